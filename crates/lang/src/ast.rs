@@ -1,0 +1,151 @@
+//! The abstract syntax tree of a scene file; every node carries the byte span it came from.
+
+/// A byte range `start..end` in the source text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct Span {
+    pub start: usize,
+    pub end: usize,
+}
+
+impl Span {
+    pub fn new(start: usize, end: usize) -> Self {
+        Span { start, end }
+    }
+
+    /// The smallest span covering both.
+    pub fn join(self, other: Span) -> Span {
+        Span { start: self.start.min(other.start), end: self.end.max(other.end) }
+    }
+}
+
+/// A name as written, with where it was written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ident {
+    pub name: String,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum ExprKind {
+    /// A decimal literal exactly as written: `12`, `0.1`, `1e-3`, `2.5E+4`.
+    Number(String),
+    /// A name with its time-derivative primes: `theta` (0), `x'` (1), `x''` (2).
+    Name { name: String, primes: u8 },
+    /// A quantity of a model object: `disk.omega`, `floor.force`, `rod.position`.
+    Member { object: Ident, field: Ident },
+    /// `sin(theta)`, `atan2(y, x)`.
+    Call { func: Ident, args: Vec<Expr> },
+    /// Unary minus.
+    Neg(Box<Expr>),
+    Binary { op: BinOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    /// A parenthesised list of two or more: `(x, y)` or `(x, y, z)`.
+    Tuple(Vec<Expr>),
+    /// `[a, b; c, d]`: rows separated by `;`, entries by `,`.
+    Matrix(Vec<Vec<Expr>>),
+}
+
+/// A unit written after a value: `kg`, `m/s^2`, `kg*m^2`, `N*m`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unit {
+    /// Each named unit with its power, in the order written (`m/s^2` is `[(m, 1), (s, -2)]`).
+    pub factors: Vec<(Ident, i32)>,
+    pub span: Span,
+}
+
+/// `name = value unit`, one item of a `param` line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamDecl {
+    pub name: Ident,
+    pub value: Option<Expr>,
+    pub unit: Option<Unit>,
+}
+
+/// One generalized coordinate of a `coord` line: `theta = pi/6, theta' = 0`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CoordDecl {
+    pub name: Ident,
+    /// Initial value (default 0).
+    pub value: Option<Expr>,
+    pub value_unit: Option<Unit>,
+    /// Initial rate, from a `name' = …` item on the same line (default 0).
+    pub rate: Option<Expr>,
+    pub rate_unit: Option<Unit>,
+}
+
+/// `key value` inside a `particle { … }` or `body { … }` block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Property {
+    pub key: Ident,
+    pub value: Expr,
+}
+
+/// `key value…` inside a `simulate { … }` block, kept as written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    pub key: Ident,
+    pub values: Vec<Expr>,
+    pub unit: Option<Unit>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stmt {
+    pub kind: StmtKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum StmtKind {
+    /// `scene "A title"`
+    Scene { title: String },
+    /// `param m = 1 kg, g = 9.81 m/s^2, k`
+    Param(Vec<ParamDecl>),
+    /// `let h = L/2*cos(theta)`
+    Let { name: Ident, value: Expr },
+    /// `coord theta = pi/6, theta' = 0` or `coord x, y`
+    Coord(Vec<CoordDecl>),
+    /// `particle bead { mass m; position (x, y) }`
+    Particle { name: Ident, props: Vec<Property> },
+    /// `body rod { mass m; inertia m*L^2/12; position (x, y); angle theta }`
+    Body { name: Ident, props: Vec<Property> },
+    /// `constraint floor: y = L/2*cos(theta)` (the name is optional)
+    Constraint { name: Option<Ident>, lhs: Expr, rhs: Expr },
+    /// `gravity g` or `gravity g along (0, -1)`
+    Gravity { strength: Expr, direction: Option<Expr> },
+    /// `potential k/2*(x - l0)^2`
+    Potential(Expr),
+    /// `force push on bead: (F0*cos(w*t), 0)`
+    Force { name: Ident, body: Ident, value: Expr },
+    /// `torque drive on rod: tau0`
+    Torque { name: Ident, body: Ident, value: Expr },
+    /// `dissipation c/2*x'^2`
+    Dissipation(Expr),
+    /// `lagrangian m/2*x'^2 - k/2*x^2`
+    Lagrangian(Expr),
+    /// `show KE, disk.omega` or `show at start: theta''`
+    Show { at_start: bool, items: Vec<Expr> },
+    /// `expect lhs = rhs` or `expect at start: lhs = rhs`
+    Expect { at_start: bool, lhs: Expr, rhs: Expr },
+    /// `simulate { until 2 s; method dop853 }`
+    Simulate(Vec<Setting>),
+}
+
+/// A whole scene file.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SceneFile {
+    pub stmts: Vec<Stmt>,
+}

@@ -1,0 +1,13 @@
+//! The scene language: the pest grammar in `grammar/scene.pest`, a parser that yields a spanned
+//! AST, and the diagnostics type every later stage reports through.
+//!
+//! This crate knows what a scene file looks like, not what its statements mean: resolving names,
+//! building expressions and checking physics belong to `model` and `mechanics`.
+
+pub mod ast;
+pub mod diag;
+mod parser;
+
+pub use ast::*;
+pub use diag::{Diagnostic, Severity};
+pub use parser::parse;
