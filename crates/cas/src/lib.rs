@@ -1,1 +1,20 @@
-//! placeholder
+//! A small exact computer-algebra core: hash-consed expressions over exact rationals, with
+//! differentiation, substitution, expansion, zero recognition and printing.
+//!
+//! This crate owns expressions and nothing else: it knows no mechanics, no files and no
+//! grammar. Everything lives in a [`Pool`]; expressions are small copyable [`ExprId`]s, and
+//! structurally equal expressions are the same id. Constructors (`add`, `mul`, `powq`, `func`,
+//! …) return canonical forms, so like terms are collected as they are built. Derivatives are
+//! memoised per (node, symbol), which keeps the derivatives of large Lagrangians shared.
+
+mod diff;
+mod expand;
+pub mod number;
+mod pool;
+pub mod print;
+mod subst;
+
+pub use number::Rational;
+pub use pool::{ExprId, Func, Node, Pool, SymId, Symbol, SymbolKind};
+pub use print::{greek_word, Style};
+pub use subst::{apply, power};

@@ -45,14 +45,27 @@ pub enum ExprKind {
     /// A decimal literal exactly as written: `12`, `0.1`, `1e-3`, `2.5E+4`.
     Number(String),
     /// A name with its time-derivative primes: `theta` (0), `x'` (1), `x''` (2).
-    Name { name: String, primes: u8 },
+    Name {
+        name: String,
+        primes: u8,
+    },
     /// A quantity of a model object: `disk.omega`, `floor.force`, `rod.position`.
-    Member { object: Ident, field: Ident },
+    Member {
+        object: Ident,
+        field: Ident,
+    },
     /// `sin(theta)`, `atan2(y, x)`.
-    Call { func: Ident, args: Vec<Expr> },
+    Call {
+        func: Ident,
+        args: Vec<Expr>,
+    },
     /// Unary minus.
     Neg(Box<Expr>),
-    Binary { op: BinOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Binary {
+        op: BinOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
     /// A parenthesised list of two or more: `(x, y)` or `(x, y, z)`.
     Tuple(Vec<Expr>),
     /// `[a, b; c, d]`: rows separated by `;`, entries by `,`.

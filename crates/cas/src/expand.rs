@@ -1,0 +1,374 @@
+//! Expansion, zero recognition and the simplifications that make printed equations read like a
+//! careful hand derivation.
+
+use std::collections::{BTreeMap, HashMap};
+
+use num_traits::{Signed, ToPrimitive, Zero};
+
+use crate::number::{self, Rational};
+use crate::pool::{ExprId, Func, Node, Pool};
+
+/// Past this many terms an expansion is abandoned and the product kept as it is.
+const EXPANSION_TERM_LIMIT: usize = 20_000;
+
+impl Pool {
+    /// Multiplies out products of sums and positive integer powers of sums, everywhere
+    /// (inside function arguments too). Negative powers of sums stay as they are. Memoised.
+    pub fn expand(&mut self, e: ExprId) -> ExprId {
+        if let Some(&r) = self.expand_memo.get(&e) {
+            return r;
+        }
+        let r = match self.node(e).clone() {
+            Node::Num(_) | Node::Sym(_) | Node::Pi => e,
+            Node::Add(c, terms) => {
+                let mut parts = vec![self.num(c)];
+                for (t, k) in terms.iter() {
+                    let t = self.expand(*t);
+                    parts.push(self.scale(t, k));
+                }
+                self.add(&parts)
+            }
+            Node::Mul(c, factors) => self.expand_product(&c, &factors),
+            Node::Pow(b, x) => {
+                let b = self.expand(b);
+                let x = self.expand(x);
+                self.pow(b, x)
+            }
+            Node::Func(f, a) => {
+                let a = self.expand(a);
+                self.func(f, a)
+            }
+            Node::Atan2(y, x) => {
+                let y = self.expand(y);
+                let x = self.expand(x);
+                self.atan2(y, x)
+            }
+        };
+        self.expand_memo.insert(e, r);
+        r
+    }
+
+    fn expand_product(&mut self, c: &Rational, factors: &[(ExprId, Rational)]) -> ExprId {
+        let mut terms: Vec<ExprId> = vec![self.num(c.clone())];
+        let mut plain: Vec<ExprId> = Vec::new();
+        for (b, x) in factors {
+            let b = self.expand(*b);
+            let repeat = if x.is_integer() && x.is_positive() { x.to_u32() } else { None };
+            match (self.node(b), repeat) {
+                (Node::Add(..), Some(n)) => {
+                    let sum_terms = self.terms(b);
+                    for _ in 0..n {
+                        if terms.len() * sum_terms.len() > EXPANSION_TERM_LIMIT {
+                            plain.push(b);
+                            continue;
+                        }
+                        let mut next = Vec::with_capacity(terms.len() * sum_terms.len());
+                        for &t in &terms {
+                            for &s in &sum_terms {
+                                next.push(self.mul2(t, s));
+                            }
+                        }
+                        terms = next;
+                    }
+                }
+                _ => plain.push(self.powq(b, x)),
+            }
+        }
+        let rest = self.mul(&plain);
+        let parts: Vec<ExprId> = terms.into_iter().map(|t| self.mul2(t, rest)).collect();
+        let sum = self.add(&parts);
+        // Multiplying by `rest` may have produced new products of sums (rest = (a+b)^-1 cancels
+        // nothing, but rest containing a sum to a positive power does); one more pass settles it.
+        if parts.len() > 1 && self.has_sum_factor(rest) {
+            self.expand(sum)
+        } else {
+            sum
+        }
+    }
+
+    fn has_sum_factor(&self, e: ExprId) -> bool {
+        let (_, fs) = self.factors(e);
+        fs.iter().any(|(b, x)| {
+            x.is_positive() && x.is_integer() && matches!(self.node(*b), Node::Add(..))
+        })
+    }
+
+    /// Rewrites even powers of cos as powers of (1 − sin²) and expands, so that polynomials in
+    /// sin and cos of the same argument have one form. Used to recognise zero, not to print.
+    pub fn trig_normal(&mut self, e: ExprId) -> ExprId {
+        let e = self.expand(e);
+        let mut memo = HashMap::new();
+        let r = self.rewrite_cos_squares(e, &mut memo);
+        self.expand(r)
+    }
+
+    fn rewrite_cos_squares(&mut self, e: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+        if let Some(&r) = memo.get(&e) {
+            return r;
+        }
+        let r = match self.node(e).clone() {
+            Node::Add(c, terms) => {
+                let mut parts = vec![self.num(c)];
+                for (t, k) in terms.iter() {
+                    let t = self.rewrite_cos_squares(*t, memo);
+                    parts.push(self.scale(t, k));
+                }
+                self.add(&parts)
+            }
+            Node::Mul(c, factors) => {
+                let mut parts = vec![self.num(c)];
+                for (b, x) in factors.iter() {
+                    let b2 = self.rewrite_cos_squares(*b, memo);
+                    match (self.node(b2).clone(), x.to_i64()) {
+                        (Node::Func(Func::Cos, u), Some(n)) if x.is_integer() && n >= 2 => {
+                            let s = self.sin(u);
+                            let s2 = self.powi(s, 2);
+                            let one = self.one();
+                            let c2 = self.sub(one, s2);
+                            parts.push(self.powi(c2, n / 2));
+                            parts.push(self.powi(b2, n % 2));
+                        }
+                        _ => parts.push(self.powq(b2, x)),
+                    }
+                }
+                self.mul(&parts)
+            }
+            Node::Func(f, a) => {
+                let a = self.rewrite_cos_squares(a, memo);
+                self.func(f, a)
+            }
+            _ => e,
+        };
+        memo.insert(e, r);
+        r
+    }
+
+    /// Multiplies a sum by the product of the (integer, negative-power) denominators of its
+    /// terms, so that `a/(a+b) + b/(a+b) − 1` becomes a polynomial that expands to zero.
+    /// Returns the numerator; the result is zero exactly when `e` is (where `e` is defined).
+    pub fn numerator(&mut self, e: ExprId) -> ExprId {
+        let mut e = self.expand(e);
+        for _ in 0..4 {
+            let Node::Add(_, terms) = self.node(e).clone() else { return e };
+            let mut denominators: BTreeMap<ExprId, Rational> = BTreeMap::new();
+            for (t, _) in terms.iter() {
+                let (_, fs) = self.factors(*t);
+                for (b, x) in fs {
+                    if x.is_negative() && self.as_num(b).is_none() {
+                        let need = -x.floor();
+                        let slot = denominators.entry(b).or_default();
+                        if need > *slot {
+                            *slot = need;
+                        }
+                    }
+                }
+            }
+            if denominators.is_empty() {
+                return e;
+            }
+            // Multiply term by term, so each denominator cancels against its own power before
+            // any sum is multiplied out.
+            let mut factors = Vec::new();
+            for (b, x) in denominators {
+                factors.push(self.powq(b, &x));
+            }
+            let clear = self.mul(&factors);
+            let mut parts = Vec::new();
+            for t in self.terms(e) {
+                let m = self.mul2(t, clear);
+                parts.push(self.expand(m));
+            }
+            e = self.add(&parts);
+        }
+        e
+    }
+
+    /// Whether `e` is identically zero, decided by algebra: expansion, clearing denominators,
+    /// and sin² + cos² = 1. `false` means "not shown to be zero", not "shown non-zero".
+    pub fn is_identically_zero(&mut self, e: ExprId) -> bool {
+        let x = self.expand(e);
+        if self.is_zero(x) {
+            return true;
+        }
+        let n = self.numerator(x);
+        if self.is_zero(n) {
+            return true;
+        }
+        let t = self.trig_normal(n);
+        if self.is_zero(t) {
+            return true;
+        }
+        let t = self.numerator(t);
+        self.is_zero(t)
+    }
+
+    /// The form to show a person: expanded, with sin²u + cos²u folded into 1 wherever a pair of
+    /// terms allows it.
+    pub fn simplify(&mut self, e: ExprId) -> ExprId {
+        let x = self.expand(e);
+        self.fold_pythagoras(x)
+    }
+
+    /// In a sum, replaces each pair `c·X·sin(u)^2 + c·X·cos(u)^2` by `c·X`.
+    fn fold_pythagoras(&mut self, e: ExprId) -> ExprId {
+        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
+        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
+        let mut constant = constant;
+        loop {
+            let mut found = None;
+            'search: for (t, k) in &terms {
+                let (c, fs) = self.factors(*t);
+                for (i, (b, x)) in fs.iter().enumerate() {
+                    let Node::Func(Func::Cos, u) = *self.node(*b) else { continue };
+                    if *x < number::int(2) || !x.is_integer() {
+                        continue;
+                    }
+                    let s = self.sin(u);
+                    let mut with_sin = fs.clone();
+                    with_sin[i].1 = x - number::int(2);
+                    let rest = self.product(&c, &with_sin);
+                    let s2 = self.powi(s, 2);
+                    let partner = self.mul2(rest, s2);
+                    let (pc, pt) = self.split_coefficient(partner);
+                    if pt == *t {
+                        continue;
+                    }
+                    let partner_coef = terms.get(&pt).map(|pk| pk * &pc.recip());
+                    if partner_coef.as_ref() == Some(k) {
+                        found = Some((*t, pt, k.clone(), rest));
+                        break 'search;
+                    }
+                }
+            }
+            let Some((t, pt, k, rest)) = found else { break };
+            terms.remove(&t);
+            terms.remove(&pt);
+            let (rc, rt) = self.split_coefficient(rest);
+            if let Some(n) = self.as_num(rt) {
+                constant += n * &rc * &k;
+            } else {
+                *terms.entry(rt).or_default() += rc * k;
+            }
+            terms.retain(|_, k| !k.is_zero());
+        }
+        let mut parts = vec![self.num(constant)];
+        for (t, k) in terms {
+            parts.push(self.scale(t, &k));
+        }
+        self.add(&parts)
+    }
+
+    /// Splits `e` into its monomial content and the rest, `e = content · rest`: the positive
+    /// gcd of the rational coefficients times every factor common to all terms at its lowest
+    /// power. `(m L²/4 sin²θ + m L²/12)` → `(m L²/12, 3 sin²θ + 1)`.
+    pub fn content(&mut self, e: ExprId) -> (ExprId, ExprId) {
+        self.common_content(&[e])
+    }
+
+    /// The monomial content shared by several expressions, and the first divided by it.
+    pub fn common_content(&mut self, exprs: &[ExprId]) -> (ExprId, ExprId) {
+        let mut gcd: Option<Rational> = None;
+        let mut common: Option<BTreeMap<ExprId, Rational>> = None;
+        let mut all_terms = Vec::new();
+        for &x in exprs {
+            all_terms.extend(self.terms(x));
+        }
+        for t in all_terms.iter().copied() {
+            if self.is_zero(t) {
+                continue;
+            }
+            let (c, fs) = self.factors(t);
+            gcd = Some(match gcd {
+                None => c.abs(),
+                Some(g) => number::gcd(&g, &c),
+            });
+            let fs: BTreeMap<ExprId, Rational> =
+                fs.into_iter().filter(|(b, _)| self.as_num(*b).is_none()).collect();
+            common = Some(match common {
+                None => fs,
+                Some(prev) => prev
+                    .into_iter()
+                    .filter_map(|(b, x)| {
+                        let y = fs.get(&b)?;
+                        // Only powers of the same sign can be common (m² and m⁻¹ share nothing).
+                        if x.is_positive() != y.is_positive() {
+                            return None;
+                        }
+                        Some((b, if x.abs() < y.abs() { x } else { y.clone() }))
+                    })
+                    .collect(),
+            });
+        }
+        let Some(gcd) = gcd else {
+            let first = exprs.first().copied().unwrap_or(self.zero());
+            return (self.one(), first);
+        };
+        let common: Vec<(ExprId, Rational)> = common.unwrap_or_default().into_iter().collect();
+        let content = self.product(&gcd, &common);
+        let first = exprs.first().copied().unwrap_or(self.zero());
+        let inverse = self.powi(content, -1);
+        let m = self.mul2(first, inverse);
+        let rest = self.expand(m);
+        (content, rest)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_needs_common_denominators_and_pythagoras() {
+        let mut p = Pool::new();
+        let a = p.param("a");
+        let a = p.sym(a);
+        let b = p.param("b");
+        let b = p.sym(b);
+        let s = p.add2(a, b);
+        let fa = p.div(a, s);
+        let fb = p.div(b, s);
+        let one = p.one();
+        let sum = p.add(&[fa, fb]);
+        let e = p.sub(sum, one);
+        assert!(!p.is_zero(e));
+        assert!(p.is_identically_zero(e));
+
+        let th = p.param("th");
+        let th = p.sym(th);
+        let s = p.sin(th);
+        let c = p.cos(th);
+        let s2 = p.powi(s, 2);
+        let c2 = p.powi(c, 2);
+        let e = p.add(&[s2, c2]);
+        let e = p.sub(e, one);
+        assert!(p.is_identically_zero(e));
+        let sum = p.add(&[s2, c2]);
+        let f = p.simplify(sum);
+        assert_eq!(f, one);
+    }
+
+    #[test]
+    fn content_pulls_out_common_monomials() {
+        let mut p = Pool::new();
+        let m = p.param("m");
+        let m = p.sym(m);
+        let l = p.param("L");
+        let l = p.sym(l);
+        let th = p.param("th");
+        let th = p.sym(th);
+        let s = p.sin(th);
+        let s2 = p.powi(s, 2);
+        let l2 = p.powi(l, 2);
+        let t1 = p.mul(&[m, l2, s2]);
+        let t1 = p.scale(t1, &number::ratio(1, 4));
+        let t2 = p.mul(&[m, l2]);
+        let t2 = p.scale(t2, &number::ratio(1, 12));
+        let e = p.add2(t1, t2);
+        let (content, rest) = p.content(e);
+        let ml2 = p.mul(&[m, l2]);
+        assert_eq!(content, p.scale(ml2, &number::ratio(1, 12)));
+        let three_s2 = p.scale(s2, &number::int(3));
+        let one = p.one();
+        assert_eq!(rest, p.add2(three_s2, one));
+    }
+}

@@ -1,0 +1,940 @@
+//! The expression arena: interned nodes, symbols, and the simplifying constructors.
+//!
+//! Every expression lives in a [`Pool`] and is named by a small [`ExprId`]. Nodes are
+//! hash-consed, so two structurally equal expressions are the same id, and every constructor
+//! returns the canonical form: sums and products flattened, like terms and like powers
+//! collected, numbers folded, exact values of functions at special points taken.
+
+use std::collections::{BTreeMap, HashMap};
+use std::rc::Rc;
+
+use num_bigint::BigInt;
+use num_traits::{One, Signed, Zero};
+
+use crate::number::{self, Rational};
+
+/// An expression in a [`Pool`]. Equal ids are equal expressions, and the converse holds for
+/// the canonical forms the constructors produce.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ExprId(u32);
+
+impl ExprId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// A symbol in a [`Pool`]: a parameter, time, or a coordinate or one of its time derivatives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SymId(u32);
+
+impl SymId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The elementary functions of one argument.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Func {
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+    Exp,
+    Ln,
+}
+
+impl Func {
+    pub const ALL: [Func; 11] = [
+        Func::Sin,
+        Func::Cos,
+        Func::Tan,
+        Func::Asin,
+        Func::Acos,
+        Func::Atan,
+        Func::Sinh,
+        Func::Cosh,
+        Func::Tanh,
+        Func::Exp,
+        Func::Ln,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Func::Sin => "sin",
+            Func::Cos => "cos",
+            Func::Tan => "tan",
+            Func::Asin => "asin",
+            Func::Acos => "acos",
+            Func::Atan => "atan",
+            Func::Sinh => "sinh",
+            Func::Cosh => "cosh",
+            Func::Tanh => "tanh",
+            Func::Exp => "exp",
+            Func::Ln => "ln",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Func> {
+        Func::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    fn is_odd(self) -> bool {
+        matches!(self, Func::Sin | Func::Tan | Func::Asin | Func::Atan | Func::Sinh | Func::Tanh)
+    }
+
+    fn is_even(self) -> bool {
+        matches!(self, Func::Cos | Func::Cosh)
+    }
+}
+
+/// One interned node. Children are ids of nodes created before it.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Node {
+    Num(Rational),
+    Sym(SymId),
+    Pi,
+    /// `constant + Σ coefficient·term`, terms sorted by id; no term is a number, a sum, or a
+    /// product with a coefficient other than 1; at least two parts.
+    Add(Rational, Box<[(ExprId, Rational)]>),
+    /// `coefficient · Π base^exponent`, bases sorted by id; no base is a product raised to an
+    /// integer power or a rational raised to an integer power.
+    Mul(Rational, Box<[(ExprId, Rational)]>),
+    /// A power whose exponent is not a number (numeric powers are one-factor products).
+    Pow(ExprId, ExprId),
+    Func(Func, ExprId),
+    Atan2(ExprId, ExprId),
+}
+
+/// What a symbol stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SymbolKind {
+    /// A parameter or any other symbol constant in time.
+    Param,
+    /// Time, `t`.
+    Time,
+    /// A generalized coordinate (`order` 0) or its `order`-th time derivative.
+    Coordinate { base: SymId, order: u8 },
+}
+
+#[derive(Clone, Debug)]
+pub struct Symbol {
+    /// The name as the scene spells it (`theta`, `x'`).
+    pub name: String,
+    pub kind: SymbolKind,
+    rate: Option<SymId>,
+}
+
+impl Symbol {
+    /// The name without primes (`theta` for `theta''`).
+    pub fn base_name(&self) -> &str {
+        self.name.trim_end_matches('\'')
+    }
+
+    /// How many time derivatives this symbol is of a coordinate (0 for anything else).
+    pub fn order(&self) -> u8 {
+        match self.kind {
+            SymbolKind::Coordinate { order, .. } => order,
+            _ => 0,
+        }
+    }
+}
+
+/// The arena that owns every expression and symbol of one derivation.
+pub struct Pool {
+    nodes: Vec<Node>,
+    interned: HashMap<Node, ExprId>,
+    symbols: Vec<Symbol>,
+    symbol_ids: HashMap<String, SymId>,
+    pub(crate) diff_memo: HashMap<(ExprId, SymId), ExprId>,
+    pub(crate) time_memo: HashMap<ExprId, ExprId>,
+    pub(crate) expand_memo: HashMap<ExprId, ExprId>,
+    free_memo: Vec<Option<Rc<[SymId]>>>,
+    zero: ExprId,
+    one: ExprId,
+}
+
+impl Default for Pool {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Pool {
+    pub fn new() -> Self {
+        let mut pool = Pool {
+            nodes: Vec::new(),
+            interned: HashMap::new(),
+            symbols: Vec::new(),
+            symbol_ids: HashMap::new(),
+            diff_memo: HashMap::new(),
+            time_memo: HashMap::new(),
+            expand_memo: HashMap::new(),
+            free_memo: Vec::new(),
+            zero: ExprId(0),
+            one: ExprId(0),
+        };
+        pool.zero = pool.intern(Node::Num(Rational::zero()));
+        pool.one = pool.intern(Node::Num(Rational::one()));
+        pool
+    }
+
+    fn intern(&mut self, node: Node) -> ExprId {
+        if let Some(&id) = self.interned.get(&node) {
+            return id;
+        }
+        let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
+        self.nodes.push(node.clone());
+        self.interned.insert(node, id);
+        id
+    }
+
+    /// How many distinct expressions the pool holds.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn node(&self, e: ExprId) -> &Node {
+        &self.nodes[e.index()]
+    }
+
+    // ----- symbols -------------------------------------------------------------------------
+
+    fn new_symbol(&mut self, name: &str, kind: SymbolKind) -> SymId {
+        let id = SymId(self.symbols.len() as u32);
+        self.symbols.push(Symbol { name: name.to_string(), kind, rate: None });
+        self.symbol_ids.insert(name.to_string(), id);
+        id
+    }
+
+    /// The parameter (time-constant symbol) with this name, created on first use.
+    pub fn param(&mut self, name: &str) -> SymId {
+        match self.symbol_ids.get(name) {
+            Some(&id) => id,
+            None => self.new_symbol(name, SymbolKind::Param),
+        }
+    }
+
+    /// Time, `t`.
+    pub fn time(&mut self) -> SymId {
+        match self.symbol_ids.get("t") {
+            Some(&id) => id,
+            None => self.new_symbol("t", SymbolKind::Time),
+        }
+    }
+
+    /// Declares a generalized coordinate. An existing symbol of that name becomes one.
+    pub fn coordinate(&mut self, name: &str) -> SymId {
+        let id = self.param(name);
+        self.symbols[id.index()].kind = SymbolKind::Coordinate { base: id, order: 0 };
+        id
+    }
+
+    /// The time derivative of a coordinate symbol (`x` → `x'`), created on first use.
+    /// `None` for symbols that are constant in time.
+    pub fn rate(&mut self, s: SymId) -> Option<SymId> {
+        let SymbolKind::Coordinate { base, order } = self.symbols[s.index()].kind else {
+            return None;
+        };
+        if let Some(r) = self.symbols[s.index()].rate {
+            return Some(r);
+        }
+        let name = format!("{}'", self.symbols[s.index()].name);
+        let r = self.new_symbol(&name, SymbolKind::Coordinate { base, order: order + 1 });
+        self.symbols[s.index()].rate = Some(r);
+        Some(r)
+    }
+
+    /// The `order`-th time derivative symbol of a coordinate.
+    pub fn derivative_symbol(&mut self, coordinate: SymId, order: u8) -> Option<SymId> {
+        let mut s = coordinate;
+        for _ in 0..order {
+            s = self.rate(s)?;
+        }
+        Some(s)
+    }
+
+    pub fn symbol(&self, s: SymId) -> &Symbol {
+        &self.symbols[s.index()]
+    }
+
+    pub fn lookup_symbol(&self, name: &str) -> Option<SymId> {
+        self.symbol_ids.get(name).copied()
+    }
+
+    pub fn symbol_count(&self) -> usize {
+        self.symbols.len()
+    }
+
+    // ----- leaves --------------------------------------------------------------------------
+
+    pub fn zero(&self) -> ExprId {
+        self.zero
+    }
+
+    pub fn one(&self) -> ExprId {
+        self.one
+    }
+
+    pub fn num(&mut self, q: Rational) -> ExprId {
+        self.intern(Node::Num(q))
+    }
+
+    pub fn int(&mut self, n: i64) -> ExprId {
+        self.num(number::int(n))
+    }
+
+    pub fn ratio(&mut self, n: i64, d: i64) -> ExprId {
+        self.num(number::ratio(n, d))
+    }
+
+    pub fn sym(&mut self, s: SymId) -> ExprId {
+        self.intern(Node::Sym(s))
+    }
+
+    pub fn pi(&mut self) -> ExprId {
+        self.intern(Node::Pi)
+    }
+
+    pub fn as_num(&self, e: ExprId) -> Option<&Rational> {
+        match self.node(e) {
+            Node::Num(q) => Some(q),
+            _ => None,
+        }
+    }
+
+    pub fn as_sym(&self, e: ExprId) -> Option<SymId> {
+        match self.node(e) {
+            Node::Sym(s) => Some(*s),
+            _ => None,
+        }
+    }
+
+    pub fn is_zero(&self, e: ExprId) -> bool {
+        e == self.zero
+    }
+
+    // ----- sums ----------------------------------------------------------------------------
+
+    pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
+        let mut sum = SumBuilder::default();
+        for &t in terms {
+            sum.push(self, t, &Rational::one());
+        }
+        sum.finish(self)
+    }
+
+    pub fn add2(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.add(&[a, b])
+    }
+
+    pub fn sub(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let mut sum = SumBuilder::default();
+        sum.push(self, a, &Rational::one());
+        sum.push(self, b, &-Rational::one());
+        sum.finish(self)
+    }
+
+    pub fn neg(&mut self, a: ExprId) -> ExprId {
+        self.scale(a, &-Rational::one())
+    }
+
+    /// `q · a`, distributing over sums so that `2(x + y)` is `2x + 2y`.
+    pub fn scale(&mut self, a: ExprId, q: &Rational) -> ExprId {
+        if q.is_one() {
+            return a;
+        }
+        if q.is_zero() {
+            return self.zero;
+        }
+        match self.node(a).clone() {
+            Node::Num(p) => self.num(p * q),
+            Node::Add(..) => {
+                let mut sum = SumBuilder::default();
+                sum.push(self, a, q);
+                sum.finish(self)
+            }
+            _ => {
+                let mut prod = ProductBuilder::new();
+                prod.coef = q.clone();
+                prod.push(self, a);
+                prod.finish(self)
+            }
+        }
+    }
+
+    // ----- products and powers -------------------------------------------------------------
+
+    pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
+        let mut prod = ProductBuilder::new();
+        for &f in factors {
+            prod.push(self, f);
+            if prod.coef.is_zero() {
+                return self.zero;
+            }
+        }
+        prod.finish(self)
+    }
+
+    pub fn mul2(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        self.mul(&[a, b])
+    }
+
+    pub fn div(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let inv = self.powq(b, &-Rational::one());
+        self.mul(&[a, inv])
+    }
+
+    pub fn pow(&mut self, base: ExprId, exponent: ExprId) -> ExprId {
+        if let Node::Num(q) = self.node(exponent) {
+            let q = q.clone();
+            return self.powq(base, &q);
+        }
+        if base == self.one {
+            return self.one;
+        }
+        self.intern(Node::Pow(base, exponent))
+    }
+
+    pub fn powi(&mut self, base: ExprId, n: i64) -> ExprId {
+        self.powq(base, &number::int(n))
+    }
+
+    pub fn sqrt(&mut self, a: ExprId) -> ExprId {
+        self.powq(a, &number::ratio(1, 2))
+    }
+
+    /// `base^q` for a rational exponent.
+    pub fn powq(&mut self, base: ExprId, q: &Rational) -> ExprId {
+        if q.is_zero() {
+            return self.one;
+        }
+        if q.is_one() {
+            return base;
+        }
+        match self.node(base).clone() {
+            Node::Mul(c, factors) if q.is_integer() || factors.len() == 1 => {
+                // (c Π b^e)^n = c^n Π b^(e n) for integer n; for a single factor with a fractional
+                // exponent only when that cannot change the sign (sqrt(x^2) stays, x^(1/2)^(1/2)
+                // becomes x^(1/4)).
+                if !q.is_integer() {
+                    let (b, e) = &factors[0];
+                    let safe = !e.is_integer() && c.is_positive();
+                    if !safe {
+                        return self.raw_power(base, q);
+                    }
+                    let mut prod = ProductBuilder::new();
+                    let cn = self.num_node(&c);
+                    prod.push_factor(self, cn, q);
+                    prod.push_factor(self, *b, &(e * q));
+                    return prod.finish(self);
+                }
+                let mut prod = ProductBuilder::new();
+                let cn = self.num_node(&c);
+                prod.push_factor(self, cn, q);
+                for (b, e) in factors.iter() {
+                    prod.push_factor(self, *b, &(e * q));
+                }
+                prod.finish(self)
+            }
+            Node::Mul(c, factors) if c.is_positive() && !c.is_one() => {
+                // sqrt(3 x y) = sqrt(3) sqrt(x y): a positive number may always come out.
+                let rest = self.intern(Node::Mul(Rational::one(), factors));
+                let mut prod = ProductBuilder::new();
+                let cn = self.num_node(&c);
+                prod.push_factor(self, cn, q);
+                prod.push_factor(self, rest, q);
+                prod.finish(self)
+            }
+            Node::Pow(b, s) if q.is_integer() => {
+                let qs = self.num(q.clone());
+                let exponent = self.mul2(s, qs);
+                self.pow(b, exponent)
+            }
+            _ => self.raw_power(base, q),
+        }
+    }
+
+    fn raw_power(&mut self, base: ExprId, q: &Rational) -> ExprId {
+        let mut prod = ProductBuilder::new();
+        prod.push_factor(self, base, q);
+        prod.finish(self)
+    }
+
+    fn num_node(&mut self, q: &Rational) -> ExprId {
+        self.num(q.clone())
+    }
+
+    // ----- functions -----------------------------------------------------------------------
+
+    pub fn func(&mut self, f: Func, arg: ExprId) -> ExprId {
+        if let Some(v) = self.exact_function_value(f, arg) {
+            return v;
+        }
+        if f.is_odd() && self.looks_negative(arg) {
+            let pos = self.neg(arg);
+            let v = self.func(f, pos);
+            return self.neg(v);
+        }
+        if f.is_even() && self.looks_negative(arg) {
+            let pos = self.neg(arg);
+            return self.func(f, pos);
+        }
+        self.intern(Node::Func(f, arg))
+    }
+
+    pub fn sin(&mut self, a: ExprId) -> ExprId {
+        self.func(Func::Sin, a)
+    }
+
+    pub fn cos(&mut self, a: ExprId) -> ExprId {
+        self.func(Func::Cos, a)
+    }
+
+    pub fn atan2(&mut self, y: ExprId, x: ExprId) -> ExprId {
+        if let (Some(yq), Some(xq)) = (self.as_num(y), self.as_num(x)) {
+            if yq.is_zero() && xq.is_positive() {
+                return self.zero;
+            }
+        }
+        self.intern(Node::Atan2(y, x))
+    }
+
+    /// Whether the canonical form reads with a leading minus sign. Used to pick one of `u` and
+    /// `-u` as the argument of odd and even functions, so `cos(a - b)` and `cos(b - a)` meet.
+    pub fn looks_negative(&self, e: ExprId) -> bool {
+        match self.node(e) {
+            Node::Num(q) => q.is_negative(),
+            Node::Mul(c, _) => c.is_negative(),
+            Node::Add(c, terms) => match terms.first() {
+                Some((_, k)) => k.is_negative(),
+                None => c.is_negative(),
+            },
+            _ => false,
+        }
+    }
+
+    /// If `e` is `k·π` for a rational `k`, that `k`.
+    pub fn pi_multiple(&self, e: ExprId) -> Option<Rational> {
+        match self.node(e) {
+            Node::Num(q) if q.is_zero() => Some(Rational::zero()),
+            Node::Pi => Some(Rational::one()),
+            Node::Mul(c, f)
+                if f.len() == 1 && f[0].1.is_one() && *self.node(f[0].0) == Node::Pi =>
+            {
+                Some(c.clone())
+            }
+            _ => None,
+        }
+    }
+
+    fn exact_function_value(&mut self, f: Func, arg: ExprId) -> Option<ExprId> {
+        match (f, self.node(arg).clone()) {
+            (Func::Sin, Node::Func(Func::Asin, x)) => Some(x),
+            (Func::Cos, Node::Func(Func::Acos, x)) => Some(x),
+            (Func::Tan, Node::Func(Func::Atan, x)) => Some(x),
+            (Func::Sin | Func::Cos | Func::Tan, _) => {
+                let k = self.pi_multiple(arg)?;
+                let sin = self.sin_of_pi_multiple(&k);
+                let half = number::ratio(1, 2);
+                let cos = self.sin_of_pi_multiple(&(k + half));
+                match f {
+                    Func::Sin => sin,
+                    Func::Cos => cos,
+                    _ => {
+                        let (s, c) = (sin?, cos?);
+                        (!self.is_zero(c)).then(|| self.div(s, c))
+                    }
+                }
+            }
+            (Func::Exp, Node::Num(q)) if q.is_zero() => Some(self.one),
+            (Func::Exp, Node::Func(Func::Ln, x)) => Some(x),
+            (Func::Ln, Node::Num(q)) if q.is_one() => Some(self.zero),
+            (Func::Ln, Node::Func(Func::Exp, x)) => Some(x),
+            (Func::Sinh | Func::Tanh | Func::Asin | Func::Atan, Node::Num(q)) if q.is_zero() => {
+                Some(self.zero)
+            }
+            (Func::Cosh, Node::Num(q)) if q.is_zero() => Some(self.one),
+            _ => None,
+        }
+    }
+
+    /// sin(kπ) exactly, for k with denominator dividing 12.
+    fn sin_of_pi_multiple(&mut self, k: &Rational) -> Option<ExprId> {
+        let twelfths = k * number::int(12);
+        if !twelfths.is_integer() {
+            return None;
+        }
+        let n = twelfths.to_integer() % BigInt::from(24);
+        let n: i64 = num_traits::ToPrimitive::to_i64(&n)?;
+        let n = n.rem_euclid(24);
+        let (index, negative) = match n {
+            0..=6 => (n, false),
+            7..=12 => (12 - n, false),
+            13..=18 => (n - 12, true),
+            _ => (24 - n, true),
+        };
+        let value = self.sin_twelfth(index);
+        Some(if negative { self.neg(value) } else { value })
+    }
+
+    /// sin(nπ/12) for n = 0..=6.
+    fn sin_twelfth(&mut self, n: i64) -> ExprId {
+        let half = number::ratio(1, 2);
+        let quarter = number::ratio(1, 4);
+        match n {
+            0 => self.zero,
+            2 => self.num(half),
+            3 | 4 => {
+                let r = self.int(if n == 3 { 2 } else { 3 });
+                let root = self.sqrt(r);
+                self.scale(root, &half)
+            }
+            6 => self.one,
+            _ => {
+                // sin(π/12) = (√6 − √2)/4, sin(5π/12) = (√6 + √2)/4.
+                let (six, two) = (self.int(6), self.int(2));
+                let r6 = self.sqrt(six);
+                let r2 = self.sqrt(two);
+                let r2 = if n == 1 { self.neg(r2) } else { r2 };
+                let s = self.add2(r6, r2);
+                self.scale(s, &quarter)
+            }
+        }
+    }
+
+    // ----- structure queries ---------------------------------------------------------------
+
+    /// The symbols `e` depends on, sorted by id. Memoised.
+    pub fn free_symbols(&mut self, e: ExprId) -> Rc<[SymId]> {
+        if let Some(Some(s)) = self.free_memo.get(e.index()) {
+            return s.clone();
+        }
+        let children = self.children(e);
+        let set: Rc<[SymId]> = match self.node(e) {
+            Node::Sym(s) => Rc::from(vec![*s]),
+            _ => {
+                let mut all: Vec<SymId> = Vec::new();
+                for c in children {
+                    all.extend(self.free_symbols(c).iter().copied());
+                }
+                all.sort_unstable();
+                all.dedup();
+                Rc::from(all)
+            }
+        };
+        if self.free_memo.len() <= e.index() {
+            self.free_memo.resize(e.index() + 1, None);
+        }
+        self.free_memo[e.index()] = Some(set.clone());
+        set
+    }
+
+    pub fn depends_on(&mut self, e: ExprId, s: SymId) -> bool {
+        self.free_symbols(e).binary_search(&s).is_ok()
+    }
+
+    /// The direct sub-expressions of `e`.
+    pub fn children(&self, e: ExprId) -> Vec<ExprId> {
+        match self.node(e) {
+            Node::Num(_) | Node::Sym(_) | Node::Pi => Vec::new(),
+            Node::Add(_, t) | Node::Mul(_, t) => t.iter().map(|(x, _)| *x).collect(),
+            Node::Pow(a, b) | Node::Atan2(a, b) => vec![*a, *b],
+            Node::Func(_, a) => vec![*a],
+        }
+    }
+
+    /// Splits `e` into a rational coefficient and the rest: `3xy` → (3, xy), `x` → (1, x).
+    pub fn split_coefficient(&mut self, e: ExprId) -> (Rational, ExprId) {
+        match self.node(e).clone() {
+            Node::Num(q) => (q, self.one),
+            Node::Mul(c, f) if !c.is_one() => {
+                let mut prod = ProductBuilder::new();
+                for (b, x) in f.iter() {
+                    prod.push_factor(self, *b, x);
+                }
+                (c, prod.finish(self))
+            }
+            _ => (Rational::one(), e),
+        }
+    }
+
+    /// The terms of a sum (with their coefficients folded in), or `[e]` for anything else.
+    pub fn terms(&mut self, e: ExprId) -> Vec<ExprId> {
+        match self.node(e).clone() {
+            Node::Add(c, terms) => {
+                let mut out: Vec<ExprId> = terms.iter().map(|(t, k)| self.scale(*t, k)).collect();
+                if !c.is_zero() {
+                    out.push(self.num(c));
+                }
+                out
+            }
+            _ => vec![e],
+        }
+    }
+
+    /// The factors of a product as (base, exponent) with its coefficient, or `(1, [(e, 1)])`.
+    pub fn factors(&self, e: ExprId) -> (Rational, Vec<(ExprId, Rational)>) {
+        match self.node(e) {
+            Node::Num(q) => (q.clone(), Vec::new()),
+            Node::Mul(c, f) => (c.clone(), f.to_vec()),
+            _ => (Rational::one(), vec![(e, Rational::one())]),
+        }
+    }
+
+    /// Rebuilds a product from a coefficient and (base, exponent) factors.
+    pub fn product(&mut self, coef: &Rational, factors: &[(ExprId, Rational)]) -> ExprId {
+        let mut prod = ProductBuilder::new();
+        prod.coef = coef.clone();
+        for (b, x) in factors {
+            prod.push_factor(self, *b, x);
+        }
+        prod.finish(self)
+    }
+}
+
+/// Collects a sum: a constant and a coefficient per distinct term.
+#[derive(Default)]
+struct SumBuilder {
+    constant: Rational,
+    terms: BTreeMap<ExprId, Rational>,
+}
+
+impl SumBuilder {
+    fn push(&mut self, pool: &mut Pool, e: ExprId, scale: &Rational) {
+        match pool.node(e).clone() {
+            Node::Num(q) => self.constant += q * scale,
+            Node::Add(c, terms) => {
+                self.constant += c * scale;
+                for (t, k) in terms.iter() {
+                    *self.terms.entry(*t).or_default() += k * scale;
+                }
+            }
+            Node::Mul(c, _) if !c.is_one() => {
+                let (c, rest) = pool.split_coefficient(e);
+                *self.terms.entry(rest).or_default() += c * scale;
+            }
+            _ => *self.terms.entry(e).or_default() += scale,
+        }
+    }
+
+    fn finish(self, pool: &mut Pool) -> ExprId {
+        let terms: Vec<(ExprId, Rational)> =
+            self.terms.into_iter().filter(|(_, k)| !k.is_zero()).collect();
+        match terms.len() {
+            0 => pool.num(self.constant),
+            1 if self.constant.is_zero() => {
+                let (t, k) = &terms[0];
+                pool.scale(*t, k)
+            }
+            _ => pool.intern(Node::Add(self.constant, terms.into_boxed_slice())),
+        }
+    }
+}
+
+/// Collects a product: a coefficient and an exponent per distinct base.
+struct ProductBuilder {
+    coef: Rational,
+    factors: BTreeMap<ExprId, Rational>,
+}
+
+impl ProductBuilder {
+    fn new() -> Self {
+        ProductBuilder { coef: Rational::one(), factors: BTreeMap::new() }
+    }
+
+    fn push(&mut self, pool: &mut Pool, e: ExprId) {
+        match pool.node(e).clone() {
+            Node::Num(q) => self.coef *= q,
+            Node::Mul(c, f) => {
+                self.coef *= c;
+                for (b, x) in f.iter() {
+                    *self.factors.entry(*b).or_default() += x;
+                }
+            }
+            _ => *self.factors.entry(e).or_default() += Rational::one(),
+        }
+    }
+
+    fn push_factor(&mut self, pool: &mut Pool, base: ExprId, exponent: &Rational) {
+        match pool.node(base).clone() {
+            Node::Num(q) if exponent.is_integer() => match number::pow_int(&q, exponent.numer()) {
+                Some(v) => self.coef *= v,
+                None => *self.factors.entry(base).or_default() += exponent,
+            },
+            Node::Mul(c, f) if exponent.is_integer() => {
+                match number::pow_int(&c, exponent.numer()) {
+                    Some(v) => self.coef *= v,
+                    None => {
+                        let cn = pool.num(c);
+                        *self.factors.entry(cn).or_default() += exponent;
+                    }
+                }
+                for (b, x) in f.iter() {
+                    *self.factors.entry(*b).or_default() += x * exponent;
+                }
+            }
+            _ => *self.factors.entry(base).or_default() += exponent,
+        }
+    }
+
+    fn finish(mut self, pool: &mut Pool) -> ExprId {
+        // Merging exponents can turn a fractional power of a number or product into an integer
+        // one (√3·√3, √(xy)·√(xy)); fold those until nothing changes.
+        loop {
+            let mut changed = false;
+            let entries: Vec<(ExprId, Rational)> =
+                std::mem::take(&mut self.factors).into_iter().collect();
+            for (b, x) in entries {
+                if x.is_zero() {
+                    changed = true;
+                    continue;
+                }
+                match pool.node(b).clone() {
+                    Node::Num(q) if x.is_integer() => match number::pow_int(&q, x.numer()) {
+                        Some(v) => {
+                            self.coef *= v;
+                            changed = true;
+                        }
+                        None => *self.factors.entry(b).or_default() += x,
+                    },
+                    Node::Num(q) if q.is_positive() => match number::rational_root(&q, &x) {
+                        Some((c, r)) => {
+                            self.coef *= c;
+                            let root = Rational::new(BigInt::one(), x.denom().clone());
+                            if !r.is_one() {
+                                let rn = pool.num(r);
+                                if (rn, root.clone()) != (b, x.clone()) {
+                                    changed = true;
+                                }
+                                *self.factors.entry(rn).or_default() += root;
+                            } else {
+                                changed = true;
+                            }
+                        }
+                        None => *self.factors.entry(b).or_default() += x,
+                    },
+                    Node::Mul(c, f) if x.is_integer() => {
+                        changed = true;
+                        self.coef *= number::pow_int(&c, x.numer()).unwrap_or_else(Rational::one);
+                        for (fb, fx) in f.iter() {
+                            *self.factors.entry(*fb).or_default() += fx * &x;
+                        }
+                    }
+                    _ => *self.factors.entry(b).or_default() += x,
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        if self.coef.is_zero() {
+            return pool.zero;
+        }
+        let factors: Vec<(ExprId, Rational)> =
+            self.factors.into_iter().filter(|(_, x)| !x.is_zero()).collect();
+        if factors.is_empty() {
+            return pool.num(self.coef);
+        }
+        if factors.len() == 1 && factors[0].1.is_one() {
+            let b = factors[0].0;
+            if self.coef.is_one() {
+                return b;
+            }
+            if matches!(pool.node(b), Node::Add(..)) {
+                return pool.scale(b, &self.coef);
+            }
+        }
+        pool.intern(Node::Mul(self.coef, factors.into_boxed_slice()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn like_terms_and_powers_collect() {
+        let mut p = Pool::new();
+        let x = p.param("x");
+        let x = p.sym(x);
+        let y = p.param("y");
+        let y = p.sym(y);
+        let xx = p.add2(x, x);
+        let two_x = p.scale(x, &number::int(2));
+        assert_eq!(xx, two_x);
+        let x2 = p.mul2(x, x);
+        assert_eq!(x2, p.powi(x, 2));
+        let xy = p.mul2(x, y);
+        let yx = p.mul2(y, x);
+        assert_eq!(xy, yx);
+        let d = p.sub(xy, yx);
+        assert!(p.is_zero(d));
+        let q = p.div(x2, x);
+        assert_eq!(q, x);
+    }
+
+    #[test]
+    fn exact_trig_at_special_angles() {
+        let mut p = Pool::new();
+        let pi = p.pi();
+        let sixth = p.scale(pi, &number::ratio(1, 6));
+        let s = p.sin(sixth);
+        assert_eq!(p.as_num(s), Some(&number::ratio(1, 2)));
+        let c = p.cos(sixth);
+        let three = p.int(3);
+        let r3 = p.sqrt(three);
+        let expected = p.scale(r3, &number::ratio(1, 2));
+        assert_eq!(c, expected);
+        let c2 = p.mul2(c, c);
+        assert_eq!(p.as_num(c2), Some(&number::ratio(3, 4)));
+        let five_quarter = p.scale(pi, &number::ratio(5, 4));
+        let s = p.sin(five_quarter);
+        let two = p.int(2);
+        let r2 = p.sqrt(two);
+        let expected = p.scale(r2, &number::ratio(-1, 2));
+        assert_eq!(s, expected);
+    }
+
+    #[test]
+    fn odd_and_even_functions_take_one_sign() {
+        let mut p = Pool::new();
+        let a = p.param("a");
+        let a = p.sym(a);
+        let b = p.param("b");
+        let b = p.sym(b);
+        let ab = p.sub(a, b);
+        let ba = p.sub(b, a);
+        let c1 = p.cos(ab);
+        let c2 = p.cos(ba);
+        assert_eq!(c1, c2);
+        let s1 = p.sin(ab);
+        let s2 = p.sin(ba);
+        let s2n = p.neg(s2);
+        assert_eq!(s1, s2n);
+    }
+
+    #[test]
+    fn radicals_fold() {
+        let mut p = Pool::new();
+        let twelve = p.int(12);
+        let r = p.sqrt(twelve);
+        let three = p.int(3);
+        let r3 = p.sqrt(three);
+        let expected = p.scale(r3, &number::int(2));
+        assert_eq!(r, expected);
+        let inv = p.powq(three, &number::ratio(-1, 2));
+        let expected = p.scale(r3, &number::ratio(1, 3));
+        assert_eq!(inv, expected);
+    }
+}
