@@ -3,7 +3,7 @@
 use num_bigint::BigInt;
 use num_integer::Integer;
 use num_rational::BigRational;
-use num_traits::{One, Signed, ToPrimitive, Zero};
+pub use num_traits::{One, Signed, ToPrimitive, Zero};
 
 /// An exact rational number; big integers underneath, so nothing overflows silently.
 pub type Rational = BigRational;

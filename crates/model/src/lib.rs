@@ -1,0 +1,158 @@
+//! The model of a scene: what its statements mean, as expressions in one [`cas::Pool`].
+//!
+//! `resolve` turns the spanned AST from `lang` into a [`Model`]: parameters, coordinates,
+//! bodies placed as functions of the coordinates, constraints, forces, and the `show` and
+//! `expect` items, with every name checked and every mistake reported with its span. This crate
+//! knows what a scene says; deriving equations from it is the job of `mechanics`.
+
+mod resolve;
+mod value;
+
+pub use resolve::resolve;
+pub use value::Value;
+
+use cas::{ExprId, Pool, SymId};
+use lang::{Setting, Span, Unit};
+
+/// A named constant: symbolic in every derivation, its value used only for numbers.
+#[derive(Clone, Debug)]
+pub struct Param {
+    pub name: String,
+    pub sym: SymId,
+    /// In terms of earlier parameters; `deg` values are already in radians.
+    pub value: Option<ExprId>,
+    pub unit: Option<Unit>,
+    pub span: Span,
+}
+
+/// A generalized coordinate with its initial value and rate.
+#[derive(Clone, Debug)]
+pub struct Coord {
+    pub name: String,
+    pub sym: SymId,
+    pub initial: ExprId,
+    pub initial_rate: ExprId,
+    /// Whether the scene gave an initial value or rate (the defaults are 0).
+    pub initial_given: bool,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BodyKind {
+    Particle,
+    /// A planar rigid body: mass, inertia about the centre of mass, position, angle.
+    Rigid,
+}
+
+#[derive(Clone, Debug)]
+pub struct Body {
+    pub name: String,
+    pub kind: BodyKind,
+    pub mass: ExprId,
+    pub inertia: Option<ExprId>,
+    /// Of the centre of mass: two or three components.
+    pub position: Vec<ExprId>,
+    /// Orientation of a planar rigid body; its angular velocity is its time derivative.
+    pub angle: Option<ExprId>,
+    pub span: Span,
+}
+
+/// A holonomic constraint `lhs = rhs`, kept as Φ = lhs − rhs.
+#[derive(Clone, Debug)]
+pub struct Constraint {
+    pub name: String,
+    pub phi: ExprId,
+    /// The symbol standing for its reaction (`floor.force`) wherever the scene mentions it.
+    pub force_symbol: SymId,
+    /// Whether any `show` or `expect` asks for the reaction.
+    pub force_requested: bool,
+    /// Coordinates written on the left-hand side, preferred for elimination.
+    pub lhs_coords: Vec<SymId>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct Gravity {
+    pub strength: ExprId,
+    /// As written; `None` means straight down (−y in 2D, −z in 3D).
+    pub direction: Option<Vec<ExprId>>,
+    pub span: Span,
+}
+
+/// An applied force at a body's centre of mass, or a torque on a rigid body.
+#[derive(Clone, Debug)]
+pub struct Load {
+    pub name: String,
+    pub body: usize,
+    pub value: Value,
+    pub span: Span,
+}
+
+/// A term that contributes to the energy or dissipation, with where it was written.
+#[derive(Clone, Debug)]
+pub struct Term {
+    pub expr: ExprId,
+    pub span: Span,
+}
+
+/// A quantity the model computes but the scene only names: `KE`, `PE`, `floor.force`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placeholder {
+    KineticEnergy,
+    PotentialEnergy,
+    Reaction(usize),
+}
+
+/// A `show` item.
+#[derive(Clone, Debug)]
+pub struct Show {
+    pub at_start: bool,
+    /// The item as written in the scene, used as its label.
+    pub label: String,
+    pub value: Value,
+    pub span: Span,
+}
+
+/// An `expect` line: `lhs = rhs`, for every state or at the start.
+#[derive(Clone, Debug)]
+pub struct Expect {
+    pub at_start: bool,
+    pub text: String,
+    pub lhs: Value,
+    pub rhs: Value,
+    pub span: Span,
+}
+
+/// Everything a scene says, resolved.
+pub struct Model {
+    pub pool: Pool,
+    pub title: Option<String>,
+    pub time: SymId,
+    pub params: Vec<Param>,
+    pub coords: Vec<Coord>,
+    pub bodies: Vec<Body>,
+    pub constraints: Vec<Constraint>,
+    pub gravity: Option<Gravity>,
+    pub potentials: Vec<Term>,
+    pub forces: Vec<Load>,
+    pub torques: Vec<Load>,
+    pub dissipation: Vec<Term>,
+    pub lagrangians: Vec<Term>,
+    pub shows: Vec<Show>,
+    pub expects: Vec<Expect>,
+    pub simulate: Vec<Setting>,
+    pub placeholders: Vec<(SymId, Placeholder)>,
+    /// `let` names with their values, in order, for printing.
+    pub lets: Vec<(String, ExprId)>,
+}
+
+impl Model {
+    pub fn placeholder(&self, s: SymId) -> Option<Placeholder> {
+        self.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)
+    }
+
+    /// The spatial dimension of the scene: 3 when any body or force is 3D, else 2.
+    pub fn dimension(&self) -> usize {
+        self.bodies.iter().map(|b| b.position.len()).max().unwrap_or(2).max(2)
+    }
+}

@@ -1,0 +1,941 @@
+//! Name resolution and the meaning of each statement: AST in, [`Model`] out.
+
+use std::collections::HashMap;
+
+use cas::number::Signed;
+use cas::{Func, Pool, Rational, SymId, SymbolKind};
+use lang::{BinOp, Diagnostic, Expr, ExprKind, Ident, Property, SceneFile, Span, Stmt, StmtKind};
+
+use crate::{
+    Body, BodyKind, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder, Show, Term, Value,
+};
+
+/// Past this the power is not physics and expanding it would exhaust memory.
+const MAX_EXPONENT: i64 = 64;
+
+/// What a name refers to at a point of the file.
+#[derive(Clone, Debug)]
+enum Binding {
+    Param(SymId),
+    Coord(SymId),
+    Let(Value),
+    Body(usize),
+    Constraint(usize),
+    Quantity(SymId),
+}
+
+/// Resolves a parsed scene. On success, the model and any warnings; otherwise every error found.
+pub fn resolve(file: &SceneFile, source: &str) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let mut r = Resolver::new(source);
+    r.declare_all(file);
+    let (outputs, statements): (Vec<&Stmt>, Vec<&Stmt>) =
+        file.stmts.iter().partition(|s| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
+    for stmt in statements {
+        r.statement(stmt);
+    }
+    // Show and expect lines may name anything in the file, wherever they stand.
+    r.in_outputs = true;
+    for stmt in outputs {
+        r.statement(stmt);
+    }
+    r.finish()
+}
+
+/// The Greek letters of a name spelled out, so `θ` and `theta` are the same name.
+fn normalize(name: &str) -> String {
+    name.chars().map(|c| cas::greek_word(c).map(str::to_string).unwrap_or_else(|| c.to_string())).collect()
+}
+
+/// Edit distance, for "did you mean" hints.
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+/// The closest candidate within a small edit distance.
+fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let limit = (name.chars().count() / 3).clamp(1, 2);
+    candidates
+        .into_iter()
+        .map(|c| (distance(name, c), c))
+        .filter(|(d, _)| *d <= limit)
+        .min_by_key(|(d, c)| (*d, c.to_string()))
+        .map(|(_, c)| c)
+}
+
+struct Resolver<'a> {
+    source: &'a str,
+    pool: Pool,
+    time: SymId,
+    names: HashMap<String, Binding>,
+    /// Every name the file declares anywhere, for "used before it is declared".
+    declared: HashMap<String, (Span, &'static str)>,
+    errors: Vec<Diagnostic>,
+    warnings: Vec<Diagnostic>,
+    in_outputs: bool,
+    title: Option<String>,
+    params: Vec<Param>,
+    coords: Vec<Coord>,
+    bodies: Vec<Body>,
+    constraints: Vec<Constraint>,
+    gravity: Option<Gravity>,
+    potentials: Vec<Term>,
+    forces: Vec<Load>,
+    torques: Vec<Load>,
+    dissipation: Vec<Term>,
+    lagrangians: Vec<Term>,
+    shows: Vec<Show>,
+    expects: Vec<Expect>,
+    simulate: Vec<lang::Setting>,
+    placeholders: Vec<(SymId, Placeholder)>,
+    lets: Vec<(String, cas::ExprId)>,
+}
+
+impl<'a> Resolver<'a> {
+    fn new(source: &'a str) -> Self {
+        let mut pool = Pool::new();
+        let time = pool.time();
+        let mut names = HashMap::new();
+        let mut placeholders = Vec::new();
+        for (name, kind) in [("KE", Placeholder::KineticEnergy), ("PE", Placeholder::PotentialEnergy)] {
+            let s = pool.param(name);
+            names.insert(name.to_string(), Binding::Quantity(s));
+            placeholders.push((s, kind));
+        }
+        Resolver {
+            source,
+            pool,
+            time,
+            names,
+            declared: HashMap::new(),
+            errors: Vec::new(),
+            warnings: Vec::new(),
+            in_outputs: false,
+            title: None,
+            params: Vec::new(),
+            coords: Vec::new(),
+            bodies: Vec::new(),
+            constraints: Vec::new(),
+            gravity: None,
+            potentials: Vec::new(),
+            forces: Vec::new(),
+            torques: Vec::new(),
+            dissipation: Vec::new(),
+            lagrangians: Vec::new(),
+            shows: Vec::new(),
+            expects: Vec::new(),
+            simulate: Vec::new(),
+            placeholders,
+            lets: Vec::new(),
+        }
+    }
+
+    fn error(&mut self, d: Diagnostic) {
+        self.errors.push(d);
+    }
+
+    fn text(&self, span: Span) -> String {
+        self.source.get(span.start..span.end).unwrap_or("").trim().to_string()
+    }
+
+    fn declare_all(&mut self, file: &SceneFile) {
+        for stmt in &file.stmts {
+            let mut add = |id: &Ident, what: &'static str| {
+                self.declared.entry(normalize(&id.name)).or_insert((id.span, what));
+            };
+            match &stmt.kind {
+                StmtKind::Param(ps) => ps.iter().for_each(|p| add(&p.name, "parameter")),
+                StmtKind::Coord(cs) => cs.iter().for_each(|c| add(&c.name, "coordinate")),
+                StmtKind::Let { name, .. } => add(name, "name"),
+                StmtKind::Particle { name, .. } | StmtKind::Body { name, .. } => add(name, "body"),
+                StmtKind::Constraint { name: Some(name), .. } => add(name, "constraint"),
+                _ => {}
+            }
+        }
+    }
+
+    /// Binds a new name, or reports that it is taken.
+    fn bind(&mut self, id: &Ident, binding: Binding) -> bool {
+        let name = normalize(&id.name);
+        if name == "t" || name == "pi" {
+            self.error(
+                Diagnostic::error(id.span, format!("`{name}` is built in and cannot be redeclared"))
+                    .with_label("built-in name")
+                    .with_hint(if name == "t" { "`t` is time" } else { "`pi` is π" }),
+            );
+            return false;
+        }
+        if let Some(existing) = self.names.get(&name) {
+            if !matches!(existing, Binding::Quantity(_)) {
+                let first = self.declared.get(&name).map(|(s, _)| *s);
+                let mut d = Diagnostic::error(id.span, format!("`{}` is declared twice", id.name))
+                    .with_label("declared again here");
+                if let Some(first) = first.filter(|s| *s != id.span) {
+                    d = d.with_related(first, "first declared here");
+                }
+                self.error(d.with_hint("give each parameter, coordinate, body and constraint its own name"));
+                return false;
+            }
+        }
+        self.names.insert(name, binding);
+        true
+    }
+
+    fn statement(&mut self, stmt: &Stmt) {
+        match &stmt.kind {
+            StmtKind::Scene { title } => self.title = Some(title.clone()),
+            StmtKind::Param(decls) => {
+                for decl in decls {
+                    let value = decl.value.as_ref().and_then(|v| self.constant(v));
+                    let value = match (value, &decl.unit) {
+                        (Some(v), Some(u)) if u.factors.len() == 1 && u.factors[0].0.name == "deg" => {
+                            let pi = self.pool.pi();
+                            let k = self.pool.mul2(v, pi);
+                            Some(self.pool.scale(k, &Rational::new(1.into(), 180.into())))
+                        }
+                        (v, _) => v,
+                    };
+                    let name = normalize(&decl.name.name);
+                    if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                        self.bind(&decl.name, Binding::Param(self.time));
+                        continue;
+                    }
+                    let sym = self.pool.param(&name);
+                    if self.bind(&decl.name, Binding::Param(sym)) {
+                        self.params.push(Param {
+                            name,
+                            sym,
+                            value,
+                            unit: decl.unit.clone(),
+                            span: decl.name.span,
+                        });
+                    }
+                }
+            }
+            StmtKind::Let { name, value } => {
+                if let Some(v) = self.value(value) {
+                    if let Value::Scalar(e) = v {
+                        self.lets.push((normalize(&name.name), e));
+                    }
+                    self.bind(name, Binding::Let(v));
+                }
+            }
+            StmtKind::Coord(decls) => {
+                for decl in decls {
+                    let initial = decl.value.as_ref().and_then(|v| self.constant(v));
+                    let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
+                    let name = normalize(&decl.name.name);
+                    if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                        self.bind(&decl.name, Binding::Param(self.time));
+                        continue;
+                    }
+                    let sym = self.pool.coordinate(&name);
+                    let zero = self.pool.zero();
+                    if self.bind(&decl.name, Binding::Coord(sym)) {
+                        self.coords.push(Coord {
+                            name,
+                            sym,
+                            initial: initial.unwrap_or(zero),
+                            initial_rate: rate.unwrap_or(zero),
+                            initial_given: decl.value.is_some() || decl.rate.is_some(),
+                            span: decl.name.span,
+                        });
+                    }
+                }
+            }
+            StmtKind::Particle { name, props } => self.body(name, props, BodyKind::Particle, stmt.span),
+            StmtKind::Body { name, props } => self.body(name, props, BodyKind::Rigid, stmt.span),
+            StmtKind::Constraint { name, lhs, rhs } => self.constraint(name.as_ref(), lhs, rhs, stmt.span),
+            StmtKind::Gravity { strength, direction } => {
+                let strength = self.scalar(strength);
+                let direction = direction.as_ref().and_then(|d| match self.value(d)? {
+                    Value::Vector(v) => Some(v),
+                    other => {
+                        self.error(
+                            Diagnostic::error(d.span, format!("a direction must be a vector, not {}", other.kind_name()))
+                                .with_label("expected `(x, y)` or `(x, y, z)`")
+                                .with_hint("write `gravity g along (0, -1)`"),
+                        );
+                        None
+                    }
+                });
+                if let Some(previous) = &self.gravity {
+                    let first = previous.span;
+                    self.error(
+                        Diagnostic::error(stmt.span, "gravity is given twice")
+                            .with_label("second `gravity`")
+                            .with_related(first, "first given here"),
+                    );
+                } else if let Some(strength) = strength {
+                    self.gravity = Some(Gravity { strength, direction, span: stmt.span });
+                }
+            }
+            StmtKind::Potential(e) => {
+                if let Some(expr) = self.scalar(e) {
+                    self.potentials.push(Term { expr, span: e.span });
+                }
+            }
+            StmtKind::Dissipation(e) => {
+                if let Some(expr) = self.scalar(e) {
+                    self.dissipation.push(Term { expr, span: e.span });
+                }
+            }
+            StmtKind::Lagrangian(e) => {
+                if let Some(expr) = self.scalar(e) {
+                    self.lagrangians.push(Term { expr, span: e.span });
+                }
+            }
+            StmtKind::Force { name, body, value } => self.load(name, body, value, stmt.span, false),
+            StmtKind::Torque { name, body, value } => self.load(name, body, value, stmt.span, true),
+            StmtKind::Show { at_start, items } => {
+                for item in items {
+                    if let Some(value) = self.value(item) {
+                        let label = self.text(item.span);
+                        self.shows.push(Show { at_start: *at_start, label, value, span: item.span });
+                    }
+                }
+            }
+            StmtKind::Expect { at_start, lhs, rhs } => {
+                let (l, r) = (self.value(lhs), self.value(rhs));
+                let (Some(l), Some(r)) = (l, r) else { return };
+                let (ln, rn) = (l.entries().len(), r.entries().len());
+                if ln != rn {
+                    self.error(
+                        Diagnostic::error(rhs.span, "the two sides of this `expect` have different shapes")
+                            .with_label(r.kind_name())
+                            .with_related(lhs.span, l.kind_name()),
+                    );
+                    return;
+                }
+                let text = self.text(stmt.span);
+                self.expects.push(Expect { at_start: *at_start, text, lhs: l, rhs: r, span: stmt.span });
+            }
+            StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
+        }
+    }
+
+    fn body(&mut self, name: &Ident, props: &[Property], kind: BodyKind, span: Span) {
+        let allowed: &[&str] = match kind {
+            BodyKind::Particle => &["mass", "position"],
+            BodyKind::Rigid => &["mass", "inertia", "position", "angle"],
+        };
+        let mut seen: HashMap<&str, Span> = HashMap::new();
+        let (mut mass, mut inertia, mut position, mut angle) = (None, None, None, None);
+        for p in props {
+            let key = p.key.name.as_str();
+            if !allowed.contains(&key) {
+                let mut d = Diagnostic::error(p.key.span, format!("unknown property `{key}`"))
+                    .with_label(format!("expected one of {}", allowed.join(", ")));
+                if kind == BodyKind::Particle && matches!(key, "inertia" | "angle") {
+                    d = d.with_hint("a particle has no orientation; use `body` for a rigid body");
+                } else if let Some(near) = closest(key, allowed.iter().copied()) {
+                    d = d.with_hint(format!("did you mean `{near}`?"));
+                }
+                self.error(d);
+                continue;
+            }
+            if let Some(first) = seen.insert(key, p.key.span) {
+                self.error(
+                    Diagnostic::error(p.key.span, format!("`{key}` is given twice"))
+                        .with_label("again here")
+                        .with_related(first, "first given here"),
+                );
+                continue;
+            }
+            match key {
+                "mass" => mass = self.scalar(&p.value),
+                "inertia" => inertia = self.scalar(&p.value),
+                "angle" => angle = self.scalar(&p.value),
+                _ => {
+                    position = match self.value(&p.value) {
+                        Some(Value::Vector(v)) if v.len() <= 3 => Some(v),
+                        Some(Value::Scalar(x)) => Some(vec![x]),
+                        Some(other) => {
+                            self.error(
+                                Diagnostic::error(p.value.span, format!("a position must be a vector, not {}", other.kind_name()))
+                                    .with_label("expected `(x, y)` or `(x, y, z)`"),
+                            );
+                            None
+                        }
+                        None => None,
+                    }
+                }
+            }
+        }
+        let what = if kind == BodyKind::Particle { "particle" } else { "body" };
+        let missing = |field: &str, hint: &str| {
+            Diagnostic::error(name.span, format!("{what} `{}` has no {field}", name.name))
+                .with_label(format!("{field} missing"))
+                .with_hint(hint.to_string())
+        };
+        let mut ok = true;
+        if mass.is_none() && !seen.contains_key("mass") {
+            let d = missing("mass", "add `mass m` inside the braces");
+            self.error(d);
+            ok = false;
+        }
+        if position.is_none() && !seen.contains_key("position") {
+            let d = missing("position", "add `position (x, y)`: where its centre of mass is, as a function of the coordinates");
+            self.error(d);
+            ok = false;
+        }
+        if kind == BodyKind::Rigid {
+            if inertia.is_none() && !seen.contains_key("inertia") {
+                let d = missing("inertia", "add `inertia m*L^2/12` (about the centre of mass), or use `particle` for a point mass");
+                self.error(d);
+                ok = false;
+            }
+            if angle.is_none() && !seen.contains_key("angle") {
+                let d = missing("angle", "add `angle theta`: the body's orientation; its angular velocity is angle'");
+                self.error(d);
+                ok = false;
+            }
+        }
+        let (Some(mass), Some(position), true) = (mass, position, ok) else { return };
+        let index = self.bodies.len();
+        if self.bind(name, Binding::Body(index)) {
+            self.bodies.push(Body { name: normalize(&name.name), kind, mass, inertia, position, angle, span });
+        }
+    }
+
+    fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
+        let (l, r) = (self.scalar(lhs), self.scalar(rhs));
+        let (Some(l), Some(r)) = (l, r) else { return };
+        let phi = self.pool.sub(l, r);
+        let free = self.pool.free_symbols(phi);
+        if free.iter().any(|s| self.pool.symbol(*s).order() > 0) {
+            self.error(
+                Diagnostic::error(span, "this constraint involves rates")
+                    .with_label("a velocity appears here")
+                    .with_hint("only holonomic constraints (positions and time) are supported; integrate a rolling condition to positions, as r*phi = R*theta"),
+            );
+            return;
+        }
+        if !free.iter().any(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. })) {
+            self.error(
+                Diagnostic::error(span, "this constraint involves no coordinate")
+                    .with_label("nothing here can move")
+                    .with_hint("a constraint relates coordinates declared with `coord`"),
+            );
+            return;
+        }
+        let index = self.constraints.len();
+        let cname = match name {
+            Some(id) => normalize(&id.name),
+            None => format!("constraint{}", index + 1),
+        };
+        let force_symbol = self.pool.param(&format!("{cname}.force"));
+        let lhs_free = self.pool.free_symbols(l);
+        let lhs_coords = lhs_free
+            .iter()
+            .copied()
+            .filter(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. }))
+            .collect();
+        if let Some(id) = name {
+            if !self.bind(id, Binding::Constraint(index)) {
+                return;
+            }
+        }
+        self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+        self.constraints.push(Constraint {
+            name: cname,
+            phi,
+            force_symbol,
+            force_requested: false,
+            lhs_coords,
+            span,
+        });
+    }
+
+    fn load(&mut self, name: &Ident, body: &Ident, value: &Expr, span: Span, torque: bool) {
+        let key = normalize(&body.name);
+        let index = match self.names.get(&key) {
+            Some(Binding::Body(i)) => *i,
+            _ => {
+                let bodies: Vec<String> = self.bodies.iter().map(|b| b.name.clone()).collect();
+                let mut d = Diagnostic::error(body.span, format!("no body named `{}`", body.name))
+                    .with_label("not a particle or body");
+                if let Some(near) = closest(&key, bodies.iter().map(String::as_str)) {
+                    d = d.with_hint(format!("did you mean `{near}`?"));
+                }
+                self.error(d);
+                return;
+            }
+        };
+        let Some(v) = self.value(value) else { return };
+        let dim = self.bodies[index].position.len();
+        let ok = match (&v, torque) {
+            (Value::Scalar(_), true) => self.bodies[index].kind == BodyKind::Rigid,
+            (Value::Vector(c), false) => c.len() == dim,
+            (Value::Scalar(_), false) => dim == 1,
+            _ => false,
+        };
+        if !ok {
+            let expected = if torque {
+                "a scalar torque on a rigid `body`".to_string()
+            } else {
+                format!("a {dim}-vector, like the body's position")
+            };
+            self.error(
+                Diagnostic::error(value.span, format!("expected {expected}, found {}", v.kind_name()))
+                    .with_label("here"),
+            );
+            return;
+        }
+        let load = Load { name: normalize(&name.name), body: index, value: v, span };
+        if torque {
+            self.torques.push(load);
+        } else {
+            self.forces.push(load);
+        }
+    }
+
+    /// A scalar that may not depend on coordinates or time (initial values, parameter values).
+    fn constant(&mut self, e: &Expr) -> Option<cas::ExprId> {
+        let v = self.scalar(e)?;
+        let moving = self
+            .pool
+            .free_symbols(v)
+            .iter()
+            .any(|s| !matches!(self.pool.symbol(*s).kind, SymbolKind::Param));
+        if moving {
+            self.error(
+                Diagnostic::error(e.span, "this value must be a constant")
+                    .with_label("depends on a coordinate or on time")
+                    .with_hint("initial values and parameter values may use numbers and parameters only"),
+            );
+            return None;
+        }
+        Some(v)
+    }
+
+    fn scalar(&mut self, e: &Expr) -> Option<cas::ExprId> {
+        match self.value(e)? {
+            Value::Scalar(x) => Some(x),
+            other => {
+                self.error(
+                    Diagnostic::error(e.span, format!("expected a scalar, found {}", other.kind_name()))
+                        .with_label("not a scalar"),
+                );
+                None
+            }
+        }
+    }
+
+    fn value(&mut self, e: &Expr) -> Option<Value> {
+        match &e.kind {
+            ExprKind::Number(text) => match cas::number::parse_decimal(text) {
+                Some(q) => Some(Value::Scalar(self.pool.num(q))),
+                None => {
+                    self.error(
+                        Diagnostic::error(e.span, format!("`{text}` is not a number lagrange can use"))
+                            .with_label("out of range")
+                            .with_hint("exponents beyond ±4000 are not supported"),
+                    );
+                    None
+                }
+            },
+            ExprKind::Name { name, primes } => self.name(name, *primes, e.span),
+            ExprKind::Member { object, field } => self.member(object, field, e.span),
+            ExprKind::Call { func, args } => self.call(func, args, e.span),
+            ExprKind::Neg(inner) => {
+                let v = self.value(inner)?;
+                Some(v.map(|x| self.pool.neg(x)))
+            }
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (l, r) = (self.value(lhs), self.value(rhs));
+                self.binary(*op, l?, r?, lhs, rhs)
+            }
+            ExprKind::Tuple(items) => {
+                let mut out = Vec::new();
+                for item in items {
+                    out.push(self.scalar(item));
+                }
+                Some(Value::Vector(out.into_iter().collect::<Option<Vec<_>>>()?))
+            }
+            ExprKind::Matrix(rows) => {
+                let mut out = Vec::new();
+                for row in rows {
+                    let mut r = Vec::new();
+                    for item in row {
+                        r.push(self.scalar(item));
+                    }
+                    out.push(r.into_iter().collect::<Option<Vec<_>>>());
+                }
+                let out = out.into_iter().collect::<Option<Vec<_>>>()?;
+                let width = out.first().map_or(0, |r| r.len());
+                if out.iter().any(|r| r.len() != width) {
+                    self.error(
+                        Diagnostic::error(e.span, "the rows of this matrix have different lengths")
+                            .with_label("ragged matrix")
+                            .with_hint("separate entries with `,` and rows with `;`"),
+                    );
+                    return None;
+                }
+                Some(Value::Matrix(out))
+            }
+        }
+    }
+
+    fn name(&mut self, raw: &str, primes: u8, span: Span) -> Option<Value> {
+        let name = normalize(raw);
+        let base = match name.as_str() {
+            "t" if !self.names.contains_key("t") => {
+                if primes > 0 {
+                    self.error(
+                        Diagnostic::error(span, "`t` is time; it has no rate")
+                            .with_label("t' is always 1")
+                            .with_hint("write `1`"),
+                    );
+                    return None;
+                }
+                return Some(Value::Scalar(self.pool.sym(self.time)));
+            }
+            "pi" if !self.names.contains_key("pi") => Value::Scalar(self.pool.pi()),
+            _ => match self.names.get(&name).cloned() {
+                Some(Binding::Param(s)) => {
+                    if primes > 0 {
+                        self.error(
+                            Diagnostic::error(span, format!("`{raw}` is a parameter, constant in time"))
+                                .with_label("has no rate")
+                                .with_hint(format!("declare it with `coord {raw}` if it moves")),
+                        );
+                        return None;
+                    }
+                    Value::Scalar(self.pool.sym(s))
+                }
+                Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
+                Some(Binding::Coord(s)) => {
+                    let d = self.pool.derivative_symbol(s, primes).expect("coordinates have rates");
+                    return Some(Value::Scalar(self.pool.sym(d)));
+                }
+                Some(Binding::Let(v)) => v,
+                Some(Binding::Body(_)) | Some(Binding::Constraint(_)) => {
+                    let what = if matches!(self.names.get(&name), Some(Binding::Body(_))) {
+                        "a body: write `NAME.position`, `NAME.velocity` or `NAME.omega`"
+                    } else {
+                        "a constraint: write `NAME.force` for its reaction"
+                    };
+                    self.error(
+                        Diagnostic::error(span, format!("`{raw}` is not a value"))
+                            .with_label("names a body or constraint")
+                            .with_hint(format!("`{raw}` is {what}")),
+                    );
+                    return None;
+                }
+                None => {
+                    self.unknown_name(raw, &name, span);
+                    return None;
+                }
+            },
+        };
+        if primes == 0 {
+            return Some(base);
+        }
+        // A rate of a `let` name or of KE: the total time derivative.
+        Some(base.map(|mut x| {
+            for _ in 0..primes {
+                x = self.pool.time_derivative(x);
+            }
+            x
+        }))
+    }
+
+    fn unknown_name(&mut self, raw: &str, name: &str, span: Span) {
+        if let Some((decl, what)) = self.declared.get(name).copied() {
+            if decl.start > span.start && !self.in_outputs {
+                self.error(
+                    Diagnostic::error(span, format!("the {what} `{raw}` is used before it is declared"))
+                        .with_label("used here")
+                        .with_related(decl, "declared here")
+                        .with_hint(format!("move the declaration of `{raw}` above its first use")),
+                );
+                return;
+            }
+            // Declared, but its declaration had an error of its own: already reported.
+            return;
+        }
+        let mut candidates: Vec<&str> = self.names.keys().map(String::as_str).collect();
+        candidates.extend(["t", "pi"]);
+        candidates.sort_unstable();
+        let mut d = Diagnostic::error(span, format!("unknown name `{raw}`")).with_label("not declared");
+        d = match closest(name, candidates) {
+            Some(near) => d.with_hint(format!("did you mean `{near}`?")),
+            None => d.with_hint(format!(
+                "declare it first: `param {raw}` for a constant, `coord {raw}` for a coordinate, `let {raw} = …` for a name"
+            )),
+        };
+        self.error(d);
+    }
+
+    fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<Value> {
+        let name = normalize(&object.name);
+        match self.names.get(&name).cloned() {
+            Some(Binding::Body(i)) => {
+                let body = self.bodies[i].clone();
+                let fields: &[&str] = match body.kind {
+                    BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
+                    BodyKind::Rigid => &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"],
+                };
+                let value = match field.name.as_str() {
+                    "position" => Some(Value::Vector(body.position.clone())),
+                    "velocity" => {
+                        Some(Value::Vector(body.position.iter().map(|x| self.pool.time_derivative(*x)).collect()))
+                    }
+                    "mass" => Some(Value::Scalar(body.mass)),
+                    "angle" => body.angle.map(Value::Scalar),
+                    "omega" => body.angle.map(|a| Value::Scalar(self.pool.time_derivative(a))),
+                    "x" => body.position.first().map(|x| Value::Scalar(*x)),
+                    "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
+                    "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
+                    _ => None,
+                };
+                if value.is_none() {
+                    let mut d = Diagnostic::error(field.span, format!("`{}` has no `{}`", object.name, field.name))
+                        .with_label(format!("expected one of {}", fields.join(", ")));
+                    if body.kind == BodyKind::Particle && matches!(field.name.as_str(), "omega" | "angle") {
+                        d = d.with_hint("a particle has no orientation; declare a rigid `body` with an `angle`");
+                    } else if let Some(near) = closest(&field.name, fields.iter().copied()) {
+                        d = d.with_hint(format!("did you mean `{near}`?"));
+                    }
+                    self.error(d);
+                }
+                value
+            }
+            Some(Binding::Constraint(i)) => {
+                if field.name != "force" {
+                    self.error(
+                        Diagnostic::error(field.span, format!("a constraint has no `{}`", field.name))
+                            .with_label("expected `force`")
+                            .with_hint(format!("`{}.force` is its reaction", object.name)),
+                    );
+                    return None;
+                }
+                if !self.in_outputs {
+                    self.error(
+                        Diagnostic::error(span, "a reaction can only be shown or checked")
+                            .with_label("used in the model itself")
+                            .with_hint("use `.force` in `show` and `expect` lines"),
+                    );
+                    return None;
+                }
+                self.constraints[i].force_requested = true;
+                Some(Value::Scalar(self.pool.sym(self.constraints[i].force_symbol)))
+            }
+            _ => {
+                if self.declared.contains_key(&name) {
+                    // Declared but failed to resolve: already reported.
+                    return None;
+                }
+                let mut candidates: Vec<&str> = self
+                    .names
+                    .iter()
+                    .filter(|(_, b)| matches!(b, Binding::Body(_) | Binding::Constraint(_)))
+                    .map(|(k, _)| k.as_str())
+                    .collect();
+                candidates.sort_unstable();
+                let mut d = Diagnostic::error(object.span, format!("no body or constraint named `{}`", object.name))
+                    .with_label("unknown");
+                if let Some(near) = closest(&name, candidates) {
+                    d = d.with_hint(format!("did you mean `{near}`?"));
+                }
+                self.error(d);
+                None
+            }
+        }
+    }
+
+    fn call(&mut self, func: &Ident, args: &[Expr], span: Span) -> Option<Value> {
+        let name = func.name.as_str();
+        let arity = match name {
+            "atan2" => 2,
+            "sqrt" => 1,
+            _ if Func::from_name(name).is_some() => 1,
+            _ => {
+                let mut known: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
+                known.extend(["sqrt", "atan2"]);
+                let mut d = Diagnostic::error(func.span, format!("unknown function `{name}`"))
+                    .with_label("not a function lagrange knows");
+                d = match closest(name, known.iter().copied()) {
+                    Some(near) => d.with_hint(format!("did you mean `{near}`?")),
+                    None => d.with_hint(format!("the functions are {}", known.join(", "))),
+                };
+                self.error(d);
+                return None;
+            }
+        };
+        if args.len() != arity {
+            self.error(
+                Diagnostic::error(span, format!("`{name}` takes {arity} argument{}", if arity == 1 { "" } else { "s" }))
+                    .with_label(format!("given {}", args.len())),
+            );
+            return None;
+        }
+        let mut xs = Vec::new();
+        for a in args {
+            xs.push(self.scalar(a));
+        }
+        let xs = xs.into_iter().collect::<Option<Vec<_>>>()?;
+        let v = match name {
+            "atan2" => self.pool.atan2(xs[0], xs[1]),
+            "sqrt" => self.pool.sqrt(xs[0]),
+            _ => self.pool.func(Func::from_name(name).expect("checked above"), xs[0]),
+        };
+        Some(Value::Scalar(v))
+    }
+
+    fn binary(&mut self, op: BinOp, l: Value, r: Value, le: &Expr, re: &Expr) -> Option<Value> {
+        use Value::*;
+        let span = le.span.join(re.span);
+        let mismatch = |this: &mut Self, what: &str| {
+            this.error(
+                Diagnostic::error(span, format!("cannot {what} {} and {}", l.kind_name(), r.kind_name()))
+                    .with_label("shapes do not fit")
+                    .with_related(le.span, l.kind_name())
+                    .with_related(re.span, r.kind_name()),
+            );
+            None
+        };
+        match op {
+            BinOp::Add | BinOp::Sub => {
+                let mut combine = |a: cas::ExprId, b: cas::ExprId| {
+                    if op == BinOp::Add {
+                        self.pool.add2(a, b)
+                    } else {
+                        self.pool.sub(a, b)
+                    }
+                };
+                match (&l, &r) {
+                    (Scalar(a), Scalar(b)) => Some(Scalar(combine(*a, *b))),
+                    (Vector(a), Vector(b)) if a.len() == b.len() => {
+                        Some(Vector(a.iter().zip(b).map(|(x, y)| combine(*x, *y)).collect()))
+                    }
+                    (Matrix(a), Matrix(b)) if a.len() == b.len() && a[0].len() == b[0].len() => Some(Matrix(
+                        a.iter().zip(b).map(|(ra, rb)| ra.iter().zip(rb).map(|(x, y)| combine(*x, *y)).collect()).collect(),
+                    )),
+                    _ => mismatch(self, if op == BinOp::Add { "add" } else { "subtract" }),
+                }
+            }
+            BinOp::Mul => match (&l, &r) {
+                (Scalar(a), Scalar(b)) => Some(Scalar(self.pool.mul2(*a, *b))),
+                (Scalar(s), other) | (other, Scalar(s)) => {
+                    let s = *s;
+                    Some(other.map(|x| self.pool.mul2(s, x)))
+                }
+                (Matrix(a), Matrix(b)) if a[0].len() == b.len() => {
+                    let mut out = Vec::new();
+                    for row in a {
+                        let mut out_row = Vec::new();
+                        for j in 0..b[0].len() {
+                            let terms: Vec<cas::ExprId> =
+                                row.iter().zip(b).map(|(x, brow)| self.pool.mul2(*x, brow[j])).collect();
+                            out_row.push(self.pool.add(&terms));
+                        }
+                        out.push(out_row);
+                    }
+                    Some(Matrix(out))
+                }
+                (Matrix(a), Vector(v)) if a[0].len() == v.len() => {
+                    let mut out = Vec::new();
+                    for row in a {
+                        let terms: Vec<cas::ExprId> = row.iter().zip(v).map(|(x, y)| self.pool.mul2(*x, *y)).collect();
+                        out.push(vec![self.pool.add(&terms)]);
+                    }
+                    Some(Matrix(out))
+                }
+                _ => mismatch(self, "multiply"),
+            },
+            BinOp::Div => match (&l, &r) {
+                (_, Scalar(b)) => {
+                    if self.pool.is_zero(*b) {
+                        self.error(Diagnostic::error(re.span, "division by zero").with_label("this is 0"));
+                        return None;
+                    }
+                    let b = *b;
+                    Some(l.map(|x| self.pool.div(x, b)))
+                }
+                _ => mismatch(self, "divide"),
+            },
+            BinOp::Pow => match (&l, &r) {
+                (Scalar(a), Scalar(b)) => {
+                    if let Some(q) = self.pool.as_num(*b) {
+                        if q.numer().bits() > 32 || q.denom().bits() > 32 || q.abs() > Rational::from_integer(MAX_EXPONENT.into()) {
+                            self.error(
+                                Diagnostic::error(re.span, "this exponent is too large")
+                                    .with_label(format!("exponents are limited to ±{MAX_EXPONENT}"))
+                                    .with_hint("a power this high is not physics; check the formula"),
+                            );
+                            return None;
+                        }
+                        if self.pool.is_zero(*a) && q < &Rational::from_integer(0.into()) {
+                            self.error(Diagnostic::error(span, "division by zero").with_label("0 to a negative power"));
+                            return None;
+                        }
+                    }
+                    Some(Scalar(self.pool.pow(*a, *b)))
+                }
+                _ => mismatch(self, "raise to a power"),
+            },
+        }
+    }
+
+    fn finish(self) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+        if !self.errors.is_empty() {
+            let mut errors = self.errors;
+            errors.sort_by_key(|d| d.span.start);
+            return Err(errors);
+        }
+        Ok((
+            Model {
+                pool: self.pool,
+                title: self.title,
+                time: self.time,
+                params: self.params,
+                coords: self.coords,
+                bodies: self.bodies,
+                constraints: self.constraints,
+                gravity: self.gravity,
+                potentials: self.potentials,
+                forces: self.forces,
+                torques: self.torques,
+                dissipation: self.dissipation,
+                lagrangians: self.lagrangians,
+                shows: self.shows,
+                expects: self.expects,
+                simulate: self.simulate,
+                placeholders: self.placeholders,
+                lets: self.lets,
+            },
+            self.warnings,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn suggestions_are_close_names() {
+        assert_eq!(closest("thta", ["theta", "phi", "x"]), Some("theta"));
+        assert_eq!(closest("q", ["theta", "phi"]), None);
+        assert_eq!(distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn greek_letters_are_spelled_out() {
+        assert_eq!(normalize("θ"), "theta");
+        assert_eq!(normalize("φ1"), "phi1");
+        assert_eq!(normalize("x"), "x");
+    }
+}
