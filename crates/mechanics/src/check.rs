@@ -1,0 +1,261 @@
+//! Checking `expect` lines against the derivation: by algebra where it decides, otherwise at
+//! many random states, always saying which.
+
+use std::collections::HashMap;
+
+use cas::{ExprId, SymId, SymbolKind};
+use nalgebra::{DMatrix, DVector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::derive::Derivation;
+
+/// How many random states a numeric check uses.
+pub const SAMPLES: usize = 24;
+const RELATIVE_TOLERANCE: f64 = 1e-9;
+
+/// The outcome of one `expect` line.
+#[derive(Clone, Debug)]
+pub enum Verdict {
+    /// The residual simplifies to zero.
+    Exact,
+    /// The algebra could not decide; the residual vanished at this many random states.
+    Numeric { samples: usize },
+    /// The residual is not zero.
+    Fails(Failure),
+    /// Neither algebra nor numbers could decide (e.g. no state where everything is defined).
+    Undecided { reason: String },
+}
+
+#[derive(Clone, Debug)]
+pub struct Failure {
+    /// Which entry of a vector or matrix equation, if it has several.
+    pub component: Option<usize>,
+    /// lhs − rhs, simplified (with accelerations, where the equation has them).
+    pub residual: ExprId,
+    /// A state where the residual is not zero, and its value there.
+    pub state: Vec<(SymId, f64)>,
+    pub value: f64,
+}
+
+impl Verdict {
+    pub fn holds(&self) -> bool {
+        matches!(self, Verdict::Exact | Verdict::Numeric { .. })
+    }
+}
+
+/// The unknowns of the equations of motion at one numeric state.
+struct Sample {
+    values: Vec<f64>,
+}
+
+impl Derivation {
+    /// Checks every `expect` line, in order.
+    pub fn check_all(&mut self) -> Vec<Verdict> {
+        (0..self.model.expects.len()).map(|i| self.check(i)).collect()
+    }
+
+    /// Checks one `expect` line.
+    pub fn check(&mut self, index: usize) -> Verdict {
+        let expect = self.model.expects[index].clone();
+        let lhs = self.expand_value(&expect.lhs).entries();
+        let rhs = self.expand_value(&expect.rhs).entries();
+        let many = lhs.len() > 1;
+        let mut numeric = 0;
+        for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
+            let residual = self.model.pool.sub(l, r);
+            let verdict = if expect.at_start {
+                self.check_at_start(residual)
+            } else {
+                self.check_everywhere(residual)
+            };
+            match verdict {
+                Verdict::Exact => {}
+                Verdict::Numeric { samples } => numeric = numeric.max(samples),
+                Verdict::Fails(mut f) => {
+                    f.component = many.then_some(k);
+                    return Verdict::Fails(f);
+                }
+                undecided => return undecided,
+            }
+        }
+        if numeric > 0 {
+            Verdict::Numeric { samples: numeric }
+        } else {
+            Verdict::Exact
+        }
+    }
+
+    fn check_at_start(&mut self, residual: ExprId) -> Verdict {
+        let Some(at_start) = self.unknowns_at_start() else {
+            return Verdict::Undecided { reason: "the mass matrix is singular at the start".into() };
+        };
+        let z = self.model.pool.subst(residual, &at_start);
+        if self.model.pool.is_identically_zero(z) {
+            return Verdict::Exact;
+        }
+        // Only parameters are left: compare at random parameter values.
+        let z = self.model.pool.simplify(z);
+        self.numeric(z, false)
+    }
+
+    fn check_everywhere(&mut self, residual: ExprId) -> Verdict {
+        let unknowns = self.unknowns();
+        let pool = &mut self.model.pool;
+        let residual = pool.expand(residual);
+        let involved: Vec<usize> =
+            (0..unknowns.len()).filter(|&j| pool.depends_on(residual, unknowns[j])).collect();
+        if involved.is_empty() {
+            if pool.is_identically_zero(residual) {
+                return Verdict::Exact;
+            }
+            let r = pool.simplify(residual);
+            return self.numeric(r, false);
+        }
+        // residual = a·u + b. It holds along the motion when it is a multiple of one row of the
+        // equations of motion: a = c·row, b = −c·rhs.
+        let a: Vec<ExprId> = unknowns.iter().map(|u| pool.diff(residual, *u)).collect();
+        let linear = a.iter().all(|aj| unknowns.iter().all(|u| !pool.depends_on(*aj, *u)));
+        if linear && self.is_row_multiple(residual, &a) {
+            return Verdict::Exact;
+        }
+        let r = self.model.pool.simplify(residual);
+        self.numeric(r, true)
+    }
+
+    fn is_row_multiple(&mut self, residual: ExprId, a: &[ExprId]) -> bool {
+        let unknowns = self.unknowns();
+        let (rows, rhs) = self.system();
+        let pool = &mut self.model.pool;
+        let zeros: HashMap<SymId, ExprId> = unknowns.iter().map(|u| (*u, pool.zero())).collect();
+        let b = pool.subst(residual, &zeros);
+        let Some(j) = (0..a.len()).find(|&j| !pool.is_identically_zero(a[j])) else { return false };
+        for (row, f) in rows.iter().zip(rhs.iter()) {
+            if pool.is_identically_zero(row[j]) {
+                continue;
+            }
+            let c = pool.div(a[j], row[j]);
+            let mut ok = true;
+            for (ak, rk) in a.iter().zip(row.iter()) {
+                let p = pool.mul2(c, *rk);
+                let d = pool.sub(*ak, p);
+                if !pool.is_identically_zero(d) {
+                    ok = false;
+                    break;
+                }
+            }
+            if ok {
+                let p = pool.mul2(c, *f);
+                let d = pool.add2(b, p);
+                if pool.is_identically_zero(d) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// The symbols a random state gives values to: parameters, coordinates, rates, time.
+    fn state_symbols(&self) -> Vec<SymId> {
+        let pool = &self.model.pool;
+        let mut syms: Vec<SymId> = self.model.params.iter().map(|p| p.sym).collect();
+        syms.push(self.model.time);
+        syms.extend(self.coords.iter().copied());
+        syms.extend(self.rates.iter().copied());
+        syms.retain(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Coordinate { order: 2.., .. }));
+        syms
+    }
+
+    fn random_state(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
+        let pool = &self.model.pool;
+        let mut values = vec![f64::NAN; pool.symbol_count()];
+        for s in self.state_symbols() {
+            values[s.index()] = match pool.symbol(s).kind {
+                SymbolKind::Param => rng.gen_range(0.5..2.0),
+                SymbolKind::Time => rng.gen_range(0.0..1.0),
+                SymbolKind::Coordinate { order: 0, .. } => rng.gen_range(-1.2..1.2),
+                SymbolKind::Coordinate { .. } => rng.gen_range(-1.0..1.0),
+            };
+        }
+        values
+    }
+
+    /// Solves the equations of motion numerically at a state, filling in the unknowns.
+    fn solve_unknowns(&mut self, values: &mut [f64]) -> Option<()> {
+        let unknowns = self.unknowns();
+        if unknowns.is_empty() {
+            return Some(());
+        }
+        let (rows, rhs) = self.system();
+        let pool = &self.model.pool;
+        let mut memo = HashMap::new();
+        let n = unknowns.len();
+        let a = DMatrix::from_fn(n, n, |i, j| pool.eval_memo(rows[i][j], values, &mut memo));
+        let b = DVector::from_fn(n, |i, _| pool.eval_memo(rhs[i], values, &mut memo));
+        if !a.iter().chain(b.iter()).all(|x| x.is_finite()) {
+            return None;
+        }
+        let x = a.lu().solve(&b)?;
+        for (u, v) in unknowns.iter().zip(x.iter()) {
+            values[u.index()] = *v;
+        }
+        Some(())
+    }
+
+    fn numeric(&mut self, residual: ExprId, with_unknowns: bool) -> Verdict {
+        // A fixed seed: the same scene is checked at the same states in every run.
+        let mut rng = ChaCha8Rng::seed_from_u64(0x1a9_2a96e);
+        let syms = self.state_symbols();
+        let mut good = 0;
+        for _ in 0..SAMPLES * 4 {
+            if good == SAMPLES {
+                break;
+            }
+            let mut values = self.random_state(&mut rng);
+            if with_unknowns && self.solve_unknowns(&mut values).is_none() {
+                continue;
+            }
+            let (value, scale) = self.magnitude(residual, &values);
+            if !value.is_finite() || !scale.is_finite() {
+                continue;
+            }
+            if value.abs() > RELATIVE_TOLERANCE * (1.0 + scale) {
+                let mut state: Vec<(SymId, f64)> = syms
+                    .iter()
+                    .filter(|s| self.model.pool.depends_on(residual, **s))
+                    .map(|s| (*s, values[s.index()]))
+                    .collect();
+                state.extend(
+                    self.unknowns()
+                        .into_iter()
+                        .filter(|u| self.model.pool.depends_on(residual, *u))
+                        .map(|u| (u, values[u.index()])),
+                );
+                return Verdict::Fails(Failure { component: None, residual, state, value });
+            }
+            good += 1;
+        }
+        if good == 0 {
+            return Verdict::Undecided { reason: "no random state where the expressions are defined".into() };
+        }
+        Verdict::Numeric { samples: good }
+    }
+
+    /// The residual's value, and the size of the terms it is the sum of (for a relative test).
+    fn magnitude(&self, residual: ExprId, values: &[f64]) -> (f64, f64) {
+        let pool = &self.model.pool;
+        let mut memo = HashMap::new();
+        let value = pool.eval_memo(residual, values, &mut memo);
+        let scale = match pool.node(residual) {
+            cas::Node::Add(c, terms) => {
+                cas::number::to_f64(c).abs()
+                    + terms
+                        .iter()
+                        .map(|(t, k)| (cas::number::to_f64(k) * pool.eval_memo(*t, values, &mut memo)).abs())
+                        .sum::<f64>()
+            }
+            _ => value.abs(),
+        };
+        (value, scale)
+    }
+}

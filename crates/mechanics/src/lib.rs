@@ -1,0 +1,16 @@
+//! Lagrangian mechanics on a resolved model.
+//!
+//! This crate owns the physics: kinetic and potential energy of particles and planar rigid
+//! bodies, holonomic constraints (eliminated when they can be solved for one coordinate, kept
+//! with a multiplier otherwise), generalized forces by virtual work, the Euler–Lagrange
+//! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, and the
+//! checking of `expect` lines. It knows nothing of parsing or of files: it starts from a
+//! [`model::Model`].
+
+mod check;
+mod derive;
+mod linear;
+
+pub use check::{Failure, Verdict, SAMPLES};
+pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
+pub use linear::solve;
