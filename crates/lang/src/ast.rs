@@ -45,14 +45,27 @@ pub enum ExprKind {
     /// A decimal literal exactly as written: `12`, `0.1`, `1e-3`, `2.5E+4`.
     Number(String),
     /// A name with its time-derivative primes: `theta` (0), `x'` (1), `x''` (2).
-    Name { name: String, primes: u8 },
+    Name {
+        name: String,
+        primes: u8,
+    },
     /// A quantity of a model object: `disk.omega`, `floor.force`, `rod.position`.
-    Member { object: Ident, field: Ident },
+    Member {
+        object: Ident,
+        field: Ident,
+    },
     /// `sin(theta)`, `atan2(y, x)`.
-    Call { func: Ident, args: Vec<Expr> },
+    Call {
+        func: Ident,
+        args: Vec<Expr>,
+    },
     /// Unary minus.
     Neg(Box<Expr>),
-    Binary { op: BinOp, lhs: Box<Expr>, rhs: Box<Expr> },
+    Binary {
+        op: BinOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
     /// A parenthesised list of two or more: `(x, y)` or `(x, y, z)`.
     Tuple(Vec<Expr>),
     /// `[a, b; c, d]`: rows separated by `;`, entries by `,`.
@@ -148,4 +161,48 @@ pub enum StmtKind {
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SceneFile {
     pub stmts: Vec<Stmt>,
+}
+
+impl Expr {
+    /// The expression as an S-expression, without spans: `(+ a (* 2 b))`, `(neg x)`,
+    /// `(call sin x)`, `(tuple x y)`, `(matrix (a b) (c d))`, `x''`, `disk.omega`.
+    /// Handy for tests that compare structure but not positions.
+    pub fn to_sexpr(&self) -> String {
+        match &self.kind {
+            ExprKind::Number(text) => text.clone(),
+            ExprKind::Name { name, primes } => {
+                format!("{name}{}", "'".repeat(usize::from(*primes)))
+            }
+            ExprKind::Member { object, field } => format!("{}.{}", object.name, field.name),
+            ExprKind::Call { func, args } => {
+                let args: Vec<String> = args.iter().map(Expr::to_sexpr).collect();
+                format!("(call {} {})", func.name, args.join(" "))
+            }
+            ExprKind::Neg(inner) => format!("(neg {})", inner.to_sexpr()),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let op = match op {
+                    BinOp::Add => "+",
+                    BinOp::Sub => "-",
+                    BinOp::Mul => "*",
+                    BinOp::Div => "/",
+                    BinOp::Pow => "^",
+                };
+                format!("({op} {} {})", lhs.to_sexpr(), rhs.to_sexpr())
+            }
+            ExprKind::Tuple(items) => {
+                let items: Vec<String> = items.iter().map(Expr::to_sexpr).collect();
+                format!("(tuple {})", items.join(" "))
+            }
+            ExprKind::Matrix(rows) => {
+                let rows: Vec<String> = rows
+                    .iter()
+                    .map(|row| {
+                        let row: Vec<String> = row.iter().map(Expr::to_sexpr).collect();
+                        format!("({})", row.join(" "))
+                    })
+                    .collect();
+                format!("(matrix {})", rows.join(" "))
+            }
+        }
+    }
 }
