@@ -68,6 +68,29 @@ static PRATT: LazyLock<PrattParser<Rule>> = LazyLock::new(|| {
 /// resumes at the next line that starts with a statement keyword) and the structural checks of
 /// the AST builder.
 pub fn parse(source: &str) -> Result<SceneFile, Vec<Diagnostic>> {
+    // pest's generated code recurses several frames per bracket level, and unoptimised builds
+    // use large frames: the 256 levels the pre-scan lets through need a few MB of stack, more
+    // than a test thread's 2 MB. So parse on a thread of our own with room to spare.
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .name("lang-parser".into())
+            .stack_size(PARSER_STACK_SIZE)
+            .spawn_scoped(scope, || parse_here(source));
+        match spawned {
+            Ok(handle) => handle.join().unwrap_or_else(|_| {
+                Err(vec![Diagnostic::error(Span::default(), "internal error: the parser crashed")])
+            }),
+            // No thread to be had: parse here, which is fine unless the nesting is extreme.
+            Err(_) => parse_here(source),
+        }
+    })
+}
+
+/// Stack for the parser thread: ample for [`MAX_BRACKET_DEPTH`] levels even in a debug build.
+const PARSER_STACK_SIZE: usize = 64 * 1024 * 1024;
+
+/// [`parse`], on the current thread's stack.
+fn parse_here(source: &str) -> Result<SceneFile, Vec<Diagnostic>> {
     let scan = scan_brackets(source);
     if let Some(too_deep) = scan.too_deep {
         return Err(vec![too_deep]);
@@ -160,9 +183,7 @@ fn scan_brackets(source: &str) -> BracketScan {
                 }
             }
             ')' | ']' | '}' => match stack.pop() {
-                Some((open_at, open)) if closer(open) == c => {
-                    let _ = open_at;
-                }
+                Some((_, open)) if closer(open) == c => {}
                 Some(open) => problems.push(BracketProblem::Mismatched { close: (i, c), open }),
                 None => problems.push(BracketProblem::Stray(i, c)),
             },
@@ -303,7 +324,6 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         at_start | kw_at => (4, "`at start:`"),
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
-        primes => (5, "`'`"),
         eq => (6, "`=`"),
         colon => (6, "`:`"),
         lparen => (6, "`(`"),
@@ -317,6 +337,32 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         EOI => (9, "end of line"),
         _ => return None,
     })
+}
+
+/// Whether pest, failing on `rule`, was looking for the start of a statement. pest reports the
+/// outermost rule that failed where it started: a statement rule, or `file` on the first line.
+fn is_statement_start(rule: Rule) -> bool {
+    use Rule::*;
+    is_statement_keyword(rule)
+        || matches!(
+            rule,
+            file | scene_stmt
+                | param_stmt
+                | let_stmt
+                | coord_stmt
+                | particle_stmt
+                | body_stmt
+                | constraint_stmt
+                | gravity_stmt
+                | potential_stmt
+                | force_stmt
+                | torque_stmt
+                | dissipation_stmt
+                | lagrangian_stmt
+                | show_stmt
+                | expect_stmt
+                | simulate_stmt
+        )
 }
 
 fn is_statement_keyword(rule: Rule) -> bool {
@@ -386,7 +432,7 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     let span = Span::new(pos, pos + found_token.len().min(rest.len()));
 
     // At the start of a statement: an unknown keyword, probably misspelt.
-    if positives.iter().any(|&r| is_statement_keyword(r)) {
+    if positives.iter().any(|&r| is_statement_start(r)) {
         let word = leading_word(rest);
         let list = format!("a statement starts with one of: {}", STATEMENT_KEYWORDS.join(", "));
         return if word.is_empty() {
@@ -422,12 +468,12 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     let wants_operator = positives.iter().any(|r| {
         matches!(r, Rule::add_op | Rule::sub_op | Rule::mul_op | Rule::div_op | Rule::pow_op)
     });
-    if wants_operator {
+    if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
+        diag = diag.with_hint("separate the items of a block with `;` or a new line");
+    } else if wants_operator {
         if let Some(hint) = juxtaposition_hint(source, pos) {
             diag = diag.with_hint(hint);
         }
-    } else if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
-        diag = diag.with_hint("separate the items of a block with `;` or a new line");
     }
     diag
 }
