@@ -162,3 +162,47 @@ pub enum StmtKind {
 pub struct SceneFile {
     pub stmts: Vec<Stmt>,
 }
+
+impl Expr {
+    /// The expression as an S-expression, without spans: `(+ a (* 2 b))`, `(neg x)`,
+    /// `(call sin x)`, `(tuple x y)`, `(matrix (a b) (c d))`, `x''`, `disk.omega`.
+    /// Handy for tests that compare structure but not positions.
+    pub fn to_sexpr(&self) -> String {
+        match &self.kind {
+            ExprKind::Number(text) => text.clone(),
+            ExprKind::Name { name, primes } => {
+                format!("{name}{}", "'".repeat(usize::from(*primes)))
+            }
+            ExprKind::Member { object, field } => format!("{}.{}", object.name, field.name),
+            ExprKind::Call { func, args } => {
+                let args: Vec<String> = args.iter().map(Expr::to_sexpr).collect();
+                format!("(call {} {})", func.name, args.join(" "))
+            }
+            ExprKind::Neg(inner) => format!("(neg {})", inner.to_sexpr()),
+            ExprKind::Binary { op, lhs, rhs } => {
+                let op = match op {
+                    BinOp::Add => "+",
+                    BinOp::Sub => "-",
+                    BinOp::Mul => "*",
+                    BinOp::Div => "/",
+                    BinOp::Pow => "^",
+                };
+                format!("({op} {} {})", lhs.to_sexpr(), rhs.to_sexpr())
+            }
+            ExprKind::Tuple(items) => {
+                let items: Vec<String> = items.iter().map(Expr::to_sexpr).collect();
+                format!("(tuple {})", items.join(" "))
+            }
+            ExprKind::Matrix(rows) => {
+                let rows: Vec<String> = rows
+                    .iter()
+                    .map(|row| {
+                        let row: Vec<String> = row.iter().map(Expr::to_sexpr).collect();
+                        format!("({})", row.join(" "))
+                    })
+                    .collect();
+                format!("(matrix {})", rows.join(" "))
+            }
+        }
+    }
+}
