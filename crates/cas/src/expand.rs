@@ -258,6 +258,19 @@ impl Pool {
         self.add(&parts)
     }
 
+    /// The simplified form with its monomial content pulled out in front of a sum:
+    /// `1/12·m·L²·(1 + 3·sin²θ)` rather than `1/12·m·L² + ¼·m·L²·sin²θ`.
+    pub fn factor_content(&mut self, e: ExprId) -> ExprId {
+        let s = self.simplify(e);
+        let (c, rest) = self.content(s);
+        if matches!(self.node(rest), Node::Add(..)) && self.as_num(c).is_none() {
+            let rest = self.fold_pythagoras(rest);
+            self.mul2(c, rest)
+        } else {
+            s
+        }
+    }
+
     /// Splits `e` into its monomial content and the rest, `e = content · rest`: the positive
     /// gcd of the rational coefficients times every factor common to all terms at its lowest
     /// power. `(m L²/4 sin²θ + m L²/12)` → `(m L²/12, 3 sin²θ + 1)`.

@@ -86,7 +86,8 @@ fn unicode_subscript(sub: &str) -> String {
     }
 }
 
-fn superscript(text: &str) -> String {
+/// Unicode superscript digits and minus, for powers.
+pub fn superscript(text: &str) -> String {
     text.chars()
         .map(|c| match c {
             '0' => '⁰',
@@ -223,11 +224,18 @@ impl Pool {
                 let mut parts: Vec<(ExprId, Rational)> = terms.to_vec();
                 parts.sort_by(|a, b| self.term_order(a.0, b.0));
                 let mut out = String::new();
+                // A constant reads first in a sum of positions (1 + 3 sin²θ), last in an
+                // equation with rates in it.
+                let constant_first = !c.is_zero() && self.max_order(e) == 0;
+                if constant_first {
+                    let text = self.rational_text(&c.abs(), style);
+                    push_term(&mut out, &text, c.is_negative(), true, style);
+                }
                 for (i, (t, k)) in parts.iter().enumerate() {
                     let text = self.fmt_scaled(*t, &k.abs(), style);
-                    push_term(&mut out, &text, k.is_negative(), i == 0, style);
+                    push_term(&mut out, &text, k.is_negative(), i == 0 && !constant_first, style);
                 }
-                if !c.is_zero() {
+                if !c.is_zero() && !constant_first {
                     let text = self.rational_text(&c.abs(), style);
                     push_term(&mut out, &text, c.is_negative(), parts.is_empty(), style);
                 }

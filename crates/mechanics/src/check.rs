@@ -44,11 +44,6 @@ impl Verdict {
     }
 }
 
-/// The unknowns of the equations of motion at one numeric state.
-struct Sample {
-    values: Vec<f64>,
-}
-
 impl Derivation {
     /// Checks every `expect` line, in order.
     pub fn check_all(&mut self) -> Vec<Verdict> {
@@ -88,7 +83,9 @@ impl Derivation {
 
     fn check_at_start(&mut self, residual: ExprId) -> Verdict {
         let Some(at_start) = self.unknowns_at_start() else {
-            return Verdict::Undecided { reason: "the mass matrix is singular at the start".into() };
+            return Verdict::Undecided {
+                reason: "the mass matrix is singular at the start".into(),
+            };
         };
         let z = self.model.pool.subst(residual, &at_start);
         if self.model.pool.is_identically_zero(z) {
@@ -236,7 +233,9 @@ impl Derivation {
             good += 1;
         }
         if good == 0 {
-            return Verdict::Undecided { reason: "no random state where the expressions are defined".into() };
+            return Verdict::Undecided {
+                reason: "no random state where the expressions are defined".into(),
+            };
         }
         Verdict::Numeric { samples: good }
     }
@@ -251,7 +250,9 @@ impl Derivation {
                 cas::number::to_f64(c).abs()
                     + terms
                         .iter()
-                        .map(|(t, k)| (cas::number::to_f64(k) * pool.eval_memo(*t, values, &mut memo)).abs())
+                        .map(|(t, k)| {
+                            (cas::number::to_f64(k) * pool.eval_memo(*t, values, &mut memo)).abs()
+                        })
                         .sum::<f64>()
             }
             _ => value.abs(),

@@ -108,7 +108,9 @@ impl Derivation {
             let value = match kind {
                 Placeholder::KineticEnergy => Some(self.kinetic),
                 Placeholder::PotentialEnergy => Some(self.potential),
-                Placeholder::Reaction(c) => self.reactions.iter().find(|r| r.constraint == c).map(|r| r.expr),
+                Placeholder::Reaction(c) => {
+                    self.reactions.iter().find(|r| r.constraint == c).map(|r| r.expr)
+                }
             };
             if let Some(v) = value {
                 map.insert(s, v);
@@ -173,16 +175,23 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         let phi = pool.expand(phi);
         if pool.is_identically_zero(phi) {
             errors.push(
-                Diagnostic::error(c.span, format!("constraint `{}` is implied by the ones before it", c.name))
-                    .with_label("redundant")
-                    .with_hint("remove it: it adds no condition"),
+                Diagnostic::error(
+                    c.span,
+                    format!("constraint `{}` is implied by the ones before it", c.name),
+                )
+                .with_label("redundant")
+                .with_hint("remove it: it adds no condition"),
             );
             continue;
         }
         let free = pool.free_symbols(phi);
         // Prefer a coordinate written alone on the left (`y = …`), then the latest declared.
-        let mut candidates: Vec<SymId> =
-            c.lhs_coords.iter().copied().filter(|q| free.contains(q) && !solved.contains_key(q)).collect();
+        let mut candidates: Vec<SymId> = c
+            .lhs_coords
+            .iter()
+            .copied()
+            .filter(|q| free.contains(q) && !solved.contains_key(q))
+            .collect();
         for q in declared.iter().rev() {
             if free.contains(q) && !candidates.contains(q) && !solved.contains_key(q) {
                 candidates.push(*q);
@@ -308,7 +317,9 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
             }
         }
         for t in &model.torques {
-            let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle) else { continue };
+            let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle) else {
+                continue;
+            };
             let angle = pool.subst(angle, map);
             let tau = pool.subst(*tau, map);
             let da = pool.diff(angle, q);
@@ -353,7 +364,8 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     }
     for (i, q) in coords.iter().enumerate() {
         if mass_matrix[i].iter().all(|e| pool.is_identically_zero(*e)) {
-            let span = model.coords.iter().find(|c| c.sym == *q).map(|c| c.span).unwrap_or_default();
+            let span =
+                model.coords.iter().find(|c| c.sym == *q).map(|c| c.span).unwrap_or_default();
             errors.push(
                 Diagnostic::error(span, format!("no kinetic energy depends on the rate of `{}`", pool.symbol(*q).name))
                     .with_label("this coordinate has no inertia")
@@ -374,7 +386,13 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         let zeros: HashMap<SymId, ExprId> = accels.iter().map(|a| (*a, pool.zero())).collect();
         let rest = pool.subst(acceleration, &zeros);
         let bias = pool.neg(rest);
-        multipliers.push(Multiplier { constraint: ci, lambda: c.force_symbol, phi, jacobian, bias });
+        multipliers.push(Multiplier {
+            constraint: ci,
+            lambda: c.force_symbol,
+            phi,
+            jacobian,
+            bias,
+        });
     }
     if !errors.is_empty() {
         return Err(errors);
@@ -417,15 +435,22 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
                 for (e, expr) in eliminated.iter().zip(lambdas) {
                     let c = &model.constraints[e.constraint];
                     if c.force_requested {
-                        reactions.push(Reaction { constraint: e.constraint, symbol: c.force_symbol, expr });
+                        reactions.push(Reaction {
+                            constraint: e.constraint,
+                            symbol: c.force_symbol,
+                            expr,
+                        });
                     }
                 }
             }
             None => {
                 let c = &model.constraints[eliminated[0].constraint];
                 warnings.push(
-                    Diagnostic::warning(c.span, "the reactions of these constraints cannot be separated")
-                        .with_label("reaction not derived"),
+                    Diagnostic::warning(
+                        c.span,
+                        "the reactions of these constraints cannot be separated",
+                    )
+                    .with_label("reaction not derived"),
                 );
             }
         }

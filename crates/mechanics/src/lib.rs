@@ -10,7 +10,9 @@
 mod check;
 mod derive;
 mod linear;
+mod present;
 
 pub use check::{Failure, Verdict, SAMPLES};
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
 pub use linear::solve;
+pub use present::Equation;

@@ -7,11 +7,15 @@ use cas::{ExprId, Pool};
 /// Meant for small systems (accelerations at the start, reactions): entries grow with size.
 pub fn solve(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
     let n = b.len();
-    let mut m: Vec<Vec<ExprId>> = a.iter().zip(b).map(|(row, rhs)| {
-        let mut r = row.clone();
-        r.push(*rhs);
-        r
-    }).collect();
+    let mut m: Vec<Vec<ExprId>> = a
+        .iter()
+        .zip(b)
+        .map(|(row, rhs)| {
+            let mut r = row.clone();
+            r.push(*rhs);
+            r
+        })
+        .collect();
     for col in 0..n {
         let pivot = (col..n).find(|&r| !pool.is_identically_zero(m[r][col]))?;
         m.swap(col, pivot);

@@ -61,6 +61,8 @@ pub struct Body {
 #[derive(Clone, Debug)]
 pub struct Constraint {
     pub name: String,
+    pub lhs: ExprId,
+    pub rhs: ExprId,
     pub phi: ExprId,
     /// The symbol standing for its reaction (`floor.force`) wherever the scene mentions it.
     pub force_symbol: SymId,

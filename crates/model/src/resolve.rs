@@ -7,7 +7,8 @@ use cas::{Func, Pool, Rational, SymId, SymbolKind};
 use lang::{BinOp, Diagnostic, Expr, ExprKind, Ident, Property, SceneFile, Span, Stmt, StmtKind};
 
 use crate::{
-    Body, BodyKind, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder, Show, Term, Value,
+    Body, BodyKind, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder, Show,
+    Term, Value,
 };
 
 /// Past this the power is not physics and expanding it would exhaust memory.
@@ -25,11 +26,16 @@ enum Binding {
 }
 
 /// Resolves a parsed scene. On success, the model and any warnings; otherwise every error found.
-pub fn resolve(file: &SceneFile, source: &str) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+pub fn resolve(
+    file: &SceneFile,
+    source: &str,
+) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
     let mut r = Resolver::new(source);
     r.declare_all(file);
-    let (outputs, statements): (Vec<&Stmt>, Vec<&Stmt>) =
-        file.stmts.iter().partition(|s| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
+    let (outputs, statements): (Vec<&Stmt>, Vec<&Stmt>) = file
+        .stmts
+        .iter()
+        .partition(|s| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
     for stmt in statements {
         r.statement(stmt);
     }
@@ -43,7 +49,9 @@ pub fn resolve(file: &SceneFile, source: &str) -> Result<(Model, Vec<Diagnostic>
 
 /// The Greek letters of a name spelled out, so `θ` and `theta` are the same name.
 fn normalize(name: &str) -> String {
-    name.chars().map(|c| cas::greek_word(c).map(str::to_string).unwrap_or_else(|| c.to_string())).collect()
+    name.chars()
+        .map(|c| cas::greek_word(c).map(str::to_string).unwrap_or_else(|| c.to_string()))
+        .collect()
 }
 
 /// Edit distance, for "did you mean" hints.
@@ -107,7 +115,9 @@ impl<'a> Resolver<'a> {
         let time = pool.time();
         let mut names = HashMap::new();
         let mut placeholders = Vec::new();
-        for (name, kind) in [("KE", Placeholder::KineticEnergy), ("PE", Placeholder::PotentialEnergy)] {
+        for (name, kind) in
+            [("KE", Placeholder::KineticEnergy), ("PE", Placeholder::PotentialEnergy)]
+        {
             let s = pool.param(name);
             names.insert(name.to_string(), Binding::Quantity(s));
             placeholders.push((s, kind));
@@ -169,9 +179,12 @@ impl<'a> Resolver<'a> {
         let name = normalize(&id.name);
         if name == "t" || name == "pi" {
             self.error(
-                Diagnostic::error(id.span, format!("`{name}` is built in and cannot be redeclared"))
-                    .with_label("built-in name")
-                    .with_hint(if name == "t" { "`t` is time" } else { "`pi` is π" }),
+                Diagnostic::error(
+                    id.span,
+                    format!("`{name}` is built in and cannot be redeclared"),
+                )
+                .with_label("built-in name")
+                .with_hint(if name == "t" { "`t` is time" } else { "`pi` is π" }),
             );
             return false;
         }
@@ -183,7 +196,9 @@ impl<'a> Resolver<'a> {
                 if let Some(first) = first.filter(|s| *s != id.span) {
                     d = d.with_related(first, "first declared here");
                 }
-                self.error(d.with_hint("give each parameter, coordinate, body and constraint its own name"));
+                self.error(d.with_hint(
+                    "give each parameter, coordinate, body and constraint its own name",
+                ));
                 return false;
             }
         }
@@ -198,7 +213,9 @@ impl<'a> Resolver<'a> {
                 for decl in decls {
                     let value = decl.value.as_ref().and_then(|v| self.constant(v));
                     let value = match (value, &decl.unit) {
-                        (Some(v), Some(u)) if u.factors.len() == 1 && u.factors[0].0.name == "deg" => {
+                        (Some(v), Some(u))
+                            if u.factors.len() == 1 && u.factors[0].0.name == "deg" =>
+                        {
                             let pi = self.pool.pi();
                             let k = self.pool.mul2(v, pi);
                             Some(self.pool.scale(k, &Rational::new(1.into(), 180.into())))
@@ -253,18 +270,25 @@ impl<'a> Resolver<'a> {
                     }
                 }
             }
-            StmtKind::Particle { name, props } => self.body(name, props, BodyKind::Particle, stmt.span),
+            StmtKind::Particle { name, props } => {
+                self.body(name, props, BodyKind::Particle, stmt.span)
+            }
             StmtKind::Body { name, props } => self.body(name, props, BodyKind::Rigid, stmt.span),
-            StmtKind::Constraint { name, lhs, rhs } => self.constraint(name.as_ref(), lhs, rhs, stmt.span),
+            StmtKind::Constraint { name, lhs, rhs } => {
+                self.constraint(name.as_ref(), lhs, rhs, stmt.span)
+            }
             StmtKind::Gravity { strength, direction } => {
                 let strength = self.scalar(strength);
                 let direction = direction.as_ref().and_then(|d| match self.value(d)? {
                     Value::Vector(v) => Some(v),
                     other => {
                         self.error(
-                            Diagnostic::error(d.span, format!("a direction must be a vector, not {}", other.kind_name()))
-                                .with_label("expected `(x, y)` or `(x, y, z)`")
-                                .with_hint("write `gravity g along (0, -1)`"),
+                            Diagnostic::error(
+                                d.span,
+                                format!("a direction must be a vector, not {}", other.kind_name()),
+                            )
+                            .with_label("expected `(x, y)` or `(x, y, z)`")
+                            .with_hint("write `gravity g along (0, -1)`"),
                         );
                         None
                     }
@@ -301,7 +325,12 @@ impl<'a> Resolver<'a> {
                 for item in items {
                     if let Some(value) = self.value(item) {
                         let label = self.text(item.span);
-                        self.shows.push(Show { at_start: *at_start, label, value, span: item.span });
+                        self.shows.push(Show {
+                            at_start: *at_start,
+                            label,
+                            value,
+                            span: item.span,
+                        });
                     }
                 }
             }
@@ -311,14 +340,23 @@ impl<'a> Resolver<'a> {
                 let (ln, rn) = (l.entries().len(), r.entries().len());
                 if ln != rn {
                     self.error(
-                        Diagnostic::error(rhs.span, "the two sides of this `expect` have different shapes")
-                            .with_label(r.kind_name())
-                            .with_related(lhs.span, l.kind_name()),
+                        Diagnostic::error(
+                            rhs.span,
+                            "the two sides of this `expect` have different shapes",
+                        )
+                        .with_label(r.kind_name())
+                        .with_related(lhs.span, l.kind_name()),
                     );
                     return;
                 }
                 let text = self.text(stmt.span);
-                self.expects.push(Expect { at_start: *at_start, text, lhs: l, rhs: r, span: stmt.span });
+                self.expects.push(Expect {
+                    at_start: *at_start,
+                    text,
+                    lhs: l,
+                    rhs: r,
+                    span: stmt.span,
+                });
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
         }
@@ -362,8 +400,14 @@ impl<'a> Resolver<'a> {
                         Some(Value::Scalar(x)) => Some(vec![x]),
                         Some(other) => {
                             self.error(
-                                Diagnostic::error(p.value.span, format!("a position must be a vector, not {}", other.kind_name()))
-                                    .with_label("expected `(x, y)` or `(x, y, z)`"),
+                                Diagnostic::error(
+                                    p.value.span,
+                                    format!(
+                                        "a position must be a vector, not {}",
+                                        other.kind_name()
+                                    ),
+                                )
+                                .with_label("expected `(x, y)` or `(x, y, z)`"),
                             );
                             None
                         }
@@ -396,7 +440,10 @@ impl<'a> Resolver<'a> {
                 ok = false;
             }
             if angle.is_none() && !seen.contains_key("angle") {
-                let d = missing("angle", "add `angle theta`: the body's orientation; its angular velocity is angle'");
+                let d = missing(
+                    "angle",
+                    "add `angle theta`: the body's orientation; its angular velocity is angle'",
+                );
                 self.error(d);
                 ok = false;
             }
@@ -404,7 +451,15 @@ impl<'a> Resolver<'a> {
         let (Some(mass), Some(position), true) = (mass, position, ok) else { return };
         let index = self.bodies.len();
         if self.bind(name, Binding::Body(index)) {
-            self.bodies.push(Body { name: normalize(&name.name), kind, mass, inertia, position, angle, span });
+            self.bodies.push(Body {
+                name: normalize(&name.name),
+                kind,
+                mass,
+                inertia,
+                position,
+                angle,
+                span,
+            });
         }
     }
 
@@ -421,7 +476,8 @@ impl<'a> Resolver<'a> {
             );
             return;
         }
-        if !free.iter().any(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. })) {
+        if !free.iter().any(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }))
+        {
             self.error(
                 Diagnostic::error(span, "this constraint involves no coordinate")
                     .with_label("nothing here can move")
@@ -439,7 +495,9 @@ impl<'a> Resolver<'a> {
         let lhs_coords = lhs_free
             .iter()
             .copied()
-            .filter(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. }))
+            .filter(|s| {
+                matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. })
+            })
             .collect();
         if let Some(id) = name {
             if !self.bind(id, Binding::Constraint(index)) {
@@ -449,6 +507,8 @@ impl<'a> Resolver<'a> {
         self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
         self.constraints.push(Constraint {
             name: cname,
+            lhs: l,
+            rhs: r,
             phi,
             force_symbol,
             force_requested: false,
@@ -487,8 +547,11 @@ impl<'a> Resolver<'a> {
                 format!("a {dim}-vector, like the body's position")
             };
             self.error(
-                Diagnostic::error(value.span, format!("expected {expected}, found {}", v.kind_name()))
-                    .with_label("here"),
+                Diagnostic::error(
+                    value.span,
+                    format!("expected {expected}, found {}", v.kind_name()),
+                )
+                .with_label("here"),
             );
             return;
         }
@@ -512,7 +575,9 @@ impl<'a> Resolver<'a> {
             self.error(
                 Diagnostic::error(e.span, "this value must be a constant")
                     .with_label("depends on a coordinate or on time")
-                    .with_hint("initial values and parameter values may use numbers and parameters only"),
+                    .with_hint(
+                        "initial values and parameter values may use numbers and parameters only",
+                    ),
             );
             return None;
         }
@@ -524,8 +589,11 @@ impl<'a> Resolver<'a> {
             Value::Scalar(x) => Some(x),
             other => {
                 self.error(
-                    Diagnostic::error(e.span, format!("expected a scalar, found {}", other.kind_name()))
-                        .with_label("not a scalar"),
+                    Diagnostic::error(
+                        e.span,
+                        format!("expected a scalar, found {}", other.kind_name()),
+                    )
+                    .with_label("not a scalar"),
                 );
                 None
             }
@@ -538,9 +606,12 @@ impl<'a> Resolver<'a> {
                 Some(q) => Some(Value::Scalar(self.pool.num(q))),
                 None => {
                     self.error(
-                        Diagnostic::error(e.span, format!("`{text}` is not a number lagrange can use"))
-                            .with_label("out of range")
-                            .with_hint("exponents beyond ±4000 are not supported"),
+                        Diagnostic::error(
+                            e.span,
+                            format!("`{text}` is not a number lagrange can use"),
+                        )
+                        .with_label("out of range")
+                        .with_hint("exponents beyond ±4000 are not supported"),
                     );
                     None
                 }
@@ -606,9 +677,12 @@ impl<'a> Resolver<'a> {
                 Some(Binding::Param(s)) => {
                     if primes > 0 {
                         self.error(
-                            Diagnostic::error(span, format!("`{raw}` is a parameter, constant in time"))
-                                .with_label("has no rate")
-                                .with_hint(format!("declare it with `coord {raw}` if it moves")),
+                            Diagnostic::error(
+                                span,
+                                format!("`{raw}` is a parameter, constant in time"),
+                            )
+                            .with_label("has no rate")
+                            .with_hint(format!("declare it with `coord {raw}` if it moves")),
                         );
                         return None;
                     }
@@ -655,10 +729,13 @@ impl<'a> Resolver<'a> {
         if let Some((decl, what)) = self.declared.get(name).copied() {
             if decl.start > span.start && !self.in_outputs {
                 self.error(
-                    Diagnostic::error(span, format!("the {what} `{raw}` is used before it is declared"))
-                        .with_label("used here")
-                        .with_related(decl, "declared here")
-                        .with_hint(format!("move the declaration of `{raw}` above its first use")),
+                    Diagnostic::error(
+                        span,
+                        format!("the {what} `{raw}` is used before it is declared"),
+                    )
+                    .with_label("used here")
+                    .with_related(decl, "declared here")
+                    .with_hint(format!("move the declaration of `{raw}` above its first use")),
                 );
                 return;
             }
@@ -668,7 +745,8 @@ impl<'a> Resolver<'a> {
         let mut candidates: Vec<&str> = self.names.keys().map(String::as_str).collect();
         candidates.extend(["t", "pi"]);
         candidates.sort_unstable();
-        let mut d = Diagnostic::error(span, format!("unknown name `{raw}`")).with_label("not declared");
+        let mut d =
+            Diagnostic::error(span, format!("unknown name `{raw}`")).with_label("not declared");
         d = match closest(name, candidates) {
             Some(near) => d.with_hint(format!("did you mean `{near}`?")),
             None => d.with_hint(format!(
@@ -685,13 +763,15 @@ impl<'a> Resolver<'a> {
                 let body = self.bodies[i].clone();
                 let fields: &[&str] = match body.kind {
                     BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
-                    BodyKind::Rigid => &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"],
+                    BodyKind::Rigid => {
+                        &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"]
+                    }
                 };
                 let value = match field.name.as_str() {
                     "position" => Some(Value::Vector(body.position.clone())),
-                    "velocity" => {
-                        Some(Value::Vector(body.position.iter().map(|x| self.pool.time_derivative(*x)).collect()))
-                    }
+                    "velocity" => Some(Value::Vector(
+                        body.position.iter().map(|x| self.pool.time_derivative(*x)).collect(),
+                    )),
                     "mass" => Some(Value::Scalar(body.mass)),
                     "angle" => body.angle.map(Value::Scalar),
                     "omega" => body.angle.map(|a| Value::Scalar(self.pool.time_derivative(a))),
@@ -701,10 +781,17 @@ impl<'a> Resolver<'a> {
                     _ => None,
                 };
                 if value.is_none() {
-                    let mut d = Diagnostic::error(field.span, format!("`{}` has no `{}`", object.name, field.name))
-                        .with_label(format!("expected one of {}", fields.join(", ")));
-                    if body.kind == BodyKind::Particle && matches!(field.name.as_str(), "omega" | "angle") {
-                        d = d.with_hint("a particle has no orientation; declare a rigid `body` with an `angle`");
+                    let mut d = Diagnostic::error(
+                        field.span,
+                        format!("`{}` has no `{}`", object.name, field.name),
+                    )
+                    .with_label(format!("expected one of {}", fields.join(", ")));
+                    if body.kind == BodyKind::Particle
+                        && matches!(field.name.as_str(), "omega" | "angle")
+                    {
+                        d = d.with_hint(
+                            "a particle has no orientation; declare a rigid `body` with an `angle`",
+                        );
                     } else if let Some(near) = closest(&field.name, fields.iter().copied()) {
                         d = d.with_hint(format!("did you mean `{near}`?"));
                     }
@@ -715,9 +802,12 @@ impl<'a> Resolver<'a> {
             Some(Binding::Constraint(i)) => {
                 if field.name != "force" {
                     self.error(
-                        Diagnostic::error(field.span, format!("a constraint has no `{}`", field.name))
-                            .with_label("expected `force`")
-                            .with_hint(format!("`{}.force` is its reaction", object.name)),
+                        Diagnostic::error(
+                            field.span,
+                            format!("a constraint has no `{}`", field.name),
+                        )
+                        .with_label("expected `force`")
+                        .with_hint(format!("`{}.force` is its reaction", object.name)),
                     );
                     return None;
                 }
@@ -744,8 +834,11 @@ impl<'a> Resolver<'a> {
                     .map(|(k, _)| k.as_str())
                     .collect();
                 candidates.sort_unstable();
-                let mut d = Diagnostic::error(object.span, format!("no body or constraint named `{}`", object.name))
-                    .with_label("unknown");
+                let mut d = Diagnostic::error(
+                    object.span,
+                    format!("no body or constraint named `{}`", object.name),
+                )
+                .with_label("unknown");
                 if let Some(near) = closest(&name, candidates) {
                     d = d.with_hint(format!("did you mean `{near}`?"));
                 }
@@ -776,8 +869,11 @@ impl<'a> Resolver<'a> {
         };
         if args.len() != arity {
             self.error(
-                Diagnostic::error(span, format!("`{name}` takes {arity} argument{}", if arity == 1 { "" } else { "s" }))
-                    .with_label(format!("given {}", args.len())),
+                Diagnostic::error(
+                    span,
+                    format!("`{name}` takes {arity} argument{}", if arity == 1 { "" } else { "s" }),
+                )
+                .with_label(format!("given {}", args.len())),
             );
             return None;
         }
@@ -799,10 +895,13 @@ impl<'a> Resolver<'a> {
         let span = le.span.join(re.span);
         let mismatch = |this: &mut Self, what: &str| {
             this.error(
-                Diagnostic::error(span, format!("cannot {what} {} and {}", l.kind_name(), r.kind_name()))
-                    .with_label("shapes do not fit")
-                    .with_related(le.span, l.kind_name())
-                    .with_related(re.span, r.kind_name()),
+                Diagnostic::error(
+                    span,
+                    format!("cannot {what} {} and {}", l.kind_name(), r.kind_name()),
+                )
+                .with_label("shapes do not fit")
+                .with_related(le.span, l.kind_name())
+                .with_related(re.span, r.kind_name()),
             );
             None
         };
@@ -820,9 +919,16 @@ impl<'a> Resolver<'a> {
                     (Vector(a), Vector(b)) if a.len() == b.len() => {
                         Some(Vector(a.iter().zip(b).map(|(x, y)| combine(*x, *y)).collect()))
                     }
-                    (Matrix(a), Matrix(b)) if a.len() == b.len() && a[0].len() == b[0].len() => Some(Matrix(
-                        a.iter().zip(b).map(|(ra, rb)| ra.iter().zip(rb).map(|(x, y)| combine(*x, *y)).collect()).collect(),
-                    )),
+                    (Matrix(a), Matrix(b)) if a.len() == b.len() && a[0].len() == b[0].len() => {
+                        Some(Matrix(
+                            a.iter()
+                                .zip(b)
+                                .map(|(ra, rb)| {
+                                    ra.iter().zip(rb).map(|(x, y)| combine(*x, *y)).collect()
+                                })
+                                .collect(),
+                        ))
+                    }
                     _ => mismatch(self, if op == BinOp::Add { "add" } else { "subtract" }),
                 }
             }
@@ -837,8 +943,11 @@ impl<'a> Resolver<'a> {
                     for row in a {
                         let mut out_row = Vec::new();
                         for j in 0..b[0].len() {
-                            let terms: Vec<cas::ExprId> =
-                                row.iter().zip(b).map(|(x, brow)| self.pool.mul2(*x, brow[j])).collect();
+                            let terms: Vec<cas::ExprId> = row
+                                .iter()
+                                .zip(b)
+                                .map(|(x, brow)| self.pool.mul2(*x, brow[j]))
+                                .collect();
                             out_row.push(self.pool.add(&terms));
                         }
                         out.push(out_row);
@@ -848,7 +957,8 @@ impl<'a> Resolver<'a> {
                 (Matrix(a), Vector(v)) if a[0].len() == v.len() => {
                     let mut out = Vec::new();
                     for row in a {
-                        let terms: Vec<cas::ExprId> = row.iter().zip(v).map(|(x, y)| self.pool.mul2(*x, *y)).collect();
+                        let terms: Vec<cas::ExprId> =
+                            row.iter().zip(v).map(|(x, y)| self.pool.mul2(*x, *y)).collect();
                         out.push(vec![self.pool.add(&terms)]);
                     }
                     Some(Matrix(out))
@@ -858,7 +968,9 @@ impl<'a> Resolver<'a> {
             BinOp::Div => match (&l, &r) {
                 (_, Scalar(b)) => {
                     if self.pool.is_zero(*b) {
-                        self.error(Diagnostic::error(re.span, "division by zero").with_label("this is 0"));
+                        self.error(
+                            Diagnostic::error(re.span, "division by zero").with_label("this is 0"),
+                        );
                         return None;
                     }
                     let b = *b;
@@ -869,16 +981,24 @@ impl<'a> Resolver<'a> {
             BinOp::Pow => match (&l, &r) {
                 (Scalar(a), Scalar(b)) => {
                     if let Some(q) = self.pool.as_num(*b) {
-                        if q.numer().bits() > 32 || q.denom().bits() > 32 || q.abs() > Rational::from_integer(MAX_EXPONENT.into()) {
+                        if q.numer().bits() > 32
+                            || q.denom().bits() > 32
+                            || q.abs() > Rational::from_integer(MAX_EXPONENT.into())
+                        {
                             self.error(
                                 Diagnostic::error(re.span, "this exponent is too large")
                                     .with_label(format!("exponents are limited to ±{MAX_EXPONENT}"))
-                                    .with_hint("a power this high is not physics; check the formula"),
+                                    .with_hint(
+                                        "a power this high is not physics; check the formula",
+                                    ),
                             );
                             return None;
                         }
                         if self.pool.is_zero(*a) && q < &Rational::from_integer(0.into()) {
-                            self.error(Diagnostic::error(span, "division by zero").with_label("0 to a negative power"));
+                            self.error(
+                                Diagnostic::error(span, "division by zero")
+                                    .with_label("0 to a negative power"),
+                            );
                             return None;
                         }
                     }

@@ -16,7 +16,9 @@ impl Value {
         match self {
             Value::Scalar(_) => "a scalar".to_string(),
             Value::Vector(v) => format!("a {}-vector", v.len()),
-            Value::Matrix(m) => format!("a {}×{} matrix", m.len(), m.first().map_or(0, |r| r.len())),
+            Value::Matrix(m) => {
+                format!("a {}×{} matrix", m.len(), m.first().map_or(0, |r| r.len()))
+            }
         }
     }
 
@@ -33,7 +35,9 @@ impl Value {
         match self {
             Value::Scalar(e) => Value::Scalar(f(*e)),
             Value::Vector(v) => Value::Vector(v.iter().map(|e| f(*e)).collect()),
-            Value::Matrix(m) => Value::Matrix(m.iter().map(|r| r.iter().map(|e| f(*e)).collect()).collect()),
+            Value::Matrix(m) => {
+                Value::Matrix(m.iter().map(|r| r.iter().map(|e| f(*e)).collect()).collect())
+            }
         }
     }
 

@@ -1,0 +1,96 @@
+//! The `check` report: every `expect` line with its verdict, and for a failure the residual and
+//! a state where it is not zero.
+
+use cas::Style;
+use lang::Diagnostic;
+use mechanics::{Derivation, Verdict};
+
+use crate::diagnostics::{line_col, render};
+
+/// The outcome of checking one file.
+pub struct FileCheck {
+    /// The report to print.
+    pub report: String,
+    /// 0: every expectation holds; 1: one does not (or cannot be decided); 2: the file has errors.
+    pub exit_code: i32,
+    pub held: usize,
+    pub failed: usize,
+}
+
+/// Checks every `expect` line of one scene.
+pub fn check_file(path: &str, source: &str) -> FileCheck {
+    let (mut d, _) = match crate::load(source) {
+        Ok(x) => x,
+        Err(errors) => {
+            return FileCheck {
+                report: render(path, source, &errors),
+                exit_code: 2,
+                held: 0,
+                failed: 0,
+            };
+        }
+    };
+    check_derivation(path, source, &mut d)
+}
+
+fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
+    let verdicts = d.check_all();
+    let mut lines = Vec::new();
+    let mut failures = Vec::new();
+    let (mut held, mut failed) = (0, 0);
+    for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
+        let (line, _) = line_col(source, expect.span.start);
+        let how = match verdict {
+            Verdict::Exact => "holds exactly".to_string(),
+            Verdict::Numeric { samples } => {
+                format!("holds at {samples} random states (the algebra could not decide)")
+            }
+            Verdict::Fails(_) => "DOES NOT HOLD".to_string(),
+            Verdict::Undecided { reason } => format!("UNDECIDED: {reason}"),
+        };
+        let mark = if verdict.holds() { "ok  " } else { "FAIL" };
+        lines.push(format!("{mark} {path}:{line}  {}  — {how}", expect.text));
+        if verdict.holds() {
+            held += 1;
+        } else {
+            failed += 1;
+        }
+        let pool = &d.model.pool;
+        match verdict {
+            Verdict::Fails(f) => {
+                let which = f.component.map(|k| format!(" (entry {})", k + 1)).unwrap_or_default();
+                let state: Vec<String> = f
+                    .state
+                    .iter()
+                    .map(|(s, v)| format!("{} = {v:.6}", pool.symbol_text(*s, Style::Unicode)))
+                    .collect();
+                let mut diag = Diagnostic::error(
+                    expect.span,
+                    format!("this expectation does not hold{which}"),
+                )
+                .with_label(format!("lhs − rhs = {}", pool.print(f.residual, Style::Unicode)));
+                diag.hint = Some(if state.is_empty() {
+                    format!("the residual is {:.6}, not 0", f.value)
+                } else {
+                    format!("at {}, lhs − rhs = {:.6}", state.join(", "), f.value)
+                });
+                failures.push(diag);
+            }
+            Verdict::Undecided { reason } => {
+                failures.push(
+                    Diagnostic::error(expect.span, "this expectation could not be decided")
+                        .with_label(reason.clone()),
+                );
+            }
+            _ => {}
+        }
+    }
+    let mut report = lines.join("\n");
+    if !report.is_empty() {
+        report.push('\n');
+    }
+    if !failures.is_empty() {
+        report.push_str(&render(path, source, &failures));
+    }
+    FileCheck { report, exit_code: if failed > 0 { 1 } else { 0 }, held, failed }
+}

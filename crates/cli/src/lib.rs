@@ -1,0 +1,54 @@
+//! The `lagrange` command: reading scene files, running the pipeline, and printing what it
+//! finds. This is the only crate that touches files and terminals.
+//!
+//! The pipeline is parse (`lang`) → resolve (`model`) → derive (`mechanics`); this crate
+//! strings the stages together, renders diagnostics with source context, and formats the
+//! `derive` and `check` reports. It knows the stages' public types, not their internals.
+
+pub mod check;
+pub mod diagnostics;
+pub mod report;
+
+use lang::Diagnostic;
+use mechanics::Derivation;
+
+/// Parses, resolves and derives one scene. Warnings come back with the derivation.
+pub fn load(source: &str) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let ast = lang::parse(source)?;
+    let (model, mut warnings) = model::resolve(&ast, source)?;
+    let mut derivation = mechanics::derive(model)?;
+    warnings.append(&mut derivation.warnings);
+    Ok((derivation, warnings))
+}
+
+/// Output formats of `derive`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Text,
+    Latex,
+    Json,
+}
+
+/// The `derive` report of a scene in the given format, or the rendered diagnostics.
+pub fn derive(path: &str, source: &str, format: Format) -> Result<String, String> {
+    let (mut d, _warnings) =
+        load(source).map_err(|errors| diagnostics::render(path, source, &errors))?;
+    Ok(match format {
+        Format::Text => report::text(&mut d),
+        Format::Latex => report::latex(&mut d),
+        Format::Json => report::json(&mut d),
+    })
+}
+
+/// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.
+pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Result<()> {
+    let dir =
+        path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    let name =
+        path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, contents)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}

@@ -1,0 +1,493 @@
+//! The `derive` report in three formats: text for people, LaTeX for papers, JSON for programs.
+
+use cas::number::Signed;
+use cas::{ExprId, Pool, Rational, Style, SymId};
+use mechanics::{Derivation, Equation};
+use model::Value;
+use serde_json::{json, Map, Value as Json};
+
+/// Everything `derive` prints, computed once and shared by the three formats.
+struct Derived {
+    equations: Vec<Equation>,
+    mass_matrix: Vec<Vec<ExprId>>,
+    forcing: Vec<ExprId>,
+    kinetic: ExprId,
+    potential: ExprId,
+    lagrangian: Option<ExprId>,
+    reactions: Vec<(SymId, ExprId)>,
+    shown: Vec<(String, Value)>,
+    at_start: Option<Vec<(String, Value)>>,
+    start_state: Vec<(SymId, ExprId)>,
+}
+
+fn collect(d: &mut Derivation) -> Derived {
+    let equations = d.equations();
+    let pool = &mut d.model.pool;
+    let mass_matrix =
+        d.mass_matrix.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect();
+    let forcing = d.forcing.iter().map(|e| pool.simplify(*e)).collect();
+    let kinetic = pool.simplify(d.kinetic);
+    let potential = pool.simplify(d.potential);
+    let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
+    let reactions = d.reactions.iter().map(|r| (r.symbol, pool.simplify(r.expr))).collect();
+    let shown = d.shown();
+    let at_start = d.shown_at_start();
+    let mut start_state = Vec::new();
+    for c in d.model.coords.clone() {
+        if d.coords.contains(&c.sym) {
+            start_state.push((c.sym, c.initial));
+        }
+    }
+    for c in d.model.coords.clone() {
+        if d.coords.contains(&c.sym) {
+            let r = d.model.pool.rate(c.sym).expect("coordinate");
+            start_state.push((r, c.initial_rate));
+        }
+    }
+    Derived {
+        equations,
+        mass_matrix,
+        forcing,
+        kinetic,
+        potential,
+        lagrangian,
+        reactions,
+        shown,
+        at_start,
+        start_state,
+    }
+}
+
+/// A terminating decimal for rationals like 981/100, so parameter values read as written.
+fn decimal(q: &Rational) -> Option<String> {
+    let mut d = q.denom().clone();
+    let mut places = 0u32;
+    let (two, five) = (2.into(), 5.into());
+    let zero = 0.into();
+    while &d % &two == zero || &d % &five == zero {
+        if &d % &two == zero {
+            d /= &two;
+        }
+        if &d % &five == zero {
+            d /= &five;
+        }
+        places += 1;
+        if places > 12 {
+            return None;
+        }
+    }
+    if d != 1.into() {
+        return None;
+    }
+    let scaled = q * num_ten_pow(places);
+    let digits = scaled.to_integer().abs().to_string();
+    let sign = if q.is_negative() { "-" } else { "" };
+    if places == 0 {
+        return Some(format!("{sign}{digits}"));
+    }
+    let padded = format!("{digits:0>width$}", width = places as usize + 1);
+    let (whole, frac) = padded.split_at(padded.len() - places as usize);
+    Some(format!("{sign}{whole}.{frac}"))
+}
+
+fn num_ten_pow(n: u32) -> cas::number::Rational {
+    let mut r = Rational::from_integer(1.into());
+    for _ in 0..n {
+        r *= Rational::from_integer(10.into());
+    }
+    r
+}
+
+fn value_text(pool: &Pool, e: ExprId, style: Style) -> String {
+    match pool.as_num(e).and_then(decimal) {
+        Some(d) if style != Style::Latex => d,
+        _ => pool.print(e, style),
+    }
+}
+
+fn unit_text(unit: &lang::Unit, style: Style) -> String {
+    let power = |p: i32| match style {
+        Style::Unicode => cas::print::superscript(&p.to_string()),
+        Style::Ascii => format!("^{p}"),
+        Style::Latex => format!("^{{{p}}}"),
+    };
+    let mut up = Vec::new();
+    let mut down = Vec::new();
+    for (name, p) in &unit.factors {
+        let part =
+            |q: i32| if q == 1 { name.name.clone() } else { format!("{}{}", name.name, power(q)) };
+        if *p >= 0 {
+            up.push(part(*p));
+        } else {
+            down.push(part(-*p));
+        }
+    }
+    let sep = if style == Style::Unicode { "·" } else { "*" };
+    let mut text = if up.is_empty() { "1".to_string() } else { up.join(sep) };
+    if !down.is_empty() {
+        text.push('/');
+        text.push_str(&down.join(sep));
+    }
+    text
+}
+
+/// Display width in terminal columns: combining marks (the dots of θ̇) take none.
+fn width(s: &str) -> usize {
+    s.chars().filter(|c| !matches!(*c as u32, 0x300..=0x36f | 0x20d0..=0x20ff)).count()
+}
+
+fn pad(s: &str, w: usize) -> String {
+    format!("{s}{}", " ".repeat(w.saturating_sub(width(s))))
+}
+
+/// A matrix or column with tall brackets, each line prefixed (the first with `label`).
+fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
+    let cols = rows.first().map_or(0, |r| r.len());
+    let widths: Vec<usize> =
+        (0..cols).map(|j| rows.iter().map(|r| width(&r[j])).max().unwrap_or(0)).collect();
+    let n = rows.len();
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let (l, rt) = match (n, i) {
+                (1, _) => ('[', ']'),
+                (_, 0) => ('⎡', '⎤'),
+                (_, i) if i == n - 1 => ('⎣', '⎦'),
+                _ => ('⎢', '⎥'),
+            };
+            let cells: Vec<String> = r.iter().zip(&widths).map(|(c, w)| pad(c, *w)).collect();
+            let prefix = if i == 0 { label.to_string() } else { " ".repeat(width(label)) };
+            format!("{prefix}{l} {} {rt}", cells.join("   "))
+        })
+        .collect()
+}
+
+fn value_lines(pool: &Pool, label: &str, v: &Value) -> Vec<String> {
+    match v {
+        Value::Scalar(e) => vec![format!("{label}{}", pool.print(*e, Style::Unicode))],
+        Value::Vector(xs) => {
+            let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Unicode)).collect();
+            vec![format!("{label}({})", parts.join(", "))]
+        }
+        Value::Matrix(m) => {
+            let rows: Vec<Vec<String>> = m
+                .iter()
+                .map(|r| r.iter().map(|e| pool.print(*e, Style::Unicode)).collect())
+                .collect();
+            bracketed(&rows, label)
+        }
+    }
+}
+
+fn sym_text(pool: &Pool, s: SymId, style: Style) -> String {
+    pool.symbol_text(s, style)
+}
+
+/// The report for people.
+pub fn text(d: &mut Derivation) -> String {
+    let derived = collect(d);
+    let pool = &d.model.pool;
+    let u = Style::Unicode;
+    let mut out = Vec::new();
+    if let Some(title) = &d.model.title {
+        out.push(title.clone());
+        out.push("═".repeat(width(title)));
+        out.push(String::new());
+    }
+    if !d.model.params.is_empty() {
+        out.push("Parameters".into());
+        for p in &d.model.params {
+            let mut line = format!("  {}", sym_text(pool, p.sym, u));
+            if let Some(v) = p.value {
+                line.push_str(&format!(" = {}", value_text(pool, v, u)));
+            }
+            if let Some(unit) = &p.unit {
+                line.push_str(&format!(" {}", unit_text(unit, u)));
+            }
+            out.push(line);
+        }
+    }
+    out.push("Coordinates".into());
+    for c in &d.model.coords {
+        let name = sym_text(pool, c.sym, u);
+        if let Some(e) = d.eliminated.iter().find(|e| e.coord == c.sym) {
+            let cname = &d.model.constraints[e.constraint].name;
+            out.push(format!("  {name} = {}   (eliminated by {cname})", pool.print(e.solution, u)));
+        } else {
+            let rate = pool
+                .lookup_symbol(&format!("{}'", c.name))
+                .map(|r| sym_text(pool, r, u))
+                .unwrap_or_default();
+            out.push(format!(
+                "  {name}   (from {name} = {}, {rate} = {})",
+                value_text(pool, c.initial, u),
+                value_text(pool, c.initial_rate, u)
+            ));
+        }
+    }
+    if !d.model.constraints.is_empty() {
+        out.push("Constraints".into());
+        for (i, c) in d.model.constraints.iter().enumerate() {
+            out.push(format!("  {}: {} = {}", c.name, pool.print(c.lhs, u), pool.print(c.rhs, u)));
+            let force = sym_text(pool, c.force_symbol, u);
+            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
+                let what = if c.force_requested {
+                    format!("; its reaction {force} is derived below")
+                } else {
+                    String::new()
+                };
+                out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
+            } else {
+                out.push(format!(
+                    "    kept with the multiplier {force} (generalized force {force}·∂Φ/∂q)"
+                ));
+            }
+        }
+    }
+    out.push("Energies".into());
+    out.push(format!("  T = {}", pool.print(derived.kinetic, u)));
+    out.push(format!("  V = {}", pool.print(derived.potential, u)));
+    if let Some(l) = derived.lagrangian {
+        out.push(format!("  L = {}", pool.print(l, u)));
+    }
+    out.push("Equations of motion".into());
+    for eq in &derived.equations {
+        out.push(format!("  {} = {}", pool.print(eq.lhs, u), pool.print(eq.rhs, u)));
+    }
+    let q: Vec<String> = d.coords.iter().map(|s| sym_text(pool, *s, u)).collect();
+    let extra = if d.multipliers.is_empty() { "" } else { " + Jᵀ·λ" };
+    out.push(format!("Mass-matrix form  M(q)·q̈ = f(q, q̇){extra},  q = ({})", q.join(", ")));
+    let m_rows: Vec<Vec<String>> =
+        derived.mass_matrix.iter().map(|r| r.iter().map(|e| pool.print(*e, u)).collect()).collect();
+    out.extend(bracketed(&m_rows, "  M = "));
+    let f_rows: Vec<Vec<String>> =
+        derived.forcing.iter().map(|e| vec![pool.print(*e, u)]).collect();
+    out.extend(bracketed(&f_rows, "  f = "));
+    for m in &d.multipliers {
+        let name = sym_text(pool, m.lambda, u);
+        let row: Vec<String> = m.jacobian.iter().map(|e| pool.print(*e, u)).collect();
+        out.extend(bracketed(&[row], &format!("  J({name}) = ")));
+        out.push(format!("  γ({name}) = {}", pool.print(m.bias, u)));
+    }
+    if !derived.reactions.is_empty() {
+        out.push("Reactions".into());
+        for (s, e) in &derived.reactions {
+            out.push(format!("  {} = {}", sym_text(pool, *s, u), pool.print(*e, u)));
+        }
+    }
+    if !derived.shown.is_empty() {
+        out.push("Shown".into());
+        for (label, v) in &derived.shown {
+            out.extend(value_lines(pool, &format!("  {label} = "), v));
+        }
+    }
+    match &derived.at_start {
+        Some(items) if !items.is_empty() => {
+            let state: Vec<String> = derived
+                .start_state
+                .iter()
+                .map(|(s, e)| format!("{} = {}", sym_text(pool, *s, u), value_text(pool, *e, u)))
+                .collect();
+            out.push(format!("At the start  ({})", state.join(", ")));
+            for (label, v) in items {
+                out.extend(value_lines(pool, &format!("  {label} = "), v));
+            }
+        }
+        Some(_) => {}
+        None => out.push("At the start: the mass matrix is singular; nothing can be shown".into()),
+    }
+    let mut text = out.join("\n");
+    text.push('\n');
+    text
+}
+
+/// The report as a LaTeX fragment (amsmath).
+pub fn latex(d: &mut Derivation) -> String {
+    let derived = collect(d);
+    let pool = &d.model.pool;
+    let l = Style::Latex;
+    let mut out = Vec::new();
+    if let Some(title) = &d.model.title {
+        out.push(format!("% {title}"));
+    }
+    out.push("% Energies".into());
+    out.push("\\begin{align}".into());
+    out.push(format!("  T &= {} \\\\", pool.print(derived.kinetic, l)));
+    let last = derived.lagrangian.map(|e| format!("  L &= {}", pool.print(e, l)));
+    match last {
+        Some(lag) => {
+            out.push(format!("  V &= {} \\\\", pool.print(derived.potential, l)));
+            out.push(lag);
+        }
+        None => out.push(format!("  V &= {}", pool.print(derived.potential, l))),
+    }
+    out.push("\\end{align}".into());
+    out.push("% Equations of motion".into());
+    out.push("\\begin{align}".into());
+    let n = derived.equations.len();
+    for (i, eq) in derived.equations.iter().enumerate() {
+        let end = if i + 1 < n { " \\\\" } else { "" };
+        out.push(format!("  {} &= {}{end}", pool.print(eq.lhs, l), pool.print(eq.rhs, l)));
+    }
+    out.push("\\end{align}".into());
+    out.push("% Mass-matrix form".into());
+    let matrix = |rows: &[Vec<ExprId>]| {
+        let body: Vec<String> = rows
+            .iter()
+            .map(|r| r.iter().map(|e| pool.print(*e, l)).collect::<Vec<_>>().join(" & "))
+            .collect();
+        format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", body.join(" \\\\ "))
+    };
+    let q: Vec<String> = d.accels.iter().map(|s| sym_text(pool, *s, l)).collect();
+    let f_rows: Vec<Vec<ExprId>> = derived.forcing.iter().map(|e| vec![*e]).collect();
+    out.push("\\begin{equation}".into());
+    out.push(format!(
+        "  {} \\begin{{bmatrix}} {} \\end{{bmatrix}} = {}",
+        matrix(&derived.mass_matrix),
+        q.join(" \\\\ "),
+        matrix(&f_rows)
+    ));
+    out.push("\\end{equation}".into());
+    let mut items: Vec<(String, String)> = Vec::new();
+    for (s, e) in &derived.reactions {
+        items.push((sym_text(pool, *s, l), pool.print(*e, l)));
+    }
+    for (label, v) in &derived.shown {
+        items.push((format!("\\text{{{}}}", label.replace('_', "\\_")), value_latex(pool, v)));
+    }
+    if let Some(at_start) = &derived.at_start {
+        for (label, v) in at_start {
+            items.push((
+                format!("\\text{{{} at }} t = 0", label.replace('_', "\\_")),
+                value_latex(pool, v),
+            ));
+        }
+    }
+    if !items.is_empty() {
+        out.push("% Reactions and shown quantities".into());
+        out.push("\\begin{align}".into());
+        let n = items.len();
+        for (i, (a, b)) in items.iter().enumerate() {
+            let end = if i + 1 < n { " \\\\" } else { "" };
+            out.push(format!("  {a} &= {b}{end}"));
+        }
+        out.push("\\end{align}".into());
+    }
+    let mut text = out.join("\n");
+    text.push('\n');
+    text
+}
+
+fn value_latex(pool: &Pool, v: &Value) -> String {
+    match v {
+        Value::Scalar(e) => pool.print(*e, Style::Latex),
+        Value::Vector(xs) => {
+            let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Latex)).collect();
+            format!("\\left({}\\right)", parts.join(", "))
+        }
+        Value::Matrix(m) => {
+            let rows: Vec<String> = m
+                .iter()
+                .map(|r| {
+                    r.iter().map(|e| pool.print(*e, Style::Latex)).collect::<Vec<_>>().join(" & ")
+                })
+                .collect();
+            format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", rows.join(" \\\\ "))
+        }
+    }
+}
+
+fn value_json(pool: &Pool, v: &Value) -> Json {
+    match v {
+        Value::Scalar(e) => json!(pool.print(*e, Style::Ascii)),
+        Value::Vector(xs) => {
+            Json::Array(xs.iter().map(|e| json!(pool.print(*e, Style::Ascii))).collect())
+        }
+        Value::Matrix(m) => Json::Array(
+            m.iter()
+                .map(|r| {
+                    Json::Array(r.iter().map(|e| json!(pool.print(*e, Style::Ascii))).collect())
+                })
+                .collect(),
+        ),
+    }
+}
+
+/// The report as JSON; every expression is a string in the scene syntax.
+pub fn json(d: &mut Derivation) -> String {
+    let derived = collect(d);
+    let pool = &d.model.pool;
+    let a = Style::Ascii;
+    let name = |s: SymId| pool.symbol(s).name.clone();
+    let mut params = Map::new();
+    for p in &d.model.params {
+        let numeric = p.value.map(|v| pool.eval(v, &[])).filter(|x| x.is_finite());
+        params.insert(
+            p.name.clone(),
+            json!({
+                "value": p.value.map(|v| pool.print(v, a)),
+                "numeric": numeric,
+                "unit": p.unit.as_ref().map(|u| unit_text(u, a)),
+            }),
+        );
+    }
+    let constraints: Vec<Json> = d
+        .model
+        .constraints
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let equation = format!("{} = {}", pool.print(c.lhs, a), pool.print(c.rhs, a));
+            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
+                json!({
+                    "name": c.name,
+                    "equation": equation,
+                    "treatment": "eliminated",
+                    "coordinate": name(e.coord),
+                    "solution": pool.print(e.solution, a),
+                })
+            } else {
+                let m = d.multipliers.iter().find(|m| m.constraint == i);
+                json!({
+                    "name": c.name,
+                    "equation": equation,
+                    "treatment": "multiplier",
+                    "multiplier": name(c.force_symbol),
+                    "jacobian": m.map(|m| m.jacobian.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>()),
+                    "bias": m.map(|m| pool.print(m.bias, a)),
+                })
+            }
+        })
+        .collect();
+    let mut reactions = Map::new();
+    for (s, e) in &derived.reactions {
+        reactions.insert(name(*s), json!(pool.print(*e, a)));
+    }
+    let mut shown = Map::new();
+    for (label, v) in &derived.shown {
+        shown.insert(label.clone(), value_json(pool, v));
+    }
+    let mut at_start = Map::new();
+    if let Some(items) = &derived.at_start {
+        for (label, v) in items {
+            at_start.insert(label.clone(), value_json(pool, v));
+        }
+    }
+    let doc = json!({
+        "scene": d.model.title,
+        "coordinates": d.coords.iter().map(|s| name(*s)).collect::<Vec<_>>(),
+        "parameters": params,
+        "constraints": constraints,
+        "kinetic_energy": pool.print(derived.kinetic, a),
+        "potential_energy": pool.print(derived.potential, a),
+        "equations": derived.equations.iter().map(|e| json!({"lhs": pool.print(e.lhs, a), "rhs": pool.print(e.rhs, a)})).collect::<Vec<_>>(),
+        "mass_matrix": derived.mass_matrix.iter().map(|r| r.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>()).collect::<Vec<_>>(),
+        "forcing": derived.forcing.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
+        "reactions": reactions,
+        "shown": shown,
+        "at_start": at_start,
+    });
+    let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
+    text.push('\n');
+    text
+}

@@ -1,0 +1,126 @@
+//! The derived equations in the forms people read: each equation of motion normalised the way
+//! a hand derivation writes it, and the `show` quantities, symbolic and at the start.
+
+use std::collections::HashMap;
+
+use cas::{ExprId, SymId};
+use model::Value;
+
+use crate::derive::Derivation;
+
+/// One equation `lhs = rhs`.
+#[derive(Clone, Copy, Debug)]
+pub struct Equation {
+    pub lhs: ExprId,
+    pub rhs: ExprId,
+}
+
+impl Derivation {
+    /// The equations of motion as a hand derivation writes them: each row divided by what its
+    /// acceleration coefficients have in common, accelerations and velocity terms on the left,
+    /// the rest (gravity, applied forces, reactions) on the right.
+    pub fn equations(&mut self) -> Vec<Equation> {
+        let n = self.coords.len();
+        let mut out = Vec::new();
+        for i in 0..n {
+            let pool = &mut self.model.pool;
+            let row: Vec<ExprId> = self.mass_matrix[i].iter().map(|e| pool.simplify(*e)).collect();
+            let (content, _) = pool.common_content(&row);
+            let lead_negative =
+                row.iter().find(|e| !pool.is_zero(**e)).is_some_and(|e| pool.looks_negative(*e));
+            let inverse = pool.powi(content, -1);
+            let inverse = if lead_negative { pool.neg(inverse) } else { inverse };
+            let mut lhs_terms = Vec::new();
+            for (j, m) in row.iter().enumerate() {
+                let c = pool.mul2(*m, inverse);
+                let c = pool.factor_content(c);
+                if pool.is_zero(c) {
+                    continue;
+                }
+                let a = pool.sym(self.accels[j]);
+                lhs_terms.push(pool.mul2(c, a));
+            }
+            let mut rhs_parts = vec![self.forcing[i]];
+            for m in &self.multipliers {
+                let lam = pool.sym(m.lambda);
+                rhs_parts.push(pool.mul2(m.jacobian[i], lam));
+            }
+            let rhs = pool.add(&rhs_parts);
+            let rhs = pool.mul2(rhs, inverse);
+            let rhs = pool.simplify(rhs);
+            let (moving, still) = self.split_by_rates(rhs);
+            let pool = &mut self.model.pool;
+            lhs_terms.push(pool.neg(moving));
+            let lhs = pool.add(&lhs_terms);
+            out.push(Equation { lhs, rhs: still });
+        }
+        for m in self.multipliers.clone() {
+            let pool = &mut self.model.pool;
+            let mut terms = Vec::new();
+            for (j, jm) in m.jacobian.iter().enumerate() {
+                let a = pool.sym(self.accels[j]);
+                let c = pool.simplify(*jm);
+                terms.push(pool.mul2(c, a));
+            }
+            let lhs = pool.add(&terms);
+            let rhs = pool.simplify(m.bias);
+            let (moving, still) = self.split_by_rates(rhs);
+            let pool = &mut self.model.pool;
+            let neg = pool.neg(moving);
+            let lhs = pool.add2(lhs, neg);
+            out.push(Equation { lhs, rhs: still });
+        }
+        out
+    }
+
+    /// Splits a sum into the terms with rates in them and the rest.
+    fn split_by_rates(&mut self, e: ExprId) -> (ExprId, ExprId) {
+        let rates = self.rates.clone();
+        let pool = &mut self.model.pool;
+        let (mut moving, mut still) = (Vec::new(), Vec::new());
+        for t in pool.terms(e) {
+            if rates.iter().any(|r| pool.depends_on(t, *r)) {
+                moving.push(t);
+            } else {
+                still.push(t);
+            }
+        }
+        (pool.add(&moving), pool.add(&still))
+    }
+
+    /// The `show` items (not `at start`), derived and simplified.
+    pub fn shown(&mut self) -> Vec<(String, Value)> {
+        let shows: Vec<_> = self.model.shows.iter().filter(|s| !s.at_start).cloned().collect();
+        shows
+            .into_iter()
+            .map(|s| {
+                let v = self.expand_value(&s.value);
+                let v = v.map(|e| self.model.pool.factor_content(e));
+                (s.label, v)
+            })
+            .collect()
+    }
+
+    /// The `show at start` items, exactly at the initial state; `None` when the mass matrix is
+    /// singular there.
+    pub fn shown_at_start(&mut self) -> Option<Vec<(String, Value)>> {
+        let shows: Vec<_> = self.model.shows.iter().filter(|s| s.at_start).cloned().collect();
+        if shows.is_empty() {
+            return Some(Vec::new());
+        }
+        let at_start: HashMap<SymId, ExprId> = self.unknowns_at_start()?;
+        Some(
+            shows
+                .into_iter()
+                .map(|s| {
+                    let v = self.expand_value(&s.value);
+                    let v = v.map(|e| {
+                        let z = self.model.pool.subst(e, &at_start);
+                        self.model.pool.factor_content(z)
+                    });
+                    (s.label, v)
+                })
+                .collect(),
+        )
+    }
+}
