@@ -3,7 +3,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use num_traits::{Signed, ToPrimitive, Zero};
+use num_traits::{One, Signed, ToPrimitive, Zero};
 
 use crate::number::{self, Rational};
 use crate::pool::{ExprId, Func, Node, Pool};
@@ -265,10 +265,53 @@ impl Pool {
         let (c, rest) = self.content(s);
         if matches!(self.node(rest), Node::Add(..)) && self.as_num(c).is_none() {
             let rest = self.fold_pythagoras(rest);
+            let rest = self.perfect_square(rest).unwrap_or(rest);
             self.mul2(c, rest)
         } else {
-            s
+            self.perfect_square(s).unwrap_or(s)
         }
+    }
+
+    /// `a² ± 2ab + b²` as `(a ± b)²`, for a sum of three terms two of which are squares.
+    pub fn perfect_square(&mut self, e: ExprId) -> Option<ExprId> {
+        let terms = self.terms(e);
+        if terms.len() != 3 {
+            return None;
+        }
+        let mut roots = Vec::new();
+        for &t in &terms {
+            let (c, fs) = self.factors(t);
+            if !c.is_positive() {
+                continue;
+            }
+            let half = number::ratio(1, 2);
+            let (rc, rr) = number::rational_root(&c, &half)?;
+            if !rr.is_one() {
+                continue;
+            }
+            if fs.iter().all(|(_, x)| (x * number::int(1) / number::int(2)).is_integer()) {
+                let halved: Vec<(ExprId, Rational)> =
+                    fs.iter().map(|(b, x)| (*b, x / number::int(2))).collect();
+                roots.push((t, self.product(&rc, &halved)));
+            }
+        }
+        for i in 0..roots.len() {
+            for j in i + 1..roots.len() {
+                let (ti, a) = roots[i];
+                let (tj, b) = roots[j];
+                let Some(&cross) = terms.iter().find(|t| **t != ti && **t != tj) else { continue };
+                for sign in [1i64, -1] {
+                    let b_signed = self.scale(b, &number::int(sign));
+                    let ab = self.mul2(a, b_signed);
+                    let twice = self.scale(ab, &number::int(2));
+                    if self.expand(twice) == cross {
+                        let sum = self.add2(a, b_signed);
+                        return Some(self.powi(sum, 2));
+                    }
+                }
+            }
+        }
+        None
     }
 
     /// Splits `e` into its monomial content and the rest, `e = content · rest`: the positive

@@ -356,6 +356,16 @@ impl Pool {
             }
             return format!("\\frac{{{}}}{{{}}}", top.join(sep), bottom.join(sep));
         }
+        // π/6 and L/4 read better than ⅙·π and ¼·L; ½·m·ẋ² keeps its fraction in front.
+        if coef.numer().is_one()
+            && !coef.is_integer()
+            && factors.len() == 1
+            && lower.is_empty()
+            && factors[0].1.is_one()
+        {
+            let atom = self.fmt_at(factors[0].0, Prec::Power, style);
+            return format!("{atom}/{}", coef.denom());
+        }
         let mut head = Vec::new();
         if !coef.is_one() || upper.is_empty() {
             head.push(self.rational_text(coef, style));
@@ -416,7 +426,36 @@ impl Pool {
     /// Terms of a sum: accelerations first, then velocities, then the rest; ties broken by
     /// the factors, compared in printing order.
     fn term_order(&self, a: ExprId, b: ExprId) -> Ordering {
-        self.max_order(b).cmp(&self.max_order(a)).then_with(|| self.structural_order(a, b))
+        let (oa, ob) = (self.max_order(a), self.max_order(b));
+        ob.cmp(&oa)
+            .then_with(|| {
+                // Among terms of the same order, follow the coordinates' declaration order
+                // (the ẍ term before the s̈ term).
+                let (la, lb) = (self.leading_symbols(a, oa), self.leading_symbols(b, ob));
+                let mut pairs = la.iter().zip(lb.iter());
+                pairs
+                    .find_map(|(x, y)| {
+                        let o = self.symbol_order(*x, *y);
+                        (o != Ordering::Equal).then_some(o)
+                    })
+                    .unwrap_or(Ordering::Equal)
+            })
+            .then_with(|| self.structural_order(a, b))
+    }
+
+    /// The symbols of the given derivative order in `e`, in declaration order.
+    fn leading_symbols(&self, e: ExprId, order: u8) -> Vec<SymId> {
+        let mut out = Vec::new();
+        let mut stack = vec![e];
+        while let Some(x) = stack.pop() {
+            match self.node(x) {
+                Node::Sym(s) if self.symbol(*s).order() == order && order > 0 => out.push(*s),
+                _ => stack.extend(self.children(x)),
+            }
+        }
+        out.sort_by(|a, b| self.symbol_order(*a, *b));
+        out.dedup();
+        out
     }
 
     /// Factors of a product: numbers, π, parameters in declaration order, sums, functions,

@@ -1,6 +1,6 @@
 //! The `derive` report in three formats: text for people, LaTeX for papers, JSON for programs.
 
-use cas::number::Signed;
+use cas::number::{One, Signed, Zero};
 use cas::{ExprId, Pool, Rational, Style, SymId};
 use mechanics::{Derivation, Equation};
 use model::Value;
@@ -15,8 +15,8 @@ struct Derived {
     potential: ExprId,
     lagrangian: Option<ExprId>,
     reactions: Vec<(SymId, ExprId)>,
-    shown: Vec<(String, Value)>,
-    at_start: Option<Vec<(String, Value)>>,
+    shown: Vec<(model::Show, Value)>,
+    at_start: Option<Vec<(model::Show, Value)>>,
     start_state: Vec<(SymId, ExprId)>,
 }
 
@@ -26,8 +26,8 @@ fn collect(d: &mut Derivation) -> Derived {
     let mass_matrix =
         d.mass_matrix.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect();
     let forcing = d.forcing.iter().map(|e| pool.simplify(*e)).collect();
-    let kinetic = pool.simplify(d.kinetic);
-    let potential = pool.simplify(d.potential);
+    let kinetic = compact(pool, d.kinetic);
+    let potential = compact(pool, d.potential);
     let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
     let reactions = d.reactions.iter().map(|r| (r.symbol, pool.simplify(r.expr))).collect();
     let shown = d.shown();
@@ -55,6 +55,21 @@ fn collect(d: &mut Derivation) -> Derived {
         shown,
         at_start,
         start_state,
+    }
+}
+
+/// The factored form when it is short (¾·m·(r + R)²·θ̇²), else the expanded one.
+fn compact(pool: &mut Pool, e: ExprId) -> ExprId {
+    let f = pool.factor_content(e);
+    let (_, factors) = pool.factors(f);
+    let short = factors.iter().all(|(b, x)| match pool.node(*b) {
+        cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),
+        _ => true,
+    });
+    if short {
+        f
+    } else {
+        pool.simplify(e)
     }
 }
 
@@ -277,7 +292,8 @@ pub fn text(d: &mut Derivation) -> String {
     }
     if !derived.shown.is_empty() {
         out.push("Shown".into());
-        for (label, v) in &derived.shown {
+        for (show, v) in &derived.shown {
+            let label = d.show_label(show, u);
             out.extend(value_lines(pool, &format!("  {label} = "), v));
         }
     }
@@ -289,7 +305,8 @@ pub fn text(d: &mut Derivation) -> String {
                 .map(|(s, e)| format!("{} = {}", sym_text(pool, *s, u), value_text(pool, *e, u)))
                 .collect();
             out.push(format!("At the start  ({})", state.join(", ")));
-            for (label, v) in items {
+            for (show, v) in items {
+                let label = d.show_label(show, u);
                 out.extend(value_lines(pool, &format!("  {label} = "), v));
             }
         }
@@ -352,13 +369,13 @@ pub fn latex(d: &mut Derivation) -> String {
     for (s, e) in &derived.reactions {
         items.push((sym_text(pool, *s, l), pool.print(*e, l)));
     }
-    for (label, v) in &derived.shown {
-        items.push((format!("\\text{{{}}}", label.replace('_', "\\_")), value_latex(pool, v)));
+    for (show, v) in &derived.shown {
+        items.push((d.show_label(show, l), value_latex(pool, v)));
     }
     if let Some(at_start) = &derived.at_start {
-        for (label, v) in at_start {
+        for (show, v) in at_start {
             items.push((
-                format!("\\text{{{} at }} t = 0", label.replace('_', "\\_")),
+                format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
                 value_latex(pool, v),
             ));
         }
@@ -464,13 +481,13 @@ pub fn json(d: &mut Derivation) -> String {
         reactions.insert(name(*s), json!(pool.print(*e, a)));
     }
     let mut shown = Map::new();
-    for (label, v) in &derived.shown {
-        shown.insert(label.clone(), value_json(pool, v));
+    for (show, v) in &derived.shown {
+        shown.insert(show.label.clone(), value_json(pool, v));
     }
     let mut at_start = Map::new();
     if let Some(items) = &derived.at_start {
-        for (label, v) in items {
-            at_start.insert(label.clone(), value_json(pool, v));
+        for (show, v) in items {
+            at_start.insert(show.label.clone(), value_json(pool, v));
         }
     }
     let doc = json!({

@@ -88,22 +88,34 @@ impl Derivation {
         (pool.add(&moving), pool.add(&still))
     }
 
+    /// How a `show` item is labelled: a lone coordinate, rate or quantity by its symbol
+    /// (`θ̈`), anything else as the scene wrote it.
+    pub fn show_label(&self, show: &model::Show, style: cas::Style) -> String {
+        match &show.value {
+            Value::Scalar(e) => match self.model.pool.as_sym(*e) {
+                Some(s) => self.model.pool.symbol_text(s, style),
+                None => show.label.clone(),
+            },
+            _ => show.label.clone(),
+        }
+    }
+
     /// The `show` items (not `at start`), derived and simplified.
-    pub fn shown(&mut self) -> Vec<(String, Value)> {
+    pub fn shown(&mut self) -> Vec<(model::Show, Value)> {
         let shows: Vec<_> = self.model.shows.iter().filter(|s| !s.at_start).cloned().collect();
         shows
             .into_iter()
             .map(|s| {
                 let v = self.expand_value(&s.value);
                 let v = v.map(|e| self.model.pool.factor_content(e));
-                (s.label, v)
+                (s, v)
             })
             .collect()
     }
 
     /// The `show at start` items, exactly at the initial state; `None` when the mass matrix is
     /// singular there.
-    pub fn shown_at_start(&mut self) -> Option<Vec<(String, Value)>> {
+    pub fn shown_at_start(&mut self) -> Option<Vec<(model::Show, Value)>> {
         let shows: Vec<_> = self.model.shows.iter().filter(|s| s.at_start).cloned().collect();
         if shows.is_empty() {
             return Some(Vec::new());
@@ -118,7 +130,7 @@ impl Derivation {
                         let z = self.model.pool.subst(e, &at_start);
                         self.model.pool.factor_content(z)
                     });
-                    (s.label, v)
+                    (s, v)
                 })
                 .collect(),
         )
