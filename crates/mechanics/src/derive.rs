@@ -93,7 +93,7 @@ impl Derivation {
         }
         for m in &self.multipliers {
             let mut row = m.jacobian.clone();
-            row.extend(std::iter::repeat(self.model.pool.zero()).take(self.multipliers.len()));
+            row.extend(std::iter::repeat_n(self.model.pool.zero(), self.multipliers.len()));
             rows.push(row);
             rhs.push(m.bias);
         }

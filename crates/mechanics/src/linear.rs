@@ -20,19 +20,20 @@ pub fn solve(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<Exp
         let pivot = (col..n).find(|&r| !pool.is_identically_zero(m[r][col]))?;
         m.swap(col, pivot);
         let inv = pool.powi(m[col][col], -1);
-        for k in col..=n {
-            let v = pool.mul2(m[col][k], inv);
-            m[col][k] = pool.simplify(v);
+        for entry in m[col][col..].iter_mut() {
+            let v = pool.mul2(*entry, inv);
+            *entry = pool.simplify(v);
         }
-        for r in 0..n {
-            if r == col || pool.is_zero(m[r][col]) {
+        let pivot_row = m[col].clone();
+        for (r, row) in m.iter_mut().enumerate() {
+            if r == col || pool.is_zero(row[col]) {
                 continue;
             }
-            let factor = m[r][col];
-            for k in col..=n {
-                let p = pool.mul2(factor, m[col][k]);
-                let d = pool.sub(m[r][k], p);
-                m[r][k] = pool.simplify(d);
+            let factor = row[col];
+            for (entry, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                let p = pool.mul2(factor, *p);
+                let d = pool.sub(*entry, p);
+                *entry = pool.simplify(d);
             }
         }
     }

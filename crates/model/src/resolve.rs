@@ -72,6 +72,11 @@ fn distance(a: &str, b: &str) -> usize {
 
 /// The closest candidate within a small edit distance.
 fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    // One letter away from a one- or two-letter name is any other name: only a change of
+    // case counts there.
+    if name.chars().count() <= 2 {
+        return candidates.into_iter().find(|c| c.eq_ignore_ascii_case(name) && *c != name);
+    }
     let limit = (name.chars().count() / 3).clamp(1, 2);
     candidates
         .into_iter()
@@ -750,7 +755,7 @@ impl<'a> Resolver<'a> {
         d = match closest(name, candidates) {
             Some(near) => d.with_hint(format!("did you mean `{near}`?")),
             None => d.with_hint(format!(
-                "declare it first: `param {raw}` for a constant, `coord {raw}` for a coordinate, `let {raw} = …` for a name"
+                "declare it first: `coord {raw}` for a coordinate, `param {raw}` for a constant, `let {raw} = …` for a name"
             )),
         };
         self.error(d);
@@ -1049,6 +1054,8 @@ mod tests {
     fn suggestions_are_close_names() {
         assert_eq!(closest("thta", ["theta", "phi", "x"]), Some("theta"));
         assert_eq!(closest("q", ["theta", "phi"]), None);
+        assert_eq!(closest("y", ["L", "x"]), None);
+        assert_eq!(closest("l", ["L", "x"]), Some("L"));
         assert_eq!(distance("kitten", "sitting"), 3);
     }
 

@@ -1,0 +1,73 @@
+//! One snapshot per example file and format: the text, LaTeX and JSON reports of `derive`.
+
+fn derive(path: &std::path::Path, format: cli::Format) -> String {
+    let source = std::fs::read_to_string(path).expect("readable example");
+    let name = path.file_name().expect("file").to_string_lossy().into_owned();
+    match cli::derive(&name, &source, format) {
+        Ok(report) => report,
+        Err(diagnostics) => panic!("{} does not derive:\n{diagnostics}", path.display()),
+    }
+}
+
+/// Runs `check_one` on every example with the snapshot named after its path
+/// (`ps5__falling_rod`), so adding an example never renames the others' snapshots.
+fn each_example(check_one: impl Fn(&std::path::Path, &str)) {
+    let examples = lagrange_tests::examples();
+    assert!(!examples.is_empty());
+    for (rel, _) in examples {
+        let path = lagrange_tests::examples_dir().join(rel.trim_start_matches("examples/"));
+        let name = rel.trim_start_matches("examples/").trim_end_matches(".lag").replace('/', "__");
+        insta::with_settings!({ input_file => &path, omit_expression => true }, {
+            check_one(&path, &name);
+        });
+    }
+}
+
+#[test]
+fn text() {
+    each_example(|path, name| insta::assert_snapshot!(format!("text@{name}"), derive(path, cli::Format::Text)));
+}
+
+#[test]
+fn latex() {
+    each_example(|path, name| insta::assert_snapshot!(format!("latex@{name}"), derive(path, cli::Format::Latex)));
+}
+
+#[test]
+fn json() {
+    each_example(|path, name| {
+        let report = derive(path, cli::Format::Json);
+        let parsed: serde_json::Value = serde_json::from_str(&report).expect("valid JSON");
+        for key in ["coordinates", "parameters", "mass_matrix", "forcing", "reactions", "shown", "at_start"] {
+            assert!(parsed.get(key).is_some(), "{} lacks `{key}`", path.display());
+        }
+        insta::assert_snapshot!(format!("json@{name}"), report);
+    });
+}
+
+/// The results the problem set's solutions state, read from the JSON report.
+#[test]
+fn problem_set_results_come_out_exactly() {
+    let dir = lagrange_tests::examples_dir().join("ps5");
+    let rod: serde_json::Value =
+        serde_json::from_str(&derive(&dir.join("falling_rod.lag"), cli::Format::Json)).expect("JSON");
+    assert_eq!(rod["coordinates"], serde_json::json!(["x", "theta"]));
+    assert_eq!(rod["at_start"]["theta''"], "12/7*g/L");
+    assert_eq!(rod["at_start"]["floor.force"], "4/7*m*g");
+    assert_eq!(rod["equations"][0]["lhs"], "x''");
+    assert_eq!(rod["equations"][1]["lhs"], "(1 + 3*sin(theta)^2)*theta'' + 3*sin(theta)*cos(theta)*theta'^2");
+    assert_eq!(rod["equations"][1]["rhs"], "6*g*sin(theta)/L");
+
+    let wedge: serde_json::Value =
+        serde_json::from_str(&derive(&dir.join("wedge.lag"), cli::Format::Json)).expect("JSON");
+    assert_eq!(
+        wedge["mass_matrix"],
+        serde_json::json!([["M + m", "m*cos(theta)"], ["m*cos(theta)", "m"]])
+    );
+    assert_eq!(wedge["forcing"], serde_json::json!(["0", "m*g*sin(theta)"]));
+
+    let disk: serde_json::Value =
+        serde_json::from_str(&derive(&dir.join("rolling_disk.lag"), cli::Format::Json)).expect("JSON");
+    assert_eq!(disk["shown"]["disk.omega"], "(1 + R/r)*theta'");
+    assert_eq!(disk["shown"]["KE"], "3/4*m*(r + R)^2*theta'^2");
+}

@@ -1,0 +1,77 @@
+//! Bad input gets a clear error: file, line, column, a caret under the culprit, and a hint.
+//! Each case's whole rendered diagnostic is pinned by a snapshot.
+
+/// Runs the pipeline on a broken scene and returns the rendered diagnostics.
+fn diagnose(source: &str) -> String {
+    match cli::load(source) {
+        Ok(_) => panic!("expected an error for:\n{source}"),
+        Err(errors) => cli::diagnostics::render("bad.lag", source, &errors),
+    }
+}
+
+fn assert_pinpointed(rendered: &str, line: usize, col: usize) {
+    assert!(rendered.contains(&format!("bad.lag:{line}:{col}")), "no bad.lag:{line}:{col} in:\n{rendered}");
+    assert!(rendered.contains('^'), "no caret in:\n{rendered}");
+    assert!(rendered.contains("hint:"), "no hint in:\n{rendered}");
+}
+
+#[test]
+fn unknown_name() {
+    let r = diagnose("param m, g\ncoord theta\nparticle p { mass m; position (sin(thta), 0) }\n");
+    assert_pinpointed(&r, 3, 36);
+    assert!(r.contains("did you mean `theta`?"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn unbalanced_bracket() {
+    let r = diagnose("param m\ncoord x\nparticle p { mass m; position ((x, 0) }\n");
+    assert!(r.contains("bad.lag:3:"), "{r}");
+    assert!(r.contains('^'), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn constraint_on_an_undeclared_coordinate() {
+    let r = diagnose("param m, L\ncoord x\nparticle p { mass m; position (x, 0) }\nconstraint c: y = L\n");
+    assert_pinpointed(&r, 4, 15);
+    assert!(r.contains("`coord y`"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn body_without_mass() {
+    let r = diagnose("param L\ncoord theta\nbody rod { inertia L^2/12; position (0, 0); angle theta }\n");
+    assert_pinpointed(&r, 3, 6);
+    assert!(r.contains("has no mass"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn implicit_multiplication() {
+    let r = diagnose("param m, g\ncoord y\nparticle p { mass m; position (0, 2y) }\n");
+    assert!(r.contains("2*y"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn coordinate_used_before_it_is_declared() {
+    let r = diagnose("param m\nparticle p { mass m; position (x, 0) }\ncoord x\n");
+    assert_pinpointed(&r, 2, 32);
+    assert!(r.contains("declared here"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn several_errors_are_all_reported() {
+    let r = diagnose("param m\ncoord x\nparticle p { mass mm; position (x, 0) }\nparticle q { mass m; position (xx, 0) }\n");
+    assert!(r.contains("bad.lag:3:"), "{r}");
+    assert!(r.contains("bad.lag:4:"), "{r}");
+}
+
+#[test]
+fn a_coordinate_nothing_moves_with() {
+    let r = diagnose("param m\ncoord x, y\nparticle p { mass m; position (x, 0) }\n");
+    assert!(r.contains("no kinetic energy depends on the rate of `y`"), "{r}");
+    insta::assert_snapshot!(r);
+}
