@@ -174,9 +174,11 @@ proptest! {
 fn reparse(text: &str) -> (String, impl Fn(&[f64; 3]) -> f64) {
     let source = format!("param x, y, z\nshow {text}\n");
     let ast = lang::parse(&source).unwrap_or_else(|e| panic!("`{text}` does not parse: {e:?}"));
-    let (m, _) = model::resolve(&ast, &source).unwrap_or_else(|e| panic!("`{text}` does not resolve: {e:?}"));
+    let (m, _) = model::resolve(&ast, &source)
+        .unwrap_or_else(|e| panic!("`{text}` does not resolve: {e:?}"));
     let model::Value::Scalar(e) = m.shows[0].value else { panic!("not a scalar") };
     let printed = m.pool.print(e, Style::Ascii);
-    let syms: Vec<SymId> = ["x", "y", "z"].iter().map(|n| m.pool.lookup_symbol(n).expect("declared")).collect();
+    let syms: Vec<SymId> =
+        ["x", "y", "z"].iter().map(|n| m.pool.lookup_symbol(n).expect("declared")).collect();
     (printed, move |p: &[f64; 3]| m.pool.eval(e, &values(&m.pool, &syms, p)))
 }

@@ -31,7 +31,11 @@ fn a_wrong_copy_of_each_expectation_fails() {
             let wrong = format!("{} + 1/3{}", &source[..at], &source[at..]);
             let line = source[..stmt.span.start].matches('\n').count() + 1;
             let result = cli::check::check_file(&path, &wrong);
-            assert_eq!(result.exit_code, 1, "{path}:{line} with `+ 1/3` still passes:\n{}", result.report);
+            assert_eq!(
+                result.exit_code, 1,
+                "{path}:{line} with `+ 1/3` still passes:\n{}",
+                result.report
+            );
             assert_eq!(result.failed, 1, "{}", result.report);
             assert!(
                 result.report.contains(&format!("FAIL {path}:{line} ")),
@@ -48,7 +52,8 @@ fn a_wrong_copy_of_each_expectation_fails() {
 /// A wrong equation of motion reports its residual and a state where it is not zero.
 #[test]
 fn a_failure_shows_the_residual_and_a_state() {
-    let source = "param m, g\ncoord x\nparticle p { mass m; position (0, x) }\ngravity g\nexpect x'' = g\n";
+    let source =
+        "param m, g\ncoord x\nparticle p { mass m; position (0, x) }\ngravity g\nexpect x'' = g\n";
     let result = cli::check::check_file("drop.lag", source);
     assert_eq!(result.exit_code, 1);
     assert!(result.report.contains("drop.lag:5:1"), "{}", result.report);

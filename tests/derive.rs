@@ -25,12 +25,16 @@ fn each_example(check_one: impl Fn(&std::path::Path, &str)) {
 
 #[test]
 fn text() {
-    each_example(|path, name| insta::assert_snapshot!(format!("text@{name}"), derive(path, cli::Format::Text)));
+    each_example(|path, name| {
+        insta::assert_snapshot!(format!("text@{name}"), derive(path, cli::Format::Text))
+    });
 }
 
 #[test]
 fn latex() {
-    each_example(|path, name| insta::assert_snapshot!(format!("latex@{name}"), derive(path, cli::Format::Latex)));
+    each_example(|path, name| {
+        insta::assert_snapshot!(format!("latex@{name}"), derive(path, cli::Format::Latex))
+    });
 }
 
 #[test]
@@ -38,7 +42,15 @@ fn json() {
     each_example(|path, name| {
         let report = derive(path, cli::Format::Json);
         let parsed: serde_json::Value = serde_json::from_str(&report).expect("valid JSON");
-        for key in ["coordinates", "parameters", "mass_matrix", "forcing", "reactions", "shown", "at_start"] {
+        for key in [
+            "coordinates",
+            "parameters",
+            "mass_matrix",
+            "forcing",
+            "reactions",
+            "shown",
+            "at_start",
+        ] {
             assert!(parsed.get(key).is_some(), "{} lacks `{key}`", path.display());
         }
         insta::assert_snapshot!(format!("json@{name}"), report);
@@ -50,12 +62,16 @@ fn json() {
 fn problem_set_results_come_out_exactly() {
     let dir = lagrange_tests::examples_dir().join("ps5");
     let rod: serde_json::Value =
-        serde_json::from_str(&derive(&dir.join("falling_rod.lag"), cli::Format::Json)).expect("JSON");
+        serde_json::from_str(&derive(&dir.join("falling_rod.lag"), cli::Format::Json))
+            .expect("JSON");
     assert_eq!(rod["coordinates"], serde_json::json!(["x", "theta"]));
     assert_eq!(rod["at_start"]["theta''"], "12/7*g/L");
     assert_eq!(rod["at_start"]["floor.force"], "4/7*m*g");
     assert_eq!(rod["equations"][0]["lhs"], "x''");
-    assert_eq!(rod["equations"][1]["lhs"], "(1 + 3*sin(theta)^2)*theta'' + 3*sin(theta)*cos(theta)*theta'^2");
+    assert_eq!(
+        rod["equations"][1]["lhs"],
+        "(1 + 3*sin(theta)^2)*theta'' + 3*sin(theta)*cos(theta)*theta'^2"
+    );
     assert_eq!(rod["equations"][1]["rhs"], "6*g*sin(theta)/L");
 
     let wedge: serde_json::Value =
@@ -67,7 +83,8 @@ fn problem_set_results_come_out_exactly() {
     assert_eq!(wedge["forcing"], serde_json::json!(["0", "m*g*sin(theta)"]));
 
     let disk: serde_json::Value =
-        serde_json::from_str(&derive(&dir.join("rolling_disk.lag"), cli::Format::Json)).expect("JSON");
+        serde_json::from_str(&derive(&dir.join("rolling_disk.lag"), cli::Format::Json))
+            .expect("JSON");
     assert_eq!(disk["shown"]["disk.omega"], "(1 + R/r)*theta'");
     assert_eq!(disk["shown"]["KE"], "3/4*m*(r + R)^2*theta'^2");
 }

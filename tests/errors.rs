@@ -10,7 +10,10 @@ fn diagnose(source: &str) -> String {
 }
 
 fn assert_pinpointed(rendered: &str, line: usize, col: usize) {
-    assert!(rendered.contains(&format!("bad.lag:{line}:{col}")), "no bad.lag:{line}:{col} in:\n{rendered}");
+    assert!(
+        rendered.contains(&format!("bad.lag:{line}:{col}")),
+        "no bad.lag:{line}:{col} in:\n{rendered}"
+    );
     assert!(rendered.contains('^'), "no caret in:\n{rendered}");
     assert!(rendered.contains("hint:"), "no hint in:\n{rendered}");
 }
@@ -33,7 +36,9 @@ fn unbalanced_bracket() {
 
 #[test]
 fn constraint_on_an_undeclared_coordinate() {
-    let r = diagnose("param m, L\ncoord x\nparticle p { mass m; position (x, 0) }\nconstraint c: y = L\n");
+    let r = diagnose(
+        "param m, L\ncoord x\nparticle p { mass m; position (x, 0) }\nconstraint c: y = L\n",
+    );
     assert_pinpointed(&r, 4, 15);
     assert!(r.contains("`coord y`"), "{r}");
     insta::assert_snapshot!(r);
@@ -41,7 +46,9 @@ fn constraint_on_an_undeclared_coordinate() {
 
 #[test]
 fn body_without_mass() {
-    let r = diagnose("param L\ncoord theta\nbody rod { inertia L^2/12; position (0, 0); angle theta }\n");
+    let r = diagnose(
+        "param L\ncoord theta\nbody rod { inertia L^2/12; position (0, 0); angle theta }\n",
+    );
     assert_pinpointed(&r, 3, 6);
     assert!(r.contains("has no mass"), "{r}");
     insta::assert_snapshot!(r);

@@ -18,7 +18,11 @@ pub fn examples() -> Vec<(String, String)> {
             if path.is_dir() {
                 stack.push(path);
             } else if path.extension().is_some_and(|e| e == "lag") {
-                let rel = path.strip_prefix(examples_dir()).expect("under examples").to_string_lossy().replace('\\', "/");
+                let rel = path
+                    .strip_prefix(examples_dir())
+                    .expect("under examples")
+                    .to_string_lossy()
+                    .replace('\\', "/");
                 let source = std::fs::read_to_string(&path).expect("readable example");
                 out.push((format!("examples/{rel}"), source));
             }
