@@ -209,41 +209,63 @@ impl Pool {
         self.fold_pythagoras(x)
     }
 
-    /// In a sum, replaces each pair `c·X·sin(u)^2 + c·X·cos(u)^2` by `c·X`.
-    fn fold_pythagoras(&mut self, e: ExprId) -> ExprId {
+    /// In a sum, folds pairs of terms with sin²u + cos²u = 1:
+    /// `c·X·sin²u + c·X·cos²u` → `c·X`, and `c·X − c·X·cos²u` → `c·X·sin²u` (likewise with sin
+    /// and cos exchanged). Each fold removes a term.
+    pub fn fold_pythagoras(&mut self, e: ExprId) -> ExprId {
         let Node::Add(constant, terms) = self.node(e).clone() else { return e };
         let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
         let mut constant = constant;
+        // Each round removes one term, so this ends.
         loop {
             let mut found = None;
             'search: for (t, k) in &terms {
                 let (c, fs) = self.factors(*t);
                 for (i, (b, x)) in fs.iter().enumerate() {
-                    let Node::Func(Func::Cos, u) = *self.node(*b) else { continue };
+                    let (f, u) = match *self.node(*b) {
+                        Node::Func(f @ (Func::Cos | Func::Sin), u) => (f, u),
+                        _ => continue,
+                    };
                     if *x < number::int(2) || !x.is_integer() {
                         continue;
                     }
-                    let s = self.sin(u);
-                    let mut with_sin = fs.clone();
-                    with_sin[i].1 = x - number::int(2);
-                    let rest = self.product(&c, &with_sin);
-                    let s2 = self.powi(s, 2);
-                    let partner = self.mul2(rest, s2);
+                    let other = if f == Func::Cos { self.sin(u) } else { self.cos(u) };
+                    let mut reduced = fs.clone();
+                    reduced[i].1 = x - number::int(2);
+                    let rest = self.product(&c, &reduced);
+                    let other2 = self.powi(other, 2);
+                    // c·X·cos² + c·X·sin² = c·X
+                    let partner = self.mul2(rest, other2);
                     let (pc, pt) = self.split_coefficient(partner);
-                    if pt == *t {
-                        continue;
+                    if pt != *t && terms.get(&pt).map(|pk| pk / &pc).as_ref() == Some(k) {
+                        found = Some((vec![*t, pt], rest, k.clone()));
+                        break 'search;
                     }
-                    let partner_coef = terms.get(&pt).map(|pk| pk * &pc.recip());
-                    if partner_coef.as_ref() == Some(k) {
-                        found = Some((*t, pt, k.clone(), rest));
+                    // k·X·cos² − k·X = −k·X·sin²
+                    let (rc, rt) = self.split_coefficient(rest);
+                    let partner_coef = if self.as_num(rt).is_some() {
+                        Some(&constant * &rc.recip())
+                    } else {
+                        terms.get(&rt).map(|pk| pk / &rc)
+                    };
+                    if partner_coef.as_ref() == Some(&-k.clone()) && !k.is_zero() {
+                        let folded = self.mul2(rest, other2);
+                        let mut remove = vec![*t];
+                        if self.as_num(rt).is_some() {
+                            constant -= &rc * &-k.clone();
+                        } else {
+                            remove.push(rt);
+                        }
+                        found = Some((remove, folded, -k.clone()));
                         break 'search;
                     }
                 }
             }
-            let Some((t, pt, k, rest)) = found else { break };
-            terms.remove(&t);
-            terms.remove(&pt);
-            let (rc, rt) = self.split_coefficient(rest);
+            let Some((remove, replacement, k)) = found else { break };
+            for t in remove {
+                terms.remove(&t);
+            }
+            let (rc, rt) = self.split_coefficient(replacement);
             if let Some(n) = self.as_num(rt) {
                 constant += n * &rc * &k;
             } else {
@@ -261,6 +283,16 @@ impl Pool {
     /// The simplified form with its monomial content pulled out in front of a sum:
     /// `1/12·m·L²·(1 + 3·sin²θ)` rather than `1/12·m·L² + ¼·m·L²·sin²θ`.
     pub fn factor_content(&mut self, e: ExprId) -> ExprId {
+        // A quotient by sums keeps its denominator: factor the numerator alone.
+        let (c, fs) = self.factors(e);
+        let is_denominator = |p: &Self, (b, x): &(ExprId, Rational)| x.is_negative() && matches!(p.node(*b), Node::Add(..));
+        if fs.iter().any(|f| is_denominator(self, f)) {
+            let (den, num): (Vec<_>, Vec<_>) = fs.into_iter().partition(|f| is_denominator(self, f));
+            let num = self.product(&c, &num);
+            let num = self.factor_content(num);
+            let den = self.product(&Rational::one(), &den);
+            return self.mul2(num, den);
+        }
         let s = self.simplify(e);
         let (c, rest) = self.content(s);
         if matches!(self.node(rest), Node::Add(..)) && self.as_num(c).is_none() {
@@ -363,8 +395,10 @@ impl Pool {
         let content = self.product(&gcd, &common);
         let first = exprs.first().copied().unwrap_or(self.zero());
         let inverse = self.powi(content, -1);
-        let m = self.mul2(first, inverse);
-        let rest = self.expand(m);
+        // Term by term, so a common 1/(a + b) cancels before any sum is multiplied out.
+        let first = self.expand(first);
+        let parts: Vec<ExprId> = self.terms(first).into_iter().map(|t| self.mul2(t, inverse)).collect();
+        let rest = self.add(&parts);
         (content, rest)
     }
 }

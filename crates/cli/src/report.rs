@@ -29,7 +29,7 @@ fn collect(d: &mut Derivation) -> Derived {
     let kinetic = compact(pool, d.kinetic);
     let potential = compact(pool, d.potential);
     let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
-    let reactions = d.reactions.iter().map(|r| (r.symbol, pool.simplify(r.expr))).collect();
+    let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
     let shown = d.shown();
     let at_start = d.shown_at_start();
     let mut start_state = Vec::new();
@@ -62,10 +62,13 @@ fn collect(d: &mut Derivation) -> Derived {
 fn compact(pool: &mut Pool, e: ExprId) -> ExprId {
     let f = pool.factor_content(e);
     let (_, factors) = pool.factors(f);
-    let short = factors.iter().all(|(b, x)| match pool.node(*b) {
-        cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),
-        _ => true,
-    });
+    // A quotient by a sum stays one quotient; a sum in front stays factored when it is short.
+    let quotient = factors.iter().any(|(b, x)| x.is_negative() && matches!(pool.node(*b), cas::Node::Add(..)));
+    let short = quotient
+        || factors.iter().all(|(b, x)| match pool.node(*b) {
+            cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),
+            _ => true,
+        });
     if short {
         f
     } else {

@@ -53,8 +53,8 @@ impl Derivation {
     /// Checks one `expect` line.
     pub fn check(&mut self, index: usize) -> Verdict {
         let expect = self.model.expects[index].clone();
-        let lhs = self.expand_value(&expect.lhs).entries();
-        let rhs = self.expand_value(&expect.rhs).entries();
+        let lhs = self.expand_value(&expect.lhs, true).entries();
+        let rhs = self.expand_value(&expect.rhs, true).entries();
         let many = lhs.len() > 1;
         let mut numeric = 0;
         for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {

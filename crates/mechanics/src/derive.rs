@@ -100,14 +100,19 @@ impl Derivation {
         (rows, rhs)
     }
 
-    /// Replaces KE, PE and reactions of eliminated constraints by what they are, and
-    /// eliminated coordinates by their solutions.
-    pub fn expand_quantities(&mut self, e: ExprId) -> ExprId {
+    /// Replaces KE, PE and reactions by what they are, and eliminated coordinates by their
+    /// solutions. With `keep_multipliers`, the reactions of constraints kept with multipliers
+    /// stay the unknowns λ of the equations of motion (as checks want them), rather than their
+    /// solved forms (as `show` wants them).
+    pub fn expand_quantities(&mut self, e: ExprId, keep_multipliers: bool) -> ExprId {
+        let kept: Vec<usize> =
+            if keep_multipliers { self.multipliers.iter().map(|m| m.constraint).collect() } else { Vec::new() };
         let mut map: HashMap<SymId, ExprId> = HashMap::new();
         for (s, kind) in self.model.placeholders.clone() {
             let value = match kind {
                 Placeholder::KineticEnergy => Some(self.kinetic),
                 Placeholder::PotentialEnergy => Some(self.potential),
+                Placeholder::Reaction(c) if kept.contains(&c) => None,
                 Placeholder::Reaction(c) => {
                     self.reactions.iter().find(|r| r.constraint == c).map(|r| r.expr)
                 }
@@ -120,8 +125,8 @@ impl Derivation {
         self.model.pool.subst(e, &self.elimination_map)
     }
 
-    pub fn expand_value(&mut self, v: &Value) -> Value {
-        v.map(|e| self.expand_quantities(e))
+    pub fn expand_value(&mut self, v: &Value, keep_multipliers: bool) -> Value {
+        v.map(|e| self.expand_quantities(e, keep_multipliers))
     }
 
     /// The initial state: each remaining coordinate and rate at its `coord` value, t = 0.
@@ -456,7 +461,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         }
     }
 
-    Ok(Derivation {
+    let mut derivation = Derivation {
         model,
         coords,
         rates,
@@ -472,5 +477,32 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         forcing,
         reactions,
         warnings,
-    })
+    };
+    derivation.solve_multiplier_reactions();
+    Ok(derivation)
+}
+
+/// Past this many unknowns the symbolic solution of the full system is too large to be worth
+/// printing; the reactions of kept constraints then stay multipliers, found numerically.
+const SYMBOLIC_SOLVE_LIMIT: usize = 4;
+
+impl Derivation {
+    /// The reactions of constraints kept with multipliers, as expressions of the state: the
+    /// multipliers of the solved system M q̈ − Jᵀλ = f, J q̈ = γ.
+    fn solve_multiplier_reactions(&mut self) {
+        let wanted: Vec<usize> = (0..self.multipliers.len())
+            .filter(|&i| self.model.constraints[self.multipliers[i].constraint].force_requested)
+            .collect();
+        let n = self.coords.len();
+        if wanted.is_empty() || n + self.multipliers.len() > SYMBOLIC_SOLVE_LIMIT {
+            return;
+        }
+        let (rows, rhs) = self.system();
+        let Some(x) = linear::solve(&mut self.model.pool, &rows, &rhs) else { return };
+        for i in wanted {
+            let m = &self.multipliers[i];
+            let expr = self.model.pool.factor_content(x[n + i]);
+            self.reactions.push(Reaction { constraint: m.constraint, symbol: m.lambda, expr });
+        }
+    }
 }

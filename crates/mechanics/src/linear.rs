@@ -1,11 +1,122 @@
 //! Exact solution of small linear systems whose entries are expressions.
 
-use cas::{ExprId, Pool};
+use std::collections::BTreeMap;
 
-/// Solves `a · x = b` by Gaussian elimination, choosing as pivot the first entry not
-/// identically zero. `None` when the matrix is singular as far as the algebra can tell.
-/// Meant for small systems (accelerations at the start, reactions): entries grow with size.
+use cas::number::{Signed, Zero};
+use cas::{ExprId, Node, Pool, Rational};
+
+/// Up to this size, Cramer's rule with cancelled quotients; beyond, Gaussian elimination.
+const CRAMER_LIMIT: usize = 4;
+
+/// Solves `a · x = b`. `None` when the matrix is singular as far as the algebra can tell.
+/// Small systems use Cramer's rule, which keeps each unknown one quotient of polynomials with
+/// their common factors cancelled (λ = m·(g·y − ẋ² − ẏ²)/(2·x² + 2·y²)).
 pub fn solve(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
+    if b.len() <= CRAMER_LIMIT {
+        cramer(pool, a, b)
+    } else {
+        gauss(pool, a, b)
+    }
+}
+
+fn cramer(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
+    let d = determinant(pool, a);
+    if pool.is_identically_zero(d) {
+        return None;
+    }
+    let mut out = Vec::with_capacity(b.len());
+    for i in 0..b.len() {
+        let replaced: Vec<Vec<ExprId>> = a
+            .iter()
+            .zip(b)
+            .map(|(row, rhs)| {
+                let mut r = row.clone();
+                r[i] = *rhs;
+                r
+            })
+            .collect();
+        let n = determinant(pool, &replaced);
+        out.push(quotient(pool, n, d));
+    }
+    Some(out)
+}
+
+/// Laplace expansion along the first row; fine for the sizes Cramer's rule is used at.
+fn determinant(pool: &mut Pool, m: &[Vec<ExprId>]) -> ExprId {
+    match m.len() {
+        0 => pool.one(),
+        1 => m[0][0],
+        _ => {
+            let mut terms = Vec::new();
+            for (j, &entry) in m[0].iter().enumerate() {
+                if pool.is_zero(entry) {
+                    continue;
+                }
+                let minor: Vec<Vec<ExprId>> = m[1..]
+                    .iter()
+                    .map(|row| row.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, e)| *e).collect())
+                    .collect();
+                let sub = determinant(pool, &minor);
+                let t = pool.mul2(entry, sub);
+                terms.push(if j % 2 == 0 { t } else { pool.neg(t) });
+            }
+            let sum = pool.add(&terms);
+            pool.expand(sum)
+        }
+    }
+}
+
+/// `n / d` with denominators cleared from both and their common monomial factor cancelled.
+pub fn quotient(pool: &mut Pool, n: ExprId, d: ExprId) -> ExprId {
+    let (n, d) = (pool.expand(n), pool.expand(d));
+    // Multiply both by every denominator either has, so both are polynomials.
+    let mut clear: BTreeMap<ExprId, Rational> = BTreeMap::new();
+    for e in [n, d] {
+        for t in pool.terms(e) {
+            let (_, fs) = pool.factors(t);
+            for (base, x) in fs {
+                if x.is_negative() && pool.as_num(base).is_none() {
+                    let need = -x.floor();
+                    let slot = clear.entry(base).or_insert_with(Rational::zero);
+                    if need > *slot {
+                        *slot = need;
+                    }
+                }
+            }
+        }
+    }
+    let factors: Vec<(ExprId, Rational)> = clear.into_iter().collect();
+    let c = pool.product(&Rational::from_integer(1.into()), &factors);
+    let mut scaled = [n, d];
+    for e in scaled.iter_mut() {
+        let parts: Vec<ExprId> = pool
+            .terms(*e)
+            .into_iter()
+            .map(|t| {
+                let m = pool.mul2(t, c);
+                pool.expand(m)
+            })
+            .collect();
+        let sum = pool.add(&parts);
+        *e = pool.expand(sum);
+    }
+    let [n, d] = scaled;
+    let (content, n) = pool.common_content(&[n, d]);
+    let inverse = pool.powi(content, -1);
+    let d = pool.mul2(d, inverse);
+    let d = pool.expand(d);
+    let (n, d) = if pool.looks_negative(d) { (pool.neg(n), pool.neg(d)) } else { (n, d) };
+    let n = pool.factor_content(n);
+    let d = pool.simplify(d);
+    if let Node::Num(q) = pool.node(d) {
+        let q = q.clone();
+        return pool.scale(n, &q.recip());
+    }
+    pool.div(n, d)
+}
+
+/// Gauss–Jordan elimination, choosing as pivot the first entry not identically zero.
+fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
     let n = b.len();
     let mut m: Vec<Vec<ExprId>> = a
         .iter()
@@ -38,4 +149,40 @@ pub fn solve(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<Exp
         }
     }
     Some(m.into_iter().map(|row| row[n]).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cas::Style;
+
+    #[test]
+    fn pendulum_multiplier_cancels() {
+        let mut p = Pool::new();
+        let names = ["m", "g", "x", "y", "u", "v"];
+        let e: Vec<ExprId> = names
+            .iter()
+            .map(|n| {
+                let s = p.param(n);
+                p.sym(s)
+            })
+            .collect();
+        let (m, g, x, y, u, v) = (e[0], e[1], e[2], e[3], e[4], e[5]);
+        let zero = p.zero();
+        let two = cas::number::int(2);
+        let mx = p.scale(x, &-two.clone());
+        let my = p.scale(y, &-two.clone());
+        let px = p.scale(x, &two);
+        let py = p.scale(y, &two);
+        let mg = p.mul2(m, g);
+        let mg = p.neg(mg);
+        let u2 = p.powi(u, 2);
+        let v2 = p.powi(v, 2);
+        let s = p.add2(u2, v2);
+        let gamma = p.scale(s, &-two);
+        let a = vec![vec![m, zero, mx], vec![zero, m, my], vec![px, py, zero]];
+        let b = vec![zero, mg, gamma];
+        let sol = solve(&mut p, &a, &b).unwrap();
+        assert_eq!(p.print(sol[2], Style::Ascii), "m*(g*y - u^2 - v^2)/(2*x^2 + 2*y^2)");
+    }
 }

@@ -56,14 +56,19 @@ impl Derivation {
         }
         for m in self.multipliers.clone() {
             let pool = &mut self.model.pool;
+            let row: Vec<ExprId> = m.jacobian.iter().map(|e| pool.simplify(*e)).collect();
+            let (content, _) = pool.common_content(&row);
+            let inverse = pool.powi(content, -1);
             let mut terms = Vec::new();
-            for (j, jm) in m.jacobian.iter().enumerate() {
+            for (j, jm) in row.iter().enumerate() {
                 let a = pool.sym(self.accels[j]);
-                let c = pool.simplify(*jm);
+                let c = pool.mul2(*jm, inverse);
+                let c = pool.factor_content(c);
                 terms.push(pool.mul2(c, a));
             }
             let lhs = pool.add(&terms);
-            let rhs = pool.simplify(m.bias);
+            let rhs = pool.mul2(m.bias, inverse);
+            let rhs = pool.simplify(rhs);
             let (moving, still) = self.split_by_rates(rhs);
             let pool = &mut self.model.pool;
             let neg = pool.neg(moving);
@@ -106,7 +111,7 @@ impl Derivation {
         shows
             .into_iter()
             .map(|s| {
-                let v = self.expand_value(&s.value);
+                let v = self.expand_value(&s.value, false);
                 let v = v.map(|e| self.model.pool.factor_content(e));
                 (s, v)
             })
@@ -125,7 +130,8 @@ impl Derivation {
             shows
                 .into_iter()
                 .map(|s| {
-                    let v = self.expand_value(&s.value);
+                    // The multipliers at the start come from the solved system, exactly.
+                    let v = self.expand_value(&s.value, true);
                     let v = v.map(|e| {
                         let z = self.model.pool.subst(e, &at_start);
                         self.model.pool.factor_content(z)
