@@ -285,9 +285,12 @@ impl Pool {
     pub fn factor_content(&mut self, e: ExprId) -> ExprId {
         // A quotient by sums keeps its denominator: factor the numerator alone.
         let (c, fs) = self.factors(e);
-        let is_denominator = |p: &Self, (b, x): &(ExprId, Rational)| x.is_negative() && matches!(p.node(*b), Node::Add(..));
+        let is_denominator = |p: &Self, (b, x): &(ExprId, Rational)| {
+            x.is_negative() && matches!(p.node(*b), Node::Add(..))
+        };
         if fs.iter().any(|f| is_denominator(self, f)) {
-            let (den, num): (Vec<_>, Vec<_>) = fs.into_iter().partition(|f| is_denominator(self, f));
+            let (den, num): (Vec<_>, Vec<_>) =
+                fs.into_iter().partition(|f| is_denominator(self, f));
             let num = self.product(&c, &num);
             let num = self.factor_content(num);
             let den = self.product(&Rational::one(), &den);
@@ -397,7 +400,8 @@ impl Pool {
         let inverse = self.powi(content, -1);
         // Term by term, so a common 1/(a + b) cancels before any sum is multiplied out.
         let first = self.expand(first);
-        let parts: Vec<ExprId> = self.terms(first).into_iter().map(|t| self.mul2(t, inverse)).collect();
+        let parts: Vec<ExprId> =
+            self.terms(first).into_iter().map(|t| self.mul2(t, inverse)).collect();
         let rest = self.add(&parts);
         (content, rest)
     }

@@ -546,9 +546,11 @@ impl Pool {
     }
 
     fn symbol_order(&self, a: SymId, b: SymId) -> Ordering {
+        // Parameters in declaration order, then time (w·t, not t·w), then coordinates.
         let key = |s: SymId| match self.symbol(s).kind {
             SymbolKind::Coordinate { base, order } => (order, base.index()),
-            _ => (0, s.index()),
+            SymbolKind::Time => (0, usize::MAX),
+            SymbolKind::Param => (0, s.index()),
         };
         key(a).cmp(&key(b))
     }

@@ -63,7 +63,8 @@ fn compact(pool: &mut Pool, e: ExprId) -> ExprId {
     let f = pool.factor_content(e);
     let (_, factors) = pool.factors(f);
     // A quotient by a sum stays one quotient; a sum in front stays factored when it is short.
-    let quotient = factors.iter().any(|(b, x)| x.is_negative() && matches!(pool.node(*b), cas::Node::Add(..)));
+    let quotient =
+        factors.iter().any(|(b, x)| x.is_negative() && matches!(pool.node(*b), cas::Node::Add(..)));
     let short = quotient
         || factors.iter().all(|(b, x)| match pool.node(*b) {
             cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),

@@ -105,8 +105,11 @@ impl Derivation {
     /// stay the unknowns λ of the equations of motion (as checks want them), rather than their
     /// solved forms (as `show` wants them).
     pub fn expand_quantities(&mut self, e: ExprId, keep_multipliers: bool) -> ExprId {
-        let kept: Vec<usize> =
-            if keep_multipliers { self.multipliers.iter().map(|m| m.constraint).collect() } else { Vec::new() };
+        let kept: Vec<usize> = if keep_multipliers {
+            self.multipliers.iter().map(|m| m.constraint).collect()
+        } else {
+            Vec::new()
+        };
         let mut map: HashMap<SymId, ExprId> = HashMap::new();
         for (s, kind) in self.model.placeholders.clone() {
             let value = match kind {

@@ -54,7 +54,9 @@ fn determinant(pool: &mut Pool, m: &[Vec<ExprId>]) -> ExprId {
                 }
                 let minor: Vec<Vec<ExprId>> = m[1..]
                     .iter()
-                    .map(|row| row.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, e)| *e).collect())
+                    .map(|row| {
+                        row.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, e)| *e).collect()
+                    })
                     .collect();
                 let sub = determinant(pool, &minor);
                 let t = pool.mul2(entry, sub);

@@ -1,0 +1,83 @@
+//! The `lagrange` binary end to end: output, exit codes, and files written whole.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lagrange(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lagrange")).args(args).output().expect("the binary runs")
+}
+
+fn example(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lagrange-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir.join(name)
+}
+
+#[test]
+fn derive_prints_the_rod_exactly() {
+    let out = lagrange(&["derive", &example("ps5/falling_rod.lag")]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(text.contains("(1 + 3·sin²(θ))·θ̈ + 3·sin(θ)·cos(θ)·θ̇² = 6·g·sin(θ)/L"), "{text}");
+    assert!(text.contains("θ̈ = 12/7·g/L"), "{text}");
+    assert!(text.contains("floor.force = 4/7·m·g"), "{text}");
+}
+
+#[test]
+fn check_exit_codes() {
+    let ok = lagrange(&["check", &example("ps5/falling_rod.lag"), &example("ps5/wedge.lag")]);
+    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stdout));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("7 passed, 0 failed"));
+
+    let wrong = scratch("wrong.lag");
+    std::fs::write(
+        &wrong,
+        "param m, g\ncoord x\nparticle p { mass m; position (0, x) }\ngravity g\nexpect x'' = g\n",
+    )
+    .expect("write");
+    let fail = lagrange(&["check", wrong.to_str().expect("path")]);
+    assert_eq!(fail.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&fail.stdout).contains("wrong.lag:5"));
+
+    let bad = scratch("bad.lag");
+    std::fs::write(&bad, "param m\ncoord x\nparticle p { mass m; position (x, 0) \n")
+        .expect("write");
+    let broken = lagrange(&["check", bad.to_str().expect("path")]);
+    assert_eq!(broken.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&broken.stderr).contains("bad.lag:"));
+
+    let missing = lagrange(&["derive", "no/such/file.lag"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("cannot read"));
+}
+
+#[test]
+fn derive_out_writes_the_whole_file() {
+    let target = scratch("rod.json");
+    let out = lagrange(&[
+        "derive",
+        &example("ps5/falling_rod.lag"),
+        "--format",
+        "json",
+        "--out",
+        target.to_str().expect("path"),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written = std::fs::read_to_string(&target).expect("written");
+    let parsed: serde_json::Value = serde_json::from_str(&written).expect("whole JSON");
+    assert_eq!(parsed["at_start"]["floor.force"], "4/7*m*g");
+    let leftovers: Vec<_> = std::fs::read_dir(target.parent().expect("dir"))
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left behind");
+}
