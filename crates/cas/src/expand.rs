@@ -135,12 +135,53 @@ impl Pool {
             }
             Node::Func(f, a) => {
                 let a = self.rewrite_cos_squares(a, memo);
-                self.func(f, a)
+                match f {
+                    Func::Sin | Func::Cos => self.expand_angle(f, a, memo),
+                    _ => self.func(f, a),
+                }
             }
             _ => e,
         };
         memo.insert(e, r);
         r
+    }
+
+    /// sin and cos of a sum or of an integer multiple, as polynomials in sin and cos of the
+    /// parts: sin(a + b) = sin a cos b + cos a sin b, sin(2a) = 2 sin a cos a.
+    fn expand_angle(&mut self, f: Func, a: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+        let split = match self.node(a).clone() {
+            Node::Add(..) => {
+                let terms = self.terms(a);
+                let first = terms[0];
+                let rest = self.add(&terms[1..]);
+                Some((first, rest))
+            }
+            Node::Mul(c, fs)
+                if c.is_integer() && c.abs() >= number::int(2) && c.abs() <= number::int(6) =>
+            {
+                let one = self.product(&Rational::one(), &fs);
+                let unit = if c.is_negative() { self.neg(one) } else { one };
+                let sign = if c.is_negative() { -1 } else { 1 };
+                let rest = self.product(&(c - number::int(sign)), &fs);
+                Some((unit, rest))
+            }
+            _ => None,
+        };
+        let Some((x, y)) = split else { return self.func(f, a) };
+        let (sx, cx) =
+            (self.expand_angle(Func::Sin, x, memo), self.expand_angle(Func::Cos, x, memo));
+        let (sy, cy) =
+            (self.expand_angle(Func::Sin, y, memo), self.expand_angle(Func::Cos, y, memo));
+        let r = if f == Func::Sin {
+            let p = self.mul2(sx, cy);
+            let q = self.mul2(cx, sy);
+            self.add2(p, q)
+        } else {
+            let p = self.mul2(cx, cy);
+            let q = self.mul2(sx, sy);
+            self.sub(p, q)
+        };
+        self.expand(r)
     }
 
     /// Multiplies a sum by the product of the (integer, negative-power) denominators of its
@@ -206,7 +247,75 @@ impl Pool {
     /// terms allows it.
     pub fn simplify(&mut self, e: ExprId) -> ExprId {
         let x = self.expand(e);
-        self.fold_pythagoras(x)
+        let x = self.fold_pythagoras(x);
+        self.fold_angle_sums(x)
+    }
+
+    /// In a sum, folds pairs of products of sines and cosines of two angles into one function
+    /// of their sum or difference: `X·sin a·sin b + X·cos a·cos b` → `X·cos(a − b)`,
+    /// `X·sin a·cos b − X·cos a·sin b` → `X·sin(a − b)`, and the `a + b` forms. Each fold
+    /// removes a term.
+    pub fn fold_angle_sums(&mut self, e: ExprId) -> ExprId {
+        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
+        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
+        loop {
+            let mut found = None;
+            'search: for (t, k) in &terms {
+                let (c, fs) = self.factors(*t);
+                let trig: Vec<(usize, Func, ExprId)> = fs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, (_, x))| x.is_one())
+                    .filter_map(|(i, (b, _))| match *self.node(*b) {
+                        Node::Func(f @ (Func::Sin | Func::Cos), u) => Some((i, f, u)),
+                        _ => None,
+                    })
+                    .collect();
+                for &(i, fi, a) in &trig {
+                    for &(j, fj, b) in &trig {
+                        // sin a·sin b pairs with cos a·cos b; sin a·cos b with cos a·sin b.
+                        if i == j || a == b || fi != Func::Sin || (fj == Func::Sin && j < i) {
+                            continue;
+                        }
+                        let mut partner_fs = fs.clone();
+                        partner_fs[i].0 = self.cos(a);
+                        partner_fs[j].0 = if fj == Func::Sin { self.cos(b) } else { self.sin(b) };
+                        let partner = self.product(&c, &partner_fs);
+                        let (pc, pt) = self.split_coefficient(partner);
+                        let Some(pk) = terms.get(&pt).map(|pk| pk / &pc) else { continue };
+                        let same = pk == *k;
+                        if !same && pk != -k.clone() {
+                            continue;
+                        }
+                        let (angle, func, coef) = match (fj, same) {
+                            (Func::Sin, true) => (self.sub(a, b), Func::Cos, k.clone()),
+                            (Func::Sin, false) => (self.add2(a, b), Func::Cos, pk),
+                            (_, false) => (self.sub(a, b), Func::Sin, k.clone()),
+                            (_, true) => (self.add2(a, b), Func::Sin, k.clone()),
+                        };
+                        let mut rest = fs.clone();
+                        rest[i].1 = Rational::zero();
+                        rest[j].1 = Rational::zero();
+                        let rest = self.product(&c, &rest);
+                        let folded = self.func(func, angle);
+                        let folded = self.mul2(rest, folded);
+                        found = Some((*t, pt, folded, coef));
+                        break 'search;
+                    }
+                }
+            }
+            let Some((t, pt, folded, coef)) = found else { break };
+            terms.remove(&t);
+            terms.remove(&pt);
+            let (fc, ft) = self.split_coefficient(folded);
+            *terms.entry(ft).or_default() += fc * coef;
+            terms.retain(|_, k| !k.is_zero());
+        }
+        let mut parts = vec![self.num(constant)];
+        for (t, k) in terms {
+            parts.push(self.scale(t, &k));
+        }
+        self.add(&parts)
     }
 
     /// In a sum, folds pairs of terms with sin²u + cos²u = 1:
@@ -298,7 +407,15 @@ impl Pool {
         }
         let s = self.simplify(e);
         let (c, rest) = self.content(s);
-        if matches!(self.node(rest), Node::Add(..)) && self.as_num(c).is_none() {
+        if let (Node::Add(k, terms), None) = (self.node(rest).clone(), self.as_num(c)) {
+            // −m·g·l·(2·cos θ₁ + cos θ₂) rather than m·g·l·(−2·cos θ₁ − cos θ₂).
+            let negative = terms.iter().filter(|(_, q)| q.is_negative()).count()
+                + usize::from(k.is_negative());
+            let (c, rest) = if 2 * negative > terms.len() + usize::from(!k.is_zero()) {
+                (self.neg(c), self.neg(rest))
+            } else {
+                (c, rest)
+            };
             let rest = self.fold_pythagoras(rest);
             let rest = self.perfect_square(rest).unwrap_or(rest);
             self.mul2(c, rest)

@@ -7,6 +7,7 @@
 
 pub mod check;
 pub mod diagnostics;
+pub mod generate;
 pub mod report;
 
 use lang::Diagnostic;

@@ -34,6 +34,15 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+    /// Write the scene of a family of systems of any size to standard output.
+    Generate {
+        /// n-link-pendulum or n-link-pendulum-on-cart
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(cli::generate::Family::NAMES))]
+        family: String,
+        /// The number of links.
+        #[arg(value_parser = clap::value_parser!(u16).range(1..=500))]
+        n: u16,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -83,6 +92,11 @@ fn main() -> ExitCode {
                     ExitCode::from(2)
                 }
             }
+        }
+        Command::Generate { family, n } => {
+            let family = cli::generate::Family::from_name(&family).expect("clap checked the name");
+            print!("{}", cli::generate::n_link(family, n as usize));
+            ExitCode::SUCCESS
         }
         Command::Check { files } => {
             let mut worst = 0;
