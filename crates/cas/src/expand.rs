@@ -136,7 +136,7 @@ impl Pool {
             Node::Func(f, a) => {
                 let a = self.rewrite_cos_squares(a, memo);
                 match f {
-                    Func::Sin | Func::Cos => self.expand_angle(f, a, memo),
+                    Func::Sin | Func::Cos => self.expand_angle(f, a),
                     _ => self.func(f, a),
                 }
             }
@@ -148,7 +148,7 @@ impl Pool {
 
     /// sin and cos of a sum or of an integer multiple, as polynomials in sin and cos of the
     /// parts: sin(a + b) = sin a cos b + cos a sin b, sin(2a) = 2 sin a cos a.
-    fn expand_angle(&mut self, f: Func, a: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+    fn expand_angle(&mut self, f: Func, a: ExprId) -> ExprId {
         let split = match self.node(a).clone() {
             Node::Add(..) => {
                 let terms = self.terms(a);
@@ -168,10 +168,8 @@ impl Pool {
             _ => None,
         };
         let Some((x, y)) = split else { return self.func(f, a) };
-        let (sx, cx) =
-            (self.expand_angle(Func::Sin, x, memo), self.expand_angle(Func::Cos, x, memo));
-        let (sy, cy) =
-            (self.expand_angle(Func::Sin, y, memo), self.expand_angle(Func::Cos, y, memo));
+        let (sx, cx) = (self.expand_angle(Func::Sin, x), self.expand_angle(Func::Cos, x));
+        let (sy, cy) = (self.expand_angle(Func::Sin, y), self.expand_angle(Func::Cos, y));
         let r = if f == Func::Sin {
             let p = self.mul2(sx, cy);
             let q = self.mul2(cx, sy);
@@ -387,6 +385,62 @@ impl Pool {
             parts.push(self.scale(t, &k));
         }
         self.add(&parts)
+    }
+
+    /// One fraction over a common denominator: `a/(a+b) − 1` → `−b/(a + b)`. Sums in the
+    /// denominator lose their monomial content to the numerator, so `m/(L + 3·L·sin²θ)` becomes
+    /// `m/(L·(1 + 3·sin²θ))` and can cancel against it.
+    pub fn together(&mut self, e: ExprId) -> ExprId {
+        let x = self.expand(e);
+        let terms = self.terms(x);
+        let mut denominators: BTreeMap<ExprId, Rational> = BTreeMap::new();
+        for &t in &terms {
+            let (_, fs) = self.factors(t);
+            for (b, p) in fs {
+                if p.is_negative() && p.is_integer() && self.as_num(b).is_none() {
+                    let slot = denominators.entry(b).or_insert_with(Rational::zero);
+                    if -p.clone() > *slot {
+                        *slot = -p;
+                    }
+                }
+            }
+        }
+        if denominators.is_empty() {
+            return x;
+        }
+        let all: Vec<(ExprId, Rational)> =
+            denominators.iter().map(|(b, k)| (*b, k.clone())).collect();
+        let clear = self.product(&Rational::one(), &all);
+        let parts: Vec<ExprId> = terms
+            .iter()
+            .map(|t| {
+                let m = self.mul2(*t, clear);
+                self.expand(m)
+            })
+            .collect();
+        let numerator = self.add(&parts);
+        let numerator = self.expand(numerator);
+        // Split each sum in the denominator into its content and a primitive part.
+        let mut monomial = self.one();
+        let mut sums = Vec::new();
+        for (b, k) in all {
+            if matches!(self.node(b), Node::Add(..)) {
+                let (c, r) = self.content(b);
+                let ck = self.powq(c, &k);
+                monomial = self.mul2(monomial, ck);
+                sums.push((r, k));
+            } else {
+                let bk = self.powq(b, &k);
+                monomial = self.mul2(monomial, bk);
+            }
+        }
+        let (g, rest) = self.content(numerator);
+        let inverse = self.powi(monomial, -1);
+        let scale = self.mul2(g, inverse);
+        let rest = self.factor_content(rest);
+        let den: Vec<(ExprId, Rational)> = sums.into_iter().map(|(r, k)| (r, -k)).collect();
+        let den = self.product(&Rational::one(), &den);
+        self.mul(&[scale, rest, den])
     }
 
     /// The simplified form with its monomial content pulled out in front of a sum:

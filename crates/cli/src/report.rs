@@ -15,6 +15,8 @@ struct Derived {
     potential: ExprId,
     lagrangian: Option<ExprId>,
     reactions: Vec<(SymId, ExprId)>,
+    /// The reactions with accelerations solved for, where the system is small enough.
+    reactions_of_state: Vec<(SymId, ExprId)>,
     shown: Vec<(model::Show, Value)>,
     at_start: Option<Vec<(model::Show, Value)>>,
     start_state: Vec<(SymId, ExprId)>,
@@ -30,6 +32,15 @@ fn collect(d: &mut Derivation) -> Derived {
     let potential = compact(pool, d.potential);
     let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
     let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
+    let reactions_of_state = d
+        .reactions
+        .clone()
+        .into_iter()
+        .map(|r| {
+            let e = d.of_state(r.expr);
+            (r.symbol, compact(&mut d.model.pool, e))
+        })
+        .collect();
     let shown = d.shown();
     let at_start = d.shown_at_start();
     let mut start_state = Vec::new();
@@ -52,6 +63,7 @@ fn collect(d: &mut Derivation) -> Derived {
         potential,
         lagrangian,
         reactions,
+        reactions_of_state,
         shown,
         at_start,
         start_state,
@@ -290,8 +302,12 @@ pub fn text(d: &mut Derivation) -> String {
     }
     if !derived.reactions.is_empty() {
         out.push("Reactions".into());
-        for (s, e) in &derived.reactions {
-            out.push(format!("  {} = {}", sym_text(pool, *s, u), pool.print(*e, u)));
+        for ((s, e), (_, explicit)) in derived.reactions.iter().zip(&derived.reactions_of_state) {
+            let mut line = format!("  {} = {}", sym_text(pool, *s, u), pool.print(*e, u));
+            if explicit != e {
+                line.push_str(&format!("\n    = {}", pool.print(*explicit, u)));
+            }
+            out.push(line);
         }
     }
     if !derived.shown.is_empty() {
@@ -481,8 +497,12 @@ pub fn json(d: &mut Derivation) -> String {
         })
         .collect();
     let mut reactions = Map::new();
-    for (s, e) in &derived.reactions {
+    for (s, e) in &derived.reactions_of_state {
         reactions.insert(name(*s), json!(pool.print(*e, a)));
+    }
+    let mut reactions_with_accelerations = Map::new();
+    for (s, e) in &derived.reactions {
+        reactions_with_accelerations.insert(name(*s), json!(pool.print(*e, a)));
     }
     let mut shown = Map::new();
     for (show, v) in &derived.shown {
@@ -505,6 +525,7 @@ pub fn json(d: &mut Derivation) -> String {
         "mass_matrix": derived.mass_matrix.iter().map(|r| r.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>()).collect::<Vec<_>>(),
         "forcing": derived.forcing.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
         "reactions": reactions,
+        "reactions_with_accelerations": reactions_with_accelerations,
         "shown": shown,
         "at_start": at_start,
     });

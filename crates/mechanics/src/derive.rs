@@ -62,6 +62,8 @@ pub struct Derivation {
     pub forcing: Vec<ExprId>,
     pub reactions: Vec<Reaction>,
     pub warnings: Vec<Diagnostic>,
+    /// q̈ and λ solved symbolically, for small systems; computed on first use.
+    solved: Option<Option<HashMap<SymId, ExprId>>>,
 }
 
 impl Derivation {
@@ -146,6 +148,35 @@ impl Derivation {
             state.insert(rate, c.initial_rate);
         }
         state
+    }
+
+    /// Accelerations and multipliers as expressions of the state, for systems small enough
+    /// (at most four unknowns) that the symbolic solution stays readable.
+    pub fn solved_unknowns(&mut self) -> Option<HashMap<SymId, ExprId>> {
+        if self.solved.is_none() {
+            let unknowns = self.unknowns();
+            let result = if unknowns.is_empty() || unknowns.len() > SYMBOLIC_SOLVE_LIMIT {
+                None
+            } else {
+                let (rows, rhs) = self.system();
+                linear::solve(&mut self.model.pool, &rows, &rhs)
+                    .map(|x| unknowns.into_iter().zip(x).collect())
+            };
+            self.solved = Some(result);
+        }
+        self.solved.clone().flatten()
+    }
+
+    /// An expression with accelerations and multipliers replaced by their solved forms, where
+    /// the system is small enough to have them; unchanged otherwise.
+    pub fn of_state(&mut self, e: ExprId) -> ExprId {
+        match self.solved_unknowns() {
+            Some(map) => {
+                let x = self.model.pool.subst(e, &map);
+                self.model.pool.together(x)
+            }
+            None => e,
+        }
     }
 
     /// Accelerations and multipliers at the initial state, exactly.
@@ -480,6 +511,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         forcing,
         reactions,
         warnings,
+        solved: None,
     };
     derivation.solve_multiplier_reactions();
     Ok(derivation)
@@ -500,11 +532,10 @@ impl Derivation {
         if wanted.is_empty() || n + self.multipliers.len() > SYMBOLIC_SOLVE_LIMIT {
             return;
         }
-        let (rows, rhs) = self.system();
-        let Some(x) = linear::solve(&mut self.model.pool, &rows, &rhs) else { return };
+        let Some(solved) = self.solved_unknowns() else { return };
         for i in wanted {
             let m = &self.multipliers[i];
-            let expr = self.model.pool.factor_content(x[n + i]);
+            let expr = self.model.pool.factor_content(solved[&m.lambda]);
             self.reactions.push(Reaction { constraint: m.constraint, symbol: m.lambda, expr });
         }
     }

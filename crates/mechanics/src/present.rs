@@ -112,7 +112,10 @@ impl Derivation {
             .into_iter()
             .map(|s| {
                 let v = self.expand_value(&s.value, false);
-                let v = v.map(|e| self.model.pool.factor_content(e));
+                let v = v.map(|e| {
+                    let e = self.of_state(e);
+                    self.model.pool.factor_content(e)
+                });
                 (s, v)
             })
             .collect()
