@@ -11,6 +11,12 @@ use crate::pool::{ExprId, Func, Node, Pool};
 /// Past this many terms an expansion is abandoned and the product kept as it is.
 const EXPANSION_TERM_LIMIT: usize = 20_000;
 
+/// Past this many terms the algebraic zero test gives up (and the numeric check decides).
+const ZERO_TEST_TERM_LIMIT: usize = 2_000;
+
+/// sin and cos of sums with more parts than this are not expanded in the zero test.
+const ANGLE_SUM_PARTS_LIMIT: usize = 4;
+
 impl Pool {
     /// Multiplies out products of sums and positive integer powers of sums, everywhere
     /// (inside function arguments too). Negative powers of sums stay as they are. Memoised.
@@ -146,11 +152,27 @@ impl Pool {
         r
     }
 
+    /// How deeply trigonometric functions nest inside each other's arguments.
+    fn trig_depth(&self, e: ExprId) -> usize {
+        let mut memo: HashMap<ExprId, usize> = HashMap::new();
+        self.trig_depth_memo(e, &mut memo)
+    }
+
+    fn trig_depth_memo(&self, e: ExprId, memo: &mut HashMap<ExprId, usize>) -> usize {
+        if let Some(&d) = memo.get(&e) {
+            return d;
+        }
+        let below = self.children(e).into_iter().map(|c| self.trig_depth_memo(c, memo)).max().unwrap_or(0);
+        let d = below + usize::from(matches!(self.node(e), Node::Func(..)));
+        memo.insert(e, d);
+        d
+    }
+
     /// sin and cos of a sum or of an integer multiple, as polynomials in sin and cos of the
     /// parts: sin(a + b) = sin a cos b + cos a sin b, sin(2a) = 2 sin a cos a.
     fn expand_angle(&mut self, f: Func, a: ExprId) -> ExprId {
         let split = match self.node(a).clone() {
-            Node::Add(..) => {
+            Node::Add(c, t) if t.len() + usize::from(!c.is_zero()) <= ANGLE_SUM_PARTS_LIMIT => {
                 let terms = self.terms(a);
                 let first = terms[0];
                 let rest = self.add(&terms[1..]);
@@ -232,6 +254,11 @@ impl Pool {
         let n = self.numerator(x);
         if self.is_zero(n) {
             return true;
+        }
+        // Rewriting trigonometric functions of sums multiplies terms; past a size the numeric
+        // check decides instead.
+        if self.terms(n).len() > ZERO_TEST_TERM_LIMIT || self.trig_depth(n) > 2 {
+            return false;
         }
         let t = self.trig_normal(n);
         if self.is_zero(t) {

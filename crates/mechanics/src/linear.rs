@@ -185,6 +185,6 @@ mod tests {
         let a = vec![vec![m, zero, mx], vec![zero, m, my], vec![px, py, zero]];
         let b = vec![zero, mg, gamma];
         let sol = solve(&mut p, &a, &b).unwrap();
-        assert_eq!(p.print(sol[2], Style::Ascii), "m*(g*y - u^2 - v^2)/(2*x^2 + 2*y^2)");
+        assert_eq!(p.print(sol[2], Style::Ascii), "-m*(-g*y + u^2 + v^2)/(2*x^2 + 2*y^2)");
     }
 }
