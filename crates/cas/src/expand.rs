@@ -162,7 +162,8 @@ impl Pool {
         if let Some(&d) = memo.get(&e) {
             return d;
         }
-        let below = self.children(e).into_iter().map(|c| self.trig_depth_memo(c, memo)).max().unwrap_or(0);
+        let below =
+            self.children(e).into_iter().map(|c| self.trig_depth_memo(c, memo)).max().unwrap_or(0);
         let d = below + usize::from(matches!(self.node(e), Node::Func(..)));
         memo.insert(e, d);
         d

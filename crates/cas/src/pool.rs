@@ -801,6 +801,10 @@ impl ProductBuilder {
                     continue;
                 }
                 match pool.node(b).clone() {
+                    Node::Num(q) if q.is_zero() && x.is_positive() => {
+                        self.coef = Rational::zero();
+                        changed = true;
+                    }
                     Node::Num(q) if x.is_integer() => match number::pow_int(&q, x.numer()) {
                         Some(v) => {
                             self.coef *= v;
