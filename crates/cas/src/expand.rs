@@ -143,6 +143,12 @@ impl Pool {
                 let a = self.rewrite_cos_squares(a, memo);
                 match f {
                     Func::Sin | Func::Cos => self.expand_angle(f, a),
+                    // tan u = sin u / cos u, so that tan and sec forms meet the others.
+                    Func::Tan => {
+                        let s = self.expand_angle(Func::Sin, a);
+                        let c = self.expand_angle(Func::Cos, a);
+                        self.div(s, c)
+                    }
                     _ => self.func(f, a),
                 }
             }
@@ -266,6 +272,11 @@ impl Pool {
             return true;
         }
         let t = self.numerator(t);
+        if self.is_zero(t) {
+            return true;
+        }
+        // Clearing denominators (from tan = sin/cos) can bring back cos² to normalise.
+        let t = self.trig_normal(t);
         self.is_zero(t)
     }
 

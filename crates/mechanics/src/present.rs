@@ -26,8 +26,13 @@ impl Derivation {
             let pool = &mut self.model.pool;
             let row: Vec<ExprId> = self.mass_matrix[i].iter().map(|e| pool.simplify(*e)).collect();
             let (content, _) = pool.common_content(&row);
-            let lead_negative =
-                row.iter().find(|e| !pool.is_zero(**e)).is_some_and(|e| pool.looks_negative(*e));
+            // The diagonal of a mass matrix is positive: keep its term's sign positive.
+            let lead = if pool.is_zero(row[i]) {
+                row.iter().find(|e| !pool.is_zero(**e))
+            } else {
+                Some(&row[i])
+            };
+            let lead_negative = lead.is_some_and(|e| pool.looks_negative(*e));
             let inverse = pool.powi(content, -1);
             let inverse = if lead_negative { pool.neg(inverse) } else { inverse };
             let mut lhs_terms = Vec::new();
@@ -137,6 +142,7 @@ impl Derivation {
                     let v = self.expand_value(&s.value, true);
                     let v = v.map(|e| {
                         let z = self.model.pool.subst(e, &at_start);
+                        let z = self.model.pool.together(z);
                         self.model.pool.factor_content(z)
                     });
                     (s, v)
