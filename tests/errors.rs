@@ -82,3 +82,32 @@ fn a_coordinate_nothing_moves_with() {
     assert!(r.contains("no kinetic energy depends on the rate of `y`"), "{r}");
     insta::assert_snapshot!(r);
 }
+
+#[test]
+fn a_dimension_mistake_names_both_terms() {
+    let r = diagnose(
+        "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord theta = pi/6\nparticle p { mass m; position (L*sin(theta), -L*cos(theta)) }\npotential m*g*theta\n",
+    );
+    assert!(r.contains("kg·m/s² here, kg·m²/s² there"), "{r}");
+    assert!(r.contains("bad.lag:4:11"), "{r}");
+    assert!(
+        r.contains("3 │ particle p") && r.contains("- kg·m²/s²"),
+        "the other term is not shown:\n{r}"
+    );
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn an_unknown_unit() {
+    let r = diagnose("param m = 1 KG\ncoord x\nparticle p { mass m; position (x, 0) }\n");
+    assert_pinpointed(&r, 1, 13);
+    assert!(r.contains("did you mean `kg`?"), "{r}");
+    insta::assert_snapshot!(r);
+}
+
+#[test]
+fn units_can_be_switched_off() {
+    let source = "param m = 1 kg, g = 9.81 m/s^2\ncoord theta\nparticle p { mass m; position (sin(theta), -cos(theta)) }\npotential m*g*theta\n";
+    assert!(cli::load(source).is_err());
+    assert!(cli::load_with(source, cli::Options { units: false }).is_ok());
+}

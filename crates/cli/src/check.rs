@@ -19,7 +19,12 @@ pub struct FileCheck {
 
 /// Checks every `expect` line of one scene.
 pub fn check_file(path: &str, source: &str) -> FileCheck {
-    let (mut d, _) = match crate::load(source) {
+    check_file_with(path, source, crate::Options::default())
+}
+
+/// [`check_file`] with options.
+pub fn check_file_with(path: &str, source: &str, options: crate::Options) -> FileCheck {
+    let (mut d, _) = match crate::load_with(source, options) {
         Ok(x) => x,
         Err(errors) => {
             return FileCheck {

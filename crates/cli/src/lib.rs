@@ -13,10 +13,37 @@ pub mod report;
 use lang::Diagnostic;
 use mechanics::Derivation;
 
+/// What the pipeline checks besides the grammar and the names.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Check that every sum, equation and energy term has one dimension.
+    pub units: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { units: true }
+    }
+}
+
 /// Parses, resolves and derives one scene. Warnings come back with the derivation.
 pub fn load(source: &str) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
+    load_with(source, Options::default())
+}
+
+/// [`load`] with options.
+pub fn load_with(
+    source: &str,
+    options: Options,
+) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
     let ast = lang::parse(source)?;
     let (model, mut warnings) = model::resolve(&ast, source)?;
+    if options.units {
+        let mismatches = model::units::check(&ast);
+        if !mismatches.is_empty() {
+            return Err(mismatches);
+        }
+    }
     let mut derivation = mechanics::derive(model)?;
     warnings.append(&mut derivation.warnings);
     Ok((derivation, warnings))
@@ -32,8 +59,18 @@ pub enum Format {
 
 /// The `derive` report of a scene in the given format, or the rendered diagnostics.
 pub fn derive(path: &str, source: &str, format: Format) -> Result<String, String> {
+    derive_with(path, source, format, Options::default())
+}
+
+/// [`derive`] with options.
+pub fn derive_with(
+    path: &str,
+    source: &str,
+    format: Format,
+    options: Options,
+) -> Result<String, String> {
     let (mut d, _warnings) =
-        load(source).map_err(|errors| diagnostics::render(path, source, &errors))?;
+        load_with(source, options).map_err(|errors| diagnostics::render(path, source, &errors))?;
     Ok(match format {
         Format::Text => report::text(&mut d),
         Format::Latex => report::latex(&mut d),

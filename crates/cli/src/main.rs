@@ -28,11 +28,17 @@ enum Command {
         /// Write the report to this file (whole or not at all) instead of standard output.
         #[arg(long, short)]
         out: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
     },
     /// Check every `expect` line of the scenes; exit 1 if one does not hold, 2 on a bad file.
     Check {
         #[arg(required = true)]
         files: Vec<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
     },
     /// Write the scene of a family of systems of any size to standard output.
     Generate {
@@ -59,7 +65,7 @@ fn read(path: &PathBuf) -> Result<String, String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Derive { file, format, out } => {
+        Command::Derive { file, format, out, no_units } => {
             let source = match read(&file) {
                 Ok(s) => s,
                 Err(e) => {
@@ -73,7 +79,7 @@ fn main() -> ExitCode {
                 FormatArg::Latex => cli::Format::Latex,
                 FormatArg::Json => cli::Format::Json,
             };
-            match cli::derive(&path, &source, format) {
+            match cli::derive_with(&path, &source, format, cli::Options { units: !no_units }) {
                 Ok(report) => match out {
                     Some(out) => match cli::write_atomically(&out, &report) {
                         Ok(()) => ExitCode::SUCCESS,
@@ -98,7 +104,7 @@ fn main() -> ExitCode {
             print!("{}", cli::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
-        Command::Check { files } => {
+        Command::Check { files, no_units } => {
             let mut worst = 0;
             let (mut held, mut failed) = (0, 0);
             for file in &files {
@@ -110,7 +116,11 @@ fn main() -> ExitCode {
                         continue;
                     }
                 };
-                let result = cli::check::check_file(&file.display().to_string(), &source);
+                let result = cli::check::check_file_with(
+                    &file.display().to_string(),
+                    &source,
+                    cli::Options { units: !no_units },
+                );
                 if result.exit_code == 2 {
                     eprint!("{}", result.report);
                 } else {

@@ -6,6 +6,7 @@
 //! knows what a scene says; deriving equations from it is the job of `mechanics`.
 
 mod resolve;
+pub mod units;
 mod value;
 
 pub use resolve::resolve;

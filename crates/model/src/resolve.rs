@@ -217,16 +217,7 @@ impl<'a> Resolver<'a> {
             StmtKind::Param(decls) => {
                 for decl in decls {
                     let value = decl.value.as_ref().and_then(|v| self.constant(v));
-                    let value = match (value, &decl.unit) {
-                        (Some(v), Some(u))
-                            if u.factors.len() == 1 && u.factors[0].0.name == "deg" =>
-                        {
-                            let pi = self.pool.pi();
-                            let k = self.pool.mul2(v, pi);
-                            Some(self.pool.scale(k, &Rational::new(1.into(), 180.into())))
-                        }
-                        (v, _) => v,
-                    };
+                    let value = value.and_then(|v| self.in_si(v, decl.unit.as_ref()));
                     let name = normalize(&decl.name.name);
                     if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
                         self.bind(&decl.name, Binding::Param(self.time));
@@ -255,7 +246,9 @@ impl<'a> Resolver<'a> {
             StmtKind::Coord(decls) => {
                 for decl in decls {
                     let initial = decl.value.as_ref().and_then(|v| self.constant(v));
+                    let initial = initial.and_then(|v| self.in_si(v, decl.value_unit.as_ref()));
                     let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
+                    let rate = rate.and_then(|v| self.in_si(v, decl.rate_unit.as_ref()));
                     let name = normalize(&decl.name.name);
                     if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
                         self.bind(&decl.name, Binding::Param(self.time));
@@ -565,6 +558,23 @@ impl<'a> Resolver<'a> {
             self.torques.push(load);
         } else {
             self.forces.push(load);
+        }
+    }
+
+    /// A value written with a unit, converted to SI (`30 deg` is π/6, `10 cm` is 1/10).
+    fn in_si(&mut self, value: cas::ExprId, unit: Option<&lang::Unit>) -> Option<cas::ExprId> {
+        let Some(unit) = unit else { return Some(value) };
+        match crate::units::parse_unit(unit) {
+            Ok((_, scale)) => {
+                let k = self.pool.num(scale.rational);
+                let pi = self.pool.pi();
+                let pi = self.pool.powi(pi, i64::from(scale.pi_power));
+                Some(self.pool.mul(&[value, k, pi]))
+            }
+            Err(d) => {
+                self.error(d);
+                None
+            }
         }
     }
 
