@@ -366,6 +366,8 @@ impl<'a> Resolver<'a> {
             BodyKind::Rigid => &["mass", "inertia", "position", "angle"],
         };
         let mut seen: HashMap<&str, Span> = HashMap::new();
+        // A misspelled property is reported once, not again as missing.
+        let mut misspelled: Vec<&str> = Vec::new();
         let (mut mass, mut inertia, mut position, mut angle) = (None, None, None, None);
         for p in props {
             let key = p.key.name.as_str();
@@ -376,6 +378,7 @@ impl<'a> Resolver<'a> {
                     d = d.with_hint("a particle has no orientation; use `body` for a rigid body");
                 } else if let Some(near) = closest(key, allowed.iter().copied()) {
                     d = d.with_hint(format!("did you mean `{near}`?"));
+                    misspelled.push(near);
                 }
                 self.error(d);
                 continue;
@@ -421,23 +424,27 @@ impl<'a> Resolver<'a> {
                 .with_hint(hint.to_string())
         };
         let mut ok = true;
-        if mass.is_none() && !seen.contains_key("mass") {
+        if mass.is_none() && !seen.contains_key("mass") && !misspelled.contains(&"mass") {
             let d = missing("mass", "add `mass m` inside the braces");
             self.error(d);
             ok = false;
         }
-        if position.is_none() && !seen.contains_key("position") {
+        if position.is_none() && !seen.contains_key("position") && !misspelled.contains(&"position")
+        {
             let d = missing("position", "add `position (x, y)`: where its centre of mass is, as a function of the coordinates");
             self.error(d);
             ok = false;
         }
         if kind == BodyKind::Rigid {
-            if inertia.is_none() && !seen.contains_key("inertia") {
+            if inertia.is_none()
+                && !seen.contains_key("inertia")
+                && !misspelled.contains(&"inertia")
+            {
                 let d = missing("inertia", "add `inertia m*L^2/12` (about the centre of mass), or use `particle` for a point mass");
                 self.error(d);
                 ok = false;
             }
-            if angle.is_none() && !seen.contains_key("angle") {
+            if angle.is_none() && !seen.contains_key("angle") && !misspelled.contains(&"angle") {
                 let d = missing(
                     "angle",
                     "add `angle theta`: the body's orientation; its angular velocity is angle'",
@@ -538,6 +545,17 @@ impl<'a> Resolver<'a> {
             (Value::Scalar(_), false) => dim == 1,
             _ => false,
         };
+        if torque && self.bodies[index].kind == BodyKind::Particle {
+            self.error(
+                Diagnostic::error(
+                    body.span,
+                    format!("`{}` is a particle, and a torque needs a rigid body", body.name),
+                )
+                .with_label("a particle has no orientation")
+                .with_hint("declare it with `body`, with an `inertia` and an `angle`"),
+            );
+            return;
+        }
         if !ok {
             let expected = if torque {
                 "a scalar torque on a rigid `body`".to_string()
