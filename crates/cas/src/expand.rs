@@ -254,6 +254,14 @@ impl Pool {
     /// Whether `e` is identically zero, decided by algebra: expansion, clearing denominators,
     /// and sin² + cos² = 1. `false` means "not shown to be zero", not "shown non-zero".
     pub fn is_identically_zero(&mut self, e: ExprId) -> bool {
+        if self.is_zero(e) {
+            return true;
+        }
+        // One point where the value is clearly not zero proves it is not identically zero,
+        // and costs far less than the algebra below.
+        if self.clearly_nonzero_somewhere(e) {
+            return false;
+        }
         let x = self.expand(e);
         if self.is_zero(x) {
             return true;
@@ -480,6 +488,30 @@ impl Pool {
         let den: Vec<(ExprId, Rational)> = sums.into_iter().map(|(r, k)| (r, -k)).collect();
         let den = self.product(&Rational::one(), &den);
         self.mul(&[scale, rest, den])
+    }
+
+    /// Evaluates at a fixed generic point (every symbol at an irrational-looking value in
+    /// (0.3, 0.8)) and reports whether the value is clearly not zero, relative to the size of
+    /// the terms that make it up.
+    fn clearly_nonzero_somewhere(&self, e: ExprId) -> bool {
+        let values: Vec<f64> = (0..self.symbol_count())
+            .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * 0.618_033_988_749_895).fract())
+            .collect();
+        let mut memo = HashMap::new();
+        let value = self.eval_memo(e, &values, &mut memo);
+        let scale = match self.node(e) {
+            Node::Add(c, terms) => {
+                number::to_f64(c).abs()
+                    + terms
+                        .iter()
+                        .map(|(t, k)| {
+                            (number::to_f64(k) * self.eval_memo(*t, &values, &mut memo)).abs()
+                        })
+                        .sum::<f64>()
+            }
+            _ => value.abs(),
+        };
+        value.is_finite() && scale.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE)
     }
 
     /// The simplified form with its monomial content pulled out in front of a sum:

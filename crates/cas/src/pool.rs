@@ -8,6 +8,8 @@
 use std::collections::{BTreeMap, HashMap};
 use std::rc::Rc;
 
+use rustc_hash::FxHashMap;
+
 use num_bigint::BigInt;
 use num_traits::{One, Signed, Zero};
 
@@ -102,10 +104,10 @@ pub enum Node {
     Pi,
     /// `constant + Σ coefficient·term`, terms sorted by id; no term is a number, a sum, or a
     /// product with a coefficient other than 1; at least two parts.
-    Add(Rational, Box<[(ExprId, Rational)]>),
+    Add(Rational, Rc<[(ExprId, Rational)]>),
     /// `coefficient · Π base^exponent`, bases sorted by id; no base is a product raised to an
     /// integer power or a rational raised to an integer power.
-    Mul(Rational, Box<[(ExprId, Rational)]>),
+    Mul(Rational, Rc<[(ExprId, Rational)]>),
     /// A power whose exponent is not a number (numeric powers are one-factor products).
     Pow(ExprId, ExprId),
     Func(Func, ExprId),
@@ -149,12 +151,13 @@ impl Symbol {
 /// The arena that owns every expression and symbol of one derivation.
 pub struct Pool {
     nodes: Vec<Node>,
-    interned: HashMap<Node, ExprId>,
+    // Fx rather than SipHash: the keys are our own ids, and interning is the hot path.
+    interned: FxHashMap<Node, ExprId>,
     symbols: Vec<Symbol>,
     symbol_ids: HashMap<String, SymId>,
-    pub(crate) diff_memo: HashMap<(ExprId, SymId), ExprId>,
-    pub(crate) time_memo: HashMap<ExprId, ExprId>,
-    pub(crate) expand_memo: HashMap<ExprId, ExprId>,
+    pub(crate) diff_memo: FxHashMap<(ExprId, SymId), ExprId>,
+    pub(crate) time_memo: FxHashMap<ExprId, ExprId>,
+    pub(crate) expand_memo: FxHashMap<ExprId, ExprId>,
     free_memo: Vec<Option<Rc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
@@ -170,12 +173,12 @@ impl Pool {
     pub fn new() -> Self {
         let mut pool = Pool {
             nodes: Vec::new(),
-            interned: HashMap::new(),
+            interned: FxHashMap::default(),
             symbols: Vec::new(),
             symbol_ids: HashMap::new(),
-            diff_memo: HashMap::new(),
-            time_memo: HashMap::new(),
-            expand_memo: HashMap::new(),
+            diff_memo: FxHashMap::default(),
+            time_memo: FxHashMap::default(),
+            expand_memo: FxHashMap::default(),
             free_memo: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
@@ -449,7 +452,7 @@ impl Pool {
             }
             Node::Mul(c, factors) if c.is_positive() && !c.is_one() => {
                 // sqrt(3 x y) = sqrt(3) sqrt(x y): a positive number may always come out.
-                let rest = self.intern(Node::Mul(Rational::one(), factors));
+                let rest = self.intern(Node::Mul(Rational::one(), factors.clone()));
                 let mut prod = ProductBuilder::new();
                 let cn = self.num_node(&c);
                 prod.push_factor(self, cn, q);
@@ -737,7 +740,7 @@ impl SumBuilder {
                 let (t, k) = &terms[0];
                 pool.scale(*t, k)
             }
-            _ => pool.intern(Node::Add(self.constant, terms.into_boxed_slice())),
+            _ => pool.intern(Node::Add(self.constant, Rc::from(terms))),
         }
     }
 }
@@ -859,7 +862,7 @@ impl ProductBuilder {
                 return pool.scale(b, &self.coef);
             }
         }
-        pool.intern(Node::Mul(self.coef, factors.into_boxed_slice()))
+        pool.intern(Node::Mul(self.coef, Rc::from(factors)))
     }
 }
 
