@@ -111,3 +111,12 @@ fn units_can_be_switched_off() {
     assert!(cli::load(source).is_err());
     assert!(cli::load_with(source, cli::Options { units: false }).is_ok());
 }
+
+#[test]
+fn an_unused_parameter_is_a_warning() {
+    let source = "param m, k, spare\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\n";
+    let (_, warnings) = cli::load(source).expect("derives despite the warning");
+    let r = cli::diagnostics::render("bad.lag", source, &warnings);
+    assert!(r.contains("warning: parameter `spare` is never used"), "{r}");
+    assert!(r.contains("bad.lag:1:13"), "{r}");
+}

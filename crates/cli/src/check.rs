@@ -15,6 +15,8 @@ pub struct FileCheck {
     pub exit_code: i32,
     pub held: usize,
     pub failed: usize,
+    /// Rendered warnings (empty when there are none).
+    pub warnings: String,
 }
 
 /// Checks every `expect` line of one scene.
@@ -24,7 +26,7 @@ pub fn check_file(path: &str, source: &str) -> FileCheck {
 
 /// [`check_file`] with options.
 pub fn check_file_with(path: &str, source: &str, options: crate::Options) -> FileCheck {
-    let (mut d, _) = match crate::load_with(source, options) {
+    let (mut d, warnings) = match crate::load_with(source, options) {
         Ok(x) => x,
         Err(errors) => {
             return FileCheck {
@@ -32,10 +34,13 @@ pub fn check_file_with(path: &str, source: &str, options: crate::Options) -> Fil
                 exit_code: 2,
                 held: 0,
                 failed: 0,
+                warnings: String::new(),
             };
         }
     };
-    check_derivation(path, source, &mut d)
+    let mut result = check_derivation(path, source, &mut d);
+    result.warnings = render(path, source, &warnings);
+    result
 }
 
 fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
@@ -97,5 +102,11 @@ fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
     if !failures.is_empty() {
         report.push_str(&render(path, source, &failures));
     }
-    FileCheck { report, exit_code: if failed > 0 { 1 } else { 0 }, held, failed }
+    FileCheck {
+        report,
+        exit_code: if failed > 0 { 1 } else { 0 },
+        held,
+        failed,
+        warnings: String::new(),
+    }
 }

@@ -69,13 +69,25 @@ pub fn derive_with(
     format: Format,
     options: Options,
 ) -> Result<String, String> {
-    let (mut d, _warnings) =
+    derive_report(path, source, format, options).map(|(report, _warnings)| report)
+}
+
+/// The `derive` report and the rendered warnings (empty when there are none), or the rendered
+/// errors.
+pub fn derive_report(
+    path: &str,
+    source: &str,
+    format: Format,
+    options: Options,
+) -> Result<(String, String), String> {
+    let (mut d, warnings) =
         load_with(source, options).map_err(|errors| diagnostics::render(path, source, &errors))?;
-    Ok(match format {
+    let report = match format {
         Format::Text => report::text(&mut d),
         Format::Latex => report::latex(&mut d),
         Format::Json => report::json(&mut d),
-    })
+    };
+    Ok((report, diagnostics::render(path, source, &warnings)))
 }
 
 /// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.

@@ -79,20 +79,23 @@ fn main() -> ExitCode {
                 FormatArg::Latex => cli::Format::Latex,
                 FormatArg::Json => cli::Format::Json,
             };
-            match cli::derive_with(&path, &source, format, cli::Options { units: !no_units }) {
-                Ok(report) => match out {
-                    Some(out) => match cli::write_atomically(&out, &report) {
-                        Ok(()) => ExitCode::SUCCESS,
-                        Err(e) => {
-                            eprintln!("error: cannot write {}: {e}", out.display());
-                            ExitCode::from(2)
+            match cli::derive_report(&path, &source, format, cli::Options { units: !no_units }) {
+                Ok((report, warnings)) => {
+                    eprint!("{warnings}");
+                    match out {
+                        Some(out) => match cli::write_atomically(&out, &report) {
+                            Ok(()) => ExitCode::SUCCESS,
+                            Err(e) => {
+                                eprintln!("error: cannot write {}: {e}", out.display());
+                                ExitCode::from(2)
+                            }
+                        },
+                        None => {
+                            print!("{report}");
+                            ExitCode::SUCCESS
                         }
-                    },
-                    None => {
-                        print!("{report}");
-                        ExitCode::SUCCESS
                     }
-                },
+                }
                 Err(diagnostics) => {
                     eprint!("{diagnostics}");
                     ExitCode::from(2)
@@ -121,6 +124,7 @@ fn main() -> ExitCode {
                     &source,
                     cli::Options { units: !no_units },
                 );
+                eprint!("{}", result.warnings);
                 if result.exit_code == 2 {
                     eprint!("{}", result.report);
                 } else {

@@ -96,6 +96,8 @@ struct Resolver<'a> {
     errors: Vec<Diagnostic>,
     warnings: Vec<Diagnostic>,
     in_outputs: bool,
+    /// Names looked up so far, for the warning about parameters nothing uses.
+    used: std::collections::HashSet<String>,
     title: Option<String>,
     params: Vec<Param>,
     coords: Vec<Coord>,
@@ -136,6 +138,7 @@ impl<'a> Resolver<'a> {
             errors: Vec::new(),
             warnings: Vec::new(),
             in_outputs: false,
+            used: std::collections::HashSet::new(),
             title: None,
             params: Vec::new(),
             coords: Vec::new(),
@@ -693,6 +696,7 @@ impl<'a> Resolver<'a> {
 
     fn name(&mut self, raw: &str, primes: u8, span: Span) -> Option<Value> {
         let name = normalize(raw);
+        self.used.insert(name.clone());
         let base = match name.as_str() {
             "t" if !self.names.contains_key("t") => {
                 if primes > 0 {
@@ -1042,7 +1046,18 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    fn finish(self) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    fn finish(mut self) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+        for p in &self.params {
+            if !self.used.contains(&p.name) {
+                self.warnings.push(
+                    Diagnostic::warning(p.span, format!("parameter `{}` is never used", p.name))
+                        .with_label("declared here")
+                        .with_hint(
+                            "remove it, or check the spelling where it was meant to be used",
+                        ),
+                );
+            }
+        }
         if !self.errors.is_empty() {
             let mut errors = self.errors;
             errors.sort_by_key(|d| d.span.start);
