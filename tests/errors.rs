@@ -114,7 +114,8 @@ fn units_can_be_switched_off() {
 
 #[test]
 fn an_unused_parameter_is_a_warning() {
-    let source = "param m, k, spare\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\n";
+    let source =
+        "param m, k, spare\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\n";
     let (_, warnings) = cli::load(source).expect("derives despite the warning");
     let r = cli::diagnostics::render("bad.lag", source, &warnings);
     assert!(r.contains("warning: parameter `spare` is never used"), "{r}");

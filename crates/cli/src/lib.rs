@@ -6,9 +6,14 @@
 //! `derive` and `check` reports. It knows the stages' public types, not their internals.
 
 pub mod check;
+pub mod codegen;
 pub mod diagnostics;
 pub mod generate;
+pub mod numbers;
+pub mod plot;
+pub mod progress;
 pub mod report;
+pub mod simulate;
 
 use lang::Diagnostic;
 use mechanics::Derivation;

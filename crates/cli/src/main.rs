@@ -49,6 +49,50 @@ enum Command {
         #[arg(value_parser = clap::value_parser!(u16).range(1..=500))]
         n: u16,
     },
+    /// Integrate the equations of motion of a scene and record quantities against time.
+    /// Exit 2 on bad input, 1 when a numeric fault stopped the run (what was computed is
+    /// still written).
+    Simulate {
+        file: PathBuf,
+        /// End time (s); default: the scene's `simulate { until … }`, else 10.
+        #[arg(long)]
+        until: Option<f64>,
+        /// rk4, dopri5, dop853 (default), midpoint or gauss.
+        #[arg(long)]
+        method: Option<String>,
+        /// Relative and absolute tolerance of dopri5 and dop853 (default 1e-10).
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// Step of rk4, midpoint and gauss (default: until/1000).
+        #[arg(long)]
+        step: Option<f64>,
+        /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
+        /// scene expression. Default: the scene's `output`, else the coordinates.
+        #[arg(long)]
+        output: Vec<String>,
+        /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
+        #[arg(long = "stop-when", value_name = "EXPR")]
+        stop_when: Vec<String>,
+        /// Record the times when this expression crosses zero.
+        #[arg(long = "event", value_name = "EXPR")]
+        event: Vec<String>,
+        /// Write the recorded quantities here: .csv or .json (default: CSV on standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Plot the recorded quantities and the energy error against time as SVG.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+    },
+    /// Write the equations of motion as a self-contained Rust module (only std needed).
+    Codegen {
+        file: PathBuf,
+        /// Write the module to this file (whole or not at all) instead of standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -107,6 +151,54 @@ fn main() -> ExitCode {
             print!("{}", cli::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
+        Command::Simulate {
+            file,
+            until,
+            method,
+            tolerance,
+            step,
+            set,
+            output,
+            stop_when,
+            event,
+            out,
+            plot,
+        } => {
+            let source = match read(&file) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("{e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let options = cli::simulate::Options {
+                until,
+                method,
+                tolerance,
+                step,
+                set,
+                output,
+                stop_when,
+                events: event,
+            };
+            simulate(&file, &source, &options, out, plot)
+        }
+        Command::Codegen { file, out } => {
+            let source = match read(&file) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("{e}");
+                    return ExitCode::from(2);
+                }
+            };
+            match cli::codegen::codegen(&file.display().to_string(), &source) {
+                Ok(module) => write_or_print(out.as_ref(), &module.source),
+                Err(e) => {
+                    eprint!("{}", if e.ends_with('\n') { e } else { format!("{e}\n") });
+                    ExitCode::from(2)
+                }
+            }
+        }
         Command::Check { files, no_units } => {
             let mut worst = 0;
             let (mut held, mut failed) = (0, 0);
@@ -138,4 +230,77 @@ fn main() -> ExitCode {
             ExitCode::from(worst as u8)
         }
     }
+}
+
+fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
+    match out {
+        Some(path) => match cli::write_atomically(path, text) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: cannot write {}: {e}", path.display());
+                ExitCode::from(2)
+            }
+        },
+        None => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+    }
+}
+
+fn simulate(
+    file: &std::path::Path,
+    source: &str,
+    options: &cli::simulate::Options,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    for target in out.iter().chain(plot.iter()) {
+        let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let allowed: &[&str] =
+            if Some(target) == plot.as_ref() { &["svg"] } else { &["csv", "json"] };
+        if !allowed.contains(&ext) {
+            eprintln!(
+                "error: cannot tell the format of {}: use .{}",
+                target.display(),
+                allowed.join(" or .")
+            );
+            return ExitCode::from(2);
+        }
+    }
+    let outcome = match cli::simulate::simulate(&path, source, options) {
+        Ok(o) => o,
+        Err((message, code)) => {
+            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
+            return ExitCode::from(code);
+        }
+    };
+    let table = match out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) {
+        Some("json") => outcome.json(),
+        _ => outcome.csv(),
+    };
+    let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
+    if write_or_print(out.as_ref(), &table) != ExitCode::SUCCESS {
+        code = ExitCode::from(2);
+    }
+    if let Some(plot) = plot {
+        let times = &outcome.run.trajectory.times;
+        let mut series: Vec<(String, Vec<f64>)> = (0..outcome.shown)
+            .map(|c| {
+                let v = outcome.run.trajectory.rows.iter().map(|r| r[c]).collect();
+                (outcome.columns[c].clone(), v)
+            })
+            .collect();
+        let energy = outcome.energy();
+        let e0 = energy.first().copied().unwrap_or(0.0);
+        series.push(("energy error E − E(0)".to_string(), energy.iter().map(|e| e - e0).collect()));
+        let title = format!("{} ({})", path, outcome.method.name());
+        if let Err(e) = cli::write_atomically(&plot, &cli::plot::svg(&title, times, &series)) {
+            eprintln!("error: cannot write {}: {e}", plot.display());
+            code = ExitCode::from(2);
+        }
+    }
+    eprint!("{}", outcome.summary());
+    code
 }

@@ -323,7 +323,9 @@ impl Checker {
 
     fn with_unit(&mut self, value: Option<&Expr>, unit: Option<&Unit>) -> Form {
         let mut f = match value {
-            Some(v) => self.scalar(v),
+            // A number with a unit has the unit's dimension; one without is a wildcard.
+            Some(v) if unit.is_some() => self.scalar(v),
+            Some(v) => self.operand_scalar(v),
             None => Form::unknown(self.fresh("a value")),
         };
         if let Some(u) = unit {
@@ -379,7 +381,7 @@ impl Checker {
                 self.body(&name.name, props)
             }
             StmtKind::Constraint { lhs, rhs, .. } => {
-                let (l, r) = (self.scalar(lhs), self.scalar(rhs));
+                let (l, r) = (self.operand_scalar(lhs), self.operand_scalar(rhs));
                 self.same(&l, &r, lhs.span, rhs.span, "between the sides of this constraint");
             }
             StmtKind::Gravity { strength, direction } => {
@@ -434,7 +436,7 @@ impl Checker {
                 }
             }
             StmtKind::Expect { lhs, rhs, .. } => {
-                let (l, r) = (self.value(lhs).forms(), self.value(rhs).forms());
+                let (l, r) = (self.operand(lhs).forms(), self.operand(rhs).forms());
                 for (a, b) in l.iter().zip(r.iter()) {
                     self.same(a, b, lhs.span, rhs.span, "between the sides of this expectation");
                 }
@@ -488,6 +490,24 @@ impl Checker {
         );
     }
 
+    /// A value that stands alone: a side of an equation, a term of a sum, an initial value, a
+    /// vector component. A bare number there (`x'' = 0`, `coord s = 1, s' = -1`, `x + 1`) takes
+    /// whatever dimension its place needs, so scenes written without units still pass; a number
+    /// that multiplies something (`k/10`, `2*x`) is dimensionless, so coefficients are checked.
+    fn operand(&mut self, e: &Expr) -> Shape {
+        if is_bare_number(e) {
+            return Shape::Scalar(Form::unknown(self.fresh("a number")));
+        }
+        self.value(e)
+    }
+
+    fn operand_scalar(&mut self, e: &Expr) -> Form {
+        match self.operand(e) {
+            Shape::Scalar(f) => f,
+            Shape::Many(v) => v.into_iter().next().unwrap_or_default(),
+        }
+    }
+
     fn scalar(&mut self, e: &Expr) -> Form {
         match self.value(e) {
             Shape::Scalar(f) => f,
@@ -497,12 +517,6 @@ impl Checker {
 
     fn value(&mut self, e: &Expr) -> Shape {
         match &e.kind {
-            // Zero has every dimension: `x'' = 0`, `coord y = 0`.
-            ExprKind::Number(text)
-                if cas::number::parse_decimal(text).is_some_and(|q| q.is_zero()) =>
-            {
-                Shape::Scalar(Form::unknown(self.fresh("0")))
-            }
             ExprKind::Number(_) => Shape::Scalar(Form::default()),
             ExprKind::Name { name, primes } => {
                 let key = normalize(name);
@@ -577,10 +591,14 @@ impl Checker {
             }
             ExprKind::Neg(inner) => self.value(inner),
             ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs),
-            ExprKind::Tuple(items) => Shape::Many(items.iter().map(|i| self.scalar(i)).collect()),
+            ExprKind::Tuple(items) => {
+                Shape::Many(items.iter().map(|i| self.operand_scalar(i)).collect())
+            }
             ExprKind::Matrix(rows) => {
-                let forms: Vec<Vec<Form>> =
-                    rows.iter().map(|r| r.iter().map(|i| self.scalar(i)).collect()).collect();
+                let forms: Vec<Vec<Form>> = rows
+                    .iter()
+                    .map(|r| r.iter().map(|i| self.operand_scalar(i)).collect())
+                    .collect();
                 Shape::Many(forms.into_iter().flatten().collect())
             }
         }
@@ -615,7 +633,10 @@ impl Checker {
             }
             return Shape::Many(out);
         }
-        let (l, r) = (self.value(lhs), self.value(rhs));
+        let (l, r) = match op {
+            BinOp::Add | BinOp::Sub => (self.operand(lhs), self.operand(rhs)),
+            _ => (self.value(lhs), self.value(rhs)),
+        };
         match op {
             BinOp::Add | BinOp::Sub => {
                 let (lf, rf) = (l.forms(), r.forms());
@@ -661,6 +682,15 @@ impl Checker {
                 }
             }
         }
+    }
+}
+
+/// A number, possibly negated: `0`, `-1`, `2.5`.
+fn is_bare_number(e: &Expr) -> bool {
+    match &e.kind {
+        ExprKind::Number(_) => true,
+        ExprKind::Neg(inner) => is_bare_number(inner),
+        _ => false,
     }
 }
 

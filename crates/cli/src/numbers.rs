@@ -1,0 +1,187 @@
+//! From a derivation to numbers: parameter values, the initial state, and the lowered
+//! programs that `simulate` runs and `codegen` prints. This is the glue between symbols
+//! (`mechanics`) and slots (`numeric`, `sim`); it gathers exactly the expressions a command
+//! needs and nothing more.
+
+use cas::{ExprId, SymId};
+use mechanics::Derivation;
+use numeric::{lower, Program};
+use sim::Layout;
+
+/// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
+/// resolved against it.
+pub struct Prepared {
+    pub derivation: Derivation,
+    /// The extra expressions, in the order asked for, expanded into the remaining
+    /// coordinates (they may still mention accelerations and multipliers).
+    pub extra: Vec<ExprId>,
+    pub parameters: Vec<SymId>,
+    pub layout: Layout,
+}
+
+/// What can go wrong between a scene and its numbers: each a message for the user.
+pub type NumbersError = String;
+
+/// Loads `source` with `extra` scene expressions appended as `show` lines, so that they are
+/// resolved (and reactions they name derived) exactly like the scene's own. The appended
+/// lines follow the file; a diagnostic in one of them is rendered against the whole text.
+pub fn prepare(path: &str, source: &str, extra: &[String]) -> Result<Prepared, NumbersError> {
+    let mut text = source.to_string();
+    if !text.ends_with('\n') {
+        text.push('\n');
+    }
+    let start = text.len();
+    for e in extra {
+        text.push_str("show ");
+        text.push_str(e);
+        text.push('\n');
+    }
+    let (mut derivation, _warnings) =
+        crate::load(&text).map_err(|errors| crate::diagnostics::render(path, &text, &errors))?;
+    let shows: Vec<model::Show> =
+        derivation.model.shows.iter().filter(|s| s.span.start >= start).cloned().collect();
+    if shows.len() != extra.len() {
+        return Err(format!("error: could not resolve `{}`", extra.join("`, `")));
+    }
+    let mut exprs = Vec::new();
+    for (show, text) in shows.iter().zip(extra) {
+        let model::Value::Scalar(e) = show.value else {
+            return Err(format!(
+                "error: `{text}` is {}, and only scalars can be recorded",
+                show.value.kind_name()
+            ));
+        };
+        exprs.push(derivation.expand_quantities(e, false));
+    }
+    let parameters: Vec<SymId> = derivation.model.params.iter().map(|p| p.sym).collect();
+    let layout = Layout {
+        coordinates: derivation.coords.len(),
+        multipliers: derivation.multipliers.len(),
+        parameters: parameters.len(),
+    };
+    Ok(Prepared { derivation, extra: exprs, parameters, layout })
+}
+
+impl Prepared {
+    pub fn coordinate_names(&self) -> Vec<String> {
+        let pool = &self.derivation.model.pool;
+        self.derivation.coords.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
+    /// Names of the state slots: coordinates, then rates.
+    pub fn state_names(&self) -> Vec<String> {
+        let pool = &self.derivation.model.pool;
+        let d = &self.derivation;
+        d.coords.iter().chain(&d.rates).map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
+    /// `[t, q, q̇, parameters]`.
+    pub fn dynamics_inputs(&self) -> Vec<SymId> {
+        let d = &self.derivation;
+        let mut v = vec![d.model.time];
+        v.extend(&d.coords);
+        v.extend(&d.rates);
+        v.extend(&self.parameters);
+        v
+    }
+
+    /// `[t, q, q̇, q̈, λ, parameters]`.
+    pub fn observation_inputs(&self) -> Vec<SymId> {
+        let d = &self.derivation;
+        let mut v = vec![d.model.time];
+        v.extend(&d.coords);
+        v.extend(&d.rates);
+        v.extend(&d.accels);
+        v.extend(d.multipliers.iter().map(|m| m.lambda));
+        v.extend(&self.parameters);
+        v
+    }
+
+    /// M (column-major), f, and per kept constraint J, γ, Φ, Φ̇: the layout of
+    /// [`sim::Mechanical`].
+    pub fn dynamics_exprs(&mut self) -> Vec<ExprId> {
+        let d = &mut self.derivation;
+        let n = d.coords.len();
+        let mut v = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                v.push(d.mass_matrix[i][j]);
+            }
+        }
+        v.extend(&d.forcing);
+        for m in d.multipliers.clone() {
+            v.extend(&m.jacobian);
+            v.push(m.bias);
+            v.push(m.phi);
+            v.push(d.model.pool.time_derivative(m.phi));
+        }
+        v
+    }
+
+    /// M, p = ∂L/∂q̇ and ∂L/∂q + Q: the layout of [`sim::Canonical`].
+    pub fn momentum_exprs(&mut self) -> Vec<ExprId> {
+        let d = &mut self.derivation;
+        let n = d.coords.len();
+        let mut v = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                v.push(d.mass_matrix[i][j]);
+            }
+        }
+        for i in 0..n {
+            v.push(d.model.pool.diff(d.lagrangian, d.rates[i]));
+        }
+        for i in 0..n {
+            let dl = d.model.pool.diff(d.lagrangian, d.coords[i]);
+            v.push(d.model.pool.add2(dl, d.generalized_forces[i]));
+        }
+        v
+    }
+
+    pub fn lower(&self, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, NumbersError> {
+        lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| match e {
+            numeric::LowerError::UnboundSymbol(s) => {
+                let name = &self.derivation.model.pool.symbol(s).name;
+                format!("error: `{name}` has no numeric value here (it is not part of the state)")
+            }
+        })
+    }
+
+    /// Parameter values in declaration order, with `overrides` (parameter index → expression
+    /// of earlier parameters) taking the place of the scene's values.
+    pub fn parameter_values(
+        &self,
+        overrides: &[(usize, ExprId)],
+    ) -> Result<Vec<f64>, NumbersError> {
+        let pool = &self.derivation.model.pool;
+        let mut values = vec![f64::NAN; pool.symbol_count()];
+        let mut out = Vec::new();
+        for (i, p) in self.derivation.model.params.iter().enumerate() {
+            let expr = overrides.iter().rev().find(|(k, _)| *k == i).map(|(_, e)| *e).or(p.value);
+            let Some(expr) = expr else {
+                return Err(format!(
+                    "error: parameter `{}` has no value; give one in the scene or with --set {}=…",
+                    p.name, p.name
+                ));
+            };
+            let v = pool.eval(expr, &values);
+            if !v.is_finite() {
+                return Err(format!("error: parameter `{}` evaluates to {v}", p.name));
+            }
+            values[p.sym.index()] = v;
+            out.push(v);
+        }
+        Ok(out)
+    }
+
+    /// The value of a constant expression (of parameters) at the given parameter values.
+    pub fn constant(&self, e: ExprId, parameters: &[f64]) -> f64 {
+        let pool = &self.derivation.model.pool;
+        let mut values = vec![f64::NAN; pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        values[self.derivation.model.time.index()] = 0.0;
+        pool.eval(e, &values)
+    }
+}

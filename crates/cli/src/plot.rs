@@ -1,0 +1,114 @@
+//! A small SVG plot written by hand: one panel per recorded quantity, and one for the energy
+//! error, all against time. Deterministic text, no fonts or libraries needed.
+
+use std::fmt::Write;
+
+const WIDTH: f64 = 720.0;
+const PANEL: f64 = 150.0;
+const LEFT: f64 = 90.0;
+const RIGHT: f64 = 20.0;
+const GAP: f64 = 40.0;
+/// Past this many points a series is thinned: the picture does not change, the file shrinks.
+const MAX_POINTS: usize = 2000;
+
+/// `series`: (title, values at `times`).
+pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String {
+    let height = GAP + series.len() as f64 * (PANEL + GAP) + 10.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
+        WIDTH / 2.0,
+        escape(title)
+    );
+    let (t0, t1) = range(times);
+    let stride = times.len().div_ceil(MAX_POINTS).max(1);
+    for (k, (name, values)) in series.iter().enumerate() {
+        let top = GAP + k as f64 * (PANEL + GAP);
+        let (v0, v1) = range(values);
+        let x = |t: f64| LEFT + (t - t0) / (t1 - t0) * (WIDTH - LEFT - RIGHT);
+        let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{LEFT}" y="{top}" width="{}" height="{PANEL}" fill="none" stroke="#888"/>"##,
+            WIDTH - LEFT - RIGHT
+        );
+        let _ = writeln!(s, r#"<text x="{}" y="{}">{}</text>"#, LEFT, top - 6.0, escape(name));
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            LEFT - 6.0,
+            top + 10.0,
+            label(v1)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            LEFT - 6.0,
+            top + PANEL,
+            label(v0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{LEFT}" y="{}" text-anchor="middle">{}</text>"#,
+            top + PANEL + 14.0,
+            label(t0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="middle">t = {}</text>"#,
+            WIDTH - RIGHT,
+            top + PANEL + 14.0,
+            label(t1)
+        );
+        let mut points = String::new();
+        let indices = (0..times.len()).step_by(stride).chain(times.len().checked_sub(1));
+        let mut last = usize::MAX;
+        for i in indices {
+            if i == last || !values[i].is_finite() {
+                continue;
+            }
+            last = i;
+            let _ = write!(points, "{:.2},{:.2} ", x(times[i]), y(values[i]));
+        }
+        let _ = writeln!(
+            s,
+            r##"<polyline fill="none" stroke="#1f5fa8" stroke-width="1.5" points="{}"/>"##,
+            points.trim_end()
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn range(v: &[f64]) -> (f64, f64) {
+    let (lo, hi) = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(*x), b.max(*x)));
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo <= 1e-300 + 1e-15 * lo.abs() {
+        let pad = if lo == 0.0 { 1.0 } else { lo.abs() * 1e-3 };
+        return (lo - pad, hi + pad);
+    }
+    (lo, hi)
+}
+
+fn label(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}

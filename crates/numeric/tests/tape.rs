@@ -1,0 +1,88 @@
+//! The tape against the reference evaluator of `cas`, and the sharing that lowering promises.
+
+use cas::{Func, Pool};
+use numeric::{lower, LowerError, Tape};
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-13 * a.abs().max(b.abs()).max(1.0)
+}
+
+#[test]
+fn tape_agrees_with_the_reference_evaluator() {
+    let mut p = Pool::new();
+    let (x, y, t) = (p.coordinate("x"), p.coordinate("y"), p.param("t0"));
+    let (xe, ye, te) = (p.sym(x), p.sym(y), p.sym(t));
+    let sx = p.sin(xe);
+    let cy = p.cos(ye);
+    let xy = p.mul(&[sx, cy, te]);
+    let half = cas::number::ratio(1, 2);
+    let r = p.powq(xe, &half);
+    let r3 = p.powq(ye, &cas::number::ratio(-3, 2));
+    let inv = p.powi(ye, -2);
+    let minus = p.neg(r3);
+    let three = p.int(3);
+    let lin = p.add(&[xy, r, minus, inv, three]);
+    let e = p.func(Func::Exp, lin);
+    let a2 = p.atan2(ye, xe);
+    let pw = p.pow(xe, ye);
+    let k = p.scale(pw, &cas::number::ratio(-7, 3));
+    let outputs = [lin, e, a2, k, xe, three];
+    let program = lower(&p, &[x, y, t], &outputs).unwrap();
+    let mut tape = Tape::new(program);
+    let mut out = [0.0; 6];
+    for (xv, yv, tv) in [(0.3, 1.7, 2.0), (2.5, 0.4, -1.0), (1.0, 1.0, 0.0)] {
+        tape.eval(&[xv, yv, tv], &mut out);
+        let mut values = vec![f64::NAN; p.symbol_count()];
+        values[x.index()] = xv;
+        values[y.index()] = yv;
+        values[t.index()] = tv;
+        for (o, e) in out.iter().zip(outputs) {
+            let want = p.eval(e, &values);
+            assert!(close(*o, want), "{o} vs {want}");
+        }
+    }
+}
+
+#[test]
+fn shared_subexpressions_are_computed_once() {
+    let mut p = Pool::new();
+    let x = p.coordinate("x");
+    let xe = p.sym(x);
+    let s = p.sin(xe);
+    let s2 = p.powi(s, 2);
+    let a = p.add(&[s2, xe]);
+    let b = p.mul(&[s2, xe]);
+    let program = lower(&p, &[x], &[a, b, s2]).unwrap();
+    let c = program.op_counts();
+    assert_eq!(c.func, 1, "sin once");
+    assert_eq!(c.mul, 2, "the square and the product");
+    assert_eq!(c.add, 1);
+}
+
+#[test]
+fn only_what_the_outputs_reach_is_lowered() {
+    let mut p = Pool::new();
+    let x = p.coordinate("x");
+    let xe = p.sym(x);
+    let _unused = p.cos(xe);
+    let s = p.sin(xe);
+    let program = lower(&p, &[x], &[s]).unwrap();
+    assert_eq!(program.code.len(), 1);
+}
+
+#[test]
+fn an_unbound_symbol_is_an_error() {
+    let mut p = Pool::new();
+    let (x, y) = (p.coordinate("x"), p.coordinate("y"));
+    let (xe, ye) = (p.sym(x), p.sym(y));
+    let e = p.add(&[xe, ye]);
+    assert_eq!(lower(&p, &[x], &[e]).unwrap_err(), LowerError::UnboundSymbol(y));
+}
+
+#[test]
+fn integer_powers_match_repeated_multiplication() {
+    assert_eq!(numeric::pow_int(3.0, 4), 81.0);
+    assert_eq!(numeric::pow_int(2.0, -3), 0.125);
+    assert_eq!(numeric::pow_int(-2.0, 3), -8.0);
+    assert_eq!(numeric::pow_int(5.0, 0), 1.0);
+}

@@ -1,0 +1,810 @@
+//! Explicit Runge–Kutta methods: fixed-step RK4, and the adaptive Dormand–Prince pairs 5(4)
+//! and 8(5,3) (DOP853) with error control and dense output. Coefficients are those of Hairer,
+//! Nørsett and Wanner, "Solving Ordinary Differential Equations I", and Shampine (1986) for the
+//! quartic dense output of the 5(4) pair.
+
+use crate::{FaultKind, Problem};
+
+/// Advances one accepted step at a time and interpolates inside the last one.
+pub(crate) trait Stepper {
+    /// Advances from `t` (with `y` its state, updated in place) by one accepted step that does
+    /// not pass `t_end`; returns the new time.
+    fn advance(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<f64, FaultKind>;
+    /// The state at time `t` inside the last accepted step.
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
+    fn evaluations(&self) -> usize;
+}
+
+/// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
+/// enough to locate events of fixed-step methods.
+#[derive(Default)]
+pub(crate) struct Hermite {
+    pub t0: f64,
+    pub t1: f64,
+    pub y0: Vec<f64>,
+    pub y1: Vec<f64>,
+    pub f0: Option<Vec<f64>>,
+    pub f1: Option<Vec<f64>>,
+}
+
+impl Hermite {
+    /// Evaluates, computing end derivatives on demand (counted in `evals`).
+    pub fn eval(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64], evals: &mut usize) {
+        let d = self.y0.len();
+        for (slot, (tt, y)) in [(0, (self.t0, &self.y0)), (1, (self.t1, &self.y1))] {
+            let f = if slot == 0 { &mut self.f0 } else { &mut self.f1 };
+            if f.is_none() {
+                let mut v = vec![0.0; d];
+                // A fault here already showed up when the step was taken.
+                let _ = p.rhs(tt, y, &mut v);
+                *evals += 1;
+                *f = Some(v);
+            }
+        }
+        let h = self.t1 - self.t0;
+        let s = (t - self.t0) / h;
+        let (f0, f1) = (self.f0.as_ref().expect("set"), self.f1.as_ref().expect("set"));
+        let h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s);
+        let h10 = s * (1.0 - s) * (1.0 - s);
+        let h01 = s * s * (3.0 - 2.0 * s);
+        let h11 = s * s * (s - 1.0);
+        for i in 0..d {
+            out[i] = h00 * self.y0[i] + h10 * h * f0[i] + h01 * self.y1[i] + h11 * h * f1[i];
+        }
+    }
+}
+
+/// The classic fourth-order Runge–Kutta method with a fixed step.
+pub(crate) struct Rk4 {
+    step: f64,
+    k: [Vec<f64>; 4],
+    tmp: Vec<f64>,
+    evals: usize,
+    last: Hermite,
+}
+
+impl Rk4 {
+    pub fn new(dim: usize, step: f64) -> Self {
+        Rk4 {
+            step,
+            k: std::array::from_fn(|_| vec![0.0; dim]),
+            tmp: vec![0.0; dim],
+            evals: 0,
+            last: Hermite::default(),
+        }
+    }
+}
+
+impl Stepper for Rk4 {
+    fn advance(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<f64, FaultKind> {
+        let h = fixed_step(self.step, t, t_end);
+        let d = y.len();
+        let [k1, k2, k3, k4] = &mut self.k;
+        p.rhs(t, y, k1)?;
+        for i in 0..d {
+            self.tmp[i] = y[i] + 0.5 * h * k1[i];
+        }
+        p.rhs(t + 0.5 * h, &self.tmp, k2)?;
+        for i in 0..d {
+            self.tmp[i] = y[i] + 0.5 * h * k2[i];
+        }
+        p.rhs(t + 0.5 * h, &self.tmp, k3)?;
+        for i in 0..d {
+            self.tmp[i] = y[i] + h * k3[i];
+        }
+        p.rhs(t + h, &self.tmp, k4)?;
+        self.evals += 4;
+        self.last.t0 = t;
+        self.last.y0 = y.to_vec();
+        self.last.f0 = Some(k1.clone());
+        for i in 0..d {
+            y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+        let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
+        self.last.t1 = t1;
+        self.last.y1 = y.to_vec();
+        self.last.f1 = None;
+        Ok(t1)
+    }
+
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        self.last.eval(p, t, out, &mut self.evals);
+    }
+
+    fn evaluations(&self) -> usize {
+        self.evals
+    }
+}
+
+/// A fixed step that lands exactly on `t_end` instead of leaving a sliver before it.
+pub(crate) fn fixed_step(step: f64, t: f64, t_end: f64) -> f64 {
+    let left = t_end - t;
+    if left <= step * (1.0 + 1e-9) {
+        left
+    } else {
+        step
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Pair {
+    Dopri5,
+    Dop853,
+}
+
+/// An adaptive explicit pair with local extrapolation (the higher order propagates).
+pub(crate) struct Adaptive {
+    pair: Pair,
+    rtol: f64,
+    atol: f64,
+    /// The step to try next; 0 until the first step is chosen.
+    h: f64,
+    /// Stages: 7 for the 5(4) pair, 16 (12 + the final derivative + 3 dense-output stages)
+    /// for DOP853.
+    k: Vec<Vec<f64>>,
+    tmp: Vec<f64>,
+    y_new: Vec<f64>,
+    y_old: Vec<f64>,
+    t_old: f64,
+    h_last: f64,
+    /// F(t, y) at the current point (first-same-as-last).
+    f: Option<Vec<f64>>,
+    evals: usize,
+    /// Dense-output coefficients of the last step, computed on first use.
+    dense: Option<Vec<Vec<f64>>>,
+    pub rejected: usize,
+}
+
+const SAFETY: f64 = 0.9;
+const MIN_FACTOR: f64 = 0.2;
+const MAX_FACTOR: f64 = 10.0;
+
+impl Adaptive {
+    pub fn new(pair: Pair, dim: usize, rtol: f64, atol: f64) -> Self {
+        let stages = match pair {
+            Pair::Dopri5 => 7,
+            Pair::Dop853 => 16,
+        };
+        Adaptive {
+            pair,
+            rtol,
+            atol,
+            h: 0.0,
+            k: vec![vec![0.0; dim]; stages],
+            tmp: vec![0.0; dim],
+            y_new: vec![0.0; dim],
+            y_old: vec![0.0; dim],
+            t_old: 0.0,
+            h_last: 0.0,
+            f: None,
+            evals: 0,
+            dense: None,
+            rejected: 0,
+        }
+    }
+
+    fn order(&self) -> f64 {
+        match self.pair {
+            Pair::Dopri5 => 4.0,
+            Pair::Dop853 => 7.0,
+        }
+    }
+
+    fn stage_count(&self) -> usize {
+        match self.pair {
+            Pair::Dopri5 => 6,
+            Pair::Dop853 => 12,
+        }
+    }
+
+    fn a(&self, s: usize) -> &'static [f64] {
+        match self.pair {
+            Pair::Dopri5 => DP5_A[s],
+            Pair::Dop853 => DOP853_A[s],
+        }
+    }
+
+    fn c(&self, s: usize) -> f64 {
+        match self.pair {
+            Pair::Dopri5 => DP5_C[s],
+            Pair::Dop853 => DOP853_C[s],
+        }
+    }
+
+    /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
+    fn initial_step(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &[f64],
+        f0: &[f64],
+        t_end: f64,
+    ) -> Result<f64, FaultKind> {
+        let scale: Vec<f64> = y.iter().map(|v| self.atol + v.abs() * self.rtol).collect();
+        let norm = |v: &[f64]| rms(v.iter().zip(&scale).map(|(a, s)| a / s));
+        let (d0, d1) = (norm(y), norm(f0));
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+        let h0 = h0.min((t_end - t).abs());
+        for i in 0..y.len() {
+            self.tmp[i] = y[i] + h0 * f0[i];
+        }
+        let mut f1 = vec![0.0; y.len()];
+        p.rhs(t + h0, &self.tmp, &mut f1)?;
+        self.evals += 1;
+        let diff: Vec<f64> = f1.iter().zip(f0).map(|(a, b)| a - b).collect();
+        let d2 = norm(&diff) / h0;
+        let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
+            (h0 * 1e-3).max(1e-6)
+        } else {
+            (0.01 / d1.max(d2)).powf(1.0 / (self.order() + 1.0))
+        };
+        Ok((100.0 * h0).min(h1))
+    }
+
+    /// One trial step of size h from (t, y): fills the stages and `y_new`, returns the error
+    /// norm (accept when ≤ 1).
+    fn trial(&mut self, p: &mut dyn Problem, t: f64, y: &[f64], h: f64) -> Result<f64, FaultKind> {
+        let d = y.len();
+        let stages = self.stage_count();
+        for s in 1..stages {
+            let a = self.a(s);
+            for i in 0..d {
+                let mut acc = 0.0;
+                for (j, aj) in a.iter().enumerate() {
+                    acc += aj * self.k[j][i];
+                }
+                self.tmp[i] = y[i] + h * acc;
+            }
+            let c = self.c(s);
+            p.rhs(t + c * h, &self.tmp, &mut self.k[s])?;
+            self.evals += 1;
+        }
+        let b = match self.pair {
+            Pair::Dopri5 => &DP5_B[..],
+            Pair::Dop853 => DOP853_A[12],
+        };
+        for i in 0..d {
+            let mut acc = 0.0;
+            for (j, bj) in b.iter().enumerate() {
+                acc += bj * self.k[j][i];
+            }
+            self.y_new[i] = y[i] + h * acc;
+        }
+        p.rhs(t + h, &self.y_new, &mut self.k[stages])?;
+        self.evals += 1;
+        let k = &self.k;
+        let scale = |i: usize| self.atol + y[i].abs().max(self.y_new[i].abs()) * self.rtol;
+        Ok(match self.pair {
+            Pair::Dopri5 => {
+                let e = (0..d).map(|i| {
+                    let mut acc = 0.0;
+                    for (j, ej) in DP5_E.iter().enumerate() {
+                        acc += ej * k[j][i];
+                    }
+                    h * acc / scale(i)
+                });
+                rms(e)
+            }
+            Pair::Dop853 => {
+                let (mut e5, mut e3) = (0.0, 0.0);
+                for i in 0..d {
+                    let (mut a5, mut a3) = (0.0, 0.0);
+                    for j in 0..12 {
+                        a5 += DOP853_E5[j] * k[j][i];
+                        a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * k[j][i];
+                    }
+                    e5 += (a5 / scale(i)).powi(2);
+                    e3 += (a3 / scale(i)).powi(2);
+                }
+                let denom = e5 + 0.01 * e3;
+                if denom == 0.0 {
+                    0.0
+                } else {
+                    h.abs() * e5 / (denom * d as f64).sqrt()
+                }
+            }
+        })
+    }
+
+    fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
+        let d = self.y_old.len();
+        let h = self.h_last;
+        match self.pair {
+            Pair::Dopri5 => (0..4)
+                .map(|power| {
+                    (0..d)
+                        .map(|i| {
+                            let mut acc = 0.0;
+                            for (j, row) in DP5_P.iter().enumerate() {
+                                acc += row[power] * self.k[j][i];
+                            }
+                            h * acc
+                        })
+                        .collect()
+                })
+                .collect(),
+            Pair::Dop853 => {
+                for s in 13..16 {
+                    let a = DOP853_A[s];
+                    for i in 0..d {
+                        let mut acc = 0.0;
+                        for (j, aj) in a.iter().enumerate() {
+                            acc += aj * self.k[j][i];
+                        }
+                        self.tmp[i] = self.y_old[i] + h * acc;
+                    }
+                    // A fault here already showed up when the step was taken.
+                    let _ = p.rhs(self.t_old + DOP853_C[s] * h, &self.tmp, &mut self.k[s]);
+                    self.evals += 1;
+                }
+                let y1 = &self.y_new;
+                let mut f = vec![vec![0.0; d]; 7];
+                for i in 0..d {
+                    let dy = y1[i] - self.y_old[i];
+                    f[0][i] = dy;
+                    f[1][i] = h * self.k[0][i] - dy;
+                    f[2][i] = 2.0 * dy - h * (self.k[12][i] + self.k[0][i]);
+                    for r in 0..4 {
+                        let mut acc = 0.0;
+                        for (j, dj) in DOP853_D[r].iter().enumerate() {
+                            acc += dj * self.k[j][i];
+                        }
+                        f[3 + r][i] = h * acc;
+                    }
+                }
+                f
+            }
+        }
+    }
+}
+
+fn rms(v: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v {
+        s += x * x;
+        n += 1;
+    }
+    if n == 0 {
+        0.0
+    } else {
+        (s / n as f64).sqrt()
+    }
+}
+
+impl Stepper for Adaptive {
+    fn advance(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<f64, FaultKind> {
+        let d = y.len();
+        if self.f.is_none() {
+            let mut f0 = vec![0.0; d];
+            p.rhs(t, y, &mut f0)?;
+            self.evals += 1;
+            self.f = Some(f0);
+        }
+        self.k[0].copy_from_slice(self.f.as_ref().expect("set"));
+        if self.h == 0.0 {
+            let f0 = self.k[0].clone();
+            self.h = self.initial_step(p, t, y, &f0, t_end)?;
+        }
+        let exponent = -1.0 / (self.order() + 1.0);
+        let mut rejected_here = false;
+        loop {
+            let min_step = 10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
+            if self.h < min_step {
+                return Err(FaultKind::StepTooSmall { step: self.h });
+            }
+            let mut h = self.h;
+            let mut t_new = t + h;
+            if t_new >= t_end {
+                t_new = t_end;
+                h = t_end - t;
+            }
+            let err = match self.trial(p, t, y, h) {
+                Ok(e) => e,
+                // A failed evaluation inside the step (NaN, singular M) may be the step's fault:
+                // shrink it, and only report when it cannot be shrunk further.
+                Err(FaultKind::NonFinite { .. }) | Err(FaultKind::SingularMass { .. })
+                    if h > 1e3 * min_step =>
+                {
+                    self.h = h * MIN_FACTOR;
+                    self.rejected += 1;
+                    rejected_here = true;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            if err <= 1.0 {
+                let mut factor = if err == 0.0 {
+                    MAX_FACTOR
+                } else {
+                    MAX_FACTOR.min(SAFETY * err.powf(exponent))
+                };
+                if rejected_here {
+                    factor = factor.min(1.0);
+                }
+                self.h = h * factor;
+                self.y_old.copy_from_slice(y);
+                self.t_old = t;
+                self.h_last = h;
+                y.copy_from_slice(&self.y_new);
+                let last = self.stage_count();
+                self.f.as_mut().expect("set").copy_from_slice(&self.k[last]);
+                self.dense = None;
+                return Ok(t_new);
+            }
+            self.h = h * MIN_FACTOR.max(SAFETY * err.powf(exponent));
+            self.rejected += 1;
+            rejected_here = true;
+        }
+    }
+
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        if self.dense.is_none() {
+            self.dense = Some(self.dense_coefficients(p));
+        }
+        let coef = self.dense.as_ref().expect("set");
+        let x = (t - self.t_old) / self.h_last;
+        let d = out.len();
+        match self.pair {
+            Pair::Dopri5 => {
+                for i in 0..d {
+                    let mut acc = 0.0;
+                    let mut xp = 1.0;
+                    for row in coef {
+                        xp *= x;
+                        acc += row[i] * xp;
+                    }
+                    out[i] = self.y_old[i] + acc;
+                }
+            }
+            Pair::Dop853 => {
+                for i in 0..d {
+                    let mut acc = 0.0;
+                    for (r, row) in coef.iter().rev().enumerate() {
+                        acc += row[i];
+                        acc *= if r % 2 == 0 { x } else { 1.0 - x };
+                    }
+                    out[i] = self.y_old[i] + acc;
+                }
+            }
+        }
+    }
+
+    fn evaluations(&self) -> usize {
+        self.evals
+    }
+}
+
+const DP5_C: [f64; 6] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0];
+const DP5_A: [&[f64]; 6] = [
+    &[],
+    &[1.0 / 5.0],
+    &[3.0 / 40.0, 9.0 / 40.0],
+    &[44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0],
+    &[19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0],
+    &[9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0],
+];
+const DP5_B: [f64; 6] =
+    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0];
+/// The difference between the fifth- and fourth-order weights, over the 7 stages.
+const DP5_E: [f64; 7] = [
+    -71.0 / 57600.0,
+    0.0,
+    71.0 / 16695.0,
+    -71.0 / 1920.0,
+    17253.0 / 339200.0,
+    -22.0 / 525.0,
+    1.0 / 40.0,
+];
+/// Shampine's quartic dense output: y(t0 + x h) = y0 + h Σ_k K_k Σ_j P[k][j] x^(j+1).
+const DP5_P: [[f64; 4]; 7] = [
+    [
+        1.0,
+        -8048581381.0 / 2820520608.0,
+        8663915743.0 / 2820520608.0,
+        -12715105075.0 / 11282082432.0,
+    ],
+    [0.0, 0.0, 0.0, 0.0],
+    [
+        0.0,
+        131558114200.0 / 32700410799.0,
+        -68118460800.0 / 10900136933.0,
+        87487479700.0 / 32700410799.0,
+    ],
+    [0.0, -1754552775.0 / 470086768.0, 14199869525.0 / 1410260304.0, -10690763975.0 / 1880347072.0],
+    [
+        0.0,
+        127303824393.0 / 49829197408.0,
+        -318862633887.0 / 49829197408.0,
+        701980252875.0 / 199316789632.0,
+    ],
+    [0.0, -282668133.0 / 205662961.0, 2019193451.0 / 616988883.0, -1453857185.0 / 822651844.0],
+    [0.0, 40617522.0 / 29380423.0, -110615467.0 / 29380423.0, 69997945.0 / 29380423.0],
+];
+
+#[allow(clippy::excessive_precision)]
+const DOP853_C: [f64; 16] = [
+    0.0,
+    0.526001519587677318785587544488e-01,
+    0.789002279381515978178381316732e-01,
+    0.118350341907227396726757197510,
+    0.281649658092772603273242802490,
+    0.333333333333333333333333333333,
+    0.25,
+    0.307692307692307692307692307692,
+    0.651282051282051282051282051282,
+    0.6,
+    0.857142857142857142857142857142,
+    1.0,
+    1.0,
+    0.1,
+    0.2,
+    0.777777777777777777777777777778,
+];
+
+/// Rows of the DOP853 tableau; row 12 holds the eighth-order weights b, rows 13–15 the
+/// stages of the dense output.
+#[allow(clippy::excessive_precision)]
+const DOP853_A: [&[f64]; 16] = [
+    &[],
+    &[5.26001519587677318785587544488e-2],
+    &[1.97250569845378994544595329183e-2, 5.91751709536136983633785987549e-2],
+    &[2.95875854768068491816892993775e-2, 0.0, 8.87627564304205475450678981324e-2],
+    &[
+        2.41365134159266685502369798665e-1,
+        0.0,
+        -8.84549479328286085344864962717e-1,
+        9.24834003261792003115737966543e-1,
+    ],
+    &[
+        3.7037037037037037037037037037e-2,
+        0.0,
+        0.0,
+        1.70828608729473871279604482173e-1,
+        1.25467687566822425016691814123e-1,
+    ],
+    &[
+        3.7109375e-2,
+        0.0,
+        0.0,
+        1.70252211019544039314978060272e-1,
+        6.02165389804559606850219397283e-2,
+        -1.7578125e-2,
+    ],
+    &[
+        3.70920001185047927108779319836e-2,
+        0.0,
+        0.0,
+        1.70383925712239993810214054705e-1,
+        1.07262030446373284651809199168e-1,
+        -1.53194377486244017527936158236e-2,
+        8.27378916381402288758473766002e-3,
+    ],
+    &[
+        6.24110958716075717114429577812e-1,
+        0.0,
+        0.0,
+        -3.36089262944694129406857109825,
+        -8.68219346841726006818189891453e-1,
+        2.75920996994467083049415600797e1,
+        2.01540675504778934086186788979e1,
+        -4.34898841810699588477366255144e1,
+    ],
+    &[
+        4.77662536438264365890433908527e-1,
+        0.0,
+        0.0,
+        -2.48811461997166764192642586468,
+        -5.90290826836842996371446475743e-1,
+        2.12300514481811942347288949897e1,
+        1.52792336328824235832596922938e1,
+        -3.32882109689848629194453265587e1,
+        -2.03312017085086261358222928593e-2,
+    ],
+    &[
+        -9.3714243008598732571704021658e-1,
+        0.0,
+        0.0,
+        5.18637242884406370830023853209,
+        1.09143734899672957818500254654,
+        -8.14978701074692612513997267357,
+        -1.85200656599969598641566180701e1,
+        2.27394870993505042818970056734e1,
+        2.49360555267965238987089396762,
+        -3.0467644718982195003823669022,
+    ],
+    &[
+        2.27331014751653820792359768449,
+        0.0,
+        0.0,
+        -1.05344954667372501984066689879e1,
+        -2.00087205822486249909675718444,
+        -1.79589318631187989172765950534e1,
+        2.79488845294199600508499808837e1,
+        -2.85899827713502369474065508674,
+        -8.87285693353062954433549289258,
+        1.23605671757943030647266201528e1,
+        6.43392746015763530355970484046e-1,
+    ],
+    &[
+        5.42937341165687622380535766363e-2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        4.45031289275240888144113950566,
+        1.89151789931450038304281599044,
+        -5.8012039600105847814672114227,
+        3.1116436695781989440891606237e-1,
+        -1.52160949662516078556178806805e-1,
+        2.01365400804030348374776537501e-1,
+        4.47106157277725905176885569043e-2,
+    ],
+    &[
+        5.61675022830479523392909219681e-2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        2.53500210216624811088794765333e-1,
+        -2.46239037470802489917441475441e-1,
+        -1.24191423263816360469010140626e-1,
+        1.5329179827876569731206322685e-1,
+        8.20105229563468988491666602057e-3,
+        7.56789766054569976138603589584e-3,
+        -8.298e-3,
+    ],
+    &[
+        3.18346481635021405060768473261e-2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        2.83009096723667755288322961402e-2,
+        5.35419883074385676223797384372e-2,
+        -5.49237485713909884646569340306e-2,
+        0.0,
+        0.0,
+        -1.08347328697249322858509316994e-4,
+        3.82571090835658412954920192323e-4,
+        -3.40465008687404560802977114492e-4,
+        1.41312443674632500278074618366e-1,
+    ],
+    &[
+        -4.28896301583791923408573538692e-1,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -4.69762141536116384314449447206,
+        7.68342119606259904184240953878,
+        4.06898981839711007970213554331,
+        3.56727187455281109270669543021e-1,
+        0.0,
+        0.0,
+        0.0,
+        -1.39902416515901462129418009734e-3,
+        2.9475147891527723389556272149,
+        -9.15095847217987001081870187138,
+    ],
+];
+
+/// The third-order weights: the 3rd-order error estimate is (b − bhh)·K.
+#[allow(clippy::excessive_precision)]
+const DOP853_BHH: [f64; 12] = {
+    let mut b = [0.0; 12];
+    b[0] = 0.244094488188976377952755905512;
+    b[8] = 0.733846688281611857341361741547;
+    b[11] = 0.220588235294117647058823529412e-1;
+    b
+};
+
+#[allow(clippy::excessive_precision)]
+const DOP853_E5: [f64; 12] = [
+    0.1312004499419488073250102996e-1,
+    0.0,
+    0.0,
+    0.0,
+    0.0,
+    -0.1225156446376204440720569753e1,
+    -0.4957589496572501915214079952,
+    0.1664377182454986536961530415e1,
+    -0.3503288487499736816886487290,
+    0.3341791187130174790297318841,
+    0.8192320648511571246570742613e-1,
+    -0.2235530786388629525884427845e-1,
+];
+
+#[allow(clippy::excessive_precision)]
+const DOP853_D: [[f64; 16]; 4] = [
+    [
+        -0.84289382761090128651353491142e1,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.56671495351937776962531783590,
+        -0.30689499459498916912797304727e1,
+        0.23846676565120698287728149680e1,
+        0.21170345824450282767155149946e1,
+        -0.87139158377797299206789907490,
+        0.22404374302607882758541771650e1,
+        0.63157877876946881815570249290,
+        -0.88990336451333310820698117400e-1,
+        0.18148505520854727256656404962e2,
+        -0.91946323924783554000451984436e1,
+        -0.44360363875948939664310572000e1,
+    ],
+    [
+        0.10427508642579134603413151009e2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.24228349177525818288430175319e3,
+        0.16520045171727028198505394887e3,
+        -0.37454675472269020279518312152e3,
+        -0.22113666853125306036270938578e2,
+        0.77334326684722638389603898808e1,
+        -0.30674084731089398182061213626e2,
+        -0.93321305264302278729567221706e1,
+        0.15697238121770843886131091075e2,
+        -0.31139403219565177677282850411e2,
+        -0.93529243588444783865713862664e1,
+        0.35816841486394083752465898540e2,
+    ],
+    [
+        0.19985053242002433820987653617e2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -0.38703730874935176555105901742e3,
+        -0.18917813819516756882830838328e3,
+        0.52780815920542364900561016686e3,
+        -0.11573902539959630126141871134e2,
+        0.68812326946963000169666922661e1,
+        -0.10006050966910838403183860980e1,
+        0.77771377980534432092869265740,
+        -0.27782057523535084065932004339e1,
+        -0.60196695231264120758267380846e2,
+        0.84320405506677161018159903784e2,
+        0.11992291136182789328035130030e2,
+    ],
+    [
+        -0.25693933462703749003312586129e2,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -0.15418974869023643374053993627e3,
+        -0.23152937917604549567536039109e3,
+        0.35763911791061412378285349910e3,
+        0.93405324183624310003907691704e2,
+        -0.37458323136451633156875139351e2,
+        0.10409964950896230045147246184e3,
+        0.29840293426660503123344363579e2,
+        -0.43533456590011143754432175058e2,
+        0.96324553959188282948394950600e2,
+        -0.39177261675615439165231486172e2,
+        -0.14972683625798562581422125276e3,
+    ],
+];

@@ -1,0 +1,205 @@
+//! Dense solves in place on `nalgebra` storage, allocation-free: Cholesky for symmetric
+//! positive definite matrices, LU with partial pivoting for the rest, each reporting the
+//! columns where it broke down.
+
+use nalgebra::DMatrix;
+
+use crate::FaultKind;
+
+/// Past this estimated condition number the solution has no correct digits left worth
+/// integrating; a report beats silently wrong accelerations.
+pub const CONDITION_LIMIT: f64 = 1e13;
+
+/// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factor and `b` with `x`.
+/// Tries Cholesky; if `a` is not positive definite, refactors a copy from `backup` by LU.
+pub fn solve_symmetric(
+    a: &mut DMatrix<f64>,
+    backup: &DMatrix<f64>,
+    b: &mut [f64],
+    pivots: &mut [usize],
+) -> Result<(), FaultKind> {
+    if cholesky_in_place(a).is_ok() {
+        let n = a.nrows();
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+        for i in 0..n {
+            let d = a[(i, i)] * a[(i, i)];
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        // The ratio of the extreme pivots bounds the condition number from below.
+        if hi / lo > CONDITION_LIMIT {
+            let worst = (0..n)
+                .filter(|&i| a[(i, i)] * a[(i, i)] * CONDITION_LIMIT < hi)
+                .collect::<Vec<_>>();
+            return Err(FaultKind::SingularMass { coordinates: worst, condition: hi / lo });
+        }
+        cholesky_solve(a, b);
+        return Ok(());
+    }
+    a.copy_from(backup);
+    solve_general(a, b, pivots)
+}
+
+/// Solves `a·x = b` by LU with partial pivoting, overwriting `a` and `b`.
+pub fn solve_general(
+    a: &mut DMatrix<f64>,
+    b: &mut [f64],
+    pivots: &mut [usize],
+) -> Result<(), FaultKind> {
+    lu_in_place(a, pivots)?;
+    lu_solve(a, pivots, b);
+    Ok(())
+}
+
+/// Lower-triangular Cholesky factor in the lower triangle of `a`. Fails at the first column
+/// whose pivot is not positive.
+pub fn cholesky_in_place(a: &mut DMatrix<f64>) -> Result<(), usize> {
+    let n = a.nrows();
+    for j in 0..n {
+        let mut d = a[(j, j)];
+        for k in 0..j {
+            d -= a[(j, k)] * a[(j, k)];
+        }
+        if d <= 0.0 || !d.is_finite() {
+            return Err(j);
+        }
+        let d = d.sqrt();
+        a[(j, j)] = d;
+        for i in j + 1..n {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= a[(i, k)] * a[(j, k)];
+            }
+            a[(i, j)] = s / d;
+        }
+    }
+    Ok(())
+}
+
+fn cholesky_solve(l: &DMatrix<f64>, b: &mut [f64]) {
+    let n = l.nrows();
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[(i, k)] * b[k];
+        }
+        b[i] = s / l[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= l[(k, i)] * b[k];
+        }
+        b[i] = s / l[(i, i)];
+    }
+}
+
+/// LU with partial pivoting; `pivots[k]` is the row swapped into place k. A pivot that
+/// vanishes relative to the largest entry, or an extreme pivot ratio, is a singular matrix.
+pub fn lu_in_place(a: &mut DMatrix<f64>, pivots: &mut [usize]) -> Result<(), FaultKind> {
+    let n = a.nrows();
+    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if !scale.is_finite() {
+        return Err(FaultKind::NonFinite { component: 0 });
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    let mut vanished = Vec::new();
+    for k in 0..n {
+        let mut p = k;
+        for i in k + 1..n {
+            if a[(i, k)].abs() > a[(p, k)].abs() {
+                p = i;
+            }
+        }
+        pivots[k] = p;
+        if p != k {
+            a.swap_rows(k, p);
+        }
+        let pivot = a[(k, k)];
+        lo = lo.min(pivot.abs());
+        hi = hi.max(pivot.abs());
+        if pivot.abs() <= scale * f64::EPSILON * n as f64 {
+            vanished.push(k);
+            continue;
+        }
+        for i in k + 1..n {
+            let factor = a[(i, k)] / pivot;
+            a[(i, k)] = factor;
+            for j in k + 1..n {
+                let u = a[(k, j)];
+                a[(i, j)] -= factor * u;
+            }
+        }
+    }
+    if !vanished.is_empty() || hi / lo > CONDITION_LIMIT {
+        if vanished.is_empty() {
+            vanished = (0..n).filter(|&k| a[(k, k)].abs() * CONDITION_LIMIT < hi).collect();
+        }
+        return Err(FaultKind::SingularMass { coordinates: vanished, condition: hi / lo });
+    }
+    Ok(())
+}
+
+/// Solves with the factors of [`lu_in_place`].
+pub fn lu_solve(lu: &DMatrix<f64>, pivots: &[usize], b: &mut [f64]) {
+    let n = lu.nrows();
+    for k in 0..n {
+        b.swap(k, pivots[k]);
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= lu[(i, k)] * b[k];
+        }
+        b[i] = s;
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= lu[(i, k)] * b[k];
+        }
+        b[i] = s / lu[(i, i)];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cholesky_and_lu_solve_the_same_system() {
+        let m = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
+        let want = [1.0, -2.0, 0.5];
+        let rhs: Vec<f64> = (0..3).map(|i| (0..3).map(|j| m[(i, j)] * want[j]).sum()).collect();
+        let mut pivots = [0; 3];
+        let mut a = m.clone();
+        let mut x = rhs.clone();
+        solve_symmetric(&mut a, &m, &mut x, &mut pivots).unwrap();
+        let mut a = m.clone();
+        let mut y = rhs.clone();
+        solve_general(&mut a, &mut y, &mut pivots).unwrap();
+        for i in 0..3 {
+            assert!((x[i] - want[i]).abs() < 1e-14);
+            assert!((y[i] - want[i]).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn indefinite_falls_back_to_lu() {
+        let m = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.0, 0.0]);
+        let mut a = m.clone();
+        let mut x = [2.0, 3.0];
+        solve_symmetric(&mut a, &m, &mut x, &mut [0; 2]).unwrap();
+        assert_eq!(x, [3.0, 2.0]);
+    }
+
+    #[test]
+    fn singular_matrix_names_the_vanishing_column() {
+        let m = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
+        let mut a = m.clone();
+        let err = solve_symmetric(&mut a, &m, &mut [1.0, 1.0], &mut [0; 2]).unwrap_err();
+        assert!(
+            matches!(err, FaultKind::SingularMass { ref coordinates, .. } if coordinates == &[1])
+        );
+    }
+}

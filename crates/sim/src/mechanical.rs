@@ -1,0 +1,278 @@
+//! Equations of motion as a first-order problem: the state (q, q̇) with accelerations from
+//! M q̈ = f, or (q, p) in canonical variables for the symplectic method.
+
+use nalgebra::DMatrix;
+use numeric::Tape;
+
+use crate::linalg;
+use crate::{check_finite, FaultKind, Problem};
+
+/// How the slots of the programs are laid out. The dynamics program takes
+/// `[t, q (n), q̇ (n), parameters (k)]` and gives `M` (n×n, column-major), `f` (n), then per
+/// multiplier the Jacobian row J (n values), γ, Φ and Φ̇. The observation program takes
+/// `[t, q, q̇, q̈ (n), λ (m), parameters]` and gives the recorded quantities.
+#[derive(Clone, Copy, Debug)]
+pub struct Layout {
+    pub coordinates: usize,
+    pub multipliers: usize,
+    pub parameters: usize,
+}
+
+impl Layout {
+    pub fn dynamics_outputs(&self) -> usize {
+        let (n, m) = (self.coordinates, self.multipliers);
+        n * n + n + m * (n + 3)
+    }
+
+    pub fn dynamics_inputs(&self) -> usize {
+        1 + 2 * self.coordinates + self.parameters
+    }
+
+    pub fn observation_inputs(&self) -> usize {
+        1 + 3 * self.coordinates + self.multipliers + self.parameters
+    }
+}
+
+/// The equations of motion M q̈ − Jᵀλ = f, J q̈ = γ as y' = F(t, y) with y = (q, q̇).
+///
+/// Constraints kept with multipliers drift at the position and velocity level, because only
+/// their second derivative is imposed. Baumgarte stabilisation replaces J q̈ = γ by
+/// J q̈ = γ − 2α Φ̇ − β² Φ, which makes Φ decay like a critically damped oscillator with the
+/// rate `baumgarte` (α = β); the run reports the largest |Φ| it saw.
+pub struct Mechanical {
+    pub layout: Layout,
+    dynamics: Tape,
+    observation: Tape,
+    parameters: Vec<f64>,
+    /// α = β of the Baumgarte stabilisation, in 1/time.
+    pub baumgarte: f64,
+    input: Vec<f64>,
+    dyn_out: Vec<f64>,
+    obs_input: Vec<f64>,
+    system: DMatrix<f64>,
+    backup: DMatrix<f64>,
+    solution: Vec<f64>,
+    pivots: Vec<usize>,
+}
+
+impl Mechanical {
+    pub fn new(layout: Layout, dynamics: Tape, observation: Tape, parameters: Vec<f64>) -> Self {
+        assert_eq!(dynamics.inputs(), layout.dynamics_inputs());
+        assert_eq!(dynamics.outputs(), layout.dynamics_outputs());
+        assert_eq!(observation.inputs(), layout.observation_inputs());
+        assert_eq!(parameters.len(), layout.parameters);
+        let size = layout.coordinates + layout.multipliers;
+        Mechanical {
+            layout,
+            dynamics,
+            observation,
+            parameters,
+            baumgarte: 10.0,
+            input: vec![0.0; layout.dynamics_inputs()],
+            dyn_out: vec![0.0; layout.dynamics_outputs()],
+            obs_input: vec![0.0; layout.observation_inputs()],
+            system: DMatrix::zeros(size, size),
+            backup: DMatrix::zeros(size, size),
+            solution: vec![0.0; size],
+            pivots: vec![0; size],
+        }
+    }
+
+    /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
+    fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.input[0] = t;
+        self.input[1..1 + 2 * n].copy_from_slice(y);
+        self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        self.dynamics.eval(&self.input, &mut self.dyn_out);
+        check_finite(&self.dyn_out)?;
+        let out = &self.dyn_out;
+        for j in 0..n {
+            for i in 0..n {
+                self.system[(i, j)] = out[j * n + i];
+            }
+            self.solution[j] = out[n * n + j];
+        }
+        if m == 0 {
+            self.backup.copy_from(&self.system);
+            return linalg::solve_symmetric(
+                &mut self.system,
+                &self.backup,
+                &mut self.solution,
+                &mut self.pivots,
+            );
+        }
+        let rows = n * n + n;
+        let a = self.baumgarte;
+        for c in 0..m {
+            let base = rows + c * (n + 3);
+            for j in 0..n {
+                let jac = out[base + j];
+                self.system[(n + c, j)] = jac;
+                self.system[(j, n + c)] = -jac;
+            }
+            for d in 0..m {
+                self.system[(n + c, n + d)] = 0.0;
+            }
+            let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
+            self.solution[n + c] = gamma - 2.0 * a * phi_rate - a * a * phi;
+        }
+        linalg::solve_general(&mut self.system, &mut self.solution, &mut self.pivots)
+    }
+
+    /// |Φ| of each kept constraint at the last evaluation.
+    pub fn constraint_values(&self) -> impl Iterator<Item = f64> + '_ {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        (0..m).map(move |c| self.dyn_out[n * n + n + c * (n + 3) + n + 1])
+    }
+}
+
+impl Problem for Mechanical {
+    fn dim(&self) -> usize {
+        2 * self.layout.coordinates
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        let n = self.layout.coordinates;
+        self.accelerations(t, y)?;
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        dy[n..].copy_from_slice(&self.solution[..n]);
+        check_finite(dy)
+    }
+
+    fn observations(&self) -> usize {
+        self.observation.outputs() + self.layout.multipliers
+    }
+
+    /// The observation program's outputs, then |Φ| of each kept constraint.
+    fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.accelerations(t, y)?;
+        let inp = &mut self.obs_input;
+        inp[0] = t;
+        inp[1..1 + 2 * n].copy_from_slice(y);
+        inp[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&self.solution);
+        inp[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        let shown = self.observation.outputs();
+        self.observation.eval(inp, &mut out[..shown]);
+        for (o, phi) in out[shown..].iter_mut().zip(self.constraint_values().collect::<Vec<_>>()) {
+            *o = phi.abs();
+        }
+        Ok(())
+    }
+}
+
+/// The same system in canonical variables y = (q, p), p = ∂L/∂q̇, for methods that are
+/// symplectic only there: q̇ = M⁻¹(p − b(q)), ṗ = ∂L/∂q + Q. The momentum program takes the
+/// dynamics inputs and gives M (n×n), p(q, q̇) (n) and ∂L/∂q + Q (n); since p is affine in q̇,
+/// b(q) = p(q, 0). Constraints kept with multipliers are not supported here.
+pub struct Canonical {
+    pub inner: Mechanical,
+    momentum: Tape,
+    input: Vec<f64>,
+    out: Vec<f64>,
+    rates: Vec<f64>,
+    physical: Vec<f64>,
+}
+
+impl Canonical {
+    pub fn new(inner: Mechanical, momentum: Tape) -> Self {
+        let n = inner.layout.coordinates;
+        assert_eq!(inner.layout.multipliers, 0);
+        assert_eq!(momentum.inputs(), inner.layout.dynamics_inputs());
+        assert_eq!(momentum.outputs(), n * n + 2 * n);
+        Canonical {
+            input: vec![0.0; inner.layout.dynamics_inputs()],
+            out: vec![0.0; n * n + 2 * n],
+            rates: vec![0.0; n],
+            physical: vec![0.0; 2 * n],
+            inner,
+            momentum,
+        }
+    }
+
+    fn set_input(&mut self, t: f64, q: &[f64], rates: Option<&[f64]>) {
+        let n = q.len();
+        self.input[0] = t;
+        self.input[1..1 + n].copy_from_slice(q);
+        match rates {
+            Some(r) => self.input[1 + n..1 + 2 * n].copy_from_slice(r),
+            None => self.input[1 + n..1 + 2 * n].iter_mut().for_each(|v| *v = 0.0),
+        }
+        let k = self.inner.parameters.len();
+        self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.inner.parameters);
+    }
+
+    /// q̇ from (q, p), left in `self.rates`.
+    fn velocities(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        let n = self.inner.layout.coordinates;
+        self.set_input(t, &y[..n], None);
+        self.momentum.eval(&self.input, &mut self.out);
+        check_finite(&self.out)?;
+        let sys = &mut self.inner.system;
+        for j in 0..n {
+            for i in 0..n {
+                sys[(i, j)] = self.out[j * n + i];
+            }
+            self.rates[j] = y[n + j] - self.out[n * n + j];
+        }
+        self.inner.backup.copy_from(&self.inner.system);
+        linalg::solve_symmetric(
+            &mut self.inner.system,
+            &self.inner.backup,
+            &mut self.rates,
+            &mut self.inner.pivots,
+        )
+    }
+
+    /// (q, p) from (q, q̇).
+    pub fn from_physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
+        let n = self.inner.layout.coordinates;
+        self.set_input(t, &y[..n], Some(&y[n..]));
+        self.momentum.eval(&self.input, &mut self.out);
+        let mut z = y.to_vec();
+        z[n..].copy_from_slice(&self.out[n * n..n * n + n]);
+        z
+    }
+}
+
+impl Problem for Canonical {
+    fn dim(&self) -> usize {
+        2 * self.inner.layout.coordinates
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        let n = self.inner.layout.coordinates;
+        self.velocities(t, y)?;
+        let rates = std::mem::take(&mut self.rates);
+        self.set_input(t, &y[..n], Some(&rates));
+        self.momentum.eval(&self.input, &mut self.out);
+        dy[..n].copy_from_slice(&rates);
+        dy[n..].copy_from_slice(&self.out[n * n + n..]);
+        self.rates = rates;
+        check_finite(dy)
+    }
+
+    fn observations(&self) -> usize {
+        self.inner.observations()
+    }
+
+    fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        let physical = self.physical_state(t, y)?;
+        self.inner.observe(t, &physical, out)
+    }
+
+    fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
+        self.physical_state(t, y).unwrap_or_else(|_| y.to_vec())
+    }
+}
+
+impl Canonical {
+    fn physical_state(&mut self, t: f64, y: &[f64]) -> Result<Vec<f64>, FaultKind> {
+        let n = self.inner.layout.coordinates;
+        self.velocities(t, y)?;
+        self.physical[..n].copy_from_slice(&y[..n]);
+        self.physical[n..].copy_from_slice(&self.rates);
+        Ok(self.physical.clone())
+    }
+}

@@ -1,0 +1,265 @@
+//! A run: steps of one method from the start to the end time, the observations recorded at
+//! each accepted step, and events located on the dense output.
+
+use crate::erk::{Adaptive, Pair, Rk4, Stepper};
+use crate::gauss::Gauss;
+use crate::{Fault, FaultKind, Problem};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Classic Runge–Kutta, fixed step.
+    Rk4,
+    /// Dormand–Prince 5(4), adaptive.
+    Dopri5,
+    /// Dormand–Prince 8(5,3), adaptive.
+    Dop853,
+    /// Implicit midpoint rule (one-stage Gauss–Legendre), fixed step, symplectic.
+    Midpoint,
+    /// Two-stage Gauss–Legendre collocation (order 4), fixed step, symplectic.
+    Gauss,
+}
+
+impl Method {
+    pub const NAMES: [&'static str; 5] = ["rk4", "dopri5", "dop853", "midpoint", "gauss"];
+
+    pub fn from_name(name: &str) -> Option<Method> {
+        Some(match name {
+            "rk4" => Method::Rk4,
+            "dopri5" | "rk45" => Method::Dopri5,
+            "dop853" => Method::Dop853,
+            "midpoint" => Method::Midpoint,
+            "gauss" | "gauss4" => Method::Gauss,
+            _ => return None,
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Rk4 => "rk4",
+            Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
+            Method::Midpoint => "midpoint",
+            Method::Gauss => "gauss",
+        }
+    }
+
+    pub fn is_adaptive(self) -> bool {
+        matches!(self, Method::Dopri5 | Method::Dop853)
+    }
+
+    /// Whether the method is symplectic, and so wants canonical variables.
+    pub fn is_symplectic(self) -> bool {
+        matches!(self, Method::Midpoint | Method::Gauss)
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Settings {
+    pub method: Method,
+    pub start: f64,
+    pub until: f64,
+    /// Relative and absolute tolerance of the adaptive methods.
+    pub tolerance: f64,
+    /// The step of the fixed-step methods.
+    pub step: f64,
+    pub max_steps: usize,
+}
+
+/// A zero crossing to watch: of observation `column`; `stop` ends the run there.
+#[derive(Clone, Copy, Debug)]
+pub struct Event {
+    pub column: usize,
+    pub stop: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EventHit {
+    /// Index into the events of the run.
+    pub event: usize,
+    pub time: f64,
+}
+
+/// The observations of a run, one row per recorded time.
+#[derive(Clone, Debug, Default)]
+pub struct Trajectory {
+    pub times: Vec<f64>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Run {
+    pub trajectory: Trajectory,
+    pub steps: usize,
+    pub rejected: usize,
+    pub evaluations: usize,
+    pub events: Vec<EventHit>,
+    /// The stop event that ended the run, if one did.
+    pub stopped_by: Option<usize>,
+    pub fault: Option<Fault>,
+    /// The final state in physical variables (q, q̇).
+    pub final_state: Vec<f64>,
+    pub final_time: f64,
+}
+
+/// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
+/// observations at every accepted step (and at located events). A fault ends the run early:
+/// what was computed up to it is kept, and the fault says when and where.
+pub fn integrate(
+    problem: &mut dyn Problem,
+    y0: &[f64],
+    settings: &Settings,
+    events: &[Event],
+    progress: &mut dyn FnMut(f64),
+) -> Run {
+    let d = problem.dim();
+    let tol = settings.tolerance;
+    let mut stepper: Box<dyn Stepper> = match settings.method {
+        Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
+        Method::Dopri5 => Box::new(Adaptive::new(Pair::Dopri5, d, tol, tol)),
+        Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
+        Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
+        Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
+    };
+    let mut run = Run {
+        trajectory: Trajectory::default(),
+        steps: 0,
+        rejected: 0,
+        evaluations: 0,
+        events: Vec::new(),
+        stopped_by: None,
+        fault: None,
+        final_state: Vec::new(),
+        final_time: settings.start,
+    };
+    let width = problem.observations();
+    let mut t = settings.start;
+    let mut y = y0.to_vec();
+    let mut row = vec![0.0; width];
+    let fault = |problem: &mut dyn Problem, kind: FaultKind, t: f64, y: &[f64]| Fault {
+        kind,
+        time: t,
+        state: problem.physical(t, y),
+    };
+    if let Err(kind) = problem.observe(t, &y, &mut row) {
+        run.fault = Some(fault(problem, kind, t, &y));
+        run.final_state = problem.physical(t, &y);
+        return run;
+    }
+    let mut previous_row = row.clone();
+    run.trajectory.times.push(t);
+    run.trajectory.rows.push(row.clone());
+
+    while t < settings.until {
+        if run.steps >= settings.max_steps {
+            run.fault =
+                Some(fault(problem, FaultKind::TooManySteps { limit: settings.max_steps }, t, &y));
+            break;
+        }
+        let t0 = t;
+        match stepper.advance(problem, t, &mut y, settings.until) {
+            Ok(t1) => t = t1,
+            Err(kind) => {
+                run.fault = Some(fault(problem, kind, t, &y));
+                break;
+            }
+        }
+        run.steps += 1;
+        if let Err(kind) = problem.observe(t, &y, &mut row) {
+            run.fault = Some(fault(problem, kind, t, &y));
+            break;
+        }
+        // Events: sign changes of watched columns over the step, located in time order.
+        let mut hits: Vec<EventHit> = Vec::new();
+        for (k, e) in events.iter().enumerate() {
+            let (g0, g1) = (previous_row[e.column], row[e.column]);
+            if g0 != 0.0 && g0 * g1 <= 0.0 {
+                let time = locate(problem, stepper.as_mut(), e.column, (t0, g0), (t, g1), width);
+                hits.push(EventHit { event: k, time });
+            }
+        }
+        hits.sort_by(|a, b| a.time.total_cmp(&b.time));
+        if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
+            let hit = hits[stop];
+            run.events.extend_from_slice(&hits[..=stop]);
+            let mut ys = vec![0.0; d];
+            stepper.interpolate(problem, hit.time, &mut ys);
+            y = ys;
+            t = hit.time;
+            if let Err(kind) = problem.observe(t, &y, &mut row) {
+                run.fault = Some(fault(problem, kind, t, &y));
+                break;
+            }
+            run.trajectory.times.push(t);
+            run.trajectory.rows.push(row.clone());
+            run.stopped_by = Some(hit.event);
+            break;
+        }
+        run.events.extend(hits);
+        run.trajectory.times.push(t);
+        run.trajectory.rows.push(row.clone());
+        std::mem::swap(&mut previous_row, &mut row);
+        progress(t);
+    }
+    run.evaluations = stepper.evaluations();
+    run.final_time = t;
+    run.final_state = problem.physical(t, &y);
+    run
+}
+
+/// The time in [t0, t1] where observation `column` crosses zero, by the Illinois variant of
+/// regula falsi on the dense output, to a few ulps of time.
+fn locate(
+    problem: &mut dyn Problem,
+    stepper: &mut dyn Stepper,
+    column: usize,
+    (mut a, mut ga): (f64, f64),
+    (mut b, mut gb): (f64, f64),
+    width: usize,
+) -> f64 {
+    let d = problem.dim();
+    let mut y = vec![0.0; d];
+    let mut row = vec![0.0; width];
+    let mut side = 0i8;
+    for _ in 0..200 {
+        if gb == 0.0 {
+            return b;
+        }
+        if (b - a).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs()).max(1.0) {
+            break;
+        }
+        let mut m = (a * gb - b * ga) / (gb - ga);
+        if !(m > a.min(b) && m < a.max(b)) {
+            m = 0.5 * (a + b);
+        }
+        stepper.interpolate(problem, m, &mut y);
+        if problem.observe(m, &y, &mut row).is_err() {
+            // Bisect towards the start, where the state was fine.
+            b = m;
+            continue;
+        }
+        let gm = row[column];
+        if gm == 0.0 {
+            return m;
+        }
+        if (gm > 0.0) == (ga > 0.0) {
+            a = m;
+            ga = gm;
+            if side == -1 {
+                gb *= 0.5;
+            }
+            side = -1;
+        } else {
+            b = m;
+            gb = gm;
+            if side == 1 {
+                ga *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    if ga.abs() < gb.abs() {
+        a
+    } else {
+        b
+    }
+}

@@ -1,0 +1,95 @@
+//! Every integrator on the harmonic oscillator, whose solution is known in closed form.
+
+use sim::{integrate, Event, FaultKind, Method, Problem, Settings};
+
+/// y'' = −y from y = 1, y' = 0; observations: y, and y − 0.5 (for events).
+struct Oscillator;
+
+impl Problem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        dy[0] = y[1];
+        dy[1] = -y[0];
+        Ok(())
+    }
+    fn observations(&self) -> usize {
+        2
+    }
+    fn observe(&mut self, _t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        out[0] = y[0];
+        out[1] = y[0] - 0.5;
+        Ok(())
+    }
+}
+
+fn settings(method: Method, tolerance: f64, step: f64) -> Settings {
+    Settings { method, start: 0.0, until: 10.0, tolerance, step, max_steps: 10_000_000 }
+}
+
+fn final_error(method: Method, tolerance: f64, step: f64) -> f64 {
+    let run = integrate(
+        &mut Oscillator,
+        &[1.0, 0.0],
+        &settings(method, tolerance, step),
+        &[],
+        &mut |_| {},
+    );
+    assert!(run.fault.is_none());
+    assert_eq!(run.final_time, 10.0);
+    (run.final_state[0] - 10f64.cos()).abs().max((run.final_state[1] + 10f64.sin()).abs())
+}
+
+#[test]
+fn each_method_converges_at_its_order() {
+    // Halving the step divides the error by 2^order.
+    for (method, order) in [(Method::Rk4, 4.0), (Method::Midpoint, 2.0), (Method::Gauss, 4.0)] {
+        let (e1, e2) = (final_error(method, 0.0, 0.02), final_error(method, 0.0, 0.01));
+        let observed = (e1 / e2).log2();
+        assert!((observed - order).abs() < 0.3, "{method:?}: order {observed}");
+    }
+}
+
+#[test]
+fn adaptive_methods_meet_their_tolerance() {
+    for method in [Method::Dopri5, Method::Dop853] {
+        for tol in [1e-6, 1e-10] {
+            let e = final_error(method, tol, 0.0);
+            assert!(e < 100.0 * tol, "{method:?} at {tol}: error {e}");
+        }
+    }
+    // DOP853 needs far fewer evaluations than the 5(4) pair at tight tolerance.
+    let count = |m| {
+        integrate(&mut Oscillator, &[1.0, 0.0], &settings(m, 1e-12, 0.0), &[], &mut |_| {})
+            .evaluations
+    };
+    assert!(count(Method::Dop853) < count(Method::Dopri5));
+}
+
+#[test]
+fn events_are_located_on_the_dense_output() {
+    // cos t = 1/2 first at t = π/3.
+    for (method, tol) in [(Method::Dopri5, 1e-12), (Method::Dop853, 1e-12), (Method::Rk4, 1e-3)] {
+        let run = integrate(
+            &mut Oscillator,
+            &[1.0, 0.0],
+            &settings(method, 1e-12, 1e-3),
+            &[Event { column: 1, stop: true }],
+            &mut |_| {},
+        );
+        assert_eq!(run.stopped_by, Some(0));
+        let t = run.final_time;
+        assert!((t - std::f64::consts::FRAC_PI_3).abs() < tol, "{method:?}: {t}");
+    }
+    // Recorded events do not stop the run: cos t = 1/2 three times in [0, 10] (π/3, 5π/3, 7π/3).
+    let run = integrate(
+        &mut Oscillator,
+        &[1.0, 0.0],
+        &settings(Method::Dop853, 1e-10, 0.0),
+        &[Event { column: 1, stop: false }],
+        &mut |_| {},
+    );
+    assert_eq!(run.events.len(), 3);
+    assert_eq!(run.final_time, 10.0);
+}

@@ -1,0 +1,147 @@
+//! Accuracy of `simulate` against exact references: the pendulum's period, the falling rod's
+//! energy, reaction and landing time, and the bounded energy error of the symplectic method.
+
+use cli::simulate::{simulate, Options, Outcome};
+
+fn run(rel: &str, options: Options) -> Outcome {
+    let path = lagrange_tests::examples_dir().join(rel);
+    let source = std::fs::read_to_string(&path).expect("example");
+    let outcome = simulate(rel, &source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
+    assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
+    outcome
+}
+
+/// The complete elliptic integral of the first kind, K(k) = π / (2 AGM(1, √(1 − k²))).
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    while (a - b).abs() > 1e-16 * a {
+        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
+#[test]
+fn pendulum_period_matches_the_elliptic_integral() {
+    // Released from rest, θ' next vanishes at half a period.
+    let outcome = run(
+        "classics/simple_pendulum.lag",
+        Options {
+            method: Some("dop853".into()),
+            tolerance: Some(1e-13),
+            until: Some(3.0),
+            stop_when: vec!["theta'".into()],
+            ..Options::default()
+        },
+    );
+    let half = outcome.run.final_time;
+    let (l, g, theta0) = (1.0f64, 9.81f64, 0.5f64);
+    let exact = 4.0 * (l / g).sqrt() * elliptic_k((theta0 / 2.0).sin());
+    let relative = (2.0 * half - exact).abs() / exact;
+    assert!(relative < 1e-10, "period {} vs {exact}: {relative:e}", 2.0 * half);
+}
+
+/// ∫ f over [a, b] by composite three-point Gauss–Legendre, which never evaluates the ends.
+fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
+    let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
+    let h = (b - a) / panels as f64;
+    (0..panels)
+        .map(|i| {
+            let mid = a + (i as f64 + 0.5) * h;
+            nodes.iter().map(|(x, w)| w * f(mid + x * h / 2.0)).sum::<f64>() * h / 2.0
+        })
+        .sum()
+}
+
+#[test]
+fn falling_rod_conserves_energy_and_lands_when_the_energy_integral_says() {
+    let outcome = run(
+        "ps5/falling_rod.lag",
+        Options {
+            method: Some("dop853".into()),
+            tolerance: Some(1e-12),
+            until: Some(1.0),
+            output: vec!["theta, floor.force".into()],
+            ..Options::default()
+        },
+    );
+    let (m, l, g) = (1.0f64, 1.0f64, 9.81f64);
+    // The scene's simulate block stops the run when the rod lies flat.
+    assert!(outcome.run.stopped_by.is_some(), "{}", outcome.summary());
+    let rows = &outcome.run.trajectory.rows;
+    let last = rows.last().expect("rows");
+    assert!((last[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    // N(0) = 4/7 m g.
+    let n0 = rows[0][1];
+    assert!((n0 - 4.0 / 7.0 * m * g).abs() < 1e-12 * m * g, "N(0) = {n0}");
+    // Energy, relative to its scale.
+    let (_, relative) = outcome.energy_drift();
+    assert!(relative < 1e-9, "energy drift {relative:e}");
+
+    // The landing time from energy: θ'² = 12 g (cos θ0 − cos θ) / (L (1 + 3 sin² θ)), so
+    // T = ∫ dθ/θ' from θ0 to π/2. With θ = θ0 + (π/2 − θ0) u² the 1/√(θ − θ0) singularity
+    // at the start becomes a smooth integrand in u.
+    let theta0 = std::f64::consts::FRAC_PI_6;
+    let span = std::f64::consts::FRAC_PI_2 - theta0;
+    let integrand = |u: f64| {
+        let theta = theta0 + span * u * u;
+        let rate2 =
+            12.0 * g * (theta0.cos() - theta.cos()) / (l * (1.0 + 3.0 * theta.sin().powi(2)));
+        2.0 * span * u / rate2.sqrt()
+    };
+    let exact = gauss_legendre(integrand, 0.0, 1.0, 4000);
+    let landed = outcome.run.final_time;
+    assert!((landed - exact).abs() < 1e-10 * exact, "landed at {landed}, energy integral {exact}");
+}
+
+#[test]
+fn symplectic_energy_error_stays_bounded_over_a_hundred_thousand_steps() {
+    let outcome = run(
+        "classics/simple_pendulum.lag",
+        Options {
+            method: Some("gauss".into()),
+            step: Some(0.01),
+            until: Some(1000.0),
+            set: vec!["theta=2".into()],
+            ..Options::default()
+        },
+    );
+    assert!(outcome.run.steps >= 100_000);
+    let e = outcome.energy();
+    let e0 = e[0];
+    let window = e.len() / 10;
+    let worst = |s: &[f64]| s.iter().map(|v| (v - e0).abs()).fold(0.0, f64::max);
+    let (early, late) = (worst(&e[..window]), worst(&e[e.len() - window..]));
+    // Bounded and not growing: the last tenth of the run is no worse than the first.
+    assert!(early < 1e-5 * e0.abs(), "early energy error {early:e}");
+    assert!(late < 1.5 * early, "energy error grew from {early:e} to {late:e}");
+}
+
+#[test]
+fn bad_input_is_an_error_with_exit_code_two() {
+    let path = lagrange_tests::examples_dir().join("ps5/falling_rod.lag");
+    let source = std::fs::read_to_string(path).unwrap();
+    for options in [
+        Options { set: vec!["thta=1".into()], ..Options::default() },
+        Options { output: vec!["thta".into()], ..Options::default() },
+        Options { method: Some("euler".into()), ..Options::default() },
+        Options { set: vec!["y=1".into()], ..Options::default() },
+    ] {
+        let Err((message, code)) = simulate("falling_rod.lag", &source, &options) else {
+            panic!("{options:?} should fail");
+        };
+        assert_eq!(code, 2, "{message}");
+        assert!(message.contains("error"), "{message}");
+    }
+}
+
+#[test]
+fn a_singular_mass_matrix_stops_the_run_with_the_state() {
+    // A bead on a wire whose inertia vanishes at s = 0: M = m s², reached from s = 1.
+    let source = "param m = 1\ncoord s = 1, s' = -1\nparticle p { mass m; position (s^2/2, 0) }\n";
+    let outcome = simulate("wire.lag", source, &Options { until: Some(2.0), ..Options::default() })
+        .unwrap_or_else(|(m, _)| panic!("{m}"));
+    let fault = outcome.run.fault.as_ref().expect("a fault");
+    let text = outcome.describe_fault(fault);
+    assert!(text.contains("s = "), "{text}");
+    assert!(outcome.run.trajectory.rows.len() > 1, "what was computed is kept");
+}
