@@ -19,8 +19,13 @@ pub struct Module {
 }
 
 pub fn codegen(path: &str, source: &str) -> Result<Module, String> {
+    codegen_with(path, source, crate::Options::default())
+}
+
+/// [`codegen`] with options.
+pub fn codegen_with(path: &str, source: &str, options: crate::Options) -> Result<Module, String> {
     // Reactions the scene derives are part of the module; asking for KE and PE changes nothing.
-    let mut prepared = prepare(path, source, &["KE".into(), "PE".into()])?;
+    let mut prepared = prepare(path, source, &["KE".into(), "PE".into()], options)?;
     let parameters = prepared.parameter_values(&[])?;
     let reactions: Vec<(String, cas::ExprId)> = prepared
         .derivation

@@ -85,6 +85,9 @@ enum Command {
         /// Plot the recorded quantities and the energy error against time as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
     },
     /// Write the equations of motion as a self-contained Rust module (only std needed).
     Codegen {
@@ -92,6 +95,9 @@ enum Command {
         /// Write the module to this file (whole or not at all) instead of standard output.
         #[arg(long, short)]
         out: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
     },
 }
 
@@ -163,6 +169,7 @@ fn main() -> ExitCode {
             event,
             out,
             plot,
+            no_units,
         } => {
             let source = match read(&file) {
                 Ok(s) => s,
@@ -180,10 +187,11 @@ fn main() -> ExitCode {
                 output,
                 stop_when,
                 events: event,
+                no_units,
             };
             simulate(&file, &source, &options, out, plot)
         }
-        Command::Codegen { file, out } => {
+        Command::Codegen { file, out, no_units } => {
             let source = match read(&file) {
                 Ok(s) => s,
                 Err(e) => {
@@ -191,7 +199,11 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            match cli::codegen::codegen(&file.display().to_string(), &source) {
+            match cli::codegen::codegen_with(
+                &file.display().to_string(),
+                &source,
+                cli::Options { units: !no_units },
+            ) {
                 Ok(module) => write_or_print(out.as_ref(), &module.source),
                 Err(e) => {
                     eprint!("{}", if e.ends_with('\n') { e } else { format!("{e}\n") });

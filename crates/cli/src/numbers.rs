@@ -25,7 +25,12 @@ pub type NumbersError = String;
 /// Loads `source` with `extra` scene expressions appended as `show` lines, so that they are
 /// resolved (and reactions they name derived) exactly like the scene's own. The appended
 /// lines follow the file; a diagnostic in one of them is rendered against the whole text.
-pub fn prepare(path: &str, source: &str, extra: &[String]) -> Result<Prepared, NumbersError> {
+pub fn prepare(
+    path: &str,
+    source: &str,
+    extra: &[String],
+    options: crate::Options,
+) -> Result<Prepared, NumbersError> {
     let mut text = source.to_string();
     if !text.ends_with('\n') {
         text.push('\n');
@@ -36,8 +41,8 @@ pub fn prepare(path: &str, source: &str, extra: &[String]) -> Result<Prepared, N
         text.push_str(e);
         text.push('\n');
     }
-    let (mut derivation, _warnings) =
-        crate::load(&text).map_err(|errors| crate::diagnostics::render(path, &text, &errors))?;
+    let (mut derivation, _warnings) = crate::load_with(&text, options)
+        .map_err(|errors| crate::diagnostics::render(path, &text, &errors))?;
     let shows: Vec<model::Show> =
         derivation.model.shows.iter().filter(|s| s.span.start >= start).cloned().collect();
     if shows.len() != extra.len() {

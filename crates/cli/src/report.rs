@@ -314,6 +314,22 @@ pub fn text(d: &mut Derivation) -> String {
         out.push("Shown".into());
         for (show, v) in &derived.shown {
             let label = d.show_label(show, u);
+            let unsolved = match v {
+                Value::Scalar(e) => {
+                    pool.as_sym(*e).filter(|s| d.multipliers.iter().any(|m| m.lambda == *s))
+                }
+                _ => None,
+            };
+            if unsolved.is_some() {
+                // Past the size where the symbolic solution stays readable, say so rather than
+                // print `λ = λ`.
+                let unknowns = d.coords.len() + d.multipliers.len();
+                out.push(format!(
+                    "  {label}: a multiplier of the equations above; {unknowns} unknowns are too many to solve for it symbolically (`lagrange simulate --output {}` gives its values)",
+                    show.label
+                ));
+                continue;
+            }
             out.extend(value_lines(pool, &format!("  {label} = "), v));
         }
     }
@@ -528,8 +544,93 @@ pub fn json(d: &mut Derivation) -> String {
         "reactions_with_accelerations": reactions_with_accelerations,
         "shown": shown,
         "at_start": at_start,
+        "model": model_json(d),
     });
     let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     text.push('\n');
     text
+}
+
+/// The scene's primitive data (before any derivation), so that an independent tool can derive
+/// the equations from the same system: every declared coordinate, the bodies, gravity, the
+/// energy and dissipation terms, the loads, and each constraint with how it was treated.
+fn model_json(d: &Derivation) -> Json {
+    let m = &d.model;
+    let pool = &m.pool;
+    let a = Style::Ascii;
+    let name = |s: SymId| pool.symbol(s).name.clone();
+    let print = |e: ExprId| pool.print(e, a);
+    let prints = |es: &[ExprId]| es.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>();
+    let bodies: Vec<Json> = m
+        .bodies
+        .iter()
+        .map(|b| {
+            json!({
+                "name": b.name,
+                "kind": match b.kind {
+                    model::BodyKind::Particle => "particle",
+                    model::BodyKind::Rigid => "rigid",
+                },
+                "mass": print(b.mass),
+                "inertia": b.inertia.map(print),
+                "position": prints(&b.position),
+                "angle": b.angle.map(print),
+            })
+        })
+        .collect();
+    let gravity = m.gravity.as_ref().map(|g| {
+        json!({
+            "strength": print(g.strength),
+            // As written; null means the default, straight down (−y in 2D, −z in 3D).
+            "direction": g.direction.as_ref().map(|v| prints(v)),
+        })
+    });
+    let terms = |ts: &[model::Term]| ts.iter().map(|t| print(t.expr)).collect::<Vec<_>>();
+    let loads = |ls: &[model::Load], key: &str| -> Vec<Json> {
+        ls.iter()
+            .map(|l| {
+                let mut o = Map::new();
+                o.insert("name".into(), json!(l.name));
+                o.insert("body".into(), json!(m.bodies[l.body].name));
+                let v = match &l.value {
+                    Value::Scalar(e) => json!(print(*e)),
+                    other => json!(prints(&other.entries())),
+                };
+                o.insert(key.into(), v);
+                Json::Object(o)
+            })
+            .collect()
+    };
+    let constraints: Vec<Json> = m
+        .constraints
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut o = Map::new();
+            o.insert("name".into(), json!(c.name));
+            o.insert("phi".into(), json!(print(c.phi)));
+            o.insert("reaction".into(), json!(name(c.force_symbol)));
+            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
+                o.insert("treatment".into(), json!("eliminated"));
+                o.insert("coordinate".into(), json!(name(e.coord)));
+                o.insert("solution".into(), json!(print(e.solution)));
+            } else if let Some(k) = d.multipliers.iter().find(|k| k.constraint == i) {
+                o.insert("treatment".into(), json!("multiplier"));
+                o.insert("multiplier".into(), json!(name(k.lambda)));
+            }
+            Json::Object(o)
+        })
+        .collect();
+    json!({
+        "time": name(m.time),
+        "coordinates": m.coords.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+        "bodies": bodies,
+        "gravity": gravity,
+        "potentials": terms(&m.potentials),
+        "dissipation": terms(&m.dissipation),
+        "lagrangian": terms(&m.lagrangians),
+        "forces": loads(&m.forces, "vector"),
+        "torques": loads(&m.torques, "torque"),
+        "constraints": constraints,
+    })
 }

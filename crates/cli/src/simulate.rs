@@ -23,6 +23,8 @@ pub struct Options {
     pub stop_when: Vec<String>,
     /// Expressions whose zero crossings are recorded.
     pub events: Vec<String>,
+    /// Skip the dimension check.
+    pub no_units: bool,
 }
 
 /// A finished (or faulted) simulation, ready to be written.
@@ -196,7 +198,8 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
     extra.push("KE".into());
     extra.push("PE".into());
     extra.extend(sets.iter().map(|(_, v)| v.clone()));
-    let mut prepared = prepare(path, source, &extra).map_err(bad)?;
+    let mut prepared =
+        prepare(path, source, &extra, crate::Options { units: !options.no_units }).map_err(bad)?;
     let coordinate_names = prepared.coordinate_names();
     if !scene_has_outputs {
         // Default outputs: every remaining coordinate.

@@ -294,7 +294,13 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     let mut potential_terms = Vec::new();
     let half = cas::number::ratio(1, 2);
     let gravity_dir: Option<Vec<ExprId>> = model.gravity.as_ref().map(|g| match &g.direction {
-        Some(d) => d.clone(),
+        // `along` gives a direction only: gravity's strength is g whatever the vector's length.
+        Some(d) => {
+            let squares: Vec<ExprId> = d.iter().map(|x| pool.powi(*x, 2)).collect();
+            let norm2 = pool.add(&squares);
+            let norm = pool.sqrt(norm2);
+            d.iter().map(|x| pool.div(*x, norm)).collect()
+        }
         None => {
             let mut d = vec![pool.zero(); dim];
             d[dim - 1] = pool.int(-1);
