@@ -145,6 +145,10 @@ pub enum StmtKind {
     Force { name: Ident, body: Ident, value: Expr },
     /// `torque drive on rod: tau0`
     Torque { name: Ident, body: Ident, value: Expr },
+    /// `spring s between cart and bob: k, l0` (the rest length is optional, default 0)
+    Spring { name: Ident, a: Expr, b: Expr, stiffness: Expr, rest: Option<Expr> },
+    /// `damper d between cart and wall: c`
+    Damper { name: Ident, a: Expr, b: Expr, coefficient: Expr },
     /// `dissipation c/2*x'^2`
     Dissipation(Expr),
     /// `lagrangian m/2*x'^2 - k/2*x^2`

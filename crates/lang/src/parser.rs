@@ -34,7 +34,7 @@ const PRATT_OPERATORS: [Rule; 6] =
     [Rule::add_op, Rule::sub_op, Rule::mul_op, Rule::div_op, Rule::pow_op, Rule::neg_op];
 
 /// The statement keywords, in the order they are listed to the user.
-pub(crate) const STATEMENT_KEYWORDS: [&str; 16] = [
+pub(crate) const STATEMENT_KEYWORDS: [&str; 18] = [
     "scene",
     "param",
     "let",
@@ -46,6 +46,8 @@ pub(crate) const STATEMENT_KEYWORDS: [&str; 16] = [
     "potential",
     "force",
     "torque",
+    "spring",
+    "damper",
     "dissipation",
     "lagrangian",
     "show",
@@ -307,8 +309,8 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     use Rule::*;
     Some(match rule {
         kw_scene | kw_param | kw_let | kw_coord | kw_particle | kw_body | kw_constraint
-        | kw_gravity | kw_potential | kw_force | kw_torque | kw_dissipation | kw_lagrangian
-        | kw_show | kw_expect | kw_simulate => (0, "a statement"),
+        | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring | kw_damper
+        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate => (0, "a statement"),
         expr | number | call | func | member | name | paren | matrix | matrix_row | neg_op => {
             (1, "an expression")
         }
@@ -321,6 +323,8 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         string_text => (3, "the text of the title"),
         kw_along => (4, "`along`"),
         kw_on => (4, "`on`"),
+        kw_between => (4, "`between`"),
+        kw_and => (4, "`and`"),
         at_start | kw_at => (4, "`at start:`"),
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
@@ -376,6 +380,8 @@ fn is_statement_keyword(rule: Rule) -> bool {
             | kw_particle
             | kw_body
             | kw_constraint
+            | kw_spring
+            | kw_damper
             | kw_gravity
             | kw_potential
             | kw_force
@@ -562,6 +568,8 @@ fn is_noise(rule: Rule) -> bool {
             rule,
             kw_along
                 | kw_on
+                | kw_between
+                | kw_and
                 | kw_at
                 | kw_start
                 | eq
@@ -690,6 +698,21 @@ impl Builder<'_> {
             Rule::potential_stmt => StmtKind::Potential(self.expr(next()?)?),
             Rule::dissipation_stmt => StmtKind::Dissipation(self.expr(next()?)?),
             Rule::lagrangian_stmt => StmtKind::Lagrangian(self.expr(next()?)?),
+            Rule::spring_stmt | Rule::damper_stmt => {
+                let name = self.ident(&next()?);
+                let a = self.expr(next()?)?;
+                let b = self.expr(next()?)?;
+                let coefficient = self.expr(next()?)?;
+                if rule == Rule::spring_stmt {
+                    let rest = match next() {
+                        Ok(p) => Some(self.expr(p)?),
+                        Err(_) => None,
+                    };
+                    StmtKind::Spring { name, a, b, stiffness: coefficient, rest }
+                } else {
+                    StmtKind::Damper { name, a, b, coefficient }
+                }
+            }
             Rule::force_stmt | Rule::torque_stmt => {
                 let name = self.ident(&next()?);
                 let body = self.ident(&next()?);

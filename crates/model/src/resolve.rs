@@ -320,6 +320,53 @@ impl<'a> Resolver<'a> {
                     self.lagrangians.push(Term { expr, span: e.span });
                 }
             }
+            StmtKind::Spring { a, b, stiffness, rest, .. } => {
+                let (Some(len2), Some(k)) = (self.separation_squared(a, b), self.scalar(stiffness))
+                else {
+                    return;
+                };
+                let rest = match rest {
+                    Some(r) => match self.scalar(r) {
+                        Some(r) => Some(r),
+                        None => return,
+                    },
+                    None => None,
+                };
+                // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
+                let stretch2 = match rest {
+                    Some(l0) => {
+                        let len = self.pool.sqrt(len2);
+                        let s = self.pool.sub(len, l0);
+                        self.pool.powi(s, 2)
+                    }
+                    None => len2,
+                };
+                let e = self.pool.mul2(k, stretch2);
+                let expr = self.pool.scale(e, &Rational::new(1.into(), 2.into()));
+                self.potentials.push(Term { expr, span: stmt.span });
+            }
+            StmtKind::Damper { a, b, coefficient, .. } => {
+                let (Some(d), Some(c)) = (self.separation(a, b), self.scalar(coefficient)) else {
+                    return;
+                };
+                // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
+                // on a line (AB = u) it is exactly u'².
+                let mut dots = Vec::new();
+                let mut squares = Vec::new();
+                for x in &d {
+                    let v = self.pool.time_derivative(*x);
+                    dots.push(self.pool.mul2(*x, v));
+                    squares.push(self.pool.powi(*x, 2));
+                }
+                let dot = self.pool.add(&dots);
+                let len2 = self.pool.add(&squares);
+                let dot2 = self.pool.powi(dot, 2);
+                let inv = self.pool.powi(len2, -1);
+                let rate2 = self.pool.mul2(dot2, inv);
+                let d = self.pool.mul2(c, rate2);
+                let expr = self.pool.scale(d, &Rational::new(1.into(), 2.into()));
+                self.dissipation.push(Term { expr, span: stmt.span });
+            }
             StmtKind::Force { name, body, value } => self.load(name, body, value, stmt.span, false),
             StmtKind::Torque { name, body, value } => self.load(name, body, value, stmt.span, true),
             StmtKind::Show { at_start, items } => {
@@ -597,6 +644,46 @@ impl<'a> Resolver<'a> {
                 None
             }
         }
+    }
+
+    /// Where a spring or damper is attached: a body (its centre of mass) or a fixed point.
+    fn anchor(&mut self, e: &Expr) -> Option<Vec<cas::ExprId>> {
+        if let ExprKind::Name { name, primes: 0 } = &e.kind {
+            if let Some(Binding::Body(i)) = self.names.get(&normalize(name)) {
+                return Some(self.bodies[*i].position.clone());
+            }
+        }
+        match self.value(e)? {
+            Value::Vector(v) => Some(v),
+            other => {
+                self.error(
+                    Diagnostic::error(e.span, format!("expected a body or a point, found {}", other.kind_name()))
+                        .with_label("not an attachment")
+                        .with_hint("attach to a `particle` or `body` by name, or to a fixed point such as (0, 0)"),
+                );
+                None
+            }
+        }
+    }
+
+    /// B − A for two attachments, padding the shorter with zeros (a 2D point in 3D).
+    fn separation(&mut self, a: &Expr, b: &Expr) -> Option<Vec<cas::ExprId>> {
+        let (pa, pb) = (self.anchor(a), self.anchor(b));
+        let (pa, pb) = (pa?, pb?);
+        let n = pa.len().max(pb.len());
+        let zero = self.pool.zero();
+        Some(
+            (0..n)
+                .map(|i| self.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
+                .collect(),
+        )
+    }
+
+    /// |B − A|².
+    fn separation_squared(&mut self, a: &Expr, b: &Expr) -> Option<cas::ExprId> {
+        let d = self.separation(a, b)?;
+        let squares: Vec<cas::ExprId> = d.iter().map(|x| self.pool.powi(*x, 2)).collect();
+        Some(self.pool.add(&squares))
     }
 
     /// A scalar that may not depend on coordinates or time (initial values, parameter values).

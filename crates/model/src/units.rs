@@ -421,6 +421,31 @@ impl Checker {
                     self.energy_term(&work, value.span);
                 }
             }
+            StmtKind::Spring { a, b, stiffness, rest, .. } => {
+                let len = self.separation(a, b);
+                let k = self.scalar(stiffness);
+                if let Some(r) = rest {
+                    let l0 = self.operand_scalar(r);
+                    self.same(
+                        &l0,
+                        &len,
+                        r.span,
+                        a.span.join(b.span),
+                        "between a rest length and the distance it rests at",
+                    );
+                }
+                let e = k.plus(&len, &Rational::from_integer(2.into()));
+                self.energy_term(&e, stiffness.span);
+            }
+            StmtKind::Damper { a, b, coefficient, .. } => {
+                let len = self.separation(a, b);
+                let c = self.scalar(coefficient);
+                // c (d|AB|/dt)² is a power: c·len²/T² = energy/T.
+                let time = Form::known(Dim::base(2));
+                let e =
+                    c.plus(&len, &Rational::from_integer(2.into())).plus(&time, &-Rational::one());
+                self.energy_term(&e, coefficient.span);
+            }
             StmtKind::Torque { body, value, .. } => {
                 let f = self.scalar(value);
                 if let Some(a) =
@@ -443,6 +468,29 @@ impl Checker {
             }
             StmtKind::Scene { .. } | StmtKind::Simulate(_) => {}
         }
+    }
+
+    /// The dimension of the distance between two attachments (bodies or points), after
+    /// checking that their coordinates share one.
+    fn separation(&mut self, a: &Expr, b: &Expr) -> Form {
+        let mut forms = Vec::new();
+        for e in [a, b] {
+            let body = match &e.kind {
+                ExprKind::Name { name, primes: 0 } => {
+                    self.bodies.get(&normalize(name)).map(|b| b.position.clone())
+                }
+                _ => None,
+            };
+            match body {
+                Some(p) => forms.extend(p),
+                None => forms.extend(self.value(e).forms()),
+            }
+        }
+        let Some(first) = forms.first().cloned() else { return Form::default() };
+        for f in &forms[1..] {
+            self.same(&first, f, a.span, b.span, "between the coordinates of a spring's ends");
+        }
+        first
     }
 
     fn body(&mut self, name: &str, props: &[Property]) {
