@@ -38,6 +38,11 @@ fn exprs_of(kind: &StmtKind) -> Vec<&Expr> {
         }
         StmtKind::Potential(e) | StmtKind::Dissipation(e) | StmtKind::Lagrangian(e) => out.push(e),
         StmtKind::Force { value, .. } | StmtKind::Torque { value, .. } => out.push(value),
+        StmtKind::Spring { a, b, stiffness, rest, .. } => {
+            out.extend([a, b, stiffness]);
+            out.extend(rest.iter());
+        }
+        StmtKind::Damper { a, b, coefficient, .. } => out.extend([a, b, coefficient]),
         StmtKind::Show { items, .. } => out.extend(items.iter()),
         StmtKind::Simulate(settings) => out.extend(settings.iter().flat_map(|s| s.values.iter())),
     }
@@ -153,4 +158,21 @@ fn expression_spans_are_exact() {
             }
         }
     }
+}
+
+#[test]
+fn springs_and_dampers_parse() {
+    let file =
+        lang::parse("spring s between cart and (0, 1): k, l0\ndamper d between cart and bob: c\n")
+            .expect("parses");
+    let StmtKind::Spring { name, a, b, stiffness, rest } = &file.stmts[0].kind else {
+        panic!("not a spring")
+    };
+    assert_eq!(name.name, "s");
+    assert_eq!(a.to_sexpr(), "cart");
+    assert_eq!(b.to_sexpr(), "(tuple 0 1)");
+    assert_eq!(stiffness.to_sexpr(), "k");
+    assert_eq!(rest.as_ref().map(|r| r.to_sexpr()), Some("l0".to_string()));
+    let StmtKind::Damper { coefficient, .. } = &file.stmts[1].kind else { panic!("not a damper") };
+    assert_eq!(coefficient.to_sexpr(), "c");
 }
