@@ -15,10 +15,25 @@ fn example(name: &str) -> String {
         .into_owned()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lagrange-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+/// A temporary folder for one test, removed when the test ends.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("lagrange-cli-{}-{test}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        Scratch(dir)
+    }
+
+    fn file(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 #[test]
@@ -37,7 +52,8 @@ fn check_exit_codes() {
     assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stdout));
     assert!(String::from_utf8_lossy(&ok.stdout).contains("7 passed, 0 failed"));
 
-    let wrong = scratch("wrong.lag");
+    let scratch = Scratch::new("exit-codes");
+    let wrong = scratch.file("wrong.lag");
     std::fs::write(
         &wrong,
         "param m, g\ncoord x\nparticle p { mass m; position (0, x) }\ngravity g\nexpect x'' = g\n",
@@ -47,7 +63,7 @@ fn check_exit_codes() {
     assert_eq!(fail.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&fail.stdout).contains("wrong.lag:5"));
 
-    let bad = scratch("bad.lag");
+    let bad = scratch.file("bad.lag");
     std::fs::write(&bad, "param m\ncoord x\nparticle p { mass m; position (x, 0) \n")
         .expect("write");
     let broken = lagrange(&["check", bad.to_str().expect("path")]);
@@ -61,7 +77,8 @@ fn check_exit_codes() {
 
 #[test]
 fn derive_out_writes_the_whole_file() {
-    let target = scratch("rod.json");
+    let scratch = Scratch::new("out");
+    let target = scratch.file("rod.json");
     let out = lagrange(&[
         "derive",
         &example("ps5/falling_rod.lag"),
