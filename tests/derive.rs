@@ -88,3 +88,19 @@ fn problem_set_results_come_out_exactly() {
     assert_eq!(disk["shown"]["disk.omega"], "(1 + R/r)*theta'");
     assert_eq!(disk["shown"]["KE"], "3/4*m*(r + R)^2*theta'^2");
 }
+
+/// The README shows the rod's `derive` output; it must be what `derive` prints today.
+#[test]
+fn the_readme_shows_the_current_output() {
+    let readme = std::fs::read_to_string(lagrange_tests::examples_dir().join("../README.md"))
+        .expect("README");
+    let section = &readme[readme.find("## What it prints").expect("the section")..];
+    let start = section.find("```\n").expect("a code block") + 4;
+    let block = &section[start..start + section[start..].find("```").expect("closed")];
+    let path = lagrange_tests::examples_dir().join("ps5/falling_rod.lag");
+    assert_eq!(
+        block,
+        derive(&path, cli::Format::Text),
+        "README.md is out of date: paste the new output"
+    );
+}
