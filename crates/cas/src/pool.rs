@@ -662,11 +662,13 @@ impl Pool {
         match self.node(e).clone() {
             Node::Num(q) => (q, self.one),
             Node::Mul(c, f) if !c.is_one() => {
-                let mut prod = ProductBuilder::new();
-                for (b, x) in f.iter() {
-                    prod.push_factor(self, *b, x);
+                // The factors are already canonical: the rest is the same product with
+                // coefficient 1, or its one factor.
+                if f.len() == 1 && f[0].1.is_one() {
+                    (c, f[0].0)
+                } else {
+                    (c, self.intern(Node::Mul(Rational::one(), f)))
                 }
-                (c, prod.finish(self))
             }
             _ => (Rational::one(), e),
         }
