@@ -145,3 +145,26 @@ fn a_singular_mass_matrix_stops_the_run_with_the_state() {
     assert!(text.contains("s = "), "{text}");
     assert!(outcome.run.trajectory.rows.len() > 1, "what was computed is kept");
 }
+
+/// `samples` records at evenly spaced times from the dense output, and those values agree
+/// with a run that steps exactly to each of them.
+#[test]
+fn evenly_spaced_samples_come_from_the_dense_output() {
+    let sampled = run(
+        "classics/simple_pendulum.lag",
+        Options { until: Some(2.0), samples: 40, tolerance: Some(1e-12), ..Options::default() },
+    );
+    let times = &sampled.run.trajectory.times;
+    assert_eq!(times.len(), 41, "{times:?}");
+    for (k, t) in times.iter().enumerate() {
+        assert!((t - 2.0 * k as f64 / 40.0).abs() < 1e-12, "sample {k} at {t}");
+    }
+    // θ at t = 1.25 from the dense output, against a run that ends there.
+    let direct = run(
+        "classics/simple_pendulum.lag",
+        Options { until: Some(1.25), tolerance: Some(1e-12), ..Options::default() },
+    );
+    let theta_direct = direct.run.trajectory.rows.last().expect("rows")[0];
+    let theta_sampled = sampled.run.trajectory.rows[25][0];
+    assert!((theta_direct - theta_sampled).abs() < 1e-9, "{theta_direct} vs {theta_sampled}");
+}

@@ -88,6 +88,10 @@ enum Command {
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
+        /// Record at this many evenly spaced times, from the integrator's dense output; 0
+        /// records at every accepted step instead. Events and the end are always recorded.
+        #[arg(long, default_value_t = 200)]
+        samples: usize,
     },
     /// Write the equations of motion as a self-contained Rust module (only std needed).
     Codegen {
@@ -170,6 +174,7 @@ fn main() -> ExitCode {
             out,
             plot,
             no_units,
+            samples,
         } => {
             let source = match read(&file) {
                 Ok(s) => s,
@@ -188,6 +193,7 @@ fn main() -> ExitCode {
                 stop_when,
                 events: event,
                 no_units,
+                samples,
             };
             simulate(&file, &source, &options, out, plot)
         }

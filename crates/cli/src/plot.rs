@@ -61,7 +61,7 @@ pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String 
         );
         let _ = writeln!(
             s,
-            r#"<text x="{}" y="{}" text-anchor="middle">t = {}</text>"#,
+            r#"<text x="{}" y="{}" text-anchor="end">t = {}</text>"#,
             WIDTH - RIGHT,
             top + PANEL + 14.0,
             label(t1)

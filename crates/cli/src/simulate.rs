@@ -25,6 +25,8 @@ pub struct Options {
     pub events: Vec<String>,
     /// Skip the dimension check.
     pub no_units: bool,
+    /// Evenly spaced times to record at (0: every accepted step).
+    pub samples: usize,
 }
 
 /// A finished (or faulted) simulation, ready to be written.
@@ -271,7 +273,15 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
     let observation = prepared.lower(&prepared.observation_inputs(), &observed).map_err(bad)?;
     let mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters);
-    let settings = Settings { method, start: 0.0, until, tolerance, step, max_steps: 20_000_000 };
+    let settings = Settings {
+        method,
+        start: 0.0,
+        until,
+        tolerance,
+        step,
+        max_steps: 20_000_000,
+        samples: options.samples,
+    };
     let watched: Vec<Event> = (0..n_stop)
         .map(|k| Event { column: n_out + k, stop: true })
         .chain((0..n_event).map(|k| Event { column: n_out + n_stop + k, stop: false }))

@@ -63,6 +63,9 @@ pub struct Settings {
     /// The step of the fixed-step methods.
     pub step: f64,
     pub max_steps: usize,
+    /// Record at this many evenly spaced times (from the dense output) rather than at every
+    /// accepted step; 0 records at every step. Events and the end are recorded either way.
+    pub samples: usize,
 }
 
 /// A zero crossing to watch: of observation `column`; `stop` ends the run there.
@@ -148,6 +151,10 @@ pub fn integrate(
     let mut previous_row = row.clone();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
+    let sample_time = |k: usize| {
+        settings.start + (settings.until - settings.start) * k as f64 / settings.samples as f64
+    };
+    let mut next_sample = 1;
 
     while t < settings.until {
         if run.steps >= settings.max_steps {
@@ -178,6 +185,22 @@ pub fn integrate(
             }
         }
         hits.sort_by(|a, b| a.time.total_cmp(&b.time));
+        if settings.samples > 0 {
+            // The evenly spaced times this step covers (up to a stop, if one comes), from the
+            // step's dense output.
+            let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
+            let mut ys = vec![0.0; d];
+            let mut sample_row = vec![0.0; width];
+            while next_sample <= settings.samples && sample_time(next_sample) < end {
+                let s = sample_time(next_sample);
+                stepper.interpolate(problem, s, &mut ys);
+                if problem.observe(s, &ys, &mut sample_row).is_ok() {
+                    run.trajectory.times.push(s);
+                    run.trajectory.rows.push(sample_row.clone());
+                }
+                next_sample += 1;
+            }
+        }
         if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
             let hit = hits[stop];
             run.events.extend_from_slice(&hits[..=stop]);
@@ -195,8 +218,10 @@ pub fn integrate(
             break;
         }
         run.events.extend(hits);
-        run.trajectory.times.push(t);
-        run.trajectory.rows.push(row.clone());
+        if settings.samples == 0 || t >= settings.until {
+            run.trajectory.times.push(t);
+            run.trajectory.rows.push(row.clone());
+        }
         std::mem::swap(&mut previous_row, &mut row);
         progress(t);
     }

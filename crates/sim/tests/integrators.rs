@@ -25,7 +25,7 @@ impl Problem for Oscillator {
 }
 
 fn settings(method: Method, tolerance: f64, step: f64) -> Settings {
-    Settings { method, start: 0.0, until: 10.0, tolerance, step, max_steps: 10_000_000 }
+    Settings { method, start: 0.0, until: 10.0, tolerance, step, max_steps: 10_000_000, samples: 0 }
 }
 
 fn final_error(method: Method, tolerance: f64, step: f64) -> f64 {
