@@ -11,7 +11,7 @@ use cli::generate::{n_link, Family};
 use numeric::Tape;
 use sim::{Mechanical, Problem};
 
-pub const SIZES: [usize; 3] = [2, 8, 20];
+pub const SIZES: [usize; 4] = [2, 4, 8, 20];
 
 /// A state of the chain that is not special: no zero angles, no equal rates.
 fn state(n: usize) -> (Vec<f64>, Vec<f64>) {
@@ -161,7 +161,7 @@ pub fn run() {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     let binary = dir.join("timer");
     let compiled = Command::new(&rustc)
-        .args(["--edition", "2021", "-O", "-o"])
+        .args(["--edition", "2021", "-O", "-A", "warnings", "-o"])
         .arg(&binary)
         .arg(dir.join("main.rs"))
         .status();

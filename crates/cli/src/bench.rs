@@ -304,9 +304,10 @@ pub fn svg(title: &str, trials: &[Trial]) -> String {
     }
     for (k, m) in methods.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
-        let mut points: Vec<(f64, f64)> =
+        // In ladder order, not sorted by time: a timing hiccup then shows as a kink rather
+        // than reordering the rungs.
+        let points: Vec<(f64, f64)> =
             good.iter().filter(|t| t.method == *m).map(|t| (px(t.seconds), py(t.error))).collect();
-        points.sort_by(|a, b| a.0.total_cmp(&b.0));
         let text: Vec<String> = points.iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect();
         let _ = writeln!(
             s,
