@@ -335,3 +335,44 @@ pub fn svg(title: &str, trials: &[Trial]) -> String {
 fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ladders_span_the_tolerances_and_steps() {
+        assert_eq!(ladder(Method::Dop853).first(), Some(&Setting::Tolerance(1e-3)));
+        assert_eq!(ladder(Method::Dop853).len(), 10);
+        assert_eq!(ladder(Method::Gauss).last(), Some(&Setting::Steps(12_800)));
+    }
+
+    #[test]
+    fn the_diagram_has_a_line_per_method_and_skips_faults() {
+        let trial = |method, error, seconds| Trial {
+            method,
+            setting: Setting::Steps(100),
+            error,
+            seconds,
+            evaluations: 1,
+            steps: 1,
+            fault: None,
+        };
+        let trials = [
+            trial(Method::Rk4, 1e-3, 1e-3),
+            trial(Method::Rk4, 1e-6, 1e-2),
+            trial(Method::Gauss, f64::NAN, 1e-2),
+            trial(Method::Gauss, 1e-8, 1e-1),
+        ];
+        let svg = svg("t", &trials);
+        assert_eq!(svg.matches("<polyline").count(), 2);
+        assert_eq!(svg.matches("<circle").count(), 3);
+        assert!(svg.contains(">rk4<") && svg.contains(">gauss<"));
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+}
