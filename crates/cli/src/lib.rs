@@ -5,6 +5,7 @@
 //! strings the stages together, renders diagnostics with source context, and formats the
 //! `derive` and `check` reports. It knows the stages' public types, not their internals.
 
+pub mod bench;
 pub mod check;
 pub mod codegen;
 pub mod diagnostics;

@@ -103,6 +103,29 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// Measure every integrator over a ladder of tolerances or steps against a tight DOP853
+    /// reference: error, wall time and right-hand-side evaluations.
+    Bench {
+        file: PathBuf,
+        /// End time (s); default: the scene's `simulate { until … }`, else 10.
+        #[arg(long)]
+        until: Option<f64>,
+        /// Override a parameter or an initial value, as for simulate.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// End each run when this expression reaches zero, as for simulate.
+        #[arg(long = "stop-when", value_name = "EXPR")]
+        stop_when: Vec<String>,
+        /// Time each run this many times and report the median.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Write the work–precision diagram (error against time, log–log) as SVG.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -217,6 +240,18 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
+            let source = match read(&file) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("{e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let options =
+                cli::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
+            bench(&file, &source, &options, repeats, plot)
+        }
         Command::Check { files, no_units } => {
             let mut worst = 0;
             let (mut held, mut failed) = (0, 0);
@@ -321,4 +356,51 @@ fn simulate(
     }
     eprint!("{}", outcome.summary());
     code
+}
+
+fn bench(
+    file: &std::path::Path,
+    source: &str,
+    options: &cli::simulate::Options,
+    repeats: usize,
+    plot: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    if let Some(p) = &plot {
+        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
+            eprintln!("error: cannot tell the format of {}: use .svg", p.display());
+            return ExitCode::from(2);
+        }
+    }
+    let report = match cli::bench::bench(&path, source, options, repeats) {
+        Ok(r) => r,
+        Err((message, code)) => {
+            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
+            return ExitCode::from(code);
+        }
+    };
+    println!(
+        "{path}: error = largest difference of the final state from DOP853 at tol {:.0e} \
+         (which differs from tol {:.0e} by {:.1e}); time: median of {repeats}, integration only",
+        cli::bench::REFERENCE_TOLERANCE,
+        10.0 * cli::bench::REFERENCE_TOLERANCE,
+        report.reference_check
+    );
+    print!("{}", cli::bench::table(&report.trials));
+    for t in report.trials.iter().filter(|t| t.fault.is_some()) {
+        eprintln!(
+            "{} {}: {}",
+            t.method.name(),
+            t.setting.label(),
+            t.fault.as_deref().unwrap_or("")
+        );
+    }
+    if let Some(p) = plot {
+        let title = format!("Work–precision: {path}");
+        if let Err(e) = cli::write_atomically(&p, &cli::bench::svg(&title, &report.trials)) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return ExitCode::from(2);
+        }
+    }
+    ExitCode::SUCCESS
 }

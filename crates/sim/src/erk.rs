@@ -19,6 +19,15 @@ pub(crate) trait Stepper {
     /// The state at time `t` inside the last accepted step.
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
     fn evaluations(&self) -> usize;
+    /// Steps rejected by the error control (adaptive methods only).
+    fn rejected(&self) -> usize {
+        0
+    }
+    /// Accepted steps whose size was set by stability rather than accuracy (adaptive methods
+    /// only): see [`Adaptive::stiff`].
+    fn stiff_steps(&self) -> usize {
+        0
+    }
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
@@ -165,6 +174,12 @@ pub(crate) struct Adaptive {
     /// Dense-output coefficients of the last step, computed on first use.
     dense: Option<Vec<Vec<f64>>>,
     pub rejected: usize,
+    /// Accepted steps at the edge of the method's stability region. Hairer's test: with the
+    /// last stage and the end point both at t + h, ρ = h·‖F(y₁) − F(ŷ)‖ / ‖y₁ − ŷ‖ estimates
+    /// h·|λ| of the dominant eigenvalue; past the boundary of the stability region along the
+    /// negative axis (3.25 for DOPRI5, 6.1 for DOP853) the step is limited by stability, not
+    /// accuracy: the system is stiff for this method.
+    pub stiff: usize,
 }
 
 const SAFETY: f64 = 0.9;
@@ -192,6 +207,7 @@ impl Adaptive {
             evals: 0,
             dense: None,
             rejected: 0,
+            stiff: 0,
         }
     }
 
@@ -318,6 +334,22 @@ impl Adaptive {
         })
     }
 
+    /// Hairer's stiffness test on the step just tried (see [`Adaptive::stiff`]); `tmp` still
+    /// holds the argument of the last stage.
+    fn at_stability_limit(&self, h: f64) -> bool {
+        let last = self.stage_count();
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..self.tmp.len() {
+            num += (self.k[last][i] - self.k[last - 1][i]).powi(2);
+            den += (self.y_new[i] - self.tmp[i]).powi(2);
+        }
+        let bound = match self.pair {
+            Pair::Dopri5 => 3.25,
+            Pair::Dop853 => 6.1,
+        };
+        den > 0.0 && h.abs() * (num / den).sqrt() > bound
+    }
+
     fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
         let d = self.y_old.len();
         let h = self.h_last;
@@ -431,6 +463,9 @@ impl Stepper for Adaptive {
                 Err(e) => return Err(e),
             };
             if err <= 1.0 {
+                if self.at_stability_limit(h) {
+                    self.stiff += 1;
+                }
                 let mut factor = if err == 0.0 {
                     MAX_FACTOR
                 } else {
@@ -489,6 +524,14 @@ impl Stepper for Adaptive {
 
     fn evaluations(&self) -> usize {
         self.evals
+    }
+
+    fn rejected(&self) -> usize {
+        self.rejected
+    }
+
+    fn stiff_steps(&self) -> usize {
+        self.stiff
     }
 }
 

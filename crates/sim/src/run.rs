@@ -95,6 +95,9 @@ pub struct Run {
     pub steps: usize,
     pub rejected: usize,
     pub evaluations: usize,
+    /// Accepted steps whose size stability, not accuracy, decided (adaptive methods): many
+    /// of them mean the system is stiff for an explicit method.
+    pub stiff_steps: usize,
     pub events: Vec<EventHit>,
     /// The stop event that ended the run, if one did.
     pub stopped_by: Option<usize>,
@@ -128,6 +131,7 @@ pub fn integrate(
         steps: 0,
         rejected: 0,
         evaluations: 0,
+        stiff_steps: 0,
         events: Vec::new(),
         stopped_by: None,
         fault: None,
@@ -226,6 +230,8 @@ pub fn integrate(
         progress(t);
     }
     run.evaluations = stepper.evaluations();
+    run.rejected = stepper.rejected();
+    run.stiff_steps = stepper.stiff_steps();
     run.final_time = t;
     run.final_state = problem.physical(t, &y);
     run

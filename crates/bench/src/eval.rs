@@ -1,0 +1,241 @@
+//! The cost of one evaluation of M and f, and of one right-hand side (M q̈ = f solved), for
+//! the n-link pendulum: the tape evaluator, the generated Rust, and the hand-written floor.
+//! The generated and hand-written code are compiled together by `rustc -O` into a small
+//! program in a temporary folder, which times itself and prints the figures.
+
+use std::fmt::Write;
+use std::hint::black_box;
+use std::process::Command;
+
+use cli::generate::{n_link, Family};
+use numeric::Tape;
+use sim::{Mechanical, Problem};
+
+pub const SIZES: [usize; 4] = [2, 4, 8, 20];
+
+/// A state of the chain that is not special: no zero angles, no equal rates.
+fn state(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let theta = (0..n).map(|i| 0.3 + 0.11 * i as f64 - 0.02 * (i * i % 7) as f64).collect();
+    let rate = (0..n).map(|i| 0.7 - 0.13 * i as f64 + 0.05 * (i % 3) as f64).collect();
+    (theta, rate)
+}
+
+struct Row {
+    n: usize,
+    ops: usize,
+    tape_mf: f64,
+    tape_rhs: f64,
+    gen_mf: f64,
+    gen_rhs: f64,
+    hand_mf: f64,
+    hand_rhs: f64,
+}
+
+/// The timing program: the generated modules, the hand-written function, and a main that
+/// prints `n kind seconds` lines.
+const TIMER: &str = r#"
+use std::hint::black_box;
+use std::time::Instant;
+
+fn per_call(mut f: impl FnMut()) -> f64 {
+    let mut iterations = 1usize;
+    loop {
+        let start = Instant::now();
+        for _ in 0..iterations { f(); }
+        let took = start.elapsed().as_secs_f64();
+        if took > 0.02 || iterations > 1 << 30 { break; }
+        iterations *= if took < 0.002 { 10 } else { 2 };
+    }
+    let mut times: Vec<f64> = (0..7).map(|_| {
+        let start = Instant::now();
+        for _ in 0..iterations { f(); }
+        start.elapsed().as_secs_f64() / iterations as f64
+    }).collect();
+    times.sort_by(f64::total_cmp);
+    times[3]
+}
+"#;
+
+pub fn run() {
+    println!("## One evaluation (n-link pendulum; median of 7 batches of ≥ 20 ms each)");
+    let dir = std::env::temp_dir().join(format!("lagrange-bench-eval-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(dir.join("hand.rs"), include_str!("hand.rs")).expect("write");
+    let mut main = String::from(TIMER);
+    let _ = writeln!(main, "#[path = \"hand.rs\"]\nmod hand;");
+    let mut body = String::from("fn main() {\n");
+    let mut rows = Vec::new();
+    for n in SIZES {
+        let scene = n_link(Family::Pendulum, n);
+        let mut prepared =
+            cli::numbers::prepare("generated.lag", &scene, &[], cli::Options::default())
+                .expect("derives");
+        let names: Vec<String> = prepared
+            .parameters
+            .iter()
+            .map(|s| prepared.derivation.model.pool.symbol(*s).name.clone())
+            .collect();
+        assert_eq!(names, ["m", "l", "g"], "the generator's parameter order");
+        let (m, l, g) = (1.0, 1.0, 9.81);
+        let exprs = prepared.dynamics_exprs();
+        let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+        let ops = dynamics.op_counts().total();
+        let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+        let (theta, rate) = state(n);
+        let mut input = vec![0.0];
+        input.extend(&theta);
+        input.extend(&rate);
+        input.extend([m, l, g]);
+
+        // The floor must be right before it is fast: it matches the tape to 1e-12.
+        let mut tape = Tape::new(dynamics.clone());
+        let mut out = vec![0.0; n * n + n];
+        tape.eval(&input, &mut out);
+        let (mut trig, mut mass, mut f) = (vec![0.0; 2 * n], vec![0.0; n * n], vec![0.0; n]);
+        crate::hand::n_link_mass_forcing(&theta, &rate, m, l, g, &mut trig, &mut mass, &mut f);
+        let scale = out.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        for (k, (a, b)) in out.iter().zip(mass.iter().chain(&f)).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-12 * scale,
+                "n = {n}: hand-written value {k} is {b}, the tape says {a}"
+            );
+        }
+
+        let tape_mf = crate::per_call(|| tape.eval(black_box(&input), black_box(&mut out)));
+        let layout = prepared.layout;
+        let mut mech =
+            Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), vec![m, l, g]);
+        let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
+        let mut dy = vec![0.0; 2 * n];
+        let tape_rhs = crate::per_call(|| {
+            mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
+        });
+
+        let module = cli::codegen::codegen("generated.lag", &scene).expect("codegen");
+        std::fs::write(dir.join(format!("m{n}.rs")), &module.source).expect("write");
+        let _ = writeln!(main, "#[path = \"m{n}.rs\"]\nmod m{n};");
+        let lit = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+        let _ = write!(
+            body,
+            r#"    {{
+        let input: [f64; {len}] = [{input}];
+        let y: [f64; {n2}] = [{y}];
+        let (mut mass, mut f, mut dy) = ([0.0; {nn}], [0.0; {n}], [0.0; {n2}]);
+        let t = per_call(|| {{ m{n}::mass_matrix(black_box(&input), &mut mass); m{n}::forcing(black_box(&input), &mut f); black_box((&mass, &f)); }});
+        println!("{n} gen_mf {{t:e}}");
+        let t = per_call(|| {{ m{n}::rhs(0.0, black_box(&y), &m{n}::PARAMETERS, &mut dy); black_box(&dy); }});
+        println!("{n} gen_rhs {{t:e}}");
+        let (theta, rate) = y.split_at({n});
+        let mut trig = [0.0; {n2}];
+        let t = per_call(|| {{ hand::n_link_mass_forcing(black_box(theta), black_box(rate), {m:?}, {l:?}, {g:?}, &mut trig, &mut mass, &mut f); black_box((&mass, &f)); }});
+        println!("{n} hand_mf {{t:e}}");
+        let t = per_call(|| {{
+            hand::n_link_mass_forcing(black_box(theta), black_box(rate), {m:?}, {l:?}, {g:?}, &mut trig, &mut mass, &mut f);
+            // M is symmetric, so its column-major storage is the row-major the solver takes.
+            let ok = m{n}::solve_in_place({n}, &mut mass, &mut f);
+            black_box((ok, &f));
+        }});
+        println!("{n} hand_rhs {{t:e}}");
+    }}
+"#,
+            len = input.len(),
+            input = lit(&input),
+            n2 = 2 * n,
+            y = lit(&y),
+            nn = n * n,
+        );
+        rows.push(Row {
+            n,
+            ops,
+            tape_mf,
+            tape_rhs,
+            gen_mf: f64::NAN,
+            gen_rhs: f64::NAN,
+            hand_mf: f64::NAN,
+            hand_rhs: f64::NAN,
+        });
+    }
+    body.push_str("}\n");
+    main.push_str(&body);
+    std::fs::write(dir.join("main.rs"), &main).expect("write");
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let binary = dir.join("timer");
+    let compiled = Command::new(&rustc)
+        .args(["--edition", "2021", "-O", "-A", "warnings", "-o"])
+        .arg(&binary)
+        .arg(dir.join("main.rs"))
+        .status();
+    match compiled {
+        Ok(s) if s.success() => {
+            let output = Command::new(&binary).output().expect("the timer runs");
+            for line in String::from_utf8_lossy(&output.stdout).lines() {
+                let parts: Vec<&str> = line.split_whitespace().collect();
+                let [n, kind, t] = parts[..] else { continue };
+                let (Ok(n), Ok(t)) = (n.parse::<usize>(), t.parse::<f64>()) else { continue };
+                let Some(row) = rows.iter_mut().find(|r| r.n == n) else { continue };
+                match kind {
+                    "gen_mf" => row.gen_mf = t,
+                    "gen_rhs" => row.gen_rhs = t,
+                    "hand_mf" => row.hand_mf = t,
+                    "hand_rhs" => row.hand_rhs = t,
+                    _ => {}
+                }
+            }
+        }
+        _ => println!(
+            "(rustc could not build the timing program in {}; no generated figures)",
+            dir.display()
+        ),
+    }
+    println!(
+        "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9} {:>9}",
+        "n",
+        "ops",
+        "tape M,f",
+        "gen M,f",
+        "hand M,f",
+        "tape rhs",
+        "gen rhs",
+        "hand rhs",
+        "gen/hand",
+        "tape/gen"
+    );
+    for r in &rows {
+        println!(
+            "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9.2} {:>9.2}",
+            r.n,
+            r.ops,
+            crate::seconds(r.tape_mf),
+            crate::seconds(r.gen_mf),
+            crate::seconds(r.hand_mf),
+            crate::seconds(r.tape_rhs),
+            crate::seconds(r.gen_rhs),
+            crate::seconds(r.hand_rhs),
+            r.gen_mf / r.hand_mf,
+            r.tape_mf / r.gen_mf
+        );
+    }
+    // The 4-link pendulum's right-hand side has its own target; measure it on the tape too.
+    let scene = n_link(Family::Pendulum, 4);
+    let mut prepared = cli::numbers::prepare("generated.lag", &scene, &[], cli::Options::default())
+        .expect("derives");
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+    let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+    let mut mech = Mechanical::new(
+        prepared.layout,
+        Tape::new(dynamics),
+        Tape::new(observation),
+        vec![1.0, 1.0, 9.81],
+    );
+    let (theta, rate) = state(4);
+    let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
+    let mut dy = vec![0.0; 8];
+    let t = crate::per_call(|| mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular"));
+    println!(
+        "4-link pendulum, one right-hand side on the tape (sim::Mechanical): {}",
+        crate::seconds(t)
+    );
+    println!("(gen, hand: rustc -O; tape: this binary; rhs = M, f and the solve of M q'' = f)\n");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,125 @@
+//! Work–precision of every integrator on three scenes with trustworthy references: the double
+//! pendulum (DOP853 at 1e-14, checked against 1e-13), the falling rod (landing time from the
+//! energy integral) and the simple pendulum (its exact period from the arithmetic–geometric
+//! mean: after one period the state is the initial one again).
+
+use cli::bench::{final_state_error, table, work_precision, Setting};
+use cli::simulate::{simulate, Options, Outcome};
+use sim::Method;
+
+pub const METHODS: [Method; 5] =
+    [Method::Rk4, Method::Dopri5, Method::Dop853, Method::Midpoint, Method::Gauss];
+
+pub fn examples() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+pub fn read(rel: &str) -> String {
+    std::fs::read_to_string(examples().join(rel)).expect("example")
+}
+
+/// The complete elliptic integral of the first kind, K(k) = π / (2 AGM(1, √(1 − k²))).
+pub fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    while (a - b).abs() > 1e-16 * a {
+        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
+/// ∫ f over [a, b] by composite three-point Gauss–Legendre, which never evaluates the ends.
+pub fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
+    let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
+    let h = (b - a) / panels as f64;
+    (0..panels)
+        .map(|i| {
+            let mid = a + (i as f64 + 0.5) * h;
+            nodes.iter().map(|(x, w)| w * f(mid + x * h / 2.0)).sum::<f64>() * h / 2.0
+        })
+        .sum()
+}
+
+/// The rod's landing time from the energy integral (m = L = 1, g = 9.81, from θ0 at rest).
+pub fn rod_landing_time(theta0: f64) -> f64 {
+    let (l, g) = (1.0f64, 9.81f64);
+    let span = std::f64::consts::FRAC_PI_2 - theta0;
+    // θ = θ0 + span·u² turns the 1/√(θ − θ0) singularity at the start into a smooth integrand.
+    // cos θ0 − cos θ = 2 sin((θ + θ0)/2) sin((θ − θ0)/2) keeps its digits next to θ0, where
+    // the plain difference cancels (it left a 2.5e-12 floor on every method's error).
+    let integrand = |u: f64| {
+        let gap = span * u * u;
+        let theta = theta0 + gap;
+        let drop = 2.0 * ((theta + theta0) / 2.0).sin() * (gap / 2.0).sin();
+        let rate2 = 12.0 * g * drop / (l * (1.0 + 3.0 * theta.sin().powi(2)));
+        2.0 * span * u / rate2.sqrt()
+    };
+    gauss_legendre(integrand, 0.0, 1.0, 4000)
+}
+
+fn section(title: &str, note: &str, trials: &[cli::bench::Trial]) {
+    println!("{title}\n{note}");
+    print!("{}", table(trials));
+    println!();
+}
+
+/// The three work–precision tables, and the trials of the double pendulum for the plot.
+pub fn run() -> Vec<cli::bench::Trial> {
+    println!("## Work–precision (integration wall time, median of 3 runs)\n");
+
+    // Double pendulum to t = 10.
+    let rel = "classics/double_pendulum.lag";
+    let source = read(rel);
+    let base = Options { until: Some(10.0), ..Options::default() };
+    let reference_options =
+        cli::bench::options_for(&base, Method::Dop853, Setting::Tolerance(1e-14), 10.0);
+    let reference = simulate(rel, &source, &reference_options).expect("reference");
+    let check = simulate(
+        rel,
+        &source,
+        &cli::bench::options_for(&base, Method::Dop853, Setting::Tolerance(1e-13), 10.0),
+    )
+    .expect("check");
+    let reference_error = final_state_error(&reference, &check);
+    let mut error = |o: &Outcome| final_state_error(&reference, o);
+    let double = work_precision(rel, &source, &base, 10.0, &METHODS, 3, &mut error).expect("runs");
+    section(
+        "double pendulum (θ1 = θ2 = π/2 from rest), t = 10 s",
+        &format!(
+            "error: max |Δ(q, q̇)| at t = 10 against DOP853 at 1e-14 (which differs from 1e-13 by \
+             {reference_error:.1e})"
+        ),
+        &double,
+    );
+
+    // Falling rod until it lands.
+    let rel = "ps5/falling_rod.lag";
+    let source = read(rel);
+    let landing = rod_landing_time(std::f64::consts::FRAC_PI_6);
+    let base = Options::default();
+    let mut error = |o: &Outcome| (o.run.final_time - landing).abs();
+    let rod = work_precision(rel, &source, &base, landing, &METHODS, 3, &mut error).expect("runs");
+    section(
+        "falling rod from θ = π/6 until it lies flat",
+        &format!("error: |landing time − {landing:.15}| (energy integral by quadrature)"),
+        &rod,
+    );
+
+    // Simple pendulum over one exact period.
+    let rel = "classics/simple_pendulum.lag";
+    let source = read(rel);
+    let (l, g, theta0) = (1.0f64, 9.81f64, 0.5f64);
+    let period = 4.0 * (l / g).sqrt() * elliptic_k((theta0 / 2.0).sin());
+    let base = Options { until: Some(period), ..Options::default() };
+    let mut error = |o: &Outcome| {
+        let s = &o.run.final_state;
+        (s[0] - theta0).abs().max(s[1].abs())
+    };
+    let simple =
+        work_precision(rel, &source, &base, period, &METHODS, 3, &mut error).expect("runs");
+    section(
+        "simple pendulum (θ0 = 0.5), one period",
+        &format!("error: max |Δ(θ, θ̇)| after the exact period T = {period:.15} s (AGM)"),
+        &simple,
+    );
+    double
+}
