@@ -407,6 +407,16 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         parts.push(pool.neg(dpt));
         forcing.push(pool.add(&parts));
     }
+    // Folding sin² + cos² and angle sums (cos θ₁ cos θ₂ + sin θ₁ sin θ₂ = cos(θ₁ − θ₂)) leaves
+    // fewer operations for the numbers to do, and is what every report prints anyway.
+    for row in mass_matrix.iter_mut() {
+        for e in row.iter_mut() {
+            *e = pool.simplify(*e);
+        }
+    }
+    for e in forcing.iter_mut() {
+        *e = pool.simplify(*e);
+    }
     for (i, q) in coords.iter().enumerate() {
         if mass_matrix[i].iter().all(|e| pool.is_identically_zero(*e)) {
             let span =
