@@ -5,6 +5,7 @@
 
 use cli::numbers::prepare;
 use cli::simulate::{simulate, Options, Outcome};
+use lagrange_tests::reference::{elliptic_k, gauss_legendre};
 use numeric::Tape;
 use sim::{FaultKind, Mechanical, Problem};
 
@@ -66,15 +67,6 @@ fn wedge_accelerations_hold_for_mass_ratios_from_1e_minus_9_to_1e9() {
     }
 }
 
-/// The complete elliptic integral of the first kind, K(k) = π / (2 AGM(1, √(1 − k²))).
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    while (a - b).abs() > 1e-16 * a {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
-}
-
 #[test]
 fn the_pendulum_period_is_scale_free_from_1e_minus_6_to_1e6() {
     let source = example("classics/simple_pendulum.lag");
@@ -105,18 +97,6 @@ fn the_pendulum_period_is_scale_free_from_1e_minus_6_to_1e6() {
         let r = *reference.get_or_insert(dimensionless);
         assert!(relative(dimensionless, r) < 1e-10, "L = {l}, m = {m}: {dimensionless} vs {r}");
     }
-}
-
-/// ∫ f over [a, b] by composite three-point Gauss–Legendre, which never evaluates the ends.
-fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
-    let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
-    let h = (b - a) / panels as f64;
-    (0..panels)
-        .map(|i| {
-            let mid = a + (i as f64 + 0.5) * h;
-            nodes.iter().map(|(x, w)| w * f(mid + x * h / 2.0)).sum::<f64>() * h / 2.0
-        })
-        .sum()
 }
 
 #[test]

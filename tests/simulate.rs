@@ -2,6 +2,7 @@
 //! energy, reaction and landing time, and the bounded energy error of the symplectic method.
 
 use cli::simulate::{simulate, Options, Outcome};
+use lagrange_tests::reference::{elliptic_k, gauss_legendre};
 
 fn run(rel: &str, options: Options) -> Outcome {
     let path = lagrange_tests::examples_dir().join(rel);
@@ -9,15 +10,6 @@ fn run(rel: &str, options: Options) -> Outcome {
     let outcome = simulate(rel, &source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
     assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
     outcome
-}
-
-/// The complete elliptic integral of the first kind, K(k) = π / (2 AGM(1, √(1 − k²))).
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    while (a - b).abs() > 1e-16 * a {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
 }
 
 #[test]
@@ -38,18 +30,6 @@ fn pendulum_period_matches_the_elliptic_integral() {
     let exact = 4.0 * (l / g).sqrt() * elliptic_k((theta0 / 2.0).sin());
     let relative = (2.0 * half - exact).abs() / exact;
     assert!(relative < 1e-10, "period {} vs {exact}: {relative:e}", 2.0 * half);
-}
-
-/// ∫ f over [a, b] by composite three-point Gauss–Legendre, which never evaluates the ends.
-fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
-    let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
-    let h = (b - a) / panels as f64;
-    (0..panels)
-        .map(|i| {
-            let mid = a + (i as f64 + 0.5) * h;
-            nodes.iter().map(|(x, w)| w * f(mid + x * h / 2.0)).sum::<f64>() * h / 2.0
-        })
-        .sum()
 }
 
 #[test]
