@@ -159,19 +159,7 @@ fn main() -> ExitCode {
             match cli::derive_report(&path, &source, format, cli::Options { units: !no_units }) {
                 Ok((report, warnings)) => {
                     eprint!("{warnings}");
-                    match out {
-                        Some(out) => match cli::write_atomically(&out, &report) {
-                            Ok(()) => ExitCode::SUCCESS,
-                            Err(e) => {
-                                eprintln!("error: cannot write {}: {e}", out.display());
-                                ExitCode::from(2)
-                            }
-                        },
-                        None => {
-                            print!("{report}");
-                            ExitCode::SUCCESS
-                        }
-                    }
+                    write_or_print(out.as_ref(), &report)
                 }
                 Err(diagnostics) => {
                     eprint!("{diagnostics}");
