@@ -146,6 +146,10 @@ pub fn lower(pool: &Pool, inputs: &[SymId], outputs: &[ExprId]) -> Result<Progra
                 b.product(coef, &factors)
             }
             Node::Pow(base, exponent) => b.emit(Instr::PowF(value[base], value[exponent])),
+            Node::Func(f @ (Func::Sin | Func::Cos), a) => match angle_pair(pool, *a) {
+                Some(((x, sx), (y, sy))) => b.angle_sum(*f, (value[&x], sx), (value[&y], sy)),
+                None => b.emit(Instr::Func(*f, value[a])),
+            },
             Node::Func(f, a) => b.emit(Instr::Func(*f, value[a])),
             Node::Atan2(y, x) => b.emit(Instr::Atan2(value[y], value[x])),
         };
@@ -154,7 +158,94 @@ pub fn lower(pool: &Pool, inputs: &[SymId], outputs: &[ExprId]) -> Result<Progra
     let outputs = outputs.iter().map(|e| value[e]).collect();
     let mut program = Program { inputs: b.inputs, constants: b.constants, code: b.code, outputs };
     finish(&mut program);
+    remove_dead_code(&mut program);
     Ok(program)
+}
+
+/// `±x ± y` with unit coefficients: the argument of sin and cos that the angle-sum formulas
+/// turn into products of sines and cosines of x and y, which a chain's many θᵢ − θⱼ share.
+fn angle_pair(pool: &Pool, a: ExprId) -> Option<((ExprId, bool), (ExprId, bool))> {
+    let Node::Add(constant, terms) = pool.node(a) else { return None };
+    let zero = Rational::from_integer(0.into());
+    if *constant != zero || terms.len() != 2 {
+        return None;
+    }
+    let sign = |k: &Rational| {
+        if k.is_one() {
+            Some(false)
+        } else if (-k).is_one() {
+            Some(true)
+        } else {
+            None
+        }
+    };
+    let (x, kx) = &terms[0];
+    let (y, ky) = &terms[1];
+    Some(((*x, sign(kx)?), (*y, sign(ky)?)))
+}
+
+/// Drops instructions no output depends on (the sums an angle-sum rewrite no longer reads),
+/// renumbering the registers after them.
+fn remove_dead_code(p: &mut Program) {
+    let first = (p.inputs + p.constants.len()) as Reg;
+    let mut live = vec![false; p.code.len()];
+    let mark = |r: Reg, live: &mut Vec<bool>| {
+        if r >= first {
+            live[(r - first) as usize] = true;
+        }
+    };
+    for &o in &p.outputs {
+        mark(o, &mut live);
+    }
+    for i in (0..p.code.len()).rev() {
+        if !live[i] {
+            continue;
+        }
+        match p.code[i] {
+            Instr::Add(a, b)
+            | Instr::Sub(a, b)
+            | Instr::Mul(a, b)
+            | Instr::Div(a, b)
+            | Instr::PowF(a, b)
+            | Instr::Atan2(a, b) => {
+                mark(a, &mut live);
+                mark(b, &mut live);
+            }
+            Instr::Neg(a) | Instr::PowInt(a, _) | Instr::Sqrt(a) | Instr::Func(_, a) => {
+                mark(a, &mut live)
+            }
+        }
+    }
+    let mut renumber = vec![0 as Reg; p.code.len()];
+    let mut next = first;
+    for (i, l) in live.iter().enumerate() {
+        if *l {
+            renumber[i] = next;
+            next += 1;
+        }
+    }
+    let fix = |r: Reg| if r >= first { renumber[(r - first) as usize] } else { r };
+    let code = std::mem::take(&mut p.code);
+    p.code = code
+        .into_iter()
+        .zip(live)
+        .filter(|(_, l)| *l)
+        .map(|(i, _)| match i {
+            Instr::Add(a, b) => Instr::Add(fix(a), fix(b)),
+            Instr::Sub(a, b) => Instr::Sub(fix(a), fix(b)),
+            Instr::Mul(a, b) => Instr::Mul(fix(a), fix(b)),
+            Instr::Div(a, b) => Instr::Div(fix(a), fix(b)),
+            Instr::Neg(a) => Instr::Neg(fix(a)),
+            Instr::PowInt(a, n) => Instr::PowInt(fix(a), n),
+            Instr::Sqrt(a) => Instr::Sqrt(fix(a)),
+            Instr::PowF(a, b) => Instr::PowF(fix(a), fix(b)),
+            Instr::Func(f, a) => Instr::Func(f, fix(a)),
+            Instr::Atan2(a, b) => Instr::Atan2(fix(a), fix(b)),
+        })
+        .collect();
+    for o in p.outputs.iter_mut() {
+        *o = fix(*o);
+    }
 }
 
 struct Builder {
@@ -190,6 +281,32 @@ impl Builder {
         self.code.push(i);
         self.numbered.insert(i, r);
         r
+    }
+
+    /// sin or cos of `±x ± y` from the sines and cosines of x and y (shared by value
+    /// numbering): sin(x + y) = sin x cos y + cos x sin y, cos(x + y) = cos x cos y − sin x sin y,
+    /// with sin(−x) = −sin x and cos(−x) = cos x.
+    fn angle_sum(
+        &mut self,
+        f: Func,
+        (x, negate_x): (Reg, bool),
+        (y, negate_y): (Reg, bool),
+    ) -> Reg {
+        let (sx, cx) = (self.emit(Instr::Func(Func::Sin, x)), self.emit(Instr::Func(Func::Cos, x)));
+        let (sy, cy) = (self.emit(Instr::Func(Func::Sin, y)), self.emit(Instr::Func(Func::Cos, y)));
+        // With a sign on x or y, sin picks up a minus: sin(−x) = −sin x.
+        let flip =
+            |b: &mut Self, r: Reg, negate: bool| if negate { b.emit(Instr::Neg(r)) } else { r };
+        let sx = flip(self, sx, negate_x);
+        let sy = flip(self, sy, negate_y);
+        let (a1, a2) = match f {
+            Func::Sin => (self.emit(Instr::Mul(sx, cy)), self.emit(Instr::Mul(cx, sy))),
+            _ => (self.emit(Instr::Mul(cx, cy)), self.emit(Instr::Mul(sx, sy))),
+        };
+        match f {
+            Func::Sin => self.emit(Instr::Add(a1, a2)),
+            _ => self.emit(Instr::Sub(a1, a2)),
+        }
     }
 
     fn sum(&mut self, constant: &Rational, terms: &[(Reg, &Rational)]) -> Reg {
