@@ -29,6 +29,24 @@ pub enum Instr {
     Atan2(Reg, Reg),
 }
 
+impl Instr {
+    /// The same operation on renamed registers.
+    pub fn map_registers(self, mut f: impl FnMut(Reg) -> Reg) -> Instr {
+        match self {
+            Instr::Add(a, b) => Instr::Add(f(a), f(b)),
+            Instr::Sub(a, b) => Instr::Sub(f(a), f(b)),
+            Instr::Mul(a, b) => Instr::Mul(f(a), f(b)),
+            Instr::Div(a, b) => Instr::Div(f(a), f(b)),
+            Instr::Neg(a) => Instr::Neg(f(a)),
+            Instr::PowInt(a, n) => Instr::PowInt(f(a), n),
+            Instr::Sqrt(a) => Instr::Sqrt(f(a)),
+            Instr::PowF(a, b) => Instr::PowF(f(a), f(b)),
+            Instr::Func(func, a) => Instr::Func(func, f(a)),
+            Instr::Atan2(a, b) => Instr::Atan2(f(a), f(b)),
+        }
+    }
+}
+
 /// A straight-line program: `inputs` values in, `outputs` values out.
 #[derive(Clone, Debug)]
 pub struct Program {
@@ -201,20 +219,11 @@ fn remove_dead_code(p: &mut Program) {
         if !live[i] {
             continue;
         }
-        match p.code[i] {
-            Instr::Add(a, b)
-            | Instr::Sub(a, b)
-            | Instr::Mul(a, b)
-            | Instr::Div(a, b)
-            | Instr::PowF(a, b)
-            | Instr::Atan2(a, b) => {
-                mark(a, &mut live);
-                mark(b, &mut live);
-            }
-            Instr::Neg(a) | Instr::PowInt(a, _) | Instr::Sqrt(a) | Instr::Func(_, a) => {
-                mark(a, &mut live)
-            }
-        }
+        // Mark every register the instruction reads.
+        p.code[i].map_registers(|r| {
+            mark(r, &mut live);
+            r
+        });
     }
     let mut renumber = vec![0 as Reg; p.code.len()];
     let mut next = first;
@@ -226,23 +235,8 @@ fn remove_dead_code(p: &mut Program) {
     }
     let fix = |r: Reg| if r >= first { renumber[(r - first) as usize] } else { r };
     let code = std::mem::take(&mut p.code);
-    p.code = code
-        .into_iter()
-        .zip(live)
-        .filter(|(_, l)| *l)
-        .map(|(i, _)| match i {
-            Instr::Add(a, b) => Instr::Add(fix(a), fix(b)),
-            Instr::Sub(a, b) => Instr::Sub(fix(a), fix(b)),
-            Instr::Mul(a, b) => Instr::Mul(fix(a), fix(b)),
-            Instr::Div(a, b) => Instr::Div(fix(a), fix(b)),
-            Instr::Neg(a) => Instr::Neg(fix(a)),
-            Instr::PowInt(a, n) => Instr::PowInt(fix(a), n),
-            Instr::Sqrt(a) => Instr::Sqrt(fix(a)),
-            Instr::PowF(a, b) => Instr::PowF(fix(a), fix(b)),
-            Instr::Func(f, a) => Instr::Func(f, fix(a)),
-            Instr::Atan2(a, b) => Instr::Atan2(fix(a), fix(b)),
-        })
-        .collect();
+    p.code =
+        code.into_iter().zip(live).filter(|(_, l)| *l).map(|(i, _)| i.map_registers(fix)).collect();
     for o in p.outputs.iter_mut() {
         *o = fix(*o);
     }
@@ -430,18 +424,7 @@ fn finish(p: &mut Program) {
         }
     };
     for i in p.code.iter_mut() {
-        *i = match *i {
-            Instr::Add(a, b) => Instr::Add(fix(a), fix(b)),
-            Instr::Sub(a, b) => Instr::Sub(fix(a), fix(b)),
-            Instr::Mul(a, b) => Instr::Mul(fix(a), fix(b)),
-            Instr::Div(a, b) => Instr::Div(fix(a), fix(b)),
-            Instr::Neg(a) => Instr::Neg(fix(a)),
-            Instr::PowInt(a, n) => Instr::PowInt(fix(a), n),
-            Instr::Sqrt(a) => Instr::Sqrt(fix(a)),
-            Instr::PowF(a, b) => Instr::PowF(fix(a), fix(b)),
-            Instr::Func(f, a) => Instr::Func(f, fix(a)),
-            Instr::Atan2(a, b) => Instr::Atan2(fix(a), fix(b)),
-        };
+        *i = i.map_registers(fix);
     }
     for o in p.outputs.iter_mut() {
         *o = fix(*o);

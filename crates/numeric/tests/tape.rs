@@ -86,3 +86,26 @@ fn integer_powers_match_repeated_multiplication() {
     assert_eq!(numeric::pow_int(-2.0, 3), -8.0);
     assert_eq!(numeric::pow_int(5.0, 0), 1.0);
 }
+
+/// sin and cos of θ₁ − θ₂ and θ₂ − θ₃ come from one sine and one cosine per angle, and the
+/// differences themselves, no longer read, are not computed.
+#[test]
+fn angle_differences_share_one_sine_and_cosine_per_angle() {
+    let mut p = Pool::new();
+    let q: Vec<_> = (1..=3).map(|i| p.coordinate(&format!("q{i}"))).collect();
+    let e: Vec<_> = q.iter().map(|s| p.sym(*s)).collect();
+    let d12 = p.sub(e[0], e[1]);
+    let d23 = p.sub(e[1], e[2]);
+    let outputs = [p.sin(d12), p.cos(d12), p.sin(d23), p.cos(d23)];
+    let program = lower(&p, &q, &outputs).unwrap();
+    let functions = program.code.iter().filter(|i| matches!(i, numeric::Instr::Func(..))).count();
+    assert_eq!(functions, 6, "{:?}", program.code);
+    let values = [0.3, -1.1, 2.0];
+    let mut out = vec![0.0; outputs.len()];
+    Tape::new(program).eval(&values, &mut out);
+    let expected =
+        [(0.3f64 + 1.1).sin(), (0.3f64 + 1.1).cos(), (-1.1f64 - 2.0).sin(), (-1.1f64 - 2.0).cos()];
+    for (a, b) in out.iter().zip(expected) {
+        assert!(close(*a, b), "{a} vs {b}");
+    }
+}
