@@ -121,3 +121,16 @@ fn an_unused_parameter_is_a_warning() {
     assert!(r.contains("warning: parameter `spare` is never used"), "{r}");
     assert!(r.contains("bad.lag:1:13"), "{r}");
 }
+
+#[test]
+fn an_initial_value_the_constraint_overrides_is_a_warning() {
+    let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = L/4\ncoord y = 2 m\ncoord theta = pi/6\nbody rod { mass m; inertia m*L^2/12; position (x, y); angle theta }\nconstraint floor: y = L/2*cos(theta)\ngravity g\n";
+    let (_, warnings) = cli::load(source).expect("derives despite the warning");
+    let r = cli::diagnostics::render("bad.lag", source, &warnings);
+    assert!(r.contains("warning: the initial value of `y` is ignored"), "{r}");
+    assert!(r.contains("bad.lag:3:7"), "{r}");
+    // A value that agrees with the constraint is no reason to warn.
+    let agreeing = source.replace("coord y = 2 m", "coord y = sqrt(3)/4 m");
+    let (_, warnings) = cli::load(&agreeing).expect("derives");
+    assert!(warnings.is_empty(), "{warnings:?}");
+}

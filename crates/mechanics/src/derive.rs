@@ -530,7 +530,48 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         solved: None,
     };
     derivation.solve_multiplier_reactions();
+    derivation.warn_about_overridden_initial_values();
     Ok(derivation)
+}
+
+impl Derivation {
+    /// An eliminated coordinate's initial value comes from its constraint; one written in the
+    /// scene that disagrees with it would be silently ignored, so say so.
+    fn warn_about_overridden_initial_values(&mut self) {
+        let mut state = self.initial_state();
+        // Compare with the parameters' values, as the numbers will see them.
+        for p in &self.model.params {
+            if let Some(v) = p.value {
+                state.insert(p.sym, v);
+            }
+        }
+        for e in self.eliminated.clone() {
+            let Some(c) = self.model.coords.iter().find(|c| c.sym == e.coord).cloned() else {
+                continue;
+            };
+            if !c.initial_given {
+                continue;
+            }
+            let pool = &mut self.model.pool;
+            let implied = pool.subst(e.solution, &state);
+            let implied = pool.simplify(implied);
+            let given = pool.subst(c.initial, &state);
+            let difference = pool.sub(given, implied);
+            if pool.is_identically_zero(difference) {
+                continue;
+            }
+            let constraint = self.model.constraints[e.constraint].name.clone();
+            let text = pool.print(implied, cas::Style::Ascii);
+            self.warnings.push(
+                Diagnostic::warning(c.span, format!("the initial value of `{}` is ignored", c.name))
+                    .with_label(format!("`{constraint}` fixes it at {text}"))
+                    .with_hint(format!(
+                        "the constraint `{constraint}` eliminates `{}`: drop its initial value, or make it {text}",
+                        c.name
+                    )),
+            );
+        }
+    }
 }
 
 /// Past this many unknowns the symbolic solution of the full system is too large to be worth
