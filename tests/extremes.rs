@@ -5,8 +5,8 @@
 
 use cli::numbers::prepare;
 use cli::simulate::{simulate, Options, Outcome};
-use lagrange_tests::reference::{elliptic_k, gauss_legendre};
 use numeric::Tape;
+use sim::reference::{elliptic_k, gauss_legendre};
 use sim::{FaultKind, Mechanical, Problem};
 
 fn example(rel: &str) -> String {

@@ -2,7 +2,7 @@
 //! energy, reaction and landing time, and the bounded energy error of the symplectic method.
 
 use cli::simulate::{simulate, Options, Outcome};
-use lagrange_tests::reference::{elliptic_k, gauss_legendre};
+use sim::reference::{elliptic_k, gauss_legendre};
 
 fn run(rel: &str, options: Options) -> Outcome {
     let path = lagrange_tests::examples_dir().join(rel);

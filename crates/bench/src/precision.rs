@@ -5,6 +5,7 @@
 
 use cli::bench::{final_state_error, table, work_precision, Setting};
 use cli::simulate::{simulate, Options, Outcome};
+use sim::reference::{elliptic_k, gauss_legendre};
 use sim::Method;
 
 pub const METHODS: [Method; 5] =
@@ -16,27 +17,6 @@ pub fn examples() -> std::path::PathBuf {
 
 pub fn read(rel: &str) -> String {
     std::fs::read_to_string(examples().join(rel)).expect("example")
-}
-
-/// The complete elliptic integral of the first kind, K(k) = π / (2 AGM(1, √(1 − k²))).
-pub fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    while (a - b).abs() > 1e-16 * a {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
-}
-
-/// ∫ f over [a, b] by composite three-point Gauss–Legendre, which never evaluates the ends.
-pub fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
-    let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
-    let h = (b - a) / panels as f64;
-    (0..panels)
-        .map(|i| {
-            let mid = a + (i as f64 + 0.5) * h;
-            nodes.iter().map(|(x, w)| w * f(mid + x * h / 2.0)).sum::<f64>() * h / 2.0
-        })
-        .sum()
 }
 
 /// The rod's landing time from the energy integral (m = L = 1, g = 9.81, from θ0 at rest).

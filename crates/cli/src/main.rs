@@ -139,17 +139,16 @@ fn read(path: &PathBuf) -> Result<String, String> {
     std::fs::read_to_string(path).map_err(|e| format!("error: cannot read {}: {e}", path.display()))
 }
 
+/// The file's text, or `None` after saying on stderr why it could not be read.
+fn read_or_report(path: &PathBuf) -> Option<String> {
+    read(path).map_err(|e| eprintln!("{e}")).ok()
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units } => {
-            let source = match read(&file) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("{e}");
-                    return ExitCode::from(2);
-                }
-            };
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
             let format = match format {
                 FormatArg::Text => cli::Format::Text,
@@ -187,13 +186,7 @@ fn main() -> ExitCode {
             no_units,
             samples,
         } => {
-            let source = match read(&file) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("{e}");
-                    return ExitCode::from(2);
-                }
-            };
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options = cli::simulate::Options {
                 until,
                 method,
@@ -209,13 +202,7 @@ fn main() -> ExitCode {
             simulate(&file, &source, &options, out, plot)
         }
         Command::Codegen { file, out, no_units } => {
-            let source = match read(&file) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("{e}");
-                    return ExitCode::from(2);
-                }
-            };
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             match cli::codegen::codegen_with(
                 &file.display().to_string(),
                 &source,
@@ -229,13 +216,7 @@ fn main() -> ExitCode {
             }
         }
         Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
-            let source = match read(&file) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("{e}");
-                    return ExitCode::from(2);
-                }
-            };
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options =
                 cli::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
             bench(&file, &source, &options, repeats, plot)

@@ -106,13 +106,7 @@ impl Prepared {
     /// [`sim::Mechanical`].
     pub fn dynamics_exprs(&mut self) -> Vec<ExprId> {
         let d = &mut self.derivation;
-        let n = d.coords.len();
-        let mut v = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                v.push(d.mass_matrix[i][j]);
-            }
-        }
+        let mut v = mass_matrix_by_columns(d);
         v.extend(&d.forcing);
         for m in d.multipliers.clone() {
             v.extend(&m.jacobian);
@@ -127,12 +121,7 @@ impl Prepared {
     pub fn momentum_exprs(&mut self) -> Vec<ExprId> {
         let d = &mut self.derivation;
         let n = d.coords.len();
-        let mut v = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                v.push(d.mass_matrix[i][j]);
-            }
-        }
+        let mut v = mass_matrix_by_columns(d);
         for i in 0..n {
             v.push(d.model.pool.diff(d.lagrangian, d.rates[i]));
         }
@@ -189,4 +178,10 @@ impl Prepared {
         values[self.derivation.model.time.index()] = 0.0;
         pool.eval(e, &values)
     }
+}
+
+/// M entry by entry, column after column: the order the solvers read it in.
+fn mass_matrix_by_columns(d: &Derivation) -> Vec<ExprId> {
+    let n = d.coords.len();
+    (0..n).flat_map(|j| (0..n).map(move |i| d.mass_matrix[i][j])).collect()
 }

@@ -43,6 +43,23 @@ pub(crate) struct Hermite {
 }
 
 impl Hermite {
+    /// Records the start of a step: the state and its derivative there.
+    pub fn begin(&mut self, t: f64, y: &[f64], f: Vec<f64>) {
+        self.t0 = t;
+        self.y0 = y.to_vec();
+        self.f0 = Some(f);
+    }
+
+    /// Records the end of a step of size `h` from `t` and returns its time, landing exactly on
+    /// `t_end` when within rounding of it; the end derivative is computed only if needed.
+    pub fn end(&mut self, t: f64, h: f64, t_end: f64, y: &[f64]) -> f64 {
+        let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
+        self.t1 = t1;
+        self.y1 = y.to_vec();
+        self.f1 = None;
+        t1
+    }
+
     /// Evaluates, computing end derivatives on demand (counted in `evals`).
     pub fn eval(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64], evals: &mut usize) {
         let d = self.y0.len();
@@ -115,17 +132,11 @@ impl Stepper for Rk4 {
         }
         p.rhs(t + h, &self.tmp, k4)?;
         self.evals += 4;
-        self.last.t0 = t;
-        self.last.y0 = y.to_vec();
-        self.last.f0 = Some(k1.clone());
+        self.last.begin(t, y, k1.clone());
         for i in 0..d {
             y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
-        let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
-        self.last.t1 = t1;
-        self.last.y1 = y.to_vec();
-        self.last.f1 = None;
-        Ok(t1)
+        Ok(self.last.end(t, h, t_end, y))
     }
 
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {

@@ -153,9 +153,7 @@ impl Stepper for Gauss {
             p.rhs(t + self.c[i] * h, &stage, fi)?;
             self.evals += 1;
         }
-        self.last.t0 = t;
-        self.last.y0 = y.to_vec();
-        self.last.f0 = Some(f0);
+        self.last.begin(t, y, f0);
         for k in 0..d {
             let mut acc = 0.0;
             for (i, fi) in f.iter().enumerate() {
@@ -163,11 +161,7 @@ impl Stepper for Gauss {
             }
             y[k] += h * acc;
         }
-        let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
-        self.last.t1 = t1;
-        self.last.y1 = y.to_vec();
-        self.last.f1 = None;
-        Ok(t1)
+        Ok(self.last.end(t, h, t_end, y))
     }
 
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {

@@ -17,6 +17,7 @@ mod erk;
 mod gauss;
 pub mod linalg;
 mod mechanical;
+pub mod reference;
 mod run;
 
 pub use mechanical::{Canonical, Layout, Mechanical};
