@@ -3,7 +3,7 @@
 
 use cas::Style;
 use lang::Diagnostic;
-use mechanics::{Derivation, Verdict};
+use mechanics::{Derivation, Sampling, Verdict};
 
 use crate::diagnostics::{line_col, render};
 
@@ -52,9 +52,16 @@ fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
         let (line, _) = line_col(source, expect.span.start);
         let how = match verdict {
             Verdict::Exact => "holds exactly".to_string(),
-            Verdict::Numeric { samples } => {
+            Verdict::ExactOnConstraints => "holds exactly on the constraint surface".to_string(),
+            Verdict::Numeric { samples, sampling: Sampling::Anywhere } => {
                 format!("holds at {samples} random states (the algebra could not decide)")
             }
+            Verdict::Numeric { samples, sampling: Sampling::OnConstraints } => format!(
+                "holds at {samples} random states on the constraint surface (the algebra could not decide)"
+            ),
+            Verdict::Numeric { samples, sampling: Sampling::AtStart { unknowns } } => format!(
+                "holds at {samples} random parameter values, the start's {unknowns} unknowns solved numerically (too many for the algebra)"
+            ),
             Verdict::Fails(_) => "DOES NOT HOLD".to_string(),
             Verdict::Undecided { reason } => format!("UNDECIDED: {reason}"),
         };

@@ -2,7 +2,7 @@
 
 use cas::number::{One, Signed, Zero};
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use mechanics::{Derivation, Equation};
+use mechanics::{Derivation, Equation, NumericValue, ShownAtStart};
 use model::Value;
 use serde_json::{json, Map, Value as Json};
 
@@ -18,7 +18,7 @@ struct Derived {
     /// The reactions with accelerations solved for, where the system is small enough.
     reactions_of_state: Vec<(SymId, ExprId)>,
     shown: Vec<(model::Show, Value)>,
-    at_start: Option<Vec<(model::Show, Value)>>,
+    at_start: ShownAtStart,
     start_state: Vec<(SymId, ExprId)>,
 }
 
@@ -333,21 +333,45 @@ pub fn text(d: &mut Derivation) -> String {
             out.extend(value_lines(pool, &format!("  {label} = "), v));
         }
     }
+    let start_heading = || {
+        let state: Vec<String> = derived
+            .start_state
+            .iter()
+            .map(|(s, e)| format!("{} = {}", sym_text(pool, *s, u), value_text(pool, *e, u)))
+            .collect();
+        format!("At the start  ({})", state.join(", "))
+    };
     match &derived.at_start {
-        Some(items) if !items.is_empty() => {
-            let state: Vec<String> = derived
-                .start_state
-                .iter()
-                .map(|(s, e)| format!("{} = {}", sym_text(pool, *s, u), value_text(pool, *e, u)))
-                .collect();
-            out.push(format!("At the start  ({})", state.join(", ")));
+        ShownAtStart::Exact(items) if !items.is_empty() => {
+            out.push(start_heading());
             for (show, v) in items {
                 let label = d.show_label(show, u);
                 out.extend(value_lines(pool, &format!("  {label} = "), v));
             }
         }
-        Some(_) => {}
-        None => out.push("At the start: the mass matrix is singular; nothing can be shown".into()),
+        ShownAtStart::Exact(_) => {}
+        ShownAtStart::Numeric { items, unknowns, digits, params } => {
+            out.push(start_heading());
+            let at: Vec<String> = params
+                .iter()
+                .map(|(s, v)| format!("{} = {}", sym_text(pool, *s, u), significant(*v, 15, u)))
+                .collect();
+            out.push(format!(
+                "  solved numerically: {unknowns} unknowns are too many to solve for exactly; at {}, to about {digits} significant digits",
+                at.join(", ")
+            ));
+            for (show, v) in items {
+                let label = d.show_label(show, u);
+                out.push(format!("  {label} ≈ {}", numeric_text(v, *digits, u)));
+            }
+        }
+        ShownAtStart::Unvalued { unknowns, missing } => out.push(format!(
+            "At the start: {unknowns} unknowns are too many to solve for exactly, and solving numerically needs a value for {}",
+            missing.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", ")
+        )),
+        ShownAtStart::Singular => {
+            out.push("At the start: the mass matrix is singular; nothing can be shown".into())
+        }
     }
     let mut text = out.join("\n");
     text.push('\n');
@@ -408,13 +432,24 @@ pub fn latex(d: &mut Derivation) -> String {
     for (show, v) in &derived.shown {
         items.push((d.show_label(show, l), value_latex(pool, v)));
     }
-    if let Some(at_start) = &derived.at_start {
-        for (show, v) in at_start {
-            items.push((
-                format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
-                value_latex(pool, v),
-            ));
+    match &derived.at_start {
+        ShownAtStart::Exact(at_start) => {
+            for (show, v) in at_start {
+                items.push((
+                    format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
+                    value_latex(pool, v),
+                ));
+            }
         }
+        ShownAtStart::Numeric { items: at_start, digits, .. } => {
+            for (show, v) in at_start {
+                items.push((
+                    format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
+                    format!("\\approx {}", numeric_text(v, *digits, l)),
+                ));
+            }
+        }
+        ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
     }
     if !items.is_empty() {
         out.push("% Reactions and shown quantities".into());
@@ -448,6 +483,64 @@ fn value_latex(pool: &Pool, v: &Value) -> String {
             format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", rows.join(" \\\\ "))
         }
     }
+}
+
+/// `v` to `digits` significant digits, plainly where that is short, in scientific notation
+/// otherwise; a Unicode minus in the text style.
+fn significant(v: f64, digits: u32, style: Style) -> String {
+    let digits = digits.max(1) as i32;
+    let text = if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else {
+        let exponent = v.abs().log10().floor() as i32;
+        if (-4..15).contains(&exponent) {
+            let decimals = (digits - 1 - exponent).max(0) as usize;
+            let t = format!("{v:.decimals$}");
+            if t.contains('.') {
+                t.trim_end_matches('0').trim_end_matches('.').to_string()
+            } else {
+                t
+            }
+        } else {
+            format!("{:.*e}", (digits - 1) as usize, v)
+        }
+    };
+    if style == Style::Unicode {
+        text.replace('-', "−")
+    } else {
+        text
+    }
+}
+
+fn numeric_text(v: &NumericValue, digits: u32, style: Style) -> String {
+    let one = |x: &f64| significant(*x, digits, style);
+    match v {
+        NumericValue::Scalar(x) => one(x),
+        NumericValue::Vector(xs) => {
+            format!("({})", xs.iter().map(one).collect::<Vec<_>>().join(", "))
+        }
+        NumericValue::Matrix(m) => format!(
+            "[{}]",
+            m.iter()
+                .map(|r| r.iter().map(one).collect::<Vec<_>>().join(", "))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+    }
+}
+
+fn numeric_json(v: &NumericValue) -> Json {
+    match v {
+        NumericValue::Scalar(x) => json_number(*x),
+        NumericValue::Vector(xs) => Json::Array(xs.iter().map(|x| json_number(*x)).collect()),
+        NumericValue::Matrix(m) => Json::Array(
+            m.iter().map(|r| Json::Array(r.iter().map(|x| json_number(*x)).collect())).collect(),
+        ),
+    }
+}
+
+fn json_number(v: f64) -> Json {
+    serde_json::Number::from_f64(v).map(Json::Number).unwrap_or(Json::Null)
 }
 
 fn value_json(pool: &Pool, v: &Value) -> Json {
@@ -525,10 +618,20 @@ pub fn json(d: &mut Derivation) -> String {
         shown.insert(show.label.clone(), value_json(pool, v));
     }
     let mut at_start = Map::new();
-    if let Some(items) = &derived.at_start {
-        for (show, v) in items {
-            at_start.insert(show.label.clone(), value_json(pool, v));
+    let mut at_start_digits = None;
+    match &derived.at_start {
+        ShownAtStart::Exact(items) => {
+            for (show, v) in items {
+                at_start.insert(show.label.clone(), value_json(pool, v));
+            }
         }
+        ShownAtStart::Numeric { items, digits, .. } => {
+            for (show, v) in items {
+                at_start.insert(show.label.clone(), numeric_json(v));
+            }
+            at_start_digits = Some(*digits);
+        }
+        ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
     }
     let doc = json!({
         "scene": d.model.title,
@@ -546,6 +649,11 @@ pub fn json(d: &mut Derivation) -> String {
         "at_start": at_start,
         "model": model_json(d),
     });
+    // Numbers rather than exact expressions: say how far to trust them.
+    let mut doc = doc;
+    if let (Some(digits), Json::Object(map)) = (at_start_digits, &mut doc) {
+        map.insert("at_start_significant_digits".into(), json!(digits));
+    }
     let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
     text.push('\n');
     text

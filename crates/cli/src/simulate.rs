@@ -43,6 +43,8 @@ pub struct Outcome {
     pub method: Method,
     pub wall_seconds: f64,
     pub state_names: Vec<String>,
+    /// The constraints kept with multipliers, in the order of the numbers' slots.
+    pub constraint_names: Vec<String>,
     /// Whether the scene's energy should be conserved (no forces, dissipation or explicit t).
     pub conservative: bool,
 }
@@ -337,6 +339,12 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
         method,
         wall_seconds,
         state_names: prepared.state_names(),
+        constraint_names: prepared
+            .derivation
+            .multipliers
+            .iter()
+            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
+            .collect(),
         conservative,
     })
 }
@@ -512,6 +520,33 @@ impl Outcome {
                     }
                 ),
             ),
+            FaultKind::SingularConstraints { constraints } => {
+                let names: Vec<String> = constraints
+                    .iter()
+                    .filter_map(|i| self.constraint_names.get(*i))
+                    .map(|s| format!("`{s}`"))
+                    .collect();
+                (
+                    "the constraints' Jacobian lost rank (the mass matrix is fine)".to_string(),
+                    if names.len() == 1 && constraints == &[0] {
+                        format!(
+                            "the gradient of {} vanishes here: a cusp of the constraint, or a \
+                             constraint written as a square",
+                            names[0]
+                        )
+                    } else if names.is_empty() {
+                        "the constraints' gradients became dependent here: a dead point of the \
+                         mechanism, or constraints that coincide here"
+                            .to_string()
+                    } else {
+                        format!(
+                            "the gradient of {} became a combination of the earlier constraints' \
+                             here: a dead point of the mechanism, or constraints that coincide here",
+                            names.join(", ")
+                        )
+                    },
+                )
+            }
             FaultKind::NonFinite { component } => (
                 format!("a value became NaN or infinite (component {component})"),
                 "a division by zero or a function outside its domain; or the motion blew up".into(),

@@ -1,5 +1,5 @@
 //! Checking `expect` lines against the derivation: by algebra where it decides, otherwise at
-//! many random states, always saying which.
+//! many random states the system can reach (on its constraints), always saying which.
 
 use std::collections::HashMap;
 
@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use crate::admissible::{random_state, state_symbols, value_and_scale, ConstraintSet};
 use crate::derive::Derivation;
+use crate::start::StartSolution;
 
 /// How many random states a numeric check uses.
 pub const SAMPLES: usize = 24;
@@ -19,12 +21,26 @@ const RELATIVE_TOLERANCE: f64 = 1e-9;
 pub enum Verdict {
     /// The residual simplifies to zero.
     Exact,
+    /// The residual simplifies to zero once the kept constraints are used (x² = L² − y²).
+    ExactOnConstraints,
     /// The algebra could not decide; the residual vanished at this many random states.
-    Numeric { samples: usize },
+    Numeric { samples: usize, sampling: Sampling },
     /// The residual is not zero.
     Fails(Failure),
     /// Neither algebra nor numbers could decide (e.g. no state where everything is defined).
     Undecided { reason: String },
+}
+
+/// Where the random states of a numeric verdict came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Sampling {
+    /// Anywhere: the system has no constraint kept with a multiplier.
+    Anywhere,
+    /// On the constraint surface: positions on Φ = 0, rates on Φ̇ = 0.
+    OnConstraints,
+    /// At the start, at random parameter values, with the unknowns of the start solved
+    /// numerically (there were too many for the algebra).
+    AtStart { unknowns: usize },
 }
 
 #[derive(Clone, Debug)]
@@ -40,7 +56,7 @@ pub struct Failure {
 
 impl Verdict {
     pub fn holds(&self) -> bool {
-        matches!(self, Verdict::Exact | Verdict::Numeric { .. })
+        matches!(self, Verdict::Exact | Verdict::ExactOnConstraints | Verdict::Numeric { .. })
     }
 }
 
@@ -56,7 +72,8 @@ impl Derivation {
         let lhs = self.expand_value(&expect.lhs, true).entries();
         let rhs = self.expand_value(&expect.rhs, true).entries();
         let many = lhs.len() > 1;
-        let mut numeric = 0;
+        let mut numeric: Option<(usize, Sampling)> = None;
+        let mut on_constraints = false;
         for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
             let residual = self.model.pool.sub(l, r);
             let verdict = if expect.at_start {
@@ -66,7 +83,13 @@ impl Derivation {
             };
             match verdict {
                 Verdict::Exact => {}
-                Verdict::Numeric { samples } => numeric = numeric.max(samples),
+                Verdict::ExactOnConstraints => on_constraints = true,
+                Verdict::Numeric { samples, sampling } => {
+                    numeric =
+                        Some(numeric.map_or((samples, sampling), |(n, s)| {
+                            (n.min(samples), s.max(sampling))
+                        }))
+                }
                 Verdict::Fails(mut f) => {
                     f.component = many.then_some(k);
                     return Verdict::Fails(f);
@@ -74,18 +97,24 @@ impl Derivation {
                 undecided => return undecided,
             }
         }
-        if numeric > 0 {
-            Verdict::Numeric { samples: numeric }
-        } else {
-            Verdict::Exact
+        match numeric {
+            Some((samples, sampling)) => Verdict::Numeric { samples, sampling },
+            None if on_constraints => Verdict::ExactOnConstraints,
+            None => Verdict::Exact,
         }
     }
 
     fn check_at_start(&mut self, residual: ExprId) -> Verdict {
-        let Some(at_start) = self.unknowns_at_start() else {
-            return Verdict::Undecided {
-                reason: "the mass matrix is singular at the start".into(),
-            };
+        let at_start = match self.unknowns_at_start() {
+            StartSolution::Exact(map) => map,
+            StartSolution::Singular => {
+                return Verdict::Undecided {
+                    reason: "the mass matrix is singular at the start".into(),
+                }
+            }
+            StartSolution::TooLarge { unknowns } => {
+                return self.numeric_at_start(residual, unknowns);
+            }
         };
         let z = self.model.pool.subst(residual, &at_start);
         if self.model.pool.is_identically_zero(z) {
@@ -106,7 +135,10 @@ impl Derivation {
             if pool.is_identically_zero(residual) {
                 return Verdict::Exact;
             }
-            let r = pool.simplify(residual);
+            if self.vanishes_on_constraints(residual) {
+                return Verdict::ExactOnConstraints;
+            }
+            let r = self.model.pool.simplify(residual);
             return self.numeric(r, false);
         }
         // residual = a·u + b. It holds along the motion when it is a multiple of one row of the
@@ -116,8 +148,54 @@ impl Derivation {
         if linear && self.is_row_multiple(residual, &a) {
             return Verdict::Exact;
         }
+        if self.vanishes_on_constraints(residual) {
+            return Verdict::ExactOnConstraints;
+        }
         let r = self.model.pool.simplify(residual);
         self.numeric(r, true)
+    }
+
+    /// Whether the residual, with the unknowns solved for, vanishes once the constraints kept
+    /// with multipliers are used: each one that is a square in some coordinate,
+    /// a·q² + b = 0 with `a` constant and `b` free of q (x² + y² = L²), gives
+    /// q = ±√(−b/a) and q̇ from Φ̇ = 0; the residual must vanish on both branches.
+    fn vanishes_on_constraints(&mut self, residual: ExprId) -> bool {
+        if self.multipliers.is_empty() {
+            return false;
+        }
+        let unknowns = self.unknowns();
+        let r = if unknowns.iter().any(|u| self.model.pool.depends_on(residual, *u)) {
+            let Some(solved) = self.solved_unknowns() else { return false };
+            self.model.pool.subst(residual, &solved)
+        } else {
+            residual
+        };
+        let pool = &mut self.model.pool;
+        let mut branches: Vec<ExprId> = vec![pool.together(r)];
+        let mut used = false;
+        for m in self.multipliers.clone() {
+            let Some((q, root)) = square_in_one_coordinate(pool, m.phi, &self.coords) else {
+                continue;
+            };
+            used = true;
+            let rate = pool.rate(q).expect("coordinate");
+            let mut next = Vec::new();
+            for root in [root, pool.neg(root)] {
+                // On Φ = 0 with q = root, Φ̇ = 0 fixes q̇ = d(root)/dt.
+                let q_rate = pool.time_derivative(root);
+                let map: HashMap<SymId, ExprId> = [(q, root), (rate, q_rate)].into();
+                for b in &branches {
+                    next.push(pool.subst(*b, &map));
+                }
+            }
+            branches = next;
+        }
+        // Substituting the roots leaves quotients by (L² − y²) that only cancel over a common
+        // denominator.
+        used && branches.into_iter().all(|b| {
+            let b = pool.together(b);
+            pool.is_identically_zero(b)
+        })
     }
 
     fn is_row_multiple(&mut self, residual: ExprId, a: &[ExprId]) -> bool {
@@ -152,31 +230,6 @@ impl Derivation {
         false
     }
 
-    /// The symbols a random state gives values to: parameters, coordinates, rates, time.
-    fn state_symbols(&self) -> Vec<SymId> {
-        let pool = &self.model.pool;
-        let mut syms: Vec<SymId> = self.model.params.iter().map(|p| p.sym).collect();
-        syms.push(self.model.time);
-        syms.extend(self.coords.iter().copied());
-        syms.extend(self.rates.iter().copied());
-        syms.retain(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Coordinate { order: 2.., .. }));
-        syms
-    }
-
-    fn random_state(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
-        let pool = &self.model.pool;
-        let mut values = vec![f64::NAN; pool.symbol_count()];
-        for s in self.state_symbols() {
-            values[s.index()] = match pool.symbol(s).kind {
-                SymbolKind::Param => rng.gen_range(0.5..2.0),
-                SymbolKind::Time => rng.gen_range(0.0..1.0),
-                SymbolKind::Coordinate { order: 0, .. } => rng.gen_range(-1.2..1.2),
-                SymbolKind::Coordinate { .. } => rng.gen_range(-1.0..1.0),
-            };
-        }
-        values
-    }
-
     /// Solves the equations of motion numerically at a state, filling in the unknowns.
     fn solve_unknowns(&mut self, values: &mut [f64]) -> Option<()> {
         let unknowns = self.unknowns();
@@ -202,61 +255,140 @@ impl Derivation {
     fn numeric(&mut self, residual: ExprId, with_unknowns: bool) -> Verdict {
         // A fixed seed: the same scene is checked at the same states in every run.
         let mut rng = ChaCha8Rng::seed_from_u64(0x1a9_2a96e);
-        let syms = self.state_symbols();
+        let syms = state_symbols(self);
+        let constraints = ConstraintSet::first(self, self.multipliers.len());
+        let sampling =
+            if constraints.is_empty() { Sampling::Anywhere } else { Sampling::OnConstraints };
+        let mut good = 0;
+        let mut reached = 0;
+        for _ in 0..SAMPLES * 4 {
+            if good == SAMPLES {
+                break;
+            }
+            let mut values = random_state(self, &mut rng);
+            if constraints.project(self, &mut values).is_err() {
+                continue;
+            }
+            reached += 1;
+            if with_unknowns && self.solve_unknowns(&mut values).is_none() {
+                continue;
+            }
+            if let Some(f) = self.failure_at(residual, &values, &syms) {
+                return Verdict::Fails(f);
+            }
+            if self.defined_at(residual, &values) {
+                good += 1;
+            }
+        }
+        if good == 0 {
+            let reason = if reached == 0 {
+                "no random start reached a state that satisfies the constraints"
+            } else {
+                "no random state where the expressions are defined"
+            };
+            return Verdict::Undecided { reason: reason.into() };
+        }
+        Verdict::Numeric { samples: good, sampling }
+    }
+
+    /// `expect at start:` past the algebra's budget: at random parameter values, the start is
+    /// solved numerically and the residual evaluated there.
+    fn numeric_at_start(&mut self, residual: ExprId, unknowns: usize) -> Verdict {
+        let mut rng = ChaCha8Rng::seed_from_u64(0x5747_a247);
+        let params: Vec<SymId> = self.model.params.iter().map(|p| p.sym).collect();
         let mut good = 0;
         for _ in 0..SAMPLES * 4 {
             if good == SAMPLES {
                 break;
             }
-            let mut values = self.random_state(&mut rng);
-            if with_unknowns && self.solve_unknowns(&mut values).is_none() {
-                continue;
+            let values: Vec<(SymId, f64)> =
+                params.iter().map(|p| (*p, rng.gen_range(0.5..2.0))).collect();
+            let Some(start) = self.start_numeric(&values) else { continue };
+            let shown: Vec<SymId> = params.clone();
+            if let Some(mut f) = self.failure_at(residual, &start.values, &shown) {
+                f.state.retain(|(s, _)| params.contains(s));
+                return Verdict::Fails(f);
             }
-            let (value, scale) = self.magnitude(residual, &values);
-            if !value.is_finite() || !scale.is_finite() {
-                continue;
+            if self.defined_at(residual, &start.values) {
+                good += 1;
             }
-            if value.abs() > RELATIVE_TOLERANCE * (1.0 + scale) {
-                let mut state: Vec<(SymId, f64)> = syms
-                    .iter()
-                    .filter(|s| self.model.pool.depends_on(residual, **s))
-                    .map(|s| (*s, values[s.index()]))
-                    .collect();
-                state.extend(
-                    self.unknowns()
-                        .into_iter()
-                        .filter(|u| self.model.pool.depends_on(residual, *u))
-                        .map(|u| (u, values[u.index()])),
-                );
-                return Verdict::Fails(Failure { component: None, residual, state, value });
-            }
-            good += 1;
         }
         if good == 0 {
             return Verdict::Undecided {
-                reason: "no random state where the expressions are defined".into(),
+                reason: "the start could not be solved at any parameter values tried".into(),
             };
         }
-        Verdict::Numeric { samples: good }
+        Verdict::Numeric { samples: good, sampling: Sampling::AtStart { unknowns } }
     }
 
-    /// The residual's value, and the size of the terms it is the sum of (for a relative test).
-    fn magnitude(&self, residual: ExprId, values: &[f64]) -> (f64, f64) {
-        let pool = &self.model.pool;
-        let mut memo = HashMap::new();
-        let value = pool.eval_memo(residual, values, &mut memo);
-        let scale = match pool.node(residual) {
-            cas::Node::Add(c, terms) => {
-                cas::number::to_f64(c).abs()
-                    + terms
-                        .iter()
-                        .map(|(t, k)| {
-                            (cas::number::to_f64(k) * pool.eval_memo(*t, values, &mut memo)).abs()
-                        })
-                        .sum::<f64>()
-            }
-            _ => value.abs(),
-        };
-        (value, scale)
+    fn defined_at(&self, residual: ExprId, values: &[f64]) -> bool {
+        let (value, scale) = value_and_scale(self, residual, values, &mut HashMap::new());
+        value.is_finite() && scale.is_finite()
     }
+
+    /// A failure when the residual is defined and not zero at this state.
+    fn failure_at(&mut self, residual: ExprId, values: &[f64], syms: &[SymId]) -> Option<Failure> {
+        let (value, scale) = value_and_scale(self, residual, values, &mut HashMap::new());
+        if !value.is_finite() || !scale.is_finite() {
+            return None;
+        }
+        if value.abs() <= RELATIVE_TOLERANCE * (1.0 + scale) {
+            return None;
+        }
+        let mut state: Vec<(SymId, f64)> = syms
+            .iter()
+            .filter(|s| self.model.pool.depends_on(residual, **s))
+            .map(|s| (*s, values[s.index()]))
+            .collect();
+        state.extend(
+            self.unknowns()
+                .into_iter()
+                .filter(|u| self.model.pool.depends_on(residual, *u))
+                .map(|u| (u, values[u.index()])),
+        );
+        Some(Failure { component: None, residual, state, value })
+    }
+}
+
+/// For Φ = a·q² + b with `a` free of every coordinate, rate and time, and `b` free of q: the
+/// coordinate q and √(−b/a).
+fn square_in_one_coordinate(
+    pool: &mut cas::Pool,
+    phi: ExprId,
+    coords: &[SymId],
+) -> Option<(SymId, ExprId)> {
+    let phi = pool.expand(phi);
+    for &q in coords {
+        if !pool.depends_on(phi, q) {
+            continue;
+        }
+        let first = pool.diff(phi, q);
+        let zero: HashMap<SymId, ExprId> = [(q, pool.zero())].into();
+        let linear = pool.subst(first, &zero);
+        if !pool.is_identically_zero(linear) {
+            continue;
+        }
+        let second = pool.diff(first, q);
+        let a = pool.simplify(second);
+        let constant =
+            pool.free_symbols(a).iter().all(|s| matches!(pool.symbol(*s).kind, SymbolKind::Param));
+        if !constant || pool.is_identically_zero(a) {
+            continue;
+        }
+        let b = pool.subst(phi, &zero);
+        // Φ must be exactly a/2·q² + b: nothing of higher order in q.
+        let half_a = pool.scale(a, &cas::number::ratio(1, 2));
+        let q2 = pool.sym(q);
+        let q2 = pool.powi(q2, 2);
+        let quadratic = pool.mul2(half_a, q2);
+        let rebuilt = pool.add2(quadratic, b);
+        let difference = pool.sub(phi, rebuilt);
+        if !pool.is_identically_zero(difference) {
+            continue;
+        }
+        let ratio = pool.div(b, half_a);
+        let minus = pool.neg(ratio);
+        return Some((q, pool.sqrt(minus)));
+    }
+    None
 }

@@ -64,6 +64,8 @@ pub struct Derivation {
     pub warnings: Vec<Diagnostic>,
     /// q̈ and λ solved symbolically, for small systems; computed on first use.
     solved: Option<Option<HashMap<SymId, ExprId>>>,
+    /// The unknowns at the start; computed on first use.
+    pub(crate) start: Option<crate::start::StartSolution>,
 }
 
 impl Derivation {
@@ -177,23 +179,6 @@ impl Derivation {
             }
             None => e,
         }
-    }
-
-    /// Accelerations and multipliers at the initial state, exactly.
-    pub fn unknowns_at_start(&mut self) -> Option<HashMap<SymId, ExprId>> {
-        let state = self.initial_state();
-        let (rows, rhs) = self.system();
-        let pool = &mut self.model.pool;
-        let mut memo = HashMap::new();
-        let a: Vec<Vec<ExprId>> = rows
-            .iter()
-            .map(|r| r.iter().map(|e| pool.subst_memo(*e, &state, &mut memo)).collect())
-            .collect();
-        let b: Vec<ExprId> = rhs.iter().map(|e| pool.subst_memo(*e, &state, &mut memo)).collect();
-        let x = linear::solve(pool, &a, &b)?;
-        let mut out: HashMap<SymId, ExprId> = self.unknowns().into_iter().zip(x).collect();
-        out.extend(state);
-        Some(out)
     }
 }
 
@@ -528,7 +513,12 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         reactions,
         warnings,
         solved: None,
+        start: None,
     };
+    let dependent = derivation.dependent_constraints();
+    if !dependent.is_empty() {
+        return Err(dependent);
+    }
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
     Ok(derivation)

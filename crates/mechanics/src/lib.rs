@@ -7,12 +7,15 @@
 //! checking of `expect` lines. It knows nothing of parsing or of files: it starts from a
 //! [`model::Model`].
 
+mod admissible;
 mod check;
 mod derive;
 mod linear;
 mod present;
+mod start;
 
-pub use check::{Failure, Verdict, SAMPLES};
+pub use check::{Failure, Sampling, Verdict, SAMPLES};
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
 pub use linear::solve;
-pub use present::Equation;
+pub use present::{Equation, NumericValue, ShownAtStart};
+pub use start::{NumericStart, StartSolution};

@@ -12,10 +12,34 @@ const CRAMER_LIMIT: usize = 4;
 /// Small systems use Cramer's rule, which keeps each unknown one quotient of polynomials with
 /// their common factors cancelled (λ = m·(g·y − ẋ² − ẏ²)/(2·x² + 2·y²)).
 pub fn solve(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
-    if b.len() <= CRAMER_LIMIT {
-        cramer(pool, a, b)
-    } else {
-        gauss(pool, a, b)
+    match solve_within(pool, a, b, usize::MAX) {
+        Solution::Solved(x) => Some(x),
+        Solution::Singular | Solution::TooLarge => None,
+    }
+}
+
+/// The outcome of [`solve_within`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Solution {
+    Solved(Vec<ExprId>),
+    /// The matrix is singular as far as the algebra can tell.
+    Singular,
+    /// The elimination built more than the budget of new expression nodes and was abandoned:
+    /// dense symbolic systems grow without bound, and a numeric answer beats a hang.
+    TooLarge,
+}
+
+/// [`solve`] that gives up once it has added `budget` nodes to the pool. The budget counts
+/// nodes, not time, so the same scene gets the same answer on every machine.
+pub fn solve_within(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], budget: usize) -> Solution {
+    let limit = pool.len().saturating_add(budget);
+    let result =
+        if b.len() <= CRAMER_LIMIT { cramer(pool, a, b) } else { gauss(pool, a, b, limit) };
+    match result {
+        Some(x) if pool.len() <= limit => Solution::Solved(x),
+        _ if pool.len() > limit => Solution::TooLarge,
+        Some(x) => Solution::Solved(x),
+        None => Solution::Singular,
     }
 }
 
@@ -117,8 +141,27 @@ pub fn quotient(pool: &mut Pool, n: ExprId, d: ExprId) -> ExprId {
     pool.div(n, d)
 }
 
+/// Under a budget, the largest entry (in distinct nodes) the elimination will simplify.
+const ENTRY_LIMIT: usize = 1_500;
+
+/// The number of distinct nodes of `e`, counted up to `cap`.
+fn dag_size(pool: &Pool, e: ExprId, cap: usize) -> usize {
+    let mut seen = std::collections::HashSet::new();
+    let mut stack = vec![e];
+    while let Some(x) = stack.pop() {
+        if seen.len() >= cap {
+            break;
+        }
+        if seen.insert(x) {
+            stack.extend(pool.children(x));
+        }
+    }
+    seen.len()
+}
+
 /// Gauss–Jordan elimination, choosing as pivot the first entry not identically zero.
-fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
+/// Stops (returning `None`) as soon as the pool grows past `limit` nodes.
+fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], limit: usize) -> Option<Vec<ExprId>> {
     let n = b.len();
     let mut m: Vec<Vec<ExprId>> = a
         .iter()
@@ -135,7 +178,13 @@ fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>
         let inv = pool.powi(m[col][col], -1);
         for entry in m[col][col..].iter_mut() {
             let v = pool.mul2(*entry, inv);
+            if limit != usize::MAX && dag_size(pool, v, ENTRY_LIMIT) >= ENTRY_LIMIT {
+                return None;
+            }
             *entry = pool.simplify(v);
+            if pool.len() > limit {
+                return None;
+            }
         }
         let pivot_row = m[col].clone();
         for (r, row) in m.iter_mut().enumerate() {
@@ -146,7 +195,15 @@ fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>
             for (entry, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
                 let p = pool.mul2(factor, *p);
                 let d = pool.sub(*entry, p);
+                // One simplification of a large entry can build millions of nodes by itself;
+                // past the budget, refuse before starting it.
+                if limit != usize::MAX && dag_size(pool, d, ENTRY_LIMIT) >= ENTRY_LIMIT {
+                    return None;
+                }
                 *entry = pool.simplify(d);
+                if pool.len() > limit {
+                    return None;
+                }
             }
         }
     }

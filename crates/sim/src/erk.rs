@@ -463,7 +463,9 @@ impl Stepper for Adaptive {
                 Ok(e) => e,
                 // A failed evaluation inside the step (NaN, singular M) may be the step's fault:
                 // shrink it, and only report when it cannot be shrunk further.
-                Err(FaultKind::NonFinite { .. }) | Err(FaultKind::SingularMass { .. })
+                Err(FaultKind::NonFinite { .. })
+                | Err(FaultKind::SingularMass { .. })
+                | Err(FaultKind::SingularConstraints { .. })
                     if h > 1e3 * min_step =>
                 {
                     self.h = h * MIN_FACTOR;

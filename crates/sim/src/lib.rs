@@ -29,6 +29,11 @@ pub enum FaultKind {
     /// The mass matrix (or the augmented system) is singular or too ill-conditioned to solve;
     /// `coordinates` are the indices of the coordinates whose pivots vanished.
     SingularMass { coordinates: Vec<usize>, condition: f64 },
+    /// The mass matrix is fine but the kept constraints' Jacobian lost rank: their gradients
+    /// became dependent (a dead point of a linkage, or constraints that coincide here), so
+    /// the multipliers are not determined. `constraints` are the ones that depend on earlier
+    /// ones.
+    SingularConstraints { constraints: Vec<usize> },
     /// A right-hand side or observation came out NaN or infinite at this component.
     NonFinite { component: usize },
     /// The adaptive step fell below what floating point can resolve at this time.

@@ -140,6 +140,30 @@ pub fn lu_in_place(a: &mut DMatrix<f64>, pivots: &mut [usize]) -> Result<(), Fau
     Ok(())
 }
 
+/// The rows of `a` that are (nearly) combinations of the rows before them, by Gram–Schmidt
+/// in order: a row whose remainder is tiny against its own size depends on earlier ones.
+pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut dependent = Vec::new();
+    for (i, row) in a.row_iter().enumerate() {
+        let mut r: Vec<f64> = row.iter().copied().collect();
+        let size = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for b in &basis {
+            let dot: f64 = r.iter().zip(b).map(|(x, y)| x * y).sum();
+            for (x, y) in r.iter_mut().zip(b) {
+                *x -= dot * y;
+            }
+        }
+        let rest = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if rest <= 1e-8 * size || size == 0.0 {
+            dependent.push(i);
+        } else {
+            basis.push(r.iter().map(|x| x / rest).collect());
+        }
+    }
+    dependent
+}
+
 /// Solves with the factors of [`lu_in_place`].
 pub fn lu_solve(lu: &DMatrix<f64>, pivots: &[usize], b: &mut [f64]) {
     let n = lu.nrows();
@@ -191,6 +215,16 @@ mod tests {
         let mut x = [2.0, 3.0];
         solve_symmetric(&mut a, &m, &mut x, &mut [0; 2]).unwrap();
         assert_eq!(x, [3.0, 2.0]);
+    }
+
+    #[test]
+    fn dependent_rows_are_found_in_order() {
+        let a = DMatrix::from_row_slice(3, 2, &[1.0, 2.0, 0.0, 1.0, 2.0, 5.0]);
+        assert_eq!(dependent_rows(&a), vec![2]);
+        let b = DMatrix::from_row_slice(2, 2, &[0.0, 0.0, 1.0, 0.0]);
+        assert_eq!(dependent_rows(&b), vec![0]);
+        let c = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        assert!(dependent_rows(&c).is_empty());
     }
 
     #[test]

@@ -117,7 +117,24 @@ impl Mechanical {
             let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
             self.solution[n + c] = gamma - 2.0 * a * phi_rate - a * a * phi;
         }
-        linalg::solve_general(&mut self.system, &mut self.solution, &mut self.pivots)
+        self.backup.copy_from(&self.system);
+        match linalg::solve_general(&mut self.system, &mut self.solution, &mut self.pivots) {
+            Err(FaultKind::SingularMass { .. }) => Err(self.which_lost_rank()),
+            other => other,
+        }
+    }
+
+    /// After the augmented system [M −Jᵀ; J 0] failed: whether M itself or the constraint
+    /// Jacobian J lost rank, the two faults a user fixes in different places.
+    fn which_lost_rank(&self) -> FaultKind {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        let mut mass = self.backup.view((0, 0), (n, n)).into_owned();
+        let mut pivots = vec![0; n];
+        if let Err(fault) = linalg::lu_in_place(&mut mass, &mut pivots) {
+            return fault;
+        }
+        let jacobian = self.backup.view((n, 0), (m, n)).into_owned();
+        FaultKind::SingularConstraints { constraints: linalg::dependent_rows(&jacobian) }
     }
 
     /// |Φ| of each kept constraint at the last evaluation.
