@@ -98,3 +98,31 @@ fn derive_out_writes_the_whole_file() {
         .collect();
     assert!(leftovers.is_empty(), "temporary files left behind");
 }
+
+#[test]
+fn every_bad_scene_exits_2_from_derive_check_and_simulate() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/bad");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("tests/bad exists")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lag"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for file in &files {
+        let path = file.to_str().expect("path");
+        let name = file.file_name().expect("name").to_string_lossy().into_owned();
+        for command in ["derive", "check", "simulate"] {
+            let out = lagrange(
+                &[command, path, "--until", "0.01"][..if command == "simulate" { 4 } else { 2 }],
+            );
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{command} {name}:\n{stderr}");
+            assert!(
+                stderr.contains(&format!("{name}:")),
+                "{command} {name}: no location in\n{stderr}"
+            );
+        }
+    }
+}
