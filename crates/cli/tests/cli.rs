@@ -126,3 +126,29 @@ fn every_bad_scene_exits_2_from_derive_check_and_simulate() {
         }
     }
 }
+
+#[test]
+fn a_file_that_is_not_utf8_gets_the_line_and_column_of_its_first_bad_byte() {
+    let scratch = Scratch::new("latin1");
+    let file = scratch.file("bad.lag");
+    // `é` in Latin-1 (0xE9), in a comment on line 4.
+    let mut bytes =
+        b"param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\n# caf".to_vec();
+    bytes.extend([0xE9, b'\n']);
+    std::fs::write(&file, &bytes).expect("write");
+    let path = file.to_str().expect("path");
+    for command in ["derive", "check", "simulate"] {
+        let out = lagrange(&[command, path]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}:\n{stderr}");
+        assert!(stderr.contains("error: the file is not valid UTF-8"), "{command}:\n{stderr}");
+        assert!(stderr.contains("bad.lag:4:6"), "{command}:\n{stderr}");
+        assert!(stderr.contains("^ byte 0xE9 is not UTF-8"), "{command}:\n{stderr}");
+        assert!(stderr.contains("in Latin-1, byte 0xE9 is `é`"), "{command}:\n{stderr}");
+    }
+    // Columns count characters, not bytes, up to the bad one.
+    let rendered =
+        cli::decode("θ.lag", b"coord \xCE\xB8 = \xFF\n".to_vec()).expect_err("not UTF-8");
+    assert!(rendered.contains("θ.lag:1:11"), "{rendered}");
+    assert_eq!(cli::decode("ok.lag", "coord θ\n".into()).as_deref(), Ok("coord θ\n"));
+}
