@@ -136,7 +136,7 @@ enum FormatArg {
 }
 
 /// The file's text, or `None` after saying on stderr why it could not be read.
-fn read_or_report(path: &PathBuf) -> Option<String> {
+fn read_or_report(path: &std::path::Path) -> Option<String> {
     cli::read_scene(path).map_err(|e| eprint!("{e}")).ok()
 }
 
