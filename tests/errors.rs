@@ -221,3 +221,29 @@ fn rates_are_refused_where_only_the_configuration_counts() {
     // Rates are what forces, dissipation and a Lagrangian are made of.
     assert!(cli::load("param m = 1 kg, c = 1 kg/s\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-c*x', 0)\ndissipation c/2*x'^2\nlagrangian c*x*x'\n").is_ok());
 }
+
+#[test]
+fn an_expectation_check_cannot_decide_is_a_warning() {
+    let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\ngravity g\nexpect x'' = 0\nexpect sqrt(-1 - x^2/L^2) = 0\nexpect x'' = ln(-(x/L)^2 - 1)*g\nexpect sqrt(x/L) = sqrt(-x/L)\n";
+    let (_, warnings) = cli::load(source).expect("derives despite the warnings");
+    let r = cli::diagnostics::render("bad.lag", source, &warnings);
+    assert_eq!(r.matches("warning: `check` cannot decide this expectation").count(), 3, "{r}");
+    assert!(r.contains("bad.lag:6:8"), "{r}");
+    assert!(r.contains("√(−1 − x²/L²) is not a real number"), "{r}");
+    assert!(r.contains("bad.lag:7:14"), "{r}");
+    assert!(r.contains("bad.lag:8:1"), "{r}");
+    assert!(!r.contains("bad.lag:5:"), "a decidable line is not warned about:\n{r}");
+    // The warning foresees what check finds.
+    let checked = cli::check::check_file("bad.lag", source);
+    assert_eq!(checked.exit_code, 1);
+    assert_eq!(checked.report.matches("UNDECIDED").count(), 3, "{}", checked.report);
+    insta::assert_snapshot!(r);
+
+    let singular = "param m = 1 kg, k = 1 N/m\ncoord r = 0 m, phi\nparticle p { mass m; position (r*cos(phi), r*sin(phi)) }\npotential k/2*r^2\nexpect at start: r'' = 0\n";
+    let (_, warnings) = cli::load(singular).expect("derives despite the warning");
+    let r = cli::diagnostics::render("bad.lag", singular, &warnings);
+    assert!(r.contains("the mass matrix is singular at the start"), "{r}");
+    assert!(r.contains("bad.lag:5:1"), "{r}");
+    let checked = cli::check::check_file("bad.lag", singular);
+    assert!(checked.report.contains("UNDECIDED"), "{}", checked.report);
+}

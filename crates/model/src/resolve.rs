@@ -425,6 +425,8 @@ impl<'a> Resolver<'a> {
                     lhs: l,
                     rhs: r,
                     span: stmt.span,
+                    lhs_span: lhs.span,
+                    rhs_span: rhs.span,
                 });
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
