@@ -152,3 +152,14 @@ fn a_file_that_is_not_utf8_gets_the_line_and_column_of_its_first_bad_byte() {
     assert!(rendered.contains("θ.lag:1:11"), "{rendered}");
     assert_eq!(cli::decode("ok.lag", "coord θ\n".into()).as_deref(), Ok("coord θ\n"));
 }
+
+#[test]
+fn set_cannot_make_a_mass_negative() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = lagrange(&["simulate", &pendulum, "--until", "0.01", "--set", "m=-1"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("`bob` has a mass of -1 kg; a mass must be positive"), "{stderr}");
+    let out = lagrange(&["simulate", &pendulum, "--until", "0.01", "--set", "m=2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}
