@@ -15,7 +15,7 @@ use crate::Value;
 /// rounding can take an exact boundary value (`1 - sin(pi/2)`) a hair across it.
 const ROUNDING_MARGIN: f64 = 1e-9;
 
-/// What an expression that must not move too fast is, for the error message.
+/// Where an expression stands, and how many time derivatives of the coordinates it may hold.
 pub(super) struct Role {
     /// "a position", "a potential", …
     pub what: &'static str,
@@ -474,7 +474,9 @@ impl Resolver<'_> {
         }
         let (negative, zero) = match self.pool.as_num(k) {
             Some(q) => (q.is_negative(), q.is_zero()),
-            None => (x < -ROUNDING_MARGIN * x.abs().max(1e-300), x == 0.0),
+            // An inertia may be exactly 0, which rounding can take a hair below; a mass may
+            // not be 0 either way, and tiny masses (1e-12 kg) are real.
+            None => (x < 0.0 && !(inertia && x > -ROUNDING_MARGIN), x == 0.0),
         };
         let refused = negative || (zero && !inertia);
         if !refused {
