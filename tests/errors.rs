@@ -134,3 +134,116 @@ fn an_initial_value_the_constraint_overrides_is_a_warning() {
     let (_, warnings) = cli::load(&agreeing).expect("derives");
     assert!(warnings.is_empty(), "{warnings:?}");
 }
+
+#[test]
+fn an_empty_scene_is_refused() {
+    for source in ["", "\n\n", "# only a comment\n"] {
+        let r = diagnose(source);
+        assert!(r.contains("error: the scene is empty"), "{r}");
+        assert_pinpointed(&r, 1, 1);
+    }
+    let r = diagnose("param m = 1 kg, L = 1 m\nparticle p { mass m; position (L, 0) }\n");
+    assert!(r.contains("the scene declares no coordinate"), "{r}");
+    assert_pinpointed(&r, 2, 10);
+}
+
+#[test]
+fn a_third_derivative_is_refused_where_it_is_written() {
+    let scene = "param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\n";
+    let r = diagnose(&format!("{scene}expect x''' = 0\n"));
+    assert!(r.contains("`x'''` is a third derivative"), "{r}");
+    assert_pinpointed(&r, 4, 8);
+    let r = diagnose(&format!("{scene}let a = x''\nshow a'\n"));
+    assert!(r.contains("`a'` needs the third derivative of `x`"), "{r}");
+    assert_pinpointed(&r, 5, 6);
+    // A long row of primes on a `let` name is refused before its derivatives are built.
+    let primes = "'".repeat(200);
+    let r = diagnose(&format!("{scene}let s = sin(x)^3\nshow s{primes}\n"));
+    assert!(r.contains("derivative"), "{r}");
+}
+
+#[test]
+fn masses_and_inertias_of_the_wrong_sign_are_refused() {
+    let r = diagnose("param m = -1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\n");
+    assert!(r.contains("the mass of `p` is negative"), "{r}");
+    assert!(r.contains("`m` is -1 kg"), "{r}");
+    assert_pinpointed(&r, 3, 19);
+    let r = diagnose("coord x\nparticle p { mass 0; position (x, 0) }\n");
+    assert!(r.contains("the mass of `p` is zero"), "{r}");
+    let r = diagnose("param m = 1 kg, L = 1 m\ncoord th\nbody b { mass m; inertia -m*L^2; position (0, 0); angle th }\n");
+    assert!(r.contains("the inertia of `b` is negative"), "{r}");
+    assert_pinpointed(&r, 3, 26);
+    // Without values the sign is unknown, and the scene stands.
+    assert!(cli::load("param m\ncoord x\nparticle p { mass -m; position (x, 0) }\n").is_ok());
+    let zero_inertia = "param m = 1 kg, L = 1 m\ncoord th\nbody b { mass m; inertia 0; position (th*L, 0); angle th }\n";
+    assert!(cli::load_with(zero_inertia, cli::Options { units: false }).is_ok());
+}
+
+#[test]
+fn constants_that_are_not_real_numbers_are_refused() {
+    let scene = "coord x\nparticle p { mass m; position (x, 0) }\n";
+    for (value, message, col) in [
+        ("sqrt(-1)", "the square root of a negative number is not real", 11),
+        ("ln(-1)", "the logarithm of a negative number is not real", 11),
+        ("ln(0)", "the logarithm of 0", 11),
+        ("acos(3/2)", "acos of a number outside [-1, 1]", 11),
+        ("1e400", "this value is not a finite number", 11),
+        ("(-1)^(1/2)", "a negative number to a fractional power", 11),
+    ] {
+        let r = diagnose(&format!("param m = 1 kg, a = {value}\n{scene}"));
+        assert!(r.contains(message), "{value}:\n{r}");
+        assert_pinpointed(&r, 1, col + 10);
+    }
+    let r = diagnose(&format!("param m = 1 kg, a = 0, b = 1/a\n{scene}"));
+    assert!(r.contains("division by zero") && r.contains("`a` is 0"), "{r}");
+    assert_pinpointed(&r, 1, 30);
+    // A function of a coordinate is no constant: its domain is the motion's business.
+    assert!(cli::load(
+        "param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\nshow sqrt(-1 - x^2)\n"
+    )
+    .is_ok());
+}
+
+#[test]
+fn rates_are_refused_where_only_the_configuration_counts() {
+    let r = diagnose("param m = 1 kg\ncoord x\nparticle p { mass m; position (x', 0) }\n");
+    assert!(r.contains("a position cannot depend on a rate"), "{r}");
+    assert!(!r.contains("no kinetic energy"), "{r}");
+    assert_pinpointed(&r, 3, 32);
+    let r = diagnose("param m = 1 kg, k = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k*x'^2\n");
+    assert!(r.contains("a potential cannot depend on a rate"), "{r}");
+    assert_pinpointed(&r, 4, 13);
+    let r = diagnose("param m = 1 kg\ncoord x\nlet v = x'\nparticle p { mass m; position (x, 0) }\nparticle q { mass m; position (x, v*1) }\n");
+    assert!(r.contains("depends on the rate of `x`"), "{r}");
+    assert_pinpointed(&r, 5, 35);
+    let r = diagnose("param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-m*x'', 0)\n");
+    assert!(r.contains("a force cannot depend on an acceleration"), "{r}");
+    // Rates are what forces, dissipation and a Lagrangian are made of.
+    assert!(cli::load("param m = 1 kg, c = 1 kg/s\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-c*x', 0)\ndissipation c/2*x'^2\nlagrangian c*x*x'\n").is_ok());
+}
+
+#[test]
+fn an_expectation_check_cannot_decide_is_a_warning() {
+    let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\ngravity g\nexpect x'' = 0\nexpect sqrt(-1 - x^2/L^2) = 0\nexpect x'' = ln(-(x/L)^2 - 1)*g\nexpect sqrt(x/L) = sqrt(-x/L)\n";
+    let (_, warnings) = cli::load(source).expect("derives despite the warnings");
+    let r = cli::diagnostics::render("bad.lag", source, &warnings);
+    assert_eq!(r.matches("warning: `check` cannot decide this expectation").count(), 3, "{r}");
+    assert!(r.contains("bad.lag:6:8"), "{r}");
+    assert!(r.contains("√(−1 − x²/L²) is not a real number"), "{r}");
+    assert!(r.contains("bad.lag:7:14"), "{r}");
+    assert!(r.contains("bad.lag:8:1"), "{r}");
+    assert!(!r.contains("bad.lag:5:"), "a decidable line is not warned about:\n{r}");
+    // The warning foresees what check finds.
+    let checked = cli::check::check_file("bad.lag", source);
+    assert_eq!(checked.exit_code, 1);
+    assert_eq!(checked.report.matches("UNDECIDED").count(), 3, "{}", checked.report);
+    insta::assert_snapshot!(r);
+
+    let singular = "param m = 1 kg, k = 1 N/m\ncoord r = 0 m, phi\nparticle p { mass m; position (r*cos(phi), r*sin(phi)) }\npotential k/2*r^2\nexpect at start: r'' = 0\n";
+    let (_, warnings) = cli::load(singular).expect("derives despite the warning");
+    let r = cli::diagnostics::render("bad.lag", singular, &warnings);
+    assert!(r.contains("the mass matrix is singular at the start"), "{r}");
+    assert!(r.contains("bad.lag:5:1"), "{r}");
+    let checked = cli::check::check_file("bad.lag", singular);
+    assert!(checked.report.contains("UNDECIDED"), "{}", checked.report);
+}

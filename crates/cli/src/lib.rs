@@ -96,6 +96,41 @@ pub fn derive_report(
     Ok((report, diagnostics::render(path, source, &warnings)))
 }
 
+/// Reads a scene file. The error is ready to print: a missing file says so, and a file that
+/// is not UTF-8 gets a diagnostic at the line and column of its first bad byte.
+pub fn read_scene(path: &std::path::Path) -> Result<String, String> {
+    let bytes =
+        std::fs::read(path).map_err(|e| format!("error: cannot read {}: {e}\n", path.display()))?;
+    decode(&path.display().to_string(), bytes)
+}
+
+/// The text of a scene file's bytes, or the rendered diagnostic of its first byte that is not
+/// UTF-8.
+pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
+    let error = match String::from_utf8(bytes) {
+        Ok(text) => return Ok(text),
+        Err(e) => e,
+    };
+    let at = error.utf8_error().valid_up_to();
+    let bad = error.as_bytes()[at];
+    // Rendered against the text with U+FFFD in place of each bad sequence: the part before
+    // the first one is unchanged, so its line and column are the file's.
+    let shown = String::from_utf8_lossy(error.as_bytes()).into_owned();
+    let width = shown[at..].chars().next().map_or(0, char::len_utf8);
+    let mut hint =
+        "lagrange reads scene files as UTF-8: save the file in that encoding".to_string();
+    if error.as_bytes().starts_with(&[0xFF, 0xFE]) || error.as_bytes().starts_with(&[0xFE, 0xFF]) {
+        hint.push_str(" (this one looks like UTF-16)");
+    } else if let Some(c) = char::from_u32(u32::from(bad)).filter(|_| bad >= 0xA0) {
+        hint.push_str(&format!(" (in Latin-1, byte 0x{bad:02X} is `{c}`)"));
+    }
+    let diagnostic =
+        Diagnostic::error(lang::Span::new(at, at + width), "the file is not valid UTF-8")
+            .with_label(format!("byte 0x{bad:02X} is not UTF-8"))
+            .with_hint(hint);
+    Err(diagnostics::render(path, &shown, &[diagnostic]))
+}
+
 /// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.
 pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Result<()> {
     let dir =

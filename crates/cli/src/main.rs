@@ -135,13 +135,9 @@ enum FormatArg {
     Json,
 }
 
-fn read(path: &PathBuf) -> Result<String, String> {
-    std::fs::read_to_string(path).map_err(|e| format!("error: cannot read {}: {e}", path.display()))
-}
-
 /// The file's text, or `None` after saying on stderr why it could not be read.
-fn read_or_report(path: &PathBuf) -> Option<String> {
-    read(path).map_err(|e| eprintln!("{e}")).ok()
+fn read_or_report(path: &std::path::Path) -> Option<String> {
+    cli::read_scene(path).map_err(|e| eprint!("{e}")).ok()
 }
 
 fn main() -> ExitCode {
@@ -225,13 +221,9 @@ fn main() -> ExitCode {
             let mut worst = 0;
             let (mut held, mut failed) = (0, 0);
             for file in &files {
-                let source = match read(file) {
-                    Ok(s) => s,
-                    Err(e) => {
-                        eprintln!("{e}");
-                        worst = 2;
-                        continue;
-                    }
+                let Some(source) = read_or_report(file) else {
+                    worst = 2;
+                    continue;
                 };
                 let result = cli::check::check_file_with(
                     &file.display().to_string(),

@@ -168,6 +168,36 @@ impl Prepared {
         Ok(out)
     }
 
+    /// Refuses a mass that is not positive, or an inertia that is negative, at the given
+    /// parameter values; those that depend on the motion are left alone.
+    pub fn masses_at(&mut self, parameters: &[f64]) -> Result<(), NumbersError> {
+        for body in self.derivation.model.bodies.clone() {
+            for (value, inertia) in [(Some(body.mass), false), (body.inertia, true)] {
+                let Some(value) = value else { continue };
+                let pool = &mut self.derivation.model.pool;
+                let constant = pool
+                    .free_symbols(value)
+                    .iter()
+                    .all(|s| matches!(pool.symbol(*s).kind, cas::SymbolKind::Param));
+                if !constant {
+                    continue;
+                }
+                let v = self.constant(value, parameters);
+                let (what, unit) =
+                    if inertia { ("an inertia", "kg·m²") } else { ("a mass", "kg") };
+                if (inertia && v < 0.0) || (!inertia && v <= 0.0) {
+                    let rule = if inertia { "cannot be negative" } else { "must be positive" };
+                    return Err(format!(
+                        "error: with the values of --set, `{}` has {what} of {v} {unit}; {what} \
+                         {rule}",
+                        body.name
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The value of a constant expression (of parameters) at the given parameter values.
     pub fn constant(&self, e: ExprId, parameters: &[f64]) -> f64 {
         let pool = &self.derivation.model.pool;

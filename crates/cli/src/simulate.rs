@@ -247,6 +247,10 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
         }
     }
     let parameters = prepared.parameter_values(&param_overrides).map_err(bad)?;
+    if !param_overrides.is_empty() {
+        // The scene's masses were checked with its own values; `--set` may change their sign.
+        prepared.masses_at(&parameters).map_err(bad)?;
+    }
     let n = prepared.layout.coordinates;
     let mut y0 = vec![0.0; 2 * n];
     for (k, q) in prepared.derivation.coords.clone().iter().enumerate() {

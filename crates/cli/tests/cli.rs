@@ -98,3 +98,68 @@ fn derive_out_writes_the_whole_file() {
         .collect();
     assert!(leftovers.is_empty(), "temporary files left behind");
 }
+
+#[test]
+fn every_bad_scene_exits_2_from_derive_check_and_simulate() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/bad");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("tests/bad exists")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "lag"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty());
+    for file in &files {
+        let path = file.to_str().expect("path");
+        let name = file.file_name().expect("name").to_string_lossy().into_owned();
+        for command in ["derive", "check", "simulate"] {
+            let out = lagrange(
+                &[command, path, "--until", "0.01"][..if command == "simulate" { 4 } else { 2 }],
+            );
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{command} {name}:\n{stderr}");
+            assert!(
+                stderr.contains(&format!("{name}:")),
+                "{command} {name}: no location in\n{stderr}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_file_that_is_not_utf8_gets_the_line_and_column_of_its_first_bad_byte() {
+    let scratch = Scratch::new("latin1");
+    let file = scratch.file("bad.lag");
+    // `é` in Latin-1 (0xE9), in a comment on line 4.
+    let mut bytes =
+        b"param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\n# caf".to_vec();
+    bytes.extend([0xE9, b'\n']);
+    std::fs::write(&file, &bytes).expect("write");
+    let path = file.to_str().expect("path");
+    for command in ["derive", "check", "simulate"] {
+        let out = lagrange(&[command, path]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}:\n{stderr}");
+        assert!(stderr.contains("error: the file is not valid UTF-8"), "{command}:\n{stderr}");
+        assert!(stderr.contains("bad.lag:4:6"), "{command}:\n{stderr}");
+        assert!(stderr.contains("^ byte 0xE9 is not UTF-8"), "{command}:\n{stderr}");
+        assert!(stderr.contains("in Latin-1, byte 0xE9 is `é`"), "{command}:\n{stderr}");
+    }
+    // Columns count characters, not bytes, up to the bad one.
+    let rendered =
+        cli::decode("θ.lag", b"coord \xCE\xB8 = \xFF\n".to_vec()).expect_err("not UTF-8");
+    assert!(rendered.contains("θ.lag:1:11"), "{rendered}");
+    assert_eq!(cli::decode("ok.lag", "coord θ\n".into()).as_deref(), Ok("coord θ\n"));
+}
+
+#[test]
+fn set_cannot_make_a_mass_negative() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = lagrange(&["simulate", &pendulum, "--until", "0.01", "--set", "m=-1"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("`bob` has a mass of -1 kg; a mass must be positive"), "{stderr}");
+    let out = lagrange(&["simulate", &pendulum, "--until", "0.01", "--set", "m=2"]);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+}

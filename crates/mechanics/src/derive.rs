@@ -521,6 +521,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     }
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
+    derivation.warn_about_undecidable_expects();
     Ok(derivation)
 }
 

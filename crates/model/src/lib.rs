@@ -124,6 +124,9 @@ pub struct Expect {
     pub lhs: Value,
     pub rhs: Value,
     pub span: Span,
+    /// Where each side is written.
+    pub lhs_span: Span,
+    pub rhs_span: Span,
 }
 
 /// Everything a scene says, resolved.

@@ -1,11 +1,17 @@
 //! Name resolution and the meaning of each statement: AST in, [`Model`] out.
 
+mod checks;
+
 use std::collections::HashMap;
 
 use cas::number::Signed;
-use cas::{Func, Pool, Rational, SymId, SymbolKind};
+use cas::{ExprId, Func, Pool, Rational, SymId, SymbolKind};
 use lang::{BinOp, Diagnostic, Expr, ExprKind, Ident, Property, SceneFile, Span, Stmt, StmtKind};
 
+use self::checks::{
+    Role, ANGLE, ATTACHMENT, DAMPER, DISSIPATION, FORCE, GRAVITY, INERTIA, LAGRANGIAN, MASS,
+    POSITION, POTENTIAL, SPRING, TORQUE,
+};
 use crate::{
     Body, BodyKind, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder, Show,
     Term, Value,
@@ -44,6 +50,7 @@ pub fn resolve(
     for stmt in outputs {
         r.statement(stmt);
     }
+    r.require_a_coordinate(file);
     r.finish()
 }
 
@@ -114,6 +121,8 @@ struct Resolver<'a> {
     simulate: Vec<lang::Setting>,
     placeholders: Vec<(SymId, Placeholder)>,
     lets: Vec<(String, cas::ExprId)>,
+    /// Each parameter's value as a number (no symbols left), for the checks of constants.
+    param_values: HashMap<SymId, ExprId>,
 }
 
 impl<'a> Resolver<'a> {
@@ -155,6 +164,7 @@ impl<'a> Resolver<'a> {
             simulate: Vec::new(),
             placeholders,
             lets: Vec::new(),
+            param_values: HashMap::new(),
         }
     }
 
@@ -228,6 +238,9 @@ impl<'a> Resolver<'a> {
                     }
                     let sym = self.pool.param(&name);
                     if self.bind(&decl.name, Binding::Param(sym)) {
+                        if let (Some(v), Some(written)) = (value, &decl.value) {
+                            self.param_value(sym, v, written);
+                        }
                         self.params.push(Param {
                             name,
                             sym,
@@ -279,21 +292,25 @@ impl<'a> Resolver<'a> {
                 self.constraint(name.as_ref(), lhs, rhs, stmt.span)
             }
             StmtKind::Gravity { strength, direction } => {
-                let strength = self.scalar(strength);
-                let direction = direction.as_ref().and_then(|d| match self.value(d)? {
-                    Value::Vector(v) => Some(v),
-                    other => {
-                        self.error(
-                            Diagnostic::error(
-                                d.span,
-                                format!("a direction must be a vector, not {}", other.kind_name()),
-                            )
-                            .with_label("expected `(x, y)` or `(x, y, z)`")
-                            .with_hint("write `gravity g along (0, -1)`"),
-                        );
-                        None
-                    }
-                });
+                let strength = self.scalar_in_role(strength, &GRAVITY);
+                let direction =
+                    direction.as_ref().and_then(|d| match self.value_in_role(d, &GRAVITY)? {
+                        Value::Vector(v) => Some(v),
+                        other => {
+                            self.error(
+                                Diagnostic::error(
+                                    d.span,
+                                    format!(
+                                        "a direction must be a vector, not {}",
+                                        other.kind_name()
+                                    ),
+                                )
+                                .with_label("expected `(x, y)` or `(x, y, z)`")
+                                .with_hint("write `gravity g along (0, -1)`"),
+                            );
+                            None
+                        }
+                    });
                 if let Some(previous) = &self.gravity {
                     let first = previous.span;
                     self.error(
@@ -306,27 +323,29 @@ impl<'a> Resolver<'a> {
                 }
             }
             StmtKind::Potential(e) => {
-                if let Some(expr) = self.scalar(e) {
+                if let Some(expr) = self.scalar_in_role(e, &POTENTIAL) {
                     self.potentials.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Dissipation(e) => {
-                if let Some(expr) = self.scalar(e) {
+                if let Some(expr) = self.scalar_in_role(e, &DISSIPATION) {
                     self.dissipation.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Lagrangian(e) => {
-                if let Some(expr) = self.scalar(e) {
+                if let Some(expr) = self.scalar_in_role(e, &LAGRANGIAN) {
                     self.lagrangians.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Spring { a, b, stiffness, rest, .. } => {
-                let (Some(len2), Some(k)) = (self.separation_squared(a, b), self.scalar(stiffness))
-                else {
+                let (Some(len2), Some(k)) = (
+                    self.separation_squared(a, b, &SPRING),
+                    self.scalar_in_role(stiffness, &SPRING),
+                ) else {
                     return;
                 };
                 let rest = match rest {
-                    Some(r) => match self.scalar(r) {
+                    Some(r) => match self.scalar_in_role(r, &SPRING) {
                         Some(r) => Some(r),
                         None => return,
                     },
@@ -346,7 +365,9 @@ impl<'a> Resolver<'a> {
                 self.potentials.push(Term { expr, span: stmt.span });
             }
             StmtKind::Damper { a, b, coefficient, .. } => {
-                let (Some(d), Some(c)) = (self.separation(a, b), self.scalar(coefficient)) else {
+                let (Some(d), Some(c)) =
+                    (self.separation(a, b, &ATTACHMENT), self.scalar_in_role(coefficient, &DAMPER))
+                else {
                     return;
                 };
                 // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
@@ -404,6 +425,8 @@ impl<'a> Resolver<'a> {
                     lhs: l,
                     rhs: r,
                     span: stmt.span,
+                    lhs_span: lhs.span,
+                    rhs_span: rhs.span,
                 });
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
@@ -442,11 +465,21 @@ impl<'a> Resolver<'a> {
                 continue;
             }
             match key {
-                "mass" => mass = self.scalar(&p.value),
-                "inertia" => inertia = self.scalar(&p.value),
-                "angle" => angle = self.scalar(&p.value),
+                "mass" => {
+                    mass = self.scalar_in_role(&p.value, &MASS);
+                    if let Some(m) = mass {
+                        self.check_sign(name, m, &p.value, false);
+                    }
+                }
+                "inertia" => {
+                    inertia = self.scalar_in_role(&p.value, &INERTIA);
+                    if let Some(i) = inertia {
+                        self.check_sign(name, i, &p.value, true);
+                    }
+                }
+                "angle" => angle = self.scalar_in_role(&p.value, &ANGLE),
                 _ => {
-                    position = match self.value(&p.value) {
+                    position = match self.value_in_role(&p.value, &POSITION) {
                         Some(Value::Vector(v)) if v.len() <= 3 => Some(v),
                         Some(Value::Scalar(x)) => Some(vec![x]),
                         Some(other) => {
@@ -587,7 +620,8 @@ impl<'a> Resolver<'a> {
                 return;
             }
         };
-        let Some(v) = self.value(value) else { return };
+        let role = if torque { &TORQUE } else { &FORCE };
+        let Some(v) = self.value_in_role(value, role) else { return };
         let dim = self.bodies[index].position.len();
         let ok = match (&v, torque) {
             (Value::Scalar(_), true) => self.bodies[index].kind == BodyKind::Rigid,
@@ -647,13 +681,13 @@ impl<'a> Resolver<'a> {
     }
 
     /// Where a spring or damper is attached: a body (its centre of mass) or a fixed point.
-    fn anchor(&mut self, e: &Expr) -> Option<Vec<cas::ExprId>> {
+    fn anchor(&mut self, e: &Expr, role: &Role) -> Option<Vec<cas::ExprId>> {
         if let ExprKind::Name { name, primes: 0 } = &e.kind {
             if let Some(Binding::Body(i)) = self.names.get(&normalize(name)) {
                 return Some(self.bodies[*i].position.clone());
             }
         }
-        match self.value(e)? {
+        match self.value_in_role(e, role)? {
             Value::Vector(v) => Some(v),
             other => {
                 self.error(
@@ -667,8 +701,8 @@ impl<'a> Resolver<'a> {
     }
 
     /// B − A for two attachments, padding the shorter with zeros (a 2D point in 3D).
-    fn separation(&mut self, a: &Expr, b: &Expr) -> Option<Vec<cas::ExprId>> {
-        let (pa, pb) = (self.anchor(a), self.anchor(b));
+    fn separation(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<Vec<cas::ExprId>> {
+        let (pa, pb) = (self.anchor(a, role), self.anchor(b, role));
         let (pa, pb) = (pa?, pb?);
         let n = pa.len().max(pb.len());
         let zero = self.pool.zero();
@@ -680,8 +714,8 @@ impl<'a> Resolver<'a> {
     }
 
     /// |B − A|².
-    fn separation_squared(&mut self, a: &Expr, b: &Expr) -> Option<cas::ExprId> {
-        let d = self.separation(a, b)?;
+    fn separation_squared(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<cas::ExprId> {
+        let d = self.separation(a, b, role)?;
         let squares: Vec<cas::ExprId> = d.iter().map(|x| self.pool.powi(*x, 2)).collect();
         Some(self.pool.add(&squares))
     }
@@ -704,7 +738,19 @@ impl<'a> Resolver<'a> {
             );
             return None;
         }
-        Some(v)
+        self.finite(v, e).then_some(v)
+    }
+
+    /// [`Self::value`], refused when it has derivatives its role does not allow.
+    fn value_in_role(&mut self, e: &Expr, role: &Role) -> Option<Value> {
+        let v = self.value(e)?;
+        self.within_role(e, &v, role).then_some(v)
+    }
+
+    /// [`Self::scalar`], refused when it has derivatives its role does not allow.
+    fn scalar_in_role(&mut self, e: &Expr, role: &Role) -> Option<cas::ExprId> {
+        let v = self.scalar(e)?;
+        self.within_role(e, &Value::Scalar(v), role).then_some(v)
     }
 
     fn scalar(&mut self, e: &Expr) -> Option<cas::ExprId> {
@@ -814,6 +860,11 @@ impl<'a> Resolver<'a> {
                 }
                 Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
                 Some(Binding::Coord(s)) => {
+                    if primes > 2 {
+                        let base = self.pool.symbol(s).name.clone();
+                        self.past_acceleration(span, primes, &base, true);
+                        return None;
+                    }
                     let d = self.pool.derivative_symbol(s, primes).expect("coordinates have rates");
                     return Some(Value::Scalar(self.pool.sym(d)));
                 }
@@ -839,6 +890,9 @@ impl<'a> Resolver<'a> {
         };
         if primes == 0 {
             return Some(base);
+        }
+        if !self.derivative_exists(&base, primes, span) {
+            return None;
         }
         // A rate of a `let` name or of KE: the total time derivative.
         Some(base.map(|mut x| {
@@ -1006,6 +1060,10 @@ impl<'a> Resolver<'a> {
             xs.push(self.scalar(a));
         }
         let xs = xs.into_iter().collect::<Option<Vec<_>>>()?;
+        if let Some(d) = self.outside_domain(name, &xs, args, span) {
+            self.error(d);
+            return None;
+        }
         let v = match name {
             "atan2" => self.pool.atan2(xs[0], xs[1]),
             "sqrt" => self.pool.sqrt(xs[0]),
@@ -1097,6 +1155,10 @@ impl<'a> Resolver<'a> {
                         );
                         return None;
                     }
+                    if let Some(d) = self.zero_divisor(*b, re) {
+                        self.error(d);
+                        return None;
+                    }
                     let b = *b;
                     Some(l.map(|x| self.pool.div(x, b)))
                 }
@@ -1125,6 +1187,10 @@ impl<'a> Resolver<'a> {
                             );
                             return None;
                         }
+                    }
+                    if let Some(d) = self.bad_power(*a, *b, span) {
+                        self.error(d);
+                        return None;
                     }
                     Some(Scalar(self.pool.pow(*a, *b)))
                 }

@@ -1,0 +1,553 @@
+//! Checks of meaning made while resolving: derivatives past the second, rates where only the
+//! configuration may appear, constants outside a function's domain, masses and inertias of the
+//! wrong sign, and a scene with nothing to move. Each names the culprit's span.
+
+use std::collections::HashMap;
+
+use cas::number::{Signed, Zero};
+use cas::{ExprId, Func, Rational, SymId, SymbolKind};
+use lang::{Diagnostic, Expr, ExprKind, Ident, SceneFile, Span, StmtKind};
+
+use super::{normalize, Binding, Resolver};
+use crate::Value;
+
+/// How far from a function's domain an inexact value must fall before it counts as outside:
+/// rounding can take an exact boundary value (`1 - sin(pi/2)`) a hair across it.
+const ROUNDING_MARGIN: f64 = 1e-9;
+
+/// Where an expression stands, and how many time derivatives of the coordinates it may hold.
+pub(super) struct Role {
+    /// "a position", "a potential", …
+    pub what: &'static str,
+    /// Derivatives of coordinates allowed: 0 for the configuration only, 1 for rates too.
+    pub max_order: u8,
+    pub hint: &'static str,
+}
+
+pub(super) const POSITION: Role = Role {
+    what: "a position",
+    max_order: 0,
+    hint: "write where the body is as a function of the coordinates (and `t`); its velocity \
+           follows by differentiation",
+};
+pub(super) const ANGLE: Role = Role {
+    what: "an angle",
+    max_order: 0,
+    hint: "write the body's orientation as a function of the coordinates (and `t`); its angular \
+           velocity follows by differentiation",
+};
+pub(super) const MASS: Role = Role {
+    what: "a mass",
+    max_order: 0,
+    hint: "a mass is a constant, or a function of the coordinates and `t`",
+};
+pub(super) const INERTIA: Role = Role {
+    what: "an inertia",
+    max_order: 0,
+    hint: "an inertia is a constant, or a function of the coordinates and `t`",
+};
+pub(super) const POTENTIAL: Role = Role {
+    what: "a potential",
+    max_order: 0,
+    hint: "a potential depends on the configuration only; put terms with rates in `lagrangian` \
+           (added to T − V) or, for friction, in `dissipation`",
+};
+pub(super) const GRAVITY: Role = Role {
+    what: "gravity",
+    max_order: 0,
+    hint: "gravity's strength and direction may depend on the coordinates and `t` only",
+};
+pub(super) const SPRING: Role = Role {
+    what: "a spring",
+    max_order: 0,
+    hint: "a spring's ends, stiffness and rest length may depend on the coordinates and `t` \
+           only; for a force that grows with speed, use a `damper`",
+};
+pub(super) const ATTACHMENT: Role = Role {
+    what: "an attachment point",
+    max_order: 0,
+    hint: "attach to a body by name, or to a point given as a function of the coordinates",
+};
+pub(super) const DAMPER: Role = Role {
+    what: "a damper",
+    max_order: 1,
+    hint: "the equations of motion are solved for the accelerations, so a damping coefficient \
+           may depend on the coordinates and rates, not on accelerations",
+};
+pub(super) const FORCE: Role = Role {
+    what: "a force",
+    max_order: 1,
+    hint: "the equations of motion are solved for the accelerations, so a force may depend on \
+           the coordinates, rates and `t`, not on accelerations",
+};
+pub(super) const TORQUE: Role = Role {
+    what: "a torque",
+    max_order: 1,
+    hint: "the equations of motion are solved for the accelerations, so a torque may depend on \
+           the coordinates, rates and `t`, not on accelerations",
+};
+pub(super) const DISSIPATION: Role = Role {
+    what: "a dissipation function",
+    max_order: 1,
+    hint: "Rayleigh's dissipation function depends on the coordinates and rates",
+};
+pub(super) const LAGRANGIAN: Role = Role {
+    what: "a Lagrangian",
+    max_order: 1,
+    hint: "lagrange derives second-order equations from L(q, q', t); a Lagrangian with \
+           accelerations would give higher-order ones",
+};
+
+/// "third", "fourth", … for a derivative's order.
+fn ordinal(n: u8) -> String {
+    match n {
+        1 => "first".into(),
+        2 => "second".into(),
+        3 => "third".into(),
+        4 => "fourth".into(),
+        5 => "fifth".into(),
+        _ => format!("{n}th"),
+    }
+}
+
+/// A value for a label: exact when it is a rational, else to six significant digits.
+fn number_text(pool: &cas::Pool, e: ExprId) -> String {
+    match pool.as_num(e) {
+        Some(_) => pool.print(e, cas::Style::Ascii),
+        None => approx(pool.eval(e, &[])),
+    }
+}
+
+/// `≈ 0.333333`, `≈ 1.23e-7`.
+fn approx(v: f64) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if a != 0.0 && !(1e-4..1e6).contains(&a) {
+        return format!("≈ {v:.3e}");
+    }
+    let text = format!("{v:.6}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    format!("≈ {text}")
+}
+
+/// The sub-expressions an expression is built from.
+fn children(e: &Expr) -> Vec<&Expr> {
+    match &e.kind {
+        ExprKind::Number(_) | ExprKind::Name { .. } | ExprKind::Member { .. } => Vec::new(),
+        ExprKind::Neg(inner) => vec![inner],
+        ExprKind::Binary { lhs, rhs, .. } => vec![lhs, rhs],
+        ExprKind::Call { args, .. } | ExprKind::Tuple(args) => args.iter().collect(),
+        ExprKind::Matrix(rows) => rows.iter().flatten().collect(),
+    }
+}
+
+impl Resolver<'_> {
+    /// The coordinate symbol of highest order in `v` (a coordinate, a rate, …), if any.
+    fn highest_coordinate(&mut self, v: &Value) -> Option<(u8, SymId)> {
+        let mut best: Option<(u8, SymId)> = None;
+        for e in v.entries() {
+            for s in self.pool.free_symbols(e).iter() {
+                if !matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }) {
+                    continue;
+                }
+                let order = self.pool.symbol(*s).order();
+                let higher = match best {
+                    Some((b, _)) => order > b,
+                    None => true,
+                };
+                if higher {
+                    best = Some((order, *s));
+                }
+            }
+        }
+        best
+    }
+
+    /// The highest derivative of a coordinate in `v`, with its order (none for 0).
+    fn highest_derivative(&mut self, v: &Value) -> Option<(u8, SymId)> {
+        self.highest_coordinate(v).filter(|(order, _)| *order > 0)
+    }
+
+    /// Resolves `e` again without reporting anything, to look inside an expression that
+    /// resolved once already.
+    fn value_quietly(&mut self, e: &Expr) -> Option<Value> {
+        let errors = self.errors.len();
+        let v = self.value(e);
+        self.errors.truncate(errors);
+        v
+    }
+
+    /// The smallest part of `e` that has a derivative past `max_order`: the name itself
+    /// (`x'`), a `let` name, or a member such as `p.velocity`.
+    fn fastest_part<'e>(&mut self, e: &'e Expr, max_order: u8) -> &'e Expr {
+        for child in children(e) {
+            let Some(v) = self.value_quietly(child) else { continue };
+            if self.highest_derivative(&v).is_some_and(|(order, _)| order > max_order) {
+                return self.fastest_part(child, max_order);
+            }
+        }
+        e
+    }
+
+    /// Whether `value` (of the expression `e`) stays within the derivatives its role allows;
+    /// reports the part that does not.
+    pub(super) fn within_role(&mut self, e: &Expr, value: &Value, role: &Role) -> bool {
+        let Some((order, _)) = self.highest_derivative(value) else { return true };
+        if order <= role.max_order {
+            return true;
+        }
+        let part = self.fastest_part(e, role.max_order);
+        let (order, base) = match self.value_quietly(part) {
+            Some(v) => match self.highest_derivative(&v) {
+                Some((o, s)) => (o, self.pool.symbol(s).base_name().to_string()),
+                None => (order, String::new()),
+            },
+            None => (order, String::new()),
+        };
+        let (noun, article) = match order {
+            1 => ("rate", "a"),
+            2 => ("acceleration", "an"),
+            _ => ("derivative", "a"),
+        };
+        let plain = matches!(&part.kind, ExprKind::Name { primes, .. } if *primes == order);
+        let label = match (base.is_empty(), plain) {
+            (true, _) => format!("{article} {noun}"),
+            (false, true) => format!("the {noun} of `{base}`"),
+            (false, false) => format!("depends on the {noun} of `{base}`"),
+        };
+        self.error(
+            Diagnostic::error(
+                part.span,
+                format!("{} cannot depend on {article} {noun}", role.what),
+            )
+            .with_label(label)
+            .with_hint(role.hint),
+        );
+        false
+    }
+
+    /// `theta'''`: only rates and accelerations exist. `span` covers the name as written,
+    /// with its primes; `direct` says whether it is the derivative of coordinate `base` itself
+    /// (`x'''`) or needs it (a `let` name with primes).
+    pub(super) fn past_acceleration(&mut self, span: Span, order: u8, base: &str, direct: bool) {
+        let written = self.text(span);
+        let message = if direct {
+            format!(
+                "`{written}` is a {} derivative; only rates and accelerations exist",
+                ordinal(order)
+            )
+        } else {
+            format!(
+                "`{written}` needs the {} derivative of `{base}`; only rates and accelerations \
+                 exist",
+                ordinal(order)
+            )
+        };
+        self.error(
+            Diagnostic::error(span, message)
+                .with_label(format!("{} time derivative of `{base}`", ordinal(order)))
+                .with_hint(format!(
+                    "the equations of motion are of second order: a scene can use `{base}`, \
+                     its rate `{base}'` and its acceleration `{base}''`"
+                )),
+        );
+    }
+
+    /// Whether `primes` derivatives of a `let` name or a quantity stay within accelerations.
+    /// Decided before differentiating: each derivative of an expression that depends on a
+    /// coordinate's k-th derivative brings in the (k+1)-th, so the order is known, and a long
+    /// row of primes is refused without building its growing derivatives.
+    pub(super) fn derivative_exists(&mut self, v: &Value, primes: u8, span: Span) -> bool {
+        if primes == 0 {
+            return true;
+        }
+        match self.highest_coordinate(v) {
+            Some((order, sym)) if usize::from(order) + usize::from(primes) > 2 => {
+                let base = self.pool.symbol(sym).base_name().to_string();
+                let order = order.saturating_add(primes);
+                self.past_acceleration(span, order, &base, false);
+                false
+            }
+            _ => true,
+        }
+    }
+
+    // --- constants ----------------------------------------------------------------------
+
+    /// `e` as a number, exactly, when every symbol in it is a parameter with a value: what the
+    /// scene means by it. `None` when a coordinate, time or a parameter without a value
+    /// appears.
+    pub(super) fn known(&mut self, e: ExprId) -> Option<ExprId> {
+        let free = self.pool.free_symbols(e);
+        if !free.iter().all(|s| self.param_values.contains_key(s)) {
+            return None;
+        }
+        if free.is_empty() {
+            return Some(e);
+        }
+        let map: HashMap<SymId, ExprId> = self.param_values.clone();
+        Some(self.pool.subst(e, &map))
+    }
+
+    /// Whether a constant is a finite number where its value is known; reports it otherwise.
+    /// Domain errors (`sqrt(-1)`) were reported where they happened; this catches the rest,
+    /// such as `1e400`.
+    pub(super) fn finite(&mut self, value: ExprId, written: &Expr) -> bool {
+        let Some(v) = self.known(value) else { return true };
+        let x = self.pool.eval(v, &[]);
+        if x.is_finite() {
+            return true;
+        }
+        let label = if x.is_nan() {
+            "not a number".to_string()
+        } else {
+            format!("too large for floating point ({x})")
+        };
+        self.error(
+            Diagnostic::error(written.span, "this value is not a finite number")
+                .with_label(label)
+                .with_hint("values must be real numbers of magnitude below about 1.8e308"),
+        );
+        false
+    }
+
+    /// Records a parameter's value, in numbers, for the checks of later constants.
+    pub(super) fn param_value(&mut self, sym: SymId, value: ExprId, written: &Expr) {
+        if !self.finite(value, written) {
+            return;
+        }
+        if let Some(v) = self.known(value) {
+            self.param_values.insert(sym, v);
+        }
+    }
+
+    /// A function applied to a known constant outside its domain (`sqrt(-1)`, `ln(0)`,
+    /// `asin(2)`), or overflowing: the error, at the call.
+    pub(super) fn outside_domain(
+        &mut self,
+        name: &str,
+        args: &[ExprId],
+        written: &[Expr],
+        span: Span,
+    ) -> Option<Diagnostic> {
+        let known: Vec<ExprId> = args.iter().map(|a| self.known(*a)).collect::<Option<Vec<_>>>()?;
+        let values: Vec<f64> = known.iter().map(|k| self.pool.eval(*k, &[])).collect();
+        if !values.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let exact: Option<Rational> = known.first().and_then(|k| self.pool.as_num(*k)).cloned();
+        let a = values[0];
+        // Exact constants are judged exactly; others with a margin for rounding.
+        let negative = exact.as_ref().map_or(a < -ROUNDING_MARGIN, |q| q.is_negative());
+        let zero = exact.as_ref().is_some_and(|q| q.is_zero());
+        let beyond_one = exact
+            .as_ref()
+            .map_or(a.abs() > 1.0 + ROUNDING_MARGIN, |q| q.abs() > cas::number::int(1));
+        let func = Func::from_name(name);
+        let problem = match (name, func) {
+            ("sqrt", _) if negative => Some((
+                "the square root of a negative number is not real".to_string(),
+                "sqrt needs an argument of 0 or more",
+            )),
+            (_, Some(Func::Ln)) if negative || zero => Some((
+                if zero {
+                    "the logarithm of 0 is not a number (it is −∞)".to_string()
+                } else {
+                    "the logarithm of a negative number is not real".to_string()
+                },
+                "ln needs a positive argument",
+            )),
+            (_, Some(Func::Asin | Func::Acos)) if beyond_one => Some((
+                format!("{name} of a number outside [-1, 1] is not real"),
+                "asin and acos take a sine or a cosine, between -1 and 1",
+            )),
+            _ => None,
+        };
+        let written_arg = written.first();
+        if let Some((message, hint)) = problem {
+            let arg_text = written_arg.map(|w| self.text(w.span)).unwrap_or_default();
+            let value = number_text(&self.pool, known[0]);
+            let label = if arg_text == value {
+                format!("the argument is {value}")
+            } else {
+                format!("the argument `{arg_text}` is {value}")
+            };
+            let hint = if self.pool.free_symbols(args[0]).is_empty() {
+                hint.to_string()
+            } else {
+                format!("{hint} (parameters count at their given values)")
+            };
+            return Some(Diagnostic::error(span, message).with_label(label).with_hint(hint));
+        }
+        // In the domain, but too large for floating point (`exp(1000)`).
+        let result = match name {
+            "sqrt" => a.sqrt(),
+            "atan2" => a.atan2(values.get(1).copied().unwrap_or(f64::NAN)),
+            _ => func.map_or(0.0, |f| cas::apply(f, a)),
+        };
+        if result.is_infinite() {
+            return Some(
+                Diagnostic::error(span, "this value is too large for floating point")
+                    .with_label(format!(
+                        "{name} of {} overflows",
+                        number_text(&self.pool, known[0])
+                    ))
+                    .with_hint(
+                        "values must be of magnitude below about 1.8e308; check the formula",
+                    ),
+            );
+        }
+        None
+    }
+
+    /// A known divisor that is 0 at the parameters' values: the error at the divisor.
+    pub(super) fn zero_divisor(&mut self, divisor: ExprId, written: &Expr) -> Option<Diagnostic> {
+        let k = self.known(divisor)?;
+        let zero = match self.pool.as_num(k) {
+            Some(q) => q.is_zero(),
+            None => self.pool.eval(k, &[]) == 0.0,
+        };
+        if !zero {
+            return None;
+        }
+        let text = self.text(written.span);
+        Some(
+            Diagnostic::error(written.span, "division by zero")
+                .with_label(format!("`{text}` is 0"))
+                .with_hint("check the parameters' values, or the formula"),
+        )
+    }
+
+    /// A power of known constants that is not a real number: 0 to a negative power, a
+    /// negative number to a fractional one.
+    pub(super) fn bad_power(
+        &mut self,
+        base: ExprId,
+        exponent: ExprId,
+        span: Span,
+    ) -> Option<Diagnostic> {
+        let (b, x) = (self.known(base)?, self.known(exponent)?);
+        let (bv, xv) = (self.pool.eval(b, &[]), self.pool.eval(x, &[]));
+        let exact_base = self.pool.as_num(b).cloned();
+        let exact_exponent = self.pool.as_num(x).cloned();
+        let base_zero = exact_base.as_ref().map_or(bv == 0.0, |q| q.is_zero());
+        let negative_exponent = exact_exponent.as_ref().map_or(xv < 0.0, |q| q.is_negative());
+        if base_zero && negative_exponent {
+            return Some(
+                Diagnostic::error(span, "division by zero")
+                    .with_label("0 to a negative power, with the parameters' values")
+                    .with_hint("check the parameters' values, or the formula"),
+            );
+        }
+        let base_negative = exact_base.as_ref().map_or(bv < -ROUNDING_MARGIN, |q| q.is_negative());
+        let fractional = exact_exponent.as_ref().map_or(xv.fract() != 0.0, |q| !q.is_integer());
+        if base_negative && fractional {
+            return Some(
+                Diagnostic::error(span, "a negative number to a fractional power is not real")
+                    .with_label(format!(
+                        "{} to the power {}",
+                        number_text(&self.pool, b),
+                        number_text(&self.pool, x)
+                    ))
+                    .with_hint("a fractional power needs a base of 0 or more; check the sign"),
+            );
+        }
+        None
+    }
+
+    /// A mass that is zero or negative, or an inertia that is negative, at the parameters'
+    /// values: the error at the property. Left alone when the sign cannot be known (a
+    /// coordinate, or a parameter without a value, appears).
+    pub(super) fn check_sign(
+        &mut self,
+        body: &Ident,
+        value: ExprId,
+        written: &Expr,
+        inertia: bool,
+    ) {
+        let Some(k) = self.known(value) else { return };
+        let x = self.pool.eval(k, &[]);
+        if !x.is_finite() {
+            return;
+        }
+        let (negative, zero) = match self.pool.as_num(k) {
+            Some(q) => (q.is_negative(), q.is_zero()),
+            // An inertia may be exactly 0, which rounding can take a hair below; a mass may
+            // not be 0 either way, and tiny masses (1e-12 kg) are real.
+            None => (x < 0.0 && !(inertia && x > -ROUNDING_MARGIN), x == 0.0),
+        };
+        let refused = negative || (zero && !inertia);
+        if !refused {
+            return;
+        }
+        let (what, unit) = if inertia { ("inertia", "kg·m²") } else { ("mass", "kg") };
+        let sign = if negative { "negative" } else { "zero" };
+        let shown = number_text(&self.pool, k);
+        let text = self.text(written.span);
+        let label = if text == shown {
+            format!("this is {shown} {unit}")
+        } else {
+            format!("`{text}` is {shown} {unit}")
+        };
+        let hint = match (inertia, negative) {
+            (true, _) => "a moment of inertia about the centre of mass is 0 or more, e.g. \
+                          m*L^2/12 for a thin rod of length L"
+                .to_string(),
+            (false, true) => "a mass must be positive: check the sign".to_string(),
+            (false, false) => "a body needs a positive mass; leave out a point that carries none \
+                               (a spring can be anchored at a fixed point such as (0, 0))"
+                .to_string(),
+        };
+        let mut d =
+            Diagnostic::error(written.span, format!("the {what} of `{}` is {sign}", body.name))
+                .with_label(label)
+                .with_hint(hint);
+        if let ExprKind::Name { name, primes: 0 } = &written.kind {
+            let key = normalize(name);
+            if let Some(Binding::Param(s)) = self.names.get(&key) {
+                let s = *s;
+                if let Some(p) = self.params.iter().find(|p| p.sym == s) {
+                    d = d.with_related(p.span, format!("`{}` is given its value here", p.name));
+                }
+            }
+        }
+        self.error(d);
+    }
+
+    // --- the scene as a whole -------------------------------------------------------------
+
+    /// A scene needs a coordinate: without one there is nothing to derive or integrate.
+    pub(super) fn require_a_coordinate(&mut self, file: &SceneFile) {
+        if file.stmts.iter().any(|s| matches!(s.kind, StmtKind::Coord(_))) {
+            return;
+        }
+        let example = "declare a coordinate and a body that moves with it: `param m = 1 kg`, \
+                       `coord x`, `particle p { mass m; position (x, 0) }`";
+        let d = if file.stmts.is_empty() {
+            let message = if self.source.trim().is_empty() {
+                "the scene is empty"
+            } else {
+                "the scene is empty: the file has only comments"
+            };
+            Diagnostic::error(Span::new(0, 0), message)
+                .with_label("expected a `coord` line and a body")
+                .with_hint(example)
+        } else {
+            let body = file.stmts.iter().find_map(|s| match &s.kind {
+                StmtKind::Particle { name, .. } | StmtKind::Body { name, .. } => Some(name),
+                _ => None,
+            });
+            let (span, label) = match body {
+                Some(name) => (name.span, format!("no coordinate moves `{}`", name.name)),
+                None => (file.stmts[0].span, "this scene has no `coord` line".to_string()),
+            };
+            Diagnostic::error(span, "the scene declares no coordinate").with_label(label).with_hint(
+                "declare the generalized coordinates with `coord` (e.g. `coord x`) and \
+                     write the positions in terms of them",
+            )
+        };
+        self.error(d);
+    }
+}
