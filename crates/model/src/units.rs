@@ -116,11 +116,6 @@ fn unit(name: &str) -> Option<(Dim, Rational, i32)> {
     })
 }
 
-const UNIT_NAMES: [&str; 24] = [
-    "kg", "g", "m", "km", "cm", "mm", "s", "ms", "min", "h", "Hz", "N", "J", "W", "Pa", "A", "C",
-    "V", "T", "K", "rad", "deg", "rev", "rpm",
-];
-
 /// The dimension and SI scale of a written unit, or an error naming the unknown part.
 pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
     let mut dim = Dim::default();
@@ -129,10 +124,10 @@ pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
         let Some((d, r, p)) = unit(&name.name) else {
             let mut diag = Diagnostic::error(name.span, format!("unknown unit `{}`", name.name))
                 .with_label("not a unit lagrange knows");
-            let near = UNIT_NAMES.iter().find(|n| n.eq_ignore_ascii_case(&name.name));
+            let near = lang::UNIT_NAMES.iter().find(|n| n.eq_ignore_ascii_case(&name.name));
             diag = match near {
                 Some(n) => diag.with_hint(format!("did you mean `{n}`?")),
-                None => diag.with_hint(format!("the units are {}", UNIT_NAMES.join(", "))),
+                None => diag.with_hint(format!("the units are {}", lang::UNIT_NAMES.join(", "))),
             };
             return Err(diag);
         };
@@ -789,6 +784,25 @@ mod tests {
         let bad = "param L = 2 m\ncoord x = 1 m\nparticle p { mass 1; position (sin(x), 0) }\n";
         let e = errors(bad);
         assert!(e.iter().any(|m| m.contains("argument of sin")), "{e:?}");
+    }
+
+    #[test]
+    fn units_after_expressions_and_denominators_only() {
+        let ok = "param m = 1 kg, L = 1 m, k = 1/2 1/m, c = sqrt(2) N/m\ncoord x = 0 m\nparticle p { mass m; position (x, 0) }\npotential c/2*x^2 + c*k*x^3\n";
+        assert_eq!(errors(ok), Vec::<String>::new());
+        // `0 m` keeps its unit: x is a length, and so x + t is refused.
+        let zero_with_unit = "coord x = 0 m\nparticle p { mass 1; position (x + t, 0) }\n";
+        assert_eq!(errors(zero_with_unit).len(), 1);
+        let inverse_length = "param k = 1/2 1/m, L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + k, 0) }\n";
+        let e = errors(inverse_length);
+        assert!(e.len() == 1 && e[0].contains("1/m"), "{e:?}");
+    }
+
+    #[test]
+    fn the_parser_knows_every_unit() {
+        for name in lang::UNIT_NAMES {
+            assert!(unit(name).is_some(), "{name}");
+        }
     }
 
     #[test]
