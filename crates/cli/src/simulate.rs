@@ -97,9 +97,11 @@ fn scene_settings(source: &str) -> Vec<(String, Vec<String>, Option<String>)> {
                     .iter()
                     .map(|e| source.get(e.span.start..e.span.end).unwrap_or("").trim().to_string())
                     .collect();
-                let unit = s.unit.as_ref().map(|u| {
-                    u.factors.iter().map(|f| f.0.name.clone()).collect::<Vec<_>>().join("*")
-                });
+                // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
+                let unit = s
+                    .unit
+                    .as_ref()
+                    .map(|u| source.get(u.span.start..u.span.end).unwrap_or("").trim().to_string());
                 out.push((s.key.name.clone(), values, unit));
             }
         }
