@@ -115,6 +115,21 @@ fn bad_input_is_an_error_with_exit_code_two() {
 }
 
 #[test]
+fn until_in_the_scene_must_be_in_seconds() {
+    let scene = "param m = 1 kg, k = 1 N/m\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\nsimulate { until UNIT }\n";
+    let options = Options::default();
+    assert!(simulate("s.lag", &scene.replace("UNIT", "1 s"), &options).is_ok());
+    // `1/s` and `s^2` name s too, but are not times.
+    for unit in ["2 1/s", "2 s^2"] {
+        let Err((message, code)) = simulate("s.lag", &scene.replace("UNIT", unit), &options) else {
+            panic!("`until {unit}` was taken as a time");
+        };
+        assert_eq!(code, 2, "{message}");
+        assert!(message.contains("is a time in s"), "{message}");
+    }
+}
+
+#[test]
 fn a_singular_mass_matrix_stops_the_run_with_the_state() {
     // A bead on a wire whose inertia vanishes at s = 0: M = m s², reached from s = 1.
     let source = "param m = 1\ncoord s = 1, s' = -1\nparticle p { mass m; position (s^2/2, 0) }\n";

@@ -435,8 +435,8 @@ def main():
     for label, path in jobs:
         start = time.time()
         try:
-            # Units are checked by lagrange's own tests; the scenes here test the mechanics,
-            # and some are written without consistent units.
+            # Units are checked by lagrange's own tests (tests/units.rs); the scenes here test
+            # the mechanics.
             report = json.loads(run([lagrange, "derive", path, "--format", "json", "--no-units"]))
             summary, worst = crosscheck(report, args.states, args.seed)
             ok = worst < TOLERANCE

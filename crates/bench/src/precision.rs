@@ -38,7 +38,7 @@ pub fn rod_landing_time(theta0: f64) -> f64 {
 
 fn section(title: &str, note: &str, trials: &[cli::bench::Trial]) {
     println!("{title}\n{note}");
-    print!("{}", table(trials));
+    print!("{}", table(trials, &[]));
     println!();
 }
 

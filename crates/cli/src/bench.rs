@@ -2,13 +2,15 @@
 //! over a ladder of tolerances (adaptive methods) or step counts (fixed-step methods); each
 //! run's final state is compared with a tight-tolerance reference, and the table gives the
 //! error, the wall time (median of a few repeats) and the right-hand-side evaluations. The
-//! work–precision diagram plots error against time, one line per method.
+//! work–precision diagram plots error against time, one line per method. A method that cannot
+//! run the scene at all (a symplectic one, when a constraint keeps a multiplier) is listed as
+//! not applicable rather than failing the whole comparison.
 
 use std::fmt::Write;
 
 use sim::Method;
 
-use crate::simulate::{simulate, Failure, Options, Outcome};
+use crate::simulate::{simulate, Failure, Options, Outcome, NO_MULTIPLIERS};
 
 /// What one rung of a ladder sets: a tolerance, or a number of fixed steps over the span.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,6 +50,13 @@ pub struct Trial {
     pub evaluations: usize,
     pub steps: usize,
     pub fault: Option<String>,
+}
+
+/// A method left out of a comparison, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inapplicable {
+    pub method: Method,
+    pub reason: &'static str,
 }
 
 /// `base` with the method and the rung's tolerance or step set.
@@ -140,8 +149,8 @@ pub fn final_state_error(reference: &Outcome, run: &Outcome) -> f64 {
     state.max((reference.run.final_time - run.run.final_time).abs())
 }
 
-/// The table of trials, one line each.
-pub fn table(trials: &[Trial]) -> String {
+/// The table of trials, one line each, then a line for each method left out.
+pub fn table(trials: &[Trial], inapplicable: &[Inapplicable]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -160,6 +169,9 @@ pub fn table(trials: &[Trial]) -> String {
             t.evaluations,
             t.steps
         );
+    }
+    for m in inapplicable {
+        let _ = writeln!(s, "{:<9} not applicable: {}", m.method.name(), m.reason);
     }
     s
 }
@@ -183,6 +195,8 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-14;
 /// What `lagrange bench FILE` measures.
 pub struct Report {
     pub trials: Vec<Trial>,
+    /// Methods that cannot run this scene, in the order of [`Method::NAMES`].
+    pub inapplicable: Vec<Inapplicable>,
     /// max |reference − the same at 10× the tolerance|: how far the reference itself can be
     /// trusted.
     pub reference_check: f64,
@@ -216,16 +230,25 @@ pub fn bench(path: &str, source: &str, base: &Options, repeats: usize) -> Result
     // The fixed-step ladders divide the span the reference actually covered (a stop event
     // may end it before --until).
     let span = reference.run.final_time;
-    let methods: Vec<Method> =
-        Method::NAMES.iter().map(|n| Method::from_name(n).expect("known")).collect();
+    // One constraint column per multiplier.
+    let multipliers = !reference.constraint_columns.is_empty();
+    let (methods, inapplicable): (Vec<Method>, Vec<Method>) = Method::NAMES
+        .iter()
+        .filter_map(|n| Method::from_name(n))
+        .partition(|m| !multipliers || m.handles_multipliers());
+    let inapplicable = inapplicable
+        .into_iter()
+        .map(|method| Inapplicable { method, reason: NO_MULTIPLIERS })
+        .collect();
     let mut error = |o: &Outcome| final_state_error(&reference, o);
     let trials = work_precision(path, source, base, span, &methods, repeats, &mut error)?;
-    Ok(Report { trials, reference_check, span })
+    Ok(Report { trials, inapplicable, reference_check, span })
 }
 
 /// The work–precision diagram: error against wall time, both logarithmic, one polyline per
-/// method, hand-written SVG like [`crate::plot`].
-pub fn svg(title: &str, trials: &[Trial]) -> String {
+/// method, hand-written SVG like [`crate::plot`]. The methods left out are named in grey under
+/// the legend, each with its reason as a tooltip.
+pub fn svg(title: &str, trials: &[Trial], inapplicable: &[Inapplicable]) -> String {
     const W: f64 = 720.0;
     const H: f64 = 480.0;
     const LEFT: f64 = 80.0;
@@ -328,6 +351,22 @@ pub fn svg(title: &str, trials: &[Trial]) -> String {
             m.name()
         );
     }
+    if !inapplicable.is_empty() {
+        let lx = W - RIGHT + 12.0;
+        let top = TOP + 16.0 + 18.0 * methods.len() as f64 + 8.0;
+        let _ =
+            writeln!(s, r##"<text x="{lx}" y="{}" fill="#888">not applicable:</text>"##, top + 4.0);
+        for (k, m) in inapplicable.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                r##"<text x="{}" y="{}" fill="#888">{}<title>{}</title></text>"##,
+                lx + 26.0,
+                top + 4.0 + 18.0 * (k + 1) as f64,
+                m.method.name(),
+                escape(m.reason)
+            );
+        }
+    }
     s.push_str("</svg>\n");
     s
 }
@@ -364,10 +403,36 @@ mod tests {
             trial(Method::Gauss, f64::NAN, 1e-2),
             trial(Method::Gauss, 1e-8, 1e-1),
         ];
-        let svg = svg("t", &trials);
+        let svg = svg("t", &trials, &[]);
         assert_eq!(svg.matches("<polyline").count(), 2);
         assert_eq!(svg.matches("<circle").count(), 3);
         assert!(svg.contains(">rk4<") && svg.contains(">gauss<"));
+        assert!(!svg.contains("not applicable"));
+    }
+
+    #[test]
+    fn methods_left_out_are_listed_in_the_table_and_the_legend() {
+        let trials = [Trial {
+            method: Method::Rk4,
+            setting: Setting::Steps(100),
+            error: 1e-3,
+            seconds: 1e-3,
+            evaluations: 400,
+            steps: 100,
+            fault: None,
+        }];
+        let out = [
+            Inapplicable { method: Method::Midpoint, reason: NO_MULTIPLIERS },
+            Inapplicable { method: Method::Gauss, reason: NO_MULTIPLIERS },
+        ];
+        let text = table(&trials, &out);
+        assert!(text.contains("rk4"), "{text}");
+        assert!(text.contains(&format!("midpoint  not applicable: {NO_MULTIPLIERS}")), "{text}");
+        assert!(text.contains(&format!("gauss     not applicable: {NO_MULTIPLIERS}")), "{text}");
+        let svg = svg("t", &trials, &out);
+        assert_eq!(svg.matches("<polyline").count(), 1);
+        assert!(svg.contains(">not applicable:<"), "{svg}");
+        assert!(svg.contains(">midpoint<title>") && svg.contains(">gauss<title>"), "{svg}");
     }
 
     #[test]

@@ -347,7 +347,7 @@ fn bench(
         10.0 * cli::bench::REFERENCE_TOLERANCE,
         report.reference_check
     );
-    print!("{}", cli::bench::table(&report.trials));
+    print!("{}", cli::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",
@@ -358,7 +358,10 @@ fn bench(
     }
     if let Some(p) = plot {
         let title = format!("Work–precision: {path}");
-        if let Err(e) = cli::write_atomically(&p, &cli::bench::svg(&title, &report.trials)) {
+        if let Err(e) = cli::write_atomically(
+            &p,
+            &cli::bench::svg(&title, &report.trials, &report.inapplicable),
+        ) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
         }

@@ -49,6 +49,11 @@ pub struct Outcome {
     pub conservative: bool,
 }
 
+/// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
+/// constraints; shared by `simulate`'s error and `bench`'s list of methods left out.
+pub const NO_MULTIPLIERS: &str =
+    "works in canonical variables and does not handle constraints kept with multipliers";
+
 /// Errors: a message and the exit code (2 for bad input).
 pub type Failure = (String, u8);
 
@@ -99,9 +104,11 @@ fn scene_settings(source: &str) -> Vec<(String, Vec<String>, Option<String>)> {
                     .iter()
                     .map(|e| source.get(e.span.start..e.span.end).unwrap_or("").trim().to_string())
                     .collect();
-                let unit = s.unit.as_ref().map(|u| {
-                    u.factors.iter().map(|f| f.0.name.clone()).collect::<Vec<_>>().join("*")
-                });
+                // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
+                let unit = s
+                    .unit
+                    .as_ref()
+                    .map(|u| source.get(u.span.start..u.span.end).unwrap_or("").trim().to_string());
                 out.push((s.key.name.clone(), values, unit));
             }
         }
@@ -292,17 +299,13 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
         .map(|k| Event { column: n_out + k, stop: true })
         .chain((0..n_event).map(|k| Event { column: n_out + n_stop + k, stop: false }))
         .collect();
+    if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
+        return Err(bad(format!("error: {} {NO_MULTIPLIERS}; use dop853", method.name())));
+    }
     let progress_bar = crate::progress::Progress::new(until);
     let mut progress = |t: f64| progress_bar.update(t);
     let started = Instant::now();
     let run = if method.is_symplectic() {
-        if prepared.layout.multipliers > 0 {
-            return Err(bad(format!(
-                "error: {} works in canonical variables and does not handle constraints kept \
-                 with multipliers; use dop853",
-                method.name()
-            )));
-        }
         let momentum_exprs = prepared.momentum_exprs();
         let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs).map_err(bad)?;
         let mut canonical = Canonical::new(mechanical, Tape::new(momentum));

@@ -163,3 +163,34 @@ fn set_cannot_make_a_mass_negative() {
     let out = lagrange(&["simulate", &pendulum, "--until", "0.01", "--set", "m=2"]);
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn bench_runs_what_it_can_on_a_scene_with_a_multiplier() {
+    let scratch = Scratch::new("bench-multiplier");
+    let plot = scratch.file("wp.svg");
+    let out = lagrange(&[
+        "bench",
+        &example("classics/pendulum_cartesian.lag"),
+        "--until",
+        "0.1",
+        "--repeats",
+        "1",
+        "--plot",
+        plot.to_str().expect("path"),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    for method in ["rk4", "dopri5", "dop853"] {
+        let rows = stdout.lines().filter(|l| l.starts_with(method)).count();
+        assert!(rows >= 8, "{method} has {rows} rows:\n{stdout}");
+        assert!(!stdout.contains(&format!("{method} not applicable")), "{stdout}");
+    }
+    for method in ["midpoint", "gauss"] {
+        let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with(method)).collect();
+        assert_eq!(rows.len(), 1, "{stdout}");
+        assert!(rows[0].contains("not applicable: works in canonical variables"), "{stdout}");
+    }
+    let svg = std::fs::read_to_string(&plot).expect("the plot is written");
+    assert!(svg.contains(">not applicable:<"), "{svg}");
+    assert!(svg.contains(">midpoint<title>") && svg.contains(">gauss<title>"), "{svg}");
+}

@@ -80,6 +80,14 @@ pub struct Unit {
     pub span: Span,
 }
 
+/// The units a scene may write after a value. What each one means (its dimension and size in
+/// SI) belongs to `model::units`; the parser needs the names only to tell a unit written where
+/// none may stand from a missing `*`.
+pub const UNIT_NAMES: [&str; 24] = [
+    "kg", "g", "m", "km", "cm", "mm", "s", "ms", "min", "h", "Hz", "N", "J", "W", "Pa", "A", "C",
+    "V", "T", "K", "rad", "deg", "rev", "rpm",
+];
+
 /// `name = value unit`, one item of a `param` line.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamDecl {

@@ -317,7 +317,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         ident | coord_name | param_item | coord_item => (2, "a name"),
         property => (2, "a property such as `mass m`"),
         setting => (2, "a setting such as `until 2 s`"),
-        unit | unit_factor => (3, "a unit"),
+        unit | unit_factor | unit_one => (3, "a unit"),
         unit_power => (3, "an integer power"),
         string | quote => (3, "a quoted title like \"A title\""),
         string_text => (3, "the text of the title"),
@@ -477,7 +477,8 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
         diag = diag.with_hint("separate the items of a block with `;` or a new line");
     } else if wants_operator {
-        if let Some(hint) = juxtaposition_hint(source, pos) {
+        let unit_allowed = positives.iter().any(|r| matches!(r, Rule::unit | Rule::unit_factor));
+        if let Some(hint) = juxtaposition_hint(source, pos, unit_allowed) {
             diag = diag.with_hint(hint);
         }
     }
@@ -485,7 +486,9 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
 }
 
 /// When two operands stand side by side (`2x`, `2 theta`, `sin (x)`), how to write it.
-fn juxtaposition_hint(source: &str, pos: usize) -> Option<String> {
+/// `unit_allowed` says whether a unit could have stood at `pos` (after the value of a `param`
+/// or `coord` item or a `simulate` setting): the second token may have been meant as a unit.
+fn juxtaposition_hint(source: &str, pos: usize, unit_allowed: bool) -> Option<String> {
     let rest = &source[pos..];
     let next = rest.chars().next()?;
     if !(next.is_alphanumeric() || next == '_' || next == '(' || next == '[') {
@@ -515,9 +518,35 @@ fn juxtaposition_hint(source: &str, pos: usize) -> Option<String> {
         Some(format!(
             "to call `{left}`, write `{left}(` with no space; to multiply, write `{left}*(`"
         ))
+    } else if !unit_allowed && is_value(left) && looks_like_unit(rest) {
+        // `let h = 2 m`: "write `2*m`" alone would hide that units are not allowed here.
+        Some(format!(
+            "to multiply, write `{left}*{right}`; a unit may follow only the value of a `param` \
+             or `coord` item or a `simulate` setting"
+        ))
+    } else if unit_allowed && next.is_ascii_digit() {
+        // `param k = 1/2 1`: a unit was possible here, and a number is not one.
+        Some(format!(
+            "to multiply, write `{left}*{right}`; a unit after a value is a unit name such as \
+             `kg` or `m/s^2`, or `1/` and one (`1/m`)"
+        ))
     } else {
         Some(format!("write `{left}*{right}`, not `{written}`"))
     }
+}
+
+/// Whether an operand as written is a value a unit could follow: a number or a bracket.
+fn is_value(operand: &str) -> bool {
+    operand.starts_with(|c: char| c.is_ascii_digit()) || operand == ")"
+}
+
+/// Whether `text` starts with what reads as a unit: a unit name as a whole word, or `1/`.
+fn looks_like_unit(text: &str) -> bool {
+    if let Some(after_one) = text.strip_prefix('1') {
+        return after_one.trim_start_matches([' ', '\t']).starts_with('/');
+    }
+    let word = leading_word(text);
+    !word.is_empty() && UNIT_NAMES.contains(&word)
 }
 
 /// The statement keyword within edit distance 2 of `word`, if there is a clear nearest one.

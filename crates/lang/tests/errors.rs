@@ -27,6 +27,21 @@ fn implicit_multiplication() {
 }
 
 #[test]
+fn side_by_side_hints_know_about_units() {
+    // A unit could stand here, but a number is not one.
+    insta::assert_snapshot!(one_error("param k = 1/2 1"), @"14..15 expected a unit, an operator, `,` or end of line, found `1` | to multiply, write `2*1`; a unit after a value is a unit name such as `kg` or `m/s^2`, or `1/` and one (`1/m`)");
+    insta::assert_snapshot!(one_error("param k = 2 3 kg"), @"12..13 expected a unit, an operator, `,` or end of line, found `3` | to multiply, write `2*3`; a unit after a value is a unit name such as `kg` or `m/s^2`, or `1/` and one (`1/m`)");
+    // A unit where none may stand.
+    insta::assert_snapshot!(one_error("let h = 2 m"), @"10..11 expected an operator or end of line, found `m` | to multiply, write `2*m`; a unit may follow only the value of a `param` or `coord` item or a `simulate` setting");
+    insta::assert_snapshot!(one_error("expect x = 1/2 1/m"), @"15..16 expected an operator or end of line, found `1` | to multiply, write `2*1`; a unit may follow only the value of a `param` or `coord` item or a `simulate` setting");
+    insta::assert_snapshot!(one_error("let h = (1 + 2) kg"), @"16..18 expected an operator or end of line, found `kg` | to multiply, write `)*kg`; a unit may follow only the value of a `param` or `coord` item or a `simulate` setting");
+    // Two units side by side are multiplied like names.
+    insta::assert_snapshot!(one_error("param v = 2 m s"), @"14..15 expected an operator, `,` or end of line, found `s` | write `m*s`, not `m s`");
+    // Not a unit: the plain hint.
+    insta::assert_snapshot!(one_error("let h = 2 mass"), @"10..14 expected an operator or end of line, found `mass` | write `2*mass`, not `2 mass`");
+}
+
+#[test]
 fn unbalanced_brackets_name_the_open_one() {
     let diags = errors("let h = (a + b\ngravity g");
     assert_eq!(diags.len(), 1);

@@ -118,6 +118,40 @@ fn units_have_the_right_powers() {
 }
 
 #[test]
+fn units_may_be_denominators_only_and_follow_any_value() {
+    let line = "param k = 1/2 1/m, w = 3 1/s, a = 2 rad/s^2, s = 1/2 N/m, q = 2 m^-1, \
+                I = sqrt(3)/2 kg*m^2, f = 2*pi 1 / s";
+    let units = param_units(line);
+    assert_eq!(powers(&units[0]), pairs(&[("m", -1)]));
+    assert_eq!(powers(&units[1]), pairs(&[("s", -1)]));
+    assert_eq!(powers(&units[2]), pairs(&[("rad", 1), ("s", -2)]));
+    assert_eq!(powers(&units[3]), pairs(&[("N", 1), ("m", -1)]));
+    assert_eq!(powers(&units[4]), pairs(&[("m", -1)]));
+    assert_eq!(powers(&units[5]), pairs(&[("kg", 1), ("m", 2)]));
+    assert_eq!(powers(&units[6]), pairs(&[("s", -1)]));
+    let span = units[0].as_ref().map(|u| &line[u.span.start..u.span.end]);
+    assert_eq!(span, Some("1/m"));
+
+    let Ok(file) = parse(line) else { panic!("{line:?} does not parse") };
+    let Some(StmtKind::Param(decls)) = file.stmts.first().map(|s| &s.kind) else { panic!() };
+    let values: Vec<String> =
+        decls.iter().map(|d| d.value.as_ref().map(Expr::to_sexpr).unwrap_or_default()).collect();
+    assert_eq!(values[0], "(/ 1 2)");
+    assert_eq!(values[5], "(/ (call sqrt 3) 2)");
+    assert_eq!(values[6], "(* 2 pi)");
+
+    // Without a value before it, `1/m` is a division, as it always was.
+    let file = parse("param k = 1/m").expect("parses");
+    let Some(StmtKind::Param(decls)) = file.stmts.first().map(|s| &s.kind) else { panic!() };
+    assert!(decls[0].unit.is_none());
+    assert_eq!(decls[0].value.as_ref().map(Expr::to_sexpr).as_deref(), Some("(/ 1 m)"));
+
+    let file = parse("coord theta = 0, theta' = 1/2 1/s").expect("parses");
+    let Some(StmtKind::Coord(decls)) = file.stmts.first().map(|s| &s.kind) else { panic!() };
+    assert_eq!(powers(&decls[0].rate_unit), pairs(&[("s", -1)]));
+}
+
+#[test]
 fn coord_lines_attach_rates_and_units() {
     let file = parse("coord theta = 30 deg, theta' = 2 rad/s, x").expect("parses");
     let Some(StmtKind::Coord(decls)) = file.stmts.first().map(|s| &s.kind) else { panic!() };

@@ -9,8 +9,12 @@
 use std::collections::{BTreeMap, HashMap};
 
 use cas::number::{One, Signed, Zero};
-use cas::Rational;
+use cas::{ExprId, Func, Pool, Rational};
 use lang::{BinOp, Diagnostic, Expr, ExprKind, Property, SceneFile, Span, StmtKind, Unit};
+
+/// Past this a power of a number is not physics; [`Checker::number_value`] leaves it unvalued
+/// rather than build it (the resolver refuses it anyway).
+const MAX_EXPONENT: i64 = 64;
 
 /// The SI base quantities tracked: mass, length, time, current, temperature.
 const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];
@@ -116,11 +120,6 @@ fn unit(name: &str) -> Option<(Dim, Rational, i32)> {
     })
 }
 
-const UNIT_NAMES: [&str; 24] = [
-    "kg", "g", "m", "km", "cm", "mm", "s", "ms", "min", "h", "Hz", "N", "J", "W", "Pa", "A", "C",
-    "V", "T", "K", "rad", "deg", "rev", "rpm",
-];
-
 /// The dimension and SI scale of a written unit, or an error naming the unknown part.
 pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
     let mut dim = Dim::default();
@@ -129,10 +128,10 @@ pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
         let Some((d, r, p)) = unit(&name.name) else {
             let mut diag = Diagnostic::error(name.span, format!("unknown unit `{}`", name.name))
                 .with_label("not a unit lagrange knows");
-            let near = UNIT_NAMES.iter().find(|n| n.eq_ignore_ascii_case(&name.name));
+            let near = lang::UNIT_NAMES.iter().find(|n| n.eq_ignore_ascii_case(&name.name));
             diag = match near {
                 Some(n) => diag.with_hint(format!("did you mean `{n}`?")),
-                None => diag.with_hint(format!("the units are {}", UNIT_NAMES.join(", "))),
+                None => diag.with_hint(format!("the units are {}", lang::UNIT_NAMES.join(", "))),
             };
             return Err(diag);
         };
@@ -229,6 +228,8 @@ struct Checker {
     /// The first energy term, to point at when another disagrees with it.
     energy_span: Option<Span>,
     errors: Vec<Diagnostic>,
+    /// Exact values of expressions made of numbers alone, to tell which of them are zero.
+    numbers: Pool,
 }
 
 impl Checker {
@@ -323,7 +324,9 @@ impl Checker {
 
     fn with_unit(&mut self, value: Option<&Expr>, unit: Option<&Unit>) -> Form {
         let mut f = match value {
-            // A number with a unit has the unit's dimension; one without is a wildcard.
+            // A number with a unit has the unit's dimension (even `0 m`); one without is a
+            // wildcard.
+            Some(v) if unit.is_some() && self.is_number(v) => Form::default(),
             Some(v) if unit.is_some() => self.scalar(v),
             Some(v) => self.operand_scalar(v),
             None => Form::unknown(self.fresh("a value")),
@@ -539,11 +542,13 @@ impl Checker {
     }
 
     /// A value that stands alone: a side of an equation, a term of a sum, an initial value, a
-    /// vector component. A bare number there (`x'' = 0`, `coord s = 1, s' = -1`, `x + 1`) takes
-    /// whatever dimension its place needs, so scenes written without units still pass; a number
-    /// that multiplies something (`k/10`, `2*x`) is dimensionless, so coefficients are checked.
+    /// vector component. A number there, or an expression of numbers alone (`x'' = 0`,
+    /// `coord s = 1, s' = -1`, `theta' = sqrt(3)/2`, `x + 1/3`), takes whatever dimension its
+    /// place needs, so scenes written without units still pass; a number that multiplies
+    /// something (`k/10`, `2*x`) is dimensionless, so coefficients are checked, unless it is
+    /// zero (see [`Checker::value`]).
     fn operand(&mut self, e: &Expr) -> Shape {
-        if is_bare_number(e) {
+        if self.is_number(e) {
             return Shape::Scalar(Form::unknown(self.fresh("a number")));
         }
         self.value(e)
@@ -563,7 +568,16 @@ impl Checker {
         }
     }
 
+    /// The dimension of `e` wherever it stands. Numbers are dimensionless here, except zero:
+    /// 0·x is zero whatever x is, so a zero has every dimension (`[m, 0; 0, m]*[x''; y'']`).
     fn value(&mut self, e: &Expr) -> Shape {
+        if self.is_number(e) {
+            return Shape::Scalar(if self.is_zero_number(e) {
+                Form::unknown(self.fresh("zero"))
+            } else {
+                Form::default()
+            });
+        }
         match &e.kind {
             ExprKind::Number(_) => Shape::Scalar(Form::default()),
             ExprKind::Name { name, primes } => {
@@ -652,6 +666,95 @@ impl Checker {
         }
     }
 
+    /// Whether `e` is made of numbers alone: literals, `pi`, and functions and operations of
+    /// them (`0`, `-1/2`, `sqrt(3)/2`, `2*pi`).
+    fn is_number(&self, e: &Expr) -> bool {
+        match &e.kind {
+            ExprKind::Number(_) => true,
+            // `pi` stays the number unless the scene declared a name `pi` of its own.
+            ExprKind::Name { name, primes: 0 } => {
+                normalize(name) == "pi"
+                    && self
+                        .names
+                        .get("pi")
+                        .is_some_and(|f| f.unknowns.is_empty() && f.known.is_dimensionless())
+            }
+            ExprKind::Neg(inner) => self.is_number(inner),
+            ExprKind::Binary { lhs, rhs, .. } => self.is_number(lhs) && self.is_number(rhs),
+            ExprKind::Call { func, args } => {
+                let known = matches!(func.name.as_str(), "sqrt" | "atan2")
+                    || Func::from_name(&func.name).is_some();
+                known && args.iter().all(|a| self.is_number(a))
+            }
+            ExprKind::Member { .. } | ExprKind::Name { .. } => false,
+            ExprKind::Tuple(_) | ExprKind::Matrix(_) => false,
+        }
+    }
+
+    /// Whether a number-only expression is exactly zero (`0`, `-0.0`, `0*pi`, `sin(pi)`,
+    /// `1/2 - 0.5`). `false` when its value could not be decided.
+    fn is_zero_number(&mut self, e: &Expr) -> bool {
+        match self.number_value(e) {
+            Some(v) => self.numbers.is_identically_zero(v),
+            None => false,
+        }
+    }
+
+    /// The exact value of a number-only expression, or `None` where building it would divide
+    /// by zero or raise to a power too large to be meant.
+    fn number_value(&mut self, e: &Expr) -> Option<ExprId> {
+        let pool = &mut self.numbers;
+        Some(match &e.kind {
+            ExprKind::Number(text) => {
+                let q = cas::number::parse_decimal(text)?;
+                pool.num(q)
+            }
+            ExprKind::Name { name, .. } if normalize(name) == "pi" => pool.pi(),
+            ExprKind::Neg(inner) => {
+                let v = self.number_value(inner)?;
+                self.numbers.neg(v)
+            }
+            ExprKind::Binary { op, lhs, rhs } => {
+                let (a, b) = (self.number_value(lhs)?, self.number_value(rhs)?);
+                let pool = &mut self.numbers;
+                match op {
+                    BinOp::Add => pool.add2(a, b),
+                    BinOp::Sub => pool.sub(a, b),
+                    BinOp::Mul => pool.mul2(a, b),
+                    BinOp::Div if pool.is_zero(b) => return None,
+                    BinOp::Div => pool.div(a, b),
+                    BinOp::Pow => {
+                        let q = pool.as_num(b)?.clone();
+                        let limit = Rational::from_integer(MAX_EXPONENT.into());
+                        let huge =
+                            q.numer().bits() > 32 || q.denom().bits() > 32 || q.abs() > limit;
+                        if huge || (pool.is_zero(a) && q.is_negative()) {
+                            return None;
+                        }
+                        pool.powq(a, &q)
+                    }
+                }
+            }
+            ExprKind::Call { func, args } => {
+                let mut xs = Vec::new();
+                for a in args {
+                    xs.push(self.number_value(a)?);
+                }
+                let pool = &mut self.numbers;
+                match (func.name.as_str(), xs.as_slice()) {
+                    ("sqrt", [x]) => pool.sqrt(*x),
+                    ("atan2", [y, x]) => pool.atan2(*y, *x),
+                    (name, [x]) => pool.func(Func::from_name(name)?, *x),
+                    _ => return None,
+                }
+            }
+            ExprKind::Name { .. }
+            | ExprKind::Member { .. }
+            | ExprKind::Tuple(_)
+            | ExprKind::Matrix(_) => return None,
+        })
+    }
+
     fn binary(&mut self, op: BinOp, lhs: &Expr, rhs: &Expr) -> Shape {
         // Matrix products: the entries of `[a, b; c, d] * [x; y]` are sums a·x + b·y.
         if let (BinOp::Mul, ExprKind::Matrix(a), ExprKind::Matrix(b)) = (op, &lhs.kind, &rhs.kind) {
@@ -733,15 +836,6 @@ impl Checker {
     }
 }
 
-/// A number, possibly negated: `0`, `-1`, `2.5`.
-fn is_bare_number(e: &Expr) -> bool {
-    match &e.kind {
-        ExprKind::Number(_) => true,
-        ExprKind::Neg(inner) => is_bare_number(inner),
-        _ => false,
-    }
-}
-
 /// A numeric exponent as written: `2`, `-1`, `1/2`, `(3/2)`.
 fn exponent_value(e: &Expr) -> Option<Rational> {
     match &e.kind {
@@ -789,6 +883,67 @@ mod tests {
         let bad = "param L = 2 m\ncoord x = 1 m\nparticle p { mass 1; position (sin(x), 0) }\n";
         let e = errors(bad);
         assert!(e.iter().any(|m| m.contains("argument of sin")), "{e:?}");
+    }
+
+    const CHARGE: &str = "param m = 1 kg, q = 1 C, B = 2 T\ncoord x = 1 m, x' = 0\ncoord y = 0, y' = 1 m/s\nlagrangian m/2*(x'^2 + y'^2) + q*B/2*(x*y' - y*x')\n";
+
+    #[test]
+    fn zero_has_every_dimension() {
+        let matrix = format!("{CHARGE}expect [m, 0; 0, m] * [x''; y''] = [q*B*y'; -q*B*x']\n");
+        assert_eq!(errors(&matrix), Vec::<String>::new());
+        for zero in ["0", "-0.0", "0*pi", "(1/2 - 0.5)", "sin(pi)", "(sqrt(4) - 2)"] {
+            let m = format!("{CHARGE}expect [m, {zero}; 0, m] * [x''; y''] = [q*B*y'; -q*B*x']\n");
+            assert_eq!(errors(&m), Vec::<String>::new(), "{zero}");
+            let product = format!("{CHARGE}expect m*x'' + {zero}*y'' = q*B*y'\n");
+            assert_eq!(errors(&product), Vec::<String>::new(), "{zero}");
+        }
+        // A number that is not zero still makes a product keep the other factor's dimension.
+        let wrong = format!("{CHARGE}expect [m, 1; 0, m] * [x''; y''] = [q*B*y'; -q*B*x']\n");
+        let e = errors(&wrong);
+        assert!(e.len() == 1 && e[0].contains("matrix product"), "{e:?}");
+    }
+
+    #[test]
+    fn number_only_expressions_take_the_dimension_their_place_needs() {
+        let pendulum = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord theta = 0, theta' = RATE\nparticle bob { mass m; position (L*sin(theta), -L*cos(theta)) }\ngravity g\n";
+        for rate in ["0.866", "1/2*sqrt(3)", "sqrt(3)/2", "2*pi", "1/3", "-1/2", "-(1/2)"] {
+            assert_eq!(errors(&pendulum.replace("RATE", rate)), Vec::<String>::new(), "{rate}");
+        }
+        let sum =
+            "param L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + sqrt(2)/2, 2*pi) }\n";
+        assert_eq!(errors(sum), Vec::<String>::new());
+        // A name is not a number: `pi` declared as a parameter is checked like any other.
+        let shadowed =
+            "param pi = 2 s, L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + pi, 0) }\n";
+        assert_eq!(errors(shadowed).len(), 1);
+    }
+
+    #[test]
+    fn units_after_expressions_and_denominators_only() {
+        let ok = "param m = 1 kg, L = 1 m, k = 1/2 1/m, c = sqrt(2) N/m\ncoord x = 0 m\nparticle p { mass m; position (x, 0) }\npotential c/2*x^2 + c*k*x^3\n";
+        assert_eq!(errors(ok), Vec::<String>::new());
+        // `0 m` keeps its unit: x is a length, and so x + t is refused.
+        let zero_with_unit = "coord x = 0 m\nparticle p { mass 1; position (x + t, 0) }\n";
+        assert_eq!(errors(zero_with_unit).len(), 1);
+        let inverse_length = "param k = 1/2 1/m, L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + k, 0) }\n";
+        let e = errors(inverse_length);
+        assert!(e.len() == 1 && e[0].contains("1/m"), "{e:?}");
+    }
+
+    #[test]
+    fn inconsistent_scenes_still_fail() {
+        let sum = "param L = 1 m\ncoord x = 1 s\nparticle p { mass 1; position (x + L, 0) }\n";
+        assert_eq!(errors(sum).len(), 1);
+        let expect = "param m = 1 kg\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\nexpect m*x'' = x\n";
+        let e = errors(expect);
+        assert!(e.len() == 1 && e[0].contains("expectation"), "{e:?}");
+    }
+
+    #[test]
+    fn the_parser_knows_every_unit() {
+        for name in lang::UNIT_NAMES {
+            assert!(unit(name).is_some(), "{name}");
+        }
     }
 
     #[test]

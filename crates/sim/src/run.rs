@@ -51,6 +51,13 @@ impl Method {
     pub fn is_symplectic(self) -> bool {
         matches!(self, Method::Midpoint | Method::Gauss)
     }
+
+    /// Whether the method can integrate constraints kept with multipliers. Those are solved
+    /// with the augmented system on (q, q̇), which the symplectic methods, working in canonical
+    /// variables (q, p), do not have.
+    pub fn handles_multipliers(self) -> bool {
+        !self.is_symplectic()
+    }
 }
 
 #[derive(Clone, Debug)]
