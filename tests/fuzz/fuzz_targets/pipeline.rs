@@ -5,7 +5,15 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(source) = std::str::from_utf8(data) else { return };
+    // Bytes that are not UTF-8 get a located diagnostic, never a panic.
+    let source = match cli::decode("fuzz.lag", data.to_vec()) {
+        Ok(source) => source,
+        Err(rendered) => {
+            assert!(rendered.contains("fuzz.lag:"));
+            return;
+        }
+    };
+    let source = source.as_str();
     for units in [true, false] {
         let options = cli::Options { units };
         let checked = cli::check::check_file_with("fuzz.lag", source, options);
