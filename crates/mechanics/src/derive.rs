@@ -3,11 +3,10 @@
 
 use std::collections::HashMap;
 
+use cas::linear_system;
 use cas::{ExprId, Pool, SymId, SymbolKind};
 use lang::Diagnostic;
 use model::{BodyKind, Model, Placeholder, Value};
-
-use crate::linear;
 
 /// A constraint solved for one coordinate, which then leaves the equations.
 #[derive(Clone, Debug)]
@@ -161,7 +160,7 @@ impl Derivation {
                 None
             } else {
                 let (rows, rhs) = self.system();
-                linear::solve(&mut self.model.pool, &rows, &rhs)
+                linear_system::solve(&mut self.model.pool, &rows, &rhs)
                     .map(|x| unknowns.into_iter().zip(x).collect())
             };
             self.solved = Some(result);
@@ -470,7 +469,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
                 a[row][col] = pool.subst(dphi, &elimination_map);
             }
         }
-        match linear::solve(pool, &a, &b) {
+        match linear_system::solve(pool, &a, &b) {
             Some(lambdas) => {
                 for (e, expr) in eliminated.iter().zip(lambdas) {
                     let c = &model.constraints[e.constraint];
