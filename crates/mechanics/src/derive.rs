@@ -262,3 +262,79 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
 /// Past this many unknowns the symbolic solution of the full system is too large to be worth
 /// printing; the reactions of kept constraints then stay multipliers, found numerically.
 const SYMBOLIC_SOLVE_LIMIT: usize = 4;
+
+#[cfg(test)]
+mod testing {
+    //! Small scenes for the phases' tests, and their expressions as text.
+
+    use cas::{ExprId, Pool, Style, SymId};
+    use model::Model;
+
+    /// Problem set 5's rod: its end on the floor is a constraint solved for y.
+    pub const FALLING_ROD: &str = "
+param m, L, g
+coord x
+coord y
+coord theta
+body rod { mass m; inertia m*L^2/12; position (x, y); angle theta }
+constraint floor: y = L/2*cos(theta)
+gravity g
+";
+
+    /// A pendulum in x and y: its rod is a constraint kept with a multiplier.
+    pub const CARTESIAN_PENDULUM: &str = "
+param m, L, g
+coord x
+coord y
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+";
+
+    /// The model of a scene, with its pool held apart as `derive` holds it during the phases.
+    pub fn scene(source: &str) -> (Pool, Model) {
+        let ast = lang::parse(source).expect("the scene parses");
+        let (mut model, _warnings) = model::resolve(&ast, source).expect("the scene resolves");
+        let pool = std::mem::take(&mut model.pool);
+        (pool, model)
+    }
+
+    /// A scene derived whole.
+    pub fn derived(source: &str) -> super::Derivation {
+        let ast = lang::parse(source).expect("the scene parses");
+        let (model, _warnings) = model::resolve(&ast, source).expect("the scene resolves");
+        super::derive(model).expect("the scene derives")
+    }
+
+    pub fn ascii(pool: &Pool, e: ExprId) -> String {
+        pool.print(e, Style::Ascii)
+    }
+
+    pub fn names(pool: &Pool, syms: &[SymId]) -> Vec<String> {
+        syms.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
+    /// The coordinate declared with this name.
+    pub fn coord(model: &Model, name: &str) -> SymId {
+        let found = model.coords.iter().find(|c| c.name == name);
+        found.unwrap_or_else(|| panic!("no coordinate `{name}`")).sym
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::testing::{ascii, derived, CARTESIAN_PENDULUM};
+
+    #[test]
+    fn the_full_system_stacks_the_constraint_rows_under_the_equations() {
+        let mut d = derived(CARTESIAN_PENDULUM);
+        assert_eq!(d.unknowns().len(), 3);
+        let (rows, rhs) = d.system();
+        let pool = d.pool();
+        let rows: Vec<Vec<String>> =
+            rows.iter().map(|r| r.iter().map(|e| ascii(pool, *e)).collect()).collect();
+        let rhs: Vec<String> = rhs.iter().map(|e| ascii(pool, *e)).collect();
+        assert_eq!(rows, [["m", "0", "-2*x"], ["0", "m", "-2*y"], ["2*x", "2*y", "0"]]);
+        assert_eq!(rhs, ["0", "-m*g", "-2*x'^2 - 2*y'^2"]);
+    }
+}

@@ -172,3 +172,116 @@ impl Derivation {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{
+        ascii, coord, derived, names, scene, CARTESIAN_PENDULUM, FALLING_ROD,
+    };
+    use super::*;
+
+    #[test]
+    fn the_floor_is_solved_for_y() {
+        let (mut pool, model) = scene(FALLING_ROD);
+        let out = eliminate_constraints(&mut pool, &model);
+        assert!(out.errors.is_empty() && out.kept.is_empty());
+        let [e] = &out.eliminated[..] else { panic!("{:?}", out.eliminated) };
+        assert_eq!((e.constraint, e.coord), (0, coord(&model, "y")));
+        assert_eq!(ascii(&pool, e.solution), "1/2*L*cos(theta)");
+    }
+
+    #[test]
+    fn the_eliminated_coordinate_moves_with_the_rest() {
+        let (mut pool, model) = scene(FALLING_ROD);
+        let out = eliminate_constraints(&mut pool, &model);
+        let c = remaining_coordinates(&mut pool, &model, &out.eliminated);
+        assert_eq!(names(&pool, &c.coords), ["x", "theta"]);
+        assert_eq!(names(&pool, &c.rates), ["x'", "theta'"]);
+        assert_eq!(names(&pool, &c.accels), ["x''", "theta''"]);
+        let y = coord(&model, "y");
+        let y_rate = pool.rate(y).unwrap();
+        let y_accel = pool.rate(y_rate).unwrap();
+        let of = |s: SymId| ascii(&pool, c.elimination_map[&s]);
+        assert_eq!(
+            [of(y), of(y_rate), of(y_accel)],
+            [
+                "1/2*L*cos(theta)",
+                "-1/2*L*sin(theta)*theta'",
+                "-1/2*L*sin(theta)*theta'' - 1/2*L*cos(theta)*theta'^2"
+            ]
+        );
+    }
+
+    #[test]
+    fn a_circle_is_kept() {
+        let (mut pool, model) = scene(CARTESIAN_PENDULUM);
+        let out = eliminate_constraints(&mut pool, &model);
+        assert!(out.eliminated.is_empty() && out.errors.is_empty());
+        assert_eq!(out.kept, [0]);
+    }
+
+    #[test]
+    fn a_coordinate_alone_on_the_left_is_preferred() {
+        let (mut pool, model) = scene("coord x\ncoord y\nconstraint c: x = 2*y");
+        let out = eliminate_constraints(&mut pool, &model);
+        assert_eq!(out.eliminated[0].coord, coord(&model, "x"));
+        assert_eq!(ascii(&pool, out.eliminated[0].solution), "2*y");
+
+        // Otherwise the latest declared.
+        let (mut pool, model) = scene("coord x\ncoord y\nconstraint c: 2*y = x");
+        let out = eliminate_constraints(&mut pool, &model);
+        assert_eq!(out.eliminated[0].coord, coord(&model, "y"));
+        assert_eq!(ascii(&pool, out.eliminated[0].solution), "x/2");
+    }
+
+    #[test]
+    fn a_coefficient_that_moves_is_not_divided_by() {
+        // Solving x*y = 1 for x would divide by y, which may pass through zero.
+        let (mut pool, model) = scene("coord x\ncoord y\nconstraint c: x*y = 1");
+        let out = eliminate_constraints(&mut pool, &model);
+        assert!(out.eliminated.is_empty());
+        assert_eq!(out.kept, [0]);
+    }
+
+    #[test]
+    fn earlier_solutions_follow_later_ones() {
+        let (mut pool, model) =
+            scene("coord x\ncoord y\ncoord z\nconstraint a: x = y\nconstraint b: y = z + 1");
+        let out = eliminate_constraints(&mut pool, &model);
+        let solved: Vec<(String, String)> = out
+            .eliminated
+            .iter()
+            .map(|e| (pool.symbol(e.coord).name.clone(), ascii(&pool, e.solution)))
+            .collect();
+        assert_eq!(solved, [("x".into(), "1 + z".into()), ("y".into(), "1 + z".into())]);
+    }
+
+    #[test]
+    fn an_implied_constraint_is_an_error() {
+        let (mut pool, model) =
+            scene("param L\ncoord x\ncoord y\nconstraint a: y = L\nconstraint b: 2*y = 2*L");
+        let out = eliminate_constraints(&mut pool, &model);
+        assert_eq!(out.eliminated.len(), 1);
+        assert!(out.kept.is_empty());
+        let [e] = &out.errors[..] else { panic!("{:?}", out.errors) };
+        assert_eq!(e.message, "constraint `b` is implied by the ones before it");
+    }
+
+    #[test]
+    fn an_initial_value_the_constraint_overrides_is_warned_about() {
+        let d = derived(
+            "param m = 1 kg, L = 2 m\ncoord x = 0\ncoord y = 1 m\nparticle p { mass m; position (x, y) }\nconstraint floor: y = L",
+        );
+        let [w] = &d.warnings[..] else { panic!("{:?}", d.warnings) };
+        assert_eq!(
+            (w.message.as_str(), w.label.as_str()),
+            ("the initial value of `y` is ignored", "`floor` fixes it at 2")
+        );
+
+        // One that agrees with it is not.
+        let d = derived(
+            "param m = 1 kg, L = 2 m\ncoord x = 0\ncoord y = 2 m\nparticle p { mass m; position (x, y) }\nconstraint floor: y = L",
+        );
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+    }
+}

@@ -90,3 +90,73 @@ impl Energies {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::testing::{ascii, scene, FALLING_ROD};
+    use super::*;
+
+    #[test]
+    fn a_pendulum() {
+        let (mut pool, model) = scene(
+            "param m, L, g\ncoord theta\nparticle bob { mass m; position (L*sin(theta), -L*cos(theta)) }\ngravity g",
+        );
+        let e = energies(&mut pool, &model);
+        assert_eq!(
+            ascii(&pool, e.kinetic),
+            "1/2*m*(L^2*sin(theta)^2*theta'^2 + L^2*cos(theta)^2*theta'^2)"
+        );
+        assert_eq!(ascii(&pool, e.potential), "-m*L*g*cos(theta)");
+        assert_eq!(
+            ascii(&pool, e.lagrangian),
+            "1/2*m*(L^2*sin(theta)^2*theta'^2 + L^2*cos(theta)^2*theta'^2) + m*L*g*cos(theta)"
+        );
+        assert_eq!(ascii(&pool, e.dissipation), "0");
+    }
+
+    #[test]
+    fn a_rigid_body_turns_too() {
+        let (mut pool, model) =
+            scene("param m, I\ncoord x\ncoord phi\nbody wheel { mass m; inertia I; position (x, 0); angle phi }");
+        let e = energies(&mut pool, &model);
+        assert_eq!(ascii(&pool, e.kinetic), "1/2*m*x'^2 + 1/2*I*phi'^2");
+        assert_eq!(ascii(&pool, e.potential), "0");
+    }
+
+    #[test]
+    fn gravity_along_a_vector_keeps_its_strength() {
+        let (mut pool, model) = scene(
+            "param m, g\ncoord x\ncoord y\nparticle p { mass m; position (x, y) }\ngravity g along (3, -4)",
+        );
+        let e = energies(&mut pool, &model);
+        assert_eq!(ascii(&pool, e.potential), "-m*g*(3/5*x - 4/5*y)");
+    }
+
+    #[test]
+    fn the_scene_adds_its_own_terms() {
+        let (mut pool, model) = scene(
+            "param m, k, c, b\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\nlagrangian b*x*x'\ndissipation c/2*x'^2",
+        );
+        let e = energies(&mut pool, &model);
+        assert_eq!(ascii(&pool, e.potential), "1/2*k*x^2");
+        assert_eq!(ascii(&pool, e.lagrangian), "1/2*m*x'^2 + b*x*x' - 1/2*k*x^2");
+        assert_eq!(ascii(&pool, e.dissipation), "1/2*c*x'^2");
+    }
+
+    #[test]
+    fn the_falling_rod_reduced() {
+        let (mut pool, model) = scene(FALLING_ROD);
+        let eliminated = eliminate_constraints(&mut pool, &model).eliminated;
+        let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+        let full = energies(&mut pool, &model);
+        assert_eq!(ascii(&pool, full.potential), "m*g*y");
+        let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
+        assert_eq!(
+            ascii(&pool, reduced.kinetic),
+            "1/2*m*(x'^2 + 1/4*L^2*sin(theta)^2*theta'^2) + 1/24*m*L^2*theta'^2"
+        );
+        assert_eq!(ascii(&pool, reduced.potential), "1/2*m*L*g*cos(theta)");
+        assert_eq!(reduced.dissipation, full.dissipation);
+    }
+}

@@ -129,3 +129,103 @@ pub(super) fn coordinates_without_inertia(
     }
     errors
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::energies::energies;
+    use super::super::testing::{ascii, coord, scene, FALLING_ROD};
+    use super::*;
+
+    /// The rows of a scene, with the phases before them run as `derive` runs them.
+    fn rows_of(source: &str) -> (Pool, Model, Coordinates, Rows) {
+        let (mut pool, model) = scene(source);
+        let eliminated = eliminate_constraints(&mut pool, &model).eliminated;
+        let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+        let full = energies(&mut pool, &model);
+        let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
+        let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+        (pool, model, coordinates, rows)
+    }
+
+    fn matrix(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<String>> {
+        m.iter().map(|row| row.iter().map(|e| ascii(pool, *e)).collect()).collect()
+    }
+
+    #[test]
+    fn two_particles_share_a_coordinate() {
+        let (pool, _, _, rows) = rows_of(
+            "param m1, m2, k\ncoord x\ncoord s\nparticle a { mass m1; position (x, 0) }\nparticle b { mass m2; position (x + s, 0) }\npotential k/2*s^2",
+        );
+        assert_eq!(matrix(&pool, &rows.mass_matrix), [["m1 + m2", "m2"], ["m2", "m2"]]);
+        assert_eq!([ascii(&pool, rows.forcing[0]), ascii(&pool, rows.forcing[1])], ["0", "-k*s"]);
+    }
+
+    #[test]
+    fn a_pendulum_row_is_simplified() {
+        let (pool, _, _, rows) = rows_of(
+            "param m, L, g\ncoord theta\nparticle bob { mass m; position (L*sin(theta), -L*cos(theta)) }\ngravity g",
+        );
+        assert_eq!(matrix(&pool, &rows.mass_matrix), [["m*L^2"]]);
+        assert_eq!(ascii(&pool, rows.forcing[0]), "-m*L*g*sin(theta)");
+        assert_eq!(ascii(&pool, rows.generalized_forces[0]), "0");
+    }
+
+    #[test]
+    fn the_falling_rod() {
+        let (pool, _, _, rows) = rows_of(FALLING_ROD);
+        assert_eq!(
+            matrix(&pool, &rows.mass_matrix),
+            [["m", "0"], ["0", "1/12*m*L^2 + 1/4*m*L^2*sin(theta)^2"]]
+        );
+        assert_eq!(
+            [ascii(&pool, rows.forcing[0]), ascii(&pool, rows.forcing[1])],
+            ["0", "-1/4*m*L^2*sin(theta)*cos(theta)*theta'^2 + 1/2*m*L*g*sin(theta)"]
+        );
+    }
+
+    #[test]
+    fn loads_do_virtual_work() {
+        let (mut pool, model) = scene(
+            "param m, L, F, tau, c\ncoord x\ncoord theta\nbody arm { mass m; inertia m*L^2; position (x + L*sin(theta), -L*cos(theta)); angle theta }\nforce push on arm: (F, 0)\ntorque motor on arm: tau\ndissipation c/2*x'^2",
+        );
+        let full = energies(&mut pool, &model);
+        let none = HashMap::new();
+        let x = coord(&model, "x");
+        let theta = coord(&model, "theta");
+        let q_x = generalized_force(&mut pool, &model, full.dissipation, x, &none);
+        let q_theta = generalized_force(&mut pool, &model, full.dissipation, theta, &none);
+        assert_eq!(
+            [ascii(&pool, q_x), ascii(&pool, q_theta)],
+            ["-c*x' + F", "tau + L*F*cos(theta)"]
+        );
+    }
+
+    #[test]
+    fn loads_on_an_eliminated_coordinate_reach_the_rest() {
+        let (mut pool, model) = scene(
+            "param m, L, P\ncoord x\ncoord y\nparticle p { mass m; position (x, y) }\nconstraint track: y = L*x^2\nforce lift on p: (0, P)",
+        );
+        let eliminated = eliminate_constraints(&mut pool, &model).eliminated;
+        let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+        let full = energies(&mut pool, &model);
+        let x = coord(&model, "x");
+        let q =
+            generalized_force(&mut pool, &model, full.dissipation, x, &coordinates.elimination_map);
+        assert_eq!(ascii(&pool, q), "2*L*P*x");
+    }
+
+    #[test]
+    fn a_coordinate_nothing_moves_with_is_an_error() {
+        let (mut pool, model) =
+            scene("param m\ncoord x\ncoord z\nparticle p { mass m; position (x, 0) }");
+        let eliminated = eliminate_constraints(&mut pool, &model).eliminated;
+        let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+        let full = energies(&mut pool, &model);
+        let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
+        let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+        let errors = coordinates_without_inertia(&mut pool, &model, &coordinates.coords, &rows);
+        let [e] = &errors[..] else { panic!("{errors:?}") };
+        assert_eq!(e.message, "no kinetic energy depends on the rate of `z`");
+    }
+}

@@ -94,3 +94,84 @@ impl Derivation {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::energies::energies;
+    use super::super::multipliers::kept_constraints;
+    use super::super::testing::{ascii, derived, scene, CARTESIAN_PENDULUM, FALLING_ROD};
+    use super::*;
+
+    /// The reactions of the eliminated constraints, with the phases before them run as
+    /// `derive` runs them.
+    fn reactions_of(source: &str) -> (Pool, Result<Vec<Reaction>, Diagnostic>) {
+        let (mut pool, model) = scene(source);
+        let out = eliminate_constraints(&mut pool, &model);
+        let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
+        let full = energies(&mut pool, &model);
+        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        let reactions = eliminated_reactions(
+            &mut pool,
+            &model,
+            &full,
+            &coordinates,
+            &out.eliminated,
+            &multipliers,
+        );
+        (pool, reactions)
+    }
+
+    fn printed(pool: &Pool, reactions: &[Reaction]) -> Vec<String> {
+        reactions
+            .iter()
+            .map(|r| format!("{} = {}", pool.symbol(r.symbol).name, ascii(pool, r.expr)))
+            .collect()
+    }
+
+    #[test]
+    fn the_floor_pushes_the_rod_up() {
+        let (pool, reactions) = reactions_of(&format!("{FALLING_ROD}show floor.force"));
+        assert_eq!(
+            printed(&pool, &reactions.unwrap()),
+            ["floor.force = -1/2*m*(L*sin(theta)*theta'' + L*cos(theta)*theta'^2 - 2*g)"]
+        );
+    }
+
+    #[test]
+    fn only_where_asked_for() {
+        let (_, reactions) = reactions_of(FALLING_ROD);
+        assert!(reactions.unwrap().is_empty());
+    }
+
+    #[test]
+    fn two_eliminated_constraints_share_a_coordinate() {
+        // x follows the cart s, y follows x: b's reaction pulls x too, so a's carries both.
+        let (pool, reactions) = reactions_of(
+            "param m, M, g\ncoord s\ncoord x\ncoord y\nparticle cart { mass M; position (s, 0) }\nparticle p { mass m; position (x, y) }\nconstraint a: x = s\nconstraint b: y = x\ngravity g\nshow a.force, b.force",
+        );
+        assert_eq!(
+            printed(&pool, &reactions.unwrap()),
+            ["a.force = m*(2*s'' + g)", "b.force = m*(s'' + g)"]
+        );
+    }
+
+    #[test]
+    fn a_kept_constraint_takes_its_share() {
+        // The plane z = h holds the bob up against gravity, less the rod's pull along z.
+        let (pool, reactions) = reactions_of(
+            "param m, L, h, g\ncoord x\ncoord y\ncoord z\nparticle bob { mass m; position (x, y, z) }\nconstraint plane: z = h\nconstraint rod: x^2 + y^2 + z^2 = L^2\ngravity g\nshow plane.force",
+        );
+        assert_eq!(printed(&pool, &reactions.unwrap()), ["plane.force = m*g - 2*h*rod.force"]);
+    }
+
+    #[test]
+    fn a_multiplier_is_solved_for_when_asked_for() {
+        let mut d = derived(&format!("{CARTESIAN_PENDULUM}show rod.force"));
+        let reactions = d.reactions.clone();
+        assert_eq!(
+            printed(d.pool(), &reactions),
+            ["rod.force = -m*(x'^2 + y'^2 - g*y)/(2*x^2 + 2*y^2)"]
+        );
+    }
+}
