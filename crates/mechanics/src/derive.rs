@@ -198,9 +198,9 @@ impl Derivation {
 /// the whole derivation.
 pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     // The phases build expressions while reading the rest of the model; holding the pool apart
-    // meanwhile lets each borrow both. The phases run in this order because the pool numbers
-    // expressions as they are built and sums are ordered by those numbers: another order could
-    // print the same equations with their terms in another order.
+    // meanwhile lets each borrow both. Their order matters beyond what each needs: the pool
+    // numbers expressions as it builds them and some ties (in simplification, in printing) go
+    // by those numbers, so building in another order could print the same equations otherwise.
     let mut pool = std::mem::take(&mut model.pool);
     let Eliminated { eliminated, kept, mut errors } = eliminate_constraints(&mut pool, &model);
     let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
