@@ -66,43 +66,46 @@ pub(super) fn eliminate_constraints(pool: &mut Pool, model: &Model) -> Eliminate
                 candidates.push(*q);
             }
         }
-        let mut done = false;
-        for q in candidates {
-            let a = pool.diff(phi, q);
-            let a = pool.simplify(a);
-            let a_free = pool.free_symbols(a);
-            // Linear in q, with a coefficient that never vanishes as the system moves.
-            let depends_on_motion =
-                a_free.iter().any(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Param));
-            if depends_on_motion || pool.is_identically_zero(a) {
-                continue;
-            }
-            let qe = pool.sym(q);
-            let step = pool.div(phi, a);
-            let sol = pool.sub(qe, step);
-            let sol = pool.simplify(sol);
-            // Earlier solutions that mention q now use the new one.
-            let single: HashMap<SymId, ExprId> = [(q, sol)].into_iter().collect();
-            for v in solved.values_mut() {
-                let s = pool.subst(*v, &single);
-                *v = pool.simplify(s);
-            }
-            for e in eliminated.iter_mut() {
-                e.solution = solved[&e.coord];
-            }
-            solved.insert(q, sol);
-            eliminated.push(Elimination { constraint: ci, coord: q, solution: sol });
-            done = true;
-            break;
-        }
-        if !done {
+        let Some((q, sol)) = solve_for_one_of(pool, phi, &candidates) else {
             kept.push(ci);
+            continue;
+        };
+        // Earlier solutions that mention q now use the new one.
+        let single: HashMap<SymId, ExprId> = [(q, sol)].into_iter().collect();
+        for v in solved.values_mut() {
+            let s = pool.subst(*v, &single);
+            *v = pool.simplify(s);
         }
+        for e in eliminated.iter_mut() {
+            e.solution = solved[&e.coord];
+        }
+        solved.insert(q, sol);
+        eliminated.push(Elimination { constraint: ci, coord: q, solution: sol });
     }
     for e in eliminated.iter_mut() {
         e.solution = solved[&e.coord];
     }
     Eliminated { eliminated, kept, errors }
+}
+
+/// The first candidate that Φ = 0 can be solved for, with its solution: Φ must be linear in
+/// it, with a coefficient that never vanishes as the system moves (parameters alone).
+fn solve_for_one_of(pool: &mut Pool, phi: ExprId, candidates: &[SymId]) -> Option<(SymId, ExprId)> {
+    for &q in candidates {
+        let a = pool.diff(phi, q);
+        let a = pool.simplify(a);
+        let a_free = pool.free_symbols(a);
+        let depends_on_motion =
+            a_free.iter().any(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Param));
+        if depends_on_motion || pool.is_identically_zero(a) {
+            continue;
+        }
+        let qe = pool.sym(q);
+        let step = pool.div(phi, a);
+        let sol = pool.sub(qe, step);
+        return Some((q, pool.simplify(sol)));
+    }
+    None
 }
 
 /// The coordinates that remain, with their rates and accelerations, and the eliminated ones'
