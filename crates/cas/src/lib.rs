@@ -1,5 +1,6 @@
 //! A small exact computer-algebra core: hash-consed expressions over exact rationals, with
-//! differentiation, substitution, expansion, zero recognition and printing.
+//! differentiation, substitution, expansion, zero recognition, printing, and the exact solution
+//! of linear systems whose entries are expressions ([`linear_system`]).
 //!
 //! This crate owns expressions and nothing else: it knows no mechanics, no files and no
 //! grammar. Everything lives in a [`Pool`]; expressions are small copyable [`ExprId`]s, and
@@ -9,6 +10,7 @@
 
 mod diff;
 mod expand;
+pub mod linear_system;
 pub mod number;
 mod pool;
 pub mod print;

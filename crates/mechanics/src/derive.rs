@@ -1,13 +1,23 @@
 //! From a model to equations of motion: constraints eliminated or kept as multipliers, the
 //! energies, the Euler–Lagrange equations in mass-matrix form, and reactions where asked for.
 
+mod eliminate;
+mod energies;
+mod equations;
+mod multipliers;
+mod reactions;
+
 use std::collections::HashMap;
 
-use cas::{ExprId, Pool, SymId, SymbolKind};
+use cas::{linear_system, ExprId, Pool, SymId};
 use lang::Diagnostic;
-use model::{BodyKind, Model, Placeholder, Value};
+use model::{Model, Placeholder, Value};
 
-use crate::linear;
+use eliminate::{eliminate_constraints, remaining_coordinates, Coordinates, Eliminated};
+use energies::energies;
+use equations::{coordinates_without_inertia, euler_lagrange_rows};
+use multipliers::kept_constraints;
+use reactions::eliminated_reactions;
 
 /// A constraint solved for one coordinate, which then leaves the equations.
 #[derive(Clone, Debug)]
@@ -161,7 +171,7 @@ impl Derivation {
                 None
             } else {
                 let (rows, rhs) = self.system();
-                linear::solve(&mut self.model.pool, &rows, &rhs)
+                linear_system::solve(&mut self.model.pool, &rows, &rhs)
                     .map(|x| unknowns.into_iter().zip(x).collect())
             };
             self.solved = Some(result);
@@ -182,320 +192,44 @@ impl Derivation {
     }
 }
 
-/// Derives the equations of motion of a model.
+/// Derives the equations of motion of a model, phase by phase: constraints eliminated where
+/// they can be solved for a coordinate, the energies, the Euler–Lagrange rows, the kept
+/// constraints' multipliers, the reactions of the eliminated ones; then the checks that need
+/// the whole derivation.
 pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
-    let mut errors = Vec::new();
-    let mut warnings = Vec::new();
-    let dim = model.dimension();
-    let pool = &mut model.pool;
-
-    // --- constraints: eliminate where one coordinate can be solved for --------------------
-    let declared: Vec<SymId> = model.coords.iter().map(|c| c.sym).collect();
-    let mut solved: HashMap<SymId, ExprId> = HashMap::new();
-    let mut eliminated: Vec<Elimination> = Vec::new();
-    let mut kept: Vec<usize> = Vec::new();
-    for (ci, c) in model.constraints.iter().enumerate() {
-        let phi = pool.subst(c.phi, &solved);
-        let phi = pool.expand(phi);
-        if pool.is_identically_zero(phi) {
-            errors.push(
-                Diagnostic::error(
-                    c.span,
-                    format!("constraint `{}` is implied by the ones before it", c.name),
-                )
-                .with_label("redundant")
-                .with_hint("remove it: it adds no condition"),
-            );
-            continue;
-        }
-        let free = pool.free_symbols(phi);
-        // Prefer a coordinate written alone on the left (`y = …`), then the latest declared.
-        let mut candidates: Vec<SymId> = c
-            .lhs_coords
-            .iter()
-            .copied()
-            .filter(|q| free.contains(q) && !solved.contains_key(q))
-            .collect();
-        for q in declared.iter().rev() {
-            if free.contains(q) && !candidates.contains(q) && !solved.contains_key(q) {
-                candidates.push(*q);
-            }
-        }
-        let mut done = false;
-        for q in candidates {
-            let a = pool.diff(phi, q);
-            let a = pool.simplify(a);
-            let a_free = pool.free_symbols(a);
-            // Linear in q, with a coefficient that never vanishes as the system moves.
-            let depends_on_motion =
-                a_free.iter().any(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Param));
-            if depends_on_motion || pool.is_identically_zero(a) {
-                continue;
-            }
-            let qe = pool.sym(q);
-            let step = pool.div(phi, a);
-            let sol = pool.sub(qe, step);
-            let sol = pool.simplify(sol);
-            // Earlier solutions that mention q now use the new one.
-            let single: HashMap<SymId, ExprId> = [(q, sol)].into_iter().collect();
-            for v in solved.values_mut() {
-                let s = pool.subst(*v, &single);
-                *v = pool.simplify(s);
-            }
-            for e in eliminated.iter_mut() {
-                e.solution = solved[&e.coord];
-            }
-            solved.insert(q, sol);
-            eliminated.push(Elimination { constraint: ci, coord: q, solution: sol });
-            done = true;
-            break;
-        }
-        if !done {
-            kept.push(ci);
-        }
-    }
-    for e in eliminated.iter_mut() {
-        e.solution = solved[&e.coord];
-    }
-
-    let coords: Vec<SymId> = declared.iter().copied().filter(|q| !solved.contains_key(q)).collect();
-    let rates: Vec<SymId> = coords.iter().map(|q| pool.rate(*q).expect("coordinate")).collect();
-    let accels: Vec<SymId> = rates.iter().map(|q| pool.rate(*q).expect("coordinate")).collect();
-
-    // q, q̇, q̈ of each eliminated coordinate in terms of the rest.
-    let mut elimination_map: HashMap<SymId, ExprId> = HashMap::new();
-    for e in &eliminated {
-        let v = pool.time_derivative(e.solution);
-        let a = pool.time_derivative(v);
-        let r = pool.rate(e.coord).expect("coordinate");
-        let rr = pool.rate(r).expect("coordinate");
-        elimination_map.insert(e.coord, e.solution);
-        elimination_map.insert(r, v);
-        elimination_map.insert(rr, a);
-    }
-
-    // --- energies in all declared coordinates --------------------------------------------
-    let mut kinetic_terms = Vec::new();
-    let mut potential_terms = Vec::new();
-    let half = cas::number::ratio(1, 2);
-    let gravity_dir: Option<Vec<ExprId>> = model.gravity.as_ref().map(|g| match &g.direction {
-        // `along` gives a direction only: gravity's strength is g whatever the vector's length.
-        Some(d) => {
-            let squares: Vec<ExprId> = d.iter().map(|x| pool.powi(*x, 2)).collect();
-            let norm2 = pool.add(&squares);
-            let norm = pool.sqrt(norm2);
-            d.iter().map(|x| pool.div(*x, norm)).collect()
-        }
-        None => {
-            let mut d = vec![pool.zero(); dim];
-            d[dim - 1] = pool.int(-1);
-            d
-        }
-    });
-    for body in &model.bodies {
-        let mut v2 = Vec::new();
-        for x in &body.position {
-            let v = pool.time_derivative(*x);
-            v2.push(pool.powi(v, 2));
-        }
-        let speed2 = pool.add(&v2);
-        let t = pool.mul2(body.mass, speed2);
-        kinetic_terms.push(pool.scale(t, &half));
-        if let (BodyKind::Rigid, Some(i), Some(angle)) = (body.kind, body.inertia, body.angle) {
-            let w = pool.time_derivative(angle);
-            let w2 = pool.powi(w, 2);
-            let t = pool.mul2(i, w2);
-            kinetic_terms.push(pool.scale(t, &half));
-        }
-        if let (Some(g), Some(dir)) = (&model.gravity, &gravity_dir) {
-            // V = −m g (d · r): the work gravity does is lost as potential energy.
-            let parts: Vec<ExprId> =
-                body.position.iter().zip(dir.iter()).map(|(x, d)| pool.mul2(*x, *d)).collect();
-            let along = pool.add(&parts);
-            let v = pool.mul(&[body.mass, g.strength, along]);
-            potential_terms.push(pool.neg(v));
-        }
-    }
-    for p in &model.potentials {
-        potential_terms.push(p.expr);
-    }
-    let kinetic_full = pool.add(&kinetic_terms);
-    let potential_full = pool.add(&potential_terms);
-    let mut lag_terms = vec![kinetic_full, pool.neg(potential_full)];
-    lag_terms.extend(model.lagrangians.iter().map(|l| l.expr));
-    let lagrangian_full = pool.add(&lag_terms);
-    let dissipation_full = {
-        let d: Vec<ExprId> = model.dissipation.iter().map(|d| d.expr).collect();
-        pool.add(&d)
-    };
-
-    // Generalized forces in any set of coordinates: Σ F·∂r/∂q + τ ∂angle/∂q − ∂D/∂q̇.
-    let generalized_force = |pool: &mut Pool, q: SymId, map: &HashMap<SymId, ExprId>| -> ExprId {
-        let mut parts = Vec::new();
-        for f in &model.forces {
-            let body = &model.bodies[f.body];
-            let comps = match &f.value {
-                Value::Vector(v) => v.clone(),
-                Value::Scalar(s) => vec![*s],
-                Value::Matrix(_) => Vec::new(),
-            };
-            for (fc, x) in comps.iter().zip(body.position.iter()) {
-                let x = pool.subst(*x, map);
-                let fc = pool.subst(*fc, map);
-                let dx = pool.diff(x, q);
-                parts.push(pool.mul2(fc, dx));
-            }
-        }
-        for t in &model.torques {
-            let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle) else {
-                continue;
-            };
-            let angle = pool.subst(angle, map);
-            let tau = pool.subst(*tau, map);
-            let da = pool.diff(angle, q);
-            parts.push(pool.mul2(tau, da));
-        }
-        let d = pool.subst(dissipation_full, map);
-        let rate = pool.rate(q).expect("coordinate");
-        let dd = pool.diff(d, rate);
-        parts.push(pool.neg(dd));
-        pool.add(&parts)
-    };
-
-    // --- the reduced system --------------------------------------------------------------
-    let kinetic = pool.subst(kinetic_full, &elimination_map);
-    let potential = pool.subst(potential_full, &elimination_map);
-    let lagrangian = pool.subst(lagrangian_full, &elimination_map);
-    let time = model.time;
-    let n = coords.len();
-    let mut mass_matrix = vec![vec![pool.zero(); n]; n];
-    let mut forcing = Vec::with_capacity(n);
-    let mut generalized_forces = Vec::with_capacity(n);
-    for i in 0..n {
-        // p_i = ∂L/∂q̇_i; d/dt p_i = Σ_j M_ij q̈_j + Σ_j ∂p_i/∂q_j q̇_j + ∂p_i/∂t.
-        let p = pool.diff(lagrangian, rates[i]);
-        for j in 0..n {
-            mass_matrix[i][j] = pool.diff(p, rates[j]);
-        }
-        let mut parts = Vec::new();
-        let q_force = generalized_force(pool, coords[i], &elimination_map);
-        generalized_forces.push(q_force);
-        parts.push(q_force);
-        parts.push(pool.diff(lagrangian, coords[i]));
-        for j in 0..n {
-            let dp = pool.diff(p, coords[j]);
-            let qd = pool.sym(rates[j]);
-            let t = pool.mul2(dp, qd);
-            parts.push(pool.neg(t));
-        }
-        let dpt = pool.diff(p, time);
-        parts.push(pool.neg(dpt));
-        forcing.push(pool.add(&parts));
-    }
-    // Folding sin² + cos² and angle sums (cos θ₁ cos θ₂ + sin θ₁ sin θ₂ = cos(θ₁ − θ₂)) leaves
-    // fewer operations for the numbers to do, and is what every report prints anyway.
-    for row in mass_matrix.iter_mut() {
-        for e in row.iter_mut() {
-            *e = pool.simplify(*e);
-        }
-    }
-    for e in forcing.iter_mut() {
-        *e = pool.simplify(*e);
-    }
-    for (i, q) in coords.iter().enumerate() {
-        if mass_matrix[i].iter().all(|e| pool.is_identically_zero(*e)) {
-            let span =
-                model.coords.iter().find(|c| c.sym == *q).map(|c| c.span).unwrap_or_default();
-            errors.push(
-                Diagnostic::error(span, format!("no kinetic energy depends on the rate of `{}`", pool.symbol(*q).name))
-                    .with_label("this coordinate has no inertia")
-                    .with_hint("the mass matrix would be singular: place a body that moves with this coordinate, or remove it"),
-            );
-        }
-    }
-
-    // --- constraints kept with multipliers ------------------------------------------------
-    let mut multipliers = Vec::new();
-    for &ci in &kept {
-        let c = &model.constraints[ci];
-        let phi = pool.subst(c.phi, &elimination_map);
-        let phi = pool.expand(phi);
-        let jacobian: Vec<ExprId> = coords.iter().map(|q| pool.diff(phi, *q)).collect();
-        let velocity = pool.time_derivative(phi);
-        let acceleration = pool.time_derivative(velocity);
-        let zeros: HashMap<SymId, ExprId> = accels.iter().map(|a| (*a, pool.zero())).collect();
-        let rest = pool.subst(acceleration, &zeros);
-        let bias = pool.neg(rest);
-        multipliers.push(Multiplier {
-            constraint: ci,
-            lambda: c.force_symbol,
-            phi,
-            jacobian,
-            bias,
-        });
-    }
+    // The phases build expressions while reading the rest of the model; holding the pool apart
+    // meanwhile lets each borrow both. Their order matters beyond what each needs: the pool
+    // numbers expressions as it builds them and some ties (in simplification, in printing) go
+    // by those numbers, so building in another order could print the same equations otherwise.
+    let mut pool = std::mem::take(&mut model.pool);
+    let Eliminated { eliminated, kept, mut errors } = eliminate_constraints(&mut pool, &model);
+    let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+    let full = energies(&mut pool, &model);
+    let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
+    let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+    errors.extend(coordinates_without_inertia(&mut pool, &model, &coordinates.coords, &rows));
+    let multipliers = kept_constraints(&mut pool, &model, &kept, &coordinates);
     if !errors.is_empty() {
         return Err(errors);
     }
-
-    // --- reactions of eliminated constraints, where asked for -----------------------------
-    let mut reactions = Vec::new();
-    let requested = eliminated.iter().any(|e| model.constraints[e.constraint].force_requested);
-    if requested {
-        // For each eliminated coordinate e: d/dt ∂L/∂ė − ∂L/∂e − Q_e = Σ_c λ_c ∂Φ_c/∂e, all
-        // in the full coordinates, then expressed in the remaining ones.
-        let k = eliminated.len();
-        let mut a = vec![vec![pool.zero(); k]; k];
-        let mut b = Vec::with_capacity(k);
-        let identity: HashMap<SymId, ExprId> = HashMap::new();
-        for (row, e) in eliminated.iter().enumerate() {
-            let rate = pool.rate(e.coord).expect("coordinate");
-            let p = pool.diff(lagrangian_full, rate);
-            let dp = pool.time_derivative(p);
-            let dl = pool.diff(lagrangian_full, e.coord);
-            let q_force = generalized_force(pool, e.coord, &identity);
-            let lhs = pool.sub(dp, dl);
-            let mut lhs = pool.sub(lhs, q_force);
-            for m in &multipliers {
-                let c = &model.constraints[m.constraint];
-                let dphi = pool.diff(c.phi, e.coord);
-                let lam = pool.sym(m.lambda);
-                let t = pool.mul2(dphi, lam);
-                lhs = pool.sub(lhs, t);
-            }
-            let lhs = pool.subst(lhs, &elimination_map);
-            b.push(pool.simplify(lhs));
-            for (col, f) in eliminated.iter().enumerate() {
-                let dphi = pool.diff(model.constraints[f.constraint].phi, e.coord);
-                a[row][col] = pool.subst(dphi, &elimination_map);
-            }
+    let mut warnings = Vec::new();
+    let reactions = match eliminated_reactions(
+        &mut pool,
+        &model,
+        &full,
+        &coordinates,
+        &eliminated,
+        &multipliers,
+    ) {
+        Ok(reactions) => reactions,
+        Err(warning) => {
+            warnings.push(warning);
+            Vec::new()
         }
-        match linear::solve(pool, &a, &b) {
-            Some(lambdas) => {
-                for (e, expr) in eliminated.iter().zip(lambdas) {
-                    let c = &model.constraints[e.constraint];
-                    if c.force_requested {
-                        reactions.push(Reaction {
-                            constraint: e.constraint,
-                            symbol: c.force_symbol,
-                            expr,
-                        });
-                    }
-                }
-            }
-            None => {
-                let c = &model.constraints[eliminated[0].constraint];
-                warnings.push(
-                    Diagnostic::warning(
-                        c.span,
-                        "the reactions of these constraints cannot be separated",
-                    )
-                    .with_label("reaction not derived"),
-                );
-            }
-        }
-    }
+    };
+    model.pool = pool;
 
+    let Coordinates { coords, rates, accels, elimination_map } = coordinates;
     let mut derivation = Derivation {
         model,
         coords,
@@ -504,12 +238,12 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         eliminated,
         multipliers,
         elimination_map,
-        kinetic,
-        potential,
-        lagrangian,
-        generalized_forces,
-        mass_matrix,
-        forcing,
+        kinetic: reduced.kinetic,
+        potential: reduced.potential,
+        lagrangian: reduced.lagrangian,
+        generalized_forces: rows.generalized_forces,
+        mass_matrix: rows.mass_matrix,
+        forcing: rows.forcing,
         reactions,
         warnings,
         solved: None,
@@ -525,66 +259,82 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     Ok(derivation)
 }
 
-impl Derivation {
-    /// An eliminated coordinate's initial value comes from its constraint; one written in the
-    /// scene that disagrees with it would be silently ignored, so say so.
-    fn warn_about_overridden_initial_values(&mut self) {
-        let mut state = self.initial_state();
-        // Compare with the parameters' values, as the numbers will see them.
-        for p in &self.model.params {
-            if let Some(v) = p.value {
-                state.insert(p.sym, v);
-            }
-        }
-        for e in self.eliminated.clone() {
-            let Some(c) = self.model.coords.iter().find(|c| c.sym == e.coord).cloned() else {
-                continue;
-            };
-            if !c.initial_given {
-                continue;
-            }
-            let pool = &mut self.model.pool;
-            let implied = pool.subst(e.solution, &state);
-            let implied = pool.simplify(implied);
-            let given = pool.subst(c.initial, &state);
-            let difference = pool.sub(given, implied);
-            if pool.is_identically_zero(difference) {
-                continue;
-            }
-            let constraint = self.model.constraints[e.constraint].name.clone();
-            let text = pool.print(implied, cas::Style::Ascii);
-            self.warnings.push(
-                Diagnostic::warning(c.span, format!("the initial value of `{}` is ignored", c.name))
-                    .with_label(format!("`{constraint}` fixes it at {text}"))
-                    .with_hint(format!(
-                        "the constraint `{constraint}` eliminates `{}`: drop its initial value, or make it {text}",
-                        c.name
-                    )),
-            );
-        }
-    }
-}
-
 /// Past this many unknowns the symbolic solution of the full system is too large to be worth
 /// printing; the reactions of kept constraints then stay multipliers, found numerically.
 const SYMBOLIC_SOLVE_LIMIT: usize = 4;
 
-impl Derivation {
-    /// The reactions of constraints kept with multipliers, as expressions of the state: the
-    /// multipliers of the solved system M q̈ − Jᵀλ = f, J q̈ = γ.
-    fn solve_multiplier_reactions(&mut self) {
-        let wanted: Vec<usize> = (0..self.multipliers.len())
-            .filter(|&i| self.model.constraints[self.multipliers[i].constraint].force_requested)
-            .collect();
-        let n = self.coords.len();
-        if wanted.is_empty() || n + self.multipliers.len() > SYMBOLIC_SOLVE_LIMIT {
-            return;
-        }
-        let Some(solved) = self.solved_unknowns() else { return };
-        for i in wanted {
-            let m = &self.multipliers[i];
-            let expr = self.model.pool.factor_content(solved[&m.lambda]);
-            self.reactions.push(Reaction { constraint: m.constraint, symbol: m.lambda, expr });
-        }
+#[cfg(test)]
+mod testing {
+    //! Small scenes for the phases' tests, and their expressions as text.
+
+    use cas::{ExprId, Pool, Style, SymId};
+    use model::Model;
+
+    /// Problem set 5's rod: its end on the floor is a constraint solved for y.
+    pub const FALLING_ROD: &str = "
+param m, L, g
+coord x
+coord y
+coord theta
+body rod { mass m; inertia m*L^2/12; position (x, y); angle theta }
+constraint floor: y = L/2*cos(theta)
+gravity g
+";
+
+    /// A pendulum in x and y: its rod is a constraint kept with a multiplier.
+    pub const CARTESIAN_PENDULUM: &str = "
+param m, L, g
+coord x
+coord y
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+";
+
+    /// The model of a scene, with its pool held apart as `derive` holds it during the phases.
+    pub fn scene(source: &str) -> (Pool, Model) {
+        let ast = lang::parse(source).expect("the scene parses");
+        let (mut model, _warnings) = model::resolve(&ast, source).expect("the scene resolves");
+        let pool = std::mem::take(&mut model.pool);
+        (pool, model)
+    }
+
+    /// A scene derived whole.
+    pub fn derived(source: &str) -> super::Derivation {
+        let ast = lang::parse(source).expect("the scene parses");
+        let (model, _warnings) = model::resolve(&ast, source).expect("the scene resolves");
+        super::derive(model).expect("the scene derives")
+    }
+
+    pub fn ascii(pool: &Pool, e: ExprId) -> String {
+        pool.print(e, Style::Ascii)
+    }
+
+    pub fn names(pool: &Pool, syms: &[SymId]) -> Vec<String> {
+        syms.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
+    /// The coordinate declared with this name.
+    pub fn coord(model: &Model, name: &str) -> SymId {
+        let found = model.coords.iter().find(|c| c.name == name);
+        found.unwrap_or_else(|| panic!("no coordinate `{name}`")).sym
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::testing::{ascii, derived, CARTESIAN_PENDULUM};
+
+    #[test]
+    fn the_full_system_stacks_the_constraint_rows_under_the_equations() {
+        let mut d = derived(CARTESIAN_PENDULUM);
+        assert_eq!(d.unknowns().len(), 3);
+        let (rows, rhs) = d.system();
+        let pool = d.pool();
+        let rows: Vec<Vec<String>> =
+            rows.iter().map(|r| r.iter().map(|e| ascii(pool, *e)).collect()).collect();
+        let rhs: Vec<String> = rhs.iter().map(|e| ascii(pool, *e)).collect();
+        assert_eq!(rows, [["m", "0", "-2*x"], ["0", "m", "-2*y"], ["2*x", "2*y", "0"]]);
+        assert_eq!(rhs, ["0", "-m*g", "-2*x'^2 - 2*y'^2"]);
     }
 }

@@ -10,12 +10,10 @@
 mod admissible;
 mod check;
 mod derive;
-mod linear;
 mod present;
 mod start;
 
 pub use check::{Failure, Sampling, Verdict, SAMPLES};
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
-pub use linear::solve;
 pub use present::{Equation, NumericValue, ShownAtStart};
 pub use start::{NumericStart, StartSolution};

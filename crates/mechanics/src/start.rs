@@ -3,11 +3,11 @@
 
 use std::collections::HashMap;
 
+use cas::linear_system::{self, Solution};
 use cas::{ExprId, SymId};
 use nalgebra::{DMatrix, DVector};
 
 use crate::derive::Derivation;
-use crate::linear::{self, Solution};
 
 /// New expression nodes the exact solve at the start may build before it gives up. A dense
 /// system of a dozen unknowns needs millions and minutes; the 4-link pendulum at distinct
@@ -52,7 +52,7 @@ impl Derivation {
             .map(|r| r.iter().map(|e| pool.subst_memo(*e, &state, &mut memo)).collect())
             .collect();
         let b: Vec<ExprId> = rhs.iter().map(|e| pool.subst_memo(*e, &state, &mut memo)).collect();
-        let solution = match linear::solve_within(pool, &a, &b, START_BUDGET) {
+        let solution = match linear_system::solve_within(pool, &a, &b, START_BUDGET) {
             Solution::Solved(x) => {
                 let mut out: HashMap<SymId, ExprId> = unknowns.into_iter().zip(x).collect();
                 out.extend(state);

@@ -1,9 +1,10 @@
-//! Exact solution of small linear systems whose entries are expressions.
+//! Exact solution of linear systems whose entries are expressions: Cramer's rule with
+//! cancelled quotients for small systems, Gauss–Jordan elimination under a node budget beyond.
 
 use std::collections::BTreeMap;
 
-use cas::number::{Signed, Zero};
-use cas::{ExprId, Node, Pool, Rational};
+use crate::number::{Signed, Zero};
+use crate::{ExprId, Node, Pool, Rational};
 
 /// Up to this size, Cramer's rule with cancelled quotients; beyond, Gaussian elimination.
 const CRAMER_LIMIT: usize = 4;
@@ -213,7 +214,7 @@ fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], limit: usize) -> Opti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use cas::Style;
+    use crate::Style;
 
     #[test]
     fn pendulum_multiplier_cancels() {
@@ -228,7 +229,7 @@ mod tests {
             .collect();
         let (m, g, x, y, u, v) = (e[0], e[1], e[2], e[3], e[4], e[5]);
         let zero = p.zero();
-        let two = cas::number::int(2);
+        let two = crate::number::int(2);
         let mx = p.scale(x, &-two.clone());
         let my = p.scale(y, &-two.clone());
         let px = p.scale(x, &two);

@@ -1,0 +1,97 @@
+//! The fourth phase of a derivation: each constraint that could not be eliminated is kept,
+//! with a multiplier λ whose generalized force is λ·∂Φ/∂q and a row J·q̈ = γ of its own.
+
+use std::collections::HashMap;
+
+use cas::{ExprId, Pool, SymId};
+use model::Model;
+
+use super::eliminate::Coordinates;
+use super::Multiplier;
+
+/// Φ of each kept constraint in the remaining coordinates, its Jacobian, and γ: Φ̈ = J·q̈ − γ,
+/// so that Φ̈ = 0 is J·q̈ = γ.
+pub(super) fn kept_constraints(
+    pool: &mut Pool,
+    model: &Model,
+    kept: &[usize],
+    coordinates: &Coordinates,
+) -> Vec<Multiplier> {
+    let mut multipliers = Vec::new();
+    for &ci in kept {
+        let c = &model.constraints[ci];
+        let phi = pool.subst(c.phi, &coordinates.elimination_map);
+        let phi = pool.expand(phi);
+        let jacobian: Vec<ExprId> = coordinates.coords.iter().map(|q| pool.diff(phi, *q)).collect();
+        let velocity = pool.time_derivative(phi);
+        let acceleration = pool.time_derivative(velocity);
+        let zeros: HashMap<SymId, ExprId> =
+            coordinates.accels.iter().map(|a| (*a, pool.zero())).collect();
+        let rest = pool.subst(acceleration, &zeros);
+        let bias = pool.neg(rest);
+        multipliers.push(Multiplier {
+            constraint: ci,
+            lambda: c.force_symbol,
+            phi,
+            jacobian,
+            bias,
+        });
+    }
+    multipliers
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::testing::{ascii, scene, CARTESIAN_PENDULUM};
+    use super::*;
+
+    fn multipliers_of(source: &str) -> (Pool, Model, Vec<Multiplier>) {
+        let (mut pool, model) = scene(source);
+        let out = eliminate_constraints(&mut pool, &model);
+        let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
+        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        (pool, model, multipliers)
+    }
+
+    #[test]
+    fn a_circle_gets_its_row() {
+        let (pool, model, multipliers) = multipliers_of(CARTESIAN_PENDULUM);
+        let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
+        assert_eq!(m.constraint, 0);
+        assert_eq!(m.lambda, model.constraints[0].force_symbol);
+        assert_eq!(ascii(&pool, m.phi), "-L^2 + x^2 + y^2");
+        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(jacobian, ["2*x", "2*y"]);
+        assert_eq!(ascii(&pool, m.bias), "-2*x'^2 - 2*y'^2");
+    }
+
+    #[test]
+    fn a_kept_constraint_sees_the_eliminations() {
+        // The floor removes y; the circle is then one in x and theta alone.
+        let (pool, _, multipliers) = multipliers_of(
+            "param m, L\ncoord x\ncoord y\ncoord theta\nbody rod { mass m; inertia m*L^2; position (x, y); angle theta }\nconstraint floor: y = L*cos(theta)\nconstraint ring: x^2 + y^2 = L^2",
+        );
+        let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
+        assert_eq!(m.constraint, 1);
+        assert_eq!(ascii(&pool, m.phi), "-L^2 + L^2*cos(theta)^2 + x^2");
+        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(jacobian, ["2*x", "-2*L^2*sin(theta)*cos(theta)"]);
+        assert_eq!(
+            ascii(&pool, m.bias),
+            "-2*x'^2 - (2*L^2*sin(theta)^2*theta' - 2*L^2*cos(theta)^2*theta')*theta'"
+        );
+    }
+
+    #[test]
+    fn a_moving_constraint_has_a_bias_in_time() {
+        let (pool, _, multipliers) = multipliers_of(
+            "param m, w\ncoord x\ncoord y\nparticle p { mass m; position (x, y) }\nconstraint spin: x*sin(w*t) = y*cos(w*t)",
+        );
+        let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
+        assert_eq!(
+            ascii(&pool, m.bias),
+            "-2*w*cos(w*t)*x' - 2*w*sin(w*t)*y' + w^2*sin(w*t)*x - w^2*cos(w*t)*y"
+        );
+    }
+}
