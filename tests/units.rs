@@ -94,3 +94,15 @@ fn inconsistent_scenes_are_still_refused() {
     let e = dimension_errors("c.lag", &CHARGE.replace("[m, 0; 0, m]", "[m, 1/2; 0, m]"));
     assert!(e.contains("matrix product"), "{e}");
 }
+
+/// A unit with two denominator factors prints so that it reads back as itself.
+#[test]
+fn a_unit_with_two_denominators_prints_as_it_reads() {
+    let source = "param m = 1 kg, c = 2 kg/m/s, L = 1 m\ncoord x = 0 m\nparticle p { mass m; position (x, 0) }\ndissipation c*L/2*x'^2\n";
+    let text = cli::derive_with("damped.lag", source, cli::Format::Text, cli::Options::default())
+        .expect("derives");
+    assert!(text.contains("c = 2 kg/m/s"), "{text}");
+    let json = cli::derive_with("damped.lag", source, cli::Format::Json, cli::Options::default())
+        .expect("derives");
+    assert!(json.contains("\"unit\": \"kg/m/s\""), "{json}");
+}

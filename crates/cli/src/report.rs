@@ -155,9 +155,10 @@ fn unit_text(unit: &lang::Unit, style: Style) -> String {
     }
     let sep = if style == Style::Unicode { "·" } else { "*" };
     let mut text = if up.is_empty() { "1".to_string() } else { up.join(sep) };
-    if !down.is_empty() {
+    // Every denominator factor gets its own `/`: `kg/m*s` would read back as kg·s/m.
+    for d in down {
         text.push('/');
-        text.push_str(&down.join(sep));
+        text.push_str(&d);
     }
     text
 }
