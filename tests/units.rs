@@ -4,18 +4,24 @@
 
 use std::path::Path;
 
-/// Every `.lag` under `tests/sympy/scenes`, sorted, as (path, source).
+/// Every `.lag` under `tests/sympy/scenes` and `tests/scenes`, sorted, as (path, source).
 fn crosscheck_scenes() -> Vec<(String, String)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("sympy/scenes");
+    let mut out = scenes_in("sympy/scenes");
+    out.extend(scenes_in("scenes"));
+    out
+}
+
+fn scenes_in(folder: &str) -> Vec<(String, String)> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(folder);
     let mut out: Vec<(String, String)> = std::fs::read_dir(&dir)
-        .expect("tests/sympy/scenes exists")
+        .expect("the test scenes exist")
         .flatten()
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|e| e == "lag"))
         .map(|p| {
             let name = p.file_name().expect("name").to_string_lossy().into_owned();
             let source = std::fs::read_to_string(&p).expect("readable");
-            (format!("tests/sympy/scenes/{name}"), source)
+            (format!("tests/{folder}/{name}"), source)
         })
         .collect();
     out.sort();
