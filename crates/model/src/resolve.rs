@@ -395,8 +395,7 @@ impl<'a> Resolver<'a> {
                     }
                 });
                 if let Some((_, g)) = &strength {
-                    let g = g.clone();
-                    self.gravity_energy(&g, written.span);
+                    self.gravity_energy(g, written.span);
                 }
                 let strength = strength.map(|(g, _)| g);
                 if let Some(previous) = &self.gravity {
