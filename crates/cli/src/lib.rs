@@ -43,13 +43,8 @@ pub fn load_with(
     options: Options,
 ) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
     let ast = lang::parse(source)?;
-    let (model, mut warnings) = model::resolve(&ast, source)?;
-    if options.units {
-        let mismatches = model::units::check(&ast);
-        if !mismatches.is_empty() {
-            return Err(mismatches);
-        }
-    }
+    let checks = model::Checks { units: options.units };
+    let (model, mut warnings) = model::resolve_with(&ast, source, checks)?;
     let mut derivation = mechanics::derive(model)?;
     warnings.append(&mut derivation.warnings);
     Ok((derivation, warnings))

@@ -9,11 +9,18 @@ mod resolve;
 pub mod units;
 mod value;
 
-pub use resolve::resolve;
+pub use resolve::{resolve, resolve_with};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};
 use lang::{Setting, Span, Unit};
+
+/// What [`resolve_with`] checks besides names and meaning.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Checks {
+    /// That every sum, equation and energy term has one dimension.
+    pub units: bool,
+}
 
 /// A named constant: symbolic in every derivation, its value used only for numbers.
 #[derive(Clone, Debug)]

@@ -1,10 +1,11 @@
 //! Name resolution and the meaning of each statement: AST in, [`Model`] out.
 
 mod checks;
+mod dims;
 
 use std::collections::HashMap;
 
-use cas::number::Signed;
+use cas::number::{One, Signed};
 use cas::{ExprId, Func, Pool, Rational, SymId, SymbolKind};
 use lang::{BinOp, Diagnostic, Expr, ExprKind, Ident, Property, SceneFile, Span, Stmt, StmtKind};
 
@@ -12,9 +13,11 @@ use self::checks::{
     Role, ANGLE, ATTACHMENT, DAMPER, DISSIPATION, FORCE, GRAVITY, INERTIA, LAGRANGIAN, MASS,
     POSITION, POTENTIAL, SPRING, TORQUE,
 };
+use self::dims::{BodyDims, Dims, NameDims};
+use crate::units::{Form, Inference, Shape};
 use crate::{
-    Body, BodyKind, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder, Show,
-    Term, Value,
+    Body, BodyKind, Checks, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder,
+    Show, Term, Value,
 };
 
 /// Past this the power is not physics and expanding it would exhaust memory.
@@ -36,22 +39,42 @@ pub fn resolve(
     file: &SceneFile,
     source: &str,
 ) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    resolve_with(file, source, Checks::default())
+}
+
+/// [`resolve`], with the checks asked for. The dimension check is made only on a scene that
+/// resolves, and its mismatches are then the errors.
+pub fn resolve_with(
+    file: &SceneFile,
+    source: &str,
+    checks: Checks,
+) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    walk(file, source).finish(checks)
+}
+
+/// The dimension mismatches of as much of a scene as resolves.
+pub(crate) fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
+    walk(file, "").units.solve()
+}
+
+fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
     let mut r = Resolver::new(source);
     r.declare_all(file);
-    let (outputs, statements): (Vec<&Stmt>, Vec<&Stmt>) = file
-        .stmts
-        .iter()
-        .partition(|s| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
-    for stmt in statements {
+    let numbered = file.stmts.iter().enumerate();
+    let (outputs, statements): (Vec<_>, Vec<_>) = numbered
+        .partition(|(_, s)| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
+    for (i, stmt) in statements {
+        r.enter(i);
         r.statement(stmt);
     }
     // Show and expect lines may name anything in the file, wherever they stand.
     r.in_outputs = true;
-    for stmt in outputs {
+    for (i, stmt) in outputs {
+        r.enter(i);
         r.statement(stmt);
     }
     r.require_a_coordinate(file);
-    r.finish()
+    r
 }
 
 /// The Greek letters of a name spelled out, so `θ` and `theta` are the same name.
@@ -123,6 +146,16 @@ struct Resolver<'a> {
     lets: Vec<(String, cas::ExprId)>,
     /// Each parameter's value as a number (no symbols left), for the checks of constants.
     param_values: HashMap<SymId, ExprId>,
+    /// The statement being resolved, by its place in the file.
+    stmt: usize,
+    /// What every expression resolved says about dimensions.
+    units: Inference,
+    /// The dimension of each name in `names`.
+    name_dims: HashMap<String, NameDims>,
+    /// The dimensions of each body in `bodies`, by the same index.
+    body_dims: Vec<BodyDims>,
+    /// Names whose dimension is not known where they are used (see [`Self::name_dims`]).
+    loose: HashMap<String, Form>,
 }
 
 impl<'a> Resolver<'a> {
@@ -165,7 +198,17 @@ impl<'a> Resolver<'a> {
             placeholders,
             lets: Vec::new(),
             param_values: HashMap::new(),
+            stmt: 0,
+            units: Inference::default(),
+            name_dims: HashMap::new(),
+            body_dims: Vec::new(),
+            loose: HashMap::new(),
         }
+    }
+
+    fn enter(&mut self, index: usize) {
+        self.stmt = index;
+        self.units.enter(index);
     }
 
     fn error(&mut self, d: Diagnostic) {
@@ -229,8 +272,17 @@ impl<'a> Resolver<'a> {
             StmtKind::Scene { title } => self.title = Some(title.clone()),
             StmtKind::Param(decls) => {
                 for decl in decls {
-                    let value = decl.value.as_ref().and_then(|v| self.constant(v));
-                    let value = value.and_then(|v| self.in_si(v, decl.unit.as_ref()));
+                    // Its unknown comes before any in its value: unknowns follow the file.
+                    let form = self.units.fresh(&decl.name.name);
+                    let value = decl.value.as_ref().map(|v| self.constant(v));
+                    if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
+                        let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
+                        let v = self.with_unit(dims, decl.unit.as_ref());
+                        let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
+                        self.units.same(&form, &v, decl.name.span, span, "in this parameter");
+                    }
+                    let value =
+                        value.flatten().and_then(|(v, _)| self.in_si(v, decl.unit.as_ref()));
                     let name = normalize(&decl.name.name);
                     if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
                         self.bind(&decl.name, Binding::Param(self.time));
@@ -238,6 +290,8 @@ impl<'a> Resolver<'a> {
                     }
                     let sym = self.pool.param(&name);
                     if self.bind(&decl.name, Binding::Param(sym)) {
+                        let dims = NameDims { at: self.stmt, form: Some(form) };
+                        self.name_dims.insert(name.clone(), dims);
                         if let (Some(v), Some(written)) = (value, &decl.value) {
                             self.param_value(sym, v, written);
                         }
@@ -252,19 +306,38 @@ impl<'a> Resolver<'a> {
                 }
             }
             StmtKind::Let { name, value } => {
-                if let Some(v) = self.value(value) {
+                if let Some((v, dims)) = self.value(value) {
                     if let Value::Scalar(e) = v {
                         self.lets.push((normalize(&name.name), e));
                     }
-                    self.bind(name, Binding::Let(v));
+                    let form = match self.shape(dims) {
+                        Shape::Scalar(f) => Some(f),
+                        Shape::Many(_) => None,
+                    };
+                    if self.bind(name, Binding::Let(v)) {
+                        let dims = NameDims { at: self.stmt, form };
+                        self.name_dims.insert(normalize(&name.name), dims);
+                    }
                 }
             }
             StmtKind::Coord(decls) => {
                 for decl in decls {
+                    let form = self.units.fresh(&decl.name.name);
                     let initial = decl.value.as_ref().and_then(|v| self.constant(v));
-                    let initial = initial.and_then(|v| self.in_si(v, decl.value_unit.as_ref()));
+                    if let (Some((_, dims)), Some(written)) = (&initial, &decl.value) {
+                        let v = self.with_unit(Some(dims.clone()), decl.value_unit.as_ref());
+                        let what = "in this initial value";
+                        self.units.same(&form, &v, decl.name.span, written.span, what);
+                    }
+                    let initial =
+                        initial.and_then(|(v, _)| self.in_si(v, decl.value_unit.as_ref()));
                     let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
-                    let rate = rate.and_then(|v| self.in_si(v, decl.rate_unit.as_ref()));
+                    if let (Some((_, dims)), Some(written)) = (&rate, &decl.rate) {
+                        let v = self.with_unit(Some(dims.clone()), decl.rate_unit.as_ref());
+                        let what = "in this initial rate";
+                        self.units.same(&form.rate(1), &v, written.span, written.span, what);
+                    }
+                    let rate = rate.and_then(|(v, _)| self.in_si(v, decl.rate_unit.as_ref()));
                     let name = normalize(&decl.name.name);
                     if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
                         self.bind(&decl.name, Binding::Param(self.time));
@@ -273,6 +346,8 @@ impl<'a> Resolver<'a> {
                     let sym = self.pool.coordinate(&name);
                     let zero = self.pool.zero();
                     if self.bind(&decl.name, Binding::Coord(sym)) {
+                        let dims = NameDims { at: self.stmt, form: Some(form) };
+                        self.name_dims.insert(name.clone(), dims);
                         self.coords.push(Coord {
                             name,
                             sym,
@@ -291,10 +366,17 @@ impl<'a> Resolver<'a> {
             StmtKind::Constraint { name, lhs, rhs } => {
                 self.constraint(name.as_ref(), lhs, rhs, stmt.span)
             }
-            StmtKind::Gravity { strength, direction } => {
-                let strength = self.scalar_in_role(strength, &GRAVITY);
-                let direction =
-                    direction.as_ref().and_then(|d| match self.value_in_role(d, &GRAVITY)? {
+            StmtKind::Gravity { strength: written, direction } => {
+                let strength = self.scalar_in_role(written, &GRAVITY).map(|(g, dims)| {
+                    let form = self.form(dims);
+                    (g, form)
+                });
+                let direction = direction.as_ref().and_then(|d| {
+                    let (value, dims) = self.value_in_role(d, &GRAVITY)?;
+                    for f in self.shape(dims).forms() {
+                        self.units.dimensionless(&f, d.span, "a direction");
+                    }
+                    match value {
                         Value::Vector(v) => Some(v),
                         other => {
                             self.error(
@@ -310,7 +392,12 @@ impl<'a> Resolver<'a> {
                             );
                             None
                         }
-                    });
+                    }
+                });
+                if let Some((_, g)) = &strength {
+                    self.gravity_energy(g, written.span);
+                }
+                let strength = strength.map(|(g, _)| g);
                 if let Some(previous) = &self.gravity {
                     let first = previous.span;
                     self.error(
@@ -323,22 +410,29 @@ impl<'a> Resolver<'a> {
                 }
             }
             StmtKind::Potential(e) => {
-                if let Some(expr) = self.scalar_in_role(e, &POTENTIAL) {
+                if let Some((expr, dims)) = self.scalar_in_role(e, &POTENTIAL) {
+                    let f = self.form(dims);
+                    self.units.energy_term(&f, e.span);
                     self.potentials.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Dissipation(e) => {
-                if let Some(expr) = self.scalar_in_role(e, &DISSIPATION) {
+                if let Some((expr, dims)) = self.scalar_in_role(e, &DISSIPATION) {
+                    // A Rayleigh function is a power: energy per time.
+                    let f = self.form(dims).plus(&crate::units::time(), &Rational::one());
+                    self.units.energy_term(&f, e.span);
                     self.dissipation.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Lagrangian(e) => {
-                if let Some(expr) = self.scalar_in_role(e, &LAGRANGIAN) {
+                if let Some((expr, dims)) = self.scalar_in_role(e, &LAGRANGIAN) {
+                    let f = self.form(dims);
+                    self.units.energy_term(&f, e.span);
                     self.lagrangians.push(Term { expr, span: e.span });
                 }
             }
             StmtKind::Spring { a, b, stiffness, rest, .. } => {
-                let (Some(len2), Some(k)) = (
+                let (Some((len2, len)), Some((k, k_dims))) = (
                     self.separation_squared(a, b, &SPRING),
                     self.scalar_in_role(stiffness, &SPRING),
                 ) else {
@@ -346,11 +440,13 @@ impl<'a> Resolver<'a> {
                 };
                 let rest = match rest {
                     Some(r) => match self.scalar_in_role(r, &SPRING) {
-                        Some(r) => Some(r),
+                        Some((l0, dims)) => Some((l0, (dims, r.span))),
                         None => return,
                     },
                     None => None,
                 };
+                let (rest, rest_dims) = rest.unzip();
+                self.spring_energy(&len, (k_dims, stiffness.span), rest_dims, a.span.join(b.span));
                 // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
                 let stretch2 = match rest {
                     Some(l0) => {
@@ -365,11 +461,12 @@ impl<'a> Resolver<'a> {
                 self.potentials.push(Term { expr, span: stmt.span });
             }
             StmtKind::Damper { a, b, coefficient, .. } => {
-                let (Some(d), Some(c)) =
+                let (Some((d, len)), Some((c, c_dims))) =
                     (self.separation(a, b, &ATTACHMENT), self.scalar_in_role(coefficient, &DAMPER))
                 else {
                     return;
                 };
+                self.damper_energy(&len, c_dims, coefficient.span);
                 // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
                 // on a line (AB = u) it is exactly u'².
                 let mut dots = Vec::new();
@@ -392,7 +489,7 @@ impl<'a> Resolver<'a> {
             StmtKind::Torque { name, body, value } => self.load(name, body, value, stmt.span, true),
             StmtKind::Show { at_start, items } => {
                 for item in items {
-                    if let Some(value) = self.value(item) {
+                    if let Some((value, _)) = self.value(item) {
                         let label = self.text(item.span);
                         self.shows.push(Show {
                             at_start: *at_start,
@@ -405,7 +502,12 @@ impl<'a> Resolver<'a> {
             }
             StmtKind::Expect { at_start, lhs, rhs } => {
                 let (l, r) = (self.value(lhs), self.value(rhs));
-                let (Some(l), Some(r)) = (l, r) else { return };
+                let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+                let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
+                for (a, b) in lf.iter().zip(&rf) {
+                    let what = "between the sides of this expectation";
+                    self.units.same(a, b, lhs.span, rhs.span, what);
+                }
                 let (ln, rn) = (l.entries().len(), r.entries().len());
                 if ln != rn {
                     self.error(
@@ -442,6 +544,9 @@ impl<'a> Resolver<'a> {
         // A misspelled property is reported once, not again as missing.
         let mut misspelled: Vec<&str> = Vec::new();
         let (mut mass, mut inertia, mut position, mut angle) = (None, None, None, None);
+        // The dimensions of each property, with where it is written.
+        let (mut mass_dims, mut inertia_dims, mut angle_dims) = (None, None, None);
+        let mut position_dims: Vec<(Form, Span)> = Vec::new();
         for p in props {
             let key = p.key.name.as_str();
             if !allowed.contains(&key) {
@@ -466,20 +571,34 @@ impl<'a> Resolver<'a> {
             }
             match key {
                 "mass" => {
-                    mass = self.scalar_in_role(&p.value, &MASS);
+                    let resolved = self.scalar_in_role(&p.value, &MASS);
+                    mass = resolved.as_ref().map(|(m, _)| *m);
+                    mass_dims = resolved.map(|(_, d)| self.form(d));
                     if let Some(m) = mass {
                         self.check_sign(name, m, &p.value, false);
                     }
                 }
                 "inertia" => {
-                    inertia = self.scalar_in_role(&p.value, &INERTIA);
+                    let resolved = self.scalar_in_role(&p.value, &INERTIA);
+                    inertia = resolved.as_ref().map(|(i, _)| *i);
+                    inertia_dims = resolved.map(|(_, d)| (self.form(d), p.value.span));
                     if let Some(i) = inertia {
                         self.check_sign(name, i, &p.value, true);
                     }
                 }
-                "angle" => angle = self.scalar_in_role(&p.value, &ANGLE),
+                "angle" => {
+                    let resolved = self.scalar_in_role(&p.value, &ANGLE);
+                    angle = resolved.as_ref().map(|(a, _)| *a);
+                    angle_dims = resolved.map(|(_, d)| self.form(d));
+                }
                 _ => {
-                    position = match self.value_in_role(&p.value, &POSITION) {
+                    let resolved = self.value_in_role(&p.value, &POSITION);
+                    let resolved = resolved.map(|(v, d)| {
+                        let forms = self.shape(d).forms();
+                        position_dims = forms.into_iter().map(|f| (f, p.value.span)).collect();
+                        v
+                    });
+                    position = match resolved {
                         Some(Value::Vector(v)) if v.len() <= 3 => Some(v),
                         Some(Value::Scalar(x)) => Some(vec![x]),
                         Some(other) => {
@@ -536,9 +655,16 @@ impl<'a> Resolver<'a> {
                 ok = false;
             }
         }
+        self.body_energy(mass_dims.clone(), &position_dims, inertia_dims, angle_dims.as_ref());
         let (Some(mass), Some(position), true) = (mass, position, ok) else { return };
         let index = self.bodies.len();
         if self.bind(name, Binding::Body(index)) {
+            self.body_dims.push(BodyDims {
+                at: self.stmt,
+                mass: mass_dims.unwrap_or_default(),
+                position: position_dims.into_iter().map(|(f, _)| f).collect(),
+                angle: angle_dims,
+            });
             self.bodies.push(Body {
                 name: normalize(&name.name),
                 kind,
@@ -553,7 +679,9 @@ impl<'a> Resolver<'a> {
 
     fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
         let (l, r) = (self.scalar(lhs), self.scalar(rhs));
-        let (Some(l), Some(r)) = (l, r) else { return };
+        let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+        let (lf, rf) = (self.operand_form(l_dims), self.operand_form(r_dims));
+        self.units.same(&lf, &rf, lhs.span, rhs.span, "between the sides of this constraint");
         let phi = self.pool.sub(l, r);
         let free = self.pool.free_symbols(phi);
         if free.iter().any(|s| self.pool.symbol(*s).order() > 0) {
@@ -621,7 +749,8 @@ impl<'a> Resolver<'a> {
             }
         };
         let role = if torque { &TORQUE } else { &FORCE };
-        let Some(v) = self.value_in_role(value, role) else { return };
+        let Some((v, dims)) = self.value_in_role(value, role) else { return };
+        self.load_energy(index, dims, value.span, torque);
         let dim = self.bodies[index].position.len();
         let ok = match (&v, torque) {
             (Value::Scalar(_), true) => self.bodies[index].kind == BodyKind::Rigid,
@@ -680,15 +809,19 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    /// Where a spring or damper is attached: a body (its centre of mass) or a fixed point.
-    fn anchor(&mut self, e: &Expr, role: &Role) -> Option<Vec<cas::ExprId>> {
+    /// Where a spring or damper is attached: a body (its centre of mass) or a fixed point;
+    /// with the dimensions of its coordinates.
+    fn anchor(&mut self, e: &Expr, role: &Role) -> Option<(Vec<cas::ExprId>, Vec<Form>)> {
         if let ExprKind::Name { name, primes: 0 } = &e.kind {
             if let Some(Binding::Body(i)) = self.names.get(&normalize(name)) {
-                return Some(self.bodies[*i].position.clone());
+                let i = *i;
+                return Some((self.bodies[i].position.clone(), self.body_dims[i].position.clone()));
             }
         }
-        match self.value_in_role(e, role)? {
-            Value::Vector(v) => Some(v),
+        let (value, dims) = self.value_in_role(e, role)?;
+        let forms = self.shape(dims).forms();
+        match value {
+            Value::Vector(v) => Some((v, forms)),
             other => {
                 self.error(
                     Diagnostic::error(e.span, format!("expected a body or a point, found {}", other.kind_name()))
@@ -700,29 +833,36 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    /// B − A for two attachments, padding the shorter with zeros (a 2D point in 3D).
-    fn separation(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<Vec<cas::ExprId>> {
+    /// B − A for two attachments, padding the shorter with zeros (a 2D point in 3D), with the
+    /// dimension of its length.
+    fn separation(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<(Vec<cas::ExprId>, Form)> {
         let (pa, pb) = (self.anchor(a, role), self.anchor(b, role));
-        let (pa, pb) = (pa?, pb?);
+        let (Some((pa, mut ends)), Some((pb, b_ends))) = (pa, pb) else { return None };
+        ends.extend(b_ends);
+        let len = self.separation_dims(ends, a.span, b.span);
         let n = pa.len().max(pb.len());
         let zero = self.pool.zero();
-        Some(
-            (0..n)
-                .map(|i| self.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
-                .collect(),
-        )
+        let d = (0..n)
+            .map(|i| self.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
+            .collect();
+        Some((d, len))
     }
 
-    /// |B − A|².
-    fn separation_squared(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<cas::ExprId> {
-        let d = self.separation(a, b, role)?;
+    /// |B − A|², with the dimension of |B − A|.
+    fn separation_squared(
+        &mut self,
+        a: &Expr,
+        b: &Expr,
+        role: &Role,
+    ) -> Option<(cas::ExprId, Form)> {
+        let (d, len) = self.separation(a, b, role)?;
         let squares: Vec<cas::ExprId> = d.iter().map(|x| self.pool.powi(*x, 2)).collect();
-        Some(self.pool.add(&squares))
+        Some((self.pool.add(&squares), len))
     }
 
     /// A scalar that may not depend on coordinates or time (initial values, parameter values).
-    fn constant(&mut self, e: &Expr) -> Option<cas::ExprId> {
-        let v = self.scalar(e)?;
+    fn constant(&mut self, e: &Expr) -> Option<(cas::ExprId, Dims)> {
+        let (v, dims) = self.scalar(e)?;
         let moving = self
             .pool
             .free_symbols(v)
@@ -738,25 +878,25 @@ impl<'a> Resolver<'a> {
             );
             return None;
         }
-        self.finite(v, e).then_some(v)
+        self.finite(v, e).then_some((v, dims))
     }
 
     /// [`Self::value`], refused when it has derivatives its role does not allow.
-    fn value_in_role(&mut self, e: &Expr, role: &Role) -> Option<Value> {
-        let v = self.value(e)?;
-        self.within_role(e, &v, role).then_some(v)
+    fn value_in_role(&mut self, e: &Expr, role: &Role) -> Option<(Value, Dims)> {
+        let (v, dims) = self.value(e)?;
+        self.within_role(e, &v, role).then_some((v, dims))
     }
 
     /// [`Self::scalar`], refused when it has derivatives its role does not allow.
-    fn scalar_in_role(&mut self, e: &Expr, role: &Role) -> Option<cas::ExprId> {
-        let v = self.scalar(e)?;
-        self.within_role(e, &Value::Scalar(v), role).then_some(v)
+    fn scalar_in_role(&mut self, e: &Expr, role: &Role) -> Option<(cas::ExprId, Dims)> {
+        let (v, dims) = self.scalar(e)?;
+        self.within_role(e, &Value::Scalar(v), role).then_some((v, dims))
     }
 
-    fn scalar(&mut self, e: &Expr) -> Option<cas::ExprId> {
+    fn scalar(&mut self, e: &Expr) -> Option<(cas::ExprId, Dims)> {
         match self.value(e)? {
-            Value::Scalar(x) => Some(x),
-            other => {
+            (Value::Scalar(x), dims) => Some((x, dims)),
+            (other, _) => {
                 self.error(
                     Diagnostic::error(
                         e.span,
@@ -769,10 +909,14 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    fn value(&mut self, e: &Expr) -> Option<Value> {
+    /// The value of `e`, and what is known of its dimension.
+    fn value(&mut self, e: &Expr) -> Option<(Value, Dims)> {
         match &e.kind {
             ExprKind::Number(text) => match cas::number::parse_decimal(text) {
-                Some(q) => Some(Value::Scalar(self.pool.num(q))),
+                Some(q) => {
+                    let v = self.pool.num(q);
+                    Some((Value::Scalar(v), self.number_dims(v, true)))
+                }
                 None => {
                     self.error(
                         Diagnostic::error(
@@ -789,19 +933,32 @@ impl<'a> Resolver<'a> {
             ExprKind::Member { object, field } => self.member(object, field, e.span),
             ExprKind::Call { func, args } => self.call(func, args, e.span),
             ExprKind::Neg(inner) => {
-                let v = self.value(inner)?;
-                Some(v.map(|x| self.pool.neg(x)))
+                let (v, dims) = self.value(inner)?;
+                let v = v.map(|x| self.pool.neg(x));
+                let dims = match (dims, &v) {
+                    (Dims::Number { decided, .. }, Value::Scalar(x)) => {
+                        self.number_dims(*x, decided)
+                    }
+                    (dims, _) => dims,
+                };
+                Some((v, dims))
             }
             ExprKind::Binary { op, lhs, rhs } => {
                 let (l, r) = (self.value(lhs), self.value(rhs));
-                self.binary(*op, l?, r?, lhs, rhs)
+                let ((l, l_dims), (r, r_dims)) = (l?, r?);
+                let v = self.binary(*op, l, r, lhs, rhs)?;
+                let dims = self.binary_dims(*op, (l_dims, r_dims), lhs, rhs, &v);
+                Some((v, dims))
             }
             ExprKind::Tuple(items) => {
                 let mut out = Vec::new();
                 for item in items {
                     out.push(self.scalar(item));
                 }
-                Some(Value::Vector(out.into_iter().collect::<Option<Vec<_>>>()?))
+                let (out, dims): (Vec<_>, Vec<_>) =
+                    out.into_iter().collect::<Option<Vec<_>>>()?.into_iter().unzip();
+                let forms = dims.into_iter().map(|d| self.operand_form(d)).collect();
+                Some((Value::Vector(out), Dims::Many(forms)))
             }
             ExprKind::Matrix(rows) => {
                 let mut out = Vec::new();
@@ -813,6 +970,8 @@ impl<'a> Resolver<'a> {
                     out.push(r.into_iter().collect::<Option<Vec<_>>>());
                 }
                 let out = out.into_iter().collect::<Option<Vec<_>>>()?;
+                let (out, grid): (Vec<Vec<_>>, Vec<Vec<_>>) =
+                    out.into_iter().map(|row| row.into_iter().unzip()).unzip();
                 let width = out.first().map_or(0, |r| r.len());
                 if out.iter().any(|r| r.len() != width) {
                     self.error(
@@ -822,12 +981,28 @@ impl<'a> Resolver<'a> {
                     );
                     return None;
                 }
-                Some(Value::Matrix(out))
+                Some((Value::Matrix(out), Dims::Grid(grid)))
             }
         }
     }
 
-    fn name(&mut self, raw: &str, primes: u8, span: Span) -> Option<Value> {
+    fn name(&mut self, raw: &str, primes: u8, span: Span) -> Option<(Value, Dims)> {
+        let value = self.name_value(raw, primes, span)?;
+        let name = normalize(raw);
+        let dims = match (name.as_str(), &value) {
+            ("t", _) if !self.names.contains_key("t") => Dims::Scalar(crate::units::time()),
+            ("pi", Value::Scalar(pi)) if !self.names.contains_key("pi") && primes == 0 => {
+                self.number_dims(*pi, true)
+            }
+            ("pi", _) if !self.names.contains_key("pi") => {
+                Dims::Scalar(Form::default().rate(primes))
+            }
+            _ => self.name_dims(raw, &name, primes),
+        };
+        Some((value, dims))
+    }
+
+    fn name_value(&mut self, raw: &str, primes: u8, span: Span) -> Option<Value> {
         let name = normalize(raw);
         self.used.insert(name.clone());
         let base = match name.as_str() {
@@ -951,7 +1126,16 @@ impl<'a> Resolver<'a> {
         self.error(d);
     }
 
-    fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<Value> {
+    fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<(Value, Dims)> {
+        let value = self.member_value(object, field, span)?;
+        let body = match self.names.get(&normalize(&object.name)) {
+            Some(Binding::Body(i)) => Some(*i),
+            _ => None,
+        };
+        Some((value, self.member_dims(object, field, body)))
+    }
+
+    fn member_value(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<Value> {
         let name = normalize(&object.name);
         match self.names.get(&name).cloned() {
             Some(Binding::Body(i)) => {
@@ -1043,7 +1227,7 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    fn call(&mut self, func: &Ident, args: &[Expr], span: Span) -> Option<Value> {
+    fn call(&mut self, func: &Ident, args: &[Expr], span: Span) -> Option<(Value, Dims)> {
         let name = func.name.as_str();
         let arity = match name {
             "atan2" => 2,
@@ -1076,7 +1260,8 @@ impl<'a> Resolver<'a> {
         for a in args {
             xs.push(self.scalar(a));
         }
-        let xs = xs.into_iter().collect::<Option<Vec<_>>>()?;
+        let (xs, arg_dims): (Vec<_>, Vec<_>) =
+            xs.into_iter().collect::<Option<Vec<_>>>()?.into_iter().unzip();
         if let Some(d) = self.outside_domain(name, &xs, args, span) {
             self.error(d);
             return None;
@@ -1086,7 +1271,8 @@ impl<'a> Resolver<'a> {
             "sqrt" => self.pool.sqrt(xs[0]),
             _ => self.pool.func(Func::from_name(name).expect("checked above"), xs[0]),
         };
-        Some(Value::Scalar(v))
+        let dims = self.call_dims(name, arg_dims, args, v);
+        Some((Value::Scalar(v), dims))
     }
 
     fn binary(&mut self, op: BinOp, l: Value, r: Value, le: &Expr, re: &Expr) -> Option<Value> {
@@ -1216,7 +1402,7 @@ impl<'a> Resolver<'a> {
         }
     }
 
-    fn finish(mut self) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    fn finish(mut self, checks: Checks) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
         for p in &self.params {
             if !self.used.contains(&p.name) {
                 self.warnings.push(
@@ -1232,6 +1418,12 @@ impl<'a> Resolver<'a> {
             let mut errors = self.errors;
             errors.sort_by_key(|d| d.span.start);
             return Err(errors);
+        }
+        if checks.units {
+            let mismatches = self.units.solve();
+            if !mismatches.is_empty() {
+                return Err(mismatches);
+            }
         }
         Ok((
             Model {

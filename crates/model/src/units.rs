@@ -1,20 +1,17 @@
-//! Units and dimensions: the SI units a scene may write after a value, and a check that every
-//! sum, equation and energy term in the scene has one dimension.
+//! Units and dimensions: the SI units a scene may write after a value, and the inference that
+//! every sum, equation and energy term in the scene has one dimension.
 //!
 //! Dimensions are exponents of the SI base quantities. Names without a unit get an unknown
-//! dimension that the check infers from how they are used (a linear system over the
-//! exponents, solved as it grows), so a scene needs units on only a few parameters for
-//! every term to be checked.
+//! dimension that is inferred from how they are used (a linear system over the exponents), so
+//! a scene needs units on only a few parameters for every term to be checked. The resolver
+//! states the facts (this equals that, this is dimensionless, this is an energy) as it
+//! resolves each expression; [`Inference::solve`] then solves them in the file's order.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use cas::number::{One, Signed, Zero};
-use cas::{ExprId, Func, Pool, Rational};
-use lang::{BinOp, Diagnostic, Expr, ExprKind, Property, SceneFile, Span, StmtKind, Unit};
-
-/// Past this a power of a number is not physics; [`Checker::number_value`] leaves it unvalued
-/// rather than build it (the resolver refuses it anyway).
-const MAX_EXPONENT: i64 = 64;
+use cas::Rational;
+use lang::{Diagnostic, SceneFile, Span, Unit};
 
 /// The SI base quantities tracked: mass, length, time, current, temperature.
 const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];
@@ -24,7 +21,7 @@ const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];
 pub struct Dim([Rational; 5]);
 
 impl Dim {
-    fn base(i: usize) -> Dim {
+    pub(crate) fn base(i: usize) -> Dim {
         let mut d = Dim::default();
         d.0[i] = Rational::one();
         d
@@ -143,23 +140,39 @@ pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
     Ok((dim, scale))
 }
 
+/// The time dimension, which each prime takes off.
+pub(crate) fn time() -> Form {
+    Form::known(Dim::base(2))
+}
+
+/// An unknown dimension. Unknowns are ordered by the statement they arise in, then by their
+/// order there: the order decides which unknown a fact is solved for, and so the wording of
+/// later messages, and it must follow the file, whatever order the statements are resolved in
+/// (`show` and `expect` lines last).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub(crate) struct Unknown {
+    stmt: usize,
+    seq: usize,
+}
+
 /// A dimension that may still depend on unknowns: `known + Σ coefficient · unknown`.
 #[derive(Clone, Debug, Default)]
-struct Form {
+pub(crate) struct Form {
     known: Dim,
-    unknowns: BTreeMap<usize, Rational>,
+    unknowns: BTreeMap<Unknown, Rational>,
 }
 
 impl Form {
-    fn known(d: Dim) -> Form {
+    pub(crate) fn known(d: Dim) -> Form {
         Form { known: d, unknowns: BTreeMap::new() }
     }
 
-    fn unknown(i: usize) -> Form {
-        Form { known: Dim::default(), unknowns: [(i, Rational::one())].into_iter().collect() }
+    fn unknown(u: Unknown) -> Form {
+        Form { known: Dim::default(), unknowns: [(u, Rational::one())].into_iter().collect() }
     }
 
-    fn plus(&self, other: &Form, k: &Rational) -> Form {
+    /// `self + k·other`.
+    pub(crate) fn plus(&self, other: &Form, k: &Rational) -> Form {
         let mut out = self.clone();
         out.known = out.known.add(&other.known.scale(k));
         for (u, c) in &other.unknowns {
@@ -170,76 +183,247 @@ impl Form {
         out
     }
 
-    fn times(&self, k: &Rational) -> Form {
+    pub(crate) fn times(&self, k: &Rational) -> Form {
         Form::default().plus(self, k)
+    }
+
+    /// The dimension of `primes` time derivatives of this.
+    pub(crate) fn rate(&self, primes: u8) -> Form {
+        self.plus(&time(), &-Rational::from_integer(primes.into()))
     }
 }
 
-/// The dimensions of a scene's values: scalars, vectors, matrices.
-// Shapes live only while one expression is checked; boxing the scalar would buy nothing.
+/// The dimensions of a scene's values: scalars, and the entries of vectors and matrices.
+// Shapes live only while one expression is resolved; boxing the scalar would buy nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
-enum Shape {
+pub(crate) enum Shape {
     Scalar(Form),
     Many(Vec<Form>),
 }
 
 impl Shape {
-    fn forms(&self) -> Vec<Form> {
+    pub(crate) fn forms(self) -> Vec<Form> {
         match self {
-            Shape::Scalar(f) => vec![f.clone()],
-            Shape::Many(v) => v.clone(),
+            Shape::Scalar(f) => vec![f],
+            Shape::Many(v) => v,
+        }
+    }
+
+    /// The scalar, or the first entry.
+    pub(crate) fn first(self) -> Form {
+        match self {
+            Shape::Scalar(f) => f,
+            Shape::Many(v) => v.into_iter().next().unwrap_or_default(),
         }
     }
 }
 
-struct BodyDims {
-    mass: Form,
-    position: Vec<Form>,
-    angle: Option<Form>,
+/// What the resolver states about dimensions, to be solved once the scene is resolved.
+// Each is stored once and read once; boxing the forms would cost an allocation apiece.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+enum Fact {
+    /// `a` and `b` have one dimension.
+    Same {
+        a: Form,
+        b: Form,
+        spans: (Span, Span),
+        what: String,
+    },
+    Dimensionless {
+        form: Form,
+        span: Span,
+        what: String,
+    },
+    /// A term of the energy (or, times a time, of the power).
+    Energy {
+        form: Form,
+        span: Span,
+    },
+    /// The terms of a sum have one dimension, and the sum has theirs: each of `results` is
+    /// `left`'s entry, or, when the terms disagree, a fresh unknown so that one mistake does
+    /// not cascade.
+    Sum {
+        left: Vec<Form>,
+        right: Vec<Form>,
+        results: Vec<Unknown>,
+        spans: (Span, Span),
+    },
 }
 
-/// Checks that every term of the scene has one dimension. Returns the mismatches found.
-pub fn check(file: &SceneFile) -> Vec<Diagnostic> {
-    let mut c = Checker::default();
-    let energy = c.fresh("the energy");
-    c.energy = Some(energy);
-    let time = Form::known(Dim::base(2));
-    c.names.insert("t".into(), time);
-    c.names.insert("pi".into(), Form::default());
-    for name in ["KE", "PE"] {
-        c.names.insert(name.into(), c.energy_form());
-    }
-    for stmt in &file.stmts {
-        c.statement(&stmt.kind);
-    }
-    c.errors
-}
-
-#[derive(Default)]
-struct Checker {
+/// The facts about dimensions gathered while a scene is resolved.
+pub(crate) struct Inference {
+    /// The statement being resolved, counted from 1 in file order (0 is before the first).
+    stmt: usize,
+    next: usize,
     /// What each unknown stands for, for messages.
-    unknown_names: Vec<String>,
+    names: HashMap<Unknown, String>,
+    facts: Vec<(usize, Fact)>,
+    energy: Unknown,
+}
+
+impl Default for Inference {
+    fn default() -> Self {
+        let first = Unknown { stmt: 0, seq: 0 };
+        let mut inference =
+            Inference { stmt: 0, next: 1, names: HashMap::new(), facts: Vec::new(), energy: first };
+        inference.names.insert(first, "the energy".to_string());
+        inference
+    }
+}
+
+impl Inference {
+    /// Facts and unknowns from here on belong to statement `index` (0-based) of the file.
+    pub(crate) fn enter(&mut self, index: usize) {
+        self.stmt = index + 1;
+    }
+
+    /// An unknown kept in reserve: named, and so used, only if its place needs it.
+    pub(crate) fn reserve(&mut self) -> Unknown {
+        self.next += 1;
+        Unknown { stmt: self.stmt, seq: self.next }
+    }
+
+    pub(crate) fn named(&mut self, u: Unknown, what: &str) -> Form {
+        self.names.insert(u, what.to_string());
+        Form::unknown(u)
+    }
+
+    pub(crate) fn fresh(&mut self, what: &str) -> Form {
+        let u = self.reserve();
+        self.named(u, what)
+    }
+
+    /// The dimension of energy, whatever the scene's units make it.
+    pub(crate) fn energy(&self) -> Form {
+        Form::unknown(self.energy)
+    }
+
+    fn state(&mut self, fact: Fact) {
+        self.facts.push((self.stmt, fact));
+    }
+
+    pub(crate) fn same(&mut self, a: &Form, b: &Form, span_a: Span, span_b: Span, what: &str) {
+        let (a, b) = (a.clone(), b.clone());
+        self.state(Fact::Same { a, b, spans: (span_a, span_b), what: what.to_string() });
+    }
+
+    pub(crate) fn dimensionless(&mut self, form: &Form, span: Span, what: &str) {
+        self.state(Fact::Dimensionless { form: form.clone(), span, what: what.to_string() });
+    }
+
+    pub(crate) fn energy_term(&mut self, form: &Form, span: Span) {
+        self.state(Fact::Energy { form: form.clone(), span });
+    }
+
+    /// The dimension of `l ± r`.
+    pub(crate) fn sum(&mut self, l: Shape, r: Shape, span_l: Span, span_r: Span) -> Shape {
+        let scalar = matches!(l, Shape::Scalar(_));
+        let (left, right) = (l.forms(), r.forms());
+        let results: Vec<Unknown> = left.iter().map(|_| self.reserve()).collect();
+        let forms: Vec<Form> = results.iter().map(|u| self.named(*u, "a mismatched sum")).collect();
+        self.state(Fact::Sum { left, right, results, spans: (span_l, span_r) });
+        if scalar {
+            Shape::Scalar(forms.into_iter().next().unwrap_or_default())
+        } else {
+            Shape::Many(forms)
+        }
+    }
+
+    /// How far the facts go, to take back those of a walk that only looks.
+    pub(crate) fn mark(&self) -> usize {
+        self.facts.len()
+    }
+
+    pub(crate) fn rollback(&mut self, mark: usize) {
+        self.facts.truncate(mark);
+    }
+
+    /// Solves the facts in the order of the statements they come from; returns the mismatches.
+    pub(crate) fn solve(&self) -> Vec<Diagnostic> {
+        let mut facts: Vec<&(usize, Fact)> = self.facts.iter().collect();
+        facts.sort_by_key(|(stmt, _)| *stmt);
+        let mut solver = Solver {
+            names: &self.names,
+            energy: self.energy,
+            solved: HashMap::new(),
+            void: HashSet::new(),
+            energy_span: None,
+            errors: Vec::new(),
+        };
+        for (_, fact) in facts {
+            solver.fact(fact);
+        }
+        solver.errors
+    }
+}
+
+/// Checks that every term of the scene has one dimension. Returns the mismatches found, from
+/// as much of the scene as resolves.
+pub fn check(file: &SceneFile) -> Vec<Diagnostic> {
+    crate::resolve::dimension_errors(file)
+}
+
+struct Solver<'a> {
+    names: &'a HashMap<Unknown, String>,
+    energy: Unknown,
     /// Solved unknowns, in terms of the others.
-    solved: HashMap<usize, Form>,
-    names: HashMap<String, Form>,
-    bodies: HashMap<String, BodyDims>,
-    energy: Option<usize>,
+    solved: HashMap<Unknown, Form>,
+    /// Entries of a vector sum whose terms disagreed: the sum became one fresh unknown, and
+    /// nothing is checked against its other entries.
+    void: HashSet<Unknown>,
     /// The first energy term, to point at when another disagrees with it.
     energy_span: Option<Span>,
     errors: Vec<Diagnostic>,
-    /// Exact values of expressions made of numbers alone, to tell which of them are zero.
-    numbers: Pool,
 }
 
-impl Checker {
-    fn fresh(&mut self, what: &str) -> usize {
-        self.unknown_names.push(what.to_string());
-        self.unknown_names.len() - 1
+impl Solver<'_> {
+    fn fact(&mut self, fact: &Fact) {
+        match fact {
+            Fact::Same { a, b, spans, what } => {
+                if !self.is_void(a) && !self.is_void(b) {
+                    self.same(a, b, spans.0, spans.1, what);
+                }
+            }
+            Fact::Dimensionless { form, span, what } => {
+                if !self.is_void(form) {
+                    self.dimensionless(form, *span, what);
+                }
+            }
+            Fact::Energy { form, span } => {
+                if !self.is_void(form) {
+                    let e = Form::unknown(self.energy);
+                    let first = *self.energy_span.get_or_insert(*span);
+                    self.same(form, &e, *span, first, "between energy terms");
+                }
+            }
+            Fact::Sum { left, right, results, spans } => {
+                let mut ok = true;
+                for (a, b) in left.iter().zip(right) {
+                    if !self.is_void(a) && !self.is_void(b) {
+                        ok &= self.same(a, b, spans.0, spans.1, "between the terms of this sum");
+                    }
+                }
+                for (i, (u, l)) in results.iter().zip(left).enumerate() {
+                    if !ok {
+                        // The sum is one unknown: its first entry stays free.
+                        if i > 0 {
+                            self.void.insert(*u);
+                        }
+                    } else if self.is_void(l) {
+                        self.void.insert(*u);
+                    } else {
+                        let value = self.reduce(l);
+                        self.solved.insert(*u, value);
+                    }
+                }
+            }
+        }
     }
 
-    fn energy_form(&self) -> Form {
-        Form::unknown(self.energy.unwrap_or(0))
+    fn is_void(&self, f: &Form) -> bool {
+        !self.void.is_empty() && f.unknowns.keys().any(|u| self.void.contains(u))
     }
 
     /// Substitutes every solved unknown.
@@ -264,15 +448,14 @@ impl Checker {
             parts.push(f.known.text());
         }
         for (u, k) in &f.unknowns {
-            let name = &self.unknown_names[*u];
+            let name = self.names.get(u).map_or("?", String::as_str);
             parts.push(if k.is_one() { format!("[{name}]") } else { format!("[{name}]^({k})") });
         }
         parts.join("·")
     }
 
     /// Records that `a` and `b` have one dimension; on a contradiction, reports both spans.
-    /// Returns whether they can be one; a mismatch is reported once, and callers replace the
-    /// mismatched value by a fresh unknown so that one mistake does not cascade.
+    /// Returns whether they can be one.
     fn same(&mut self, a: &Form, b: &Form, span_a: Span, span_b: Span, what: &str) -> bool {
         let diff = self.reduce(&a.plus(b, &-Rational::one()));
         if let Some((&u, k)) = diff.unknowns.iter().next() {
@@ -315,544 +498,6 @@ impl Checker {
             self.same(f, &Form::default(), span, span, what);
         }
     }
-
-    fn energy_term(&mut self, f: &Form, span: Span) {
-        let e = self.energy_form();
-        let first = *self.energy_span.get_or_insert(span);
-        self.same(f, &e, span, first, "between energy terms");
-    }
-
-    fn with_unit(&mut self, value: Option<&Expr>, unit: Option<&Unit>) -> Form {
-        let mut f = match value {
-            // A number with a unit has the unit's dimension (even `0 m`); one without is a
-            // wildcard.
-            Some(v) if unit.is_some() && self.is_number(v) => Form::default(),
-            Some(v) if unit.is_some() => self.scalar(v),
-            Some(v) => self.operand_scalar(v),
-            None => Form::unknown(self.fresh("a value")),
-        };
-        if let Some(u) = unit {
-            match parse_unit(u) {
-                Ok((d, _)) => f = f.plus(&Form::known(d), &Rational::one()),
-                Err(e) => self.errors.push(e),
-            }
-        }
-        f
-    }
-
-    fn statement(&mut self, stmt: &StmtKind) {
-        match stmt {
-            StmtKind::Param(decls) => {
-                for p in decls {
-                    let u = self.fresh(&p.name.name);
-                    let f = Form::unknown(u);
-                    if p.value.is_some() || p.unit.is_some() {
-                        let v = self.with_unit(p.value.as_ref(), p.unit.as_ref());
-                        let span = p.value.as_ref().map_or(p.name.span, |v| v.span);
-                        self.same(&f, &v, p.name.span, span, "in this parameter");
-                    }
-                    self.names.insert(normalize(&p.name.name), f);
-                }
-            }
-            StmtKind::Coord(decls) => {
-                for c in decls {
-                    let u = self.fresh(&c.name.name);
-                    let f = Form::unknown(u);
-                    if c.value.is_some() {
-                        let v = self.with_unit(c.value.as_ref(), c.value_unit.as_ref());
-                        let span = c.value.as_ref().map_or(c.name.span, |v| v.span);
-                        self.same(&f, &v, c.name.span, span, "in this initial value");
-                    }
-                    if c.rate.is_some() {
-                        let v = self.with_unit(c.rate.as_ref(), c.rate_unit.as_ref());
-                        let rate = f.plus(&Form::known(Dim::base(2)), &-Rational::one());
-                        let span = c.rate.as_ref().map_or(c.name.span, |v| v.span);
-                        self.same(&rate, &v, span, span, "in this initial rate");
-                    }
-                    self.names.insert(normalize(&c.name.name), f);
-                }
-            }
-            StmtKind::Let { name, value } => {
-                let s = self.value(value);
-                let f = match s {
-                    Shape::Scalar(f) => f,
-                    Shape::Many(_) => return,
-                };
-                self.names.insert(normalize(&name.name), f);
-            }
-            StmtKind::Particle { name, props } | StmtKind::Body { name, props } => {
-                self.body(&name.name, props)
-            }
-            StmtKind::Constraint { lhs, rhs, .. } => {
-                let (l, r) = (self.operand_scalar(lhs), self.operand_scalar(rhs));
-                self.same(&l, &r, lhs.span, rhs.span, "between the sides of this constraint");
-            }
-            StmtKind::Gravity { strength, direction } => {
-                let g = self.scalar(strength);
-                if let Some(d) = direction {
-                    for f in self.value(d).forms() {
-                        self.dimensionless(&f, d.span, "a direction");
-                    }
-                }
-                let bodies: Vec<(Form, Vec<Form>)> =
-                    self.bodies.values().map(|b| (b.mass.clone(), b.position.clone())).collect();
-                for (m, pos) in bodies {
-                    for x in pos {
-                        let e = m.plus(&g, &Rational::one()).plus(&x, &Rational::one());
-                        self.energy_term(&e, strength.span);
-                    }
-                }
-            }
-            StmtKind::Potential(e) | StmtKind::Lagrangian(e) => {
-                let f = self.scalar(e);
-                self.energy_term(&f, e.span);
-            }
-            StmtKind::Dissipation(e) => {
-                // A Rayleigh function is a power: energy per time.
-                let f = self.scalar(e).plus(&Form::known(Dim::base(2)), &Rational::one());
-                self.energy_term(&f, e.span);
-            }
-            StmtKind::Force { body, value, .. } => {
-                let v = self.value(value).forms();
-                let pos = self
-                    .bodies
-                    .get(&normalize(&body.name))
-                    .map(|b| b.position.clone())
-                    .unwrap_or_default();
-                for (f, x) in v.iter().zip(pos) {
-                    let work = f.plus(&x, &Rational::one());
-                    self.energy_term(&work, value.span);
-                }
-            }
-            StmtKind::Spring { a, b, stiffness, rest, .. } => {
-                let len = self.separation(a, b);
-                let k = self.scalar(stiffness);
-                if let Some(r) = rest {
-                    let l0 = self.operand_scalar(r);
-                    self.same(
-                        &l0,
-                        &len,
-                        r.span,
-                        a.span.join(b.span),
-                        "between a rest length and the distance it rests at",
-                    );
-                }
-                let e = k.plus(&len, &Rational::from_integer(2.into()));
-                self.energy_term(&e, stiffness.span);
-            }
-            StmtKind::Damper { a, b, coefficient, .. } => {
-                let len = self.separation(a, b);
-                let c = self.scalar(coefficient);
-                // c (d|AB|/dt)² is a power: c·len²/T² = energy/T.
-                let time = Form::known(Dim::base(2));
-                let e =
-                    c.plus(&len, &Rational::from_integer(2.into())).plus(&time, &-Rational::one());
-                self.energy_term(&e, coefficient.span);
-            }
-            StmtKind::Torque { body, value, .. } => {
-                let f = self.scalar(value);
-                if let Some(a) =
-                    self.bodies.get(&normalize(&body.name)).and_then(|b| b.angle.clone())
-                {
-                    let work = f.plus(&a, &Rational::one());
-                    self.energy_term(&work, value.span);
-                }
-            }
-            StmtKind::Show { items, .. } => {
-                for item in items {
-                    self.value(item);
-                }
-            }
-            StmtKind::Expect { lhs, rhs, .. } => {
-                let (l, r) = (self.operand(lhs).forms(), self.operand(rhs).forms());
-                for (a, b) in l.iter().zip(r.iter()) {
-                    self.same(a, b, lhs.span, rhs.span, "between the sides of this expectation");
-                }
-            }
-            StmtKind::Scene { .. } | StmtKind::Simulate(_) => {}
-        }
-    }
-
-    /// The dimension of the distance between two attachments (bodies or points), after
-    /// checking that their coordinates share one.
-    fn separation(&mut self, a: &Expr, b: &Expr) -> Form {
-        let mut forms = Vec::new();
-        for e in [a, b] {
-            let body = match &e.kind {
-                ExprKind::Name { name, primes: 0 } => {
-                    self.bodies.get(&normalize(name)).map(|b| b.position.clone())
-                }
-                _ => None,
-            };
-            match body {
-                Some(p) => forms.extend(p),
-                None => forms.extend(self.value(e).forms()),
-            }
-        }
-        let Some(first) = forms.first().cloned() else { return Form::default() };
-        for f in &forms[1..] {
-            self.same(&first, f, a.span, b.span, "between the coordinates of a spring's ends");
-        }
-        first
-    }
-
-    fn body(&mut self, name: &str, props: &[Property]) {
-        let mut mass = None;
-        let mut inertia = None;
-        let mut position = Vec::new();
-        let mut angle = None;
-        for p in props {
-            match p.key.name.as_str() {
-                "mass" => mass = Some((self.scalar(&p.value), p.value.span)),
-                "inertia" => inertia = Some((self.scalar(&p.value), p.value.span)),
-                "angle" => angle = Some((self.scalar(&p.value), p.value.span)),
-                "position" => {
-                    position = self
-                        .value(&p.value)
-                        .forms()
-                        .into_iter()
-                        .map(|f| (f, p.value.span))
-                        .collect()
-                }
-                _ => {}
-            }
-        }
-        let time = Form::known(Dim::base(2));
-        let two = Rational::from_integer(2.into());
-        let m = mass.clone().map(|(f, _)| f).unwrap_or_default();
-        // ½ m v² and ½ I ω² are energies.
-        for (x, span) in &position {
-            let v = x.plus(&time, &-Rational::one());
-            let e = m.plus(&v, &two);
-            self.energy_term(&e, *span);
-        }
-        if let (Some((i, span)), Some((a, _))) = (&inertia, &angle) {
-            let w = a.plus(&time, &-Rational::one());
-            let e = i.plus(&w, &two);
-            self.energy_term(&e, *span);
-        }
-        self.bodies.insert(
-            normalize(name),
-            BodyDims {
-                mass: m,
-                position: position.into_iter().map(|(f, _)| f).collect(),
-                angle: angle.map(|(f, _)| f),
-            },
-        );
-    }
-
-    /// A value that stands alone: a side of an equation, a term of a sum, an initial value, a
-    /// vector component. A number there, or an expression of numbers alone (`x'' = 0`,
-    /// `coord s = 1, s' = -1`, `theta' = sqrt(3)/2`, `x + 1/3`), takes whatever dimension its
-    /// place needs, so scenes written without units still pass; a number that multiplies
-    /// something (`k/10`, `2*x`) is dimensionless, so coefficients are checked, unless it is
-    /// zero (see [`Checker::value`]).
-    fn operand(&mut self, e: &Expr) -> Shape {
-        if self.is_number(e) {
-            return Shape::Scalar(Form::unknown(self.fresh("a number")));
-        }
-        self.value(e)
-    }
-
-    fn operand_scalar(&mut self, e: &Expr) -> Form {
-        match self.operand(e) {
-            Shape::Scalar(f) => f,
-            Shape::Many(v) => v.into_iter().next().unwrap_or_default(),
-        }
-    }
-
-    fn scalar(&mut self, e: &Expr) -> Form {
-        match self.value(e) {
-            Shape::Scalar(f) => f,
-            Shape::Many(v) => v.into_iter().next().unwrap_or_default(),
-        }
-    }
-
-    /// The dimension of `e` wherever it stands. Numbers are dimensionless here, except zero:
-    /// 0·x is zero whatever x is, so a zero has every dimension (`[m, 0; 0, m]*[x''; y'']`).
-    fn value(&mut self, e: &Expr) -> Shape {
-        if self.is_number(e) {
-            return Shape::Scalar(if self.is_zero_number(e) {
-                Form::unknown(self.fresh("zero"))
-            } else {
-                Form::default()
-            });
-        }
-        match &e.kind {
-            ExprKind::Number(_) => Shape::Scalar(Form::default()),
-            ExprKind::Name { name, primes } => {
-                let key = normalize(name);
-                let f = match self.names.get(&key) {
-                    Some(f) => f.clone(),
-                    None => {
-                        let u = self.fresh(name);
-                        let f = Form::unknown(u);
-                        self.names.insert(key, f.clone());
-                        f
-                    }
-                };
-                let k = Rational::from_integer((*primes).into());
-                Shape::Scalar(f.plus(&Form::known(Dim::base(2)), &-k))
-            }
-            ExprKind::Member { object, field } => {
-                let time = Form::known(Dim::base(2));
-                match self.bodies.get(&normalize(&object.name)) {
-                    Some(b) => match field.name.as_str() {
-                        "position" => Shape::Many(b.position.clone()),
-                        "velocity" => Shape::Many(
-                            b.position.iter().map(|x| x.plus(&time, &-Rational::one())).collect(),
-                        ),
-                        "mass" => Shape::Scalar(b.mass.clone()),
-                        "angle" => Shape::Scalar(b.angle.clone().unwrap_or_default()),
-                        "omega" => Shape::Scalar(
-                            b.angle.clone().unwrap_or_default().plus(&time, &-Rational::one()),
-                        ),
-                        "x" | "y" | "z" => {
-                            let i = match field.name.as_str() {
-                                "x" => 0,
-                                "y" => 1,
-                                _ => 2,
-                            };
-                            Shape::Scalar(b.position.get(i).cloned().unwrap_or_default())
-                        }
-                        _ => Shape::Scalar(Form::unknown(self.fresh(&field.name))),
-                    },
-                    // A reaction: its dimension depends on the constraint's coordinates.
-                    None => Shape::Scalar(Form::unknown(
-                        self.fresh(&format!("{}.{}", object.name, field.name)),
-                    )),
-                }
-            }
-            ExprKind::Call { func, args } => {
-                let forms: Vec<Form> = args.iter().map(|a| self.scalar(a)).collect();
-                match func.name.as_str() {
-                    "sqrt" => Shape::Scalar(
-                        forms
-                            .first()
-                            .cloned()
-                            .unwrap_or_default()
-                            .times(&Rational::new(1.into(), 2.into())),
-                    ),
-                    "atan2" if forms.len() == 2 => {
-                        self.same(
-                            &forms[0],
-                            &forms[1],
-                            args[0].span,
-                            args[1].span,
-                            "between the arguments of atan2",
-                        );
-                        Shape::Scalar(Form::default())
-                    }
-                    name => {
-                        for (f, a) in forms.iter().zip(args) {
-                            self.dimensionless(f, a.span, &format!("the argument of {name}"));
-                        }
-                        Shape::Scalar(Form::default())
-                    }
-                }
-            }
-            ExprKind::Neg(inner) => self.value(inner),
-            ExprKind::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs),
-            ExprKind::Tuple(items) => {
-                Shape::Many(items.iter().map(|i| self.operand_scalar(i)).collect())
-            }
-            ExprKind::Matrix(rows) => {
-                let forms: Vec<Vec<Form>> = rows
-                    .iter()
-                    .map(|r| r.iter().map(|i| self.operand_scalar(i)).collect())
-                    .collect();
-                Shape::Many(forms.into_iter().flatten().collect())
-            }
-        }
-    }
-
-    /// Whether `e` is made of numbers alone: literals, `pi`, and functions and operations of
-    /// them (`0`, `-1/2`, `sqrt(3)/2`, `2*pi`).
-    fn is_number(&self, e: &Expr) -> bool {
-        match &e.kind {
-            ExprKind::Number(_) => true,
-            // `pi` stays the number unless the scene declared a name `pi` of its own.
-            ExprKind::Name { name, primes: 0 } => {
-                normalize(name) == "pi"
-                    && self
-                        .names
-                        .get("pi")
-                        .is_some_and(|f| f.unknowns.is_empty() && f.known.is_dimensionless())
-            }
-            ExprKind::Neg(inner) => self.is_number(inner),
-            ExprKind::Binary { lhs, rhs, .. } => self.is_number(lhs) && self.is_number(rhs),
-            ExprKind::Call { func, args } => {
-                let known = matches!(func.name.as_str(), "sqrt" | "atan2")
-                    || Func::from_name(&func.name).is_some();
-                known && args.iter().all(|a| self.is_number(a))
-            }
-            ExprKind::Member { .. } | ExprKind::Name { .. } => false,
-            ExprKind::Tuple(_) | ExprKind::Matrix(_) => false,
-        }
-    }
-
-    /// Whether a number-only expression is exactly zero (`0`, `-0.0`, `0*pi`, `sin(pi)`,
-    /// `1/2 - 0.5`). `false` when its value could not be decided.
-    fn is_zero_number(&mut self, e: &Expr) -> bool {
-        match self.number_value(e) {
-            Some(v) => self.numbers.is_identically_zero(v),
-            None => false,
-        }
-    }
-
-    /// The exact value of a number-only expression, or `None` where building it would divide
-    /// by zero or raise to a power too large to be meant.
-    fn number_value(&mut self, e: &Expr) -> Option<ExprId> {
-        let pool = &mut self.numbers;
-        Some(match &e.kind {
-            ExprKind::Number(text) => {
-                let q = cas::number::parse_decimal(text)?;
-                pool.num(q)
-            }
-            ExprKind::Name { name, .. } if normalize(name) == "pi" => pool.pi(),
-            ExprKind::Neg(inner) => {
-                let v = self.number_value(inner)?;
-                self.numbers.neg(v)
-            }
-            ExprKind::Binary { op, lhs, rhs } => {
-                let (a, b) = (self.number_value(lhs)?, self.number_value(rhs)?);
-                let pool = &mut self.numbers;
-                match op {
-                    BinOp::Add => pool.add2(a, b),
-                    BinOp::Sub => pool.sub(a, b),
-                    BinOp::Mul => pool.mul2(a, b),
-                    BinOp::Div if pool.is_zero(b) => return None,
-                    BinOp::Div => pool.div(a, b),
-                    BinOp::Pow => {
-                        let q = pool.as_num(b)?.clone();
-                        let limit = Rational::from_integer(MAX_EXPONENT.into());
-                        let huge =
-                            q.numer().bits() > 32 || q.denom().bits() > 32 || q.abs() > limit;
-                        if huge || (pool.is_zero(a) && q.is_negative()) {
-                            return None;
-                        }
-                        pool.powq(a, &q)
-                    }
-                }
-            }
-            ExprKind::Call { func, args } => {
-                let mut xs = Vec::new();
-                for a in args {
-                    xs.push(self.number_value(a)?);
-                }
-                let pool = &mut self.numbers;
-                match (func.name.as_str(), xs.as_slice()) {
-                    ("sqrt", [x]) => pool.sqrt(*x),
-                    ("atan2", [y, x]) => pool.atan2(*y, *x),
-                    (name, [x]) => pool.func(Func::from_name(name)?, *x),
-                    _ => return None,
-                }
-            }
-            ExprKind::Name { .. }
-            | ExprKind::Member { .. }
-            | ExprKind::Tuple(_)
-            | ExprKind::Matrix(_) => return None,
-        })
-    }
-
-    fn binary(&mut self, op: BinOp, lhs: &Expr, rhs: &Expr) -> Shape {
-        // Matrix products: the entries of `[a, b; c, d] * [x; y]` are sums a·x + b·y.
-        if let (BinOp::Mul, ExprKind::Matrix(a), ExprKind::Matrix(b)) = (op, &lhs.kind, &rhs.kind) {
-            let a: Vec<Vec<Form>> =
-                a.iter().map(|r| r.iter().map(|i| self.scalar(i)).collect()).collect();
-            let b: Vec<Vec<Form>> =
-                b.iter().map(|r| r.iter().map(|i| self.scalar(i)).collect()).collect();
-            let mut out = Vec::new();
-            for row in &a {
-                for j in 0..b.first().map_or(0, |r| r.len()) {
-                    let terms: Vec<Form> = row
-                        .iter()
-                        .zip(&b)
-                        .map(|(x, brow)| x.plus(&brow[j], &Rational::one()))
-                        .collect();
-                    for t in terms.iter().skip(1) {
-                        self.same(
-                            &terms[0],
-                            t,
-                            lhs.span,
-                            rhs.span,
-                            "between the terms of this matrix product",
-                        );
-                    }
-                    out.push(terms.into_iter().next().unwrap_or_default());
-                }
-            }
-            return Shape::Many(out);
-        }
-        let (l, r) = match op {
-            BinOp::Add | BinOp::Sub => (self.operand(lhs), self.operand(rhs)),
-            _ => (self.value(lhs), self.value(rhs)),
-        };
-        match op {
-            BinOp::Add | BinOp::Sub => {
-                let (lf, rf) = (l.forms(), r.forms());
-                let mut ok = true;
-                for (a, b) in lf.iter().zip(rf.iter()) {
-                    ok &= self.same(a, b, lhs.span, rhs.span, "between the terms of this sum");
-                }
-                if ok {
-                    l
-                } else {
-                    Shape::Scalar(Form::unknown(self.fresh("a mismatched sum")))
-                }
-            }
-            BinOp::Mul | BinOp::Div => {
-                let k = if op == BinOp::Mul { Rational::one() } else { -Rational::one() };
-                match (l, r) {
-                    (Shape::Scalar(a), Shape::Scalar(b)) => Shape::Scalar(a.plus(&b, &k)),
-                    (Shape::Scalar(a), Shape::Many(v)) => Shape::Many(
-                        v.iter().map(|b| a.times(&Rational::one()).plus(b, &k)).collect(),
-                    ),
-                    (Shape::Many(v), Shape::Scalar(b)) => {
-                        Shape::Many(v.iter().map(|a| a.plus(&b, &k)).collect())
-                    }
-                    (Shape::Many(v), Shape::Many(_)) => Shape::Many(v),
-                }
-            }
-            BinOp::Pow => {
-                let base = match l {
-                    Shape::Scalar(f) => f,
-                    Shape::Many(_) => return l,
-                };
-                match exponent_value(rhs) {
-                    Some(q) => Shape::Scalar(base.times(&q)),
-                    None => {
-                        let ef = match r {
-                            Shape::Scalar(f) => f,
-                            Shape::Many(_) => Form::default(),
-                        };
-                        self.dimensionless(&base, lhs.span, "a base raised to a symbolic power");
-                        self.dimensionless(&ef, rhs.span, "an exponent");
-                        Shape::Scalar(Form::default())
-                    }
-                }
-            }
-        }
-    }
-}
-
-/// A numeric exponent as written: `2`, `-1`, `1/2`, `(3/2)`.
-fn exponent_value(e: &Expr) -> Option<Rational> {
-    match &e.kind {
-        ExprKind::Number(t) => cas::number::parse_decimal(t),
-        ExprKind::Neg(inner) => exponent_value(inner).map(|q| -q),
-        ExprKind::Binary { op: BinOp::Div, lhs, rhs } => {
-            let (a, b) = (exponent_value(lhs)?, exponent_value(rhs)?);
-            (!b.is_zero()).then(|| a / b)
-        }
-        _ => None,
-    }
-}
-
-fn normalize(name: &str) -> String {
-    name.chars()
-        .map(|c| cas::greek_word(c).map(str::to_string).unwrap_or_else(|| c.to_string()))
-        .collect()
 }
 
 #[cfg(test)]
@@ -912,10 +557,9 @@ mod tests {
         let sum =
             "param L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + sqrt(2)/2, 2*pi) }\n";
         assert_eq!(errors(sum), Vec::<String>::new());
-        // A name is not a number: `pi` declared as a parameter is checked like any other.
-        let shadowed =
-            "param pi = 2 s, L = 1 m\ncoord x = 1 m\nparticle p { mass 1; position (x + pi, 0) }\n";
-        assert_eq!(errors(shadowed).len(), 1);
+        // A name is not a number: a `let` name for a number is dimensionless like any other.
+        let named = "let c = 2\ncoord x = 1 m\nparticle p { mass 1; position (x + c, 0) }\n";
+        assert_eq!(errors(named).len(), 1);
     }
 
     #[test]

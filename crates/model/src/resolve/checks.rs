@@ -173,10 +173,11 @@ impl Resolver<'_> {
     /// Resolves `e` again without reporting anything, to look inside an expression that
     /// resolved once already.
     fn value_quietly(&mut self, e: &Expr) -> Option<Value> {
-        let errors = self.errors.len();
+        let (errors, facts) = (self.errors.len(), self.units.mark());
         let v = self.value(e);
         self.errors.truncate(errors);
-        v
+        self.units.rollback(facts);
+        v.map(|(v, _)| v)
     }
 
     /// The smallest part of `e` that has a derivative past `max_order`: the name itself
