@@ -51,6 +51,7 @@ pub fn load_with(
         }
     }
     let mut derivation = mechanics::derive(model)?;
+    verify::diagnose(&mut derivation)?;
     warnings.append(&mut derivation.warnings);
     Ok((derivation, warnings))
 }
