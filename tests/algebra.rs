@@ -129,8 +129,17 @@ proptest! {
         prop_assume!(f0.abs() < 1e4 && exact.abs() < 1e4);
         let second = (fp - 2.0 * f0 + fm) / (h * h);
         prop_assume!(second.abs() < 1e5);
-        let numeric = (fp - fm) / (2.0 * h);
-        prop_assert!(close(exact, numeric, 1e-5), "d/d{} of {} = {} gives {exact}, finite difference {numeric}",
+        let difference = (fp - fm) / (2.0 * h);
+        // Near a singularity (sqrt(cos x) at x = π/2 − 5e-4) the third derivative spoils the
+        // quotient though the second is moderate: only a quotient that halving h leaves
+        // settled is a reference.
+        let mut plus_half = at.clone();
+        plus_half[syms[which].index()] += h / 2.0;
+        let mut minus_half = at.clone();
+        minus_half[syms[which].index()] -= h / 2.0;
+        let half = (numeric::eval(&pool, e, &plus_half) - numeric::eval(&pool, e, &minus_half)) / h;
+        prop_assume!(close(difference, half, 1e-6));
+        prop_assert!(close(exact, difference, 1e-5), "d/d{} of {} = {} gives {exact}, finite difference {difference}",
             ["x", "y", "z"][which], pool.print(e, Style::Ascii), pool.print(d, Style::Ascii));
     }
 
