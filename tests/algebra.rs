@@ -90,6 +90,7 @@ fn build(pool: &mut Pool, vars: &[ExprId], t: &Tree) -> ExprId {
 
 fn setup() -> (Pool, Vec<SymId>, Vec<ExprId>) {
     let mut pool = Pool::new();
+    pool.set_probe(numeric::value_and_scale);
     let syms: Vec<SymId> = ["x", "y", "z"].iter().map(|n| pool.param(n)).collect();
     let vars = syms.iter().map(|s| pool.sym(*s)).collect();
     (pool, syms, vars)
@@ -116,20 +117,29 @@ proptest! {
         let e = build(&mut pool, &vars, &t);
         let d = pool.diff(e, syms[which]);
         let at = values(&pool, &syms, &p);
-        let exact = pool.eval(d, &at);
+        let exact = numeric::eval(&pool, d, &at);
         let h = 1e-5;
         let mut plus = at.clone();
         plus[syms[which].index()] += h;
         let mut minus = at.clone();
         minus[syms[which].index()] -= h;
-        let (fp, fm, f0) = (pool.eval(e, &plus), pool.eval(e, &minus), pool.eval(e, &at));
+        let (fp, fm, f0) = (numeric::eval(&pool, e, &plus), numeric::eval(&pool, e, &minus), numeric::eval(&pool, e, &at));
         // Only where the function is tame: finite, moderate, and not at a kink of sqrt.
         prop_assume!(exact.is_finite() && fp.is_finite() && fm.is_finite() && f0.is_finite());
         prop_assume!(f0.abs() < 1e4 && exact.abs() < 1e4);
         let second = (fp - 2.0 * f0 + fm) / (h * h);
         prop_assume!(second.abs() < 1e5);
-        let numeric = (fp - fm) / (2.0 * h);
-        prop_assert!(close(exact, numeric, 1e-5), "d/d{} of {} = {} gives {exact}, finite difference {numeric}",
+        let difference = (fp - fm) / (2.0 * h);
+        // Near a singularity (sqrt(cos x) at x = π/2 − 5e-4) the third derivative spoils the
+        // quotient though the second is moderate: only a quotient that halving h leaves
+        // settled is a reference.
+        let mut plus_half = at.clone();
+        plus_half[syms[which].index()] += h / 2.0;
+        let mut minus_half = at.clone();
+        minus_half[syms[which].index()] -= h / 2.0;
+        let half = (numeric::eval(&pool, e, &plus_half) - numeric::eval(&pool, e, &minus_half)) / h;
+        prop_assume!(close(difference, half, 1e-6));
+        prop_assert!(close(exact, difference, 1e-5), "d/d{} of {} = {} gives {exact}, finite difference {difference}",
             ["x", "y", "z"][which], pool.print(e, Style::Ascii), pool.print(d, Style::Ascii));
     }
 
@@ -138,12 +148,12 @@ proptest! {
         let (mut pool, syms, vars) = setup();
         let e = build(&mut pool, &vars, &t);
         let at = values(&pool, &syms, &p);
-        let before = pool.eval(e, &at);
+        let before = numeric::eval(&pool, e, &at);
         prop_assume!(before.is_finite() && before.abs() < 1e6);
         let s = pool.simplify(e);
         let f = pool.factor_content(e);
-        let after = pool.eval(s, &at);
-        let factored = pool.eval(f, &at);
+        let after = numeric::eval(&pool, s, &at);
+        let factored = numeric::eval(&pool, f, &at);
         prop_assert!(close(before, after, 1e-9), "{} = {before} but simplified {} = {after}",
             pool.print(e, Style::Ascii), pool.print(s, Style::Ascii));
         prop_assert!(close(before, factored, 1e-9), "{} = {before} but factored {} = {factored}",
@@ -159,7 +169,7 @@ proptest! {
         let e = build(&mut pool, &vars, &t);
         let text = pool.print(e, Style::Ascii);
         let at = values(&pool, &syms, &p);
-        let before = pool.eval(e, &at);
+        let before = numeric::eval(&pool, e, &at);
         // A scene refuses constants that are not real numbers (`sqrt(-2)`), so only values
         // are read back.
         prop_assume!(before.is_finite() && before.abs() < 1e6);
@@ -182,5 +192,5 @@ fn reparse(text: &str) -> (String, impl Fn(&[f64; 3]) -> f64) {
     let printed = m.pool.print(e, Style::Ascii);
     let syms: Vec<SymId> =
         ["x", "y", "z"].iter().map(|n| m.pool.lookup_symbol(n).expect("declared")).collect();
-    (printed, move |p: &[f64; 3]| m.pool.eval(e, &values(&m.pool, &syms, p)))
+    (printed, move |p: &[f64; 3]| numeric::eval(&m.pool, e, &values(&m.pool, &syms, p)))
 }

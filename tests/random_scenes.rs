@@ -97,7 +97,7 @@ fn state(d: &mechanics::Derivation, seed: u64) -> Vec<f64> {
         .collect();
     for p in &d.model.params {
         if let Some(v) = p.value {
-            values[p.sym.index()] = pool.eval(v, &values);
+            values[p.sym.index()] = numeric::eval(pool, v, &values);
         }
     }
     values
@@ -146,7 +146,7 @@ proptest! {
 
         let values = state(&d, seed);
         let entries: Vec<f64> =
-            m.iter().flatten().map(|e| d.model.pool.eval(*e, &values)).collect();
+            m.iter().flatten().map(|e| numeric::eval(&d.model.pool, *e, &values)).collect();
         if n > 0 && entries.iter().all(|x| x.is_finite()) {
             let matrix = nalgebra::DMatrix::from_row_slice(n, n, &entries);
             let eigen = matrix.clone().symmetric_eigen();

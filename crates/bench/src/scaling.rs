@@ -54,6 +54,8 @@ pub fn json(family: Family, n: usize) {
     );
 }
 
+// Timings extrapolated and growth exponents printed to two decimals: no last bit shows.
+#[allow(clippy::disallowed_methods)]
 pub fn run(budget: f64, max: usize) {
     println!("## Derivation scaling (median of up to 5 runs; per-size budget {budget} s)");
     for family in [Family::Pendulum, Family::PendulumOnCart] {

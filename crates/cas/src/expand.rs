@@ -490,27 +490,15 @@ impl Pool {
         self.mul(&[scale, rest, den])
     }
 
-    /// Evaluates at a fixed generic point (every symbol at an irrational-looking value in
-    /// (0.3, 0.8)) and reports whether the value is clearly not zero, relative to the size of
-    /// the terms that make it up.
+    /// Evaluates, with the pool's probe, at a fixed generic point (every symbol at an
+    /// irrational-looking value in (0.3, 0.8)) and reports whether the value is clearly not
+    /// zero, relative to the size of the terms that make it up.
     fn clearly_nonzero_somewhere(&self, e: ExprId) -> bool {
+        let Some(probe) = self.probe else { return false };
         let values: Vec<f64> = (0..self.symbol_count())
             .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * 0.618_033_988_749_895).fract())
             .collect();
-        let mut memo = HashMap::new();
-        let value = self.eval_memo(e, &values, &mut memo);
-        let scale = match self.node(e) {
-            Node::Add(c, terms) => {
-                number::to_f64(c).abs()
-                    + terms
-                        .iter()
-                        .map(|(t, k)| {
-                            (number::to_f64(k) * self.eval_memo(*t, &values, &mut memo)).abs()
-                        })
-                        .sum::<f64>()
-            }
-            _ => value.abs(),
-        };
+        let (value, scale) = probe(self, e, &values);
         value.is_finite() && scale.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE)
     }
 

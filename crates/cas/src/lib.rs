@@ -7,6 +7,9 @@
 //! structurally equal expressions are the same id. Constructors (`add`, `mul`, `powq`, `func`,
 //! …) return canonical forms, so like terms are collected as they are built. Derivatives are
 //! memoised per (node, symbol), which keeps the derivatives of large Lagrangians shared.
+//!
+//! It evaluates no floats: the one float evaluator of expressions is `numeric`'s, which sits
+//! above this crate and hands the zero test its quick numeric probe ([`Pool::set_probe`]).
 
 mod diff;
 mod expand;
@@ -17,6 +20,5 @@ pub mod print;
 mod subst;
 
 pub use number::Rational;
-pub use pool::{ExprId, Func, Node, Pool, SymId, Symbol, SymbolKind};
+pub use pool::{ExprId, Func, Node, Pool, Probe, SymId, Symbol, SymbolKind};
 pub use print::{greek_word, Style};
-pub use subst::{apply, power};

@@ -148,6 +148,12 @@ impl Symbol {
     }
 }
 
+/// The zero test's numeric probe: the value of `e` with symbol `s` at `values[s.index()]`,
+/// and the size of the terms it is a sum of. This crate evaluates no floats itself; the one
+/// evaluator lives in `numeric` (`numeric::value_and_scale`), above it, and whoever creates a
+/// pool for a derivation hands it in with [`Pool::set_probe`].
+pub type Probe = fn(&Pool, ExprId, &[f64]) -> (f64, f64);
+
 /// The arena that owns every expression and symbol of one derivation.
 pub struct Pool {
     nodes: Vec<Node>,
@@ -161,6 +167,7 @@ pub struct Pool {
     free_memo: Vec<Option<Rc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
+    pub(crate) probe: Option<Probe>,
 }
 
 impl Default for Pool {
@@ -182,10 +189,18 @@ impl Pool {
             free_memo: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
+            probe: None,
         };
         pool.zero = pool.intern(Node::Num(Rational::zero()));
         pool.one = pool.intern(Node::Num(Rational::one()));
         pool
+    }
+
+    /// Lets the zero test try a numeric point before the algebra: one point where the value
+    /// is clearly not zero settles most questions at a fraction of the algebra's cost.
+    /// Without a probe the answers are the same, only slower to reach.
+    pub fn set_probe(&mut self, probe: Probe) {
+        self.probe = Some(probe);
     }
 
     fn intern(&mut self, node: Node) -> ExprId {

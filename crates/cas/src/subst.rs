@@ -1,9 +1,8 @@
-//! Substitution of expressions for symbols, and numeric evaluation.
+//! Substitution of expressions for symbols.
 
 use std::collections::HashMap;
 
-use crate::number;
-use crate::pool::{ExprId, Func, Node, Pool, SymId};
+use crate::pool::{ExprId, Node, Pool, SymId};
 
 impl Pool {
     /// Replaces every symbol in `map` by its expression, re-canonicalising on the way up.
@@ -64,80 +63,5 @@ impl Pool {
         };
         memo.insert(e, r);
         r
-    }
-
-    /// Evaluates `e` in floating point, with `values[s.index()]` the value of symbol `s`.
-    /// Symbols without a value (past the end of `values`) are NaN, which propagates.
-    pub fn eval(&self, e: ExprId, values: &[f64]) -> f64 {
-        let mut memo = HashMap::new();
-        self.eval_memo(e, values, &mut memo)
-    }
-
-    pub fn eval_memo(&self, e: ExprId, values: &[f64], memo: &mut HashMap<ExprId, f64>) -> f64 {
-        if let Some(&v) = memo.get(&e) {
-            return v;
-        }
-        let v = match self.node(e) {
-            Node::Num(q) => number::to_f64(q),
-            Node::Sym(s) => values.get(s.index()).copied().unwrap_or(f64::NAN),
-            Node::Pi => std::f64::consts::PI,
-            Node::Add(c, terms) => {
-                let mut acc = number::to_f64(c);
-                for (t, k) in terms.iter() {
-                    acc += number::to_f64(k) * self.eval_memo(*t, values, memo);
-                }
-                acc
-            }
-            Node::Mul(c, factors) => {
-                let mut acc = number::to_f64(c);
-                for (b, x) in factors.iter() {
-                    let base = self.eval_memo(*b, values, memo);
-                    acc *= power(base, x);
-                }
-                acc
-            }
-            Node::Pow(b, x) => {
-                self.eval_memo(*b, values, memo).powf(self.eval_memo(*x, values, memo))
-            }
-            Node::Func(f, a) => apply(*f, self.eval_memo(*a, values, memo)),
-            Node::Atan2(y, x) => {
-                self.eval_memo(*y, values, memo).atan2(self.eval_memo(*x, values, memo))
-            }
-        };
-        memo.insert(e, v);
-        v
-    }
-}
-
-/// `base^x` for a rational exponent, with integer powers by repeated multiplication (exact
-/// sign for negative bases) and square roots by `sqrt`.
-pub fn power(base: f64, x: &number::Rational) -> f64 {
-    use num_traits::ToPrimitive;
-    if x.is_integer() {
-        if let Some(n) = x.numer().to_i32() {
-            return base.powi(n);
-        }
-    }
-    if *x.denom() == 2.into() {
-        if let Some(n) = x.numer().to_i32() {
-            return base.sqrt().powi(n);
-        }
-    }
-    base.powf(number::to_f64(x))
-}
-
-pub fn apply(f: Func, a: f64) -> f64 {
-    match f {
-        Func::Sin => a.sin(),
-        Func::Cos => a.cos(),
-        Func::Tan => a.tan(),
-        Func::Asin => a.asin(),
-        Func::Acos => a.acos(),
-        Func::Atan => a.atan(),
-        Func::Sinh => a.sinh(),
-        Func::Cosh => a.cosh(),
-        Func::Tanh => a.tanh(),
-        Func::Exp => a.exp(),
-        Func::Ln => a.ln(),
     }
 }

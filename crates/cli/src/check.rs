@@ -3,7 +3,8 @@
 
 use cas::Style;
 use lang::Diagnostic;
-use mechanics::{Derivation, Sampling, Verdict};
+use mechanics::Derivation;
+use verify::{Sampling, Verdict};
 
 use crate::diagnostics::{line_col, render};
 
@@ -44,7 +45,7 @@ pub fn check_file_with(path: &str, source: &str, options: crate::Options) -> Fil
 }
 
 fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
-    let verdicts = d.check_all();
+    let verdicts = verify::check_all(d);
     let mut lines = Vec::new();
     let mut failures = Vec::new();
     let (mut held, mut failed) = (0, 0);

@@ -46,6 +46,7 @@ pub fn load_with(
     let checks = model::Checks { units: options.units };
     let (model, mut warnings) = model::resolve_with(&ast, source, checks)?;
     let mut derivation = mechanics::derive(model)?;
+    verify::diagnose(&mut derivation)?;
     warnings.append(&mut derivation.warnings);
     Ok((derivation, warnings))
 }

@@ -158,7 +158,7 @@ impl Prepared {
                     p.name, p.name
                 ));
             };
-            let v = pool.eval(expr, &values);
+            let v = numeric::eval(pool, expr, &values);
             if !v.is_finite() {
                 return Err(format!("error: parameter `{}` evaluates to {v}", p.name));
             }
@@ -206,7 +206,7 @@ impl Prepared {
             values[s.index()] = *v;
         }
         values[self.derivation.model.time.index()] = 0.0;
-        pool.eval(e, &values)
+        numeric::eval(pool, e, &values)
     }
 }
 

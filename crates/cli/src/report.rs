@@ -2,9 +2,10 @@
 
 use cas::number::{One, Signed, Zero};
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use mechanics::{Derivation, Equation, NumericValue, ShownAtStart};
+use mechanics::{Derivation, Equation};
 use model::Value;
 use serde_json::{json, Map, Value as Json};
+use verify::{NumericValue, ShownAtStart};
 
 /// Everything `derive` prints, computed once and shared by the three formats.
 struct Derived {
@@ -42,7 +43,7 @@ fn collect(d: &mut Derivation) -> Derived {
         })
         .collect();
     let shown = d.shown();
-    let at_start = d.shown_at_start();
+    let at_start = verify::shown_at_start(d);
     let mut start_state = Vec::new();
     for c in d.model.coords.clone() {
         if d.coords.contains(&c.sym) {
@@ -493,7 +494,7 @@ fn significant(v: f64, digits: u32, style: Style) -> String {
     let text = if v == 0.0 || !v.is_finite() {
         format!("{v}")
     } else {
-        let exponent = v.abs().log10().floor() as i32;
+        let exponent = numeric::elementary::log10(v.abs()).floor() as i32;
         if (-4..15).contains(&exponent) {
             let decimals = (digits - 1 - exponent).max(0) as usize;
             let t = format!("{v:.decimals$}");
@@ -568,7 +569,7 @@ pub fn json(d: &mut Derivation) -> String {
     let name = |s: SymId| pool.symbol(s).name.clone();
     let mut params = Map::new();
     for p in &d.model.params {
-        let numeric = p.value.map(|v| pool.eval(v, &[])).filter(|x| x.is_finite());
+        let numeric = p.value.map(|v| numeric::eval(pool, v, &[])).filter(|x| x.is_finite());
         params.insert(
             p.name.clone(),
             json!({

@@ -249,13 +249,8 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         solved: None,
         start: None,
     };
-    let dependent = derivation.dependent_constraints();
-    if !dependent.is_empty() {
-        return Err(dependent);
-    }
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
-    derivation.warn_about_undecidable_expects();
     Ok(derivation)
 }
 

@@ -4,16 +4,16 @@
 //! bodies, holonomic constraints (eliminated when they can be solved for one coordinate, kept
 //! with a multiplier otherwise), generalized forces by virtual work, the Euler–Lagrange
 //! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, and the
-//! checking of `expect` lines. It knows nothing of parsing or of files: it starts from a
-//! [`model::Model`].
+//! algebraic side of checking `expect` lines. It is purely symbolic: what needs numbers
+//! (random states, the numeric start, verdicts sampled at states) is the `verify` crate's. It
+//! knows nothing of parsing or of files: it starts from a [`model::Model`].
 
-mod admissible;
 mod check;
 mod derive;
 mod present;
 mod start;
 
-pub use check::{Failure, Sampling, Verdict, SAMPLES};
+pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
-pub use present::{Equation, NumericValue, ShownAtStart};
-pub use start::{NumericStart, StartSolution};
+pub use present::{Equation, StartShows};
+pub use start::StartSolution;

@@ -1,7 +1,7 @@
 //! The derived equations in the forms people read: each equation of motion normalised the way
 //! a hand derivation writes it, and the `show` quantities, symbolic and at the start.
 
-use cas::{ExprId, SymId};
+use cas::ExprId;
 use model::Value;
 
 use crate::derive::Derivation;
@@ -125,15 +125,15 @@ impl Derivation {
             .collect()
     }
 
-    /// The `show at start` items at the initial state: exactly where the algebra stays within
-    /// its budget, numerically at the parameters' values otherwise.
-    pub fn shown_at_start(&mut self) -> ShownAtStart {
+    /// The `show at start` items at the initial state, exactly where the algebra stays within
+    /// its budget; past it, the items are left for numbers (the `verify` crate).
+    pub fn shows_at_start(&mut self) -> StartShows {
         let shows: Vec<_> = self.model.shows.iter().filter(|s| s.at_start).cloned().collect();
         if shows.is_empty() {
-            return ShownAtStart::Exact(Vec::new());
+            return StartShows::Exact(Vec::new());
         }
         match self.unknowns_at_start() {
-            StartSolution::Exact(at_start) => ShownAtStart::Exact(
+            StartSolution::Exact(at_start) => StartShows::Exact(
                 shows
                     .into_iter()
                     .map(|s| {
@@ -148,65 +148,19 @@ impl Derivation {
                     })
                     .collect(),
             ),
-            StartSolution::Singular => ShownAtStart::Singular,
-            StartSolution::TooLarge { unknowns } => {
-                let params = match self.parameter_values() {
-                    Ok(p) => p,
-                    Err(missing) => return ShownAtStart::Unvalued { unknowns, missing },
-                };
-                let Some(start) = self.start_numeric(&params) else {
-                    return ShownAtStart::Singular;
-                };
-                let items = shows
-                    .into_iter()
-                    .map(|s| {
-                        let v = self.expand_value(&s.value, true);
-                        let pool = &self.model.pool;
-                        let numbers = match &v {
-                            Value::Scalar(e) => NumericValue::Scalar(pool.eval(*e, &start.values)),
-                            Value::Vector(xs) => NumericValue::Vector(
-                                xs.iter().map(|e| pool.eval(*e, &start.values)).collect(),
-                            ),
-                            Value::Matrix(m) => NumericValue::Matrix(
-                                m.iter()
-                                    .map(|r| {
-                                        r.iter().map(|e| pool.eval(*e, &start.values)).collect()
-                                    })
-                                    .collect(),
-                            ),
-                        };
-                        (s, numbers)
-                    })
-                    .collect();
-                ShownAtStart::Numeric { items, unknowns, digits: start.digits, params }
-            }
+            StartSolution::Singular => StartShows::Singular,
+            StartSolution::TooLarge { unknowns } => StartShows::TooLarge { unknowns, shows },
         }
     }
 }
 
-/// A `show at start` value in floating point.
-#[derive(Clone, Debug, PartialEq)]
-pub enum NumericValue {
-    Scalar(f64),
-    Vector(Vec<f64>),
-    Matrix(Vec<Vec<f64>>),
-}
-
-/// The `show at start` items, as [`Derivation::shown_at_start`] could find them.
+/// The `show at start` items, as the algebra could find them.
 #[derive(Clone, Debug)]
-pub enum ShownAtStart {
+pub enum StartShows {
     /// Exactly, in the parameters.
     Exact(Vec<(model::Show, Value)>),
-    /// Numerically at the scene's parameter values (`params`), because the exact solve of
-    /// `unknowns` unknowns outgrew its budget; `digits` significant digits are trustworthy.
-    Numeric {
-        items: Vec<(model::Show, NumericValue)>,
-        unknowns: usize,
-        digits: u32,
-        params: Vec<(SymId, f64)>,
-    },
-    /// Numbers were needed, but these parameters have no value.
-    Unvalued { unknowns: usize, missing: Vec<String> },
+    /// The exact solve of `unknowns` unknowns outgrew its budget: these items need numbers.
+    TooLarge { unknowns: usize, shows: Vec<model::Show> },
     /// The mass matrix (with the constraints' rows) is singular at the start.
     Singular,
 }

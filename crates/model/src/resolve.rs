@@ -161,6 +161,7 @@ struct Resolver<'a> {
 impl<'a> Resolver<'a> {
     fn new(source: &'a str) -> Self {
         let mut pool = Pool::new();
+        pool.set_probe(numeric::value_and_scale);
         let time = pool.time();
         let mut names = HashMap::new();
         let mut placeholders = Vec::new();

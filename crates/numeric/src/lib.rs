@@ -1,4 +1,5 @@
-//! Lowering of symbolic expressions to fast numeric code.
+//! Lowering of symbolic expressions to fast numeric code, and every float computed from an
+//! expression.
 //!
 //! This crate owns the step from a set of [`cas`] expressions to one straight-line
 //! [`Program`]: the expression DAG is walked once (hash-consing already shares equal
@@ -8,30 +9,19 @@
 //! into any `&mut [f64]`, such as the storage of an `nalgebra` matrix) or is printed as Rust
 //! source by [`rust`]. It takes expression ids and a symbol → input-slot mapping and knows
 //! nothing of how the expressions were derived: no mechanics, no names, no files.
+//!
+//! It is also the only float evaluator of expressions: [`Evaluator`] (and [`eval`],
+//! [`value_and_scale`]) lower and run the same tape for parameter values, initial states,
+//! `expect` checks and the zero test's probe, with the [`elementary`] functions of `libm`, so
+//! a value has the same bits wherever and on whatever machine it is computed.
 
+pub mod elementary;
+mod eval;
 mod lower;
 pub mod rust;
 mod tape;
 
+pub use elementary::pow_int;
+pub use eval::{eval, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program};
 pub use tape::Tape;
-
-/// `x^n` by binary powering: the same sequence of multiplications on every machine, in the
-/// tape and in generated code (`f64::powi` leaves its precision unspecified).
-pub fn pow_int(x: f64, n: i32) -> f64 {
-    let mut base = x;
-    let mut k = n.unsigned_abs();
-    let mut acc = 1.0;
-    while k > 0 {
-        if k & 1 == 1 {
-            acc *= base;
-        }
-        base *= base;
-        k >>= 1;
-    }
-    if n < 0 {
-        1.0 / acc
-    } else {
-        acc
-    }
-}

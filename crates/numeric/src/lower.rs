@@ -123,18 +123,32 @@ pub enum LowerError {
 /// Lowers `outputs` to one program whose input `i` is the value of `inputs[i]`.
 /// Only the nodes the outputs reach are lowered, each once.
 pub fn lower(pool: &Pool, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, LowerError> {
-    let mut b = Builder {
-        inputs: inputs.len(),
-        constants: Vec::new(),
-        constant_regs: HashMap::new(),
-        code: Vec::new(),
-        numbered: HashMap::new(),
-    };
     let slots: HashMap<SymId, Reg> =
         inputs.iter().enumerate().map(|(i, s)| (*s, i as Reg)).collect();
+    build(pool, &reachable(pool, outputs), inputs.len(), &slots, outputs)
+}
 
-    // Children have smaller ids than parents, so the reachable nodes sorted by id are in
-    // dependency order.
+/// Lowers `outputs` with every symbol they mention as an input: the program, and the symbol
+/// each input stands for.
+pub(crate) fn lower_free(pool: &Pool, outputs: &[ExprId]) -> (Program, Vec<SymId>) {
+    let reachable = reachable(pool, outputs);
+    let symbols: Vec<SymId> = reachable
+        .iter()
+        .filter_map(|e| match pool.node(*e) {
+            Node::Sym(s) => Some(*s),
+            _ => None,
+        })
+        .collect();
+    let slots: HashMap<SymId, Reg> =
+        symbols.iter().enumerate().map(|(i, s)| (*s, i as Reg)).collect();
+    let program = build(pool, &reachable, symbols.len(), &slots, outputs)
+        .expect("every symbol reached has an input");
+    (program, symbols)
+}
+
+/// The nodes `outputs` reach, in dependency order: children have smaller ids than parents,
+/// so sorted by id.
+fn reachable(pool: &Pool, outputs: &[ExprId]) -> Vec<ExprId> {
     let mut reachable: Vec<ExprId> = Vec::new();
     let mut seen: std::collections::HashSet<ExprId> = std::collections::HashSet::new();
     let mut stack: Vec<ExprId> = outputs.to_vec();
@@ -146,9 +160,25 @@ pub fn lower(pool: &Pool, inputs: &[SymId], outputs: &[ExprId]) -> Result<Progra
         stack.extend(pool.children(e));
     }
     reachable.sort();
+    reachable
+}
 
+fn build(
+    pool: &Pool,
+    reachable: &[ExprId],
+    inputs: usize,
+    slots: &HashMap<SymId, Reg>,
+    outputs: &[ExprId],
+) -> Result<Program, LowerError> {
+    let mut b = Builder {
+        inputs,
+        constants: Vec::new(),
+        constant_regs: HashMap::new(),
+        code: Vec::new(),
+        numbered: HashMap::new(),
+    };
     let mut value: HashMap<ExprId, Reg> = HashMap::with_capacity(reachable.len());
-    for e in reachable {
+    for &e in reachable {
         let reg = match pool.node(e) {
             Node::Num(q) => b.constant(to_f64(q)),
             Node::Pi => b.constant(std::f64::consts::PI),

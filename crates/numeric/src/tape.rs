@@ -1,11 +1,10 @@
 //! The tape evaluator: runs a [`Program`] over a register file allocated once.
 
-use cas::Func;
-
+use crate::elementary::{apply, atan2, pow, pow_int};
 use crate::lower::{Instr, Program};
 
-/// A program with its registers. Evaluation allocates nothing; the elementary functions come
-/// from `libm`, so the same inputs give the same bits on every machine.
+/// A program with its registers. Evaluation allocates nothing; the elementary functions are
+/// those of [`crate::elementary`], so the same inputs give the same bits on every machine.
 #[derive(Clone, Debug)]
 pub struct Tape {
     program: Program,
@@ -50,32 +49,16 @@ impl Tape {
                 Instr::Mul(a, b) => r[a as usize] * r[b as usize],
                 Instr::Div(a, b) => r[a as usize] / r[b as usize],
                 Instr::Neg(a) => -r[a as usize],
-                Instr::PowInt(a, n) => crate::pow_int(r[a as usize], n),
+                Instr::PowInt(a, n) => pow_int(r[a as usize], n),
                 Instr::Sqrt(a) => r[a as usize].sqrt(),
-                Instr::PowF(a, b) => libm::pow(r[a as usize], r[b as usize]),
+                Instr::PowF(a, b) => pow(r[a as usize], r[b as usize]),
                 Instr::Func(f, a) => apply(f, r[a as usize]),
-                Instr::Atan2(y, x) => libm::atan2(r[y as usize], r[x as usize]),
+                Instr::Atan2(y, x) => atan2(r[y as usize], r[x as usize]),
             };
             r[base + k] = v;
         }
         for (o, reg) in out.iter_mut().zip(&p.outputs) {
             *o = r[*reg as usize];
         }
-    }
-}
-
-fn apply(f: Func, a: f64) -> f64 {
-    match f {
-        Func::Sin => libm::sin(a),
-        Func::Cos => libm::cos(a),
-        Func::Tan => libm::tan(a),
-        Func::Asin => libm::asin(a),
-        Func::Acos => libm::acos(a),
-        Func::Atan => libm::atan(a),
-        Func::Sinh => libm::sinh(a),
-        Func::Cosh => libm::cosh(a),
-        Func::Tanh => libm::tanh(a),
-        Func::Exp => libm::exp(a),
-        Func::Ln => libm::log(a),
     }
 }

@@ -251,6 +251,8 @@ impl Adaptive {
     }
 
     /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
+    // Step-size control keeps the platform's `powf` (see `advance` below).
+    #[allow(clippy::disallowed_methods)]
     fn initial_step(
         &mut self,
         p: &mut dyn Problem,
@@ -332,8 +334,11 @@ impl Adaptive {
                         a5 += DOP853_E5[j] * k[j][i];
                         a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * k[j][i];
                     }
-                    e5 += (a5 / scale(i)).powi(2);
-                    e3 += (a3 / scale(i)).powi(2);
+                    // Squares as products: the bits `powi(2)` gave, without its unspecified
+                    // precision.
+                    let (r5, r3) = (a5 / scale(i), a3 / scale(i));
+                    e5 += r5 * r5;
+                    e3 += r3 * r3;
                 }
                 let denom = e5 + 0.01 * e3;
                 if denom == 0.0 {
@@ -351,8 +356,9 @@ impl Adaptive {
         let last = self.stage_count();
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..self.tmp.len() {
-            num += (self.k[last][i] - self.k[last - 1][i]).powi(2);
-            den += (self.y_new[i] - self.tmp[i]).powi(2);
+            let (dk, dy) = (self.k[last][i] - self.k[last - 1][i], self.y_new[i] - self.tmp[i]);
+            num += dk * dk;
+            den += dy * dy;
         }
         let bound = match self.pair {
             Pair::Dopri5 => 3.25,
@@ -427,6 +433,11 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 impl Stepper for Adaptive {
+    // The step-size factor keeps the platform's `powf`: libm's differs from it in the last bit
+    // now and then, which would move every adaptive run's results on this machine. The
+    // integrands are portable (the tape); making the controller so too is a change of results,
+    // not of shape, and is left for its own commit.
+    #[allow(clippy::disallowed_methods)]
     fn advance(
         &mut self,
         p: &mut dyn Problem,

@@ -114,7 +114,7 @@ fn ordinal(n: u8) -> String {
 fn number_text(pool: &cas::Pool, e: ExprId) -> String {
     match pool.as_num(e) {
         Some(_) => pool.print(e, cas::Style::Ascii),
-        None => approx(pool.eval(e, &[])),
+        None => approx(numeric::eval(pool, e, &[])),
     }
 }
 
@@ -297,7 +297,7 @@ impl Resolver<'_> {
     /// such as `1e400`.
     pub(super) fn finite(&mut self, value: ExprId, written: &Expr) -> bool {
         let Some(v) = self.known(value) else { return true };
-        let x = self.pool.eval(v, &[]);
+        let x = numeric::eval(&self.pool, v, &[]);
         if x.is_finite() {
             return true;
         }
@@ -334,7 +334,7 @@ impl Resolver<'_> {
         span: Span,
     ) -> Option<Diagnostic> {
         let known: Vec<ExprId> = args.iter().map(|a| self.known(*a)).collect::<Option<Vec<_>>>()?;
-        let values: Vec<f64> = known.iter().map(|k| self.pool.eval(*k, &[])).collect();
+        let values: Vec<f64> = numeric::Evaluator::new(&self.pool, &known).eval(&[]).to_vec();
         if !values.iter().all(|v| v.is_finite()) {
             return None;
         }
@@ -385,8 +385,8 @@ impl Resolver<'_> {
         // In the domain, but too large for floating point (`exp(1000)`).
         let result = match name {
             "sqrt" => a.sqrt(),
-            "atan2" => a.atan2(values.get(1).copied().unwrap_or(f64::NAN)),
-            _ => func.map_or(0.0, |f| cas::apply(f, a)),
+            "atan2" => numeric::elementary::atan2(a, values.get(1).copied().unwrap_or(f64::NAN)),
+            _ => func.map_or(0.0, |f| numeric::elementary::apply(f, a)),
         };
         if result.is_infinite() {
             return Some(
@@ -408,7 +408,7 @@ impl Resolver<'_> {
         let k = self.known(divisor)?;
         let zero = match self.pool.as_num(k) {
             Some(q) => q.is_zero(),
-            None => self.pool.eval(k, &[]) == 0.0,
+            None => numeric::eval(&self.pool, k, &[]) == 0.0,
         };
         if !zero {
             return None;
@@ -430,7 +430,7 @@ impl Resolver<'_> {
         span: Span,
     ) -> Option<Diagnostic> {
         let (b, x) = (self.known(base)?, self.known(exponent)?);
-        let (bv, xv) = (self.pool.eval(b, &[]), self.pool.eval(x, &[]));
+        let (bv, xv) = (numeric::eval(&self.pool, b, &[]), numeric::eval(&self.pool, x, &[]));
         let exact_base = self.pool.as_num(b).cloned();
         let exact_exponent = self.pool.as_num(x).cloned();
         let base_zero = exact_base.as_ref().map_or(bv == 0.0, |q| q.is_zero());
@@ -469,7 +469,7 @@ impl Resolver<'_> {
         inertia: bool,
     ) {
         let Some(k) = self.known(value) else { return };
-        let x = self.pool.eval(k, &[]);
+        let x = numeric::eval(&self.pool, k, &[]);
         if !x.is_finite() {
             return;
         }

@@ -1,0 +1,57 @@
+//! The elementary functions of every float the project computes from an expression: `libm`'s,
+//! and integer powers by binary powering, so the same inputs give the same bits on every
+//! machine (the standard library's versions are the platform's and may differ in the last
+//! bit).
+
+use cas::Func;
+
+/// `f(a)` for one of the scene language's functions.
+pub fn apply(f: Func, a: f64) -> f64 {
+    match f {
+        Func::Sin => libm::sin(a),
+        Func::Cos => libm::cos(a),
+        Func::Tan => libm::tan(a),
+        Func::Asin => libm::asin(a),
+        Func::Acos => libm::acos(a),
+        Func::Atan => libm::atan(a),
+        Func::Sinh => libm::sinh(a),
+        Func::Cosh => libm::cosh(a),
+        Func::Tanh => libm::tanh(a),
+        Func::Exp => libm::exp(a),
+        Func::Ln => libm::log(a),
+    }
+}
+
+pub fn atan2(y: f64, x: f64) -> f64 {
+    libm::atan2(y, x)
+}
+
+/// A real power `base^exponent`.
+pub fn pow(base: f64, exponent: f64) -> f64 {
+    libm::pow(base, exponent)
+}
+
+/// `x^n` by binary powering: the same sequence of multiplications on every machine, in the
+/// tape and in generated code (`f64::powi` leaves its precision unspecified).
+pub fn pow_int(x: f64, n: i32) -> f64 {
+    let mut base = x;
+    let mut k = n.unsigned_abs();
+    let mut acc = 1.0;
+    while k > 0 {
+        if k & 1 == 1 {
+            acc *= base;
+        }
+        base *= base;
+        k >>= 1;
+    }
+    if n < 0 {
+        1.0 / acc
+    } else {
+        acc
+    }
+}
+
+/// The decimal logarithm, for digits counted from a magnitude (a condition number).
+pub fn log10(x: f64) -> f64 {
+    libm::log10(x)
+}

@@ -1,0 +1,216 @@
+//! Checking `expect` lines: by the algebra of `mechanics` where it decides, otherwise at many
+//! random states the system can reach (on its constraints), always saying which.
+
+use cas::{ExprId, SymId};
+use mechanics::{Decision, Derivation};
+use numeric::ScaledEvaluator;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::admissible::{random_state, state_symbols, ConstraintSet};
+use crate::start::StartSolver;
+use crate::system::{solve_unknowns, System};
+
+/// How many random states a numeric check uses.
+pub const SAMPLES: usize = 24;
+const RELATIVE_TOLERANCE: f64 = 1e-9;
+
+/// The outcome of one `expect` line.
+#[derive(Clone, Debug)]
+pub enum Verdict {
+    /// The residual simplifies to zero.
+    Exact,
+    /// The residual simplifies to zero once the kept constraints are used (x² = L² − y²).
+    ExactOnConstraints,
+    /// The algebra could not decide; the residual vanished at this many random states.
+    Numeric { samples: usize, sampling: Sampling },
+    /// The residual is not zero.
+    Fails(Failure),
+    /// Neither algebra nor numbers could decide (e.g. no state where everything is defined).
+    Undecided { reason: String },
+}
+
+/// Where the random states of a numeric verdict came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Sampling {
+    /// Anywhere: the system has no constraint kept with a multiplier.
+    Anywhere,
+    /// On the constraint surface: positions on Φ = 0, rates on Φ̇ = 0.
+    OnConstraints,
+    /// At the start, at random parameter values, with the unknowns of the start solved
+    /// numerically (there were too many for the algebra).
+    AtStart { unknowns: usize },
+}
+
+#[derive(Clone, Debug)]
+pub struct Failure {
+    /// Which entry of a vector or matrix equation, if it has several.
+    pub component: Option<usize>,
+    /// lhs − rhs, simplified (with accelerations, where the equation has them).
+    pub residual: ExprId,
+    /// A state where the residual is not zero, and its value there.
+    pub state: Vec<(SymId, f64)>,
+    pub value: f64,
+}
+
+impl Verdict {
+    pub fn holds(&self) -> bool {
+        matches!(self, Verdict::Exact | Verdict::ExactOnConstraints | Verdict::Numeric { .. })
+    }
+}
+
+/// Checks every `expect` line, in order.
+pub fn check_all(d: &mut Derivation) -> Vec<Verdict> {
+    (0..d.model.expects.len()).map(|i| check(d, i)).collect()
+}
+
+/// Checks one `expect` line.
+pub fn check(d: &mut Derivation, index: usize) -> Verdict {
+    let at_start = d.model.expects[index].at_start;
+    let (lhs, rhs) = d.expect_sides(index);
+    let many = lhs.len() > 1;
+    let mut numeric: Option<(usize, Sampling)> = None;
+    let mut on_constraints = false;
+    for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
+        let residual = d.model.pool.sub(l, r);
+        let decision =
+            if at_start { d.decide_at_start(residual) } else { d.decide_everywhere(residual) };
+        let verdict = match decision {
+            Decision::Exact => Verdict::Exact,
+            Decision::ExactOnConstraints => Verdict::ExactOnConstraints,
+            Decision::Sample { residual, solve } => sample(d, residual, solve),
+            Decision::SampleAtStart { residual, unknowns } => {
+                sample_at_start(d, residual, unknowns)
+            }
+            Decision::SingularAtStart => {
+                Verdict::Undecided { reason: "the mass matrix is singular at the start".into() }
+            }
+        };
+        match verdict {
+            Verdict::Exact => {}
+            Verdict::ExactOnConstraints => on_constraints = true,
+            Verdict::Numeric { samples, sampling } => {
+                numeric = Some(
+                    numeric.map_or((samples, sampling), |(n, s)| (n.min(samples), s.max(sampling))),
+                )
+            }
+            Verdict::Fails(mut f) => {
+                f.component = many.then_some(k);
+                return Verdict::Fails(f);
+            }
+            undecided => return undecided,
+        }
+    }
+    match numeric {
+        Some((samples, sampling)) => Verdict::Numeric { samples, sampling },
+        None if on_constraints => Verdict::ExactOnConstraints,
+        None => Verdict::Exact,
+    }
+}
+
+/// A residual the algebra left undecided, compared with zero at random states (on the
+/// constraint surface, where there are kept constraints), solving for the accelerations and
+/// multipliers at each state when `solve` says so.
+fn sample(d: &mut Derivation, residual: ExprId, solve: bool) -> Verdict {
+    // A fixed seed: the same scene is checked at the same states in every run.
+    let mut rng = ChaCha8Rng::seed_from_u64(0x1a9_2a96e);
+    let syms = state_symbols(d);
+    let mut constraints = ConstraintSet::first(d, d.multipliers.len());
+    let sampling =
+        if constraints.is_empty() { Sampling::Anywhere } else { Sampling::OnConstraints };
+    let mut measure = ScaledEvaluator::new(&d.model.pool, &[residual]);
+    let mut system: Option<System> = None;
+    let mut good = 0;
+    let mut reached = 0;
+    for _ in 0..SAMPLES * 4 {
+        if good == SAMPLES {
+            break;
+        }
+        let mut values = random_state(d, &mut rng);
+        if constraints.project(&mut values).is_err() {
+            continue;
+        }
+        reached += 1;
+        if solve && solve_unknowns(d, &mut system, &mut values).is_none() {
+            continue;
+        }
+        let (value, scale) = measure.eval(&values)[0];
+        if let Some(f) = failure_at(d, residual, (value, scale), &values, &syms) {
+            return Verdict::Fails(f);
+        }
+        if value.is_finite() && scale.is_finite() {
+            good += 1;
+        }
+    }
+    if good == 0 {
+        let reason = if reached == 0 {
+            "no random start reached a state that satisfies the constraints"
+        } else {
+            "no random state where the expressions are defined"
+        };
+        return Verdict::Undecided { reason: reason.into() };
+    }
+    Verdict::Numeric { samples: good, sampling }
+}
+
+/// `expect at start:` past the algebra's budget: at random parameter values, the start is
+/// solved numerically and the residual evaluated there.
+fn sample_at_start(d: &mut Derivation, residual: ExprId, unknowns: usize) -> Verdict {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5747_a247);
+    let params: Vec<SymId> = d.model.params.iter().map(|p| p.sym).collect();
+    let mut solver = StartSolver::new(d);
+    let mut measure = ScaledEvaluator::new(&d.model.pool, &[residual]);
+    let mut good = 0;
+    for _ in 0..SAMPLES * 4 {
+        if good == SAMPLES {
+            break;
+        }
+        let values: Vec<(SymId, f64)> =
+            params.iter().map(|p| (*p, rng.gen_range(0.5..2.0))).collect();
+        let Some(start) = solver.solve(d, &values) else { continue };
+        let (value, scale) = measure.eval(&start.values)[0];
+        if let Some(mut f) = failure_at(d, residual, (value, scale), &start.values, &params) {
+            f.state.retain(|(s, _)| params.contains(s));
+            return Verdict::Fails(f);
+        }
+        if value.is_finite() && scale.is_finite() {
+            good += 1;
+        }
+    }
+    if good == 0 {
+        return Verdict::Undecided {
+            reason: "the start could not be solved at any parameter values tried".into(),
+        };
+    }
+    Verdict::Numeric { samples: good, sampling: Sampling::AtStart { unknowns } }
+}
+
+/// A failure when the residual, whose value and size at this state are `measured`, is
+/// defined and not zero there.
+fn failure_at(
+    d: &mut Derivation,
+    residual: ExprId,
+    (value, scale): (f64, f64),
+    values: &[f64],
+    syms: &[SymId],
+) -> Option<Failure> {
+    if !value.is_finite() || !scale.is_finite() {
+        return None;
+    }
+    if value.abs() <= RELATIVE_TOLERANCE * (1.0 + scale) {
+        return None;
+    }
+    let pool = &mut d.model.pool;
+    let mut state: Vec<(SymId, f64)> = syms
+        .iter()
+        .filter(|s| pool.depends_on(residual, **s))
+        .map(|s| (*s, values[s.index()]))
+        .collect();
+    state.extend(
+        d.unknowns()
+            .into_iter()
+            .filter(|u| d.model.pool.depends_on(residual, *u))
+            .map(|u| (u, values[u.index()])),
+    );
+    Some(Failure { component: None, residual, state, value })
+}

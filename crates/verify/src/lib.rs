@@ -1,0 +1,36 @@
+//! The numeric side of checking a derivation.
+//!
+//! This crate owns everything about a derivation that takes numbers rather than algebra:
+//! random states the system can reach (projected onto the constraints kept with multipliers),
+//! the rank of the constraints' Jacobian there (which tells a repeated or contradicting
+//! constraint), `expect` lines that the algebra of `mechanics` cannot decide, sampled at such
+//! states, the start solved in floating point when the exact solve outgrows its budget, and
+//! the warnings about `expect` lines no state can decide. Every float it computes from an
+//! expression comes from `numeric`'s evaluator; it adds the linear algebra and the seeded
+//! random states.
+
+mod admissible;
+mod check;
+mod present;
+mod start;
+mod system;
+mod undecidable;
+
+pub use check::{check, check_all, Failure, Sampling, Verdict, SAMPLES};
+pub use present::{shown_at_start, NumericValue, ShownAtStart};
+pub use start::{parameter_values, start_numeric, NumericStart};
+
+use lang::Diagnostic;
+use mechanics::Derivation;
+
+/// The numeric diagnostics that follow a derivation: an error for a kept constraint that
+/// repeats or contradicts the ones before it, and warnings about `expect` lines `check` will
+/// not be able to decide (added to the derivation's warnings).
+pub fn diagnose(d: &mut Derivation) -> Result<(), Vec<Diagnostic>> {
+    let dependent = admissible::dependent_constraints(d);
+    if !dependent.is_empty() {
+        return Err(dependent);
+    }
+    undecidable::warn_about_undecidable_expects(d);
+    Ok(())
+}
