@@ -3,6 +3,8 @@
 //! Nørsett and Wanner, "Solving Ordinary Differential Equations I", and Shampine (1986) for the
 //! quartic dense output of the 5(4) pair.
 
+use numeric::elementary::pow;
+
 use crate::{FaultKind, Problem};
 
 /// Advances one accepted step at a time and interpolates inside the last one.
@@ -251,8 +253,6 @@ impl Adaptive {
     }
 
     /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
-    // Step-size control keeps the platform's `powf` (see `advance` below).
-    #[allow(clippy::disallowed_methods)]
     fn initial_step(
         &mut self,
         p: &mut dyn Problem,
@@ -277,7 +277,7 @@ impl Adaptive {
         let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
             (h0 * 1e-3).max(1e-6)
         } else {
-            (0.01 / d1.max(d2)).powf(1.0 / (self.order() + 1.0))
+            pow(0.01 / d1.max(d2), 1.0 / (self.order() + 1.0))
         };
         Ok((100.0 * h0).min(h1))
     }
@@ -433,11 +433,8 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 impl Stepper for Adaptive {
-    // The step-size factor keeps the platform's `powf`: libm's differs from it in the last bit
-    // now and then, which would move every adaptive run's results on this machine. The
-    // integrands are portable (the tape); making the controller so too is a change of results,
-    // not of shape, and is left for its own commit.
-    #[allow(clippy::disallowed_methods)]
+    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
+    // differ in the last bit, and a different step sequence moves every result.
     fn advance(
         &mut self,
         p: &mut dyn Problem,
@@ -493,7 +490,7 @@ impl Stepper for Adaptive {
                 let mut factor = if err == 0.0 {
                     MAX_FACTOR
                 } else {
-                    MAX_FACTOR.min(SAFETY * err.powf(exponent))
+                    MAX_FACTOR.min(SAFETY * pow(err, exponent))
                 };
                 if rejected_here {
                     factor = factor.min(1.0);
@@ -508,7 +505,7 @@ impl Stepper for Adaptive {
                 self.dense = None;
                 return Ok(t_new);
             }
-            self.h = h * MIN_FACTOR.max(SAFETY * err.powf(exponent));
+            self.h = h * MIN_FACTOR.max(SAFETY * pow(err, exponent));
             self.rejected += 1;
             rejected_here = true;
         }
