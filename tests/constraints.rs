@@ -212,3 +212,42 @@ fn simulate_names_a_constraint_that_lost_its_gradient() {
     assert!(text.contains("constraints' Jacobian lost rank"), "{text}");
     assert!(text.contains("`line`"), "{text}");
 }
+
+/// A velocity constraint (set in the model: the language does not write one yet) is kept,
+/// and checks sample states whose rates satisfy it: a knife edge at angle theta that cannot
+/// slide sideways, sin(theta)·ẋ = cos(theta)·ẏ, which holds nowhere else.
+#[test]
+fn checks_sample_rates_that_satisfy_a_velocity_constraint() {
+    let source = "param m = 1 kg, I = 1 kg*m^2\ncoord x\ncoord y\ncoord theta\n\
+                  body blade { mass m; inertia I; position (x, y); angle theta }\n\
+                  constraint edge: x^2 = y^2\n\
+                  expect sin(theta)*x' = cos(theta)*y'\nexpect x' = y'\n";
+    let ast = lang::parse(source).expect("parses");
+    let (mut model, _) = model::resolve(&ast, source).expect("resolves");
+    let pool = &mut model.pool;
+    let rate = |pool: &mut cas::Pool, name: &str| {
+        let s = pool.lookup_symbol(name).expect("declared");
+        let r = pool.rate(s).expect("a coordinate");
+        pool.sym(r)
+    };
+    let (xd, yd) = (rate(pool, "x"), rate(pool, "y"));
+    let theta = pool.lookup_symbol("theta").expect("declared");
+    let theta = pool.sym(theta);
+    let (s, c) = (pool.sin(theta), pool.cos(theta));
+    let (a, b) = (pool.mul2(s, xd), pool.mul2(c, yd));
+    model.constraints[0].kind = model::ConstraintKind::Velocity;
+    model.constraints[0].phi = pool.sub(a, b);
+    let mut d = mechanics::derive(model).expect("derives");
+    assert_eq!(d.coords.len(), 3, "a velocity constraint eliminates nothing");
+    assert_eq!(d.multipliers.len(), 1);
+    let verdicts = verify::check_all(&mut d);
+    assert!(
+        matches!(
+            verdicts[0],
+            verify::Verdict::Numeric { sampling: verify::Sampling::OnConstraints, .. }
+        ),
+        "{:?}",
+        verdicts[0]
+    );
+    assert!(matches!(verdicts[1], verify::Verdict::Fails(_)), "{:?}", verdicts[1]);
+}

@@ -112,9 +112,22 @@ impl Prepared {
             v.extend(&m.jacobian);
             v.push(m.bias);
             v.push(m.phi);
-            v.push(d.model.pool.time_derivative(m.phi));
+            // A velocity constraint is stabilised on its residual alone.
+            v.push(match m.kind {
+                model::ConstraintKind::Position => d.model.pool.time_derivative(m.phi),
+                model::ConstraintKind::Velocity => d.model.pool.zero(),
+            });
         }
         v
+    }
+
+    /// How the integrator stabilises each kept constraint, in slot order.
+    pub fn stabilisation(&self) -> Vec<sim::Stabilisation> {
+        let kind = |m: &mechanics::Multiplier| match m.kind {
+            model::ConstraintKind::Position => sim::Stabilisation::Position,
+            model::ConstraintKind::Velocity => sim::Stabilisation::Velocity,
+        };
+        self.derivation.multipliers.iter().map(kind).collect()
     }
 
     /// M, p = ∂L/∂q̇ and ∂L/∂q + Q: the layout of [`sim::Canonical`].
@@ -172,7 +185,7 @@ impl Prepared {
     /// parameter values; those that depend on the motion are left alone.
     pub fn masses_at(&mut self, parameters: &[f64]) -> Result<(), NumbersError> {
         for body in self.derivation.model.bodies.clone() {
-            for (value, inertia) in [(Some(body.mass), false), (body.inertia, true)] {
+            for (value, inertia) in [(Some(body.mass), false), (body.planar_inertia(), true)] {
                 let Some(value) = value else { continue };
                 let pool = &mut self.derivation.model.pool;
                 let constant = pool

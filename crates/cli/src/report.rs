@@ -675,17 +675,28 @@ fn model_json(d: &Derivation) -> Json {
         .bodies
         .iter()
         .map(|b| {
-            json!({
-                "name": b.name,
-                "kind": match b.kind {
-                    model::BodyKind::Particle => "particle",
-                    model::BodyKind::Rigid => "rigid",
-                },
-                "mass": print(b.mass),
-                "inertia": b.inertia.map(print),
-                "position": prints(&b.position),
-                "angle": b.angle.map(print),
-            })
+            let matrix = |m: &[[ExprId; 3]; 3]| -> Vec<Vec<String>> {
+                m.iter().map(|r| prints(r)).collect()
+            };
+            match &b.rotation {
+                // A planar body is "rigid" in the JSON that the SymPy cross-check reads.
+                None | Some(model::Rotation::Planar { .. }) => json!({
+                    "name": b.name,
+                    "kind": if b.rotation.is_some() { "rigid" } else { "particle" },
+                    "mass": print(b.mass),
+                    "inertia": b.planar_inertia().map(print),
+                    "position": prints(&b.position),
+                    "angle": b.angle().map(print),
+                }),
+                Some(model::Rotation::Spatial { inertia, orientation }) => json!({
+                    "name": b.name,
+                    "kind": "spatial",
+                    "mass": print(b.mass),
+                    "inertia": matrix(inertia),
+                    "position": prints(&b.position),
+                    "orientation": matrix(orientation),
+                }),
+            }
         })
         .collect();
     let gravity = m.gravity.as_ref().map(|g| {

@@ -285,7 +285,8 @@ pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, 
     let observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
     let observation = prepared.lower(&prepared.observation_inputs(), &observed).map_err(bad)?;
     let mechanical =
-        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters);
+        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
+            .with_kinds(prepared.stabilisation());
     let settings = Settings {
         method,
         start: 0.0,

@@ -33,10 +33,12 @@ pub struct Elimination {
 #[derive(Clone, Debug)]
 pub struct Multiplier {
     pub constraint: usize,
+    /// Of positions or of velocities: how the row is formed and how it is stabilised.
+    pub kind: model::ConstraintKind,
     pub lambda: SymId,
-    /// Φ in the remaining coordinates.
+    /// Φ in the remaining coordinates (for a velocity constraint, linear in their rates).
     pub phi: ExprId,
-    /// ∂Φ/∂q, one entry per coordinate.
+    /// The coefficients of q̈ in the row: ∂Φ/∂q (∂Φ/∂q̇ for a velocity constraint).
     pub jacobian: Vec<ExprId>,
     /// γ = −(J̇·q̇ + ∂²Φ/∂t² + …): what J·q̈ must equal.
     pub bias: ExprId,

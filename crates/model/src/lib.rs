@@ -45,30 +45,85 @@ pub struct Coord {
     pub span: Span,
 }
 
+/// What a body is. A `particle` statement makes a point mass and a `body` statement a planar
+/// rigid body; spatial bodies are the model's already, ahead of the language.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BodyKind {
     Particle,
-    /// A planar rigid body: mass, inertia about the centre of mass, position, angle.
-    Rigid,
+    /// A rigid body turning in the plane.
+    Planar,
+    /// A rigid body turning in space.
+    Spatial,
+}
+
+/// How a rigid body turns, with the inertia that goes with its rotation.
+#[derive(Clone, Debug)]
+pub enum Rotation {
+    /// About the axis normal to the plane: the inertia about the centre of mass, and the angle,
+    /// whose rate is the angular velocity.
+    Planar { inertia: ExprId, angle: ExprId },
+    /// In space: the inertia tensor about the centre of mass in body axes (symmetric), and the
+    /// orientation, the rotation matrix from body axes to world axes, whose rate gives the
+    /// angular velocity through ω̃ = Rᵀ·Ṙ (in body axes).
+    Spatial { inertia: [[ExprId; 3]; 3], orientation: [[ExprId; 3]; 3] },
 }
 
 #[derive(Clone, Debug)]
 pub struct Body {
     pub name: String,
-    pub kind: BodyKind,
     pub mass: ExprId,
-    pub inertia: Option<ExprId>,
     /// Of the centre of mass: two or three components.
     pub position: Vec<ExprId>,
-    /// Orientation of a planar rigid body; its angular velocity is its time derivative.
-    pub angle: Option<ExprId>,
+    /// `None` for a particle.
+    pub rotation: Option<Rotation>,
     pub span: Span,
 }
 
-/// A holonomic constraint `lhs = rhs`, kept as Φ = lhs − rhs.
+impl Body {
+    pub fn kind(&self) -> BodyKind {
+        match self.rotation {
+            None => BodyKind::Particle,
+            Some(Rotation::Planar { .. }) => BodyKind::Planar,
+            Some(Rotation::Spatial { .. }) => BodyKind::Spatial,
+        }
+    }
+
+    /// The angle of a planar body.
+    pub fn angle(&self) -> Option<ExprId> {
+        match self.rotation {
+            Some(Rotation::Planar { angle, .. }) => Some(angle),
+            _ => None,
+        }
+    }
+
+    /// The inertia about the centre of mass of a planar body.
+    pub fn planar_inertia(&self) -> Option<ExprId> {
+        match self.rotation {
+            Some(Rotation::Planar { inertia, .. }) => Some(inertia),
+            _ => None,
+        }
+    }
+}
+
+/// What a constraint restrains, which decides how it is differentiated and how the integrator
+/// keeps it from drifting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConstraintKind {
+    /// Φ(q, t) = 0: holonomic. Differentiated twice for the acceleration row; stabilised on
+    /// both Φ and Φ̇.
+    Position,
+    /// A(q, t)·q̇ + b(q, t) = 0: a velocity (nonholonomic) constraint such as rolling without
+    /// slipping. Differentiated once; stabilised on the residual itself. The language does not
+    /// yet write one.
+    Velocity,
+}
+
+/// A constraint `lhs = rhs`, kept as Φ = lhs − rhs: of positions (Φ(q, t)), or of velocities
+/// (Φ linear in the rates).
 #[derive(Clone, Debug)]
 pub struct Constraint {
     pub name: String,
+    pub kind: ConstraintKind,
     pub lhs: ExprId,
     pub rhs: ExprId,
     pub phi: ExprId,

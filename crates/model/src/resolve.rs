@@ -16,8 +16,8 @@ use self::checks::{
 use self::dims::{BodyDims, Dims, NameDims};
 use crate::units::{Form, Inference, Shape};
 use crate::{
-    Body, BodyKind, Checks, Constraint, Coord, Expect, Gravity, Load, Model, Param, Placeholder,
-    Show, Term, Value,
+    Body, BodyKind, Checks, Constraint, ConstraintKind, Coord, Expect, Gravity, Load, Model, Param,
+    Placeholder, Rotation, Show, Term, Value,
 };
 
 /// Past this the power is not physics and expanding it would exhaust memory.
@@ -363,7 +363,7 @@ impl<'a> Resolver<'a> {
             StmtKind::Particle { name, props } => {
                 self.body(name, props, BodyKind::Particle, stmt.span)
             }
-            StmtKind::Body { name, props } => self.body(name, props, BodyKind::Rigid, stmt.span),
+            StmtKind::Body { name, props } => self.body(name, props, BodyKind::Planar, stmt.span),
             StmtKind::Constraint { name, lhs, rhs } => {
                 self.constraint(name.as_ref(), lhs, rhs, stmt.span)
             }
@@ -539,7 +539,7 @@ impl<'a> Resolver<'a> {
     fn body(&mut self, name: &Ident, props: &[Property], kind: BodyKind, span: Span) {
         let allowed: &[&str] = match kind {
             BodyKind::Particle => &["mass", "position"],
-            BodyKind::Rigid => &["mass", "inertia", "position", "angle"],
+            BodyKind::Planar | BodyKind::Spatial => &["mass", "inertia", "position", "angle"],
         };
         let mut seen: HashMap<&str, Span> = HashMap::new();
         // A misspelled property is reported once, not again as missing.
@@ -638,7 +638,7 @@ impl<'a> Resolver<'a> {
             self.error(d);
             ok = false;
         }
-        if kind == BodyKind::Rigid {
+        if kind == BodyKind::Planar {
             if inertia.is_none()
                 && !seen.contains_key("inertia")
                 && !misspelled.contains(&"inertia")
@@ -666,15 +666,13 @@ impl<'a> Resolver<'a> {
                 position: position_dims.into_iter().map(|(f, _)| f).collect(),
                 angle: angle_dims,
             });
-            self.bodies.push(Body {
-                name: normalize(&name.name),
-                kind,
-                mass,
-                inertia,
-                position,
-                angle,
-                span,
-            });
+            let rotation = match (kind, inertia, angle) {
+                (BodyKind::Planar, Some(inertia), Some(angle)) => {
+                    Some(Rotation::Planar { inertia, angle })
+                }
+                _ => None,
+            };
+            self.bodies.push(Body { name: normalize(&name.name), mass, position, rotation, span });
         }
     }
 
@@ -724,6 +722,8 @@ impl<'a> Resolver<'a> {
         self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
         self.constraints.push(Constraint {
             name: cname,
+            // Velocity constraints are refused above until the language writes them.
+            kind: ConstraintKind::Position,
             lhs: l,
             rhs: r,
             phi,
@@ -754,12 +754,12 @@ impl<'a> Resolver<'a> {
         self.load_energy(index, dims, value.span, torque);
         let dim = self.bodies[index].position.len();
         let ok = match (&v, torque) {
-            (Value::Scalar(_), true) => self.bodies[index].kind == BodyKind::Rigid,
+            (Value::Scalar(_), true) => self.bodies[index].kind() == BodyKind::Planar,
             (Value::Vector(c), false) => c.len() == dim,
             (Value::Scalar(_), false) => dim == 1,
             _ => false,
         };
-        if torque && self.bodies[index].kind == BodyKind::Particle {
+        if torque && self.bodies[index].kind() == BodyKind::Particle {
             self.error(
                 Diagnostic::error(
                     body.span,
@@ -1141,9 +1141,9 @@ impl<'a> Resolver<'a> {
         match self.names.get(&name).cloned() {
             Some(Binding::Body(i)) => {
                 let body = self.bodies[i].clone();
-                let fields: &[&str] = match body.kind {
+                let fields: &[&str] = match body.kind() {
                     BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
-                    BodyKind::Rigid => {
+                    BodyKind::Planar | BodyKind::Spatial => {
                         &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"]
                     }
                 };
@@ -1153,8 +1153,8 @@ impl<'a> Resolver<'a> {
                         body.position.iter().map(|x| self.pool.time_derivative(*x)).collect(),
                     )),
                     "mass" => Some(Value::Scalar(body.mass)),
-                    "angle" => body.angle.map(Value::Scalar),
-                    "omega" => body.angle.map(|a| Value::Scalar(self.pool.time_derivative(a))),
+                    "angle" => body.angle().map(Value::Scalar),
+                    "omega" => body.angle().map(|a| Value::Scalar(self.pool.time_derivative(a))),
                     "x" => body.position.first().map(|x| Value::Scalar(*x)),
                     "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
                     "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
@@ -1166,7 +1166,7 @@ impl<'a> Resolver<'a> {
                         format!("`{}` has no `{}`", object.name, field.name),
                     )
                     .with_label(format!("expected one of {}", fields.join(", ")));
-                    if body.kind == BodyKind::Particle
+                    if body.kind() == BodyKind::Particle
                         && matches!(field.name.as_str(), "omega" | "angle")
                     {
                         d = d.with_hint(

@@ -20,7 +20,7 @@ mod mechanical;
 pub mod reference;
 mod run;
 
-pub use mechanical::{Canonical, Layout, Mechanical};
+pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Settings, Trajectory};
 
 /// What went wrong numerically, with the slots involved.

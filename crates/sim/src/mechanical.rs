@@ -33,6 +33,17 @@ impl Layout {
     }
 }
 
+/// How the integrator keeps one kept constraint from drifting: the slot after γ holds Φ and
+/// the next Φ̇ for a position constraint; for a velocity constraint the first holds its
+/// residual A·q̇ + b and the second is unused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stabilisation {
+    /// J q̈ = γ − 2α Φ̇ − α² Φ.
+    Position,
+    /// J q̈ = γ − α·(A q̇ + b): a velocity constraint has no position level to drift at.
+    Velocity,
+}
+
 /// The equations of motion M q̈ − Jᵀλ = f, J q̈ = γ as y' = F(t, y) with y = (q, q̇).
 ///
 /// Constraints kept with multipliers drift at the position and velocity level, because only
@@ -46,6 +57,8 @@ pub struct Mechanical {
     parameters: Vec<f64>,
     /// α = β of the Baumgarte stabilisation, in 1/time.
     pub baumgarte: f64,
+    /// One per kept constraint; position constraints unless [`Mechanical::with_kinds`] says.
+    stabilisation: Vec<Stabilisation>,
     input: Vec<f64>,
     dyn_out: Vec<f64>,
     obs_input: Vec<f64>,
@@ -68,6 +81,7 @@ impl Mechanical {
             observation,
             parameters,
             baumgarte: 10.0,
+            stabilisation: vec![Stabilisation::Position; layout.multipliers],
             input: vec![0.0; layout.dynamics_inputs()],
             dyn_out: vec![0.0; layout.dynamics_outputs()],
             obs_input: vec![0.0; layout.observation_inputs()],
@@ -76,6 +90,13 @@ impl Mechanical {
             solution: vec![0.0; size],
             pivots: vec![0; size],
         }
+    }
+
+    /// Says which kept constraints restrain velocities rather than positions.
+    pub fn with_kinds(mut self, kinds: Vec<Stabilisation>) -> Self {
+        assert_eq!(kinds.len(), self.layout.multipliers);
+        self.stabilisation = kinds;
+        self
     }
 
     /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
@@ -115,7 +136,10 @@ impl Mechanical {
                 self.system[(n + c, n + d)] = 0.0;
             }
             let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
-            self.solution[n + c] = gamma - 2.0 * a * phi_rate - a * a * phi;
+            self.solution[n + c] = match self.stabilisation[c] {
+                Stabilisation::Position => gamma - 2.0 * a * phi_rate - a * a * phi,
+                Stabilisation::Velocity => gamma - a * phi,
+            };
         }
         self.backup.copy_from(&self.system);
         match linalg::solve_general(&mut self.system, &mut self.solution, &mut self.pivots) {

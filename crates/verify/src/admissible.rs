@@ -3,9 +3,12 @@
 //! checks sample only where a hand derivation that uses the constraints is entitled to hold,
 //! and the rank of the constraint Jacobian there, which tells a repeated constraint.
 
-use cas::{SymId, SymbolKind};
+use std::collections::HashMap;
+
+use cas::{ExprId, SymId, SymbolKind};
 use lang::Diagnostic;
 use mechanics::Derivation;
+use model::ConstraintKind;
 use nalgebra::{DMatrix, DVector};
 use numeric::{Evaluator, ScaledEvaluator};
 use rand::{Rng, SeedableRng};
@@ -63,7 +66,11 @@ pub(crate) struct ConstraintSet {
     phi: ScaledEvaluator,
     /// The Jacobian row after row, each entry with the size of its terms.
     jacobian: ScaledEvaluator,
+    /// What J·q̇ leaves out of the rate-level residual: ∂Φ/∂t for a position constraint, b of
+    /// A·q̇ + b for a velocity constraint.
     phi_t: Evaluator,
+    /// The rows that restrain positions; the others restrain only rates.
+    positional: Vec<usize>,
     /// Where the coordinates and the rates sit in a state.
     coords: Vec<usize>,
     rates: Vec<usize>,
@@ -74,10 +81,19 @@ impl ConstraintSet {
     pub(crate) fn first(d: &mut Derivation, count: usize) -> ConstraintSet {
         let time = d.model.time;
         let (mut phi, mut jacobian, mut phi_t) = (Vec::new(), Vec::new(), Vec::new());
-        for m in d.multipliers.iter().take(count) {
+        let mut positional = Vec::new();
+        let still: HashMap<SymId, ExprId> =
+            d.rates.iter().map(|r| (*r, d.model.pool.zero())).collect();
+        for (i, m) in d.multipliers.iter().take(count).enumerate() {
             phi.push(m.phi);
             jacobian.extend(m.jacobian.iter().copied());
-            phi_t.push(d.model.pool.diff(m.phi, time));
+            match m.kind {
+                ConstraintKind::Position => {
+                    positional.push(i);
+                    phi_t.push(d.model.pool.diff(m.phi, time));
+                }
+                ConstraintKind::Velocity => phi_t.push(d.model.pool.subst(m.phi, &still)),
+            }
         }
         let pool = &d.model.pool;
         ConstraintSet {
@@ -85,6 +101,7 @@ impl ConstraintSet {
             phi: ScaledEvaluator::new(pool, &phi),
             jacobian: ScaledEvaluator::new(pool, &jacobian),
             phi_t: Evaluator::new(pool, &phi_t),
+            positional,
             coords: d.coords.iter().map(|q| q.index()).collect(),
             rates: d.rates.iter().map(|q| q.index()).collect(),
         }
@@ -105,22 +122,24 @@ impl ConstraintSet {
         if self.is_empty() {
             return Ok(());
         }
-        let mut converged = false;
-        for _ in 0..NEWTON_ITERATIONS {
+        let mut converged = self.positional.is_empty();
+        for _ in 0..if converged { 0 } else { NEWTON_ITERATIONS } {
             let mut worst = 0.0f64;
-            let mut phi = DVector::zeros(self.count);
-            for (i, (v, scale)) in self.phi.eval(values).into_iter().enumerate() {
+            let mut phi = DVector::zeros(self.positional.len());
+            let all = self.phi.eval(values);
+            for (row, &i) in self.positional.iter().enumerate() {
+                let (v, scale) = all[i];
                 if !v.is_finite() || !scale.is_finite() {
                     return Err(Projection::Lost);
                 }
-                phi[i] = v;
+                phi[row] = v;
                 worst = worst.max(v.abs() / (1.0 + scale));
             }
             if worst < ON_CONSTRAINT {
                 converged = true;
                 break;
             }
-            let j = self.jacobian_at(values);
+            let j = self.jacobian_at(values).select_rows(self.positional.iter());
             let step = min_norm_solve(j, &phi).ok_or(Projection::Lost)?;
             let size = step.amax();
             for (k, &slot) in self.coords.iter().enumerate() {
@@ -135,8 +154,8 @@ impl ConstraintSet {
         if !converged {
             return Err(Projection::Lost);
         }
-        // Φ̇ is linear in the rates: one minimum-norm correction lands on it, a second cleans
-        // up rounding.
+        // Φ̇ (Φ itself for a velocity constraint) is linear in the rates: one minimum-norm
+        // correction lands on it, a second cleans up rounding.
         for _ in 0..2 {
             let j = self.jacobian_at(values);
             let phi_t = self.phi_t.eval(values);

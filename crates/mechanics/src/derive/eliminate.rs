@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId, SymbolKind};
 use lang::Diagnostic;
-use model::Model;
+use model::{ConstraintKind, Model};
 
 use super::{Derivation, Elimination};
 
@@ -40,6 +40,11 @@ pub(super) fn eliminate_constraints(pool: &mut Pool, model: &Model) -> Eliminate
     let mut kept: Vec<usize> = Vec::new();
     let mut errors = Vec::new();
     for (ci, c) in model.constraints.iter().enumerate() {
+        // A velocity constraint cannot be solved for a coordinate: it restrains rates only.
+        if c.kind == ConstraintKind::Velocity {
+            kept.push(ci);
+            continue;
+        }
         let phi = pool.subst(c.phi, &solved);
         let phi = pool.expand(phi);
         if pool.is_identically_zero(phi) {

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
-use model::{BodyKind, Model};
+use model::{Model, Rotation};
 
 /// The scalar functions the equations of motion come from.
 #[derive(Clone, Copy, Debug)]
@@ -47,11 +47,25 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
         let speed2 = pool.add(&v2);
         let t = pool.mul2(body.mass, speed2);
         kinetic_terms.push(pool.scale(t, &half));
-        if let (BodyKind::Rigid, Some(i), Some(angle)) = (body.kind, body.inertia, body.angle) {
-            let w = pool.time_derivative(angle);
-            let w2 = pool.powi(w, 2);
-            let t = pool.mul2(i, w2);
-            kinetic_terms.push(pool.scale(t, &half));
+        match &body.rotation {
+            None => {}
+            Some(Rotation::Planar { inertia, angle }) => {
+                let w = pool.time_derivative(*angle);
+                let w2 = pool.powi(w, 2);
+                let t = pool.mul2(*inertia, w2);
+                kinetic_terms.push(pool.scale(t, &half));
+            }
+            Some(Rotation::Spatial { inertia, orientation }) => {
+                let w = angular_velocity_in_body_axes(pool, orientation);
+                let mut parts = Vec::new();
+                for (i, row) in inertia.iter().enumerate() {
+                    for (j, entry) in row.iter().enumerate() {
+                        parts.push(pool.mul(&[w[i], *entry, w[j]]));
+                    }
+                }
+                let t = pool.add(&parts);
+                kinetic_terms.push(pool.scale(t, &half));
+            }
         }
         if let (Some(g), Some(dir)) = (&model.gravity, &gravity_dir) {
             // V = −m g (d · r): the work gravity does is lost as potential energy.
@@ -75,6 +89,25 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
         pool.add(&d)
     };
     Energies { kinetic, potential, lagrangian, dissipation }
+}
+
+/// ω in body axes from the orientation R (body to world): Rᵀ·Ṙ is the skew matrix of ω, so
+/// ω = ((RᵀṘ)₃₂, (RᵀṘ)₁₃, (RᵀṘ)₂₁), each simplified (the sin² + cos² of Euler angles fold).
+pub(crate) fn angular_velocity_in_body_axes(
+    pool: &mut Pool,
+    orientation: &[[ExprId; 3]; 3],
+) -> [ExprId; 3] {
+    let rate: Vec<Vec<ExprId>> = orientation
+        .iter()
+        .map(|row| row.iter().map(|e| pool.time_derivative(*e)).collect())
+        .collect();
+    // (RᵀṘ)ᵢⱼ = Σₖ Rₖᵢ·Ṙₖⱼ
+    let mut entry = |i: usize, j: usize| {
+        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(orientation[k][i], rate[k][j])).collect();
+        let sum = pool.add(&terms);
+        pool.simplify(sum)
+    };
+    [entry(2, 1), entry(0, 2), entry(1, 0)]
 }
 
 impl Energies {
@@ -113,6 +146,52 @@ mod tests {
             "1/2*m*(L^2*sin(theta)^2*theta'^2 + L^2*cos(theta)^2*theta'^2) + m*L*g*cos(theta)"
         );
         assert_eq!(ascii(&pool, e.dissipation), "0");
+    }
+
+    /// A body turning in space, built in the model directly (the language does not write one
+    /// yet): a gimbal that turns by phi about z, then by theta about the new x axis.
+    #[test]
+    fn a_spatial_body_turns_with_omega_from_its_orientation() {
+        let (mut pool, mut model) = scene(
+            "param m, A, B, C\ncoord phi\ncoord theta\nparticle g { mass m; position (0, 0, 0) }",
+        );
+        let sym = |pool: &mut Pool, name: &str| {
+            let s = pool.lookup_symbol(name).expect("declared");
+            pool.sym(s)
+        };
+        let (a, b, c) = (sym(&mut pool, "A"), sym(&mut pool, "B"), sym(&mut pool, "C"));
+        let (phi, theta) = (sym(&mut pool, "phi"), sym(&mut pool, "theta"));
+        let (zero, one) = (pool.zero(), pool.one());
+        let rot_z = |pool: &mut Pool, q: ExprId| {
+            let (s, k) = (pool.sin(q), pool.cos(q));
+            let ms = pool.neg(s);
+            [[k, ms, zero], [s, k, zero], [zero, zero, one]]
+        };
+        let rot_x = |pool: &mut Pool, q: ExprId| {
+            let (s, k) = (pool.sin(q), pool.cos(q));
+            let ms = pool.neg(s);
+            [[one, zero, zero], [zero, k, ms], [zero, s, k]]
+        };
+        let (rz, rx) = (rot_z(&mut pool, phi), rot_x(&mut pool, theta));
+        let mut orientation = [[zero; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(rz[i][k], rx[k][j])).collect();
+                orientation[i][j] = pool.add(&terms);
+            }
+        }
+        let inertia = [[a, zero, zero], [zero, b, zero], [zero, zero, c]];
+        let w = angular_velocity_in_body_axes(&mut pool, &orientation);
+        let w: Vec<String> = w.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(w, ["theta'", "sin(theta)*phi'", "cos(theta)*phi'"]);
+        model.bodies[0].rotation = Some(Rotation::Spatial { inertia, orientation });
+        assert_eq!(model.bodies[0].kind(), model::BodyKind::Spatial);
+        let e = energies(&mut pool, &model);
+        let kinetic = pool.simplify(e.kinetic);
+        assert_eq!(
+            ascii(&pool, kinetic),
+            "1/2*B*sin(theta)^2*phi'^2 + 1/2*C*cos(theta)^2*phi'^2 + 1/2*A*theta'^2"
+        );
     }
 
     #[test]

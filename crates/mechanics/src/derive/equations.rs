@@ -44,7 +44,7 @@ pub(super) fn generalized_force(
         }
     }
     for t in &model.torques {
-        let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle) else {
+        let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle()) else {
             continue;
         };
         let angle = pool.subst(angle, map);

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
-use model::Model;
+use model::{ConstraintKind, Model};
 
 use super::eliminate::Coordinates;
 use super::Multiplier;
@@ -22,15 +22,28 @@ pub(super) fn kept_constraints(
         let c = &model.constraints[ci];
         let phi = pool.subst(c.phi, &coordinates.elimination_map);
         let phi = pool.expand(phi);
-        let jacobian: Vec<ExprId> = coordinates.coords.iter().map(|q| pool.diff(phi, *q)).collect();
-        let velocity = pool.time_derivative(phi);
-        let acceleration = pool.time_derivative(velocity);
+        // The row is the first derivative of Φ that has accelerations: Φ̈ for a position
+        // constraint, Φ̇ for a velocity constraint. Its coefficients of q̈ are the Jacobian.
+        let (jacobian, acceleration) = match c.kind {
+            ConstraintKind::Position => {
+                let jacobian: Vec<ExprId> =
+                    coordinates.coords.iter().map(|q| pool.diff(phi, *q)).collect();
+                let velocity = pool.time_derivative(phi);
+                (jacobian, pool.time_derivative(velocity))
+            }
+            ConstraintKind::Velocity => {
+                let jacobian: Vec<ExprId> =
+                    coordinates.rates.iter().map(|v| pool.diff(phi, *v)).collect();
+                (jacobian, pool.time_derivative(phi))
+            }
+        };
         let zeros: HashMap<SymId, ExprId> =
             coordinates.accels.iter().map(|a| (*a, pool.zero())).collect();
         let rest = pool.subst(acceleration, &zeros);
         let bias = pool.neg(rest);
         multipliers.push(Multiplier {
             constraint: ci,
+            kind: c.kind,
             lambda: c.force_symbol,
             phi,
             jacobian,
@@ -38,6 +51,19 @@ pub(super) fn kept_constraints(
         });
     }
     multipliers
+}
+
+/// The generalized force per unit multiplier of a constraint along coordinate q: ∂Φ/∂q for a
+/// position constraint, ∂Φ/∂q̇ for a velocity constraint (the same direction, since
+/// ∂Φ̇/∂q̇ = ∂Φ/∂q).
+pub(super) fn constraint_gradient(pool: &mut Pool, c: &model::Constraint, q: SymId) -> ExprId {
+    match c.kind {
+        ConstraintKind::Position => pool.diff(c.phi, q),
+        ConstraintKind::Velocity => {
+            let rate = pool.rate(q).expect("coordinate");
+            pool.diff(c.phi, rate)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -64,6 +90,42 @@ mod tests {
         let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(jacobian, ["2*x", "2*y"]);
         assert_eq!(ascii(&pool, m.bias), "-2*x'^2 - 2*y'^2");
+    }
+
+    /// A velocity constraint, set in the model directly (the language does not write one yet):
+    /// a knife edge at angle theta that cannot slide sideways, sin(theta)·ẋ − cos(theta)·ẏ = 0.
+    /// It is kept, never eliminated, its row is Φ̇ with the rates' coefficients as Jacobian,
+    /// and its force on theta is nil.
+    #[test]
+    fn a_velocity_constraint_gets_its_row_from_one_derivative() {
+        let (mut pool, mut model) = scene(
+            "param m, I\ncoord x\ncoord y\ncoord theta\nbody blade { mass m; inertia I; position (x, y); angle theta }\nconstraint edge: x = y",
+        );
+        let rate = |pool: &mut Pool, name: &str| {
+            let s = pool.lookup_symbol(name).expect("declared");
+            let r = pool.rate(s).expect("a coordinate");
+            pool.sym(r)
+        };
+        let (xd, yd) = (rate(&mut pool, "x"), rate(&mut pool, "y"));
+        let theta = pool.lookup_symbol("theta").expect("declared");
+        let theta = pool.sym(theta);
+        let (s, c) = (pool.sin(theta), pool.cos(theta));
+        let (a, b) = (pool.mul2(s, xd), pool.mul2(c, yd));
+        model.constraints[0].kind = ConstraintKind::Velocity;
+        model.constraints[0].phi = pool.sub(a, b);
+        let out = eliminate_constraints(&mut pool, &model);
+        assert!(out.eliminated.is_empty());
+        assert_eq!(out.kept, [0]);
+        let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
+        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
+        assert_eq!(m.kind, ConstraintKind::Velocity);
+        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(jacobian, ["sin(theta)", "-cos(theta)", "0"]);
+        assert_eq!(ascii(&pool, m.bias), "-(cos(theta)*x' + sin(theta)*y')*theta'");
+        let along_theta = coordinates.coords[2];
+        let gradient = constraint_gradient(&mut pool, &model.constraints[0], along_theta);
+        assert!(pool.is_zero(gradient));
     }
 
     #[test]
