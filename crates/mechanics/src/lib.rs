@@ -1,8 +1,9 @@
 //! Lagrangian mechanics on a resolved model.
 //!
-//! This crate owns the physics: kinetic and potential energy of particles and planar rigid
-//! bodies, holonomic constraints (eliminated when they can be solved for one coordinate, kept
-//! with a multiplier otherwise), generalized forces by virtual work, the Euler–Lagrange
+//! This crate owns the physics: kinetic and potential energy of particles and rigid bodies
+//! (planar, and spatial with ω from the orientation), constraints (a holonomic one eliminated
+//! when it can be solved for one coordinate, kept with a multiplier otherwise; a velocity
+//! constraint always kept), generalized forces by virtual work, the Euler–Lagrange
 //! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, and the
 //! algebraic side of checking `expect` lines. It is purely symbolic: what needs numbers
 //! (random states, the numeric start, verdicts sampled at states) is the `verify` crate's. It
