@@ -105,9 +105,13 @@ fn solve_for_one_of(pool: &mut Pool, phi: ExprId, candidates: &[SymId]) -> Optio
         if depends_on_motion || pool.is_identically_zero(a) {
             continue;
         }
-        let qe = pool.sym(q);
-        let step = pool.div(phi, a);
-        let sol = pool.sub(qe, step);
+        // Φ = a·q + rest with a free of q, so q = −rest/a. Taking the rest by substitution,
+        // not q − Φ/a, keeps q out of the solution even where a·q/a would not cancel
+        // (a sum over a symbolic denominator such as a/(a − 1) − 1/(a − 1)).
+        let zero = pool.zero();
+        let rest = pool.subst(phi, &[(q, zero)].into_iter().collect());
+        let step = pool.div(rest, a);
+        let sol = pool.neg(step);
         return Some((q, pool.simplify(sol)));
     }
     None
@@ -240,6 +244,28 @@ mod tests {
         let out = eliminate_constraints(&mut pool, &model);
         assert_eq!(out.eliminated[0].coord, coord(&model, "y"));
         assert_eq!(ascii(&pool, out.eliminated[0].solution), "x/2");
+    }
+
+    #[test]
+    fn a_symbolic_coefficient_leaves_no_trace_of_the_coordinate() {
+        // a·q = q − a gives q = −a/(a − 1); the solution must not mention q itself, which
+        // q − Φ/a did when a/(a − 1) and 1/(a − 1) did not combine.
+        let (mut pool, model) = scene("param a = 2\ncoord q\ncoord p\nconstraint c: q*a = q - a");
+        let out = eliminate_constraints(&mut pool, &model);
+        let [e] = &out.eliminated[..] else { panic!("{:?}", out.eliminated) };
+        assert_eq!(e.coord, coord(&model, "q"));
+        assert!(!pool.free_symbols(e.solution).contains(&e.coord), "{}", ascii(&pool, e.solution));
+        let a = pool.free_symbols(e.solution);
+        assert_eq!(a.len(), 1);
+        let expected = {
+            let a = pool.sym(a[0]);
+            let one = pool.one();
+            let a_minus_one = pool.sub(a, one);
+            let quotient = pool.div(a, a_minus_one);
+            pool.neg(quotient)
+        };
+        let difference = pool.sub(e.solution, expected);
+        assert!(pool.is_identically_zero(difference), "{}", ascii(&pool, e.solution));
     }
 
     #[test]
