@@ -201,6 +201,16 @@ def sympy_system(model, scope, coords, substitute, kept):
             body = RigidBody(b["name"], P, B, mass,
                              (inertia(B, 0, 0, sub(scope.parse(b["inertia"]))), P))
             frames[b["name"]] = B
+        elif b["kind"] == "spatial":
+            # The orientation carries body axes into world axes, so it is N.dcm(B); SymPy
+            # works out the angular velocity from it on its own.
+            B = ReferenceFrame(b["name"] + "_frame")
+            R = sp.Matrix([[sub(scope.parse(x)) for x in row] for row in b["orientation"]])
+            B.orient_explicit(N, R)
+            I = [[sub(scope.parse(x)) for x in row] for row in b["inertia"]]
+            tensor = inertia(B, I[0][0], I[1][1], I[2][2], I[0][1], I[1][2], I[0][2])
+            body = RigidBody(b["name"], P, B, mass, (tensor, P))
+            frames[b["name"]] = B
         else:
             body = Particle(b["name"], P, mass)
         if gravity:
@@ -219,11 +229,19 @@ def sympy_system(model, scope, coords, substitute, kept):
     forcelist = []
     for f in model["forces"]:
         comps = f["vector"] if isinstance(f["vector"], list) else [f["vector"]]
-        forcelist.append((points[f["body"]], vector(comps)))
+        point = points[f["body"]]
+        if "at" in f:
+            # A force at a point of the body: its own point, moving as its position does.
+            point = O.locatenew(f["name"] + "_at", vector(f["at"]))
+            point.set_vel(N, point.pos_from(O).dt(N))
+        forcelist.append((point, vector(comps)))
     for tq in model["torques"]:
         if tq["body"] not in frames:
             raise ValueError(f"torque on `{tq['body']}`, which has no angle")
-        forcelist.append((frames[tq["body"]], sub(scope.parse(tq["torque"])) * N.z))
+        if isinstance(tq["torque"], list):
+            forcelist.append((frames[tq["body"]], vector(tq["torque"])))
+        else:
+            forcelist.append((frames[tq["body"]], sub(scope.parse(tq["torque"])) * N.z))
 
     q = [scope.coords[c] for c in coords]
     lm = LagrangesMethod(L, q, forcelist=forcelist or None, frame=N,

@@ -718,6 +718,9 @@ fn model_json(d: &Derivation) -> Json {
                     other => json!(prints(&other.entries())),
                 };
                 o.insert(key.into(), v);
+                if let Some(at) = &l.at {
+                    o.insert("at".into(), json!(prints(at)));
+                }
                 Json::Object(o)
             })
             .collect()

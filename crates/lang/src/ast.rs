@@ -149,8 +149,8 @@ pub enum StmtKind {
     Gravity { strength: Expr, direction: Option<Expr> },
     /// `potential k/2*(x - l0)^2`
     Potential(Expr),
-    /// `force push on bead: (F0*cos(w*t), 0)`
-    Force { name: Ident, body: Ident, value: Expr },
+    /// `force push on bead: (F0*cos(w*t), 0)`, or `force f on b at P: F` at the point P
+    Force { name: Ident, body: Ident, at: Option<Expr>, value: Expr },
     /// `torque drive on rod: tau0`
     Torque { name: Ident, body: Ident, value: Expr },
     /// `spring s between cart and bob: k, l0` (the rest length is optional, default 0)

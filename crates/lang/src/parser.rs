@@ -745,9 +745,14 @@ impl Builder<'_> {
             Rule::force_stmt | Rule::torque_stmt => {
                 let name = self.ident(&next()?);
                 let body = self.ident(&next()?);
-                let value = self.expr(next()?)?;
+                let first = self.expr(next()?)?;
+                // `at P` comes before the value when it is given.
+                let (at, value) = match next() {
+                    Ok(p) => (Some(first), self.expr(p)?),
+                    Err(_) => (None, first),
+                };
                 if rule == Rule::force_stmt {
-                    StmtKind::Force { name, body, value }
+                    StmtKind::Force { name, body, at, value }
                 } else {
                     StmtKind::Torque { name, body, value }
                 }

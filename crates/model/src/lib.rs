@@ -5,6 +5,7 @@
 //! `expect` items, with every name checked and every mistake reported with its span. This crate
 //! knows what a scene says; deriving equations from it is the job of `mechanics`.
 
+pub mod kinematics;
 mod resolve;
 pub mod units;
 mod value;
@@ -144,12 +145,15 @@ pub struct Gravity {
     pub span: Span,
 }
 
-/// An applied force at a body's centre of mass, or a torque on a rigid body.
+/// An applied force at a body's centre of mass or at a point of it, or a torque on a rigid
+/// body (a scalar in the plane, a vector in world axes in space).
 #[derive(Clone, Debug)]
 pub struct Load {
     pub name: String,
     pub body: usize,
     pub value: Value,
+    /// The point a force acts at (world axes), when it is not the centre of mass.
+    pub at: Option<Vec<ExprId>>,
     pub span: Span,
 }
 

@@ -2,6 +2,7 @@
 
 mod checks;
 mod dims;
+mod space;
 
 use std::collections::HashMap;
 
@@ -291,7 +292,7 @@ impl<'a> Resolver<'a> {
                     }
                     let sym = self.pool.param(&name);
                     if self.bind(&decl.name, Binding::Param(sym)) {
-                        let dims = NameDims { at: self.stmt, form: Some(form) };
+                        let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
                         self.name_dims.insert(name.clone(), dims);
                         if let (Some(v), Some(written)) = (value, &decl.value) {
                             self.param_value(sym, v, written);
@@ -311,12 +312,25 @@ impl<'a> Resolver<'a> {
                     if let Value::Scalar(e) = v {
                         self.lets.push((normalize(&name.name), e));
                     }
-                    let form = match self.shape(dims) {
-                        Shape::Scalar(f) => Some(f),
-                        Shape::Many(_) => None,
+                    // A vector or matrix keeps the dimension of each entry.
+                    let (form, entries) = match dims {
+                        Dims::Grid(g) => {
+                            let g = g
+                                .into_iter()
+                                .map(|row| {
+                                    row.into_iter().map(|d| Dims::Scalar(self.form(d))).collect()
+                                })
+                                .collect();
+                            (None, Some(Dims::Grid(g)))
+                        }
+                        Dims::Many(v) => (None, Some(Dims::Many(v))),
+                        d => match self.shape(d) {
+                            Shape::Scalar(f) => (Some(f), None),
+                            Shape::Many(v) => (None, Some(Dims::Many(v))),
+                        },
                     };
                     if self.bind(name, Binding::Let(v)) {
-                        let dims = NameDims { at: self.stmt, form };
+                        let dims = NameDims { at: self.stmt, form, entries };
                         self.name_dims.insert(normalize(&name.name), dims);
                     }
                 }
@@ -347,7 +361,7 @@ impl<'a> Resolver<'a> {
                     let sym = self.pool.coordinate(&name);
                     let zero = self.pool.zero();
                     if self.bind(&decl.name, Binding::Coord(sym)) {
-                        let dims = NameDims { at: self.stmt, form: Some(form) };
+                        let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
                         self.name_dims.insert(name.clone(), dims);
                         self.coords.push(Coord {
                             name,
@@ -486,8 +500,12 @@ impl<'a> Resolver<'a> {
                 let expr = self.pool.scale(d, &Rational::new(1.into(), 2.into()));
                 self.dissipation.push(Term { expr, span: stmt.span });
             }
-            StmtKind::Force { name, body, value } => self.load(name, body, value, stmt.span, false),
-            StmtKind::Torque { name, body, value } => self.load(name, body, value, stmt.span, true),
+            StmtKind::Force { name, body, at, value } => {
+                self.load(name, body, at.as_ref(), value, stmt.span, false)
+            }
+            StmtKind::Torque { name, body, value } => {
+                self.load(name, body, None, value, stmt.span, true)
+            }
             StmtKind::Show { at_start, items } => {
                 for item in items {
                     if let Some((value, _)) = self.value(item) {
@@ -539,14 +557,18 @@ impl<'a> Resolver<'a> {
     fn body(&mut self, name: &Ident, props: &[Property], kind: BodyKind, span: Span) {
         let allowed: &[&str] = match kind {
             BodyKind::Particle => &["mass", "position"],
-            BodyKind::Planar | BodyKind::Spatial => &["mass", "inertia", "position", "angle"],
+            BodyKind::Planar | BodyKind::Spatial => {
+                &["mass", "inertia", "position", "angle", "orientation"]
+            }
         };
         let mut seen: HashMap<&str, Span> = HashMap::new();
         // A misspelled property is reported once, not again as missing.
         let mut misspelled: Vec<&str> = Vec::new();
         let (mut mass, mut inertia, mut position, mut angle) = (None, None, None, None);
+        let mut orientation: Option<(Vec<Vec<ExprId>>, Span)> = None;
         // The dimensions of each property, with where it is written.
         let (mut mass_dims, mut inertia_dims, mut angle_dims) = (None, None, None);
+        let mut inertia_written: Option<(Value, &Expr)> = None;
         let mut position_dims: Vec<(Form, Span)> = Vec::new();
         for p in props {
             let key = p.key.name.as_str();
@@ -580,11 +602,50 @@ impl<'a> Resolver<'a> {
                     }
                 }
                 "inertia" => {
-                    let resolved = self.scalar_in_role(&p.value, &INERTIA);
-                    inertia = resolved.as_ref().map(|(i, _)| *i);
-                    inertia_dims = resolved.map(|(_, d)| (self.form(d), p.value.span));
-                    if let Some(i) = inertia {
-                        self.check_sign(name, i, &p.value, true);
+                    // A scalar for a planar body; in space also principal moments or a tensor,
+                    // decided once the orientation is known.
+                    let resolved = self.value_in_role(&p.value, &INERTIA);
+                    if let Some((v, d)) = resolved {
+                        let forms = self.shape(d).forms();
+                        inertia_dims = forms.first().cloned().map(|f| (f, p.value.span));
+                        for f in &forms[1.min(forms.len())..] {
+                            let what = "between the entries of an inertia";
+                            self.units.same(&forms[0], f, p.value.span, p.value.span, what);
+                        }
+                        if let Value::Scalar(i) = v {
+                            inertia = Some(i);
+                            self.check_sign(name, i, &p.value, true);
+                        }
+                        inertia_written = Some((v, &p.value));
+                    }
+                }
+                "orientation" => {
+                    let resolved = self.value_in_role(&p.value, &ANGLE);
+                    match resolved {
+                        Some((Value::Matrix(m), d))
+                            if m.len() == 3 && m.iter().all(|r| r.len() == 3) =>
+                        {
+                            for f in self.shape(d).forms() {
+                                let what = "an entry of an orientation";
+                                self.units.dimensionless(&f, p.value.span, what);
+                            }
+                            orientation = Some((m, p.value.span));
+                        }
+                        Some((other, _)) => self.error(
+                            Diagnostic::error(
+                                p.value.span,
+                                format!(
+                                    "an orientation is a 3×3 rotation matrix, not {}",
+                                    other.kind_name()
+                                ),
+                            )
+                            .with_label("expected a rotation")
+                            .with_hint(
+                                "compose rotations such as `rotz(phi)*rotx(theta)*rotz(psi)`; a \
+                                 body turning in the plane takes `angle` instead",
+                            ),
+                        ),
+                        None => {}
                     }
                 }
                 "angle" => {
@@ -638,7 +699,30 @@ impl<'a> Resolver<'a> {
             self.error(d);
             ok = false;
         }
-        if kind == BodyKind::Planar {
+        let spatial = orientation.is_some() || seen.contains_key("orientation");
+        if spatial {
+            if let Some(first) = seen.get("angle") {
+                self.error(
+                    Diagnostic::error(*first, "a body has either an `angle` or an `orientation`")
+                        .with_label("angle given")
+                        .with_related(seen["orientation"], "orientation given")
+                        .with_hint(
+                            "`angle` turns a body in the plane; `orientation` turns it in space",
+                        ),
+                );
+                ok = false;
+            }
+            if !seen.contains_key("inertia") && !misspelled.contains(&"inertia") {
+                let d = missing(
+                    "inertia",
+                    "add `inertia (A, B, C)`: the principal moments about the centre of mass in \
+                     body axes, or the full tensor `[Ixx, Ixy, Ixz; Ixy, Iyy, Iyz; Ixz, Iyz, Izz]`",
+                );
+                self.error(d);
+                ok = false;
+            }
+        }
+        if kind == BodyKind::Planar && !spatial {
             if inertia.is_none()
                 && !seen.contains_key("inertia")
                 && !misspelled.contains(&"inertia")
@@ -656,7 +740,34 @@ impl<'a> Resolver<'a> {
                 ok = false;
             }
         }
-        self.body_energy(mass_dims.clone(), &position_dims, inertia_dims, angle_dims.as_ref());
+        let rotation_rate = match spatial {
+            // ω of a body in space is a rate of dimensionless rotation entries.
+            true => Some(Form::default()),
+            false => angle_dims.clone(),
+        };
+        self.body_energy(mass_dims.clone(), &position_dims, inertia_dims, rotation_rate.as_ref());
+        if let (false, Some((written, expr))) = (spatial, &inertia_written) {
+            if !matches!(written, Value::Scalar(_)) {
+                self.error(
+                    Diagnostic::error(expr.span, "a body turning in the plane has one inertia")
+                        .with_label(format!("expected a scalar, found {}", written.kind_name()))
+                        .with_hint(
+                            "principal moments or a tensor need an `orientation` in space; in the \
+                             plane give the inertia about the axis normal to it",
+                        ),
+                );
+                ok = false;
+            }
+        }
+        let spatial_rotation = match (orientation, inertia_written) {
+            (Some((rows, span)), Some((written, expr))) => {
+                self.spatial_rotation(name, rows, span, written, expr, position.as_deref())
+            }
+            _ => None,
+        };
+        if spatial && spatial_rotation.is_none() {
+            ok = false;
+        }
         let (Some(mass), Some(position), true) = (mass, position, ok) else { return };
         let index = self.bodies.len();
         if self.bind(name, Binding::Body(index)) {
@@ -665,8 +776,10 @@ impl<'a> Resolver<'a> {
                 mass: mass_dims.unwrap_or_default(),
                 position: position_dims.into_iter().map(|(f, _)| f).collect(),
                 angle: angle_dims,
+                spatial,
             });
             let rotation = match (kind, inertia, angle) {
+                _ if spatial => spatial_rotation,
                 (BodyKind::Planar, Some(inertia), Some(angle)) => {
                     Some(Rotation::Planar { inertia, angle })
                 }
@@ -734,7 +847,15 @@ impl<'a> Resolver<'a> {
         });
     }
 
-    fn load(&mut self, name: &Ident, body: &Ident, value: &Expr, span: Span, torque: bool) {
+    fn load(
+        &mut self,
+        name: &Ident,
+        body: &Ident,
+        at: Option<&Expr>,
+        value: &Expr,
+        span: Span,
+        torque: bool,
+    ) {
         let key = normalize(&body.name);
         let index = match self.names.get(&key) {
             Some(Binding::Body(i)) => *i,
@@ -750,11 +871,48 @@ impl<'a> Resolver<'a> {
             }
         };
         let role = if torque { &TORQUE } else { &FORCE };
-        let Some((v, dims)) = self.value_in_role(value, role) else { return };
-        self.load_energy(index, dims, value.span, torque);
         let dim = self.bodies[index].position.len();
+        let kind = self.bodies[index].kind();
+        // The point a force acts at, when it is not the centre of mass.
+        let mut point = None;
+        if let Some(at) = at {
+            if kind == BodyKind::Particle {
+                self.error(
+                    Diagnostic::error(at.span, "a particle is a point: a force on it acts there")
+                        .with_label("a point of a particle")
+                        .with_hint(format!(
+                            "drop `at …`, or declare `{}` as a rigid `body`",
+                            body.name
+                        )),
+                );
+                return;
+            }
+            let Some((p, p_dims)) = self.value_in_role(at, &POSITION) else { return };
+            match space::as_vector(&p).filter(|p| p.len() == dim) {
+                Some(p) => point = Some((p, self.shape(p_dims).forms())),
+                None => {
+                    self.error(
+                        Diagnostic::error(
+                            at.span,
+                            format!("expected a point, a {dim}-vector, found {}", p.kind_name()),
+                        )
+                        .with_label("not a point")
+                        .with_hint("give the point in world axes, like the body's position"),
+                    );
+                    return;
+                }
+            }
+        }
+        let Some((v, dims)) = self.value_in_role(value, role) else { return };
+        let v = match v {
+            // `R*v` and written columns alike.
+            Value::Matrix(_) => space::as_vector(&v).map(Value::Vector).unwrap_or(v),
+            v => v,
+        };
+        self.load_energy(index, dims, value.span, torque, point.as_ref().map(|(_, f)| f.clone()));
         let ok = match (&v, torque) {
-            (Value::Scalar(_), true) => self.bodies[index].kind() == BodyKind::Planar,
+            (Value::Scalar(_), true) => kind == BodyKind::Planar,
+            (Value::Vector(c), true) => kind == BodyKind::Spatial && c.len() == 3,
             (Value::Vector(c), false) => c.len() == dim,
             (Value::Scalar(_), false) => dim == 1,
             _ => false,
@@ -771,7 +929,9 @@ impl<'a> Resolver<'a> {
             return;
         }
         if !ok {
-            let expected = if torque {
+            let expected = if torque && kind == BodyKind::Spatial {
+                "a torque vector `(tx, ty, tz)` in world axes on a body in space".to_string()
+            } else if torque {
                 "a scalar torque on a rigid `body`".to_string()
             } else {
                 format!("a {dim}-vector, like the body's position")
@@ -785,7 +945,8 @@ impl<'a> Resolver<'a> {
             );
             return;
         }
-        let load = Load { name: normalize(&name.name), body: index, value: v, span };
+        let at = point.map(|(p, _)| p);
+        let load = Load { name: normalize(&name.name), body: index, value: v, at, span };
         if torque {
             self.torques.push(load);
         } else {
@@ -1129,6 +1290,19 @@ impl<'a> Resolver<'a> {
 
     fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<(Value, Dims)> {
         let value = self.member_value(object, field, span)?;
+        if let Some(Binding::Let(_)) = self.names.get(&normalize(&object.name)) {
+            // A component of a vector `let`.
+            self.used.insert(normalize(&object.name));
+            let i = match field.name.as_str() {
+                "x" => 0,
+                "y" => 1,
+                _ => 2,
+            };
+            let name = normalize(&object.name);
+            let whole = self.name_dims(&object.name, &name, 0);
+            let forms = self.shape(whole).forms();
+            return Some((value, Dims::Scalar(forms.get(i).cloned().unwrap_or_default())));
+        }
         let body = match self.names.get(&normalize(&object.name)) {
             Some(Binding::Body(i)) => Some(*i),
             _ => None,
@@ -1143,10 +1317,40 @@ impl<'a> Resolver<'a> {
                 let body = self.bodies[i].clone();
                 let fields: &[&str] = match body.kind() {
                     BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
-                    BodyKind::Planar | BodyKind::Spatial => {
+                    BodyKind::Planar => {
                         &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"]
                     }
+                    BodyKind::Spatial => &[
+                        "position",
+                        "velocity",
+                        "mass",
+                        "omega",
+                        "omega_body",
+                        "axes",
+                        "x",
+                        "y",
+                        "z",
+                    ],
                 };
+                if let Some(Rotation::Spatial { orientation, .. }) = &body.rotation {
+                    let orientation = *orientation;
+                    let pool = &mut self.pool;
+                    let spatial = match field.name.as_str() {
+                        "omega" => Some(Value::Vector(
+                            crate::kinematics::angular_velocity_in_world_axes(pool, &orientation)
+                                .to_vec(),
+                        )),
+                        "omega_body" => Some(Value::Vector(
+                            crate::kinematics::angular_velocity_in_body_axes(pool, &orientation)
+                                .to_vec(),
+                        )),
+                        "axes" => Some(Value::Matrix(crate::kinematics::rows(&orientation))),
+                        _ => None,
+                    };
+                    if spatial.is_some() {
+                        return spatial;
+                    }
+                }
                 let value = match field.name.as_str() {
                     "position" => Some(Value::Vector(body.position.clone())),
                     "velocity" => Some(Value::Vector(
@@ -1159,6 +1363,10 @@ impl<'a> Resolver<'a> {
                     "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
                     "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
                     _ => None,
+                };
+                let value = match field.name.as_str() {
+                    "angle" if body.kind() == BodyKind::Spatial => None,
+                    _ => value,
                 };
                 if value.is_none() {
                     let mut d = Diagnostic::error(
@@ -1178,6 +1386,32 @@ impl<'a> Resolver<'a> {
                     self.error(d);
                 }
                 value
+            }
+            Some(Binding::Let(v)) if !matches!(v, Value::Scalar(_)) => {
+                let components = space::as_vector(&v);
+                let i = match field.name.as_str() {
+                    "x" => 0,
+                    "y" => 1,
+                    "z" => 2,
+                    _ => usize::MAX,
+                };
+                match components.as_ref().and_then(|c| c.get(i)) {
+                    Some(x) => Some(Value::Scalar(*x)),
+                    None => {
+                        let d = Diagnostic::error(
+                            field.span,
+                            format!("`{}` has no `{}`", object.name, field.name),
+                        )
+                        .with_label(match &components {
+                            Some(c) if c.len() == 2 => "expected x or y".to_string(),
+                            Some(_) => "expected x, y or z".to_string(),
+                            None => format!("`{}` is {}", object.name, v.kind_name()),
+                        })
+                        .with_hint("a vector's components are `.x`, `.y` and `.z`");
+                        self.error(d);
+                        None
+                    }
+                }
             }
             Some(Binding::Constraint(i)) => {
                 if field.name != "force" {
@@ -1230,6 +1464,9 @@ impl<'a> Resolver<'a> {
 
     fn call(&mut self, func: &Ident, args: &[Expr], span: Span) -> Option<(Value, Dims)> {
         let name = func.name.as_str();
+        if space::is_space_function(name) {
+            return self.space_call(name, args, span);
+        }
         let arity = match name {
             "atan2" => 2,
             "sqrt" => 1,
@@ -1237,6 +1474,7 @@ impl<'a> Resolver<'a> {
             _ => {
                 let mut known: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
                 known.extend(["sqrt", "atan2"]);
+                known.extend(space::SPACE_FUNCTIONS.iter().map(|(n, _)| *n));
                 let mut d = Diagnostic::error(func.span, format!("unknown function `{name}`"))
                     .with_label("not a function lagrange knows");
                 d = match closest(name, known.iter().copied()) {
@@ -1340,14 +1578,9 @@ impl<'a> Resolver<'a> {
                     }
                     Some(Matrix(out))
                 }
+                // R*v: a vector in the rotated axes carried into the fixed ones.
                 (Matrix(a), Vector(v)) if a[0].len() == v.len() => {
-                    let mut out = Vec::new();
-                    for row in a {
-                        let terms: Vec<cas::ExprId> =
-                            row.iter().zip(v).map(|(x, y)| self.pool.mul2(*x, *y)).collect();
-                        out.push(vec![self.pool.add(&terms)]);
-                    }
-                    Some(Matrix(out))
+                    Some(Vector(crate::kinematics::apply(&mut self.pool, a, v)))
                 }
                 _ => mismatch(self, "multiply"),
             },

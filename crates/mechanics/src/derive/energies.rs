@@ -56,7 +56,7 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
                 kinetic_terms.push(pool.scale(t, &half));
             }
             Some(Rotation::Spatial { inertia, orientation }) => {
-                let w = angular_velocity_in_body_axes(pool, orientation);
+                let w = model::kinematics::angular_velocity_in_body_axes(pool, orientation);
                 let mut parts = Vec::new();
                 for (i, row) in inertia.iter().enumerate() {
                     for (j, entry) in row.iter().enumerate() {
@@ -89,25 +89,6 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
         pool.add(&d)
     };
     Energies { kinetic, potential, lagrangian, dissipation }
-}
-
-/// ω in body axes from the orientation R (body to world): Rᵀ·Ṙ is the skew matrix of ω, so
-/// ω = ((RᵀṘ)₃₂, (RᵀṘ)₁₃, (RᵀṘ)₂₁), each simplified (the sin² + cos² of Euler angles fold).
-pub(crate) fn angular_velocity_in_body_axes(
-    pool: &mut Pool,
-    orientation: &[[ExprId; 3]; 3],
-) -> [ExprId; 3] {
-    let rate: Vec<Vec<ExprId>> = orientation
-        .iter()
-        .map(|row| row.iter().map(|e| pool.time_derivative(*e)).collect())
-        .collect();
-    // (RᵀṘ)ᵢⱼ = Σₖ Rₖᵢ·Ṙₖⱼ
-    let mut entry = |i: usize, j: usize| {
-        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(orientation[k][i], rate[k][j])).collect();
-        let sum = pool.add(&terms);
-        pool.simplify(sum)
-    };
-    [entry(2, 1), entry(0, 2), entry(1, 0)]
 }
 
 impl Energies {
@@ -181,7 +162,7 @@ mod tests {
             }
         }
         let inertia = [[a, zero, zero], [zero, b, zero], [zero, zero, c]];
-        let w = angular_velocity_in_body_axes(&mut pool, &orientation);
+        let w = model::kinematics::angular_velocity_in_body_axes(&mut pool, &orientation);
         let w: Vec<String> = w.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(w, ["theta'", "sin(theta)*phi'", "cos(theta)*phi'"]);
         model.bodies[0].rotation = Some(Rotation::Spatial { inertia, orientation });

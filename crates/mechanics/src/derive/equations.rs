@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
 use lang::Diagnostic;
-use model::{Model, Value};
+use model::{Model, Rotation, Value};
 
 use super::eliminate::Coordinates;
 use super::energies::Energies;
@@ -19,8 +19,9 @@ pub(super) struct Rows {
     pub generalized_forces: Vec<ExprId>,
 }
 
-/// The generalized force along `q` in any set of coordinates: Σ F·∂r/∂q + τ·∂angle/∂q −
-/// ∂D/∂q̇, with positions, loads and D first put through `map`.
+/// The generalized force along `q` in any set of coordinates, by virtual work: Σ F·∂r/∂q over
+/// forces (r the point they act at), Σ τ·∂ω/∂q̇ over torques (in the plane ∂ω/∂q̇ = ∂angle/∂q),
+/// and −∂D/∂q̇, with positions, loads and D first put through `map`.
 pub(super) fn generalized_force(
     pool: &mut Pool,
     model: &Model,
@@ -36,14 +37,29 @@ pub(super) fn generalized_force(
             Value::Scalar(s) => vec![*s],
             Value::Matrix(_) => Vec::new(),
         };
-        for (fc, x) in comps.iter().zip(body.position.iter()) {
+        let point = f.at.as_ref().unwrap_or(&body.position);
+        for (fc, x) in comps.iter().zip(point.iter()) {
             let x = pool.subst(*x, map);
             let fc = pool.subst(*fc, map);
             let dx = pool.diff(x, q);
             parts.push(pool.mul2(fc, dx));
         }
     }
+    let rate = pool.rate(q).expect("coordinate");
     for t in &model.torques {
+        if let (Value::Vector(tau), Some(Rotation::Spatial { orientation, .. })) =
+            (&t.value, &model.bodies[t.body].rotation)
+        {
+            // The partial angular velocity ∂ω/∂q̇ in world axes, where τ is given.
+            let omega = model::kinematics::angular_velocity_in_world_axes(pool, orientation);
+            for (tc, w) in tau.iter().zip(omega) {
+                let w = pool.subst(w, map);
+                let tc = pool.subst(*tc, map);
+                let dw = pool.diff(w, rate);
+                parts.push(pool.mul2(tc, dw));
+            }
+            continue;
+        }
         let (Value::Scalar(tau), Some(angle)) = (&t.value, model.bodies[t.body].angle()) else {
             continue;
         };
@@ -53,7 +69,6 @@ pub(super) fn generalized_force(
         parts.push(pool.mul2(tau, da));
     }
     let d = pool.subst(dissipation, map);
-    let rate = pool.rate(q).expect("coordinate");
     let dd = pool.diff(d, rate);
     parts.push(pool.neg(dd));
     pool.add(&parts)

@@ -41,8 +41,10 @@ impl From<Shape> for Dims {
 pub(super) struct NameDims {
     /// The statement that declares it, by its place in the file.
     pub at: usize,
-    /// `None` for a vector or matrix `let`, which counts as one unknown wherever it is used.
+    /// `None` for a vector or matrix `let`, whose dimensions are in `entries`.
     pub form: Option<Form>,
+    /// The dimensions of a vector or matrix `let`, entry by entry.
+    pub entries: Option<Dims>,
 }
 
 /// The dimensions of a body, beside it in the resolver's table.
@@ -51,6 +53,8 @@ pub(super) struct BodyDims {
     pub mass: Form,
     pub position: Vec<Form>,
     pub angle: Option<Form>,
+    /// Whether it turns in space (its `omega` is a vector).
+    pub spatial: bool,
 }
 
 fn two() -> Rational {
@@ -133,12 +137,34 @@ impl Resolver<'_> {
     /// The dimension of a declared name with `primes` rates.
     pub(super) fn name_dims(&mut self, raw: &str, name: &str, primes: u8) -> Dims {
         let declared = self.name_dims.get(name).filter(|d| !self.ahead(d.at));
+        if let Some(entries) = declared.and_then(|d| d.entries.clone()) {
+            return self.rate_dims(entries, primes);
+        }
         let form = match declared.and_then(|d| d.form.clone()) {
             Some(f) => f,
             None if matches!(name, "KE" | "PE") => self.units.energy(),
             None => self.loose(raw, name),
         };
         Dims::Scalar(form.rate(primes))
+    }
+
+    /// The dimension of the `primes`-th rate of a value of dimension `d`.
+    pub(super) fn rate_dims(&mut self, d: Dims, primes: u8) -> Dims {
+        if primes == 0 {
+            return d;
+        }
+        match d {
+            Dims::Number { .. } => Dims::Scalar(Form::default().rate(primes)),
+            Dims::Scalar(f) => Dims::Scalar(f.rate(primes)),
+            Dims::Many(v) => Dims::Many(v.iter().map(|f| f.rate(primes)).collect()),
+            Dims::Grid(g) => Dims::Grid(
+                g.into_iter()
+                    .map(|row| {
+                        row.into_iter().map(|d| Dims::Scalar(self.form(d).rate(primes))).collect()
+                    })
+                    .collect(),
+            ),
+        }
     }
 
     /// The dimension of `object.field`, where `body` is the index of the body it names.
@@ -158,6 +184,8 @@ impl Resolver<'_> {
             "velocity" => Dims::Many(b.position.iter().map(|x| x.rate(1)).collect()),
             "mass" => Dims::Scalar(b.mass.clone()),
             "angle" => Dims::Scalar(b.angle.clone().unwrap_or_default()),
+            "omega" | "omega_body" if b.spatial => Dims::Many(vec![Form::default().rate(1); 3]),
+            "axes" => Dims::Grid(vec![vec![Dims::Scalar(Form::default()); 3]; 3]),
             "omega" => Dims::Scalar(b.angle.clone().unwrap_or_default().rate(1)),
             "x" | "y" | "z" => {
                 let i = match field.name.as_str() {
@@ -228,11 +256,20 @@ impl Resolver<'_> {
                 return self.number_dims(*v, decided);
             }
         }
-        let written_matrices =
-            matches!((&le.kind, &re.kind), (ExprKind::Matrix(_), ExprKind::Matrix(_)));
+        // R*v: a matrix times a vector, each entry of the result a sum like those below.
+        let (l, r) = match (op, l, r) {
+            (BinOp::Mul, Dims::Grid(a), Dims::Many(v))
+                if a.first().map_or(0, Vec::len) == v.len() =>
+            {
+                (Dims::Grid(a), Dims::Grid(v.into_iter().map(|f| vec![Dims::Scalar(f)]).collect()))
+            }
+            (_, l, r) => (l, r),
+        };
+        let fits =
+            |a: &Vec<Vec<Dims>>, b: &Vec<Vec<Dims>>| a.first().map_or(0, Vec::len) == b.len();
         match (op, l, r) {
             // The entries of `[a, b; c, d] * [x; y]` are sums a·x + b·y.
-            (BinOp::Mul, Dims::Grid(a), Dims::Grid(b)) if written_matrices => {
+            (BinOp::Mul, Dims::Grid(a), Dims::Grid(b)) if fits(&a, &b) => {
                 let mut grid = |g: Vec<Vec<Dims>>| -> Vec<Vec<Form>> {
                     g.into_iter()
                         .map(|row| row.into_iter().map(|d| self.form(d)).collect())
@@ -258,6 +295,16 @@ impl Resolver<'_> {
                         }
                         out.push(terms.into_iter().next().unwrap_or_default());
                     }
+                }
+                // A column stays a list of components; a product of matrices keeps its rows,
+                // so that it can multiply again (`rotz(phi)*rotx(theta)*v`).
+                let columns = b.first().map_or(0, |r| r.len());
+                if columns > 1 {
+                    let rows = out
+                        .chunks(columns)
+                        .map(|row| row.iter().cloned().map(Dims::Scalar).collect())
+                        .collect();
+                    return Dims::Grid(rows);
                 }
                 Dims::Many(out)
             }
@@ -374,7 +421,21 @@ impl Resolver<'_> {
 
     /// The work of a force along its body's position, or of a torque through its angle, is an
     /// energy.
-    pub(super) fn load_energy(&mut self, body: usize, value: Dims, span: Span, torque: bool) {
+    pub(super) fn load_energy(
+        &mut self,
+        body: usize,
+        value: Dims,
+        span: Span,
+        torque: bool,
+        point: Option<Vec<Form>>,
+    ) {
+        if torque && self.body_dims[body].spatial {
+            // τ·ω dt: the rotation's entries are dimensionless, so each component is an energy.
+            for f in self.shape(value).forms() {
+                self.units.energy_term(&f, span);
+            }
+            return;
+        }
         if torque {
             let f = self.form(value);
             if let Some(a) = self.body_dims[body].angle.clone() {
@@ -383,7 +444,7 @@ impl Resolver<'_> {
             return;
         }
         let forms = self.shape(value).forms();
-        let position = self.body_dims[body].position.clone();
+        let position = point.unwrap_or_else(|| self.body_dims[body].position.clone());
         for (f, x) in forms.iter().zip(position) {
             self.units.energy_term(&f.plus(&x, &Rational::one()), span);
         }

@@ -1,0 +1,314 @@
+//! Vectors and rotations as values: the functions a scene calls on them (`dot`, `cross`,
+//! `norm`, `rotx`, `roty`, `rotz`, `rotation`, `transpose`, `dt`), each with its value and
+//! its dimension, and the members of a rigid body in space (`omega`, `omega_body`, `axes`).
+
+use cas::number::One;
+use cas::{ExprId, Rational};
+use lang::{Diagnostic, Expr, Ident, Span};
+
+use super::dims::Dims;
+use super::Resolver;
+use crate::kinematics;
+use crate::units::Form;
+use crate::{Rotation, Value};
+
+/// The functions of vectors and matrices, with what each takes, for hints.
+pub(super) const SPACE_FUNCTIONS: [(&str, &str); 9] = [
+    ("dot", "two vectors of one length"),
+    ("cross", "two 3-vectors"),
+    ("norm", "a vector"),
+    ("rotx", "an angle"),
+    ("roty", "an angle"),
+    ("rotz", "an angle"),
+    ("rotation", "an axis (a 3-vector) and an angle"),
+    ("transpose", "a matrix"),
+    ("dt", "any expression, vector or matrix"),
+];
+
+pub(super) fn is_space_function(name: &str) -> bool {
+    SPACE_FUNCTIONS.iter().any(|(n, _)| *n == name)
+}
+
+/// A vector's entries, whether written `(x, y, z)` or as the column `[x; y; z]`.
+pub(super) fn as_vector(v: &Value) -> Option<Vec<ExprId>> {
+    match v {
+        Value::Vector(v) => Some(v.clone()),
+        Value::Matrix(m) if m.iter().all(|r| r.len() == 1) => {
+            Some(m.iter().map(|r| r[0]).collect())
+        }
+        Value::Scalar(_) | Value::Matrix(_) => None,
+    }
+}
+
+/// A dimensionless 3×3 grid: the dimension of a rotation matrix.
+fn rotation_dims() -> Dims {
+    Dims::Grid(vec![vec![Dims::Scalar(Form::default()); 3]; 3])
+}
+
+impl Resolver<'_> {
+    /// A call of one of [`SPACE_FUNCTIONS`].
+    pub(super) fn space_call(
+        &mut self,
+        name: &str,
+        args: &[Expr],
+        span: Span,
+    ) -> Option<(Value, Dims)> {
+        let arity = if name == "rotation" { 2 } else { 1 };
+        let arity = if matches!(name, "dot" | "cross") { 2 } else { arity };
+        let takes = SPACE_FUNCTIONS.iter().find(|(n, _)| *n == name).map_or("", |(_, t)| *t);
+        if args.len() != arity {
+            self.error(
+                Diagnostic::error(
+                    span,
+                    format!("`{name}` takes {arity} argument{}", if arity == 1 { "" } else { "s" }),
+                )
+                .with_label(format!("given {}", args.len()))
+                .with_hint(format!("`{name}` takes {takes}")),
+            );
+            return None;
+        }
+        let mut resolved = Vec::new();
+        for a in args {
+            resolved.push(self.value(a));
+        }
+        let resolved = resolved.into_iter().collect::<Option<Vec<_>>>()?;
+        let (values, dims): (Vec<Value>, Vec<Dims>) = resolved.into_iter().unzip();
+        let wrong = |this: &mut Self, i: usize, expected: &str| {
+            this.error(
+                Diagnostic::error(
+                    args[i].span,
+                    format!("`{name}` takes {takes}, not {}", values[i].kind_name()),
+                )
+                .with_label(format!("expected {expected}")),
+            );
+            None
+        };
+        match name {
+            "dot" | "cross" => {
+                let (Some(u), Some(v)) = (as_vector(&values[0]), as_vector(&values[1])) else {
+                    let i = usize::from(as_vector(&values[0]).is_some());
+                    return wrong(self, i, "a vector");
+                };
+                let length = if name == "cross" { 3 } else { u.len() };
+                for (i, w) in [&u, &v].into_iter().enumerate() {
+                    if w.len() != length {
+                        return wrong(self, i, &format!("a {length}-vector"));
+                    }
+                }
+                let mut dims = dims.into_iter();
+                let a = self.components(dims.next().expect("two"), args[0].span);
+                let b = self.components(dims.next().expect("two"), args[1].span);
+                let product = a.plus(&b, &Rational::one());
+                if name == "dot" {
+                    Some((
+                        Value::Scalar(kinematics::dot(&mut self.pool, &u, &v)),
+                        Dims::Scalar(product),
+                    ))
+                } else {
+                    let w = kinematics::cross(&mut self.pool, &u, &v);
+                    Some((Value::Vector(w), Dims::Many(vec![product; 3])))
+                }
+            }
+            "norm" => {
+                let Some(u) = as_vector(&values[0]) else { return wrong(self, 0, "a vector") };
+                let form = self.components(dims.into_iter().next().expect("one"), args[0].span);
+                let squares: Vec<ExprId> = u.iter().map(|x| self.pool.powi(*x, 2)).collect();
+                let sum = self.pool.add(&squares);
+                let sum = self.pool.simplify(sum);
+                Some((Value::Scalar(self.pool.sqrt(sum)), Dims::Scalar(form)))
+            }
+            "rotx" | "roty" | "rotz" => {
+                let Value::Scalar(angle) = values[0] else { return wrong(self, 0, "an angle") };
+                let form = self.form(dims.into_iter().next().expect("one"));
+                self.units.dimensionless(&form, args[0].span, &format!("the angle of {name}"));
+                let axis = match name {
+                    "rotx" => 0,
+                    "roty" => 1,
+                    _ => 2,
+                };
+                let r = kinematics::elementary(&mut self.pool, axis, angle);
+                Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
+            }
+            "rotation" => {
+                let axis = as_vector(&values[0]).filter(|v| v.len() == 3);
+                let Some(axis) = axis else { return wrong(self, 0, "a 3-vector") };
+                let Value::Scalar(angle) = values[1] else { return wrong(self, 1, "an angle") };
+                if axis.iter().all(|x| self.pool.is_identically_zero(*x)) {
+                    self.error(
+                        Diagnostic::error(args[0].span, "a rotation's axis cannot be zero")
+                            .with_label("this vector is zero")
+                            .with_hint("give the direction to turn about, such as (0, 0, 1)"),
+                    );
+                    return None;
+                }
+                let mut dims = dims.into_iter();
+                self.components(dims.next().expect("two"), args[0].span);
+                let form = self.form(dims.next().expect("two"));
+                self.units.dimensionless(&form, args[1].span, "the angle of a rotation");
+                let axis = [axis[0], axis[1], axis[2]];
+                let r = kinematics::about_axis(&mut self.pool, axis, angle);
+                Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
+            }
+            "transpose" => {
+                let Value::Matrix(m) = &values[0] else { return wrong(self, 0, "a matrix") };
+                let t = kinematics::transpose(m);
+                let dims = match dims.into_iter().next().expect("one") {
+                    Dims::Grid(g) => {
+                        let columns = g.first().map_or(0, Vec::len);
+                        let mut out: Vec<Vec<Dims>> = vec![Vec::new(); columns];
+                        for row in g {
+                            for (j, d) in row.into_iter().enumerate() {
+                                out[j].push(d);
+                            }
+                        }
+                        Dims::Grid(out)
+                    }
+                    other => other,
+                };
+                Some((Value::Matrix(t), dims))
+            }
+            _ => {
+                // dt: the total time derivative, entry by entry.
+                let value = values[0].clone().map(|x| self.pool.time_derivative(x));
+                let dims = match dims.into_iter().next().expect("one") {
+                    Dims::Number { .. } => Dims::Scalar(Form::default()),
+                    Dims::Scalar(f) => Dims::Scalar(f.rate(1)),
+                    Dims::Many(v) => Dims::Many(v.iter().map(|f| f.rate(1)).collect()),
+                    Dims::Grid(g) => {
+                        let g = g
+                            .into_iter()
+                            .map(|row| {
+                                row.into_iter()
+                                    .map(|d| Dims::Scalar(self.form(d).rate(1)))
+                                    .collect()
+                            })
+                            .collect();
+                        Dims::Grid(g)
+                    }
+                };
+                Some((value, dims))
+            }
+        }
+    }
+
+    /// The one dimension all components of a vector share, stated as a fact.
+    pub(super) fn components(&mut self, d: Dims, span: Span) -> Form {
+        let forms = self.shape(d).forms();
+        let Some(first) = forms.first().cloned() else { return Form::default() };
+        for f in &forms[1..] {
+            self.units.same(&first, f, span, span, "between the components of a vector");
+        }
+        first
+    }
+}
+
+impl Resolver<'_> {
+    /// The rotation of a body in space from its `orientation` and `inertia`: the inertia as a
+    /// symmetric tensor in body axes (a scalar is the same about every axis, a 3-vector the
+    /// principal moments), and the orientation checked to be a rotation.
+    pub(super) fn spatial_rotation(
+        &mut self,
+        name: &Ident,
+        orientation: Vec<Vec<ExprId>>,
+        orientation_span: Span,
+        inertia: Value,
+        inertia_written: &Expr,
+        position: Option<&[ExprId]>,
+    ) -> Option<Rotation> {
+        if let Some(p) = position.filter(|p| p.len() != 3) {
+            self.error(
+                Diagnostic::error(
+                    name.span,
+                    format!(
+                        "`{}` turns in space but its position has {} components",
+                        name.name,
+                        p.len()
+                    ),
+                )
+                .with_label("an orientation needs a 3-vector position")
+                .with_hint("give the centre of mass as `(x, y, z)`"),
+            );
+            return None;
+        }
+        let zero = self.pool.zero();
+        let tensor: [[ExprId; 3]; 3] = match &inertia {
+            Value::Scalar(i) => {
+                std::array::from_fn(|r| std::array::from_fn(|c| if r == c { *i } else { zero }))
+            }
+            Value::Vector(v) if v.len() == 3 => {
+                std::array::from_fn(|r| std::array::from_fn(|c| if r == c { v[r] } else { zero }))
+            }
+            Value::Matrix(m) if kinematics::matrix3(m).is_some() => {
+                let m = kinematics::matrix3(m).expect("checked");
+                for (r, c) in [(0, 1), (0, 2), (1, 2)] {
+                    let d = self.pool.sub(m[r][c], m[c][r]);
+                    if !self.pool.is_identically_zero(d) {
+                        self.error(
+                            Diagnostic::error(
+                                inertia_written.span,
+                                "an inertia tensor is symmetric",
+                            )
+                            .with_label(format!(
+                                "entry ({}, {}) differs from entry ({}, {})",
+                                r + 1,
+                                c + 1,
+                                c + 1,
+                                r + 1
+                            ))
+                            .with_hint(
+                                "give Ixy, Ixz and Iyz once above the diagonal and again below it",
+                            ),
+                        );
+                        return None;
+                    }
+                }
+                m
+            }
+            other => {
+                self.error(
+                    Diagnostic::error(
+                        inertia_written.span,
+                        format!("expected the inertia of a body in space, found {}", other.kind_name()),
+                    )
+                    .with_label("not an inertia")
+                    .with_hint(
+                        "give the principal moments `(A, B, C)` or the tensor `[Ixx, Ixy, Ixz; Ixy, \
+                         Iyy, Iyz; Ixz, Iyz, Izz]`, about the centre of mass in body axes",
+                    ),
+                );
+                return None;
+            }
+        };
+        for (r, row) in tensor.iter().enumerate() {
+            if !matches!(inertia, Value::Scalar(_)) {
+                self.check_sign(name, row[r], inertia_written, true);
+            }
+        }
+        let rows = kinematics::transpose(&orientation);
+        let gram = kinematics::product(&mut self.pool, &rows, &orientation);
+        for (r, row) in gram.iter().enumerate() {
+            for (c, entry) in row.iter().enumerate() {
+                let identity = if r == c { self.pool.one() } else { self.pool.zero() };
+                let d = self.pool.sub(*entry, identity);
+                if !self.pool.is_identically_zero(d) {
+                    self.error(
+                        Diagnostic::error(orientation_span, "this orientation is not a rotation")
+                            .with_label(format!(
+                                "entry ({}, {}) of Rᵀ·R is not {}",
+                                r + 1,
+                                c + 1,
+                                if r == c { 1 } else { 0 }
+                            ))
+                            .with_hint(
+                                "build it from rotx, roty, rotz and rotation(axis, angle), whose \
+                                 products are rotations",
+                            ),
+                    );
+                    return None;
+                }
+            }
+        }
+        let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+        Some(Rotation::Spatial { inertia: tensor, orientation })
+    }
+}
