@@ -205,8 +205,13 @@ def sympy_system(model, scope, coords, substitute, kept):
             # The orientation carries body axes into world axes, so it is N.dcm(B); SymPy
             # works out the angular velocity from it on its own.
             B = ReferenceFrame(b["name"] + "_frame")
-            R = sp.Matrix([[sub(scope.parse(x)) for x in row] for row in b["orientation"]])
-            B.orient_explicit(N, R)
+            if "euler_parameters" in b:
+                # SymPy's own quaternion orientation, with its own angular velocity.
+                e = [sub(scope.parse(x)) for x in b["euler_parameters"]]
+                B.orient_quaternion(N, e)
+            else:
+                R = sp.Matrix([[sub(scope.parse(x)) for x in row] for row in b["orientation"]])
+                B.orient_explicit(N, R)
             I = [[sub(scope.parse(x)) for x in row] for row in b["inertia"]]
             tensor = inertia(B, I[0][0], I[1][1], I[2][2], I[0][1], I[1][2], I[0][2])
             body = RigidBody(b["name"], P, B, mass, (tensor, P))

@@ -431,6 +431,8 @@ impl Pool {
             .then_with(|| {
                 // Among terms of the same order, follow the coordinates' declaration order
                 // (the ẍ term before the s̈ term).
+                // Compared as whole sequences (a prefix first): stopping at the shorter one
+                // would make the order intransitive, which sorting must not meet.
                 let (la, lb) = (self.leading_symbols(a, oa), self.leading_symbols(b, ob));
                 let mut pairs = la.iter().zip(lb.iter());
                 pairs
@@ -438,7 +440,7 @@ impl Pool {
                         let o = self.symbol_order(*x, *y);
                         (o != Ordering::Equal).then_some(o)
                     })
-                    .unwrap_or(Ordering::Equal)
+                    .unwrap_or_else(|| la.len().cmp(&lb.len()))
             })
             .then_with(|| self.structural_order(a, b))
     }

@@ -688,14 +688,20 @@ fn model_json(d: &Derivation) -> Json {
                     "position": prints(&b.position),
                     "angle": b.angle().map(print),
                 }),
-                Some(model::Rotation::Spatial { inertia, orientation }) => json!({
-                    "name": b.name,
-                    "kind": "spatial",
-                    "mass": print(b.mass),
-                    "inertia": matrix(inertia),
-                    "position": prints(&b.position),
-                    "orientation": matrix(orientation),
-                }),
+                Some(model::Rotation::Spatial { inertia, orientation, euler_parameters }) => {
+                    let mut o = json!({
+                        "name": b.name,
+                        "kind": "spatial",
+                        "mass": print(b.mass),
+                        "inertia": matrix(inertia),
+                        "position": prints(&b.position),
+                        "orientation": matrix(orientation),
+                    });
+                    if let Some(e) = euler_parameters {
+                        o["euler_parameters"] = json!(prints(e));
+                    }
+                    o
+                }
             }
         })
         .collect();

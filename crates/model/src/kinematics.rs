@@ -61,6 +61,36 @@ pub fn about_axis(pool: &mut Pool, axis: [ExprId; 3], angle: ExprId) -> Matrix3 
     r
 }
 
+/// The rotation of the unit quaternion (Euler parameters) e0 + e1·i + e2·j + e3·k. The formula
+/// is a rotation only where e0² + e1² + e2² + e3² = 1; a body oriented this way carries that
+/// constraint.
+pub fn from_quaternion(pool: &mut Pool, e: [ExprId; 4]) -> Matrix3 {
+    let [e0, e1, e2, e3] = e;
+    let sq = |pool: &mut Pool, x: ExprId| pool.powi(x, 2);
+    let two = pool.int(2);
+    let twice = |pool: &mut Pool, a: ExprId, b: ExprId, c: ExprId, d: ExprId, plus: bool| {
+        let ab = pool.mul2(a, b);
+        let cd = pool.mul2(c, d);
+        let s = if plus { pool.add2(ab, cd) } else { pool.sub(ab, cd) };
+        pool.mul2(two, s)
+    };
+    let diagonal = |pool: &mut Pool, plus: ExprId| {
+        let (s0, s1, s2, s3) = (sq(pool, e0), sq(pool, e1), sq(pool, e2), sq(pool, e3));
+        let all = [s0, s1, s2, s3];
+        let terms: Vec<ExprId> = [e0, e1, e2, e3]
+            .iter()
+            .zip(all)
+            .map(|(x, s)| if *x == e0 || *x == plus { s } else { pool.neg(s) })
+            .collect();
+        pool.add(&terms)
+    };
+    [
+        [diagonal(pool, e1), twice(pool, e1, e2, e0, e3, false), twice(pool, e1, e3, e0, e2, true)],
+        [twice(pool, e1, e2, e0, e3, true), diagonal(pool, e2), twice(pool, e2, e3, e0, e1, false)],
+        [twice(pool, e1, e3, e0, e2, false), twice(pool, e2, e3, e0, e1, true), diagonal(pool, e3)],
+    ]
+}
+
 /// A·B for matrices of expressions of any compatible shapes.
 pub fn product(pool: &mut Pool, a: &[Vec<ExprId>], b: &[Vec<ExprId>]) -> Vec<Vec<ExprId>> {
     let columns = b.first().map_or(0, Vec::len);
@@ -151,6 +181,42 @@ pub fn angular_velocity_in_world_axes(pool: &mut Pool, orientation: &Matrix3) ->
         pool.simplify(sum)
     };
     [entry(2, 1), entry(0, 2), entry(1, 0)]
+}
+
+/// ω of a body oriented by Euler parameters e, from their rates: 2·G(e)·ė in body axes and
+/// 2·E(e)·ė in world axes. Equal to the ω of [`from_quaternion`] on the unit sphere, and a
+/// quadratic in e instead of a sextic off it.
+pub fn angular_velocity_of_euler_parameters(
+    pool: &mut Pool,
+    e: [ExprId; 4],
+    world: bool,
+) -> [ExprId; 3] {
+    let rates = e.map(|x| pool.time_derivative(x));
+    // Rows of G (body) or E (world), each entry ±e_k, as (sign, index) pairs.
+    let rows: [[(i64, usize); 4]; 3] = if world {
+        [
+            [(-1, 1), (1, 0), (-1, 3), (1, 2)],
+            [(-1, 2), (1, 3), (1, 0), (-1, 1)],
+            [(-1, 3), (-1, 2), (1, 1), (1, 0)],
+        ]
+    } else {
+        [
+            [(-1, 1), (1, 0), (1, 3), (-1, 2)],
+            [(-1, 2), (-1, 3), (1, 0), (1, 1)],
+            [(-1, 3), (1, 2), (-1, 1), (1, 0)],
+        ]
+    };
+    rows.map(|row| {
+        let terms: Vec<ExprId> = row
+            .iter()
+            .zip(rates)
+            .map(|((sign, k), rate)| {
+                let two = pool.int(2 * sign);
+                pool.mul(&[two, e[*k], rate])
+            })
+            .collect();
+        pool.add(&terms)
+    })
 }
 
 #[cfg(test)]

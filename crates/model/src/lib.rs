@@ -66,7 +66,25 @@ pub enum Rotation {
     /// In space: the inertia tensor about the centre of mass in body axes (symmetric), and the
     /// orientation, the rotation matrix from body axes to world axes, whose rate gives the
     /// angular velocity through ω̃ = Rᵀ·Ṙ (in body axes).
-    Spatial { inertia: [[ExprId; 3]; 3], orientation: [[ExprId; 3]; 3] },
+    Spatial {
+        inertia: [[ExprId; 3]; 3],
+        orientation: [[ExprId; 3]; 3],
+        /// The Euler parameters when the orientation is `quaternion(e0, e1, e2, e3)`: ω is then
+        /// 2·G(e)·ė, exact on the unit sphere their constraint keeps them on.
+        euler_parameters: Option<[ExprId; 4]>,
+    },
+}
+
+impl Rotation {
+    /// ω of a body in space, in body axes (`world` false) or world axes.
+    pub fn spatial_angular_velocity(&self, pool: &mut Pool, world: bool) -> Option<[ExprId; 3]> {
+        let Rotation::Spatial { orientation, euler_parameters, .. } = self else { return None };
+        Some(match (euler_parameters, world) {
+            (Some(e), _) => kinematics::angular_velocity_of_euler_parameters(pool, *e, world),
+            (None, false) => kinematics::angular_velocity_in_body_axes(pool, orientation),
+            (None, true) => kinematics::angular_velocity_in_world_axes(pool, orientation),
+        })
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -134,6 +152,8 @@ pub struct Constraint {
     pub force_requested: bool,
     /// Coordinates written on the left-hand side, preferred for elimination.
     pub lhs_coords: Vec<SymId>,
+    /// For the unit norm of Euler parameters that the scene did not write: the parameters.
+    pub quaternion: Option<[ExprId; 4]>,
     pub span: Span,
 }
 

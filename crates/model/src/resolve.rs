@@ -157,6 +157,8 @@ struct Resolver<'a> {
     body_dims: Vec<BodyDims>,
     /// Names whose dimension is not known where they are used (see [`Self::name_dims`]).
     loose: HashMap<String, Form>,
+    /// Each `quaternion(…)` resolved: its matrix, its Euler parameters and where it is written.
+    quaternions: Vec<(Vec<Vec<ExprId>>, [ExprId; 4], Span)>,
 }
 
 impl<'a> Resolver<'a> {
@@ -205,6 +207,7 @@ impl<'a> Resolver<'a> {
             name_dims: HashMap::new(),
             body_dims: Vec::new(),
             loose: HashMap::new(),
+            quaternions: Vec::new(),
         }
     }
 
@@ -843,6 +846,7 @@ impl<'a> Resolver<'a> {
             force_symbol,
             force_requested: false,
             lhs_coords,
+            quaternion: None,
             span,
         });
     }
@@ -1332,18 +1336,16 @@ impl<'a> Resolver<'a> {
                         "z",
                     ],
                 };
-                if let Some(Rotation::Spatial { orientation, .. }) = &body.rotation {
+                if let Some(rotation @ Rotation::Spatial { orientation, .. }) = &body.rotation {
                     let orientation = *orientation;
                     let pool = &mut self.pool;
                     let spatial = match field.name.as_str() {
-                        "omega" => Some(Value::Vector(
-                            crate::kinematics::angular_velocity_in_world_axes(pool, &orientation)
-                                .to_vec(),
-                        )),
-                        "omega_body" => Some(Value::Vector(
-                            crate::kinematics::angular_velocity_in_body_axes(pool, &orientation)
-                                .to_vec(),
-                        )),
+                        "omega" | "omega_body" => {
+                            let world = field.name == "omega";
+                            rotation
+                                .spatial_angular_velocity(pool, world)
+                                .map(|w| Value::Vector(w.to_vec()))
+                        }
                         "axes" => Some(Value::Matrix(crate::kinematics::rows(&orientation))),
                         _ => None,
                     };

@@ -55,8 +55,8 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
                 let t = pool.mul2(*inertia, w2);
                 kinetic_terms.push(pool.scale(t, &half));
             }
-            Some(Rotation::Spatial { inertia, orientation }) => {
-                let w = model::kinematics::angular_velocity_in_body_axes(pool, orientation);
+            Some(rotation @ Rotation::Spatial { inertia, .. }) => {
+                let w = rotation.spatial_angular_velocity(pool, false).expect("in space");
                 let mut parts = Vec::new();
                 for (i, row) in inertia.iter().enumerate() {
                     for (j, entry) in row.iter().enumerate() {
@@ -165,7 +165,8 @@ mod tests {
         let w = model::kinematics::angular_velocity_in_body_axes(&mut pool, &orientation);
         let w: Vec<String> = w.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(w, ["theta'", "sin(theta)*phi'", "cos(theta)*phi'"]);
-        model.bodies[0].rotation = Some(Rotation::Spatial { inertia, orientation });
+        model.bodies[0].rotation =
+            Some(Rotation::Spatial { inertia, orientation, euler_parameters: None });
         assert_eq!(model.bodies[0].kind(), model::BodyKind::Spatial);
         let e = energies(&mut pool, &model);
         let kinetic = pool.simplify(e.kinetic);

@@ -47,11 +47,11 @@ pub(super) fn generalized_force(
     }
     let rate = pool.rate(q).expect("coordinate");
     for t in &model.torques {
-        if let (Value::Vector(tau), Some(Rotation::Spatial { orientation, .. })) =
+        if let (Value::Vector(tau), Some(rotation @ Rotation::Spatial { .. })) =
             (&t.value, &model.bodies[t.body].rotation)
         {
             // The partial angular velocity ∂ω/∂q̇ in world axes, where τ is given.
-            let omega = model::kinematics::angular_velocity_in_world_axes(pool, orientation);
+            let omega = rotation.spatial_angular_velocity(pool, true).expect("in space");
             for (tc, w) in tau.iter().zip(omega) {
                 let w = pool.subst(w, map);
                 let tc = pool.subst(*tc, map);

@@ -7,13 +7,14 @@ use cas::{ExprId, Rational};
 use lang::{Diagnostic, Expr, Ident, Span};
 
 use super::dims::Dims;
+use super::normalize;
 use super::Resolver;
 use crate::kinematics;
 use crate::units::Form;
-use crate::{Rotation, Value};
+use crate::{Constraint, ConstraintKind, Placeholder, Rotation, Value};
 
 /// The functions of vectors and matrices, with what each takes, for hints.
-pub(super) const SPACE_FUNCTIONS: [(&str, &str); 9] = [
+pub(super) const SPACE_FUNCTIONS: [(&str, &str); 10] = [
     ("dot", "two vectors of one length"),
     ("cross", "two 3-vectors"),
     ("norm", "a vector"),
@@ -21,6 +22,7 @@ pub(super) const SPACE_FUNCTIONS: [(&str, &str); 9] = [
     ("roty", "an angle"),
     ("rotz", "an angle"),
     ("rotation", "an axis (a 3-vector) and an angle"),
+    ("quaternion", "four coordinates e0, e1, e2, e3 (Euler parameters)"),
     ("transpose", "a matrix"),
     ("dt", "any expression, vector or matrix"),
 ];
@@ -53,8 +55,11 @@ impl Resolver<'_> {
         args: &[Expr],
         span: Span,
     ) -> Option<(Value, Dims)> {
-        let arity = if name == "rotation" { 2 } else { 1 };
-        let arity = if matches!(name, "dot" | "cross") { 2 } else { arity };
+        let arity = match name {
+            "rotation" | "dot" | "cross" => 2,
+            "quaternion" => 4,
+            _ => 1,
+        };
         let takes = SPACE_FUNCTIONS.iter().find(|(n, _)| *n == name).map_or("", |(_, t)| *t);
         if args.len() != arity {
             self.error(
@@ -148,6 +153,24 @@ impl Resolver<'_> {
                 let axis = [axis[0], axis[1], axis[2]];
                 let r = kinematics::about_axis(&mut self.pool, axis, angle);
                 Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
+            }
+            "quaternion" => {
+                let mut e = Vec::new();
+                for (i, v) in values.iter().enumerate() {
+                    match v {
+                        Value::Scalar(x) => e.push(*x),
+                        _ => return wrong(self, i, "a scalar"),
+                    }
+                }
+                for (d, a) in dims.into_iter().zip(args) {
+                    let form = self.form(d);
+                    self.units.dimensionless(&form, a.span, "an Euler parameter");
+                }
+                let e = [e[0], e[1], e[2], e[3]];
+                let r = kinematics::from_quaternion(&mut self.pool, e);
+                let rows = kinematics::rows(&r);
+                self.quaternions.push((rows.clone(), e, span));
+                Some((Value::Matrix(rows), rotation_dims()))
             }
             "transpose" => {
                 let Value::Matrix(m) = &values[0] else { return wrong(self, 0, "a matrix") };
@@ -284,6 +307,14 @@ impl Resolver<'_> {
                 self.check_sign(name, row[r], inertia_written, true);
             }
         }
+        if let Some((_, e, _)) = self.quaternions.iter().find(|(m, _, _)| *m == orientation) {
+            // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
+            let e = *e;
+            self.unit_quaternion(name, e, orientation_span);
+            let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+            let euler_parameters = Some(e);
+            return Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters });
+        }
         let rows = kinematics::transpose(&orientation);
         let gram = kinematics::product(&mut self.pool, &rows, &orientation);
         for (r, row) in gram.iter().enumerate() {
@@ -309,6 +340,37 @@ impl Resolver<'_> {
             }
         }
         let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
-        Some(Rotation::Spatial { inertia: tensor, orientation })
+        Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
+    }
+}
+
+impl Resolver<'_> {
+    /// The constraint e0² + e1² + e2² + e3² = 1 of a body oriented by Euler parameters, named
+    /// `BODY_unit`; it is kept with a multiplier, so the parameters never leave the unit
+    /// sphere, and a body that tumbles meets no singular configuration.
+    fn unit_quaternion(&mut self, body: &Ident, e: [ExprId; 4], span: Span) {
+        if self.constraints.iter().any(|c| c.quaternion == Some(e)) {
+            return;
+        }
+        let squares: Vec<ExprId> = e.iter().map(|x| self.pool.powi(*x, 2)).collect();
+        let lhs = self.pool.add(&squares);
+        let rhs = self.pool.one();
+        let phi = self.pool.sub(lhs, rhs);
+        let index = self.constraints.len();
+        let name = format!("{}_unit", normalize(&body.name));
+        let force_symbol = self.pool.param(&format!("{name}.force"));
+        self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+        self.constraints.push(Constraint {
+            name,
+            kind: ConstraintKind::Position,
+            lhs,
+            rhs,
+            phi,
+            force_symbol,
+            force_requested: false,
+            lhs_coords: Vec::new(),
+            quaternion: Some(e),
+            span,
+        });
     }
 }

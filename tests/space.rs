@@ -1,0 +1,111 @@
+//! Rigid bodies in space: the identities of vectors and rotations hold exactly (and a wrong
+//! copy of each fails), the heavy top's equations are the textbook's, and simulations keep
+//! what the physics conserves: the top's spin, a tumbling body's energy and angular momentum
+//! through its flips.
+
+use cli::simulate::{simulate, Options, Outcome};
+
+fn scene(rel: &str) -> (String, String) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+    (rel.to_string(), std::fs::read_to_string(&path).expect("scene"))
+}
+
+#[test]
+fn identities_of_vectors_and_rotations_hold_and_wrong_copies_fail() {
+    let (path, source) = scene("scenes/vectors_and_rotations.lag");
+    let result = cli::check::check_file(&path, &source);
+    assert_eq!(result.exit_code, 0, "{}", result.report);
+    assert_eq!(result.held, 12, "{}", result.report);
+    // Each identity with one entry of its right-hand side changed must fail.
+    let wrong = [
+        ("(0, 0, 1)\n", "(0, 0, -1)\n"),
+        ("= 5*L^2", "= 4*L^2"),
+        ("rotz(a)\n", "rotx(a)\n"),
+        ("= (0, 1, 0)", "= (0, 0, 1)"),
+        ("[1, 0, 0; 0, 1, 0; 0, 0, 1]", "[1, 0, 0; 0, 1, 0; 0, 0, -1]"),
+        ("= rod.omega\n", "= rod.omega_body\n"),
+        ("= cross(rod.omega, rod.position)", "= cross(rod.position, rod.omega)"),
+        ("w.z, 0, -w.x", "w.z, 0, w.x"),
+    ];
+    for (right, wrong) in wrong {
+        assert_eq!(source.matches(right).count(), 1, "`{right}` is not one place");
+        let mutated = source.replacen(right, wrong, 1);
+        let result = cli::check::check_file_with(&path, &mutated, cli::Options { units: false });
+        assert_eq!(result.failed, 1, "`{wrong}` still passes:\n{}", result.report);
+    }
+}
+
+#[test]
+fn the_heavy_top_has_the_textbook_mass_matrix_and_spin() {
+    let (_, source) = lagrange_tests::examples()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("space/heavy_top.lag"))
+        .expect("the heavy top");
+    let (d, _) = cli::load(&source).expect("derives");
+    let pool = &d.model.pool;
+    let print = |pool: &cas::Pool, e| pool.print(e, cas::Style::Ascii);
+    let m = d.mass_matrix.clone();
+    assert_eq!(print(pool, m[1][1]), "A + m*l^2");
+    assert_eq!(print(pool, m[2][2]), "C");
+    assert_eq!(print(pool, m[0][2]), "C*cos(theta)");
+    assert_eq!(print(pool, m[0][1]), "0");
+    // ψ is cyclic: its momentum C·(ψ' + φ'·cos θ) is the last row's whole content.
+    let psi_row: Vec<String> = m[2].iter().map(|e| print(pool, *e)).collect();
+    assert_eq!(psi_row, ["C*cos(theta)", "0", "C"]);
+}
+
+fn run(rel: &str, options: Options) -> Outcome {
+    let (path, source) = lagrange_tests::examples()
+        .into_iter()
+        .find(|(p, _)| p.ends_with(rel))
+        .unwrap_or_else(|| panic!("no example {rel}"));
+    let outcome = simulate(&path, &source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
+    assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
+    outcome
+}
+
+fn column(outcome: &Outcome, i: usize) -> Vec<f64> {
+    outcome.run.trajectory.rows.iter().map(|r| r[i]).collect()
+}
+
+fn spread(v: &[f64]) -> f64 {
+    let max = v.iter().copied().fold(f64::MIN, f64::max);
+    let min = v.iter().copied().fold(f64::MAX, f64::min);
+    max - min
+}
+
+#[test]
+fn the_heavy_top_keeps_its_spin_and_energy() {
+    let outcome = run(
+        "space/heavy_top.lag",
+        Options {
+            until: Some(3.0),
+            tolerance: Some(1e-12),
+            output: vec!["psi' + phi'*cos(theta), theta, KE + PE".into()],
+            ..Options::default()
+        },
+    );
+    let spin = column(&outcome, 0);
+    let cos = numeric::elementary::apply(cas::Func::Cos, 0.3);
+    assert!((spin[0] - (60.0 + 2.0 * cos)).abs() < 1e-12);
+    assert!(spread(&spin) < 1e-9 * spin[0].abs(), "spin drifts by {}", spread(&spin));
+    // It nutates: θ moves, and the energy does not.
+    assert!(spread(&column(&outcome, 1)) > 1e-3);
+    let energy = column(&outcome, 2);
+    assert!(spread(&energy) < 1e-9 * energy[0].abs(), "energy drifts by {}", spread(&energy));
+}
+
+#[test]
+fn a_body_spun_about_its_intermediate_axis_flips_and_conserves_energy_and_momentum() {
+    let outcome = run("space/tennis_racket.lag", Options::default());
+    // Outputs: w.y, H.x, H.y, H.z, KE.
+    let spin = column(&outcome, 0);
+    assert!((spin[0] - 2.0).abs() < 1e-12);
+    let flipped = spin.iter().position(|w| *w < -1.9).expect("the spin reverses");
+    assert!(spin[flipped..].iter().any(|w| *w > 1.9), "and comes back");
+    for (i, scale) in [(1, 4.0), (2, 4.0), (3, 4.0), (4, 4.0)] {
+        let v = column(&outcome, i);
+        assert!(spread(&v) < 1e-9 * scale, "column {i} drifts by {:e}", spread(&v));
+    }
+    assert!((column(&outcome, 2)[0] - 4.0).abs() < 1e-12, "H = B·ω = 2·2 along y");
+}
