@@ -1376,7 +1376,12 @@ impl<'a> Resolver<'a> {
                         format!("`{}` has no `{}`", object.name, field.name),
                     )
                     .with_label(format!("expected one of {}", fields.join(", ")));
-                    if body.kind() == BodyKind::Particle
+                    if body.kind() == BodyKind::Spatial && field.name == "angle" {
+                        d = d.with_hint(
+                            "a body turning in space has no single angle: its orientation is \
+                             `axes`, its angular velocity `omega` (world axes) or `omega_body`",
+                        );
+                    } else if body.kind() == BodyKind::Particle
                         && matches!(field.name.as_str(), "omega" | "angle")
                     {
                         d = d.with_hint(
