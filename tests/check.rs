@@ -32,7 +32,8 @@ fn a_wrong_copy_of_each_expectation_fails() {
             };
             let wrong = format!("{} + 1/3{}", &source[..at], &source[at..]);
             let line = source[..stmt.span.start].matches('\n').count() + 1;
-            let result = cli::check::check_file_with(&path, &wrong, cli::Options { units: false });
+            let result =
+                cli::check::check_file_with(&path, &wrong, engine::Options { units: false });
             assert_eq!(
                 result.exit_code, 1,
                 "{path}:{line} with `+ 1/3` still passes:\n{}",

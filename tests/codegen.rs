@@ -19,7 +19,8 @@ fn generated_code_compiles_and_matches_the_tape() {
     let mut modules = String::new();
     let mut expected: Vec<f64> = Vec::new();
     for (k, (rel, source)) in lagrange_tests::examples().into_iter().enumerate() {
-        let module = cli::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let module =
+            engine::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
         std::fs::write(dir.join(format!("m{k}.rs")), &module.source).unwrap();
         let _ = writeln!(modules, "#[path = \"m{k}.rs\"]\nmod m{k};");
         for (name, program) in &module.programs {

@@ -62,7 +62,7 @@ fn numbers_decide_on_projected_states_where_the_algebra_cannot() {
 fn the_state_of_a_failure_is_on_the_constraint() {
     let (path, source) = scene("bead_on_a_cubic.lag");
     let wrong = source.replace("expect y^3 = c^3 - a^3", "expect y^3 = c^3 + a^3");
-    let (mut d, _) = cli::load(&wrong).expect("derives");
+    let mut d = engine::load(&wrong).expect("derives").derivation;
     let verdicts = verify::check_all(&mut d);
     let verify::Verdict::Fails(failure) = &verdicts[0] else { panic!("{path}: {:?}", verdicts[0]) };
     let value = |name: &str| {
@@ -109,7 +109,7 @@ fn a_contradicting_constraint_is_named_at_derive_time() {
 fn a_constraint_no_start_reaches_is_warned_about() {
     let source = "param m, L, g\ncoord x\ncoord y\nparticle p { mass m; position (x, y) }\n\
                   constraint ring: x^2 + y^2 = -L^2\ngravity g\n";
-    let (_, warnings) = cli::load(source).expect("derives");
+    let warnings = engine::load(source).expect("derives").warnings;
     assert!(
         warnings
             .iter()
@@ -133,7 +133,7 @@ fn independent_constraints_pass() {
 #[test]
 fn thirteen_unknowns_at_the_start_are_solved_numerically() {
     let (_, source) = scene("seven_links_six_loops.lag");
-    let (mut d, _) = cli::load(&source).expect("derives");
+    let mut d = engine::load(&source).expect("derives").derivation;
     assert_eq!(d.unknowns().len(), 13);
     let text = cli::report::text(&mut d);
     assert!(text.contains("solved numerically: 13 unknowns"), "{text}");
@@ -176,15 +176,15 @@ fn thirteen_unknowns_at_the_start_are_solved_numerically() {
 /// pendulum at distinct angles, moving.
 #[test]
 fn the_numeric_start_agrees_with_the_exact_one() {
-    let family = cli::generate::Family::from_name("n-link-pendulum").expect("a family");
-    let mut source = cli::generate::n_link(family, 4);
+    let family = engine::generate::Family::from_name("n-link-pendulum").expect("a family");
+    let mut source = engine::generate::n_link(family, 4);
     for k in 1..=4 {
         source = source.replace(
             &format!("coord theta{k} = 1/10"),
             &format!("coord theta{k} = {k}/10, theta{k}' = 1"),
         );
     }
-    let (mut d, _) = cli::load(&source).expect("derives");
+    let mut d = engine::load(&source).expect("derives").derivation;
     let mechanics::StartSolution::Exact(exact) = d.unknowns_at_start() else {
         panic!("the 4-link start fits the budget")
     };
@@ -203,9 +203,8 @@ fn the_numeric_start_agrees_with_the_exact_one() {
 fn simulate_names_a_constraint_that_lost_its_gradient() {
     let source = "param m = 1, g = 9.81\ncoord x = 0\ncoord y = 0\n\
                   particle bead { mass m; position (x, y) }\nconstraint line: x^3 = y^3\ngravity g\n";
-    let options = cli::simulate::Options { until: Some(1.0), ..Default::default() };
-    let outcome = cli::simulate::simulate("cusp.lag", source, &options)
-        .unwrap_or_else(|(m, _)| panic!("{m}"));
+    let options = engine::simulate::Options { until: Some(1.0), ..Default::default() };
+    let outcome = engine::simulate::simulate(source, &options).unwrap_or_else(|e| panic!("{e}"));
     let fault = outcome.run.fault.as_ref().expect("a fault");
     assert!(matches!(fault.kind, sim::FaultKind::SingularConstraints { .. }), "{fault:?}");
     let text = outcome.describe_fault(fault);

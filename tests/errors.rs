@@ -3,9 +3,9 @@
 
 /// Runs the pipeline on a broken scene and returns the rendered diagnostics.
 fn diagnose(source: &str) -> String {
-    match cli::load(source) {
+    match engine::load(source) {
         Ok(_) => panic!("expected an error for:\n{source}"),
-        Err(errors) => cli::diagnostics::render("bad.lag", source, &errors),
+        Err(e) => cli::diagnostics::error("bad.lag", &e),
     }
 }
 
@@ -108,15 +108,15 @@ fn an_unknown_unit() {
 #[test]
 fn units_can_be_switched_off() {
     let source = "param m = 1 kg, g = 9.81 m/s^2\ncoord theta\nparticle p { mass m; position (sin(theta), -cos(theta)) }\npotential m*g*theta\n";
-    assert!(cli::load(source).is_err());
-    assert!(cli::load_with(source, cli::Options { units: false }).is_ok());
+    assert!(engine::load(source).is_err());
+    assert!(engine::load_with(source, engine::Options { units: false }).is_ok());
 }
 
 #[test]
 fn an_unused_parameter_is_a_warning() {
     let source =
         "param m, k, spare\ncoord x\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\n";
-    let (_, warnings) = cli::load(source).expect("derives despite the warning");
+    let warnings = engine::load(source).expect("derives despite the warning").warnings;
     let r = cli::diagnostics::render("bad.lag", source, &warnings);
     assert!(r.contains("warning: parameter `spare` is never used"), "{r}");
     assert!(r.contains("bad.lag:1:13"), "{r}");
@@ -125,13 +125,13 @@ fn an_unused_parameter_is_a_warning() {
 #[test]
 fn an_initial_value_the_constraint_overrides_is_a_warning() {
     let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = L/4\ncoord y = 2 m\ncoord theta = pi/6\nbody rod { mass m; inertia m*L^2/12; position (x, y); angle theta }\nconstraint floor: y = L/2*cos(theta)\ngravity g\n";
-    let (_, warnings) = cli::load(source).expect("derives despite the warning");
+    let warnings = engine::load(source).expect("derives despite the warning").warnings;
     let r = cli::diagnostics::render("bad.lag", source, &warnings);
     assert!(r.contains("warning: the initial value of `y` is ignored"), "{r}");
     assert!(r.contains("bad.lag:3:7"), "{r}");
     // A value that agrees with the constraint is no reason to warn.
     let agreeing = source.replace("coord y = 2 m", "coord y = sqrt(3)/4 m");
-    let (_, warnings) = cli::load(&agreeing).expect("derives");
+    let warnings = engine::load(&agreeing).expect("derives").warnings;
     assert!(warnings.is_empty(), "{warnings:?}");
 }
 
@@ -174,9 +174,9 @@ fn masses_and_inertias_of_the_wrong_sign_are_refused() {
     assert!(r.contains("the inertia of `b` is negative"), "{r}");
     assert_pinpointed(&r, 3, 26);
     // Without values the sign is unknown, and the scene stands.
-    assert!(cli::load("param m\ncoord x\nparticle p { mass -m; position (x, 0) }\n").is_ok());
+    assert!(engine::load("param m\ncoord x\nparticle p { mass -m; position (x, 0) }\n").is_ok());
     let zero_inertia = "param m = 1 kg, L = 1 m\ncoord th\nbody b { mass m; inertia 0; position (th*L, 0); angle th }\n";
-    assert!(cli::load_with(zero_inertia, cli::Options { units: false }).is_ok());
+    assert!(engine::load_with(zero_inertia, engine::Options { units: false }).is_ok());
 }
 
 #[test]
@@ -198,7 +198,7 @@ fn constants_that_are_not_real_numbers_are_refused() {
     assert!(r.contains("division by zero") && r.contains("`a` is 0"), "{r}");
     assert_pinpointed(&r, 1, 30);
     // A function of a coordinate is no constant: its domain is the motion's business.
-    assert!(cli::load(
+    assert!(engine::load(
         "param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\nshow sqrt(-1 - x^2)\n"
     )
     .is_ok());
@@ -219,13 +219,13 @@ fn rates_are_refused_where_only_the_configuration_counts() {
     let r = diagnose("param m = 1 kg\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-m*x'', 0)\n");
     assert!(r.contains("a force cannot depend on an acceleration"), "{r}");
     // Rates are what forces, dissipation and a Lagrangian are made of.
-    assert!(cli::load("param m = 1 kg, c = 1 kg/s\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-c*x', 0)\ndissipation c/2*x'^2\nlagrangian c*x*x'\n").is_ok());
+    assert!(engine::load("param m = 1 kg, c = 1 kg/s\ncoord x\nparticle p { mass m; position (x, 0) }\nforce f on p: (-c*x', 0)\ndissipation c/2*x'^2\nlagrangian c*x*x'\n").is_ok());
 }
 
 #[test]
 fn an_expectation_check_cannot_decide_is_a_warning() {
     let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\ngravity g\nexpect x'' = 0\nexpect sqrt(-1 - x^2/L^2) = 0\nexpect x'' = ln(-(x/L)^2 - 1)*g\nexpect sqrt(x/L) = sqrt(-x/L)\n";
-    let (_, warnings) = cli::load(source).expect("derives despite the warnings");
+    let warnings = engine::load(source).expect("derives despite the warnings").warnings;
     let r = cli::diagnostics::render("bad.lag", source, &warnings);
     assert_eq!(r.matches("warning: `check` cannot decide this expectation").count(), 3, "{r}");
     assert!(r.contains("bad.lag:6:8"), "{r}");
@@ -240,7 +240,7 @@ fn an_expectation_check_cannot_decide_is_a_warning() {
     insta::assert_snapshot!(r);
 
     let singular = "param m = 1 kg, k = 1 N/m\ncoord r = 0 m, phi\nparticle p { mass m; position (r*cos(phi), r*sin(phi)) }\npotential k/2*r^2\nexpect at start: r'' = 0\n";
-    let (_, warnings) = cli::load(singular).expect("derives despite the warning");
+    let warnings = engine::load(singular).expect("derives despite the warning").warnings;
     let r = cli::diagnostics::render("bad.lag", singular, &warnings);
     assert!(r.contains("the mass matrix is singular at the start"), "{r}");
     assert!(r.contains("bad.lag:5:1"), "{r}");

@@ -7,8 +7,9 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
-use cli::numbers::prepare;
-use cli::simulate::{simulate, Options, Outcome};
+use cli::simulate::summary;
+use engine::numbers::prepare;
+use engine::simulate::{simulate, Options, Outcome};
 use numeric::Tape;
 use sim::reference::{elliptic_k, gauss_legendre};
 use sim::{FaultKind, Mechanical, Problem};
@@ -18,8 +19,8 @@ fn example(rel: &str) -> String {
 }
 
 fn run(rel: &str, source: &str, options: Options) -> Outcome {
-    let outcome = simulate(rel, source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
-    assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
+    let outcome = simulate(source, &options).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    assert!(outcome.run.fault.is_none(), "{}", summary(&outcome));
     outcome
 }
 
@@ -31,7 +32,8 @@ fn accelerations(
     set: &dyn Fn(&[String], &mut [f64]),
     y: &[f64],
 ) -> Result<Vec<f64>, FaultKind> {
-    let mut p = prepare(rel, source, &[], cli::Options::default()).expect("derives");
+    let mut p =
+        prepare(source, &[], engine::Options::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
     let names: Vec<String> = p.derivation.model.params.iter().map(|q| q.name.clone()).collect();
     let mut values = p.parameter_values(&[]).expect("values");
     set(&names, &mut values);
@@ -136,7 +138,7 @@ fn a_rod_released_1e_minus_8_from_vertical_lands_when_the_energy_integral_says()
             ..Options::default()
         },
     );
-    assert!(outcome.run.stopped_by.is_some(), "{}", outcome.summary());
+    assert!(outcome.run.stopped_by.is_some(), "{}", summary(&outcome));
     let landed = outcome.run.final_time;
     assert!(relative(landed, exact) < 1e-10, "landed at {landed}, energy integral {exact}");
 }
@@ -208,7 +210,7 @@ fn a_stiff_spring_in_a_slow_system_stays_stable_and_is_reported_as_stiff() {
         let r = &outcome.run;
         assert!(r.steps > 2_000, "{method}: {} steps", r.steps);
         assert!(r.stiff_steps * 10 >= r.steps, "{method}: {} of {} stiff", r.stiff_steps, r.steps);
-        let summary = outcome.summary();
+        let summary = summary(&outcome);
         assert!(summary.contains("limited by stability"), "{summary}");
     }
 }

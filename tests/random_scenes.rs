@@ -112,10 +112,10 @@ proptest! {
     /// with diagnostics that point into the scene.
     #[test]
     fn random_scenes_derive_to_a_kinetic_energy_hessian_or_are_refused(source in scene(), seed in any::<u64>()) {
-        let options = cli::Options { units: false };
-        let mut d = match cli::load_with(&source, options) {
-            Ok((d, _warnings)) => d,
-            Err(errors) => {
+        let options = engine::Options { units: false };
+        let mut d = match engine::load_with(&source, options) {
+            Ok(scene) => scene.derivation,
+            Err(engine::Error::Scene { diagnostics: errors, .. }) => {
                 prop_assert!(!errors.is_empty());
                 for e in &errors {
                     prop_assert!(!e.message.is_empty());
@@ -123,6 +123,7 @@ proptest! {
                 }
                 return Ok(());
             }
+            Err(other) => panic!("loading fails only with the scene's diagnostics, not: {other}"),
         };
         let n = d.coords.len();
         let m = d.mass_matrix.clone();

@@ -5,14 +5,15 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
-use cli::simulate::{simulate, Options, Outcome};
+use cli::simulate::summary;
+use engine::simulate::{simulate, Options, Outcome};
 use sim::reference::{elliptic_k, gauss_legendre};
 
 fn run(rel: &str, options: Options) -> Outcome {
     let path = lagrange_tests::examples_dir().join(rel);
     let source = std::fs::read_to_string(&path).expect("example");
-    let outcome = simulate(rel, &source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
-    assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
+    let outcome = simulate(&source, &options).unwrap_or_else(|e| panic!("{e}"));
+    assert!(outcome.run.fault.is_none(), "{}", summary(&outcome));
     outcome
 }
 
@@ -50,7 +51,7 @@ fn falling_rod_conserves_energy_and_lands_when_the_energy_integral_says() {
     );
     let (m, l, g) = (1.0f64, 1.0f64, 9.81f64);
     // The scene's simulate block stops the run when the rod lies flat.
-    assert!(outcome.run.stopped_by.is_some(), "{}", outcome.summary());
+    assert!(outcome.run.stopped_by.is_some(), "{}", summary(&outcome));
     let rows = &outcome.run.trajectory.rows;
     let last = rows.last().expect("rows");
     assert!((last[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
@@ -110,9 +111,10 @@ fn bad_input_is_an_error_with_exit_code_two() {
         Options { method: Some("euler".into()), ..Options::default() },
         Options { set: vec!["y=1".into()], ..Options::default() },
     ] {
-        let Err((message, code)) = simulate("falling_rod.lag", &source, &options) else {
+        let Err(e) = simulate(&source, &options) else {
             panic!("{options:?} should fail");
         };
+        let (message, code) = (e.to_string(), e.exit_code());
         assert_eq!(code, 2, "{message}");
         assert!(message.contains("error"), "{message}");
     }
@@ -122,12 +124,13 @@ fn bad_input_is_an_error_with_exit_code_two() {
 fn until_in_the_scene_must_be_in_seconds() {
     let scene = "param m = 1 kg, k = 1 N/m\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\npotential k/2*x^2\nsimulate { until UNIT }\n";
     let options = Options::default();
-    assert!(simulate("s.lag", &scene.replace("UNIT", "1 s"), &options).is_ok());
+    assert!(simulate(&scene.replace("UNIT", "1 s"), &options).is_ok());
     // `1/s` and `s^2` name s too, but are not times.
     for unit in ["2 1/s", "2 s^2"] {
-        let Err((message, code)) = simulate("s.lag", &scene.replace("UNIT", unit), &options) else {
+        let Err(e) = simulate(&scene.replace("UNIT", unit), &options) else {
             panic!("`until {unit}` was taken as a time");
         };
+        let (message, code) = (e.to_string(), e.exit_code());
         assert_eq!(code, 2, "{message}");
         assert!(message.contains("is a time in s"), "{message}");
     }
@@ -137,8 +140,8 @@ fn until_in_the_scene_must_be_in_seconds() {
 fn a_singular_mass_matrix_stops_the_run_with_the_state() {
     // A bead on a wire whose inertia vanishes at s = 0: M = m s², reached from s = 1.
     let source = "param m = 1\ncoord s = 1, s' = -1\nparticle p { mass m; position (s^2/2, 0) }\n";
-    let outcome = simulate("wire.lag", source, &Options { until: Some(2.0), ..Options::default() })
-        .unwrap_or_else(|(m, _)| panic!("{m}"));
+    let outcome = simulate(source, &Options { until: Some(2.0), ..Options::default() })
+        .unwrap_or_else(|e| panic!("{e}"));
     let fault = outcome.run.fault.as_ref().expect("a fault");
     let text = outcome.describe_fault(fault);
     assert!(text.contains("s = "), "{text}");

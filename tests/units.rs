@@ -45,8 +45,8 @@ fn every_example_and_crosscheck_scene_is_dimensionally_consistent() {
     for (path, source) in scenes {
         assert_eq!(dimension_errors(&path, &source), "", "{path}");
         // And the whole pipeline, units on, accepts it.
-        if let Err(e) = cli::load(&source) {
-            panic!("{path}:\n{}", cli::diagnostics::render(&path, &source, &e));
+        if let Err(e) = engine::load(&source) {
+            panic!("{path}:\n{}", cli::diagnostics::error(&path, &e));
         }
     }
 }
@@ -75,9 +75,9 @@ fn a_zero_in_a_matrix_expectation_has_every_dimension() {
 
 #[test]
 fn values_written_as_expressions_and_inverse_units_derive() {
-    let (_, warnings) = match cli::load(PENDULUM) {
-        Ok(x) => x,
-        Err(e) => panic!("{}", cli::diagnostics::render("t.lag", PENDULUM, &e)),
+    let warnings = match engine::load(PENDULUM) {
+        Ok(scene) => scene.warnings,
+        Err(e) => panic!("{}", cli::diagnostics::error("t.lag", &e)),
     };
     let rendered = cli::diagnostics::render("t.lag", PENDULUM, &warnings);
     // `k` is declared for the sake of its unit and used nowhere: a warning, nothing worse.
@@ -105,10 +105,12 @@ fn inconsistent_scenes_are_still_refused() {
 #[test]
 fn a_unit_with_two_denominators_prints_as_it_reads() {
     let source = "param m = 1 kg, c = 2 kg/m/s, L = 1 m\ncoord x = 0 m\nparticle p { mass m; position (x, 0) }\ndissipation c*L/2*x'^2\n";
-    let text = cli::derive_with("damped.lag", source, cli::Format::Text, cli::Options::default())
-        .expect("derives");
+    let text =
+        cli::derive_with("damped.lag", source, cli::Format::Text, engine::Options::default())
+            .expect("derives");
     assert!(text.contains("c = 2 kg/m/s"), "{text}");
-    let json = cli::derive_with("damped.lag", source, cli::Format::Json, cli::Options::default())
-        .expect("derives");
+    let json =
+        cli::derive_with("damped.lag", source, cli::Format::Json, engine::Options::default())
+            .expect("derives");
     assert!(json.contains("\"unit\": \"kg/m/s\""), "{json}");
 }

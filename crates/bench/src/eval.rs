@@ -7,7 +7,7 @@ use std::fmt::Write;
 use std::hint::black_box;
 use std::process::Command;
 
-use cli::generate::{n_link, Family};
+use engine::generate::{n_link, Family};
 use numeric::Tape;
 use sim::{Mechanical, Problem};
 
@@ -68,8 +68,7 @@ pub fn run() {
     for n in SIZES {
         let scene = n_link(Family::Pendulum, n);
         let mut prepared =
-            cli::numbers::prepare("generated.lag", &scene, &[], cli::Options::default())
-                .expect("derives");
+            engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
         let names: Vec<String> = prepared
             .parameters
             .iter()
@@ -111,7 +110,7 @@ pub fn run() {
             mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
         });
 
-        let module = cli::codegen::codegen("generated.lag", &scene).expect("codegen");
+        let module = engine::codegen::codegen("generated.lag", &scene).expect("codegen");
         std::fs::write(dir.join(format!("m{n}.rs")), &module.source).expect("write");
         let _ = writeln!(main, "#[path = \"m{n}.rs\"]\nmod m{n};");
         let lit = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
@@ -217,8 +216,8 @@ pub fn run() {
     }
     // The 4-link pendulum's right-hand side has its own target; measure it on the tape too.
     let scene = n_link(Family::Pendulum, 4);
-    let mut prepared = cli::numbers::prepare("generated.lag", &scene, &[], cli::Options::default())
-        .expect("derives");
+    let mut prepared =
+        engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
     let exprs = prepared.dynamics_exprs();
     let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
     let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");

@@ -45,7 +45,7 @@ fn main() {
         }
         "model" => model::run(),
         "derive" => {
-            let family = args.get(1).and_then(|f| cli::generate::Family::from_name(f));
+            let family = args.get(1).and_then(|f| engine::generate::Family::from_name(f));
             let n = args.get(2).and_then(|n| n.parse::<usize>().ok());
             let (Some(family), Some(n)) = (family, n) else {
                 eprintln!("{USAGE}");
@@ -62,7 +62,7 @@ fn main() {
 
 /// The median of `v`.
 pub fn median(v: &mut [f64]) -> f64 {
-    cli::bench::median(v)
+    engine::bench::median(v)
 }
 
 /// Seconds per call of `f`: batches sized to last about 20 ms, seven of them, the median.
@@ -93,4 +93,16 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
     median(&mut times)
 }
 
-pub use cli::bench::seconds;
+/// A duration with a unit that keeps three significant digits readable (as `lagrange bench`
+/// prints it).
+pub fn seconds(s: f64) -> String {
+    if s < 1e-6 {
+        format!("{:.1} ns", s * 1e9)
+    } else if s < 1e-3 {
+        format!("{:.2} µs", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.2} ms", s * 1e3)
+    } else {
+        format!("{s:.2} s")
+    }
+}

@@ -35,7 +35,7 @@ pub fn run() {
         let mut prepared = None;
         for _ in 0..5 {
             let start = Instant::now();
-            let p = cli::numbers::prepare("rod.lag", &bare, &extra, cli::Options::default())
+            let p = engine::numbers::prepare(&bare, &extra, engine::Options::default())
                 .expect("derives");
             times.push(start.elapsed().as_secs_f64());
             prepared = Some(p);

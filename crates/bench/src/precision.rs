@@ -3,8 +3,10 @@
 //! energy integral) and the simple pendulum (its exact period from the arithmetic–geometric
 //! mean: after one period the state is the initial one again).
 
-use cli::bench::{final_state_error, table, work_precision, Setting};
-use cli::simulate::{simulate, Options, Outcome};
+use std::fmt::Write;
+
+use engine::bench::{final_state_error, options_for, work_precision, Setting, Trial};
+use engine::simulate::{simulate, Options, Outcome};
 use sim::reference::{elliptic_k, gauss_legendre};
 use sim::Method;
 
@@ -38,34 +40,55 @@ pub fn rod_landing_time(theta0: f64) -> f64 {
     gauss_legendre(integrand, 0.0, 1.0, 4000)
 }
 
-fn section(title: &str, note: &str, trials: &[cli::bench::Trial]) {
+/// The table of trials, one line each, as `lagrange bench` prints it.
+fn table(trials: &[Trial]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
+        "method", "setting", "error", "time", "rhs evals", "steps"
+    );
+    for t in trials {
+        let error = if t.error.is_nan() { "fault".to_string() } else { format!("{:.2e}", t.error) };
+        let _ = writeln!(
+            s,
+            "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
+            t.method.name(),
+            t.setting.label(),
+            error,
+            crate::seconds(t.seconds),
+            t.evaluations,
+            t.steps
+        );
+    }
+    s
+}
+
+fn section(title: &str, note: &str, trials: &[Trial]) {
     println!("{title}\n{note}");
-    print!("{}", table(trials, &[]));
+    print!("{}", table(trials));
     println!();
 }
 
 /// The three work–precision tables, and the trials of the double pendulum for the plot.
 // The pendulum's exact period is a reference too (see `rod_landing_time`).
 #[allow(clippy::disallowed_methods)]
-pub fn run() -> Vec<cli::bench::Trial> {
+pub fn run() -> Vec<Trial> {
     println!("## Work–precision (integration wall time, median of 3 runs)\n");
 
     // Double pendulum to t = 10.
     let rel = "classics/double_pendulum.lag";
     let source = read(rel);
     let base = Options { until: Some(10.0), ..Options::default() };
-    let reference_options =
-        cli::bench::options_for(&base, Method::Dop853, Setting::Tolerance(1e-14), 10.0);
-    let reference = simulate(rel, &source, &reference_options).expect("reference");
-    let check = simulate(
-        rel,
-        &source,
-        &cli::bench::options_for(&base, Method::Dop853, Setting::Tolerance(1e-13), 10.0),
-    )
-    .expect("check");
+    let reference_options = options_for(&base, Method::Dop853, Setting::Tolerance(1e-14), 10.0);
+    let reference = simulate(&source, &reference_options).expect("reference");
+    let check =
+        simulate(&source, &options_for(&base, Method::Dop853, Setting::Tolerance(1e-13), 10.0))
+            .expect("check");
     let reference_error = final_state_error(&reference, &check);
     let mut error = |o: &Outcome| final_state_error(&reference, o);
-    let double = work_precision(rel, &source, &base, 10.0, &METHODS, 3, &mut error).expect("runs");
+    let double =
+        work_precision(&source, &base, 10.0, &METHODS, 3, &mut error, &mut ()).expect("runs");
     section(
         "double pendulum (θ1 = θ2 = π/2 from rest), t = 10 s",
         &format!(
@@ -81,7 +104,8 @@ pub fn run() -> Vec<cli::bench::Trial> {
     let landing = rod_landing_time(std::f64::consts::FRAC_PI_6);
     let base = Options::default();
     let mut error = |o: &Outcome| (o.run.final_time - landing).abs();
-    let rod = work_precision(rel, &source, &base, landing, &METHODS, 3, &mut error).expect("runs");
+    let rod =
+        work_precision(&source, &base, landing, &METHODS, 3, &mut error, &mut ()).expect("runs");
     section(
         "falling rod from θ = π/6 until it lies flat",
         &format!("error: |landing time − {landing:.15}| (energy integral by quadrature)"),
@@ -99,7 +123,7 @@ pub fn run() -> Vec<cli::bench::Trial> {
         (s[0] - theta0).abs().max(s[1].abs())
     };
     let simple =
-        work_precision(rel, &source, &base, period, &METHODS, 3, &mut error).expect("runs");
+        work_precision(&source, &base, period, &METHODS, 3, &mut error, &mut ()).expect("runs");
     section(
         "simple pendulum (θ0 = 0.5), one period",
         &format!("error: max |Δ(θ, θ̇)| after the exact period T = {period:.15} s (AGM)"),

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use cli::generate::{n_link, Family};
+use engine::generate::{n_link, Family};
 
 pub const SIZES: [usize; 9] = [1, 2, 4, 8, 12, 16, 24, 32, 50];
 
@@ -21,7 +21,7 @@ fn once(family: Family, n: usize) -> Measured {
     let start = Instant::now();
     // `prepare` is parse, resolve (with the dimension check) and derive, plus collecting the
     // parameter slots: what every numeric command does before lowering.
-    let mut prepared = cli::numbers::prepare("generated.lag", &scene, &[], cli::Options::default())
+    let mut prepared = engine::numbers::prepare(&scene, &[], engine::Options::default())
         .expect("generated scenes derive");
     let derive = start.elapsed().as_secs_f64();
     let exprs = prepared.dynamics_exprs();

@@ -6,7 +6,9 @@ use lang::Diagnostic;
 use mechanics::Derivation;
 use verify::{Sampling, Verdict};
 
-use crate::diagnostics::{line_col, render};
+use engine::{line_col, Options};
+
+use crate::diagnostics::render;
 
 /// The outcome of checking one file.
 pub struct FileCheck {
@@ -22,16 +24,16 @@ pub struct FileCheck {
 
 /// Checks every `expect` line of one scene.
 pub fn check_file(path: &str, source: &str) -> FileCheck {
-    check_file_with(path, source, crate::Options::default())
+    check_file_with(path, source, Options::default())
 }
 
 /// [`check_file`] with options.
-pub fn check_file_with(path: &str, source: &str, options: crate::Options) -> FileCheck {
-    let (mut d, warnings) = match crate::load_with(source, options) {
-        Ok(x) => x,
-        Err(errors) => {
+pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck {
+    let engine::Scene { derivation: mut d, warnings } = match engine::load_with(source, options) {
+        Ok(scene) => scene,
+        Err(e) => {
             return FileCheck {
-                report: render(path, source, &errors),
+                report: crate::diagnostics::error(path, &e),
                 exit_code: 2,
                 held: 0,
                 failed: 0,

@@ -46,6 +46,15 @@ pub fn render(path: &str, source: &str, diagnostics: &[Diagnostic]) -> String {
     String::from_utf8_lossy(buffer.as_slice()).into_owned()
 }
 
+/// An engine error as text: a scene's diagnostics rendered against the text they point into,
+/// anything else as its message, each ending in a newline.
+pub fn error(path: &str, error: &engine::Error) -> String {
+    match error {
+        engine::Error::Scene { diagnostics, source } => render(path, source, diagnostics),
+        other => format!("{other}\n"),
+    }
+}
+
 /// Writes the diagnostics to standard error, in colour when it is a terminal.
 pub fn eprint(path: &str, source: &str, diagnostics: &[Diagnostic]) {
     use std::io::IsTerminal;
@@ -53,14 +62,4 @@ pub fn eprint(path: &str, source: &str, diagnostics: &[Diagnostic]) {
         if std::io::stderr().is_terminal() { ColorChoice::Auto } else { ColorChoice::Never };
     let mut stream = StandardStream::stderr(choice);
     emit(&mut stream, path, source, diagnostics);
-}
-
-/// 1-based line and column of a byte offset.
-pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(source.len());
-    let before = &source[..offset];
-    let line = before.matches('\n').count() + 1;
-    let col =
-        before.rfind('\n').map_or(before.chars().count(), |i| before[i + 1..].chars().count()) + 1;
-    (line, col)
 }

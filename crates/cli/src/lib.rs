@@ -1,55 +1,20 @@
-//! The `lagrange` command: reading scene files, running the pipeline, and printing what it
-//! finds. This is the only crate that touches files and terminals.
+//! The `lagrange` command: reading scene files, writing results, and rendering what the
+//! engine finds. This is the only crate that touches files and terminals.
 //!
-//! The pipeline is parse (`lang`) → resolve (`model`) → derive (`mechanics`); this crate
-//! strings the stages together, renders diagnostics with source context, and formats the
-//! `derive` and `check` reports. It knows the stages' public types, not their internals.
+//! `engine` loads scenes, lowers and runs them; this crate reads the files, renders
+//! diagnostics with source context, formats the `derive` and `check` reports, writes the
+//! results of `simulate` and `bench` (CSV, JSON, summaries, tables, SVG) and draws progress.
 
 pub mod bench;
 pub mod check;
-pub mod codegen;
 pub mod diagnostics;
-pub mod generate;
-pub mod numbers;
 pub mod plot;
 pub mod progress;
 pub mod report;
 pub mod simulate;
 
+use engine::Options;
 use lang::Diagnostic;
-use mechanics::Derivation;
-
-/// What the pipeline checks besides the grammar and the names.
-#[derive(Clone, Copy, Debug)]
-pub struct Options {
-    /// Check that every sum, equation and energy term has one dimension.
-    pub units: bool,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options { units: true }
-    }
-}
-
-/// Parses, resolves and derives one scene. Warnings come back with the derivation.
-pub fn load(source: &str) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
-    load_with(source, Options::default())
-}
-
-/// [`load`] with options.
-pub fn load_with(
-    source: &str,
-    options: Options,
-) -> Result<(Derivation, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let ast = lang::parse(source)?;
-    let checks = model::Checks { units: options.units };
-    let (model, mut warnings) = model::resolve_with(&ast, source, checks)?;
-    let mut derivation = mechanics::derive(model)?;
-    verify::diagnose(&mut derivation)?;
-    warnings.append(&mut derivation.warnings);
-    Ok((derivation, warnings))
-}
 
 /// Output formats of `derive`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,8 +47,8 @@ pub fn derive_report(
     format: Format,
     options: Options,
 ) -> Result<(String, String), String> {
-    let (mut d, warnings) =
-        load_with(source, options).map_err(|errors| diagnostics::render(path, source, &errors))?;
+    let engine::Scene { derivation: mut d, warnings } =
+        engine::load_with(source, options).map_err(|e| diagnostics::error(path, &e))?;
     let report = match format {
         Format::Text => report::text(&mut d),
         Format::Latex => report::latex(&mut d),

@@ -43,7 +43,7 @@ enum Command {
     /// Write the scene of a family of systems of any size to standard output.
     Generate {
         /// n-link-pendulum or n-link-pendulum-on-cart
-        #[arg(value_parser = clap::builder::PossibleValuesParser::new(cli::generate::Family::NAMES))]
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(engine::generate::Family::NAMES))]
         family: String,
         /// The number of links.
         #[arg(value_parser = clap::value_parser!(u16).range(1..=500))]
@@ -151,7 +151,7 @@ fn main() -> ExitCode {
                 FormatArg::Latex => cli::Format::Latex,
                 FormatArg::Json => cli::Format::Json,
             };
-            match cli::derive_report(&path, &source, format, cli::Options { units: !no_units }) {
+            match cli::derive_report(&path, &source, format, engine::Options { units: !no_units }) {
                 Ok((report, warnings)) => {
                     eprint!("{warnings}");
                     write_or_print(out.as_ref(), &report)
@@ -163,8 +163,9 @@ fn main() -> ExitCode {
             }
         }
         Command::Generate { family, n } => {
-            let family = cli::generate::Family::from_name(&family).expect("clap checked the name");
-            print!("{}", cli::generate::n_link(family, n as usize));
+            let family =
+                engine::generate::Family::from_name(&family).expect("clap checked the name");
+            print!("{}", engine::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
         Command::Simulate {
@@ -183,7 +184,7 @@ fn main() -> ExitCode {
             samples,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let options = cli::simulate::Options {
+            let options = engine::simulate::Options {
                 until,
                 method,
                 tolerance,
@@ -199,22 +200,20 @@ fn main() -> ExitCode {
         }
         Command::Codegen { file, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            match cli::codegen::codegen_with(
-                &file.display().to_string(),
+            let path = file.display().to_string();
+            match engine::codegen::codegen_with(
+                &path,
                 &source,
-                cli::Options { units: !no_units },
+                engine::Options { units: !no_units },
             ) {
                 Ok(module) => write_or_print(out.as_ref(), &module.source),
-                Err(e) => {
-                    eprint!("{}", if e.ends_with('\n') { e } else { format!("{e}\n") });
-                    ExitCode::from(2)
-                }
+                Err(e) => fail(&path, &e),
             }
         }
         Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options =
-                cli::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
+                engine::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
             bench(&file, &source, &options, repeats, plot)
         }
         Command::Check { files, no_units } => {
@@ -228,7 +227,7 @@ fn main() -> ExitCode {
                 let result = cli::check::check_file_with(
                     &file.display().to_string(),
                     &source,
-                    cli::Options { units: !no_units },
+                    engine::Options { units: !no_units },
                 );
                 eprint!("{}", result.warnings);
                 if result.exit_code == 2 {
@@ -262,10 +261,17 @@ fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
     }
 }
 
+/// Says on stderr why the engine could not do what was asked; its exit code.
+fn fail(path: &str, error: &engine::Error) -> ExitCode {
+    let message = cli::diagnostics::error(path, error);
+    eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
+    ExitCode::from(error.exit_code())
+}
+
 fn simulate(
     file: &std::path::Path,
     source: &str,
-    options: &cli::simulate::Options,
+    options: &engine::simulate::Options,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
 ) -> ExitCode {
@@ -283,16 +289,13 @@ fn simulate(
             return ExitCode::from(2);
         }
     }
-    let outcome = match cli::simulate::simulate(&path, source, options) {
+    let outcome = match cli::simulate::simulate(source, options) {
         Ok(o) => o,
-        Err((message, code)) => {
-            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
-            return ExitCode::from(code);
-        }
+        Err(e) => return fail(&path, &e),
     };
     let table = match out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) {
-        Some("json") => outcome.json(),
-        _ => outcome.csv(),
+        Some("json") => cli::simulate::json(&outcome),
+        _ => cli::simulate::csv(&outcome),
     };
     let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
     if write_or_print(out.as_ref(), &table) != ExitCode::SUCCESS {
@@ -315,14 +318,14 @@ fn simulate(
             code = ExitCode::from(2);
         }
     }
-    eprint!("{}", outcome.summary());
+    eprint!("{}", cli::simulate::summary(&outcome));
     code
 }
 
 fn bench(
     file: &std::path::Path,
     source: &str,
-    options: &cli::simulate::Options,
+    options: &engine::simulate::Options,
     repeats: usize,
     plot: Option<PathBuf>,
 ) -> ExitCode {
@@ -333,18 +336,16 @@ fn bench(
             return ExitCode::from(2);
         }
     }
-    let report = match cli::bench::bench(&path, source, options, repeats) {
-        Ok(r) => r,
-        Err((message, code)) => {
-            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
-            return ExitCode::from(code);
-        }
-    };
+    let report =
+        match engine::bench::bench(source, options, repeats, &mut cli::progress::Bar::new()) {
+            Ok(r) => r,
+            Err(e) => return fail(&path, &e),
+        };
     println!(
         "{path}: error = largest difference of the final state from DOP853 at tol {:.0e} \
          (which differs from tol {:.0e} by {:.1e}); time: median of {repeats}, integration only",
-        cli::bench::REFERENCE_TOLERANCE,
-        10.0 * cli::bench::REFERENCE_TOLERANCE,
+        engine::bench::REFERENCE_TOLERANCE,
+        10.0 * engine::bench::REFERENCE_TOLERANCE,
         report.reference_check
     );
     print!("{}", cli::bench::table(&report.trials, &report.inapplicable));

@@ -1,28 +1,41 @@
 //! A progress line on stderr for runs that last, shown only when stderr is a terminal.
 
-use std::cell::Cell;
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
 /// Draws `t / until` as a bar, first after a second of running, then at most ten times a second.
-pub struct Progress {
+pub struct Bar {
     until: f64,
     started: Instant,
-    last: Cell<Option<Instant>>,
+    last: Option<Instant>,
     enabled: bool,
 }
 
-impl Progress {
-    pub fn new(until: f64) -> Self {
-        Progress {
-            until,
+impl Bar {
+    pub fn new() -> Self {
+        Bar {
+            until: 1.0,
             started: Instant::now(),
-            last: Cell::new(None),
+            last: None,
             enabled: std::io::stderr().is_terminal(),
         }
     }
+}
 
-    pub fn update(&self, t: f64) {
+impl Default for Bar {
+    fn default() -> Self {
+        Bar::new()
+    }
+}
+
+impl engine::simulate::Progress for Bar {
+    fn start(&mut self, until: f64) {
+        self.until = until;
+        self.started = Instant::now();
+        self.last = None;
+    }
+
+    fn update(&mut self, t: f64) {
         if !self.enabled {
             return;
         }
@@ -30,10 +43,10 @@ impl Progress {
         if now - self.started < Duration::from_secs(1) {
             return;
         }
-        if self.last.get().is_some_and(|l| now - l < Duration::from_millis(100)) {
+        if self.last.is_some_and(|l| now - l < Duration::from_millis(100)) {
             return;
         }
-        self.last.set(Some(now));
+        self.last = Some(now);
         let fraction = (t / self.until).clamp(0.0, 1.0);
         let filled = (fraction * 30.0) as usize;
         eprint!(
@@ -45,8 +58,8 @@ impl Progress {
         let _ = std::io::stderr().flush();
     }
 
-    pub fn finish(&self) {
-        if self.enabled && self.last.get().is_some() {
+    fn finish(&mut self) {
+        if self.enabled && self.last.is_some() {
             eprint!("\r{}\r", " ".repeat(60));
         }
     }

@@ -1,94 +1,11 @@
 //! The `derive` report in three formats: text for people, LaTeX for papers, JSON for programs.
 
-use cas::number::{One, Signed, Zero};
+use cas::number::Signed;
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use mechanics::{Derivation, Equation};
+use mechanics::Derivation;
 use model::Value;
 use serde_json::{json, Map, Value as Json};
 use verify::{NumericValue, ShownAtStart};
-
-/// Everything `derive` prints, computed once and shared by the three formats.
-struct Derived {
-    equations: Vec<Equation>,
-    mass_matrix: Vec<Vec<ExprId>>,
-    forcing: Vec<ExprId>,
-    kinetic: ExprId,
-    potential: ExprId,
-    lagrangian: Option<ExprId>,
-    reactions: Vec<(SymId, ExprId)>,
-    /// The reactions with accelerations solved for, where the system is small enough.
-    reactions_of_state: Vec<(SymId, ExprId)>,
-    shown: Vec<(model::Show, Value)>,
-    at_start: ShownAtStart,
-    start_state: Vec<(SymId, ExprId)>,
-}
-
-fn collect(d: &mut Derivation) -> Derived {
-    let equations = d.equations();
-    let pool = &mut d.model.pool;
-    let mass_matrix =
-        d.mass_matrix.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect();
-    let forcing = d.forcing.iter().map(|e| pool.simplify(*e)).collect();
-    let kinetic = compact(pool, d.kinetic);
-    let potential = compact(pool, d.potential);
-    let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
-    let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
-    let reactions_of_state = d
-        .reactions
-        .clone()
-        .into_iter()
-        .map(|r| {
-            let e = d.of_state(r.expr);
-            (r.symbol, compact(&mut d.model.pool, e))
-        })
-        .collect();
-    let shown = d.shown();
-    let at_start = verify::shown_at_start(d);
-    let mut start_state = Vec::new();
-    for c in d.model.coords.clone() {
-        if d.coords.contains(&c.sym) {
-            start_state.push((c.sym, c.initial));
-        }
-    }
-    for c in d.model.coords.clone() {
-        if d.coords.contains(&c.sym) {
-            let r = d.model.pool.rate(c.sym).expect("coordinate");
-            start_state.push((r, c.initial_rate));
-        }
-    }
-    Derived {
-        equations,
-        mass_matrix,
-        forcing,
-        kinetic,
-        potential,
-        lagrangian,
-        reactions,
-        reactions_of_state,
-        shown,
-        at_start,
-        start_state,
-    }
-}
-
-/// The factored form when it is short (¾·m·(r + R)²·θ̇²), else the expanded one.
-fn compact(pool: &mut Pool, e: ExprId) -> ExprId {
-    let f = pool.factor_content(e);
-    let (_, factors) = pool.factors(f);
-    // A quotient by a sum stays one quotient; a sum in front stays factored when it is short.
-    let quotient =
-        factors.iter().any(|(b, x)| x.is_negative() && matches!(pool.node(*b), cas::Node::Add(..)));
-    let short = quotient
-        || factors.iter().all(|(b, x)| match pool.node(*b) {
-            cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),
-            _ => true,
-        });
-    if short {
-        f
-    } else {
-        pool.simplify(e)
-    }
-}
 
 /// A terminating decimal for rationals like 981/100, so parameter values read as written.
 fn decimal(q: &Rational) -> Option<String> {
@@ -218,7 +135,7 @@ fn sym_text(pool: &Pool, s: SymId, style: Style) -> String {
 
 /// The report for people.
 pub fn text(d: &mut Derivation) -> String {
-    let derived = collect(d);
+    let derived = engine::derived::collect(d);
     let pool = &d.model.pool;
     let u = Style::Unicode;
     let mut out = Vec::new();
@@ -382,7 +299,7 @@ pub fn text(d: &mut Derivation) -> String {
 
 /// The report as a LaTeX fragment (amsmath).
 pub fn latex(d: &mut Derivation) -> String {
-    let derived = collect(d);
+    let derived = engine::derived::collect(d);
     let pool = &d.model.pool;
     let l = Style::Latex;
     let mut out = Vec::new();
@@ -563,7 +480,7 @@ fn value_json(pool: &Pool, v: &Value) -> Json {
 
 /// The report as JSON; every expression is a string in the scene syntax.
 pub fn json(d: &mut Derivation) -> String {
-    let derived = collect(d);
+    let derived = engine::derived::collect(d);
     let pool = &d.model.pool;
     let a = Style::Ascii;
     let name = |s: SymId| pool.symbol(s).name.clone();

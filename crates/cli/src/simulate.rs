@@ -1,583 +1,122 @@
-//! `lagrange simulate`: settings from the scene's `simulate { … }` block and the command
-//! line, the run, and its outputs (CSV, JSON, an SVG plot) and summary.
+//! `lagrange simulate`'s outputs: the recorded quantities as CSV or JSON, and the summary of
+//! a run. The run itself is `engine::simulate`'s; the progress bar is drawn while it runs.
 
-use std::time::Instant;
+use engine::simulate::{Options, Outcome};
+use engine::Error;
 
-use numeric::Tape;
-use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run, Settings};
-
-use crate::numbers::prepare;
-
-/// What the command line asks for; `None` leaves the scene's setting or the default.
-#[derive(Clone, Debug, Default)]
-pub struct Options {
-    pub until: Option<f64>,
-    pub method: Option<String>,
-    pub tolerance: Option<f64>,
-    pub step: Option<f64>,
-    /// `name=value` pairs.
-    pub set: Vec<String>,
-    /// Quantities to record, comma-separated lists.
-    pub output: Vec<String>,
-    /// Expressions whose zero (or `lhs = rhs`) ends the run.
-    pub stop_when: Vec<String>,
-    /// Expressions whose zero crossings are recorded.
-    pub events: Vec<String>,
-    /// Skip the dimension check.
-    pub no_units: bool,
-    /// Evenly spaced times to record at (0: every accepted step).
-    pub samples: usize,
+/// Runs the scene with a progress bar on a terminal.
+pub fn simulate(source: &str, options: &Options) -> Result<Outcome, Error> {
+    engine::simulate::simulate_with(source, options, &mut crate::progress::Bar::new())
 }
 
-/// A finished (or faulted) simulation, ready to be written.
-pub struct Outcome {
-    pub columns: Vec<String>,
-    pub run: Run,
-    /// Which trajectory columns are the recorded outputs (the rest are internal).
-    pub shown: usize,
-    /// Trajectory columns of KE and PE.
-    pub energy_columns: (usize, usize),
-    pub constraint_columns: Vec<usize>,
-    pub event_names: Vec<String>,
-    pub stop_names: usize,
-    pub method: Method,
-    pub wall_seconds: f64,
-    pub state_names: Vec<String>,
-    /// The constraints kept with multipliers, in the order of the numbers' slots.
-    pub constraint_names: Vec<String>,
-    /// Whether the scene's energy should be conserved (no forces, dissipation or explicit t).
-    pub conservative: bool,
-}
-
-/// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
-/// constraints; shared by `simulate`'s error and `bench`'s list of methods left out.
-pub const NO_MULTIPLIERS: &str =
-    "works in canonical variables and does not handle constraints kept with multipliers";
-
-/// Errors: a message and the exit code (2 for bad input).
-pub type Failure = (String, u8);
-
-fn bad(message: impl Into<String>) -> Failure {
-    (message.into(), 2)
-}
-
-/// Splits at commas outside parentheses and brackets.
-pub fn split_list(text: &str) -> Vec<String> {
-    let mut parts = Vec::new();
-    let (mut depth, mut current) = (0i32, String::new());
-    for c in text.chars() {
-        match c {
-            '(' | '[' => depth += 1,
-            ')' | ']' => depth -= 1,
-            ',' if depth == 0 => {
-                parts.push(current.trim().to_string());
-                current.clear();
-                continue;
-            }
-            _ => {}
+/// The recorded outputs as CSV: a header, then a row per recorded time.
+pub fn csv(outcome: &Outcome) -> String {
+    let mut s = String::from("t");
+    for c in &outcome.columns[..outcome.shown] {
+        s.push(',');
+        s.push_str(&csv_field(c));
+    }
+    s.push('\n');
+    for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
+        s.push_str(&format!("{t}"));
+        for v in &row[..outcome.shown] {
+            s.push_str(&format!(",{v}"));
         }
-        current.push(c);
+        s.push('\n');
     }
-    if !current.trim().is_empty() {
-        parts.push(current.trim().to_string());
-    }
-    parts
+    s
 }
 
-/// `lhs = rhs` as `(lhs) - (rhs)`; an expression without `=` as itself.
-fn zero_of(text: &str) -> String {
-    match text.split_once('=') {
-        Some((l, r)) => format!("({}) - ({})", l.trim(), r.trim()),
-        None => text.trim().to_string(),
-    }
-}
-
-/// The scene's `simulate` settings as text: key → values.
-fn scene_settings(source: &str) -> Vec<(String, Vec<String>, Option<String>)> {
-    let Ok(ast) = lang::parse(source) else { return Vec::new() };
-    let mut out = Vec::new();
-    for stmt in &ast.stmts {
-        if let lang::StmtKind::Simulate(settings) = &stmt.kind {
-            for s in settings {
-                let values = s
-                    .values
-                    .iter()
-                    .map(|e| source.get(e.span.start..e.span.end).unwrap_or("").trim().to_string())
-                    .collect();
-                // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
-                let unit = s
-                    .unit
-                    .as_ref()
-                    .map(|u| source.get(u.span.start..u.span.end).unwrap_or("").trim().to_string());
-                out.push((s.key.name.clone(), values, unit));
-            }
-        }
-    }
-    out
-}
-
-pub fn simulate(path: &str, source: &str, options: &Options) -> Result<Outcome, Failure> {
-    // --- settings: the scene's block, then the command line --------------------------------
-    let mut until = 10.0;
-    let mut method = Method::Dop853;
-    let mut tolerance = 1e-10;
-    let mut step: Option<f64> = None;
-    let mut outputs: Vec<String> = Vec::new();
-    let mut stops: Vec<String> = Vec::new();
-    let mut events: Vec<String> = Vec::new();
-    let number = |key: &str, v: &[String]| -> Result<f64, Failure> {
-        let text = v.first().map(String::as_str).unwrap_or("");
-        text.parse::<f64>().map_err(|_| {
-            bad(format!("error: `{key} {text}` in the scene's simulate block is not a number"))
+/// The recorded outputs, the events and the summary as JSON.
+pub fn json(outcome: &Outcome) -> String {
+    let rows: Vec<serde_json::Value> = outcome
+        .run
+        .trajectory
+        .times
+        .iter()
+        .zip(&outcome.run.trajectory.rows)
+        .map(|(t, r)| {
+            let mut v = vec![json_number(*t)];
+            v.extend(r[..outcome.shown].iter().map(|x| json_number(*x)));
+            serde_json::Value::Array(v)
         })
-    };
-    for (key, values, unit) in scene_settings(source) {
-        match key.as_str() {
-            "until" => {
-                until = number(&key, &values)?;
-                if unit.as_deref().is_some_and(|u| u != "s") {
-                    return Err(bad(format!("error: `until` is a time in s, not in {unit:?}")));
-                }
-            }
-            "method" => {
-                let name = values.first().cloned().unwrap_or_default();
-                method = Method::from_name(&name).ok_or_else(|| {
-                    bad(format!(
-                        "error: unknown method `{name}` in the simulate block; one of {}",
-                        Method::NAMES.join(", ")
-                    ))
-                })?;
-            }
-            "tolerance" => tolerance = number(&key, &values)?,
-            "step" => step = Some(number(&key, &values)?),
-            "output" => outputs.extend(values),
-            "stop" => stops.extend(values),
-            "event" => events.extend(values),
-            other => {
-                return Err(bad(format!(
-                    "error: unknown setting `{other}` in the simulate block; known: until, \
-                     method, tolerance, step, output, stop, event"
-                )))
-            }
-        }
-    }
-    if let Some(u) = options.until {
-        until = u;
-    }
-    if let Some(name) = &options.method {
-        method = Method::from_name(name).ok_or_else(|| {
-            bad(format!("error: unknown method `{name}`; one of {}", Method::NAMES.join(", ")))
-        })?;
-    }
-    if let Some(t) = options.tolerance {
-        tolerance = t;
-    }
-    if options.step.is_some() {
-        step = options.step;
-    }
-    if !options.output.is_empty() {
-        outputs = options.output.iter().flat_map(|o| split_list(o)).collect();
-    }
-    stops.extend(options.stop_when.iter().map(|s| zero_of(s)));
-    events.extend(options.events.iter().map(|s| zero_of(s)));
-    if !(until.is_finite() && until > 0.0) {
-        return Err(bad(format!("error: --until must be a positive time, not {until}")));
-    }
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(bad(format!("error: --tolerance must be positive, not {tolerance}")));
-    }
-    let step = step.unwrap_or(until / 1000.0);
-    if !(step.is_finite() && step > 0.0) {
-        return Err(bad(format!("error: --step must be positive, not {step}")));
-    }
-
-    // --- `--set name=value`: parsed before loading so the values resolve as expressions ---
-    let mut sets: Vec<(String, String)> = Vec::new();
-    for s in &options.set {
-        let Some((name, value)) = s.split_once('=') else {
-            return Err(bad(format!("error: --set `{s}` is not of the form name=value")));
-        };
-        sets.push((name.trim().to_string(), value.trim().to_string()));
-    }
-
-    // --- load, with outputs, events and set values resolved as scene expressions ----------
-    let scene_has_outputs = !outputs.is_empty();
-    let mut extra: Vec<String> = Vec::new();
-    extra.extend(outputs.iter().cloned());
-    extra.extend(stops.iter().cloned());
-    extra.extend(events.iter().cloned());
-    extra.push("KE".into());
-    extra.push("PE".into());
-    extra.extend(sets.iter().map(|(_, v)| v.clone()));
-    let mut prepared =
-        prepare(path, source, &extra, crate::Options { units: !options.no_units }).map_err(bad)?;
-    let coordinate_names = prepared.coordinate_names();
-    if !scene_has_outputs {
-        // Default outputs: every remaining coordinate.
-        outputs = coordinate_names.clone();
-        let coords = prepared.derivation.coords.clone();
-        let pool = &mut prepared.derivation.model.pool;
-        let exprs: Vec<cas::ExprId> = coords.iter().map(|q| pool.sym(*q)).collect();
-        prepared.extra.splice(0..0, exprs);
-    }
-    let (n_out, n_stop, n_event) = (outputs.len(), stops.len(), events.len());
-    let set_exprs = prepared.extra[n_out + n_stop + n_event + 2..].to_vec();
-
-    // --- parameter values and the initial state -------------------------------------------
-    let model = &prepared.derivation.model;
-    let mut param_overrides = Vec::new();
-    let mut coord_overrides: Vec<(usize, bool, cas::ExprId)> = Vec::new();
-    for ((name, _), expr) in sets.iter().zip(&set_exprs) {
-        let base = name.trim_end_matches('\'');
-        let primes = name.len() - base.len();
-        if let Some(i) = model.params.iter().position(|p| p.name == base && primes == 0) {
-            param_overrides.push((i, *expr));
-        } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
-            if !prepared.derivation.coords.contains(&model.coords[i].sym) {
-                return Err(bad(format!(
-                    "error: --set {name}: `{base}` is fixed by a constraint; set the remaining \
-                     coordinates ({}) instead",
-                    coordinate_names.join(", ")
-                )));
-            }
-            coord_overrides.push((i, primes == 1, *expr));
-        } else {
-            let mut known: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
-            for c in &coordinate_names {
-                known.push(c.clone());
-                known.push(format!("{c}'"));
-            }
-            return Err(bad(format!(
-                "error: --set {name}: no parameter or coordinate of that name; one of {}",
-                known.join(", ")
-            )));
-        }
-    }
-    let parameters = prepared.parameter_values(&param_overrides).map_err(bad)?;
-    if !param_overrides.is_empty() {
-        // The scene's masses were checked with its own values; `--set` may change their sign.
-        prepared.masses_at(&parameters).map_err(bad)?;
-    }
-    let n = prepared.layout.coordinates;
-    let mut y0 = vec![0.0; 2 * n];
-    for (k, q) in prepared.derivation.coords.clone().iter().enumerate() {
-        let model = &prepared.derivation.model;
-        let i = model.coords.iter().position(|c| c.sym == *q).expect("declared");
-        let c = &model.coords[i];
-        let find = |rate: bool| {
-            coord_overrides.iter().rev().find(|(j, r, _)| *j == i && *r == rate).map(|x| x.2)
-        };
-        let initial = find(false).unwrap_or(c.initial);
-        let rate = find(true).unwrap_or(c.initial_rate);
-        y0[k] = prepared.constant(initial, &parameters);
-        y0[n + k] = prepared.constant(rate, &parameters);
-    }
-    if let Some(bad_slot) = y0.iter().position(|v| !v.is_finite()) {
-        return Err(bad(format!(
-            "error: the initial value of `{}` is not a finite number",
-            prepared.state_names()[bad_slot]
-        )));
-    }
-
-    // --- lower and run --------------------------------------------------------------------
-    let dynamics_exprs = prepared.dynamics_exprs();
-    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs).map_err(bad)?;
-    let observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
-    let observation = prepared.lower(&prepared.observation_inputs(), &observed).map_err(bad)?;
-    let mechanical =
-        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation());
-    let settings = Settings {
-        method,
-        start: 0.0,
-        until,
-        tolerance,
-        step,
-        max_steps: 20_000_000,
-        samples: options.samples,
-    };
-    let watched: Vec<Event> = (0..n_stop)
-        .map(|k| Event { column: n_out + k, stop: true })
-        .chain((0..n_event).map(|k| Event { column: n_out + n_stop + k, stop: false }))
         .collect();
-    if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
-        return Err(bad(format!("error: {} {NO_MULTIPLIERS}; use dop853", method.name())));
-    }
-    let progress_bar = crate::progress::Progress::new(until);
-    let mut progress = |t: f64| progress_bar.update(t);
-    let started = Instant::now();
-    let run = if method.is_symplectic() {
-        let momentum_exprs = prepared.momentum_exprs();
-        let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs).map_err(bad)?;
-        let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
-        let z0 = canonical.from_physical(0.0, &y0);
-        integrate(&mut canonical, &z0, &settings, &watched, &mut progress)
-    } else {
-        let mut m = mechanical;
-        integrate(&mut m as &mut dyn Problem, &y0, &settings, &watched, &mut progress)
-    };
-    progress_bar.finish();
-    let wall_seconds = started.elapsed().as_secs_f64();
+    let mut columns = vec!["t".to_string()];
+    columns.extend(outcome.columns[..outcome.shown].iter().cloned());
+    let events: Vec<serde_json::Value> = outcome
+        .run
+        .events
+        .iter()
+        .map(|e| serde_json::json!({"event": outcome.event_names[e.event], "t": e.time}))
+        .collect();
+    let value = serde_json::json!({
+        "columns": columns,
+        "rows": rows,
+        "events": events,
+        "summary": summary_json(outcome),
+    });
+    let mut s = serde_json::to_string_pretty(&value).expect("json");
+    s.push('\n');
+    s
+}
 
-    let model = &prepared.derivation.model;
-    let conservative = model.forces.is_empty()
-        && model.torques.is_empty()
-        && model.dissipation.is_empty()
-        && !prepared.dynamics_exprs().iter().any(|e| {
-            let t = prepared.derivation.model.time;
-            prepared.derivation.model.pool.depends_on(*e, t)
-        });
-    let mut columns: Vec<String> = outputs.clone();
-    columns.extend(stops.iter().cloned());
-    columns.extend(events.iter().cloned());
-    columns.push("KE".into());
-    columns.push("PE".into());
-    let constraint_columns =
-        (0..prepared.layout.multipliers).map(|c| n_out + n_stop + n_event + 2 + c).collect();
-    let mut event_names = stops.clone();
-    event_names.extend(events.iter().cloned());
-    Ok(Outcome {
-        columns,
-        run,
-        shown: n_out,
-        energy_columns: (n_out + n_stop + n_event, n_out + n_stop + n_event + 1),
-        constraint_columns,
-        event_names,
-        stop_names: n_stop,
-        method,
-        wall_seconds,
-        state_names: prepared.state_names(),
-        constraint_names: prepared
-            .derivation
-            .multipliers
-            .iter()
-            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
-            .collect(),
-        conservative,
+fn summary_json(outcome: &Outcome) -> serde_json::Value {
+    let (drift, relative) = outcome.energy_drift();
+    serde_json::json!({
+        "method": outcome.method.name(),
+        "steps": outcome.run.steps,
+        "rejected_steps": outcome.run.rejected,
+        "rhs_evaluations": outcome.run.evaluations,
+        "stiff_steps": outcome.run.stiff_steps,
+        "final_time": outcome.run.final_time,
+        "energy_drift": json_number(drift),
+        "energy_drift_relative": json_number(relative),
+        "constraint_drift": outcome.constraint_drift().map(json_number),
+        "fault": outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)),
     })
 }
 
-impl Outcome {
-    /// The total energy at each recorded time.
-    pub fn energy(&self) -> Vec<f64> {
-        let (k, p) = self.energy_columns;
-        self.run.trajectory.rows.iter().map(|r| r[k] + r[p]).collect()
-    }
-
-    /// The largest |E(t) − E(0)|, and that relative to the energy scale.
-    pub fn energy_drift(&self) -> (f64, f64) {
-        let e = self.energy();
-        let e0 = e.first().copied().unwrap_or(0.0);
-        let (k, p) = self.energy_columns;
-        let scale = self
-            .run
-            .trajectory
-            .rows
-            .iter()
-            .map(|r| r[k].abs().max(r[p].abs()))
-            .fold(e0.abs(), f64::max)
-            .max(f64::MIN_POSITIVE);
-        let drift = e.iter().map(|v| (v - e0).abs()).fold(0.0, f64::max);
-        (drift, drift / scale)
-    }
-
-    pub fn constraint_drift(&self) -> Option<f64> {
-        if self.constraint_columns.is_empty() {
-            return None;
-        }
-        Some(
-            self.run
-                .trajectory
-                .rows
-                .iter()
-                .flat_map(|r| self.constraint_columns.iter().map(move |&c| r[c]))
-                .fold(0.0, f64::max),
-        )
-    }
-
-    pub fn csv(&self) -> String {
-        let mut s = String::from("t");
-        for c in &self.columns[..self.shown] {
-            s.push(',');
-            s.push_str(&csv_field(c));
-        }
-        s.push('\n');
-        for (t, row) in self.run.trajectory.times.iter().zip(&self.run.trajectory.rows) {
-            s.push_str(&format!("{t}"));
-            for v in &row[..self.shown] {
-                s.push_str(&format!(",{v}"));
-            }
-            s.push('\n');
-        }
-        s
-    }
-
-    pub fn json(&self) -> String {
-        let rows: Vec<serde_json::Value> = self
-            .run
-            .trajectory
-            .times
-            .iter()
-            .zip(&self.run.trajectory.rows)
-            .map(|(t, r)| {
-                let mut v = vec![json_number(*t)];
-                v.extend(r[..self.shown].iter().map(|x| json_number(*x)));
-                serde_json::Value::Array(v)
-            })
-            .collect();
-        let mut columns = vec!["t".to_string()];
-        columns.extend(self.columns[..self.shown].iter().cloned());
-        let events: Vec<serde_json::Value> = self
-            .run
-            .events
-            .iter()
-            .map(|e| serde_json::json!({"event": self.event_names[e.event], "t": e.time}))
-            .collect();
-        let value = serde_json::json!({
-            "columns": columns,
-            "rows": rows,
-            "events": events,
-            "summary": self.summary_json(),
-        });
-        let mut s = serde_json::to_string_pretty(&value).expect("json");
-        s.push('\n');
-        s
-    }
-
-    fn summary_json(&self) -> serde_json::Value {
-        let (drift, relative) = self.energy_drift();
-        serde_json::json!({
-            "method": self.method.name(),
-            "steps": self.run.steps,
-            "rejected_steps": self.run.rejected,
-            "rhs_evaluations": self.run.evaluations,
-            "stiff_steps": self.run.stiff_steps,
-            "final_time": self.run.final_time,
-            "energy_drift": json_number(drift),
-            "energy_drift_relative": json_number(relative),
-            "constraint_drift": self.constraint_drift().map(json_number),
-            "fault": self.run.fault.as_ref().map(|f| self.describe_fault(f)),
-        })
-    }
-
-    /// The summary printed on stderr after a run.
-    pub fn summary(&self) -> String {
-        let r = &self.run;
-        let mut s = format!(
-            "{}: {} steps ({} rejected), {} right-hand-side evaluations, {:.3} s wall time\n",
-            self.method.name(),
-            r.steps,
-            r.rejected,
-            r.evaluations,
-            self.wall_seconds
-        );
-        let (drift, relative) = self.energy_drift();
-        let note = if self.conservative { "" } else { " (not conserved: forces or time act)" };
+/// The summary printed on stderr after a run.
+pub fn summary(outcome: &Outcome) -> String {
+    let r = &outcome.run;
+    let mut s = format!(
+        "{}: {} steps ({} rejected), {} right-hand-side evaluations, {:.3} s wall time\n",
+        outcome.method.name(),
+        r.steps,
+        r.rejected,
+        r.evaluations,
+        outcome.wall_seconds
+    );
+    let (drift, relative) = outcome.energy_drift();
+    let note = if outcome.conservative { "" } else { " (not conserved: forces or time act)" };
+    s.push_str(&format!(
+        "energy drift: max |E − E(0)| = {drift:.3e} ({relative:.3e} relative){note}\n"
+    ));
+    // Hairer's stiffness test flagged a good part of the steps: their size was set by the
+    // stability of the explicit method, not by the tolerance.
+    if r.stiff_steps >= 15 && 10 * r.stiff_steps >= r.steps {
         s.push_str(&format!(
-            "energy drift: max |E − E(0)| = {drift:.3e} ({relative:.3e} relative){note}\n"
+            "stiff: {} of {} steps were limited by stability, not accuracy; the step count \
+             reflects the fastest mode, not the tolerance\n",
+            r.stiff_steps, r.steps
         ));
-        // Hairer's stiffness test flagged a good part of the steps: their size was set by the
-        // stability of the explicit method, not by the tolerance.
-        if r.stiff_steps >= 15 && 10 * r.stiff_steps >= r.steps {
-            s.push_str(&format!(
-                "stiff: {} of {} steps were limited by stability, not accuracy; the step count \
-                 reflects the fastest mode, not the tolerance\n",
-                r.stiff_steps, r.steps
-            ));
-        }
-        if let Some(c) = self.constraint_drift() {
-            s.push_str(&format!("constraint drift: max |Φ| = {c:.3e} (Baumgarte-stabilised)\n"));
-        }
-        for e in &r.events {
-            let kind = if e.event < self.stop_names { "stop" } else { "event" };
-            s.push_str(&format!("{kind}: {} = 0 at t = {}\n", self.event_names[e.event], e.time));
-        }
-        match (&r.fault, r.stopped_by) {
-            (Some(f), _) => s.push_str(&format!("{}\n", self.describe_fault(f))),
-            (None, Some(k)) => s.push_str(&format!(
-                "stopped at t = {} by `{}` (before --until)\n",
-                r.final_time, self.event_names[k]
-            )),
-            (None, None) => s.push_str(&format!("reached t = {}\n", r.final_time)),
-        }
-        s
     }
-
-    pub fn describe_fault(&self, f: &sim::Fault) -> String {
-        let state: Vec<String> =
-            self.state_names.iter().zip(&f.state).map(|(n, v)| format!("{n} = {v}")).collect();
-        let coords = |idx: &[usize]| -> String {
-            idx.iter()
-                .filter_map(|i| self.state_names.get(*i))
-                .map(|s| format!("`{s}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let (what, cause) = match &f.kind {
-            FaultKind::SingularMass { coordinates, condition } => (
-                format!(
-                    "the mass matrix is singular or ill-conditioned (condition ≈ {condition:.1e})"
-                ),
-                format!(
-                    "the inertia along {} vanishes here (a degenerate configuration, or a \
-                     coordinate that stops moving any mass)",
-                    if coordinates.is_empty() {
-                        "some coordinate".into()
-                    } else {
-                        coords(coordinates)
-                    }
-                ),
-            ),
-            FaultKind::SingularConstraints { constraints } => {
-                let names: Vec<String> = constraints
-                    .iter()
-                    .filter_map(|i| self.constraint_names.get(*i))
-                    .map(|s| format!("`{s}`"))
-                    .collect();
-                (
-                    "the constraints' Jacobian lost rank (the mass matrix is fine)".to_string(),
-                    if names.len() == 1 && constraints == &[0] {
-                        format!(
-                            "the gradient of {} vanishes here: a cusp of the constraint, or a \
-                             constraint written as a square",
-                            names[0]
-                        )
-                    } else if names.is_empty() {
-                        "the constraints' gradients became dependent here: a dead point of the \
-                         mechanism, or constraints that coincide here"
-                            .to_string()
-                    } else {
-                        format!(
-                            "the gradient of {} became a combination of the earlier constraints' \
-                             here: a dead point of the mechanism, or constraints that coincide here",
-                            names.join(", ")
-                        )
-                    },
-                )
-            }
-            FaultKind::NonFinite { component } => (
-                format!("a value became NaN or infinite (component {component})"),
-                "a division by zero or a function outside its domain; or the motion blew up".into(),
-            ),
-            FaultKind::StepTooSmall { step } => (
-                format!("the step size fell to {step:.1e}"),
-                "a singularity ahead (the solution blows up) or a very stiff system".into(),
-            ),
-            FaultKind::NewtonFailed => (
-                "Newton's iteration of the implicit method did not converge".into(),
-                "the step is too large for this motion: lower --step".into(),
-            ),
-            FaultKind::TooManySteps { limit } => (
-                format!("more than {limit} steps"),
-                "the tolerance is too tight or the step too small for the time span".into(),
-            ),
-        };
-        format!(
-            "numeric fault at t = {}: {what}\n  state: {}\n  likely cause: {cause}",
-            f.time,
-            state.join(", ")
-        )
+    if let Some(c) = outcome.constraint_drift() {
+        s.push_str(&format!("constraint drift: max |Φ| = {c:.3e} (Baumgarte-stabilised)\n"));
     }
+    for e in &r.events {
+        let kind = if e.event < outcome.stop_names { "stop" } else { "event" };
+        s.push_str(&format!("{kind}: {} = 0 at t = {}\n", outcome.event_names[e.event], e.time));
+    }
+    match (&r.fault, r.stopped_by) {
+        (Some(f), _) => s.push_str(&format!("{}\n", outcome.describe_fault(f))),
+        (None, Some(k)) => s.push_str(&format!(
+            "stopped at t = {} by `{}` (before --until)\n",
+            r.final_time, outcome.event_names[k]
+        )),
+        (None, None) => s.push_str(&format!("reached t = {}\n", r.final_time)),
+    }
+    s
 }
 
 fn csv_field(s: &str) -> String {

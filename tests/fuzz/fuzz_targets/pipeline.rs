@@ -15,7 +15,7 @@ fuzz_target!(|data: &[u8]| {
     };
     let source = source.as_str();
     for units in [true, false] {
-        let options = cli::Options { units };
+        let options = engine::Options { units };
         let checked = cli::check::check_file_with("fuzz.lag", source, options);
         assert!(checked.exit_code <= 2);
         if checked.exit_code < 2 {

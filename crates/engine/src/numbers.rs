@@ -8,6 +8,8 @@ use mechanics::Derivation;
 use numeric::{lower, Program};
 use sim::Layout;
 
+use crate::{Error, Options};
+
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
 pub struct Prepared {
@@ -19,18 +21,11 @@ pub struct Prepared {
     pub layout: Layout,
 }
 
-/// What can go wrong between a scene and its numbers: each a message for the user.
-pub type NumbersError = String;
-
 /// Loads `source` with `extra` scene expressions appended as `show` lines, so that they are
 /// resolved (and reactions they name derived) exactly like the scene's own. The appended
-/// lines follow the file; a diagnostic in one of them is rendered against the whole text.
-pub fn prepare(
-    path: &str,
-    source: &str,
-    extra: &[String],
-    options: crate::Options,
-) -> Result<Prepared, NumbersError> {
+/// lines follow the file; a diagnostic in one of them points into the whole text, which
+/// [`Error::Scene`] carries.
+pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepared, Error> {
     let mut text = source.to_string();
     if !text.ends_with('\n') {
         text.push('\n');
@@ -41,20 +36,19 @@ pub fn prepare(
         text.push_str(e);
         text.push('\n');
     }
-    let (mut derivation, _warnings) = crate::load_with(&text, options)
-        .map_err(|errors| crate::diagnostics::render(path, &text, &errors))?;
+    let mut derivation = crate::load_with(&text, options)?.derivation;
     let shows: Vec<model::Show> =
         derivation.model.shows.iter().filter(|s| s.span.start >= start).cloned().collect();
     if shows.len() != extra.len() {
-        return Err(format!("error: could not resolve `{}`", extra.join("`, `")));
+        return Err(Error::Input(format!("could not resolve `{}`", extra.join("`, `"))));
     }
     let mut exprs = Vec::new();
     for (show, text) in shows.iter().zip(extra) {
         let model::Value::Scalar(e) = show.value else {
-            return Err(format!(
-                "error: `{text}` is {}, and only scalars can be recorded",
+            return Err(Error::Input(format!(
+                "`{text}` is {}, and only scalars can be recorded",
                 show.value.kind_name()
-            ));
+            )));
         };
         exprs.push(derivation.expand_quantities(e, false));
     }
@@ -145,35 +139,34 @@ impl Prepared {
         v
     }
 
-    pub fn lower(&self, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, NumbersError> {
+    pub fn lower(&self, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, Error> {
         lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| match e {
             numeric::LowerError::UnboundSymbol(s) => {
                 let name = &self.derivation.model.pool.symbol(s).name;
-                format!("error: `{name}` has no numeric value here (it is not part of the state)")
+                Error::Input(format!(
+                    "`{name}` has no numeric value here (it is not part of the state)"
+                ))
             }
         })
     }
 
     /// Parameter values in declaration order, with `overrides` (parameter index → expression
     /// of earlier parameters) taking the place of the scene's values.
-    pub fn parameter_values(
-        &self,
-        overrides: &[(usize, ExprId)],
-    ) -> Result<Vec<f64>, NumbersError> {
+    pub fn parameter_values(&self, overrides: &[(usize, ExprId)]) -> Result<Vec<f64>, Error> {
         let pool = &self.derivation.model.pool;
         let mut values = vec![f64::NAN; pool.symbol_count()];
         let mut out = Vec::new();
         for (i, p) in self.derivation.model.params.iter().enumerate() {
             let expr = overrides.iter().rev().find(|(k, _)| *k == i).map(|(_, e)| *e).or(p.value);
             let Some(expr) = expr else {
-                return Err(format!(
-                    "error: parameter `{}` has no value; give one in the scene or with --set {}=…",
+                return Err(Error::Input(format!(
+                    "parameter `{}` has no value; give one in the scene or with --set {}=…",
                     p.name, p.name
-                ));
+                )));
             };
             let v = numeric::eval(pool, expr, &values);
             if !v.is_finite() {
-                return Err(format!("error: parameter `{}` evaluates to {v}", p.name));
+                return Err(Error::Input(format!("parameter `{}` evaluates to {v}", p.name)));
             }
             values[p.sym.index()] = v;
             out.push(v);
@@ -183,7 +176,7 @@ impl Prepared {
 
     /// Refuses a mass that is not positive, or an inertia that is negative, at the given
     /// parameter values; those that depend on the motion are left alone.
-    pub fn masses_at(&mut self, parameters: &[f64]) -> Result<(), NumbersError> {
+    pub fn masses_at(&mut self, parameters: &[f64]) -> Result<(), Error> {
         for body in self.derivation.model.bodies.clone() {
             for (value, inertia) in [(Some(body.mass), false), (body.planar_inertia(), true)] {
                 let Some(value) = value else { continue };
@@ -200,11 +193,10 @@ impl Prepared {
                     if inertia { ("an inertia", "kg·m²") } else { ("a mass", "kg") };
                 if (inertia && v < 0.0) || (!inertia && v <= 0.0) {
                     let rule = if inertia { "cannot be negative" } else { "must be positive" };
-                    return Err(format!(
-                        "error: with the values of --set, `{}` has {what} of {v} {unit}; {what} \
-                         {rule}",
+                    return Err(Error::Input(format!(
+                        "with the values of --set, `{}` has {what} of {v} {unit}; {what} {rule}",
                         body.name
-                    ));
+                    )));
                 }
             }
         }

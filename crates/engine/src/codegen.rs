@@ -1,12 +1,13 @@
-//! `lagrange codegen`: a self-contained Rust module (only `std`) with the mass matrix, the
+//! The equations of a scene as a self-contained Rust module (only `std`): the mass matrix, the
 //! forcing, the constraint rows, the right-hand side of the first-order system, the energies
-//! and the reactions of a scene, each a straight-line function lowered like the tape.
+//! and the reactions, each a straight-line function lowered like the tape.
 
 use std::fmt::Write;
 
 use numeric::rust::{function, literal, HELPERS};
 
 use crate::numbers::{prepare, Prepared};
+use crate::{Error, Options};
 
 /// The functions of a generated module, with the programs they were printed from (the tests
 /// run the same programs on the tape).
@@ -18,14 +19,16 @@ pub struct Module {
     pub programs: Vec<(String, numeric::Program)>,
 }
 
-pub fn codegen(path: &str, source: &str) -> Result<Module, String> {
-    codegen_with(path, source, crate::Options::default())
+/// The module of the scene `source`; `path` is the name its header gives the scene (and its
+/// title when the scene has none).
+pub fn codegen(path: &str, source: &str) -> Result<Module, Error> {
+    codegen_with(path, source, Options::default())
 }
 
 /// [`codegen`] with options.
-pub fn codegen_with(path: &str, source: &str, options: crate::Options) -> Result<Module, String> {
+pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module, Error> {
     // Reactions the scene derives are part of the module; asking for KE and PE changes nothing.
-    let mut prepared = prepare(path, source, &["KE".into(), "PE".into()], options)?;
+    let mut prepared = prepare(source, &["KE".into(), "PE".into()], options)?;
     let parameters = prepared.parameter_values(&[])?;
     let reactions: Vec<(String, cas::ExprId)> = prepared
         .derivation

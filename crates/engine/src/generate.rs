@@ -69,7 +69,7 @@ mod tests {
         for family in [Family::Pendulum, Family::PendulumOnCart] {
             for n in 1..=3 {
                 let scene = n_link(family, n);
-                let (d, _) = crate::load(&scene).unwrap_or_else(|e| panic!("{scene}\n{e:?}"));
+                let d = crate::load(&scene).unwrap_or_else(|e| panic!("{scene}\n{e}")).derivation;
                 let dof = n + usize::from(family == Family::PendulumOnCart);
                 assert_eq!(d.coords.len(), dof);
                 assert_eq!(d.mass_matrix.len(), dof);

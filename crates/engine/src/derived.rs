@@ -1,0 +1,94 @@
+//! What a `derive` report shows, computed once for every format: the equations, M and f, the
+//! energies and reactions in their most readable exact form (factored when that is short),
+//! the reactions with the accelerations solved for, the `show` values, those evaluated at the
+//! start, and the start's state. Printing them is the front end's.
+
+use cas::number::{One, Signed, Zero};
+use cas::{ExprId, Pool, SymId};
+use mechanics::{Derivation, Equation};
+use model::Value;
+use verify::ShownAtStart;
+
+/// Everything `derive` prints, computed once and shared by the formats.
+pub struct Derived {
+    pub equations: Vec<Equation>,
+    pub mass_matrix: Vec<Vec<ExprId>>,
+    pub forcing: Vec<ExprId>,
+    pub kinetic: ExprId,
+    pub potential: ExprId,
+    pub lagrangian: Option<ExprId>,
+    pub reactions: Vec<(SymId, ExprId)>,
+    /// The reactions with accelerations solved for, where the system is small enough.
+    pub reactions_of_state: Vec<(SymId, ExprId)>,
+    pub shown: Vec<(model::Show, Value)>,
+    pub at_start: ShownAtStart,
+    pub start_state: Vec<(SymId, ExprId)>,
+}
+
+/// The forms of a derivation that a report shows.
+pub fn collect(d: &mut Derivation) -> Derived {
+    let equations = d.equations();
+    let pool = &mut d.model.pool;
+    let mass_matrix =
+        d.mass_matrix.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect();
+    let forcing = d.forcing.iter().map(|e| pool.simplify(*e)).collect();
+    let kinetic = compact(pool, d.kinetic);
+    let potential = compact(pool, d.potential);
+    let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
+    let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
+    let reactions_of_state = d
+        .reactions
+        .clone()
+        .into_iter()
+        .map(|r| {
+            let e = d.of_state(r.expr);
+            (r.symbol, compact(&mut d.model.pool, e))
+        })
+        .collect();
+    let shown = d.shown();
+    let at_start = verify::shown_at_start(d);
+    let mut start_state = Vec::new();
+    for c in d.model.coords.clone() {
+        if d.coords.contains(&c.sym) {
+            start_state.push((c.sym, c.initial));
+        }
+    }
+    for c in d.model.coords.clone() {
+        if d.coords.contains(&c.sym) {
+            let r = d.model.pool.rate(c.sym).expect("coordinate");
+            start_state.push((r, c.initial_rate));
+        }
+    }
+    Derived {
+        equations,
+        mass_matrix,
+        forcing,
+        kinetic,
+        potential,
+        lagrangian,
+        reactions,
+        reactions_of_state,
+        shown,
+        at_start,
+        start_state,
+    }
+}
+
+/// The factored form when it is short (¾·m·(r + R)²·θ̇²), else the expanded one.
+fn compact(pool: &mut Pool, e: ExprId) -> ExprId {
+    let f = pool.factor_content(e);
+    let (_, factors) = pool.factors(f);
+    // A quotient by a sum stays one quotient; a sum in front stays factored when it is short.
+    let quotient =
+        factors.iter().any(|(b, x)| x.is_negative() && matches!(pool.node(*b), cas::Node::Add(..)));
+    let short = quotient
+        || factors.iter().all(|(b, x)| match pool.node(*b) {
+            cas::Node::Add(c, terms) => terms.len() + usize::from(!c.is_zero()) <= 2 || !x.is_one(),
+            _ => true,
+        });
+    if short {
+        f
+    } else {
+        pool.simplify(e)
+    }
+}

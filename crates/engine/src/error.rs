@@ -1,0 +1,90 @@
+//! What can go wrong between a scene and its numbers, typed: the scene's own diagnostics,
+//! input that makes no sense, or a numeric fault. A front end renders them and exits with
+//! [`Error::exit_code`].
+
+use std::fmt;
+
+use lang::{Diagnostic, Severity};
+
+/// Why a front end's request could not be carried out.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Error {
+    /// The scene has errors: its diagnostics, with the text their spans point into. That text
+    /// is the scene's as loaded, which for a command that resolves extra expressions is the
+    /// file with `show` lines appended.
+    Scene { diagnostics: Vec<Diagnostic>, source: String },
+    /// A setting, option or value that cannot be used: what is wrong with it.
+    Input(String),
+    /// The numbers went wrong (a run that should have finished faulted): what happened.
+    Numeric(String),
+}
+
+impl Error {
+    /// The exit code of a command that failed this way: 2 for bad input (the scene's errors
+    /// included), 1 for a numeric fault.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Scene { .. } | Error::Input(_) => 2,
+            Error::Numeric(_) => 1,
+        }
+    }
+}
+
+/// One line per problem, `error: …`; a scene's diagnostics with their line and column but
+/// without the source context a front end may add.
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Scene { diagnostics, source } => {
+                for (k, d) in diagnostics.iter().enumerate() {
+                    let (line, col) = line_col(source, d.span.start);
+                    let severity = match d.severity {
+                        Severity::Error => "error",
+                        Severity::Warning => "warning",
+                    };
+                    if k > 0 {
+                        writeln!(f)?;
+                    }
+                    write!(f, "{severity}: {} (line {line}, column {col})", d.message)?;
+                }
+                Ok(())
+            }
+            Error::Input(message) | Error::Numeric(message) => write!(f, "error: {message}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// 1-based line and column (in characters) of a byte offset.
+pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(source.len());
+    let before = &source[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col =
+        before.rfind('\n').map_or(before.chars().count(), |i| before[i + 1..].chars().count()) + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exit_codes_and_messages() {
+        let input = Error::Input("`until` must be positive".into());
+        assert_eq!(input.exit_code(), 2);
+        assert_eq!(input.to_string(), "error: `until` must be positive");
+        assert_eq!(Error::Numeric("the reference run failed".into()).exit_code(), 1);
+        let d = Diagnostic::error(lang::Span::new(8, 9), "unknown name `y`");
+        let scene = Error::Scene { diagnostics: vec![d], source: "coord x\ny\n".into() };
+        assert_eq!(scene.exit_code(), 2);
+        assert_eq!(scene.to_string(), "error: unknown name `y` (line 2, column 1)");
+    }
+
+    #[test]
+    fn line_and_column_count_characters() {
+        assert_eq!(line_col("ab\nθx", 5), (2, 2));
+        assert_eq!(line_col("ab", 99), (1, 3));
+    }
+}

@@ -1,0 +1,60 @@
+//! The library under every front end: it strings the stages together. It loads a scene
+//! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
+//! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
+//! `simulate` settings and runs them ([`simulate`]), measures integrators against a reference
+//! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
+//! any size ([`generate`]). What goes wrong comes back as an [`Error`].
+//!
+//! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
+//! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
+//! command, the benchmarks) shows them.
+
+pub mod bench;
+pub mod codegen;
+pub mod derived;
+mod error;
+pub mod generate;
+pub mod numbers;
+pub mod simulate;
+
+pub use error::{line_col, Error};
+
+use lang::Diagnostic;
+use mechanics::Derivation;
+
+/// What the pipeline checks besides the grammar and the names.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Check that every sum, equation and energy term has one dimension.
+    pub units: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { units: true }
+    }
+}
+
+/// A loaded scene: its derivation, and the warnings met on the way.
+pub struct Scene {
+    pub derivation: Derivation,
+    /// Warnings of resolving, then of deriving and diagnosing; spans into the loaded text.
+    pub warnings: Vec<Diagnostic>,
+}
+
+/// Parses, resolves and derives one scene.
+pub fn load(source: &str) -> Result<Scene, Error> {
+    load_with(source, Options::default())
+}
+
+/// [`load`] with options.
+pub fn load_with(source: &str, options: Options) -> Result<Scene, Error> {
+    let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
+    let ast = lang::parse(source).map_err(scene)?;
+    let checks = model::Checks { units: options.units };
+    let (model, mut warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
+    let mut derivation = mechanics::derive(model).map_err(scene)?;
+    verify::diagnose(&mut derivation).map_err(scene)?;
+    warnings.append(&mut derivation.warnings);
+    Ok(Scene { derivation, warnings })
+}
