@@ -3,7 +3,8 @@
 //! what the physics conserves: the top's spin, a tumbling body's energy and angular momentum
 //! through its flips.
 
-use cli::simulate::{simulate, Options, Outcome};
+use cli::simulate::summary;
+use engine::simulate::{simulate, Options, Outcome};
 
 fn scene(rel: &str) -> (String, String) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
@@ -30,7 +31,7 @@ fn identities_of_vectors_and_rotations_hold_and_wrong_copies_fail() {
     for (right, wrong) in wrong {
         assert_eq!(source.matches(right).count(), 1, "`{right}` is not one place");
         let mutated = source.replacen(right, wrong, 1);
-        let result = cli::check::check_file_with(&path, &mutated, cli::Options { units: false });
+        let result = cli::check::check_file_with(&path, &mutated, engine::Options { units: false });
         assert_eq!(result.failed, 1, "`{wrong}` still passes:\n{}", result.report);
     }
 }
@@ -41,7 +42,7 @@ fn the_heavy_top_has_the_textbook_mass_matrix_and_spin() {
         .into_iter()
         .find(|(p, _)| p.ends_with("space/heavy_top.lag"))
         .expect("the heavy top");
-    let (d, _) = cli::load(&source).expect("derives");
+    let d = engine::load(&source).expect("derives").derivation;
     let pool = &d.model.pool;
     let print = |pool: &cas::Pool, e| pool.print(e, cas::Style::Ascii);
     let m = d.mass_matrix.clone();
@@ -55,12 +56,12 @@ fn the_heavy_top_has_the_textbook_mass_matrix_and_spin() {
 }
 
 fn run(rel: &str, options: Options) -> Outcome {
-    let (path, source) = lagrange_tests::examples()
+    let (_, source) = lagrange_tests::examples()
         .into_iter()
         .find(|(p, _)| p.ends_with(rel))
         .unwrap_or_else(|| panic!("no example {rel}"));
-    let outcome = simulate(&path, &source, &options).unwrap_or_else(|(m, _)| panic!("{m}"));
-    assert!(outcome.run.fault.is_none(), "{}", outcome.summary());
+    let outcome = simulate(&source, &options).unwrap_or_else(|e| panic!("{e}"));
+    assert!(outcome.run.fault.is_none(), "{}", summary(&outcome));
     outcome
 }
 
