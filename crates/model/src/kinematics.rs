@@ -91,7 +91,9 @@ pub fn from_quaternion(pool: &mut Pool, e: [ExprId; 4]) -> Matrix3 {
     ]
 }
 
-/// A·B for matrices of expressions of any compatible shapes.
+/// A·B for matrices of expressions of any compatible shapes, each entry simplified: in a
+/// product of rotations about one axis, cos a·cos b − sin a·sin b becomes cos(a + b) here,
+/// once, instead of in every term of the energy built from it.
 pub fn product(pool: &mut Pool, a: &[Vec<ExprId>], b: &[Vec<ExprId>]) -> Vec<Vec<ExprId>> {
     let columns = b.first().map_or(0, Vec::len);
     a.iter()
@@ -100,19 +102,21 @@ pub fn product(pool: &mut Pool, a: &[Vec<ExprId>], b: &[Vec<ExprId>]) -> Vec<Vec
                 .map(|j| {
                     let terms: Vec<ExprId> =
                         row.iter().zip(b).map(|(x, brow)| pool.mul2(*x, brow[j])).collect();
-                    pool.add(&terms)
+                    let sum = pool.add(&terms);
+                    pool.simplify(sum)
                 })
                 .collect()
         })
         .collect()
 }
 
-/// A·v.
+/// A·v, each entry simplified as in [`product`].
 pub fn apply(pool: &mut Pool, a: &[Vec<ExprId>], v: &[ExprId]) -> Vec<ExprId> {
     a.iter()
         .map(|row| {
             let terms: Vec<ExprId> = row.iter().zip(v).map(|(x, y)| pool.mul2(*x, *y)).collect();
-            pool.add(&terms)
+            let sum = pool.add(&terms);
+            pool.simplify(sum)
         })
         .collect()
 }

@@ -1570,20 +1570,7 @@ impl<'a> Resolver<'a> {
                     Some(other.map(|x| self.pool.mul2(s, x)))
                 }
                 (Matrix(a), Matrix(b)) if a[0].len() == b.len() => {
-                    let mut out = Vec::new();
-                    for row in a {
-                        let mut out_row = Vec::new();
-                        for j in 0..b[0].len() {
-                            let terms: Vec<cas::ExprId> = row
-                                .iter()
-                                .zip(b)
-                                .map(|(x, brow)| self.pool.mul2(*x, brow[j]))
-                                .collect();
-                            out_row.push(self.pool.add(&terms));
-                        }
-                        out.push(out_row);
-                    }
-                    Some(Matrix(out))
+                    Some(Matrix(crate::kinematics::product(&mut self.pool, a, b)))
                 }
                 // R*v: a vector in the rotated axes carried into the fixed ones.
                 (Matrix(a), Vector(v)) if a[0].len() == v.len() => {
