@@ -29,11 +29,30 @@ pub struct Derived {
 pub fn collect(d: &mut Derivation) -> Derived {
     let equations = d.equations();
     let pool = &mut d.model.pool;
-    let mass_matrix =
-        d.mass_matrix.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect();
-    let forcing = d.forcing.iter().map(|e| pool.simplify(*e)).collect();
+    let mass_matrix = d
+        .mass_matrix
+        .iter()
+        .map(|r| {
+            r.iter()
+                .map(|e| {
+                    let f = pool.factor_content(*e);
+                    gathered(pool, f)
+                })
+                .collect()
+        })
+        .collect();
+    let forcing = d
+        .forcing
+        .iter()
+        .map(|e| {
+            let s = pool.simplify(*e);
+            gathered(pool, s)
+        })
+        .collect();
     let kinetic = compact(pool, d.kinetic);
+    let kinetic = gathered(pool, kinetic);
     let potential = compact(pool, d.potential);
+    let potential = gathered(pool, potential);
     let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
     let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
     let reactions_of_state = d
@@ -72,6 +91,15 @@ pub fn collect(d: &mut Derivation) -> Derived {
         at_start,
         start_state,
     }
+}
+
+/// A sum with its terms that move alike gathered under one coefficient of parameters.
+fn gathered(pool: &mut Pool, e: ExprId) -> ExprId {
+    let terms = pool.terms(e);
+    if terms.len() < 2 {
+        return e;
+    }
+    mechanics::collect_by_motion(pool, &terms)
 }
 
 /// The factored form when it is short (¾·m·(r + R)²·θ̇²), else the expanded one.

@@ -12,6 +12,7 @@
 mod check;
 mod derive;
 mod present;
+pub use present::collect_by_motion;
 mod start;
 
 pub use check::Decision;

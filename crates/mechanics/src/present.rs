@@ -41,6 +41,8 @@ impl Derivation {
                 if pool.is_zero(c) {
                     continue;
                 }
+                let parts = pool.terms(c);
+                let c = collect_by_motion(pool, &parts);
                 let a = pool.sym(self.accels[j]);
                 lhs_terms.push(pool.mul2(c, a));
             }
@@ -54,9 +56,10 @@ impl Derivation {
             let rhs = pool.simplify(rhs);
             let (moving, still) = self.split_by_rates(rhs);
             let pool = &mut self.model.pool;
-            lhs_terms.push(pool.neg(moving));
-            let lhs = pool.add(&lhs_terms);
-            out.push(Equation { lhs, rhs: still });
+            lhs_terms.extend(moving.into_iter().map(|t| pool.neg(t)));
+            let lhs = collect_by_motion(pool, &lhs_terms);
+            let rhs = collect_by_motion(pool, &still);
+            out.push(Equation { lhs, rhs });
         }
         for m in self.multipliers.clone() {
             let pool = &mut self.model.pool;
@@ -70,20 +73,20 @@ impl Derivation {
                 let c = pool.factor_content(c);
                 terms.push(pool.mul2(c, a));
             }
-            let lhs = pool.add(&terms);
             let rhs = pool.mul2(m.bias, inverse);
             let rhs = pool.simplify(rhs);
             let (moving, still) = self.split_by_rates(rhs);
             let pool = &mut self.model.pool;
-            let neg = pool.neg(moving);
-            let lhs = pool.add2(lhs, neg);
-            out.push(Equation { lhs, rhs: still });
+            terms.extend(moving.into_iter().map(|t| pool.neg(t)));
+            let lhs = collect_by_motion(pool, &terms);
+            let rhs = collect_by_motion(pool, &still);
+            out.push(Equation { lhs, rhs });
         }
         out
     }
 
     /// Splits a sum into the terms with rates in them and the rest.
-    fn split_by_rates(&mut self, e: ExprId) -> (ExprId, ExprId) {
+    fn split_by_rates(&mut self, e: ExprId) -> (Vec<ExprId>, Vec<ExprId>) {
         let rates = self.rates.clone();
         let pool = &mut self.model.pool;
         let (mut moving, mut still) = (Vec::new(), Vec::new());
@@ -94,7 +97,7 @@ impl Derivation {
                 still.push(t);
             }
         }
-        (pool.add(&moving), pool.add(&still))
+        (moving, still)
     }
 
     /// How a `show` item is labelled: a lone coordinate, rate or quantity by its symbol
@@ -163,4 +166,71 @@ pub enum StartShows {
     TooLarge { unknowns: usize, shows: Vec<model::Show> },
     /// The mass matrix (with the constraints' rows) is singular at the start.
     Singular,
+}
+
+/// The sum of `terms` with the terms that move alike gathered: those whose factors of
+/// coordinates, rates and time agree share one coefficient of parameters, as a hand
+/// derivation writes (A + m·l² − C)·sin θ·cos θ·φ̇² rather than three terms.
+pub fn collect_by_motion(pool: &mut cas::Pool, terms: &[ExprId]) -> ExprId {
+    use cas::SymbolKind;
+    let mut groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
+    for t in terms {
+        let (coef, factors) = pool.factors(*t);
+        let (mut motion, mut constant) = (Vec::new(), Vec::new());
+        for f in factors {
+            let moves = pool
+                .free_symbols(f.0)
+                .iter()
+                .any(|s| !matches!(pool.symbol(*s).kind, SymbolKind::Param));
+            if moves {
+                motion.push(f);
+            } else {
+                constant.push(f);
+            }
+        }
+        let one = cas::Rational::from_integer(1.into());
+        let motion = pool.product(&one, &motion);
+        let constant = pool.product(&coef, &constant);
+        match groups.iter_mut().find(|(m, _)| *m == motion) {
+            Some((_, cs)) => cs.push(constant),
+            None => groups.push((motion, vec![constant])),
+        }
+    }
+    let mut gathered = Vec::new();
+    for (motion, constants) in groups {
+        if constants.len() == 1 {
+            gathered.push(pool.mul2(constants[0], motion));
+            continue;
+        }
+        // What the coefficients share comes out, a sign with it: −g·(m₁ + m₂), not
+        // (−m₁·g − m₂·g).
+        let sum = pool.add(&constants);
+        let coefficient = pool.factor_content(sum);
+        let terms = pool.terms(coefficient);
+        if terms.len() < 2 {
+            gathered.push(pool.mul2(coefficient, motion));
+            continue;
+        }
+        // A number the terms share stands in front, where the motion keeps it from being
+        // distributed again, and a sum of mostly negative terms reads better negated:
+        // ½·(A + m·l²)·sin²θ·φ̇² and −2·(A − C + m·l²)·X.
+        // Only where it leaves whole numbers inside without making new ones: ½·(A + m·l²), but
+        // I₂ + ¼·m₂·l₂² stays as it is rather than ¼·(4·I₂ + m₂·l₂²).
+        let (content, rest) = pool.content(coefficient);
+        let sizes: Vec<cas::Rational> =
+            terms.iter().map(|t| cas::number::Signed::abs(&pool.split_coefficient(*t).0)).collect();
+        let alike = sizes.iter().all(|q| *q == sizes[0]);
+        let (content, rest) = match pool.as_num(content) {
+            Some(q) if alike || q.is_integer() => (content, rest),
+            _ => (pool.one(), coefficient),
+        };
+        let negative = terms.iter().filter(|t| pool.looks_negative(**t)).count();
+        let (content, rest) = if 2 * negative > terms.len() {
+            (pool.neg(content), pool.neg(rest))
+        } else {
+            (content, rest)
+        };
+        gathered.push(pool.mul(&[content, rest, motion]));
+    }
+    pool.add(&gathered)
 }
