@@ -31,8 +31,8 @@ pub fn run() {
             let s = engine::load(&source).expect("derives");
             std::hint::black_box(s);
         });
-        let mut prepared = engine::numbers::prepare(&source, &[], engine::Options::default())
-            .expect("prepares");
+        let mut prepared =
+            engine::numbers::prepare(&source, &[], engine::Options::default()).expect("prepares");
         let inputs = prepared.dynamics_inputs();
         let outputs = prepared.dynamics_exprs();
         let program = prepared.lower(&inputs, &outputs).expect("lowers");

@@ -186,7 +186,14 @@ pub fn text(d: &mut Derivation) -> String {
                 } else {
                     String::new()
                 };
+                if let Some(phi) = e.integrated {
+                    out.push(format!("    integrates to {} = 0", pool.print(phi, u)));
+                }
                 out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
+            } else if c.kind == model::ConstraintKind::Velocity {
+                out.push(format!(
+                    "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
+                ));
             } else {
                 out.push(format!(
                     "    kept with the multiplier {force} (generalized force {force}·∂Φ/∂q)"
@@ -656,6 +663,9 @@ fn model_json(d: &Derivation) -> Json {
             let mut o = Map::new();
             o.insert("name".into(), json!(c.name));
             o.insert("phi".into(), json!(print(c.phi)));
+            if c.kind == model::ConstraintKind::Velocity {
+                o.insert("kind".into(), json!("velocity"));
+            }
             o.insert("reaction".into(), json!(name(c.force_symbol)));
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 o.insert("treatment".into(), json!("eliminated"));

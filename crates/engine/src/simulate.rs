@@ -403,7 +403,8 @@ pub fn run(
         && !prepared.dynamics_exprs().iter().any(|e| {
             let t = prepared.derivation.model.time;
             prepared.derivation.model.pool.depends_on(*e, t)
-        });
+        })
+        && !prepared.derivation.drives_through_velocity_constraints();
     let mut columns: Vec<String> = outputs.clone();
     columns.extend(stops.iter().cloned());
     columns.extend(events.iter().cloned());
