@@ -110,3 +110,60 @@ fn a_body_spun_about_its_intermediate_axis_flips_and_conserves_energy_and_moment
     }
     assert!((column(&outcome, 2)[0] - 4.0).abs() < 1e-12, "H = B·ω = 2·2 along y");
 }
+
+#[test]
+fn a_ball_on_a_turntable_circles_at_two_sevenths_of_its_rate() {
+    // W = 1/s: the centre's circle takes 7π/W.
+    let period = 7.0 * std::f64::consts::PI;
+    let outcome = run(
+        "space/ball_on_turntable.lag",
+        Options {
+            until: Some(period),
+            tolerance: Some(1e-12),
+            output: vec!["x, y".into()],
+            ..Options::default()
+        },
+    );
+    let (x, y) = (column(&outcome, 0), column(&outcome, 1));
+    let last = x.len() - 1;
+    assert!((x[last] - 0.3).abs() < 1e-8 && y[last].abs() < 1e-8, "({}, {})", x[last], y[last]);
+    // Half-way round it is across the circle, whose centre is where the start's velocity and
+    // rolling put it: (−0.05, 0), radius 0.35.
+    let half = x.len() / 2;
+    assert!((x[half] + 0.4).abs() < 1e-2, "x at half a period: {}", x[half]);
+    let radius: Vec<f64> =
+        x.iter().zip(&y).map(|(x, y)| ((x + 0.05) * (x + 0.05) + y * y).sqrt()).collect();
+    assert!(spread(&radius) < 1e-9, "the path is not a circle: {:e}", spread(&radius));
+    let drift = outcome.constraint_drift().expect("kept constraints");
+    assert!(drift < 1e-9, "drift {drift:e}");
+}
+
+#[test]
+fn the_rolling_disk_by_rates_derives_as_by_positions() {
+    let (_, by_positions) = lagrange_tests::examples()
+        .into_iter()
+        .find(|(p, _)| p.ends_with("ps5/rolling_disk.lag"))
+        .expect("the disk");
+    let (_, by_rates) = scene("scenes/rolling_disk_by_rates.lag");
+    assert!(by_rates.contains("r*phi' = R*theta'"));
+    let equations = |source: &str| {
+        let mut d = engine::load(source).expect("derives").derivation;
+        let eqs = d.equations();
+        let pool = &d.model.pool;
+        let m: Vec<String> =
+            d.mass_matrix.iter().flatten().map(|e| pool.print(*e, cas::Style::Ascii)).collect();
+        let f: Vec<String> = d.forcing.iter().map(|e| pool.print(*e, cas::Style::Ascii)).collect();
+        let e: Vec<String> = eqs
+            .iter()
+            .map(|q| {
+                format!(
+                    "{} = {}",
+                    pool.print(q.lhs, cas::Style::Ascii),
+                    pool.print(q.rhs, cas::Style::Ascii)
+                )
+            })
+            .collect();
+        (m, f, e)
+    };
+    assert_eq!(equations(&by_rates), equations(&by_positions));
+}
