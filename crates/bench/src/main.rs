@@ -97,16 +97,5 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
     median(&mut times)
 }
 
-/// A duration with a unit that keeps three significant digits readable (as `lagrange bench`
-/// prints it).
-pub fn seconds(s: f64) -> String {
-    if s < 1e-6 {
-        format!("{:.1} ns", s * 1e9)
-    } else if s < 1e-3 {
-        format!("{:.2} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
-    }
-}
+/// A duration with a unit that keeps three significant digits readable.
+pub use engine::bench::seconds;
