@@ -115,9 +115,11 @@ fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
 fn value_lines(pool: &Pool, label: &str, v: &Value) -> Vec<String> {
     match v {
         Value::Scalar(e) => vec![format!("{label}{}", pool.print(*e, Style::Unicode))],
+        // A vector is a column, as in a hand derivation.
         Value::Vector(xs) => {
-            let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Unicode)).collect();
-            vec![format!("{label}({})", parts.join(", "))]
+            let rows: Vec<Vec<String>> =
+                xs.iter().map(|e| vec![pool.print(*e, Style::Unicode)]).collect();
+            bracketed(&rows, label)
         }
         Value::Matrix(m) => {
             let rows: Vec<Vec<String>> = m
@@ -397,7 +399,7 @@ fn value_latex(pool: &Pool, v: &Value) -> String {
         Value::Scalar(e) => pool.print(*e, Style::Latex),
         Value::Vector(xs) => {
             let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Latex)).collect();
-            format!("\\left({}\\right)", parts.join(", "))
+            format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", parts.join(" \\\\ "))
         }
         Value::Matrix(m) => {
             let rows: Vec<String> = m
