@@ -57,12 +57,9 @@ pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
                 Ok(attributes)
             };
             let message = match first {
-                Some(d) => format!(
-                    "{path}:{}:{}: {}",
-                    line.unwrap_or(1),
-                    column.unwrap_or(1),
-                    d.message
-                ),
+                Some(d) => {
+                    format!("{path}:{}:{}: {}", line.unwrap_or(1), column.unwrap_or(1), d.message)
+                }
                 None => error.to_string(),
             };
             match build() {

@@ -31,8 +31,8 @@ struct NativeScene {
 #[pyfunction]
 #[pyo3(signature = (text, path = "<string>".to_string(), units = true))]
 fn loads(text: String, path: String, units: bool) -> PyResult<NativeScene> {
-    let scene = engine::load_with(&text, engine::Options { units })
-        .map_err(|e| engine_error(&e, &path))?;
+    let scene =
+        engine::load_with(&text, engine::Options { units }).map_err(|e| engine_error(&e, &path))?;
     Ok(NativeScene { source: text, path, units, scene })
 }
 

@@ -8,6 +8,7 @@ use numeric::Tape;
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use sim::{FaultKind, Mechanical, Problem};
 
 use crate::errors::{engine_error, numeric_error};
@@ -55,7 +56,6 @@ pub struct Rhs {
     names: Vec<String>,
     y0: Vec<f64>,
     /// Parameter values in declaration order, as the programs use them.
-    #[pyo3(get)]
     parameters: Vec<(String, f64)>,
     dy: Vec<f64>,
 }
@@ -66,7 +66,8 @@ impl Rhs {
             prepared(source, units).map_err(|e| engine_error(&e, path))?;
         let dynamics_exprs = prepared.dynamics_exprs();
         let inputs = prepared.dynamics_inputs();
-        let dynamics = prepared.lower(&inputs, &dynamics_exprs).map_err(|e| engine_error(&e, path))?;
+        let dynamics =
+            prepared.lower(&inputs, &dynamics_exprs).map_err(|e| engine_error(&e, path))?;
         let observation = prepared
             .lower(&prepared.observation_inputs(), &[])
             .map_err(|e| engine_error(&e, path))?;
@@ -79,9 +80,13 @@ impl Rhs {
             .map(|p| p.name.clone())
             .zip(parameters.iter().copied())
             .collect();
-        let mechanical =
-            Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-                .with_kinds(prepared.stabilisation());
+        let mechanical = Mechanical::new(
+            prepared.layout,
+            Tape::new(dynamics),
+            Tape::new(observation),
+            parameters,
+        )
+        .with_kinds(prepared.stabilisation());
         let dim = mechanical.dim();
         Ok(Rhs { mechanical, names, y0, parameters: named, dy: vec![0.0; dim] })
     }
@@ -95,9 +100,9 @@ impl Rhs {
                 y.len()
             )));
         }
-        self.mechanical
-            .rhs(t, y, &mut self.dy)
-            .map_err(|kind| numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names))))
+        self.mechanical.rhs(t, y, &mut self.dy).map_err(|kind| {
+            numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names)))
+        })
     }
 }
 
@@ -169,6 +174,16 @@ impl Rhs {
     #[getter]
     fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.y0)
+    }
+
+    /// The parameters' values the programs use: a dict of name to value.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for (name, value) in &self.parameters {
+            out.set_item(name, value)?;
+        }
+        Ok(out)
     }
 
     fn __repr__(&self) -> String {

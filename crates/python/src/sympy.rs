@@ -50,11 +50,14 @@ impl<'py> ToSympy<'py> {
         }
         let symbol = pool.symbol(s);
         let value = match symbol.kind {
-            SymbolKind::Param => self.call("Symbol", vec![symbol.name.clone().into_pyobject(self.py)?.into_any()])?,
+            SymbolKind::Param => {
+                self.call("Symbol", vec![symbol.name.clone().into_pyobject(self.py)?.into_any()])?
+            }
             SymbolKind::Time => self.t.clone(),
             SymbolKind::Coordinate { base, order } => {
                 let name = pool.symbol(base).base_name().to_string();
-                let function = self.call("Function", vec![name.into_pyobject(self.py)?.into_any()])?;
+                let function =
+                    self.call("Function", vec![name.into_pyobject(self.py)?.into_any()])?;
                 let q = function.call1((self.t.clone(),))?;
                 if order == 0 {
                     q
@@ -115,7 +118,12 @@ impl<'py> ToSympy<'py> {
     }
 
     /// `sympy.Eq(lhs, rhs)`, left unevaluated.
-    pub fn equation(&mut self, pool: &Pool, lhs: ExprId, rhs: ExprId) -> PyResult<Bound<'py, PyAny>> {
+    pub fn equation(
+        &mut self,
+        pool: &Pool,
+        lhs: ExprId,
+        rhs: ExprId,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let (l, r) = (self.expr(pool, lhs)?, self.expr(pool, rhs)?);
         let kwargs = pyo3::types::PyDict::new(self.py);
         kwargs.set_item("evaluate", false)?;
