@@ -167,3 +167,53 @@ fn the_rolling_disk_by_rates_derives_as_by_positions() {
     };
     assert_eq!(equations(&by_rates), equations(&by_positions));
 }
+
+/// The equations in the independent rates hold wherever the multiplier form's accelerations
+/// do: at states on the constraint surface (dependent rates from the constraints), q̈ and λ
+/// solved from M·q̈ − Jᵀ·λ = f, J·q̈ = γ make each of them vanish.
+#[test]
+fn the_independent_rates_form_agrees_with_the_multipliers() {
+    let source = std::fs::read_to_string(
+        lagrange_tests::examples_dir().join("classics/chaplygin_sleigh.lag"),
+    )
+    .expect("the sleigh");
+    let mut d = engine::load(&source).expect("derives").derivation;
+    let form = d.independent_form().expect("a velocity constraint and no force asked for");
+    assert_eq!(form.independent.len(), 2);
+    assert_eq!(form.dependent.len(), 1);
+    let (rows, rhs) = d.system();
+    let pool = &d.model.pool;
+    let mut values = vec![0.0; pool.symbol_count()];
+    for p in &d.model.params {
+        values[p.sym.index()] = numeric::eval(pool, p.value.expect("valued"), &values);
+    }
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for _ in 0..20 {
+        for s in d.coords.iter().chain(&d.rates) {
+            values[s.index()] = next();
+        }
+        for (r, e) in &form.dependent {
+            values[r.index()] = numeric::eval(pool, *e, &values);
+        }
+        let size = rhs.len();
+        let a: Vec<f64> = rows.iter().flatten().map(|e| numeric::eval(pool, *e, &values)).collect();
+        let b: Vec<f64> = rhs.iter().map(|e| numeric::eval(pool, *e, &values)).collect();
+        let x = nalgebra::DMatrix::from_row_slice(size, size, &a)
+            .lu()
+            .solve(&nalgebra::DVector::from_vec(b))
+            .expect("regular");
+        for (s, v) in d.unknowns().iter().zip(x.iter()) {
+            values[s.index()] = *v;
+        }
+        for e in &form.equations {
+            let r = numeric::eval(pool, *e, &values);
+            assert!(r.abs() < 1e-9, "residual {r:e}");
+        }
+    }
+}

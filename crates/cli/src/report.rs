@@ -228,6 +228,21 @@ pub fn text(d: &mut Derivation) -> String {
         out.extend(bracketed(&[row], &format!("  J({name}) = ")));
         out.push(format!("  γ({name}) = {}", pool.print(m.bias, u)));
     }
+    if let Some(form) = &derived.independent {
+        let names = |s: &[SymId]| s.iter().map(|r| sym_text(pool, *r, u)).collect::<Vec<_>>();
+        let dependent: Vec<SymId> = form.dependent.iter().map(|(d, _)| *d).collect();
+        out.push(format!(
+            "In the independent rates  ({}; the constraints give {})",
+            names(&form.independent).join(", "),
+            names(&dependent).join(", ")
+        ));
+        for (d, e) in &form.dependent {
+            out.push(format!("  {} = {}", sym_text(pool, *d, u), pool.print(*e, u)));
+        }
+        for e in &form.equations {
+            out.push(format!("  {} = 0", pool.print(*e, u)));
+        }
+    }
     if !derived.reactions.is_empty() {
         out.push("Reactions".into());
         for ((s, e), (_, explicit)) in derived.reactions.iter().zip(&derived.reactions_of_state) {
@@ -353,6 +368,21 @@ pub fn latex(d: &mut Derivation) -> String {
         matrix(&f_rows)
     ));
     out.push("\\end{equation}".into());
+    if let Some(form) = &derived.independent {
+        out.push("% In the independent rates".into());
+        out.push("\\begin{align}".into());
+        let mut lines: Vec<String> = form
+            .dependent
+            .iter()
+            .map(|(r, e)| format!("  {} &= {}", sym_text(pool, *r, l), pool.print(*e, l)))
+            .collect();
+        lines.extend(form.equations.iter().map(|e| format!("  {} &= 0", pool.print(*e, l))));
+        let n = lines.len();
+        for (i, line) in lines.into_iter().enumerate() {
+            out.push(if i + 1 < n { format!("{line} \\\\") } else { line });
+        }
+        out.push("\\end{align}".into());
+    }
     let mut items: Vec<(String, String)> = Vec::new();
     for (s, e) in &derived.reactions {
         items.push((sym_text(pool, *s, l), pool.print(*e, l)));
@@ -577,8 +607,24 @@ pub fn json(d: &mut Derivation) -> String {
         "at_start": at_start,
         "model": model_json(d),
     });
-    // Numbers rather than exact expressions: say how far to trust them.
     let mut doc = doc;
+    // Only scenes that keep a velocity constraint and ask for no contact force have this form.
+    if let (Some(form), Json::Object(map)) = (&derived.independent, &mut doc) {
+        let dependent: Map<String, Json> = form
+            .dependent
+            .iter()
+            .map(|(r, e)| (name(*r), Json::String(pool.print(*e, a))))
+            .collect();
+        map.insert(
+            "independent_rates".into(),
+            json!({
+                "independent": form.independent.iter().map(|r| name(*r)).collect::<Vec<_>>(),
+                "dependent": dependent,
+                "equations": form.equations.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
+            }),
+        );
+    }
+    // Numbers rather than exact expressions: say how far to trust them.
     if let (Some(digits), Json::Object(map)) = (at_start_digits, &mut doc) {
         map.insert("at_start_significant_digits".into(), json!(digits));
     }

@@ -23,11 +23,15 @@ pub struct Derived {
     pub shown: Vec<(model::Show, Value)>,
     pub at_start: ShownAtStart,
     pub start_state: Vec<(SymId, ExprId)>,
+    /// The equations in the independent rates, where velocity constraints are kept and no
+    /// contact force is asked for.
+    pub independent: Option<mechanics::IndependentForm>,
 }
 
 /// The forms of a derivation that a report shows.
 pub fn collect(d: &mut Derivation) -> Derived {
     let equations = d.equations();
+    let independent = d.independent_form();
     let pool = &mut d.model.pool;
     let mass_matrix = d
         .mass_matrix
@@ -90,6 +94,7 @@ pub fn collect(d: &mut Derivation) -> Derived {
         shown,
         at_start,
         start_state,
+        independent,
     }
 }
 
