@@ -194,3 +194,19 @@ def test_kept_constraint_has_multiplier_and_numbers_hold_it():
     f = scene.rhs()
     out = f(0.0, f.y0)
     assert out.shape == (len(f.names),) and np.all(np.isfinite(out))
+
+
+@pytest.mark.parametrize(
+    "path", sorted(EXAMPLES.glob("**/*.lag")), ids=lambda p: f"{p.parent.name}/{p.stem}"
+)
+def test_every_example_derives_evaluates_and_checks(path):
+    scene = lagrange.load(path)
+    d = scene.derive()
+    n = len(d.coordinates)
+    assert d.mass_matrix.shape == (n, n) and d.forcing.shape == (n, 1)
+    assert len(d.equations) >= 1 and "\\begin{aligned}" in d._repr_latex_()
+    f = scene.rhs()
+    assert f.names[:n] == [str(q.func) for q in d.coordinates]
+    assert np.all(np.isfinite(f(0.0, f.y0)))
+    assert scene.mass_matrix_function()(0.0, f.y0).shape == (n, n)
+    assert all(e.held for e in scene.check())
