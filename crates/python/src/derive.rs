@@ -177,6 +177,28 @@ pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, P
         constraints.append(item)?;
     }
     out.set_item("constraints", constraints)?;
+
+    let independent = match &derived.independent {
+        None => None,
+        Some(form) => {
+            let item = PyDict::new(py);
+            let dependent = PyDict::new(py);
+            for (rate, e) in &form.dependent {
+                dependent.set_item(&pool.symbol(*rate).name, s.expr(pool, *e)?)?;
+            }
+            item.set_item("dependent", dependent)?;
+            item.set_item("independent", list(&mut s, &form.independent)?)?;
+            let zero = pool.zero();
+            let equations: Vec<_> = form
+                .equations
+                .iter()
+                .map(|e| s.equation(pool, *e, zero))
+                .collect::<PyResult<_>>()?;
+            item.set_item("equations", PyList::new(py, equations)?)?;
+            Some(item)
+        }
+    };
+    out.set_item("independent", independent)?;
     out.set_item("latex", latex(d, &derived))?;
     Ok(out)
 }

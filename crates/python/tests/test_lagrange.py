@@ -210,3 +210,11 @@ def test_every_example_derives_evaluates_and_checks(path):
     assert np.all(np.isfinite(f(0.0, f.y0)))
     assert scene.mass_matrix_function()(0.0, f.y0).shape == (n, n)
     assert all(e.held for e in scene.check())
+
+
+def test_chaplygin_sleigh_has_equations_in_the_independent_rates():
+    d = lagrange.load(EXAMPLES / "classics" / "chaplygin_sleigh.lag").derive()
+    form = d.independent
+    assert form is not None
+    assert len(form["equations"]) == len(form["independent"])
+    assert form["dependent"] and all(isinstance(e, sp.Eq) for e in form["equations"])

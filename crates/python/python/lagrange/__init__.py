@@ -215,6 +215,10 @@ class Derivation:
       allows (``at_start_note`` says when they are numbers instead); ``start``: the initial
       state.
     - ``constraints``: a list of :class:`Constraint`.
+    - ``independent``: where velocity constraints are kept and no reaction is asked for, the
+      equations in the independent rates (Maggi's form) as a dict: ``dependent`` (each
+      dependent rate's name to its expression), ``independent`` (the independent rates) and
+      ``equations`` (``sympy.Eq(…, 0)``); ``None`` otherwise.
     - ``latex``: the equations, mass-matrix form, reactions and start values in LaTeX.
     """
 
@@ -240,6 +244,7 @@ class Derivation:
         self.at_start_note = raw["at_start_note"]
         self.start = raw["start"]
         self.constraints = [Constraint(**c) for c in raw["constraints"]]
+        self.independent = raw["independent"]
         self.latex = raw["latex"]
 
     def parameter_values(self):
