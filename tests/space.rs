@@ -253,3 +253,30 @@ fn a_singular_angle_set_is_named_when_simulate_meets_it() {
     assert!(text.contains("`top`"), "{text}");
     assert!(outcome.run.trajectory.rows.iter().flatten().all(|x| x.is_finite()));
 }
+
+/// A thin coin rolling upright is stable when its spin Ω has Ω² > g/(3·r): 163.5/s² here, so
+/// Ω = 15/s keeps it up and Ω = 5/s lets it fall. `--set` of the spin re-solves the rolling
+/// rates, so both runs start on the constraints and keep their energy.
+#[test]
+fn a_fast_coin_rolls_on_and_a_slow_one_falls() {
+    let lean_of = |spin: &str| {
+        let outcome = run(
+            "space/rolling_coin.lag",
+            Options {
+                set: vec![format!("phi'={spin}")],
+                tolerance: Some(1e-11),
+                output: vec!["theta".into()],
+                ..Options::default()
+            },
+        );
+        let (_, relative) = outcome.energy_drift();
+        assert!(relative < 1e-8, "energy drift {relative:e} at spin {spin}");
+        let drift = outcome.constraint_drift().expect("kept constraints");
+        assert!(drift < 1e-8, "constraint drift {drift:e} at spin {spin}");
+        column(&outcome, 0).into_iter().fold(0.0, f64::max)
+    };
+    let fast = lean_of("15");
+    assert!(fast < 0.5, "the fast coin leans to {fast}");
+    let slow = lean_of("5");
+    assert!(slow > 1.0, "the slow coin only leans to {slow}");
+}

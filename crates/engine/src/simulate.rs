@@ -350,6 +350,18 @@ pub fn run(
         y0[k] = prepared.constant(initial, &parameters);
         y0[n + k] = prepared.constant(rate, &parameters);
     }
+    let set_rates: Vec<bool> = prepared
+        .derivation
+        .coords
+        .iter()
+        .map(|q| {
+            let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
+            coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate)
+        })
+        .collect();
+    if !coord_overrides.is_empty() {
+        prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
+    }
     if let Some(bad_slot) = y0.iter().position(|v| !v.is_finite()) {
         return Err(bad(format!(
             "the initial value of `{}` is not a finite number",
