@@ -13,7 +13,7 @@ const SCENES: [&str; 6] = [
     "examples/space/spherical_rod.lag",
     "examples/space/tennis_racket.lag",
     "examples/space/robot_arm.lag",
-    "tests/sympy/scenes/gyroscope.lag",
+    "examples/space/gyroscope.lag",
     "tests/sympy/scenes/spatial_loads.lag",
 ];
 

@@ -180,7 +180,8 @@ pub fn text(d: &mut Derivation) -> String {
     if !d.model.constraints.is_empty() {
         out.push("Constraints".into());
         for (i, c) in d.model.constraints.iter().enumerate() {
-            out.push(format!("  {}: {} = {}", c.name, pool.print(c.lhs, u), pool.print(c.rhs, u)));
+            let (lhs, rhs) = derived.constraint_sides[i];
+            out.push(format!("  {}: {} = {}", c.name, pool.print(lhs, u), pool.print(rhs, u)));
             let force = sym_text(pool, c.force_symbol, u);
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 let what = if c.force_requested {

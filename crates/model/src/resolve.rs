@@ -1168,7 +1168,13 @@ impl<'a> Resolver<'a> {
                 }
             },
             ExprKind::Name { name, primes } => self.name(name, *primes, e.span),
-            ExprKind::Member { object, field } => self.member(object, field, e.span),
+            ExprKind::Member { object, field, component: None } => {
+                self.member(object, field, e.span)
+            }
+            ExprKind::Member { object, field, component: Some(c) } => {
+                let (v, dims) = self.member(object, field, e.span)?;
+                self.component(v, dims, c, &format!("{}.{}", object.name, field.name))
+            }
             ExprKind::Call { func, args } => self.call(func, args, e.span),
             ExprKind::Neg(inner) => {
                 let (v, dims) = self.value(inner)?;
@@ -1365,20 +1371,14 @@ impl<'a> Resolver<'a> {
     }
 
     fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<(Value, Dims)> {
-        let value = self.member_value(object, field, span)?;
-        if let Some(Binding::Let(_)) = self.names.get(&normalize(&object.name)) {
-            // A component of a vector `let`.
-            self.used.insert(normalize(&object.name));
-            let i = match field.name.as_str() {
-                "x" => 0,
-                "y" => 1,
-                _ => 2,
-            };
-            let name = normalize(&object.name);
-            let whole = self.name_dims(&object.name, &name, 0);
-            let forms = self.shape(whole).forms();
-            return Some((value, Dims::Scalar(forms.get(i).cloned().unwrap_or_default())));
+        if let Some(Binding::Let(v)) = self.names.get(&normalize(&object.name)) {
+            if !matches!(v, Value::Scalar(_)) {
+                // A component of a vector `let`.
+                let (v, dims) = self.name(&object.name, 0, object.span)?;
+                return self.component(v, dims, field, &object.name);
+            }
         }
+        let value = self.member_value(object, field, span)?;
         let body = match self.names.get(&normalize(&object.name)) {
             Some(Binding::Body(i)) => Some(*i),
             _ => None,
@@ -1465,32 +1465,6 @@ impl<'a> Resolver<'a> {
                     self.error(d);
                 }
                 value
-            }
-            Some(Binding::Let(v)) if !matches!(v, Value::Scalar(_)) => {
-                let components = space::as_vector(&v);
-                let i = match field.name.as_str() {
-                    "x" => 0,
-                    "y" => 1,
-                    "z" => 2,
-                    _ => usize::MAX,
-                };
-                match components.as_ref().and_then(|c| c.get(i)) {
-                    Some(x) => Some(Value::Scalar(*x)),
-                    None => {
-                        let d = Diagnostic::error(
-                            field.span,
-                            format!("`{}` has no `{}`", object.name, field.name),
-                        )
-                        .with_label(match &components {
-                            Some(c) if c.len() == 2 => "expected x or y".to_string(),
-                            Some(_) => "expected x, y or z".to_string(),
-                            None => format!("`{}` is {}", object.name, v.kind_name()),
-                        })
-                        .with_hint("a vector's components are `.x`, `.y` and `.z`");
-                        self.error(d);
-                        None
-                    }
-                }
             }
             Some(Binding::Constraint(components)) => {
                 if field.name != "force" {
