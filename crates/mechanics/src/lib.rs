@@ -4,18 +4,21 @@
 //! (planar, and spatial with ω from the orientation), constraints (a holonomic one eliminated
 //! when it can be solved for one coordinate, kept with a multiplier otherwise; a velocity
 //! constraint always kept), generalized forces by virtual work, the Euler–Lagrange
-//! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, and the
-//! algebraic side of checking `expect` lines. It is purely symbolic: what needs numbers
+//! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, the
+//! algebraic side of checking `expect` lines, and the exact linearization about a reference
+//! (`linearize about`). It is purely symbolic: what needs numbers
 //! (random states, the numeric start, verdicts sampled at states) is the `verify` crate's. It
 //! knows nothing of parsing or of files: it starts from a [`model::Model`].
 
 mod check;
 mod derive;
+mod linearize;
 mod present;
 pub use present::collect_by_motion;
 mod start;
 
 pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
+pub use linearize::{LinearConstraint, Linearization};
 pub use present::{Equation, StartShows};
 pub use start::StartSolution;
