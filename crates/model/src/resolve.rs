@@ -593,14 +593,14 @@ impl<'a> Resolver<'a> {
                     continue;
                 }
             };
-            let Some((_, coord_dims)) = self.name(raw, item.primes, item.name.span) else {
-                continue;
-            };
+            // The primes follow the name with nothing between them.
+            let primed = Span::new(item.name.span.start, item.name.span.end + item.primes as usize);
+            let Some((_, coord_dims)) = self.name(raw, item.primes, primed) else { continue };
             let Some((value, dims)) = self.constant(&item.value) else { continue };
             let written = self.with_unit(Some(dims), item.unit.as_ref());
             let expected = self.form(coord_dims);
             let what = "in this reference value";
-            self.units.same(&expected, &written, item.name.span, item.value.span, what);
+            self.units.same(&expected, &written, primed, item.value.span, what);
             let Some(value) = self.in_si(value, item.unit.as_ref()) else { continue };
             let rate = item.primes == 1;
             if let Some(first) = out.iter().find(|a| a.coord == coord && a.rate == rate) {
