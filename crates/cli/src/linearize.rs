@@ -358,6 +358,9 @@ pub fn json(l: &Linearized) -> String {
     text
 }
 
+/// One part of an eigenvalue (re, im).
+type Part = fn(&(f64, f64)) -> f64;
+
 const WIDTH: f64 = 720.0;
 const PANEL: f64 = 200.0;
 const LEFT: f64 = 90.0;
@@ -384,8 +387,7 @@ pub fn svg(title: &str, sweep: &Sweep) -> String {
     let values: Vec<f64> = sweep.rows.iter().map(|r| r.value).collect();
     let (p0, p1) = range(&values);
     let x = |p: f64| LEFT + (p - p0) / (p1 - p0) * (WIDTH - LEFT - RIGHT);
-    let panels: [(&str, fn(&(f64, f64)) -> f64); 2] =
-        [("real part of λ", |z| z.0), ("imaginary part of λ", |z| z.1)];
+    let panels: [(&str, Part); 2] = [("real part of λ", |z| z.0), ("imaginary part of λ", |z| z.1)];
     for (k, (name, part)) in panels.iter().enumerate() {
         let top = GAP + k as f64 * (PANEL + GAP);
         let all: Vec<f64> =

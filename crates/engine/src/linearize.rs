@@ -501,7 +501,9 @@ impl Analysis {
         // On each kept constraint, then the accelerations (and the multipliers) there.
         let values = self.by_symbol(parameters, &vec![0.0; k]);
         for (c, (phi, size)) in self.phi.eval(&values).into_iter().enumerate() {
-            if !(phi.abs() <= EQUILIBRIUM_TOLERANCE * size) {
+            // NaN is off the constraint too.
+            let on = phi.abs() <= EQUILIBRIUM_TOLERANCE * size;
+            if !on {
                 let constraint = lin.constraints[c].constraint;
                 return Err(Fault::OffConstraint { constraint, value: phi });
             }
@@ -574,7 +576,8 @@ impl Analysis {
         let svd = nalgebra::SVD::try_new(mr.clone(), false, false, f64::EPSILON, MAX_ITERATIONS)
             .ok_or(Fault::NotFinite("the mass matrix"))?;
         let (largest, smallest) = (svd.singular_values.max(), svd.singular_values.min());
-        if !(smallest > 1e-12 * largest) {
+        let regular = smallest > 1e-12 * largest;
+        if !regular {
             return Err(Fault::SingularMass { condition: largest / smallest });
         }
         let lu = mr.lu();
@@ -659,7 +662,7 @@ fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
 
 /// The verdict and the absolute tolerance it used.
 fn stability(eigenvalues: &[(f64, f64)]) -> (Stability, f64) {
-    let scale = eigenvalues.iter().map(|(re, im)| re.hypot(*im)).fold(0.0, f64::max);
+    let scale = eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
     let tolerance = RELATIVE_TOLERANCE * scale;
     let verdict = if eigenvalues.iter().any(|(re, _)| *re > tolerance) {
         Stability::Unstable

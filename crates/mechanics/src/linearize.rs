@@ -184,24 +184,25 @@ impl Derivation {
             let e = pool.subst(e, &map);
             pool.simplify(e)
         };
-        let mut mass = vec![Vec::with_capacity(n); n];
-        let mut damping = vec![Vec::with_capacity(n); n];
-        let mut stiffness = vec![Vec::with_capacity(n); n];
-        for j in 0..n {
-            for i in 0..n {
-                mass[j].push(at(pool, self.mass_matrix[j][i]));
+        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
+        for (j, g) in generalized.iter().enumerate() {
+            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, is_cyclic) in cyclic.iter().enumerate() {
+                m.push(at(pool, self.mass_matrix[j][i]));
                 let df = pool.diff(self.forcing[j], self.rates[i]);
-                let c = at(pool, df);
-                damping[j].push(pool.neg(c));
-                let k = if cyclic[i] {
+                let df = at(pool, df);
+                c.push(pool.neg(df));
+                k.push(if *is_cyclic {
                     pool.zero()
                 } else {
-                    let dg = pool.diff(generalized[j], self.coords[i]);
-                    let k = at(pool, dg);
-                    pool.neg(k)
-                };
-                stiffness[j].push(k);
+                    let dg = pool.diff(*g, self.coords[i]);
+                    let dg = at(pool, dg);
+                    pool.neg(dg)
+                });
             }
+            mass.push(m);
+            damping.push(c);
+            stiffness.push(k);
         }
         let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
         let residual_is_zero =
@@ -276,11 +277,15 @@ impl Derivation {
 mod tests {
     use crate::derive::testing::{ascii, derived};
 
-    fn matrices(source: &str) -> (Vec<Vec<String>>, Vec<Vec<String>>, Vec<Vec<String>>) {
+    /// A matrix as text, row by row.
+    type Text = Vec<Vec<String>>;
+
+    /// M, C and K of a scene about its reference.
+    fn matrices(source: &str) -> (Text, Text, Text) {
         let mut d = derived(source);
         let lin = d.linearize().expect("linearizes");
         let pool = d.pool();
-        let text = |m: &[Vec<cas::ExprId>]| -> Vec<Vec<String>> {
+        let text = |m: &[Vec<cas::ExprId>]| -> Text {
             m.iter().map(|r| r.iter().map(|e| ascii(pool, *e)).collect()).collect()
         };
         (text(&lin.mass), text(&lin.damping), text(&lin.stiffness))
