@@ -215,3 +215,65 @@ fn text_and_plot_show_the_sweep() {
     assert_eq!(svg.matches("<circle").count(), 2 * 11 * 5);
     assert_eq!(svg.matches("stroke-dasharray").count(), 2);
 }
+
+/// Every scene of the repository (examples, cross-check scenes, the bad gallery), linearized
+/// about all coordinates at 0 and swept over its first parameter: an answer or an error with
+/// exit code 2, never a panic.
+#[test]
+fn no_scene_makes_linearize_panic() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<std::path::PathBuf> = Vec::new();
+    for dir in ["../examples/classics", "../examples/ps5", "../examples/space", "bad", "scenes"] {
+        let entries = std::fs::read_dir(root.join(dir)).expect("a folder");
+        files.extend(entries.flatten().map(|e| e.path()));
+    }
+    files.extend(
+        std::fs::read_dir(root.join("sympy/scenes")).expect("scenes").flatten().map(|e| e.path()),
+    );
+    files.retain(|p| p.extension().is_some_and(|e| e == "lag"));
+    files.sort();
+    assert!(files.len() > 100, "{}", files.len());
+    let mut panicked = Vec::new();
+    let mut answered = 0;
+    for path in files {
+        let source = std::fs::read_to_string(&path).expect("readable");
+        let (coords, params) = match lang::parse(&source) {
+            Ok(file) => names(&file),
+            Err(_) => (Vec::new(), Vec::new()),
+        };
+        let about = coords.iter().map(|c| format!("{c} = 0")).collect::<Vec<_>>().join(", ");
+        let mut runs = vec![Options { about: Some(about.clone()), ..Default::default() }];
+        if let Some(p) = params.first() {
+            let sweep = Some(format!("{p}=1:2:3"));
+            runs.push(Options { about: Some(about), sweep, ..Default::default() });
+        }
+        for options in runs {
+            let outcome = std::panic::catch_unwind(|| linearize(&source, &options));
+            match outcome {
+                Err(_) => panicked.push(path.display().to_string()),
+                Ok(Ok(_)) => answered += 1,
+                Ok(Err(e)) => assert_eq!(e.exit_code(), 2, "{}: {e}", path.display()),
+            }
+        }
+    }
+    assert!(panicked.is_empty(), "linearize panicked on {panicked:?}");
+    // Most scenes are not at rest with every coordinate at 0; some are.
+    assert!(answered >= 10, "only {answered} scenes linearized");
+}
+
+/// The coordinates and parameters a scene declares, by name.
+fn names(file: &lang::SceneFile) -> (Vec<String>, Vec<String>) {
+    let (mut coords, mut params) = (Vec::new(), Vec::new());
+    for stmt in &file.stmts {
+        match &stmt.kind {
+            lang::StmtKind::Coord(decls) => {
+                coords.extend(decls.iter().map(|d| d.name.name.clone()))
+            }
+            lang::StmtKind::Param(decls) => {
+                params.extend(decls.iter().map(|d| d.name.name.clone()))
+            }
+            _ => {}
+        }
+    }
+    (coords, params)
+}

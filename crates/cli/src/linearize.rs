@@ -58,8 +58,9 @@ fn reference_text(pool: &Pool, reference: &[(SymId, bool, ExprId)], style: Style
 
 fn verdict_text(numbers: &Numbers) -> String {
     let tolerance = format!(
-        "{} ({RELATIVE_TOLERANCE:.0e} × the largest |λ|)",
-        significant(numbers.tolerance, 2, Style::Unicode)
+        "{} ({} × the largest |λ|)",
+        significant(numbers.tolerance, 2, Style::Unicode),
+        significant(RELATIVE_TOLERANCE, 1, Style::Unicode)
     );
     match numbers.stability {
         engine::linearize::Stability::Stable => {
@@ -146,7 +147,8 @@ pub fn text(l: &Linearized) -> String {
         out.push(format!("  {} = {}", pool.symbol_text(c.lambda, u), number(*v)));
     }
     let state: Vec<String> = l.state.iter().map(|s| format!("δ{}", state_text(pool, s))).collect();
-    out.push(format!("First-order form  ẋ = A·x,  x = ({})", state.join(", ")));
+    // Not x: a scene's coordinate is as likely as not to be called that.
+    out.push(format!("First-order form  u̇ = A·u,  u = ({})", state.join(", ")));
     if let Some(basis) = &l.at.basis {
         out.extend(bracketed(&number_rows(basis), "  δq = N·z,  N = "));
     }

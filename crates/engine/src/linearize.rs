@@ -82,7 +82,7 @@ pub struct Numbers {
     /// With kept constraints: the basis N of their null space (one column per reduced
     /// coordinate z, one row per coordinate), δq = N·z.
     pub basis: Option<Vec<Vec<f64>>>,
-    /// ẋ = A·x.
+    /// u̇ = A·u, u the state.
     pub a: Vec<Vec<f64>>,
     /// (re, im), by real part from the largest down (within the tolerance of zero as zero),
     /// then by imaginary part.
@@ -127,7 +127,7 @@ pub struct Linearized {
     pub mass: Vec<Vec<ExprId>>,
     pub damping: Vec<Vec<ExprId>>,
     pub stiffness: Vec<Vec<ExprId>>,
-    /// The names of the state x of ẋ = A·x: positions (`theta`, or `z1` along the null space
+    /// The names of the state u of u̇ = A·u: positions (`theta`, or `z1` along the null space
     /// of kept constraints), then rates (`theta'`).
     pub state: Vec<String>,
     /// Whether the algebra showed the accelerations zero at the reference for every value of
@@ -213,6 +213,9 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     }
     let scene = |diagnostics: Vec<Diagnostic>| Error::Scene { diagnostics, source: text.clone() };
     let linearization = prepared.derivation.linearize().map_err(scene).map_err(from_about)?;
+    if linearization.coords.is_empty() {
+        return Err(bad("the constraints fix every coordinate: nothing is left to linearize"));
+    }
 
     // --- parameter values ------------------------------------------------------------------
     let model = &prepared.derivation.model;
@@ -324,7 +327,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let mass = shown(pool, &linearization.mass);
     let damping = shown(pool, &linearization.damping);
     let stiffness = shown(pool, &linearization.stiffness);
-    let state = analysis.state_names(&prepared, &linearization);
+    let state = analysis.state_names(&prepared, &linearization, &at);
     Ok(Linearized {
         derivation: prepared.derivation,
         exact_reference: linearization.residual_is_zero,
@@ -348,6 +351,8 @@ enum Fault {
     SingularMass { condition: f64 },
     /// A value is NaN or infinite.
     NotFinite(&'static str),
+    /// The kept constraints leave no small motion.
+    NoMotion,
 }
 
 impl Fault {
@@ -395,6 +400,12 @@ impl Fault {
                 "the coordinates are singular here (Euler angles at gimbal lock, say): choose \
                  coordinates that are regular at the reference",
             ),
+            Fault::NoMotion => Diagnostic::error(
+                span,
+                format!("the constraints leave no small motion about this reference{at}"),
+            )
+            .with_label("every δq here breaks a constraint")
+            .with_hint("a reference needs room to move: fewer constraints than coordinates"),
             Fault::NotFinite(what) => Diagnostic::error(
                 span,
                 format!("{what} is not a finite number at this reference{at}"),
@@ -450,14 +461,16 @@ impl Analysis {
 
     /// The names of the state: positions kept (coordinates, or z1… along the constraints'
     /// null space, then cyclic coordinates), then their rates.
-    fn state_names(&self, prepared: &Prepared, lin: &Linearization) -> Vec<String> {
+    fn state_names(&self, prepared: &Prepared, lin: &Linearization, at: &Numbers) -> Vec<String> {
         let pool = &prepared.derivation.model.pool;
         let name = |i: usize| pool.symbol(lin.coords[i]).name.clone();
         let (positions, rates): (Vec<String>, Vec<String>) = if self.k == 0 {
             let positions = (0..self.n).filter(|&i| !self.cyclic[i]).map(name).collect();
             (positions, (0..self.n).map(|i| format!("{}'", name(i))).collect())
         } else {
-            let reduced = self.n - self.cyclic.iter().filter(|c| **c).count() - self.k;
+            // The null space's dimension at the reference: n minus the constraints' rank there.
+            let columns = at.basis.as_ref().and_then(|b| b.first()).map_or(0, Vec::len);
+            let reduced = columns.saturating_sub(self.cyclic.iter().filter(|c| **c).count());
             let z: Vec<String> = (1..=reduced).map(|j| format!("z{j}")).collect();
             let cyclic: Vec<String> = (0..self.n).filter(|&i| self.cyclic[i]).map(name).collect();
             let rates = z.iter().chain(&cyclic).map(|s| format!("{s}'")).collect();
@@ -567,6 +580,9 @@ impl Analysis {
             basis
         };
         let r = basis.ncols();
+        if r == 0 {
+            return Err(Fault::NoMotion);
+        }
         let reduce = |m: &DMatrix<f64>| basis.transpose() * m * &basis;
         let (mr, cr, kr) = (reduce(&mass), reduce(&damping), reduce(&stiffness));
         // Which reduced coordinates keep their position in the state: all but the cyclic.

@@ -54,13 +54,6 @@ pub struct Linearization {
     pub span: Span,
 }
 
-impl Linearization {
-    /// Whether coordinate `i` is in the state of the first-order system.
-    pub fn keeps(&self, i: usize) -> bool {
-        !self.cyclic[i]
-    }
-}
-
 impl Derivation {
     /// Linearizes the equations of motion about the reference of the scene's `linearize about`
     /// lines (a later line overrides an earlier one item by item). Errors point at the items or
