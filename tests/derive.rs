@@ -104,3 +104,23 @@ fn the_readme_shows_the_current_output() {
         "README.md is out of date: paste the new output"
     );
 }
+
+/// The README quotes the heavy top's kinetic energy and θ equation; each quoted line must be a
+/// line `derive` prints today.
+#[test]
+fn the_readme_quotes_the_heavy_top_as_derived() {
+    let readme = std::fs::read_to_string(lagrange_tests::examples_dir().join("../README.md"))
+        .expect("README");
+    let section = &readme[readme.find("### Bodies in space").expect("the section")..];
+    let quoted = section.split("```").nth(3).expect("the second code block");
+    let path = lagrange_tests::examples_dir().join("space/heavy_top.lag");
+    let printed = derive(&path, cli::Format::Text);
+    let lines: Vec<&str> = quoted.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 2, "{quoted}");
+    for line in lines {
+        assert!(
+            printed.lines().any(|p| p == line),
+            "README quotes `{line}`, derive prints:\n{printed}"
+        );
+    }
+}

@@ -161,10 +161,12 @@ def relative(a, b):
 # --------------------------------------------------------------------------------------------
 
 
-def sympy_system(model, scope, coords, substitute, kept):
+def sympy_system(model, scope, coords, substitute, kept, velocity=()):
     """LagrangesMethod in `coords`, after substituting the eliminated coordinates
     (`substitute`, applied to q, q' and q''), with the constraints `kept` (a list of Phi) as
-    holonomic constraint equations. Returns (MM, FF, lam_vec): MM [q'; q''; lam] = FF."""
+    constraint equations: holonomic, except those whose index is in `velocity`, which are
+    nonholonomic (linear in the rates). Returns (MM, FF, order): MM [q'; q''; lam] = FF, with
+    lam in SymPy's order (holonomic first), `order[i]` the place of kept[i]'s multiplier."""
     t = scope.t
     sub = lambda e: e.xreplace(substitute)
     N = ReferenceFrame("N")
@@ -249,8 +251,10 @@ def sympy_system(model, scope, coords, substitute, kept):
             forcelist.append((frames[tq["body"]], sub(scope.parse(tq["torque"])) * N.z))
 
     q = [scope.coords[c] for c in coords]
+    hol = [phi for i, phi in enumerate(kept) if i not in velocity]
+    nonhol = [phi for i, phi in enumerate(kept) if i in velocity]
     lm = LagrangesMethod(L, q, forcelist=forcelist or None, frame=N,
-                         hol_coneqs=kept or None)
+                         hol_coneqs=hol or None, nonhol_coneqs=nonhol or None)
     lm.form_lagranges_equations()
     MM, FF = lm.mass_matrix_full, lm.forcing_full.copy()
 
@@ -259,8 +263,15 @@ def sympy_system(model, scope, coords, substitute, kept):
     D = sum((sub(scope.parse(d)) for d in model["dissipation"]), sp.S(0))
     for i, qi in enumerate(q):
         FF[len(q) + i] += -D.diff(qi.diff(t))
-    lam = list(lm.lam_vec) if kept else []
-    return MM, FF, lam
+    order, h, v = [], 0, len(hol)
+    for i in range(len(kept)):
+        if i in velocity:
+            order.append(v)
+            v += 1
+        else:
+            order.append(h)
+            h += 1
+    return MM, FF, order
 
 
 def check_eliminations(model, scope, substitute, evaluate, n_args, rng):
@@ -325,7 +336,8 @@ def crosscheck(report, n_states, seed):
 
     # SymPy in the remaining coordinates, with lagrange's kept constraints as multipliers.
     phis = [scope.parse(c["phi"]).xreplace(substitute) for c in kept]
-    MM, FF, lam = sympy_system(model, scope, remaining, substitute, phis)
+    velocity = {i for i, c in enumerate(kept) if c.get("kind") == "velocity"}
+    MM, FF, order = sympy_system(model, scope, remaining, substitute, phis, velocity)
     sym_MM, sym_FF = reduced.function(list(MM)), reduced.function(list(FF))
     size = MM.shape[0]
 
@@ -335,7 +347,8 @@ def crosscheck(report, n_states, seed):
     wanted_full = [r for r in reaction_names if by_reaction[r].get("treatment") == "eliminated"]
     if wanted_full:
         all_phis = [scope.parse(c["phi"]) for c in model["constraints"]]
-        fMM, fFF, flam = sympy_system(model, scope, declared, {}, all_phis)
+        all_velocity = {i for i, c in enumerate(model["constraints"]) if c.get("kind") == "velocity"}
+        fMM, fFF, forder = sympy_system(model, scope, declared, {}, all_phis, all_velocity)
         full = Evaluator(scope, declared)
         full_MM, full_FF = full.function(list(fMM)), full.function(list(fFF))
         # The full state from the reduced one: eliminated coordinates from their solutions.
@@ -362,7 +375,8 @@ def crosscheck(report, n_states, seed):
 
         # SymPy's [q'; q''; lam] from mass_matrix_full and forcing_full.
         y = solve([list(r) for r in _rows(sym_MM(*state, *pad), size)], sym_FF(*state, *pad))
-        sym_acc, sym_lam = y[n:2 * n], y[2 * n:]
+        sym_acc = y[n:2 * n]
+        sym_lam = [y[2 * n + order[i]] for i in range(len(kept))]
         # SymPy's mass_matrix puts -dPhi/dq against lam on the left (M q'' - J^T lam = f), so
         # its lam has lagrange's sign: generalized constraint force +lam dPhi/dq.
         # (Its `lm.eom` writes the multiplier term with the other sign; we do not use it.)
@@ -383,7 +397,7 @@ def crosscheck(report, n_states, seed):
                     fs = len(declared)
                     z = solve(_rows(full_MM(*full_state, *[0] * fs), 2 * fs + m),
                               full_FF(*full_state, *[0] * fs))
-                    worst = max(worst, relative(value, z[2 * fs + constraint_index[r]]))
+                    worst = max(worst, relative(value, z[2 * fs + forder[constraint_index[r]]]))
                     # The full system's accelerations must agree with the reduced ones too.
                     for i, name in enumerate(remaining):
                         worst = max(worst, relative(z[fs + declared.index(name)], lag_acc[i]))

@@ -5,6 +5,7 @@
 //!   Rust compiled with `rustc -O`, and in a hand-written function (the floor);
 //! - `precision`: work–precision of every integrator against exact references;
 //! - `model`: what asking for reactions and energies costs in the lowered program;
+//! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -15,11 +16,12 @@ mod hand;
 mod model;
 mod precision;
 mod scaling;
+mod space;
 
 use std::time::Instant;
 
 const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | derive n-link-pendulum[-on-cart] N]";
+                     precision | model | space | derive n-link-pendulum[-on-cart] N]";
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -37,7 +39,9 @@ fn main() {
             eval::run();
             precision::run();
             model::run();
+            space::run();
         }
+        "space" => space::run(),
         "scaling" => scaling::run(budget, max),
         "eval" => eval::run(),
         "precision" => {
@@ -93,16 +97,5 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
     median(&mut times)
 }
 
-/// A duration with a unit that keeps three significant digits readable (as `lagrange bench`
-/// prints it).
-pub fn seconds(s: f64) -> String {
-    if s < 1e-6 {
-        format!("{:.1} ns", s * 1e9)
-    } else if s < 1e-3 {
-        format!("{:.2} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
-    }
-}
+/// A duration with a unit that keeps three significant digits readable.
+pub use engine::bench::seconds;

@@ -3,8 +3,6 @@
 //! energy integral) and the simple pendulum (its exact period from the arithmetic–geometric
 //! mean: after one period the state is the initial one again).
 
-use std::fmt::Write;
-
 use engine::bench::{final_state_error, options_for, work_precision, Setting, Trial};
 use engine::simulate::{simulate, Options, Outcome};
 use sim::reference::{elliptic_k, gauss_legendre};
@@ -40,33 +38,9 @@ pub fn rod_landing_time(theta0: f64) -> f64 {
     gauss_legendre(integrand, 0.0, 1.0, 4000)
 }
 
-/// The table of trials, one line each, as `lagrange bench` prints it.
-fn table(trials: &[Trial]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
-        "method", "setting", "error", "time", "rhs evals", "steps"
-    );
-    for t in trials {
-        let error = if t.error.is_nan() { "fault".to_string() } else { format!("{:.2e}", t.error) };
-        let _ = writeln!(
-            s,
-            "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
-            t.method.name(),
-            t.setting.label(),
-            error,
-            crate::seconds(t.seconds),
-            t.evaluations,
-            t.steps
-        );
-    }
-    s
-}
-
 fn section(title: &str, note: &str, trials: &[Trial]) {
     println!("{title}\n{note}");
-    print!("{}", table(trials));
+    print!("{}", engine::bench::table(trials, &[]));
     println!();
 }
 

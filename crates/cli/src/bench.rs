@@ -4,48 +4,9 @@
 
 use std::fmt::Write;
 
+pub use engine::bench::{seconds, table};
 use engine::bench::{Inapplicable, Trial};
 use sim::Method;
-
-/// The table of trials, one line each, then a line for each method left out.
-pub fn table(trials: &[Trial], inapplicable: &[Inapplicable]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
-        "method", "setting", "error", "time", "rhs evals", "steps"
-    );
-    for t in trials {
-        let error = if t.error.is_nan() { "fault".to_string() } else { format!("{:.2e}", t.error) };
-        let _ = writeln!(
-            s,
-            "{:<9} {:>12} {:>11} {:>12} {:>10} {:>9}",
-            t.method.name(),
-            t.setting.label(),
-            error,
-            seconds(t.seconds),
-            t.evaluations,
-            t.steps
-        );
-    }
-    for m in inapplicable {
-        let _ = writeln!(s, "{:<9} not applicable: {}", m.method.name(), m.reason);
-    }
-    s
-}
-
-/// A duration with a unit that keeps three significant digits readable.
-pub fn seconds(s: f64) -> String {
-    if s < 1e-6 {
-        format!("{:.1} ns", s * 1e9)
-    } else if s < 1e-3 {
-        format!("{:.2} µs", s * 1e6)
-    } else if s < 1.0 {
-        format!("{:.2} ms", s * 1e3)
-    } else {
-        format!("{s:.2} s")
-    }
-}
 
 /// The work–precision diagram: error against wall time, both logarithmic, one polyline per
 /// method, hand-written SVG like [`crate::plot`]. The methods left out are named in grey under

@@ -115,9 +115,11 @@ pub(crate) fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
 fn value_lines(pool: &Pool, label: &str, v: &Value) -> Vec<String> {
     match v {
         Value::Scalar(e) => vec![format!("{label}{}", pool.print(*e, Style::Unicode))],
+        // A vector is a column, as in a hand derivation.
         Value::Vector(xs) => {
-            let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Unicode)).collect();
-            vec![format!("{label}({})", parts.join(", "))]
+            let rows: Vec<Vec<String>> =
+                xs.iter().map(|e| vec![pool.print(*e, Style::Unicode)]).collect();
+            bracketed(&rows, label)
         }
         Value::Matrix(m) => {
             let rows: Vec<Vec<String>> = m
@@ -178,7 +180,8 @@ pub fn text(d: &mut Derivation) -> String {
     if !d.model.constraints.is_empty() {
         out.push("Constraints".into());
         for (i, c) in d.model.constraints.iter().enumerate() {
-            out.push(format!("  {}: {} = {}", c.name, pool.print(c.lhs, u), pool.print(c.rhs, u)));
+            let (lhs, rhs) = derived.constraint_sides[i];
+            out.push(format!("  {}: {} = {}", c.name, pool.print(lhs, u), pool.print(rhs, u)));
             let force = sym_text(pool, c.force_symbol, u);
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 let what = if c.force_requested {
@@ -186,7 +189,14 @@ pub fn text(d: &mut Derivation) -> String {
                 } else {
                     String::new()
                 };
+                if let Some(phi) = e.integrated {
+                    out.push(format!("    integrates to {} = 0", pool.print(phi, u)));
+                }
                 out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
+            } else if c.kind == model::ConstraintKind::Velocity {
+                out.push(format!(
+                    "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
+                ));
             } else {
                 out.push(format!(
                     "    kept with the multiplier {force} (generalized force {force}·∂Φ/∂q)"
@@ -218,6 +228,21 @@ pub fn text(d: &mut Derivation) -> String {
         let row: Vec<String> = m.jacobian.iter().map(|e| pool.print(*e, u)).collect();
         out.extend(bracketed(&[row], &format!("  J({name}) = ")));
         out.push(format!("  γ({name}) = {}", pool.print(m.bias, u)));
+    }
+    if let Some(form) = &derived.independent {
+        let names = |s: &[SymId]| s.iter().map(|r| sym_text(pool, *r, u)).collect::<Vec<_>>();
+        let dependent: Vec<SymId> = form.dependent.iter().map(|(d, _)| *d).collect();
+        out.push(format!(
+            "In the independent rates  ({}; the constraints give {})",
+            names(&form.independent).join(", "),
+            names(&dependent).join(", ")
+        ));
+        for (d, e) in &form.dependent {
+            out.push(format!("  {} = {}", sym_text(pool, *d, u), pool.print(*e, u)));
+        }
+        for e in &form.equations {
+            out.push(format!("  {} = 0", pool.print(*e, u)));
+        }
     }
     if !derived.reactions.is_empty() {
         out.push("Reactions".into());
@@ -344,6 +369,21 @@ pub fn latex(d: &mut Derivation) -> String {
         matrix(&f_rows)
     ));
     out.push("\\end{equation}".into());
+    if let Some(form) = &derived.independent {
+        out.push("% In the independent rates".into());
+        out.push("\\begin{align}".into());
+        let mut lines: Vec<String> = form
+            .dependent
+            .iter()
+            .map(|(r, e)| format!("  {} &= {}", sym_text(pool, *r, l), pool.print(*e, l)))
+            .collect();
+        lines.extend(form.equations.iter().map(|e| format!("  {} &= 0", pool.print(*e, l))));
+        let n = lines.len();
+        for (i, line) in lines.into_iter().enumerate() {
+            out.push(if i + 1 < n { format!("{line} \\\\") } else { line });
+        }
+        out.push("\\end{align}".into());
+    }
     let mut items: Vec<(String, String)> = Vec::new();
     for (s, e) in &derived.reactions {
         items.push((sym_text(pool, *s, l), pool.print(*e, l)));
@@ -390,7 +430,7 @@ fn value_latex(pool: &Pool, v: &Value) -> String {
         Value::Scalar(e) => pool.print(*e, Style::Latex),
         Value::Vector(xs) => {
             let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Latex)).collect();
-            format!("\\left({}\\right)", parts.join(", "))
+            format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", parts.join(" \\\\ "))
         }
         Value::Matrix(m) => {
             let rows: Vec<String> = m
@@ -568,8 +608,24 @@ pub fn json(d: &mut Derivation) -> String {
         "at_start": at_start,
         "model": model_json(d),
     });
-    // Numbers rather than exact expressions: say how far to trust them.
     let mut doc = doc;
+    // Only scenes that keep a velocity constraint and ask for no contact force have this form.
+    if let (Some(form), Json::Object(map)) = (&derived.independent, &mut doc) {
+        let dependent: Map<String, Json> = form
+            .dependent
+            .iter()
+            .map(|(r, e)| (name(*r), Json::String(pool.print(*e, a))))
+            .collect();
+        map.insert(
+            "independent_rates".into(),
+            json!({
+                "independent": form.independent.iter().map(|r| name(*r)).collect::<Vec<_>>(),
+                "dependent": dependent,
+                "equations": form.equations.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
+            }),
+        );
+    }
+    // Numbers rather than exact expressions: say how far to trust them.
     if let (Some(digits), Json::Object(map)) = (at_start_digits, &mut doc) {
         map.insert("at_start_significant_digits".into(), json!(digits));
     }
@@ -656,6 +712,9 @@ fn model_json(d: &Derivation) -> Json {
             let mut o = Map::new();
             o.insert("name".into(), json!(c.name));
             o.insert("phi".into(), json!(print(c.phi)));
+            if c.kind == model::ConstraintKind::Velocity {
+                o.insert("kind".into(), json!("velocity"));
+            }
             o.insert("reaction".into(), json!(name(c.force_symbol)));
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 o.insert("treatment".into(), json!("eliminated"));

@@ -88,7 +88,11 @@ pub fn summary(outcome: &Outcome) -> String {
         outcome.wall_seconds
     );
     let (drift, relative) = outcome.energy_drift();
-    let note = if outcome.conservative { "" } else { " (not conserved: forces or time act)" };
+    let note = if outcome.conservative {
+        ""
+    } else {
+        " (not conserved: forces, time or a moving constraint act)"
+    };
     s.push_str(&format!(
         "energy drift: max |E − E(0)| = {drift:.3e} ({relative:.3e} relative){note}\n"
     ));

@@ -23,11 +23,32 @@ pub struct Derived {
     pub shown: Vec<(model::Show, Value)>,
     pub at_start: ShownAtStart,
     pub start_state: Vec<(SymId, ExprId)>,
+    /// The equations in the independent rates, where velocity constraints are kept and no
+    /// contact force is asked for.
+    pub independent: Option<mechanics::IndependentForm>,
+    /// Each constraint's two sides as shown: as written, except a component of a vector
+    /// constraint, which is its simplified Φ = 0 (the sum of a velocity and a cross product
+    /// as written is pages long).
+    pub constraint_sides: Vec<(ExprId, ExprId)>,
 }
 
 /// The forms of a derivation that a report shows.
 pub fn collect(d: &mut Derivation) -> Derived {
     let equations = d.equations();
+    let independent = d.independent_form();
+    let constraint_sides = d
+        .model
+        .constraints
+        .clone()
+        .iter()
+        .map(|c| match c.name.contains('.') {
+            true => {
+                let phi = d.model.pool.simplify(c.phi);
+                (phi, d.model.pool.zero())
+            }
+            false => (c.lhs, c.rhs),
+        })
+        .collect();
     let pool = &mut d.model.pool;
     let mass_matrix = d
         .mass_matrix
@@ -90,6 +111,8 @@ pub fn collect(d: &mut Derivation) -> Derived {
         shown,
         at_start,
         start_state,
+        independent,
+        constraint_sides,
     }
 }
 

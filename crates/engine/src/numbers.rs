@@ -220,3 +220,79 @@ fn mass_matrix_by_columns(d: &Derivation) -> Vec<ExprId> {
     let n = d.coords.len();
     (0..n).flat_map(|j| (0..n).map(move |i| d.mass_matrix[i][j])).collect()
 }
+
+impl Prepared {
+    /// Makes the start's rates satisfy the kept velocity constraints again after `--set`
+    /// changed positions or rates: the rates the scene left to the constraints (and `--set`
+    /// did not give) are solved for at the new state, numerically. `y0` is `[q, q̇]` in slot
+    /// order; `set_rates` marks the rates `--set` gave.
+    pub fn settle_rates(
+        &mut self,
+        y0: &mut [f64],
+        parameters: &[f64],
+        set_rates: &[bool],
+    ) -> Result<(), Error> {
+        let d = &mut self.derivation;
+        if !d.multipliers.iter().any(|m| m.kind == model::ConstraintKind::Velocity) {
+            return Ok(());
+        }
+        let n = d.coords.len();
+        let rows: Vec<ExprId> = d
+            .multipliers
+            .clone()
+            .into_iter()
+            .map(|m| match m.kind {
+                model::ConstraintKind::Velocity => m.phi,
+                model::ConstraintKind::Position => d.model.pool.time_derivative(m.phi),
+            })
+            .collect();
+        let pool = &mut d.model.pool;
+        let free: Vec<usize> = (0..n)
+            .filter(|k| {
+                let c = d.model.coords.iter().find(|c| c.sym == d.coords[*k]).expect("declared");
+                !c.initial_rate_given
+                    && !set_rates[*k]
+                    && rows.iter().any(|r| pool.depends_on(*r, d.rates[*k]))
+            })
+            .collect();
+        if free.len() != rows.len() {
+            // The derivation already settled the scene's own start; with nothing to solve for
+            // here, a run from a state `--set` made inconsistent drifts back under Baumgarte.
+            return Ok(());
+        }
+        let mut values = vec![f64::NAN; pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        values[d.model.time.index()] = 0.0;
+        for k in 0..n {
+            values[d.coords[k].index()] = y0[k];
+            values[d.rates[k].index()] = y0[n + k];
+        }
+        for k in &free {
+            values[d.rates[*k].index()] = 0.0;
+        }
+        let size = rows.len();
+        let mut a = nalgebra::DMatrix::zeros(size, size);
+        let mut b = vec![0.0; size];
+        for (i, row) in rows.iter().enumerate() {
+            b[i] = -numeric::eval(pool, *row, &values);
+            for (j, k) in free.iter().enumerate() {
+                let coefficient = pool.diff(*row, d.rates[*k]);
+                a[(i, j)] = numeric::eval(pool, coefficient, &values);
+            }
+        }
+        let mut pivots = vec![0; size];
+        sim::linalg::solve_general(&mut a, &mut b, &mut pivots).map_err(|_| {
+            Error::Input(
+                "error: the rates left to the velocity constraints are not fixed by them at the \
+                 state --set gives; give them with --set too"
+                    .into(),
+            )
+        })?;
+        for (j, k) in free.iter().enumerate() {
+            y0[n + *k] = b[j];
+        }
+        Ok(())
+    }
+}

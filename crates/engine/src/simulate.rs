@@ -84,6 +84,9 @@ pub struct Outcome {
     pub state_names: Vec<String>,
     /// The constraints kept with multipliers, in the order of the numbers' slots.
     pub constraint_names: Vec<String>,
+    /// Bodies in space oriented by angles (not Euler parameters), whose angle sets have
+    /// singular configurations where the mass matrix loses rank.
+    pub angle_oriented_bodies: Vec<String>,
     /// Whether the scene's energy should be conserved (no forces, dissipation or explicit t).
     pub conservative: bool,
 }
@@ -347,6 +350,18 @@ pub fn run(
         y0[k] = prepared.constant(initial, &parameters);
         y0[n + k] = prepared.constant(rate, &parameters);
     }
+    let set_rates: Vec<bool> = prepared
+        .derivation
+        .coords
+        .iter()
+        .map(|q| {
+            let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
+            coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate)
+        })
+        .collect();
+    if !coord_overrides.is_empty() {
+        prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
+    }
     if let Some(bad_slot) = y0.iter().position(|v| !v.is_finite()) {
         return Err(bad(format!(
             "the initial value of `{}` is not a finite number",
@@ -403,7 +418,8 @@ pub fn run(
         && !prepared.dynamics_exprs().iter().any(|e| {
             let t = prepared.derivation.model.time;
             prepared.derivation.model.pool.depends_on(*e, t)
-        });
+        })
+        && !prepared.derivation.drives_through_velocity_constraints();
     let mut columns: Vec<String> = outputs.clone();
     columns.extend(stops.iter().cloned());
     columns.extend(events.iter().cloned());
@@ -429,6 +445,16 @@ pub fn run(
             .multipliers
             .iter()
             .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
+            .collect(),
+        angle_oriented_bodies: prepared
+            .derivation
+            .model
+            .bodies
+            .iter()
+            .filter(|b| {
+                matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
+            })
+            .map(|b| b.name.clone())
             .collect(),
         conservative,
     })
@@ -483,6 +509,29 @@ impl Outcome {
                 .join(", ")
         };
         let (what, cause) = match &f.kind {
+            FaultKind::SingularMass { coordinates, condition }
+                if !self.angle_oriented_bodies.is_empty() =>
+            {
+                let bodies: Vec<String> =
+                    self.angle_oriented_bodies.iter().map(|b| format!("`{b}`")).collect();
+                (
+                    format!(
+                        "the orientation angles are singular here: the mass matrix loses rank \
+                         (condition ≈ {condition:.1e}) along {}",
+                        if coordinates.is_empty() {
+                            "some coordinate".into()
+                        } else {
+                            coords(coordinates)
+                        }
+                    ),
+                    format!(
+                        "the angle set orienting {} has a singular configuration here (as θ = 0 \
+                         is for 3-1-3 Euler angles); start away from it, choose angles regular \
+                         here, or orient by quaternion(e0, e1, e2, e3)",
+                        bodies.join(", ")
+                    ),
+                )
+            }
             FaultKind::SingularMass { coordinates, condition } => (
                 format!(
                     "the mass matrix is singular or ill-conditioned (condition ≈ {condition:.1e})"

@@ -49,10 +49,12 @@ pub enum ExprKind {
         name: String,
         primes: u8,
     },
-    /// A quantity of a model object: `disk.omega`, `floor.force`, `rod.position`.
+    /// A quantity of a model object: `disk.omega`, `floor.force`, `rod.position`; or a
+    /// component of a vector one, `top.omega_body.z`.
     Member {
         object: Ident,
         field: Ident,
+        component: Option<Ident>,
     },
     /// `sin(theta)`, `atan2(y, x)`.
     Call {
@@ -199,7 +201,10 @@ impl Expr {
             ExprKind::Name { name, primes } => {
                 format!("{name}{}", "'".repeat(usize::from(*primes)))
             }
-            ExprKind::Member { object, field } => format!("{}.{}", object.name, field.name),
+            ExprKind::Member { object, field, component } => match component {
+                Some(c) => format!("{}.{}.{}", object.name, field.name, c.name),
+                None => format!("{}.{}", object.name, field.name),
+            },
             ExprKind::Call { func, args } => {
                 let args: Vec<String> = args.iter().map(Expr::to_sexpr).collect();
                 format!("(call {} {})", func.name, args.join(" "))

@@ -1031,7 +1031,12 @@ impl Builder<'_> {
                 let (Some(object), Some(field)) = (inner.next(), inner.next()) else {
                     return Err(Diagnostic::error(span, "internal error: member"));
                 };
-                ExprKind::Member { object: self.ident(&object), field: self.ident(&field) }
+                let component = inner.next().map(|c| self.ident(&c));
+                ExprKind::Member {
+                    object: self.ident(&object),
+                    field: self.ident(&field),
+                    component,
+                }
             }
             Rule::call => {
                 let mut inner = parts(pair);

@@ -6,6 +6,7 @@ mod energies;
 mod equations;
 mod multipliers;
 mod reactions;
+mod start_rates;
 
 use std::collections::HashMap;
 
@@ -26,6 +27,9 @@ pub struct Elimination {
     pub coord: SymId,
     /// The coordinate as a function of the remaining ones (and time).
     pub solution: ExprId,
+    /// For a velocity constraint that integrates (constant coefficients), the position
+    /// constraint Φ = 0 it integrates to, from the start.
+    pub integrated: Option<ExprId>,
 }
 
 /// A constraint kept in the equations through its multiplier λ (its reaction), with
@@ -253,6 +257,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     };
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
+    derivation.settle_start_rates().map_err(|e| vec![e])?;
     Ok(derivation)
 }
 

@@ -3,19 +3,23 @@
 //! This crate owns the physics: kinetic and potential energy of particles and rigid bodies
 //! (planar, and spatial with ω from the orientation), constraints (a holonomic one eliminated
 //! when it can be solved for one coordinate, kept with a multiplier otherwise; a velocity
-//! constraint always kept), generalized forces by virtual work, the Euler–Lagrange
-//! equations as M(q, t)·q̈ = f(q, q̇, t), reactions where a scene asks for them, the
-//! algebraic side of checking `expect` lines, and the exact linearization about a reference
-//! (`linearize about`). It is purely symbolic: what needs numbers
+//! constraint integrated when its coefficients are constant, kept otherwise), generalized
+//! forces by virtual work, the Euler–Lagrange equations as M(q, t)·q̈ = f(q, q̇, t), the same
+//! in the independent rates where velocity constraints are kept, reactions where a scene asks
+//! for them, the algebraic side of checking `expect` lines, and the exact linearization about
+//! a reference (`linearize about`). It is purely symbolic: what needs numbers
 //! (random states, the numeric start, verdicts sampled at states) is the `verify` crate's. It
 //! knows nothing of parsing or of files: it starts from a [`model::Model`].
 
 mod check;
 mod derive;
+mod independent;
 mod linearize;
 mod present;
-pub use present::collect_by_motion;
 mod start;
+
+pub use independent::IndependentForm;
+pub use present::collect_by_motion;
 
 pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};

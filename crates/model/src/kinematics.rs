@@ -159,28 +159,28 @@ pub fn rows(m: &Matrix3) -> Vec<Vec<ExprId>> {
 /// ω in body axes from the orientation R (body to world): Rᵀ·Ṙ is the skew matrix of ω, so
 /// ω = ((RᵀṘ)₃₂, (RᵀṘ)₁₃, (RᵀṘ)₂₁), each simplified (the sin² + cos² of Euler angles fold).
 pub fn angular_velocity_in_body_axes(pool: &mut Pool, orientation: &Matrix3) -> [ExprId; 3] {
-    let rate: Vec<Vec<ExprId>> = orientation
-        .iter()
-        .map(|row| row.iter().map(|e| pool.time_derivative(*e)).collect())
-        .collect();
-    // (RᵀṘ)ᵢⱼ = Σₖ Rₖᵢ·Ṙₖⱼ
-    let mut entry = |i: usize, j: usize| {
-        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(orientation[k][i], rate[k][j])).collect();
-        let sum = pool.add(&terms);
-        pool.simplify(sum)
-    };
-    [entry(2, 1), entry(0, 2), entry(1, 0)]
+    angular_velocity(pool, orientation, false)
 }
 
 /// ω in world axes: Ṙ·Rᵀ is its skew matrix, so ω = ((ṘRᵀ)₃₂, (ṘRᵀ)₁₃, (ṘRᵀ)₂₁).
 pub fn angular_velocity_in_world_axes(pool: &mut Pool, orientation: &Matrix3) -> [ExprId; 3] {
+    angular_velocity(pool, orientation, true)
+}
+
+/// The vector of the skew matrix Rᵀ·Ṙ (body axes) or Ṙ·Rᵀ (world axes).
+fn angular_velocity(pool: &mut Pool, orientation: &Matrix3, world: bool) -> [ExprId; 3] {
     let rate: Vec<Vec<ExprId>> = orientation
         .iter()
         .map(|row| row.iter().map(|e| pool.time_derivative(*e)).collect())
         .collect();
-    // (ṘRᵀ)ᵢⱼ = Σₖ Ṙᵢₖ·Rⱼₖ
+    // (RᵀṘ)ᵢⱼ = Σₖ Rₖᵢ·Ṙₖⱼ and (ṘRᵀ)ᵢⱼ = Σₖ Ṙᵢₖ·Rⱼₖ
     let mut entry = |i: usize, j: usize| {
-        let terms: Vec<ExprId> = (0..3).map(|k| pool.mul2(rate[i][k], orientation[j][k])).collect();
+        let terms: Vec<ExprId> = (0..3)
+            .map(|k| match world {
+                false => pool.mul2(orientation[k][i], rate[k][j]),
+                true => pool.mul2(rate[i][k], orientation[j][k]),
+            })
+            .collect();
         let sum = pool.add(&terms);
         pool.simplify(sum)
     };

@@ -43,6 +43,9 @@ pub struct Coord {
     pub initial_rate: ExprId,
     /// Whether the scene gave an initial value or rate (the defaults are 0).
     pub initial_given: bool,
+    /// Whether the scene gave the initial rate; one it did not give may be set by the
+    /// velocity constraints at the start.
+    pub initial_rate_given: bool,
     pub span: Span,
 }
 

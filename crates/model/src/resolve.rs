@@ -31,7 +31,9 @@ enum Binding {
     Coord(SymId),
     Let(Value),
     Body(usize),
-    Constraint(usize),
+    /// The constraint's scalar components, one for a scalar constraint; `None` for a
+    /// component of a vector constraint that always holds.
+    Constraint(Vec<Option<usize>>),
     Quantity(SymId),
 }
 
@@ -375,6 +377,7 @@ impl<'a> Resolver<'a> {
                             initial: initial.unwrap_or(zero),
                             initial_rate: rate.unwrap_or(zero),
                             initial_given: decl.value.is_some() || decl.rate.is_some(),
+                            initial_rate_given: decl.rate.is_some(),
                             span: decl.name.span,
                         });
                     }
@@ -854,19 +857,99 @@ impl<'a> Resolver<'a> {
     }
 
     fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
-        let (l, r) = (self.scalar(lhs), self.scalar(rhs));
+        let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
-        let (lf, rf) = (self.operand_form(l_dims), self.operand_form(r_dims));
-        self.units.same(&lf, &rf, lhs.span, rhs.span, "between the sides of this constraint");
-        let phi = self.pool.sub(l, r);
-        let free = self.pool.free_symbols(phi);
-        if free.iter().any(|s| self.pool.symbol(*s).order() > 0) {
+        // A vector constraint is one scalar constraint per component (`roll.x`, `roll.y`, …).
+        let (ls, rs) = match (space::as_vector(&l), space::as_vector(&r), &l, &r) {
+            (_, _, Value::Scalar(a), Value::Scalar(b)) => (vec![*a], vec![*b]),
+            (Some(a), Some(b), _, _) if a.len() == b.len() => (a, b),
+            _ => {
+                self.error(
+                    Diagnostic::error(
+                        span,
+                        format!(
+                            "the sides of this constraint differ in shape: {} and {}",
+                            l.kind_name(),
+                            r.kind_name()
+                        ),
+                    )
+                    .with_label("shapes do not fit")
+                    .with_related(lhs.span, l.kind_name())
+                    .with_related(rhs.span, r.kind_name()),
+                );
+                return;
+            }
+        };
+        let vector = ls.len() > 1 || !matches!(l, Value::Scalar(_));
+        let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
+        for (a, b) in lf.iter().zip(&rf) {
+            self.units.same(a, b, lhs.span, rhs.span, "between the sides of this constraint");
+        }
+        let base = match name {
+            Some(id) => normalize(&id.name),
+            None => format!("constraint{}", self.constraints.len() + 1),
+        };
+        let mut indices = Vec::new();
+        for (k, (l, r)) in ls.into_iter().zip(rs).enumerate() {
+            let phi = self.pool.sub(l, r);
+            if vector && self.pool.is_identically_zero(phi) {
+                // A component that holds whatever the motion (the height of a ball's contact
+                // with the floor it rolls on) restrains nothing.
+                indices.push(None);
+                continue;
+            }
+            let cname =
+                if vector { format!("{base}.{}", ["x", "y", "z"][k.min(2)]) } else { base.clone() };
+            let Some(kind) = self.constraint_kind(phi, span) else { return };
+            let index = self.constraints.len();
+            let force_symbol = self.pool.param(&format!("{cname}.force"));
+            let lhs_free = self.pool.free_symbols(l);
+            let lhs_coords = lhs_free
+                .iter()
+                .copied()
+                .filter(|s| {
+                    matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. })
+                })
+                .collect();
+            self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+            self.constraints.push(Constraint {
+                name: cname,
+                kind,
+                lhs: l,
+                rhs: r,
+                phi,
+                force_symbol,
+                force_requested: false,
+                lhs_coords,
+                quaternion: None,
+                span,
+            });
+            indices.push(Some(index));
+        }
+        if indices.iter().all(Option::is_none) {
             self.error(
-                Diagnostic::error(span, "this constraint involves rates")
-                    .with_label("a velocity appears here")
-                    .with_hint("only holonomic constraints (positions and time) are supported; integrate a rolling condition to positions, as r*phi = R*theta"),
+                Diagnostic::error(span, "every component of this constraint always holds")
+                    .with_label("nothing is restrained")
+                    .with_hint("a constraint relates coordinates declared with `coord`"),
             );
             return;
+        }
+        if let Some(id) = name {
+            self.bind(id, Binding::Constraint(indices));
+        }
+    }
+
+    /// Whether Φ = 0 restrains positions or velocities; `None` (with the error reported) when
+    /// it is neither: accelerations, rates not entering linearly, or no coordinate at all.
+    fn constraint_kind(&mut self, phi: ExprId, span: Span) -> Option<ConstraintKind> {
+        let free = self.pool.free_symbols(phi);
+        if free.iter().any(|s| self.pool.symbol(*s).order() > 1) {
+            self.error(
+                Diagnostic::error(span, "this constraint involves accelerations")
+                    .with_label("an acceleration appears here")
+                    .with_hint("a constraint restrains positions, or velocities (rolling without slipping)"),
+            );
+            return None;
         }
         if !free.iter().any(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }))
         {
@@ -875,41 +958,30 @@ impl<'a> Resolver<'a> {
                     .with_label("nothing here can move")
                     .with_hint("a constraint relates coordinates declared with `coord`"),
             );
-            return;
+            return None;
         }
-        let index = self.constraints.len();
-        let cname = match name {
-            Some(id) => normalize(&id.name),
-            None => format!("constraint{}", index + 1),
-        };
-        let force_symbol = self.pool.param(&format!("{cname}.force"));
-        let lhs_free = self.pool.free_symbols(l);
-        let lhs_coords = lhs_free
-            .iter()
-            .copied()
-            .filter(|s| {
-                matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. })
-            })
-            .collect();
-        if let Some(id) = name {
-            if !self.bind(id, Binding::Constraint(index)) {
-                return;
+        let rates: Vec<SymId> =
+            free.iter().copied().filter(|s| self.pool.symbol(*s).order() == 1).collect();
+        if rates.is_empty() {
+            return Some(ConstraintKind::Position);
+        }
+        // A(q, t)·q̇ + b(q, t): no rate may remain in a derivative by a rate.
+        for v in &rates {
+            let dv = self.pool.diff(phi, *v);
+            let dv_free = self.pool.free_symbols(dv);
+            if let Some(w) = dv_free.iter().find(|s| self.pool.symbol(**s).order() == 1) {
+                let (v, w) = (self.pool.symbol(*v).name.clone(), self.pool.symbol(*w).name.clone());
+                self.error(
+                    Diagnostic::error(span, "this constraint is not linear in the rates")
+                        .with_label(format!("the coefficient of {v} depends on {w}"))
+                        .with_hint(
+                            "a velocity constraint is A(q, t)·q' + b(q, t) = 0, as rolling without slipping is",
+                        ),
+                );
+                return None;
             }
         }
-        self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
-        self.constraints.push(Constraint {
-            name: cname,
-            // Velocity constraints are refused above until the language writes them.
-            kind: ConstraintKind::Position,
-            lhs: l,
-            rhs: r,
-            phi,
-            force_symbol,
-            force_requested: false,
-            lhs_coords,
-            quaternion: None,
-            span,
-        });
+        Some(ConstraintKind::Velocity)
     }
 
     fn load(
@@ -1157,7 +1229,13 @@ impl<'a> Resolver<'a> {
                 }
             },
             ExprKind::Name { name, primes } => self.name(name, *primes, e.span),
-            ExprKind::Member { object, field } => self.member(object, field, e.span),
+            ExprKind::Member { object, field, component: None } => {
+                self.member(object, field, e.span)
+            }
+            ExprKind::Member { object, field, component: Some(c) } => {
+                let (v, dims) = self.member(object, field, e.span)?;
+                self.component(v, dims, c, &format!("{}.{}", object.name, field.name))
+            }
             ExprKind::Call { func, args } => self.call(func, args, e.span),
             ExprKind::Neg(inner) => {
                 let (v, dims) = self.value(inner)?;
@@ -1354,20 +1432,14 @@ impl<'a> Resolver<'a> {
     }
 
     fn member(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<(Value, Dims)> {
-        let value = self.member_value(object, field, span)?;
-        if let Some(Binding::Let(_)) = self.names.get(&normalize(&object.name)) {
-            // A component of a vector `let`.
-            self.used.insert(normalize(&object.name));
-            let i = match field.name.as_str() {
-                "x" => 0,
-                "y" => 1,
-                _ => 2,
-            };
-            let name = normalize(&object.name);
-            let whole = self.name_dims(&object.name, &name, 0);
-            let forms = self.shape(whole).forms();
-            return Some((value, Dims::Scalar(forms.get(i).cloned().unwrap_or_default())));
+        if let Some(Binding::Let(v)) = self.names.get(&normalize(&object.name)) {
+            if !matches!(v, Value::Scalar(_)) {
+                // A component of a vector `let`.
+                let (v, dims) = self.name(&object.name, 0, object.span)?;
+                return self.component(v, dims, field, &object.name);
+            }
         }
+        let value = self.member_value(object, field, span)?;
         let body = match self.names.get(&normalize(&object.name)) {
             Some(Binding::Body(i)) => Some(*i),
             _ => None,
@@ -1455,33 +1527,7 @@ impl<'a> Resolver<'a> {
                 }
                 value
             }
-            Some(Binding::Let(v)) if !matches!(v, Value::Scalar(_)) => {
-                let components = space::as_vector(&v);
-                let i = match field.name.as_str() {
-                    "x" => 0,
-                    "y" => 1,
-                    "z" => 2,
-                    _ => usize::MAX,
-                };
-                match components.as_ref().and_then(|c| c.get(i)) {
-                    Some(x) => Some(Value::Scalar(*x)),
-                    None => {
-                        let d = Diagnostic::error(
-                            field.span,
-                            format!("`{}` has no `{}`", object.name, field.name),
-                        )
-                        .with_label(match &components {
-                            Some(c) if c.len() == 2 => "expected x or y".to_string(),
-                            Some(_) => "expected x, y or z".to_string(),
-                            None => format!("`{}` is {}", object.name, v.kind_name()),
-                        })
-                        .with_hint("a vector's components are `.x`, `.y` and `.z`");
-                        self.error(d);
-                        None
-                    }
-                }
-            }
-            Some(Binding::Constraint(i)) => {
+            Some(Binding::Constraint(components)) => {
                 if field.name != "force" {
                     self.error(
                         Diagnostic::error(
@@ -1501,8 +1547,24 @@ impl<'a> Resolver<'a> {
                     );
                     return None;
                 }
-                self.constraints[i].force_requested = true;
-                Some(Value::Scalar(self.pool.sym(self.constraints[i].force_symbol)))
+                let mut forces = Vec::new();
+                for component in &components {
+                    forces.push(match component {
+                        Some(i) => {
+                            self.constraints[*i].force_requested = true;
+                            self.pool.sym(self.constraints[*i].force_symbol)
+                        }
+                        // A component that always holds exerts nothing.
+                        None => self.pool.zero(),
+                    });
+                }
+                // A vector constraint's reaction is the vector of its components' reactions.
+                let vector = components.len() > 1
+                    || components.iter().flatten().any(|i| self.constraints[*i].name.contains('.'));
+                match vector {
+                    false => Some(Value::Scalar(forces[0])),
+                    true => Some(Value::Vector(forces)),
+                }
             }
             _ => {
                 if self.declared.contains_key(&name) {

@@ -374,3 +374,38 @@ impl Resolver<'_> {
         });
     }
 }
+
+impl Resolver<'_> {
+    /// `.x`, `.y` or `.z` of a vector value (`top.omega_body.z`, `roll.force.x`), with its
+    /// dimension.
+    pub(super) fn component(
+        &mut self,
+        value: Value,
+        dims: Dims,
+        field: &Ident,
+        what: &str,
+    ) -> Option<(Value, Dims)> {
+        let components = as_vector(&value);
+        let i = match field.name.as_str() {
+            "x" => 0,
+            "y" => 1,
+            "z" => 2,
+            _ => usize::MAX,
+        };
+        let Some(x) = components.as_ref().and_then(|c| c.get(i)).copied() else {
+            let label = match &components {
+                Some(c) if c.len() == 2 => "expected x or y".to_string(),
+                Some(_) => "expected x, y or z".to_string(),
+                None => format!("`{what}` is {}", value.kind_name()),
+            };
+            self.error(
+                Diagnostic::error(field.span, format!("`{what}` has no `{}`", field.name))
+                    .with_label(label)
+                    .with_hint("a vector's components are `.x`, `.y` and `.z`"),
+            );
+            return None;
+        };
+        let forms = self.shape(dims).forms();
+        Some((Value::Scalar(x), Dims::Scalar(forms.get(i).cloned().unwrap_or_default())))
+    }
+}
