@@ -191,18 +191,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         text.push('\n');
     }
     let extra: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
-    let from_about = |error: Error| match error {
-        // The command line's line follows the file; say so where a diagnostic points into it.
-        Error::Scene { mut diagnostics, source } => {
-            for d in &mut diagnostics {
-                if (about_line.0..=about_line.1).contains(&d.span.start) {
-                    d.label = format!("{} (from --about)", d.label);
-                }
-            }
-            Error::Scene { diagnostics, source }
-        }
-        other => other,
-    };
+    let from_about = |error: Error| from_about(error, about_line);
     let mut prepared =
         prepare(&text, &extra, crate::Options { units: !options.no_units }).map_err(from_about)?;
     if prepared.derivation.model.linearize.is_empty() {
@@ -250,76 +239,16 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         None => None,
     };
 
-    let mut analysis = Analysis::new(&mut prepared, &linearization)?;
-    let span = linearization.span;
-    let at_values = |prepared: &mut Prepared, value: Option<f64>| -> Result<Vec<f64>, Error> {
-        let mut all = overrides.clone();
-        if let (Some(i), Some(v)) = (swept, value) {
-            let q = Rational::from_float(v).ok_or_else(|| bad(format!("{v} is not a number")))?;
-            let e = prepared.derivation.model.pool.num(q);
-            all.push((i, e));
-        }
-        let parameters = prepared.parameter_values(&all)?;
-        if !all.is_empty() {
-            prepared.masses_at(&parameters)?;
-        }
-        Ok(parameters)
-    };
-    let mut analyse = |prepared: &mut Prepared, value: Option<f64>| -> Result<Numbers, Error> {
-        let parameters = at_values(prepared, value)?;
-        analysis.at(&linearization, &parameters).map_err(|fault| {
-            let name = swept.map(|i| prepared.derivation.model.params[i].name.clone());
-            let at = match (name, value) {
-                (Some(name), Some(v)) => format!(" (at {name} = {v})"),
-                _ => String::new(),
-            };
-            let diagnostic = fault.diagnostic(prepared, span, &at);
-            from_about(Error::Scene { diagnostics: vec![diagnostic], source: text.clone() })
-        })
+    let analysis = Analysis::new(&mut prepared, &linearization)?;
+    let mut session =
+        Session { prepared, linearization, analysis, overrides, swept, text, about_line };
+    let at = session.analyse(None)?;
+    let sweep = match sweep {
+        Some((parameter, a, b, n)) => Some(session.sweep(parameter, a, b, n)?),
+        None => None,
     };
 
-    let at = analyse(&mut prepared, None)?;
-    let sweep = match (sweep, swept) {
-        (Some((parameter, a, b, n)), Some(_)) => {
-            let mut rows = Vec::with_capacity(n);
-            for k in 0..n {
-                let value = if k == n - 1 { b } else { a + (b - a) * k as f64 / (n - 1) as f64 };
-                let numbers = analyse(&mut prepared, Some(value))?;
-                rows.push(Row {
-                    value,
-                    eigenvalues: numbers.eigenvalues,
-                    stability: numbers.stability,
-                });
-            }
-            let mut changes = Vec::new();
-            for pair in rows.windows(2) {
-                let (first, second) = (&pair[0], &pair[1]);
-                if first.stability == second.stability {
-                    continue;
-                }
-                let (from, mut to) = (first.stability, second.stability);
-                let (mut lo, mut hi) = (first.value, second.value);
-                for _ in 0..200 {
-                    let mid = 0.5 * (lo + hi);
-                    let narrow = (hi - lo).abs() <= SWEEP_PRECISION * lo.abs().max(hi.abs());
-                    if narrow || mid == lo || mid == hi {
-                        break;
-                    }
-                    let s = analyse(&mut prepared, Some(mid))?.stability;
-                    if s == from {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                        to = s;
-                    }
-                }
-                changes.push(Change { value: 0.5 * (lo + hi), from, to, bracket: (lo, hi) });
-            }
-            Some(Sweep { parameter, rows, changes })
-        }
-        _ => None,
-    };
-
+    let Session { mut prepared, linearization, analysis, .. } = session;
     let pool = &mut prepared.derivation.model.pool;
     let shown = |pool: &mut cas::Pool, m: &[Vec<ExprId>]| -> Vec<Vec<ExprId>> {
         m.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect()
@@ -339,6 +268,102 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         at,
         sweep,
     })
+}
+
+/// A linearization being analysed at one set of parameter values after another.
+struct Session {
+    prepared: Prepared,
+    linearization: Linearization,
+    analysis: Analysis,
+    /// `--set` values: parameter index → expression.
+    overrides: Vec<(usize, ExprId)>,
+    /// The swept parameter's index.
+    swept: Option<usize>,
+    /// The scene as loaded, `--about` line included, for diagnostics.
+    text: String,
+    about_line: (usize, usize),
+}
+
+impl Session {
+    /// The numbers at the parameters' values, with the swept parameter at `value` if given.
+    fn analyse(&mut self, value: Option<f64>) -> Result<Numbers, Error> {
+        let mut all = self.overrides.clone();
+        if let (Some(i), Some(v)) = (self.swept, value) {
+            let q = Rational::from_float(v).ok_or_else(|| bad(format!("{v} is not a number")))?;
+            all.push((i, self.prepared.derivation.model.pool.num(q)));
+        }
+        let parameters = self.prepared.parameter_values(&all)?;
+        if !all.is_empty() {
+            // The scene's masses were checked with its own values; these may change their sign.
+            self.prepared.masses_at(&parameters)?;
+        }
+        self.analysis.at(&self.linearization, &parameters).map_err(|fault| {
+            let model = &self.prepared.derivation.model;
+            let at = match (self.swept, value) {
+                (Some(i), Some(v)) => format!(" (at {} = {v})", model.params[i].name),
+                _ => String::new(),
+            };
+            let diagnostic = fault.diagnostic(&self.prepared, self.linearization.span, &at);
+            let error = Error::Scene { diagnostics: vec![diagnostic], source: self.text.clone() };
+            from_about(error, self.about_line)
+        })
+    }
+
+    /// n evenly spaced values from a to b, and every change of the verdict between neighbours
+    /// bisected (one per pair of neighbours: a finer sweep finds changes closer together).
+    fn sweep(&mut self, parameter: String, a: f64, b: f64, n: usize) -> Result<Sweep, Error> {
+        let mut rows = Vec::with_capacity(n);
+        for k in 0..n {
+            let value = if k == n - 1 { b } else { a + (b - a) * k as f64 / (n - 1) as f64 };
+            let numbers = self.analyse(Some(value))?;
+            rows.push(Row {
+                value,
+                eigenvalues: numbers.eigenvalues,
+                stability: numbers.stability,
+            });
+        }
+        let mut changes = Vec::new();
+        for pair in rows.windows(2) {
+            let (first, second) = (&pair[0], &pair[1]);
+            if first.stability == second.stability {
+                continue;
+            }
+            let (from, mut to) = (first.stability, second.stability);
+            let (mut lo, mut hi) = (first.value, second.value);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                let narrow = (hi - lo).abs() <= SWEEP_PRECISION * lo.abs().max(hi.abs());
+                if narrow || mid == lo || mid == hi {
+                    break;
+                }
+                let s = self.analyse(Some(mid))?.stability;
+                if s == from {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                    to = s;
+                }
+            }
+            changes.push(Change { value: 0.5 * (lo + hi), from, to, bracket: (lo, hi) });
+        }
+        Ok(Sweep { parameter, rows, changes })
+    }
+}
+
+/// Says where a diagnostic points into the command line's `--about` line, which follows the
+/// file in the text loaded.
+fn from_about(error: Error, about_line: (usize, usize)) -> Error {
+    match error {
+        Error::Scene { mut diagnostics, source } => {
+            for d in &mut diagnostics {
+                if (about_line.0..=about_line.1).contains(&d.span.start) {
+                    d.label = format!("{} (from --about)", d.label);
+                }
+            }
+            Error::Scene { diagnostics, source }
+        }
+        other => other,
+    }
 }
 
 /// Why a reference could not be analysed at some parameter values.
