@@ -277,3 +277,25 @@ fn names(file: &lang::SceneFile) -> (Vec<String>, Vec<String>) {
     }
     (coords, params)
 }
+
+/// Issue 12's bar: the double pendulum of equal masses and lengths swings in its normal modes
+/// at ω² = (2 ± √2)·g/l.
+#[test]
+fn the_double_pendulum_has_its_normal_modes() {
+    // The example has m1 = m2 = 1 kg and l1 = l2 = 1 m.
+    let source = example("classics/double_pendulum.lag");
+    let modes = about(&source, "theta1 = 0, theta2 = 0");
+    assert_eq!(modes.at.stability, Stability::MarginallyStable);
+    let (g, length) = (9.81_f64, 1.0_f64);
+    let root2 = 2.0_f64.sqrt();
+    let mut expected = [((2.0 + root2) * g / length).sqrt(), ((2.0 - root2) * g / length).sqrt()];
+    let mut found: Vec<f64> =
+        modes.at.eigenvalues.iter().filter(|(_, im)| *im > 0.0).map(|(_, im)| *im).collect();
+    found.sort_by(|a, b| b.total_cmp(a));
+    expected.sort_by(|a, b| b.total_cmp(a));
+    assert_eq!(found.len(), 2, "{:?}", modes.at.eigenvalues);
+    for (f, e) in found.iter().zip(expected) {
+        assert!(close(*f, e, 1e-12), "{f} against {e}");
+    }
+    assert!(modes.at.eigenvalues.iter().all(|(re, _)| re.abs() < 1e-12 * expected[0]));
+}
