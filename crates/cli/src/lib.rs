@@ -2,12 +2,14 @@
 //! engine finds. This is the only crate that touches files and terminals.
 //!
 //! `engine` loads scenes, lowers and runs them; this crate reads the files, renders
-//! diagnostics with source context, formats the `derive` and `check` reports, writes the
-//! results of `simulate` and `bench` (CSV, JSON, summaries, tables, SVG) and draws progress.
+//! diagnostics with source context, formats the `derive`, `check` and `linearize` reports,
+//! writes the results of `simulate`, `bench` and `linearize` (CSV, JSON, summaries, tables,
+//! SVG) and draws progress.
 
 pub mod bench;
 pub mod check;
 pub mod diagnostics;
+pub mod linearize;
 pub mod plot;
 pub mod progress;
 pub mod report;

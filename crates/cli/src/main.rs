@@ -93,6 +93,35 @@ enum Command {
         #[arg(long, default_value_t = 200)]
         samples: usize,
     },
+    /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
+    /// the first-order matrix A, its eigenvalues and the verdict on stability. Exit 2 on bad
+    /// input, a reference that is not an equilibrium included.
+    Linearize {
+        file: PathBuf,
+        /// The reference, overriding or extending the scene's `linearize about` line:
+        /// `--about "theta=0, psi'=60"`. Rates not given are 0.
+        #[arg(long, value_name = "ITEMS")]
+        about: Option<String>,
+        /// Override a parameter: `--set g=1.62`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// Tabulate the eigenvalues for n values of parameter p from a to b, and find where
+        /// stability changes: `--sweep w=0:100:101`.
+        #[arg(long, value_name = "P=A:B:N")]
+        sweep: Option<String>,
+        /// Draw the sweep's eigenvalues (real and imaginary parts against p) as SVG.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// How to print: text for people, or json for programs.
+        #[arg(long, value_enum, default_value_t = LinearizeFormat::Text)]
+        format: LinearizeFormat,
+        /// Write the report to this file (whole or not at all) instead of standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Write the equations of motion as a self-contained Rust module (only std needed).
     Codegen {
         file: PathBuf,
@@ -126,6 +155,12 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LinearizeFormat {
+    Text,
+    Json,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -197,6 +232,11 @@ fn main() -> ExitCode {
                 samples,
             };
             simulate(&file, &source, &options, out, plot)
+        }
+        Command::Linearize { file, about, set, sweep, plot, format, out, no_units } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let options = engine::linearize::Options { about, set, sweep, no_units };
+            linearize(&file, &source, &options, format, out, plot)
         }
         Command::Codegen { file, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
@@ -320,6 +360,43 @@ fn simulate(
     }
     eprint!("{}", cli::simulate::summary(&outcome));
     code
+}
+
+fn linearize(
+    file: &std::path::Path,
+    source: &str,
+    options: &engine::linearize::Options,
+    format: LinearizeFormat,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    if let Some(p) = &plot {
+        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
+            eprintln!("error: cannot tell the format of {}: use .svg", p.display());
+            return ExitCode::from(2);
+        }
+        if options.sweep.is_none() {
+            eprintln!("error: --plot draws a sweep: give --sweep p=a:b:n too");
+            return ExitCode::from(2);
+        }
+    }
+    let linearized = match engine::linearize::linearize(source, options) {
+        Ok(l) => l,
+        Err(e) => return fail(&path, &e),
+    };
+    let report = match format {
+        LinearizeFormat::Text => cli::linearize::text(&linearized),
+        LinearizeFormat::Json => cli::linearize::json(&linearized),
+    };
+    if let (Some(p), Some(sweep)) = (plot, &linearized.sweep) {
+        let title = format!("Eigenvalues against {}: {path}", sweep.parameter);
+        if let Err(e) = cli::write_atomically(&p, &cli::linearize::svg(&title, sweep)) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return ExitCode::from(2);
+        }
+    }
+    write_or_print(out.as_ref(), &report)
 }
 
 fn bench(

@@ -86,7 +86,7 @@ pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String 
     s
 }
 
-fn range(v: &[f64]) -> (f64, f64) {
+pub(crate) fn range(v: &[f64]) -> (f64, f64) {
     let (lo, hi) = v
         .iter()
         .filter(|x| x.is_finite())
@@ -101,7 +101,7 @@ fn range(v: &[f64]) -> (f64, f64) {
     (lo, hi)
 }
 
-fn label(v: f64) -> String {
+pub(crate) fn label(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
         format!("{v:.3e}")
     } else {
@@ -109,6 +109,6 @@ fn label(v: f64) -> String {
     }
 }
 
-fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }

@@ -47,7 +47,7 @@ fn num_ten_pow(n: u32) -> cas::number::Rational {
     r
 }
 
-fn value_text(pool: &Pool, e: ExprId, style: Style) -> String {
+pub(crate) fn value_text(pool: &Pool, e: ExprId, style: Style) -> String {
     match pool.as_num(e).and_then(decimal) {
         Some(d) if style != Style::Latex => d,
         _ => pool.print(e, style),
@@ -91,7 +91,7 @@ fn pad(s: &str, w: usize) -> String {
 }
 
 /// A matrix or column with tall brackets, each line prefixed (the first with `label`).
-fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
+pub(crate) fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
     let cols = rows.first().map_or(0, |r| r.len());
     let widths: Vec<usize> =
         (0..cols).map(|j| rows.iter().map(|r| width(&r[j])).max().unwrap_or(0)).collect();
@@ -446,7 +446,7 @@ fn value_latex(pool: &Pool, v: &Value) -> String {
 
 /// `v` to `digits` significant digits, plainly where that is short, in scientific notation
 /// otherwise; a Unicode minus in the text style.
-fn significant(v: f64, digits: u32, style: Style) -> String {
+pub(crate) fn significant(v: f64, digits: u32, style: Style) -> String {
     let digits = digits.max(1) as i32;
     let text = if v == 0.0 || !v.is_finite() {
         format!("{v}")
@@ -498,7 +498,7 @@ fn numeric_json(v: &NumericValue) -> Json {
     }
 }
 
-fn json_number(v: f64) -> Json {
+pub(crate) fn json_number(v: f64) -> Json {
     serde_json::Number::from_f64(v).map(Json::Number).unwrap_or(Json::Null)
 }
 

@@ -194,3 +194,34 @@ fn bench_runs_what_it_can_on_a_scene_with_a_multiplier() {
     assert!(svg.contains(">not applicable:<"), "{svg}");
     assert!(svg.contains(">midpoint<title>") && svg.contains(">gauss<title>"), "{svg}");
 }
+
+#[test]
+fn linearize_prints_exits_and_plots() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = lagrange(&["linearize", &pendulum, "--about", "theta=pi"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).expect("utf-8");
+    assert!(text.contains("K = [ −m·L·g ]") && text.contains("Unstable"), "{text}");
+
+    let out = lagrange(&["linearize", &pendulum, "--about", "theta=1"]);
+    assert_eq!(out.status.code(), Some(2));
+    let errors = String::from_utf8(out.stderr).expect("utf-8");
+    assert!(errors.contains("not an equilibrium") && errors.contains("θ̈ = "), "{errors}");
+
+    let scratch = Scratch::new("linearize");
+    let plot = scratch.file("top.svg");
+    let plot_arg = plot.to_string_lossy().into_owned();
+    let top = example("space/sleeping_top.lag");
+    let args =
+        ["linearize", &top, "--sweep", "w=0:100:21", "--plot", &plot_arg, "--format", "json"];
+    let out = lagrange(&args);
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(json["linearization"]["sweep"].as_array().map(Vec::len), Some(21));
+    let svg = std::fs::read_to_string(&plot).expect("the plot is written");
+    assert!(svg.starts_with("<svg") && svg.contains("stroke-dasharray"));
+
+    // A plot needs a sweep to draw.
+    let out = lagrange(&["linearize", &top, "--plot", &plot_arg]);
+    assert_eq!(out.status.code(), Some(2));
+}

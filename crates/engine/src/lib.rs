@@ -3,7 +3,8 @@
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
 //! `simulate` settings and runs them ([`simulate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
-//! any size ([`generate`]). What goes wrong comes back as an [`Error`].
+//! any size ([`generate`]), and analyses small motions about a reference ([`linearize`]).
+//! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
@@ -14,6 +15,7 @@ pub mod codegen;
 pub mod derived;
 mod error;
 pub mod generate;
+pub mod linearize;
 pub mod numbers;
 pub mod simulate;
 

@@ -125,6 +125,18 @@ pub struct Setting {
     pub unit: Option<Unit>,
 }
 
+/// One item of a `linearize about` line: the reference value of a coordinate (`theta = 0`)
+/// or of its rate (`psi' = w`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AboutItem {
+    pub name: Ident,
+    /// 0 for the coordinate, 1 for its rate.
+    pub primes: u8,
+    pub value: Expr,
+    pub unit: Option<Unit>,
+    pub span: Span,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Stmt {
     pub kind: StmtKind,
@@ -169,6 +181,8 @@ pub enum StmtKind {
     Expect { at_start: bool, lhs: Expr, rhs: Expr },
     /// `simulate { until 2 s; method dop853 }`
     Simulate(Vec<Setting>),
+    /// `linearize about theta = 0, theta' = 0`
+    Linearize(Vec<AboutItem>),
 }
 
 /// A whole scene file.

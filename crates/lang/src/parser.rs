@@ -34,7 +34,7 @@ const PRATT_OPERATORS: [Rule; 6] =
     [Rule::add_op, Rule::sub_op, Rule::mul_op, Rule::div_op, Rule::pow_op, Rule::neg_op];
 
 /// The statement keywords, in the order they are listed to the user.
-pub(crate) const STATEMENT_KEYWORDS: [&str; 18] = [
+pub(crate) const STATEMENT_KEYWORDS: [&str; 19] = [
     "scene",
     "param",
     "let",
@@ -53,6 +53,7 @@ pub(crate) const STATEMENT_KEYWORDS: [&str; 18] = [
     "show",
     "expect",
     "simulate",
+    "linearize",
 ];
 
 /// Operator precedence, loosest first: `+ -` < `* /` < unary `-` < `^` (right associative).
@@ -310,11 +311,13 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     Some(match rule {
         kw_scene | kw_param | kw_let | kw_coord | kw_particle | kw_body | kw_constraint
         | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring | kw_damper
-        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate => (0, "a statement"),
+        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate | kw_linearize => {
+            (0, "a statement")
+        }
         expr | number | call | func | member | name | paren | matrix | matrix_row | neg_op => {
             (1, "an expression")
         }
-        ident | coord_name | param_item | coord_item => (2, "a name"),
+        ident | coord_name | param_item | coord_item | about_item => (2, "a name"),
         property => (2, "a property such as `mass m`"),
         setting => (2, "a setting such as `until 2 s`"),
         unit | unit_factor | unit_one => (3, "a unit"),
@@ -322,6 +325,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         string | quote => (3, "a quoted title like \"A title\""),
         string_text => (3, "the text of the title"),
         kw_along => (4, "`along`"),
+        kw_about => (4, "`about`"),
         kw_on => (4, "`on`"),
         kw_between => (4, "`between`"),
         kw_and => (4, "`and`"),
@@ -366,6 +370,7 @@ fn is_statement_start(rule: Rule) -> bool {
                 | show_stmt
                 | expect_stmt
                 | simulate_stmt
+                | linearize_stmt
         )
 }
 
@@ -391,6 +396,7 @@ fn is_statement_keyword(rule: Rule) -> bool {
             | kw_show
             | kw_expect
             | kw_simulate
+            | kw_linearize
     )
 }
 
@@ -596,6 +602,7 @@ fn is_noise(rule: Rule) -> bool {
         || matches!(
             rule,
             kw_along
+                | kw_about
                 | kw_on
                 | kw_between
                 | kw_and
@@ -776,6 +783,13 @@ impl Builder<'_> {
                 }
                 StmtKind::Simulate(settings)
             }
+            Rule::linearize_stmt => {
+                let mut items = Vec::new();
+                while let Ok(item) = next() {
+                    items.push(self.about_item(item)?);
+                }
+                StmtKind::Linearize(items)
+            }
             _ => {
                 return Err(Diagnostic::error(Span::default(), "internal error: unknown statement"))
             }
@@ -876,6 +890,35 @@ impl Builder<'_> {
             decl.rate_unit = it.unit;
         }
         Ok(decls)
+    }
+
+    /// `theta = 0` or `theta' = 0` of a `linearize about` line.
+    fn about_item(&self, item: Pair<'_, Rule>) -> Built<AboutItem> {
+        let span = self.span(&item);
+        let mut parts = parts(item);
+        let internal = || Diagnostic::error(span, "internal error: linearize item");
+        let coord_name = parts.next().ok_or_else(internal)?;
+        let mut name_parts = coord_name.clone().into_inner();
+        let name = name_parts.next().map_or_else(|| self.ident(&coord_name), |p| self.ident(&p));
+        let (primes, primes_span) = match name_parts.next() {
+            Some(p) => (p.as_str().len(), self.span(&p)),
+            None => (0, name.span),
+        };
+        if primes > 1 {
+            let written = format!("{}{}", name.name, "'".repeat(primes.min(3)));
+            return Err(Diagnostic::error(
+                primes_span,
+                format!("`{written}`: a reference gives positions and rates only"),
+            )
+            .with_label("too many primes")
+            .with_hint(format!(
+                "write `{0} = …` or `{0}' = …`; the reference's accelerations are zero",
+                name.name
+            )));
+        }
+        let value = self.expr(parts.next().ok_or_else(internal)?)?;
+        let unit = parts.next().map(|p| self.unit(p)).transpose()?;
+        Ok(AboutItem { name, primes: primes as u8, value, unit, span })
     }
 
     fn setting(&self, pair: Pair<'_, Rule>) -> Built<Setting> {

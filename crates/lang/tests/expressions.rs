@@ -180,6 +180,26 @@ fn simulate_settings_keep_values_and_units() {
 }
 
 #[test]
+fn linearize_about_gives_positions_and_rates() {
+    let file = parse("linearize about theta = pi, x' = 0, psi' = 60 rad/s").expect("parses");
+    let Some(StmtKind::Linearize(items)) = file.stmts.first().map(|s| &s.kind) else { panic!() };
+    let written: Vec<(String, u8, String)> =
+        items.iter().map(|i| (i.name.name.clone(), i.primes, i.value.to_sexpr())).collect();
+    let expected = [("theta", 0, "pi"), ("x", 1, "0"), ("psi", 1, "60")];
+    let expected: Vec<(String, u8, String)> =
+        expected.iter().map(|(n, p, v)| (n.to_string(), *p, v.to_string())).collect();
+    assert_eq!(written, expected);
+    assert_eq!(powers(&items[2].unit), pairs(&[("rad", 1), ("s", -1)]));
+    let source = "linearize about theta = pi, x' = 0, psi' = 60 rad/s";
+    assert_eq!(&source[items[0].span.start..items[0].span.end], "theta = pi");
+
+    let errors = parse("linearize about theta'' = 0").expect_err("an acceleration");
+    assert!(errors[0].message.contains("positions and rates only"), "{errors:?}");
+    let errors = parse("linearize theta = 0").expect_err("no `about`");
+    assert!(errors[0].message.contains("`about`"), "{errors:?}");
+}
+
+#[test]
 fn other_statements() {
     let file = parse(
         "scene \"A \\\"quoted\\\" title\"\nconstraint x^2 + y^2 = L^2\ngravity g along (0, -1)\n\

@@ -45,6 +45,7 @@ fn exprs_of(kind: &StmtKind) -> Vec<&Expr> {
         StmtKind::Damper { a, b, coefficient, .. } => out.extend([a, b, coefficient]),
         StmtKind::Show { items, .. } => out.extend(items.iter()),
         StmtKind::Simulate(settings) => out.extend(settings.iter().flat_map(|s| s.values.iter())),
+        StmtKind::Linearize(items) => out.extend(items.iter().map(|i| &i.value)),
     }
     out
 }

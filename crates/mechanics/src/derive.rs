@@ -266,7 +266,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
 const SYMBOLIC_SOLVE_LIMIT: usize = 4;
 
 #[cfg(test)]
-mod testing {
+pub(crate) mod testing {
     //! Small scenes for the phases' tests, and their expressions as text.
 
     use cas::{ExprId, Pool, Style, SymId};

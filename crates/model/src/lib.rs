@@ -218,6 +218,27 @@ pub struct Expect {
     pub rhs_span: Span,
 }
 
+/// One value of a `linearize about` line: a coordinate's reference position, or its rate's.
+#[derive(Clone, Debug)]
+pub struct About {
+    pub coord: SymId,
+    /// The rate (`psi' = w`) rather than the position.
+    pub rate: bool,
+    /// A constant: numbers and parameters, in SI.
+    pub value: ExprId,
+    /// The item as written (`psi' = w`).
+    pub span: Span,
+}
+
+/// A `linearize about` line: the reference of small motions, an equilibrium or a steady
+/// motion. A later line (the command line's `--about` is one) overrides an earlier one item by
+/// item.
+#[derive(Clone, Debug)]
+pub struct Linearize {
+    pub items: Vec<About>,
+    pub span: Span,
+}
+
 /// Everything a scene says, resolved.
 pub struct Model {
     pub pool: Pool,
@@ -236,6 +257,8 @@ pub struct Model {
     pub shows: Vec<Show>,
     pub expects: Vec<Expect>,
     pub simulate: Vec<Setting>,
+    /// The `linearize about` lines, in the order written.
+    pub linearize: Vec<Linearize>,
     pub placeholders: Vec<(SymId, Placeholder)>,
     /// `let` names with their values, in order, for printing.
     pub lets: Vec<(String, ExprId)>,

@@ -17,8 +17,8 @@ use self::checks::{
 use self::dims::{BodyDims, Dims, NameDims};
 use crate::units::{Form, Inference, Shape};
 use crate::{
-    Body, BodyKind, Checks, Constraint, ConstraintKind, Coord, Expect, Gravity, Load, Model, Param,
-    Placeholder, Rotation, Show, Term, Value,
+    About, Body, BodyKind, Checks, Constraint, ConstraintKind, Coord, Expect, Gravity, Linearize,
+    Load, Model, Param, Placeholder, Rotation, Show, Term, Value,
 };
 
 /// Past this the power is not physics and expanding it would exhaust memory.
@@ -64,13 +64,14 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
     let mut r = Resolver::new(source);
     r.declare_all(file);
     let numbered = file.stmts.iter().enumerate();
-    let (outputs, statements): (Vec<_>, Vec<_>) = numbered
-        .partition(|(_, s)| matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. }));
+    let (outputs, statements): (Vec<_>, Vec<_>) = numbered.partition(|(_, s)| {
+        matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. } | StmtKind::Linearize(_))
+    });
     for (i, stmt) in statements {
         r.enter(i);
         r.statement(stmt);
     }
-    // Show and expect lines may name anything in the file, wherever they stand.
+    // Show, expect and linearize lines may name anything in the file, wherever they stand.
     r.in_outputs = true;
     for (i, stmt) in outputs {
         r.enter(i);
@@ -145,6 +146,7 @@ struct Resolver<'a> {
     shows: Vec<Show>,
     expects: Vec<Expect>,
     simulate: Vec<lang::Setting>,
+    linearize: Vec<Linearize>,
     placeholders: Vec<(SymId, Placeholder)>,
     lets: Vec<(String, cas::ExprId)>,
     /// Each parameter's value as a number (no symbols left), for the checks of constants.
@@ -201,6 +203,7 @@ impl<'a> Resolver<'a> {
             shows: Vec::new(),
             expects: Vec::new(),
             simulate: Vec::new(),
+            linearize: Vec::new(),
             placeholders,
             lets: Vec::new(),
             param_values: HashMap::new(),
@@ -557,7 +560,65 @@ impl<'a> Resolver<'a> {
                 });
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
+            StmtKind::Linearize(items) => self.linearize(items, stmt.span),
         }
+    }
+
+    /// A `linearize about` line: each item names a coordinate (or its rate) and gives it a
+    /// constant of the coordinate's dimension (or its rate's).
+    fn linearize(&mut self, items: &[lang::AboutItem], span: Span) {
+        let mut out: Vec<About> = Vec::new();
+        for item in items {
+            let raw = &item.name.name;
+            let name = normalize(raw);
+            let coord = match self.names.get(&name).cloned() {
+                Some(Binding::Coord(s)) => s,
+                None => {
+                    self.unknown_name(raw, &name, item.name.span);
+                    continue;
+                }
+                Some(other) => {
+                    let what = match other {
+                        Binding::Param(_) => "a parameter",
+                        Binding::Let(_) => "a `let` name",
+                        Binding::Body(_) => "a body",
+                        Binding::Constraint(_) => "a constraint",
+                        Binding::Quantity(_) | Binding::Coord(_) => "a derived quantity",
+                    };
+                    self.error(
+                        Diagnostic::error(item.name.span, format!("`{raw}` is not a coordinate"))
+                            .with_label(what)
+                            .with_hint(
+                                "a reference gives coordinates and their rates: \
+                                 `linearize about theta = 0, theta' = 0`",
+                            ),
+                    );
+                    continue;
+                }
+            };
+            // The primes follow the name with nothing between them.
+            let primed = Span::new(item.name.span.start, item.name.span.end + item.primes as usize);
+            let Some((_, coord_dims)) = self.name(raw, item.primes, primed) else { continue };
+            let Some((value, dims)) = self.constant(&item.value) else { continue };
+            let written = self.with_unit(Some(dims), item.unit.as_ref());
+            let expected = self.form(coord_dims);
+            let what = "in this reference value";
+            self.units.same(&expected, &written, primed, item.value.span, what);
+            let Some(value) = self.in_si(value, item.unit.as_ref()) else { continue };
+            let rate = item.primes == 1;
+            if let Some(first) = out.iter().find(|a| a.coord == coord && a.rate == rate) {
+                let written = format!("{raw}{}", if rate { "'" } else { "" });
+                self.error(
+                    Diagnostic::error(item.span, format!("`{written}` is given twice"))
+                        .with_label("given again here")
+                        .with_related(first.span, "first given here")
+                        .with_hint("give each coordinate and rate one reference value"),
+                );
+                continue;
+            }
+            out.push(About { coord, rate, value, span: item.span });
+        }
+        self.linearize.push(Linearize { items: out, span });
     }
 
     fn body(&mut self, name: &Ident, props: &[Property], kind: BodyKind, span: Span) {
@@ -1733,6 +1794,7 @@ impl<'a> Resolver<'a> {
                 shows: self.shows,
                 expects: self.expects,
                 simulate: self.simulate,
+                linearize: self.linearize,
                 placeholders: self.placeholders,
                 lets: self.lets,
             },

@@ -1,5 +1,6 @@
-//! Any bytes through the whole pipeline: a scene either gets diagnostics or derives, checks
-//! and prints; nothing may panic, hang or exhaust memory.
+//! Any bytes through the whole pipeline: a scene either gets diagnostics or derives, checks,
+//! prints and (with a `linearize about` line) linearizes; nothing may panic, hang or exhaust
+//! memory.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -21,6 +22,11 @@ fuzz_target!(|data: &[u8]| {
         if checked.exit_code < 2 {
             for format in [cli::Format::Text, cli::Format::Latex, cli::Format::Json] {
                 let _ = cli::derive_with("fuzz.lag", source, format, options);
+            }
+            // A scene's own `linearize about` line, if it has one: an answer or exit 2.
+            let linearize = engine::linearize::Options { no_units: !units, ..Default::default() };
+            if let Ok(l) = engine::linearize::linearize(source, &linearize) {
+                let _ = (cli::linearize::text(&l), cli::linearize::json(&l));
             }
         }
     }

@@ -1,0 +1,477 @@
+//! The `linearize` report: M, C, K exactly and at the parameters' values, the first-order
+//! matrix, the eigenvalues and the verdict, a sweep's table and its changes of stability, as
+//! text or JSON; and the sweep drawn as SVG.
+
+use std::fmt::Write;
+
+use cas::{ExprId, Pool, Style, SymId};
+use engine::linearize::{Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
+use serde_json::{json, Map, Value as Json};
+
+use crate::plot::{escape, label, range};
+use crate::report::{bracketed, json_number, significant, value_text};
+
+/// Digits of the numbers in the text report.
+const DIGITS: u32 = 10;
+
+fn number(v: f64) -> String {
+    if v == 0.0 {
+        // −0 and 0 read the same to a person.
+        return "0".into();
+    }
+    significant(v, DIGITS, Style::Unicode)
+}
+
+/// `re ± im·i`, with the digits a table has room for.
+fn complex(re: f64, im: f64, digits: u32) -> String {
+    let re_text = if re == 0.0 { "0".to_string() } else { significant(re, digits, Style::Unicode) };
+    if im == 0.0 {
+        return re_text;
+    }
+    let sign = if im < 0.0 { "−" } else { "+" };
+    format!("{re_text} {sign} {}i", significant(im.abs(), digits, Style::Unicode))
+}
+
+fn exact_rows(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<String>> {
+    m.iter().map(|r| r.iter().map(|e| pool.print(*e, Style::Unicode)).collect()).collect()
+}
+
+fn number_rows(m: &[Vec<f64>]) -> Vec<Vec<String>> {
+    m.iter().map(|r| r.iter().map(|v| number(*v)).collect()).collect()
+}
+
+/// `θ = 0, ẋ = 0, θ̇ = 0`: the reference as the scene's terms.
+fn reference_text(pool: &Pool, reference: &[(SymId, bool, ExprId)], style: Style) -> Vec<String> {
+    reference
+        .iter()
+        .map(|(q, rate, value)| {
+            let name = if *rate {
+                let r = pool.symbol(*q).name.clone() + "'";
+                pool.lookup_symbol(&r).map(|s| pool.symbol_text(s, style)).unwrap_or(r)
+            } else {
+                pool.symbol_text(*q, style)
+            };
+            format!("{name} = {}", value_text(pool, *value, style))
+        })
+        .collect()
+}
+
+fn verdict_text(numbers: &Numbers) -> String {
+    let tolerance = format!(
+        "{} ({} × the largest |λ|)",
+        significant(numbers.tolerance, 2, Style::Unicode),
+        significant(RELATIVE_TOLERANCE, 1, Style::Unicode)
+    );
+    match numbers.stability {
+        engine::linearize::Stability::Stable => {
+            format!("Stable: every real part is below −{tolerance}")
+        }
+        engine::linearize::Stability::MarginallyStable => format!(
+            "Marginally stable: no real part is above {tolerance}, and some are within it of zero"
+        ),
+        engine::linearize::Stability::Unstable => {
+            format!("Unstable: some real part is above {tolerance}")
+        }
+    }
+}
+
+/// The report for people.
+pub fn text(l: &Linearized) -> String {
+    let d = &l.derivation;
+    let pool = &d.model.pool;
+    let lin = &l.linearization;
+    let u = Style::Unicode;
+    let mut out = Vec::new();
+    let reference = engine::linearize::reference(lin);
+    let about = reference_text(pool, &reference, u).join(", ");
+    let title = match &d.model.title {
+        Some(title) => format!("{title}: small motions"),
+        None => "Small motions".to_string(),
+    };
+    out.push(title.clone());
+    out.push("═".repeat(title.chars().count()));
+    out.push(String::new());
+    out.push(format!("About  {about}"));
+    if l.exact_reference {
+        out.push(
+            "  the accelerations vanish there exactly, for every value of the parameters".into(),
+        );
+    } else {
+        let largest = l.at.accelerations.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+        out.push(format!(
+            "  the accelerations vanish there at the parameters' values (the largest is {})",
+            number(largest)
+        ));
+    }
+    for (i, q) in lin.coords.iter().enumerate() {
+        if lin.cyclic[i] {
+            let name = pool.symbol_text(*q, u);
+            let rate = pool
+                .lookup_symbol(&format!("{}'", pool.symbol(*q).name))
+                .map(|s| pool.symbol_text(s, u))
+                .unwrap_or_default();
+            out.push(format!(
+                "  {name} is cyclic (in neither M nor f): δ{name} leaves the state, δ{rate} stays"
+            ));
+        }
+    }
+    let q: Vec<String> = lin.coords.iter().map(|s| pool.symbol_text(*s, u)).collect();
+    let constrained = !lin.constraints.is_empty();
+    let rhs = if constrained { "Jᵀ·δλ,  J·δq = 0" } else { "0" };
+    out.push(format!("Linearized equations  M·δq̈ + C·δq̇ + K·δq = {rhs},  q = ({})", q.join(", ")));
+    out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
+    out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
+    out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+    for c in &lin.constraints {
+        let name = pool.symbol_text(c.lambda, u);
+        let row: Vec<String> = c.jacobian.iter().map(|e| pool.print(*e, u)).collect();
+        out.extend(bracketed(&[row], &format!("  J({name}) = ")));
+    }
+
+    let at: Vec<String> = d
+        .model
+        .params
+        .iter()
+        .zip(&l.at.parameters)
+        .map(|(p, v)| format!("{} = {}", pool.symbol_text(p.sym, u), number(*v)))
+        .collect();
+    out.push(if at.is_empty() {
+        "In numbers".to_string()
+    } else {
+        format!("At {}", at.join(", "))
+    });
+    out.extend(bracketed(&number_rows(&l.at.mass), "  M = "));
+    out.extend(bracketed(&number_rows(&l.at.damping), "  C = "));
+    out.extend(bracketed(&number_rows(&l.at.stiffness), "  K = "));
+    for (c, v) in lin.constraints.iter().zip(&l.at.multipliers) {
+        out.push(format!("  {} = {}", pool.symbol_text(c.lambda, u), number(*v)));
+    }
+    let state: Vec<String> = l.state.iter().map(|s| format!("δ{}", state_text(pool, s))).collect();
+    // Not x: a scene's coordinate is as likely as not to be called that.
+    out.push(format!("First-order form  u̇ = A·u,  u = ({})", state.join(", ")));
+    if let Some(basis) = &l.at.basis {
+        out.extend(bracketed(&number_rows(basis), "  δq = N·z,  N = "));
+    }
+    out.extend(bracketed(&number_rows(&l.at.a), "  A = "));
+    out.push("Eigenvalues of A".into());
+    for (re, im) in &l.at.eigenvalues {
+        out.push(format!("  {}", complex(*re, *im, DIGITS)));
+    }
+    out.push(verdict_text(&l.at));
+    if let Some(sweep) = &l.sweep {
+        out.push(String::new());
+        out.extend(sweep_lines(pool, sweep));
+    }
+    let mut text = out.join("\n");
+    text.push('\n');
+    text
+}
+
+/// A state name (`theta'`, `z1'`) as the report prints names (θ̇, ż1).
+fn state_text(pool: &Pool, name: &str) -> String {
+    if let Some(s) = pool.lookup_symbol(name) {
+        return pool.symbol_text(s, Style::Unicode);
+    }
+    // A coordinate along the constraints' null space has no symbol: its rate gets its dot here.
+    match name.strip_suffix('\'') {
+        Some(base) => {
+            let mut chars = base.chars();
+            let first = chars.next().map(String::from).unwrap_or_default();
+            format!("{first}\u{307}{}", chars.as_str())
+        }
+        None => name.to_string(),
+    }
+}
+
+fn sweep_lines(pool: &Pool, sweep: &Sweep) -> Vec<String> {
+    let mut out = Vec::new();
+    let name = pool
+        .lookup_symbol(&sweep.parameter)
+        .map_or(sweep.parameter.clone(), |s| pool.symbol_text(s, Style::Unicode));
+    let (first, last) = match (sweep.rows.first(), sweep.rows.last()) {
+        (Some(a), Some(b)) => (a.value, b.value),
+        _ => return out,
+    };
+    out.push(format!(
+        "Sweep of {name} from {} to {} ({} values): eigenvalues",
+        number(first),
+        number(last),
+        sweep.rows.len()
+    ));
+    let rows: Vec<Vec<String>> = sweep
+        .rows
+        .iter()
+        .map(|r| {
+            let mut cells = vec![number(r.value), r.stability.name().to_string()];
+            cells.extend(r.eigenvalues.iter().map(|(re, im)| complex(*re, *im, 6)));
+            cells
+        })
+        .collect();
+    let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let mut header = vec![name.clone(), "verdict".into()];
+    header.extend((1..columns.saturating_sub(1)).map(|k| format!("λ{k}")));
+    let widths: Vec<usize> = (0..columns)
+        .map(|j| {
+            let cells = std::iter::once(&header).chain(&rows).filter_map(|r| r.get(j));
+            cells.map(|c| c.chars().count()).max().unwrap_or(0)
+        })
+        .collect();
+    for row in std::iter::once(&header).chain(&rows) {
+        let cells: Vec<String> = row
+            .iter()
+            .zip(&widths)
+            .map(|(c, w)| format!("{c}{}", " ".repeat(w.saturating_sub(c.chars().count()))))
+            .collect();
+        out.push(format!("  {}", cells.join("   ").trim_end()));
+    }
+    if sweep.changes.is_empty() {
+        out.push(format!(
+            "Stability does not change between {name} = {} and {}",
+            number(first),
+            number(last)
+        ));
+    } else {
+        out.push("Stability changes".into());
+        for c in &sweep.changes {
+            out.push(format!(
+                "  {name} = {}: {} → {}  (bracketed by bisection: [{}, {}])",
+                significant(c.value, 12, Style::Unicode),
+                c.from.name(),
+                c.to.name(),
+                significant(c.bracket.0.min(c.bracket.1), 14, Style::Unicode),
+                significant(c.bracket.0.max(c.bracket.1), 14, Style::Unicode),
+            ));
+        }
+    }
+    out
+}
+
+fn matrix_json(m: &[Vec<f64>]) -> Json {
+    Json::Array(
+        m.iter().map(|r| Json::Array(r.iter().map(|v| json_number(*v)).collect())).collect(),
+    )
+}
+
+fn exact_json(pool: &Pool, m: &[Vec<ExprId>]) -> Json {
+    Json::Array(
+        m.iter()
+            .map(|r| Json::Array(r.iter().map(|e| json!(pool.print(*e, Style::Ascii))).collect()))
+            .collect(),
+    )
+}
+
+fn eigenvalues_json(eigenvalues: &[(f64, f64)]) -> Json {
+    Json::Array(
+        eigenvalues.iter().map(|(re, im)| json!([json_number(*re), json_number(*im)])).collect(),
+    )
+}
+
+/// The report as JSON: one `linearization` object; expressions are strings in the scene
+/// syntax, numbers are numbers.
+pub fn json(l: &Linearized) -> String {
+    let d = &l.derivation;
+    let pool = &d.model.pool;
+    let lin = &l.linearization;
+    let a = Style::Ascii;
+    let name = |s: SymId| pool.symbol(s).name.clone();
+    let mut about = Map::new();
+    for (q, rate, value) in engine::linearize::reference(lin) {
+        let key = if rate { format!("{}'", name(q)) } else { name(q) };
+        about.insert(key, json!(pool.print(value, a)));
+    }
+    let mut parameters = Map::new();
+    for (p, v) in d.model.params.iter().zip(&l.at.parameters) {
+        parameters.insert(p.name.clone(), json_number(*v));
+    }
+    let matrix = |exact: &[Vec<ExprId>], value: &[Vec<f64>]| json!({ "exact": exact_json(pool, exact), "value": matrix_json(value) });
+    let constraints: Vec<Json> = lin
+        .constraints
+        .iter()
+        .zip(&l.at.multipliers)
+        .map(|(c, v)| {
+            json!({
+                "name": d.model.constraints[c.constraint].name,
+                "multiplier": name(c.lambda),
+                "multiplier_value": json_number(*v),
+                "jacobian": c.jacobian.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    let mut out = Map::new();
+    out.insert(
+        "coordinates".into(),
+        json!(lin.coords.iter().map(|q| name(*q)).collect::<Vec<_>>()),
+    );
+    let cyclic: Vec<String> =
+        lin.coords.iter().zip(&lin.cyclic).filter(|(_, c)| **c).map(|(q, _)| name(*q)).collect();
+    out.insert("cyclic".into(), json!(cyclic));
+    out.insert("about".into(), Json::Object(about));
+    out.insert("exact_reference".into(), json!(l.exact_reference));
+    out.insert("parameters".into(), Json::Object(parameters));
+    out.insert(
+        "accelerations".into(),
+        Json::Array(l.at.accelerations.iter().map(|v| json_number(*v)).collect()),
+    );
+    out.insert("M".into(), matrix(&l.mass, &l.at.mass));
+    out.insert("C".into(), matrix(&l.damping, &l.at.damping));
+    out.insert("K".into(), matrix(&l.stiffness, &l.at.stiffness));
+    if !constraints.is_empty() {
+        out.insert("constraints".into(), Json::Array(constraints));
+    }
+    if let Some(basis) = &l.at.basis {
+        out.insert("basis".into(), matrix_json(basis));
+    }
+    out.insert("state".into(), json!(l.state));
+    out.insert("A".into(), matrix_json(&l.at.a));
+    out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
+    out.insert("stability".into(), json!(l.at.stability.name()));
+    out.insert("tolerance".into(), json_number(l.at.tolerance));
+    if let Some(sweep) = &l.sweep {
+        out.insert("sweep_parameter".into(), json!(sweep.parameter));
+        let rows: Vec<Json> = sweep
+            .rows
+            .iter()
+            .map(|r| {
+                json!({
+                    "value": json_number(r.value),
+                    "eigenvalues": eigenvalues_json(&r.eigenvalues),
+                    "stability": r.stability.name(),
+                })
+            })
+            .collect();
+        out.insert("sweep".into(), Json::Array(rows));
+        let changes: Vec<Json> = sweep
+            .changes
+            .iter()
+            .map(|c| {
+                json!({
+                    "value": json_number(c.value),
+                    "from": c.from.name(),
+                    "to": c.to.name(),
+                    "bracket": [json_number(c.bracket.0), json_number(c.bracket.1)],
+                })
+            })
+            .collect();
+        out.insert("changes".into(), Json::Array(changes));
+    }
+    let report = json!({ "linearization": Json::Object(out) });
+    let mut text = serde_json::to_string_pretty(&report).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+/// One part of an eigenvalue (re, im).
+type Part = fn(&(f64, f64)) -> f64;
+
+const WIDTH: f64 = 720.0;
+const PANEL: f64 = 200.0;
+const LEFT: f64 = 90.0;
+const RIGHT: f64 = 20.0;
+const GAP: f64 = 40.0;
+
+/// The real and imaginary parts of the eigenvalues against the swept parameter, one panel
+/// each, with the changes of stability marked. A dot per eigenvalue and value: which
+/// eigenvalue continues which is not known, so no lines join them.
+pub fn svg(title: &str, sweep: &Sweep) -> String {
+    let height = GAP + 2.0 * (PANEL + GAP) + 10.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
+        WIDTH / 2.0,
+        escape(title)
+    );
+    let values: Vec<f64> = sweep.rows.iter().map(|r| r.value).collect();
+    let (p0, p1) = range(&values);
+    let x = |p: f64| LEFT + (p - p0) / (p1 - p0) * (WIDTH - LEFT - RIGHT);
+    let panels: [(&str, Part); 2] = [("real part of λ", |z| z.0), ("imaginary part of λ", |z| z.1)];
+    for (k, (name, part)) in panels.iter().enumerate() {
+        let top = GAP + k as f64 * (PANEL + GAP);
+        let all: Vec<f64> =
+            sweep.rows.iter().flat_map(|r| r.eigenvalues.iter().map(part)).collect();
+        let (v0, v1) = range(&all);
+        let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{LEFT}" y="{top}" width="{}" height="{PANEL}" fill="none" stroke="#888"/>"##,
+            WIDTH - LEFT - RIGHT
+        );
+        let _ = writeln!(s, r#"<text x="{LEFT}" y="{}">{}</text>"#, top - 6.0, escape(name));
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            LEFT - 6.0,
+            top + 10.0,
+            label(v1)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            LEFT - 6.0,
+            top + PANEL,
+            label(v0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{LEFT}" y="{}" text-anchor="middle">{}</text>"#,
+            top + PANEL + 14.0,
+            label(p0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{} = {}</text>"#,
+            WIDTH - RIGHT,
+            top + PANEL + 14.0,
+            escape(&sweep.parameter),
+            label(p1)
+        );
+        if v0 < 0.0 && v1 > 0.0 {
+            let _ = writeln!(
+                s,
+                r##"<line x1="{LEFT}" y1="{y0:.2}" x2="{}" y2="{y0:.2}" stroke="#bbb"/>"##,
+                WIDTH - RIGHT,
+                y0 = y(0.0)
+            );
+        }
+        for c in &sweep.changes {
+            let _ = writeln!(
+                s,
+                r##"<line x1="{cx:.2}" y1="{top}" x2="{cx:.2}" y2="{}" stroke="#c0392b" stroke-dasharray="4 3"/>"##,
+                top + PANEL,
+                cx = x(c.value)
+            );
+        }
+        for r in &sweep.rows {
+            for z in &r.eigenvalues {
+                let v = part(z);
+                if v.is_finite() {
+                    let _ = writeln!(
+                        s,
+                        r##"<circle cx="{:.2}" cy="{:.2}" r="1.8" fill="#1f5fa8"/>"##,
+                        x(r.value),
+                        y(v)
+                    );
+                }
+            }
+        }
+    }
+    for (k, c) in sweep.changes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            r##"<text x="{:.2}" y="{}" fill="#c0392b">{} = {} ({} → {})</text>"##,
+            x(c.value) + 4.0,
+            GAP + 14.0 * (k as f64 + 1.0),
+            escape(&sweep.parameter),
+            label(c.value),
+            c.from.name(),
+            c.to.name()
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}

@@ -1,0 +1,770 @@
+//! Small motions about a reference, in numbers: the exact M, C, K of `mechanics` evaluated at
+//! the parameters' values, the reference checked (the accelerations there must vanish, and it
+//! must lie on every kept constraint), the first-order matrix A and its eigenvalues, the
+//! verdict on stability, and a sweep of one parameter with the values where the verdict
+//! changes found by bisection. Printing it all is the front end's.
+//!
+//! Coordinates stay those of the derivation, except that a cyclic coordinate's δq leaves the
+//! state (its rate stays: a neighbouring steady motion spins at another rate), and with
+//! constraints kept with multipliers the state moves in the null space of their Jacobian at
+//! the reference: δq = N·z, so that J·δq = 0 and Jᵀ·δλ drops out of Nᵀ·(…).
+
+use cas::{ExprId, Rational, Style, SymId};
+use lang::{Diagnostic, Span};
+use mechanics::{Derivation, Linearization};
+use nalgebra::{DMatrix, DVector};
+use numeric::{ScaledEvaluator, Tape};
+
+use crate::numbers::{prepare, Prepared};
+use crate::Error;
+
+/// A real part counts as zero within this fraction of the largest |eigenvalue|: rounding in
+/// the eigenvalues of a matrix of order ten is far below it, and a root of a double eigenvalue
+/// (where stability changes) is still far above it a relative 1e-10 away.
+pub const RELATIVE_TOLERANCE: f64 = 1e-8;
+/// A residual counts as zero within this fraction of the size of its terms.
+const EQUILIBRIUM_TOLERANCE: f64 = 1e-9;
+/// Bisection stops when the bracket of a change of stability is this narrow, relatively.
+const SWEEP_PRECISION: f64 = 1e-10;
+/// Past this many sweep values the table stops being a table.
+const MAX_SWEEP_VALUES: usize = 100_000;
+/// Iterations the Schur and SVD decompositions may take: a count, never a time.
+const MAX_ITERATIONS: usize = 10_000;
+
+/// What a front end asks for.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// `theta=0, phi'=2`: items that override or extend the scene's `linearize about` line.
+    pub about: Option<String>,
+    /// `name=value` pairs for parameters.
+    pub set: Vec<String>,
+    /// `p=a:b:n`: n values of parameter p from a to b.
+    pub sweep: Option<String>,
+    /// Skip the dimension check.
+    pub no_units: bool,
+}
+
+/// How small motions about the reference behave, by the real parts of the eigenvalues.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stability {
+    /// Every real part is below −tolerance: small motions die out.
+    Stable,
+    /// None is above +tolerance, some is within it: small motions neither grow nor die out
+    /// (at first order).
+    MarginallyStable,
+    /// Some real part is above +tolerance: some small motion grows.
+    Unstable,
+}
+
+impl Stability {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stability::Stable => "stable",
+            Stability::MarginallyStable => "marginally stable",
+            Stability::Unstable => "unstable",
+        }
+    }
+}
+
+/// The linearization at one set of parameter values.
+#[derive(Clone, Debug)]
+pub struct Numbers {
+    /// The parameters' values, in declaration order.
+    pub parameters: Vec<f64>,
+    pub mass: Vec<Vec<f64>>,
+    pub damping: Vec<Vec<f64>>,
+    /// With the multipliers at their reference values.
+    pub stiffness: Vec<Vec<f64>>,
+    /// The multipliers at the reference, in the order of the derivation's.
+    pub multipliers: Vec<f64>,
+    /// The accelerations at the reference (zero within the tolerance), per coordinate.
+    pub accelerations: Vec<f64>,
+    /// With kept constraints: the basis N of their null space (one column per reduced
+    /// coordinate z, one row per coordinate), δq = N·z.
+    pub basis: Option<Vec<Vec<f64>>>,
+    /// u̇ = A·u, u the state.
+    pub a: Vec<Vec<f64>>,
+    /// (re, im), by real part from the largest down (within the tolerance of zero as zero),
+    /// then by imaginary part.
+    pub eigenvalues: Vec<(f64, f64)>,
+    pub stability: Stability,
+    /// The absolute tolerance on real parts: [`RELATIVE_TOLERANCE`] × the largest |eigenvalue|.
+    pub tolerance: f64,
+}
+
+/// One value of a sweep.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub value: f64,
+    pub eigenvalues: Vec<(f64, f64)>,
+    pub stability: Stability,
+}
+
+/// A value of the swept parameter where the verdict changes, bracketed by bisection.
+#[derive(Clone, Copy, Debug)]
+pub struct Change {
+    pub value: f64,
+    /// The verdict just before (towards the start of the sweep) and just after.
+    pub from: Stability,
+    pub to: Stability,
+    /// The last bracket: `from` holds at its first end, `to` at its second.
+    pub bracket: (f64, f64),
+}
+
+/// The eigenvalues against one parameter.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    pub parameter: String,
+    pub rows: Vec<Row>,
+    pub changes: Vec<Change>,
+}
+
+/// Everything `linearize` reports.
+pub struct Linearized {
+    pub derivation: Derivation,
+    pub linearization: Linearization,
+    /// M, C, K in the forms a report shows.
+    pub mass: Vec<Vec<ExprId>>,
+    pub damping: Vec<Vec<ExprId>>,
+    pub stiffness: Vec<Vec<ExprId>>,
+    /// The names of the state u of u̇ = A·u: positions (`theta`, or `z1` along the null space
+    /// of kept constraints), then rates (`theta'`).
+    pub state: Vec<String>,
+    /// Whether the algebra showed the accelerations zero at the reference for every value of
+    /// the parameters (else numbers showed it at each value used).
+    pub exact_reference: bool,
+    pub at: Numbers,
+    pub sweep: Option<Sweep>,
+}
+
+fn bad(message: impl Into<String>) -> Error {
+    Error::Input(message.into())
+}
+
+/// `p=a:b:n`, checked.
+fn parse_sweep(text: &str) -> Result<(String, f64, f64, usize), Error> {
+    let form = || bad(format!("--sweep `{text}` is not of the form p=a:b:n (like w=0:100:201)"));
+    let (name, range) = text.split_once('=').ok_or_else(form)?;
+    let parts: Vec<&str> = range.split(':').map(str::trim).collect();
+    let [a, b, n] = parts[..] else { return Err(form()) };
+    let (Ok(a), Ok(b), Ok(n)) = (a.parse::<f64>(), b.parse::<f64>(), n.parse::<usize>()) else {
+        return Err(form());
+    };
+    if !(a.is_finite() && b.is_finite()) || a == b {
+        return Err(bad(format!("--sweep {text}: the ends must be two different finite numbers")));
+    }
+    if !(2..=MAX_SWEEP_VALUES).contains(&n) {
+        return Err(bad(format!(
+            "--sweep {text}: the number of values must be from 2 to {MAX_SWEEP_VALUES}"
+        )));
+    }
+    Ok((name.trim().to_string(), a, b, n))
+}
+
+/// Loads `source`, linearizes it about its reference (with `--about` items after the scene's)
+/// and analyses it at the parameters' values, and over the sweep if one is asked for.
+pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
+    let sweep = options.sweep.as_deref().map(parse_sweep).transpose()?;
+    let mut sets: Vec<(String, String)> = Vec::new();
+    for s in &options.set {
+        let Some((name, value)) = s.split_once('=') else {
+            return Err(bad(format!("--set `{s}` is not of the form name=value")));
+        };
+        sets.push((name.trim().to_string(), value.trim().to_string()));
+    }
+
+    // `--about` becomes a `linearize about` line after the scene's, so that it is resolved
+    // (names, units, constants) like one and overrides it item by item.
+    let mut text = source.to_string();
+    let mut about_line = (usize::MAX, usize::MAX);
+    if let Some(about) = &options.about {
+        if about.contains(['\n', '\r']) {
+            return Err(bad("--about must be one line"));
+        }
+        if !text.ends_with('\n') {
+            text.push('\n');
+        }
+        about_line.0 = text.len();
+        text.push_str("linearize about ");
+        text.push_str(about);
+        about_line.1 = text.len();
+        text.push('\n');
+    }
+    let extra: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
+    let from_about = |error: Error| from_about(error, about_line);
+    let mut prepared =
+        prepare(&text, &extra, crate::Options { units: !options.no_units }).map_err(from_about)?;
+    if prepared.derivation.model.linearize.is_empty() {
+        return Err(bad(
+            "the scene has no `linearize about` line: add one, or give the reference with \
+             --about 'theta=0'",
+        ));
+    }
+    let scene = |diagnostics: Vec<Diagnostic>| Error::Scene { diagnostics, source: text.clone() };
+    let linearization = prepared.derivation.linearize().map_err(scene).map_err(from_about)?;
+    if linearization.coords.is_empty() {
+        return Err(bad("the constraints fix every coordinate: nothing is left to linearize"));
+    }
+
+    // --- parameter values ------------------------------------------------------------------
+    let model = &prepared.derivation.model;
+    let mut overrides: Vec<(usize, ExprId)> = Vec::new();
+    for ((name, _), expr) in sets.iter().zip(prepared.extra.clone()) {
+        match model.params.iter().position(|p| &p.name == name) {
+            Some(i) => overrides.push((i, expr)),
+            None if model.coords.iter().any(|c| *name == c.name || *name == format!("{}'", c.name)) => {
+                return Err(bad(format!(
+                    "--set {name}: the reference is given by `linearize about` or --about, not --set"
+                )))
+            }
+            None => {
+                let known: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
+                return Err(bad(format!(
+                    "--set {name}: no parameter of that name; one of {}",
+                    known.join(", ")
+                )));
+            }
+        }
+    }
+    let swept = match &sweep {
+        Some((name, ..)) => {
+            Some(model.params.iter().position(|p| &p.name == name).ok_or_else(|| {
+                let known: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
+                bad(format!(
+                    "--sweep {name}: no parameter of that name; one of {}",
+                    known.join(", ")
+                ))
+            })?)
+        }
+        None => None,
+    };
+
+    let analysis = Analysis::new(&mut prepared, &linearization)?;
+    let mut session =
+        Session { prepared, linearization, analysis, overrides, swept, text, about_line };
+    let at = session.analyse(None)?;
+    let sweep = match sweep {
+        Some((parameter, a, b, n)) => Some(session.sweep(parameter, a, b, n)?),
+        None => None,
+    };
+
+    let Session { mut prepared, linearization, analysis, .. } = session;
+    let pool = &mut prepared.derivation.model.pool;
+    let shown = |pool: &mut cas::Pool, m: &[Vec<ExprId>]| -> Vec<Vec<ExprId>> {
+        m.iter().map(|r| r.iter().map(|e| pool.factor_content(*e)).collect()).collect()
+    };
+    let mass = shown(pool, &linearization.mass);
+    let damping = shown(pool, &linearization.damping);
+    let stiffness = shown(pool, &linearization.stiffness);
+    let state = analysis.state_names(&prepared, &linearization, &at);
+    Ok(Linearized {
+        derivation: prepared.derivation,
+        exact_reference: linearization.residual_is_zero,
+        linearization,
+        mass,
+        damping,
+        stiffness,
+        state,
+        at,
+        sweep,
+    })
+}
+
+/// A linearization being analysed at one set of parameter values after another.
+struct Session {
+    prepared: Prepared,
+    linearization: Linearization,
+    analysis: Analysis,
+    /// `--set` values: parameter index → expression.
+    overrides: Vec<(usize, ExprId)>,
+    /// The swept parameter's index.
+    swept: Option<usize>,
+    /// The scene as loaded, `--about` line included, for diagnostics.
+    text: String,
+    about_line: (usize, usize),
+}
+
+impl Session {
+    /// The numbers at the parameters' values, with the swept parameter at `value` if given.
+    fn analyse(&mut self, value: Option<f64>) -> Result<Numbers, Error> {
+        let mut all = self.overrides.clone();
+        if let (Some(i), Some(v)) = (self.swept, value) {
+            let q = Rational::from_float(v).ok_or_else(|| bad(format!("{v} is not a number")))?;
+            all.push((i, self.prepared.derivation.model.pool.num(q)));
+        }
+        let parameters = self.prepared.parameter_values(&all)?;
+        if !all.is_empty() {
+            // The scene's masses were checked with its own values; these may change their sign.
+            self.prepared.masses_at(&parameters)?;
+        }
+        self.analysis.at(&self.linearization, &parameters).map_err(|fault| {
+            let model = &self.prepared.derivation.model;
+            let at = match (self.swept, value) {
+                (Some(i), Some(v)) => format!(" (at {} = {v})", model.params[i].name),
+                _ => String::new(),
+            };
+            let diagnostic = fault.diagnostic(&self.prepared, self.linearization.span, &at);
+            let error = Error::Scene { diagnostics: vec![diagnostic], source: self.text.clone() };
+            from_about(error, self.about_line)
+        })
+    }
+
+    /// n evenly spaced values from a to b, and every change of the verdict between neighbours
+    /// bisected (one per pair of neighbours: a finer sweep finds changes closer together).
+    fn sweep(&mut self, parameter: String, a: f64, b: f64, n: usize) -> Result<Sweep, Error> {
+        let mut rows = Vec::with_capacity(n);
+        for k in 0..n {
+            let value = if k == n - 1 { b } else { a + (b - a) * k as f64 / (n - 1) as f64 };
+            let numbers = self.analyse(Some(value))?;
+            rows.push(Row {
+                value,
+                eigenvalues: numbers.eigenvalues,
+                stability: numbers.stability,
+            });
+        }
+        let mut changes = Vec::new();
+        for pair in rows.windows(2) {
+            let (first, second) = (&pair[0], &pair[1]);
+            if first.stability == second.stability {
+                continue;
+            }
+            let (from, mut to) = (first.stability, second.stability);
+            let (mut lo, mut hi) = (first.value, second.value);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                let narrow = (hi - lo).abs() <= SWEEP_PRECISION * lo.abs().max(hi.abs());
+                if narrow || mid == lo || mid == hi {
+                    break;
+                }
+                let s = self.analyse(Some(mid))?.stability;
+                if s == from {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                    to = s;
+                }
+            }
+            changes.push(Change { value: 0.5 * (lo + hi), from, to, bracket: (lo, hi) });
+        }
+        Ok(Sweep { parameter, rows, changes })
+    }
+}
+
+/// Says where a diagnostic points into the command line's `--about` line, which follows the
+/// file in the text loaded.
+fn from_about(error: Error, about_line: (usize, usize)) -> Error {
+    match error {
+        Error::Scene { mut diagnostics, source } => {
+            for d in &mut diagnostics {
+                if (about_line.0..=about_line.1).contains(&d.span.start) {
+                    d.label = format!("{} (from --about)", d.label);
+                }
+            }
+            Error::Scene { diagnostics, source }
+        }
+        other => other,
+    }
+}
+
+/// Why a reference could not be analysed at some parameter values.
+enum Fault {
+    /// The accelerations there do not vanish.
+    NotEquilibrium { accelerations: Vec<f64> },
+    /// The reference is off a kept constraint.
+    OffConstraint { constraint: usize, value: f64 },
+    /// The mass matrix (projected onto the constraints' null space) is singular there.
+    SingularMass { condition: f64 },
+    /// A value is NaN or infinite.
+    NotFinite(&'static str),
+    /// The kept constraints leave no small motion.
+    NoMotion,
+}
+
+impl Fault {
+    fn diagnostic(&self, prepared: &Prepared, span: Span, at: &str) -> Diagnostic {
+        let d = &prepared.derivation;
+        let pool = &d.model.pool;
+        match self {
+            Fault::NotEquilibrium { accelerations } => {
+                let listed: Vec<String> = d
+                    .accels
+                    .iter()
+                    .zip(accelerations)
+                    .map(|(a, v)| format!("{} = {}", pool.symbol_text(*a, Style::Unicode), v))
+                    .collect();
+                Diagnostic::error(
+                    span,
+                    format!("this reference is not an equilibrium or a steady motion{at}"),
+                )
+                .with_label(format!("the accelerations here: {}", listed.join(", ")))
+                .with_hint(
+                    "at a reference the accelerations vanish: choose positions (and rates of \
+                     cyclic coordinates) where M⁻¹·f is zero",
+                )
+            }
+            Fault::OffConstraint { constraint, value } => {
+                let c = &d.model.constraints[*constraint];
+                Diagnostic::error(
+                    span,
+                    format!("this reference is not on the constraint `{}`{at}", c.name),
+                )
+                .with_label(format!("Φ = {value} here"))
+                .with_related(c.span, "the constraint")
+                .with_hint("give positions that satisfy every constraint kept with a multiplier")
+            }
+            Fault::SingularMass { condition } => Diagnostic::error(
+                span,
+                format!("the mass matrix is singular at this reference{at}"),
+            )
+            .with_label(if condition.is_finite() {
+                format!("condition number ≈ {condition:.1e}")
+            } else {
+                "exactly singular".to_string()
+            })
+            .with_hint(
+                "the coordinates are singular here (Euler angles at gimbal lock, say): choose \
+                 coordinates that are regular at the reference",
+            ),
+            Fault::NoMotion => Diagnostic::error(
+                span,
+                format!("the constraints leave no small motion about this reference{at}"),
+            )
+            .with_label("every δq here breaks a constraint")
+            .with_hint("a reference needs room to move: fewer constraints than coordinates"),
+            Fault::NotFinite(what) => Diagnostic::error(
+                span,
+                format!("{what} is not a finite number at this reference{at}"),
+            )
+            .with_label("NaN or infinite here")
+            .with_hint("a division by zero or a function outside its domain at the reference"),
+        }
+    }
+}
+
+/// The lowered matrices of a linearization, ready for any parameter values.
+struct Analysis {
+    tape: Tape,
+    n: usize,
+    /// Kept constraints.
+    k: usize,
+    /// Parameters then multipliers: the tape's inputs.
+    inputs: Vec<SymId>,
+    residual: ScaledEvaluator,
+    phi: ScaledEvaluator,
+    symbol_count: usize,
+    cyclic: Vec<bool>,
+}
+
+impl Analysis {
+    fn new(prepared: &mut Prepared, lin: &Linearization) -> Result<Analysis, Error> {
+        let n = lin.coords.len();
+        let mut outputs: Vec<ExprId> = Vec::new();
+        for m in [&lin.mass, &lin.damping, &lin.stiffness] {
+            outputs.extend(m.iter().flatten());
+        }
+        outputs.extend(&lin.residual);
+        for c in &lin.constraints {
+            outputs.extend(&c.jacobian);
+            outputs.push(c.bias);
+        }
+        let mut inputs = prepared.parameters.clone();
+        inputs.extend(lin.constraints.iter().map(|c| c.lambda));
+        let tape = Tape::new(prepared.lower(&inputs, &outputs)?);
+        let pool = &prepared.derivation.model.pool;
+        let phis: Vec<ExprId> = lin.constraints.iter().map(|c| c.phi).collect();
+        Ok(Analysis {
+            tape,
+            n,
+            k: lin.constraints.len(),
+            inputs,
+            residual: ScaledEvaluator::new(pool, &lin.residual),
+            phi: ScaledEvaluator::new(pool, &phis),
+            symbol_count: pool.symbol_count(),
+            cyclic: lin.cyclic.clone(),
+        })
+    }
+
+    /// The names of the state: positions kept (coordinates, or z1… along the constraints'
+    /// null space, then cyclic coordinates), then their rates.
+    fn state_names(&self, prepared: &Prepared, lin: &Linearization, at: &Numbers) -> Vec<String> {
+        let pool = &prepared.derivation.model.pool;
+        let name = |i: usize| pool.symbol(lin.coords[i]).name.clone();
+        let (positions, rates): (Vec<String>, Vec<String>) = if self.k == 0 {
+            let positions = (0..self.n).filter(|&i| !self.cyclic[i]).map(name).collect();
+            (positions, (0..self.n).map(|i| format!("{}'", name(i))).collect())
+        } else {
+            // The null space's dimension at the reference: n minus the constraints' rank there.
+            let columns = at.basis.as_ref().and_then(|b| b.first()).map_or(0, Vec::len);
+            let reduced = columns.saturating_sub(self.cyclic.iter().filter(|c| **c).count());
+            let z: Vec<String> = (1..=reduced).map(|j| format!("z{j}")).collect();
+            let cyclic: Vec<String> = (0..self.n).filter(|&i| self.cyclic[i]).map(name).collect();
+            let rates = z.iter().chain(&cyclic).map(|s| format!("{s}'")).collect();
+            (z, rates)
+        };
+        positions.into_iter().chain(rates).collect()
+    }
+
+    fn eval(&mut self, parameters: &[f64], multipliers: &[f64]) -> Vec<f64> {
+        let mut input = parameters.to_vec();
+        input.extend(multipliers);
+        let mut out = vec![0.0; self.tape.outputs()];
+        self.tape.eval(&input, &mut out);
+        out
+    }
+
+    /// Values by symbol, for the scaled evaluators.
+    fn by_symbol(&self, parameters: &[f64], multipliers: &[f64]) -> Vec<f64> {
+        let mut values = vec![f64::NAN; self.symbol_count];
+        for (s, v) in self.inputs.iter().zip(parameters.iter().chain(multipliers)) {
+            values[s.index()] = *v;
+        }
+        values
+    }
+
+    fn at(&mut self, lin: &Linearization, parameters: &[f64]) -> Result<Numbers, Fault> {
+        let (n, k) = (self.n, self.k);
+        let square = |out: &[f64], block: usize| -> DMatrix<f64> {
+            DMatrix::from_fn(n, n, |j, i| out[block * n * n + j * n + i])
+        };
+        let out = self.eval(parameters, &vec![0.0; k]);
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(Fault::NotFinite("M, C, K or f"));
+        }
+        let mass = square(&out, 0);
+        let forcing = DVector::from_fn(n, |j, _| out[3 * n * n + j]);
+        let base = 3 * n * n + n;
+        let jacobian = DMatrix::from_fn(k, n, |c, i| out[base + c * (n + 1) + i]);
+        let bias = DVector::from_fn(k, |c, _| out[base + c * (n + 1) + n]);
+
+        // On each kept constraint, then the accelerations (and the multipliers) there.
+        let values = self.by_symbol(parameters, &vec![0.0; k]);
+        for (c, (phi, size)) in self.phi.eval(&values).into_iter().enumerate() {
+            // NaN is off the constraint too.
+            let on = phi.abs() <= EQUILIBRIUM_TOLERANCE * size;
+            if !on {
+                let constraint = lin.constraints[c].constraint;
+                return Err(Fault::OffConstraint { constraint, value: phi });
+            }
+        }
+        let (accelerations, multipliers) = if k == 0 {
+            let lu = mass.clone().lu();
+            let a = lu.solve(&forcing).unwrap_or_else(|| DVector::from_element(n, f64::NAN));
+            (a, DVector::zeros(0))
+        } else {
+            // M·q̈ − Jᵀ·λ = f, J·q̈ = γ.
+            let mut system = DMatrix::zeros(n + k, n + k);
+            system.view_mut((0, 0), (n, n)).copy_from(&mass);
+            system.view_mut((0, n), (n, k)).copy_from(&(-jacobian.transpose()));
+            system.view_mut((n, 0), (k, n)).copy_from(&jacobian);
+            let mut rhs = DVector::zeros(n + k);
+            rhs.rows_mut(0, n).copy_from(&forcing);
+            rhs.rows_mut(n, k).copy_from(&bias);
+            let x = least_squares(system, &rhs)
+                .unwrap_or_else(|| DVector::from_element(n + k, f64::NAN));
+            (x.rows(0, n).into_owned(), x.rows(n, k).into_owned())
+        };
+        let multipliers: Vec<f64> = multipliers.iter().copied().collect();
+        let accelerations: Vec<f64> = accelerations.iter().copied().collect();
+        let out = self.eval(parameters, &multipliers);
+        let stiffness = square(&out, 2);
+        if !lin.residual_is_zero {
+            let values = self.by_symbol(parameters, &multipliers);
+            let residual = self.residual.eval(&values);
+            let held = residual.iter().enumerate().all(|(j, (r, size))| {
+                // A shift of the reference by a 1e-3 of what the coordinates are measured in
+                // would leave this much: below it, rounding of the reference is all there is.
+                let floor = 1e-3 * stiffness.row(j).iter().map(|x| x.abs()).sum::<f64>();
+                r.abs() <= EQUILIBRIUM_TOLERANCE * size.max(floor)
+            });
+            if !held || accelerations.iter().any(|a| !a.is_finite()) {
+                return Err(Fault::NotEquilibrium { accelerations });
+            }
+        }
+        let damping = square(&out, 1);
+
+        // The reduced coordinates: the constraints' null space over the non-cyclic
+        // coordinates, then each cyclic coordinate as it is.
+        let kept: Vec<usize> = (0..n).filter(|&i| !self.cyclic[i]).collect();
+        let cyclic: Vec<usize> = (0..n).filter(|&i| self.cyclic[i]).collect();
+        let basis = if k == 0 {
+            DMatrix::identity(n, n)
+        } else {
+            let restricted = DMatrix::from_fn(k, kept.len(), |c, i| jacobian[(c, kept[i])]);
+            let null =
+                null_space(restricted).ok_or(Fault::NotFinite("the constraints' Jacobian"))?;
+            let r = null.ncols() + cyclic.len();
+            let mut basis = DMatrix::zeros(n, r);
+            for (row, &i) in kept.iter().enumerate() {
+                for col in 0..null.ncols() {
+                    basis[(i, col)] = null[(row, col)];
+                }
+            }
+            for (col, &i) in cyclic.iter().enumerate() {
+                basis[(i, null.ncols() + col)] = 1.0;
+            }
+            basis
+        };
+        let r = basis.ncols();
+        if r == 0 {
+            return Err(Fault::NoMotion);
+        }
+        let reduce = |m: &DMatrix<f64>| basis.transpose() * m * &basis;
+        let (mr, cr, kr) = (reduce(&mass), reduce(&damping), reduce(&stiffness));
+        // Which reduced coordinates keep their position in the state: all but the cyclic.
+        let positions: Vec<usize> =
+            if k == 0 { kept.clone() } else { (0..r - cyclic.len()).collect() };
+
+        let svd = nalgebra::SVD::try_new(mr.clone(), false, false, f64::EPSILON, MAX_ITERATIONS)
+            .ok_or(Fault::NotFinite("the mass matrix"))?;
+        let (largest, smallest) = (svd.singular_values.max(), svd.singular_values.min());
+        let regular = smallest > 1e-12 * largest;
+        if !regular {
+            return Err(Fault::SingularMass { condition: largest / smallest });
+        }
+        let lu = mr.lu();
+        let p = positions.len();
+        let size = p + r;
+        let mut a = DMatrix::zeros(size, size);
+        for (row, &j) in positions.iter().enumerate() {
+            a[(row, p + j)] = 1.0;
+        }
+        let stiff = DMatrix::from_fn(r, p, |row, col| kr[(row, positions[col])]);
+        let lower_left =
+            lu.solve(&stiff).ok_or(Fault::SingularMass { condition: f64::INFINITY })?;
+        let lower_right = lu.solve(&cr).ok_or(Fault::SingularMass { condition: f64::INFINITY })?;
+        a.view_mut((p, 0), (r, p)).copy_from(&(-lower_left));
+        a.view_mut((p, p), (r, r)).copy_from(&(-lower_right));
+
+        let eigenvalues = eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
+        let (stability, tolerance) = stability(&eigenvalues);
+        let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
+            (0..m.nrows()).map(|j| m.row(j).iter().copied().collect()).collect()
+        };
+        Ok(Numbers {
+            parameters: parameters.to_vec(),
+            mass: rows(&mass),
+            damping: rows(&damping),
+            stiffness: rows(&stiffness),
+            multipliers,
+            accelerations,
+            basis: (k > 0).then(|| rows(&basis)),
+            a: rows(&a),
+            eigenvalues,
+            stability,
+            tolerance,
+        })
+    }
+}
+
+/// The least-squares solution of smallest norm, robust to a rank-deficient system (dependent
+/// constraints at the reference).
+fn least_squares(a: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
+    let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, MAX_ITERATIONS)?;
+    let eps = 1e-12 * svd.singular_values.max();
+    svd.solve(b, eps).ok()
+}
+
+/// An orthonormal basis of the null space of a k×n matrix, as the columns of an n×r matrix.
+fn null_space(j: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let (k, n) = j.shape();
+    // Padded to square, so that the SVD gives every right singular vector, not only k.
+    let mut square = DMatrix::zeros(n.max(k), n);
+    square.view_mut((0, 0), (k, n)).copy_from(&j);
+    let svd = nalgebra::SVD::try_new(square, false, true, f64::EPSILON, MAX_ITERATIONS)?;
+    let v_t = svd.v_t?;
+    let largest = svd.singular_values.max();
+    let columns: Vec<DVector<f64>> = (0..svd.singular_values.len())
+        .filter(|&i| svd.singular_values[i] <= 1e-10 * largest)
+        .map(|i| v_t.row(i).transpose())
+        .collect();
+    Some(if columns.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_columns(&columns) })
+}
+
+/// The eigenvalues of A as (re, im), by real part from the largest down (those within the
+/// verdict's tolerance of zero as zero), then by imaginary part; `None` when the iteration
+/// does not converge.
+fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
+    if a.is_empty() {
+        return Some(Vec::new());
+    }
+    if a.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let schur = nalgebra::Schur::try_new(a.clone(), f64::EPSILON, MAX_ITERATIONS)?;
+    let mut out: Vec<(f64, f64)> =
+        schur.complex_eigenvalues().iter().map(|z| (z.re, z.im)).collect();
+    // Real parts within the verdict's tolerance of zero sort as zero, so that rounding does not
+    // shuffle the eigenvalues of an undamped system from one value of a sweep to the next.
+    let (_, tolerance) = stability(&out);
+    let key = |re: f64| if re.abs() <= tolerance { 0.0 } else { re };
+    out.sort_by(|x, y| key(y.0).total_cmp(&key(x.0)).then(y.1.total_cmp(&x.1)));
+    Some(out)
+}
+
+/// The verdict and the absolute tolerance it used.
+fn stability(eigenvalues: &[(f64, f64)]) -> (Stability, f64) {
+    let scale = eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
+    let tolerance = RELATIVE_TOLERANCE * scale;
+    let verdict = if eigenvalues.iter().any(|(re, _)| *re > tolerance) {
+        Stability::Unstable
+    } else if !eigenvalues.is_empty() && eigenvalues.iter().all(|(re, _)| *re < -tolerance) {
+        Stability::Stable
+    } else {
+        Stability::MarginallyStable
+    };
+    (verdict, tolerance)
+}
+
+/// The reference as the scene's terms: each coordinate's position (where it has one) and rate.
+pub fn reference(lin: &Linearization) -> Vec<(SymId, bool, ExprId)> {
+    let mut out = Vec::new();
+    for (i, q) in lin.coords.iter().enumerate() {
+        if let Some(p) = lin.positions[i] {
+            out.push((*q, false, p));
+        }
+    }
+    for (i, q) in lin.coords.iter().enumerate() {
+        out.push((*q, true, lin.rates[i]));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verdicts_follow_the_real_parts() {
+        assert_eq!(stability(&[(-1.0, 2.0), (-1.0, -2.0)]).0, Stability::Stable);
+        assert_eq!(stability(&[(0.0, 2.0), (0.0, -2.0)]).0, Stability::MarginallyStable);
+        assert_eq!(stability(&[(1e-12, 2.0), (-1e-12, -2.0)]).0, Stability::MarginallyStable);
+        assert_eq!(stability(&[(3.0, 0.0), (-3.0, 0.0)]).0, Stability::Unstable);
+        assert_eq!(stability(&[(0.0, 0.0)]).0, Stability::MarginallyStable);
+    }
+
+    #[test]
+    fn sweeps_are_parsed_and_checked() {
+        assert_eq!(parse_sweep("w=0:100:11").ok(), Some(("w".to_string(), 0.0, 100.0, 11)));
+        assert!(parse_sweep("w=0:100").is_err());
+        assert!(parse_sweep("w=1:1:5").is_err());
+        assert!(parse_sweep("w=0:1:1").is_err());
+        assert!(parse_sweep("w=0:x:3").is_err());
+    }
+
+    #[test]
+    fn the_null_space_is_orthonormal_and_annihilated() {
+        let j = DMatrix::from_row_slice(1, 3, &[1.0, 2.0, 2.0]);
+        let n = null_space(j.clone()).expect("converges");
+        assert_eq!(n.ncols(), 2);
+        assert!((&j * &n).amax() < 1e-14);
+        assert!((n.transpose() * &n - DMatrix::identity(2, 2)).amax() < 1e-14);
+    }
+
+    #[test]
+    fn eigenvalues_are_sorted() {
+        let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -4.0, 0.0]);
+        let e = eigenvalues(&a).expect("converges");
+        assert_eq!(e.len(), 2);
+        assert!((e[0].1 - 2.0).abs() < 1e-14 && (e[1].1 + 2.0).abs() < 1e-14, "{e:?}");
+    }
+}

@@ -1,0 +1,301 @@
+//! `lagrange linearize`: small motions about equilibria and steady motions against results
+//! derived by hand. The pendulum hanging and standing, the pendulum on a cart, the Cartesian
+//! pendulum through its constraint's null space, the conical pendulum, the sleeping top's
+//! critical spin found by a sweep; references that are not equilibria, and the JSON shape.
+
+use engine::linearize::{linearize, Linearized, Options, Stability};
+
+fn example(rel: &str) -> String {
+    let (_, source) = lagrange_tests::examples()
+        .into_iter()
+        .find(|(p, _)| p.ends_with(rel))
+        .unwrap_or_else(|| panic!("no example {rel}"));
+    source
+}
+
+fn about(source: &str, about: &str) -> Linearized {
+    let options = Options { about: Some(about.into()), ..Default::default() };
+    linearize(source, &options).unwrap_or_else(|e| panic!("linearizes about {about}: {e}"))
+}
+
+fn close(a: f64, b: f64, relative: f64) -> bool {
+    (a - b).abs() <= relative * b.abs().max(1e-300)
+}
+
+fn exact(l: &Linearized, m: &[Vec<cas::ExprId>]) -> Vec<Vec<String>> {
+    let pool = &l.derivation.model.pool;
+    m.iter().map(|r| r.iter().map(|e| pool.print(*e, cas::Style::Ascii)).collect()).collect()
+}
+
+#[test]
+fn the_pendulum_oscillates_hanging_and_falls_standing() {
+    let source = example("classics/simple_pendulum.lag");
+    let (g, length) = (9.81_f64, 1.0_f64);
+    let omega = (g / length).sqrt();
+
+    let hanging = about(&source, "theta = 0");
+    assert!(hanging.exact_reference);
+    assert_eq!(hanging.at.stability, Stability::MarginallyStable);
+    let e = &hanging.at.eigenvalues;
+    assert_eq!(e.len(), 2);
+    assert!(e[0].0.abs() <= 1e-12 * omega && e[1].0.abs() <= 1e-12 * omega, "{e:?}");
+    assert!(close(e[0].1, omega, 1e-12) && close(e[1].1, -omega, 1e-12), "{e:?}");
+
+    let standing = about(&source, "theta = pi");
+    assert_eq!(standing.at.stability, Stability::Unstable);
+    let e = &standing.at.eigenvalues;
+    assert!(close(e[0].0, omega, 1e-12) && close(e[1].0, -omega, 1e-12), "{e:?}");
+    assert!(e[0].1 == 0.0 && e[1].1 == 0.0, "{e:?}");
+    assert_eq!(exact(&standing, &standing.stiffness), [["-m*L*g"]]);
+}
+
+#[test]
+fn the_pendulum_on_a_cart_has_the_hand_derived_matrices() {
+    // T = ½(M + m)ẋ² + m·L·cos θ·ẋ·θ̇ + ½·m·L²·θ̇², V = −m·g·L·cos θ: about θ = 0,
+    // M = [M + m, m·L; m·L, m·L²], C = 0, K = [0, 0; 0, m·g·L]; x is cyclic.
+    let l = about(&example("classics/pendulum_on_cart.lag"), "theta = 0");
+    assert_eq!(exact(&l, &l.mass), [["M + m", "m*L"], ["m*L", "m*L^2"]]);
+    assert_eq!(exact(&l, &l.damping), [["0", "0"], ["0", "0"]]);
+    assert_eq!(exact(&l, &l.stiffness), [["0", "0"], ["0", "m*L*g"]]);
+    assert_eq!(l.linearization.cyclic, [true, false]);
+    assert_eq!(l.state, ["theta", "x'", "theta'"]);
+    let (big, m, length, g) = (2.0, 1.0, 1.0, 9.81);
+    assert_eq!(l.at.mass, [[big + m, m * length], [m * length, m * length * length]]);
+    assert_eq!(l.at.stiffness, [[0.0, 0.0], [0.0, m * g * length]]);
+    // det(K − ω²M) = 0: ω² = (M + m)·g/(M·L), and the cart's free drift δẋ gives 0.
+    let omega = ((big + m) * g / (big * length)).sqrt();
+    let e = &l.at.eigenvalues;
+    assert_eq!(e.len(), 3);
+    assert!(close(e[0].1, omega, 1e-12) && e[1] == (0.0, 0.0), "{e:?}");
+    assert!(e.iter().all(|(re, _)| re.abs() <= 1e-12 * omega), "{e:?}");
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+}
+
+#[test]
+fn a_kept_constraint_is_linearized_in_its_null_space() {
+    let l = about(&example("classics/pendulum_cartesian.lag"), "x = 0, y = -L");
+    // λ = −m·g/(2·L) holds the bob up; K = −2·λ·I then.
+    let (m, g, length) = (1.0, 9.81, 1.0);
+    assert!(close(l.at.multipliers[0], -m * g / (2.0 * length), 1e-12), "{:?}", l.at.multipliers);
+    assert_eq!(exact(&l, &l.stiffness), [["-2*rod.force", "0"], ["0", "-2*rod.force"]]);
+    assert_eq!(l.state, ["z1", "z1'"]);
+    let omega = (g / length).sqrt();
+    let e = &l.at.eigenvalues;
+    assert!(close(e[0].1, omega, 1e-12) && close(e[1].1, -omega, 1e-12), "{e:?}");
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+    // Off the constraint, the reference is refused.
+    let options = Options { about: Some("x = 0, y = -2*L".into()), ..Default::default() };
+    let err = linearize(&example("classics/pendulum_cartesian.lag"), &options).err().expect("off");
+    assert!(cli::diagnostics::error("p.lag", &err).contains("not on the constraint `rod`"));
+}
+
+#[test]
+fn the_conical_pendulum_wobbles_at_the_textbook_frequency() {
+    // Steady precession at θ0 needs φ̇² = g/(L·cos θ0); small wobbles then have
+    // ω² = g/L·(1 + 3·cos²θ0)/cos θ0. φ is cyclic.
+    let l = about(&example("classics/spherical_pendulum.lag"), "theta = pi/3, phi' = sqrt(2*g/L)");
+    assert!(l.exact_reference);
+    assert_eq!(l.linearization.cyclic, [false, true]);
+    let (g, length, c) = (9.81_f64, 1.0_f64, 0.5_f64);
+    let omega = (g / length * (1.0 + 3.0 * c * c) / c).sqrt();
+    let e = &l.at.eigenvalues;
+    assert!(close(e[0].1, omega, 1e-12), "{e:?}");
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+}
+
+#[test]
+fn the_sleeping_top_wakes_below_the_critical_spin() {
+    let source = example("space/sleeping_top.lag");
+    let options = Options { sweep: Some("w=0:100:101".into()), ..Default::default() };
+    let l = linearize(&source, &options).expect("linearizes");
+    let sweep = l.sweep.as_ref().expect("a sweep");
+    assert_eq!(sweep.rows.len(), 101);
+    assert_eq!(sweep.rows[0].stability, Stability::Unstable);
+    assert_eq!(sweep.rows[100].stability, Stability::MarginallyStable);
+    assert_eq!(sweep.changes.len(), 1, "{:?}", sweep.changes);
+    let change = sweep.changes[0];
+    assert_eq!((change.from, change.to), (Stability::Unstable, Stability::MarginallyStable));
+    // C²·w² = 4·(A + m·l²)·m·g·l.
+    let (m, g, l_, a, c) = (0.5_f64, 9.81_f64, 0.04_f64, 0.0004_f64, 0.0006_f64);
+    let critical = 2.0 * ((a + m * l_ * l_) * m * g * l_).sqrt() / c;
+    assert!(close(change.value, critical, 1e-8), "{} against {critical}", change.value);
+    let (lo, hi) = change.bracket;
+    assert!((hi - lo).abs() <= 2e-10 * critical, "{lo}..{hi}");
+    // The same from the other end, over a sweep that does not straddle the change evenly.
+    let options = Options { sweep: Some("w=90:10:7".into()), ..Default::default() };
+    let l = linearize(&source, &options).expect("linearizes");
+    let change = l.sweep.expect("a sweep").changes[0];
+    assert_eq!((change.from, change.to), (Stability::MarginallyStable, Stability::Unstable));
+    assert!(close(change.value, critical, 1e-8), "{} against {critical}", change.value);
+}
+
+#[test]
+fn a_reference_that_is_not_an_equilibrium_is_refused_with_its_accelerations() {
+    let source = example("classics/simple_pendulum.lag");
+    let options = Options { about: Some("theta = pi/2".into()), ..Default::default() };
+    let err = linearize(&source, &options).err().expect("not an equilibrium");
+    assert_eq!(err.exit_code(), 2);
+    let text = cli::diagnostics::error("simple_pendulum.lag", &err);
+    assert!(text.contains("is not an equilibrium or a steady motion"), "{text}");
+    assert!(text.contains("θ̈ = -9.81"), "{text}");
+    assert!(text.contains("(from --about)") && text.contains('^'), "{text}");
+
+    // Positions left out, an eliminated coordinate given, equations that change with time, a
+    // mass matrix singular at the reference (the heavy top's Euler angles at θ = 0).
+    let cases = [
+        ("classics/double_pendulum.lag", "theta1 = 0", "no position for `theta2`"),
+        ("ps5/falling_rod.lag", "y = 0, theta = 0", "`y` is eliminated by `floor`"),
+        ("classics/damped_driven_oscillator.lag", "x = 0", "depend on time"),
+        ("space/heavy_top.lag", "theta = 0, phi' = 0", "mass matrix is singular"),
+        ("classics/spherical_pendulum.lag", "theta = 0, theta' = 1", "does not stay put"),
+    ];
+    for (rel, about, message) in cases {
+        let options = Options { about: Some(about.into()), ..Default::default() };
+        let err = linearize(&example(rel), &options).err().unwrap_or_else(|| panic!("{rel}"));
+        assert_eq!(err.exit_code(), 2, "{rel}");
+        let text = cli::diagnostics::error(rel, &err);
+        assert!(text.contains(message) && text.contains('^'), "{rel}: {text}");
+    }
+    let none = linearize(&source, &Options::default()).err().expect("no reference");
+    assert!(none.to_string().contains("no `linearize about` line"), "{none}");
+}
+
+#[test]
+fn the_command_line_extends_and_overrides_the_scene() {
+    let source = example("space/sleeping_top.lag");
+    // The scene spins at w; --about spins it at 10 and keeps the rest of the scene's line.
+    let l = about(&source, "psi' = 10");
+    assert_eq!(l.at.stability, Stability::Unstable);
+    let options = Options { set: vec!["w=10".into()], ..Default::default() };
+    let set = linearize(&source, &options).expect("linearizes");
+    assert_eq!(set.at.eigenvalues, l.at.eigenvalues);
+}
+
+#[test]
+fn json_has_the_matrices_the_eigenvalues_and_the_sweep() {
+    let source = example("space/sleeping_top.lag");
+    let options = Options { sweep: Some("w=40:60:5".into()), ..Default::default() };
+    let l = linearize(&source, &options).expect("linearizes");
+    let json: serde_json::Value =
+        serde_json::from_str(&cli::linearize::json(&l)).expect("valid JSON");
+    let lin = &json["linearization"];
+    assert_eq!(lin["coordinates"], serde_json::json!(["a", "b", "psi"]));
+    assert_eq!(lin["cyclic"], serde_json::json!(["psi"]));
+    assert_eq!(lin["about"]["psi'"], "w");
+    assert_eq!(lin["M"]["exact"][0][0], "A + m*l^2");
+    assert_eq!(lin["C"]["exact"][0][1], "C*w");
+    assert_eq!(lin["K"]["exact"][1][1], "-m*g*l");
+    assert_eq!(lin["K"]["value"][1][1], -0.5 * 9.81 * 0.04);
+    assert_eq!(lin["A"].as_array().map(Vec::len), Some(5));
+    let eigenvalues = lin["eigenvalues"].as_array().expect("eigenvalues");
+    assert_eq!(eigenvalues.len(), 5);
+    assert!(eigenvalues.iter().all(|z| z.as_array().is_some_and(|z| z.len() == 2)));
+    assert_eq!(lin["stability"], "marginally stable");
+    let rows = lin["sweep"].as_array().expect("rows");
+    assert_eq!(rows.len(), 5);
+    assert_eq!(rows[0]["value"], 40.0);
+    assert_eq!(rows[0]["eigenvalues"].as_array().map(Vec::len), Some(5));
+    assert_eq!(lin["changes"][0]["from"], "unstable");
+    let value = lin["changes"][0]["value"].as_f64().expect("a number");
+    assert!((value - 51.14684741).abs() < 1e-6, "{value}");
+}
+
+#[test]
+fn text_and_plot_show_the_sweep() {
+    let source = example("space/sleeping_top.lag");
+    let options = Options { sweep: Some("w=0:100:11".into()), ..Default::default() };
+    let l = linearize(&source, &options).expect("linearizes");
+    let text = cli::linearize::text(&l);
+    assert!(text.contains("ψ is cyclic"), "{text}");
+    assert!(text.contains("Stability changes\n  w = 51.1468474"), "{text}");
+    let sweep = l.sweep.as_ref().expect("sweep");
+    let svg = cli::linearize::svg("top", sweep);
+    assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
+    // A dot per eigenvalue and value, in both panels.
+    assert_eq!(svg.matches("<circle").count(), 2 * 11 * 5);
+    assert_eq!(svg.matches("stroke-dasharray").count(), 2);
+}
+
+/// Every scene of the repository (examples, cross-check scenes, the bad gallery), linearized
+/// about all coordinates at 0 and swept over its first parameter: an answer or an error with
+/// exit code 2, never a panic.
+#[test]
+fn no_scene_makes_linearize_panic() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<std::path::PathBuf> = Vec::new();
+    for dir in ["../examples/classics", "../examples/ps5", "../examples/space", "bad", "scenes"] {
+        let entries = std::fs::read_dir(root.join(dir)).expect("a folder");
+        files.extend(entries.flatten().map(|e| e.path()));
+    }
+    files.extend(
+        std::fs::read_dir(root.join("sympy/scenes")).expect("scenes").flatten().map(|e| e.path()),
+    );
+    files.retain(|p| p.extension().is_some_and(|e| e == "lag"));
+    files.sort();
+    assert!(files.len() > 100, "{}", files.len());
+    let mut panicked = Vec::new();
+    let mut answered = 0;
+    for path in files {
+        let source = std::fs::read_to_string(&path).expect("readable");
+        let (coords, params) = match lang::parse(&source) {
+            Ok(file) => names(&file),
+            Err(_) => (Vec::new(), Vec::new()),
+        };
+        let about = coords.iter().map(|c| format!("{c} = 0")).collect::<Vec<_>>().join(", ");
+        let mut runs = vec![Options { about: Some(about.clone()), ..Default::default() }];
+        if let Some(p) = params.first() {
+            let sweep = Some(format!("{p}=1:2:3"));
+            runs.push(Options { about: Some(about), sweep, ..Default::default() });
+        }
+        for options in runs {
+            let outcome = std::panic::catch_unwind(|| linearize(&source, &options));
+            match outcome {
+                Err(_) => panicked.push(path.display().to_string()),
+                Ok(Ok(_)) => answered += 1,
+                Ok(Err(e)) => assert_eq!(e.exit_code(), 2, "{}: {e}", path.display()),
+            }
+        }
+    }
+    assert!(panicked.is_empty(), "linearize panicked on {panicked:?}");
+    // Most scenes are not at rest with every coordinate at 0; some are.
+    assert!(answered >= 10, "only {answered} scenes linearized");
+}
+
+/// The coordinates and parameters a scene declares, by name.
+fn names(file: &lang::SceneFile) -> (Vec<String>, Vec<String>) {
+    let (mut coords, mut params) = (Vec::new(), Vec::new());
+    for stmt in &file.stmts {
+        match &stmt.kind {
+            lang::StmtKind::Coord(decls) => {
+                coords.extend(decls.iter().map(|d| d.name.name.clone()))
+            }
+            lang::StmtKind::Param(decls) => {
+                params.extend(decls.iter().map(|d| d.name.name.clone()))
+            }
+            _ => {}
+        }
+    }
+    (coords, params)
+}
+
+/// Issue 12's bar: the double pendulum of equal masses and lengths swings in its normal modes
+/// at ω² = (2 ± √2)·g/l.
+#[test]
+fn the_double_pendulum_has_its_normal_modes() {
+    // The example has m1 = m2 = 1 kg and l1 = l2 = 1 m.
+    let source = example("classics/double_pendulum.lag");
+    let modes = about(&source, "theta1 = 0, theta2 = 0");
+    assert_eq!(modes.at.stability, Stability::MarginallyStable);
+    let (g, length) = (9.81_f64, 1.0_f64);
+    let root2 = 2.0_f64.sqrt();
+    let mut expected = [((2.0 + root2) * g / length).sqrt(), ((2.0 - root2) * g / length).sqrt()];
+    let mut found: Vec<f64> =
+        modes.at.eigenvalues.iter().filter(|(_, im)| *im > 0.0).map(|(_, im)| *im).collect();
+    found.sort_by(|a, b| b.total_cmp(a));
+    expected.sort_by(|a, b| b.total_cmp(a));
+    assert_eq!(found.len(), 2, "{:?}", modes.at.eigenvalues);
+    for (f, e) in found.iter().zip(expected) {
+        assert!(close(*f, e, 1e-12), "{f} against {e}");
+    }
+    assert!(modes.at.eigenvalues.iter().all(|(re, _)| re.abs() < 1e-12 * expected[0]));
+}
