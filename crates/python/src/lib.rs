@@ -114,6 +114,67 @@ impl NativeScene {
         Ok(out)
     }
 
+    /// Small motions about an equilibrium or a steady motion, as `lagrange linearize` finds
+    /// them: exact M, C, K (SymPy matrices), the first-order A and its eigenvalues (NumPy),
+    /// the verdict, and with `sweep` the eigenvalues against one parameter and where the
+    /// verdict changes.
+    #[pyo3(signature = (about = None, set = Vec::new(), sweep = None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        about: Option<String>,
+        set: Vec<String>,
+        sweep: Option<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let options = engine::linearize::Options { about, set, sweep, no_units: !self.units };
+        let l = engine::linearize::linearize(&self.source, &options)
+            .map_err(|e| engine_error(&e, &self.path))?;
+        let mut s = sympy::ToSympy::new(py)?;
+        let pool = &l.derivation.model.pool;
+        let out = PyDict::new(py);
+        out.set_item("state", &l.state)?;
+        out.set_item("M", s.matrix(pool, &l.mass)?)?;
+        out.set_item("C", s.matrix(pool, &l.damping)?)?;
+        out.set_item("K", s.matrix(pool, &l.stiffness)?)?;
+        out.set_item("exact_reference", l.exact_reference)?;
+        let numpy = py.import("numpy")?;
+        let complex = |values: &[(f64, f64)]| -> PyResult<Bound<'py, PyAny>> {
+            let list = PyList::empty(py);
+            for (re, im) in values {
+                list.append(pyo3::types::PyComplex::from_doubles(py, *re, *im))?;
+            }
+            numpy.call_method1("array", (list,))
+        };
+        out.set_item("A", numpy.call_method1("array", (l.at.a.clone(),))?)?;
+        out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
+        out.set_item("stability", l.at.stability.name())?;
+        out.set_item("tolerance", l.at.tolerance)?;
+        if let Some(sweep) = &l.sweep {
+            let rows = PyList::empty(py);
+            for row in &sweep.rows {
+                let item = PyDict::new(py);
+                item.set_item("value", row.value)?;
+                item.set_item("eigenvalues", complex(&row.eigenvalues)?)?;
+                item.set_item("stability", row.stability.name())?;
+                rows.append(item)?;
+            }
+            let changes = PyList::empty(py);
+            for c in &sweep.changes {
+                let item = PyDict::new(py);
+                item.set_item("value", c.value)?;
+                item.set_item("from", c.from.name())?;
+                item.set_item("to", c.to.name())?;
+                changes.append(item)?;
+            }
+            let item = PyDict::new(py);
+            item.set_item("parameter", &sweep.parameter)?;
+            item.set_item("rows", rows)?;
+            item.set_item("changes", changes)?;
+            out.set_item("sweep", item)?;
+        }
+        Ok(out)
+    }
+
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {

@@ -218,3 +218,24 @@ def test_chaplygin_sleigh_has_equations_in_the_independent_rates():
     assert form is not None
     assert len(form["equations"]) == len(form["independent"])
     assert form["dependent"] and all(isinstance(e, sp.Eq) for e in form["equations"])
+
+
+def test_linearize_the_pendulum_and_sweep_the_sleeping_top():
+    pendulum = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    hanging = pendulum.linearize(about="theta = 0")
+    g, L = sp.symbols("g L")
+    m = sp.Symbol("m")
+    assert sp.simplify(hanging["K"][0, 0] - m * L * g) == 0
+    omega = np.sqrt(9.81 / 1.0)
+    assert np.allclose(sorted(hanging["eigenvalues"].imag), [-omega, omega], rtol=1e-12)
+    assert hanging["stability"] == "marginally stable"
+    standing = pendulum.linearize(about={"theta": "pi"})
+    assert standing["stability"] == "unstable"
+
+    top = lagrange.load(EXAMPLES / "space" / "sleeping_top.lag")
+    swept = top.linearize(sweep="w=0:100:11")
+    changes = swept["sweep"]["changes"]
+    assert len(changes) == 1
+    assert abs(changes[0]["value"] - 51.1468474101777) < 1e-6
+    with pytest.raises(lagrange.SceneError):
+        pendulum.linearize(about="theta = 1")

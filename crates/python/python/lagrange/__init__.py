@@ -182,6 +182,25 @@ class Scene:
             raise NumericError(results.fault, results=results)
         return results
 
+    def linearize(self, about=None, set=None, sweep=None):
+        """Small motions about an equilibrium or a steady motion, as ``lagrange linearize``.
+
+        - ``about``: ``"theta=0, phi'=2"`` (or a dict of name to value), extending or
+          overriding the scene's ``linearize about`` line;
+        - ``set``: a dict of parameter name to value;
+        - ``sweep``: ``"w=0:100:201"``, n values of one parameter.
+
+        Returns a dict: ``state`` (the names of u in u' = A·u), ``M``, ``C``, ``K`` (exact
+        SymPy matrices of M·δq'' + C·δq' + K·δq = 0), ``A`` and ``eigenvalues`` (NumPy, at the
+        parameters' values), ``stability`` ("stable", "marginally stable" or "unstable") with
+        its ``tolerance``, and with ``sweep`` the rows and the values where the verdict
+        changes. A reference that is not an equilibrium raises :class:`SceneError`.
+        """
+        if isinstance(about, dict):
+            about = ", ".join(f"{k}={_value_text(v)}" for k, v in about.items())
+        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
+        return self._native.linearize(about=about, set=sets, sweep=sweep)
+
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
         return [Expectation(**item) for item in self._native.check()]
