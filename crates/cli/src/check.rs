@@ -4,7 +4,7 @@
 use cas::Style;
 use lang::Diagnostic;
 use mechanics::Derivation;
-use verify::{Sampling, Verdict};
+use verify::Verdict;
 
 use engine::{line_col, Options};
 
@@ -53,21 +53,7 @@ fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
     let (mut held, mut failed) = (0, 0);
     for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
         let (line, _) = line_col(source, expect.span.start);
-        let how = match verdict {
-            Verdict::Exact => "holds exactly".to_string(),
-            Verdict::ExactOnConstraints => "holds exactly on the constraint surface".to_string(),
-            Verdict::Numeric { samples, sampling: Sampling::Anywhere } => {
-                format!("holds at {samples} random states (the algebra could not decide)")
-            }
-            Verdict::Numeric { samples, sampling: Sampling::OnConstraints } => format!(
-                "holds at {samples} random states on the constraint surface (the algebra could not decide)"
-            ),
-            Verdict::Numeric { samples, sampling: Sampling::AtStart { unknowns } } => format!(
-                "holds at {samples} random parameter values, the start's {unknowns} unknowns solved numerically (too many for the algebra)"
-            ),
-            Verdict::Fails(_) => "DOES NOT HOLD".to_string(),
-            Verdict::Undecided { reason } => format!("UNDECIDED: {reason}"),
-        };
+        let how = verdict.how();
         let mark = if verdict.holds() { "ok  " } else { "FAIL" };
         lines.push(format!("{mark} {path}:{line}  {}  — {how}", expect.text));
         if verdict.holds() {

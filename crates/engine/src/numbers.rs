@@ -174,6 +174,36 @@ impl Prepared {
         Ok(out)
     }
 
+    /// The initial state (q, then q̇, of the remaining coordinates) at the given parameter
+    /// values; `overrides` (the coordinate's index in the model, whether it is the rate, an
+    /// expression of the parameters) take the place of the scene's values, the last one of a
+    /// slot winning.
+    pub fn initial_state(
+        &self,
+        parameters: &[f64],
+        overrides: &[(usize, bool, ExprId)],
+    ) -> Result<Vec<f64>, Error> {
+        let model = &self.derivation.model;
+        let n = self.layout.coordinates;
+        let mut y0 = vec![0.0; 2 * n];
+        for (k, q) in self.derivation.coords.iter().enumerate() {
+            let Some(i) = model.coords.iter().position(|c| c.sym == *q) else { continue };
+            let c = &model.coords[i];
+            let find = |rate: bool| {
+                overrides.iter().rev().find(|(j, r, _)| *j == i && *r == rate).map(|x| x.2)
+            };
+            y0[k] = self.constant(find(false).unwrap_or(c.initial), parameters);
+            y0[n + k] = self.constant(find(true).unwrap_or(c.initial_rate), parameters);
+        }
+        if let Some(slot) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Input(format!(
+                "the initial value of `{}` is not a finite number",
+                self.state_names()[slot]
+            )));
+        }
+        Ok(y0)
+    }
+
     /// Refuses a mass that is not positive, or an inertia that is negative, at the given
     /// parameter values; those that depend on the motion are left alone.
     pub fn masses_at(&mut self, parameters: &[f64]) -> Result<(), Error> {

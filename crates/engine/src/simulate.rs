@@ -336,20 +336,7 @@ pub fn run(
         // The scene's masses were checked with its own values; `--set` may change their sign.
         prepared.masses_at(&parameters)?;
     }
-    let n = prepared.layout.coordinates;
-    let mut y0 = vec![0.0; 2 * n];
-    for (k, q) in prepared.derivation.coords.clone().iter().enumerate() {
-        let model = &prepared.derivation.model;
-        let i = model.coords.iter().position(|c| c.sym == *q).expect("declared");
-        let c = &model.coords[i];
-        let find = |rate: bool| {
-            coord_overrides.iter().rev().find(|(j, r, _)| *j == i && *r == rate).map(|x| x.2)
-        };
-        let initial = find(false).unwrap_or(c.initial);
-        let rate = find(true).unwrap_or(c.initial_rate);
-        y0[k] = prepared.constant(initial, &parameters);
-        y0[n + k] = prepared.constant(rate, &parameters);
-    }
+    let mut y0 = prepared.initial_state(&parameters, &coord_overrides)?;
     let set_rates: Vec<bool> = prepared
         .derivation
         .coords

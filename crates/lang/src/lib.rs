@@ -1,5 +1,6 @@
 //! The scene language: the pest grammar in `grammar/scene.pest`, a parser that yields a spanned
-//! AST, and the diagnostics type every later stage reports through.
+//! AST, the diagnostics type every later stage reports through, and their rendering against
+//! the scene's text ([`render`]) that every front end prints.
 //!
 //! This crate knows what a scene file looks like, not what its statements mean: resolving names,
 //! building expressions and checking physics belong to `model` and `mechanics`.
@@ -7,6 +8,7 @@
 pub mod ast;
 pub mod diag;
 mod parser;
+pub mod render;
 
 pub use ast::*;
 pub use diag::{Diagnostic, Severity};

@@ -57,6 +57,26 @@ impl Verdict {
     pub fn holds(&self) -> bool {
         matches!(self, Verdict::Exact | Verdict::ExactOnConstraints | Verdict::Numeric { .. })
     }
+
+    /// How it was decided, in the words of a `check` report ("holds exactly", "DOES NOT
+    /// HOLD"); every front end says it alike.
+    pub fn how(&self) -> String {
+        match self {
+            Verdict::Exact => "holds exactly".to_string(),
+            Verdict::ExactOnConstraints => "holds exactly on the constraint surface".to_string(),
+            Verdict::Numeric { samples, sampling: Sampling::Anywhere } => {
+                format!("holds at {samples} random states (the algebra could not decide)")
+            }
+            Verdict::Numeric { samples, sampling: Sampling::OnConstraints } => format!(
+                "holds at {samples} random states on the constraint surface (the algebra could not decide)"
+            ),
+            Verdict::Numeric { samples, sampling: Sampling::AtStart { unknowns } } => format!(
+                "holds at {samples} random parameter values, the start's {unknowns} unknowns solved numerically (too many for the algebra)"
+            ),
+            Verdict::Fails(_) => "DOES NOT HOLD".to_string(),
+            Verdict::Undecided { reason } => format!("UNDECIDED: {reason}"),
+        }
+    }
 }
 
 /// Checks every `expect` line, in order.

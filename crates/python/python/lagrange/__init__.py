@@ -1,0 +1,348 @@
+"""Lagrangian mechanics from scene files, in Python.
+
+``lagrange`` reads a scene (``.lag``) file, derives its Euler–Lagrange equations exactly and
+hands them to Python: the equations, mass matrix and reactions as SymPy expressions, the
+equations of motion as a fast callable for ``scipy.integrate.solve_ivp`` and NumPy, and its
+own simulations as NumPy arrays::
+
+    import lagrange
+    scene = lagrange.load("examples/ps5/falling_rod.lag")
+    d = scene.derive()
+    d.mass_matrix                 # a sympy.Matrix
+    d.at_start["theta''"]         # 12*g/(7*L), exactly
+    f = scene.rhs()               # f(t, y) for solve_ivp, y = coordinates then rates
+    run = scene.simulate(until=1.0)
+    run["theta"], run["t"]        # NumPy arrays
+
+In a notebook a derivation shows its equations (``_repr_latex_``). Mistakes in a scene raise
+:class:`SceneError` with the file, line and column and the diagnostic as the ``lagrange``
+command prints it.
+"""
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from fractions import Fraction
+import math
+import os
+
+from . import _native
+from ._errors import NumericError, SceneError
+
+__all__ = [
+    "load",
+    "loads",
+    "Scene",
+    "Derivation",
+    "Constraint",
+    "Expectation",
+    "Results",
+    "SceneError",
+    "NumericError",
+]
+
+
+def load(path, *, units=True):
+    """Loads the scene file at ``path`` (a ``str`` or ``os.PathLike``) and derives it.
+
+    ``units=False`` skips the dimension check (as ``--no-units`` does). Raises
+    :class:`SceneError` when the scene has mistakes, ``OSError`` when the file cannot be read.
+    """
+    path = os.fspath(path)
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    return Scene(_native.loads(text, path, units))
+
+
+def loads(text, *, name="<string>", units=True):
+    """Loads a scene from its text; ``name`` stands for the file in diagnostics."""
+    return Scene(_native.loads(text, name, units))
+
+
+def _value_text(value):
+    """A ``set`` value as scene text: numbers exactly (0.1 is 1/10), strings as written."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        raise TypeError("a set value is a number or a scene expression, not a bool")
+    if isinstance(value, int):
+        return str(value)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"a set value must be finite, not {value}")
+    text = repr(value)
+    if "e" in text or "E" in text:
+        q = Fraction(value)
+        return f"{q.numerator}/{q.denominator}" if q.denominator != 1 else str(q.numerator)
+    return text
+
+
+class Scene:
+    """A loaded scene: parsed, resolved and derived. Made by :func:`load` or :func:`loads`."""
+
+    def __init__(self, native):
+        self._native = native
+        self._derivation = None
+
+    @property
+    def title(self):
+        """The scene's title, or ``None``."""
+        return self._native.title
+
+    @property
+    def path(self):
+        """The file name the scene goes by in diagnostics."""
+        return self._native.path
+
+    @property
+    def source(self):
+        """The scene's text."""
+        return self._native.source
+
+    @property
+    def warnings(self):
+        """The warnings met while loading, rendered as the ``lagrange`` command prints them
+        (``""`` when there are none)."""
+        return self._native.warnings
+
+    def derive(self):
+        """The derivation as SymPy objects: a :class:`Derivation` (computed once)."""
+        if self._derivation is None:
+            self._derivation = Derivation(self._native.derive())
+        return self._derivation
+
+    def rhs(self):
+        """y' = f(t, y) of the equations of motion, for ``scipy.integrate.solve_ivp``.
+
+        The state y holds the remaining coordinates, then their rates (``f.names`` lists
+        them; ``f.y0`` is the scene's initial state). ``f(t, y)`` returns the 1-D array
+        (q̇, q̈); ``f.batch(Y, t=0.0)`` evaluates every row of the 2-D array ``Y`` in one call
+        (``t`` one time, or one per row). The scene's lowered programs compute it at the
+        parameters' values (``f.parameters``), solving for constraint multipliers as
+        :meth:`simulate` does. A singular mass matrix raises :class:`NumericError`.
+        """
+        return self._native.rhs()
+
+    def mass_matrix_function(self):
+        """M(t, q) at the parameters' values: ``M(t, q)`` returns an n×n NumPy array (q may
+        be the coordinates or a whole state; M does not depend on the rates)."""
+        return self._native.mass_matrix_function()
+
+    def simulate(
+        self,
+        until=None,
+        method=None,
+        tolerance=None,
+        output=None,
+        set=None,
+        *,
+        step=None,
+        stop_when=None,
+        events=None,
+        samples=0,
+    ):
+        """Integrates the scene as ``lagrange simulate`` does and returns :class:`Results`.
+
+        Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
+
+        - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
+          midpoint, gauss; ``tolerance`` of the adaptive methods; ``step`` of the fixed-step
+          ones.
+        - ``output``: scene expressions to record (a string or a list), e.g.
+          ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
+        - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
+          a scene expression, in place of the scene's values.
+        - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
+          ``events``: expressions whose zero crossings are recorded.
+        - ``samples``: record at this many evenly spaced times (0: every accepted step).
+
+        A run that faults raises :class:`NumericError` whose ``results`` hold what was
+        computed before the fault.
+        """
+        def listed(value):
+            if value is None:
+                return []
+            if isinstance(value, str):
+                return [value]
+            return [str(v) for v in value]
+
+        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
+        raw = self._native.simulate(
+            until=None if until is None else float(until),
+            method=method,
+            tolerance=None if tolerance is None else float(tolerance),
+            step=None if step is None else float(step),
+            output=listed(output),
+            set=sets,
+            stop_when=listed(stop_when),
+            events=listed(events),
+            samples=int(samples),
+        )
+        results = Results(raw)
+        if results.fault is not None:
+            raise NumericError(results.fault, results=results)
+        return results
+
+    def check(self):
+        """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
+        return [Expectation(**item) for item in self._native.check()]
+
+    def __repr__(self):
+        title = f" {self.title!r}" if self.title else ""
+        return f"<lagrange.Scene{title} from {self.path}>"
+
+
+class Derivation:
+    """Everything ``lagrange derive`` shows, as SymPy objects.
+
+    Coordinates are functions of time ``t`` (``theta(t)``); their rates and accelerations
+    are ``Derivative``s of them; parameters and reactions are ``Symbol``s named as in the
+    scene (``g``, ``floor.force``); numbers are exact.
+
+    Attributes:
+
+    - ``t``: the time symbol; ``coordinates``, ``rates``, ``accelerations``: the remaining
+      coordinates (those constraints did not eliminate) and their derivatives;
+      ``multipliers``: the reactions of constraints kept with multipliers.
+    - ``parameters``: dict of parameter name to its value as a float (``None`` if it has
+      none); ``symbols``: dict of every scene name (``"theta''"`` included) to its SymPy object.
+    - ``mass_matrix`` (n×n) and ``forcing`` (n×1): ``sympy.Matrix`` with M·q̈ = f.
+    - ``equations``: the equations of motion as ``sympy.Eq``, as the report writes them.
+    - ``kinetic``, ``potential``, ``lagrangian``: T, V and L.
+    - ``reactions``: dict of reaction name (``"floor.force"``) to its expression (with
+      accelerations); ``reactions_of_state``: with the accelerations solved for.
+    - ``shown``: the scene's ``show`` items; ``at_start``: its ``show at start`` items at the
+      initial state, keyed as written in the scene (``"theta''"``), exact where the algebra
+      allows (``at_start_note`` says when they are numbers instead); ``start``: the initial
+      state.
+    - ``constraints``: a list of :class:`Constraint`.
+    - ``independent``: where velocity constraints are kept and no reaction is asked for, the
+      equations in the independent rates (Maggi's form) as a dict: ``dependent`` (each
+      dependent rate's name to its expression), ``independent`` (the independent rates) and
+      ``equations`` (``sympy.Eq(…, 0)``); ``None`` otherwise.
+    - ``latex``: the equations, mass-matrix form, reactions and start values in LaTeX.
+    """
+
+    def __init__(self, raw):
+        self.title = raw["title"]
+        self.t = raw["t"]
+        self.coordinates = raw["coordinates"]
+        self.rates = raw["rates"]
+        self.accelerations = raw["accelerations"]
+        self.multipliers = raw["multipliers"]
+        self.parameters = raw["parameters"]
+        self.symbols = raw["symbols"]
+        self.mass_matrix = raw["mass_matrix"]
+        self.forcing = raw["forcing"]
+        self.equations = raw["equations"]
+        self.kinetic = raw["kinetic"]
+        self.potential = raw["potential"]
+        self.lagrangian = raw["lagrangian"]
+        self.reactions = raw["reactions"]
+        self.reactions_of_state = raw["reactions_of_state"]
+        self.shown = raw["shown"]
+        self.at_start = raw["at_start"]
+        self.at_start_note = raw["at_start_note"]
+        self.start = raw["start"]
+        self.constraints = [Constraint(**c) for c in raw["constraints"]]
+        self.independent = raw["independent"]
+        self.latex = raw["latex"]
+
+    def parameter_values(self):
+        """``{symbol: value}`` of the parameters that have values, for ``expr.subs(...)``."""
+        return {
+            self.symbols[name]: value
+            for name, value in self.parameters.items()
+            if value is not None
+        }
+
+    def _repr_latex_(self):
+        return self.latex
+
+    def __repr__(self):
+        coords = ", ".join(str(q) for q in self.coordinates)
+        return f"<lagrange.Derivation of ({coords}): {len(self.equations)} equations>"
+
+
+@dataclass
+class Constraint:
+    """A constraint of the scene: ``equation`` as written (``sympy.Eq``), ``phi`` = lhs − rhs,
+    ``kind`` (``"position"`` or ``"velocity"``), ``reaction`` (its ``NAME.force`` symbol) and
+    ``handling``: ``"eliminated"`` (then ``solved_for`` is the coordinate it removed and
+    ``solution`` its value), ``"kept"`` with a multiplier, or ``"dropped"`` (always holds)."""
+
+    name: str
+    kind: str
+    equation: object
+    phi: object
+    reaction: object
+    handling: str
+    solved_for: object = None
+    solution: object = None
+
+
+@dataclass
+class Expectation:
+    """One ``expect`` line and its verdict: ``line`` in the file, ``text`` as written,
+    ``held``, and ``how`` it was decided ("holds exactly", "DOES NOT HOLD", …). One that fails
+    has its ``residual`` (lhs − rhs, SymPy) and a ``state`` where it is not zero."""
+
+    line: int
+    text: str
+    held: bool
+    how: str
+    residual: object = None
+    state: dict = field(default=None)
+    component: int = None
+
+    def __bool__(self):
+        return self.held
+
+
+class Results(Mapping):
+    """A simulation: a mapping of each recorded quantity's name (and ``"t"``) to a NumPy
+    array, one value per recorded time.
+
+    Besides: ``energy`` (T + V at each time), ``events`` (a list of ``(name, time)``),
+    ``stopped_by`` (the stop condition that ended the run, or ``None``), ``method``,
+    ``steps``, ``rejected``, ``evaluations``, ``energy_drift`` (largest absolute and relative
+    change of T + V), ``conservative`` (whether the scene should keep its energy),
+    ``constraint_drift``, ``wall_seconds`` and ``fault`` (``None`` for a finished run).
+    """
+
+    def __init__(self, raw):
+        self.t = raw["t"]
+        self._columns = {"t": raw["t"], **raw["columns"]}
+        self.energy = raw["energy"]
+        self.events = raw["events"]
+        self.stopped_by = raw["stopped_by"]
+        self.fault = raw["fault"]
+        self.method = raw["method"]
+        self.steps = raw["steps"]
+        self.rejected = raw["rejected"]
+        self.evaluations = raw["evaluations"]
+        self.energy_drift = raw["energy_drift"]
+        self.conservative = raw["conservative"]
+        self.constraint_drift = raw["constraint_drift"]
+        self.wall_seconds = raw["wall_seconds"]
+
+    def __getitem__(self, name):
+        return self._columns[name]
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __len__(self):
+        return len(self._columns)
+
+    def to_pandas(self):
+        """The columns as a ``pandas.DataFrame`` indexed by ``t`` (needs pandas)."""
+        try:
+            import pandas
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Results.to_pandas needs pandas: pip install pandas") from e
+        columns = {k: v for k, v in self._columns.items() if k != "t"}
+        return pandas.DataFrame(columns, index=pandas.Index(self.t, name="t"))
+
+    def __repr__(self):
+        names = ", ".join(k for k in self._columns if k != "t")
+        return f"<lagrange.Results {len(self.t)} times of ({names}), {self.method}>"

@@ -1,0 +1,176 @@
+//! The native half of the `lagrange` Python package (`lagrange._native`): a loaded scene
+//! and what it gives Python: its derivation as SymPy objects ([`derive`]), fast callables of
+//! its equations for NumPy and SciPy ([`numbers`]), simulations as NumPy arrays, and its
+//! `expect` lines checked. The Python half (`python/lagrange`) wraps these in documented
+//! classes.
+//!
+//! Everything goes through `engine`, as in the `lagrange` command; every error comes back as
+//! a Python exception ([`errors`]), never as a panic across the boundary.
+
+mod derive;
+mod errors;
+mod numbers;
+mod sympy;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use errors::engine_error;
+
+/// A loaded scene: its text, the name it goes by in diagnostics, and its derivation.
+#[pyclass(unsendable, module = "lagrange._native")]
+struct NativeScene {
+    source: String,
+    path: String,
+    units: bool,
+    scene: engine::Scene,
+}
+
+/// Parses, resolves and derives a scene's text; `path` names it in diagnostics.
+#[pyfunction]
+#[pyo3(signature = (text, path = "<string>".to_string(), units = true))]
+fn loads(text: String, path: String, units: bool) -> PyResult<NativeScene> {
+    let scene =
+        engine::load_with(&text, engine::Options { units }).map_err(|e| engine_error(&e, &path))?;
+    Ok(NativeScene { source: text, path, units, scene })
+}
+
+#[pymethods]
+impl NativeScene {
+    /// The forms a `derive` report shows, as a dict of SymPy objects.
+    fn derive<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        derive::derive(py, &mut self.scene.derivation)
+    }
+
+    /// y' = F(t, y) for `solve_ivp`.
+    fn rhs(&self) -> PyResult<numbers::Rhs> {
+        numbers::Rhs::new(&self.source, &self.path, self.units)
+    }
+
+    /// M(t, q) at the parameters' values.
+    fn mass_matrix_function(&self) -> PyResult<numbers::MassMatrix> {
+        numbers::MassMatrix::new(&self.source, &self.path, self.units)
+    }
+
+    /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
+    #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
+                        output = Vec::new(), set = Vec::new(), stop_when = Vec::new(),
+                        events = Vec::new(), samples = 0))]
+    #[allow(clippy::too_many_arguments)]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        until: Option<f64>,
+        method: Option<String>,
+        tolerance: Option<f64>,
+        step: Option<f64>,
+        output: Vec<String>,
+        set: Vec<String>,
+        stop_when: Vec<String>,
+        events: Vec<String>,
+        samples: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let options = engine::simulate::Options {
+            until,
+            method,
+            tolerance,
+            step,
+            set,
+            output,
+            stop_when,
+            events,
+            no_units: !self.units,
+            samples,
+        };
+        let outcome = engine::simulate::simulate(&self.source, &options)
+            .map_err(|e| engine_error(&e, &self.path))?;
+        let trajectory = &outcome.run.trajectory;
+        let out = PyDict::new(py);
+        out.set_item("t", PyArray1::from_slice(py, &trajectory.times))?;
+        let columns = PyDict::new(py);
+        for (k, name) in outcome.columns.iter().enumerate().take(outcome.shown) {
+            let values: Vec<f64> = trajectory.rows.iter().map(|r| r[k]).collect();
+            columns.set_item(name, PyArray1::from_vec(py, values))?;
+        }
+        out.set_item("columns", columns)?;
+        out.set_item("energy", PyArray1::from_vec(py, outcome.energy()))?;
+        let hits = PyList::empty(py);
+        for hit in &outcome.run.events {
+            hits.append((outcome.event_names.get(hit.event).cloned(), hit.time))?;
+        }
+        out.set_item("events", hits)?;
+        let stopped_by = outcome.run.stopped_by.and_then(|k| outcome.event_names.get(k).cloned());
+        out.set_item("stopped_by", stopped_by)?;
+        out.set_item("fault", outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)))?;
+        out.set_item("method", outcome.method.name())?;
+        out.set_item("steps", outcome.run.steps)?;
+        out.set_item("rejected", outcome.run.rejected)?;
+        out.set_item("evaluations", outcome.run.evaluations)?;
+        out.set_item("energy_drift", outcome.energy_drift())?;
+        out.set_item("conservative", outcome.conservative)?;
+        out.set_item("constraint_drift", outcome.constraint_drift())?;
+        out.set_item("wall_seconds", outcome.wall_seconds)?;
+        Ok(out)
+    }
+
+    /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
+    /// fails, the residual and a state where it is not zero).
+    fn check<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let d = &mut self.scene.derivation;
+        let verdicts = verify::check_all(d);
+        let mut s = sympy::ToSympy::new(py)?;
+        let out = PyList::empty(py);
+        for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
+            let item = PyDict::new(py);
+            let (line, _) = engine::line_col(&self.source, expect.span.start);
+            item.set_item("line", line)?;
+            item.set_item("text", &expect.text)?;
+            item.set_item("held", verdict.holds())?;
+            item.set_item("how", verdict.how())?;
+            if let verify::Verdict::Fails(f) = verdict {
+                let pool = &d.model.pool;
+                item.set_item("residual", s.expr(pool, f.residual)?)?;
+                let state = PyDict::new(py);
+                for (sym, v) in &f.state {
+                    state.set_item(&pool.symbol(*sym).name, *v)?;
+                }
+                item.set_item("state", state)?;
+                item.set_item("component", f.component)?;
+            }
+            out.append(item)?;
+        }
+        Ok(out)
+    }
+
+    /// The scene's warnings, rendered as the `lagrange` command prints them ("" if none).
+    #[getter]
+    fn warnings(&self) -> String {
+        lang::render::render(&self.path, &self.source, &self.scene.warnings)
+    }
+
+    #[getter]
+    fn title(&self) -> Option<String> {
+        self.scene.derivation.model.title.clone()
+    }
+
+    #[getter]
+    fn source(&self) -> String {
+        self.source.clone()
+    }
+
+    #[getter]
+    fn path(&self) -> String {
+        self.path.clone()
+    }
+}
+
+/// The native half of the `lagrange` package.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_class::<NativeScene>()?;
+    m.add_class::<numbers::Rhs>()?;
+    m.add_class::<numbers::MassMatrix>()?;
+    Ok(())
+}

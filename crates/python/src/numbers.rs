@@ -1,0 +1,263 @@
+//! The scene's equations as fast callables for NumPy and SciPy: `Scene.rhs()` gives
+//! y' = F(t, y) for `scipy.integrate.solve_ivp` (y = coordinates, then rates), evaluated by the
+//! lowered programs through `sim::Mechanical` exactly as `simulate` runs them, with
+//! `.batch(Y)` for many states in one call; `Scene.mass_matrix_function()` gives M(t, q).
+
+use engine::numbers::{prepare, Prepared};
+use numeric::Tape;
+use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sim::{FaultKind, Mechanical, Problem};
+
+use crate::errors::{engine_error, numeric_error};
+
+/// Loads `source` for numbers, with its parameter values and initial state.
+fn prepared(source: &str, units: bool) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
+    let prepared = prepare(source, &[], engine::Options { units })?;
+    let parameters = prepared.parameter_values(&[])?;
+    let y0 = prepared.initial_state(&parameters, &[])?;
+    Ok((prepared, parameters, y0))
+}
+
+fn fault_text(kind: &FaultKind, names: &[String]) -> String {
+    let coordinates = |idx: &[usize]| -> String {
+        idx.iter()
+            .filter_map(|i| names.get(*i))
+            .map(|s| format!("`{s}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match kind {
+        FaultKind::SingularMass { coordinates: c, condition } => format!(
+            "the mass matrix is singular or ill-conditioned here (condition ≈ {condition:.1e}; \
+             along {})",
+            if c.is_empty() { "some coordinate".to_string() } else { coordinates(c) }
+        ),
+        FaultKind::SingularConstraints { .. } => {
+            "the constraints' Jacobian lost rank here".to_string()
+        }
+        FaultKind::NonFinite { component } => {
+            format!("a value became NaN or infinite (component {component})")
+        }
+        other => format!("{other:?}"),
+    }
+}
+
+/// y' = F(t, y) of a scene, y = (q, q̇) of its remaining coordinates: what
+/// `scipy.integrate.solve_ivp` takes. Evaluated by the scene's lowered programs; constraints
+/// kept with multipliers are solved with them (and Baumgarte-stabilised) as in `simulate`.
+#[pyclass(unsendable, module = "lagrange")]
+pub struct Rhs {
+    mechanical: Mechanical,
+    /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
+    #[pyo3(get)]
+    names: Vec<String>,
+    y0: Vec<f64>,
+    /// Parameter values in declaration order, as the programs use them.
+    parameters: Vec<(String, f64)>,
+    dy: Vec<f64>,
+}
+
+impl Rhs {
+    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        let (mut prepared, parameters, y0) =
+            prepared(source, units).map_err(|e| engine_error(&e, path))?;
+        let dynamics_exprs = prepared.dynamics_exprs();
+        let inputs = prepared.dynamics_inputs();
+        let dynamics =
+            prepared.lower(&inputs, &dynamics_exprs).map_err(|e| engine_error(&e, path))?;
+        let observation = prepared
+            .lower(&prepared.observation_inputs(), &[])
+            .map_err(|e| engine_error(&e, path))?;
+        let names = prepared.state_names();
+        let named: Vec<(String, f64)> = prepared
+            .derivation
+            .model
+            .params
+            .iter()
+            .map(|p| p.name.clone())
+            .zip(parameters.iter().copied())
+            .collect();
+        let mechanical = Mechanical::new(
+            prepared.layout,
+            Tape::new(dynamics),
+            Tape::new(observation),
+            parameters,
+        )
+        .with_kinds(prepared.stabilisation());
+        let dim = mechanical.dim();
+        Ok(Rhs { mechanical, names, y0, parameters: named, dy: vec![0.0; dim] })
+    }
+
+    fn eval(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+        if y.len() != self.dy.len() {
+            return Err(PyValueError::new_err(format!(
+                "the state has {} entries ({}), not {}",
+                self.dy.len(),
+                self.names.join(", "),
+                y.len()
+            )));
+        }
+        self.mechanical.rhs(t, y, &mut self.dy).map_err(|kind| {
+            numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names)))
+        })
+    }
+}
+
+#[pymethods]
+impl Rhs {
+    /// F(t, y): the rates of the state y = (q, q̇) at time t, as a 1-D array (q̇, q̈).
+    fn __call__<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        y: PyArrayLike1<'py, f64, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let y = y.as_array();
+        let y: Vec<f64> = y.iter().copied().collect();
+        self.eval(t, &y)?;
+        Ok(PyArray1::from_slice(py, &self.dy))
+    }
+
+    /// F at many states in one call: `Y` is a 2-D array with one state a row; `t` one time
+    /// for all rows or one time per row. Returns an array of the same shape as `Y`.
+    #[pyo3(signature = (y, t = None))]
+    fn batch<'py>(
+        &mut self,
+        py: Python<'py>,
+        y: PyArrayLike2<'py, f64, AllowTypeChange>,
+        t: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let y = y.as_array();
+        let rows = y.nrows();
+        let times: Vec<f64> = match t {
+            None => vec![0.0; rows],
+            Some(t) => match t.extract::<f64>() {
+                Ok(t) => vec![t; rows],
+                Err(_) => {
+                    let t: PyArrayLike1<'py, f64, AllowTypeChange> = t.extract()?;
+                    let t: Vec<f64> = t.as_array().iter().copied().collect();
+                    if t.len() != rows {
+                        return Err(PyValueError::new_err(format!(
+                            "{} times for {rows} states",
+                            t.len()
+                        )));
+                    }
+                    t
+                }
+            },
+        };
+        let width = self.dy.len();
+        if y.ncols() != width {
+            return Err(PyValueError::new_err(format!(
+                "each row is a state of {width} entries ({}), not {}",
+                self.names.join(", "),
+                y.ncols()
+            )));
+        }
+        let mut out = Vec::with_capacity(rows * width);
+        let mut state = vec![0.0; width];
+        for (row, t) in y.rows().into_iter().zip(times) {
+            for (slot, v) in state.iter_mut().zip(row.iter()) {
+                *slot = *v;
+            }
+            self.eval(t, &state)?;
+            out.extend_from_slice(&self.dy);
+        }
+        let flat = PyArray1::from_vec(py, out);
+        flat.reshape([rows, width])
+    }
+
+    /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.
+    #[getter]
+    fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.y0)
+    }
+
+    /// The parameters' values the programs use: a dict of name to value.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for (name, value) in &self.parameters {
+            out.set_item(name, value)?;
+        }
+        Ok(out)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<lagrange rhs of ({})>", self.names.join(", "))
+    }
+}
+
+/// M(t, q) of a scene at its parameter values: its remaining coordinates' mass matrix.
+#[pyclass(unsendable, module = "lagrange")]
+pub struct MassMatrix {
+    tape: Tape,
+    n: usize,
+    parameters: Vec<f64>,
+    /// Names of the coordinates, in the order of M's rows.
+    #[pyo3(get)]
+    names: Vec<String>,
+    input: Vec<f64>,
+    output: Vec<f64>,
+}
+
+impl MassMatrix {
+    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        let (prepared, parameters, _) =
+            prepared(source, units).map_err(|e| engine_error(&e, path))?;
+        let d = &prepared.derivation;
+        let n = d.coords.len();
+        let entries: Vec<cas::ExprId> =
+            (0..n).flat_map(|i| (0..n).map(move |j| d.mass_matrix[i][j])).collect();
+        let inputs = prepared.dynamics_inputs();
+        let program = prepared.lower(&inputs, &entries).map_err(|e| engine_error(&e, path))?;
+        let inputs = inputs.len();
+        Ok(MassMatrix {
+            tape: Tape::new(program),
+            n,
+            parameters,
+            names: prepared.coordinate_names(),
+            input: vec![0.0; inputs],
+            output: vec![0.0; n * n],
+        })
+    }
+}
+
+#[pymethods]
+impl MassMatrix {
+    /// M at time t and coordinates q (a state y = (q, q̇) is taken too; M does not depend on
+    /// the rates), as an n×n array.
+    fn __call__<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        q: PyArrayLike1<'py, f64, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let n = self.n;
+        let q = q.as_array();
+        if q.len() != n && q.len() != 2 * n {
+            return Err(PyValueError::new_err(format!(
+                "M takes the {n} coordinates ({}) or a whole state of {}, not {} values",
+                self.names.join(", "),
+                2 * n,
+                q.len()
+            )));
+        }
+        self.input.iter_mut().for_each(|v| *v = 0.0);
+        self.input[0] = t;
+        for (slot, v) in self.input[1..].iter_mut().zip(q.iter()) {
+            *slot = *v;
+        }
+        self.input[1 + 2 * n..].copy_from_slice(&self.parameters);
+        self.tape.eval(&self.input, &mut self.output);
+        let flat = PyArray1::from_slice(py, &self.output);
+        flat.reshape([n, n])
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<lagrange mass matrix of ({})>", self.names.join(", "))
+    }
+}

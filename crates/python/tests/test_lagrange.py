@@ -1,0 +1,220 @@
+"""The lagrange package from Python: the problem-set results exactly through SymPy, the rhs
+against SciPy and against lagrange's own integrator, errors, and what a notebook shows."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import lagrange
+
+ROOT = Path(__file__).resolve().parents[3]
+EXAMPLES = ROOT / "examples"
+
+
+@pytest.fixture(scope="module")
+def rod():
+    return lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
+
+
+def test_falling_rod_start_is_exact(rod):
+    d = rod.derive()
+    g, L, m = sp.symbols("g L m")
+    # Exactly, not to a tolerance: the same SymPy expressions.
+    assert d.at_start["theta''"] == 12 * g / (7 * L)
+    assert d.at_start["floor.force"] == sp.Rational(4, 7) * m * g
+    assert d.symbols["g"] == g
+    assert d.parameters == {"m": 1.0, "L": 1.0, "g": 9.81}
+
+
+def test_falling_rod_equations_and_reaction(rod):
+    d = rod.derive()
+    t = d.t
+    x, theta = d.coordinates
+    assert [str(q) for q in d.coordinates] == ["x(t)", "theta(t)"]
+    assert d.rates[1] == sp.Derivative(theta, t)
+    m, L, g = (d.symbols[k] for k in ("m", "L", "g"))
+    M = d.mass_matrix
+    assert M.shape == (2, 2)
+    assert sp.simplify(M[1, 1] - m * L**2 * (1 + 3 * sp.sin(theta) ** 2) / 12) == 0
+    assert M[0, 1] == 0 and M[0, 0] == m
+    # The hand-derived equation of motion is the derived one.
+    th, thd, thdd = theta, d.rates[1], d.accelerations[1]
+    hand = thdd * (1 + 3 * sp.sin(th) ** 2) + 3 * thd**2 * sp.sin(th) * sp.cos(th) - 6 * g / L * sp.sin(th)
+    eq = d.equations[1]
+    assert sp.simplify((eq.lhs - eq.rhs) - hand) == 0
+    # M q̈ = f holds for the equations: substitute the accelerations solved from M, f.
+    qdd = M.LUsolve(d.forcing)
+    assert sp.simplify(qdd[1] - sp.solve(hand, thdd)[0]) == 0
+    floor = d.constraints[0]
+    assert floor.name == "floor" and floor.handling == "eliminated"
+    assert str(floor.solved_for) == "y(t)"
+    assert "floor.force" in d.reactions
+
+
+def test_wedge_mass_matrix():
+    d = lagrange.load(EXAMPLES / "ps5" / "wedge.lag").derive()
+    M_, m, theta = (d.symbols[k] for k in ("M", "m", "theta"))
+    expected = sp.Matrix([[M_ + m, m * sp.cos(theta)], [m * sp.cos(theta), m]])
+    assert sp.simplify(d.mass_matrix - expected) == sp.zeros(2, 2)
+    g = d.symbols["g"]
+    assert sp.simplify(d.forcing - sp.Matrix([0, m * g * sp.sin(theta)])) == sp.zeros(2, 1)
+
+
+def test_rolling_disk_kinetic_energy():
+    d = lagrange.load(EXAMPLES / "ps5" / "rolling_disk.lag").derive()
+    m, r, R = (d.symbols[k] for k in ("m", "r", "R"))
+    thetadot = d.symbols["theta'"]
+    expected = sp.Rational(3, 4) * m * (R + r) ** 2 * thetadot**2
+    assert sp.simplify(d.kinetic - expected) == 0
+    assert sp.simplify(d.shown["KE"] - expected) == 0
+    assert sp.simplify(d.shown["disk.omega"] - (R + r) / r * thetadot) == 0
+
+
+def test_check_reports_every_expectation():
+    results = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag").check()
+    assert len(results) == 4
+    assert all(r.held for r in results)
+    assert results[2].line == 20 and results[2].how == "holds exactly"
+    assert "12/7*g/L" in results[2].text
+
+
+def test_a_wrong_expectation_fails_with_its_residual():
+    scene = lagrange.loads(
+        "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\n"
+        "coord theta = 1/2\n"
+        "particle bob { mass m; position (L*sin(theta), -L*cos(theta)) }\n"
+        "gravity g\n"
+        "expect theta'' = g/L*sin(theta)\n"
+    )
+    (result,) = scene.check()
+    assert not result.held and result.how == "DOES NOT HOLD"
+    assert result.line == 5
+    assert result.residual is not None and result.state
+
+
+def test_rhs_with_solve_ivp_agrees_with_simulate():
+    from scipy.integrate import solve_ivp
+
+    scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    f = scene.rhs()
+    assert f.names == ["theta", "theta'"]
+    np.testing.assert_allclose(f.y0, [0.5, 0.0])
+    # θ̈ = −g/L·sin θ at the start.
+    np.testing.assert_allclose(f(0.0, f.y0), [0.0, -9.81 * np.sin(0.5)], rtol=1e-15)
+    run = scene.simulate(until=2.0, output=["theta", "theta'"], tolerance=1e-12)
+    sol = solve_ivp(f, (0.0, 2.0), f.y0, method="DOP853", rtol=1e-13, atol=1e-13, t_eval=run["t"])
+    assert sol.success
+    np.testing.assert_allclose(sol.y[0], run["theta"], atol=1e-8)
+    np.testing.assert_allclose(sol.y[1], run["theta'"], atol=1e-8)
+
+
+def test_batch_evaluates_rows_like_single_calls():
+    f = lagrange.load(EXAMPLES / "classics" / "double_pendulum.lag").rhs()
+    rng = np.random.default_rng(1)
+    Y = rng.normal(size=(50, len(f.names)))
+    times = np.linspace(0.0, 1.0, 50)
+    out = f.batch(Y, t=times)
+    assert out.shape == Y.shape
+    for k in (0, 17, 49):
+        np.testing.assert_array_equal(out[k], f(times[k], Y[k]))
+    with pytest.raises(ValueError):
+        f.batch(np.zeros((3, len(f.names) + 1)))
+    with pytest.raises(ValueError):
+        f(0.0, [1.0])
+
+
+def test_mass_matrix_function_matches_sympy():
+    scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
+    M = scene.mass_matrix_function()
+    d = scene.derive()
+    q = [0.3, 0.7]
+    values = d.parameter_values()
+    values.update(dict(zip(d.coordinates, q)))
+    exact = np.array(d.mass_matrix.subs(values).evalf(), dtype=float)
+    np.testing.assert_allclose(M(0.0, q), exact, rtol=1e-14)
+
+
+def test_simulate_returns_named_arrays():
+    scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
+    run = scene.simulate(until=1.0, output=["theta", "floor.force"], set={"g": 9.8})
+    assert set(run) == {"t", "theta", "floor.force"}
+    assert run["t"].shape == run["theta"].shape
+    assert run.stopped_by is not None  # the rod lies flat before t = 1
+    np.testing.assert_allclose(run["theta"][-1], np.pi / 2, atol=1e-9)
+    # At the start N = 4/7·m·g, with g as set.
+    np.testing.assert_allclose(run["floor.force"][0], 4 / 7 * 9.8, rtol=1e-12)
+    pandas = pytest.importorskip("pandas")
+    frame = run.to_pandas()
+    assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == ["theta", "floor.force"]
+
+
+def test_bad_scene_raises_scene_error_with_position():
+    text = "param m = 1 kg\ncoord x = 0\nparticle p { mass m; position (x, y) }\n"
+    with pytest.raises(lagrange.SceneError) as caught:
+        lagrange.loads(text, name="bad.lag")
+    e = caught.value
+    assert isinstance(e, Exception)
+    assert (e.file, e.line, e.column) == ("bad.lag", 3, 35)
+    assert "unknown name `y`" in str(e)
+    # Rendered as the command prints it: file:line:column, the line, a caret.
+    assert "bad.lag:3:35" in e.rendered
+    assert "particle p { mass m; position (x, y) }" in e.rendered
+    assert "^" in e.rendered
+    assert e.diagnostics[0][0] == "error"
+
+
+def test_parse_error_and_bad_options():
+    with pytest.raises(lagrange.SceneError) as caught:
+        lagrange.loads("coord x = \n")
+    assert caught.value.line == 1
+    scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    with pytest.raises(ValueError):
+        scene.simulate(method="euler")
+    with pytest.raises(ValueError):
+        scene.simulate(until=-1)
+    with pytest.raises(OSError):
+        lagrange.load(EXAMPLES / "no_such_scene.lag")
+
+
+def test_notebook_display_is_latex():
+    d = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag").derive()
+    latex = d._repr_latex_()
+    assert isinstance(latex, str)
+    assert latex.startswith("$$") and "\\begin{aligned}" in latex
+    assert "\\ddot{\\theta}" in latex and "\\frac{12 g}{7 L}" in latex
+
+
+def test_kept_constraint_has_multiplier_and_numbers_hold_it():
+    scene = lagrange.load(EXAMPLES / "classics" / "pendulum_cartesian.lag")
+    d = scene.derive()
+    assert len(d.multipliers) == 1
+    assert any(c.handling == "kept" for c in d.constraints)
+    f = scene.rhs()
+    out = f(0.0, f.y0)
+    assert out.shape == (len(f.names),) and np.all(np.isfinite(out))
+
+
+@pytest.mark.parametrize(
+    "path", sorted(EXAMPLES.glob("**/*.lag")), ids=lambda p: f"{p.parent.name}/{p.stem}"
+)
+def test_every_example_derives_evaluates_and_checks(path):
+    scene = lagrange.load(path)
+    d = scene.derive()
+    n = len(d.coordinates)
+    assert d.mass_matrix.shape == (n, n) and d.forcing.shape == (n, 1)
+    assert len(d.equations) >= 1 and "\\begin{aligned}" in d._repr_latex_()
+    f = scene.rhs()
+    assert f.names[:n] == [str(q.func) for q in d.coordinates]
+    assert np.all(np.isfinite(f(0.0, f.y0)))
+    assert scene.mass_matrix_function()(0.0, f.y0).shape == (n, n)
+    assert all(e.held for e in scene.check())
+
+
+def test_chaplygin_sleigh_has_equations_in_the_independent_rates():
+    d = lagrange.load(EXAMPLES / "classics" / "chaplygin_sleigh.lag").derive()
+    form = d.independent
+    assert form is not None
+    assert len(form["equations"]) == len(form["independent"])
+    assert form["dependent"] and all(isinstance(e, sp.Eq) for e in form["equations"])
