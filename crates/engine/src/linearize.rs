@@ -836,7 +836,7 @@ fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
     }
     let reduced = q.transpose() * a * &q;
     let mut values = eigenvalues(&reduced)?;
-    values.extend(std::iter::repeat((0.0, 0.0)).take(c));
+    values.extend(std::iter::repeat_n((0.0, 0.0), c));
     let (_, tolerance) = stability(&values);
     let key = |re: f64| if re.abs() <= tolerance { 0.0 } else { re };
     values.sort_by(|x, y| key(y.0).total_cmp(&key(x.0)).then(y.1.total_cmp(&x.1)));

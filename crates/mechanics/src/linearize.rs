@@ -365,8 +365,8 @@ impl Derivation {
                 if !kept[i] {
                     continue;
                 }
-                for j in 0..n {
-                    if !kept[j] && pool.depends_on(kinematic[i], self.coords[j]) {
+                for (j, q) in self.coords.iter().enumerate() {
+                    if !kept[j] && pool.depends_on(kinematic[i], *q) {
                         kept[j] = true;
                         grew = true;
                     }
