@@ -299,3 +299,70 @@ fn the_double_pendulum_has_its_normal_modes() {
     }
     assert!(modes.at.eigenvalues.iter().all(|(re, _)| re.abs() < 1e-12 * expected[0]));
 }
+
+#[test]
+fn the_rolling_coin_stays_up_above_the_critical_spin() {
+    // In the independent rates (ψ̇, θ̇, φ̇) about upright rolling at spin W, with A = m·r²/4
+    // and C = m·r²/2 the disk's moments: (A + m·r²)·δθ̈ = m·g·r·δθ − (C + m·r²)·W·δψ̇ and
+    // A·δψ̈ = C·W·δθ̇, so that δθ̈ = (4/5·g/r − 12/5·W²)·δθ + const: upright rolling holds
+    // (marginally) when W² > g/(3·r).
+    let source = example("space/rolling_coin.lag");
+    let l = linearize(&source, &Options::default()).expect("linearizes");
+    assert!(l.exact_reference);
+    let rates = l.linearization.independent.as_ref().expect("in the independent rates");
+    assert_eq!(rates.rates.len(), 3);
+    assert_eq!(l.linearization.cyclic, [true, true, true, false, true]);
+    assert_eq!(l.state, ["theta", "psi'", "theta'", "phi'"]);
+    assert_eq!(exact(&l, &l.stiffness), [["0"], ["-4/5*g/r"], ["0"]]);
+    let (g, r, w) = (9.81_f64, 0.02_f64, 15.0_f64);
+    let omega = (12.0 / 5.0 * w * w - 4.0 / 5.0 * g / r).sqrt();
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+    let e = &l.at.eigenvalues;
+    assert!(close(e[0].1, omega, 1e-12), "{e:?} against {omega}");
+
+    let critical = (g / (3.0 * r)).sqrt();
+    for (range, from, to) in [
+        ("W=0:30:7", Stability::Unstable, Stability::MarginallyStable),
+        ("W=25:1:5", Stability::MarginallyStable, Stability::Unstable),
+    ] {
+        let options = Options { sweep: Some(range.into()), ..Default::default() };
+        let l = linearize(&source, &options).expect("linearizes");
+        let sweep = l.sweep.expect("a sweep");
+        assert_eq!(sweep.changes.len(), 1, "{:?}", sweep.changes);
+        let change = sweep.changes[0];
+        assert_eq!((change.from, change.to), (from, to));
+        assert!(close(change.value, critical, 1e-8), "{} against {critical}", change.value);
+    }
+}
+
+#[test]
+fn the_chaplygin_sleigh_is_stable_with_its_centre_ahead_of_the_blade() {
+    // (I + m·a²)·δθ̈ = −m·a·v·δθ̇ about gliding straight on at speed v: a turn dies out at the
+    // rate m·a·v/(I + m·a²) with the centre of mass ahead (a > 0), grows behind (a < 0). The
+    // heading and the speed are neutral (neighbouring straight glides are steady too): two
+    // zeros, so ahead is marginally stable.
+    let source = example("classics/chaplygin_sleigh.lag");
+    let rate = |a: f64| 1.0 * a * 1.0 / (0.1 + 1.0 * a * a);
+    for (a, stability) in [(0.2, Stability::MarginallyStable), (-0.2, Stability::Unstable)] {
+        let options = Options { set: vec![format!("a={a}")], ..Default::default() };
+        let l = linearize(&source, &options).expect("linearizes");
+        assert_eq!(l.at.stability, stability, "a = {a}");
+        assert_eq!(l.state, ["theta", "x'", "theta'"]);
+        let e = &l.at.eigenvalues;
+        let moving: Vec<f64> = e.iter().map(|z| z.0).filter(|re| *re != 0.0).collect();
+        assert_eq!(moving.len(), 1, "{e:?}");
+        assert!(close(moving[0], -rate(a), 1e-12), "{e:?} against {}", -rate(a));
+        assert!(e.iter().all(|z| z.1 == 0.0), "{e:?}");
+    }
+    let l = about(&source, "theta = 0, x' = v");
+    assert_eq!(exact(&l, &l.damping), [["0", "0"], ["0", "m*a*v"]]);
+    assert_eq!(exact(&l, &l.mass), [["1", "0"], ["0", "I + m*a^2"]]);
+    // A velocity constraint's dependent rate is not the reference's to give, and a position
+    // the equations need is.
+    let options = Options { about: Some("theta = 0, y' = 1".into()), ..Default::default() };
+    let error = linearize(&source, &options).err().expect("y' is dependent").to_string();
+    assert!(error.contains("follows from the velocity constraints"), "{error}");
+    let options = Options { about: Some("theta' = 1".into()), ..Default::default() };
+    let error = linearize(&source, &options).err().expect("θ turns").to_string();
+    assert!(error.contains("does not stay put"), "{error}");
+}

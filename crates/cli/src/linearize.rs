@@ -110,18 +110,51 @@ pub fn text(l: &Linearized) -> String {
                 .lookup_symbol(&format!("{}'", pool.symbol(*q).name))
                 .map(|s| pool.symbol_text(s, u))
                 .unwrap_or_default();
-            out.push(format!(
-                "  {name} is cyclic (in neither M nor f): δ{name} leaves the state, δ{rate} stays"
-            ));
+            out.push(if lin.independent.is_some() {
+                format!(
+                    "  {name} is ignorable (in neither the equations in u nor the rates of p): \
+                     δ{name} leaves the state"
+                )
+            } else {
+                format!(
+                    "  {name} is cyclic (in neither M nor f): δ{name} leaves the state, δ{rate} stays"
+                )
+            });
         }
     }
-    let q: Vec<String> = lin.coords.iter().map(|s| pool.symbol_text(*s, u)).collect();
-    let constrained = !lin.constraints.is_empty();
-    let rhs = if constrained { "Jᵀ·δλ,  J·δq = 0" } else { "0" };
-    out.push(format!("Linearized equations  M·δq̈ + C·δq̇ + K·δq = {rhs},  q = ({})", q.join(", ")));
-    out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
-    out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
-    out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+    if let Some(r) = &lin.independent {
+        let names = |symbols: &mut dyn Iterator<Item = SymId>| -> String {
+            symbols.map(|s| pool.symbol_text(s, u)).collect::<Vec<_>>().join(", ")
+        };
+        let rates = names(&mut r.rates.iter().copied());
+        let kept = names(&mut r.kept.iter().map(|&i| lin.coords[i]));
+        let dependent = names(&mut r.dependent.iter().map(|(d, _)| *d));
+        out.push(format!(
+            "Linearized equations in the independent rates  M·δu̇ + C·δu + K·δp = 0,  \
+             u = ({rates}),  p = ({kept})"
+        ));
+        out.push(format!(
+            "  (the velocity constraints give {dependent}; their multipliers cancel in this form)"
+        ));
+        out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
+        out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
+        out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+        if !r.kept.is_empty() {
+            out.push("Kinematics  δṗ = G·(δp, δu)".into());
+            out.extend(bracketed(&exact_rows(pool, &r.kinematics), "  G = "));
+        }
+    } else {
+        let q: Vec<String> = lin.coords.iter().map(|s| pool.symbol_text(*s, u)).collect();
+        let constrained = !lin.constraints.is_empty();
+        let rhs = if constrained { "Jᵀ·δλ,  J·δq = 0" } else { "0" };
+        out.push(format!(
+            "Linearized equations  M·δq̈ + C·δq̇ + K·δq = {rhs},  q = ({})",
+            q.join(", ")
+        ));
+        out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
+        out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
+        out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+    }
     for c in &lin.constraints {
         let name = pool.symbol_text(c.lambda, u);
         let row: Vec<String> = c.jacobian.iter().map(|e| pool.print(*e, u)).collect();
@@ -143,6 +176,9 @@ pub fn text(l: &Linearized) -> String {
     out.extend(bracketed(&number_rows(&l.at.mass), "  M = "));
     out.extend(bracketed(&number_rows(&l.at.damping), "  C = "));
     out.extend(bracketed(&number_rows(&l.at.stiffness), "  K = "));
+    if let Some(g) = l.at.kinematics.as_ref().filter(|g| !g.is_empty()) {
+        out.extend(bracketed(&number_rows(g), "  G = "));
+    }
     for (c, v) in lin.constraints.iter().zip(&l.at.multipliers) {
         out.push(format!("  {} = {}", pool.symbol_text(c.lambda, u), number(*v)));
     }
@@ -320,6 +356,17 @@ pub fn json(l: &Linearized) -> String {
     }
     if let Some(basis) = &l.at.basis {
         out.insert("basis".into(), matrix_json(basis));
+    }
+    if let (Some(r), Some(g)) = (&lin.independent, &l.at.kinematics) {
+        out.insert(
+            "independent_rates".into(),
+            json!(r.rates.iter().map(|s| name(*s)).collect::<Vec<_>>()),
+        );
+        out.insert(
+            "positions_kept".into(),
+            json!(r.kept.iter().map(|&i| name(lin.coords[i])).collect::<Vec<_>>()),
+        );
+        out.insert("G".into(), matrix(&r.kinematics, g));
     }
     out.insert("state".into(), json!(l.state));
     out.insert("A".into(), matrix_json(&l.at.a));

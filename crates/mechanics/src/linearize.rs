@@ -50,6 +50,11 @@ pub struct Linearization {
     /// kept constraints only: with them, the multipliers' values are for numbers to find).
     pub residual_is_zero: bool,
     pub constraints: Vec<LinearConstraint>,
+    /// With velocity constraints kept: the equations in the independent rates, linearized
+    /// (then `mass`, `damping` and `stiffness` are M̃, C̃, K̃ of M̃·δu̇ + C̃·δu + K̃·δp = 0, with
+    /// u the independent rates and p the positions kept, and `constraints` is empty: the
+    /// multipliers cancel in that form).
+    pub independent: Option<RatesLinearization>,
     /// The last `linearize about` line, which the reference is reported at.
     pub span: Span,
 }
@@ -65,23 +70,6 @@ impl Derivation {
                 .with_hint("add `linearize about q = …` naming the reference")]);
         };
         let mut errors = Vec::new();
-        if let Some(m) = self.multipliers.iter().find(|m| m.kind == ConstraintKind::Velocity) {
-            let c = &self.model.constraints[m.constraint];
-            errors.push(
-                Diagnostic::error(
-                    c.span,
-                    format!(
-                        "`{}` is a velocity constraint, which linearize does not handle yet",
-                        c.name
-                    ),
-                )
-                .with_label("a velocity constraint")
-                .with_related(span, "linearized here")
-                .with_hint("linearize handles constraints of positions only"),
-            );
-            return Err(errors);
-        }
-
         // The reference: later items override earlier ones.
         let mut given: HashMap<(SymId, bool), (ExprId, Span)> = HashMap::new();
         for line in &self.model.linearize {
@@ -106,6 +94,13 @@ impl Derivation {
                     )),
                 );
             }
+        }
+
+        if self.multipliers.iter().any(|m| m.kind == ConstraintKind::Velocity) {
+            if !errors.is_empty() {
+                return Err(errors);
+            }
+            return self.linearize_in_rates(span, &items);
         }
 
         let n = self.coords.len();
@@ -251,6 +246,7 @@ impl Derivation {
             residual,
             residual_is_zero,
             constraints,
+            independent: None,
             span,
         })
     }
@@ -263,6 +259,306 @@ impl Derivation {
         exprs.extend(&self.forcing);
         exprs.extend(self.multipliers.iter().map(|m| m.phi));
         !exprs.iter().any(|e| pool.depends_on(*e, q))
+    }
+}
+
+/// The equations in the independent rates about a reference (Maggi's form, linearized), for a
+/// scene with velocity constraints kept: the state is the positions kept and the independent
+/// rates, δp and δu, with
+///
+/// M̃·δu̇ + C̃·δu + K̃·δp = 0 (the `Linearization`'s `mass`, `damping`, `stiffness`) and
+/// δṗ = G·(δp, δu) (the kinematics: ṗ = u for an independent rate, the dependent rate's
+/// expression for a dependent one).
+#[derive(Clone, Debug)]
+pub struct RatesLinearization {
+    /// The independent rates u, in the coordinates' order.
+    pub rates: Vec<SymId>,
+    /// The coordinates (indices into `coords`) whose positions stay in the state: those the
+    /// equations in the independent rates depend on, and those the rates of these depend on,
+    /// in the coordinates' order. The others are ignorable (cyclic).
+    pub kept: Vec<usize>,
+    /// G: one row per position kept; columns the positions kept, then the independent rates.
+    pub kinematics: Vec<Vec<ExprId>>,
+    /// Each dependent rate and its expression in the positions and the independent rates.
+    pub dependent: Vec<(SymId, ExprId)>,
+    /// What each entry of the `Linearization`'s `residual` stands for: the acceleration of
+    /// each independent rate (the residual is that equation's M̃·u̇ + h at u̇ = 0, h), then the
+    /// rate of each dependent position kept (which must vanish for the reference to stay).
+    pub residual_symbols: Vec<SymId>,
+}
+
+/// The reference's items, by coordinate and whether a rate, in the order written.
+type Items = [((SymId, bool), (ExprId, Span))];
+
+impl Derivation {
+    /// Linearizes in the independent rates: see [`RatesLinearization`].
+    fn linearize_in_rates(
+        &mut self,
+        span: Span,
+        items: &Items,
+    ) -> Result<Linearization, Vec<Diagnostic>> {
+        if let Some(m) = self.multipliers.iter().find(|m| m.kind == ConstraintKind::Position) {
+            let c = &self.model.constraints[m.constraint];
+            return Err(vec![Diagnostic::error(
+                c.span,
+                format!(
+                    "`{}` is a position constraint kept beside velocity constraints, which \
+                     linearize does not handle yet",
+                    c.name
+                ),
+            )
+            .with_label("a position constraint kept with a multiplier")
+            .with_related(span, "linearized here")
+            .with_hint(
+                "linearize handles velocity constraints when every kept constraint restrains \
+                 velocities, or position constraints alone",
+            )]);
+        }
+        let Some(form) = self.independent_form() else {
+            let c = self
+                .multipliers
+                .iter()
+                .find(|m| self.model.constraints[m.constraint].force_requested)
+                .or(self.multipliers.first())
+                .map(|m| &self.model.constraints[m.constraint]);
+            let (at, name) = c.map_or((span, String::new()), |c| (c.span, c.name.clone()));
+            return Err(vec![Diagnostic::error(
+                at,
+                "the equations in the independent rates could not be formed, which linearizing \
+                 with velocity constraints needs",
+            )
+            .with_label(format!("`{name}` is kept with a multiplier"))
+            .with_related(span, "linearized here")
+            .with_hint(
+                "the dependent rates must solve exactly (at most four kept constraints), and no \
+                 `show` or `expect` line may ask for a kept constraint's reaction",
+            )]);
+        };
+        let n = self.coords.len();
+        let pool = &mut self.model.pool;
+        let accels: Vec<SymId> = form
+            .independent
+            .iter()
+            .map(|u| pool.rate(*u).expect("a rate has an acceleration"))
+            .collect();
+        // ṗ of each coordinate: u itself, or the dependent rate's expression.
+        let kinematic: Vec<ExprId> = (0..n)
+            .map(|i| {
+                let r = self.rates[i];
+                match form.dependent.iter().find(|(d, _)| *d == r) {
+                    Some((_, e)) => *e,
+                    None => pool.sym(r),
+                }
+            })
+            .collect();
+        let is_dependent: Vec<bool> =
+            (0..n).map(|i| form.dependent.iter().any(|(d, _)| *d == self.rates[i])).collect();
+
+        // The positions kept: those the equations depend on, and, in turn, those the rates of
+        // kept positions depend on.
+        let mut kept: Vec<bool> = (0..n)
+            .map(|i| form.equations.iter().any(|e| pool.depends_on(*e, self.coords[i])))
+            .collect();
+        loop {
+            let mut grew = false;
+            for i in 0..n {
+                if !kept[i] {
+                    continue;
+                }
+                for (j, q) in self.coords.iter().enumerate() {
+                    if !kept[j] && pool.depends_on(kinematic[i], *q) {
+                        kept[j] = true;
+                        grew = true;
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
+        }
+        let cyclic: Vec<bool> = kept.iter().map(|k| !k).collect();
+
+        let mut errors = Vec::new();
+        let mut positions = vec![None; n];
+        let mut given_rates: Vec<Option<ExprId>> = vec![None; n];
+        let mut map: HashMap<SymId, ExprId> = HashMap::new();
+        for ((coord, rate), (value, item_span)) in items {
+            let Some(i) = self.coords.iter().position(|q| q == coord) else { continue };
+            let name = pool.symbol_text(*coord, cas::Style::Unicode);
+            if !*rate {
+                positions[i] = Some(*value);
+                map.insert(*coord, *value);
+            } else if is_dependent[i] {
+                errors.push(
+                    Diagnostic::error(
+                        *item_span,
+                        format!("the rate of `{name}` follows from the velocity constraints"),
+                    )
+                    .with_label("a dependent rate")
+                    .with_hint(
+                        "leave it out: give the independent rates, and the constraints give \
+                         this one",
+                    ),
+                );
+            } else {
+                given_rates[i] = Some(*value);
+                map.insert(self.rates[i], *value);
+                if kept[i] && !pool.is_zero(*value) {
+                    errors.push(
+                        Diagnostic::error(
+                            *item_span,
+                            format!("a reference that moves `{name}` does not stay put"),
+                        )
+                        .with_label(format!(
+                            "{name} is not ignorable: the equations in the independent rates \
+                             depend on it"
+                        ))
+                        .with_hint(
+                            "a steady motion may move only ignorable coordinates (those in \
+                             neither the equations in the independent rates nor the rates of \
+                             the positions they need); give this one a position and rate 0",
+                        ),
+                    );
+                }
+            }
+        }
+        for u in &form.independent {
+            map.entry(*u).or_insert(pool.zero());
+        }
+        for a in &accels {
+            map.insert(*a, pool.zero());
+        }
+        let missing: Vec<String> = (0..n)
+            .filter(|&i| kept[i] && positions[i].is_none())
+            .map(|i| format!("`{}`", pool.symbol(self.coords[i]).name))
+            .collect();
+        if !missing.is_empty() {
+            let (them, it) = if missing.len() == 1 { ("", "it") } else { ("s", "them") };
+            errors.push(
+                Diagnostic::error(
+                    span,
+                    format!("the reference gives no position for {}", missing.join(", ")),
+                )
+                .with_label(format!("position{them} missing here"))
+                .with_hint(format!(
+                    "add {it} to the line (`{} = …`); rates default to 0, and an ignorable \
+                     coordinate needs no position",
+                    missing[0].trim_matches('`')
+                )),
+            );
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+
+        let at = |pool: &mut Pool, e: ExprId| {
+            let e = pool.subst(e, &map);
+            pool.simplify(e)
+        };
+        let zero_accels: HashMap<SymId, ExprId> =
+            accels.iter().map(|a| (*a, pool.zero())).collect();
+        let kept_index: Vec<usize> = (0..n).filter(|&i| kept[i]).collect();
+        let (mut mass, mut damping, mut stiffness, mut residual) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for e in &form.equations {
+            let h = pool.subst(*e, &zero_accels);
+            let mut m = Vec::new();
+            for a in &accels {
+                let d = pool.diff(*e, *a);
+                m.push(at(pool, d));
+            }
+            let mut c = Vec::new();
+            for u in &form.independent {
+                let d = pool.diff(h, *u);
+                c.push(at(pool, d));
+            }
+            let mut k = Vec::new();
+            for &i in &kept_index {
+                let d = pool.diff(h, self.coords[i]);
+                k.push(at(pool, d));
+            }
+            mass.push(m);
+            damping.push(c);
+            stiffness.push(k);
+            residual.push(at(pool, h));
+        }
+        let mut residual_symbols = accels.clone();
+        let mut kinematics = Vec::new();
+        for &i in &kept_index {
+            let mut row = Vec::new();
+            for &j in &kept_index {
+                let d = pool.diff(kinematic[i], self.coords[j]);
+                row.push(at(pool, d));
+            }
+            for u in &form.independent {
+                let d = pool.diff(kinematic[i], *u);
+                row.push(at(pool, d));
+            }
+            kinematics.push(row);
+            if is_dependent[i] {
+                residual.push(at(pool, kinematic[i]));
+                residual_symbols.push(self.rates[i]);
+            }
+        }
+        let rates: Vec<ExprId> = (0..n)
+            .map(|i| {
+                if is_dependent[i] {
+                    at(pool, kinematic[i])
+                } else {
+                    given_rates[i].unwrap_or(pool.zero())
+                }
+            })
+            .collect();
+        let residual_is_zero = residual.iter().all(|r| pool.is_identically_zero(*r));
+
+        let time = self.model.time;
+        let mut all: Vec<ExprId> = mass
+            .iter()
+            .chain(&damping)
+            .chain(&stiffness)
+            .chain(&kinematics)
+            .flatten()
+            .copied()
+            .collect();
+        all.extend(&residual);
+        let timed = all.iter().any(|e| {
+            pool.depends_on(*e, time) && {
+                let d = pool.diff(*e, time);
+                !pool.is_identically_zero(d)
+            }
+        });
+        if timed {
+            return Err(vec![Diagnostic::error(
+                span,
+                "the equations depend on time at this reference",
+            )
+            .with_label("the linearized equations would change with t")
+            .with_hint(
+                "a reference needs equations that do not change with time: no drive or \
+                 schedule written with `t` may act there",
+            )]);
+        }
+
+        Ok(Linearization {
+            coords: self.coords.clone(),
+            cyclic,
+            positions,
+            rates,
+            mass,
+            damping,
+            stiffness,
+            residual,
+            residual_is_zero,
+            constraints: Vec::new(),
+            independent: Some(RatesLinearization {
+                rates: form.independent.clone(),
+                kept: kept_index,
+                kinematics,
+                dependent: form.dependent.clone(),
+                residual_symbols,
+            }),
+            span,
+        })
     }
 }
 
