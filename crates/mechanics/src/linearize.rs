@@ -217,23 +217,7 @@ impl Derivation {
             all.extend(&c.jacobian);
             all.extend([c.phi, c.bias]);
         }
-        let timed = all.iter().any(|e| {
-            pool.depends_on(*e, time) && {
-                let d = pool.diff(*e, time);
-                !pool.is_identically_zero(d)
-            }
-        });
-        if timed {
-            return Err(vec![Diagnostic::error(
-                span,
-                "the equations depend on time at this reference",
-            )
-            .with_label("the linearized equations would change with t")
-            .with_hint(
-                "a reference needs equations that do not change with time: no drive or \
-                 schedule written with `t` may act there",
-            )]);
-        }
+        refuse_time_dependence(pool, &all, time, span)?;
 
         Ok(Linearization {
             coords: self.coords.clone(),
@@ -521,23 +505,7 @@ impl Derivation {
             .copied()
             .collect();
         all.extend(&residual);
-        let timed = all.iter().any(|e| {
-            pool.depends_on(*e, time) && {
-                let d = pool.diff(*e, time);
-                !pool.is_identically_zero(d)
-            }
-        });
-        if timed {
-            return Err(vec![Diagnostic::error(
-                span,
-                "the equations depend on time at this reference",
-            )
-            .with_label("the linearized equations would change with t")
-            .with_hint(
-                "a reference needs equations that do not change with time: no drive or \
-                 schedule written with `t` may act there",
-            )]);
-        }
+        refuse_time_dependence(pool, &all, time, span)?;
 
         Ok(Linearization {
             coords: self.coords.clone(),
@@ -560,6 +528,31 @@ impl Derivation {
             span,
         })
     }
+}
+
+/// A reference whose linearized equations still change with t is no equilibrium or steady
+/// motion: refused, naming the reference.
+fn refuse_time_dependence(
+    pool: &mut Pool,
+    exprs: &[ExprId],
+    time: SymId,
+    span: Span,
+) -> Result<(), Vec<Diagnostic>> {
+    let timed = exprs.iter().any(|e| {
+        pool.depends_on(*e, time) && {
+            let d = pool.diff(*e, time);
+            !pool.is_identically_zero(d)
+        }
+    });
+    if !timed {
+        return Ok(());
+    }
+    Err(vec![Diagnostic::error(span, "the equations depend on time at this reference")
+        .with_label("the linearized equations would change with t")
+        .with_hint(
+            "a reference needs equations that do not change with time: no drive or schedule \
+             written with `t` may act there",
+        )])
 }
 
 #[cfg(test)]
