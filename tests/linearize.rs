@@ -366,3 +366,17 @@ fn the_chaplygin_sleigh_is_stable_with_its_centre_ahead_of_the_blade() {
     let error = linearize(&source, &options).err().expect("θ turns").to_string();
     assert!(error.contains("does not stay put"), "{error}");
 }
+
+/// Upright on its cart the pendulum falls: one eigenvalue is +√((M + m)·g/(M·L)).
+#[test]
+fn the_inverted_pendulum_on_a_cart_is_unstable() {
+    let l = linearize(&example("classics/inverted_pendulum_on_cart.lag"), &Options::default())
+        .expect("linearizes about its own line");
+    assert_eq!(l.at.stability, Stability::Unstable);
+    assert_eq!(exact(&l, &l.stiffness), [["0", "0"], ["0", "-m*L*g"]]);
+    let (big, m, length, g) = (2.0_f64, 1.0, 1.0, 9.81);
+    let growth = ((big + m) * g / (big * length)).sqrt();
+    let e = &l.at.eigenvalues;
+    assert!(close(e[0].0, growth, 1e-12) && e[0].1 == 0.0, "{e:?}");
+    assert!(e.iter().any(|(re, im)| close(*re, -growth, 1e-12) && *im == 0.0), "{e:?}");
+}
