@@ -29,7 +29,12 @@ fn complex(re: f64, im: f64, digits: u32) -> String {
         return re_text;
     }
     let sign = if im < 0.0 { "−" } else { "+" };
-    format!("{re_text} {sign} {}i", significant(im.abs(), digits, Style::Unicode))
+    let im_text = significant(im.abs(), digits, Style::Unicode);
+    if re == 0.0 {
+        // Purely imaginary: ±ωi, as a hand derivation writes an oscillation.
+        return format!("{}{im_text}i", if im < 0.0 { "−" } else { "" });
+    }
+    format!("{re_text} {sign} {im_text}i")
 }
 
 fn exact_rows(pool: &Pool, m: &[Vec<ExprId>]) -> Vec<Vec<String>> {
@@ -190,8 +195,10 @@ pub fn text(l: &Linearized) -> String {
     }
     out.extend(bracketed(&number_rows(&l.at.a), "  A = "));
     out.push("Eigenvalues of A".into());
+    // A part within the verdict's tolerance of zero is rounding: it prints as 0.
+    let clean = |x: f64| if x.abs() <= l.at.tolerance { 0.0 } else { x };
     for (re, im) in &l.at.eigenvalues {
-        out.push(format!("  {}", complex(*re, *im, DIGITS)));
+        out.push(format!("  {}", complex(clean(*re), clean(*im), DIGITS)));
     }
     out.push(verdict_text(&l.at));
     if let Some(sweep) = &l.sweep {
@@ -239,7 +246,12 @@ fn sweep_lines(pool: &Pool, sweep: &Sweep) -> Vec<String> {
         .iter()
         .map(|r| {
             let mut cells = vec![number(r.value), r.stability.name().to_string()];
-            cells.extend(r.eigenvalues.iter().map(|(re, im)| complex(*re, *im, 6)));
+            // The verdict's tolerance at this value: parts within it of zero print as 0.
+            let largest =
+                r.eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
+            let tolerance = engine::linearize::RELATIVE_TOLERANCE * largest;
+            let clean = |x: f64| if x.abs() <= tolerance { 0.0 } else { x };
+            cells.extend(r.eigenvalues.iter().map(|(re, im)| complex(clean(*re), clean(*im), 6)));
             cells
         })
         .collect();
