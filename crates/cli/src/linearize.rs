@@ -8,7 +8,7 @@ use cas::{ExprId, Pool, Style, SymId};
 use engine::linearize::{Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
 use serde_json::{json, Map, Value as Json};
 
-use crate::plot::{escape, label, range};
+use crate::plot::{escape, frame, label, range, Frame};
 use crate::report::{bracketed, json_number, significant, value_text};
 
 /// Digits of the numbers in the text report.
@@ -455,40 +455,9 @@ pub fn svg(title: &str, sweep: &Sweep) -> String {
             sweep.rows.iter().flat_map(|r| r.eigenvalues.iter().map(part)).collect();
         let (v0, v1) = range(&all);
         let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
-        let _ = writeln!(
-            s,
-            r##"<rect x="{LEFT}" y="{top}" width="{}" height="{PANEL}" fill="none" stroke="#888"/>"##,
-            WIDTH - LEFT - RIGHT
-        );
-        let _ = writeln!(s, r#"<text x="{LEFT}" y="{}">{}</text>"#, top - 6.0, escape(name));
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-            LEFT - 6.0,
-            top + 10.0,
-            label(v1)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-            LEFT - 6.0,
-            top + PANEL,
-            label(v0)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{LEFT}" y="{}" text-anchor="middle">{}</text>"#,
-            top + PANEL + 14.0,
-            label(p0)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">{} = {}</text>"#,
-            WIDTH - RIGHT,
-            top + PANEL + 14.0,
-            escape(&sweep.parameter),
-            label(p1)
-        );
+        let axis_end = format!("{} = {}", sweep.parameter, label(p1));
+        let at = Frame { top, panel: PANEL, width: WIDTH, left: LEFT, right: RIGHT };
+        frame(&mut s, at, name, (v0, v1), (&label(p0), &axis_end));
         if v0 < 0.0 && v1 > 0.0 {
             let _ = writeln!(
                 s,

@@ -11,6 +11,60 @@ const GAP: f64 = 40.0;
 /// Past this many points a series is thinned: the picture does not change, the file shrinks.
 const MAX_POINTS: usize = 2000;
 
+/// Where a panel sits in a figure.
+pub(crate) struct Frame {
+    pub top: f64,
+    pub panel: f64,
+    pub width: f64,
+    pub left: f64,
+    pub right: f64,
+}
+
+/// A panel's box, its name above it, its value range at the left edge and the ends of its
+/// horizontal axis below it.
+pub(crate) fn frame(
+    s: &mut String,
+    f: Frame,
+    name: &str,
+    (v0, v1): (f64, f64),
+    (x0, x1): (&str, &str),
+) {
+    let Frame { top, panel, width, left, right } = f;
+    let _ = writeln!(
+        s,
+        r##"<rect x="{left}" y="{top}" width="{}" height="{panel}" fill="none" stroke="#888"/>"##,
+        width - left - right
+    );
+    let _ = writeln!(s, r#"<text x="{left}" y="{}">{}</text>"#, top - 6.0, escape(name));
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+        left - 6.0,
+        top + 10.0,
+        label(v1)
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+        left - 6.0,
+        top + panel,
+        label(v0)
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{left}" y="{}" text-anchor="middle">{}</text>"#,
+        top + panel + 14.0,
+        escape(x0)
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+        width - right,
+        top + panel + 14.0,
+        escape(x1)
+    );
+}
+
 /// `series`: (title, values at `times`).
 pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String {
     let height = GAP + series.len() as f64 * (PANEL + GAP) + 10.0;
@@ -33,38 +87,13 @@ pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String 
         let (v0, v1) = range(values);
         let x = |t: f64| LEFT + (t - t0) / (t1 - t0) * (WIDTH - LEFT - RIGHT);
         let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
-        let _ = writeln!(
-            s,
-            r##"<rect x="{LEFT}" y="{top}" width="{}" height="{PANEL}" fill="none" stroke="#888"/>"##,
-            WIDTH - LEFT - RIGHT
-        );
-        let _ = writeln!(s, r#"<text x="{}" y="{}">{}</text>"#, LEFT, top - 6.0, escape(name));
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-            LEFT - 6.0,
-            top + 10.0,
-            label(v1)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-            LEFT - 6.0,
-            top + PANEL,
-            label(v0)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{LEFT}" y="{}" text-anchor="middle">{}</text>"#,
-            top + PANEL + 14.0,
-            label(t0)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="end">t = {}</text>"#,
-            WIDTH - RIGHT,
-            top + PANEL + 14.0,
-            label(t1)
+        let axis_end = format!("t = {}", label(t1));
+        frame(
+            &mut s,
+            Frame { top, panel: PANEL, width: WIDTH, left: LEFT, right: RIGHT },
+            name,
+            (v0, v1),
+            (&label(t0), &axis_end),
         );
         let mut points = String::new();
         let indices = (0..times.len()).step_by(stride).chain(times.len().checked_sub(1));
