@@ -8,7 +8,7 @@ use cas::{ExprId, Pool, Style, SymId};
 use engine::linearize::{Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
 use serde_json::{json, Map, Value as Json};
 
-use crate::plot::{escape, frame, label, range, Frame};
+use crate::plot::{escape, frame, label, page, range, Frame};
 use crate::report::{bracketed, json_number, significant, value_text};
 
 /// Digits of the numbers in the text report.
@@ -433,18 +433,7 @@ const GAP: f64 = 40.0;
 /// eigenvalue continues which is not known, so no lines join them.
 pub fn svg(title: &str, sweep: &Sweep) -> String {
     let height = GAP + 2.0 * (PANEL + GAP) + 10.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
-        WIDTH / 2.0,
-        escape(title)
-    );
+    let mut s = page(WIDTH, height, title);
     let values: Vec<f64> = sweep.rows.iter().map(|r| r.value).collect();
     let (p0, p1) = range(&values);
     let x = |p: f64| LEFT + (p - p0) / (p1 - p0) * (WIDTH - LEFT - RIGHT);

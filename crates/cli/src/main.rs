@@ -362,6 +362,15 @@ fn simulate(
     code
 }
 
+/// Whether a plot's path ends in `.svg`, the one format plots are written in; says so when not.
+fn is_svg(p: &std::path::Path) -> bool {
+    let svg = p.extension().and_then(|e| e.to_str()) == Some("svg");
+    if !svg {
+        eprintln!("error: cannot tell the format of {}: use .svg", p.display());
+    }
+    svg
+}
+
 fn linearize(
     file: &std::path::Path,
     source: &str,
@@ -372,8 +381,7 @@ fn linearize(
 ) -> ExitCode {
     let path = file.display().to_string();
     if let Some(p) = &plot {
-        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
-            eprintln!("error: cannot tell the format of {}: use .svg", p.display());
+        if !is_svg(p) {
             return ExitCode::from(2);
         }
         if options.sweep.is_none() {
@@ -407,11 +415,8 @@ fn bench(
     plot: Option<PathBuf>,
 ) -> ExitCode {
     let path = file.display().to_string();
-    if let Some(p) = &plot {
-        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
-            eprintln!("error: cannot tell the format of {}: use .svg", p.display());
-            return ExitCode::from(2);
-        }
+    if plot.as_deref().is_some_and(|p| !is_svg(p)) {
+        return ExitCode::from(2);
     }
     let report =
         match engine::bench::bench(source, options, repeats, &mut cli::progress::Bar::new()) {

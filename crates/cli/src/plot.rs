@@ -11,6 +11,24 @@ const GAP: f64 = 40.0;
 /// Past this many points a series is thinned: the picture does not change, the file shrinks.
 const MAX_POINTS: usize = 2000;
 
+/// An SVG page of the given size, white, with its title centred at the top; the caller adds
+/// the panels and closes it.
+pub(crate) fn page(width: f64, height: f64, title: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
+        width / 2.0,
+        escape(title)
+    );
+    s
+}
+
 /// Where a panel sits in a figure.
 pub(crate) struct Frame {
     pub top: f64,
@@ -68,18 +86,7 @@ pub(crate) fn frame(
 /// `series`: (title, values at `times`).
 pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String {
     let height = GAP + series.len() as f64 * (PANEL + GAP) + 10.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
-        WIDTH / 2.0,
-        escape(title)
-    );
+    let mut s = page(WIDTH, height, title);
     let (t0, t1) = range(times);
     let stride = times.len().div_ceil(MAX_POINTS).max(1);
     for (k, (name, values)) in series.iter().enumerate() {

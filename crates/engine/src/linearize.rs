@@ -659,19 +659,16 @@ impl Analysis {
 
         let eigenvalues = eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
         let (stability, tolerance) = stability(&eigenvalues);
-        let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
-            (0..m.nrows()).map(|j| m.row(j).iter().copied().collect()).collect()
-        };
         Ok(Numbers {
             parameters: parameters.to_vec(),
-            mass: rows(&mass),
-            damping: rows(&damping),
-            stiffness: rows(&stiffness),
+            mass: rows_of(&mass),
+            damping: rows_of(&damping),
+            stiffness: rows_of(&stiffness),
             multipliers,
             accelerations,
-            basis: (k > 0).then(|| rows(&basis)),
+            basis: (k > 0).then(|| rows_of(&basis)),
             kinematics: None,
-            a: rows(&a),
+            a: rows_of(&a),
             eigenvalues,
             stability,
             tolerance,
@@ -747,19 +744,16 @@ impl Analysis {
         let eigenvalues =
             deflated_eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
         let (stability, tolerance) = stability(&eigenvalues);
-        let rows = |m: &DMatrix<f64>| -> Vec<Vec<f64>> {
-            (0..m.nrows()).map(|j| m.row(j).iter().copied().collect()).collect()
-        };
         Ok(Numbers {
             parameters: parameters.to_vec(),
-            mass: rows(&mass),
-            damping: rows(&damping),
-            stiffness: rows(&stiffness),
+            mass: rows_of(&mass),
+            damping: rows_of(&damping),
+            stiffness: rows_of(&stiffness),
             multipliers: Vec::new(),
             accelerations,
             basis: None,
-            kinematics: Some(rows(&kinematics)),
-            a: rows(&a),
+            kinematics: Some(rows_of(&kinematics)),
+            a: rows_of(&a),
             eigenvalues,
             stability,
             tolerance,
@@ -869,6 +863,11 @@ pub fn reference(lin: &Linearization) -> Vec<(SymId, bool, ExprId)> {
         out.push((*q, true, lin.rates[i]));
     }
     out
+}
+
+/// A matrix as rows, as `Numbers` keeps them.
+fn rows_of(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|j| m.row(j).iter().copied().collect()).collect()
 }
 
 #[cfg(test)]

@@ -136,25 +136,11 @@ impl Derivation {
         for i in 0..n {
             map.entry(self.rates[i]).or_insert(pool.zero());
         }
-        let missing: Vec<String> = (0..n)
+        let missing: Vec<SymId> = (0..n)
             .filter(|&i| !cyclic[i] && positions[i].is_none())
-            .map(|i| format!("`{}`", pool.symbol(self.coords[i]).name))
+            .map(|i| self.coords[i])
             .collect();
-        if !missing.is_empty() {
-            let (them, it) = if missing.len() == 1 { ("", "it") } else { ("s", "them") };
-            errors.push(
-                Diagnostic::error(
-                    span,
-                    format!("the reference gives no position for {}", missing.join(", ")),
-                )
-                .with_label(format!("position{them} missing here"))
-                .with_hint(format!(
-                    "add {it} to the line (`{} = …`); rates default to 0, and a cyclic \
-                     coordinate needs no position",
-                    missing[0].trim_matches('`')
-                )),
-            );
-        }
+        errors.extend(missing_positions(pool, &missing, span, "a cyclic"));
         if !errors.is_empty() {
             return Err(errors);
         }
@@ -412,25 +398,9 @@ impl Derivation {
         for a in &accels {
             map.insert(*a, pool.zero());
         }
-        let missing: Vec<String> = (0..n)
-            .filter(|&i| kept[i] && positions[i].is_none())
-            .map(|i| format!("`{}`", pool.symbol(self.coords[i]).name))
-            .collect();
-        if !missing.is_empty() {
-            let (them, it) = if missing.len() == 1 { ("", "it") } else { ("s", "them") };
-            errors.push(
-                Diagnostic::error(
-                    span,
-                    format!("the reference gives no position for {}", missing.join(", ")),
-                )
-                .with_label(format!("position{them} missing here"))
-                .with_hint(format!(
-                    "add {it} to the line (`{} = …`); rates default to 0, and an ignorable \
-                     coordinate needs no position",
-                    missing[0].trim_matches('`')
-                )),
-            );
-        }
+        let missing: Vec<SymId> =
+            (0..n).filter(|&i| kept[i] && positions[i].is_none()).map(|i| self.coords[i]).collect();
+        errors.extend(missing_positions(pool, &missing, span, "an ignorable"));
         if !errors.is_empty() {
             return Err(errors);
         }
@@ -528,6 +498,27 @@ impl Derivation {
             span,
         })
     }
+}
+
+/// The reference names no position for these coordinates (`what` says which kind of
+/// coordinate may go without one: "a cyclic", "an ignorable").
+fn missing_positions(pool: &Pool, missing: &[SymId], span: Span, what: &str) -> Option<Diagnostic> {
+    let first = missing.first()?;
+    let names: Vec<String> =
+        missing.iter().map(|q| format!("`{}`", pool.symbol(*q).name)).collect();
+    let (them, it) = if missing.len() == 1 { ("", "it") } else { ("s", "them") };
+    Some(
+        Diagnostic::error(
+            span,
+            format!("the reference gives no position for {}", names.join(", ")),
+        )
+        .with_label(format!("position{them} missing here"))
+        .with_hint(format!(
+            "add {it} to the line (`{} = …`); rates default to 0, and {what} coordinate \
+                 needs no position",
+            pool.symbol(*first).name
+        )),
+    )
 }
 
 /// A reference whose linearized equations still change with t is no equilibrium or steady

@@ -163,18 +163,10 @@ impl<'py> ToSympy<'py> {
     }
 }
 
+/// SymPy's name of a function: ours, except the natural logarithm, which SymPy calls `log`.
 fn function_name(f: Func) -> &'static str {
     match f {
-        Func::Sin => "sin",
-        Func::Cos => "cos",
-        Func::Tan => "tan",
-        Func::Asin => "asin",
-        Func::Acos => "acos",
-        Func::Atan => "atan",
-        Func::Sinh => "sinh",
-        Func::Cosh => "cosh",
-        Func::Tanh => "tanh",
-        Func::Exp => "exp",
         Func::Ln => "log",
+        other => other.name(),
     }
 }
