@@ -11,6 +11,11 @@ use crate::pool::{ExprId, Func, Node, Pool};
 /// Past this many terms an expansion is abandoned and the product kept as it is.
 const EXPANSION_TERM_LIMIT: usize = 20_000;
 
+/// Past this many terms (counted before like terms combine) `simplify` leaves an expression as
+/// it is: expanding and folding cost grows faster than the terms, and a model this size (a
+/// bicycle's frames in space) is for numbers and generated code, not for reading.
+pub const SIMPLIFY_TERM_LIMIT: usize = 4_000;
+
 /// Past this many terms the algebraic zero test gives up (and the numeric check decides).
 const ZERO_TEST_TERM_LIMIT: usize = 2_000;
 
@@ -90,6 +95,56 @@ impl Pool {
         } else {
             sum
         }
+    }
+
+    /// Whether expanding `e` would give more than `limit` terms, counted before like terms
+    /// combine (an upper bound), without expanding: linear in the size of `e` as a graph.
+    pub fn expansion_exceeds(&self, e: ExprId, limit: usize) -> bool {
+        let mut memo = HashMap::new();
+        self.expanded_terms(e, limit, &mut memo) > limit
+    }
+
+    /// The number of terms `expand` would multiply out, saturated just past `limit`.
+    fn expanded_terms(&self, e: ExprId, limit: usize, memo: &mut HashMap<ExprId, usize>) -> usize {
+        if let Some(&n) = memo.get(&e) {
+            return n;
+        }
+        let cap = limit.saturating_add(1);
+        let n = match self.node(e) {
+            Node::Num(_) | Node::Sym(_) | Node::Pi | Node::Func(..) | Node::Atan2(..) => 1,
+            Node::Add(_, terms) => {
+                let mut n = 1usize;
+                for (t, _) in terms.iter() {
+                    n = n.saturating_add(self.expanded_terms(*t, limit, memo)).min(cap);
+                }
+                n
+            }
+            Node::Mul(_, factors) => {
+                let mut n = 1usize;
+                for (b, x) in factors.iter() {
+                    // A sum to a negative or fractional power stays one factor.
+                    let Some(repeat) = x.is_integer().then(|| x.to_u32()).flatten() else {
+                        continue;
+                    };
+                    let m = self.expanded_terms(*b, limit, memo);
+                    for _ in 0..repeat {
+                        n = n.saturating_mul(m).min(cap);
+                    }
+                }
+                n
+            }
+            Node::Pow(b, x) => {
+                let repeat = self.as_num(*x).filter(|q| q.is_integer()).and_then(|q| q.to_u32());
+                let m = self.expanded_terms(*b, limit, memo);
+                let mut n = 1usize;
+                for _ in 0..repeat.unwrap_or(0) {
+                    n = n.saturating_mul(m).min(cap);
+                }
+                n
+            }
+        };
+        memo.insert(e, n);
+        n
     }
 
     fn has_sum_factor(&self, e: ExprId) -> bool {
@@ -291,6 +346,9 @@ impl Pool {
     /// The form to show a person: expanded, with sin²u + cos²u folded into 1 wherever a pair of
     /// terms allows it.
     pub fn simplify(&mut self, e: ExprId) -> ExprId {
+        if self.expansion_exceeds(e, SIMPLIFY_TERM_LIMIT) {
+            return e;
+        }
         let x = self.expand(e);
         let x = self.fold_pythagoras(x);
         self.fold_angle_sums(x)
@@ -500,6 +558,25 @@ impl Pool {
             .collect();
         let (value, scale) = probe(self, e, &values);
         value.is_finite() && scale.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE)
+    }
+
+    /// Whether `e` is zero at two generic points (every symbol at an irrational-looking value
+    /// in (0.3, 0.8)), relative to its magnitude there (every part by its absolute value, so
+    /// that cancellations nested however deep show): how an expression too large for the
+    /// algebra is taken to vanish identically. Without a magnitude probe, only a literal zero
+    /// vanishes.
+    pub fn vanishes_at_generic_points(&self, e: ExprId) -> bool {
+        if self.is_zero(e) {
+            return true;
+        }
+        let Some(probe) = self.magnitude_probe else { return false };
+        [0.618_033_988_749_895, 0.414_213_562_373_095].iter().all(|step| {
+            let values: Vec<f64> = (0..self.symbol_count())
+                .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * step).fract())
+                .collect();
+            let (value, magnitude) = probe(self, e, &values);
+            value.is_finite() && magnitude.is_finite() && value.abs() <= 1e-9 * magnitude
+        })
     }
 
     /// The simplified form with its monomial content pulled out in front of a sum:

@@ -168,6 +168,9 @@ pub struct Pool {
     zero: ExprId,
     one: ExprId,
     pub(crate) probe: Option<Probe>,
+    /// The value and the magnitude (every part by its absolute value) of an expression at a
+    /// point: see [`Pool::vanishes_at_generic_points`].
+    pub(crate) magnitude_probe: Option<Probe>,
 }
 
 impl Default for Pool {
@@ -190,6 +193,7 @@ impl Pool {
             zero: ExprId(0),
             one: ExprId(0),
             probe: None,
+            magnitude_probe: None,
         };
         pool.zero = pool.intern(Node::Num(Rational::zero()));
         pool.one = pool.intern(Node::Num(Rational::one()));
@@ -201,6 +205,11 @@ impl Pool {
     /// Without a probe the answers are the same, only slower to reach.
     pub fn set_probe(&mut self, probe: Probe) {
         self.probe = Some(probe);
+    }
+
+    /// Hands in the magnitude probe ([`Pool::vanishes_at_generic_points`]).
+    pub fn set_magnitude_probe(&mut self, probe: Probe) {
+        self.magnitude_probe = Some(probe);
     }
 
     fn intern(&mut self, node: Node) -> ExprId {

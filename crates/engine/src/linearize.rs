@@ -86,6 +86,10 @@ pub struct Numbers {
     /// With kept constraints: the basis N of their null space (one column per reduced
     /// coordinate z, one row per coordinate), δq = N·z.
     pub basis: Option<Vec<Vec<f64>>>,
+    /// With position and velocity constraints kept together: the coordinates whose positions
+    /// stay in the state, then those whose rates are the independent rates (indices into the
+    /// linearization's `coords`), as the numbers chose them at these values.
+    pub reduced: Option<(Vec<usize>, Vec<usize>)>,
     /// u̇ = A·u, u the state.
     pub a: Vec<Vec<f64>>,
     /// (re, im), by real part from the largest down (within the tolerance of zero as zero),
@@ -382,6 +386,9 @@ enum Fault {
     NotFinite(&'static str),
     /// The kept constraints leave no small motion.
     NoMotion,
+    /// The kept constraints do not fix the dependent rates at the reference (or the given
+    /// rates break them).
+    DependentRates { residual: f64 },
 }
 
 impl Fault {
@@ -434,6 +441,20 @@ impl Fault {
             )
             .with_label("every δq here breaks a constraint")
             .with_hint("a reference needs room to move: fewer constraints than coordinates"),
+            Fault::DependentRates { residual } => Diagnostic::error(
+                span,
+                format!("the kept constraints do not fix the dependent rates here{at}"),
+            )
+            .with_label(if residual.is_finite() {
+                format!("their rows are singular or inconsistent (residual {residual:.1e})")
+            } else {
+                "their rows are singular here".to_string()
+            })
+            .with_hint(
+                "give the independent rates of the steady motion in the reference (the \
+                 constraints give the others), and positions where the constraints restrain \
+                 independent directions",
+            ),
             Fault::NotFinite(what) => Diagnostic::error(
                 span,
                 format!("{what} is not a finite number at this reference{at}"),
@@ -460,6 +481,8 @@ struct Analysis {
     accels: Vec<SymId>,
     /// With velocity constraints kept: the independent rates' count and the positions kept.
     rates: Option<(usize, usize)>,
+    /// With position and velocity constraints kept together: the dependent rates' count.
+    kept: Option<usize>,
 }
 
 impl Analysis {
@@ -476,9 +499,16 @@ impl Analysis {
         for c in &lin.constraints {
             outputs.extend(&c.jacobian);
             outputs.push(c.bias);
+            if lin.kept.is_some() {
+                outputs.extend(c.rate_row);
+                outputs.extend(&c.positions);
+            }
         }
         let mut inputs = prepared.parameters.clone();
         inputs.extend(lin.constraints.iter().map(|c| c.lambda));
+        if let Some(kept) = &lin.kept {
+            inputs.extend(kept.dependent.iter().map(|&i| prepared.derivation.rates[i]));
+        }
         let tape = Tape::new(prepared.lower(&inputs, &outputs)?);
         let pool = &prepared.derivation.model.pool;
         let phis: Vec<ExprId> = lin.constraints.iter().map(|c| c.phi).collect();
@@ -493,6 +523,7 @@ impl Analysis {
             cyclic: lin.cyclic.clone(),
             accels: prepared.derivation.accels.clone(),
             rates: lin.independent.as_ref().map(|r| (r.rates.len(), r.kept.len())),
+            kept: lin.kept.as_ref().map(|k| k.dependent.len()),
         })
     }
 
@@ -501,7 +532,12 @@ impl Analysis {
     fn state_names(&self, prepared: &Prepared, lin: &Linearization, at: &Numbers) -> Vec<String> {
         let pool = &prepared.derivation.model.pool;
         let name = |i: usize| pool.symbol(lin.coords[i]).name.clone();
-        let (positions, rates): (Vec<String>, Vec<String>) = if let Some(r) = &lin.independent {
+        let (positions, rates): (Vec<String>, Vec<String>) = if let Some((p, u)) = &at.reduced {
+            (
+                p.iter().map(|&i| name(i)).collect(),
+                u.iter().map(|&i| format!("{}'", name(i))).collect(),
+            )
+        } else if let Some(r) = &lin.independent {
             let coord = |u: &SymId| {
                 let rates = &prepared.derivation.rates;
                 rates.iter().position(|v| v == u).map_or_else(String::new, name)
@@ -526,6 +562,7 @@ impl Analysis {
     fn eval(&mut self, parameters: &[f64], multipliers: &[f64]) -> Vec<f64> {
         let mut input = parameters.to_vec();
         input.extend(multipliers);
+        input.resize(self.inputs.len(), 0.0);
         let mut out = vec![0.0; self.tape.outputs()];
         self.tape.eval(&input, &mut out);
         out
@@ -543,6 +580,9 @@ impl Analysis {
     fn at(&mut self, lin: &Linearization, parameters: &[f64]) -> Result<Numbers, Fault> {
         if let Some((rates, kept)) = self.rates {
             return self.at_rates(lin, parameters, rates, kept);
+        }
+        if self.kept.is_some() {
+            return self.at_kept(lin, parameters);
         }
         let (n, k) = (self.n, self.k);
         let square = |out: &[f64], block: usize| -> DMatrix<f64> {
@@ -668,6 +708,7 @@ impl Analysis {
             accelerations,
             basis: (k > 0).then(|| rows_of(&basis)),
             kinematics: None,
+            reduced: None,
             a: rows_of(&a),
             eigenvalues,
             stability,
@@ -753,12 +794,301 @@ impl Analysis {
             accelerations,
             basis: None,
             kinematics: Some(rows_of(&kinematics)),
+            reduced: None,
             a: rows_of(&a),
             eigenvalues,
             stability,
             tolerance,
         })
     }
+}
+
+impl Analysis {
+    /// With position and velocity constraints kept together. The dependent rates at the
+    /// reference come first, from the constraints at the velocity level; then q̈ and the
+    /// multipliers there, as for position constraints alone. Then the reduction, all in
+    /// numbers: the position constraints give δq = N·δz (one dependent coordinate per row,
+    /// the rest of z the coordinates themselves), the velocity constraints A·δq̇ + B·δq = 0
+    /// give δż = T·δu + S·δz (u the independent rates, again coordinates' own), and the
+    /// equations of motion along Q = N·T, where the multipliers cancel:
+    ///
+    /// M̃ = QᵀMQ, C̃ = Qᵀ(M·N·S·T + C·Q), K̃ = Qᵀ(M·N·S·S + C·N·S + K·N),
+    ///
+    /// M̃·δu̇ + C̃·δu + K̃·δz = 0. Positions that neither K̃ nor the rates of the positions kept
+    /// depend on leave the state (ignorable); first integrals leave the eigenvalues as zeros.
+    fn at_kept(&mut self, lin: &Linearization, parameters: &[f64]) -> Result<Numbers, Fault> {
+        let kept = lin.kept.as_ref().expect("a kept linearization");
+        let (n, k) = (self.n, self.k);
+        let dependent = &kept.dependent;
+        let nd = dependent.len();
+        let square = |out: &[f64], block: usize| -> DMatrix<f64> {
+            DMatrix::from_fn(n, n, |j, i| out[block * n * n + j * n + i])
+        };
+        // Each constraint's outputs: J (n), γ, the rate row, B (n for a velocity constraint).
+        let mut offsets = Vec::with_capacity(k);
+        let mut offset = 3 * n * n + n;
+        for c in &lin.constraints {
+            offsets.push(offset);
+            offset += n + 2 + c.positions.len();
+        }
+        let rows = |out: &[f64]| -> (DMatrix<f64>, DVector<f64>, DVector<f64>) {
+            let jacobian = DMatrix::from_fn(k, n, |c, i| out[offsets[c] + i]);
+            let bias = DVector::from_fn(k, |c, _| out[offsets[c] + n]);
+            let rate_rows = DVector::from_fn(k, |c, _| out[offsets[c] + n + 1]);
+            (jacobian, bias, rate_rows)
+        };
+        let inputs = |multipliers: &[f64], rates: &[f64]| -> Vec<f64> {
+            multipliers.iter().chain(rates).copied().collect()
+        };
+
+        // On each kept position constraint.
+        let values = self.by_symbol(parameters, &vec![0.0; k + nd]);
+        for (c, (phi, size)) in self.phi.eval(&values).into_iter().enumerate() {
+            if lin.constraints[c].kind != model::ConstraintKind::Position {
+                continue;
+            }
+            if phi.abs() > EQUILIBRIUM_TOLERANCE * size || !phi.is_finite() {
+                let constraint = lin.constraints[c].constraint;
+                return Err(Fault::OffConstraint { constraint, value: phi });
+            }
+        }
+        // The dependent rates: J[:, dependent]·r = −(the rows with them at 0).
+        let out = self.eval(parameters, &inputs(&vec![0.0; k], &vec![0.0; nd]));
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(Fault::NotFinite("M, C, K, f or a constraint's rows"));
+        }
+        let (jacobian, _, rate_rows) = rows(&out);
+        let restrained = DMatrix::from_fn(k, nd, |c, d| jacobian[(c, dependent[d])]);
+        let rhs = -&rate_rows;
+        let solved = least_squares(restrained.clone(), &rhs)
+            .ok_or(Fault::DependentRates { residual: f64::NAN })?;
+        let miss = (&restrained * &solved - &rhs).amax();
+        let scale = restrained.amax() * solved.amax() + rhs.amax();
+        if miss > EQUILIBRIUM_TOLERANCE * scale.max(f64::MIN_POSITIVE) {
+            return Err(Fault::DependentRates { residual: miss });
+        }
+        let rates: Vec<f64> = solved.iter().copied().collect();
+
+        // q̈ and the multipliers: M·q̈ − Jᵀ·λ = f, J·q̈ = γ.
+        let out = self.eval(parameters, &inputs(&vec![0.0; k], &rates));
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(Fault::NotFinite("M, C, K, f or a constraint's rows"));
+        }
+        let mass = square(&out, 0);
+        let forcing = DVector::from_fn(n, |j, _| out[3 * n * n + j]);
+        let (jacobian, bias, _) = rows(&out);
+        let mut system = DMatrix::zeros(n + k, n + k);
+        system.view_mut((0, 0), (n, n)).copy_from(&mass);
+        system.view_mut((0, n), (n, k)).copy_from(&(-jacobian.transpose()));
+        system.view_mut((n, 0), (k, n)).copy_from(&jacobian);
+        let mut rhs = DVector::zeros(n + k);
+        rhs.rows_mut(0, n).copy_from(&forcing);
+        rhs.rows_mut(n, k).copy_from(&bias);
+        let x =
+            least_squares(system, &rhs).unwrap_or_else(|| DVector::from_element(n + k, f64::NAN));
+        let accelerations: Vec<f64> = x.rows(0, n).iter().copied().collect();
+        let multipliers: Vec<f64> = x.rows(n, k).iter().copied().collect();
+        let out = self.eval(parameters, &inputs(&multipliers, &rates));
+        let stiffness = square(&out, 2);
+        let damping = square(&out, 1);
+        let values = self.by_symbol(parameters, &inputs(&multipliers, &rates));
+        let residual = self.residual.eval(&values);
+        // Relative to the largest force in any row, f's or a reaction's: rows that vanish by
+        // symmetry have no size of their own, and an expression too large to simplify hides
+        // its terms inside products.
+        let reactions =
+            |j: usize| -> f64 { (0..k).map(|c| (jacobian[(c, j)] * multipliers[c]).abs()).sum() };
+        let scale =
+            (0..n).map(|j| residual[j].1.max(forcing[j].abs() + reactions(j))).fold(0.0, f64::max);
+        let held = residual.iter().all(|(r, _)| r.abs() <= EQUILIBRIUM_TOLERANCE * scale);
+        if !held || accelerations.iter().any(|a| !a.is_finite()) {
+            return Err(Fault::NotEquilibrium { accelerations, symbols: self.accels.clone() });
+        }
+
+        // δq = N·δz along the position constraints.
+        let position_rows: Vec<usize> = (0..k)
+            .filter(|&c| lin.constraints[c].kind == model::ConstraintKind::Position)
+            .collect();
+        let velocity_rows: Vec<usize> = (0..k)
+            .filter(|&c| lin.constraints[c].kind == model::ConstraintKind::Velocity)
+            .collect();
+        let preferred = |i: usize| dependent.contains(&i);
+        let p_rows =
+            DMatrix::from_fn(position_rows.len(), n, |r, i| jacobian[(position_rows[r], i)]);
+        let eliminated = pivots(&p_rows, &(0..n).collect::<Vec<_>>(), &preferred);
+        let z: Vec<usize> = (0..n).filter(|i| !eliminated.contains(i)).collect();
+        let nz = z.len();
+        let mut basis = DMatrix::zeros(n, nz);
+        for (col, &i) in z.iter().enumerate() {
+            basis[(i, col)] = 1.0;
+        }
+        if !eliminated.is_empty() {
+            let dep = DMatrix::from_fn(p_rows.nrows(), eliminated.len(), |r, d| {
+                p_rows[(r, eliminated[d])]
+            });
+            let ind = DMatrix::from_fn(p_rows.nrows(), nz, |r, c| p_rows[(r, z[c])]);
+            let x = least_squares_matrix(dep, &(-ind)).ok_or(Fault::NoMotion)?;
+            for (d, &i) in eliminated.iter().enumerate() {
+                for c in 0..nz {
+                    basis[(i, c)] = x[(d, c)];
+                }
+            }
+        }
+        // δż = T·δu + S·δz along the velocity constraints.
+        let a_rows =
+            DMatrix::from_fn(velocity_rows.len(), n, |r, i| jacobian[(velocity_rows[r], i)]);
+        let b_rows = DMatrix::from_fn(velocity_rows.len(), n, |r, i| {
+            out[offsets[velocity_rows[r]] + n + 2 + i]
+        });
+        let an = &a_rows * &basis;
+        let bn = &b_rows * &basis;
+        let z_preferred = |c: usize| preferred(z[c]);
+        let dependent_z = pivots(&an, &(0..nz).collect::<Vec<_>>(), &z_preferred);
+        let independent_z: Vec<usize> = (0..nz).filter(|c| !dependent_z.contains(c)).collect();
+        let nu = independent_z.len();
+        let mut t = DMatrix::zeros(nz, nu);
+        let mut s = DMatrix::zeros(nz, nz);
+        for (col, &c) in independent_z.iter().enumerate() {
+            t[(c, col)] = 1.0;
+        }
+        if !dependent_z.is_empty() {
+            let dep =
+                DMatrix::from_fn(an.nrows(), dependent_z.len(), |r, d| an[(r, dependent_z[d])]);
+            let ind = DMatrix::from_fn(an.nrows(), nu, |r, c| an[(r, independent_z[c])]);
+            let x_t = least_squares_matrix(dep.clone(), &(-ind))
+                .ok_or(Fault::DependentRates { residual: f64::NAN })?;
+            let x_s = least_squares_matrix(dep, &(-&bn))
+                .ok_or(Fault::DependentRates { residual: f64::NAN })?;
+            for (d, &c) in dependent_z.iter().enumerate() {
+                for col in 0..nu {
+                    t[(c, col)] = x_t[(d, col)];
+                }
+                for col in 0..nz {
+                    s[(c, col)] = x_s[(d, col)];
+                }
+            }
+        }
+        let q = &basis * &t;
+        let ns = &basis * &s;
+        let m_reduced = q.transpose() * &mass * &q;
+        let c_reduced = q.transpose() * (&mass * &ns * &t + &damping * &q);
+        let k_reduced = q.transpose() * (&mass * &ns * &s + &damping * &ns + &stiffness * &basis);
+
+        // The positions kept: those K̃ depends on, and those the rates of kept ones depend on.
+        let k_tol = 1e-9 * k_reduced.amax();
+        let s_tol = 1e-9 * s.amax().max(t.amax());
+        let mut keep: Vec<bool> = (0..nz).map(|c| k_reduced.column(c).amax() > k_tol).collect();
+        loop {
+            let mut grew = false;
+            for i in 0..nz {
+                if !keep[i] {
+                    continue;
+                }
+                for j in 0..nz {
+                    if !keep[j] && s[(i, j)].abs() > s_tol {
+                        keep[j] = true;
+                        grew = true;
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
+        }
+        let kept_z: Vec<usize> = (0..nz).filter(|&c| keep[c]).collect();
+        let np = kept_z.len();
+        let size = np + nu;
+        if size == 0 || nu == 0 {
+            return Err(Fault::NoMotion);
+        }
+        let svd =
+            nalgebra::SVD::try_new(m_reduced.clone(), false, false, f64::EPSILON, MAX_ITERATIONS)
+                .ok_or(Fault::NotFinite("the mass matrix"))?;
+        let (largest, smallest) = (svd.singular_values.max(), svd.singular_values.min());
+        if smallest <= 1e-12 * largest {
+            return Err(Fault::SingularMass { condition: largest / smallest });
+        }
+        let lu = m_reduced.clone().lu();
+        let k_kept = DMatrix::from_fn(nu, np, |r, c| k_reduced[(r, kept_z[c])]);
+        let mut kinematics = DMatrix::zeros(np, size);
+        for (row, &i) in kept_z.iter().enumerate() {
+            for (col, &j) in kept_z.iter().enumerate() {
+                kinematics[(row, col)] = s[(i, j)];
+            }
+            for col in 0..nu {
+                kinematics[(row, np + col)] = t[(i, col)];
+            }
+        }
+        let mut forces = DMatrix::zeros(nu, size);
+        forces.view_mut((0, 0), (nu, np)).copy_from(&k_kept);
+        forces.view_mut((0, np), (nu, nu)).copy_from(&c_reduced);
+        let lower = lu.solve(&forces).ok_or(Fault::SingularMass { condition: f64::INFINITY })?;
+        let mut a = DMatrix::zeros(size, size);
+        a.view_mut((0, 0), (np, size)).copy_from(&kinematics);
+        a.view_mut((np, 0), (nu, size)).copy_from(&(-lower));
+
+        let eigenvalues =
+            deflated_eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
+        let (stability, tolerance) = stability(&eigenvalues);
+        let positions: Vec<usize> = kept_z.iter().map(|&c| z[c]).collect();
+        let independent: Vec<usize> = independent_z.iter().map(|&c| z[c]).collect();
+        Ok(Numbers {
+            parameters: parameters.to_vec(),
+            mass: rows_of(&m_reduced),
+            damping: rows_of(&c_reduced),
+            stiffness: rows_of(&k_kept),
+            multipliers,
+            accelerations,
+            basis: None,
+            kinematics: Some(rows_of(&kinematics)),
+            reduced: Some((positions, independent)),
+            a: rows_of(&a),
+            eigenvalues,
+            stability,
+            tolerance,
+        })
+    }
+}
+
+/// One pivot column per row of `m` (rows that are combinations of earlier ones get none):
+/// Gaussian elimination choosing, in each row, among the columns clearly away from zero, a
+/// preferred one if there is one, the largest otherwise.
+fn pivots(m: &DMatrix<f64>, columns: &[usize], preferred: &dyn Fn(usize) -> bool) -> Vec<usize> {
+    let mut work = m.clone();
+    let scale = work.amax();
+    let mut chosen: Vec<usize> = Vec::new();
+    for r in 0..work.nrows() {
+        let row_max = columns.iter().map(|&c| work[(r, c)].abs()).fold(0.0, f64::max);
+        if row_max <= 1e-10 * scale {
+            continue;
+        }
+        let clear = |c: &usize| !chosen.contains(c) && work[(r, *c)].abs() > 1e-3 * row_max;
+        let best = |cs: Vec<usize>| {
+            cs.into_iter().max_by(|a, b| work[(r, *a)].abs().total_cmp(&work[(r, *b)].abs()))
+        };
+        let pick = best(columns.iter().copied().filter(|c| clear(c) && preferred(*c)).collect())
+            .or_else(|| best(columns.iter().copied().filter(|c| clear(c)).collect()));
+        let Some(p) = pick else { continue };
+        // Eliminate the pivot column from the rows below.
+        for below in r + 1..work.nrows() {
+            let factor = work[(below, p)] / work[(r, p)];
+            if factor != 0.0 {
+                for c in 0..work.ncols() {
+                    let v = work[(r, c)];
+                    work[(below, c)] -= factor * v;
+                }
+            }
+        }
+        chosen.push(p);
+    }
+    chosen
+}
+
+/// X of A·X = B column by column in the least-squares sense (A of full column rank here).
+fn least_squares_matrix(a: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, MAX_ITERATIONS)?;
+    let eps = 1e-12 * svd.singular_values.max();
+    svd.solve(b, eps).ok()
 }
 
 /// The least-squares solution of smallest norm, robust to a rank-deficient system (dependent

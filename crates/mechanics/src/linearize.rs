@@ -21,11 +21,33 @@ use crate::derive::Derivation;
 pub struct LinearConstraint {
     /// Its index among the model's constraints.
     pub constraint: usize,
+    pub kind: ConstraintKind,
     /// The multiplier's symbol (`rod.force`), which appears in K and in the residual.
     pub lambda: SymId,
+    /// ∂Φ/∂q for a position constraint, ∂Φ/∂q̇ for a velocity constraint: its row of
+    /// J·q̈ = γ, and the direction of its reaction.
     pub jacobian: Vec<ExprId>,
+    /// Φ at the reference: a position constraint's value there (zero on it); a velocity
+    /// constraint's with the dependent rates at 0 (see [`KeptLinearization`]).
     pub phi: ExprId,
     pub bias: ExprId,
+    /// With velocity and position constraints kept together ([`KeptLinearization`]): its row
+    /// at the velocity level, Φ for a velocity constraint and Φ̇ for a position one, with the
+    /// dependent rates at 0 (so that it is J·q̇ of the given rates, and the rest); and, for a
+    /// velocity constraint, ∂Φ/∂q (B of A·δq̇ + B·δq = 0). Empty otherwise.
+    pub rate_row: Option<ExprId>,
+    pub positions: Vec<ExprId>,
+}
+
+/// The reference of a scene keeping velocity constraints beside position constraints (or too
+/// many velocity constraints for the independent rates' exact form): the dependent rates stay
+/// symbols in every matrix, for numbers to solve from the constraints' `rate_row`s, and the
+/// reduction to the independent coordinates and rates is done in numbers too.
+#[derive(Clone, Debug)]
+pub struct KeptLinearization {
+    /// The coordinates (indices into `coords`) whose rates the constraints fix at the
+    /// reference: one per kept constraint, chosen as the independent rates' form chooses.
+    pub dependent: Vec<usize>,
 }
 
 /// M·δq̈ + C·δq̇ + K·δq = Jᵀ·δλ about a reference, exactly.
@@ -55,6 +77,8 @@ pub struct Linearization {
     /// u the independent rates and p the positions kept, and `constraints` is empty: the
     /// multipliers cancel in that form).
     pub independent: Option<RatesLinearization>,
+    /// With velocity and position constraints kept together: how numbers finish the job.
+    pub kept: Option<KeptLinearization>,
     /// The last `linearize about` line, which the reference is reported at.
     pub span: Span,
 }
@@ -99,6 +123,10 @@ impl Derivation {
         if self.multipliers.iter().any(|m| m.kind == ConstraintKind::Velocity) {
             if !errors.is_empty() {
                 return Err(errors);
+            }
+            let mixed = self.multipliers.iter().any(|m| m.kind == ConstraintKind::Position);
+            if mixed || self.multipliers.len() > crate::independent::DEPENDENT_LIMIT {
+                return self.linearize_kept(span, &items);
             }
             return self.linearize_in_rates(span, &items);
         }
@@ -186,10 +214,13 @@ impl Derivation {
             .iter()
             .map(|m| LinearConstraint {
                 constraint: m.constraint,
+                kind: m.kind,
                 lambda: m.lambda,
                 jacobian: m.jacobian.iter().map(|e| at(pool, *e)).collect(),
                 phi: at(pool, m.phi),
                 bias: at(pool, m.bias),
+                rate_row: None,
+                positions: Vec::new(),
             })
             .collect();
 
@@ -217,18 +248,26 @@ impl Derivation {
             residual_is_zero,
             constraints,
             independent: None,
+            kept: None,
             span,
         })
     }
 
     /// Whether a coordinate appears in neither M nor f nor any kept constraint: only its rate
-    /// matters, and a steady motion may move it.
+    /// matters, and a steady motion may move it. An expression left unsimplified for its size
+    /// may still hold the coordinate where the algebra would cancel it (a wheel's spin in
+    /// sin² + cos²): there a derivative that is zero at generic points counts as absent.
     fn is_cyclic(&mut self, q: SymId) -> bool {
         let pool = &mut self.model.pool;
         let mut exprs: Vec<ExprId> = self.mass_matrix.iter().flatten().copied().collect();
         exprs.extend(&self.forcing);
         exprs.extend(self.multipliers.iter().map(|m| m.phi));
-        !exprs.iter().any(|e| pool.depends_on(*e, q))
+        !exprs.iter().any(|e| {
+            pool.depends_on(*e, q) && {
+                let d = pool.diff(*e, q);
+                !pool.vanishes_at_generic_points(d)
+            }
+        })
     }
 }
 
@@ -488,6 +527,7 @@ impl Derivation {
             residual,
             residual_is_zero,
             constraints: Vec::new(),
+            kept: None,
             independent: Some(RatesLinearization {
                 rates: form.independent.clone(),
                 kept: kept_index,
@@ -495,6 +535,194 @@ impl Derivation {
                 dependent: form.dependent.clone(),
                 residual_symbols,
             }),
+            span,
+        })
+    }
+}
+
+impl Derivation {
+    /// Linearizes with position and velocity constraints kept together: see
+    /// [`KeptLinearization`]. M, C and K are those of all the coordinates, K with the
+    /// multipliers' symbols as in the holonomic case; each constraint adds its rows.
+    fn linearize_kept(
+        &mut self,
+        span: Span,
+        items: &Items,
+    ) -> Result<Linearization, Vec<Diagnostic>> {
+        let n = self.coords.len();
+        let rows: Vec<ExprId> = self
+            .multipliers
+            .clone()
+            .into_iter()
+            .map(|m| match m.kind {
+                ConstraintKind::Velocity => m.phi,
+                ConstraintKind::Position => self.model.pool.time_derivative(m.phi),
+            })
+            .collect();
+        let Some(dependent_rates) = self.dependent_rates(&rows) else {
+            return Err(vec![Diagnostic::error(
+                span,
+                "the kept constraints' rows do not each restrain a rate of their own here",
+            )
+            .with_label("no dependent rate for every constraint")
+            .with_hint("leave one rate per kept constraint without a value at the start")]);
+        };
+        let dependent: Vec<usize> =
+            dependent_rates.iter().filter_map(|r| self.rates.iter().position(|x| x == r)).collect();
+        let cyclic: Vec<bool> = (0..n).map(|i| self.is_cyclic(self.coords[i])).collect();
+        let pool = &mut self.model.pool;
+        let mut errors = Vec::new();
+        let mut positions = vec![None; n];
+        let mut map: HashMap<SymId, ExprId> = HashMap::new();
+        for ((coord, rate), (value, item_span)) in items {
+            let Some(i) = self.coords.iter().position(|q| q == coord) else { continue };
+            let name = pool.symbol_text(*coord, cas::Style::Unicode);
+            if !*rate {
+                positions[i] = Some(*value);
+                map.insert(*coord, *value);
+            } else if dependent.contains(&i) {
+                errors.push(
+                    Diagnostic::error(
+                        *item_span,
+                        format!("the rate of `{name}` follows from the kept constraints"),
+                    )
+                    .with_label("a dependent rate")
+                    .with_hint(
+                        "leave it out: give the independent rates, and the constraints give                          this one",
+                    ),
+                );
+            } else {
+                map.insert(self.rates[i], *value);
+                if !cyclic[i] && !pool.is_zero(*value) {
+                    errors.push(
+                        Diagnostic::error(
+                            *item_span,
+                            format!("a reference that moves `{name}` does not stay put"),
+                        )
+                        .with_label(format!("{name} is not cyclic: M, f or a constraint depends on it"))
+                        .with_hint(
+                            "a steady motion may move only cyclic coordinates; give this one a                              position and rate 0",
+                        ),
+                    );
+                }
+            }
+        }
+        for i in 0..n {
+            if !dependent.contains(&i) {
+                map.entry(self.rates[i]).or_insert(pool.zero());
+            }
+            // A cyclic coordinate left in an expression too large to simplify does not change
+            // its value (`is_cyclic`): any position stands for all.
+            if cyclic[i] {
+                map.entry(self.coords[i]).or_insert(pool.zero());
+            }
+        }
+        let missing: Vec<SymId> = (0..n)
+            .filter(|&i| !cyclic[i] && positions[i].is_none())
+            .map(|i| self.coords[i])
+            .collect();
+        errors.extend(missing_positions(pool, &missing, span, "a cyclic"));
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+
+        let at = |pool: &mut Pool, e: ExprId| {
+            let e = pool.subst(e, &map);
+            pool.simplify(e)
+        };
+        let mut generalized = self.forcing.clone();
+        for m in &self.multipliers {
+            let lambda = pool.sym(m.lambda);
+            for (j, g) in generalized.iter_mut().enumerate() {
+                let force = pool.mul2(m.jacobian[j], lambda);
+                *g = pool.add2(*g, force);
+            }
+        }
+        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
+        for (j, g) in generalized.iter().enumerate() {
+            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
+            for i in 0..n {
+                m.push(at(pool, self.mass_matrix[j][i]));
+                let dg = pool.diff(*g, self.rates[i]);
+                let dg = at(pool, dg);
+                c.push(pool.neg(dg));
+                k.push(if cyclic[i] {
+                    pool.zero()
+                } else {
+                    let dg = pool.diff(*g, self.coords[i]);
+                    let dg = at(pool, dg);
+                    pool.neg(dg)
+                });
+            }
+            mass.push(m);
+            damping.push(c);
+            stiffness.push(k);
+        }
+        let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+        // The dependent rates at 0 in the rows that solve for them.
+        let zero_dependent: HashMap<SymId, ExprId> =
+            dependent.iter().map(|&i| (self.rates[i], pool.zero())).collect();
+        let mut constraints = Vec::new();
+        for (m, row) in self.multipliers.iter().zip(&rows) {
+            let rate_row = at(pool, *row);
+            let rate_row = pool.subst(rate_row, &zero_dependent);
+            let positions = match m.kind {
+                ConstraintKind::Velocity => (0..n)
+                    .map(|i| {
+                        if cyclic[i] {
+                            pool.zero()
+                        } else {
+                            let d = pool.diff(m.phi, self.coords[i]);
+                            at(pool, d)
+                        }
+                    })
+                    .collect(),
+                ConstraintKind::Position => Vec::new(),
+            };
+            let phi = at(pool, m.phi);
+            let phi = match m.kind {
+                ConstraintKind::Velocity => pool.subst(phi, &zero_dependent),
+                ConstraintKind::Position => phi,
+            };
+            constraints.push(LinearConstraint {
+                constraint: m.constraint,
+                kind: m.kind,
+                lambda: m.lambda,
+                jacobian: m.jacobian.iter().map(|e| at(pool, *e)).collect(),
+                phi,
+                bias: at(pool, m.bias),
+                rate_row: Some(rate_row),
+                positions,
+            });
+        }
+        let rates: Vec<ExprId> = (0..n)
+            .map(|i| map.get(&self.rates[i]).copied().unwrap_or_else(|| pool.sym(self.rates[i])))
+            .collect();
+
+        let time = self.model.time;
+        let mut all: Vec<ExprId> =
+            mass.iter().chain(&damping).chain(&stiffness).flatten().copied().collect();
+        all.extend(&residual);
+        for c in &constraints {
+            all.extend(&c.jacobian);
+            all.extend(&c.positions);
+            all.extend([c.phi, c.bias]);
+        }
+        refuse_time_dependence(pool, &all, time, span)?;
+
+        Ok(Linearization {
+            coords: self.coords.clone(),
+            cyclic,
+            positions,
+            rates,
+            mass,
+            damping,
+            stiffness,
+            residual,
+            residual_is_zero: false,
+            constraints,
+            independent: None,
+            kept: Some(KeptLinearization { dependent }),
             span,
         })
     }

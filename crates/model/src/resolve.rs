@@ -169,6 +169,7 @@ impl<'a> Resolver<'a> {
     fn new(source: &'a str) -> Self {
         let mut pool = Pool::new();
         pool.set_probe(numeric::value_and_scale);
+        pool.set_magnitude_probe(numeric::value_and_magnitude);
         let time = pool.time();
         let mut names = HashMap::new();
         let mut placeholders = Vec::new();

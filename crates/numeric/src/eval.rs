@@ -5,6 +5,7 @@
 use cas::number::to_f64;
 use cas::{ExprId, Node, Pool, SymId};
 
+use crate::elementary::pow_int;
 use crate::lower::lower_free;
 use crate::tape::Tape;
 
@@ -106,4 +107,88 @@ impl ScaledEvaluator {
 /// [`ScaledEvaluator`]. Its signature is [`cas::Probe`]'s, so it serves the zero test.
 pub fn value_and_scale(pool: &Pool, e: ExprId, values: &[f64]) -> (f64, f64) {
     ScaledEvaluator::new(pool, &[e]).eval(values)[0]
+}
+
+/// The value of one expression at one point and its magnitude: the same expression evaluated
+/// with every coefficient, term and factor by its absolute value, so that the rounding of the
+/// value is within a few ulps of the magnitude wherever cancellations hide, in a sum nested
+/// however deep. Its signature is [`cas::Probe`]'s, for the zero test of expressions too large
+/// for the algebra ([`Pool::vanishes_at_generic_points`]).
+pub fn value_and_magnitude(pool: &Pool, e: ExprId, values: &[f64]) -> (f64, f64) {
+    let mut memo = std::collections::HashMap::new();
+    magnitude(pool, e, values, &mut memo)
+}
+
+fn magnitude(
+    pool: &Pool,
+    e: ExprId,
+    values: &[f64],
+    memo: &mut std::collections::HashMap<ExprId, (f64, f64)>,
+) -> (f64, f64) {
+    if let Some(&r) = memo.get(&e) {
+        return r;
+    }
+    let r = match pool.node(e) {
+        Node::Num(q) => (to_f64(q), to_f64(q).abs()),
+        Node::Sym(s) => {
+            let v = values.get(s.index()).copied().unwrap_or(f64::NAN);
+            (v, v.abs())
+        }
+        Node::Pi => (std::f64::consts::PI, std::f64::consts::PI),
+        Node::Add(c, terms) => {
+            let (mut value, mut size) = (to_f64(c), to_f64(c).abs());
+            for (t, k) in terms.iter() {
+                let (v, m) = magnitude(pool, *t, values, memo);
+                let k = to_f64(k);
+                value += k * v;
+                size += k.abs() * m;
+            }
+            (value, size)
+        }
+        Node::Mul(c, factors) => {
+            let (mut value, mut size) = (to_f64(c), to_f64(c).abs());
+            for (b, x) in factors.iter() {
+                let (v, m) = magnitude(pool, *b, values, memo);
+                match x.is_integer().then(|| x.to_integer()).and_then(|n| i32::try_from(n).ok()) {
+                    Some(n) if n > 0 => {
+                        value *= pow_int(v, n);
+                        size *= pow_int(m, n);
+                    }
+                    // A quotient or a root: its rounding is relative to its value.
+                    Some(n) => {
+                        let p = pow_int(v, n);
+                        value *= p;
+                        size *= p.abs();
+                    }
+                    None => {
+                        let p = crate::elementary::pow(v, to_f64(x));
+                        value *= p;
+                        size *= p.abs();
+                    }
+                }
+            }
+            (value, size)
+        }
+        Node::Pow(b, x) => {
+            let (v, m) = magnitude(pool, *b, values, memo);
+            let (xv, _) = magnitude(pool, *x, values, memo);
+            let p = crate::elementary::pow(v, xv);
+            let size =
+                if xv > 0.0 && xv.fract() == 0.0 { crate::elementary::pow(m, xv) } else { p.abs() };
+            (p, size)
+        }
+        Node::Func(f, a) => {
+            let (v, _) = magnitude(pool, *a, values, memo);
+            let value = crate::elementary::apply(*f, v);
+            (value, value.abs())
+        }
+        Node::Atan2(y, x) => {
+            let (yv, _) = magnitude(pool, *y, values, memo);
+            let (xv, _) = magnitude(pool, *x, values, memo);
+            let value = crate::elementary::atan2(yv, xv);
+            (value, value.abs())
+        }
+    };
+    memo.insert(e, r);
+    r
 }

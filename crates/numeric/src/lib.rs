@@ -22,6 +22,6 @@ pub mod rust;
 mod tape;
 
 pub use elementary::pow_int;
-pub use eval::{eval, value_and_scale, Evaluator, ScaledEvaluator};
+pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program};
 pub use tape::Tape;
