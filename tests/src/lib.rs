@@ -7,8 +7,29 @@ pub fn examples_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples")
 }
 
-/// Every `.lag` file under `examples/`, sorted, as (path relative to the repository, source).
+/// Examples the every-example tests leave to tests of their own: the bicycle's derivation
+/// takes seconds, its equations print as operation counts, and its generated code would take
+/// rustc minutes (tests/bicycle.rs holds it to the benchmark instead).
+const OWN_TESTS: [&str; 1] = ["examples/bicycle/whipple.lag"];
+
+/// Every `.lag` file under `examples/`, sorted, as (path relative to the repository, source),
+/// except those with tests of their own ([`example`] finds those too).
 pub fn examples() -> Vec<(String, String)> {
+    let mut all = all_examples();
+    all.retain(|(path, _)| !OWN_TESTS.contains(&path.as_str()));
+    all
+}
+
+/// The example at `path` (relative to `examples/`), whichever tests hold it.
+pub fn example(path: &str) -> String {
+    let (_, source) = all_examples()
+        .into_iter()
+        .find(|(p, _)| p.ends_with(path))
+        .unwrap_or_else(|| panic!("no example {path}"));
+    source
+}
+
+fn all_examples() -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut stack = vec![examples_dir()];
     while let Some(dir) = stack.pop() {

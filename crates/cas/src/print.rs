@@ -3,6 +3,7 @@
 //! never by arena ids, so the same scene prints the same text in every run.
 
 use std::cmp::Ordering;
+use std::collections::HashMap;
 
 use num_traits::{One, Signed, Zero};
 
@@ -123,6 +124,9 @@ fn vulgar(q: &Rational) -> Option<&'static str> {
     pairs.iter().find(|((n, d), _)| *q == Rational::new((*n).into(), (*d).into())).map(|(_, s)| *s)
 }
 
+/// Past this many nodes written out, an expression prints as its operation count.
+pub const PRINT_NODE_LIMIT: usize = 2_000;
+
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Prec {
     Sum,
@@ -132,9 +136,55 @@ enum Prec {
 }
 
 impl Pool {
-    /// Prints an expression in the given style.
+    /// Prints an expression in the given style; one whose printed form would run past
+    /// [`PRINT_NODE_LIMIT`] nodes (a bicycle's equations, shared subexpressions printed each time
+    /// they occur) prints as how many operations it holds instead.
     pub fn print(&self, e: ExprId, style: Style) -> String {
+        if self.tree_exceeds(e, PRINT_NODE_LIMIT) {
+            let count = self.operation_count(e);
+            return match style {
+                Style::Latex => format!(r"\langle\text{{{count} operations}}\rangle"),
+                Style::Ascii => format!("<{count} operations>"),
+                Style::Unicode => format!("⟨{count} operations⟩"),
+            };
+        }
         self.fmt(e, style).0
+    }
+
+    /// Whether `e` written out as a tree has more than `limit` nodes (each shared
+    /// subexpression counted every time it occurs), without writing it out.
+    pub fn tree_exceeds(&self, e: ExprId, limit: usize) -> bool {
+        fn size(pool: &Pool, e: ExprId, cap: usize, memo: &mut HashMap<ExprId, usize>) -> usize {
+            if let Some(&n) = memo.get(&e) {
+                return n;
+            }
+            let mut n = 1usize;
+            for c in pool.children(e) {
+                n = n.saturating_add(size(pool, c, cap, memo)).min(cap);
+            }
+            memo.insert(e, n);
+            n
+        }
+        size(self, e, limit.saturating_add(1), &mut HashMap::new()) > limit
+    }
+
+    /// The distinct operations (sums, products, powers, functions) `e` is built of, each
+    /// shared subexpression once.
+    pub fn operation_count(&self, e: ExprId) -> usize {
+        let mut seen = std::collections::HashSet::new();
+        let mut stack = vec![e];
+        let mut count = 0;
+        while let Some(x) = stack.pop() {
+            if !seen.insert(x) {
+                continue;
+            }
+            let children = self.children(x);
+            if !children.is_empty() {
+                count += 1;
+            }
+            stack.extend(children);
+        }
+        count
     }
 
     /// How a symbol is shown: `theta''` is `θ̈` in Unicode and `\ddot{\theta}` in LaTeX.

@@ -67,7 +67,7 @@ fn verdict_text(numbers: &Numbers) -> String {
         significant(numbers.tolerance, 2, Style::Unicode),
         significant(RELATIVE_TOLERANCE, 1, Style::Unicode)
     );
-    match numbers.stability {
+    let verdict = match numbers.stability {
         engine::linearize::Stability::Stable => {
             format!("Stable: every real part is below −{tolerance}")
         }
@@ -77,6 +77,17 @@ fn verdict_text(numbers: &Numbers) -> String {
         engine::linearize::Stability::Unstable => {
             format!("Unstable: some real part is above {tolerance}")
         }
+    };
+    match numbers.first_integrals {
+        0 => verdict,
+        1 => format!(
+            "{verdict}, apart from one zero: a first integral's, which leads to neighbouring \
+             steady motions"
+        ),
+        k => format!(
+            "{verdict}, apart from {k} zeros: first integrals', which lead to neighbouring \
+             steady motions"
+        ),
     }
 }
 

@@ -98,6 +98,9 @@ pub struct Numbers {
     pub stability: Stability,
     /// The absolute tolerance on real parts: [`RELATIVE_TOLERANCE`] × the largest |eigenvalue|.
     pub tolerance: f64,
+    /// How many of the zero eigenvalues are first integrals' (conserved combinations of the
+    /// state, which the verdict leaves aside: they lead to neighbouring steady motions).
+    pub first_integrals: usize,
 }
 
 /// One value of a sweep.
@@ -106,6 +109,10 @@ pub struct Row {
     pub value: f64,
     pub eigenvalues: Vec<(f64, f64)>,
     pub stability: Stability,
+    /// M, C and K at this value, as [`Numbers`] has them.
+    pub mass: Vec<Vec<f64>>,
+    pub damping: Vec<Vec<f64>>,
+    pub stiffness: Vec<Vec<f64>>,
 }
 
 /// A value of the swept parameter where the verdict changes, bracketed by bisection.
@@ -328,6 +335,9 @@ impl Session {
                 value,
                 eigenvalues: numbers.eigenvalues,
                 stability: numbers.stability,
+                mass: numbers.mass,
+                damping: numbers.damping,
+                stiffness: numbers.stiffness,
             });
         }
         let mut changes = Vec::new();
@@ -338,18 +348,32 @@ impl Session {
             }
             let (from, mut to) = (first.stability, second.stability);
             let (mut lo, mut hi) = (first.value, second.value);
+            // Between stable and unstable, the largest real part crosses zero: bisecting on
+            // its sign finds the crossing itself, where the verdict would stop at the edge of
+            // the tolerance band around zero.
+            let through_zero = matches!(
+                (from, to),
+                (Stability::Stable, Stability::Unstable) | (Stability::Unstable, Stability::Stable)
+            );
             for _ in 0..200 {
                 let mid = 0.5 * (lo + hi);
                 let narrow = (hi - lo).abs() <= SWEEP_PRECISION * lo.abs().max(hi.abs());
                 if narrow || mid == lo || mid == hi {
                     break;
                 }
-                let s = self.analyse(Some(mid))?.stability;
-                if s == from {
+                let numbers = self.analyse(Some(mid))?;
+                let like_from = if through_zero {
+                    (largest_real_part(&numbers) > 0.0) == (from == Stability::Unstable)
+                } else {
+                    numbers.stability == from
+                };
+                if like_from {
                     lo = mid;
                 } else {
                     hi = mid;
-                    to = s;
+                    if !through_zero {
+                        to = numbers.stability;
+                    }
                 }
             }
             changes.push(Change { value: 0.5 * (lo + hi), from, to, bracket: (lo, hi) });
@@ -699,6 +723,7 @@ impl Analysis {
 
         let eigenvalues = eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
         let (stability, tolerance) = stability(&eigenvalues);
+        let first_integrals = 0;
         Ok(Numbers {
             parameters: parameters.to_vec(),
             mass: rows_of(&mass),
@@ -713,6 +738,7 @@ impl Analysis {
             eigenvalues,
             stability,
             tolerance,
+            first_integrals,
         })
     }
     /// With velocity constraints kept: M̃·δu̇ + C̃·δu + K̃·δp = 0 and δṗ = G·(δp, δu), so
@@ -782,9 +808,9 @@ impl Analysis {
             return Err(Fault::NoMotion);
         }
 
-        let eigenvalues =
+        let (eigenvalues, first_integrals) =
             deflated_eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
-        let (stability, tolerance) = stability(&eigenvalues);
+        let (stability, tolerance) = stability_apart(&eigenvalues, first_integrals);
         Ok(Numbers {
             parameters: parameters.to_vec(),
             mass: rows_of(&mass),
@@ -799,6 +825,7 @@ impl Analysis {
             eigenvalues,
             stability,
             tolerance,
+            first_integrals,
         })
     }
 }
@@ -1027,9 +1054,9 @@ impl Analysis {
         a.view_mut((0, 0), (np, size)).copy_from(&kinematics);
         a.view_mut((np, 0), (nu, size)).copy_from(&(-lower));
 
-        let eigenvalues =
+        let (eigenvalues, first_integrals) =
             deflated_eigenvalues(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
-        let (stability, tolerance) = stability(&eigenvalues);
+        let (stability, tolerance) = stability_apart(&eigenvalues, first_integrals);
         let positions: Vec<usize> = kept_z.iter().map(|&c| z[c]).collect();
         let independent: Vec<usize> = independent_z.iter().map(|&c| z[c]).collect();
         Ok(Numbers {
@@ -1046,6 +1073,7 @@ impl Analysis {
             eigenvalues,
             stability,
             tolerance,
+            first_integrals,
         })
     }
 }
@@ -1101,6 +1129,11 @@ fn least_squares(a: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
 
 /// An orthonormal basis of the null space of a k×n matrix, as the columns of an n×r matrix.
 fn null_space(j: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    null_space_within(j, 1e-10)
+}
+
+/// The null space of the singular values below `relative` × the largest.
+fn null_space_within(j: DMatrix<f64>, relative: f64) -> Option<DMatrix<f64>> {
     let (k, n) = j.shape();
     // Padded to square, so that the SVD gives every right singular vector, not only k.
     let mut square = DMatrix::zeros(n.max(k), n);
@@ -1109,7 +1142,7 @@ fn null_space(j: DMatrix<f64>) -> Option<DMatrix<f64>> {
     let v_t = svd.v_t?;
     let largest = svd.singular_values.max();
     let columns: Vec<DVector<f64>> = (0..svd.singular_values.len())
-        .filter(|&i| svd.singular_values[i] <= 1e-10 * largest)
+        .filter(|&i| svd.singular_values[i] <= relative * largest)
         .map(|i| v_t.row(i).transpose())
         .collect();
     Some(if columns.is_empty() { DMatrix::zeros(n, 0) } else { DMatrix::from_columns(&columns) })
@@ -1143,20 +1176,23 @@ fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
 /// this, where an oscillation's pair meets those zeros (the rolling coin's critical spin) the
 /// eigenvalues of a Jordan block of order three move by the cube root of the rounding, far
 /// above the verdict's tolerance.
-fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
+fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<(Vec<(f64, f64)>, usize)> {
     let size = a.nrows();
     if size == 0 || a.iter().any(|x| !x.is_finite()) {
-        return eigenvalues(a);
+        return eigenvalues(a).map(|v| (v, 0));
     }
-    let conserved = null_space(a.transpose())?;
+    // A first integral's row of A is zero up to rounding; a tighter threshold than for
+    // constraints keeps an eigenvalue merely passing through zero (the bicycle's capsize mode
+    // at its critical speed) out of the first integrals.
+    let conserved = null_space_within(a.transpose(), 1e-13)?;
     let c = conserved.ncols();
     if c == 0 || a.amax() == 0.0 {
-        return eigenvalues(a);
+        return eigenvalues(a).map(|v| (v, 0));
     }
     // Q: an orthonormal basis of the complement, from the null space of the ℓᵀ.
     let q = null_space(conserved.transpose())?;
     if q.ncols() + c != size {
-        return eigenvalues(a);
+        return eigenvalues(a).map(|v| (v, 0));
     }
     let reduced = q.transpose() * a * &q;
     let mut values = eigenvalues(&reduced)?;
@@ -1164,7 +1200,50 @@ fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<Vec<(f64, f64)>> {
     let (_, tolerance) = stability(&values);
     let key = |re: f64| if re.abs() <= tolerance { 0.0 } else { re };
     values.sort_by(|x, y| key(y.0).total_cmp(&key(x.0)).then(y.1.total_cmp(&x.1)));
-    Some(values)
+    Some((values, c))
+}
+
+/// The verdict on the eigenvalues apart from `first_integrals` of their exact zeros (each
+/// first integral's direction leads to a neighbouring steady motion, not away from this one:
+/// the bicycle's forward speed, the sleigh's), and the tolerance it used.
+fn stability_apart(eigenvalues: &[(f64, f64)], first_integrals: usize) -> (Stability, f64) {
+    let (_, tolerance) = stability(eigenvalues);
+    let mut skip = first_integrals;
+    let rest: Vec<(f64, f64)> = eigenvalues
+        .iter()
+        .filter(|z| {
+            let drop = skip > 0 && **z == (0.0, 0.0);
+            skip -= usize::from(drop);
+            !drop
+        })
+        .copied()
+        .collect();
+    if rest.is_empty() {
+        return (Stability::MarginallyStable, tolerance);
+    }
+    let verdict = if rest.iter().any(|(re, _)| *re > tolerance) {
+        Stability::Unstable
+    } else if rest.iter().all(|(re, _)| *re < -tolerance) {
+        Stability::Stable
+    } else {
+        Stability::MarginallyStable
+    };
+    (verdict, tolerance)
+}
+
+/// The largest real part among the eigenvalues apart from the first integrals' zeros.
+fn largest_real_part(numbers: &Numbers) -> f64 {
+    let mut skip = numbers.first_integrals;
+    numbers
+        .eigenvalues
+        .iter()
+        .filter(|z| {
+            let drop = skip > 0 && **z == (0.0, 0.0);
+            skip -= usize::from(drop);
+            !drop
+        })
+        .map(|z| z.0)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The verdict and the absolute tolerance it used.

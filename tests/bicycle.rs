@@ -1,0 +1,105 @@
+//! The Whipple bicycle benchmark (Meijaard, Papadopoulos, Ruina and Schwab, 2007), derived from
+//! `examples/bicycle/whipple.lag`, which holds only the paper's Table 1: the eigenvalues of
+//! Table 2 at every tabulated speed, the weave and capsize speeds, and the benchmark's M, C1,
+//! K0 and K2 recovered from the linearization at two speeds.
+
+use engine::linearize::{linearize, Options, Stability};
+
+/// Table 2: at v = 0, 1, …, 10 m/s, the real eigenvalues and the complex pairs (re, |im|).
+const TABLE_2: [&[(f64, f64)]; 11] = [
+    &[(-5.53094371765393, 0.0), (-3.13164324790656, 0.0), (3.13164324790656, 0.0), (5.53094371765393, 0.0)],
+    &[(-7.11008014637442, 0.0), (-3.13423125066578, 0.0), (3.52696170990070, 0.8077402751993)],
+    &[(-8.67387984831735, 0.0), (-3.07158645641514, 0.0), (2.68234517512745, 1.68066296590675)],
+    &[(-10.35101467245920, 0.0), (-2.63366137253667, 0.0), (1.70675605663975, 2.31582447384325)],
+    &[(-12.15861426576450, 0.0), (-1.42944427361326, 0.0), (0.41325331521125, 3.07910818603206)],
+    &[(-14.07838969279820, 0.0), (-0.77534188219585, 4.46486771378823), (-0.32286642900409, 0.0)],
+    &[(-16.08537123098030, 0.0), (-1.52644486584142, 5.87673060598709), (-0.00406690076970, 0.0)],
+    &[(-18.15788466125262, 0.0), (-2.13875644258362, 7.19525913329805), (0.10268170574766, 0.0)],
+    &[(-20.27940894394569, 0.0), (-2.69348683581097, 8.46037971396931), (0.14327879765713, 0.0)],
+    &[(-22.43788559040858, 0.0), (-3.21675402252485, 9.69377351531791), (0.15790184030917, 0.0)],
+    &[(-24.62459635017404, 0.0), (-3.72016840437287, 10.90681139476287), (0.16105338653172, 0.0)],
+];
+
+const M: [[f64; 2]; 2] = [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]];
+const C1: [[f64; 2]; 2] = [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]];
+const K0: [[f64; 2]; 2] =
+    [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]];
+const K2: [[f64; 2]; 2] = [[0.0, 76.59734589573222], [0.0, 2.65431523794604]];
+const G: f64 = 9.81;
+
+fn whipple() -> String {
+    lagrange_tests::example("bicycle/whipple.lag")
+}
+
+/// The eigenvalues away from zero (the zeros are the first integral of the forward speed), as
+/// (re, |im|) with each complex pair once, sorted.
+fn roll_and_steer(eigenvalues: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = eigenvalues
+        .iter()
+        .filter(|(re, im)| re.hypot(*im) > 1e-6 && *im >= 0.0)
+        .copied()
+        .collect();
+    out.sort_by(|a, b| a.0.total_cmp(&b.0));
+    out
+}
+
+#[test]
+fn the_benchmark_comes_out_of_table_1() {
+    let options = Options {
+        set: vec!["v=1".into()],
+        sweep: Some("v=0:10:11".into()),
+        ..Default::default()
+    };
+    let l = linearize(&whipple(), &options).unwrap_or_else(|e| panic!("linearizes: {e}"));
+
+    // The roll–steer block: u = (φ̇, δ̇, θ̇R), p = (φ, δ).
+    let (positions, rates) = l.at.reduced.clone().expect("reduced in numbers");
+    let names: Vec<String> = positions
+        .iter()
+        .chain(&rates)
+        .map(|&i| l.derivation.model.pool.symbol(l.linearization.coords[i]).name.clone())
+        .collect();
+    assert_eq!(names, ["phi", "delta", "phi", "delta", "thetaR"]);
+
+    let sweep = l.sweep.as_ref().expect("a sweep");
+    for (row, expected) in sweep.rows.iter().zip(TABLE_2) {
+        let ours = roll_and_steer(&row.eigenvalues);
+        assert_eq!(ours.len(), expected.len(), "at v = {}: {:?}", row.value, row.eigenvalues);
+        for (a, b) in ours.iter().zip(expected) {
+            assert!(
+                (a.0 - b.0).abs() < 1e-10 && (a.1 - b.1).abs() < 1e-10,
+                "at v = {}: {a:?} against {b:?}",
+                row.value
+            );
+        }
+    }
+
+    // Weave: unstable below, stable above; capsize: unstable again above.
+    let changes: Vec<(f64, Stability, Stability)> =
+        sweep.changes.iter().map(|c| (c.value, c.from, c.to)).collect();
+    assert_eq!(changes.len(), 2, "{changes:?}");
+    assert!((changes[0].0 - 4.29238253634111).abs() < 1e-8, "{changes:?}");
+    assert_eq!((changes[0].1, changes[0].2), (Stability::Unstable, Stability::Stable));
+    assert!((changes[1].0 - 6.02426201538837).abs() < 1e-8, "{changes:?}");
+    assert_eq!((changes[1].1, changes[1].2), (Stability::Stable, Stability::Unstable));
+
+    // M·q̈ + v·C1·q̇ + (g·K0 + v²·K2)·q = 0: M and C1 at v = 1, K at v = 0 and 1.
+    let at_zero = &sweep.rows[0];
+    let at_one = &l.at;
+    for j in 0..2 {
+        for i in 0..2 {
+            let close = |ours: f64, theirs: f64, what: &str| {
+                assert!((ours - theirs).abs() < 1e-11, "{what}[{j}][{i}]: {ours} against {theirs}");
+            };
+            close(at_one.mass[j][i], M[j][i], "M");
+            close(at_one.damping[j][i], C1[j][i], "C1");
+            close(at_zero.stiffness[j][i] / G, K0[j][i], "K0");
+            close(at_one.stiffness[j][i] - at_zero.stiffness[j][i], K2[j][i], "K2");
+        }
+    }
+    // The wheel's rate is a first integral: it leaves the roll and steer alone.
+    for k in 0..2 {
+        assert!(at_one.mass[2][k].abs() < 1e-12 && at_one.mass[k][2].abs() < 1e-12);
+        assert!(at_one.damping[k][2].abs() < 1e-12 && at_one.stiffness[2][k].abs() < 1e-12);
+    }
+}
