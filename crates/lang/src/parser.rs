@@ -486,7 +486,16 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     let wants_operator = positives.iter().any(|r| {
         matches!(r, Rule::add_op | Rule::sub_op | Rule::mul_op | Rule::div_op | Rule::pow_op)
     });
-    if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
+    let line_start = source[..pos].rfind('\n').map_or(0, |n| n + 1);
+    let mut statement = source[line_start..pos].split_whitespace();
+    let in_polyline = statement.next() == Some("draw") && statement.next() == Some("polyline");
+    if positives.contains(&Rule::kw_line) {
+        diag = diag.with_hint(
+            "draw `line from A to B`, `circle at C radius r` or `polyline A, B, C`",
+        );
+    } else if in_polyline && positives.contains(&Rule::comma) {
+        diag = diag.with_hint("a polyline joins two points or more: `draw polyline A, B, C`");
+    } else if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
         diag = diag.with_hint("separate the items of a block with `;` or a new line");
     } else if wants_operator {
         let unit_allowed = positives.iter().any(|r| matches!(r, Rule::unit | Rule::unit_factor));

@@ -91,9 +91,12 @@ impl Resolver<'_> {
         let dimension = self.bodies.iter().map(|b| b.position.len()).max().unwrap_or(2).max(2);
         if point.len() > dimension {
             self.error(
-                Diagnostic::error(e.span, format!("a point of {} components", point.len()))
-                    .with_label(format!("this scene is in {dimension} dimensions"))
-                    .with_hint("every body of this scene moves in the plane: draw `(x, y)`"),
+                Diagnostic::error(
+                    e.span,
+                    format!("a point in space ({} components) in a scene in the plane", point.len()),
+                )
+                .with_label("a point in space")
+                .with_hint("every body of this scene moves in the plane: draw points `(x, y)`"),
             );
             return None;
         }
