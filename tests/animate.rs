@@ -42,7 +42,9 @@ fn the_falling_rod_keeps_its_end_on_the_floor() {
     let a = animation("ps5/falling_rod.lag");
     assert_eq!(a.dimension, 2);
     assert!(a.times.len() > 50, "{} frames", a.times.len());
-    assert!(matches!(figure(&a, "rod").kind, FigureKind::Body { axis_length } if axis_length > 0.5));
+    assert!(
+        matches!(figure(&a, "rod").kind, FigureKind::Body { axis_length } if axis_length > 0.5)
+    );
     let rod = a
         .figures
         .iter()
@@ -122,9 +124,9 @@ fn pages_are_the_same_bytes_and_name_no_network() {
     for rel in PAGES {
         let first = page(rel);
         assert_eq!(first, page(rel), "{rel}: two runs give different pages");
-        for reference in [
-            "://", "<link", " src=", "url(", "@import", "fetch(", "XMLHttpRequest", "WebSocket",
-        ] {
+        for reference in
+            ["://", "<link", " src=", "url(", "@import", "fetch(", "XMLHttpRequest", "WebSocket"]
+        {
             assert!(!first.contains(reference), "{rel}: the page contains `{reference}`");
         }
         assert!(first.starts_with("<!DOCTYPE html>"));
@@ -147,7 +149,11 @@ fn chromium() -> Option<PathBuf> {
 }
 
 fn python() -> Option<&'static str> {
-    Command::new("python3").arg("--version").output().is_ok_and(|o| o.status.success()).then_some("python3")
+    Command::new("python3")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+        .then_some("python3")
 }
 
 #[test]

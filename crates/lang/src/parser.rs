@@ -490,9 +490,8 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     let mut statement = source[line_start..pos].split_whitespace();
     let in_polyline = statement.next() == Some("draw") && statement.next() == Some("polyline");
     if positives.contains(&Rule::kw_line) {
-        diag = diag.with_hint(
-            "draw `line from A to B`, `circle at C radius r` or `polyline A, B, C`",
-        );
+        diag =
+            diag.with_hint("draw `line from A to B`, `circle at C radius r` or `polyline A, B, C`");
     } else if in_polyline && positives.contains(&Rule::comma) {
         diag = diag.with_hint("a polyline joins two points or more: `draw polyline A, B, C`");
     } else if positives.contains(&Rule::semicolon) && rest.starts_with(',') {

@@ -222,8 +222,14 @@ pub struct Expect {
 /// scene has dimensions.
 #[derive(Clone, Debug)]
 pub enum Figure {
-    Line { from: Vec<ExprId>, to: Vec<ExprId> },
-    Circle { centre: Vec<ExprId>, radius: ExprId },
+    Line {
+        from: Vec<ExprId>,
+        to: Vec<ExprId>,
+    },
+    Circle {
+        centre: Vec<ExprId>,
+        radius: ExprId,
+    },
     /// Two points or more, joined in order.
     Polyline(Vec<Vec<ExprId>>),
 }

@@ -93,7 +93,10 @@ impl Resolver<'_> {
             self.error(
                 Diagnostic::error(
                     e.span,
-                    format!("a point in space ({} components) in a scene in the plane", point.len()),
+                    format!(
+                        "a point in space ({} components) in a scene in the plane",
+                        point.len()
+                    ),
                 )
                 .with_label("a point in space")
                 .with_hint("every body of this scene moves in the plane: draw points `(x, y)`"),
