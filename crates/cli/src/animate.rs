@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn numbers_keep_six_significant_digits() {
-        assert_eq!(number(std::f64::consts::PI), json!(3.14159));
+        assert_eq!(number(2.0 / 3.0), json!(0.666667));
         assert_eq!(number(-1.234567e-8), json!(-1.23457e-8));
         assert_eq!(number(0.0), json!(0.0));
         assert_eq!(number(f64::NAN), Value::Null);
