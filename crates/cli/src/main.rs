@@ -85,13 +85,18 @@ enum Command {
         /// Plot the recorded quantities and the energy error against time as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Write a self-contained HTML page that plays the motion (.html): the bodies, springs
+        /// and `draw` shapes, with the energy error beside them.
+        #[arg(long, value_name = "OUT.html")]
+        animate: Option<PathBuf>,
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
         /// Record at this many evenly spaced times, from the integrator's dense output; 0
         /// records at every accepted step instead. Events and the end are always recorded.
-        #[arg(long, default_value_t = 200)]
-        samples: usize,
+        /// Default: 200, or 1000 with --animate (frames of the animation).
+        #[arg(long)]
+        samples: Option<usize>,
     },
     /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
     /// the first-order matrix A, its eigenvalues and the verdict on stability. Exit 2 on bad
@@ -215,10 +220,13 @@ fn main() -> ExitCode {
             event,
             out,
             plot,
+            animate,
             no_units,
             samples,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            // An animation wants frames close enough to play smoothly.
+            let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
                 until,
                 method,
@@ -229,9 +237,10 @@ fn main() -> ExitCode {
                 stop_when,
                 events: event,
                 no_units,
-                samples,
+                samples: samples.unwrap_or(default_samples),
+                animate: animate.is_some(),
             };
-            simulate(&file, &source, &options, out, plot)
+            simulate(&file, &source, &options, out, Figures { plot, animate })
         }
         Command::Linearize { file, about, set, sweep, plot, format, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
@@ -308,18 +317,32 @@ fn fail(path: &str, error: &engine::Error) -> ExitCode {
     ExitCode::from(error.exit_code())
 }
 
+/// The pictures `simulate` draws besides its table.
+struct Figures {
+    /// The recorded quantities against time, as SVG.
+    plot: Option<PathBuf>,
+    /// The motion, as an HTML page that plays it.
+    animate: Option<PathBuf>,
+}
+
 fn simulate(
     file: &std::path::Path,
     source: &str,
     options: &engine::simulate::Options,
     out: Option<PathBuf>,
-    plot: Option<PathBuf>,
+    figures: Figures,
 ) -> ExitCode {
+    let Figures { plot, animate } = figures;
     let path = file.display().to_string();
-    for target in out.iter().chain(plot.iter()) {
+    for target in out.iter().chain(plot.iter()).chain(animate.iter()) {
         let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
-        let allowed: &[&str] =
-            if Some(target) == plot.as_ref() { &["svg"] } else { &["csv", "json"] };
+        let allowed: &[&str] = if Some(target) == animate.as_ref() {
+            &["html"]
+        } else if Some(target) == plot.as_ref() {
+            &["svg"]
+        } else {
+            &["csv", "json"]
+        };
         if !allowed.contains(&ext) {
             eprintln!(
                 "error: cannot tell the format of {}: use .{}",
@@ -355,6 +378,12 @@ fn simulate(
         let title = format!("{} ({})", path, outcome.method.name());
         if let Err(e) = cli::write_atomically(&plot, &cli::plot::svg(&title, times, &series)) {
             eprintln!("error: cannot write {}: {e}", plot.display());
+            code = ExitCode::from(2);
+        }
+    }
+    if let (Some(target), Some(animation)) = (animate, &outcome.animation) {
+        if let Err(e) = cli::write_atomically(&target, &cli::animate::page(animation, &path)) {
+            eprintln!("error: cannot write {}: {e}", target.display());
             code = ExitCode::from(2);
         }
     }

@@ -225,3 +225,27 @@ fn linearize_prints_exits_and_plots() {
     let out = lagrange(&["linearize", &top, "--plot", &plot_arg]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn simulate_animates_into_a_page() {
+    let scratch = Scratch::new("animate");
+    let page = scratch.file("rod.html");
+    let csv = scratch.file("rod.csv");
+    let rod = example("ps5/falling_rod.lag");
+    let (csv_arg, page_arg) = (csv.to_str().expect("path"), page.to_str().expect("path"));
+    let out = lagrange(&["simulate", &rod, "--out", csv_arg, "--animate", page_arg]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let html = std::fs::read_to_string(&page).expect("the page is written");
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+    assert!(html.contains("<title>Rod falls with its end on a frictionless floor</title>"));
+    // 1000 frames by default with --animate, up to where the rod lies flat.
+    let frames = std::fs::read_to_string(&csv).expect("csv").lines().count() - 1;
+    assert!(frames > 300, "{frames} frames");
+
+    // Only .html is an animation; nothing is written for another name.
+    let wrong = scratch.file("rod.svg");
+    let out = lagrange(&["simulate", &rod, "--animate", wrong.to_str().expect("path")]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("use .html"));
+    assert!(!wrong.exists());
+}

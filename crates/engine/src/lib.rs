@@ -1,7 +1,8 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), measures integrators against a reference
+//! `simulate` settings and runs them ([`simulate`]), with the scene's figures frame by frame
+//! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
 //! any size ([`generate`]), and analyses small motions about a reference ([`linearize`]).
 //! What goes wrong comes back as an [`Error`].
@@ -10,6 +11,7 @@
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
 //! command, the benchmarks) shows them.
 
+pub mod animate;
 pub mod bench;
 pub mod codegen;
 pub mod derived;

@@ -8,6 +8,7 @@ use std::time::Instant;
 use numeric::Tape;
 use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+use crate::animate::{Animation, Plan};
 use crate::numbers::prepare;
 use crate::Error;
 
@@ -30,6 +31,8 @@ pub struct Options {
     pub no_units: bool,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
+    /// Also evaluate the scene's figures at every recorded time ([`Outcome::animation`]).
+    pub animate: bool,
 }
 
 /// The settings of a run: the scene's `simulate` block overridden by the [`Options`], checked.
@@ -54,6 +57,8 @@ pub struct Settings {
     pub samples: usize,
     /// Check dimensions when loading.
     pub units: bool,
+    /// Evaluate the scene's figures at every recorded time.
+    pub animate: bool,
 }
 
 /// How far a run has got, for a front end that shows it; `()` shows nothing.
@@ -89,6 +94,8 @@ pub struct Outcome {
     pub angle_oriented_bodies: Vec<String>,
     /// Whether the scene's energy should be conserved (no forces, dissipation or explicit t).
     pub conservative: bool,
+    /// The scene's figures at every recorded time, when the settings asked for them.
+    pub animation: Option<Animation>,
 }
 
 /// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
@@ -250,6 +257,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         sets,
         samples: options.samples,
         units: !options.no_units,
+        animate: options.animate,
     })
 }
 
@@ -359,7 +367,12 @@ pub fn run(
     // --- lower and run --------------------------------------------------------------------
     let dynamics_exprs = prepared.dynamics_exprs();
     let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
-    let observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
+    let mut observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
+    // The figures' numbers follow the energies, before the constraints' residuals that the
+    // integrator appends.
+    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
+    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
     let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
     let mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
@@ -412,11 +425,15 @@ pub fn run(
     columns.extend(events.iter().cloned());
     columns.push("KE".into());
     columns.push("PE".into());
-    let constraint_columns =
-        (0..prepared.layout.multipliers).map(|c| n_out + n_stop + n_event + 2 + c).collect();
+    let constraint_columns = (0..prepared.layout.multipliers)
+        .map(|c| n_out + n_stop + n_event + 2 + n_drawn + c)
+        .collect();
     let mut event_names = stops.clone();
     event_names.extend(events.iter().cloned());
-    Ok(Outcome {
+    let figures = plan.map(|p| p.figures(&run.trajectory.rows, n_out + n_stop + n_event + 2));
+    let title = prepared.derivation.model.title.clone();
+    let dimension = prepared.derivation.model.dimension();
+    let mut outcome = Outcome {
         columns,
         run,
         shown: n_out,
@@ -444,7 +461,21 @@ pub fn run(
             .map(|b| b.name.clone())
             .collect(),
         conservative,
-    })
+        animation: None,
+    };
+    if let Some(figures) = figures {
+        let energy = outcome.energy();
+        let e0 = energy.first().copied().unwrap_or(0.0);
+        outcome.animation = Some(Animation {
+            title,
+            dimension,
+            times: outcome.run.trajectory.times.clone(),
+            energy_error: energy.iter().map(|e| e - e0).collect(),
+            conservative,
+            figures,
+        });
+    }
+    Ok(outcome)
 }
 
 impl Outcome {

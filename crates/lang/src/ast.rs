@@ -183,6 +183,19 @@ pub enum StmtKind {
     Simulate(Vec<Setting>),
     /// `linearize about theta = 0, theta' = 0`
     Linearize(Vec<AboutItem>),
+    /// `draw line from (0, 0) to bob.position`: a shape for `simulate --animate`.
+    Draw(Shape),
+}
+
+/// A shape of a `draw` line, in world coordinates; its points are vector expressions.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// `line from A to B`
+    Line { from: Expr, to: Expr },
+    /// `circle at C radius r`
+    Circle { centre: Expr, radius: Expr },
+    /// `polyline A, B, C`: two points or more.
+    Polyline(Vec<Expr>),
 }
 
 /// A whole scene file.

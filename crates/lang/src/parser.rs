@@ -34,7 +34,7 @@ const PRATT_OPERATORS: [Rule; 6] =
     [Rule::add_op, Rule::sub_op, Rule::mul_op, Rule::div_op, Rule::pow_op, Rule::neg_op];
 
 /// The statement keywords, in the order they are listed to the user.
-pub(crate) const STATEMENT_KEYWORDS: [&str; 19] = [
+pub(crate) const STATEMENT_KEYWORDS: [&str; 20] = [
     "scene",
     "param",
     "let",
@@ -54,6 +54,7 @@ pub(crate) const STATEMENT_KEYWORDS: [&str; 19] = [
     "expect",
     "simulate",
     "linearize",
+    "draw",
 ];
 
 /// Operator precedence, loosest first: `+ -` < `* /` < unary `-` < `^` (right associative).
@@ -311,9 +312,9 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     Some(match rule {
         kw_scene | kw_param | kw_let | kw_coord | kw_particle | kw_body | kw_constraint
         | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring | kw_damper
-        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate | kw_linearize => {
-            (0, "a statement")
-        }
+        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate | kw_linearize
+        | kw_draw => (0, "a statement"),
+        kw_line | kw_circle | kw_polyline => (2, "a shape (`line`, `circle` or `polyline`)"),
         expr | number | call | func | member | name | paren | matrix | matrix_row | neg_op => {
             (1, "an expression")
         }
@@ -329,6 +330,9 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         kw_on => (4, "`on`"),
         kw_between => (4, "`between`"),
         kw_and => (4, "`and`"),
+        kw_from => (4, "`from`"),
+        kw_to => (4, "`to`"),
+        kw_radius => (4, "`radius`"),
         at_start | kw_at => (4, "`at start:`"),
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
@@ -371,6 +375,7 @@ fn is_statement_start(rule: Rule) -> bool {
                 | expect_stmt
                 | simulate_stmt
                 | linearize_stmt
+                | draw_stmt
         )
 }
 
@@ -397,6 +402,7 @@ fn is_statement_keyword(rule: Rule) -> bool {
             | kw_expect
             | kw_simulate
             | kw_linearize
+            | kw_draw
     )
 }
 
@@ -480,7 +486,15 @@ fn describe_syntax_error(source: &str, pos: usize, positives: &[Rule]) -> Diagno
     let wants_operator = positives.iter().any(|r| {
         matches!(r, Rule::add_op | Rule::sub_op | Rule::mul_op | Rule::div_op | Rule::pow_op)
     });
-    if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
+    let line_start = source[..pos].rfind('\n').map_or(0, |n| n + 1);
+    let mut statement = source[line_start..pos].split_whitespace();
+    let in_polyline = statement.next() == Some("draw") && statement.next() == Some("polyline");
+    if positives.contains(&Rule::kw_line) {
+        diag =
+            diag.with_hint("draw `line from A to B`, `circle at C radius r` or `polyline A, B, C`");
+    } else if in_polyline && positives.contains(&Rule::comma) {
+        diag = diag.with_hint("a polyline joins two points or more: `draw polyline A, B, C`");
+    } else if positives.contains(&Rule::semicolon) && rest.starts_with(',') {
         diag = diag.with_hint("separate the items of a block with `;` or a new line");
     } else if wants_operator {
         let unit_allowed = positives.iter().any(|r| matches!(r, Rule::unit | Rule::unit_factor));
@@ -606,6 +620,12 @@ fn is_noise(rule: Rule) -> bool {
                 | kw_on
                 | kw_between
                 | kw_and
+                | kw_line
+                | kw_circle
+                | kw_polyline
+                | kw_from
+                | kw_to
+                | kw_radius
                 | kw_at
                 | kw_start
                 | eq
@@ -790,10 +810,31 @@ impl Builder<'_> {
                 }
                 StmtKind::Linearize(items)
             }
+            Rule::draw_stmt => StmtKind::Draw(self.shape(next()?)?),
             _ => {
                 return Err(Diagnostic::error(Span::default(), "internal error: unknown statement"))
             }
         })
+    }
+
+    /// The shape of a `draw` line: its kind from the rule, its points as expressions.
+    fn shape(&self, pair: Pair<'_, Rule>) -> Built<Shape> {
+        let rule = pair.as_rule();
+        let exprs = parts(pair).map(|p| self.expr(p)).collect::<Built<Vec<Expr>>>()?;
+        let mut items = exprs.into_iter();
+        let shape = match rule {
+            Rule::draw_polyline => Some(Shape::Polyline(items.collect())),
+            Rule::draw_line => match (items.next(), items.next()) {
+                (Some(from), Some(to)) => Some(Shape::Line { from, to }),
+                _ => None,
+            },
+            Rule::draw_circle => match (items.next(), items.next()) {
+                (Some(centre), Some(radius)) => Some(Shape::Circle { centre, radius }),
+                _ => None,
+            },
+            _ => None,
+        };
+        shape.ok_or_else(|| Diagnostic::error(Span::default(), "internal error: draw"))
     }
 
     fn param_item(&self, item: Pair<'_, Rule>) -> Built<ParamDecl> {

@@ -1,6 +1,6 @@
 //! The sample scenes of the design sketch parse, with the statements and spans expected.
 
-use lang::{parse, Expr, ExprKind, SceneFile, StmtKind};
+use lang::{parse, Expr, ExprKind, SceneFile, Shape, StmtKind};
 
 const INCLINE: &str = include_str!("scenes/incline.lag");
 const DISK: &str = include_str!("scenes/disk.lag");
@@ -46,6 +46,9 @@ fn exprs_of(kind: &StmtKind) -> Vec<&Expr> {
         StmtKind::Show { items, .. } => out.extend(items.iter()),
         StmtKind::Simulate(settings) => out.extend(settings.iter().flat_map(|s| s.values.iter())),
         StmtKind::Linearize(items) => out.extend(items.iter().map(|i| &i.value)),
+        StmtKind::Draw(Shape::Line { from, to }) => out.extend([from, to]),
+        StmtKind::Draw(Shape::Circle { centre, radius }) => out.extend([centre, radius]),
+        StmtKind::Draw(Shape::Polyline(points)) => out.extend(points.iter()),
     }
     out
 }
@@ -176,4 +179,24 @@ fn springs_and_dampers_parse() {
     assert_eq!(rest.as_ref().map(|r| r.to_sexpr()), Some("l0".to_string()));
     let StmtKind::Damper { coefficient, .. } = &file.stmts[1].kind else { panic!("not a damper") };
     assert_eq!(coefficient.to_sexpr(), "c");
+}
+
+#[test]
+fn drawings_parse() {
+    let file = lang::parse(
+        "draw line from (0, 0) to bob.position\ndraw circle at disk radius r/2\n\
+         draw polyline (0, 0), bob1, bob2 + (l, 0)\n",
+    )
+    .expect("parses");
+    let StmtKind::Draw(Shape::Line { from, to }) = &file.stmts[0].kind else { panic!("a line") };
+    assert_eq!((from.to_sexpr().as_str(), to.to_sexpr().as_str()), ("(tuple 0 0)", "bob.position"));
+    let StmtKind::Draw(Shape::Circle { centre, radius }) = &file.stmts[1].kind else {
+        panic!("a circle")
+    };
+    assert_eq!((centre.to_sexpr().as_str(), radius.to_sexpr().as_str()), ("disk", "(/ r 2)"));
+    let StmtKind::Draw(Shape::Polyline(points)) = &file.stmts[2].kind else { panic!("a polyline") };
+    let points: Vec<String> = points.iter().map(Expr::to_sexpr).collect();
+    assert_eq!(points, ["(tuple 0 0)", "bob1", "(+ bob2 (tuple l 0))"]);
+    // `line`, `to` and the like stay ordinary names outside a `draw` line.
+    lang::parse("let line = to + from*radius\n").expect("names, not keywords");
 }

@@ -218,6 +218,50 @@ pub struct Expect {
     pub rhs_span: Span,
 }
 
+/// What a `draw` line draws, in world coordinates: each point has as many components as the
+/// scene has dimensions.
+#[derive(Clone, Debug)]
+pub enum Figure {
+    Line {
+        from: Vec<ExprId>,
+        to: Vec<ExprId>,
+    },
+    Circle {
+        centre: Vec<ExprId>,
+        radius: ExprId,
+    },
+    /// Two points or more, joined in order.
+    Polyline(Vec<Vec<ExprId>>),
+}
+
+/// A `draw` line: a shape `simulate --animate` draws at every frame. It takes no part in the
+/// derivation.
+#[derive(Clone, Debug)]
+pub struct Drawing {
+    /// The line as written.
+    pub label: String,
+    pub figure: Figure,
+    pub span: Span,
+}
+
+/// Whether a [`Link`] stores energy or dissipates it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LinkKind {
+    Spring,
+    Damper,
+}
+
+/// A spring or damper between two points, kept for drawing; its energy or dissipation is
+/// already among the potentials or the dissipation terms.
+#[derive(Clone, Debug)]
+pub struct Link {
+    pub name: String,
+    pub kind: LinkKind,
+    /// The two ends as written: a body's position or a point (fixed or moving).
+    pub ends: [Vec<ExprId>; 2],
+    pub span: Span,
+}
+
 /// One value of a `linearize about` line: a coordinate's reference position, or its rate's.
 #[derive(Clone, Debug)]
 pub struct About {
@@ -256,6 +300,10 @@ pub struct Model {
     pub lagrangians: Vec<Term>,
     pub shows: Vec<Show>,
     pub expects: Vec<Expect>,
+    /// The `draw` lines, in the order written.
+    pub drawings: Vec<Drawing>,
+    /// The springs and dampers, in the order written.
+    pub links: Vec<Link>,
     pub simulate: Vec<Setting>,
     /// The `linearize about` lines, in the order written.
     pub linearize: Vec<Linearize>,

@@ -2,6 +2,7 @@
 
 mod checks;
 mod dims;
+mod draw;
 mod space;
 
 use std::collections::HashMap;
@@ -17,9 +18,19 @@ use self::checks::{
 use self::dims::{BodyDims, Dims, NameDims};
 use crate::units::{Form, Inference, Shape};
 use crate::{
-    About, Body, BodyKind, Checks, Constraint, ConstraintKind, Coord, Expect, Gravity, Linearize,
-    Load, Model, Param, Placeholder, Rotation, Show, Term, Value,
+    About, Body, BodyKind, Checks, Constraint, ConstraintKind, Coord, Drawing, Expect, Gravity,
+    Linearize, Link, LinkKind, Load, Model, Param, Placeholder, Rotation, Show, Term, Value,
 };
+
+/// Two attachment points of a spring or damper, and what lies between them.
+struct Separation {
+    /// B − A, padded to the longer of the two.
+    difference: Vec<ExprId>,
+    /// The dimension of its length.
+    length: Form,
+    /// A and B as written.
+    ends: [Vec<ExprId>; 2],
+}
 
 /// Past this the power is not physics and expanding it would exhaust memory.
 const MAX_EXPONENT: i64 = 64;
@@ -65,13 +76,19 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
     r.declare_all(file);
     let numbered = file.stmts.iter().enumerate();
     let (outputs, statements): (Vec<_>, Vec<_>) = numbered.partition(|(_, s)| {
-        matches!(s.kind, StmtKind::Show { .. } | StmtKind::Expect { .. } | StmtKind::Linearize(_))
+        matches!(
+            s.kind,
+            StmtKind::Show { .. }
+                | StmtKind::Expect { .. }
+                | StmtKind::Linearize(_)
+                | StmtKind::Draw(_)
+        )
     });
     for (i, stmt) in statements {
         r.enter(i);
         r.statement(stmt);
     }
-    // Show, expect and linearize lines may name anything in the file, wherever they stand.
+    // Show, expect, linearize and draw lines may name anything in the file, wherever they stand.
     r.in_outputs = true;
     for (i, stmt) in outputs {
         r.enter(i);
@@ -130,6 +147,9 @@ struct Resolver<'a> {
     errors: Vec<Diagnostic>,
     warnings: Vec<Diagnostic>,
     in_outputs: bool,
+    /// Resolving a `draw` line, where a reaction may not be named: asking for one would change
+    /// the derivation, and a drawing must leave the equations as they are.
+    in_drawing: bool,
     /// Names looked up so far, for the warning about parameters nothing uses.
     used: std::collections::HashSet<String>,
     title: Option<String>,
@@ -145,6 +165,8 @@ struct Resolver<'a> {
     lagrangians: Vec<Term>,
     shows: Vec<Show>,
     expects: Vec<Expect>,
+    drawings: Vec<Drawing>,
+    links: Vec<Link>,
     simulate: Vec<lang::Setting>,
     linearize: Vec<Linearize>,
     placeholders: Vec<(SymId, Placeholder)>,
@@ -189,6 +211,7 @@ impl<'a> Resolver<'a> {
             errors: Vec::new(),
             warnings: Vec::new(),
             in_outputs: false,
+            in_drawing: false,
             used: std::collections::HashSet::new(),
             title: None,
             params: Vec::new(),
@@ -203,6 +226,8 @@ impl<'a> Resolver<'a> {
             lagrangians: Vec::new(),
             shows: Vec::new(),
             expects: Vec::new(),
+            drawings: Vec::new(),
+            links: Vec::new(),
             simulate: Vec::new(),
             linearize: Vec::new(),
             placeholders,
@@ -456,8 +481,8 @@ impl<'a> Resolver<'a> {
                     self.lagrangians.push(Term { expr, span: e.span });
                 }
             }
-            StmtKind::Spring { a, b, stiffness, rest, .. } => {
-                let (Some((len2, len)), Some((k, k_dims))) = (
+            StmtKind::Spring { name, a, b, stiffness, rest } => {
+                let (Some((len2, separation)), Some((k, k_dims))) = (
                     self.separation_squared(a, b, &SPRING),
                     self.scalar_in_role(stiffness, &SPRING),
                 ) else {
@@ -471,6 +496,7 @@ impl<'a> Resolver<'a> {
                     None => None,
                 };
                 let (rest, rest_dims) = rest.unzip();
+                let len = separation.length;
                 self.spring_energy(&len, (k_dims, stiffness.span), rest_dims, a.span.join(b.span));
                 // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
                 let stretch2 = match rest {
@@ -484,13 +510,26 @@ impl<'a> Resolver<'a> {
                 let e = self.pool.mul2(k, stretch2);
                 let expr = self.pool.scale(e, &Rational::new(1.into(), 2.into()));
                 self.potentials.push(Term { expr, span: stmt.span });
+                self.links.push(Link {
+                    name: name.name.clone(),
+                    kind: LinkKind::Spring,
+                    ends: separation.ends,
+                    span: stmt.span,
+                });
             }
-            StmtKind::Damper { a, b, coefficient, .. } => {
-                let (Some((d, len)), Some((c, c_dims))) =
+            StmtKind::Damper { name, a, b, coefficient } => {
+                let (Some(separation), Some((c, c_dims))) =
                     (self.separation(a, b, &ATTACHMENT), self.scalar_in_role(coefficient, &DAMPER))
                 else {
                     return;
                 };
+                let Separation { difference: d, length: len, ends } = separation;
+                self.links.push(Link {
+                    name: name.name.clone(),
+                    kind: LinkKind::Damper,
+                    ends,
+                    span: stmt.span,
+                });
                 self.damper_energy(&len, c_dims, coefficient.span);
                 // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
                 // on a line (AB = u) it is exactly u'².
@@ -562,6 +601,7 @@ impl<'a> Resolver<'a> {
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
+            StmtKind::Draw(shape) => self.draw(shape, stmt.span),
         }
     }
 
@@ -1134,30 +1174,31 @@ impl<'a> Resolver<'a> {
     }
 
     /// B − A for two attachments, padding the shorter with zeros (a 2D point in 3D), with the
-    /// dimension of its length.
-    fn separation(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<(Vec<cas::ExprId>, Form)> {
+    /// dimension of its length and the two ends as written (for drawing).
+    fn separation(&mut self, a: &Expr, b: &Expr, role: &Role) -> Option<Separation> {
         let (pa, pb) = (self.anchor(a, role), self.anchor(b, role));
         let (Some((pa, mut ends)), Some((pb, b_ends))) = (pa, pb) else { return None };
         ends.extend(b_ends);
-        let len = self.separation_dims(ends, a.span, b.span);
+        let length = self.separation_dims(ends, a.span, b.span);
         let n = pa.len().max(pb.len());
         let zero = self.pool.zero();
-        let d = (0..n)
+        let difference = (0..n)
             .map(|i| self.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
             .collect();
-        Some((d, len))
+        Some(Separation { difference, length, ends: [pa, pb] })
     }
 
-    /// |B − A|², with the dimension of |B − A|.
+    /// |B − A|², with the separation it is of.
     fn separation_squared(
         &mut self,
         a: &Expr,
         b: &Expr,
         role: &Role,
-    ) -> Option<(cas::ExprId, Form)> {
-        let (d, len) = self.separation(a, b, role)?;
-        let squares: Vec<cas::ExprId> = d.iter().map(|x| self.pool.powi(*x, 2)).collect();
-        Some((self.pool.add(&squares), len))
+    ) -> Option<(cas::ExprId, Separation)> {
+        let separation = self.separation(a, b, role)?;
+        let squares: Vec<cas::ExprId> =
+            separation.difference.iter().map(|x| self.pool.powi(*x, 2)).collect();
+        Some((self.pool.add(&squares), separation))
     }
 
     /// A scalar that may not depend on coordinates or time (initial values, parameter values).
@@ -1540,6 +1581,17 @@ impl<'a> Resolver<'a> {
                     );
                     return None;
                 }
+                if self.in_drawing {
+                    self.error(
+                        Diagnostic::error(span, "a reaction cannot be drawn")
+                            .with_label("a force, not a point")
+                            .with_hint(
+                                "a `draw` line places shapes with positions, which may use the \
+                                 coordinates, their rates and `t`",
+                            ),
+                    );
+                    return None;
+                }
                 if !self.in_outputs {
                     self.error(
                         Diagnostic::error(span, "a reaction can only be shown or checked")
@@ -1794,6 +1846,8 @@ impl<'a> Resolver<'a> {
                 lagrangians: self.lagrangians,
                 shows: self.shows,
                 expects: self.expects,
+                drawings: self.drawings,
+                links: self.links,
                 simulate: self.simulate,
                 linearize: self.linearize,
                 placeholders: self.placeholders,

@@ -82,6 +82,7 @@ impl NativeScene {
             events,
             no_units: !self.units,
             samples,
+            animate: false,
         };
         let outcome = engine::simulate::simulate(&self.source, &options)
             .map_err(|e| engine_error(&e, &self.path))?;

@@ -98,6 +98,13 @@ pub(super) const LAGRANGIAN: Role = Role {
            accelerations would give higher-order ones",
 };
 
+pub(super) const DRAWING: Role = Role {
+    what: "a drawing",
+    max_order: 1,
+    hint: "a drawing shows the state: its points may use the coordinates, their rates and `t`, \
+           not accelerations",
+};
+
 /// "third", "fourth", … for a derivative's order.
 fn ordinal(n: u8) -> String {
     match n {
