@@ -7,7 +7,12 @@ use engine::linearize::{linearize, Options, Stability};
 
 /// Table 2: at v = 0, 1, …, 10 m/s, the real eigenvalues and the complex pairs (re, |im|).
 const TABLE_2: [&[(f64, f64)]; 11] = [
-    &[(-5.53094371765393, 0.0), (-3.13164324790656, 0.0), (3.13164324790656, 0.0), (5.53094371765393, 0.0)],
+    &[
+        (-5.53094371765393, 0.0),
+        (-3.13164324790656, 0.0),
+        (3.13164324790656, 0.0),
+        (5.53094371765393, 0.0),
+    ],
     &[(-7.11008014637442, 0.0), (-3.13423125066578, 0.0), (3.52696170990070, 0.8077402751993)],
     &[(-8.67387984831735, 0.0), (-3.07158645641514, 0.0), (2.68234517512745, 1.68066296590675)],
     &[(-10.35101467245920, 0.0), (-2.63366137253667, 0.0), (1.70675605663975, 2.31582447384325)],
@@ -22,8 +27,7 @@ const TABLE_2: [&[(f64, f64)]; 11] = [
 
 const M: [[f64; 2]; 2] = [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]];
 const C1: [[f64; 2]; 2] = [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]];
-const K0: [[f64; 2]; 2] =
-    [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]];
+const K0: [[f64; 2]; 2] = [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]];
 const K2: [[f64; 2]; 2] = [[0.0, 76.59734589573222], [0.0, 2.65431523794604]];
 const G: f64 = 9.81;
 
@@ -34,22 +38,16 @@ fn whipple() -> String {
 /// The eigenvalues away from zero (the zeros are the first integral of the forward speed), as
 /// (re, |im|) with each complex pair once, sorted.
 fn roll_and_steer(eigenvalues: &[(f64, f64)]) -> Vec<(f64, f64)> {
-    let mut out: Vec<(f64, f64)> = eigenvalues
-        .iter()
-        .filter(|(re, im)| re.hypot(*im) > 1e-6 && *im >= 0.0)
-        .copied()
-        .collect();
+    let mut out: Vec<(f64, f64)> =
+        eigenvalues.iter().filter(|(re, im)| re.hypot(*im) > 1e-6 && *im >= 0.0).copied().collect();
     out.sort_by(|a, b| a.0.total_cmp(&b.0));
     out
 }
 
 #[test]
 fn the_benchmark_comes_out_of_table_1() {
-    let options = Options {
-        set: vec!["v=1".into()],
-        sweep: Some("v=0:10:11".into()),
-        ..Default::default()
-    };
+    let options =
+        Options { set: vec!["v=1".into()], sweep: Some("v=0:10:11".into()), ..Default::default() };
     let l = linearize(&whipple(), &options).unwrap_or_else(|e| panic!("linearizes: {e}"));
 
     // The roll–steer block: u = (φ̇, δ̇, θ̇R), p = (φ, δ).
