@@ -98,7 +98,16 @@ pub fn text(l: &Linearized) -> String {
     let lin = &l.linearization;
     let u = Style::Unicode;
     let mut out = Vec::new();
-    let reference = engine::linearize::reference(lin);
+    let mut reference = engine::linearize::reference(lin);
+    // A dependent rate of kept constraints stays its own symbol: numbers solve it, below.
+    reference.retain(|(q, rate, value)| {
+        !*rate
+            || lin
+                .coords
+                .iter()
+                .position(|c| c == q)
+                .is_none_or(|i| pool.as_sym(*value) != Some(d.rates[i]))
+    });
     let about = reference_text(pool, &reference, u).join(", ");
     let title = match &d.model.title {
         Some(title) => format!("{title}: small motions"),
@@ -189,6 +198,23 @@ pub fn text(l: &Linearized) -> String {
     } else {
         format!("At {}", at.join(", "))
     });
+    if let (Some(kept), Some((p, r))) = (&lin.kept, &l.at.reduced) {
+        let names = |is: &mut dyn Iterator<Item = SymId>| -> String {
+            is.map(|s| pool.symbol_text(s, u)).collect::<Vec<_>>().join(", ")
+        };
+        let values: Vec<String> = kept
+            .dependent
+            .iter()
+            .zip(&l.at.dependent_rates)
+            .map(|(&i, v)| format!("{} = {}", pool.symbol_text(d.rates[i], u), number(*v)))
+            .collect();
+        out.push(format!("  the kept constraints give {}", values.join(", ")));
+        out.push(format!(
+            "  reduced in numbers: M·δu̇ + C·δu + K·δp = 0,  δṗ = G·(δp, δu),  u = ({}),  p = ({})",
+            names(&mut r.iter().map(|&i| d.rates[i])),
+            names(&mut p.iter().map(|&i| lin.coords[i]))
+        ));
+    }
     out.extend(bracketed(&number_rows(&l.at.mass), "  M = "));
     out.extend(bracketed(&number_rows(&l.at.damping), "  C = "));
     out.extend(bracketed(&number_rows(&l.at.stiffness), "  K = "));

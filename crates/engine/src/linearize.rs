@@ -90,6 +90,9 @@ pub struct Numbers {
     /// stay in the state, then those whose rates are the independent rates (indices into the
     /// linearization's `coords`), as the numbers chose them at these values.
     pub reduced: Option<(Vec<usize>, Vec<usize>)>,
+    /// With position and velocity constraints kept together: the dependent rates at the
+    /// reference (the `KeptLinearization`'s `dependent`, in its order), solved in numbers.
+    pub dependent_rates: Vec<f64>,
     /// u̇ = A·u, u the state.
     pub a: Vec<Vec<f64>>,
     /// (re, im), by real part from the largest down (within the tolerance of zero as zero),
@@ -734,6 +737,7 @@ impl Analysis {
             basis: (k > 0).then(|| rows_of(&basis)),
             kinematics: None,
             reduced: None,
+            dependent_rates: Vec::new(),
             a: rows_of(&a),
             eigenvalues,
             stability,
@@ -821,6 +825,7 @@ impl Analysis {
             basis: None,
             kinematics: Some(rows_of(&kinematics)),
             reduced: None,
+            dependent_rates: Vec::new(),
             a: rows_of(&a),
             eigenvalues,
             stability,
@@ -1069,6 +1074,7 @@ impl Analysis {
             basis: None,
             kinematics: Some(rows_of(&kinematics)),
             reduced: Some((positions, independent)),
+            dependent_rates: rates,
             a: rows_of(&a),
             eigenvalues,
             stability,

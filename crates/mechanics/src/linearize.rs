@@ -607,13 +607,13 @@ impl Derivation {
                 }
             }
         }
-        for i in 0..n {
+        for (i, is_cyclic) in cyclic.iter().enumerate() {
             if !dependent.contains(&i) {
                 map.entry(self.rates[i]).or_insert(pool.zero());
             }
             // A cyclic coordinate left in an expression too large to simplify does not change
             // its value (`is_cyclic`): any position stands for all.
-            if cyclic[i] {
+            if *is_cyclic {
                 map.entry(self.coords[i]).or_insert(pool.zero());
             }
         }
@@ -641,12 +641,12 @@ impl Derivation {
         let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
         for (j, g) in generalized.iter().enumerate() {
             let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
-            for i in 0..n {
+            for (i, is_cyclic) in cyclic.iter().enumerate() {
                 m.push(at(pool, self.mass_matrix[j][i]));
                 let dg = pool.diff(*g, self.rates[i]);
                 let dg = at(pool, dg);
                 c.push(pool.neg(dg));
-                k.push(if cyclic[i] {
+                k.push(if *is_cyclic {
                     pool.zero()
                 } else {
                     let dg = pool.diff(*g, self.coords[i]);
