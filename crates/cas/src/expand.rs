@@ -16,6 +16,9 @@ const EXPANSION_TERM_LIMIT: usize = 20_000;
 /// bicycle's frames in space) is for numbers and generated code, not for reading.
 pub const SIMPLIFY_TERM_LIMIT: usize = 4_000;
 
+/// How many generic points [`Pool::at_generic_point`] has.
+pub const GENERIC_POINTS: usize = 2;
+
 /// Past this many terms the algebraic zero test gives up (and the numeric check decides).
 const ZERO_TEST_TERM_LIMIT: usize = 2_000;
 
@@ -569,14 +572,21 @@ impl Pool {
         if self.is_zero(e) {
             return true;
         }
-        let Some(probe) = self.magnitude_probe else { return false };
-        [0.618_033_988_749_895, 0.414_213_562_373_095].iter().all(|step| {
-            let values: Vec<f64> = (0..self.symbol_count())
-                .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * step).fract())
-                .collect();
-            let (value, magnitude) = probe(self, e, &values);
-            value.is_finite() && magnitude.is_finite() && value.abs() <= 1e-9 * magnitude
+        (0..GENERIC_POINTS).all(|point| match self.at_generic_point(&[e], point) {
+            Some(v) => v[0].0.is_finite() && v[0].1.is_finite() && v[0].0.abs() <= 1e-9 * v[0].1,
+            None => false,
         })
+    }
+
+    /// The value and the magnitude of each expression at generic point `point` (of
+    /// [`GENERIC_POINTS`]); `None` without a magnitude probe.
+    pub fn at_generic_point(&self, exprs: &[ExprId], point: usize) -> Option<Vec<(f64, f64)>> {
+        let probe = self.magnitude_probe?;
+        let step = [0.618_033_988_749_895, 0.414_213_562_373_095][point % GENERIC_POINTS];
+        let values: Vec<f64> = (0..self.symbol_count())
+            .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * step).fract())
+            .collect();
+        Some(exprs.iter().map(|e| probe(self, *e, &values)).collect())
     }
 
     /// The simplified form with its monomial content pulled out in front of a sum:

@@ -19,6 +19,7 @@ mod pool;
 pub mod print;
 mod subst;
 
+pub use expand::GENERIC_POINTS;
 pub use number::Rational;
 pub use pool::{ExprId, Func, Node, Pool, Probe, SymId, Symbol, SymbolKind};
 pub use print::{greek_word, Style};

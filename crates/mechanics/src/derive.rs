@@ -214,11 +214,11 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
     let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
     errors.extend(coordinates_without_inertia(&mut pool, &model, &coordinates.coords, &rows));
-    let multipliers = kept_constraints(&mut pool, &model, &kept, &coordinates);
+    let (multipliers, implied) = kept_constraints(&mut pool, &model, &kept, &coordinates);
     if !errors.is_empty() {
         return Err(errors);
     }
-    let mut warnings = Vec::new();
+    let mut warnings = implied;
     let reactions = match eliminated_reactions(
         &mut pool,
         &model,

@@ -4,6 +4,7 @@
 use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
+use lang::Diagnostic;
 use model::{ConstraintKind, Model};
 
 use super::eliminate::Coordinates;
@@ -11,16 +12,52 @@ use super::Multiplier;
 
 /// Φ of each kept constraint in the remaining coordinates, its Jacobian, and γ: Φ̈ = J·q̈ − γ,
 /// so that Φ̈ = 0 is J·q̈ = γ.
+/// Velocity constraints that restrain nothing the position constraints do not: each with a
+/// warning that says so (the vertical component of a wheel's rolling, the time derivative of
+/// its touching the ground). They are left out of the equations, whose rows they would make
+/// dependent.
 pub(super) fn kept_constraints(
     pool: &mut Pool,
     model: &Model,
     kept: &[usize],
     coordinates: &Coordinates,
-) -> Vec<Multiplier> {
+) -> (Vec<Multiplier>, Vec<Diagnostic>) {
     let mut multipliers = Vec::new();
+    let mut warnings = Vec::new();
+    let position_rows: Vec<(usize, ExprId)> = kept
+        .iter()
+        .filter(|&&ci| model.constraints[ci].kind == ConstraintKind::Position)
+        .map(|&ci| {
+            let phi = pool.subst(model.constraints[ci].phi, &coordinates.elimination_map);
+            (ci, pool.time_derivative(phi))
+        })
+        .collect();
     for &ci in kept {
         let c = &model.constraints[ci];
         let phi = pool.subst(c.phi, &coordinates.elimination_map);
+        if c.kind == ConstraintKind::Velocity && !c.force_requested {
+            let rows: Vec<ExprId> = position_rows.iter().map(|(_, r)| *r).collect();
+            if let Some(by) = implied_by(pool, phi, &rows, &coordinates.rates) {
+                let names: Vec<String> = by
+                    .iter()
+                    .map(|&k| format!("`{}`", model.constraints[position_rows[k].0].name))
+                    .collect();
+                let what = if names.is_empty() {
+                    "it holds whatever the motion, in the coordinates left".to_string()
+                } else {
+                    format!("the time derivative of {} says as much", names.join(" and "))
+                };
+                warnings.push(
+                    Diagnostic::warning(
+                        c.span,
+                        format!("`{}` restrains nothing more: left out", c.name),
+                    )
+                    .with_label(what)
+                    .with_hint("constrain only what restrains velocities (of a vector, the components that do)"),
+                );
+                continue;
+            }
+        }
         let phi = pool.expand(phi);
         // The row is the first derivative of Φ that has accelerations: Φ̈ for a position
         // constraint, Φ̇ for a velocity constraint. Its coefficients of q̈ are the Jacobian.
@@ -50,7 +87,63 @@ pub(super) fn kept_constraints(
             bias,
         });
     }
-    multipliers
+    (multipliers, warnings)
+}
+
+/// Whether the velocity row Φ (linear in the rates) is, at each generic point, a combination
+/// of `rows` (the position constraints' Φ̇), coefficients of the rates and the rest alike; the
+/// rows it needs, by index, if so. Decided in numbers: the rows are as large as a bicycle's.
+fn implied_by(
+    pool: &mut Pool,
+    phi: ExprId,
+    rows: &[ExprId],
+    rates: &[SymId],
+) -> Option<Vec<usize>> {
+    // Each row as its coefficients of the rates, then what is left with them at 0.
+    let zeros: HashMap<SymId, ExprId> = rates.iter().map(|r| (*r, pool.zero())).collect();
+    let parts = |pool: &mut Pool, row: ExprId| -> Vec<ExprId> {
+        let mut out: Vec<ExprId> = rates.iter().map(|r| pool.diff(row, *r)).collect();
+        out.push(pool.subst(row, &zeros));
+        out
+    };
+    let target = parts(pool, phi);
+    let basis: Vec<Vec<ExprId>> = rows.iter().map(|r| parts(pool, *r)).collect();
+    let mut used = std::collections::BTreeSet::new();
+    for point in 0..cas::GENERIC_POINTS {
+        let numbers = |exprs: &[ExprId]| -> Option<(Vec<f64>, f64)> {
+            let values = pool.at_generic_point(exprs, point)?;
+            let scale = values.iter().map(|(_, m)| *m).fold(0.0, f64::max);
+            Some((values.into_iter().map(|(v, _)| v).collect(), scale))
+        };
+        let (mut residual, scale) = numbers(&target)?;
+        if !residual.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        // Gram–Schmidt against the rows, one after another.
+        let mut done: Vec<Vec<f64>> = Vec::new();
+        for (k, row) in basis.iter().enumerate() {
+            let (mut v, _) = numbers(row)?;
+            for d in &done {
+                let along: f64 = v.iter().zip(d).map(|(a, b)| a * b).sum();
+                v.iter_mut().zip(d).for_each(|(a, b)| *a -= along * b);
+            }
+            let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt();
+            if !norm.is_finite() || norm <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
+                continue;
+            }
+            v.iter_mut().for_each(|a| *a /= norm);
+            let along: f64 = residual.iter().zip(&v).map(|(a, b)| a * b).sum();
+            if along.abs() > 1e-9 * scale {
+                used.insert(k);
+            }
+            residual.iter_mut().zip(&v).for_each(|(a, b)| *a -= along * b);
+            done.push(v);
+        }
+        if residual.iter().any(|r| r.abs() > 1e-9 * scale.max(f64::MIN_POSITIVE)) {
+            return None;
+        }
+    }
+    Some(used.into_iter().collect())
 }
 
 /// The generalized force per unit multiplier of a constraint along coordinate q: ∂Φ/∂q for a
@@ -69,14 +162,14 @@ pub(super) fn constraint_gradient(pool: &mut Pool, c: &model::Constraint, q: Sym
 #[cfg(test)]
 mod tests {
     use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
-    use super::super::testing::{ascii, scene, CARTESIAN_PENDULUM};
+    use super::super::testing::{ascii, derived, scene, CARTESIAN_PENDULUM};
     use super::*;
 
     fn multipliers_of(source: &str) -> (Pool, Model, Vec<Multiplier>) {
         let (mut pool, model) = scene(source);
         let out = eliminate_constraints(&mut pool, &model);
         let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
-        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        let (multipliers, _) = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
         (pool, model, multipliers)
     }
 
@@ -117,7 +210,7 @@ mod tests {
         assert!(out.eliminated.is_empty());
         assert_eq!(out.kept, [0]);
         let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
-        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        let (multipliers, _) = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
         assert_eq!(m.kind, ConstraintKind::Velocity);
         let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
@@ -155,5 +248,27 @@ mod tests {
             ascii(&pool, m.bias),
             "-2*w*cos(w*t)*x' - 2*w*sin(w*t)*y' + w^2*sin(w*t)*x - w^2*cos(w*t)*y"
         );
+    }
+
+    #[test]
+    fn a_velocity_row_that_a_position_constraint_implies_is_left_out_with_a_warning() {
+        // The bead's speed along the radius is zero because its distance is fixed: the second
+        // constraint says again, at the velocity level, what the first says.
+        let source = "
+param m, L, g
+coord x = 1, y = 0
+particle bead { mass m; position (x, y) }
+gravity g
+constraint ring: x^2 + y^2 = L^2
+constraint radial: x*x' + y*y' = 0
+constraint skewed: x*y' - y*x' = 0
+";
+        let d = derived(source);
+        let kept: Vec<&str> =
+            d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.as_str()).collect();
+        assert_eq!(kept, ["ring", "skewed"]);
+        assert_eq!(d.warnings.len(), 1, "{:?}", d.warnings);
+        assert!(d.warnings[0].message.contains("`radial` restrains nothing more"));
+        assert!(d.warnings[0].label.contains("time derivative of `ring`"));
     }
 }

@@ -111,7 +111,7 @@ mod tests {
         let out = eliminate_constraints(&mut pool, &model);
         let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
         let full = energies(&mut pool, &model);
-        let multipliers = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
+        let (multipliers, _) = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
         let reactions = eliminated_reactions(
             &mut pool,
             &model,
