@@ -6,11 +6,14 @@
 //! - `precision`: work–precision of every integrator against exact references;
 //! - `model`: what asking for reactions and energies costs in the lowered program;
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
+//! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
+//!   right-hand side;
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
 //! machine may be shared, so the figures are indicative.
 
+mod bicycle;
 mod eval;
 mod hand;
 mod model;
@@ -21,7 +24,7 @@ mod space;
 use std::time::Instant;
 
 const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | space | derive n-link-pendulum[-on-cart] N]";
+                     precision | model | space | bicycle | derive n-link-pendulum[-on-cart] N]";
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -40,8 +43,10 @@ fn main() {
             precision::run();
             model::run();
             space::run();
+            bicycle::run();
         }
         "space" => space::run(),
+        "bicycle" => bicycle::run(),
         "scaling" => scaling::run(budget, max),
         "eval" => eval::run(),
         "precision" => {

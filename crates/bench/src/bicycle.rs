@@ -1,0 +1,59 @@
+//! The Whipple bicycle (`examples/bicycle/whipple.lag`): the time to derive the full nonlinear
+//! model and to linearize it at 5 m/s (each a whole run, once: they take seconds), the
+//! operations its lowered equations take, and one right-hand side on the tape at the start.
+
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+use numeric::Tape;
+use sim::{Mechanical, Problem};
+
+use crate::seconds;
+
+pub fn run() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let source =
+        std::fs::read_to_string(root.join("examples/bicycle/whipple.lag")).expect("the bicycle");
+    println!("## The Whipple bicycle\n");
+
+    let start = Instant::now();
+    let scene = engine::load(&source).expect("the bicycle derives");
+    let derive = start.elapsed().as_secs_f64();
+    let n = scene.derivation.coords.len();
+    let kept = scene.derivation.multipliers.len();
+    drop(scene);
+
+    let start = Instant::now();
+    let options = engine::linearize::Options { set: vec!["v=5".into()], ..Default::default() };
+    let linearized = engine::linearize::linearize(&source, &options).expect("linearizes");
+    let linearize = start.elapsed().as_secs_f64();
+    black_box(&linearized.at.eigenvalues);
+
+    let mut prepared =
+        engine::numbers::prepare(&source, &[], engine::Options::default()).expect("prepares");
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+    let ops = dynamics.op_counts().total();
+    let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+    let parameters = prepared.parameter_values(&[]).expect("parameter values");
+    let y = prepared.initial_state(&parameters, &[]).expect("a start");
+    let stabilisation = prepared.stabilisation();
+    let mut mech =
+        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
+            .with_kinds(stabilisation);
+    let mut dy = vec![0.0; y.len()];
+    let rhs = crate::per_call(|| {
+        mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
+    });
+
+    println!("| coordinates | kept constraints | derive (whole load, once) | linearize at 5 m/s (with its derivation, once) | lowered operations (M, f, constraint rows) | one right-hand side |");
+    println!("|---|---|---|---|---|---|");
+    println!(
+        "| {n} | {kept} | {} | {} | {ops} | {} |",
+        seconds(derive),
+        seconds(linearize),
+        seconds(rhs)
+    );
+    println!();
+}
