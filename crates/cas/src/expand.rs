@@ -589,6 +589,54 @@ impl Pool {
         Some(exprs.iter().map(|e| probe(self, *e, &values)).collect())
     }
 
+    /// Whether the vector `target` is, at every generic point, a combination of the vectors
+    /// `rows` (each as long as it), the coefficients free to change from point to point; the
+    /// rows the combination needs, by index, if so. For identities between expressions too
+    /// large for the algebra, as [`Pool::vanishes_at_generic_points`] (the same points and
+    /// magnitudes); `None` without a magnitude probe.
+    pub fn combination_at_generic_points(
+        &self,
+        target: &[ExprId],
+        rows: &[Vec<ExprId>],
+    ) -> Option<Vec<usize>> {
+        let mut used = std::collections::BTreeSet::new();
+        for point in 0..GENERIC_POINTS {
+            let numbers = |exprs: &[ExprId]| -> Option<(Vec<f64>, f64)> {
+                let values = self.at_generic_point(exprs, point)?;
+                let scale = values.iter().map(|(_, m)| *m).fold(0.0, f64::max);
+                Some((values.into_iter().map(|(v, _)| v).collect(), scale))
+            };
+            let (mut residual, scale) = numbers(target)?;
+            if !residual.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            // Gram–Schmidt against the rows, one after another.
+            let mut done: Vec<Vec<f64>> = Vec::new();
+            for (k, row) in rows.iter().enumerate() {
+                let (mut v, _) = numbers(row)?;
+                for d in &done {
+                    let along: f64 = v.iter().zip(d).map(|(a, b)| a * b).sum();
+                    v.iter_mut().zip(d).for_each(|(a, b)| *a -= along * b);
+                }
+                let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt();
+                if !norm.is_finite() || norm <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
+                    continue;
+                }
+                v.iter_mut().for_each(|a| *a /= norm);
+                let along: f64 = residual.iter().zip(&v).map(|(a, b)| a * b).sum();
+                if along.abs() > 1e-9 * scale {
+                    used.insert(k);
+                }
+                residual.iter_mut().zip(&v).for_each(|(a, b)| *a -= along * b);
+                done.push(v);
+            }
+            if residual.iter().any(|r| r.abs() > 1e-9 * scale.max(f64::MIN_POSITIVE)) {
+                return None;
+            }
+        }
+        Some(used.into_iter().collect())
+    }
+
     /// The simplified form with its monomial content pulled out in front of a sum:
     /// `1/12·m·L²·(1 + 3·sin²θ)` rather than `1/12·m·L² + ¼·m·L²·sin²θ`.
     pub fn factor_content(&mut self, e: ExprId) -> ExprId {

@@ -92,7 +92,8 @@ pub(super) fn kept_constraints(
 
 /// Whether the velocity row Φ (linear in the rates) is, at each generic point, a combination
 /// of `rows` (the position constraints' Φ̇), coefficients of the rates and the rest alike; the
-/// rows it needs, by index, if so. Decided in numbers: the rows are as large as a bicycle's.
+/// rows it needs, by index, if so. Decided by the pool's numeric identity test: the rows are as
+/// large as a bicycle's.
 fn implied_by(
     pool: &mut Pool,
     phi: ExprId,
@@ -108,42 +109,7 @@ fn implied_by(
     };
     let target = parts(pool, phi);
     let basis: Vec<Vec<ExprId>> = rows.iter().map(|r| parts(pool, *r)).collect();
-    let mut used = std::collections::BTreeSet::new();
-    for point in 0..cas::GENERIC_POINTS {
-        let numbers = |exprs: &[ExprId]| -> Option<(Vec<f64>, f64)> {
-            let values = pool.at_generic_point(exprs, point)?;
-            let scale = values.iter().map(|(_, m)| *m).fold(0.0, f64::max);
-            Some((values.into_iter().map(|(v, _)| v).collect(), scale))
-        };
-        let (mut residual, scale) = numbers(&target)?;
-        if !residual.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        // Gram–Schmidt against the rows, one after another.
-        let mut done: Vec<Vec<f64>> = Vec::new();
-        for (k, row) in basis.iter().enumerate() {
-            let (mut v, _) = numbers(row)?;
-            for d in &done {
-                let along: f64 = v.iter().zip(d).map(|(a, b)| a * b).sum();
-                v.iter_mut().zip(d).for_each(|(a, b)| *a -= along * b);
-            }
-            let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt();
-            if !norm.is_finite() || norm <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
-                continue;
-            }
-            v.iter_mut().for_each(|a| *a /= norm);
-            let along: f64 = residual.iter().zip(&v).map(|(a, b)| a * b).sum();
-            if along.abs() > 1e-9 * scale {
-                used.insert(k);
-            }
-            residual.iter_mut().zip(&v).for_each(|(a, b)| *a -= along * b);
-            done.push(v);
-        }
-        if residual.iter().any(|r| r.abs() > 1e-9 * scale.max(f64::MIN_POSITIVE)) {
-            return None;
-        }
-    }
-    Some(used.into_iter().collect())
+    pool.combination_at_generic_points(&target, &basis)
 }
 
 /// The generalized force per unit multiplier of a constraint along coordinate q: ∂Φ/∂q for a
