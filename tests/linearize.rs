@@ -381,3 +381,49 @@ fn the_inverted_pendulum_on_a_cart_is_unstable() {
     assert!(close(e[0].0, growth, 1e-12) && e[0].1 == 0.0, "{e:?}");
     assert!(e.iter().any(|(re, im)| close(*re, -growth, 1e-12) && *im == 0.0), "{e:?}");
 }
+
+#[test]
+fn position_and_velocity_constraints_kept_together_reduce_in_numbers() {
+    // A Chaplygin sleigh and, beside it, a pendulum in Cartesian coordinates on its rod (kept
+    // with a multiplier), its weight a potential (the sleigh glides on a level floor): two
+    // systems that do not touch, so the small motions are each one's.
+    // The sleigh's turn dies out at m·a·v/(I + m·a²); the bob swings at √(g/L).
+    let source = "
+param m = 1 kg, I = 0.1 kg*m^2, a = 0.2 m, v = 1 m/s, mb = 2 kg, L = 1.5 m, g = 9.81 m/s^2
+coord x = 0, x' = v
+coord y = 0
+coord theta = 0, theta' = 0
+coord u = 0, w = -L
+body sleigh { mass m; inertia I; position (x + a*cos(theta), y + a*sin(theta)); angle theta }
+particle bob { mass mb; position (u, w) }
+constraint blade: y'*cos(theta) = x'*sin(theta)
+constraint rod: u^2 + w^2 = L^2
+potential mb*g*w                   # the bob's weight alone: the sleigh glides on a level floor
+linearize about theta = 0, x' = v, u = 0, w = -L
+";
+    let l = about(source, "theta = 0");
+    assert!(l.linearization.kept.is_some());
+    let (positions, rates) = l.at.reduced.clone().expect("reduced in numbers");
+    let name = |i: &usize| l.derivation.model.pool.symbol(l.linearization.coords[*i]).name.clone();
+    // The rod's row fixes w, the blade's y'; the heading θ is ignorable at first order (no
+    // force depends on it, and no rate kept), as x and y are.
+    assert_eq!(positions.iter().map(name).collect::<Vec<_>>(), ["u"]);
+    assert_eq!(rates.iter().map(name).collect::<Vec<_>>(), ["x", "theta", "u"]);
+    let turning = -1.0 * 0.2 * 1.0 / (0.1 + 1.0 * 0.2 * 0.2);
+    let swing = (9.81f64 / 1.5).sqrt();
+    let e = &l.at.eigenvalues;
+    assert_eq!(e.len(), 4, "{e:?}");
+    assert!(e.iter().any(|z| close(z.0, turning, 1e-12) && z.1 == 0.0), "{e:?}");
+    assert!(e.iter().any(|z| z.0.abs() < 1e-12 && close(z.1, swing, 1e-12)), "{e:?}");
+    assert!(e.iter().any(|z| z.0.abs() < 1e-12 && close(z.1, -swing, 1e-12)), "{e:?}");
+    // The forward speed is a first integral.
+    assert_eq!(l.at.first_integrals, 1, "{e:?}");
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+    // The rod's tension holds the bob up; the blade pushes nothing sideways in a straight glide.
+    assert!(close(l.at.multipliers[1], -2.0 * 9.81 / (2.0 * 1.5), 1e-12), "{:?}", l.at.multipliers);
+    // A dependent rate is the constraints' to give.
+    let error = linearize(source, &Options { about: Some("y' = 1".into()), ..Default::default() })
+        .err()
+        .expect("refused");
+    assert!(error.to_string().contains("follows from the kept constraints"), "{error}");
+}
