@@ -409,7 +409,8 @@ linearize about theta = 0, x' = v, u = 0, w = -L
     // force depends on it, and no rate kept), as x and y are.
     assert_eq!(positions.iter().map(name).collect::<Vec<_>>(), ["u"]);
     assert_eq!(rates.iter().map(name).collect::<Vec<_>>(), ["x", "theta", "u"]);
-    let turning = -1.0 * 0.2 * 1.0 / (0.1 + 1.0 * 0.2 * 0.2);
+    let (m, i, a, v) = (1.0, 0.1, 0.2, 1.0);
+    let turning = -(m * a * v) / (i + m * a * a);
     let swing = (9.81f64 / 1.5).sqrt();
     let e = &l.at.eigenvalues;
     assert_eq!(e.len(), 4, "{e:?}");
