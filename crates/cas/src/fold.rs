@@ -100,7 +100,10 @@ impl Pool {
                 constant += n * &rc * &fold.coefficient;
                 work.changed(Key::Constant);
             } else {
-                *terms.entry(rt).or_default() += rc * fold.coefficient;
+                number::add_to(
+                    terms.entry(rt).or_default(),
+                    &number::times(&rc, &fold.coefficient),
+                );
                 if terms[&rt].is_zero() {
                     terms.remove(&rt);
                 }
@@ -142,7 +145,7 @@ impl Pool {
             let partner = self.mul2(rest, other2);
             let (pc, pt) = self.split_coefficient(partner);
             looked_up.push(Key::Term(pt));
-            if pt != t && terms.get(&pt).map(|pk| pk / &pc).as_ref() == Some(k) {
+            if pt != t && terms.get(&pt).map(|pk| number::divided(pk, &pc)).as_ref() == Some(k) {
                 let fold = Fold {
                     remove: vec![t, pt],
                     constant_change: None,
@@ -159,7 +162,7 @@ impl Pool {
                 Some(constant * &rc.recip())
             } else {
                 looked_up.push(Key::Term(rt));
-                terms.get(&rt).map(|pk| pk / &rc)
+                terms.get(&rt).map(|pk| number::divided(pk, &rc))
             };
             if partner_coef.as_ref() == Some(&-k.clone()) && !k.is_zero() {
                 let folded = self.mul2(rest, other2);
@@ -195,7 +198,7 @@ impl Pool {
                 terms.remove(r);
             }
             let (fc, ft) = self.split_coefficient(fold.replacement);
-            *terms.entry(ft).or_default() += fc * fold.coefficient;
+            number::add_to(terms.entry(ft).or_default(), &number::times(&fc, &fold.coefficient));
             if terms[&ft].is_zero() {
                 terms.remove(&ft);
             }
@@ -239,7 +242,7 @@ impl Pool {
                 let partner = self.product(&c, &partner_fs);
                 let (pc, pt) = self.split_coefficient(partner);
                 looked_up.push(Key::Term(pt));
-                let Some(pk) = terms.get(&pt).map(|pk| pk / &pc) else { continue };
+                let Some(pk) = terms.get(&pt).map(|pk| number::divided(pk, &pc)) else { continue };
                 let same = pk == *k;
                 if !same && pk != -k.clone() {
                     continue;

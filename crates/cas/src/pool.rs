@@ -6,6 +6,7 @@
 //! collected, numbers folded, exact values of functions at special points taken.
 
 use std::collections::{BTreeMap, HashMap};
+use std::hash::{Hash, Hasher};
 use std::rc::Rc;
 
 use rustc_hash::FxHashMap;
@@ -97,7 +98,7 @@ impl Func {
 }
 
 /// One interned node. Children are ids of nodes created before it.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Node {
     Num(Rational),
     Sym(SymId),
@@ -112,6 +113,41 @@ pub enum Node {
     Pow(ExprId, ExprId),
     Func(Func, ExprId),
     Atan2(ExprId, ExprId),
+}
+
+// Interning hashes every node it is handed, coefficients and exponents included. A rational's
+// own hash walks its continued fraction (so that unreduced equal values hash alike), with a
+// big-integer division per step; ours are always reduced, with a positive denominator, so
+// hashing the numerator and denominator is consistent with equality and far cheaper.
+impl Hash for Node {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        fn rational<H: Hasher>(q: &Rational, state: &mut H) {
+            q.numer().hash(state);
+            q.denom().hash(state);
+        }
+        std::mem::discriminant(self).hash(state);
+        match self {
+            Node::Num(q) => rational(q, state),
+            Node::Sym(s) => s.hash(state),
+            Node::Pi => {}
+            Node::Add(c, parts) | Node::Mul(c, parts) => {
+                rational(c, state);
+                parts.len().hash(state);
+                for (e, k) in parts.iter() {
+                    e.hash(state);
+                    rational(k, state);
+                }
+            }
+            Node::Pow(a, b) | Node::Atan2(a, b) => {
+                a.hash(state);
+                b.hash(state);
+            }
+            Node::Func(f, a) => {
+                f.hash(state);
+                a.hash(state);
+            }
+        }
+    }
 }
 
 /// What a symbol stands for.
@@ -376,7 +412,7 @@ impl Pool {
             return self.zero;
         }
         match self.node(a).clone() {
-            Node::Num(p) => self.num(p * q),
+            Node::Num(p) => self.num(number::times(&p, q)),
             Node::Add(..) => {
                 let mut sum = SumBuilder::default();
                 sum.push(self, a, q);
@@ -733,18 +769,18 @@ struct SumBuilder {
 impl SumBuilder {
     fn push(&mut self, pool: &mut Pool, e: ExprId, scale: &Rational) {
         match pool.node(e).clone() {
-            Node::Num(q) => self.constant += q * scale,
+            Node::Num(q) => number::add_to(&mut self.constant, &number::times(&q, scale)),
             Node::Add(c, terms) => {
-                self.constant += c * scale;
+                number::add_to(&mut self.constant, &number::times(&c, scale));
                 for (t, k) in terms.iter() {
-                    *self.terms.entry(*t).or_default() += k * scale;
+                    number::add_to(self.terms.entry(*t).or_default(), &number::times(k, scale));
                 }
             }
             Node::Mul(c, _) if !c.is_one() => {
                 let (c, rest) = pool.split_coefficient(e);
-                *self.terms.entry(rest).or_default() += c * scale;
+                number::add_to(self.terms.entry(rest).or_default(), &number::times(&c, scale));
             }
-            _ => *self.terms.entry(e).or_default() += scale,
+            _ => number::add_to(self.terms.entry(e).or_default(), scale),
         }
     }
 
@@ -775,43 +811,56 @@ impl ProductBuilder {
 
     fn push(&mut self, pool: &mut Pool, e: ExprId) {
         match pool.node(e).clone() {
-            Node::Num(q) => self.coef *= q,
+            Node::Num(q) => number::scale_by(&mut self.coef, &q),
             Node::Mul(c, f) => {
-                self.coef *= c;
+                number::scale_by(&mut self.coef, &c);
                 for (b, x) in f.iter() {
-                    *self.factors.entry(*b).or_default() += x;
+                    number::add_to(self.factors.entry(*b).or_default(), x);
                 }
             }
-            _ => *self.factors.entry(e).or_default() += Rational::one(),
+            _ => number::add_to(self.factors.entry(e).or_default(), &Rational::one()),
         }
     }
 
     fn push_factor(&mut self, pool: &mut Pool, base: ExprId, exponent: &Rational) {
         match pool.node(base).clone() {
             Node::Num(q) if exponent.is_integer() => match number::pow_int(&q, exponent.numer()) {
-                Some(v) => self.coef *= v,
-                None => *self.factors.entry(base).or_default() += exponent,
+                Some(v) => number::scale_by(&mut self.coef, &v),
+                None => number::add_to(self.factors.entry(base).or_default(), exponent),
             },
             Node::Mul(c, f) if exponent.is_integer() => {
                 match number::pow_int(&c, exponent.numer()) {
-                    Some(v) => self.coef *= v,
+                    Some(v) => number::scale_by(&mut self.coef, &v),
                     None => {
                         let cn = pool.num(c);
-                        *self.factors.entry(cn).or_default() += exponent;
+                        number::add_to(self.factors.entry(cn).or_default(), exponent);
                     }
                 }
                 for (b, x) in f.iter() {
-                    *self.factors.entry(*b).or_default() += x * exponent;
+                    number::add_to(
+                        self.factors.entry(*b).or_default(),
+                        &number::times(x, exponent),
+                    );
                 }
             }
-            _ => *self.factors.entry(base).or_default() += exponent,
+            _ => number::add_to(self.factors.entry(base).or_default(), exponent),
         }
+    }
+
+    /// Whether no factor is one the folding in `finish` would touch: most products are of
+    /// symbols and functions, and need no pass at all.
+    fn settled(&self, pool: &Pool) -> bool {
+        self.factors.iter().all(|(b, x)| match pool.node(*b) {
+            Node::Num(_) => false,
+            Node::Mul(..) => !x.is_integer(),
+            _ => !x.is_zero(),
+        })
     }
 
     fn finish(mut self, pool: &mut Pool) -> ExprId {
         // Merging exponents can turn a fractional power of a number or product into an integer
         // one (√3·√3, √(xy)·√(xy)); fold those until nothing changes.
-        loop {
+        while !self.settled(pool) {
             let mut changed = false;
             let entries: Vec<(ExprId, Rational)> =
                 std::mem::take(&mut self.factors).into_iter().collect();
@@ -827,10 +876,10 @@ impl ProductBuilder {
                     }
                     Node::Num(q) if x.is_integer() => match number::pow_int(&q, x.numer()) {
                         Some(v) => {
-                            self.coef *= v;
+                            number::scale_by(&mut self.coef, &v);
                             changed = true;
                         }
-                        None => *self.factors.entry(b).or_default() += x,
+                        None => number::add_to(self.factors.entry(b).or_default(), &x),
                     },
                     Node::Num(q) if q.is_positive() => match number::rational_root(&q, &x) {
                         Some((c, r)) => {
@@ -846,16 +895,19 @@ impl ProductBuilder {
                                 changed = true;
                             }
                         }
-                        None => *self.factors.entry(b).or_default() += x,
+                        None => number::add_to(self.factors.entry(b).or_default(), &x),
                     },
                     Node::Mul(c, f) if x.is_integer() => {
                         changed = true;
                         self.coef *= number::pow_int(&c, x.numer()).unwrap_or_else(Rational::one);
                         for (fb, fx) in f.iter() {
-                            *self.factors.entry(*fb).or_default() += fx * &x;
+                            number::add_to(
+                                self.factors.entry(*fb).or_default(),
+                                &number::times(fx, &x),
+                            );
                         }
                     }
-                    _ => *self.factors.entry(b).or_default() += x,
+                    _ => number::add_to(self.factors.entry(b).or_default(), &x),
                 }
             }
             if !changed {
