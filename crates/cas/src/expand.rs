@@ -303,10 +303,16 @@ impl Pool {
 
     /// The form to show a person: expanded, with sin²u + cos²u folded into 1 wherever a pair of
     /// terms allows it.
+    /// Memoised: a report simplifies the same entries of M several times over.
     pub fn simplify(&mut self, e: ExprId) -> ExprId {
+        if let Some(&r) = self.simplify_memo.get(&e) {
+            return r;
+        }
         let x = self.expand(e);
         let x = self.fold_pythagoras(x);
-        self.fold_angle_sums(x)
+        let r = self.fold_angle_sums(x);
+        self.simplify_memo.insert(e, r);
+        r
     }
 
     /// In a sum, folds pairs of products of sines and cosines of two angles into one function

@@ -33,6 +33,15 @@ pub fn add_to(a: &mut Rational, b: &Rational) {
     }
 }
 
+/// `a + b`.
+pub fn plus(a: &Rational, b: &Rational) -> Rational {
+    if a.is_integer() && b.is_integer() {
+        Rational::from_integer(a.numer() + b.numer())
+    } else {
+        a + b
+    }
+}
+
 /// `a · b`.
 pub fn times(a: &Rational, b: &Rational) -> Rational {
     if b.is_one() {

@@ -122,8 +122,12 @@ pub enum Node {
 impl Hash for Node {
     fn hash<H: Hasher>(&self, state: &mut H) {
         fn rational<H: Hasher>(q: &Rational, state: &mut H) {
-            q.numer().hash(state);
-            q.denom().hash(state);
+            // The sign and lowest digits: equal reduced values agree on them, and the few
+            // rationals that differ only above 2^64 may share a bucket.
+            let (numer, denom) = (q.numer(), q.denom());
+            state.write_u8(numer.sign() as u8);
+            state.write_u64(numer.iter_u64_digits().next().unwrap_or(0));
+            state.write_u64(denom.iter_u64_digits().next().unwrap_or(0));
         }
         std::mem::discriminant(self).hash(state);
         match self {
@@ -200,6 +204,7 @@ pub struct Pool {
     pub(crate) diff_memo: FxHashMap<(ExprId, SymId), ExprId>,
     pub(crate) time_memo: FxHashMap<ExprId, ExprId>,
     pub(crate) expand_memo: FxHashMap<ExprId, ExprId>,
+    pub(crate) simplify_memo: FxHashMap<ExprId, ExprId>,
     free_memo: Vec<Option<Rc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
@@ -222,6 +227,7 @@ impl Pool {
             diff_memo: FxHashMap::default(),
             time_memo: FxHashMap::default(),
             expand_memo: FxHashMap::default(),
+            simplify_memo: FxHashMap::default(),
             free_memo: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
@@ -411,8 +417,11 @@ impl Pool {
         if q.is_zero() {
             return self.zero;
         }
-        match self.node(a).clone() {
-            Node::Num(p) => self.num(number::times(&p, q)),
+        if let Node::Num(p) = self.node(a) {
+            let value = number::times(p, q);
+            return self.num(value);
+        }
+        match self.node(a) {
             Node::Add(..) => {
                 let mut sum = SumBuilder::default();
                 sum.push(self, a, q);
@@ -759,6 +768,18 @@ impl Pool {
     }
 }
 
+/// Adds `value` to the entry of `key`, moving it in when the entry is new.
+fn accumulate(map: &mut BTreeMap<ExprId, Rational>, key: ExprId, value: Rational) {
+    match map.entry(key) {
+        std::collections::btree_map::Entry::Vacant(slot) => {
+            slot.insert(value);
+        }
+        std::collections::btree_map::Entry::Occupied(mut slot) => {
+            number::add_to(slot.get_mut(), &value);
+        }
+    }
+}
+
 /// Collects a sum: a constant and a coefficient per distinct term.
 #[derive(Default)]
 struct SumBuilder {
@@ -768,19 +789,20 @@ struct SumBuilder {
 
 impl SumBuilder {
     fn push(&mut self, pool: &mut Pool, e: ExprId, scale: &Rational) {
-        match pool.node(e).clone() {
-            Node::Num(q) => number::add_to(&mut self.constant, &number::times(&q, scale)),
+        // Read the node in place: cloning it would copy its coefficients.
+        match pool.node(e) {
+            Node::Num(q) => number::add_to(&mut self.constant, &number::times(q, scale)),
             Node::Add(c, terms) => {
-                number::add_to(&mut self.constant, &number::times(&c, scale));
+                number::add_to(&mut self.constant, &number::times(c, scale));
                 for (t, k) in terms.iter() {
-                    number::add_to(self.terms.entry(*t).or_default(), &number::times(k, scale));
+                    accumulate(&mut self.terms, *t, number::times(k, scale));
                 }
             }
             Node::Mul(c, _) if !c.is_one() => {
                 let (c, rest) = pool.split_coefficient(e);
-                number::add_to(self.terms.entry(rest).or_default(), &number::times(&c, scale));
+                accumulate(&mut self.terms, rest, number::times(&c, scale));
             }
-            _ => number::add_to(self.terms.entry(e).or_default(), scale),
+            _ => accumulate(&mut self.terms, e, scale.clone()),
         }
     }
 
@@ -810,40 +832,46 @@ impl ProductBuilder {
     }
 
     fn push(&mut self, pool: &mut Pool, e: ExprId) {
-        match pool.node(e).clone() {
-            Node::Num(q) => number::scale_by(&mut self.coef, &q),
+        match pool.node(e) {
+            Node::Num(q) => number::scale_by(&mut self.coef, q),
             Node::Mul(c, f) => {
-                number::scale_by(&mut self.coef, &c);
+                number::scale_by(&mut self.coef, c);
                 for (b, x) in f.iter() {
-                    number::add_to(self.factors.entry(*b).or_default(), x);
+                    accumulate(&mut self.factors, *b, x.clone());
                 }
             }
-            _ => number::add_to(self.factors.entry(e).or_default(), &Rational::one()),
+            _ => accumulate(&mut self.factors, e, Rational::one()),
         }
     }
 
     fn push_factor(&mut self, pool: &mut Pool, base: ExprId, exponent: &Rational) {
-        match pool.node(base).clone() {
-            Node::Num(q) if exponent.is_integer() => match number::pow_int(&q, exponent.numer()) {
-                Some(v) => number::scale_by(&mut self.coef, &v),
-                None => number::add_to(self.factors.entry(base).or_default(), exponent),
+        let unpowered = match pool.node(base) {
+            Node::Num(q) if exponent.is_integer() => match number::pow_int(q, exponent.numer()) {
+                Some(v) => {
+                    number::scale_by(&mut self.coef, &v);
+                    None
+                }
+                None => Some(base),
             },
             Node::Mul(c, f) if exponent.is_integer() => {
-                match number::pow_int(&c, exponent.numer()) {
-                    Some(v) => number::scale_by(&mut self.coef, &v),
+                for (b, x) in f.iter() {
+                    accumulate(&mut self.factors, *b, number::times(x, exponent));
+                }
+                match number::pow_int(c, exponent.numer()) {
+                    Some(v) => {
+                        number::scale_by(&mut self.coef, &v);
+                        None
+                    }
                     None => {
-                        let cn = pool.num(c);
-                        number::add_to(self.factors.entry(cn).or_default(), exponent);
+                        let c = c.clone();
+                        Some(pool.num(c))
                     }
                 }
-                for (b, x) in f.iter() {
-                    number::add_to(
-                        self.factors.entry(*b).or_default(),
-                        &number::times(x, exponent),
-                    );
-                }
             }
-            _ => number::add_to(self.factors.entry(base).or_default(), exponent),
+            _ => Some(base),
+        };
+        if let Some(b) = unpowered {
+            accumulate(&mut self.factors, b, exponent.clone());
         }
     }
 
