@@ -5,7 +5,7 @@
 //! returns the canonical form: sums and products flattened, like terms and like powers
 //! collected, numbers folded, exact values of functions at special points taken.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
 use std::rc::Rc;
 
@@ -98,7 +98,7 @@ impl Func {
 }
 
 /// One interned node. Children are ids of nodes created before it.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Eq)]
 pub enum Node {
     Num(Rational),
     Sym(SymId),
@@ -113,6 +113,33 @@ pub enum Node {
     Pow(ExprId, ExprId),
     Func(Func, ExprId),
     Atan2(ExprId, ExprId),
+}
+
+// Interning compares every node it finds in the table with the one it is handed. A rational's
+// own equality goes through its ordering (cross-multiplying when denominators differ); ours are
+// reduced, so equal values have equal numerators and denominators.
+impl PartialEq for Node {
+    fn eq(&self, other: &Node) -> bool {
+        fn same(a: &Rational, b: &Rational) -> bool {
+            a.numer() == b.numer() && a.denom() == b.denom()
+        }
+        fn same_parts(a: &[(ExprId, Rational)], b: &[(ExprId, Rational)]) -> bool {
+            a.len() == b.len() && a.iter().zip(b).all(|((x, p), (y, q))| x == y && same(p, q))
+        }
+        match (self, other) {
+            (Node::Num(a), Node::Num(b)) => same(a, b),
+            (Node::Sym(a), Node::Sym(b)) => a == b,
+            (Node::Pi, Node::Pi) => true,
+            (Node::Add(c, a), Node::Add(d, b)) | (Node::Mul(c, a), Node::Mul(d, b)) => {
+                same(c, d) && same_parts(a, b)
+            }
+            (Node::Pow(a, x), Node::Pow(b, y)) | (Node::Atan2(a, x), Node::Atan2(b, y)) => {
+                a == b && x == y
+            }
+            (Node::Func(f, a), Node::Func(g, b)) => f == g && a == b,
+            _ => false,
+        }
+    }
 }
 
 // Interning hashes every node it is handed, coefficients and exponents included. A rational's
@@ -246,13 +273,17 @@ impl Pool {
     }
 
     fn intern(&mut self, node: Node) -> ExprId {
-        if let Some(&id) = self.interned.get(&node) {
-            return id;
+        // One lookup, hashing the node once, whether it is new or not.
+        match self.interned.entry(node) {
+            std::collections::hash_map::Entry::Occupied(known) => *known.get(),
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                let id =
+                    ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
+                self.nodes.push(slot.key().clone());
+                slot.insert(id);
+                id
+            }
         }
-        let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
-        self.nodes.push(node.clone());
-        self.interned.insert(node, id);
-        id
     }
 
     /// How many distinct expressions the pool holds.
@@ -768,23 +799,35 @@ impl Pool {
     }
 }
 
-/// Adds `value` to the entry of `key`, moving it in when the entry is new.
-fn accumulate(map: &mut BTreeMap<ExprId, Rational>, key: ExprId, value: Rational) {
-    match map.entry(key) {
-        std::collections::btree_map::Entry::Vacant(slot) => {
-            slot.insert(value);
-        }
-        std::collections::btree_map::Entry::Occupied(mut slot) => {
-            number::add_to(slot.get_mut(), &value);
+/// Adds `value` to the entry of `key`. Entries are collected as they come and merged once,
+/// by [`merged`]: most sums and products are short, and a map per builder cost more in
+/// allocation than the merging does.
+fn accumulate(entries: &mut Vec<(ExprId, Rational)>, key: ExprId, value: Rational) {
+    entries.push((key, value));
+}
+
+/// The entries sorted by key, with the values of equal keys added: what a map from key to
+/// value would hold.
+fn merged(mut entries: Vec<(ExprId, Rational)>) -> Vec<(ExprId, Rational)> {
+    if entries.windows(2).all(|w| w[0].0 < w[1].0) {
+        return entries;
+    }
+    entries.sort_unstable_by_key(|(key, _)| *key);
+    let mut out: Vec<(ExprId, Rational)> = Vec::with_capacity(entries.len());
+    for (key, value) in entries {
+        match out.last_mut() {
+            Some((last, sum)) if *last == key => number::add_to(sum, &value),
+            _ => out.push((key, value)),
         }
     }
+    out
 }
 
 /// Collects a sum: a constant and a coefficient per distinct term.
 #[derive(Default)]
 struct SumBuilder {
     constant: Rational,
-    terms: BTreeMap<ExprId, Rational>,
+    terms: Vec<(ExprId, Rational)>,
 }
 
 impl SumBuilder {
@@ -808,7 +851,7 @@ impl SumBuilder {
 
     fn finish(self, pool: &mut Pool) -> ExprId {
         let terms: Vec<(ExprId, Rational)> =
-            self.terms.into_iter().filter(|(_, k)| !k.is_zero()).collect();
+            merged(self.terms).into_iter().filter(|(_, k)| !k.is_zero()).collect();
         match terms.len() {
             0 => pool.num(self.constant),
             1 if self.constant.is_zero() => {
@@ -823,12 +866,12 @@ impl SumBuilder {
 /// Collects a product: a coefficient and an exponent per distinct base.
 struct ProductBuilder {
     coef: Rational,
-    factors: BTreeMap<ExprId, Rational>,
+    factors: Vec<(ExprId, Rational)>,
 }
 
 impl ProductBuilder {
     fn new() -> Self {
-        ProductBuilder { coef: Rational::one(), factors: BTreeMap::new() }
+        ProductBuilder { coef: Rational::one(), factors: Vec::new() }
     }
 
     fn push(&mut self, pool: &mut Pool, e: ExprId) {
@@ -888,10 +931,10 @@ impl ProductBuilder {
     fn finish(mut self, pool: &mut Pool) -> ExprId {
         // Merging exponents can turn a fractional power of a number or product into an integer
         // one (√3·√3, √(xy)·√(xy)); fold those until nothing changes.
+        self.factors = merged(std::mem::take(&mut self.factors));
         while !self.settled(pool) {
             let mut changed = false;
-            let entries: Vec<(ExprId, Rational)> =
-                std::mem::take(&mut self.factors).into_iter().collect();
+            let entries = std::mem::take(&mut self.factors);
             for (b, x) in entries {
                 if x.is_zero() {
                     changed = true;
@@ -907,7 +950,7 @@ impl ProductBuilder {
                             number::scale_by(&mut self.coef, &v);
                             changed = true;
                         }
-                        None => number::add_to(self.factors.entry(b).or_default(), &x),
+                        None => accumulate(&mut self.factors, b, x),
                     },
                     Node::Num(q) if q.is_positive() => match number::rational_root(&q, &x) {
                         Some((c, r)) => {
@@ -918,26 +961,24 @@ impl ProductBuilder {
                                 if (rn, root.clone()) != (b, x.clone()) {
                                     changed = true;
                                 }
-                                *self.factors.entry(rn).or_default() += root;
+                                accumulate(&mut self.factors, rn, root);
                             } else {
                                 changed = true;
                             }
                         }
-                        None => number::add_to(self.factors.entry(b).or_default(), &x),
+                        None => accumulate(&mut self.factors, b, x),
                     },
                     Node::Mul(c, f) if x.is_integer() => {
                         changed = true;
                         self.coef *= number::pow_int(&c, x.numer()).unwrap_or_else(Rational::one);
                         for (fb, fx) in f.iter() {
-                            number::add_to(
-                                self.factors.entry(*fb).or_default(),
-                                &number::times(fx, &x),
-                            );
+                            accumulate(&mut self.factors, *fb, number::times(fx, &x));
                         }
                     }
-                    _ => number::add_to(self.factors.entry(b).or_default(), &x),
+                    _ => accumulate(&mut self.factors, b, x),
                 }
             }
+            self.factors = merged(std::mem::take(&mut self.factors));
             if !changed {
                 break;
             }
