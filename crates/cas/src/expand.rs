@@ -24,30 +24,55 @@ impl Pool {
         if let Some(&r) = self.expand_memo.get(&e) {
             return r;
         }
+        // A node whose parts expand to themselves is its own expansion: the constructors would
+        // rebuild the same canonical node from them, at the cost of interning every step.
         let r = match self.node(e).clone() {
             Node::Num(_) | Node::Sym(_) | Node::Pi => e,
             Node::Add(c, terms) => {
-                let mut parts = vec![self.num(c)];
-                for (t, k) in terms.iter() {
-                    let t = self.expand(*t);
-                    parts.push(self.scale(t, k));
+                let expanded: Vec<ExprId> = terms.iter().map(|(t, _)| self.expand(*t)).collect();
+                if expanded.iter().zip(terms.iter()).all(|(x, (t, _))| x == t) {
+                    e
+                } else {
+                    let mut parts = vec![self.num(c)];
+                    for (x, (_, k)) in expanded.into_iter().zip(terms.iter()) {
+                        parts.push(self.scale(x, k));
+                    }
+                    self.add(&parts)
                 }
-                self.add(&parts)
             }
-            Node::Mul(c, factors) => self.expand_product(&c, &factors),
+            Node::Mul(c, factors) => {
+                let atoms = factors.iter().all(|(b, _)| {
+                    matches!(self.node(*b), Node::Sym(_) | Node::Func(..)) && self.expand(*b) == *b
+                });
+                if atoms {
+                    e
+                } else {
+                    self.expand_product(&c, &factors)
+                }
+            }
             Node::Pow(b, x) => {
-                let b = self.expand(b);
-                let x = self.expand(x);
-                self.pow(b, x)
+                let (eb, ex) = (self.expand(b), self.expand(x));
+                if (eb, ex) == (b, x) {
+                    e
+                } else {
+                    self.pow(eb, ex)
+                }
             }
             Node::Func(f, a) => {
-                let a = self.expand(a);
-                self.func(f, a)
+                let ea = self.expand(a);
+                if ea == a {
+                    e
+                } else {
+                    self.func(f, ea)
+                }
             }
             Node::Atan2(y, x) => {
-                let y = self.expand(y);
-                let x = self.expand(x);
-                self.atan2(y, x)
+                let (ey, ex) = (self.expand(y), self.expand(x));
+                if (ey, ex) == (y, x) {
+                    e
+                } else {
+                    self.atan2(ey, ex)
+                }
             }
         };
         self.expand_memo.insert(e, r);
