@@ -35,7 +35,7 @@ methods at the loosest tolerance that reaches the same final error.
 The script creates and uses a virtual environment (tests/sympy/.venv-bench, pinned sympy and
 symengine) on first run. Usage:
     tests/sympy/sympy_compare.py [--sizes 4,8,12,16,24,32] [--families pendulum,cart]
-                                 [--budget 150] [--no-sympy] [--dop853]
+                                 [--budget 150] [--no-sympy] [--plot FILE.svg] [--dop853]
 """
 
 import os
@@ -299,7 +299,7 @@ def derivation_table(family, sizes, budget, with_sympy):
           f"{'SymE/ours':>10} {'Lagrange(SymPy)':>16} {'Lagr/ours':>10} {'Kane(SymPy)':>12} "
           f"{'Kane/ours':>10} {'lib derive+lower':>17} {'SymPy cse ops':>14} {'our ops':>8}")
     skip = {"lagrange": not with_sympy, "kane": not with_sympy}
-    ours_by_n, symengine_by_n = [], []
+    ours_by_n, symengine_by_n, lagranges_by_n, kanes_by_n = [], [], [], []
     for n in sizes:
         process = lagrange_process(family, n)
         library = lagrange_figures(family, n)
@@ -319,19 +319,85 @@ def derivation_table(family, sizes, budget, with_sympy):
         cse = row["kane"][1]
         ours_by_n.append((n, process))
         symengine_by_n.append((n, symengine))
-        print(f"{n:>3} {fmt(process):>15} {f'{peak / 1e6:.1f} MB' if peak else '-':>9} {fmt(symengine):>14} "
-              f"{ratio(symengine, process):>10} {fmt(lt) if lt or with_sympy else '-':>16} "
-              f"{ratio(lt, process):>10} {fmt(kt) if kt or with_sympy else '-':>12} "
-              f"{ratio(kt, process):>10} {fmt(library['lowered_s']):>17} "
+        lagranges_by_n.append((n, lt))
+        kanes_by_n.append((n, kt))
+        memory = f"{peak / 1e6:.1f} MB" if peak else "-"
+        sympy = (fmt(lt) if lt or with_sympy else "-", fmt(kt) if kt or with_sympy else "-")
+        print(f"{n:>3} {fmt(process):>15} {memory:>9} {fmt(symengine):>14} "
+              f"{ratio(symengine, process):>10} {sympy[0]:>16} {ratio(lt, process):>10} "
+              f"{sympy[1]:>12} {ratio(kt, process):>10} {fmt(library['lowered_s']):>17} "
               f"{cse if cse is not None else '-':>14} {library['ops']:>8}", flush=True)
     print(f"growth over n = {sizes[0]}..{sizes[-1]}: lagrange {growth(ours_by_n)}, "
           f"SymEngine {growth(symengine_by_n)}")
     print(f"(lagrange derive: the whole `lagrange derive --format json` process, median of 3; "
           f"SymEngine raw: Euler-Lagrange by differentiation, nothing expanded or printed, "
           f"median of 3; SymPy: one run each, budget {budget} s per size; theirs/ours above 1 "
-          f"means lagrange is faster; lib derive+lower and peak RSS: `lagrange-bench derive`, median of 5 and the largest "
-          f"peak of its runs; "
-          f"SymPy cse ops: count_ops after sympy.cse of Kane's M and f)\n")
+          f"means lagrange is faster; lib derive+lower and peak RSS: `lagrange-bench derive`, "
+          f"median of 5 and the largest peak of its runs; SymPy cse ops: count_ops after "
+          f"sympy.cse of Kane's M and f)\n")
+    return {
+        "lagrange derive (whole process)": ours_by_n,
+        f"SymEngine {se.__version__} raw Euler-Lagrange": symengine_by_n,
+        f"SymPy {sp.__version__} KanesMethod": kanes_by_n,
+        f"SymPy {sp.__version__} LagrangesMethod": lagranges_by_n,
+    }
+
+
+def plot(family, series, path):
+    """A log-log SVG of seconds against n, one line per tool: the README's scaling figure."""
+    import math
+
+    points = [(n, t) for line in series.values() for n, t in line if t]
+    if not points:
+        return
+    width, height, left, right, top, bottom = 640, 400, 70, 230, 40, 50
+    n_lo, n_hi = min(n for n, _ in points), max(n for n, _ in points)
+    t_lo = 10.0 ** math.floor(math.log10(min(t for _, t in points)))
+    t_hi = 10.0 ** math.ceil(math.log10(max(t for _, t in points)))
+
+    def x(n):
+        span = math.log(n_hi / n_lo) or 1.0
+        return left + (width - left - right) * math.log(n / n_lo) / span
+
+    def y(t):
+        return top + (height - top - bottom) * (1 - math.log(t / t_lo) / math.log(t_hi / t_lo))
+
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+           f'font-family="sans-serif" font-size="12">',
+           f'<rect width="{width}" height="{height}" fill="white"/>',
+           f'<text x="{left}" y="20" font-size="14">Derivation time, {family} '
+           f'(same machine, same run)</text>']
+    decade = t_lo
+    while decade <= t_hi * 1.001:
+        label = f"{decade * 1e3:g} ms" if decade < 1 else f"{decade:g} s"
+        out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(decade):.1f}" '
+                   f'y2="{y(decade):.1f}" stroke="#ddd"/>')
+        out.append(f'<text x="{left - 6}" y="{y(decade) + 4:.1f}" '
+                   f'text-anchor="end">{label}</text>')
+        decade *= 10
+    for n in sorted({n for n, _ in points}):
+        out.append(f'<text x="{x(n):.1f}" y="{height - bottom + 18}" '
+                   f'text-anchor="middle">{n}</text>')
+    out.append(f'<text x="{(left + width - right) / 2:.1f}" y="{height - 10}" '
+               f'text-anchor="middle">n (links)</text>')
+    colours = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd"]
+    for k, (name, line) in enumerate(series.items()):
+        line = [(n, t) for n, t in line if t]
+        if not line:
+            continue
+        colour = colours[k % len(colours)]
+        path_d = " ".join(f"{'M' if i == 0 else 'L'}{x(n):.1f},{y(t):.1f}"
+                          for i, (n, t) in enumerate(line))
+        out.append(f'<path d="{path_d}" fill="none" stroke="{colour}" stroke-width="2"/>')
+        for n, t in line:
+            out.append(f'<circle cx="{x(n):.1f}" cy="{y(t):.1f}" r="3" fill="{colour}"/>')
+        ly = top + 10 + 22 * k
+        out.append(f'<line x1="{width - right + 12}" x2="{width - right + 32}" y1="{ly}" '
+                   f'y2="{ly}" stroke="{colour}" stroke-width="2"/>')
+        out.append(f'<text x="{width - right + 38}" y="{ly + 4}" font-size="11">{name}</text>')
+    out.append("</svg>")
+    with open(path, "w") as file:
+        file.write("\n".join(out) + "\n")
 
 
 def double_pendulum_rhs():
@@ -413,6 +479,8 @@ def main():
     parser.add_argument("--budget", type=float, default=150.0)
     parser.add_argument("--no-sympy", action="store_true",
                         help="time lagrange and SymEngine only")
+    parser.add_argument("--plot", metavar="FILE.svg",
+                        help="draw the first family's times against n, log-log")
     parser.add_argument("--dop853", action="store_true")
     parser.add_argument("--skip-derivation", action="store_true")
     args = parser.parse_args()
@@ -423,8 +491,10 @@ def main():
           f"{sys.version.split()[0]}\n")
     if not args.skip_derivation:
         sizes = [int(s) for s in args.sizes.split(",")]
-        for family in args.families.split(","):
-            derivation_table(FAMILIES[family], sizes, args.budget, not args.no_sympy)
+        for k, family in enumerate(args.families.split(",")):
+            series = derivation_table(FAMILIES[family], sizes, args.budget, not args.no_sympy)
+            if args.plot and k == 0:
+                plot(FAMILIES[family], series, args.plot)
     if args.dop853:
         dop853_comparison()
 
