@@ -1,6 +1,7 @@
 //! `lagrange-bench`: the benchmarks of the speed/accuracy issue, printed as tables.
 //!
-//! - `scaling`: derivation time and expression size of the n-link pendulum (and on a cart);
+//! - `scaling`: derivation time, expression size and peak memory of the n-link pendulum (and
+//!   on a cart);
 //! - `eval`: one evaluation of M and f, and one right-hand side, on the tape, in generated
 //!   Rust compiled with `rustc -O`, and in a hand-written function (the floor);
 //! - `precision`: work–precision of every integrator against exact references;
@@ -16,6 +17,7 @@
 mod bicycle;
 mod eval;
 mod hand;
+mod memory;
 mod model;
 mod precision;
 mod scaling;

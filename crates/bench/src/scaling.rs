@@ -1,5 +1,6 @@
 //! Derivation scaling: parse + resolve + derive, then lowering M and f to one program, for
-//! n-link chains of growing n; expression size as pool nodes and lowered operations.
+//! n-link chains of growing n; expression size as pool nodes and lowered operations, and the
+//! peak resident memory of each size.
 
 use std::time::Instant;
 
@@ -7,17 +8,21 @@ use engine::generate::{n_link, Family};
 
 pub const SIZES: [usize; 9] = [1, 2, 4, 8, 12, 16, 24, 32, 50];
 
-/// One measurement: seconds to derive, seconds to derive and lower, pool nodes, operations.
+/// One measurement: seconds to derive, seconds to derive and lower, pool nodes, operations,
+/// and the peak resident memory of the process while deriving and lowering (where the system
+/// tells it).
 #[derive(Clone, Copy, Debug)]
 pub struct Measured {
     pub derive: f64,
     pub lowered: f64,
     pub nodes: usize,
     pub ops: usize,
+    pub peak_bytes: Option<u64>,
 }
 
 fn once(family: Family, n: usize) -> Measured {
     let scene = n_link(family, n);
+    crate::memory::reset_peak();
     let start = Instant::now();
     // `prepare` is parse, resolve (with the dimension check) and derive, plus collecting the
     // parameter slots: what every numeric command does before lowering.
@@ -32,6 +37,7 @@ fn once(family: Family, n: usize) -> Measured {
         lowered,
         nodes: prepared.derivation.model.pool.len(),
         ops: program.op_counts().total(),
+        peak_bytes: crate::memory::peak_bytes(),
     }
 }
 
@@ -43,13 +49,22 @@ pub fn measure(family: Family, n: usize, repeats: usize) -> Measured {
     }
     let mut d: Vec<f64> = runs.iter().map(|r| r.derive).collect();
     let mut l: Vec<f64> = runs.iter().map(|r| r.lowered).collect();
-    Measured { derive: crate::median(&mut d), lowered: crate::median(&mut l), ..runs[0] }
+    // The largest peak of the repeats: memory is not noise to be filtered out.
+    let peak_bytes = runs.iter().filter_map(|r| r.peak_bytes).max();
+    Measured {
+        derive: crate::median(&mut d),
+        lowered: crate::median(&mut l),
+        peak_bytes,
+        ..runs[0]
+    }
 }
 
 pub fn json(family: Family, n: usize) {
     let m = measure(family, n, 5);
+    let peak = m.peak_bytes.map_or("null".to_string(), |b| b.to_string());
     println!(
-        "{{\"n\": {n}, \"derive_s\": {:e}, \"lowered_s\": {:e}, \"nodes\": {}, \"ops\": {}}}",
+        "{{\"n\": {n}, \"derive_s\": {:e}, \"lowered_s\": {:e}, \"nodes\": {}, \"ops\": {}, \
+         \"peak_rss_bytes\": {peak}}}",
         m.derive, m.lowered, m.nodes, m.ops
     );
 }
@@ -62,8 +77,8 @@ pub fn run(budget: f64, max: usize) {
         let name = Family::NAMES[family as usize];
         println!("\n{name}");
         println!(
-            "{:>4} {:>12} {:>16} {:>10} {:>10} {:>8} {:>9}",
-            "n", "derive", "+ lower M, f", "pool nodes", "ops M, f", "ops/n²", "growth"
+            "{:>4} {:>12} {:>16} {:>10} {:>10} {:>8} {:>9} {:>10}",
+            "n", "derive", "+ lower M, f", "pool nodes", "ops M, f", "ops/n²", "growth", "peak RSS"
         );
         let mut previous: Option<(usize, f64)> = None;
         for &n in SIZES.iter().filter(|&&n| n <= max) {
@@ -86,13 +101,14 @@ pub fn run(budget: f64, max: usize) {
                 _ => String::new(),
             };
             println!(
-                "{n:>4} {:>12} {:>16} {:>10} {:>10} {:>8.1} {:>9}",
+                "{n:>4} {:>12} {:>16} {:>10} {:>10} {:>8.1} {:>9} {:>10}",
                 crate::seconds(m.derive),
                 crate::seconds(m.lowered),
                 m.nodes,
                 m.ops,
                 m.ops as f64 / (n * n) as f64,
-                growth
+                growth,
+                crate::memory::megabytes(m.peak_bytes)
             );
             previous = Some((n, m.lowered));
         }

@@ -32,34 +32,72 @@ impl Pool {
         if let Some(&r) = self.expand_memo.get(&e) {
             return r;
         }
+        // A node whose parts expand to themselves is its own expansion: the constructors would
+        // rebuild the same canonical node from them, at the cost of interning every step.
         let r = match self.node(e).clone() {
             Node::Num(_) | Node::Sym(_) | Node::Pi => e,
             Node::Add(c, terms) => {
-                let mut parts = vec![self.num(c)];
-                for (t, k) in terms.iter() {
-                    let t = self.expand(*t);
-                    parts.push(self.scale(t, k));
+                let expanded: Vec<ExprId> = terms.iter().map(|(t, _)| self.expand(*t)).collect();
+                if expanded.iter().zip(terms.iter()).all(|(x, (t, _))| x == t) {
+                    e
+                } else {
+                    let mut parts = vec![self.num(c)];
+                    for (x, (_, k)) in expanded.into_iter().zip(terms.iter()) {
+                        parts.push(self.scale(x, k));
+                    }
+                    self.add(&parts)
                 }
-                self.add(&parts)
             }
-            Node::Mul(c, factors) => self.expand_product(&c, &factors),
+            Node::Mul(c, factors) => {
+                let atoms = factors.iter().all(|(b, _)| {
+                    matches!(self.node(*b), Node::Sym(_) | Node::Func(..)) && self.expand(*b) == *b
+                });
+                if atoms {
+                    e
+                } else {
+                    self.expand_product(&c, &factors)
+                }
+            }
             Node::Pow(b, x) => {
-                let b = self.expand(b);
-                let x = self.expand(x);
-                self.pow(b, x)
+                let (eb, ex) = (self.expand(b), self.expand(x));
+                if (eb, ex) == (b, x) {
+                    e
+                } else {
+                    self.pow(eb, ex)
+                }
             }
             Node::Func(f, a) => {
-                let a = self.expand(a);
-                self.func(f, a)
+                let ea = self.expand(a);
+                if ea == a {
+                    e
+                } else {
+                    self.func(f, ea)
+                }
             }
             Node::Atan2(y, x) => {
-                let y = self.expand(y);
-                let x = self.expand(x);
-                self.atan2(y, x)
+                let (ey, ex) = (self.expand(y), self.expand(x));
+                if (ey, ex) == (y, x) {
+                    e
+                } else {
+                    self.atan2(ey, ex)
+                }
             }
         };
         self.expand_memo.insert(e, r);
         r
+    }
+
+    /// Records `expanded` as what [`Pool::expand`] gives for `e`, for a caller that has it by
+    /// a shorter route: the kinetic energy as ½·q̇ᵀ·M·q̇ from an expanded mass matrix, rather
+    /// than squares of long sums multiplied out. It must be exactly `expand(e)` (the same
+    /// canonical sum); builds with debug assertions, the tests among them, check that it is.
+    pub fn remember_expansion(&mut self, e: ExprId, expanded: ExprId) {
+        #[cfg(debug_assertions)]
+        {
+            let direct = self.expand(e);
+            assert_eq!(direct, expanded, "a remembered expansion differs from expand's");
+        }
+        self.expand_memo.insert(e, expanded);
     }
 
     fn expand_product(&mut self, c: &Rational, factors: &[(ExprId, Rational)]) -> ExprId {
@@ -348,151 +386,36 @@ impl Pool {
 
     /// The form to show a person: expanded, with sin²u + cos²u folded into 1 wherever a pair of
     /// terms allows it.
+    /// Memoised: a report simplifies the same entries of M several times over.
     pub fn simplify(&mut self, e: ExprId) -> ExprId {
+        if let Some(&r) = self.simplify_memo.get(&e) {
+            return r;
+        }
         if self.expansion_exceeds(e, SIMPLIFY_TERM_LIMIT) {
             return e;
         }
         let x = self.expand(e);
         let x = self.fold_pythagoras(x);
-        self.fold_angle_sums(x)
+        let r = self.fold_angle_sums(x);
+        self.simplify_memo.insert(e, r);
+        r
     }
 
     /// In a sum, folds pairs of products of sines and cosines of two angles into one function
     /// of their sum or difference: `X·sin a·sin b + X·cos a·cos b` → `X·cos(a − b)`,
     /// `X·sin a·cos b − X·cos a·sin b` → `X·sin(a − b)`, and the `a + b` forms. Each fold
-    /// removes a term.
+    /// removes a term; the first term in the sum's order that has a partner folds first
+    /// (`fold`: without scanning the sum again after each fold).
     pub fn fold_angle_sums(&mut self, e: ExprId) -> ExprId {
-        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
-        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
-        loop {
-            let mut found = None;
-            'search: for (t, k) in &terms {
-                let (c, fs) = self.factors(*t);
-                let trig: Vec<(usize, Func, ExprId)> = fs
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, (_, x))| x.is_one())
-                    .filter_map(|(i, (b, _))| match *self.node(*b) {
-                        Node::Func(f @ (Func::Sin | Func::Cos), u) => Some((i, f, u)),
-                        _ => None,
-                    })
-                    .collect();
-                for &(i, fi, a) in &trig {
-                    for &(j, fj, b) in &trig {
-                        // sin a·sin b pairs with cos a·cos b; sin a·cos b with cos a·sin b.
-                        if i == j || a == b || fi != Func::Sin || (fj == Func::Sin && j < i) {
-                            continue;
-                        }
-                        let mut partner_fs = fs.clone();
-                        partner_fs[i].0 = self.cos(a);
-                        partner_fs[j].0 = if fj == Func::Sin { self.cos(b) } else { self.sin(b) };
-                        let partner = self.product(&c, &partner_fs);
-                        let (pc, pt) = self.split_coefficient(partner);
-                        let Some(pk) = terms.get(&pt).map(|pk| pk / &pc) else { continue };
-                        let same = pk == *k;
-                        if !same && pk != -k.clone() {
-                            continue;
-                        }
-                        let (angle, func, coef) = match (fj, same) {
-                            (Func::Sin, true) => (self.sub(a, b), Func::Cos, k.clone()),
-                            (Func::Sin, false) => (self.add2(a, b), Func::Cos, pk),
-                            (_, false) => (self.sub(a, b), Func::Sin, k.clone()),
-                            (_, true) => (self.add2(a, b), Func::Sin, k.clone()),
-                        };
-                        let mut rest = fs.clone();
-                        rest[i].1 = Rational::zero();
-                        rest[j].1 = Rational::zero();
-                        let rest = self.product(&c, &rest);
-                        let folded = self.func(func, angle);
-                        let folded = self.mul2(rest, folded);
-                        found = Some((*t, pt, folded, coef));
-                        break 'search;
-                    }
-                }
-            }
-            let Some((t, pt, folded, coef)) = found else { break };
-            terms.remove(&t);
-            terms.remove(&pt);
-            let (fc, ft) = self.split_coefficient(folded);
-            *terms.entry(ft).or_default() += fc * coef;
-            terms.retain(|_, k| !k.is_zero());
-        }
-        let mut parts = vec![self.num(constant)];
-        for (t, k) in terms {
-            parts.push(self.scale(t, &k));
-        }
-        self.add(&parts)
+        self.fold_angle_sums_worklist(e)
     }
 
     /// In a sum, folds pairs of terms with sin²u + cos²u = 1:
     /// `c·X·sin²u + c·X·cos²u` → `c·X`, and `c·X − c·X·cos²u` → `c·X·sin²u` (likewise with sin
-    /// and cos exchanged). Each fold removes a term.
+    /// and cos exchanged). Each fold removes a term; the first term in the sum's order that has
+    /// a partner folds first (`fold`: without scanning the sum again after each fold).
     pub fn fold_pythagoras(&mut self, e: ExprId) -> ExprId {
-        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
-        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
-        let mut constant = constant;
-        // Each round removes one term, so this ends.
-        loop {
-            let mut found = None;
-            'search: for (t, k) in &terms {
-                let (c, fs) = self.factors(*t);
-                for (i, (b, x)) in fs.iter().enumerate() {
-                    let (f, u) = match *self.node(*b) {
-                        Node::Func(f @ (Func::Cos | Func::Sin), u) => (f, u),
-                        _ => continue,
-                    };
-                    if *x < number::int(2) || !x.is_integer() {
-                        continue;
-                    }
-                    let other = if f == Func::Cos { self.sin(u) } else { self.cos(u) };
-                    let mut reduced = fs.clone();
-                    reduced[i].1 = x - number::int(2);
-                    let rest = self.product(&c, &reduced);
-                    let other2 = self.powi(other, 2);
-                    // c·X·cos² + c·X·sin² = c·X
-                    let partner = self.mul2(rest, other2);
-                    let (pc, pt) = self.split_coefficient(partner);
-                    if pt != *t && terms.get(&pt).map(|pk| pk / &pc).as_ref() == Some(k) {
-                        found = Some((vec![*t, pt], rest, k.clone()));
-                        break 'search;
-                    }
-                    // k·X·cos² − k·X = −k·X·sin²
-                    let (rc, rt) = self.split_coefficient(rest);
-                    let partner_coef = if self.as_num(rt).is_some() {
-                        Some(&constant * &rc.recip())
-                    } else {
-                        terms.get(&rt).map(|pk| pk / &rc)
-                    };
-                    if partner_coef.as_ref() == Some(&-k.clone()) && !k.is_zero() {
-                        let folded = self.mul2(rest, other2);
-                        let mut remove = vec![*t];
-                        if self.as_num(rt).is_some() {
-                            constant -= &rc * &-k.clone();
-                        } else {
-                            remove.push(rt);
-                        }
-                        found = Some((remove, folded, -k.clone()));
-                        break 'search;
-                    }
-                }
-            }
-            let Some((remove, replacement, k)) = found else { break };
-            for t in remove {
-                terms.remove(&t);
-            }
-            let (rc, rt) = self.split_coefficient(replacement);
-            if let Some(n) = self.as_num(rt) {
-                constant += n * &rc * &k;
-            } else {
-                *terms.entry(rt).or_default() += rc * k;
-            }
-            terms.retain(|_, k| !k.is_zero());
-        }
-        let mut parts = vec![self.num(constant)];
-        for (t, k) in terms {
-            parts.push(self.scale(t, &k));
-        }
-        self.add(&parts)
+        self.fold_pythagoras_worklist(e)
     }
 
     /// One fraction over a common denominator: `a/(a+b) − 1` → `−b/(a + b)`. Sums in the

@@ -13,6 +13,7 @@
 
 mod diff;
 mod expand;
+mod fold;
 pub mod linear_system;
 pub mod number;
 mod pool;

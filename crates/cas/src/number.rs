@@ -16,6 +16,62 @@ pub fn ratio(n: i64, d: i64) -> Rational {
     Rational::new(BigInt::from(n), BigInt::from(d))
 }
 
+// Sums and products of expressions add and multiply coefficients and exponents all the time,
+// and nearly all of them are small integers. num-rational reduces every result by a gcd, two
+// divisions and shifts, integers included; these skip that when both sides are integers (or
+// one side is one), where there is nothing to reduce.
+
+/// `*a += b`.
+pub fn add_to(a: &mut Rational, b: &Rational) {
+    if b.is_zero() {
+        return;
+    }
+    if a.is_integer() && b.is_integer() {
+        *a = Rational::from_integer(a.numer() + b.numer());
+    } else {
+        *a += b;
+    }
+}
+
+/// `a + b`.
+pub fn plus(a: &Rational, b: &Rational) -> Rational {
+    if a.is_integer() && b.is_integer() {
+        Rational::from_integer(a.numer() + b.numer())
+    } else {
+        a + b
+    }
+}
+
+/// `a · b`.
+pub fn times(a: &Rational, b: &Rational) -> Rational {
+    if b.is_one() {
+        return a.clone();
+    }
+    if a.is_one() {
+        return b.clone();
+    }
+    if a.is_integer() && b.is_integer() {
+        return Rational::from_integer(a.numer() * b.numer());
+    }
+    a * b
+}
+
+/// `*a *= b`.
+pub fn scale_by(a: &mut Rational, b: &Rational) {
+    if b.is_one() {
+        return;
+    }
+    *a = times(a, b);
+}
+
+/// `a / b`.
+pub fn divided(a: &Rational, b: &Rational) -> Rational {
+    if b.is_one() {
+        return a.clone();
+    }
+    a / b
+}
+
 /// Parses a decimal literal (`12`, `0.1`, `1e-3`, `2.5E+4`) into an exact rational.
 pub fn parse_decimal(text: &str) -> Option<Rational> {
     let (mantissa, exponent) = match text.find(['e', 'E']) {

@@ -5,7 +5,8 @@
 //! returns the canonical form: sums and products flattened, like terms and like powers
 //! collected, numbers folded, exact values of functions at special points taken.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::rc::Rc;
 
 use rustc_hash::FxHashMap;
@@ -97,7 +98,7 @@ impl Func {
 }
 
 /// One interned node. Children are ids of nodes created before it.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, Eq)]
 pub enum Node {
     Num(Rational),
     Sym(SymId),
@@ -112,6 +113,72 @@ pub enum Node {
     Pow(ExprId, ExprId),
     Func(Func, ExprId),
     Atan2(ExprId, ExprId),
+}
+
+// Interning compares every node it finds in the table with the one it is handed. A rational's
+// own equality goes through its ordering (cross-multiplying when denominators differ); ours are
+// reduced, so equal values have equal numerators and denominators.
+impl PartialEq for Node {
+    fn eq(&self, other: &Node) -> bool {
+        fn same(a: &Rational, b: &Rational) -> bool {
+            a.numer() == b.numer() && a.denom() == b.denom()
+        }
+        fn same_parts(a: &[(ExprId, Rational)], b: &[(ExprId, Rational)]) -> bool {
+            a.len() == b.len() && a.iter().zip(b).all(|((x, p), (y, q))| x == y && same(p, q))
+        }
+        match (self, other) {
+            (Node::Num(a), Node::Num(b)) => same(a, b),
+            (Node::Sym(a), Node::Sym(b)) => a == b,
+            (Node::Pi, Node::Pi) => true,
+            (Node::Add(c, a), Node::Add(d, b)) | (Node::Mul(c, a), Node::Mul(d, b)) => {
+                same(c, d) && same_parts(a, b)
+            }
+            (Node::Pow(a, x), Node::Pow(b, y)) | (Node::Atan2(a, x), Node::Atan2(b, y)) => {
+                a == b && x == y
+            }
+            (Node::Func(f, a), Node::Func(g, b)) => f == g && a == b,
+            _ => false,
+        }
+    }
+}
+
+// Interning hashes every node it is handed, coefficients and exponents included. A rational's
+// own hash walks its continued fraction (so that unreduced equal values hash alike), with a
+// big-integer division per step; ours are always reduced, with a positive denominator, so
+// hashing the numerator and denominator is consistent with equality and far cheaper.
+impl Hash for Node {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        fn rational<H: Hasher>(q: &Rational, state: &mut H) {
+            // The sign and lowest digits: equal reduced values agree on them, and the few
+            // rationals that differ only above 2^64 may share a bucket.
+            let (numer, denom) = (q.numer(), q.denom());
+            state.write_u8(numer.sign() as u8);
+            state.write_u64(numer.iter_u64_digits().next().unwrap_or(0));
+            state.write_u64(denom.iter_u64_digits().next().unwrap_or(0));
+        }
+        std::mem::discriminant(self).hash(state);
+        match self {
+            Node::Num(q) => rational(q, state),
+            Node::Sym(s) => s.hash(state),
+            Node::Pi => {}
+            Node::Add(c, parts) | Node::Mul(c, parts) => {
+                rational(c, state);
+                parts.len().hash(state);
+                for (e, k) in parts.iter() {
+                    e.hash(state);
+                    rational(k, state);
+                }
+            }
+            Node::Pow(a, b) | Node::Atan2(a, b) => {
+                a.hash(state);
+                b.hash(state);
+            }
+            Node::Func(f, a) => {
+                f.hash(state);
+                a.hash(state);
+            }
+        }
+    }
 }
 
 /// What a symbol stands for.
@@ -164,6 +231,7 @@ pub struct Pool {
     pub(crate) diff_memo: FxHashMap<(ExprId, SymId), ExprId>,
     pub(crate) time_memo: FxHashMap<ExprId, ExprId>,
     pub(crate) expand_memo: FxHashMap<ExprId, ExprId>,
+    pub(crate) simplify_memo: FxHashMap<ExprId, ExprId>,
     free_memo: Vec<Option<Rc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
@@ -189,6 +257,7 @@ impl Pool {
             diff_memo: FxHashMap::default(),
             time_memo: FxHashMap::default(),
             expand_memo: FxHashMap::default(),
+            simplify_memo: FxHashMap::default(),
             free_memo: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
@@ -213,13 +282,17 @@ impl Pool {
     }
 
     fn intern(&mut self, node: Node) -> ExprId {
-        if let Some(&id) = self.interned.get(&node) {
-            return id;
+        // One lookup, hashing the node once, whether it is new or not.
+        match self.interned.entry(node) {
+            std::collections::hash_map::Entry::Occupied(known) => *known.get(),
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                let id =
+                    ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
+                self.nodes.push(slot.key().clone());
+                slot.insert(id);
+                id
+            }
         }
-        let id = ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
-        self.nodes.push(node.clone());
-        self.interned.insert(node, id);
-        id
     }
 
     /// How many distinct expressions the pool holds.
@@ -384,8 +457,11 @@ impl Pool {
         if q.is_zero() {
             return self.zero;
         }
-        match self.node(a).clone() {
-            Node::Num(p) => self.num(p * q),
+        if let Node::Num(p) = self.node(a) {
+            let value = number::times(p, q);
+            return self.num(value);
+        }
+        match self.node(a) {
             Node::Add(..) => {
                 let mut sum = SumBuilder::default();
                 sum.push(self, a, q);
@@ -732,34 +808,59 @@ impl Pool {
     }
 }
 
+/// Adds `value` to the entry of `key`. Entries are collected as they come and merged once,
+/// by [`merged`]: most sums and products are short, and a map per builder cost more in
+/// allocation than the merging does.
+fn accumulate(entries: &mut Vec<(ExprId, Rational)>, key: ExprId, value: Rational) {
+    entries.push((key, value));
+}
+
+/// The entries sorted by key, with the values of equal keys added: what a map from key to
+/// value would hold.
+fn merged(mut entries: Vec<(ExprId, Rational)>) -> Vec<(ExprId, Rational)> {
+    if entries.windows(2).all(|w| w[0].0 < w[1].0) {
+        return entries;
+    }
+    entries.sort_unstable_by_key(|(key, _)| *key);
+    let mut out: Vec<(ExprId, Rational)> = Vec::with_capacity(entries.len());
+    for (key, value) in entries {
+        match out.last_mut() {
+            Some((last, sum)) if *last == key => number::add_to(sum, &value),
+            _ => out.push((key, value)),
+        }
+    }
+    out
+}
+
 /// Collects a sum: a constant and a coefficient per distinct term.
 #[derive(Default)]
 struct SumBuilder {
     constant: Rational,
-    terms: BTreeMap<ExprId, Rational>,
+    terms: Vec<(ExprId, Rational)>,
 }
 
 impl SumBuilder {
     fn push(&mut self, pool: &mut Pool, e: ExprId, scale: &Rational) {
-        match pool.node(e).clone() {
-            Node::Num(q) => self.constant += q * scale,
+        // Read the node in place: cloning it would copy its coefficients.
+        match pool.node(e) {
+            Node::Num(q) => number::add_to(&mut self.constant, &number::times(q, scale)),
             Node::Add(c, terms) => {
-                self.constant += c * scale;
+                number::add_to(&mut self.constant, &number::times(c, scale));
                 for (t, k) in terms.iter() {
-                    *self.terms.entry(*t).or_default() += k * scale;
+                    accumulate(&mut self.terms, *t, number::times(k, scale));
                 }
             }
             Node::Mul(c, _) if !c.is_one() => {
                 let (c, rest) = pool.split_coefficient(e);
-                *self.terms.entry(rest).or_default() += c * scale;
+                accumulate(&mut self.terms, rest, number::times(&c, scale));
             }
-            _ => *self.terms.entry(e).or_default() += scale,
+            _ => accumulate(&mut self.terms, e, scale.clone()),
         }
     }
 
     fn finish(self, pool: &mut Pool) -> ExprId {
         let terms: Vec<(ExprId, Rational)> =
-            self.terms.into_iter().filter(|(_, k)| !k.is_zero()).collect();
+            merged(self.terms).into_iter().filter(|(_, k)| !k.is_zero()).collect();
         match terms.len() {
             0 => pool.num(self.constant),
             1 if self.constant.is_zero() => {
@@ -774,56 +875,75 @@ impl SumBuilder {
 /// Collects a product: a coefficient and an exponent per distinct base.
 struct ProductBuilder {
     coef: Rational,
-    factors: BTreeMap<ExprId, Rational>,
+    factors: Vec<(ExprId, Rational)>,
 }
 
 impl ProductBuilder {
     fn new() -> Self {
-        ProductBuilder { coef: Rational::one(), factors: BTreeMap::new() }
+        ProductBuilder { coef: Rational::one(), factors: Vec::new() }
     }
 
     fn push(&mut self, pool: &mut Pool, e: ExprId) {
-        match pool.node(e).clone() {
-            Node::Num(q) => self.coef *= q,
+        match pool.node(e) {
+            Node::Num(q) => number::scale_by(&mut self.coef, q),
             Node::Mul(c, f) => {
-                self.coef *= c;
+                number::scale_by(&mut self.coef, c);
                 for (b, x) in f.iter() {
-                    *self.factors.entry(*b).or_default() += x;
+                    accumulate(&mut self.factors, *b, x.clone());
                 }
             }
-            _ => *self.factors.entry(e).or_default() += Rational::one(),
+            _ => accumulate(&mut self.factors, e, Rational::one()),
         }
     }
 
     fn push_factor(&mut self, pool: &mut Pool, base: ExprId, exponent: &Rational) {
-        match pool.node(base).clone() {
-            Node::Num(q) if exponent.is_integer() => match number::pow_int(&q, exponent.numer()) {
-                Some(v) => self.coef *= v,
-                None => *self.factors.entry(base).or_default() += exponent,
+        let unpowered = match pool.node(base) {
+            Node::Num(q) if exponent.is_integer() => match number::pow_int(q, exponent.numer()) {
+                Some(v) => {
+                    number::scale_by(&mut self.coef, &v);
+                    None
+                }
+                None => Some(base),
             },
             Node::Mul(c, f) if exponent.is_integer() => {
-                match number::pow_int(&c, exponent.numer()) {
-                    Some(v) => self.coef *= v,
+                for (b, x) in f.iter() {
+                    accumulate(&mut self.factors, *b, number::times(x, exponent));
+                }
+                match number::pow_int(c, exponent.numer()) {
+                    Some(v) => {
+                        number::scale_by(&mut self.coef, &v);
+                        None
+                    }
                     None => {
-                        let cn = pool.num(c);
-                        *self.factors.entry(cn).or_default() += exponent;
+                        let c = c.clone();
+                        Some(pool.num(c))
                     }
                 }
-                for (b, x) in f.iter() {
-                    *self.factors.entry(*b).or_default() += x * exponent;
-                }
             }
-            _ => *self.factors.entry(base).or_default() += exponent,
+            _ => Some(base),
+        };
+        if let Some(b) = unpowered {
+            accumulate(&mut self.factors, b, exponent.clone());
         }
+    }
+
+    /// Whether no factor is one the folding in `finish` would touch: most products are of
+    /// symbols and functions, and need no pass at all.
+    fn settled(&self, pool: &Pool) -> bool {
+        self.factors.iter().all(|(b, x)| match pool.node(*b) {
+            Node::Num(_) => false,
+            Node::Mul(..) => !x.is_integer(),
+            _ => !x.is_zero(),
+        })
     }
 
     fn finish(mut self, pool: &mut Pool) -> ExprId {
         // Merging exponents can turn a fractional power of a number or product into an integer
         // one (√3·√3, √(xy)·√(xy)); fold those until nothing changes.
-        loop {
+        self.factors = merged(std::mem::take(&mut self.factors));
+        while !self.settled(pool) {
             let mut changed = false;
-            let entries: Vec<(ExprId, Rational)> =
-                std::mem::take(&mut self.factors).into_iter().collect();
+            let entries = std::mem::take(&mut self.factors);
             for (b, x) in entries {
                 if x.is_zero() {
                     changed = true;
@@ -836,10 +956,10 @@ impl ProductBuilder {
                     }
                     Node::Num(q) if x.is_integer() => match number::pow_int(&q, x.numer()) {
                         Some(v) => {
-                            self.coef *= v;
+                            number::scale_by(&mut self.coef, &v);
                             changed = true;
                         }
-                        None => *self.factors.entry(b).or_default() += x,
+                        None => accumulate(&mut self.factors, b, x),
                     },
                     Node::Num(q) if q.is_positive() => match number::rational_root(&q, &x) {
                         Some((c, r)) => {
@@ -850,23 +970,24 @@ impl ProductBuilder {
                                 if (rn, root.clone()) != (b, x.clone()) {
                                     changed = true;
                                 }
-                                *self.factors.entry(rn).or_default() += root;
+                                accumulate(&mut self.factors, rn, root);
                             } else {
                                 changed = true;
                             }
                         }
-                        None => *self.factors.entry(b).or_default() += x,
+                        None => accumulate(&mut self.factors, b, x),
                     },
                     Node::Mul(c, f) if x.is_integer() => {
                         changed = true;
                         self.coef *= number::pow_int(&c, x.numer()).unwrap_or_else(Rational::one);
                         for (fb, fx) in f.iter() {
-                            *self.factors.entry(*fb).or_default() += fx * &x;
+                            accumulate(&mut self.factors, *fb, number::times(fx, &x));
                         }
                     }
-                    _ => *self.factors.entry(b).or_default() += x,
+                    _ => accumulate(&mut self.factors, b, x),
                 }
             }
+            self.factors = merged(std::mem::take(&mut self.factors));
             if !changed {
                 break;
             }

@@ -271,8 +271,7 @@ impl Pool {
                 Prec::Atom,
             ),
             Node::Add(c, terms) => {
-                let mut parts: Vec<(ExprId, Rational)> = terms.to_vec();
-                parts.sort_by(|a, b| self.term_order(a.0, b.0));
+                let parts = self.in_term_order(terms);
                 let mut out = String::new();
                 // A constant reads first in a sum of positions (1 + 3 sin²θ), last in an
                 // equation with rates in it.
@@ -473,17 +472,37 @@ impl Pool {
         }
     }
 
+    /// The terms of a sum in printing order (`term_order_with`), each term's order and
+    /// leading symbols found once rather than at every comparison.
+    fn in_term_order(&self, terms: &[(ExprId, Rational)]) -> Vec<(ExprId, Rational)> {
+        let keys: Vec<(u8, Vec<SymId>)> = terms
+            .iter()
+            .map(|(t, _)| {
+                let order = self.max_order(*t);
+                (order, self.leading_symbols(*t, order))
+            })
+            .collect();
+        let mut index: Vec<usize> = (0..terms.len()).collect();
+        index.sort_by(|&i, &j| self.term_order_with(terms[i].0, &keys[i], terms[j].0, &keys[j]));
+        index.into_iter().map(|i| terms[i].clone()).collect()
+    }
+
     /// Terms of a sum: accelerations first, then velocities, then the rest; ties broken by
-    /// the factors, compared in printing order.
-    fn term_order(&self, a: ExprId, b: ExprId) -> Ordering {
-        let (oa, ob) = (self.max_order(a), self.max_order(b));
-        ob.cmp(&oa)
+    /// the factors, compared in printing order. Each term comes with its order and its
+    /// leading symbols of that order.
+    fn term_order_with(
+        &self,
+        a: ExprId,
+        (oa, la): &(u8, Vec<SymId>),
+        b: ExprId,
+        (ob, lb): &(u8, Vec<SymId>),
+    ) -> Ordering {
+        ob.cmp(oa)
             .then_with(|| {
                 // Among terms of the same order, follow the coordinates' declaration order
                 // (the ẍ term before the s̈ term).
                 // Compared as whole sequences (a prefix first): stopping at the shorter one
                 // would make the order intransitive, which sorting must not meet.
-                let (la, lb) = (self.leading_symbols(a, oa), self.leading_symbols(b, ob));
                 let mut pairs = la.iter().zip(lb.iter());
                 pairs
                     .find_map(|(x, y)| {

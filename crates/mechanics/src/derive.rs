@@ -7,6 +7,7 @@ mod equations;
 mod multipliers;
 mod reactions;
 mod start_rates;
+mod structural;
 
 use std::collections::HashMap;
 
@@ -212,7 +213,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
     let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
     let full = energies(&mut pool, &model);
     let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
-    let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+    let rows = euler_lagrange_rows(&mut pool, &model, &full, &reduced, &coordinates);
     errors.extend(coordinates_without_inertia(&mut pool, &model, &coordinates.coords, &rows));
     let (multipliers, implied) = kept_constraints(&mut pool, &model, &kept, &coordinates);
     if !errors.is_empty() {

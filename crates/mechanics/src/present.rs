@@ -1,6 +1,8 @@
 //! The derived equations in the forms people read: each equation of motion normalised the way
 //! a hand derivation writes it, and the `show` quantities, symbolic and at the start.
 
+use std::collections::HashMap;
+
 use cas::ExprId;
 use model::Value;
 
@@ -174,6 +176,8 @@ pub enum StartShows {
 pub fn collect_by_motion(pool: &mut cas::Pool, terms: &[ExprId]) -> ExprId {
     use cas::SymbolKind;
     let mut groups: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
+    // Where each motion's group is: a sum as long as a large model's T has thousands of terms.
+    let mut group_of: HashMap<ExprId, usize> = HashMap::new();
     for t in terms {
         let (coef, factors) = pool.factors(*t);
         let (mut motion, mut constant) = (Vec::new(), Vec::new());
@@ -191,9 +195,12 @@ pub fn collect_by_motion(pool: &mut cas::Pool, terms: &[ExprId]) -> ExprId {
         let one = cas::Rational::from_integer(1.into());
         let motion = pool.product(&one, &motion);
         let constant = pool.product(&coef, &constant);
-        match groups.iter_mut().find(|(m, _)| *m == motion) {
-            Some((_, cs)) => cs.push(constant),
-            None => groups.push((motion, vec![constant])),
+        match group_of.get(&motion) {
+            Some(&g) => groups[g].1.push(constant),
+            None => {
+                group_of.insert(motion, groups.len());
+                groups.push((motion, vec![constant]));
+            }
         }
     }
     let mut gathered = Vec::new();

@@ -36,11 +36,13 @@ impl Dim {
     }
 
     fn add(&self, other: &Dim) -> Dim {
-        Dim(std::array::from_fn(|i| &self.0[i] + &other.0[i]))
+        Dim(std::array::from_fn(|i| cas::number::plus(&self.0[i], &other.0[i])))
     }
 
     fn scale(&self, k: &Rational) -> Dim {
-        Dim(std::array::from_fn(|i| &self.0[i] * k))
+        // Through cas's integer fast path: the inference scales dimensions by small integers
+        // all the time.
+        Dim(std::array::from_fn(|i| cas::number::times(&self.0[i], k)))
     }
 
     /// `kg·m²/s²`, or `1` for a dimensionless quantity.
@@ -177,7 +179,7 @@ impl Form {
         out.known = out.known.add(&other.known.scale(k));
         for (u, c) in &other.unknowns {
             let slot = out.unknowns.entry(*u).or_insert_with(Rational::zero);
-            *slot += c * k;
+            cas::number::add_to(slot, &cas::number::times(c, k));
         }
         out.unknowns.retain(|_, c| !c.is_zero());
         out

@@ -9,6 +9,7 @@ use model::{Model, Rotation, Value};
 
 use super::eliminate::Coordinates;
 use super::energies::Energies;
+use super::structural::{inertial_terms, kinetic_expansion, structural_rows};
 
 /// The equations of motion in the remaining coordinates, one row per coordinate.
 #[derive(Debug)]
@@ -75,15 +76,23 @@ pub(super) fn generalized_force(
 }
 
 /// d/dt ∂L/∂q̇ᵢ − ∂L/∂qᵢ = Qᵢ for each remaining coordinate, split into the accelerations'
-/// coefficients (M) and everything else (f), from energies in the remaining coordinates.
+/// coefficients (M) and everything else (f), from energies in the remaining coordinates
+/// (`reduced`) and in all declared ones (`full`). The kinetic energy of translation and
+/// planar rotation takes the structural route (`structural`: m·Jᵀ·J and m·a₀·J); the rest of L
+/// is differentiated.
 pub(super) fn euler_lagrange_rows(
     pool: &mut Pool,
     model: &Model,
+    full: &Energies,
     reduced: &Energies,
     coordinates: &Coordinates,
 ) -> Rows {
     let Coordinates { coords, rates, elimination_map, .. } = coordinates;
-    let lagrangian = reduced.lagrangian;
+    let (inertial, inertial_kinetic) = inertial_terms(pool, model, elimination_map, coords);
+    // L without the terms the structural route covers, in the remaining coordinates.
+    let rest = pool.sub(full.lagrangian, inertial_kinetic);
+    let lagrangian = pool.subst(rest, elimination_map);
+    let (structural_mass, structural_forcing) = structural_rows(pool, &inertial, coords);
     let n = coords.len();
     let mut mass_matrix = vec![vec![pool.zero(); n]; n];
     let mut forcing = Vec::with_capacity(n);
@@ -92,13 +101,17 @@ pub(super) fn euler_lagrange_rows(
         // p_i = ∂L/∂q̇_i; d/dt p_i = Σ_j M_ij q̈_j + Σ_j ∂p_i/∂q_j q̇_j + ∂p_i/∂t.
         let p = pool.diff(lagrangian, rates[i]);
         for j in 0..n {
-            mass_matrix[i][j] = pool.diff(p, rates[j]);
+            let m = pool.diff(p, rates[j]);
+            // The structural part is symmetric and kept in its upper triangle.
+            let structural = structural_mass[i.min(j)][i.max(j)];
+            mass_matrix[i][j] = pool.add2(structural, m);
         }
         let mut parts = Vec::new();
         let q_force =
             generalized_force(pool, model, reduced.dissipation, coords[i], elimination_map);
         generalized_forces.push(q_force);
         parts.push(q_force);
+        parts.push(structural_forcing[i]);
         parts.push(pool.diff(lagrangian, coords[i]));
         for j in 0..n {
             let dp = pool.diff(p, coords[j]);
@@ -119,6 +132,19 @@ pub(super) fn euler_lagrange_rows(
     }
     for e in forcing.iter_mut() {
         *e = pool.simplify(*e);
+    }
+    // Reports show T simplified; its squares of long sums multiplied out would cost more than
+    // the rows did.
+    let structural_kinetic = pool.subst(inertial_kinetic, elimination_map);
+    if let Some(expanded) = kinetic_expansion(
+        pool,
+        &inertial,
+        &structural_mass,
+        rates,
+        reduced.kinetic,
+        structural_kinetic,
+    ) {
+        pool.remember_expansion(reduced.kinetic, expanded);
     }
     Rows { mass_matrix, forcing, generalized_forces }
 }
@@ -159,7 +185,7 @@ mod tests {
         let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
         let full = energies(&mut pool, &model);
         let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
-        let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+        let rows = euler_lagrange_rows(&mut pool, &model, &full, &reduced, &coordinates);
         (pool, model, coordinates, rows)
     }
 
@@ -238,7 +264,7 @@ mod tests {
         let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
         let full = energies(&mut pool, &model);
         let reduced = full.reduced(&mut pool, &coordinates.elimination_map);
-        let rows = euler_lagrange_rows(&mut pool, &model, &reduced, &coordinates);
+        let rows = euler_lagrange_rows(&mut pool, &model, &full, &reduced, &coordinates);
         let errors = coordinates_without_inertia(&mut pool, &model, &coordinates.coords, &rows);
         let [e] = &errors[..] else { panic!("{errors:?}") };
         assert_eq!(e.message, "no kinetic energy depends on the rate of `z`");

@@ -1,0 +1,278 @@
+//! The Euler–Lagrange rows of the kinetic energy of translation (and of planar rotation)
+//! without differentiating T twice. For T = ½·m·|ṙ|² with m constant, Lagrange's equations
+//! are Newton's projected on the coordinates:
+//!
+//! d/dt ∂T/∂q̇ᵢ − ∂T/∂qᵢ = m·r̈·∂r/∂qᵢ, with r̈ = Σⱼ (∂r/∂qⱼ)·q̈ⱼ + a₀,
+//!
+//! so the term adds m·(∂r/∂qᵢ)·(∂r/∂qⱼ) to Mᵢⱼ and −m·a₀·∂r/∂qᵢ to fᵢ, where a₀ is r̈ with
+//! every q̈ set to zero. A planar body's ½·I·θ̇² is the same with the angle for r.
+//!
+//! Differentiating T twice builds products of sums that are only expanded, and mostly cancel,
+//! later: their size grows like the cube of the chain's length. These rows hold only what
+//! survives. They are the same polynomial in the same sines, cosines and symbols as the rows
+//! by differentiation, so once `simplify` expands them it sees the same sum, and prints the
+//! same equations. That holds where expansion is canonical: positions built from sums,
+//! products, integer powers of sums and functions whose derivatives are powers of functions;
+//! a position outside that (a square root or quotient of a sum, `atan2`, `ln`) keeps its body
+//! on the route by differentiation.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+
+use cas::{ExprId, Func, Node, Pool, SymId, SymbolKind};
+use model::{Model, Rotation};
+
+/// One term ½·mass·|d position/dt|² of T, with the mass constant.
+struct Inertial {
+    mass: ExprId,
+    /// The position in the remaining coordinates (for a planar body's rotation, its angle).
+    position: Vec<ExprId>,
+}
+
+/// The kinetic energy terms that take the structural route, in the remaining coordinates,
+/// and their sum as `energies` built it (in all declared coordinates), so the rest of L can be
+/// told apart: `(terms, their T)`.
+pub(super) fn inertial_terms(
+    pool: &mut Pool,
+    model: &Model,
+    map: &HashMap<SymId, ExprId>,
+    coords: &[SymId],
+) -> (Vec<InertialTerm>, ExprId) {
+    let half = cas::number::ratio(1, 2);
+    let mut terms = Vec::new();
+    let mut kinetic = Vec::new();
+    let mut candidates: Vec<(ExprId, Vec<ExprId>, ExprId)> = Vec::new();
+    for body in &model.bodies {
+        // The term exactly as `energies` builds it, so that it cancels from L.
+        let mut v2 = Vec::new();
+        for x in &body.position {
+            let v = pool.time_derivative(*x);
+            v2.push(pool.powi(v, 2));
+        }
+        let speed2 = pool.add(&v2);
+        let t = pool.mul2(body.mass, speed2);
+        let t = pool.scale(t, &half);
+        candidates.push((body.mass, body.position.clone(), t));
+        if let Some(Rotation::Planar { inertia, angle }) = &body.rotation {
+            let w = pool.time_derivative(*angle);
+            let w2 = pool.powi(w, 2);
+            let t = pool.mul2(*inertia, w2);
+            let t = pool.scale(t, &half);
+            candidates.push((*inertia, vec![*angle], t));
+        }
+    }
+    let mut safe = HashSet::new();
+    for (mass, position, t) in candidates {
+        if !is_constant(pool, mass) {
+            continue;
+        }
+        let position: Vec<ExprId> = position.iter().map(|x| pool.subst(*x, map)).collect();
+        if !position.iter().all(|x| expands_canonically(pool, *x, &mut safe))
+            || !position.iter().all(|x| moves_with(pool, *x, coords))
+        {
+            continue;
+        }
+        terms.push(InertialTerm(Inertial { mass, position }));
+        kinetic.push(t);
+    }
+    let kinetic = pool.add(&kinetic);
+    (terms, kinetic)
+}
+
+/// A kinetic-energy term on the structural route (opaque outside this module).
+pub(super) struct InertialTerm(Inertial);
+
+/// Whether `e` is constant in time: parameters and numbers only.
+fn is_constant(pool: &mut Pool, e: ExprId) -> bool {
+    pool.free_symbols(e).iter().all(|s| matches!(pool.symbol(*s).kind, SymbolKind::Param))
+}
+
+/// Whether a position depends on nothing but the remaining coordinates (not their rates),
+/// time and parameters.
+fn moves_with(pool: &mut Pool, e: ExprId, coords: &[SymId]) -> bool {
+    pool.free_symbols(e).iter().all(|s| match pool.symbol(*s).kind {
+        SymbolKind::Param | SymbolKind::Time => true,
+        SymbolKind::Coordinate { order: 0, .. } => coords.contains(s),
+        SymbolKind::Coordinate { .. } => false,
+    })
+}
+
+/// Whether `e`, and every derivative of it, expands to one canonical polynomial in its atoms:
+/// no sum under a root or in a denominator, no symbolic exponent, and only functions whose
+/// derivatives are again of that kind.
+fn expands_canonically(pool: &Pool, e: ExprId, safe: &mut HashSet<ExprId>) -> bool {
+    if safe.contains(&e) {
+        return true;
+    }
+    let ok = match pool.node(e) {
+        Node::Num(_) | Node::Sym(_) | Node::Pi => true,
+        Node::Add(_, terms) => {
+            let terms = terms.clone();
+            terms.iter().all(|(t, _)| expands_canonically(pool, *t, safe))
+        }
+        Node::Mul(_, factors) => {
+            let factors = factors.clone();
+            factors.iter().all(|(b, x)| {
+                let sum_ok = !matches!(pool.node(*b), Node::Add(..))
+                    || (x.is_integer() && cas::number::Signed::is_positive(x));
+                sum_ok && expands_canonically(pool, *b, safe)
+            })
+        }
+        Node::Func(f, a) => {
+            matches!(
+                f,
+                Func::Sin
+                    | Func::Cos
+                    | Func::Tan
+                    | Func::Sinh
+                    | Func::Cosh
+                    | Func::Tanh
+                    | Func::Exp
+            ) && expands_canonically(pool, *a, safe)
+        }
+        Node::Pow(..) | Node::Atan2(..) => false,
+    };
+    if ok {
+        safe.insert(e);
+    }
+    ok
+}
+
+/// The structural part of the rows: M (upper triangle filled, j ≥ i) and the part of f, both
+/// raw (sums of products, not yet simplified), for the given terms.
+pub(super) fn structural_rows(
+    pool: &mut Pool,
+    terms: &[InertialTerm],
+    coords: &[SymId],
+) -> (Vec<Vec<ExprId>>, Vec<ExprId>) {
+    let n = coords.len();
+    let index: HashMap<SymId, usize> = coords.iter().enumerate().map(|(i, q)| (*q, i)).collect();
+    // Mᵢⱼ = Σ m·(∂r/∂qᵢ)·(∂r/∂qⱼ): the same product recurs down a chain, so each distinct
+    // product is formed once and its masses added.
+    let mut mass_parts: Vec<Vec<BTreeMap<ExprId, Vec<ExprId>>>> = vec![vec![BTreeMap::new(); n]; n];
+    let mut products: HashMap<(ExprId, ExprId), ExprId> = HashMap::new();
+    // fᵢ = −Σ m·a₀·∂r/∂qᵢ: grouped by (∂r/∂qᵢ, m), so that a chain's accelerations are added
+    // once per coordinate before the one product is formed.
+    let mut force_parts: Vec<BTreeMap<(ExprId, ExprId), Vec<ExprId>>> = vec![BTreeMap::new(); n];
+    for InertialTerm(term) in terms {
+        for &x in &term.position {
+            let moving: Vec<(usize, SymId)> = pool
+                .free_symbols(x)
+                .iter()
+                .filter_map(|s| index.get(s).map(|&i| (i, *s)))
+                .collect();
+            let mut jacobian: Vec<(usize, ExprId)> = Vec::with_capacity(moving.len());
+            for (i, s) in moving {
+                let d = pool.diff(x, s);
+                if !pool.is_zero(d) {
+                    jacobian.push((i, d));
+                }
+            }
+            if jacobian.is_empty() {
+                continue;
+            }
+            for (a, &(i, di)) in jacobian.iter().enumerate() {
+                for &(j, dj) in &jacobian[a..] {
+                    let (i, j, di, dj) = if i <= j { (i, j, di, dj) } else { (j, i, dj, di) };
+                    let p = *products.entry((di, dj)).or_insert_with(|| pool.mul2(di, dj));
+                    mass_parts[i][j].entry(p).or_default().push(term.mass);
+                }
+            }
+            let velocity = pool.time_derivative(x);
+            let a0 = acceleration_without_q2(pool, velocity);
+            if pool.is_zero(a0) {
+                continue;
+            }
+            for &(i, di) in &jacobian {
+                force_parts[i].entry((di, term.mass)).or_default().push(a0);
+            }
+        }
+    }
+    let mut mass = vec![vec![pool.zero(); n]; n];
+    for i in 0..n {
+        for j in i..n {
+            let parts: Vec<ExprId> = std::mem::take(&mut mass_parts[i][j])
+                .into_iter()
+                .map(|(p, masses)| {
+                    let m = pool.add(&masses);
+                    pool.mul2(p, m)
+                })
+                .collect();
+            mass[i][j] = pool.add(&parts);
+        }
+    }
+    let forcing = force_parts
+        .into_iter()
+        .map(|groups| {
+            let parts: Vec<ExprId> = groups
+                .into_iter()
+                .map(|((d, m), accelerations)| {
+                    let a = pool.add(&accelerations);
+                    let t = pool.mul(&[m, d, a]);
+                    pool.neg(t)
+                })
+                .collect();
+            pool.add(&parts)
+        })
+        .collect();
+    (mass, forcing)
+}
+
+/// d/dt of a velocity with every acceleration q̈ taken as zero: Σ ∂v/∂q·q̇ + ∂v/∂t.
+fn acceleration_without_q2(pool: &mut Pool, velocity: ExprId) -> ExprId {
+    let mut parts = Vec::new();
+    for &s in pool.free_symbols(velocity).iter() {
+        let rate = match pool.symbol(s).kind {
+            SymbolKind::Time => pool.one(),
+            SymbolKind::Coordinate { order: 0, .. } => {
+                let r = pool.rate(s).expect("coordinates have rates");
+                pool.sym(r)
+            }
+            // q̇ → q̈ is the part that goes to M; parameters do not move.
+            _ => continue,
+        };
+        let partial = pool.diff(velocity, s);
+        parts.push(pool.mul2(partial, rate));
+    }
+    pool.add(&parts)
+}
+
+/// The expansion of the kinetic energy `kinetic` (in the remaining coordinates) by a shorter
+/// route than multiplying out its squares: ½·Σ Mᵢⱼ·q̇ᵢ·q̇ⱼ from the structural M (`mass`, upper
+/// triangle, raw), plus the expansion of the terms the structural route did not take
+/// (`kinetic` less `structural_kinetic`). `None` when a position moves with time itself, so
+/// that T has terms of first and zeroth degree in the rates that M does not hold.
+pub(super) fn kinetic_expansion(
+    pool: &mut Pool,
+    terms: &[InertialTerm],
+    mass: &[Vec<ExprId>],
+    rates: &[SymId],
+    kinetic: ExprId,
+    structural_kinetic: ExprId,
+) -> Option<ExprId> {
+    for InertialTerm(term) in terms {
+        for &x in &term.position {
+            let time =
+                pool.free_symbols(x).iter().any(|s| pool.symbol(*s).kind == SymbolKind::Time);
+            if time {
+                return None;
+            }
+        }
+    }
+    let half = cas::number::ratio(1, 2);
+    let mut parts = Vec::new();
+    for (i, row) in mass.iter().enumerate() {
+        for (j, &entry) in row.iter().enumerate().skip(i) {
+            if pool.is_zero(entry) {
+                continue;
+            }
+            let entry = pool.expand(entry);
+            let (qi, qj) = (pool.sym(rates[i]), pool.sym(rates[j]));
+            let t = pool.mul(&[entry, qi, qj]);
+            let t = if i == j { pool.scale(t, &half) } else { t };
+            parts.push(pool.expand(t));
+        }
+    }
+    let rest = pool.sub(kinetic, structural_kinetic);
+    parts.push(pool.expand(rest));
+    Some(pool.add(&parts))
+}
