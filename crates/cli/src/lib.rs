@@ -57,6 +57,9 @@ pub fn derive_report(
         Format::Latex => report::latex(&mut d),
         Format::Json => report::json(&mut d),
     };
+    // Freeing a large model's expressions one by one costs a tenth of the bicycle's run, and
+    // every caller is done with it: a front end's process ends, a test's memory is small.
+    std::mem::forget(d);
     Ok((report, diagnostics::render(path, source, &warnings)))
 }
 

@@ -433,6 +433,9 @@ fn linearize(
             return ExitCode::from(2);
         }
     }
+    // The process ends here: freeing a large model's expressions one by one (a tenth of the
+    // bicycle's run) would be work for nothing.
+    std::mem::forget(linearized);
     write_or_print(out.as_ref(), &report)
 }
 
