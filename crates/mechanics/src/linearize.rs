@@ -626,8 +626,10 @@ impl Derivation {
             return Err(errors);
         }
 
-        let at = |pool: &mut Pool, e: ExprId| {
-            let e = pool.subst(e, &map);
+        // One memo for every substitution: the derivatives share most of their parts.
+        let mut memo = HashMap::new();
+        let mut at = |pool: &mut Pool, e: ExprId| {
+            let e = pool.subst_memo(e, &map, &mut memo);
             pool.simplify(e)
         };
         let mut generalized = self.forcing.clone();
