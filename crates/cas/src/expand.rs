@@ -33,11 +33,8 @@ impl Pool {
                 if expanded.iter().zip(terms.iter()).all(|(x, (t, _))| x == t) {
                     e
                 } else {
-                    let mut parts = vec![self.num(c)];
-                    for (x, (_, k)) in expanded.into_iter().zip(terms.iter()) {
-                        parts.push(self.scale(x, k));
-                    }
-                    self.add(&parts)
+                    let parts = expanded.into_iter().zip(terms.iter().map(|(_, k)| k.clone()));
+                    self.sum_of(c, parts)
                 }
             }
             Node::Mul(c, factors) => {
