@@ -1,7 +1,7 @@
 //! Differentiation: partial derivatives by a symbol (memoised per node and symbol) and the
 //! total time derivative, which treats every coordinate as a function of time.
 
-use num_traits::One;
+use num_traits::{One, Zero};
 
 use crate::number::{self, Rational};
 use crate::pool::{ExprId, Func, Node, Pool, SymId, SymbolKind};
@@ -31,14 +31,15 @@ impl Pool {
                 }
             }
             Node::Add(_, terms) => {
-                let parts: Vec<ExprId> = terms
-                    .iter()
-                    .map(|(t, k)| {
-                        let dt = self.diff(*t, s);
-                        self.scale(dt, k)
-                    })
-                    .collect();
-                self.add(&parts)
+                // Only the terms that depend on s: along a chain, most do not.
+                let mut parts = Vec::new();
+                for (t, k) in terms.iter() {
+                    let dt = self.diff(*t, s);
+                    if !self.is_zero(dt) {
+                        parts.push((dt, k.clone()));
+                    }
+                }
+                self.sum_of(Rational::zero(), parts)
             }
             Node::Mul(c, factors) => {
                 // Product rule, one term per factor that depends on s:

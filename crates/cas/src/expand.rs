@@ -41,11 +41,8 @@ impl Pool {
                 if expanded.iter().zip(terms.iter()).all(|(x, (t, _))| x == t) {
                     e
                 } else {
-                    let mut parts = vec![self.num(c)];
-                    for (x, (_, k)) in expanded.into_iter().zip(terms.iter()) {
-                        parts.push(self.scale(x, k));
-                    }
-                    self.add(&parts)
+                    let parts = expanded.into_iter().zip(terms.iter().map(|(_, k)| k.clone()));
+                    self.sum_of(c, parts)
                 }
             }
             Node::Mul(c, factors) => {
@@ -648,15 +645,24 @@ impl Pool {
     pub fn common_content(&mut self, exprs: &[ExprId]) -> (ExprId, ExprId) {
         let mut gcd: Option<Rational> = None;
         let mut common: Option<BTreeMap<ExprId, Rational>> = None;
-        let mut all_terms = Vec::new();
+        // Each term's coefficient and factors, read from the sum rather than built as terms.
+        let mut all_terms: Vec<(Rational, Vec<(ExprId, Rational)>)> = Vec::new();
         for &x in exprs {
-            all_terms.extend(self.terms(x));
-        }
-        for t in all_terms.iter().copied() {
-            if self.is_zero(t) {
-                continue;
+            match self.node(x) {
+                Node::Add(c, terms) => {
+                    for (t, k) in terms.iter() {
+                        let (tc, fs) = self.factors(*t);
+                        all_terms.push((number::times(&tc, k), fs));
+                    }
+                    if !c.is_zero() {
+                        all_terms.push((c.clone(), Vec::new()));
+                    }
+                }
+                _ if self.is_zero(x) => {}
+                _ => all_terms.push(self.factors(x)),
             }
-            let (c, fs) = self.factors(t);
+        }
+        for (c, fs) in all_terms {
             gcd = Some(match gcd {
                 None => c.abs(),
                 Some(g) => number::gcd(&g, &c),

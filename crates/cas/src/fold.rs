@@ -110,11 +110,7 @@ impl Pool {
                 work.changed(Key::Term(rt));
             }
         }
-        let mut parts = vec![self.num(constant)];
-        for (t, k) in terms {
-            parts.push(self.scale(t, &k));
-        }
-        self.add(&parts)
+        self.sum_of(constant, terms)
     }
 
     /// The first sin²/cos² fold of term `t` (coefficient `k`), as the full rescan finds it, and
@@ -204,11 +200,7 @@ impl Pool {
             }
             work.changed(Key::Term(ft));
         }
-        let mut parts = vec![self.num(constant)];
-        for (t, k) in terms {
-            parts.push(self.scale(t, &k));
-        }
-        self.add(&parts)
+        self.sum_of(constant, terms)
     }
 
     /// The first angle-sum fold of term `t` (coefficient `k`), as the full rescan finds it,

@@ -434,6 +434,22 @@ impl Pool {
         sum.finish(self)
     }
 
+    /// `constant + Σ k·t` from terms and their coefficients, without building each `k·t` as
+    /// a node first: the same sum as `add` of the scaled terms.
+    pub(crate) fn sum_of(
+        &mut self,
+        constant: Rational,
+        terms: impl IntoIterator<Item = (ExprId, Rational)>,
+    ) -> ExprId {
+        let mut sum = SumBuilder { constant, terms: Vec::new() };
+        for (t, k) in terms {
+            if !k.is_zero() {
+                sum.push(self, t, &k);
+            }
+        }
+        sum.finish(self)
+    }
+
     pub fn add2(&mut self, a: ExprId, b: ExprId) -> ExprId {
         self.add(&[a, b])
     }

@@ -5,7 +5,7 @@
 use std::cmp::Ordering;
 use std::collections::HashMap;
 
-use num_traits::{One, Signed, Zero};
+use num_traits::{One, Signed, ToPrimitive, Zero};
 
 use crate::number::Rational;
 use crate::pool::{ExprId, Node, Pool, SymId, SymbolKind};
@@ -437,8 +437,10 @@ impl Pool {
         if x.is_one() {
             return self.fmt_at(b, Prec::Power, style);
         }
-        let half = Rational::new(1.into(), 2.into());
-        if *x == half {
+        // Compared by parts: building ½ as a rational (a gcd and divisions) at every power
+        // printed cost more than printing it.
+        let half = x.numer().is_one() && x.denom().to_u8() == Some(2);
+        if half {
             let inner = self.print(b, style);
             return match style {
                 Style::Unicode => {
