@@ -121,6 +121,19 @@ impl Derivation {
         (rows, rhs)
     }
 
+    /// Each kept constraint at the velocity level, in the multipliers' order: Φ of a velocity
+    /// constraint, Φ̇ of a position one (linear in the rates either way).
+    pub fn velocity_rows(&mut self) -> Vec<ExprId> {
+        let pool = &mut self.model.pool;
+        self.multipliers
+            .iter()
+            .map(|m| match m.kind {
+                model::ConstraintKind::Velocity => m.phi,
+                model::ConstraintKind::Position => pool.time_derivative(m.phi),
+            })
+            .collect()
+    }
+
     /// Replaces KE, PE and reactions by what they are, and eliminated coordinates by their
     /// solutions. With `keep_multipliers`, the reactions of constraints kept with multipliers
     /// stay the unknowns λ of the equations of motion (as checks want them), rather than their

@@ -38,15 +38,7 @@ impl Derivation {
         {
             return None;
         }
-        let rows: Vec<ExprId> = self
-            .multipliers
-            .clone()
-            .into_iter()
-            .map(|m| match m.kind {
-                ConstraintKind::Velocity => m.phi,
-                ConstraintKind::Position => self.model.pool.time_derivative(m.phi),
-            })
-            .collect();
+        let rows = self.velocity_rows();
         let dependent = self.dependent_rates(&rows)?;
         let pool = &mut self.model.pool;
         // A·q̇ + b = 0 solved for the dependent rates: the rest of each row, with them at 0.

@@ -173,40 +173,18 @@ impl Derivation {
             return Err(errors);
         }
 
-        // K = −∂(f + Jᵀλ)/∂q and C = −∂f/∂q̇ (J of a position constraint has no rates).
-        let mut generalized = self.forcing.clone();
-        for m in &self.multipliers {
-            let lambda = pool.sym(m.lambda);
-            for (j, g) in generalized.iter_mut().enumerate() {
-                let force = pool.mul2(m.jacobian[j], lambda);
-                *g = pool.add2(*g, force);
-            }
-        }
-        let at = |pool: &mut Pool, e: ExprId| {
+        let mut at = |pool: &mut Pool, e: ExprId| {
             let e = pool.subst(e, &map);
             pool.simplify(e)
         };
-        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
-        for (j, g) in generalized.iter().enumerate() {
-            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
-            for (i, is_cyclic) in cyclic.iter().enumerate() {
-                m.push(at(pool, self.mass_matrix[j][i]));
-                let df = pool.diff(self.forcing[j], self.rates[i]);
-                let df = at(pool, df);
-                c.push(pool.neg(df));
-                k.push(if *is_cyclic {
-                    pool.zero()
-                } else {
-                    let dg = pool.diff(*g, self.coords[i]);
-                    let dg = at(pool, dg);
-                    pool.neg(dg)
-                });
-            }
-            mass.push(m);
-            damping.push(c);
-            stiffness.push(k);
-        }
-        let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+        let parts = Equations {
+            mass: &self.mass_matrix,
+            forcing: &self.forcing,
+            multipliers: &self.multipliers,
+            coords: &self.coords,
+            rates: &self.rates,
+        };
+        let (mass, damping, stiffness, residual) = parts.at_reference(pool, &cyclic, &mut at);
         let residual_is_zero =
             self.multipliers.is_empty() && residual.iter().all(|r| pool.is_identically_zero(*r));
         let constraints: Vec<LinearConstraint> = self
@@ -224,17 +202,15 @@ impl Derivation {
             })
             .collect();
 
-        // A reference is a fixed point of autonomous equations; a drive or a schedule that
-        // is still there makes the small motions those of a time-varying system.
         let time = self.model.time;
-        let mut all: Vec<ExprId> =
-            mass.iter().chain(&damping).chain(&stiffness).flatten().copied().collect();
-        all.extend(&residual);
-        for c in &constraints {
-            all.extend(&c.jacobian);
-            all.extend([c.phi, c.bias]);
-        }
-        refuse_time_dependence(pool, &all, time, span)?;
+        refuse_time_dependence_of(
+            pool,
+            [&mass, &damping, &stiffness],
+            &residual,
+            &constraints,
+            time,
+            span,
+        )?;
 
         Ok(Linearization {
             coords: self.coords.clone(),
@@ -550,15 +526,7 @@ impl Derivation {
         items: &Items,
     ) -> Result<Linearization, Vec<Diagnostic>> {
         let n = self.coords.len();
-        let rows: Vec<ExprId> = self
-            .multipliers
-            .clone()
-            .into_iter()
-            .map(|m| match m.kind {
-                ConstraintKind::Velocity => m.phi,
-                ConstraintKind::Position => self.model.pool.time_derivative(m.phi),
-            })
-            .collect();
+        let rows = self.velocity_rows();
         let Some(dependent_rates) = self.dependent_rates(&rows) else {
             return Err(vec![Diagnostic::error(
                 span,
@@ -632,35 +600,14 @@ impl Derivation {
             let e = pool.subst_memo(e, &map, &mut memo);
             pool.simplify(e)
         };
-        let mut generalized = self.forcing.clone();
-        for m in &self.multipliers {
-            let lambda = pool.sym(m.lambda);
-            for (j, g) in generalized.iter_mut().enumerate() {
-                let force = pool.mul2(m.jacobian[j], lambda);
-                *g = pool.add2(*g, force);
-            }
-        }
-        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
-        for (j, g) in generalized.iter().enumerate() {
-            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
-            for (i, is_cyclic) in cyclic.iter().enumerate() {
-                m.push(at(pool, self.mass_matrix[j][i]));
-                let dg = pool.diff(*g, self.rates[i]);
-                let dg = at(pool, dg);
-                c.push(pool.neg(dg));
-                k.push(if *is_cyclic {
-                    pool.zero()
-                } else {
-                    let dg = pool.diff(*g, self.coords[i]);
-                    let dg = at(pool, dg);
-                    pool.neg(dg)
-                });
-            }
-            mass.push(m);
-            damping.push(c);
-            stiffness.push(k);
-        }
-        let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+        let parts = Equations {
+            mass: &self.mass_matrix,
+            forcing: &self.forcing,
+            multipliers: &self.multipliers,
+            coords: &self.coords,
+            rates: &self.rates,
+        };
+        let (mass, damping, stiffness, residual) = parts.at_reference(pool, &cyclic, &mut at);
         // The dependent rates at 0 in the rows that solve for them.
         let zero_dependent: HashMap<SymId, ExprId> =
             dependent.iter().map(|&i| (self.rates[i], pool.zero())).collect();
@@ -702,15 +649,14 @@ impl Derivation {
             .collect();
 
         let time = self.model.time;
-        let mut all: Vec<ExprId> =
-            mass.iter().chain(&damping).chain(&stiffness).flatten().copied().collect();
-        all.extend(&residual);
-        for c in &constraints {
-            all.extend(&c.jacobian);
-            all.extend(&c.positions);
-            all.extend([c.phi, c.bias]);
-        }
-        refuse_time_dependence(pool, &all, time, span)?;
+        refuse_time_dependence_of(
+            pool,
+            [&mass, &damping, &stiffness],
+            &residual,
+            &constraints,
+            time,
+            span,
+        )?;
 
         Ok(Linearization {
             coords: self.coords.clone(),
@@ -728,6 +674,82 @@ impl Derivation {
             span,
         })
     }
+}
+
+/// The equations of motion with their kept constraints, as the holonomic and the kept paths
+/// linearize them.
+struct Equations<'a> {
+    mass: &'a [Vec<ExprId>],
+    forcing: &'a [ExprId],
+    multipliers: &'a [crate::derive::Multiplier],
+    coords: &'a [SymId],
+    rates: &'a [SymId],
+}
+
+/// M, C, K and the residual at a reference.
+type AtReference = (Vec<Vec<ExprId>>, Vec<Vec<ExprId>>, Vec<Vec<ExprId>>, Vec<ExprId>);
+
+impl Equations<'_> {
+    /// With g = f + Jᵀλ (λ the multipliers' symbols): M, C = −∂f/∂q̇ (J has no rates, for a
+    /// velocity constraint either: it is linear in them), K = −∂g/∂q (zero for a cyclic
+    /// coordinate), and g, each put through `at` (the reference substituted).
+    fn at_reference(
+        &self,
+        pool: &mut Pool,
+        cyclic: &[bool],
+        at: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId,
+    ) -> AtReference {
+        let mut generalized = self.forcing.to_vec();
+        for m in self.multipliers {
+            let lambda = pool.sym(m.lambda);
+            for (j, g) in generalized.iter_mut().enumerate() {
+                let force = pool.mul2(m.jacobian[j], lambda);
+                *g = pool.add2(*g, force);
+            }
+        }
+        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
+        for (j, g) in generalized.iter().enumerate() {
+            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, is_cyclic) in cyclic.iter().enumerate() {
+                m.push(at(pool, self.mass[j][i]));
+                let df = pool.diff(self.forcing[j], self.rates[i]);
+                let df = at(pool, df);
+                c.push(pool.neg(df));
+                k.push(if *is_cyclic {
+                    pool.zero()
+                } else {
+                    let dg = pool.diff(*g, self.coords[i]);
+                    let dg = at(pool, dg);
+                    pool.neg(dg)
+                });
+            }
+            mass.push(m);
+            damping.push(c);
+            stiffness.push(k);
+        }
+        let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+        (mass, damping, stiffness, residual)
+    }
+}
+
+/// A reference is a fixed point of autonomous equations; a drive or a schedule that is still
+/// there makes the small motions those of a time-varying system: refused.
+fn refuse_time_dependence_of(
+    pool: &mut Pool,
+    matrices: [&[Vec<ExprId>]; 3],
+    residual: &[ExprId],
+    constraints: &[LinearConstraint],
+    time: SymId,
+    span: Span,
+) -> Result<(), Vec<Diagnostic>> {
+    let mut all: Vec<ExprId> = matrices.iter().flat_map(|m| m.iter().flatten()).copied().collect();
+    all.extend(residual);
+    for c in constraints {
+        all.extend(&c.jacobian);
+        all.extend(&c.positions);
+        all.extend([c.phi, c.bias]);
+    }
+    refuse_time_dependence(pool, &all, time, span)
 }
 
 /// The reference names no position for these coordinates (`what` says which kind of

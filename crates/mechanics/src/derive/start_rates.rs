@@ -37,18 +37,9 @@ impl Derivation {
             return Ok(());
         }
         let state = self.initial_state();
-        let rows: Vec<(usize, ExprId)> = self
-            .multipliers
-            .clone()
-            .into_iter()
-            .map(|m| {
-                let row = match m.kind {
-                    ConstraintKind::Velocity => m.phi,
-                    ConstraintKind::Position => self.model.pool.time_derivative(m.phi),
-                };
-                (m.constraint, row)
-            })
-            .collect();
+        let constraints: Vec<usize> = self.multipliers.iter().map(|m| m.constraint).collect();
+        let rows: Vec<(usize, ExprId)> =
+            constraints.into_iter().zip(self.velocity_rows()).collect();
         let pool = &mut self.model.pool;
         let mut violated = Vec::new();
         for (c, row) in &rows {
