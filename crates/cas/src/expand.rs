@@ -489,13 +489,8 @@ impl Pool {
     /// algebra is taken to vanish identically. Without a magnitude probe, only a literal zero
     /// vanishes.
     pub fn vanishes_at_generic_points(&self, e: ExprId) -> bool {
-        if self.is_zero(e) {
-            return true;
-        }
-        (0..GENERIC_POINTS).all(|point| match self.at_generic_point(&[e], point) {
-            Some(v) => v[0].0.is_finite() && v[0].1.is_finite() && v[0].0.abs() <= 1e-9 * v[0].1,
-            None => false,
-        })
+        // Zero is the combination of no rows.
+        self.is_zero(e) || self.combination_at_generic_points(&[e], &[]).is_some()
     }
 
     /// The value and the magnitude of each expression at generic point `point` (of
@@ -527,7 +522,7 @@ impl Pool {
                 Some((values.into_iter().map(|(v, _)| v).collect(), scale))
             };
             let (mut residual, scale) = numbers(target)?;
-            if !residual.iter().all(|v| v.is_finite()) {
+            if !scale.is_finite() || !residual.iter().all(|v| v.is_finite()) {
                 return None;
             }
             // Gram–Schmidt against the rows, one after another.

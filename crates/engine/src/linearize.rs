@@ -640,17 +640,7 @@ impl Analysis {
             let a = lu.solve(&forcing).unwrap_or_else(|| DVector::from_element(n, f64::NAN));
             (a, DVector::zeros(0))
         } else {
-            // M·q̈ − Jᵀ·λ = f, J·q̈ = γ.
-            let mut system = DMatrix::zeros(n + k, n + k);
-            system.view_mut((0, 0), (n, n)).copy_from(&mass);
-            system.view_mut((0, n), (n, k)).copy_from(&(-jacobian.transpose()));
-            system.view_mut((n, 0), (k, n)).copy_from(&jacobian);
-            let mut rhs = DVector::zeros(n + k);
-            rhs.rows_mut(0, n).copy_from(&forcing);
-            rhs.rows_mut(n, k).copy_from(&bias);
-            let x = least_squares(system, &rhs)
-                .unwrap_or_else(|| DVector::from_element(n + k, f64::NAN));
-            (x.rows(0, n).into_owned(), x.rows(n, k).into_owned())
+            accelerations_and_multipliers(&mass, &jacobian, &forcing, &bias)
         };
         let multipliers: Vec<f64> = multipliers.iter().copied().collect();
         let accelerations: Vec<f64> = accelerations.iter().copied().collect();
@@ -909,17 +899,10 @@ impl Analysis {
         let mass = square(&out, 0);
         let forcing = DVector::from_fn(n, |j, _| out[3 * n * n + j]);
         let (jacobian, bias, _) = rows(&out);
-        let mut system = DMatrix::zeros(n + k, n + k);
-        system.view_mut((0, 0), (n, n)).copy_from(&mass);
-        system.view_mut((0, n), (n, k)).copy_from(&(-jacobian.transpose()));
-        system.view_mut((n, 0), (k, n)).copy_from(&jacobian);
-        let mut rhs = DVector::zeros(n + k);
-        rhs.rows_mut(0, n).copy_from(&forcing);
-        rhs.rows_mut(n, k).copy_from(&bias);
-        let x =
-            least_squares(system, &rhs).unwrap_or_else(|| DVector::from_element(n + k, f64::NAN));
-        let accelerations: Vec<f64> = x.rows(0, n).iter().copied().collect();
-        let multipliers: Vec<f64> = x.rows(n, k).iter().copied().collect();
+        let (accelerations, multipliers) =
+            accelerations_and_multipliers(&mass, &jacobian, &forcing, &bias);
+        let accelerations: Vec<f64> = accelerations.iter().copied().collect();
+        let multipliers: Vec<f64> = multipliers.iter().copied().collect();
         let out = self.eval(parameters, &inputs(&multipliers, &rates));
         let stiffness = square(&out, 2);
         let damping = square(&out, 1);
@@ -947,7 +930,7 @@ impl Analysis {
         let preferred = |i: usize| dependent.contains(&i);
         let p_rows =
             DMatrix::from_fn(position_rows.len(), n, |r, i| jacobian[(position_rows[r], i)]);
-        let eliminated = pivots(&p_rows, &(0..n).collect::<Vec<_>>(), &preferred);
+        let eliminated = pivots(&p_rows, &preferred);
         let z: Vec<usize> = (0..n).filter(|i| !eliminated.contains(i)).collect();
         let nz = z.len();
         let mut basis = DMatrix::zeros(n, nz);
@@ -975,7 +958,7 @@ impl Analysis {
         let an = &a_rows * &basis;
         let bn = &b_rows * &basis;
         let z_preferred = |c: usize| preferred(z[c]);
-        let dependent_z = pivots(&an, &(0..nz).collect::<Vec<_>>(), &z_preferred);
+        let dependent_z = pivots(&an, &z_preferred);
         let independent_z: Vec<usize> = (0..nz).filter(|c| !dependent_z.contains(c)).collect();
         let nu = independent_z.len();
         let mut t = DMatrix::zeros(nz, nu);
@@ -1087,7 +1070,8 @@ impl Analysis {
 /// One pivot column per row of `m` (rows that are combinations of earlier ones get none):
 /// Gaussian elimination choosing, in each row, among the columns clearly away from zero, a
 /// preferred one if there is one, the largest otherwise.
-fn pivots(m: &DMatrix<f64>, columns: &[usize], preferred: &dyn Fn(usize) -> bool) -> Vec<usize> {
+fn pivots(m: &DMatrix<f64>, preferred: &dyn Fn(usize) -> bool) -> Vec<usize> {
+    let columns: Vec<usize> = (0..m.ncols()).collect();
     let mut work = m.clone();
     let scale = work.amax();
     let mut chosen: Vec<usize> = Vec::new();
@@ -1123,6 +1107,26 @@ fn least_squares_matrix(a: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64
     let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, MAX_ITERATIONS)?;
     let eps = 1e-12 * svd.singular_values.max();
     svd.solve(b, eps).ok()
+}
+
+/// q̈ and λ of M·q̈ − Jᵀ·λ = f, J·q̈ = γ, by least squares (dependent constraints at the
+/// reference are allowed); NaN where the solve fails.
+fn accelerations_and_multipliers(
+    mass: &DMatrix<f64>,
+    jacobian: &DMatrix<f64>,
+    forcing: &DVector<f64>,
+    bias: &DVector<f64>,
+) -> (DVector<f64>, DVector<f64>) {
+    let (n, k) = (mass.nrows(), jacobian.nrows());
+    let mut system = DMatrix::zeros(n + k, n + k);
+    system.view_mut((0, 0), (n, n)).copy_from(mass);
+    system.view_mut((0, n), (n, k)).copy_from(&(-jacobian.transpose()));
+    system.view_mut((n, 0), (k, n)).copy_from(jacobian);
+    let mut rhs = DVector::zeros(n + k);
+    rhs.rows_mut(0, n).copy_from(forcing);
+    rhs.rows_mut(n, k).copy_from(bias);
+    let x = least_squares(system, &rhs).unwrap_or_else(|| DVector::from_element(n + k, f64::NAN));
+    (x.rows(0, n).into_owned(), x.rows(n, k).into_owned())
 }
 
 /// The least-squares solution of smallest norm, robust to a rank-deficient system (dependent
@@ -1213,9 +1217,26 @@ fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<(Vec<(f64, f64)>, usize)> {
 /// first integral's direction leads to a neighbouring steady motion, not away from this one:
 /// the bicycle's forward speed, the sleigh's), and the tolerance it used.
 fn stability_apart(eigenvalues: &[(f64, f64)], first_integrals: usize) -> (Stability, f64) {
-    let (_, tolerance) = stability(eigenvalues);
+    let scale = eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
+    let tolerance = RELATIVE_TOLERANCE * scale;
+    let rest = apart_from_first_integrals(eigenvalues, first_integrals);
+    let verdict = if rest.iter().any(|(re, _)| *re > tolerance) {
+        Stability::Unstable
+    } else if !rest.is_empty() && rest.iter().all(|(re, _)| *re < -tolerance) {
+        Stability::Stable
+    } else {
+        Stability::MarginallyStable
+    };
+    (verdict, tolerance)
+}
+
+/// The eigenvalues without `first_integrals` of their exact zeros (the deflated ones).
+fn apart_from_first_integrals(
+    eigenvalues: &[(f64, f64)],
+    first_integrals: usize,
+) -> Vec<(f64, f64)> {
     let mut skip = first_integrals;
-    let rest: Vec<(f64, f64)> = eigenvalues
+    eigenvalues
         .iter()
         .filter(|z| {
             let drop = skip > 0 && **z == (0.0, 0.0);
@@ -1223,47 +1244,20 @@ fn stability_apart(eigenvalues: &[(f64, f64)], first_integrals: usize) -> (Stabi
             !drop
         })
         .copied()
-        .collect();
-    if rest.is_empty() {
-        return (Stability::MarginallyStable, tolerance);
-    }
-    let verdict = if rest.iter().any(|(re, _)| *re > tolerance) {
-        Stability::Unstable
-    } else if rest.iter().all(|(re, _)| *re < -tolerance) {
-        Stability::Stable
-    } else {
-        Stability::MarginallyStable
-    };
-    (verdict, tolerance)
+        .collect()
 }
 
 /// The largest real part among the eigenvalues apart from the first integrals' zeros.
 fn largest_real_part(numbers: &Numbers) -> f64 {
-    let mut skip = numbers.first_integrals;
-    numbers
-        .eigenvalues
+    apart_from_first_integrals(&numbers.eigenvalues, numbers.first_integrals)
         .iter()
-        .filter(|z| {
-            let drop = skip > 0 && **z == (0.0, 0.0);
-            skip -= usize::from(drop);
-            !drop
-        })
         .map(|z| z.0)
         .fold(f64::NEG_INFINITY, f64::max)
 }
 
-/// The verdict and the absolute tolerance it used.
+/// The verdict on all the eigenvalues and the absolute tolerance it used.
 fn stability(eigenvalues: &[(f64, f64)]) -> (Stability, f64) {
-    let scale = eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
-    let tolerance = RELATIVE_TOLERANCE * scale;
-    let verdict = if eigenvalues.iter().any(|(re, _)| *re > tolerance) {
-        Stability::Unstable
-    } else if !eigenvalues.is_empty() && eigenvalues.iter().all(|(re, _)| *re < -tolerance) {
-        Stability::Stable
-    } else {
-        Stability::MarginallyStable
-    };
-    (verdict, tolerance)
+    stability_apart(eigenvalues, 0)
 }
 
 /// The reference as the scene's terms: each coordinate's position (where it has one) and rate.

@@ -17,6 +17,27 @@ pub(super) struct Energies {
     pub dissipation: ExprId,
 }
 
+/// ½·m·|ṙ|² of a body's centre, built one way for `energies` and the structural rows alike
+/// (which must find the very term in L to take it out).
+pub(super) fn translational_kinetic(pool: &mut Pool, body: &model::Body) -> ExprId {
+    let mut v2 = Vec::new();
+    for x in &body.position {
+        let v = pool.time_derivative(*x);
+        v2.push(pool.powi(v, 2));
+    }
+    let speed2 = pool.add(&v2);
+    let t = pool.mul2(body.mass, speed2);
+    pool.scale(t, &cas::number::ratio(1, 2))
+}
+
+/// ½·I·θ̇² of a body turning in the plane, built one way like [`translational_kinetic`].
+pub(super) fn planar_kinetic(pool: &mut Pool, inertia: ExprId, angle: ExprId) -> ExprId {
+    let w = pool.time_derivative(angle);
+    let w2 = pool.powi(w, 2);
+    let t = pool.mul2(inertia, w2);
+    pool.scale(t, &cas::number::ratio(1, 2))
+}
+
 /// T of every body (translation and, for a rigid body, rotation), V of gravity and the scene's
 /// potentials, and L = T − V + the scene's Lagrangian terms, in all declared coordinates.
 pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
@@ -39,21 +60,11 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
         }
     });
     for body in &model.bodies {
-        let mut v2 = Vec::new();
-        for x in &body.position {
-            let v = pool.time_derivative(*x);
-            v2.push(pool.powi(v, 2));
-        }
-        let speed2 = pool.add(&v2);
-        let t = pool.mul2(body.mass, speed2);
-        kinetic_terms.push(pool.scale(t, &half));
+        kinetic_terms.push(translational_kinetic(pool, body));
         match &body.rotation {
             None => {}
             Some(Rotation::Planar { inertia, angle }) => {
-                let w = pool.time_derivative(*angle);
-                let w2 = pool.powi(w, 2);
-                let t = pool.mul2(*inertia, w2);
-                kinetic_terms.push(pool.scale(t, &half));
+                kinetic_terms.push(planar_kinetic(pool, *inertia, *angle));
             }
             Some(rotation @ Rotation::Spatial { inertia, .. }) => {
                 let w = rotation.spatial_angular_velocity(pool, false).expect("in space");

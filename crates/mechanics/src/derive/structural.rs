@@ -37,26 +37,15 @@ pub(super) fn inertial_terms(
     map: &HashMap<SymId, ExprId>,
     coords: &[SymId],
 ) -> (Vec<InertialTerm>, ExprId) {
-    let half = cas::number::ratio(1, 2);
     let mut terms = Vec::new();
     let mut kinetic = Vec::new();
     let mut candidates: Vec<(ExprId, Vec<ExprId>, ExprId)> = Vec::new();
     for body in &model.bodies {
         // The term exactly as `energies` builds it, so that it cancels from L.
-        let mut v2 = Vec::new();
-        for x in &body.position {
-            let v = pool.time_derivative(*x);
-            v2.push(pool.powi(v, 2));
-        }
-        let speed2 = pool.add(&v2);
-        let t = pool.mul2(body.mass, speed2);
-        let t = pool.scale(t, &half);
+        let t = super::energies::translational_kinetic(pool, body);
         candidates.push((body.mass, body.position.clone(), t));
         if let Some(Rotation::Planar { inertia, angle }) = &body.rotation {
-            let w = pool.time_derivative(*angle);
-            let w2 = pool.powi(w, 2);
-            let t = pool.mul2(*inertia, w2);
-            let t = pool.scale(t, &half);
+            let t = super::energies::planar_kinetic(pool, *inertia, *angle);
             candidates.push((*inertia, vec![*angle], t));
         }
     }
