@@ -38,13 +38,29 @@ pub(super) fn planar_kinetic(pool: &mut Pool, inertia: ExprId, angle: ExprId) ->
     pool.scale(t, &cas::number::ratio(1, 2))
 }
 
+/// ½·ωᵀ·I·ω of a body turning in space (ω in body axes), built one way like
+/// [`translational_kinetic`].
+pub(super) fn spatial_kinetic(
+    pool: &mut Pool,
+    inertia: &[[ExprId; 3]; 3],
+    w: [ExprId; 3],
+) -> ExprId {
+    let mut parts = Vec::new();
+    for (i, row) in inertia.iter().enumerate() {
+        for (j, entry) in row.iter().enumerate() {
+            parts.push(pool.mul(&[w[i], *entry, w[j]]));
+        }
+    }
+    let t = pool.add(&parts);
+    pool.scale(t, &cas::number::ratio(1, 2))
+}
+
 /// T of every body (translation and, for a rigid body, rotation), V of gravity and the scene's
 /// potentials, and L = T − V + the scene's Lagrangian terms, in all declared coordinates.
 pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
     let dim = model.dimension();
     let mut kinetic_terms = Vec::new();
     let mut potential_terms = Vec::new();
-    let half = cas::number::ratio(1, 2);
     let gravity_dir: Option<Vec<ExprId>> = model.gravity.as_ref().map(|g| match &g.direction {
         // `along` gives a direction only: gravity's strength is g whatever the vector's length.
         Some(d) => {
@@ -68,14 +84,7 @@ pub(super) fn energies(pool: &mut Pool, model: &Model) -> Energies {
             }
             Some(rotation @ Rotation::Spatial { inertia, .. }) => {
                 let w = rotation.spatial_angular_velocity(pool, false).expect("in space");
-                let mut parts = Vec::new();
-                for (i, row) in inertia.iter().enumerate() {
-                    for (j, entry) in row.iter().enumerate() {
-                        parts.push(pool.mul(&[w[i], *entry, w[j]]));
-                    }
-                }
-                let t = pool.add(&parts);
-                kinetic_terms.push(pool.scale(t, &half));
+                kinetic_terms.push(spatial_kinetic(pool, inertia, w));
             }
         }
         if let (Some(g), Some(dir)) = (&model.gravity, &gravity_dir) {

@@ -7,6 +7,13 @@
 //! so the term adds m·(∂r/∂qᵢ)·(∂r/∂qⱼ) to Mᵢⱼ and −m·a₀·∂r/∂qᵢ to fᵢ, where a₀ is r̈ with
 //! every q̈ set to zero. A planar body's ½·I·θ̇² is the same with the angle for r.
 //!
+//! A body turning in space, T = ½·ωᵀ·I·ω with ω in body axes and I constant, is Euler's
+//! equations projected the same way: with Wᵢ = ∂ω/∂q̇ᵢ (the partial angular velocity) and α₀
+//! the body-axes derivative of ω with every q̈ set to zero, the term adds Wᵢᵀ·I·Wⱼ to Mᵢⱼ and
+//! −Wᵢᵀ·(I·α₀ + ω × I·ω) to fᵢ. The two routes agree where Rᵀ·R = 1, which for angles means
+//! modulo sin² + cos² = 1: printed rows agree once `simplify` folds those, and a row too large
+//! to simplify is a sum of products of short factors, which is what the numbers want.
+//!
 //! Differentiating T twice builds products of sums that are only expanded, and mostly cancel,
 //! later: their size grows like the cube of the chain's length. These rows hold only what
 //! survives. They are the same polynomial in the same sines, cosines and symbols as the rows
@@ -22,10 +29,19 @@ use cas::{ExprId, Func, Node, Pool, SymId, SymbolKind};
 use model::{Model, Rotation};
 
 /// One term ½·mass·|d position/dt|² of T, with the mass constant.
-struct Inertial {
+pub(super) struct Inertial {
     mass: ExprId,
     /// The position in the remaining coordinates (for a planar body's rotation, its angle).
     position: Vec<ExprId>,
+}
+
+/// One term ½·ωᵀ·I·ω of T, a body turning in space, with I constant.
+pub(super) struct Turning {
+    inertia: [[ExprId; 3]; 3],
+    /// ω in body axes, in the remaining coordinates and their rates.
+    omega: [ExprId; 3],
+    /// Whether ω has a part no rate multiplies (a turning the scene prescribes in time).
+    driven: bool,
 }
 
 /// The kinetic energy terms that take the structural route, in the remaining coordinates,
@@ -60,15 +76,48 @@ pub(super) fn inertial_terms(
         {
             continue;
         }
-        terms.push(InertialTerm(Inertial { mass, position }));
+        terms.push(InertialTerm::Moving(Inertial { mass, position }));
+        kinetic.push(t);
+    }
+    for body in &model.bodies {
+        let Some(rotation @ Rotation::Spatial { inertia, euler_parameters: None, .. }) =
+            &body.rotation
+        else {
+            // Euler parameters give ω exactly only on their unit sphere, where the identity
+            // behind this route needs it everywhere: they are differentiated.
+            continue;
+        };
+        if !inertia.iter().flatten().all(|x| is_constant(pool, *x)) {
+            continue;
+        }
+        let w = rotation.spatial_angular_velocity(pool, false).expect("in space");
+        let t = super::energies::spatial_kinetic(pool, inertia, w);
+        let omega = w.map(|x| pool.subst(x, map));
+        if !omega.iter().all(|x| expands_canonically(pool, *x, &mut safe))
+            || !omega.iter().all(|x| turns_with(pool, *x, coords))
+        {
+            continue;
+        }
+        let rates: HashMap<SymId, ExprId> = coords
+            .iter()
+            .map(|q| (pool.rate(*q).expect("coordinates have rates"), pool.zero()))
+            .collect();
+        let driven = omega.iter().any(|x| {
+            let rest = pool.subst(*x, &rates);
+            !pool.is_zero(rest)
+        });
+        terms.push(InertialTerm::Turning(Turning { inertia: *inertia, omega, driven }));
         kinetic.push(t);
     }
     let kinetic = pool.add(&kinetic);
     (terms, kinetic)
 }
 
-/// A kinetic-energy term on the structural route (opaque outside this module).
-pub(super) struct InertialTerm(Inertial);
+/// A kinetic-energy term on the structural route (its parts private to this module).
+pub(super) enum InertialTerm {
+    Moving(Inertial),
+    Turning(Turning),
+}
 
 /// Whether `e` is constant in time: parameters and numbers only.
 fn is_constant(pool: &mut Pool, e: ExprId) -> bool {
@@ -81,6 +130,17 @@ fn moves_with(pool: &mut Pool, e: ExprId, coords: &[SymId]) -> bool {
     pool.free_symbols(e).iter().all(|s| match pool.symbol(*s).kind {
         SymbolKind::Param | SymbolKind::Time => true,
         SymbolKind::Coordinate { order: 0, .. } => coords.contains(s),
+        SymbolKind::Coordinate { .. } => false,
+    })
+}
+
+/// Whether an angular velocity depends on nothing but the remaining coordinates, their rates,
+/// time and parameters.
+fn turns_with(pool: &mut Pool, e: ExprId, coords: &[SymId]) -> bool {
+    pool.free_symbols(e).iter().all(|s| match pool.symbol(*s).kind {
+        SymbolKind::Param | SymbolKind::Time => true,
+        SymbolKind::Coordinate { order: 0, .. } => coords.contains(s),
+        SymbolKind::Coordinate { order: 1, .. } => coords.iter().any(|q| pool.rate(*q) == Some(*s)),
         SymbolKind::Coordinate { .. } => false,
     })
 }
@@ -142,7 +202,14 @@ pub(super) fn structural_rows(
     // fᵢ = −Σ m·a₀·∂r/∂qᵢ: grouped by (∂r/∂qᵢ, m), so that a chain's accelerations are added
     // once per coordinate before the one product is formed.
     let mut force_parts: Vec<BTreeMap<(ExprId, ExprId), Vec<ExprId>>> = vec![BTreeMap::new(); n];
-    for InertialTerm(term) in terms {
+    for term in terms {
+        let term = match term {
+            InertialTerm::Moving(term) => term,
+            InertialTerm::Turning(turn) => {
+                turning_rows(pool, turn, coords, &mut products, &mut mass_parts, &mut force_parts);
+                continue;
+            }
+        };
         for &x in &term.position {
             let moving: Vec<(usize, SymId)> = pool
                 .free_symbols(x)
@@ -206,6 +273,75 @@ pub(super) fn structural_rows(
     (mass, forcing)
 }
 
+/// The parts a body turning in space adds to M (Wᵢᵀ·I·Wⱼ, one product of entries of W per
+/// nonzero entry of I) and to f (−Wᵢᵀ·(I·α₀ + ω × I·ω)), in the groupings of
+/// [`structural_rows`].
+#[allow(clippy::type_complexity)]
+fn turning_rows(
+    pool: &mut Pool,
+    turn: &Turning,
+    coords: &[SymId],
+    products: &mut HashMap<(ExprId, ExprId), ExprId>,
+    mass_parts: &mut [Vec<BTreeMap<ExprId, Vec<ExprId>>>],
+    force_parts: &mut [BTreeMap<(ExprId, ExprId), Vec<ExprId>>],
+) {
+    let Turning { inertia, omega, .. } = turn;
+    // The partial angular velocities, of the rates ω moves with.
+    let mut partial: Vec<(usize, [ExprId; 3])> = Vec::new();
+    for (i, q) in coords.iter().enumerate() {
+        let rate = pool.rate(*q).expect("coordinates have rates");
+        let w = omega.map(|x| pool.diff(x, rate));
+        if !w.iter().all(|x| pool.is_zero(*x)) {
+            partial.push((i, w));
+        }
+    }
+    if partial.is_empty() {
+        return;
+    }
+    let nonzero: Vec<(usize, usize)> = (0..3)
+        .flat_map(|a| (0..3).map(move |b| (a, b)))
+        .filter(|&(a, b)| !pool.is_zero(inertia[a][b]))
+        .collect();
+    for (k, &(i, wi)) in partial.iter().enumerate() {
+        for &(j, wj) in &partial[k..] {
+            for &(a, b) in &nonzero {
+                let (x, y) = (wi[a], wj[b]);
+                if pool.is_zero(x) || pool.is_zero(y) {
+                    continue;
+                }
+                let p = *products.entry((x, y)).or_insert_with(|| pool.mul2(x, y));
+                mass_parts[i][j].entry(p).or_default().push(inertia[a][b]);
+            }
+        }
+    }
+    // I·α₀ + ω × I·ω, the body-axes rate of the angular momentum with every q̈ set to zero.
+    let alpha = omega.map(|x| acceleration_without_q2(pool, x));
+    let times = |pool: &mut Pool, v: &[ExprId; 3]| -> [ExprId; 3] {
+        [0, 1, 2].map(|a| {
+            let parts: Vec<ExprId> = (0..3).map(|b| pool.mul2(inertia[a][b], v[b])).collect();
+            pool.add(&parts)
+        })
+    };
+    let momentum = times(pool, omega);
+    let spun = times(pool, &alpha);
+    let one = pool.one();
+    for a in 0..3 {
+        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+        let ahead = pool.mul2(omega[b], momentum[c]);
+        let behind = pool.mul2(omega[c], momentum[b]);
+        let gyroscopic = pool.sub(ahead, behind);
+        let rate = pool.add2(spun[a], gyroscopic);
+        if pool.is_zero(rate) {
+            continue;
+        }
+        for &(i, wi) in &partial {
+            if !pool.is_zero(wi[a]) {
+                force_parts[i].entry((wi[a], one)).or_default().push(rate);
+            }
+        }
+    }
+}
+
 /// d/dt of a velocity with every acceleration q̈ taken as zero: Σ ∂v/∂q·q̇ + ∂v/∂t.
 fn acceleration_without_q2(pool: &mut Pool, velocity: ExprId) -> ExprId {
     let mut parts = Vec::new();
@@ -238,13 +374,21 @@ pub(super) fn kinetic_expansion(
     kinetic: ExprId,
     structural_kinetic: ExprId,
 ) -> Option<ExprId> {
-    for InertialTerm(term) in terms {
-        for &x in &term.position {
-            let time =
-                pool.free_symbols(x).iter().any(|s| pool.symbol(*s).kind == SymbolKind::Time);
-            if time {
-                return None;
+    for term in terms {
+        match term {
+            InertialTerm::Moving(term) => {
+                for &x in &term.position {
+                    let time = pool
+                        .free_symbols(x)
+                        .iter()
+                        .any(|s| pool.symbol(*s).kind == SymbolKind::Time);
+                    if time {
+                        return None;
+                    }
+                }
             }
+            InertialTerm::Turning(turn) if turn.driven => return None,
+            InertialTerm::Turning(_) => {}
         }
     }
     let half = cas::number::ratio(1, 2);
