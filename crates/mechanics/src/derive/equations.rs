@@ -239,6 +239,58 @@ mod tests {
         );
     }
 
+    /// The rows of d/dt ∂L/∂q̇ − ∂L/∂q = 0 with L differentiated twice, the route the structural
+    /// rows replace, for comparing with them: M and f.
+    fn rows_by_differentiation(
+        pool: &mut Pool,
+        model: &Model,
+        coordinates: &Coordinates,
+    ) -> (Vec<Vec<ExprId>>, Vec<ExprId>) {
+        let full = energies(pool, model);
+        let l = pool.subst(full.lagrangian, &coordinates.elimination_map);
+        let (coords, rates) = (&coordinates.coords, &coordinates.rates);
+        let mut mass = Vec::new();
+        let mut forcing = Vec::new();
+        for (&coord, &rate) in coords.iter().zip(rates) {
+            let p = pool.diff(l, rate);
+            mass.push(rates.iter().map(|r| pool.diff(p, *r)).collect());
+            let mut parts = vec![pool.diff(l, coord)];
+            for (q, r) in coords.iter().zip(rates) {
+                let dp = pool.diff(p, *q);
+                let r = pool.sym(*r);
+                let t = pool.mul2(dp, r);
+                parts.push(pool.neg(t));
+            }
+            let dpt = pool.diff(p, model.time);
+            parts.push(pool.neg(dpt));
+            forcing.push(pool.add(&parts));
+        }
+        (mass, forcing)
+    }
+
+    /// A body turning in space takes the structural route (Wᵀ·I·W and Euler's gyroscopic
+    /// terms), which agrees with differentiating ½·ωᵀ·I·ω twice only through sin² + cos² = 1:
+    /// an inertia with products, three angles, a centre that moves with them, and a frame
+    /// turned in time underneath.
+    #[test]
+    fn a_body_turning_in_space_has_the_rows_of_its_lagrangian() {
+        for orientation in ["rotz(a)*rotx(b)*roty(c)", "rotz(w*t)*rotx(a)*rotz(b)*roty(c)"] {
+            let source = format!(
+                "param m, g, w, l, A, B, C, D\ncoord a\ncoord b\ncoord c\nbody top {{ mass m; inertia [A, 0, D; 0, B, 0; D, 0, C]; orientation {orientation}; position rotz(a)*rotx(b)*(0, 0, l) }}\ngravity g"
+            );
+            let (mut pool, model, coordinates, rows) = rows_of(&source);
+            let (mass, forcing) = rows_by_differentiation(&mut pool, &model, &coordinates);
+            for (i, row) in mass.iter().enumerate() {
+                for (j, by_l) in row.iter().enumerate() {
+                    let d = pool.sub(rows.mass_matrix[i][j], *by_l);
+                    assert!(pool.is_identically_zero(d), "M[{i}][{j}] of {orientation}");
+                }
+                let d = pool.sub(rows.forcing[i], forcing[i]);
+                assert!(pool.is_identically_zero(d), "f[{i}] of {orientation}");
+            }
+        }
+    }
+
     #[test]
     fn loads_do_virtual_work() {
         let (mut pool, model) = scene(
