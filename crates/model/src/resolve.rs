@@ -1291,6 +1291,17 @@ impl<'a> Resolver<'a> {
                 Some((v, dims))
             }
             ExprKind::Binary { op, lhs, rhs } => {
+                if let (BinOp::Mul | BinOp::Div, ExprKind::Neg(inner)) = (op, &lhs.kind) {
+                    // `-a*b` is built as −(a·b), the product it prints back from: as (−a)·b a
+                    // sum a would take the sign into its terms, `-(y + z)*x` would read back as
+                    // `(-y - z)*x`, and print so.
+                    let product = Expr {
+                        kind: ExprKind::Binary { op: *op, lhs: inner.clone(), rhs: rhs.clone() },
+                        span: e.span,
+                    };
+                    let negated = Expr { kind: ExprKind::Neg(Box::new(product)), span: e.span };
+                    return self.value(&negated);
+                }
                 let (l, r) = (self.value(lhs), self.value(rhs));
                 let ((l, l_dims), (r, r_dims)) = (l?, r?);
                 let v = self.binary(*op, l, r, lhs, rhs)?;
