@@ -151,6 +151,12 @@ impl Pool {
         self.fmt(e, style).0
     }
 
+    /// Whether `e` prints in full rather than as its operation count (see [`Pool::print`]):
+    /// where it does not, making it readable first is wasted.
+    pub fn prints_in_full(&self, e: ExprId) -> bool {
+        !self.tree_exceeds(e, PRINT_NODE_LIMIT)
+    }
+
     /// Whether `e` written out as a tree has more than `limit` nodes (each shared
     /// subexpression counted every time it occurs), without writing it out.
     pub fn tree_exceeds(&self, e: ExprId, limit: usize) -> bool {

@@ -43,8 +43,10 @@ pub fn collect(d: &mut Derivation) -> Derived {
         .iter()
         .map(|c| match c.name.contains('.') {
             true => {
-                let phi = d.model.pool.simplify(c.phi);
-                (phi, d.model.pool.zero())
+                // As the derivation keeps it: one too large to print is left as built.
+                let pool = &mut d.model.pool;
+                let phi = if pool.prints_in_full(c.phi) { pool.simplify(c.phi) } else { c.phi };
+                (phi, pool.zero())
             }
             false => (c.lhs, c.rhs),
         })
@@ -55,9 +57,12 @@ pub fn collect(d: &mut Derivation) -> Derived {
         .iter()
         .map(|r| {
             r.iter()
-                .map(|e| {
-                    let f = pool.factor_content(*e);
-                    gathered(pool, f)
+                .map(|e| match pool.prints_in_full(*e) {
+                    true => {
+                        let f = pool.factor_content(*e);
+                        gathered(pool, f)
+                    }
+                    false => *e,
                 })
                 .collect()
         })
@@ -65,15 +70,16 @@ pub fn collect(d: &mut Derivation) -> Derived {
     let forcing = d
         .forcing
         .iter()
-        .map(|e| {
-            let s = pool.simplify(*e);
-            gathered(pool, s)
+        .map(|e| match pool.prints_in_full(*e) {
+            true => {
+                let s = pool.simplify(*e);
+                gathered(pool, s)
+            }
+            false => *e,
         })
         .collect();
-    let kinetic = compact(pool, d.kinetic);
-    let kinetic = gathered(pool, kinetic);
-    let potential = compact(pool, d.potential);
-    let potential = gathered(pool, potential);
+    let kinetic = readable(pool, d.kinetic);
+    let potential = readable(pool, d.potential);
     let lagrangian = (!d.model.lagrangians.is_empty()).then(|| pool.simplify(d.lagrangian));
     let reactions = d.reactions.iter().map(|r| (r.symbol, compact(pool, r.expr))).collect();
     let reactions_of_state = d
@@ -114,6 +120,16 @@ pub fn collect(d: &mut Derivation) -> Derived {
         independent,
         constraint_sides,
     }
+}
+
+/// An energy in its compact form, gathered; unless it is too large to print as built (a
+/// bicycle's T), which no example's simplifying brings back under the limit.
+fn readable(pool: &mut Pool, e: ExprId) -> ExprId {
+    if !pool.prints_in_full(e) {
+        return e;
+    }
+    let c = compact(pool, e);
+    gathered(pool, c)
 }
 
 /// A sum with its terms that move alike gathered under one coefficient of parameters.

@@ -25,6 +25,24 @@ impl Derivation {
         let mut out = Vec::new();
         for i in 0..n {
             let pool = &mut self.model.pool;
+            if !self.mass_matrix[i].iter().all(|e| pool.prints_in_full(*e)) {
+                // A bicycle's row: it prints as operation counts whatever is done to it.
+                let terms: Vec<ExprId> = (0..n)
+                    .map(|j| {
+                        let a = pool.sym(self.accels[j]);
+                        pool.mul2(self.mass_matrix[i][j], a)
+                    })
+                    .collect();
+                let lhs = pool.add(&terms);
+                let mut rhs_parts = vec![self.forcing[i]];
+                for m in &self.multipliers {
+                    let lam = pool.sym(m.lambda);
+                    rhs_parts.push(pool.mul2(m.jacobian[i], lam));
+                }
+                let rhs = pool.add(&rhs_parts);
+                out.push(Equation { lhs, rhs });
+                continue;
+            }
             let row: Vec<ExprId> = self.mass_matrix[i].iter().map(|e| pool.simplify(*e)).collect();
             let (content, _) = pool.common_content(&row);
             // The diagonal of a mass matrix is positive: keep its term's sign positive.
@@ -65,6 +83,17 @@ impl Derivation {
         }
         for m in self.multipliers.clone() {
             let pool = &mut self.model.pool;
+            if !m.jacobian.iter().chain([&m.bias]).all(|e| pool.prints_in_full(*e)) {
+                let terms: Vec<ExprId> = (0..n)
+                    .map(|j| {
+                        let a = pool.sym(self.accels[j]);
+                        pool.mul2(m.jacobian[j], a)
+                    })
+                    .collect();
+                let lhs = pool.add(&terms);
+                out.push(Equation { lhs, rhs: m.bias });
+                continue;
+            }
             let row: Vec<ExprId> = m.jacobian.iter().map(|e| pool.simplify(*e)).collect();
             let (content, _) = pool.common_content(&row);
             let inverse = pool.powi(content, -1);
