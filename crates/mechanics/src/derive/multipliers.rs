@@ -58,13 +58,15 @@ pub(super) fn kept_constraints(
                 continue;
             }
         }
-        // Expanded, a row prints canonically. A row too large to print is kept as built:
-        // expanding it multiplies out what its parts share (a bicycle's front wheel rolling:
-        // 1,324 lowered operations as built, 6,367 expanded, and its bias 7 times that).
+        // Simplified, a row and its Jacobian print as a hand derivation writes them (a rolling
+        // coin's −r·cos ψ, not −r·sin²θ·cos ψ − r·cos ψ·cos²θ). A row too large to print is
+        // kept as built: multiplying it out loses what its parts share (a bicycle's front
+        // wheel rolling: 1,324 lowered operations as built, 6,367 expanded, its bias 7 times
+        // that).
         let phi = if pool.tree_exceeds(phi, cas::print::PRINT_NODE_LIMIT) {
             phi
         } else {
-            pool.expand(phi)
+            pool.simplify(phi)
         };
         // The row is the first derivative of Φ that has accelerations: Φ̈ for a position
         // constraint, Φ̇ for a velocity constraint. Its coefficients of q̈ are the Jacobian.
@@ -202,7 +204,7 @@ mod tests {
         );
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
         assert_eq!(m.constraint, 1);
-        assert_eq!(ascii(&pool, m.phi), "-L^2 + L^2*cos(theta)^2 + x^2");
+        assert_eq!(ascii(&pool, m.phi), "-L^2*sin(theta)^2 + x^2");
         let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(jacobian, ["2*x", "-2*L^2*sin(theta)*cos(theta)"]);
         assert_eq!(
