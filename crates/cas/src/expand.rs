@@ -393,6 +393,7 @@ impl Pool {
         }
         let x = self.expand(e);
         let x = self.fold_pythagoras(x);
+        let x = self.fold_pythagoras_groups(x);
         let r = self.fold_angle_sums(x);
         self.simplify_memo.insert(e, r);
         r
@@ -699,6 +700,54 @@ impl Pool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// (sin² + cos²)² and ³ multiplied out fold whole, beside other terms and under a factor:
+    /// r·sin⁴λ + 2·r·sin²λ·cos²λ + r·cos⁴λ + R − r is R, and under sin²θ the same again.
+    #[test]
+    fn the_square_of_pythagoras_folds() {
+        let mut p = Pool::new();
+        let sym = |p: &mut Pool, name: &str| {
+            let s = p.param(name);
+            p.sym(s)
+        };
+        let (r, big_r, lambda, theta) =
+            (sym(&mut p, "r"), sym(&mut p, "R"), sym(&mut p, "l"), sym(&mut p, "th"));
+        let (s, c) = (p.sin(lambda), p.cos(lambda));
+        let (s2, c2, s4, c4) = (p.powi(s, 2), p.powi(c, 2), p.powi(s, 4), p.powi(c, 4));
+        let square = |p: &mut Pool, x: ExprId| {
+            let a = p.mul2(x, s4);
+            let b = p.mul(&[x, s2, c2]);
+            let b = p.scale(b, &number::int(2));
+            let d = p.mul2(x, c4);
+            p.add(&[a, b, d])
+        };
+        let folded = square(&mut p, r);
+        let e = p.add(&[folded, big_r]);
+        let e = p.sub(e, r);
+        assert_eq!(p.simplify(e), big_r);
+        let sin_theta = p.sin(theta);
+        let under = p.powi(sin_theta, 2);
+        let x = p.mul2(r, under);
+        let e = square(&mut p, x);
+        assert_eq!(p.simplify(e), x);
+        // The cube, as the pairwise folds leave it: sin⁶ + 3·sin²·cos² + cos⁶ − 1 is zero, and
+        // with sin λ·cos λ in front, still zero.
+        let (s6, c6) = (p.powi(s, 6), p.powi(c, 6));
+        let mixed = p.mul(&[s2, c2]);
+        let mixed = p.scale(mixed, &number::int(3));
+        let one = p.one();
+        let cube = p.add(&[s6, mixed, c6]);
+        let cube = p.sub(cube, one);
+        let folded = p.simplify(cube);
+        assert!(p.is_zero(folded));
+        let front = p.mul(&[r, s, c]);
+        let e = p.mul2(front, cube);
+        let folded = p.simplify(e);
+        assert!(p.is_zero(folded));
+        // Not one term modulo sin² + cos² = 1: left alone.
+        let e = p.add(&[s4, c4]);
+        assert_eq!(p.simplify(e), e);
+    }
 
     #[test]
     fn zero_needs_common_denominators_and_pythagoras() {

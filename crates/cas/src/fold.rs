@@ -1,5 +1,5 @@
-//! The pairwise folds of `simplify` (sin²u + cos²u = 1, and products of sines and cosines
-//! into one function of a sum or difference) in time near linear in the number of terms.
+//! The folds of `simplify` (sin²u + cos²u = 1 and its square, and products of sines and
+//! cosines into one function of a sum or difference) in time near linear in the number of terms.
 //!
 //! Each fold looks, for one term, for a partner term that its own factors determine; the
 //! folds take the first term (in the sum's order) that has a partner, fold it, and look
@@ -12,7 +12,7 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
-use num_traits::{One, Zero};
+use num_traits::{One, ToPrimitive, Zero};
 
 use crate::number::{self, Rational};
 use crate::pool::{ExprId, Func, Node, Pool};
@@ -177,6 +177,132 @@ impl Pool {
         (None, looked_up)
     }
 
+    /// Folds what the pairwise folds leave of a polynomial in sin²u and cos²u that is one
+    /// term modulo sin²u + cos²u = 1: the terms that share everything else (X, and an odd sin u
+    /// or cos u) are gathered as X·Σ k·s^i·(1 − s)^j in s = sin²u, and as the same in cos²u,
+    /// and where either has at most one term, and fewer than the terms gathered, it replaces
+    /// them. (sin² + cos²)² and (sin² + cos²)³ multiplied out are what this finds: a unit axis
+    /// written in angles leaves them in every product of rotations about it.
+    pub(crate) fn fold_pythagoras_groups(&mut self, e: ExprId) -> ExprId {
+        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
+        let mut groups: BTreeMap<GroupKey, Vec<Member>> = BTreeMap::new();
+        let one = self.one();
+        for (t, k) in terms.iter() {
+            let (c, fs) = self.factors(*t);
+            let mut angles: Vec<ExprId> = fs
+                .iter()
+                .filter_map(|(b, x)| match self.node(*b) {
+                    Node::Func(Func::Sin | Func::Cos, u)
+                        if x.is_integer() && x > &Rational::zero() =>
+                    {
+                        Some(*u)
+                    }
+                    _ => None,
+                })
+                .collect();
+            angles.sort();
+            angles.dedup();
+            'angles: for u in angles {
+                let (mut sin_power, mut cos_power) = (0u32, 0u32);
+                let mut rest = Vec::with_capacity(fs.len());
+                for (b, x) in &fs {
+                    let power = match self.node(*b) {
+                        Node::Func(Func::Sin, v) if *v == u => &mut sin_power,
+                        Node::Func(Func::Cos, v) if *v == u => &mut cos_power,
+                        _ => {
+                            rest.push((*b, x.clone()));
+                            continue;
+                        }
+                    };
+                    // A quotient by sin u or cos u is no polynomial in them.
+                    match x.is_integer().then(|| x.to_u32()).flatten() {
+                        Some(n) => *power = n,
+                        None => continue 'angles,
+                    }
+                }
+                let x = self.product(&c, &rest);
+                let key =
+                    GroupKey { angle: u, rest: x, odd_sin: sin_power % 2, odd_cos: cos_power % 2 };
+                let member =
+                    Member { term: Some(*t), sin: sin_power / 2, cos: cos_power / 2, k: k.clone() };
+                groups.entry(key).or_default().push(member);
+            }
+        }
+        if !constant.is_zero() {
+            for (key, members) in groups.iter_mut() {
+                if key.rest == one && key.odd_sin == 0 && key.odd_cos == 0 {
+                    members.push(Member { term: None, sin: 0, cos: 0, k: constant.clone() });
+                }
+            }
+        }
+        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
+        let mut constant = constant;
+        let mut constant_used = false;
+        let mut changed = false;
+        for (key, members) in groups {
+            if members.len() < 3 {
+                continue;
+            }
+            // A term (or the constant) another group has already folded is gone.
+            let present = members.iter().all(|m| match m.term {
+                Some(t) => terms.contains_key(&t),
+                None => !constant_used,
+            });
+            if !present {
+                continue;
+            }
+            let in_sin = polynomial(&members, |m| (m.sin, m.cos));
+            let in_cos = polynomial(&members, |m| (m.cos, m.sin));
+            let nonzero = |p: &[Rational]| p.iter().filter(|c| !c.is_zero()).count();
+            let (poly, func) = if nonzero(&in_sin) <= nonzero(&in_cos) {
+                (in_sin, Func::Sin)
+            } else {
+                (in_cos, Func::Cos)
+            };
+            if nonzero(&poly) > 1 || nonzero(&poly) >= members.len() {
+                continue;
+            }
+            for m in &members {
+                match m.term {
+                    Some(t) => {
+                        terms.remove(&t);
+                    }
+                    None => {
+                        constant -= &m.k;
+                        constant_used = true;
+                    }
+                }
+            }
+            changed = true;
+            let Some((degree, coefficient)) = poly.iter().enumerate().find(|(_, c)| !c.is_zero())
+            else {
+                continue;
+            };
+            let (sin_u, cos_u) = (self.sin(key.angle), self.cos(key.angle));
+            let (sin_power, cos_power) = match func {
+                Func::Sin => (2 * degree as i64 + i64::from(key.odd_sin), i64::from(key.odd_cos)),
+                _ => (i64::from(key.odd_sin), 2 * degree as i64 + i64::from(key.odd_cos)),
+            };
+            let (s, c) = (self.powi(sin_u, sin_power), self.powi(cos_u, cos_power));
+            let folded = self.mul(&[key.rest, s, c]);
+            let (rc, rt) = self.split_coefficient(folded);
+            let k = number::times(&rc, coefficient);
+            if let Some(n) = self.as_num(rt) {
+                constant += n * &k;
+            } else {
+                let entry = terms.entry(rt).or_default();
+                number::add_to(entry, &k);
+                if entry.is_zero() {
+                    terms.remove(&rt);
+                }
+            }
+        }
+        if !changed {
+            return e;
+        }
+        self.sum_of(constant, terms)
+    }
+
     /// [`Pool::fold_angle_sums`] with each term examined once, and again only when a term it
     /// could pair with changes.
     pub(crate) fn fold_angle_sums_worklist(&mut self, e: ExprId) -> ExprId {
@@ -258,4 +384,43 @@ impl Pool {
         }
         (None, looked_up)
     }
+}
+
+/// Terms that differ only in even powers of sin u and cos u: the angle, what else they have
+/// (coefficient included), and whether sin u and cos u are there to an odd power.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct GroupKey {
+    angle: ExprId,
+    rest: ExprId,
+    odd_sin: u32,
+    odd_cos: u32,
+}
+
+/// One term of a group, k·(sin²u)^sin·(cos²u)^cos (`None`: the sum's constant).
+struct Member {
+    term: Option<ExprId>,
+    sin: u32,
+    cos: u32,
+    k: Rational,
+}
+
+/// Σ k·x^i·(1 − x)^j over the members, with (i, j) as `powers` picks them, as coefficients of
+/// x⁰, x¹, …
+fn polynomial(members: &[Member], powers: impl Fn(&Member) -> (u32, u32)) -> Vec<Rational> {
+    let mut out: Vec<Rational> = Vec::new();
+    for m in members {
+        let (i, j) = powers(m);
+        // (1 − x)^j by the binomial theorem.
+        let mut binomial = number::int(1);
+        for r in 0..=j {
+            let degree = (i + r) as usize;
+            if out.len() <= degree {
+                out.resize(degree + 1, Rational::zero());
+            }
+            let sign = if r % 2 == 0 { number::int(1) } else { number::int(-1) };
+            number::add_to(&mut out[degree], &(&m.k * &binomial * sign));
+            binomial = binomial * number::int(i64::from(j - r)) / number::int(i64::from(r + 1));
+        }
+    }
+    out
 }
