@@ -185,6 +185,29 @@ impl Pool {
     /// written in angles leaves them in every product of rotations about it.
     pub(crate) fn fold_pythagoras_groups(&mut self, e: ExprId) -> ExprId {
         let Node::Add(constant, terms) = self.node(e).clone() else { return e };
+        // A group that folds to one term and that the pairwise folds left has a term of degree
+        // 2 or more in sin²u and cos²u: up to degree 1, the only such groups are their pairs.
+        // The angles with such a term, found without building anything.
+        let mut heavy: Vec<ExprId> = Vec::new();
+        for (t, _) in terms.iter() {
+            let (_, fs) = self.factors(*t);
+            let mut degrees: Vec<(ExprId, u32)> = Vec::new();
+            for (b, x) in &fs {
+                if let Node::Func(Func::Sin | Func::Cos, u) = self.node(*b) {
+                    let half = x.is_integer().then(|| x.to_u32()).flatten().unwrap_or(0) / 2;
+                    match degrees.iter_mut().find(|(v, _)| v == u) {
+                        Some((_, d)) => *d += half,
+                        None => degrees.push((*u, half)),
+                    }
+                }
+            }
+            heavy.extend(degrees.into_iter().filter(|(_, d)| *d >= 2).map(|(u, _)| u));
+        }
+        if heavy.is_empty() {
+            return e;
+        }
+        heavy.sort();
+        heavy.dedup();
         let mut groups: BTreeMap<GroupKey, Vec<Member>> = BTreeMap::new();
         let one = self.one();
         for (t, k) in terms.iter() {
@@ -193,7 +216,9 @@ impl Pool {
                 .iter()
                 .filter_map(|(b, x)| match self.node(*b) {
                     Node::Func(Func::Sin | Func::Cos, u)
-                        if x.is_integer() && x > &Rational::zero() =>
+                        if x.is_integer()
+                            && x > &Rational::zero()
+                            && heavy.binary_search(u).is_ok() =>
                     {
                         Some(*u)
                     }
