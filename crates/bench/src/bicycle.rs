@@ -38,6 +38,7 @@ pub fn run() {
     let dynamics = prepared.lower(&inputs, &exprs).expect("lowers");
     let ops = dynamics.op_counts().total();
     // Each part lowered alone, so what they share is counted in each: they add up to more.
+    // The slots as `dynamics_exprs` lays them out: M by columns, f, then the constraint rows.
     let part = |range: std::ops::Range<usize>| {
         let program = prepared.lower(&inputs, &exprs[range]).expect("lowers");
         program.op_counts().total()

@@ -744,9 +744,52 @@ mod tests {
         let e = p.mul2(front, cube);
         let folded = p.simplify(e);
         assert!(p.is_zero(folded));
-        // Not one term modulo sin² + cos² = 1: left alone.
-        let e = p.add(&[s4, c4]);
+        // Not one term modulo sin² + cos² = 1 (it is 2 − sin², or 1 + cos²), and no pair
+        // folds: sin⁴ + 3·sin²·cos² + 2·cos⁴ is left alone.
+        let mixed = p.mul(&[s2, c2]);
+        let mixed = p.scale(mixed, &number::int(3));
+        let twice = p.scale(c4, &number::int(2));
+        let e = p.add(&[s4, mixed, twice]);
         assert_eq!(p.simplify(e), e);
+        // The constant may stand apart from a group that folds: 1 + sin²·cos⁴ + 2·sin⁴·cos²
+        // + sin⁶ is 1 + sin².
+        let (s6, c4s2, s4c2) = (p.powi(s, 6), p.mul(&[s2, c4]), p.mul(&[s4, c2]));
+        let s4c2 = p.scale(s4c2, &number::int(2));
+        let e = p.add(&[one, c4s2, s4c2, s6]);
+        let expected = p.add(&[one, s2]);
+        assert_eq!(p.simplify(e), expected);
+    }
+
+    /// A term in the groups of two angles: the first fold changes it, and the second, built
+    /// on its old coefficient, must not take it away: (sin²u + cos²u)²·sin⁴v + (sin²v + cos²v)²
+    /// multiplied out (its sin⁴v in both groups) is 1 + sin⁴v, and what simplify makes of it
+    /// is equal.
+    #[test]
+    fn groups_that_share_a_term_fold_exactly() {
+        let mut p = Pool::new();
+        let sym = |p: &mut Pool, name: &str| {
+            let s = p.param(name);
+            p.sym(s)
+        };
+        let (u, v) = (sym(&mut p, "u"), sym(&mut p, "v"));
+        let square_of = |p: &mut Pool, a: ExprId, front: ExprId| {
+            let (s, c) = (p.sin(a), p.cos(a));
+            let (s2, c2, s4, c4) = (p.powi(s, 2), p.powi(c, 2), p.powi(s, 4), p.powi(c, 4));
+            let mixed = p.mul(&[front, s2, c2]);
+            let mixed = p.scale(mixed, &number::int(2));
+            let a = p.mul2(front, s4);
+            let b = p.mul2(front, c4);
+            p.add(&[a, mixed, b])
+        };
+        let sin_v = p.sin(v);
+        let sin4_v = p.powi(sin_v, 4);
+        let one = p.one();
+        let first = square_of(&mut p, u, sin4_v);
+        let second = square_of(&mut p, v, one);
+        let e = p.add(&[first, second]);
+        let simplified = p.simplify(e);
+        let difference = p.sub(simplified, e);
+        assert!(p.is_identically_zero(difference), "{}", p.print(simplified, crate::Style::Ascii));
     }
 
     #[test]

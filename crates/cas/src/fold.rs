@@ -245,6 +245,9 @@ impl Pool {
                         None => continue 'angles,
                     }
                 }
+                if (sin_power / 2) + (cos_power / 2) > GROUP_DEGREE_LIMIT {
+                    continue;
+                }
                 let x = self.product(&c, &rest);
                 let key =
                     GroupKey { angle: u, rest: x, odd_sin: sin_power % 2, odd_cos: cos_power % 2 };
@@ -253,49 +256,39 @@ impl Pool {
                 groups.entry(key).or_default().push(member);
             }
         }
-        if !constant.is_zero() {
-            for (key, members) in groups.iter_mut() {
-                if key.rest == one && key.odd_sin == 0 && key.odd_cos == 0 {
-                    members.push(Member { term: None, sin: 0, cos: 0, k: constant.clone() });
-                }
-            }
-        }
+        let original_constant = constant.clone();
         let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
         let mut constant = constant;
-        let mut constant_used = false;
         let mut changed = false;
-        for (key, members) in groups {
-            if members.len() < 3 {
-                continue;
-            }
-            // A term (or the constant) another group has already folded is gone.
-            let present = members.iter().all(|m| match m.term {
-                Some(t) => terms.contains_key(&t),
-                None => !constant_used,
+        for (key, mut members) in groups {
+            // Every fold is an identity among its own members; one whose members another fold
+            // has changed since (a term two angles share) is left for the next `simplify`.
+            let unchanged = members.iter().all(|m| match m.term {
+                Some(t) => terms.get(&t) == Some(&m.k),
+                None => constant == m.k,
             });
-            if !present {
+            if !unchanged {
                 continue;
             }
-            let in_sin = polynomial(&members, |m| (m.sin, m.cos));
-            let in_cos = polynomial(&members, |m| (m.cos, m.sin));
-            let nonzero = |p: &[Rational]| p.iter().filter(|c| !c.is_zero()).count();
-            let (poly, func) = if nonzero(&in_sin) <= nonzero(&in_cos) {
-                (in_sin, Func::Sin)
-            } else {
-                (in_cos, Func::Cos)
-            };
-            if nonzero(&poly) > 1 || nonzero(&poly) >= members.len() {
-                continue;
+            let mut fold = one_term(&members);
+            // The sum's constant belongs to the group of plain powers, where it may be what
+            // makes it one term (sin⁶ + 3·sin²·cos² + cos⁶ − 1) or what keeps it from one.
+            let plain = key.rest == one && key.odd_sin == 0 && key.odd_cos == 0;
+            if fold.is_none()
+                && plain
+                && !original_constant.is_zero()
+                && constant == original_constant
+            {
+                members.push(Member { term: None, sin: 0, cos: 0, k: constant.clone() });
+                fold = one_term(&members);
             }
+            let Some((poly, func)) = fold else { continue };
             for m in &members {
                 match m.term {
                     Some(t) => {
                         terms.remove(&t);
                     }
-                    None => {
-                        constant -= &m.k;
-                        constant_used = true;
-                    }
+                    None => constant -= &m.k,
                 }
             }
             changed = true;
@@ -409,6 +402,28 @@ impl Pool {
         }
         (None, looked_up)
     }
+}
+
+/// The highest degree in sin²u and cos²u a term may have to join a group: (sin² + cos²)³ is
+/// of degree 3, and the polynomials grow as the square of the degree.
+const GROUP_DEGREE_LIMIT: u32 = 8;
+
+/// The group's polynomial in sin²u or in cos²u, whichever has fewer terms, and which, where it
+/// has at most one term and fewer than the group has members.
+fn one_term(members: &[Member]) -> Option<(Vec<Rational>, Func)> {
+    if members.len() < 3 {
+        // Pairs are the pairwise folds'.
+        return None;
+    }
+    let in_sin = polynomial(members, |m| (m.sin, m.cos));
+    let in_cos = polynomial(members, |m| (m.cos, m.sin));
+    let nonzero = |p: &[Rational]| p.iter().filter(|c| !c.is_zero()).count();
+    let (poly, func) = if nonzero(&in_sin) <= nonzero(&in_cos) {
+        (in_sin, Func::Sin)
+    } else {
+        (in_cos, Func::Cos)
+    };
+    (nonzero(&poly) <= 1).then_some((poly, func))
 }
 
 /// Terms that differ only in even powers of sin u and cos u: the angle, what else they have

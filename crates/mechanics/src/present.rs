@@ -24,22 +24,11 @@ impl Derivation {
         let n = self.coords.len();
         let mut out = Vec::new();
         for i in 0..n {
+            let rhs = self.right_side(i);
             let pool = &mut self.model.pool;
             if !self.mass_matrix[i].iter().all(|e| pool.prints_in_full(*e)) {
                 // A bicycle's row: it prints as operation counts whatever is done to it.
-                let terms: Vec<ExprId> = (0..n)
-                    .map(|j| {
-                        let a = pool.sym(self.accels[j]);
-                        pool.mul2(self.mass_matrix[i][j], a)
-                    })
-                    .collect();
-                let lhs = pool.add(&terms);
-                let mut rhs_parts = vec![self.forcing[i]];
-                for m in &self.multipliers {
-                    let lam = pool.sym(m.lambda);
-                    rhs_parts.push(pool.mul2(m.jacobian[i], lam));
-                }
-                let rhs = pool.add(&rhs_parts);
+                let lhs = times_accelerations(pool, &self.mass_matrix[i], &self.accels);
                 out.push(Equation { lhs, rhs });
                 continue;
             }
@@ -66,12 +55,6 @@ impl Derivation {
                 let a = pool.sym(self.accels[j]);
                 lhs_terms.push(pool.mul2(c, a));
             }
-            let mut rhs_parts = vec![self.forcing[i]];
-            for m in &self.multipliers {
-                let lam = pool.sym(m.lambda);
-                rhs_parts.push(pool.mul2(m.jacobian[i], lam));
-            }
-            let rhs = pool.add(&rhs_parts);
             let rhs = pool.mul2(rhs, inverse);
             let rhs = pool.simplify(rhs);
             let (moving, still) = self.split_by_rates(rhs);
@@ -84,13 +67,7 @@ impl Derivation {
         for m in self.multipliers.clone() {
             let pool = &mut self.model.pool;
             if !m.jacobian.iter().chain([&m.bias]).all(|e| pool.prints_in_full(*e)) {
-                let terms: Vec<ExprId> = (0..n)
-                    .map(|j| {
-                        let a = pool.sym(self.accels[j]);
-                        pool.mul2(m.jacobian[j], a)
-                    })
-                    .collect();
-                let lhs = pool.add(&terms);
+                let lhs = times_accelerations(pool, &m.jacobian, &self.accels);
                 out.push(Equation { lhs, rhs: m.bias });
                 continue;
             }
@@ -114,6 +91,17 @@ impl Derivation {
             out.push(Equation { lhs, rhs });
         }
         out
+    }
+
+    /// fᵢ + Σ Jᵢ·λ: what row `i` of M·q̈ equals.
+    fn right_side(&mut self, i: usize) -> ExprId {
+        let pool = &mut self.model.pool;
+        let mut parts = vec![self.forcing[i]];
+        for m in &self.multipliers {
+            let lambda = pool.sym(m.lambda);
+            parts.push(pool.mul2(m.jacobian[i], lambda));
+        }
+        pool.add(&parts)
     }
 
     /// Splits a sum into the terms with rates in them and the rest.
@@ -269,4 +257,17 @@ pub fn collect_by_motion(pool: &mut cas::Pool, terms: &[ExprId]) -> ExprId {
         gathered.push(pool.mul(&[content, rest, motion]));
     }
     pool.add(&gathered)
+}
+
+/// Σⱼ rowⱼ·q̈ⱼ, as built.
+fn times_accelerations(pool: &mut cas::Pool, row: &[ExprId], accels: &[cas::SymId]) -> ExprId {
+    let terms: Vec<ExprId> = row
+        .iter()
+        .zip(accels)
+        .map(|(e, a)| {
+            let a = pool.sym(*a);
+            pool.mul2(*e, a)
+        })
+        .collect();
+    pool.add(&terms)
 }

@@ -1297,7 +1297,7 @@ impl<'a> Resolver<'a> {
                     // `(-y - z)*x`, and print so.
                     let product = Expr {
                         kind: ExprKind::Binary { op: *op, lhs: inner.clone(), rhs: rhs.clone() },
-                        span: e.span,
+                        span: Span { start: inner.span.start, end: rhs.span.end },
                     };
                     let negated = Expr { kind: ExprKind::Neg(Box::new(product)), span: e.span };
                     return self.value(&negated);

@@ -77,9 +77,9 @@ pub(super) fn generalized_force(
 
 /// d/dt ∂L/∂q̇ᵢ − ∂L/∂qᵢ = Qᵢ for each remaining coordinate, split into the accelerations'
 /// coefficients (M) and everything else (f), from energies in the remaining coordinates
-/// (`reduced`) and in all declared ones (`full`). The kinetic energy of translation and
-/// planar rotation takes the structural route (`structural`: m·Jᵀ·J and m·a₀·J); the rest of L
-/// is differentiated.
+/// (`reduced`) and in all declared ones (`full`). The kinetic energy of translation, planar
+/// rotation and rotation in space takes the structural route (`structural`: m·Jᵀ·J and m·a₀·J,
+/// Wᵀ·I·W and Euler's gyroscopic terms); the rest of L is differentiated.
 pub(super) fn euler_lagrange_rows(
     pool: &mut Pool,
     model: &Model,
@@ -154,7 +154,7 @@ pub(super) fn euler_lagrange_rows(
 /// factors lose what they share: the bicycle's M took 18,078 lowered operations simplified.
 fn simplified_unless_larger(pool: &mut Pool, e: ExprId) -> ExprId {
     let simplified = pool.simplify(e);
-    if !pool.tree_exceeds(simplified, cas::print::PRINT_NODE_LIMIT)
+    if pool.prints_in_full(simplified)
         || pool.operation_count(simplified) <= pool.operation_count(e)
     {
         simplified

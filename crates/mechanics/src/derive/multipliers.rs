@@ -59,15 +59,11 @@ pub(super) fn kept_constraints(
             }
         }
         // Simplified, a row and its Jacobian print as a hand derivation writes them (a rolling
-        // coin's −r·cos ψ, not −r·sin²θ·cos ψ − r·cos ψ·cos²θ). A row too large to print is
-        // kept as built: multiplying it out loses what its parts share (a bicycle's front
-        // wheel rolling: 1,324 lowered operations as built, 6,367 expanded, its bias 7 times
-        // that).
-        let phi = if pool.tree_exceeds(phi, cas::print::PRINT_NODE_LIMIT) {
-            phi
-        } else {
-            pool.simplify(phi)
-        };
+        // coin's −r·cos ψ, not −r·sin²θ·cos ψ − r·cos ψ·cos²θ); past simplify's own size
+        // limit it stays as built. A row too large to print is kept as built too: multiplying
+        // it out loses what its parts share (a bicycle's front wheel rolling: 1,324 lowered
+        // operations as built, 6,367 expanded, its bias 7 times that).
+        let phi = if pool.prints_in_full(phi) { pool.simplify(phi) } else { phi };
         // The row is the first derivative of Φ that has accelerations: Φ̈ for a position
         // constraint, Φ̇ for a velocity constraint. Its coefficients of q̈ are the Jacobian.
         let (jacobian, acceleration) = match c.kind {

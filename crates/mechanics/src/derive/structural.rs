@@ -1,27 +1,29 @@
-//! The Euler–Lagrange rows of the kinetic energy of translation (and of planar rotation)
-//! without differentiating T twice. For T = ½·m·|ṙ|² with m constant, Lagrange's equations
-//! are Newton's projected on the coordinates:
+//! The Euler–Lagrange rows of the kinetic energy of translation, of planar rotation and of
+//! rotation in space, without differentiating T twice. For T = ½·m·|ṙ|² with m constant,
+//! Lagrange's equations are Newton's projected on the coordinates:
 //!
 //! d/dt ∂T/∂q̇ᵢ − ∂T/∂qᵢ = m·r̈·∂r/∂qᵢ, with r̈ = Σⱼ (∂r/∂qⱼ)·q̈ⱼ + a₀,
 //!
 //! so the term adds m·(∂r/∂qᵢ)·(∂r/∂qⱼ) to Mᵢⱼ and −m·a₀·∂r/∂qᵢ to fᵢ, where a₀ is r̈ with
 //! every q̈ set to zero. A planar body's ½·I·θ̇² is the same with the angle for r.
 //!
+//! Differentiating T twice builds products of sums that are only expanded, and mostly cancel,
+//! later: their size grows like the cube of the chain's length. These rows hold only what
+//! survives. For translation and planar rotation they are the same polynomial in the same
+//! sines, cosines and symbols as the rows by differentiation, so once `simplify` expands them
+//! it sees the same sum, and prints the same equations. That holds where expansion is
+//! canonical: positions built from sums, products, integer powers of sums and functions whose
+//! derivatives are powers of functions; a position outside that (a square root or quotient of
+//! a sum, `atan2`, `ln`) keeps its body on the route by differentiation.
+//!
 //! A body turning in space, T = ½·ωᵀ·I·ω with ω in body axes and I constant, is Euler's
 //! equations projected the same way: with Wᵢ = ∂ω/∂q̇ᵢ (the partial angular velocity) and α₀
 //! the body-axes derivative of ω with every q̈ set to zero, the term adds Wᵢᵀ·I·Wⱼ to Mᵢⱼ and
-//! −Wᵢᵀ·(I·α₀ + ω × I·ω) to fᵢ. The two routes agree where Rᵀ·R = 1, which for angles means
-//! modulo sin² + cos² = 1: printed rows agree once `simplify` folds those, and a row too large
-//! to simplify is a sum of products of short factors, which is what the numbers want.
-//!
-//! Differentiating T twice builds products of sums that are only expanded, and mostly cancel,
-//! later: their size grows like the cube of the chain's length. These rows hold only what
-//! survives. They are the same polynomial in the same sines, cosines and symbols as the rows
-//! by differentiation, so once `simplify` expands them it sees the same sum, and prints the
-//! same equations. That holds where expansion is canonical: positions built from sums,
-//! products, integer powers of sums and functions whose derivatives are powers of functions;
-//! a position outside that (a square root or quotient of a sum, `atan2`, `ln`) keeps its body
-//! on the route by differentiation.
+//! −Wᵢᵀ·(I·α₀ + ω × I·ω) to fᵢ. This route and differentiation agree only where Rᵀ·R = 1,
+//! which for angles means modulo sin² + cos² = 1: their rows print alike once `simplify` has
+//! folded those (every example's do), and a row too large to simplify is a sum of products of
+//! short factors, which is what the numbers want. Euler parameters, whose ω is exact only on
+//! their unit sphere, are differentiated.
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
@@ -83,7 +85,7 @@ pub(super) fn inertial_terms(
         let Some(rotation @ Rotation::Spatial { inertia, euler_parameters: None, .. }) =
             &body.rotation
         else {
-            // Euler parameters give ω exactly only on their unit sphere, where the identity
+            // Euler parameters give ω exactly only on their unit sphere, and the identity
             // behind this route needs it everywhere: they are differentiated.
             continue;
         };
@@ -364,8 +366,9 @@ fn acceleration_without_q2(pool: &mut Pool, velocity: ExprId) -> ExprId {
 /// The expansion of the kinetic energy `kinetic` (in the remaining coordinates) by a shorter
 /// route than multiplying out its squares: ½·Σ Mᵢⱼ·q̇ᵢ·q̇ⱼ from the structural M (`mass`, upper
 /// triangle, raw), plus the expansion of the terms the structural route did not take
-/// (`kinetic` less `structural_kinetic`). `None` when a position moves with time itself, so
-/// that T has terms of first and zeroth degree in the rates that M does not hold.
+/// (`kinetic` less `structural_kinetic`). `None` when a position moves with time itself, or a
+/// body turns in time itself (a driven frame), so that T has terms of first and zeroth degree
+/// in the rates that M does not hold.
 pub(super) fn kinetic_expansion(
     pool: &mut Pool,
     terms: &[InertialTerm],
@@ -408,4 +411,41 @@ pub(super) fn kinetic_expansion(
     let rest = pool.sub(kinetic, structural_kinetic);
     parts.push(pool.expand(rest));
     Some(pool.add(&parts))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::testing::scene;
+    use super::*;
+
+    /// The body of `equations`' test of the turning rows takes this route (else that test
+    /// would compare differentiation with itself), driven only when its frame turns in time.
+    #[test]
+    fn a_body_with_constant_inertia_turns_on_the_structural_route() {
+        for (orientation, driven) in
+            [("rotz(a)*rotx(b)*roty(c)", false), ("rotz(w*t)*rotx(a)*rotz(b)*roty(c)", true)]
+        {
+            let source = format!(
+                "param m, w, A, B, C, D\ncoord a\ncoord b\ncoord c\nbody top {{ mass m; inertia [A, 0, D; 0, B, 0; D, 0, C]; orientation {orientation}; position (0, 0, 0) }}"
+            );
+            let (mut pool, model) = scene(&source);
+            let eliminated = eliminate_constraints(&mut pool, &model).eliminated;
+            let coordinates = remaining_coordinates(&mut pool, &model, &eliminated);
+            let (terms, _) = inertial_terms(
+                &mut pool,
+                &model,
+                &coordinates.elimination_map,
+                &coordinates.coords,
+            );
+            let turning: Vec<bool> = terms
+                .iter()
+                .filter_map(|t| match t {
+                    InertialTerm::Turning(turn) => Some(turn.driven),
+                    InertialTerm::Moving(_) => None,
+                })
+                .collect();
+            assert_eq!(turning, [driven], "{orientation}");
+        }
+    }
 }
