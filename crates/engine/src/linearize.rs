@@ -1102,7 +1102,8 @@ fn pivots(m: &DMatrix<f64>, preferred: &dyn Fn(usize) -> bool) -> Vec<usize> {
     chosen
 }
 
-/// X of A·X = B column by column in the least-squares sense (A of full column rank here).
+/// X of A·X = B column by column in the least-squares sense, of smallest norm where A is
+/// rank-deficient.
 fn least_squares_matrix(a: DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, MAX_ITERATIONS)?;
     let eps = 1e-12 * svd.singular_values.max();
@@ -1130,11 +1131,10 @@ fn accelerations_and_multipliers(
 }
 
 /// The least-squares solution of smallest norm, robust to a rank-deficient system (dependent
-/// constraints at the reference).
+/// constraints at the reference): [`least_squares_matrix`] of one column.
 fn least_squares(a: DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
-    let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, MAX_ITERATIONS)?;
-    let eps = 1e-12 * svd.singular_values.max();
-    svd.solve(b, eps).ok()
+    let column = DMatrix::from_column_slice(b.len(), 1, b.as_slice());
+    least_squares_matrix(a, &column).map(|x| x.column(0).into_owned())
 }
 
 /// An orthonormal basis of the null space of a k×n matrix, as the columns of an n×r matrix.
