@@ -468,23 +468,33 @@ def main():
             fh.write(run([lagrange, "generate", family, count]))
         jobs.append((f"generated {family} {count}", path))
 
+    def check_one(path):
+        # Units are checked by lagrange's own tests (tests/units.rs); the scenes here test the
+        # mechanics.
+        report = json.loads(run([lagrange, "derive", path, "--format", "json", "--no-units"]))
+        return crosscheck(report, args.states, args.seed)
+
+    sys.exit(check_each(jobs, check_one, TOLERANCE))
+
+
+def check_each(jobs, check_one, tolerance):
+    """Runs `check_one(path)` -> (summary, worst relative difference) for each (label, path),
+    printing one `ok`/`FAIL` line per scene and the count; returns the exit status (1 when any
+    failed). A crash is a failure of its scene, not of the run."""
     passed = failed = 0
     for label, path in jobs:
         start = time.time()
         try:
-            # Units are checked by lagrange's own tests (tests/units.rs); the scenes here test
-            # the mechanics.
-            report = json.loads(run([lagrange, "derive", path, "--format", "json", "--no-units"]))
-            summary, worst = crosscheck(report, args.states, args.seed)
-            ok = worst < TOLERANCE
+            summary, worst = check_one(path)
+            ok = worst < tolerance
             line = f"{summary}; max rel diff {worst:.1e}"
-        except Exception as e:  # a crash is a failure of this scene, not of the run
+        except Exception as e:
             ok, line = False, f"error: {type(e).__name__}: {e}"
         status = "ok  " if ok else "FAIL"
         print(f"{status} {label}: {line} ({time.time() - start:.1f} s)", flush=True)
         passed, failed = passed + ok, failed + (not ok)
     print(f"{passed} passed, {failed} failed")
-    sys.exit(1 if failed else 0)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -36,7 +36,6 @@ import json
 import os
 import random
 import sys
-import time
 
 import mpmath
 import sympy as sp
@@ -51,7 +50,15 @@ from sympy.physics.mechanics import (
 )
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from crosscheck import ROOT, Evaluator, Scope, find_lagrange, run, solve  # noqa: E402
+from crosscheck import (  # noqa: E402
+    ROOT,
+    Evaluator,
+    Scope,
+    check_each,
+    find_lagrange,
+    run,
+    solve,
+)
 
 TOLERANCE = 1e-25
 mpmath.mp.dps = 40
@@ -347,26 +354,15 @@ def main():
 
     known = {os.path.normpath(os.path.join(ROOT, k)): k for k in SCENES}
     scenes = args.scenes or [os.path.join(ROOT, k) for k in SCENES]
-    passed = failed = 0
-    for path in scenes:
-        label = os.path.relpath(path)
-        start = time.time()
-        try:
-            key = known.get(os.path.normpath(os.path.abspath(path)))
-            if key is None:
-                raise ValueError(f"no Kane model for this scene (known: {', '.join(SCENES)})")
-            report = json.loads(run([lagrange, "derive", path, "--format", "json", "--no-units"]))
-            summary, worst = check(SCENES[key](), report, args.states, args.seed)
-            ok = worst < TOLERANCE
-            line = f"{summary}; max rel diff {worst:.1e}"
-        except Exception as e:  # a crash is a failure of this scene, not of the run
-            ok, line = False, f"error: {type(e).__name__}: {e}"
-        status = "ok  " if ok else "FAIL"
-        print(f"{status} {label}: {line} ({time.time() - start:.1f} s)", flush=True)
-        passed, failed = passed + ok, failed + (not ok)
-    print(f"{passed} passed, {failed} failed")
-    sys.exit(1 if failed else 0)
+    def check_one(path):
+        key = known.get(os.path.normpath(os.path.abspath(path)))
+        if key is None:
+            raise ValueError(f"no Kane model for this scene (known: {', '.join(SCENES)})")
+        report = json.loads(run([lagrange, "derive", path, "--format", "json", "--no-units"]))
+        return check(SCENES[key](), report, args.states, args.seed)
 
+    jobs = [(os.path.relpath(path), path) for path in scenes]
+    sys.exit(check_each(jobs, check_one, TOLERANCE))
 
 if __name__ == "__main__":
     main()

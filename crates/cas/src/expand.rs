@@ -701,17 +701,20 @@ impl Pool {
 mod tests {
     use super::*;
 
+    /// Parameters of these names, declared in order, as expressions.
+    fn params<const N: usize>(p: &mut Pool, names: [&str; N]) -> [ExprId; N] {
+        names.map(|name| {
+            let s = p.param(name);
+            p.sym(s)
+        })
+    }
+
     /// (sin² + cos²)² and ³ multiplied out fold whole, beside other terms and under a factor:
     /// r·sin⁴λ + 2·r·sin²λ·cos²λ + r·cos⁴λ + R − r is R, and under sin²θ the same again.
     #[test]
     fn the_square_of_pythagoras_folds() {
         let mut p = Pool::new();
-        let sym = |p: &mut Pool, name: &str| {
-            let s = p.param(name);
-            p.sym(s)
-        };
-        let (r, big_r, lambda, theta) =
-            (sym(&mut p, "r"), sym(&mut p, "R"), sym(&mut p, "l"), sym(&mut p, "th"));
+        let [r, big_r, lambda, theta] = params(&mut p, ["r", "R", "l", "th"]);
         let (s, c) = (p.sin(lambda), p.cos(lambda));
         let (s2, c2, s4, c4) = (p.powi(s, 2), p.powi(c, 2), p.powi(s, 4), p.powi(c, 4));
         let square = |p: &mut Pool, x: ExprId| {
@@ -767,11 +770,7 @@ mod tests {
     #[test]
     fn groups_that_share_a_term_fold_exactly() {
         let mut p = Pool::new();
-        let sym = |p: &mut Pool, name: &str| {
-            let s = p.param(name);
-            p.sym(s)
-        };
-        let (u, v) = (sym(&mut p, "u"), sym(&mut p, "v"));
+        let [u, v] = params(&mut p, ["u", "v"]);
         let square_of = |p: &mut Pool, a: ExprId, front: ExprId| {
             let (s, c) = (p.sin(a), p.cos(a));
             let (s2, c2, s4, c4) = (p.powi(s, 2), p.powi(c, 2), p.powi(s, 4), p.powi(c, 4));
