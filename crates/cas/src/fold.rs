@@ -95,22 +95,34 @@ impl Pool {
                 constant += change;
                 work.changed(Key::Constant);
             }
-            let (rc, rt) = self.split_coefficient(fold.replacement);
-            if let Some(n) = self.as_num(rt) {
-                constant += n * &rc * &fold.coefficient;
-                work.changed(Key::Constant);
-            } else {
-                number::add_to(
-                    terms.entry(rt).or_default(),
-                    &number::times(&rc, &fold.coefficient),
-                );
-                if terms[&rt].is_zero() {
-                    terms.remove(&rt);
-                }
-                work.changed(Key::Term(rt));
-            }
+            let changed =
+                self.add_into(&mut constant, &mut terms, fold.replacement, &fold.coefficient);
+            work.changed(changed);
         }
         self.sum_of(constant, terms)
+    }
+
+    /// Adds k·`e` to a sum held as its constant and its terms: to the constant when `e` is a
+    /// number, else to `e`'s term, which leaves when it cancels. Which of the two changed.
+    fn add_into(
+        &mut self,
+        constant: &mut Rational,
+        terms: &mut BTreeMap<ExprId, Rational>,
+        e: ExprId,
+        k: &Rational,
+    ) -> Key {
+        let (c, t) = self.split_coefficient(e);
+        let k = number::times(&c, k);
+        if let Some(n) = self.as_num(t) {
+            *constant += n * &k;
+            return Key::Constant;
+        }
+        let entry = terms.entry(t).or_default();
+        number::add_to(entry, &k);
+        if entry.is_zero() {
+            terms.remove(&t);
+        }
+        Key::Term(t)
     }
 
     /// The first sin²/cos² fold of term `t` (coefficient `k`), as the full rescan finds it, and
@@ -190,9 +202,10 @@ impl Pool {
         // The angles with such a term, found without building anything.
         let mut heavy: Vec<ExprId> = Vec::new();
         for (t, _) in terms.iter() {
-            let (_, fs) = self.factors(*t);
+            // A term of degree 2 is a product (sin²u·cos²u, sin⁴u).
+            let Node::Mul(_, fs) = self.node(*t) else { continue };
             let mut degrees: Vec<(ExprId, u32)> = Vec::new();
-            for (b, x) in &fs {
+            for (b, x) in fs.iter() {
                 if let Node::Func(Func::Sin | Func::Cos, u) = self.node(*b) {
                     let half = x.is_integer().then(|| x.to_u32()).flatten().unwrap_or(0) / 2;
                     match degrees.iter_mut().find(|(v, _)| v == u) {
@@ -303,17 +316,7 @@ impl Pool {
             };
             let (s, c) = (self.powi(sin_u, sin_power), self.powi(cos_u, cos_power));
             let folded = self.mul(&[key.rest, s, c]);
-            let (rc, rt) = self.split_coefficient(folded);
-            let k = number::times(&rc, coefficient);
-            if let Some(n) = self.as_num(rt) {
-                constant += n * &k;
-            } else {
-                let entry = terms.entry(rt).or_default();
-                number::add_to(entry, &k);
-                if entry.is_zero() {
-                    terms.remove(&rt);
-                }
-            }
+            self.add_into(&mut constant, &mut terms, folded, coefficient);
         }
         if !changed {
             return e;
@@ -325,6 +328,7 @@ impl Pool {
     /// could pair with changes.
     pub(crate) fn fold_angle_sums_worklist(&mut self, e: ExprId) -> ExprId {
         let Node::Add(constant, terms) = self.node(e).clone() else { return e };
+        let mut constant = constant;
         let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
         let mut work = Worklist::new(&terms);
         while let Some(t) = work.next(&terms) {
@@ -337,12 +341,9 @@ impl Pool {
             for r in &fold.remove {
                 terms.remove(r);
             }
-            let (fc, ft) = self.split_coefficient(fold.replacement);
-            number::add_to(terms.entry(ft).or_default(), &number::times(&fc, &fold.coefficient));
-            if terms[&ft].is_zero() {
-                terms.remove(&ft);
-            }
-            work.changed(Key::Term(ft));
+            let changed =
+                self.add_into(&mut constant, &mut terms, fold.replacement, &fold.coefficient);
+            work.changed(changed);
         }
         self.sum_of(constant, terms)
     }

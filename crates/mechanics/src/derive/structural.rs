@@ -278,7 +278,6 @@ pub(super) fn structural_rows(
 /// The parts a body turning in space adds to M (Wᵢᵀ·I·Wⱼ, one product of entries of W per
 /// nonzero entry of I) and to f (−Wᵢᵀ·(I·α₀ + ω × I·ω)), in the groupings of
 /// [`structural_rows`].
-#[allow(clippy::type_complexity)]
 fn turning_rows(
     pool: &mut Pool,
     turn: &Turning,
