@@ -77,13 +77,31 @@ impl Pool {
     /// [`Pool::fold_pythagoras`] with each term examined once, and again only when a term it
     /// could pair with changes.
     pub(crate) fn fold_pythagoras_worklist(&mut self, e: ExprId) -> ExprId {
+        self.fold_worklist(e, |pool, t, k, terms, constant| {
+            pool.pythagoras_partner(t, k, terms, constant)
+        })
+    }
+
+    /// Folds a sum term by term with `partner`, which finds the first fold of a term (with its
+    /// coefficient), and the keys it looked up, as the full rescan would.
+    fn fold_worklist(
+        &mut self,
+        e: ExprId,
+        mut partner: impl FnMut(
+            &mut Pool,
+            ExprId,
+            &Rational,
+            &BTreeMap<ExprId, Rational>,
+            &Rational,
+        ) -> (Option<Fold>, Vec<Key>),
+    ) -> ExprId {
         let Node::Add(constant, terms) = self.node(e).clone() else { return e };
         let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
         let mut constant = constant;
         let mut work = Worklist::new(&terms);
         while let Some(t) = work.next(&terms) {
             let k = terms[&t].clone();
-            let (found, looked_up) = self.pythagoras_partner(t, &k, &terms, &constant);
+            let (found, looked_up) = partner(self, t, &k, &terms, &constant);
             let Some(fold) = found else {
                 work.park(t, looked_up);
                 continue;
@@ -327,25 +345,7 @@ impl Pool {
     /// [`Pool::fold_angle_sums`] with each term examined once, and again only when a term it
     /// could pair with changes.
     pub(crate) fn fold_angle_sums_worklist(&mut self, e: ExprId) -> ExprId {
-        let Node::Add(constant, terms) = self.node(e).clone() else { return e };
-        let mut constant = constant;
-        let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
-        let mut work = Worklist::new(&terms);
-        while let Some(t) = work.next(&terms) {
-            let k = terms[&t].clone();
-            let (found, looked_up) = self.angle_sum_partner(t, &k, &terms);
-            let Some(fold) = found else {
-                work.park(t, looked_up);
-                continue;
-            };
-            for r in &fold.remove {
-                terms.remove(r);
-            }
-            let changed =
-                self.add_into(&mut constant, &mut terms, fold.replacement, &fold.coefficient);
-            work.changed(changed);
-        }
-        self.sum_of(constant, terms)
+        self.fold_worklist(e, |pool, t, k, terms, _| pool.angle_sum_partner(t, k, terms))
     }
 
     /// The first angle-sum fold of term `t` (coefficient `k`), as the full rescan finds it,
