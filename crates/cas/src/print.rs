@@ -199,7 +199,12 @@ impl Pool {
         if style == Style::Ascii {
             return symbol.name.clone();
         }
-        let order = symbol.order();
+        // A symbol that is no coordinate's derivative may still be a rate (`KE'`, the rate of
+        // the kinetic energy): its primes count too.
+        let order = match symbol.kind {
+            SymbolKind::Coordinate { order, .. } => order,
+            _ => (symbol.name.len() - symbol.base_name().len()) as u8,
+        };
         let (base, sub) = split_subscript(symbol.base_name());
         let greek = GREEK.iter().find(|(w, _, _)| *w == base);
         match style {

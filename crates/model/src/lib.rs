@@ -193,6 +193,12 @@ pub enum Placeholder {
     KineticEnergy,
     PotentialEnergy,
     Reaction(usize),
+    /// The time derivative of another placeholder (`dt(KE)`, `KE'`), written at `span`: a
+    /// symbol of its own, since differentiating the stand-in symbol would give 0.
+    Rate {
+        of: SymId,
+        span: Span,
+    },
 }
 
 /// A `show` item.

@@ -1391,24 +1391,9 @@ impl<'a> Resolver<'a> {
                     }
                     Value::Scalar(self.pool.sym(s))
                 }
-                Some(Binding::Quantity(s)) => {
-                    // KE stands for an expression only derived later; differentiating its
-                    // stand-in symbol would silently give 0.
-                    if primes > 0 {
-                        self.error(
-                            Diagnostic::error(
-                                span,
-                                format!("the rate of `{raw}` is not available"),
-                            )
-                            .with_label("KE and PE are known only once the derivation is done")
-                            .with_hint(
-                                "write the energy out as a `let` name and take its rate: `let T = m/2*x'^2`, then `T'`",
-                            ),
-                        );
-                        return None;
-                    }
-                    Value::Scalar(self.pool.sym(s))
-                }
+                // KE stands for an expression only derived later; its rates are symbols of
+                // their own (see `total_rate`), taken below as a `let` name's are.
+                Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
                 Some(Binding::Coord(s)) => {
                     if primes > 2 {
                         let base = self.pool.symbol(s).name.clone();
@@ -1444,10 +1429,10 @@ impl<'a> Resolver<'a> {
         if !self.derivative_exists(&base, primes, span) {
             return None;
         }
-        // A rate of a `let` name: the total time derivative.
+        // A rate of a `let` name or a quantity: the total time derivative.
         Some(base.map(|mut x| {
             for _ in 0..primes {
-                x = self.pool.time_derivative(x);
+                x = self.total_rate(x, span);
             }
             x
         }))

@@ -9,7 +9,7 @@ use cas::{ExprId, Func, Rational, SymId, SymbolKind};
 use lang::{Diagnostic, Expr, ExprKind, Ident, SceneFile, Span, StmtKind};
 
 use super::{normalize, Binding, Resolver};
-use crate::Value;
+use crate::{Placeholder, Value};
 
 /// How far from a function's domain an inexact value must fall before it counts as outside:
 /// rounding can take an exact boundary value (`1 - sin(pi/2)`) a hair across it.
@@ -276,10 +276,104 @@ impl Resolver<'_> {
                 let base = self.pool.symbol(sym).base_name().to_string();
                 let order = order.saturating_add(primes);
                 self.past_acceleration(span, order, &base, false);
+                return false;
+            }
+            _ => {}
+        }
+        match self.highest_placeholder(v) {
+            Some((order, root, root_order)) if usize::from(order) + usize::from(primes) > 2 => {
+                let name = self.pool.symbol(root).name.clone();
+                let written = self.text(span);
+                let (has, times) = match root_order {
+                    0 => ("positions", "twice"),
+                    _ => ("rates", "once"),
+                };
+                self.error(
+                    Diagnostic::error(
+                        span,
+                        format!(
+                            "`{written}` needs a {} derivative of the coordinates; only rates and \
+                             accelerations exist",
+                            ordinal(order.saturating_add(primes))
+                        ),
+                    )
+                    .with_label(format!("`{name}` has {has} in it"))
+                    .with_hint(format!(
+                        "the equations of motion are of second order: `{name}` can be \
+                         differentiated {times}"
+                    )),
+                );
                 false
             }
             _ => true,
         }
+    }
+
+    /// The placeholder (KE, PE, a reaction or a rate of one) in `v` whose expression holds the
+    /// highest derivative of the coordinates: that order, and the quantity it is a rate of
+    /// (itself if none) with that quantity's order. T has rates, V positions, and a reaction
+    /// is differentiated in its form in the state (positions and rates).
+    fn highest_placeholder(&mut self, v: &Value) -> Option<(u8, SymId, u8)> {
+        let mut best: Option<(u8, SymId, u8)> = None;
+        for e in v.entries() {
+            for s in self.pool.free_symbols(e).iter() {
+                let Some((order, root, root_order)) = self.placeholder_order(*s) else {
+                    continue;
+                };
+                if best.is_none_or(|(b, _, _)| order > b) {
+                    best = Some((order, root, root_order));
+                }
+            }
+        }
+        best
+    }
+
+    /// A placeholder's order (see [`Self::highest_placeholder`]), with the quantity it is a
+    /// rate of and that quantity's order.
+    fn placeholder_order(&self, s: SymId) -> Option<(u8, SymId, u8)> {
+        let kind = self.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)?;
+        Some(match kind {
+            Placeholder::PotentialEnergy => (0, s, 0),
+            Placeholder::KineticEnergy | Placeholder::Reaction(_) => (1, s, 1),
+            Placeholder::Rate { of, .. } => {
+                let (order, root, root_order) = self.placeholder_order(of)?;
+                (order + 1, root, root_order)
+            }
+        })
+    }
+
+    /// The total time derivative of `e`, placeholders included. KE, PE and reactions stand
+    /// for expressions derived only later, and their stand-in symbols are constants to the
+    /// algebra; so each contributes ∂e/∂p times a symbol for its rate, which the derivation
+    /// replaces by the derivative of what p turns out to be.
+    pub(super) fn total_rate(&mut self, e: ExprId, span: Span) -> ExprId {
+        let mut parts = vec![self.pool.time_derivative(e)];
+        let free = self.pool.free_symbols(e);
+        for p in free.iter() {
+            if self.placeholder_order(*p).is_none() {
+                continue;
+            }
+            let rate = self.placeholder_rate(*p, span);
+            let partial = self.pool.diff(e, *p);
+            let rate = self.pool.sym(rate);
+            parts.push(self.pool.mul2(partial, rate));
+        }
+        self.pool.add(&parts)
+    }
+
+    /// The symbol for the rate of placeholder `p`, made on first use.
+    fn placeholder_rate(&mut self, p: SymId, span: Span) -> SymId {
+        let made = self.placeholders.iter().find_map(|(r, k)| match k {
+            Placeholder::Rate { of, .. } if *of == p => Some(*r),
+            _ => None,
+        });
+        if let Some(r) = made {
+            return r;
+        }
+        let name = format!("{}'", self.pool.symbol(p).name);
+        let r = self.pool.param(&name);
+        self.placeholders.push((r, Placeholder::Rate { of: p, span }));
+        r
     }
 
     // --- constants ----------------------------------------------------------------------

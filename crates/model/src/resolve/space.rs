@@ -192,7 +192,10 @@ impl Resolver<'_> {
             }
             _ => {
                 // dt: the total time derivative, entry by entry.
-                let value = values[0].clone().map(|x| self.pool.time_derivative(x));
+                if !self.derivative_exists(&values[0], 1, span) {
+                    return None;
+                }
+                let value = values[0].clone().map(|x| self.total_rate(x, span));
                 let dims = match dims.into_iter().next().expect("one") {
                     Dims::Number { .. } => Dims::Scalar(Form::default()),
                     Dims::Scalar(f) => Dims::Scalar(f.rate(1)),
