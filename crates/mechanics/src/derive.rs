@@ -6,6 +6,7 @@ mod energies;
 mod equations;
 mod multipliers;
 mod reactions;
+mod start_positions;
 mod start_rates;
 mod structural;
 
@@ -83,6 +84,16 @@ pub struct Derivation {
     solved: Option<Option<HashMap<SymId, ExprId>>>,
     /// The unknowns at the start; computed on first use.
     pub(crate) start: Option<crate::start::StartSolution>,
+    /// The start breaks a kept position constraint exactly: the `verify` crate decides in
+    /// numbers whether that is the rounding of values given to some digits, or solves the free
+    /// positions, before the start's rates are settled.
+    pub start_positions_pending: bool,
+    /// Coordinates whose start positions were solved in numbers from the kept constraints.
+    pub solved_start_positions: Vec<SymId>,
+    /// The start satisfies the kept constraints only at the parameters' values, or was solved
+    /// there in numbers: what is decided at the start is decided at those values, not at
+    /// random ones.
+    pub start_at_values_only: bool,
 }
 
 impl Derivation {
@@ -308,11 +319,18 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         warnings,
         solved: None,
         start: None,
+        start_positions_pending: false,
+        solved_start_positions: Vec::new(),
+        start_at_values_only: false,
     };
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
     derivation.reaction_rates_exist()?;
-    derivation.settle_start_rates().map_err(|e| vec![e])?;
+    if derivation.start_position_residuals().is_empty() {
+        derivation.settle_start_rates().map_err(|e| vec![e])?;
+    } else {
+        derivation.start_positions_pending = true;
+    }
     Ok(derivation)
 }
 

@@ -404,6 +404,7 @@ impl<'a> Resolver<'a> {
                             initial_rate: rate.unwrap_or(zero),
                             initial_given: decl.value.is_some() || decl.rate.is_some(),
                             initial_rate_given: decl.rate.is_some(),
+                            position_free: decl.value.is_none() || decl.guess,
                             span: decl.name.span,
                         });
                     }
