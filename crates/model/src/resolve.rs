@@ -309,7 +309,15 @@ impl<'a> Resolver<'a> {
             StmtKind::Param(decls) => {
                 for decl in decls {
                     // Its unknown comes before any in its value: unknowns follow the file.
-                    let form = self.units.fresh(&decl.name.name);
+                    let example = match (&decl.value, &decl.unit) {
+                        (Some(v), None) => {
+                            let value = self.text(v.span);
+                            let value = if value.is_empty() { "…" } else { value.as_str() };
+                            Some(format!("param {} = {value} rad", decl.name.name))
+                        }
+                        _ => None,
+                    };
+                    let form = self.units.declared(&decl.name.name, decl.name.span, example);
                     let value = decl.value.as_ref().map(|v| self.constant(v));
                     if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
                         let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
@@ -1357,6 +1365,9 @@ impl<'a> Resolver<'a> {
             }
             _ => self.name_dims(raw, &name, primes),
         };
+        if let Dims::Scalar(f) = &dims {
+            self.units.used(f, span);
+        }
         Some((value, dims))
     }
 
