@@ -22,6 +22,9 @@ pub(super) struct Role {
     /// Derivatives of coordinates allowed: 0 for the configuration only, 1 for rates too.
     pub max_order: u8,
     pub hint: &'static str,
+    /// Whether deriving the equations of motion differentiates it (by the coordinates or
+    /// the rates), so that a kink in it becomes a jump in a force.
+    pub differentiated: bool,
 }
 
 pub(super) const POSITION: Role = Role {
@@ -29,73 +32,86 @@ pub(super) const POSITION: Role = Role {
     max_order: 0,
     hint: "write where the body is as a function of the coordinates (and `t`); its velocity \
            follows by differentiation",
+    differentiated: true,
 };
 pub(super) const ANGLE: Role = Role {
     what: "an angle",
     max_order: 0,
     hint: "write the body's orientation as a function of the coordinates (and `t`); its angular \
            velocity follows by differentiation",
+    differentiated: true,
 };
 pub(super) const MASS: Role = Role {
     what: "a mass",
     max_order: 0,
     hint: "a mass is a constant, or a function of the coordinates and `t`",
+    differentiated: true,
 };
 pub(super) const INERTIA: Role = Role {
     what: "an inertia",
     max_order: 0,
     hint: "an inertia is a constant, or a function of the coordinates and `t`",
+    differentiated: true,
 };
 pub(super) const POTENTIAL: Role = Role {
     what: "a potential",
     max_order: 0,
     hint: "a potential depends on the configuration only; put terms with rates in `lagrangian` \
            (added to T − V) or, for friction, in `dissipation`",
+    differentiated: true,
 };
 pub(super) const GRAVITY: Role = Role {
     what: "gravity",
     max_order: 0,
     hint: "gravity's strength and direction may depend on the coordinates and `t` only",
+    differentiated: true,
 };
 pub(super) const SPRING: Role = Role {
     what: "a spring",
     max_order: 0,
     hint: "a spring's ends, stiffness and rest length may depend on the coordinates and `t` \
            only; for a force that grows with speed, use a `damper`",
+    differentiated: true,
 };
 pub(super) const ATTACHMENT: Role = Role {
     what: "an attachment point",
     max_order: 0,
     hint: "attach to a body by name, or to a point given as a function of the coordinates",
+    differentiated: true,
 };
 pub(super) const DAMPER: Role = Role {
     what: "a damper",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a damping coefficient \
            may depend on the coordinates and rates, not on accelerations",
+    differentiated: false,
 };
 pub(super) const FORCE: Role = Role {
     what: "a force",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a force may depend on \
            the coordinates, rates and `t`, not on accelerations",
+    differentiated: false,
 };
 pub(super) const TORQUE: Role = Role {
     what: "a torque",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a torque may depend on \
            the coordinates, rates and `t`, not on accelerations",
+    differentiated: false,
 };
 pub(super) const DISSIPATION: Role = Role {
     what: "a dissipation function",
     max_order: 1,
     hint: "Rayleigh's dissipation function depends on the coordinates and rates",
+    differentiated: true,
 };
 pub(super) const LAGRANGIAN: Role = Role {
     what: "a Lagrangian",
     max_order: 1,
     hint: "lagrange derives second-order equations from L(q, q', t); a Lagrangian with \
            accelerations would give higher-order ones",
+    differentiated: true,
 };
 
 pub(super) const DRAWING: Role = Role {
@@ -103,7 +119,35 @@ pub(super) const DRAWING: Role = Role {
     max_order: 1,
     hint: "a drawing shows the state: its points may use the coordinates, their rates and `t`, \
            not accelerations",
+    differentiated: false,
 };
+
+/// Not a role an expression is refused in, but one whose kinks matter: a constraint's
+/// gradient is its derivative.
+pub(super) const CONSTRAINT: Role =
+    Role { what: "a constraint", max_order: 1, hint: "", differentiated: true };
+
+/// The functions whose derivative jumps (`abs`, `min`, `max`) or is a spike (`sign`).
+const NOT_SMOOTH: [&str; 4] = ["abs", "sign", "min", "max"];
+
+/// Whether `e` has `abs` or `sign` of something that moves with the coordinates or rates.
+fn kinked(pool: &mut cas::Pool, e: ExprId, seen: &mut std::collections::HashSet<ExprId>) -> bool {
+    if !seen.insert(e) {
+        return false;
+    }
+    if let cas::Node::Func(f, a) = *pool.node(e) {
+        if !f.is_smooth() {
+            let moving = pool
+                .free_symbols(a)
+                .iter()
+                .any(|s| matches!(pool.symbol(*s).kind, SymbolKind::Coordinate { .. }));
+            if moving {
+                return true;
+            }
+        }
+    }
+    pool.children(e).into_iter().any(|c| kinked(pool, c, seen))
+}
 
 /// "third", "fourth", … for a derivative's order.
 fn ordinal(n: u8) -> String {
@@ -234,6 +278,61 @@ impl Resolver<'_> {
             .with_hint(role.hint),
         );
         false
+    }
+
+    /// A warning where the equations of motion will differentiate `abs`, `sign`, `min` or
+    /// `max` of the state: at the call when it is written in `e`, else at `e` (through a
+    /// `let`). The derivation goes on; the equations are those of either side of the kink.
+    pub(super) fn warn_kinks(&mut self, e: &Expr, value: &Value, role: &Role) {
+        if !role.differentiated {
+            return;
+        }
+        let mut seen = std::collections::HashSet::new();
+        if !value.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+            return;
+        }
+        let (span, name) = self.kinked_call(e).unwrap_or((e.span, String::new()));
+        let what = if name.is_empty() {
+            "through a `let`, `abs`, `sign`, `min` or `max`".to_string()
+        } else {
+            format!("`{name}`")
+        };
+        let label = match name.as_str() {
+            "sign" => "jumps where its argument is 0; its derivative (0 elsewhere) misses that",
+            "min" | "max" => "has a kink where its arguments are equal",
+            "abs" => "has a kink where its argument is 0",
+            _ => "has a kink or a jump",
+        };
+        self.warnings.push(
+            Diagnostic::warning(
+                span,
+                format!(
+                    "{what} in {} is not smooth, and the equations of motion differentiate it",
+                    role.what
+                ),
+            )
+            .with_label(label)
+            .with_hint(
+                "the equations hold on either side, but a force derived from it jumps there; \
+                 an integrator with error control crosses the jump with many tiny steps or \
+                 loses accuracy, and a fixed step steps over it; a smooth stand-in such as \
+                 sqrt(x^2 + eps^2) for abs(x) avoids it",
+            ),
+        );
+    }
+
+    /// The first call of `abs`, `sign`, `min` or `max` in `e` whose value moves with the state.
+    fn kinked_call(&mut self, e: &Expr) -> Option<(Span, String)> {
+        if let ExprKind::Call { func, .. } = &e.kind {
+            if NOT_SMOOTH.contains(&func.name.as_str()) {
+                let v = self.value_quietly(e)?;
+                let mut seen = std::collections::HashSet::new();
+                if v.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+                    return Some((e.span, func.name.clone()));
+                }
+            }
+        }
+        children(e).into_iter().find_map(|c| self.kinked_call(c))
     }
 
     /// `theta'''`: only rates and accelerations exist. `span` covers the name as written,
@@ -742,5 +841,33 @@ impl Resolver<'_> {
             }
         }
         Some(d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The warnings of a scene that resolves, as `label: message`, but for unused parameters.
+    fn warnings(source: &str) -> Vec<String> {
+        let file = lang::parse(source).expect("parses");
+        let (_, w) = crate::resolve(&file, source).expect("resolves");
+        w.into_iter()
+            .filter(|d| !d.message.contains("never used"))
+            .map(|d| format!("{}: {}", d.label, d.message))
+            .collect()
+    }
+
+    #[test]
+    fn a_kink_the_equations_differentiate_is_warned_of_and_one_they_do_not_is_not() {
+        let scene = "param m = 1 kg, k = 2 N, c = 1 N*s/m\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\n";
+        let w = warnings(&format!("{scene}potential k*abs(x)\n"));
+        assert!(w.len() == 1 && w[0].contains("`abs` in a potential is not smooth"), "{w:?}");
+        let w = warnings(&format!("{scene}let d = max(x, 0)\npotential k*d\n"));
+        assert!(w.len() == 1 && w[0].contains("through a `let`"), "{w:?}");
+        let w = warnings(&format!("{scene}dissipation c/2*x'^2*sign(x')\n"));
+        assert!(w.len() == 1 && w[0].starts_with("jumps where its argument is 0"), "{w:?}");
+        // A force is not differentiated (it is itself discontinuous, which the README says),
+        // and a constant under `abs` has no kink.
+        assert!(warnings(&format!("{scene}force f on p: (-k*sign(x'), 0)\n")).is_empty());
+        assert!(warnings(&format!("{scene}potential abs(-k)*x\n")).is_empty());
     }
 }
