@@ -170,3 +170,23 @@ fn evenly_spaced_samples_come_from_the_dense_output() {
     let theta_sampled = sampled.run.trajectory.rows[25][0];
     assert!((theta_direct - theta_sampled).abs() < 1e-9, "{theta_direct} vs {theta_sampled}");
 }
+
+#[test]
+fn a_stop_condition_with_abs_and_a_force_that_flips_sign() {
+    // V = k·|x| from rest at x0 = 1 m, k/m = 2 m/s²: x = 1 − t² until the bottom, so |x| = ½
+    // at t = √½; the period is 4·√(2·m·x0/k) = 4 s, across two jumps of the force.
+    let options = |stop: Vec<String>| Options {
+        method: Some("dop853".into()),
+        tolerance: Some(1e-12),
+        until: Some(4.0),
+        output: vec!["x".into()],
+        stop_when: stop,
+        ..Options::default()
+    };
+    let outcome = run("classics/bead_in_a_v.lag", options(vec!["abs(x) = 1/2".into()]));
+    let t = outcome.run.final_time;
+    assert!((t - 0.5f64.sqrt()).abs() < 1e-12, "stopped at {t}");
+    let outcome = run("classics/bead_in_a_v.lag", options(Vec::new()));
+    let x = outcome.run.trajectory.rows.last().expect("rows")[0];
+    assert!((outcome.run.final_time - 4.0).abs() < 1e-12 && (x - 1.0).abs() < 1e-8, "x(4) = {x}");
+}
