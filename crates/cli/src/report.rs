@@ -21,7 +21,8 @@ fn decimal(q: &Rational) -> Option<String> {
             d /= &five;
         }
         places += 1;
-        if places > 12 {
+        // Values pasted from elsewhere carry up to 17 digits; a float's binary fraction, more.
+        if places > 17 {
             return None;
         }
     }
@@ -72,6 +73,8 @@ fn start_value_text(d: &Derivation, s: cas::SymId, e: ExprId, style: Style) -> S
 
 pub(crate) fn value_text(pool: &Pool, e: ExprId, style: Style) -> String {
     match pool.as_num(e).and_then(decimal) {
+        // The minus sign every other printed number has.
+        Some(d) if style == Style::Unicode => d.replacen('-', "−", 1),
         Some(d) if style != Style::Latex => d,
         _ => pool.print(e, style),
     }

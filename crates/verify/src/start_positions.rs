@@ -67,7 +67,9 @@ pub fn settle_start_positions(d: &mut Derivation) -> Result<(), Vec<Diagnostic>>
         })
         .collect();
     if off.is_empty() {
+        // Rounded values are a start only at these parameter values.
         d.start_positions_pending = false;
+        d.start_at_values_only = true;
         return d.settle_start_rates().map_err(|e| vec![e]);
     }
     let free = d.free_start_positions();
