@@ -105,6 +105,23 @@ fn a_contradicting_constraint_is_named_at_derive_time() {
     );
 }
 
+/// A velocity constraint that asks the time derivative of a kept position constraint for
+/// another value: named as a contradiction, not as start rates a hint could fix.
+#[test]
+fn a_velocity_constraint_contradicting_a_position_one_is_named() {
+    let source = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2, v0 = 1 m^2/s\n\
+                  coord x = 0.6 m, y = -0.8 m\nparticle p { mass m; position (x, y) }\n\
+                  constraint rod: x^2 + y^2 = L^2\nconstraint push: x*x' + y*y' = v0\ngravity g\n";
+    let result = cli::check::check_file("push.lag", source);
+    assert_eq!(result.exit_code, 2, "{}", result.report);
+    assert!(
+        result.report.contains("constraint `push` contradicts the ones before it"),
+        "{}",
+        result.report
+    );
+    assert!(!result.report.contains("rates at the start"), "{}", result.report);
+}
+
 #[test]
 fn a_constraint_no_start_reaches_is_warned_about() {
     let source = "param m, L, g\ncoord x\ncoord y\nparticle p { mass m; position (x, y) }\n\

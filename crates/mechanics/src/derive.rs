@@ -90,6 +90,9 @@ pub struct Derivation {
     pub start_positions_pending: bool,
     /// Coordinates whose start positions were solved in numbers from the kept constraints.
     pub solved_start_positions: Vec<SymId>,
+    /// The start's rates break a kept constraint: the error, held for `verify` to report
+    /// unless a contradiction between the constraints explains it.
+    pub start_rates_error: Option<Diagnostic>,
     /// The start satisfies the kept constraints only at the parameters' values, or was solved
     /// there in numbers: what is decided at the start is decided at those values, not at
     /// random ones.
@@ -321,13 +324,16 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         start: None,
         start_positions_pending: false,
         solved_start_positions: Vec::new(),
+        start_rates_error: None,
         start_at_values_only: false,
     };
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
     derivation.reaction_rates_exist()?;
     if derivation.start_position_residuals().is_empty() {
-        derivation.settle_start_rates().map_err(|e| vec![e])?;
+        // Rates that break a kept constraint may be a constraint that contradicts another,
+        // which `verify` tells in numbers: it reports this only if nothing explains it better.
+        derivation.start_rates_error = derivation.settle_start_rates().err();
     } else {
         derivation.start_positions_pending = true;
     }

@@ -175,6 +175,24 @@ impl ConstraintSet {
         Ok(())
     }
 
+    /// How far the rates of a projected state stay from the rate-level rows, relative to the
+    /// size of their terms: 0 but for rounding, unless the rows contradict one another (the
+    /// same combination of rates asked to take two values), where the projection can only
+    /// come as close as least squares allow.
+    pub(crate) fn rate_residual(&mut self, values: &[f64]) -> f64 {
+        let j = self.jacobian_at(values);
+        let phi_t = self.phi_t.eval(values).to_vec();
+        let mut worst = 0.0f64;
+        for (i, bias) in phi_t.iter().enumerate() {
+            let terms: Vec<f64> =
+                (0..self.rates.len()).map(|k| j[(i, k)] * values[self.rates[k]]).collect();
+            let residual: f64 = terms.iter().sum::<f64>() + bias;
+            let size = terms.iter().map(|t| t.abs()).sum::<f64>() + bias.abs();
+            worst = worst.max(residual.abs() / (1.0 + size));
+        }
+        worst
+    }
+
     /// The rank of the constraints' Jacobian at a state. Each row is measured against the size
     /// of the terms its entries are sums of, so a gradient that vanishes by cancellation
     /// (2·x − 2·L near x = L) counts as lost even though nothing else is larger.
@@ -228,11 +246,13 @@ pub(crate) fn dependent_constraints(d: &mut Derivation) -> Vec<Diagnostic> {
     for k in 0..d.multipliers.len() {
         let mut set = ConstraintSet::first(d, k + 1);
         let (mut reached, mut stalled, mut full_rank) = (0, 0, false);
+        let mut rates_off = false;
         for _ in 0..INDEPENDENCE_TRIES {
             let mut values = random_state(d, &mut rng);
             match set.project(&mut values) {
                 Ok(()) => {
                     reached += 1;
+                    rates_off |= set.rate_residual(&values) > 1e-8;
                     if set.rank_at(&values) == Some(k + 1) {
                         full_rank = true;
                         break;
@@ -268,6 +288,17 @@ pub(crate) fn dependent_constraints(d: &mut Derivation) -> Vec<Diagnostic> {
             )
             .with_label("∂Φ/∂q vanishes on Φ = 0")
             .with_hint("its force cannot be found; write it without the square, e.g. `x = L` rather than `(x - L)^2 = 0`")
+        } else if reached > 0 && rates_off {
+            Diagnostic::error(
+                c.span,
+                format!("constraint `{}` contradicts the ones before it", c.name),
+            )
+            .with_label("no motion satisfies it together with them")
+            .with_hint(
+                "at the velocity level it restrains the same combination of rates as they do \
+                 (a position constraint restrains its time derivative), but asks another value \
+                 of it: check its signs and parameters, or remove it",
+            )
         } else if reached > 0 {
             Diagnostic::error(
                 c.span,

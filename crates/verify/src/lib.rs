@@ -34,6 +34,9 @@ pub fn diagnose(d: &mut Derivation) -> Result<(), Vec<Diagnostic>> {
     if !dependent.is_empty() {
         return Err(dependent);
     }
+    if let Some(e) = d.start_rates_error.take() {
+        return Err(vec![e]);
+    }
     settle_start_positions(d)?;
     undecidable::warn_about_undecidable_expects(d);
     Ok(())
