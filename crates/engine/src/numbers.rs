@@ -252,10 +252,6 @@ fn mass_matrix_by_columns(d: &Derivation) -> Vec<ExprId> {
 }
 
 impl Prepared {
-    /// Makes the start's rates satisfy the kept velocity constraints again after `--set`
-    /// changed positions or rates: the rates the scene left to the constraints (and `--set`
-    /// did not give) are solved for at the new state, numerically. `y0` is `[q, q̇]` in slot
-    /// order; `set_rates` marks the rates `--set` gave.
     /// Checks the start's positions against the kept position constraints at the values a
     /// run uses (the scene's, with `--set`): positions the scene left free are solved again
     /// there, and a start that breaks a constraint all the same is an error, rather than a run
@@ -313,6 +309,11 @@ impl Prepared {
         Ok(())
     }
 
+    /// Makes the start's rates satisfy the kept constraints (at the velocity level) again
+    /// after `--set` changed parameters, positions or rates: the rates the scene left to the
+    /// constraints (and `--set` did not give) are solved for at the new state, numerically;
+    /// with none to solve for, rates that break a row are an error. `y0` is `[q, q̇]` in slot
+    /// order; `set_rates` marks the rates `--set` gave.
     pub fn settle_rates(
         &mut self,
         y0: &mut [f64],
@@ -320,7 +321,7 @@ impl Prepared {
         set_rates: &[bool],
     ) -> Result<(), Error> {
         let d = &mut self.derivation;
-        if !d.multipliers.iter().any(|m| m.kind == model::ConstraintKind::Velocity) {
+        if d.multipliers.is_empty() {
             return Ok(());
         }
         let n = d.coords.len();

@@ -7,7 +7,6 @@
 use cas::{ExprId, SymId};
 use lang::Diagnostic;
 use mechanics::Derivation;
-use model::ConstraintKind;
 use nalgebra::{DMatrix, DVector};
 use numeric::Evaluator;
 
@@ -156,12 +155,7 @@ pub fn solve_positions(
     mut values: Vec<f64>,
     keep_positions: bool,
 ) -> Option<Vec<(SymId, f64)>> {
-    let phis: Vec<ExprId> = d
-        .multipliers
-        .iter()
-        .filter(|m| m.kind == ConstraintKind::Position)
-        .map(|m| m.phi)
-        .collect();
+    let phis = d.kept_position_constraints();
     let mut jacobian = Vec::new();
     for phi in &phis {
         for q in free {

@@ -59,15 +59,19 @@ impl Derivation {
         out
     }
 
-    /// The coordinates whose start positions the kept position constraints may solve for:
-    /// remaining, restrained by one of them, and given no value or only a guess (`~`).
-    pub fn free_start_positions(&mut self) -> Vec<SymId> {
-        let phis: Vec<ExprId> = self
-            .multipliers
+    /// Φ of each position constraint kept with a multiplier, in the multipliers' order.
+    pub fn kept_position_constraints(&self) -> Vec<ExprId> {
+        self.multipliers
             .iter()
             .filter(|m| m.kind == ConstraintKind::Position)
             .map(|m| m.phi)
-            .collect();
+            .collect()
+    }
+
+    /// The coordinates whose start positions the kept position constraints may solve for:
+    /// remaining, restrained by one of them, and given no value or only a guess (`~`).
+    pub fn free_start_positions(&mut self) -> Vec<SymId> {
+        let phis = self.kept_position_constraints();
         let mut out = Vec::new();
         for c in self.model.coords.clone() {
             if !c.position_free || !self.coords.contains(&c.sym) {
