@@ -411,15 +411,8 @@ pub fn run(
     progress.finish();
     let wall_seconds = started.elapsed().as_secs_f64();
 
-    let model = &prepared.derivation.model;
-    let conservative = model.forces.is_empty()
-        && model.torques.is_empty()
-        && model.dissipation.is_empty()
-        && !prepared.dynamics_exprs().iter().any(|e| {
-            let t = prepared.derivation.model.time;
-            prepared.derivation.model.pool.depends_on(*e, t)
-        })
-        && !prepared.derivation.drives_through_velocity_constraints();
+    let dynamics = prepared.dynamics_exprs();
+    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
     let mut columns: Vec<String> = outputs.clone();
     columns.extend(stops.iter().cloned());
     columns.extend(events.iter().cloned());
@@ -476,6 +469,40 @@ pub fn run(
         });
     }
     Ok(outcome)
+}
+
+/// Whether T + V should stay at its start value. It does not when loads act that no potential
+/// accounts for, or when anything depends on time: T + V is then not a first integral even
+/// where the equations do not mention t (a bead on a rod turned at a fixed rate has r̈ = ω²·r,
+/// yet the motor feeds it energy). Time enters through the equations, a position or
+/// orientation given in t, a coordinate eliminated by a constraint in t (a drive), a potential
+/// or Lagrangian term in t, or a kept velocity constraint that moves the scene at rest.
+fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> bool {
+    let model = &d.model;
+    if !(model.forces.is_empty() && model.torques.is_empty() && model.dissipation.is_empty()) {
+        return false;
+    }
+    let mut timed: Vec<cas::ExprId> = dynamics.to_vec();
+    for body in &model.bodies {
+        timed.extend(&body.position);
+        match &body.rotation {
+            Some(model::Rotation::Planar { angle, .. }) => timed.push(*angle),
+            Some(model::Rotation::Spatial { orientation, .. }) => {
+                timed.extend(orientation.iter().flatten())
+            }
+            None => {}
+        }
+    }
+    timed.extend(d.eliminated.iter().map(|e| e.solution));
+    timed.extend(model.potentials.iter().chain(&model.lagrangians).map(|term| term.expr));
+    timed.push(d.potential);
+    timed.push(d.lagrangian);
+    let t = model.time;
+    let pool = &mut d.model.pool;
+    if timed.iter().any(|e| pool.depends_on(*e, t)) {
+        return false;
+    }
+    !d.drives_through_velocity_constraints()
 }
 
 impl Outcome {
