@@ -21,7 +21,7 @@ pub mod linearize;
 pub mod numbers;
 pub mod simulate;
 
-pub use error::{line_col, Error};
+pub use error::{line_col, Error, Piece, Setting};
 
 use lang::Diagnostic;
 use mechanics::Derivation;

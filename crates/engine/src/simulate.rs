@@ -10,7 +10,7 @@ use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, R
 
 use crate::animate::{Animation, Plan};
 use crate::numbers::prepare;
-use crate::Error;
+use crate::{Error, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
 #[derive(Clone, Debug, Default)]
@@ -228,21 +228,30 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     stops.extend(options.stop_when.iter().map(|s| zero_of(s)));
     events.extend(options.events.iter().map(|s| zero_of(s)));
     if !(until.is_finite() && until > 0.0) {
-        return Err(bad(format!("--until must be a positive time, not {until}")));
+        return Err(Error::setting(
+            Setting::Until,
+            format!(" must be a positive time, not {until}"),
+        ));
     }
     if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(bad(format!("--tolerance must be positive, not {tolerance}")));
+        return Err(Error::setting(
+            Setting::Tolerance,
+            format!(" must be positive, not {tolerance}"),
+        ));
     }
     let step = step.unwrap_or(until / 1000.0);
     if !(step.is_finite() && step > 0.0) {
-        return Err(bad(format!("--step must be positive, not {step}")));
+        return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
 
     // `--set name=value`: split here, resolved as expressions when the scene is loaded.
     let mut sets: Vec<(String, String)> = Vec::new();
     for s in &options.set {
         let Some((name, value)) = s.split_once('=') else {
-            return Err(bad(format!("--set `{s}` is not of the form name=value")));
+            return Err(Error::setting(
+                Setting::Set,
+                format!(" `{s}` is not of the form name=value"),
+            ));
         };
         sets.push((name.trim().to_string(), value.trim().to_string()));
     }
@@ -320,11 +329,15 @@ pub fn run(
             param_overrides.push((i, *expr));
         } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
             if !prepared.derivation.coords.contains(&model.coords[i].sym) {
-                return Err(bad(format!(
-                    "--set {name}: `{base}` is fixed by a constraint; set the remaining \
-                     coordinates ({}) instead",
-                    coordinate_names.join(", ")
-                )));
+                return Err(Error::given(
+                    Setting::Set,
+                    name,
+                    format!(
+                        ": `{base}` is fixed by a constraint; set the remaining coordinates ({}) \
+                         instead",
+                        coordinate_names.join(", ")
+                    ),
+                ));
             }
             coord_overrides.push((i, primes == 1, *expr));
         } else {
@@ -333,10 +346,11 @@ pub fn run(
                 known.push(c.clone());
                 known.push(format!("{c}'"));
             }
-            return Err(bad(format!(
-                "--set {name}: no parameter or coordinate of that name; one of {}",
-                known.join(", ")
-            )));
+            return Err(Error::given(
+                Setting::Set,
+                name,
+                format!(": no parameter or coordinate of that name; one of {}", known.join(", ")),
+            ));
         }
     }
     let parameters = prepared.parameter_values(&param_overrides)?;
@@ -628,7 +642,7 @@ impl Outcome {
             ),
             FaultKind::NewtonFailed => (
                 "Newton's iteration of the implicit method did not converge".into(),
-                "the step is too large for this motion: lower --step".into(),
+                "the step is too large for this motion: lower the step".into(),
             ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),
