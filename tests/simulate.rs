@@ -148,13 +148,14 @@ fn a_singular_mass_matrix_stops_the_run_with_the_state() {
     assert!(outcome.run.trajectory.rows.len() > 1, "what was computed is kept");
 }
 
-/// `samples` records at evenly spaced times from the dense output, and those values agree
-/// with a run that steps exactly to each of them.
+/// `samples` records at that many evenly spaced times, the start and the end included (as
+/// numpy.linspace counts them), from the dense output, and those values agree with a run
+/// that steps exactly to each of them.
 #[test]
 fn evenly_spaced_samples_come_from_the_dense_output() {
     let sampled = run(
         "classics/simple_pendulum.lag",
-        Options { until: Some(2.0), samples: 40, tolerance: Some(1e-12), ..Options::default() },
+        Options { until: Some(2.0), samples: 41, tolerance: Some(1e-12), ..Options::default() },
     );
     let times = &sampled.run.trajectory.times;
     assert_eq!(times.len(), 41, "{times:?}");

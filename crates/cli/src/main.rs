@@ -92,8 +92,9 @@ enum Command {
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
-        /// Record at this many evenly spaced times, from the integrator's dense output; 0
-        /// records at every accepted step instead. Events and the end are always recorded.
+        /// Record at this many evenly spaced times (the start and the end included), from the
+        /// integrator's dense output; 0 records at every accepted step instead. Events and the
+        /// end are always recorded.
         /// Default: 200, or 1000 with --animate (frames of the animation).
         #[arg(long)]
         samples: Option<usize>,
