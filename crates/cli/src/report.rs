@@ -193,6 +193,8 @@ pub fn text(d: &mut Derivation) -> String {
                     out.push(format!("    integrates to {} = 0", pool.print(phi, u)));
                 }
                 out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
+            } else if let Some(why) = &derived.left_out[i] {
+                out.push(format!("    left out, as it restrains nothing more: {why}"));
             } else if c.kind == model::ConstraintKind::Velocity {
                 out.push(format!(
                     "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
