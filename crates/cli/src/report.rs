@@ -267,7 +267,7 @@ pub fn text_with(d: &mut Derivation, full: bool) -> String {
     out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
     for m in &d.multipliers {
         let name = sym_text(pool, m.lambda, u);
-        let row = cells(pool, &[m.jacobian.clone()], full);
+        let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
         out.extend(bracketed(&row, &format!("  J({name}) = ")));
         out.push(format!("  γ({name}) = {}", print(m.bias)));
     }
