@@ -140,3 +140,72 @@ fn the_report_is_readable_and_whole_on_request() {
     assert!(!whole.contains("--full prints it"));
     assert!(whole.len() > 100_000, "{} bytes", whole.len());
 }
+
+/// The values `show at start` prints, read back.
+fn shown_at_start(report: &str, labels: &[&str]) -> Vec<f64> {
+    labels
+        .iter()
+        .map(|label| {
+            let line = report
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("{label} ≈")))
+                .unwrap_or_else(|| panic!("{label} is not shown:\n{report}"));
+            line.split('≈')
+                .nth(1)
+                .expect("a value")
+                .trim()
+                .replace('−', "-")
+                .parse()
+                .expect("a number")
+        })
+        .collect()
+}
+
+/// Away from upright, with the pitch solved from the front wheel's contact (or pasted in to
+/// 13 digits), the start's 13 unknowns are past the exact solve. `show at start` gives them in
+/// numbers (it used to say the mass matrix was singular), `simulate`'s first row agrees, and
+/// `expect at start` is decided there.
+#[test]
+fn a_general_start_is_shown_and_checked_in_numbers() {
+    let general = whipple()
+        .replace("coord phi = 0, phi' = 0.5 rad/s", "coord phi = 0.62, phi' = 0.5 rad/s")
+        .replace(
+            "coord theta = 0, delta = 0, delta' = 0",
+            "coord theta ~ 0, delta = -0.23, delta' = 0.1 rad/s",
+        );
+    let scene = format!("{general}show at start: psi'', phi'', delta''\n");
+    let report =
+        cli::derive("bike.lag", &scene, cli::Format::Text).unwrap_or_else(|e| panic!("{e}"));
+    assert!(report.contains("θ   (from θ ≈ 0.0157640711752"), "{report}");
+    let shown = shown_at_start(&report, &["ψ\u{308}", "φ\u{308}", "δ\u{308}"]);
+
+    let outcome = engine::simulate::simulate(
+        &general,
+        &engine::simulate::Options {
+            until: Some(0.001),
+            output: vec!["psi'', phi'', delta''".into()],
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let first = &outcome.run.trajectory.rows[0];
+    for (s, r) in shown.iter().zip(first) {
+        assert!((s - r).abs() < 1e-9 * r.abs().max(1.0), "shown {shown:?}, simulated {first:?}");
+    }
+
+    // The pitch pasted in to 13 digits: its rounding is accepted, and the start is the same.
+    let pasted = scene.replace("coord theta ~ 0,", "coord theta = 0.01576407117524,");
+    let report =
+        cli::derive("bike.lag", &pasted, cli::Format::Text).unwrap_or_else(|e| panic!("{e}"));
+    assert!(report.contains("13 unknowns are too many to solve for exactly"), "{report}");
+    let again = shown_at_start(&report, &["ψ\u{308}", "φ\u{308}", "δ\u{308}"]);
+    for (a, b) in again.iter().zip(&shown) {
+        assert!((a - b).abs() < 1e-6 * b.abs().max(1.0), "{again:?} against {shown:?}");
+    }
+    let expectation = format!("{general}expect at start: phi'' = {}\n", first[1]);
+    let result = cli::check::check_file("bike.lag", &expectation);
+    assert_eq!(result.exit_code, 0, "{}", result.report);
+    assert!(result.report.contains("holds at the parameters' values"), "{}", result.report);
+    let wrong = format!("{general}expect at start: phi'' = {}\n", first[1] + 0.01);
+    assert_eq!(cli::check::check_file("bike.lag", &wrong).exit_code, 1);
+}

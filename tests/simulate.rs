@@ -218,3 +218,23 @@ fn the_energy_line_says_when_the_energy_is_not_conserved() {
     let spinning = run("classics/bead_on_spinning_rod.lag", Options::default());
     assert!(summary(&spinning).contains("not conserved"), "{}", summary(&spinning));
 }
+
+#[test]
+fn a_stop_condition_with_abs_and_a_force_that_flips_sign() {
+    // V = k·|x| from rest at x0 = 1 m, k/m = 2 m/s²: x = 1 − t² until the bottom, so |x| = ½
+    // at t = √½; the period is 4·√(2·m·x0/k) = 4 s, across two jumps of the force.
+    let options = |stop: Vec<String>| Options {
+        method: Some("dop853".into()),
+        tolerance: Some(1e-12),
+        until: Some(4.0),
+        output: vec!["x".into()],
+        stop_when: stop,
+        ..Options::default()
+    };
+    let outcome = run("classics/bead_in_a_v.lag", options(vec!["abs(x) = 1/2".into()]));
+    let t = outcome.run.final_time;
+    assert!((t - 0.5f64.sqrt()).abs() < 1e-12, "stopped at {t}");
+    let outcome = run("classics/bead_in_a_v.lag", options(Vec::new()));
+    let x = outcome.run.trajectory.rows.last().expect("rows")[0];
+    assert!((outcome.run.final_time - 4.0).abs() < 1e-12 && (x - 1.0).abs() < 1e-8, "x(4) = {x}");
+}

@@ -56,6 +56,7 @@ FUNCTIONS = {
     "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2,
     "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh,
     "exp": sp.exp, "ln": sp.log, "sqrt": sp.sqrt,
+    "abs": sp.Abs, "sign": sp.sign, "min": sp.Min, "max": sp.Max,
 }
 
 # A name (possibly dotted, like `floor.force`) with its primes. The lookbehind keeps the `e`

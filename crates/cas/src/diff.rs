@@ -128,6 +128,9 @@ impl Pool {
             }
             Func::Exp => self.func(Func::Exp, u),
             Func::Ln => self.powi(u, -1),
+            // Almost everywhere: at u = 0 neither has a derivative (see `Func::is_smooth`).
+            Func::Abs => self.func(Func::Sign, u),
+            Func::Sign => self.zero(),
         }
     }
 

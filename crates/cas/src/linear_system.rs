@@ -34,14 +34,26 @@ pub enum Solution {
 /// nodes, not time, so the same scene gets the same answer on every machine.
 pub fn solve_within(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], budget: usize) -> Solution {
     let limit = pool.len().saturating_add(budget);
-    let result =
-        if b.len() <= CRAMER_LIMIT { cramer(pool, a, b) } else { gauss(pool, a, b, limit) };
+    let result = if b.len() <= CRAMER_LIMIT {
+        cramer(pool, a, b).ok_or(Stop::Singular)
+    } else {
+        gauss(pool, a, b, limit)
+    };
     match result {
-        Some(x) if pool.len() <= limit => Solution::Solved(x),
+        Ok(x) if pool.len() <= limit => Solution::Solved(x),
         _ if pool.len() > limit => Solution::TooLarge,
-        Some(x) => Solution::Solved(x),
-        None => Solution::Singular,
+        Ok(x) => Solution::Solved(x),
+        Err(Stop::TooLarge) => Solution::TooLarge,
+        Err(Stop::Singular) => Solution::Singular,
     }
+}
+
+/// Why Gauss–Jordan elimination stopped short of a solution.
+enum Stop {
+    /// No pivot in a column: the matrix is singular.
+    Singular,
+    /// An entry outgrew the size a simplification may start from, or the pool its budget.
+    TooLarge,
 }
 
 fn cramer(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId]) -> Option<Vec<ExprId>> {
@@ -162,7 +174,12 @@ fn dag_size(pool: &Pool, e: ExprId, cap: usize) -> usize {
 
 /// Gauss–Jordan elimination, choosing as pivot the first entry not identically zero.
 /// Stops (returning `None`) as soon as the pool grows past `limit` nodes.
-fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], limit: usize) -> Option<Vec<ExprId>> {
+fn gauss(
+    pool: &mut Pool,
+    a: &[Vec<ExprId>],
+    b: &[ExprId],
+    limit: usize,
+) -> Result<Vec<ExprId>, Stop> {
     let n = b.len();
     let mut m: Vec<Vec<ExprId>> = a
         .iter()
@@ -174,17 +191,18 @@ fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], limit: usize) -> Opti
         })
         .collect();
     for col in 0..n {
-        let pivot = (col..n).find(|&r| !pool.is_identically_zero(m[r][col]))?;
+        let pivot =
+            (col..n).find(|&r| !pool.is_identically_zero(m[r][col])).ok_or(Stop::Singular)?;
         m.swap(col, pivot);
         let inv = pool.powi(m[col][col], -1);
         for entry in m[col][col..].iter_mut() {
             let v = pool.mul2(*entry, inv);
             if limit != usize::MAX && dag_size(pool, v, ENTRY_LIMIT) >= ENTRY_LIMIT {
-                return None;
+                return Err(Stop::TooLarge);
             }
             *entry = pool.simplify(v);
             if pool.len() > limit {
-                return None;
+                return Err(Stop::TooLarge);
             }
         }
         let pivot_row = m[col].clone();
@@ -199,22 +217,54 @@ fn gauss(pool: &mut Pool, a: &[Vec<ExprId>], b: &[ExprId], limit: usize) -> Opti
                 // One simplification of a large entry can build millions of nodes by itself;
                 // past the budget, refuse before starting it.
                 if limit != usize::MAX && dag_size(pool, d, ENTRY_LIMIT) >= ENTRY_LIMIT {
-                    return None;
+                    return Err(Stop::TooLarge);
                 }
                 *entry = pool.simplify(d);
                 if pool.len() > limit {
-                    return None;
+                    return Err(Stop::TooLarge);
                 }
             }
         }
     }
-    Some(m.into_iter().map(|row| row[n]).collect())
+    Ok(m.into_iter().map(|row| row[n]).collect())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::Style;
+
+    /// An entry past the size a simplification may start from stops the elimination as too
+    /// large: it used to read as "no pivot", and a regular start was reported singular.
+    #[test]
+    fn an_entry_too_large_to_simplify_is_too_large_not_singular() {
+        let mut p = Pool::new();
+        let symbols: Vec<ExprId> = (0..900)
+            .map(|k| {
+                let s = p.param(&format!("s{k}"));
+                p.sym(s)
+            })
+            .collect();
+        let products: Vec<ExprId> = symbols.windows(2).map(|w| p.mul2(w[0], w[1])).collect();
+        let mut large = products;
+        large.push(p.one());
+        let large = p.add(&large);
+        let n = 5;
+        let a: Vec<Vec<ExprId>> = (0..n)
+            .map(|i| {
+                (0..n)
+                    .map(|j| match (i, j) {
+                        (0, 0) => large,
+                        _ if i == j => p.one(),
+                        (0, _) => symbols[j],
+                        _ => p.zero(),
+                    })
+                    .collect()
+            })
+            .collect();
+        let b: Vec<ExprId> = (0..n).map(|i| symbols[i + 10]).collect();
+        assert_eq!(solve_within(&mut p, &a, &b, 50_000_000), Solution::TooLarge);
+    }
 
     #[test]
     fn pendulum_multiplier_cancels() {

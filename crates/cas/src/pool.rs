@@ -51,10 +51,14 @@ pub enum Func {
     Tanh,
     Exp,
     Ln,
+    /// |u|: continuous, with a kink at 0 (its derivative is `Sign`).
+    Abs,
+    /// −1, 0 or 1: a jump at 0, and a derivative of 0 everywhere else.
+    Sign,
 }
 
 impl Func {
-    pub const ALL: [Func; 11] = [
+    pub const ALL: [Func; 13] = [
         Func::Sin,
         Func::Cos,
         Func::Tan,
@@ -66,6 +70,8 @@ impl Func {
         Func::Tanh,
         Func::Exp,
         Func::Ln,
+        Func::Abs,
+        Func::Sign,
     ];
 
     pub fn name(self) -> &'static str {
@@ -81,6 +87,8 @@ impl Func {
             Func::Tanh => "tanh",
             Func::Exp => "exp",
             Func::Ln => "ln",
+            Func::Abs => "abs",
+            Func::Sign => "sign",
         }
     }
 
@@ -89,11 +97,20 @@ impl Func {
     }
 
     fn is_odd(self) -> bool {
-        matches!(self, Func::Sin | Func::Tan | Func::Asin | Func::Atan | Func::Sinh | Func::Tanh)
+        matches!(
+            self,
+            Func::Sin | Func::Tan | Func::Asin | Func::Atan | Func::Sinh | Func::Tanh | Func::Sign
+        )
     }
 
     fn is_even(self) -> bool {
-        matches!(self, Func::Cos | Func::Cosh)
+        matches!(self, Func::Cos | Func::Cosh | Func::Abs)
+    }
+
+    /// Whether it is smooth everywhere it is defined: derivatives through `abs` and `sign`
+    /// are those of almost every point, and wrong at the kink or the jump.
+    pub fn is_smooth(self) -> bool {
+        !matches!(self, Func::Abs | Func::Sign)
     }
 }
 
@@ -746,6 +763,27 @@ impl Pool {
                 Some(self.zero)
             }
             (Func::Cosh, Node::Num(q)) if q.is_zero() => Some(self.one),
+            (Func::Abs, Node::Func(Func::Abs, _)) => Some(arg),
+            (Func::Abs | Func::Sign, _) => {
+                // A number, or a number times π, has a known sign.
+                let (k, pi) = match self.node(arg) {
+                    Node::Num(q) => (q.clone(), false),
+                    _ => (self.pi_multiple(arg)?, true),
+                };
+                Some(match f {
+                    Func::Sign if k.is_zero() => self.zero,
+                    Func::Sign => self.num(number::int(if k.is_negative() { -1 } else { 1 })),
+                    _ => {
+                        let m = self.num(k.abs());
+                        if pi {
+                            let p = self.pi();
+                            self.mul2(m, p)
+                        } else {
+                            m
+                        }
+                    }
+                })
+            }
             _ => None,
         }
     }

@@ -199,7 +199,12 @@ impl Pool {
         if style == Style::Ascii {
             return symbol.name.clone();
         }
-        let order = symbol.order();
+        // A symbol that is no coordinate's derivative may still be a rate (`KE'`, the rate of
+        // the kinetic energy): its primes count too.
+        let order = match symbol.kind {
+            SymbolKind::Coordinate { order, .. } => order,
+            _ => (symbol.name.len() - symbol.base_name().len()) as u8,
+        };
         let (base, sub) = split_subscript(symbol.base_name());
         let greek = GREEK.iter().find(|(w, _, _)| *w == base);
         match style {
@@ -329,6 +334,19 @@ impl Pool {
     }
 
     fn call_text(&self, name: &str, arg: &str, power: Option<&str>, style: Style) -> String {
+        // |u| reads as the bars a reader writes; scene syntax keeps `abs(u)`, which parses.
+        let bars = match style {
+            Style::Latex => Some(format!("\\left|{arg}\\right|")),
+            Style::Unicode => Some(format!("|{arg}|")),
+            Style::Ascii => None,
+        };
+        if let (Some(bars), "abs") = (bars, name) {
+            return match (power, style) {
+                (Some(p), Style::Latex) => format!("{bars}^{{{p}}}"),
+                (Some(p), _) => format!("{bars}{}", superscript(p)),
+                (None, _) => bars,
+            };
+        }
         match style {
             Style::Latex => {
                 let head = match name {
@@ -338,6 +356,7 @@ impl Pool {
                     "asin" => "\\arcsin".to_string(),
                     "acos" => "\\arccos".to_string(),
                     "atan" => "\\arctan".to_string(),
+                    "sign" => "\\operatorname{sgn}".to_string(),
                     other => format!("\\operatorname{{{other}}}"),
                 };
                 match power {

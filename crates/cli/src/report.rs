@@ -21,7 +21,8 @@ fn decimal(q: &Rational) -> Option<String> {
             d /= &five;
         }
         places += 1;
-        if places > 12 {
+        // Values pasted from elsewhere carry up to 17 digits; a float's binary fraction, more.
+        if places > 17 {
             return None;
         }
     }
@@ -47,8 +48,33 @@ fn num_ten_pow(n: u32) -> cas::number::Rational {
     r
 }
 
+/// `= value` of a start position, or `≈ value` where it was solved in numbers (a decimal
+/// whose last digits are the solve's rounding).
+/// Once positions were solved, the rates solved at them are exact only in those decimals, and
+/// read better as numbers too.
+fn start_value_text(d: &Derivation, s: cas::SymId, e: ExprId, style: Style) -> String {
+    let pool = &d.model.pool;
+    let rate = pool.symbol(s).order() > 0;
+    let numeric = d.solved_start_positions.contains(&s)
+        || (rate && !d.solved_start_positions.is_empty() && pool.as_num(e).is_none());
+    let values = if numeric { verify::parameter_values(d).ok() } else { None };
+    match values {
+        Some(params) => {
+            let mut at = vec![f64::NAN; pool.symbol_count()];
+            for (p, v) in params {
+                at[p.index()] = v;
+            }
+            let sign = if style == Style::Latex { "\\approx" } else { "≈" };
+            format!("{sign} {}", significant(numeric::eval(pool, e, &at), 12, style))
+        }
+        None => format!("= {}", value_text(pool, e, style)),
+    }
+}
+
 pub(crate) fn value_text(pool: &Pool, e: ExprId, style: Style) -> String {
     match pool.as_num(e).and_then(decimal) {
+        // The minus sign every other printed number has.
+        Some(d) if style == Style::Unicode => d.replacen('-', "−", 1),
         Some(d) if style != Style::Latex => d,
         _ => pool.print(e, style),
     }
@@ -209,14 +235,17 @@ pub fn text_with(d: &mut Derivation, full: bool) -> String {
             let cname = &d.model.constraints[e.constraint].name;
             out.push(format!("  {name} = {}   (eliminated by {cname})", print(e.solution)));
         } else {
-            let rate = pool
-                .lookup_symbol(&format!("{}'", c.name))
-                .map(|r| sym_text(pool, r, u))
-                .unwrap_or_default();
+            let rate_symbol = pool.lookup_symbol(&format!("{}'", c.name));
+            let rate = rate_symbol.map(|r| sym_text(pool, r, u)).unwrap_or_default();
+            let solved = if d.solved_start_positions.contains(&c.sym) {
+                ", solved from the constraints"
+            } else {
+                ""
+            };
             out.push(format!(
-                "  {name}   (from {name} = {}, {rate} = {})",
-                value_text(pool, c.initial, u),
-                value_text(pool, c.initial_rate, u)
+                "  {name}   (from {name} {}, {rate} {}{solved})",
+                start_value_text(d, c.sym, c.initial, u),
+                start_value_text(d, rate_symbol.unwrap_or(c.sym), c.initial_rate, u)
             ));
         }
     }
@@ -323,7 +352,7 @@ pub fn text_with(d: &mut Derivation, full: bool) -> String {
         let state: Vec<String> = derived
             .start_state
             .iter()
-            .map(|(s, e)| format!("{} = {}", sym_text(pool, *s, u), value_text(pool, *e, u)))
+            .map(|(s, e)| format!("{} {}", sym_text(pool, *s, u), start_value_text(d, *s, *e, u)))
             .collect();
         format!("At the start  ({})", state.join(", "))
     };
@@ -336,14 +365,15 @@ pub fn text_with(d: &mut Derivation, full: bool) -> String {
             }
         }
         ShownAtStart::Exact(_) => {}
-        ShownAtStart::Numeric { items, unknowns, digits, params } => {
+        ShownAtStart::Numeric { items, unknowns, digits, params, because } => {
             out.push(start_heading());
             let at: Vec<String> = params
                 .iter()
                 .map(|(s, v)| format!("{} = {}", sym_text(pool, *s, u), significant(*v, 15, u)))
                 .collect();
             out.push(format!(
-                "  solved numerically: {unknowns} unknowns are too many to solve for exactly; at {}, to about {digits} significant digits",
+                "  solved numerically: {}; at {}, to about {digits} significant digits",
+                because.words(*unknowns),
                 at.join(", ")
             ));
             for (show, v) in items {

@@ -263,6 +263,63 @@ impl Prepared {
     /// changed positions or rates: the rates the scene left to the constraints (and `--set`
     /// did not give) are solved for at the new state, numerically. `y0` is `[q, q̇]` in slot
     /// order; `set_rates` marks the rates `--set` gave.
+    /// Checks the start's positions against the kept position constraints at the values a
+    /// run uses (the scene's, with `--set`): positions the scene left free are solved again
+    /// there, and a start that breaks a constraint all the same is an error, rather than a run
+    /// that Baumgarte drags back onto it.
+    pub fn settle_positions(
+        &mut self,
+        y0: &mut [f64],
+        parameters: &[f64],
+        set_positions: &[bool],
+    ) -> Result<(), Error> {
+        let d = &mut self.derivation;
+        let n = d.coords.len();
+        let mut values = vec![f64::NAN; d.model.pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        values[d.model.time.index()] = 0.0;
+        for k in 0..n {
+            values[d.coords[k].index()] = y0[k];
+        }
+        let broken = |d: &mechanics::Derivation, values: &[f64]| {
+            d.multipliers
+                .iter()
+                .filter(|m| m.kind == model::ConstraintKind::Position)
+                .map(|m| {
+                    let (v, size) = numeric::value_and_magnitude(&d.model.pool, m.phi, values);
+                    (m.constraint, v, size)
+                })
+                .find(|(_, v, size)| !verify::within_rounding(*v, *size))
+        };
+        let Some((first, ..)) = broken(d, &values) else { return Ok(()) };
+        let free: Vec<SymId> = d
+            .free_start_positions()
+            .into_iter()
+            .filter(|q| !d.coords.iter().position(|c| c == q).is_some_and(|k| set_positions[k]))
+            .collect();
+        let solved = if free.is_empty() {
+            None
+        } else {
+            verify::solve_positions(d, &free, values.clone(), true)
+        };
+        let Some(solved) = solved else {
+            let name = &d.model.constraints[first].name;
+            let (.., v, _) = broken(d, &values).expect("broken");
+            return Err(Error::Input(format!(
+                "with these values the start breaks the constraint `{name}` (this side \
+                 minus that is {v:.6e} at the start); set start positions that satisfy it, or \
+                 leave one it restrains without a value in the scene for lagrange to solve"
+            )));
+        };
+        for (q, v) in solved {
+            let k = d.coords.iter().position(|c| *c == q).expect("remaining");
+            y0[k] = v;
+        }
+        Ok(())
+    }
+
     pub fn settle_rates(
         &mut self,
         y0: &mut [f64],
@@ -292,11 +349,6 @@ impl Prepared {
                     && rows.iter().any(|r| pool.depends_on(*r, d.rates[*k]))
             })
             .collect();
-        if free.len() != rows.len() {
-            // The derivation already settled the scene's own start; with nothing to solve for
-            // here, a run from a state `--set` made inconsistent drifts back under Baumgarte.
-            return Ok(());
-        }
         let mut values = vec![f64::NAN; pool.symbol_count()];
         for (s, v) in self.parameters.iter().zip(parameters) {
             values[s.index()] = *v;
@@ -305,6 +357,23 @@ impl Prepared {
         for k in 0..n {
             values[d.coords[k].index()] = y0[k];
             values[d.rates[k].index()] = y0[n + k];
+        }
+        if free.len() != rows.len() {
+            // Nothing to solve for: the rates must satisfy the rows as they are, or the run
+            // would start off the constraints and be dragged back by the stabilisation.
+            for (m, row) in d.multipliers.iter().zip(&rows) {
+                let (v, size) = numeric::value_and_magnitude(pool, *row, &values);
+                if !verify::within_rounding(v, size) {
+                    let name = &d.model.constraints[m.constraint].name;
+                    return Err(Error::Input(format!(
+                        "with these values the start's rates break the constraint \
+                         `{name}` (this side minus that is {v:.6e} at the start); set rates \
+                         that satisfy it, or leave some it restrains without a value in the \
+                         scene for lagrange to solve"
+                    )));
+                }
+            }
+            return Ok(());
         }
         for k in &free {
             values[d.rates[*k].index()] = 0.0;
@@ -322,7 +391,7 @@ impl Prepared {
         let mut pivots = vec![0; size];
         sim::linalg::solve_general(&mut a, &mut b, &mut pivots).map_err(|_| {
             Error::Input(
-                "error: the rates left to the velocity constraints are not fixed by them at the \
+                "the rates left to the velocity constraints are not fixed by them at the \
                  state --set gives; give them with --set too"
                     .into(),
             )

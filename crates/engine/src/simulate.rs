@@ -9,7 +9,7 @@ use numeric::Tape;
 use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run};
 
 use crate::animate::{Animation, Plan};
-use crate::numbers::prepare;
+use crate::numbers::{prepare, Prepared};
 use crate::{Error, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
@@ -359,16 +359,21 @@ pub fn run(
         prepared.masses_at(&parameters)?;
     }
     let mut y0 = prepared.initial_state(&parameters, &coord_overrides)?;
-    let set_rates: Vec<bool> = prepared
-        .derivation
-        .coords
-        .iter()
-        .map(|q| {
-            let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
-            coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate)
-        })
-        .collect();
-    if !coord_overrides.is_empty() {
+    let set_in = |prepared: &Prepared, rates: bool| -> Vec<bool> {
+        prepared
+            .derivation
+            .coords
+            .iter()
+            .map(|q| {
+                let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
+                coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate == rates)
+            })
+            .collect()
+    };
+    let (set_positions, set_rates) = (set_in(&prepared, false), set_in(&prepared, true));
+    // The scene's own start was settled when it was derived; `--set` values may break it.
+    if !param_overrides.is_empty() || !coord_overrides.is_empty() {
+        prepared.settle_positions(&mut y0, &parameters, &set_positions)?;
         prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
     }
     if let Some(bad_slot) = y0.iter().position(|v| !v.is_finite()) {

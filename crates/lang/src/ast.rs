@@ -105,6 +105,9 @@ pub struct CoordDecl {
     /// Initial value (default 0).
     pub value: Option<Expr>,
     pub value_unit: Option<Unit>,
+    /// Whether the value is a guess (`coord y ~ -1`), for the start's position to be solved
+    /// from the kept constraints near it.
+    pub guess: bool,
     /// Initial rate, from a `name' = …` item on the same line (default 0).
     pub rate: Option<Expr>,
     pub rate_unit: Option<Unit>,

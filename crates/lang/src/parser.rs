@@ -337,6 +337,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
         eq => (6, "`=`"),
+        near => (6, "`~`"),
         colon => (6, "`:`"),
         lparen => (6, "`(`"),
         lbracket => (6, "`[`"),
@@ -857,6 +858,8 @@ impl Builder<'_> {
             primes_span: Span,
             value: Option<Expr>,
             unit: Option<Unit>,
+            /// Where `~` stands, when the value is a guess.
+            near: Option<Span>,
         }
         let mut parsed = Vec::new();
         for item in items {
@@ -870,9 +873,12 @@ impl Builder<'_> {
                 Some(p) => (p.as_str().len(), self.span(&p)),
                 None => (0, item_span),
             };
-            let value = parts.next().map(|p| self.expr(p)).transpose()?;
-            let unit = parts.next().map(|p| self.unit(p)).transpose()?;
-            parsed.push(Item { name, primes, primes_span, value, unit });
+            // `~` is kept by `parts` (it means something); `=` is not.
+            let mut rest = parts.peekable();
+            let near = rest.next_if(|p| p.as_rule() == Rule::near).map(|p| self.span(&p));
+            let value = rest.next().map(|p| self.expr(p)).transpose()?;
+            let unit = rest.next().map(|p| self.unit(p)).transpose()?;
+            parsed.push(Item { name, primes, primes_span, value, unit, near });
         }
 
         let mut decls: Vec<CoordDecl> = parsed
@@ -882,6 +888,7 @@ impl Builder<'_> {
                 name: it.name.clone(),
                 value: it.value.clone(),
                 value_unit: it.unit.clone(),
+                guess: it.near.is_some(),
                 rate: None,
                 rate_unit: None,
             })
@@ -895,6 +902,17 @@ impl Builder<'_> {
                 )
                 .with_label("too many primes")
                 .with_hint(format!("write `{}' = …`", it.name.name)));
+            }
+            if let Some(near) = it.near {
+                return Err(Diagnostic::error(
+                    near,
+                    format!("the initial rate `{written}` cannot be a guess"),
+                )
+                .with_label("`~` is for positions")
+                .with_hint(format!(
+                    "rates the kept constraints fix are solved exactly: leave `{written}` \
+                     without a value, or give it with `=`"
+                )));
             }
             let Some(value) = it.value else {
                 return Err(Diagnostic::error(

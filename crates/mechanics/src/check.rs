@@ -42,13 +42,21 @@ impl Derivation {
         let at_start = match self.unknowns_at_start() {
             StartSolution::Exact(map) => map,
             StartSolution::Singular => return Decision::SingularAtStart,
-            StartSolution::TooLarge { unknowns } => {
+            StartSolution::TooLarge { unknowns } | StartSolution::Numeric { unknowns } => {
                 return Decision::SampleAtStart { residual, unknowns };
             }
         };
-        let z = self.model.pool.subst(residual, &at_start);
+        let mut z = self.model.pool.subst(residual, &at_start);
         if self.model.pool.is_identically_zero(z) {
             return Decision::Exact;
+        }
+        if self.start_at_values_only {
+            // The start is a start only at the parameters' values: decide there.
+            let values = self.parameter_values();
+            z = self.model.pool.subst(z, &values);
+            if self.model.pool.is_identically_zero(z) {
+                return Decision::Exact;
+            }
         }
         // Only parameters are left: compare at random parameter values.
         let z = self.model.pool.simplify(z);

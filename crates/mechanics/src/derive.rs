@@ -6,6 +6,7 @@ mod energies;
 mod equations;
 mod multipliers;
 mod reactions;
+mod start_positions;
 mod start_rates;
 mod structural;
 
@@ -83,6 +84,16 @@ pub struct Derivation {
     solved: Option<Option<HashMap<SymId, ExprId>>>,
     /// The unknowns at the start; computed on first use.
     pub(crate) start: Option<crate::start::StartSolution>,
+    /// The start breaks a kept position constraint exactly: the `verify` crate decides in
+    /// numbers whether that is the rounding of values given to some digits, or solves the free
+    /// positions, before the start's rates are settled.
+    pub start_positions_pending: bool,
+    /// Coordinates whose start positions were solved in numbers from the kept constraints.
+    pub solved_start_positions: Vec<SymId>,
+    /// The start satisfies the kept constraints only at the parameters' values, or was solved
+    /// there in numbers: what is decided at the start is decided at those values, not at
+    /// random ones.
+    pub start_at_values_only: bool,
 }
 
 impl Derivation {
@@ -145,6 +156,18 @@ impl Derivation {
             Vec::new()
         };
         let mut map: HashMap<SymId, ExprId> = HashMap::new();
+        // What each placeholder a rate is taken of stands for, in the state: its rate is the
+        // time derivative of that. A rate is always made after what it differentiates.
+        let mut in_state: HashMap<SymId, ExprId> = HashMap::new();
+        let differentiated: Vec<SymId> = self
+            .model
+            .placeholders
+            .iter()
+            .filter_map(|(_, k)| match k {
+                Placeholder::Rate { of, .. } => Some(*of),
+                _ => None,
+            })
+            .collect();
         for (s, kind) in self.model.placeholders.clone() {
             let value = match kind {
                 Placeholder::KineticEnergy => Some(self.kinetic),
@@ -153,13 +176,41 @@ impl Derivation {
                 Placeholder::Reaction(c) => {
                     self.reactions.iter().find(|r| r.constraint == c).map(|r| r.expr)
                 }
+                Placeholder::Rate { of, .. } => in_state.get(&of).map(|base| {
+                    let d = self.model.pool.time_derivative(*base);
+                    self.model.pool.subst(d, &self.elimination_map)
+                }),
             };
+            if differentiated.contains(&s) {
+                let form = match kind {
+                    Placeholder::Reaction(c) => self.reaction_in_state(c),
+                    _ => value,
+                };
+                if let Some(f) = form {
+                    in_state.insert(s, f);
+                }
+            }
             if let Some(v) = value {
                 map.insert(s, v);
             }
         }
         let e = self.model.pool.subst(e, &map);
         self.model.pool.subst(e, &self.elimination_map)
+    }
+
+    /// A reaction as an expression of the state (positions, rates, time), with the
+    /// accelerations and multipliers solved for: what its time derivative is taken of.
+    /// `None` where the system is too large for the symbolic solve.
+    pub fn reaction_in_state(&mut self, constraint: usize) -> Option<ExprId> {
+        let solved = self.solved_unknowns()?;
+        let m = self.multipliers.iter().find(|m| m.constraint == constraint);
+        let e = match m {
+            Some(m) => return solved.get(&m.lambda).copied(),
+            None => self.reactions.iter().find(|r| r.constraint == constraint)?.expr,
+        };
+        let x = self.model.pool.subst(e, &solved);
+        let x = self.model.pool.subst(x, &self.elimination_map);
+        Some(self.model.pool.together(x))
     }
 
     pub fn expand_value(&mut self, v: &Value, keep_multipliers: bool) -> Value {
@@ -268,11 +319,49 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         warnings,
         solved: None,
         start: None,
+        start_positions_pending: false,
+        solved_start_positions: Vec::new(),
+        start_at_values_only: false,
     };
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
-    derivation.settle_start_rates().map_err(|e| vec![e])?;
+    derivation.reaction_rates_exist()?;
+    if derivation.start_position_residuals().is_empty() {
+        derivation.settle_start_rates().map_err(|e| vec![e])?;
+    } else {
+        derivation.start_positions_pending = true;
+    }
     Ok(derivation)
+}
+
+impl Derivation {
+    /// A rate of a reaction is the derivative of the reaction as an expression of the state,
+    /// which exists only where the full system is solved symbolically.
+    fn reaction_rates_exist(&mut self) -> Result<(), Vec<Diagnostic>> {
+        let mut errors = Vec::new();
+        for (_, kind) in self.model.placeholders.clone() {
+            let Placeholder::Rate { of, span } = kind else { continue };
+            let Some(Placeholder::Reaction(c)) = self.model.placeholder(of) else { continue };
+            if self.reaction_in_state(c).is_some() {
+                continue;
+            }
+            let name = self.model.pool.symbol(of).name.clone();
+            let unknowns = self.unknowns().len();
+            errors.push(
+                Diagnostic::error(span, format!("the rate of `{name}` is not available"))
+                    .with_label("needs the reaction as an expression of the state")
+                    .with_hint(format!(
+                        "lagrange solves for the accelerations and reactions symbolically only up \
+                         to {SYMBOLIC_SOLVE_LIMIT} unknowns, and this scene has {unknowns}"
+                    )),
+            );
+        }
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(errors)
+        }
+    }
 }
 
 /// Past this many unknowns the symbolic solution of the full system is too large to be worth

@@ -24,5 +24,5 @@ pub use present::collect_by_motion;
 pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
 pub use linearize::{KeptLinearization, LinearConstraint, Linearization, RatesLinearization};
-pub use present::{Equation, StartShows};
+pub use present::{Equation, NumericStart, StartShows};
 pub use start::StartSolution;

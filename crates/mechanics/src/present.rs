@@ -170,8 +170,16 @@ impl Derivation {
                     })
                     .collect(),
             ),
-            StartSolution::Singular => StartShows::Singular,
-            StartSolution::TooLarge { unknowns } => StartShows::TooLarge { unknowns, shows },
+            StartSolution::Singular => {
+                let unknowns = self.unknowns().len();
+                StartShows::Numeric { unknowns, shows, because: NumericStart::SingularInAlgebra }
+            }
+            StartSolution::TooLarge { unknowns } => {
+                StartShows::Numeric { unknowns, shows, because: NumericStart::TooManyUnknowns }
+            }
+            StartSolution::Numeric { unknowns } => {
+                StartShows::Numeric { unknowns, shows, because: NumericStart::PositionsSolved }
+            }
         }
     }
 }
@@ -181,10 +189,37 @@ impl Derivation {
 pub enum StartShows {
     /// Exactly, in the parameters.
     Exact(Vec<(model::Show, Value)>),
-    /// The exact solve of `unknowns` unknowns outgrew its budget: these items need numbers.
-    TooLarge { unknowns: usize, shows: Vec<model::Show> },
-    /// The mass matrix (with the constraints' rows) is singular at the start.
-    Singular,
+    /// These items need numbers, for the reason given.
+    Numeric { unknowns: usize, shows: Vec<model::Show>, because: NumericStart },
+}
+
+/// Why the start is left to numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NumericStart {
+    /// The exact solve of the unknowns outgrew its budget.
+    TooManyUnknowns,
+    /// The start's positions were solved in numbers from the kept constraints.
+    PositionsSolved,
+    /// The exact solve found the system singular. Its zero test decides large entries at
+    /// generic points, so numbers at the start have the last word.
+    SingularInAlgebra,
+}
+
+impl NumericStart {
+    /// Why, in the words of a report.
+    pub fn words(self, unknowns: usize) -> String {
+        match self {
+            NumericStart::TooManyUnknowns => {
+                format!("{unknowns} unknowns are too many to solve for exactly")
+            }
+            NumericStart::PositionsSolved => {
+                "the start positions were solved numerically from the constraints".to_string()
+            }
+            NumericStart::SingularInAlgebra => {
+                format!("the exact solve of {unknowns} unknowns found no pivot")
+            }
+        }
+    }
 }
 
 /// The sum of `terms` with the terms that move alike gathered: those whose factors of

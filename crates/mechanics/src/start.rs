@@ -22,6 +22,8 @@ pub enum StartSolution {
     Singular,
     /// The exact solution outgrew its budget; the unknowns are found numerically instead.
     TooLarge { unknowns: usize },
+    /// The start's positions were solved in numbers, and so is the rest of the start.
+    Numeric { unknowns: usize },
 }
 
 impl Derivation {
@@ -34,6 +36,13 @@ impl Derivation {
         let state = self.initial_state();
         let (rows, rhs) = self.system();
         let unknowns = self.unknowns();
+        if !self.solved_start_positions.is_empty() {
+            // Positions solved in numbers are decimals close to irrational values: an exact
+            // solve at them would only spell out their rounding.
+            let solution = StartSolution::Numeric { unknowns: unknowns.len() };
+            self.start = Some(solution.clone());
+            return solution;
+        }
         let pool = &mut self.model.pool;
         let mut memo = HashMap::new();
         let a: Vec<Vec<ExprId>> = rows

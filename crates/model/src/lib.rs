@@ -46,6 +46,9 @@ pub struct Coord {
     /// Whether the scene gave the initial rate; one it did not give may be set by the
     /// velocity constraints at the start.
     pub initial_rate_given: bool,
+    /// Whether the start position may be solved from the kept position constraints: the
+    /// scene gave none, or gave a guess (`coord y ~ -1`) to start the solve from.
+    pub position_free: bool,
     pub span: Span,
 }
 
@@ -193,6 +196,12 @@ pub enum Placeholder {
     KineticEnergy,
     PotentialEnergy,
     Reaction(usize),
+    /// The time derivative of another placeholder (`dt(KE)`, `KE'`), written at `span`: a
+    /// symbol of its own, since differentiating the stand-in symbol would give 0.
+    Rate {
+        of: SymId,
+        span: Span,
+    },
 }
 
 /// A `show` item.

@@ -309,7 +309,15 @@ impl<'a> Resolver<'a> {
             StmtKind::Param(decls) => {
                 for decl in decls {
                     // Its unknown comes before any in its value: unknowns follow the file.
-                    let form = self.units.fresh(&decl.name.name);
+                    let example = match (&decl.value, &decl.unit) {
+                        (Some(v), None) => {
+                            let value = self.text(v.span);
+                            let value = if value.is_empty() { "…" } else { value.as_str() };
+                            Some(format!("param {} = {value} rad", decl.name.name))
+                        }
+                        _ => None,
+                    };
+                    let form = self.units.declared(&decl.name.name, decl.name.span, example);
                     let value = decl.value.as_ref().map(|v| self.constant(v));
                     if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
                         let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
@@ -404,6 +412,7 @@ impl<'a> Resolver<'a> {
                             initial_rate: rate.unwrap_or(zero),
                             initial_given: decl.value.is_some() || decl.rate.is_some(),
                             initial_rate_given: decl.rate.is_some(),
+                            position_free: decl.value.is_none() || decl.guess,
                             span: decl.name.span,
                         });
                     }
@@ -900,6 +909,8 @@ impl<'a> Resolver<'a> {
     fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
         let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+        self.warn_kinks(lhs, &l, &checks::CONSTRAINT);
+        self.warn_kinks(rhs, &r, &checks::CONSTRAINT);
         // A vector constraint is one scalar constraint per component (`roll.x`, `roll.y`, …).
         let (ls, rs) = match (space::as_vector(&l), space::as_vector(&r), &l, &r) {
             (_, _, Value::Scalar(a), Value::Scalar(b)) => (vec![*a], vec![*b]),
@@ -1225,13 +1236,21 @@ impl<'a> Resolver<'a> {
     /// [`Self::value`], refused when it has derivatives its role does not allow.
     fn value_in_role(&mut self, e: &Expr, role: &Role) -> Option<(Value, Dims)> {
         let (v, dims) = self.value(e)?;
-        self.within_role(e, &v, role).then_some((v, dims))
+        let within = self.within_role(e, &v, role);
+        if within {
+            self.warn_kinks(e, &v, role);
+        }
+        within.then_some((v, dims))
     }
 
     /// [`Self::scalar`], refused when it has derivatives its role does not allow.
     fn scalar_in_role(&mut self, e: &Expr, role: &Role) -> Option<(cas::ExprId, Dims)> {
         let (v, dims) = self.scalar(e)?;
-        self.within_role(e, &Value::Scalar(v), role).then_some((v, dims))
+        let within = self.within_role(e, &Value::Scalar(v), role);
+        if within {
+            self.warn_kinks(e, &Value::Scalar(v), role);
+        }
+        within.then_some((v, dims))
     }
 
     fn scalar(&mut self, e: &Expr) -> Option<(cas::ExprId, Dims)> {
@@ -1357,6 +1376,9 @@ impl<'a> Resolver<'a> {
             }
             _ => self.name_dims(raw, &name, primes),
         };
+        if let Dims::Scalar(f) = &dims {
+            self.units.used(f, span);
+        }
         Some((value, dims))
     }
 
@@ -1391,24 +1413,9 @@ impl<'a> Resolver<'a> {
                     }
                     Value::Scalar(self.pool.sym(s))
                 }
-                Some(Binding::Quantity(s)) => {
-                    // KE stands for an expression only derived later; differentiating its
-                    // stand-in symbol would silently give 0.
-                    if primes > 0 {
-                        self.error(
-                            Diagnostic::error(
-                                span,
-                                format!("the rate of `{raw}` is not available"),
-                            )
-                            .with_label("KE and PE are known only once the derivation is done")
-                            .with_hint(
-                                "write the energy out as a `let` name and take its rate: `let T = m/2*x'^2`, then `T'`",
-                            ),
-                        );
-                        return None;
-                    }
-                    Value::Scalar(self.pool.sym(s))
-                }
+                // KE stands for an expression only derived later; its rates are symbols of
+                // their own (see `total_rate`), taken below as a `let` name's are.
+                Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
                 Some(Binding::Coord(s)) => {
                     if primes > 2 {
                         let base = self.pool.symbol(s).name.clone();
@@ -1444,10 +1451,10 @@ impl<'a> Resolver<'a> {
         if !self.derivative_exists(&base, primes, span) {
             return None;
         }
-        // A rate of a `let` name: the total time derivative.
+        // A rate of a `let` name or a quantity: the total time derivative.
         Some(base.map(|mut x| {
             for _ in 0..primes {
-                x = self.pool.time_derivative(x);
+                x = self.total_rate(x, span);
             }
             x
         }))
@@ -1662,12 +1669,12 @@ impl<'a> Resolver<'a> {
             return self.space_call(name, args, span);
         }
         let arity = match name {
-            "atan2" => 2,
+            "atan2" | "min" | "max" => 2,
             "sqrt" => 1,
             _ if Func::from_name(name).is_some() => 1,
             _ => {
                 let mut known: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
-                known.extend(["sqrt", "atan2"]);
+                known.extend(["sqrt", "atan2", "min", "max"]);
                 known.extend(space::SPACE_FUNCTIONS.iter().map(|(n, _)| *n));
                 let mut d = Diagnostic::error(func.span, format!("unknown function `{name}`"))
                     .with_label("not a function lagrange knows");
@@ -1702,6 +1709,19 @@ impl<'a> Resolver<'a> {
         let v = match name {
             "atan2" => self.pool.atan2(xs[0], xs[1]),
             "sqrt" => self.pool.sqrt(xs[0]),
+            // (a + b ∓ |a − b|)/2: no node of their own, so everything that knows `abs`
+            // (derivatives, numbers, printing, SymPy) knows them.
+            "min" | "max" => {
+                let sum = self.pool.add2(xs[0], xs[1]);
+                let gap = self.pool.sub(xs[0], xs[1]);
+                let mut gap = self.pool.func(Func::Abs, gap);
+                if name == "min" {
+                    gap = self.pool.neg(gap);
+                }
+                let twice = self.pool.add2(sum, gap);
+                let half = self.pool.num(cas::Rational::new(1.into(), 2.into()));
+                self.pool.mul2(half, twice)
+            }
             _ => self.pool.func(Func::from_name(name).expect("checked above"), xs[0]),
         };
         let dims = self.call_dims(name, arg_dims, args, v);

@@ -263,13 +263,34 @@ pub(crate) struct Inference {
     names: HashMap<Unknown, String>,
     facts: Vec<(usize, Fact)>,
     energy: Unknown,
+    /// The unknowns of parameters: the name, where it is declared, and the
+    /// declaration a dimensionless value would have (`param ka = 1/4 rad`), for messages.
+    declared: HashMap<Unknown, Declared>,
+    /// Where each declared name is used, by statement: a name without a unit takes its
+    /// dimension from a use, and a later mismatch names that use.
+    uses: HashMap<Unknown, Vec<(usize, Span)>>,
+}
+
+/// A parameter, as the messages about its dimension name it.
+#[derive(Debug)]
+struct Declared {
+    name: String,
+    span: Span,
+    dimensionless: Option<String>,
 }
 
 impl Default for Inference {
     fn default() -> Self {
         let first = Unknown { stmt: 0, seq: 0 };
-        let mut inference =
-            Inference { stmt: 0, next: 1, names: HashMap::new(), facts: Vec::new(), energy: first };
+        let mut inference = Inference {
+            stmt: 0,
+            next: 1,
+            names: HashMap::new(),
+            facts: Vec::new(),
+            energy: first,
+            declared: HashMap::new(),
+            uses: HashMap::new(),
+        };
         inference.names.insert(first, "the energy".to_string());
         inference
     }
@@ -295,6 +316,33 @@ impl Inference {
     pub(crate) fn fresh(&mut self, what: &str) -> Form {
         let u = self.reserve();
         self.named(u, what)
+    }
+
+    /// The unknown dimension of a parameter declared at `span`; `dimensionless` is how its
+    /// declaration would be written to make it dimensionless, if it can be. (A coordinate
+    /// without a unit takes its dimension from a position as a matter of course; naming that
+    /// use would be noise.)
+    pub(crate) fn declared(
+        &mut self,
+        name: &str,
+        span: Span,
+        dimensionless: Option<String>,
+    ) -> Form {
+        let u = self.reserve();
+        self.declared.insert(u, Declared { name: name.to_string(), span, dimensionless });
+        self.named(u, name)
+    }
+
+    /// A use at `span` of a name whose dimension is `form`.
+    pub(crate) fn used(&mut self, form: &Form, span: Span) {
+        for u in form.unknowns.keys() {
+            if self.declared.contains_key(u) {
+                let uses = self.uses.entry(*u).or_default();
+                if !uses.contains(&(self.stmt, span)) {
+                    uses.push((self.stmt, span));
+                }
+            }
+        }
     }
 
     /// The dimension of energy, whatever the scene's units make it.
@@ -348,13 +396,18 @@ impl Inference {
         facts.sort_by_key(|(stmt, _)| *stmt);
         let mut solver = Solver {
             names: &self.names,
+            declared: &self.declared,
+            uses: &self.uses,
+            stmt: 0,
+            origin: HashMap::new(),
             energy: self.energy,
             solved: HashMap::new(),
             void: HashSet::new(),
             energy_span: None,
             errors: Vec::new(),
         };
-        for (_, fact) in facts {
+        for (stmt, fact) in facts {
+            solver.stmt = *stmt;
             solver.fact(fact);
         }
         solver.errors
@@ -369,6 +422,13 @@ pub fn check(file: &SceneFile) -> Vec<Diagnostic> {
 
 struct Solver<'a> {
     names: &'a HashMap<Unknown, String>,
+    declared: &'a HashMap<Unknown, Declared>,
+    uses: &'a HashMap<Unknown, Vec<(usize, Span)>>,
+    /// The statement of the fact being solved.
+    stmt: usize,
+    /// Where each declared name's dimension became known: the statement and the spans of
+    /// the fact that decided it.
+    origin: HashMap<Unknown, (usize, Span, Span)>,
     energy: Unknown,
     /// Solved unknowns, in terms of the others.
     solved: HashMap<Unknown, Form>,
@@ -465,9 +525,21 @@ impl Solver<'_> {
             let mut rest = diff.clone();
             rest.unknowns.remove(&u);
             let value = rest.times(&-(Rational::one() / k));
-            for s in self.solved.values_mut() {
+            let mut decided = Vec::new();
+            for (v, s) in self.solved.iter_mut() {
                 if let Some(c) = s.unknowns.remove(&u) {
                     *s = s.plus(&value, &c);
+                    if s.unknowns.is_empty() {
+                        decided.push(*v);
+                    }
+                }
+            }
+            if value.unknowns.is_empty() {
+                decided.push(u);
+            }
+            for v in decided {
+                if self.declared.contains_key(&v) {
+                    self.origin.entry(v).or_insert((self.stmt, span_a, span_b));
                 }
             }
             self.solved.insert(u, value);
@@ -485,8 +557,66 @@ impl Solver<'_> {
         if span_b != span_a {
             d = d.with_related(span_b, db);
         }
-        self.errors.push(d.with_hint("every term added or equated must have one dimension; `--no-units` turns this check off"));
+        let hint = "every term added or equated must have one dimension; `--no-units` turns this check off";
+        let d = match self.inferred(a, b) {
+            Some((related, why)) => related
+                .into_iter()
+                .fold(d, |d, (span, label)| d.with_related(span, label))
+                .with_hint(why),
+            None => d.with_hint(hint),
+        };
+        self.errors.push(d);
         false
+    }
+
+    /// A mismatch that may come from a name without a unit, which took its dimension from a
+    /// use elsewhere: that use and the declaration, for `d`, and the hint that goes with them.
+    /// The use that decided the dimension may be the mistake rather than the place the
+    /// mismatch shows, which the file's order alone decides.
+    fn inferred(&self, a: &Form, b: &Form) -> Option<(Vec<(Span, String)>, String)> {
+        let mut names: Vec<Unknown> = a.unknowns.keys().chain(b.unknowns.keys()).copied().collect();
+        names.sort();
+        names.dedup();
+        let mut related = Vec::new();
+        let mut hints = Vec::new();
+        for u in names {
+            let (Some(declared), Some(&(stmt, span_a, span_b))) =
+                (self.declared.get(&u), self.origin.get(&u))
+            else {
+                continue;
+            };
+            let dim = self.reduce(&Form::unknown(u));
+            if stmt == u.stmt || !dim.unknowns.is_empty() || dim.known.is_dimensionless() {
+                continue;
+            }
+            let (from, to) = (span_a.start.min(span_b.start), span_a.end.max(span_b.end));
+            let uses = self.uses.get(&u).map_or(&[][..], Vec::as_slice);
+            let at = uses
+                .iter()
+                .find(|(s, span)| *s == stmt && span.start >= from && span.end <= to)
+                .or_else(|| uses.iter().find(|(s, _)| *s == stmt))
+                .map_or(span_a, |(_, span)| *span);
+            let name = &declared.name;
+            let text = dim.known.text();
+            related.push((at, format!("`{name}` takes {text} from this use")));
+            related.push((declared.span, format!("`{name}` is declared here without a unit")));
+            hints.push(match &declared.dimensionless {
+                Some(example) => format!(
+                    "`{name}` has no unit, so it took {text} from its first use; if that use is \
+                     the mistake and `{name}` is dimensionless, declare `{example}` (`rad` marks \
+                     a value dimensionless), and the error moves to that use"
+                ),
+                None => format!(
+                    "`{name}` has no unit, so it took {text} from its first use; if that use is \
+                     the mistake, give `{name}` its unit where it is declared, and the error \
+                     moves to that use"
+                ),
+            });
+        }
+        if related.is_empty() {
+            return None;
+        }
+        Some((related, hints.join("; ")))
     }
 
     fn dimensionless(&mut self, f: &Form, span: Span, what: &str) {
@@ -583,6 +713,38 @@ mod tests {
         let expect = "param m = 1 kg\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\nexpect m*x'' = x\n";
         let e = errors(expect);
         assert!(e.len() == 1 && e[0].contains("expectation"), "{e:?}");
+    }
+
+    #[test]
+    fn a_parameter_without_a_unit_names_the_use_that_gave_it_one() {
+        let scene = |ka: &str| {
+            format!(
+                "param m = 1 kg, L = 1 m, ka = {ka}\ncoord theta = 0.3\nlet r = L*sin(theta) + ka\n\
+                 body rod {{ mass m; inertia ka*m*L^2; position (r, -L*cos(theta)); angle theta }}\n"
+            )
+        };
+        let source = scene("1/4");
+        let at = |text: &str, n: usize| {
+            let start = source.match_indices(text).nth(n).expect("in the scene").0;
+            Span::new(start, start + text.len())
+        };
+        let file = lang::parse(&source).expect("parses");
+        let e = check(&file);
+        assert_eq!(e.len(), 1, "{e:?}");
+        assert_eq!(e[0].span, at("ka*m*L^2", 0));
+        let related: Vec<(Span, &str)> =
+            e[0].related.iter().map(|(s, l)| (*s, l.as_str())).collect();
+        assert!(related.contains(&(at("ka", 1), "`ka` takes m from this use")), "{related:?}");
+        assert!(related.contains(&(at("ka", 0), "`ka` is declared here without a unit")));
+        assert!(e[0]
+            .hint
+            .as_deref()
+            .is_some_and(|h| h.contains("(`rad` marks a value dimensionless)")));
+        // Marked dimensionless, `ka` is blamed where it is used as a length.
+        let source = scene("1/4 rad");
+        let e = check(&lang::parse(&source).expect("parses"));
+        let sum = source.find("L*sin(theta) + ka").expect("the let");
+        assert!(e.len() == 1 && e[0].span.start == sum && e[0].related.len() == 1, "{e:?}");
     }
 
     #[test]

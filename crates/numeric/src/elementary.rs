@@ -19,6 +19,19 @@ pub fn apply(f: Func, a: f64) -> f64 {
         Func::Tanh => libm::tanh(a),
         Func::Exp => libm::exp(a),
         Func::Ln => libm::log(a),
+        Func::Abs => libm::fabs(a),
+        Func::Sign => sign(a),
+    }
+}
+
+/// −1, 0 or 1 by the sign of `a` (`f64::signum` gives 1 at 0); NaN stays NaN.
+pub fn sign(a: f64) -> f64 {
+    if a > 0.0 {
+        1.0
+    } else if a < 0.0 {
+        -1.0
+    } else {
+        a * 0.0
     }
 }
 

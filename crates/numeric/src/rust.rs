@@ -82,6 +82,7 @@ pub fn function(program: &Program, name: &str, doc: &str) -> String {
             Instr::PowInt(a, n) => format!("pow_int({}, {n})", operand(a)),
             Instr::Sqrt(a) => format!("{}.sqrt()", operand(a)),
             Instr::PowF(a, b) => format!("{}.powf({})", operand(a), operand(b)),
+            Instr::Func(Func::Sign, a) => format!("sign({})", operand(a)),
             Instr::Func(f, a) => format!("{}.{}()", operand(a), method(f)),
             Instr::Atan2(y, x) => format!("{}.atan2({})", operand(y), operand(x)),
         };
@@ -103,7 +104,18 @@ fn method(f: Func) -> &'static str {
 
 /// Helpers the generated functions call: integer powers as the tape computes them, and a
 /// dense solver (Gaussian elimination with partial pivoting) for `a·x = b`.
-pub const HELPERS: &str = r#"/// `x^n` by binary powering, as the tape computes it.
+pub const HELPERS: &str = r#"/// −1, 0 or 1 by the sign of `x`, as the tape computes it (`f64::signum` gives 1 at 0).
+pub fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        x * 0.0
+    }
+}
+
+/// `x^n` by binary powering, as the tape computes it.
 pub fn pow_int(x: f64, n: i32) -> f64 {
     let mut base = x;
     let mut k = n.unsigned_abs();

@@ -163,10 +163,12 @@ impl<'py> ToSympy<'py> {
     }
 }
 
-/// SymPy's name of a function: ours, except the natural logarithm, which SymPy calls `log`.
+/// SymPy's name of a function: ours, except the natural logarithm, which SymPy calls `log`,
+/// and `Abs`. (`min` and `max` reach SymPy as the `Abs` they are written with.)
 fn function_name(f: Func) -> &'static str {
     match f {
         Func::Ln => "log",
+        Func::Abs => "Abs",
         other => other.name(),
     }
 }

@@ -13,24 +13,28 @@ mod admissible;
 mod check;
 mod present;
 mod start;
+mod start_positions;
 mod system;
 mod undecidable;
 
 pub use check::{check, check_all, Failure, Sampling, Verdict, SAMPLES};
 pub use present::{shown_at_start, NumericValue, ShownAtStart};
 pub use start::{parameter_values, start_numeric, NumericStart};
+pub use start_positions::{settle_start_positions, solve_positions, within_rounding};
 
 use lang::Diagnostic;
 use mechanics::Derivation;
 
 /// The numeric diagnostics that follow a derivation: an error for a kept constraint that
-/// repeats or contradicts the ones before it, and warnings about `expect` lines `check` will
+/// repeats or contradicts the ones before it, the start's positions settled against the kept
+/// constraints (an error where they break one), and warnings about `expect` lines `check` will
 /// not be able to decide (added to the derivation's warnings).
 pub fn diagnose(d: &mut Derivation) -> Result<(), Vec<Diagnostic>> {
     let dependent = admissible::dependent_constraints(d);
     if !dependent.is_empty() {
         return Err(dependent);
     }
+    settle_start_positions(d)?;
     undecidable::warn_about_undecidable_expects(d);
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! exact solve of `mechanics`.
 
 use cas::SymId;
-use mechanics::{Derivation, StartShows};
+use mechanics::{Derivation, NumericStart, StartShows};
 use model::Value;
 
 use crate::start::{parameter_values, start_numeric};
@@ -20,13 +20,14 @@ pub enum NumericValue {
 pub enum ShownAtStart {
     /// Exactly, in the parameters.
     Exact(Vec<(model::Show, Value)>),
-    /// Numerically at the scene's parameter values (`params`), because the exact solve of
-    /// `unknowns` unknowns outgrew its budget; `digits` significant digits are trustworthy.
+    /// Numerically at the scene's parameter values (`params`), for the reason `because`;
+    /// `digits` significant digits are trustworthy.
     Numeric {
         items: Vec<(model::Show, NumericValue)>,
         unknowns: usize,
         digits: u32,
         params: Vec<(SymId, f64)>,
+        because: NumericStart,
     },
     /// Numbers were needed, but these parameters have no value.
     Unvalued { unknowns: usize, missing: Vec<String> },
@@ -37,10 +38,9 @@ pub enum ShownAtStart {
 /// The `show at start` items at the initial state: exactly where the algebra stays within
 /// its budget, numerically at the parameters' values otherwise.
 pub fn shown_at_start(d: &mut Derivation) -> ShownAtStart {
-    let (unknowns, shows) = match d.shows_at_start() {
+    let (unknowns, shows, because) = match d.shows_at_start() {
         StartShows::Exact(items) => return ShownAtStart::Exact(items),
-        StartShows::Singular => return ShownAtStart::Singular,
-        StartShows::TooLarge { unknowns, shows } => (unknowns, shows),
+        StartShows::Numeric { unknowns, shows, because } => (unknowns, shows, because),
     };
     let params = match parameter_values(d) {
         Ok(p) => p,
@@ -65,5 +65,5 @@ pub fn shown_at_start(d: &mut Derivation) -> ShownAtStart {
             (s, numbers)
         })
         .collect();
-    ShownAtStart::Numeric { items, unknowns, digits: start.digits, params }
+    ShownAtStart::Numeric { items, unknowns, digits: start.digits, params, because }
 }

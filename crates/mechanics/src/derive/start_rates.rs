@@ -29,28 +29,30 @@ impl Derivation {
         false
     }
 
-    /// Settles the start's rates against the kept constraints (each at the velocity level: Φ
-    /// for a velocity constraint, Φ̇ for a position one) when a velocity constraint is kept.
-    /// Scenes with position constraints only are left as they are, so their defaults stand.
-    pub(super) fn settle_start_rates(&mut self) -> Result<(), Diagnostic> {
-        if !self.multipliers.iter().any(|m| m.kind == ConstraintKind::Velocity) {
+    /// Settles the start's rates against the kept constraints, each at the velocity level: Φ
+    /// for a velocity constraint, Φ̇ for a position one (a crank turning moves its rod, and a
+    /// rod whose length is driven moves its bob).
+    pub fn settle_start_rates(&mut self) -> Result<(), Diagnostic> {
+        if self.multipliers.is_empty() {
             return Ok(());
         }
         let state = self.initial_state();
         let constraints: Vec<usize> = self.multipliers.iter().map(|m| m.constraint).collect();
         let rows: Vec<(usize, ExprId)> =
             constraints.into_iter().zip(self.velocity_rows()).collect();
-        let pool = &mut self.model.pool;
         let mut violated = Vec::new();
         for (c, row) in &rows {
-            let at_start = pool.subst(*row, &state);
-            if !pool.is_identically_zero(at_start) {
-                violated.push((*c, pool.simplify(at_start)));
+            let at_start = self.model.pool.subst(*row, &state);
+            // At the values the run uses: a start may hold only there (a turntable's speed
+            // matched to a ball's spin by the parameters' values).
+            if !self.zero_at_parameter_values(at_start) {
+                violated.push((*c, self.model.pool.simplify(at_start)));
             }
         }
         if violated.is_empty() {
             return Ok(());
         }
+        let pool = &mut self.model.pool;
         // The rates left to the constraints: not given, and restrained by some row.
         let mut unknowns: Vec<(usize, SymId)> = Vec::new();
         for (i, c) in self.model.coords.iter().enumerate() {

@@ -9,7 +9,7 @@ use cas::{ExprId, Func, Rational, SymId, SymbolKind};
 use lang::{Diagnostic, Expr, ExprKind, Ident, SceneFile, Span, StmtKind};
 
 use super::{normalize, Binding, Resolver};
-use crate::Value;
+use crate::{Placeholder, Value};
 
 /// How far from a function's domain an inexact value must fall before it counts as outside:
 /// rounding can take an exact boundary value (`1 - sin(pi/2)`) a hair across it.
@@ -22,6 +22,9 @@ pub(super) struct Role {
     /// Derivatives of coordinates allowed: 0 for the configuration only, 1 for rates too.
     pub max_order: u8,
     pub hint: &'static str,
+    /// Whether deriving the equations of motion differentiates it (by the coordinates or
+    /// the rates), so that a kink in it becomes a jump in a force.
+    pub differentiated: bool,
 }
 
 pub(super) const POSITION: Role = Role {
@@ -29,73 +32,86 @@ pub(super) const POSITION: Role = Role {
     max_order: 0,
     hint: "write where the body is as a function of the coordinates (and `t`); its velocity \
            follows by differentiation",
+    differentiated: true,
 };
 pub(super) const ANGLE: Role = Role {
     what: "an angle",
     max_order: 0,
     hint: "write the body's orientation as a function of the coordinates (and `t`); its angular \
            velocity follows by differentiation",
+    differentiated: true,
 };
 pub(super) const MASS: Role = Role {
     what: "a mass",
     max_order: 0,
     hint: "a mass is a constant, or a function of the coordinates and `t`",
+    differentiated: true,
 };
 pub(super) const INERTIA: Role = Role {
     what: "an inertia",
     max_order: 0,
     hint: "an inertia is a constant, or a function of the coordinates and `t`",
+    differentiated: true,
 };
 pub(super) const POTENTIAL: Role = Role {
     what: "a potential",
     max_order: 0,
     hint: "a potential depends on the configuration only; put terms with rates in `lagrangian` \
            (added to T − V) or, for friction, in `dissipation`",
+    differentiated: true,
 };
 pub(super) const GRAVITY: Role = Role {
     what: "gravity",
     max_order: 0,
     hint: "gravity's strength and direction may depend on the coordinates and `t` only",
+    differentiated: true,
 };
 pub(super) const SPRING: Role = Role {
     what: "a spring",
     max_order: 0,
     hint: "a spring's ends, stiffness and rest length may depend on the coordinates and `t` \
            only; for a force that grows with speed, use a `damper`",
+    differentiated: true,
 };
 pub(super) const ATTACHMENT: Role = Role {
     what: "an attachment point",
     max_order: 0,
     hint: "attach to a body by name, or to a point given as a function of the coordinates",
+    differentiated: true,
 };
 pub(super) const DAMPER: Role = Role {
     what: "a damper",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a damping coefficient \
            may depend on the coordinates and rates, not on accelerations",
+    differentiated: false,
 };
 pub(super) const FORCE: Role = Role {
     what: "a force",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a force may depend on \
            the coordinates, rates and `t`, not on accelerations",
+    differentiated: false,
 };
 pub(super) const TORQUE: Role = Role {
     what: "a torque",
     max_order: 1,
     hint: "the equations of motion are solved for the accelerations, so a torque may depend on \
            the coordinates, rates and `t`, not on accelerations",
+    differentiated: false,
 };
 pub(super) const DISSIPATION: Role = Role {
     what: "a dissipation function",
     max_order: 1,
     hint: "Rayleigh's dissipation function depends on the coordinates and rates",
+    differentiated: true,
 };
 pub(super) const LAGRANGIAN: Role = Role {
     what: "a Lagrangian",
     max_order: 1,
     hint: "lagrange derives second-order equations from L(q, q', t); a Lagrangian with \
            accelerations would give higher-order ones",
+    differentiated: true,
 };
 
 pub(super) const DRAWING: Role = Role {
@@ -103,7 +119,35 @@ pub(super) const DRAWING: Role = Role {
     max_order: 1,
     hint: "a drawing shows the state: its points may use the coordinates, their rates and `t`, \
            not accelerations",
+    differentiated: false,
 };
+
+/// Not a role an expression is refused in, but one whose kinks matter: a constraint's
+/// gradient is its derivative.
+pub(super) const CONSTRAINT: Role =
+    Role { what: "a constraint", max_order: 1, hint: "", differentiated: true };
+
+/// The functions whose derivative jumps (`abs`, `min`, `max`) or is a spike (`sign`).
+const NOT_SMOOTH: [&str; 4] = ["abs", "sign", "min", "max"];
+
+/// Whether `e` has `abs` or `sign` of something that moves with the coordinates or rates.
+fn kinked(pool: &mut cas::Pool, e: ExprId, seen: &mut std::collections::HashSet<ExprId>) -> bool {
+    if !seen.insert(e) {
+        return false;
+    }
+    if let cas::Node::Func(f, a) = *pool.node(e) {
+        if !f.is_smooth() {
+            let moving = pool
+                .free_symbols(a)
+                .iter()
+                .any(|s| matches!(pool.symbol(*s).kind, SymbolKind::Coordinate { .. }));
+            if moving {
+                return true;
+            }
+        }
+    }
+    pool.children(e).into_iter().any(|c| kinked(pool, c, seen))
+}
 
 /// "third", "fourth", … for a derivative's order.
 fn ordinal(n: u8) -> String {
@@ -236,6 +280,61 @@ impl Resolver<'_> {
         false
     }
 
+    /// A warning where the equations of motion will differentiate `abs`, `sign`, `min` or
+    /// `max` of the state: at the call when it is written in `e`, else at `e` (through a
+    /// `let`). The derivation goes on; the equations are those of either side of the kink.
+    pub(super) fn warn_kinks(&mut self, e: &Expr, value: &Value, role: &Role) {
+        if !role.differentiated {
+            return;
+        }
+        let mut seen = std::collections::HashSet::new();
+        if !value.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+            return;
+        }
+        let (span, name) = self.kinked_call(e).unwrap_or((e.span, String::new()));
+        let what = if name.is_empty() {
+            "through a `let`, `abs`, `sign`, `min` or `max`".to_string()
+        } else {
+            format!("`{name}`")
+        };
+        let label = match name.as_str() {
+            "sign" => "jumps where its argument is 0; its derivative (0 elsewhere) misses that",
+            "min" | "max" => "has a kink where its arguments are equal",
+            "abs" => "has a kink where its argument is 0",
+            _ => "has a kink or a jump",
+        };
+        self.warnings.push(
+            Diagnostic::warning(
+                span,
+                format!(
+                    "{what} in {} is not smooth, and the equations of motion differentiate it",
+                    role.what
+                ),
+            )
+            .with_label(label)
+            .with_hint(
+                "the equations hold on either side, but a force derived from it jumps there; \
+                 an integrator with error control crosses the jump with many tiny steps or \
+                 loses accuracy, and a fixed step steps over it; a smooth stand-in such as \
+                 sqrt(x^2 + eps^2) for abs(x) avoids it",
+            ),
+        );
+    }
+
+    /// The first call of `abs`, `sign`, `min` or `max` in `e` whose value moves with the state.
+    fn kinked_call(&mut self, e: &Expr) -> Option<(Span, String)> {
+        if let ExprKind::Call { func, .. } = &e.kind {
+            if NOT_SMOOTH.contains(&func.name.as_str()) {
+                let v = self.value_quietly(e)?;
+                let mut seen = std::collections::HashSet::new();
+                if v.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+                    return Some((e.span, func.name.clone()));
+                }
+            }
+        }
+        children(e).into_iter().find_map(|c| self.kinked_call(c))
+    }
+
     /// `theta'''`: only rates and accelerations exist. `span` covers the name as written,
     /// with its primes; `direct` says whether it is the derivative of coordinate `base` itself
     /// (`x'''`) or needs it (a `let` name with primes).
@@ -276,10 +375,104 @@ impl Resolver<'_> {
                 let base = self.pool.symbol(sym).base_name().to_string();
                 let order = order.saturating_add(primes);
                 self.past_acceleration(span, order, &base, false);
+                return false;
+            }
+            _ => {}
+        }
+        match self.highest_placeholder(v) {
+            Some((order, root, root_order)) if usize::from(order) + usize::from(primes) > 2 => {
+                let name = self.pool.symbol(root).name.clone();
+                let written = self.text(span);
+                let (has, times) = match root_order {
+                    0 => ("positions", "twice"),
+                    _ => ("rates", "once"),
+                };
+                self.error(
+                    Diagnostic::error(
+                        span,
+                        format!(
+                            "`{written}` needs a {} derivative of the coordinates; only rates and \
+                             accelerations exist",
+                            ordinal(order.saturating_add(primes))
+                        ),
+                    )
+                    .with_label(format!("`{name}` has {has} in it"))
+                    .with_hint(format!(
+                        "the equations of motion are of second order: `{name}` can be \
+                         differentiated {times}"
+                    )),
+                );
                 false
             }
             _ => true,
         }
+    }
+
+    /// The placeholder (KE, PE, a reaction or a rate of one) in `v` whose expression holds the
+    /// highest derivative of the coordinates: that order, and the quantity it is a rate of
+    /// (itself if none) with that quantity's order. T has rates, V positions, and a reaction
+    /// is differentiated in its form in the state (positions and rates).
+    fn highest_placeholder(&mut self, v: &Value) -> Option<(u8, SymId, u8)> {
+        let mut best: Option<(u8, SymId, u8)> = None;
+        for e in v.entries() {
+            for s in self.pool.free_symbols(e).iter() {
+                let Some((order, root, root_order)) = self.placeholder_order(*s) else {
+                    continue;
+                };
+                if best.is_none_or(|(b, _, _)| order > b) {
+                    best = Some((order, root, root_order));
+                }
+            }
+        }
+        best
+    }
+
+    /// A placeholder's order (see [`Self::highest_placeholder`]), with the quantity it is a
+    /// rate of and that quantity's order.
+    fn placeholder_order(&self, s: SymId) -> Option<(u8, SymId, u8)> {
+        let kind = self.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)?;
+        Some(match kind {
+            Placeholder::PotentialEnergy => (0, s, 0),
+            Placeholder::KineticEnergy | Placeholder::Reaction(_) => (1, s, 1),
+            Placeholder::Rate { of, .. } => {
+                let (order, root, root_order) = self.placeholder_order(of)?;
+                (order + 1, root, root_order)
+            }
+        })
+    }
+
+    /// The total time derivative of `e`, placeholders included. KE, PE and reactions stand
+    /// for expressions derived only later, and their stand-in symbols are constants to the
+    /// algebra; so each contributes ∂e/∂p times a symbol for its rate, which the derivation
+    /// replaces by the derivative of what p turns out to be.
+    pub(super) fn total_rate(&mut self, e: ExprId, span: Span) -> ExprId {
+        let mut parts = vec![self.pool.time_derivative(e)];
+        let free = self.pool.free_symbols(e);
+        for p in free.iter() {
+            if self.placeholder_order(*p).is_none() {
+                continue;
+            }
+            let rate = self.placeholder_rate(*p, span);
+            let partial = self.pool.diff(e, *p);
+            let rate = self.pool.sym(rate);
+            parts.push(self.pool.mul2(partial, rate));
+        }
+        self.pool.add(&parts)
+    }
+
+    /// The symbol for the rate of placeholder `p`, made on first use.
+    fn placeholder_rate(&mut self, p: SymId, span: Span) -> SymId {
+        let made = self.placeholders.iter().find_map(|(r, k)| match k {
+            Placeholder::Rate { of, .. } if *of == p => Some(*r),
+            _ => None,
+        });
+        if let Some(r) = made {
+            return r;
+        }
+        let name = format!("{}'", self.pool.symbol(p).name);
+        let r = self.pool.param(&name);
+        self.placeholders.push((r, Placeholder::Rate { of: p, span }));
+        r
     }
 
     // --- constants ----------------------------------------------------------------------
@@ -557,5 +750,218 @@ impl Resolver<'_> {
             )
         };
         self.error(d);
+    }
+}
+
+/// How an inequality between known constants came out: exactly when the constant is a
+/// rational, otherwise in floating point with a margin relative to `scale`, so that an exact
+/// boundary (a thin plate's C = A + B written with `sqrt`) is not refused for rounding.
+fn below_zero(pool: &cas::Pool, value: ExprId, scale: f64) -> bool {
+    match pool.as_num(value) {
+        Some(q) => q.is_negative(),
+        None => {
+            let x = numeric::eval(pool, value, &[]);
+            x.is_finite() && x < -ROUNDING_MARGIN * scale.max(f64::MIN_POSITIVE)
+        }
+    }
+}
+
+/// The principal minors of a symmetric 3×3 matrix, each with the rows it is taken over
+/// (counted from 1), smallest first: a symmetric matrix is positive semidefinite exactly when
+/// none is negative (the leading minors alone would miss `diag(0, -1, 0)`).
+fn principal_minors(pool: &mut cas::Pool, m: &[[ExprId; 3]; 3]) -> Vec<(Vec<usize>, ExprId, u32)> {
+    let mut out: Vec<(Vec<usize>, ExprId, u32)> =
+        (0..3).map(|i| (vec![i + 1], m[i][i], 1)).collect();
+    for (r, c) in [(0, 1), (0, 2), (1, 2)] {
+        let diagonal = pool.mul2(m[r][r], m[c][c]);
+        let off = pool.powi(m[r][c], 2);
+        out.push((vec![r + 1, c + 1], pool.sub(diagonal, off), 2));
+    }
+    let rows: Vec<Vec<ExprId>> = m.iter().map(|r| r.to_vec()).collect();
+    let cross = crate::kinematics::cross(pool, &rows[1], &rows[2]);
+    out.push((vec![1, 2, 3], crate::kinematics::dot(pool, &rows[0], &cross), 3));
+    out
+}
+
+impl Resolver<'_> {
+    /// A body's inertia tensor in space, at the parameters' values: positive semidefinite (or
+    /// ½·ωᵀ·I·ω is negative for some ω, and the motion blows up), and with each principal
+    /// moment at most the sum of the other two, as every distribution of mass has (equal for
+    /// a thin plate). Left alone where the tensor depends on the state.
+    pub(super) fn check_inertia_tensor(
+        &mut self,
+        body: &Ident,
+        tensor: &[[ExprId; 3]; 3],
+        written: &Expr,
+    ) {
+        let mut known = [[tensor[0][0]; 3]; 3];
+        for r in 0..3 {
+            for c in 0..3 {
+                let Some(k) = self.known(tensor[r][c]) else { return };
+                known[r][c] = k;
+            }
+        }
+        let scale = known
+            .iter()
+            .flatten()
+            .map(|e| numeric::eval(&self.pool, *e, &[]).abs())
+            .fold(0.0, f64::max);
+        if !scale.is_finite() {
+            return;
+        }
+        let diagonal = (0..3).all(|r| {
+            (0..3).all(|c| r == c || self.pool.as_num(known[r][c]).is_some_and(|q| q.is_zero()))
+        });
+        for (rows, minor, degree) in principal_minors(&mut self.pool, &known) {
+            let minor = self.pool.simplify(minor);
+            if !below_zero(&self.pool, minor, numeric::elementary::pow_int(scale, degree as i32)) {
+                continue;
+            }
+            let axis = |i: usize| ["x", "y", "z"][i - 1];
+            let value = number_text(&self.pool, minor);
+            let label = match rows[..] {
+                [r] => format!("I{0}{0} is {value} kg·m²", axis(r)),
+                [r, c] => format!(
+                    "I{0}{0}·I{1}{1} − I{0}{1}² is {value} kg²·m⁴: the product of inertia \
+                     I{0}{1} is too large",
+                    axis(r),
+                    axis(c)
+                ),
+                _ => format!("its determinant is {value} kg³·m⁶"),
+            };
+            self.error(
+                Diagnostic::error(
+                    written.span,
+                    format!("the inertia tensor of `{}` is not positive semidefinite", body.name),
+                )
+                .with_label(label)
+                .with_hint(
+                    "with it some turning would have negative kinetic energy; a tensor's \
+                     diagonal entries are 0 or more and each product of inertia is at most \
+                     the geometric mean of its two moments (Ixy² ≤ Ixx·Iyy); check signs and \
+                     parameters' values",
+                ),
+            );
+            return;
+        }
+        // Σ = tr(I)/2·1 − I is the second moment ∫ r·rᵀ dm of the mass, which no mass
+        // distribution can make indefinite; its diagonal is (B + C − A)/2 and so on.
+        let trace = self.pool.add(&[known[0][0], known[1][1], known[2][2]]);
+        let half = self.pool.num(Rational::new(1.into(), 2.into()));
+        let half = self.pool.mul2(half, trace);
+        let second: [[ExprId; 3]; 3] = std::array::from_fn(|r| {
+            std::array::from_fn(|c| {
+                let minus = self.pool.neg(known[r][c]);
+                if r == c {
+                    self.pool.add(&[half, minus])
+                } else {
+                    minus
+                }
+            })
+        });
+        for (rows, minor, degree) in principal_minors(&mut self.pool, &second) {
+            let minor = self.pool.simplify(minor);
+            if !below_zero(&self.pool, minor, numeric::elementary::pow_int(scale, degree as i32)) {
+                continue;
+            }
+            let span = match (&written.kind, diagonal && rows.len() == 1) {
+                (ExprKind::Tuple(parts), true) if parts.len() == 3 => parts[rows[0] - 1].span,
+                _ => written.span,
+            };
+            let moments = if diagonal {
+                let i = rows[0] - 1;
+                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+                let others = self.pool.add(&[known[j][j], known[k][k]]);
+                let others = self.pool.simplify(others);
+                let name = if span == written.span {
+                    let axis = ["x", "y", "z"][i];
+                    format!("I{axis}{axis}")
+                } else {
+                    format!("`{}`", self.text(span))
+                };
+                format!(
+                    "{name} is {} kg·m², more than the other two moments together ({} kg·m²)",
+                    number_text(&self.pool, known[i][i]),
+                    number_text(&self.pool, others)
+                )
+            } else {
+                "one principal moment is more than the other two together".to_string()
+            };
+            self.error(
+                Diagnostic::error(
+                    span,
+                    format!("no rigid body has the inertia given to `{}`", body.name),
+                )
+                .with_label(moments)
+                .with_hint(
+                    "each principal moment is at most the sum of the other two (equal for a \
+                     thin plate); e.g. a solid cylinder of radius r and height h about its \
+                     centre has (m*(3*r^2 + h^2)/12, m*(3*r^2 + h^2)/12, m*r^2/2)",
+                ),
+            );
+            return;
+        }
+    }
+}
+
+impl Resolver<'_> {
+    /// A vector whose every component is 0 at the parameters' values (a rotation's axis,
+    /// `(a, 0, 0)` with `a = 0`): the error at the vector, naming the parameters it has.
+    pub(super) fn zero_at_values(&mut self, v: &[ExprId], written: &Expr) -> Option<Diagnostic> {
+        let mut params = Vec::new();
+        for x in v {
+            let k = self.known(*x)?;
+            let zero = match self.pool.as_num(k) {
+                Some(q) => q.is_zero(),
+                None => numeric::eval(&self.pool, k, &[]) == 0.0,
+            };
+            if !zero {
+                return None;
+            }
+            params.extend(self.pool.free_symbols(*x).iter().copied());
+        }
+        let text = self.text(written.span);
+        let mut d = Diagnostic::error(written.span, "a rotation's axis cannot be zero")
+            .with_label(format!("`{text}` is (0, 0, 0) at the parameters' values"))
+            .with_hint(
+                "give the direction to turn about, such as (0, 0, 1), or check the parameters' \
+                 values",
+            );
+        params.sort();
+        params.dedup();
+        for s in params {
+            if let Some(p) = self.params.iter().find(|p| p.sym == s) {
+                d = d.with_related(p.span, format!("`{}` is given its value here", p.name));
+            }
+        }
+        Some(d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The warnings of a scene that resolves, as `label: message`, but for unused parameters.
+    fn warnings(source: &str) -> Vec<String> {
+        let file = lang::parse(source).expect("parses");
+        let (_, w) = crate::resolve(&file, source).expect("resolves");
+        w.into_iter()
+            .filter(|d| !d.message.contains("never used"))
+            .map(|d| format!("{}: {}", d.label, d.message))
+            .collect()
+    }
+
+    #[test]
+    fn a_kink_the_equations_differentiate_is_warned_of_and_one_they_do_not_is_not() {
+        let scene = "param m = 1 kg, k = 2 N, c = 1 N*s/m\ncoord x = 1 m\nparticle p { mass m; position (x, 0) }\n";
+        let w = warnings(&format!("{scene}potential k*abs(x)\n"));
+        assert!(w.len() == 1 && w[0].contains("`abs` in a potential is not smooth"), "{w:?}");
+        let w = warnings(&format!("{scene}let d = max(x, 0)\npotential k*d\n"));
+        assert!(w.len() == 1 && w[0].contains("through a `let`"), "{w:?}");
+        let w = warnings(&format!("{scene}dissipation c/2*x'^2*sign(x')\n"));
+        assert!(w.len() == 1 && w[0].starts_with("jumps where its argument is 0"), "{w:?}");
+        // A force is not differentiated (it is itself discontinuous, which the README says),
+        // and a constant under `abs` has no kink.
+        assert!(warnings(&format!("{scene}force f on p: (-k*sign(x'), 0)\n")).is_empty());
+        assert!(warnings(&format!("{scene}potential abs(-k)*x\n")).is_empty());
     }
 }

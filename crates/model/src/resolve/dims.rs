@@ -211,6 +211,13 @@ impl Resolver<'_> {
             let decided = args.iter().all(|d| matches!(d, Dims::Number { decided: true, .. }));
             return self.number_dims(value, decided);
         }
+        if matches!(name, "min" | "max") && args.len() == 2 {
+            // Like the terms of a sum: a number alone takes the other side's dimension.
+            let forms: Vec<Form> = args.into_iter().map(|d| self.operand_form(d)).collect();
+            let what = format!("between the arguments of {name}");
+            self.units.same(&forms[0], &forms[1], written[0].span, written[1].span, &what);
+            return Dims::Scalar(forms[0].clone());
+        }
         let forms: Vec<Form> = args.into_iter().map(|d| self.form(d)).collect();
         match name {
             "sqrt" => Dims::Scalar(
@@ -220,6 +227,9 @@ impl Resolver<'_> {
                     .unwrap_or_default()
                     .times(&Rational::new(1.into(), 2.into())),
             ),
+            // |u| keeps the dimension; the sign has none.
+            "abs" => Dims::Scalar(forms.first().cloned().unwrap_or_default()),
+            "sign" => Dims::Scalar(Form::default()),
             "atan2" if forms.len() == 2 => {
                 self.units.same(
                     &forms[0],

@@ -146,6 +146,10 @@ impl Resolver<'_> {
                     );
                     return None;
                 }
+                if let Some(d) = self.zero_at_values(&axis, &args[0]) {
+                    self.error(d);
+                    return None;
+                }
                 let mut dims = dims.into_iter();
                 self.components(dims.next().expect("two"), args[0].span);
                 let form = self.form(dims.next().expect("two"));
@@ -192,7 +196,10 @@ impl Resolver<'_> {
             }
             _ => {
                 // dt: the total time derivative, entry by entry.
-                let value = values[0].clone().map(|x| self.pool.time_derivative(x));
+                if !self.derivative_exists(&values[0], 1, span) {
+                    return None;
+                }
+                let value = values[0].clone().map(|x| self.total_rate(x, span));
                 let dims = match dims.into_iter().next().expect("one") {
                     Dims::Number { .. } => Dims::Scalar(Form::default()),
                     Dims::Scalar(f) => Dims::Scalar(f.rate(1)),
@@ -302,10 +309,14 @@ impl Resolver<'_> {
                 return None;
             }
         };
+        let errors = self.errors.len();
         for (r, row) in tensor.iter().enumerate() {
             if !matches!(inertia, Value::Scalar(_)) {
                 self.check_sign(name, row[r], inertia_written, true);
             }
+        }
+        if self.errors.len() == errors {
+            self.check_inertia_tensor(name, &tensor, inertia_written);
         }
         if let Some((_, e, _)) = self.quaternions.iter().find(|(m, _, _)| *m == orientation) {
             // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
@@ -338,6 +349,27 @@ impl Resolver<'_> {
                     return None;
                 }
             }
+        }
+        // Rᵀ·R = I leaves det R = ±1; −1 is a mirror image, and Rᵀ·Ṙ is then not the body's ω.
+        let cross = kinematics::cross(&mut self.pool, &orientation[1], &orientation[2]);
+        let det = kinematics::dot(&mut self.pool, &orientation[0], &cross);
+        let one = self.pool.one();
+        let off = self.pool.sub(det, one);
+        if !self.pool.is_identically_zero(off) {
+            self.error(
+                Diagnostic::error(
+                    orientation_span,
+                    "this orientation is a reflection, not a rotation",
+                )
+                .with_label("its determinant is -1: it turns the body inside out")
+                .with_hint(
+                    "one axis is flipped (a left-handed frame), and ω from Rᵀ·Ṙ would not be the \
+                         body's angular velocity; negate one column (a body axis) to make the \
+                         frame right-handed, or build it from rotx, roty, rotz and \
+                         rotation(axis, angle)",
+                ),
+            );
+            return None;
         }
         let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
         Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
@@ -407,5 +439,83 @@ impl Resolver<'_> {
         };
         let forms = self.shape(dims).forms();
         Some((Value::Scalar(x), Dims::Scalar(forms.get(i).cloned().unwrap_or_default())))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The messages of the errors `body`'s line gets, in a scene around it.
+    fn errors(params: &str, body: &str) -> Vec<String> {
+        let source = format!("param m = 1 kg, {params}\ncoord a, c\n{body}\n");
+        let file = lang::parse(&source).expect("parses");
+        match crate::resolve(&file, &source) {
+            Ok(_) => Vec::new(),
+            Err(e) => e.into_iter().map(|d| format!("{}: {}", d.message, d.label)).collect(),
+        }
+    }
+
+    fn body(inertia: &str, orientation: &str) -> String {
+        format!(
+            "body b {{ mass m; inertia {inertia}; orientation {orientation}; position (0, 0, 0) }}"
+        )
+    }
+
+    #[test]
+    fn thin_plates_and_rods_are_bodies_and_a_hair_past_them_is_not() {
+        let p = "A = 1 kg*m^2, r = 2 m";
+        for inertia in [
+            "(A, A, 2*A)",
+            "(0, m*r^2, m*r^2)",
+            "(0, 0, 0)",
+            "[2*A, A/2, 0; A/2, 2*A, 0; 0, 0, A]",
+            "[sqrt(2), 1, 0; 1, sqrt(2), 0; 0, 0, 2*sqrt(2)]*A",
+            "[A, A, 0; A, A, 0; 0, 0, 2*A]",
+        ] {
+            let e = errors(p, &body(inertia, "rotz(a)*rotx(c)"));
+            assert!(e.is_empty(), "{inertia} refused: {e:?}");
+        }
+        for (inertia, says) in [
+            ("(A, A, 2*A + A/10^6)", "more than the other two moments together"),
+            ("(2.000001*A, A, A)", "`2.000001*A` is 2000001/1000000 kg·m²"),
+            ("[2*A, A/2, 0; A/2, 2*A, 0; 0, 0, 0.999*A]", "one principal moment is more"),
+            ("[A, A, 0; A, A*0.999, 0; 0, 0, 2*A]", "Ixx·Iyy − Ixy² is -1/1000"),
+            ("[A, 0, A; 0, A, 0; A, 0, A/2]", "Ixx·Izz − Ixz² is -1/2"),
+            ("[10, 9, 9; 9, 10, -9; 9, -9, 10]*A", "its determinant is -2888 "),
+        ] {
+            let e = errors(p, &body(inertia, "rotz(a)"));
+            assert!(e.len() == 1 && e[0].contains(says), "{inertia}: {e:?}");
+        }
+    }
+
+    #[test]
+    fn an_inertia_that_depends_on_the_state_is_left_to_the_state() {
+        let e = errors("A = 1 kg*m^2", &body("(A, A, A*(2 + sin(a)^2))", "rotz(a)"));
+        assert!(e.is_empty(), "{e:?}");
+    }
+
+    #[test]
+    fn a_reflection_is_refused_and_a_rotation_written_out_is_not() {
+        let p = "A = 1 kg*m^2";
+        let turn = "[cos(a), -sin(a), 0; sin(a), cos(a), 0; 0, 0, 1]";
+        assert!(errors(p, &body("(A, A, A)", turn)).is_empty());
+        for mirror in [
+            "[cos(a), -sin(a), 0; sin(a), cos(a), 0; 0, 0, -1]",
+            "rotz(a)*[1, 0, 0; 0, -1, 0; 0, 0, 1]",
+            "-rotx(a)",
+        ] {
+            let e = errors(p, &body("(A, A, A)", mirror));
+            assert!(e.len() == 1 && e[0].contains("a reflection"), "{mirror}: {e:?}");
+        }
+    }
+
+    #[test]
+    fn an_axis_zero_only_at_the_parameters_values_is_refused_at_the_axis() {
+        let e = errors("A = 1 kg*m^2, k = 0, n = 1", &body("(A, A, A)", "rotation((k, 0, 0), a)"));
+        assert!(e.len() == 1 && e[0].contains("(0, 0, 0) at the parameters' values"), "{e:?}");
+        let e = errors("A = 1 kg*m^2, k = 0, n = 1", &body("(A, A, A)", "rotation((k, 0, n), a)"));
+        assert!(e.is_empty(), "{e:?}");
+        // An axis that moves is not judged at the parameters' values.
+        let e = errors("A = 1 kg*m^2, k = 0", &body("(A, A, A)", "rotation((k, 0, c), a)"));
+        assert!(e.is_empty(), "{e:?}");
     }
 }

@@ -1,0 +1,103 @@
+//! The start's positions against the kept position constraints. A start that breaks one is
+//! an impossible state: `show at start` and `expect at start` would be evaluated there, and a
+//! run would drag the state back onto the constraint. Decided here exactly, at the values the
+//! run uses; what only numbers can decide (a value given to some digits, a position to solve
+//! for) is the `verify` crate's, which hands its solution back through
+//! [`Derivation::set_start_positions`].
+
+use std::collections::HashMap;
+
+use cas::{ExprId, SymId};
+use lang::Diagnostic;
+use model::ConstraintKind;
+
+use super::Derivation;
+
+impl Derivation {
+    /// Each parameter's value as numbers only (earlier parameters' values substituted),
+    /// exactly; parameters without a value are left out.
+    pub fn parameter_values(&mut self) -> HashMap<SymId, ExprId> {
+        let mut values: HashMap<SymId, ExprId> = HashMap::new();
+        for p in self.model.params.clone() {
+            let Some(v) = p.value else { continue };
+            let v = self.model.pool.subst(v, &values);
+            values.insert(p.sym, v);
+        }
+        values
+    }
+
+    /// Whether `e`, an expression of the parameters (and the start), is zero at the values
+    /// the run uses: exactly, as an identity first, then at the parameters' values.
+    /// A start that holds only at the values marks the derivation
+    /// ([`Derivation::start_at_values_only`]).
+    pub fn zero_at_parameter_values(&mut self, e: ExprId) -> bool {
+        if self.model.pool.is_identically_zero(e) {
+            return true;
+        }
+        let values = self.parameter_values();
+        let at_values = self.model.pool.subst(e, &values);
+        let free = self.model.pool.free_symbols(at_values);
+        let zero = free.is_empty() && self.model.pool.is_identically_zero(at_values);
+        self.start_at_values_only |= zero;
+        zero
+    }
+
+    /// Each kept position constraint that the start does not satisfy exactly: the
+    /// constraint's index and Φ at the start.
+    pub fn start_position_residuals(&mut self) -> Vec<(usize, ExprId)> {
+        let state = self.initial_state();
+        let mut out = Vec::new();
+        for m in self.multipliers.clone() {
+            if m.kind != ConstraintKind::Position {
+                continue;
+            }
+            let at_start = self.model.pool.subst(m.phi, &state);
+            if !self.zero_at_parameter_values(at_start) {
+                out.push((m.constraint, at_start));
+            }
+        }
+        out
+    }
+
+    /// The coordinates whose start positions the kept position constraints may solve for:
+    /// remaining, restrained by one of them, and given no value or only a guess (`~`).
+    pub fn free_start_positions(&mut self) -> Vec<SymId> {
+        let phis: Vec<ExprId> = self
+            .multipliers
+            .iter()
+            .filter(|m| m.kind == ConstraintKind::Position)
+            .map(|m| m.phi)
+            .collect();
+        let mut out = Vec::new();
+        for c in self.model.coords.clone() {
+            if !c.position_free || !self.coords.contains(&c.sym) {
+                continue;
+            }
+            if phis.iter().any(|phi| self.model.pool.depends_on(*phi, c.sym)) {
+                out.push(c.sym);
+            }
+        }
+        out
+    }
+
+    /// Takes start positions solved in numbers (each as the shortest decimal of its float), marks
+    /// them as solved, and settles the start's rates at the new positions.
+    pub fn set_start_positions(&mut self, solved: &[(SymId, f64)]) -> Result<(), Diagnostic> {
+        for (s, x) in solved {
+            // The shortest decimal that reads back as the float: what the report prints.
+            let Some(q) = cas::number::parse_decimal(&format!("{:e}", x.abs())) else { continue };
+            let q = if *x < 0.0 { -q } else { q };
+            let value = self.model.pool.num(q);
+            if let Some(c) = self.model.coords.iter_mut().find(|c| c.sym == *s) {
+                c.initial = value;
+            }
+            if !self.solved_start_positions.contains(s) {
+                self.solved_start_positions.push(*s);
+            }
+        }
+        self.start = None;
+        self.start_positions_pending = false;
+        self.start_at_values_only = true;
+        self.settle_start_rates()
+    }
+}
