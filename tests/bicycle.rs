@@ -121,6 +121,26 @@ fn the_lowered_right_hand_side_stays_small() {
     assert!(ops < 20_000, "{ops} operations");
 }
 
+/// The bicycle's `derive` report is one to read: an entry past a thousand characters shows its
+/// size and how to see it whole (it printed 154 KB, with lines of 16,000 characters), and
+/// `--full` prints it whole.
+#[test]
+fn the_report_is_readable_and_whole_on_request() {
+    let source = whipple();
+    let options = engine::Options::default();
+    let text = cli::Format::Text;
+    let (report, _) = cli::derive_report_with("whipple.lag", &source, text, options, false)
+        .expect("the bicycle derives");
+    assert!(report.len() < 20_000, "{} bytes", report.len());
+    let longest = report.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+    assert!(longest <= 1_000, "a line of {longest} characters");
+    assert!(report.contains("characters; --full prints it⟩"), "{report}");
+    let (whole, _) = cli::derive_report_with("whipple.lag", &source, text, options, true)
+        .expect("the bicycle derives");
+    assert!(!whole.contains("--full prints it"));
+    assert!(whole.len() > 100_000, "{} bytes", whole.len());
+}
+
 /// The values `show at start` prints, read back.
 fn shown_at_start(report: &str, labels: &[&str]) -> Vec<f64> {
     labels

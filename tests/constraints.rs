@@ -267,3 +267,20 @@ fn checks_sample_rates_that_satisfy_a_velocity_constraint() {
     );
     assert!(matches!(verdicts[1], verify::Verdict::Fails(_)), "{:?}", verdicts[1]);
 }
+
+/// A velocity constraint the position constraints imply is left out with a warning, and the
+/// report lists it as left out, with why, not as kept with a multiplier.
+#[test]
+fn a_constraint_left_out_is_listed_as_left_out() {
+    let source = "param m, L = 1, g\ncoord x = 1, y = 0\nparticle bead { mass m; position (x, y) }\n\
+                  gravity g\nconstraint ring: x^2 + y^2 = L^2\nconstraint radial: x*x' + y*y' = 0\n";
+    let report = cli::derive("radial.lag", source, cli::Format::Text).expect("derives");
+    let listed = report.split("  radial:").nth(1).expect("radial is listed");
+    let said = listed.lines().nth(1).unwrap_or_default();
+    assert_eq!(
+        said,
+        "    left out, as it restrains nothing more: the time derivative of `ring` says as much",
+        "{report}"
+    );
+    assert!(!listed.contains("multiplier radial.force"), "{report}");
+}

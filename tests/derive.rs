@@ -124,3 +124,21 @@ fn the_readme_quotes_the_heavy_top_as_derived() {
         );
     }
 }
+
+/// A pendulum hung at asin(r/L) on a rim, with a stiffness of √2·√3: its report prints
+/// cos(π/2 + asin(r/L)) as −r/L (so the pivot is at −r), sin²(acos(r/L)) as 1 − r²/L² and
+/// √2·√3 as √6, as a hand derivation writes them.
+#[test]
+fn printed_forms_are_folded() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/pendulum_hung_at_asin.lag");
+    let report = derive(&path, cli::Format::Text);
+    for line in [
+        "  V = ½·√6·r²·k·th² − m·L·g·cos(th) + m·r·g",
+        "  pivot = ⎡ −r ⎤",
+        "  L^2*sin(acos(r/L))^2 = L² − r²",
+    ] {
+        assert!(report.lines().any(|l| l == line), "no `{line}` in\n{report}");
+    }
+    assert!(!report.contains("π/2 + asin") && !report.contains("√2"), "{report}");
+}

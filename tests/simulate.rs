@@ -148,13 +148,14 @@ fn a_singular_mass_matrix_stops_the_run_with_the_state() {
     assert!(outcome.run.trajectory.rows.len() > 1, "what was computed is kept");
 }
 
-/// `samples` records at evenly spaced times from the dense output, and those values agree
-/// with a run that steps exactly to each of them.
+/// `samples` records at that many evenly spaced times, the start and the end included (as
+/// numpy.linspace counts them), from the dense output, and those values agree with a run
+/// that steps exactly to each of them.
 #[test]
 fn evenly_spaced_samples_come_from_the_dense_output() {
     let sampled = run(
         "classics/simple_pendulum.lag",
-        Options { until: Some(2.0), samples: 40, tolerance: Some(1e-12), ..Options::default() },
+        Options { until: Some(2.0), samples: 41, tolerance: Some(1e-12), ..Options::default() },
     );
     let times = &sampled.run.trajectory.times;
     assert_eq!(times.len(), 41, "{times:?}");
@@ -169,6 +170,53 @@ fn evenly_spaced_samples_come_from_the_dense_output() {
     let theta_direct = direct.run.trajectory.rows.last().expect("rows")[0];
     let theta_sampled = sampled.run.trajectory.rows[25][0];
     assert!((theta_direct - theta_sampled).abs() < 1e-9, "{theta_direct} vs {theta_sampled}");
+}
+
+/// The summary says the energy is not conserved whenever T + V need not be: loads that no
+/// potential accounts for, or time anywhere, even where the equations of motion do not show
+/// it (the spinning rod's r̈ = ω²·r has no t, yet its motor works on the bead).
+#[test]
+fn the_energy_line_says_when_the_energy_is_not_conserved() {
+    let pendulum = "param m = 1, L = 1, g = 9.81\ncoord th = 1/2\ngravity g\n";
+    let bob = "particle bob { mass m; position (L*sin(th), -L*cos(th)) }\n";
+    let scenes = [
+        ("a pendulum", format!("{pendulum}{bob}"), true),
+        (
+            "a pivot shaken in time",
+            format!("{pendulum}particle bob {{ mass m; position (sin(t) + L*sin(th), -L*cos(th)) }}\n"),
+            false,
+        ),
+        (
+            "a body turned in time",
+            format!("{pendulum}{bob}body wheel {{ mass m; inertia m; position (0, 0); angle th + t }}\n"),
+            false,
+        ),
+        (
+            "a potential in time alone",
+            format!("{pendulum}{bob}potential m*g*L*sin(t)\n"),
+            false,
+        ),
+        ("dissipation", format!("{pendulum}{bob}dissipation th'^2/10\n"), false),
+        ("a force", format!("{pendulum}{bob}force push on bob: (1, 0)\n"), false),
+        (
+            "a drive eliminated",
+            "param m = 1, w = 2\ncoord r = 1\ncoord phi\n\
+             particle bead { mass m; position (r*cos(phi), r*sin(phi)) }\n\
+             constraint motor: phi = w*t\n"
+                .to_string(),
+            false,
+        ),
+    ];
+    for (what, source, conserved) in scenes {
+        // Units are beside the point here: t stands in angles and lengths as it is.
+        let options = Options { until: Some(0.1), no_units: true, ..Options::default() };
+        let outcome = simulate(&source, &options).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert_eq!(outcome.conservative, conserved, "{what}");
+        let summary = summary(&outcome);
+        assert_eq!(!summary.contains("not conserved"), conserved, "{what}:\n{summary}");
+    }
+    let spinning = run("classics/bead_on_spinning_rod.lag", Options::default());
+    assert!(summary(&spinning).contains("not conserved"), "{}", summary(&spinning));
 }
 
 #[test]

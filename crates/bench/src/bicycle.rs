@@ -18,17 +18,21 @@ pub fn run() {
         std::fs::read_to_string(root.join("examples/bicycle/whipple.lag")).expect("the bicycle");
     println!("## The Whipple bicycle\n");
 
+    let bar = crate::progress::Bar::new("bicycle: deriving");
     let start = Instant::now();
     let scene = engine::load(&source).expect("the bicycle derives");
     let derive = start.elapsed().as_secs_f64();
+    drop(bar);
     let n = scene.derivation.coords.len();
     let kept = scene.derivation.multipliers.len();
     drop(scene);
 
+    let bar = crate::progress::Bar::new("bicycle: linearizing");
     let start = Instant::now();
     let options = engine::linearize::Options { set: vec!["v=5".into()], ..Default::default() };
     let linearized = engine::linearize::linearize(&source, &options).expect("linearizes");
     let linearize = start.elapsed().as_secs_f64();
+    drop(bar);
     black_box(&linearized.at.eigenvalues);
 
     let mut prepared =

@@ -20,6 +20,7 @@ mod hand;
 mod memory;
 mod model;
 mod precision;
+mod progress;
 mod scaling;
 mod space;
 

@@ -4,7 +4,9 @@
 //! mean: after one period the state is the initial one again).
 
 use engine::bench::{final_state_error, options_for, work_precision, Setting, Trial};
-use engine::simulate::{simulate, Options, Outcome};
+use engine::simulate::{simulate_with, Options, Outcome};
+
+use crate::progress::Bar;
 use sim::reference::{elliptic_k, gauss_legendre};
 use sim::Method;
 
@@ -54,15 +56,16 @@ pub fn run() -> Vec<Trial> {
     let rel = "classics/double_pendulum.lag";
     let source = read(rel);
     let base = Options { until: Some(10.0), ..Options::default() };
+    let mut bar = Bar::new("work–precision: double pendulum");
     let reference_options = options_for(&base, Method::Dop853, Setting::Tolerance(1e-14), 10.0);
-    let reference = simulate(&source, &reference_options).expect("reference");
-    let check =
-        simulate(&source, &options_for(&base, Method::Dop853, Setting::Tolerance(1e-13), 10.0))
-            .expect("check");
+    let reference = simulate_with(&source, &reference_options, &mut bar).expect("reference");
+    let check_options = options_for(&base, Method::Dop853, Setting::Tolerance(1e-13), 10.0);
+    let check = simulate_with(&source, &check_options, &mut bar).expect("check");
     let reference_error = final_state_error(&reference, &check);
     let mut error = |o: &Outcome| final_state_error(&reference, o);
     let double =
-        work_precision(&source, &base, 10.0, &METHODS, 3, &mut error, &mut ()).expect("runs");
+        work_precision(&source, &base, 10.0, &METHODS, 3, &mut error, &mut bar).expect("runs");
+    drop(bar);
     section(
         "double pendulum (θ1 = θ2 = π/2 from rest), t = 10 s",
         &format!(
@@ -78,8 +81,10 @@ pub fn run() -> Vec<Trial> {
     let landing = rod_landing_time(std::f64::consts::FRAC_PI_6);
     let base = Options::default();
     let mut error = |o: &Outcome| (o.run.final_time - landing).abs();
+    let mut bar = Bar::new("work–precision: falling rod");
     let rod =
-        work_precision(&source, &base, landing, &METHODS, 3, &mut error, &mut ()).expect("runs");
+        work_precision(&source, &base, landing, &METHODS, 3, &mut error, &mut bar).expect("runs");
+    drop(bar);
     section(
         "falling rod from θ = π/6 until it lies flat",
         &format!("error: |landing time − {landing:.15}| (energy integral by quadrature)"),
@@ -92,12 +97,14 @@ pub fn run() -> Vec<Trial> {
     let (l, g, theta0) = (1.0f64, 9.81f64, 0.5f64);
     let period = 4.0 * (l / g).sqrt() * elliptic_k((theta0 / 2.0).sin());
     let base = Options { until: Some(period), ..Options::default() };
+    let mut bar = Bar::new("work–precision: simple pendulum");
     let mut error = |o: &Outcome| {
         let s = &o.run.final_state;
         (s[0] - theta0).abs().max(s[1].abs())
     };
     let simple =
-        work_precision(&source, &base, period, &METHODS, 3, &mut error, &mut ()).expect("runs");
+        work_precision(&source, &base, period, &METHODS, 3, &mut error, &mut bar).expect("runs");
+    drop(bar);
     section(
         "simple pendulum (θ0 = 0.5), one period",
         &format!("error: max |Δ(θ, θ̇)| after the exact period T = {period:.15} s (AGM)"),

@@ -93,7 +93,10 @@ pub fn run(budget: f64, max: usize) {
                     continue;
                 }
             }
-            let m = measure(family, n, 5);
+            let m = {
+                let _bar = crate::progress::Bar::new(format!("scaling: {name}, n = {n}"));
+                measure(family, n, 5)
+            };
             let growth = match previous {
                 Some((pn, pt)) if n > pn => {
                     format!("n^{:.2}", (m.lowered / pt).ln() / (n as f64 / pn as f64).ln())

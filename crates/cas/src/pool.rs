@@ -617,6 +617,9 @@ impl Pool {
         if let Some(v) = self.exact_function_value(f, arg) {
             return v;
         }
+        if let Some(v) = self.quarter_turn_shift(f, arg) {
+            return v;
+        }
         if f.is_odd() && self.looks_negative(arg) {
             let pos = self.neg(arg);
             let v = self.func(f, pos);
@@ -674,11 +677,70 @@ impl Pool {
         }
     }
 
+    /// sin, cos or tan of `u + n·π/2` (n ≠ 0) in terms of `u`: cos(π/2 + u) is −sin(u), as a
+    /// hand derivation reduces it (tan only for whole turns of π, where it stays a tan).
+    fn quarter_turn_shift(&mut self, f: Func, arg: ExprId) -> Option<ExprId> {
+        if !matches!(f, Func::Sin | Func::Cos | Func::Tan) {
+            return None;
+        }
+        let Node::Add(_, terms) = self.node(arg) else { return None };
+        let k = terms.iter().find(|(t, _)| *self.node(*t) == Node::Pi)?.1.clone();
+        let halves = &k * number::int(2);
+        if !halves.is_integer() {
+            return None;
+        }
+        let n: i64 = num_traits::ToPrimitive::to_i64(&(halves.to_integer() % BigInt::from(4)))?;
+        let n = n.rem_euclid(4);
+        if f == Func::Tan && n % 2 == 1 {
+            return None;
+        }
+        let pi = self.pi();
+        let turn = self.scale(pi, &k);
+        let u = self.sub(arg, turn);
+        // sin(u + nπ/2) and cos(u + nπ/2) for n = 0, 1, 2, 3 go round sin, cos, −sin, −cos.
+        let (g, negative) = match (f, n) {
+            (Func::Tan, _) => (Func::Tan, false),
+            (Func::Sin, 0) | (Func::Cos, 3) => (Func::Sin, false),
+            (Func::Sin, 1) | (Func::Cos, 0) => (Func::Cos, false),
+            (Func::Sin, 2) | (Func::Cos, 1) => (Func::Sin, true),
+            _ => (Func::Cos, true),
+        };
+        let v = self.func(g, u);
+        Some(if negative { self.neg(v) } else { v })
+    }
+
+    /// √(1 − x²), the cosine of asin(x) and the sine of acos(x) for real |x| ≤ 1 (their
+    /// ranges, [−π/2, π/2] and [0, π], are where those are not negative).
+    fn cofunction_of_inverse(&mut self, x: ExprId) -> ExprId {
+        let square = self.powi(x, 2);
+        let rest = self.sub(self.one, square);
+        self.sqrt(rest)
+    }
+
     fn exact_function_value(&mut self, f: Func, arg: ExprId) -> Option<ExprId> {
         match (f, self.node(arg).clone()) {
             (Func::Sin, Node::Func(Func::Asin, x)) => Some(x),
             (Func::Cos, Node::Func(Func::Acos, x)) => Some(x),
             (Func::Tan, Node::Func(Func::Atan, x)) => Some(x),
+            (Func::Cos, Node::Func(Func::Asin, x)) | (Func::Sin, Node::Func(Func::Acos, x)) => {
+                Some(self.cofunction_of_inverse(x))
+            }
+            (Func::Tan, Node::Func(Func::Asin, x)) => {
+                let c = self.cofunction_of_inverse(x);
+                Some(self.div(x, c))
+            }
+            (Func::Tan, Node::Func(Func::Acos, x)) => {
+                let s = self.cofunction_of_inverse(x);
+                Some(self.div(s, x))
+            }
+            // cos(atan x) = 1/√(1 + x²) > 0 on all of atan's range (−π/2, π/2).
+            (Func::Sin | Func::Cos, Node::Func(Func::Atan, x)) => {
+                let square = self.powi(x, 2);
+                let hypotenuse = self.add2(self.one, square);
+                let secant = self.sqrt(hypotenuse);
+                let top = if f == Func::Sin { x } else { self.one };
+                Some(self.div(top, secant))
+            }
             (Func::Sin | Func::Cos | Func::Tan, _) => {
                 let k = self.pi_multiple(arg)?;
                 let sin = self.sin_of_pi_multiple(&k);
@@ -981,6 +1043,47 @@ impl ProductBuilder {
         }
     }
 
+    /// q₁^x·q₂^x = (q₁·q₂)^x for positive rationals and one fractional x, so that √2·√3 is √6
+    /// as a hand derivation writes it (the loop in `finish` then takes out what is a perfect
+    /// power: √2·√6 = √12 = 2·√3). Whether it combined any.
+    fn combine_numeric_powers(&mut self, pool: &mut Pool) -> bool {
+        let positive = |pool: &Pool, (b, x): &(ExprId, Rational)| {
+            !x.is_integer() && matches!(pool.node(*b), Node::Num(q) if q.is_positive())
+        };
+        let mut combined = false;
+        let mut k = 0;
+        while k < self.factors.len() {
+            if !positive(pool, &self.factors[k]) {
+                k += 1;
+                continue;
+            }
+            let x = self.factors[k].1.clone();
+            let mut base = pool.as_num(self.factors[k].0).cloned().unwrap_or_else(Rational::one);
+            let mut j = k + 1;
+            let mut merged_any = false;
+            while j < self.factors.len() {
+                if self.factors[j].1 == x && positive(pool, &self.factors[j]) {
+                    let (b, _) = self.factors.remove(j);
+                    if let Some(q) = pool.as_num(b) {
+                        base *= q.clone();
+                    }
+                    merged_any = true;
+                } else {
+                    j += 1;
+                }
+            }
+            if merged_any {
+                self.factors[k].0 = pool.num(base);
+                combined = true;
+            }
+            k += 1;
+        }
+        if combined {
+            self.factors = merged(std::mem::take(&mut self.factors));
+        }
+        combined
+    }
+
     /// Whether no factor is one the folding in `finish` would touch: most products are of
     /// symbols and functions, and need no pass at all.
     fn settled(&self, pool: &Pool) -> bool {
@@ -996,7 +1099,7 @@ impl ProductBuilder {
         // one (√3·√3, √(xy)·√(xy)); fold those until nothing changes.
         self.factors = merged(std::mem::take(&mut self.factors));
         while !self.settled(pool) {
-            let mut changed = false;
+            let mut changed = self.combine_numeric_powers(pool);
             let entries = std::mem::take(&mut self.factors);
             for (b, x) in entries {
                 if x.is_zero() {
@@ -1112,6 +1215,107 @@ mod tests {
         let r2 = p.sqrt(two);
         let expected = p.scale(r2, &number::ratio(-1, 2));
         assert_eq!(s, expected);
+    }
+
+    /// Printed as a hand derivation writes them: the forms of the scene syntax.
+    fn printed(p: &Pool, e: ExprId) -> String {
+        p.print(e, crate::Style::Ascii)
+    }
+
+    #[test]
+    fn powers_of_numbers_with_one_exponent_combine() {
+        let mut p = Pool::new();
+        let (two, three, six) = (p.int(2), p.int(3), p.int(6));
+        let (r2, r3, r6) = (p.sqrt(two), p.sqrt(three), p.sqrt(six));
+        let product = p.mul2(r2, r3);
+        assert_eq!(printed(&p, product), "sqrt(6)");
+        // √2·√6 = √12 = 2·√3: what is a perfect square comes out.
+        let product = p.mul2(r2, r6);
+        assert_eq!(printed(&p, product), "2*sqrt(3)");
+        let x = p.param("x");
+        let x = p.sym(x);
+        let product = p.mul(&[r2, x, r3]);
+        assert_eq!(printed(&p, product), "sqrt(6)*x");
+        // √2/√2 is 1, and √3/√2 is √6/2 (1/√2 is √2/2 first).
+        let inverse = p.powq(two, &number::ratio(-1, 2));
+        let one = p.mul2(r2, inverse);
+        assert_eq!(one, p.one());
+        let quotient = p.mul2(r3, inverse);
+        assert_eq!(printed(&p, quotient), "1/2*sqrt(6)");
+    }
+
+    #[test]
+    fn trig_of_a_quarter_turn_and_more_is_trig_of_the_rest() {
+        let mut p = Pool::new();
+        let x = p.param("x");
+        let x = p.sym(x);
+        let pi = p.pi();
+        let shifted = |p: &mut Pool, k: (i64, i64)| {
+            let turn = p.scale(pi, &number::ratio(k.0, k.1));
+            p.add2(turn, x)
+        };
+        let mut cases = Vec::new();
+        for (k, f, expected) in [
+            ((1, 2), Func::Cos, "-sin(x)"),
+            ((1, 2), Func::Sin, "cos(x)"),
+            ((1, 1), Func::Sin, "-sin(x)"),
+            ((3, 2), Func::Cos, "sin(x)"),
+            ((-1, 2), Func::Sin, "-cos(x)"),
+            ((2, 1), Func::Cos, "cos(x)"),
+            ((1, 1), Func::Tan, "tan(x)"),
+        ] {
+            let arg = shifted(&mut p, k);
+            let v = p.func(f, arg);
+            cases.push((printed(&p, v), expected));
+        }
+        for (got, expected) in cases {
+            assert_eq!(got, expected);
+        }
+        // A quarter turn of tan is a cotangent: left as it is; so is a turn of π/4.
+        let arg = shifted(&mut p, (1, 2));
+        let v = p.func(Func::Tan, arg);
+        assert!(printed(&p, v).starts_with("tan("), "{}", printed(&p, v));
+        let arg = shifted(&mut p, (1, 4));
+        let v = p.cos(arg);
+        assert!(printed(&p, v).starts_with("cos("), "{}", printed(&p, v));
+    }
+
+    #[test]
+    fn trig_of_inverse_trig_is_algebraic() {
+        let mut p = Pool::new();
+        let x = p.param("x");
+        let x = p.sym(x);
+        let mut got = Vec::new();
+        for (outer, inner) in [
+            (Func::Cos, Func::Asin),
+            (Func::Sin, Func::Acos),
+            (Func::Tan, Func::Asin),
+            (Func::Tan, Func::Acos),
+            (Func::Sin, Func::Atan),
+            (Func::Cos, Func::Atan),
+            (Func::Sin, Func::Asin),
+        ] {
+            let a = p.func(inner, x);
+            let v = p.func(outer, a);
+            got.push(printed(&p, v));
+        }
+        assert_eq!(
+            got,
+            [
+                "sqrt(1 - x^2)",
+                "sqrt(1 - x^2)",
+                "x/sqrt(1 - x^2)",
+                "sqrt(1 - x^2)/x",
+                "x/sqrt(1 + x^2)",
+                "1/sqrt(1 + x^2)",
+                "x",
+            ]
+        );
+        // sin²(acos x) is 1 − x², the square root squared away.
+        let a = p.func(Func::Acos, x);
+        let s = p.sin(a);
+        let square = p.powi(s, 2);
+        assert_eq!(printed(&p, square), "1 - x^2");
     }
 
     #[test]

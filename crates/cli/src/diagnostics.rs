@@ -11,7 +11,21 @@ pub use lang::render::render;
 pub fn error(path: &str, error: &engine::Error) -> String {
     match error {
         engine::Error::Scene { diagnostics, source } => render(path, source, diagnostics),
+        engine::Error::Setting(_) => format!("error: {}\n", error.worded(flag)),
         other => format!("{other}\n"),
+    }
+}
+
+/// A setting as the command line spells it: `--set gg`.
+fn flag(piece: &engine::Piece) -> String {
+    match piece {
+        engine::Piece::Text(text) => text.clone(),
+        engine::Piece::Setting(s) => format!("--{}", s.name()),
+        // Quoted when the shell would split it, as a user would type it.
+        engine::Piece::Given(s, given) if given.contains([' ', '\'']) => {
+            format!("--{} '{given}'", s.name())
+        }
+        engine::Piece::Given(s, given) => format!("--{} {given}", s.name()),
     }
 }
 

@@ -50,10 +50,22 @@ pub fn derive_report(
     format: Format,
     options: Options,
 ) -> Result<(String, String), String> {
+    derive_report_with(path, source, format, options, false)
+}
+
+/// [`derive_report`], with `full` printing every entry of the text report whole rather than
+/// its size past [`report::TEXT_ENTRY_LIMIT`] characters.
+pub fn derive_report_with(
+    path: &str,
+    source: &str,
+    format: Format,
+    options: Options,
+    full: bool,
+) -> Result<(String, String), String> {
     let engine::Scene { derivation: mut d, warnings } =
         engine::load_with(source, options).map_err(|e| diagnostics::error(path, &e))?;
     let report = match format {
-        Format::Text => report::text(&mut d),
+        Format::Text => report::text_with(&mut d, full),
         Format::Latex => report::latex(&mut d),
         Format::Json => report::json(&mut d),
     };

@@ -31,6 +31,10 @@ enum Command {
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
+        /// Print every entry of the text report whole; without it, one past 1,000 characters
+        /// shows its size instead.
+        #[arg(long)]
+        full: bool,
     },
     /// Check every `expect` line of the scenes; exit 1 if one does not hold, 2 on a bad file.
     Check {
@@ -92,8 +96,9 @@ enum Command {
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
-        /// Record at this many evenly spaced times, from the integrator's dense output; 0
-        /// records at every accepted step instead. Events and the end are always recorded.
+        /// Record at this many evenly spaced times (the start and the end included), from the
+        /// integrator's dense output; 0 records at every accepted step instead. Events and the
+        /// end are always recorded.
         /// Default: 200, or 1000 with --animate (frames of the animation).
         #[arg(long)]
         samples: Option<usize>,
@@ -183,7 +188,7 @@ fn read_or_report(path: &std::path::Path) -> Option<String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Derive { file, format, out, no_units } => {
+        Command::Derive { file, format, out, no_units, full } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
             let format = match format {
@@ -191,7 +196,8 @@ fn main() -> ExitCode {
                 FormatArg::Latex => cli::Format::Latex,
                 FormatArg::Json => cli::Format::Json,
             };
-            match cli::derive_report(&path, &source, format, engine::Options { units: !no_units }) {
+            let options = engine::Options { units: !no_units };
+            match cli::derive_report_with(&path, &source, format, options, full) {
                 Ok((report, warnings)) => {
                     eprint!("{warnings}");
                     write_or_print(out.as_ref(), &report)

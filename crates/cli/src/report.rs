@@ -138,20 +138,16 @@ pub(crate) fn bracketed(rows: &[Vec<String>], label: &str) -> Vec<String> {
         .collect()
 }
 
-fn value_lines(pool: &Pool, label: &str, v: &Value) -> Vec<String> {
+fn value_lines(pool: &Pool, full: bool, label: &str, v: &Value) -> Vec<String> {
     match v {
-        Value::Scalar(e) => vec![format!("{label}{}", pool.print(*e, Style::Unicode))],
+        Value::Scalar(e) => vec![format!("{label}{}", entry(pool, *e, full))],
         // A vector is a column, as in a hand derivation.
         Value::Vector(xs) => {
-            let rows: Vec<Vec<String>> =
-                xs.iter().map(|e| vec![pool.print(*e, Style::Unicode)]).collect();
-            bracketed(&rows, label)
+            let rows: Vec<Vec<ExprId>> = xs.iter().map(|e| vec![*e]).collect();
+            bracketed(&cells(pool, &rows, full), label)
         }
         Value::Matrix(m) => {
-            let rows: Vec<Vec<String>> = m
-                .iter()
-                .map(|r| r.iter().map(|e| pool.print(*e, Style::Unicode)).collect())
-                .collect();
+            let rows = cells(pool, m, full);
             bracketed(&rows, label)
         }
     }
@@ -163,9 +159,56 @@ fn sym_text(pool: &Pool, s: SymId, style: Style) -> String {
 
 /// The report for people.
 pub fn text(d: &mut Derivation) -> String {
+    text_with(d, false)
+}
+
+/// Past this many characters an entry of the text report is a wall no one reads (a bicycle's
+/// equations run to 16,000): its size stands in its place unless the whole report is asked
+/// for. Every example but the bicycle prints its entries in full well under it.
+pub const TEXT_ENTRY_LIMIT: usize = 1_000;
+
+/// An entry of the text report: in full, or past [`TEXT_ENTRY_LIMIT`] characters (unless
+/// `full`) its size and how to see it, as an entry past the printer's own node limit shows
+/// its operations.
+fn entry(pool: &Pool, e: ExprId, full: bool) -> String {
+    shortened(pool, e, pool.print(e, Style::Unicode), TEXT_ENTRY_LIMIT, full)
+}
+
+/// `printed` (of `e`), or its size when it runs past `limit` characters and not `full`.
+fn shortened(pool: &Pool, e: ExprId, printed: String, limit: usize, full: bool) -> String {
+    let characters = printed.chars().count();
+    if full || characters <= limit {
+        return printed;
+    }
+    let operations = pool.operation_count(e);
+    format!("⟨{operations} operations, {characters} characters; --full prints it⟩")
+}
+
+/// The cells of a matrix in the text report. Its columns are as wide as their widest entry,
+/// so a row runs past [`TEXT_ENTRY_LIMIT`] long before any one entry does: then an entry
+/// wider than its share of the limit shows its size (unless `full`).
+fn cells(pool: &Pool, rows: &[Vec<ExprId>], full: bool) -> Vec<Vec<String>> {
+    let printed: Vec<Vec<String>> =
+        rows.iter().map(|r| r.iter().map(|e| pool.print(*e, Style::Unicode)).collect()).collect();
+    let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widest = |k: usize| printed.iter().filter_map(|r| r.get(k)).map(|c| width(c)).max();
+    let line: usize = (0..columns).filter_map(widest).sum();
+    if full || line <= TEXT_ENTRY_LIMIT {
+        return printed;
+    }
+    let share = TEXT_ENTRY_LIMIT / columns.max(1);
+    rows.iter()
+        .zip(printed)
+        .map(|(r, p)| r.iter().zip(p).map(|(e, c)| shortened(pool, *e, c, share, false)).collect())
+        .collect()
+}
+
+/// The report for people; `full` prints every entry whole (see [`TEXT_ENTRY_LIMIT`]).
+pub fn text_with(d: &mut Derivation, full: bool) -> String {
     let derived = engine::derived::collect(d);
     let pool = &d.model.pool;
     let u = Style::Unicode;
+    let print = |e: ExprId| entry(pool, e, full);
     let mut out = Vec::new();
     if let Some(title) = &d.model.title {
         out.push(title.clone());
@@ -190,7 +233,7 @@ pub fn text(d: &mut Derivation) -> String {
         let name = sym_text(pool, c.sym, u);
         if let Some(e) = d.eliminated.iter().find(|e| e.coord == c.sym) {
             let cname = &d.model.constraints[e.constraint].name;
-            out.push(format!("  {name} = {}   (eliminated by {cname})", pool.print(e.solution, u)));
+            out.push(format!("  {name} = {}   (eliminated by {cname})", print(e.solution)));
         } else {
             let rate_symbol = pool.lookup_symbol(&format!("{}'", c.name));
             let rate = rate_symbol.map(|r| sym_text(pool, r, u)).unwrap_or_default();
@@ -210,7 +253,7 @@ pub fn text(d: &mut Derivation) -> String {
         out.push("Constraints".into());
         for (i, c) in d.model.constraints.iter().enumerate() {
             let (lhs, rhs) = derived.constraint_sides[i];
-            out.push(format!("  {}: {} = {}", c.name, pool.print(lhs, u), pool.print(rhs, u)));
+            out.push(format!("  {}: {} = {}", c.name, print(lhs), print(rhs)));
             let force = sym_text(pool, c.force_symbol, u);
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 let what = if c.force_requested {
@@ -219,9 +262,11 @@ pub fn text(d: &mut Derivation) -> String {
                     String::new()
                 };
                 if let Some(phi) = e.integrated {
-                    out.push(format!("    integrates to {} = 0", pool.print(phi, u)));
+                    out.push(format!("    integrates to {} = 0", print(phi)));
                 }
                 out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
+            } else if let Some(why) = &derived.left_out[i] {
+                out.push(format!("    left out, as it restrains nothing more: {why}"));
             } else if c.kind == model::ConstraintKind::Velocity {
                 out.push(format!(
                     "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
@@ -234,29 +279,26 @@ pub fn text(d: &mut Derivation) -> String {
         }
     }
     out.push("Energies".into());
-    out.push(format!("  T = {}", pool.print(derived.kinetic, u)));
-    out.push(format!("  V = {}", pool.print(derived.potential, u)));
+    out.push(format!("  T = {}", print(derived.kinetic)));
+    out.push(format!("  V = {}", print(derived.potential)));
     if let Some(l) = derived.lagrangian {
-        out.push(format!("  L = {}", pool.print(l, u)));
+        out.push(format!("  L = {}", print(l)));
     }
     out.push("Equations of motion".into());
     for eq in &derived.equations {
-        out.push(format!("  {} = {}", pool.print(eq.lhs, u), pool.print(eq.rhs, u)));
+        out.push(format!("  {} = {}", print(eq.lhs), print(eq.rhs)));
     }
     let q: Vec<String> = d.coords.iter().map(|s| sym_text(pool, *s, u)).collect();
     let extra = if d.multipliers.is_empty() { "" } else { " + Jᵀ·λ" };
     out.push(format!("Mass-matrix form  M(q)·q̈ = f(q, q̇){extra},  q = ({})", q.join(", ")));
-    let m_rows: Vec<Vec<String>> =
-        derived.mass_matrix.iter().map(|r| r.iter().map(|e| pool.print(*e, u)).collect()).collect();
-    out.extend(bracketed(&m_rows, "  M = "));
-    let f_rows: Vec<Vec<String>> =
-        derived.forcing.iter().map(|e| vec![pool.print(*e, u)]).collect();
-    out.extend(bracketed(&f_rows, "  f = "));
+    out.extend(bracketed(&cells(pool, &derived.mass_matrix, full), "  M = "));
+    let f_rows: Vec<Vec<ExprId>> = derived.forcing.iter().map(|e| vec![*e]).collect();
+    out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
     for m in &d.multipliers {
         let name = sym_text(pool, m.lambda, u);
-        let row: Vec<String> = m.jacobian.iter().map(|e| pool.print(*e, u)).collect();
-        out.extend(bracketed(&[row], &format!("  J({name}) = ")));
-        out.push(format!("  γ({name}) = {}", pool.print(m.bias, u)));
+        let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
+        out.extend(bracketed(&row, &format!("  J({name}) = ")));
+        out.push(format!("  γ({name}) = {}", print(m.bias)));
     }
     if let Some(form) = &derived.independent {
         let names = |s: &[SymId]| s.iter().map(|r| sym_text(pool, *r, u)).collect::<Vec<_>>();
@@ -267,18 +309,18 @@ pub fn text(d: &mut Derivation) -> String {
             names(&dependent).join(", ")
         ));
         for (d, e) in &form.dependent {
-            out.push(format!("  {} = {}", sym_text(pool, *d, u), pool.print(*e, u)));
+            out.push(format!("  {} = {}", sym_text(pool, *d, u), print(*e)));
         }
         for e in &form.equations {
-            out.push(format!("  {} = 0", pool.print(*e, u)));
+            out.push(format!("  {} = 0", print(*e)));
         }
     }
     if !derived.reactions.is_empty() {
         out.push("Reactions".into());
         for ((s, e), (_, explicit)) in derived.reactions.iter().zip(&derived.reactions_of_state) {
-            let mut line = format!("  {} = {}", sym_text(pool, *s, u), pool.print(*e, u));
+            let mut line = format!("  {} = {}", sym_text(pool, *s, u), print(*e));
             if explicit != e {
-                line.push_str(&format!("\n    = {}", pool.print(*explicit, u)));
+                line.push_str(&format!("\n    = {}", print(*explicit)));
             }
             out.push(line);
         }
@@ -303,7 +345,7 @@ pub fn text(d: &mut Derivation) -> String {
                 ));
                 continue;
             }
-            out.extend(value_lines(pool, &format!("  {label} = "), v));
+            out.extend(value_lines(pool, full, &format!("  {label} = "), v));
         }
     }
     let start_heading = || {
@@ -319,7 +361,7 @@ pub fn text(d: &mut Derivation) -> String {
             out.push(start_heading());
             for (show, v) in items {
                 let label = d.show_label(show, u);
-                out.extend(value_lines(pool, &format!("  {label} = "), v));
+                out.extend(value_lines(pool, full, &format!("  {label} = "), v));
             }
         }
         ShownAtStart::Exact(_) => {}

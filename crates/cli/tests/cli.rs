@@ -164,6 +164,29 @@ fn set_cannot_make_a_mass_negative() {
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// The engine names settings abstractly; the command line words them as its flags.
+#[test]
+fn settings_are_named_by_their_flags() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    for (args, said) in [
+        (&["--until=-1"][..], "error: --until must be a positive time, not -1"),
+        (&["--set", "gg=1"][..], "error: --set gg: no parameter or coordinate of that name"),
+        (&["--set", "m=-1"][..], "error: with the values of --set, `bob` has a mass of -1 kg"),
+    ] {
+        let out = lagrange(&[&["simulate", pendulum.as_str()][..], args].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
+    }
+    let out = lagrange(&["linearize", &pendulum, "--sweep", "w=0:1:3"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("give the reference with --about theta=0"), "{stderr}");
+    let cart = example("classics/inverted_pendulum_on_cart.lag");
+    let out = lagrange(&["linearize", &cart, "--sweep", "w=0:1:3"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("error: --sweep w: no parameter of that name"), "{stderr}");
+}
+
 #[test]
 fn bench_runs_what_it_can_on_a_scene_with_a_multiplier() {
     let scratch = Scratch::new("bench-multiplier");

@@ -30,6 +30,9 @@ pub struct Derived {
     /// constraint, which is its simplified Φ = 0 (the sum of a velocity and a cross product
     /// as written is pages long).
     pub constraint_sides: Vec<(ExprId, ExprId)>,
+    /// Why each constraint that is neither eliminated nor kept was left out (a velocity
+    /// constraint the position constraints already imply); `None` for the others.
+    pub left_out: Vec<Option<String>>,
 }
 
 /// The forms of a derivation that a report shows.
@@ -49,6 +52,25 @@ pub fn collect(d: &mut Derivation) -> Derived {
                 (phi, pool.zero())
             }
             false => (c.lhs, c.rhs),
+        })
+        .collect();
+    let left_out = d
+        .model
+        .constraints
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let handled = d.eliminated.iter().any(|e| e.constraint == i)
+                || d.multipliers.iter().any(|m| m.constraint == i);
+            // The warning that left it out says why, under its caret; the report repeats that
+            // where the constraint is listed.
+            let warned = format!("`{}` restrains nothing more", c.name);
+            let why = d.warnings.iter().find(|w| w.message.starts_with(&warned));
+            (!handled).then(|| {
+                why.map(|w| w.label.clone())
+                    .filter(|l| !l.is_empty())
+                    .unwrap_or_else(|| "the other constraints imply it".into())
+            })
         })
         .collect();
     let pool = &mut d.model.pool;
@@ -119,6 +141,7 @@ pub fn collect(d: &mut Derivation) -> Derived {
         start_state,
         independent,
         constraint_sides,
+        left_out,
     }
 }
 

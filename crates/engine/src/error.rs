@@ -15,6 +15,9 @@ pub enum Error {
     Scene { diagnostics: Vec<Diagnostic>, source: String },
     /// A setting, option or value that cannot be used: what is wrong with it.
     Input(String),
+    /// A front end's setting that cannot be used, in words that name the settings abstractly
+    /// so that each front end can word them as its users write them ([`Error::worded`]).
+    Setting(Vec<Piece>),
     /// The numbers went wrong (a run that should have finished faulted): what happened.
     Numeric(String),
 }
@@ -24,7 +27,7 @@ impl Error {
     /// included), 1 for a numeric fault.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::Scene { .. } | Error::Input(_) => 2,
+            Error::Scene { .. } | Error::Input(_) | Error::Setting(_) => 2,
             Error::Numeric(_) => 1,
         }
     }
@@ -50,6 +53,82 @@ impl fmt::Display for Error {
                 Ok(())
             }
             Error::Input(message) | Error::Numeric(message) => write!(f, "error: {message}"),
+            Error::Setting(_) => write!(f, "error: {}", self.worded(Piece::plain)),
+        }
+    }
+}
+
+/// A setting of a run or a linearization as a front end takes it: `--until` on the command
+/// line, the keyword `until` in Python. Errors name it and leave the words to the front end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Setting {
+    Until,
+    Tolerance,
+    Step,
+    /// Values in place of the scene's, `name=value`.
+    Set,
+    Sweep,
+    About,
+}
+
+impl Setting {
+    /// The plain name: a command line prefixes `--`, Python takes it as a keyword.
+    pub fn name(self) -> &'static str {
+        match self {
+            Setting::Until => "until",
+            Setting::Tolerance => "tolerance",
+            Setting::Step => "step",
+            Setting::Set => "set",
+            Setting::Sweep => "sweep",
+            Setting::About => "about",
+        }
+    }
+}
+
+/// A piece of an [`Error::Setting`]'s text.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Piece {
+    Text(String),
+    /// A setting by its name.
+    Setting(Setting),
+    /// A setting with what it was given: the name it sets (`--set gg`), the sweep it was
+    /// asked for (`--sweep w=0:1:2`), the reference (`--about theta=0`).
+    Given(Setting, String),
+}
+
+impl Piece {
+    /// Words for a reader who knows neither front end: the setting's name in backticks.
+    pub fn plain(&self) -> String {
+        match self {
+            Piece::Text(text) => text.clone(),
+            Piece::Setting(s) => format!("`{}`", s.name()),
+            Piece::Given(s, given) => format!("`{}` {given}", s.name()),
+        }
+    }
+}
+
+impl Error {
+    /// `setting` followed by `rest`: "`until` must be positive".
+    pub(crate) fn setting(setting: Setting, rest: impl Into<String>) -> Error {
+        Error::Setting(vec![Piece::Setting(setting), Piece::Text(rest.into())])
+    }
+
+    /// `setting` with what it was given, then `rest`: "`set` gg: no parameter …".
+    pub(crate) fn given(
+        setting: Setting,
+        given: impl Into<String>,
+        rest: impl Into<String>,
+    ) -> Error {
+        Error::Setting(vec![Piece::Given(setting, given.into()), Piece::Text(rest.into())])
+    }
+
+    /// The text of an [`Error::Setting`] with each setting in `word`'s words; the message of
+    /// any other error as it is (a scene's diagnostics as [`fmt::Display`] shows them).
+    pub fn worded(&self, word: impl Fn(&Piece) -> String) -> String {
+        match self {
+            Error::Setting(pieces) => pieces.iter().map(word).collect(),
+            Error::Input(message) | Error::Numeric(message) => message.clone(),
+            Error::Scene { .. } => self.to_string(),
         }
     }
 }
@@ -76,6 +155,17 @@ mod tests {
         assert_eq!(input.exit_code(), 2);
         assert_eq!(input.to_string(), "error: `until` must be positive");
         assert_eq!(Error::Numeric("the reference run failed".into()).exit_code(), 1);
+        let setting = Error::Setting(vec![
+            Piece::Given(Setting::Set, "gg".into()),
+            Piece::Text(": no parameter of that name".into()),
+        ]);
+        assert_eq!(setting.exit_code(), 2);
+        assert_eq!(setting.to_string(), "error: `set` gg: no parameter of that name");
+        let flags = |p: &Piece| match p {
+            Piece::Given(s, given) => format!("--{} {given}", s.name()),
+            other => other.plain(),
+        };
+        assert_eq!(setting.worded(flags), "--set gg: no parameter of that name");
         let d = Diagnostic::error(lang::Span::new(8, 9), "unknown name `y`");
         let scene = Error::Scene { diagnostics: vec![d], source: "coord x\ny\n".into() };
         assert_eq!(scene.exit_code(), 2);

@@ -21,7 +21,7 @@ pub mod linearize;
 pub mod numbers;
 pub mod simulate;
 
-pub use error::{line_col, Error};
+pub use error::{line_col, Error, Piece, Setting};
 
 use lang::Diagnostic;
 use mechanics::Derivation;
@@ -59,6 +59,7 @@ pub fn load_with(source: &str, options: Options) -> Result<Scene, Error> {
     let (model, mut warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
     let mut derivation = mechanics::derive(model).map_err(scene)?;
     verify::diagnose(&mut derivation).map_err(scene)?;
-    warnings.append(&mut derivation.warnings);
+    // Copied, not moved: the derivation's own stay with it for its report to cite.
+    warnings.extend(derivation.warnings.iter().cloned());
     Ok(Scene { derivation, warnings })
 }

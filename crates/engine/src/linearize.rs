@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use numeric::{ScaledEvaluator, Tape};
 
 use crate::numbers::{prepare, Prepared};
-use crate::Error;
+use crate::{Error, Piece, Setting};
 
 /// A real part counts as zero within this fraction of the largest |eigenvalue|: rounding in
 /// the eigenvalues of a matrix of order ten is far below it, and a root of a double eigenvalue
@@ -161,7 +161,10 @@ fn bad(message: impl Into<String>) -> Error {
 
 /// `p=a:b:n`, checked.
 fn parse_sweep(text: &str) -> Result<(String, f64, f64, usize), Error> {
-    let form = || bad(format!("--sweep `{text}` is not of the form p=a:b:n (like w=0:100:201)"));
+    let form = || {
+        let rest = format!(" `{text}` is not of the form p=a:b:n (like w=0:100:201)");
+        Error::setting(Setting::Sweep, rest)
+    };
     let (name, range) = text.split_once('=').ok_or_else(form)?;
     let parts: Vec<&str> = range.split(':').map(str::trim).collect();
     let [a, b, n] = parts[..] else { return Err(form()) };
@@ -169,12 +172,12 @@ fn parse_sweep(text: &str) -> Result<(String, f64, f64, usize), Error> {
         return Err(form());
     };
     if !(a.is_finite() && b.is_finite()) || a == b {
-        return Err(bad(format!("--sweep {text}: the ends must be two different finite numbers")));
+        let rest = ": the ends must be two different finite numbers";
+        return Err(Error::given(Setting::Sweep, text, rest));
     }
     if !(2..=MAX_SWEEP_VALUES).contains(&n) {
-        return Err(bad(format!(
-            "--sweep {text}: the number of values must be from 2 to {MAX_SWEEP_VALUES}"
-        )));
+        let rest = format!(": the number of values must be from 2 to {MAX_SWEEP_VALUES}");
+        return Err(Error::given(Setting::Sweep, text, rest));
     }
     Ok((name.trim().to_string(), a, b, n))
 }
@@ -186,7 +189,10 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let mut sets: Vec<(String, String)> = Vec::new();
     for s in &options.set {
         let Some((name, value)) = s.split_once('=') else {
-            return Err(bad(format!("--set `{s}` is not of the form name=value")));
+            return Err(Error::setting(
+                Setting::Set,
+                format!(" `{s}` is not of the form name=value"),
+            ));
         };
         sets.push((name.trim().to_string(), value.trim().to_string()));
     }
@@ -197,7 +203,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let mut about_line = (usize::MAX, usize::MAX);
     if let Some(about) = &options.about {
         if about.contains(['\n', '\r']) {
-            return Err(bad("--about must be one line"));
+            return Err(Error::setting(Setting::About, " must be one line"));
         }
         if !text.ends_with('\n') {
             text.push('\n');
@@ -213,10 +219,13 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let mut prepared =
         prepare(&text, &extra, crate::Options { units: !options.no_units }).map_err(from_about)?;
     if prepared.derivation.model.linearize.is_empty() {
-        return Err(bad(
-            "the scene has no `linearize about` line: add one, or give the reference with \
-             --about 'theta=0'",
-        ));
+        return Err(Error::Setting(vec![
+            Piece::Text(
+                "the scene has no `linearize about` line: add one, or give the reference with "
+                    .into(),
+            ),
+            Piece::Given(Setting::About, "theta=0".into()),
+        ]));
     }
     let scene = |diagnostics: Vec<Diagnostic>| Error::Scene { diagnostics, source: text.clone() };
     let linearization = prepared.derivation.linearize().map_err(scene).map_err(from_about)?;
@@ -230,17 +239,23 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     for ((name, _), expr) in sets.iter().zip(prepared.extra.clone()) {
         match model.params.iter().position(|p| &p.name == name) {
             Some(i) => overrides.push((i, expr)),
-            None if model.coords.iter().any(|c| *name == c.name || *name == format!("{}'", c.name)) => {
-                return Err(bad(format!(
-                    "--set {name}: the reference is given by `linearize about` or --about, not --set"
-                )))
+            None if model
+                .coords
+                .iter()
+                .any(|c| *name == c.name || *name == format!("{}'", c.name)) =>
+            {
+                return Err(Error::Setting(vec![
+                    Piece::Given(Setting::Set, name.clone()),
+                    Piece::Text(": the reference is given by `linearize about` or ".into()),
+                    Piece::Setting(Setting::About),
+                    Piece::Text(", not ".into()),
+                    Piece::Setting(Setting::Set),
+                ]))
             }
             None => {
                 let known: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
-                return Err(bad(format!(
-                    "--set {name}: no parameter of that name; one of {}",
-                    known.join(", ")
-                )));
+                let rest = format!(": no parameter of that name; one of {}", known.join(", "));
+                return Err(Error::given(Setting::Set, name, rest));
             }
         }
     }
@@ -248,10 +263,8 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         Some((name, ..)) => {
             Some(model.params.iter().position(|p| &p.name == name).ok_or_else(|| {
                 let known: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
-                bad(format!(
-                    "--sweep {name}: no parameter of that name; one of {}",
-                    known.join(", ")
-                ))
+                let rest = format!(": no parameter of that name; one of {}", known.join(", "));
+                Error::given(Setting::Sweep, name, rest)
             })?)
         }
         None => None,

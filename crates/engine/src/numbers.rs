@@ -8,7 +8,7 @@ use mechanics::Derivation;
 use numeric::{lower, Program};
 use sim::Layout;
 
-use crate::{Error, Options};
+use crate::{Error, Options, Piece, Setting};
 
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
@@ -159,10 +159,13 @@ impl Prepared {
         for (i, p) in self.derivation.model.params.iter().enumerate() {
             let expr = overrides.iter().rev().find(|(k, _)| *k == i).map(|(_, e)| *e).or(p.value);
             let Some(expr) = expr else {
-                return Err(Error::Input(format!(
-                    "parameter `{}` has no value; give one in the scene or with --set {}=…",
-                    p.name, p.name
-                )));
+                return Err(Error::Setting(vec![
+                    Piece::Text(format!(
+                        "parameter `{}` has no value; give one in the scene or with ",
+                        p.name
+                    )),
+                    Piece::Given(Setting::Set, p.name.clone()),
+                ]));
             };
             let v = numeric::eval(pool, expr, &values);
             if !v.is_finite() {
@@ -223,10 +226,14 @@ impl Prepared {
                     if inertia { ("an inertia", "kg·m²") } else { ("a mass", "kg") };
                 if (inertia && v < 0.0) || (!inertia && v <= 0.0) {
                     let rule = if inertia { "cannot be negative" } else { "must be positive" };
-                    return Err(Error::Input(format!(
-                        "with the values of --set, `{}` has {what} of {v} {unit}; {what} {rule}",
-                        body.name
-                    )));
+                    return Err(Error::Setting(vec![
+                        Piece::Text("with the values of ".into()),
+                        Piece::Setting(Setting::Set),
+                        Piece::Text(format!(
+                            ", `{}` has {what} of {v} {unit}; {what} {rule}",
+                            body.name
+                        )),
+                    ]));
                 }
             }
         }

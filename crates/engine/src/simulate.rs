@@ -10,7 +10,7 @@ use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, R
 
 use crate::animate::{Animation, Plan};
 use crate::numbers::{prepare, Prepared};
-use crate::Error;
+use crate::{Error, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
 #[derive(Clone, Debug, Default)]
@@ -228,21 +228,30 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     stops.extend(options.stop_when.iter().map(|s| zero_of(s)));
     events.extend(options.events.iter().map(|s| zero_of(s)));
     if !(until.is_finite() && until > 0.0) {
-        return Err(bad(format!("--until must be a positive time, not {until}")));
+        return Err(Error::setting(
+            Setting::Until,
+            format!(" must be a positive time, not {until}"),
+        ));
     }
     if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(bad(format!("--tolerance must be positive, not {tolerance}")));
+        return Err(Error::setting(
+            Setting::Tolerance,
+            format!(" must be positive, not {tolerance}"),
+        ));
     }
     let step = step.unwrap_or(until / 1000.0);
     if !(step.is_finite() && step > 0.0) {
-        return Err(bad(format!("--step must be positive, not {step}")));
+        return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
 
     // `--set name=value`: split here, resolved as expressions when the scene is loaded.
     let mut sets: Vec<(String, String)> = Vec::new();
     for s in &options.set {
         let Some((name, value)) = s.split_once('=') else {
-            return Err(bad(format!("--set `{s}` is not of the form name=value")));
+            return Err(Error::setting(
+                Setting::Set,
+                format!(" `{s}` is not of the form name=value"),
+            ));
         };
         sets.push((name.trim().to_string(), value.trim().to_string()));
     }
@@ -320,11 +329,15 @@ pub fn run(
             param_overrides.push((i, *expr));
         } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
             if !prepared.derivation.coords.contains(&model.coords[i].sym) {
-                return Err(bad(format!(
-                    "--set {name}: `{base}` is fixed by a constraint; set the remaining \
-                     coordinates ({}) instead",
-                    coordinate_names.join(", ")
-                )));
+                return Err(Error::given(
+                    Setting::Set,
+                    name,
+                    format!(
+                        ": `{base}` is fixed by a constraint; set the remaining coordinates ({}) \
+                         instead",
+                        coordinate_names.join(", ")
+                    ),
+                ));
             }
             coord_overrides.push((i, primes == 1, *expr));
         } else {
@@ -333,10 +346,11 @@ pub fn run(
                 known.push(c.clone());
                 known.push(format!("{c}'"));
             }
-            return Err(bad(format!(
-                "--set {name}: no parameter or coordinate of that name; one of {}",
-                known.join(", ")
-            )));
+            return Err(Error::given(
+                Setting::Set,
+                name,
+                format!(": no parameter or coordinate of that name; one of {}", known.join(", ")),
+            ));
         }
     }
     let parameters = prepared.parameter_values(&param_overrides)?;
@@ -416,15 +430,8 @@ pub fn run(
     progress.finish();
     let wall_seconds = started.elapsed().as_secs_f64();
 
-    let model = &prepared.derivation.model;
-    let conservative = model.forces.is_empty()
-        && model.torques.is_empty()
-        && model.dissipation.is_empty()
-        && !prepared.dynamics_exprs().iter().any(|e| {
-            let t = prepared.derivation.model.time;
-            prepared.derivation.model.pool.depends_on(*e, t)
-        })
-        && !prepared.derivation.drives_through_velocity_constraints();
+    let dynamics = prepared.dynamics_exprs();
+    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
     let mut columns: Vec<String> = outputs.clone();
     columns.extend(stops.iter().cloned());
     columns.extend(events.iter().cloned());
@@ -481,6 +488,40 @@ pub fn run(
         });
     }
     Ok(outcome)
+}
+
+/// Whether T + V should stay at its start value. It does not when loads act that no potential
+/// accounts for, or when anything depends on time: T + V is then not a first integral even
+/// where the equations do not mention t (a bead on a rod turned at a fixed rate has r̈ = ω²·r,
+/// yet the motor feeds it energy). Time enters through the equations, a position or
+/// orientation given in t, a coordinate eliminated by a constraint in t (a drive), a potential
+/// or Lagrangian term in t, or a kept velocity constraint that moves the scene at rest.
+fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> bool {
+    let model = &d.model;
+    if !(model.forces.is_empty() && model.torques.is_empty() && model.dissipation.is_empty()) {
+        return false;
+    }
+    let mut timed: Vec<cas::ExprId> = dynamics.to_vec();
+    for body in &model.bodies {
+        timed.extend(&body.position);
+        match &body.rotation {
+            Some(model::Rotation::Planar { angle, .. }) => timed.push(*angle),
+            Some(model::Rotation::Spatial { orientation, .. }) => {
+                timed.extend(orientation.iter().flatten())
+            }
+            None => {}
+        }
+    }
+    timed.extend(d.eliminated.iter().map(|e| e.solution));
+    timed.extend(model.potentials.iter().chain(&model.lagrangians).map(|term| term.expr));
+    timed.push(d.potential);
+    timed.push(d.lagrangian);
+    let t = model.time;
+    let pool = &mut d.model.pool;
+    if timed.iter().any(|e| pool.depends_on(*e, t)) {
+        return false;
+    }
+    !d.drives_through_velocity_constraints()
 }
 
 impl Outcome {
@@ -606,7 +647,7 @@ impl Outcome {
             ),
             FaultKind::NewtonFailed => (
                 "Newton's iteration of the implicit method did not converge".into(),
-                "the step is too large for this motion: lower --step".into(),
+                "the step is too large for this motion: lower the step".into(),
             ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),

@@ -1,7 +1,8 @@
 //! Engine errors as Python exceptions: a scene's mistakes as `lagrange.SceneError` (with the
 //! file, line and column of the first error and the diagnostics rendered as the `lagrange`
-//! command prints them), bad input as `ValueError`, a numeric fault as
-//! `lagrange.NumericError`. The exception classes are defined in `lagrange/_errors.py`.
+//! command prints them), bad input as `ValueError` (settings named by their keywords), a
+//! numeric fault as `lagrange.NumericError`. The exception classes are defined in
+//! `lagrange/_errors.py`.
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -58,7 +59,12 @@ pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
             };
             let message = match first {
                 Some(d) => {
-                    format!("{path}:{}:{}: {}", line.unwrap_or(1), column.unwrap_or(1), d.message)
+                    let (line, column) = (line.unwrap_or(1), column.unwrap_or(1));
+                    // The hint ("did you mean `g`?") is often the answer: str(e) keeps it.
+                    match &d.hint {
+                        Some(hint) => format!("{path}:{line}:{column}: {} ({hint})", d.message),
+                        None => format!("{path}:{line}:{column}: {}", d.message),
+                    }
                 }
                 None => error.to_string(),
             };
@@ -68,6 +74,17 @@ pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
             }
         }),
         engine::Error::Input(message) => PyValueError::new_err(message.clone()),
+        engine::Error::Setting(_) => PyValueError::new_err(error.worded(keyword)),
         engine::Error::Numeric(message) => numeric_error(message.clone()),
+    }
+}
+
+/// A setting as a Python caller writes it: the keyword argument, `set={"gg": …}`.
+fn keyword(piece: &engine::Piece) -> String {
+    match piece {
+        engine::Piece::Text(text) => text.clone(),
+        engine::Piece::Setting(s) => format!("`{}`", s.name()),
+        engine::Piece::Given(engine::Setting::Set, name) => format!("`set={{{name:?}: …}}`"),
+        engine::Piece::Given(s, given) => format!("`{}={given:?}`", s.name()),
     }
 }

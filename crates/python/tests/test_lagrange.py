@@ -1,6 +1,8 @@
 """The lagrange package from Python: the problem-set results exactly through SymPy, the rhs
 against SciPy and against lagrange's own integrator, errors, and what a notebook shows."""
 
+import ast
+import importlib.metadata
 from pathlib import Path
 
 import numpy as np
@@ -239,3 +241,88 @@ def test_linearize_the_pendulum_and_sweep_the_sleeping_top():
     assert abs(changes[0]["value"] - 51.1468474101777) < 1e-6
     with pytest.raises(lagrange.SceneError):
         pendulum.linearize(about="theta = 1")
+
+
+def test_settings_are_named_as_python_callers_write_them():
+    scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    with pytest.raises(ValueError) as caught:
+        scene.simulate(until=-1)
+    assert str(caught.value).startswith("`until` must be a positive time"), caught.value
+    with pytest.raises(ValueError) as caught:
+        scene.simulate(until=0.1, set={"gg": 1})
+    message = str(caught.value)
+    assert message.startswith('`set={"gg": …}`: no parameter or coordinate'), message
+    assert "--" not in message
+    with pytest.raises(ValueError) as caught:
+        scene.linearize(about="theta=0", sweep="w=0:1:3")
+    assert str(caught.value).startswith('`sweep="w"`: no parameter'), caught.value
+    with pytest.raises(ValueError) as caught:
+        scene.linearize()
+    assert '`about="theta=0"`' in str(caught.value), caught.value
+
+
+def test_str_of_a_scene_error_keeps_the_hint():
+    text = "param length = 2\ncoord x = 0\nparticle p { mass 1; position (x, 0) }\npotential lenght*x\n"
+    with pytest.raises(lagrange.SceneError) as caught:
+        lagrange.loads(text)
+    assert "did you mean `length`?" in str(caught.value), str(caught.value)
+
+
+def test_samples_counts_times_as_linspace_does():
+    scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    run = scene.simulate(until=2.0, samples=5)
+    np.testing.assert_allclose(run["t"], np.linspace(0.0, 2.0, 5), atol=1e-12)
+    with pytest.raises(ValueError, match="`samples` must be 0"):
+        scene.simulate(until=1.0, samples=-1)
+    with pytest.raises(TypeError):
+        scene.simulate(until=1.0, samples=2.5)
+
+
+def test_the_callables_and_the_version_are_exported():
+    scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
+    assert isinstance(scene.rhs(), lagrange.Rhs)
+    assert isinstance(scene.mass_matrix_function(), lagrange.MassMatrix)
+    assert {"Rhs", "MassMatrix", "__version__"} <= set(lagrange.__all__)
+    assert lagrange.__version__ == importlib.metadata.version("lagrange")
+    assert lagrange.__version__[0].isdigit()
+
+
+def test_the_stub_covers_the_native_module():
+    package = Path(lagrange.__file__).parent
+    assert (package / "py.typed").is_file()
+    stub = ast.parse((package / "_native.pyi").read_text(encoding="utf-8"))
+    declared = {
+        node.name
+        for node in stub.body
+        if isinstance(node, (ast.ClassDef, ast.FunctionDef))
+    }
+    native = {name for name in dir(lagrange._native) if not name.startswith("_")}
+    assert declared == native
+    # Each class's public methods and attributes, too.
+    for node in stub.body:
+        if isinstance(node, ast.ClassDef):
+            members = {
+                item.name if isinstance(item, ast.FunctionDef) else item.target.id
+                for item in node.body
+                if isinstance(item, (ast.FunctionDef, ast.AnnAssign))
+            }
+            real = {m for m in dir(getattr(lagrange._native, node.name)) if not m.startswith("_")}
+            assert {m for m in members if not m.startswith("_")} == real, node.name
+
+
+def test_mypy_accepts_a_typed_use_of_the_package(tmp_path):
+    mypy = pytest.importorskip("mypy.api")
+    script = tmp_path / "use.py"
+    script.write_text(
+        "import lagrange\n"
+        "scene = lagrange.loads('coord x = 0\\nparticle p { mass 1; position (x, 0) }\\n')\n"
+        "f: lagrange.Rhs = scene.rhs()\n"
+        "names: list[str] = f.names\n"
+        "n: int = lagrange._native.loads('')\n",
+        encoding="utf-8",
+    )
+    out, err, status = mypy.run([str(script), "--no-error-summary"])
+    # The last line is wrong on purpose: mypy must see the stub to catch it.
+    assert status == 1, out + err
+    assert "use.py:5" in out and "NativeScene" in out, out
+    assert out.count("error:") == 1, out

@@ -70,8 +70,9 @@ pub struct Settings {
     /// The step of the fixed-step methods.
     pub step: f64,
     pub max_steps: usize,
-    /// Record at this many evenly spaced times (from the dense output) rather than at every
-    /// accepted step; 0 records at every step. Events and the end are recorded either way.
+    /// Record at this many evenly spaced times from the start to the end, both included (from
+    /// the dense output), rather than at every accepted step; 0 records at every step. Events
+    /// and the end are recorded either way.
     pub samples: usize,
 }
 
@@ -162,9 +163,11 @@ pub fn integrate(
     let mut previous_row = row.clone();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
-    let sample_time = |k: usize| {
-        settings.start + (settings.until - settings.start) * k as f64 / settings.samples as f64
-    };
+    // `samples` times from the start to the end, both included, as numpy.linspace counts
+    // them: `samples − 1` intervals. One sample is the start, and the end is recorded anyway.
+    let intervals = settings.samples.saturating_sub(1).max(1);
+    let sample_time =
+        |k: usize| settings.start + (settings.until - settings.start) * k as f64 / intervals as f64;
     let mut next_sample = 1;
 
     while t < settings.until {
@@ -202,7 +205,7 @@ pub fn integrate(
             let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
             let mut ys = vec![0.0; d];
             let mut sample_row = vec![0.0; width];
-            while next_sample <= settings.samples && sample_time(next_sample) < end {
+            while next_sample <= intervals && sample_time(next_sample) < end {
                 let s = sample_time(next_sample);
                 stepper.interpolate(problem, s, &mut ys);
                 if problem.observe(s, &ys, &mut sample_row).is_ok() {

@@ -23,10 +23,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 import math
+import numbers
 import os
+
+from importlib import metadata as _metadata
 
 from . import _native
 from ._errors import NumericError, SceneError
+from ._native import MassMatrix, Rhs
 
 __all__ = [
     "load",
@@ -36,9 +40,18 @@ __all__ = [
     "Constraint",
     "Expectation",
     "Results",
+    "Rhs",
+    "MassMatrix",
     "SceneError",
     "NumericError",
+    "__version__",
 ]
+
+try:
+    # The installed distribution's version, which maturin takes from the crate's.
+    __version__ = _metadata.version("lagrange")
+except _metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
+    __version__ = "0+unknown"
 
 
 def load(path, *, units=True):
@@ -153,7 +166,10 @@ class Scene:
           a scene expression, in place of the scene's values.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
-        - ``samples``: record at this many evenly spaced times (0: every accepted step).
+        - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
+          included, as ``numpy.linspace(0, until, samples)`` spaces them (0: at every
+          accepted step instead); events, and the end of a run that stops early, come in
+          addition.
 
         A run that faults raises :class:`NumericError` whose ``results`` hold what was
         computed before the fault.
@@ -165,6 +181,10 @@ class Scene:
                 return [value]
             return [str(v) for v in value]
 
+        if isinstance(samples, bool) or not isinstance(samples, numbers.Integral):
+            raise TypeError(f"`samples` must be a whole number, not {samples!r}")
+        if samples < 0:
+            raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
         sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
         raw = self._native.simulate(
             until=None if until is None else float(until),
