@@ -50,6 +50,19 @@ pub fn derive_report(
     format: Format,
     options: Options,
 ) -> Result<(String, String), String> {
+    derive_keeping(path, source, format, options).map(|(report, warnings, _)| (report, warnings))
+}
+
+/// [`derive_report`] that also hands back the derivation, for a process about to end: freeing
+/// a large model's expressions one by one costs a tenth of the bicycle's run, so the command
+/// leaves it to the process's end. A library caller that goes on (a test, the fuzzer) must
+/// free it, which [`derive_report`] does.
+pub fn derive_keeping(
+    path: &str,
+    source: &str,
+    format: Format,
+    options: Options,
+) -> Result<(String, String, mechanics::Derivation), String> {
     let engine::Scene { derivation: mut d, warnings } =
         engine::load_with(source, options).map_err(|e| diagnostics::error(path, &e))?;
     let report = match format {
@@ -57,10 +70,7 @@ pub fn derive_report(
         Format::Latex => report::latex(&mut d),
         Format::Json => report::json(&mut d),
     };
-    // Freeing a large model's expressions one by one costs a tenth of the bicycle's run, and
-    // every caller is done with it: a front end's process ends, a test's memory is small.
-    std::mem::forget(d);
-    Ok((report, diagnostics::render(path, source, &warnings)))
+    Ok((report, diagnostics::render(path, source, &warnings), d))
 }
 
 /// Reads a scene file. The error is ready to print: a missing file says so, and a file that

@@ -191,9 +191,13 @@ fn main() -> ExitCode {
                 FormatArg::Latex => cli::Format::Latex,
                 FormatArg::Json => cli::Format::Json,
             };
-            match cli::derive_report(&path, &source, format, engine::Options { units: !no_units }) {
-                Ok((report, warnings)) => {
+            let options = engine::Options { units: !no_units };
+            match cli::derive_keeping(&path, &source, format, options) {
+                Ok((report, warnings, derivation)) => {
                     eprint!("{warnings}");
+                    // The process ends here: freeing a large model's expressions one by one (a
+                    // tenth of the bicycle's run) would be work for nothing.
+                    std::mem::forget(derivation);
                     write_or_print(out.as_ref(), &report)
                 }
                 Err(diagnostics) => {
