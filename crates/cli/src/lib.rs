@@ -53,8 +53,7 @@ pub fn derive_report(
     derive_report_with(path, source, format, options, false)
 }
 
-/// [`derive_report`], with `full` printing every entry of the text report whole rather than
-/// its size past [`report::TEXT_ENTRY_LIMIT`] characters.
+/// [`derive_report`], with `full` printing every entry of the text report whole.
 pub fn derive_report_with(
     path: &str,
     source: &str,
@@ -62,6 +61,22 @@ pub fn derive_report_with(
     options: Options,
     full: bool,
 ) -> Result<(String, String), String> {
+    derive_keeping(path, source, format, options, full)
+        .map(|(report, warnings, _)| (report, warnings))
+}
+
+/// [`derive_report`] that also hands back the derivation, for a process about to end: freeing
+/// a large model's expressions one by one costs a tenth of the bicycle's run, so the command
+/// leaves it to the process's end. A library caller that goes on (a test, the fuzzer) must
+/// free it, which [`derive_report`] does. With `full`, every entry of the text report is
+/// printed whole rather than as its size past [`report::TEXT_ENTRY_LIMIT`] characters.
+pub fn derive_keeping(
+    path: &str,
+    source: &str,
+    format: Format,
+    options: Options,
+    full: bool,
+) -> Result<(String, String, mechanics::Derivation), String> {
     let engine::Scene { derivation: mut d, warnings } =
         engine::load_with(source, options).map_err(|e| diagnostics::error(path, &e))?;
     let report = match format {
@@ -69,10 +84,7 @@ pub fn derive_report_with(
         Format::Latex => report::latex(&mut d),
         Format::Json => report::json(&mut d),
     };
-    // Freeing a large model's expressions one by one costs a tenth of the bicycle's run, and
-    // every caller is done with it: a front end's process ends, a test's memory is small.
-    std::mem::forget(d);
-    Ok((report, diagnostics::render(path, source, &warnings)))
+    Ok((report, diagnostics::render(path, source, &warnings), d))
 }
 
 /// Reads a scene file. The error is ready to print: a missing file says so, and a file that

@@ -197,9 +197,12 @@ fn main() -> ExitCode {
                 FormatArg::Json => cli::Format::Json,
             };
             let options = engine::Options { units: !no_units };
-            match cli::derive_report_with(&path, &source, format, options, full) {
-                Ok((report, warnings)) => {
+            match cli::derive_keeping(&path, &source, format, options, full) {
+                Ok((report, warnings, derivation)) => {
                     eprint!("{warnings}");
+                    // The process ends here: freeing a large model's expressions one by one (a
+                    // tenth of the bicycle's run) would be work for nothing.
+                    std::mem::forget(derivation);
                     write_or_print(out.as_ref(), &report)
                 }
                 Err(diagnostics) => {
