@@ -284,3 +284,20 @@ fn a_constraint_left_out_is_listed_as_left_out() {
     );
     assert!(!listed.contains("multiplier radial.force"), "{report}");
 }
+
+/// Reports name a vector constraint's component reactions `roll.x.force`; a scene may write
+/// that name as well as `roll.force.x`.
+#[test]
+fn a_component_reaction_goes_by_the_name_the_report_prints() {
+    let scene = lagrange_tests::example("space/ball_on_turntable.lag");
+    let both = format!("{scene}expect roll.x.force = roll.force.x\n");
+    let result = cli::check::check_file("turntable.lag", &both);
+    assert_eq!(result.exit_code, 0, "{}", result.report);
+    assert!(
+        result.report.contains("expect roll.x.force = roll.force.x  — holds exactly"),
+        "{}",
+        result.report
+    );
+    let other = format!("{scene}expect roll.x.force = roll.force.y\n");
+    assert_eq!(cli::check::check_file("turntable.lag", &other).exit_code, 1);
+}

@@ -1293,6 +1293,18 @@ impl<'a> Resolver<'a> {
             ExprKind::Member { object, field, component: None } => {
                 self.member(object, field, e.span)
             }
+            // `roll.x.force`, as reports name a component's reaction, is `roll.force.x`.
+            ExprKind::Member { object, field, component: Some(c) }
+                if c.name == "force"
+                    && matches!(field.name.as_str(), "x" | "y" | "z")
+                    && matches!(
+                        self.names.get(&normalize(&object.name)),
+                        Some(Binding::Constraint(_))
+                    ) =>
+            {
+                let (v, dims) = self.member(object, c, e.span)?;
+                self.component(v, dims, field, &format!("{}.force", object.name))
+            }
             ExprKind::Member { object, field, component: Some(c) } => {
                 let (v, dims) = self.member(object, field, e.span)?;
                 self.component(v, dims, c, &format!("{}.{}", object.name, field.name))
