@@ -214,7 +214,7 @@ fn main() -> ExitCode {
         Command::Generate { family, n } => {
             let family =
                 engine::generate::Family::from_name(&family).expect("clap checked the name");
-            print!("{}", engine::generate::n_link(family, n as usize));
+            emit(&engine::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
         Command::Simulate {
@@ -291,13 +291,13 @@ fn main() -> ExitCode {
                 if result.exit_code == 2 {
                     eprint!("{}", result.report);
                 } else {
-                    print!("{}", result.report);
+                    emit(&result.report);
                 }
                 held += result.held;
                 failed += result.failed;
                 worst = worst.max(result.exit_code);
             }
-            println!("{held} passed, {failed} failed");
+            emit(&format!("{held} passed, {failed} failed\n"));
             ExitCode::from(worst as u8)
         }
     }
@@ -313,8 +313,21 @@ fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
             }
         },
         None => {
-            print!("{text}");
+            emit(text);
             ExitCode::SUCCESS
+        }
+    }
+}
+
+/// Writes to standard output. A reader that stops reading (`| head`) is not an error: the
+/// rest of the output is dropped and the command ends with its own exit code, where `print!`
+/// would panic.
+fn emit(text: &str) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()) {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("error: cannot write the output: {e}");
         }
     }
 }
@@ -464,14 +477,14 @@ fn bench(
             Ok(r) => r,
             Err(e) => return fail(&path, &e),
         };
-    println!(
+    emit(&format!(
         "{path}: error = largest difference of the final state from DOP853 at tol {:.0e} \
-         (which differs from tol {:.0e} by {:.1e}); time: median of {repeats}, integration only",
+         (which differs from tol {:.0e} by {:.1e}); time: median of {repeats}, integration only\n",
         engine::bench::REFERENCE_TOLERANCE,
         10.0 * engine::bench::REFERENCE_TOLERANCE,
         report.reference_check
-    );
-    print!("{}", cli::bench::table(&report.trials, &report.inapplicable));
+    ));
+    emit(&cli::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",

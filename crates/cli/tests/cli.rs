@@ -272,3 +272,26 @@ fn simulate_animates_into_a_page() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("use .html"));
     assert!(!wrong.exists());
 }
+
+/// A reader that stops reading (`lagrange simulate … | head -1`) ends the output, not the
+/// command with a panic: the exit code stays the command's own.
+#[test]
+fn a_reader_that_stops_reading_is_not_a_panic() {
+    use std::io::Read;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lagrange"))
+        .args(["simulate", &example("classics/double_pendulum.lag"), "--until", "50"])
+        .args(["--samples", "200000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let mut stdout = child.stdout.take().expect("piped");
+    let mut first = [0u8; 16];
+    stdout.read_exact(&mut first).expect("the header comes first");
+    drop(stdout);
+    let output = child.wait_with_output().expect("it ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+}
