@@ -107,7 +107,7 @@ fn the_start_shows_the_published_accelerations_and_multipliers() {
     let start = verify::start_numeric(&mut d, &params).expect("regular at the start");
     let accelerations: Vec<f64> = d.accels.iter().map(|a| start.values[a.index()]).collect();
     let off = relative(&accelerations, &ACCELERATIONS);
-    assert!(off < 1e-12, "accelerations {accelerations:?}: {off:e} off");
+    assert!(off < 1e-14, "accelerations {accelerations:?}: {off:e} off");
     let names: Vec<&str> =
         d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.as_str()).collect();
     assert_eq!(names, ["loop_b.x", "loop_b.y", "loop_a.x", "loop_a.y", "loop_c.x", "loop_c.y"]);

@@ -54,7 +54,8 @@ pub fn shown_at_start(d: &mut Derivation) -> ShownAtStart {
         .map(|s| {
             let v = d.expand_value(&s.value, true);
             let pool = &d.model.pool;
-            let at = |e: &cas::ExprId| numeric::eval(pool, *e, &start.values);
+            // + 0.0 turns −0 (a value solved to exactly zero) into 0.
+            let at = |e: &cas::ExprId| numeric::eval(pool, *e, &start.values) + 0.0;
             let numbers = match &v {
                 Value::Scalar(e) => NumericValue::Scalar(at(e)),
                 Value::Vector(xs) => NumericValue::Vector(xs.iter().map(at).collect()),
