@@ -51,12 +51,22 @@ mpmath.mp.dps = 40
 # Scene-syntax expressions -> SymPy
 # --------------------------------------------------------------------------------------------
 
+def real_abs(u):
+    """|u| for a real u. SymPy's Abs of a function of time not declared real differentiates
+    into re() and im() terms that no printer evaluates; sqrt(u**2) differentiates as |u| does
+    for real u (u*u'/|u|), and so do the sign, min and max written with it."""
+    return sp.sqrt(u**2)
+
+
 FUNCTIONS = {
     "sin": sp.sin, "cos": sp.cos, "tan": sp.tan,
     "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2,
     "sinh": sp.sinh, "cosh": sp.cosh, "tanh": sp.tanh,
     "exp": sp.exp, "ln": sp.log, "sqrt": sp.sqrt,
-    "abs": sp.Abs, "sign": sp.sign, "min": sp.Min, "max": sp.Max,
+    "abs": real_abs,
+    "sign": lambda u: u / real_abs(u),
+    "min": lambda a, b: (a + b - real_abs(a - b)) / 2,
+    "max": lambda a, b: (a + b + real_abs(a - b)) / 2,
 }
 
 # A name (possibly dotted, like `floor.force`) with its primes. The lookbehind keeps the `e`
