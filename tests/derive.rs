@@ -95,7 +95,7 @@ fn the_readme_shows_the_current_output() {
     let readme = std::fs::read_to_string(lagrange_tests::examples_dir().join("../README.md"))
         .expect("README");
     let section = &readme[readme.find("## What it prints").expect("the section")..];
-    let start = section.find("```\n").expect("a code block") + 4;
+    let start = section.find("```text\n").expect("a code block") + 8;
     let block = &section[start..start + section[start..].find("```").expect("closed")];
     let path = lagrange_tests::examples_dir().join("ps5/falling_rod.lag");
     assert_eq!(
@@ -105,14 +105,15 @@ fn the_readme_shows_the_current_output() {
     );
 }
 
-/// The README quotes the heavy top's kinetic energy and θ equation; each quoted line must be a
-/// line `derive` prints today.
+/// The manual's page on the language (docs/language.md) quotes the heavy top's kinetic energy
+/// and θ equation; each quoted line must be a line `derive` prints today.
 #[test]
-fn the_readme_quotes_the_heavy_top_as_derived() {
-    let readme = std::fs::read_to_string(lagrange_tests::examples_dir().join("../README.md"))
-        .expect("README");
-    let section = &readme[readme.find("### Bodies in space").expect("the section")..];
+fn the_manual_quotes_the_heavy_top_as_derived() {
+    let page = std::fs::read_to_string(lagrange_tests::examples_dir().join("../docs/language.md"))
+        .expect("docs/language.md");
+    let section = &page[page.find("## Bodies in space").expect("the section")..];
     let quoted = section.split("```").nth(3).expect("the second code block");
+    let quoted = quoted.strip_prefix("text\n").expect("a `text` block");
     let path = lagrange_tests::examples_dir().join("space/heavy_top.lag");
     let printed = derive(&path, cli::Format::Text);
     let lines: Vec<&str> = quoted.lines().filter(|l| !l.trim().is_empty()).collect();
@@ -120,7 +121,7 @@ fn the_readme_quotes_the_heavy_top_as_derived() {
     for line in lines {
         assert!(
             printed.lines().any(|p| p == line),
-            "README quotes `{line}`, derive prints:\n{printed}"
+            "docs/language.md quotes `{line}`, derive prints:\n{printed}"
         );
     }
 }

@@ -1,0 +1,521 @@
+//! The manual cannot go stale: every scene in README.md and docs/*.md derives (or is refused,
+//! where the page shows a mistake), every `lagrange` command in a `sh` block runs on the
+//! bundled examples through the library, every `text,output` block is what its command prints,
+//! and every path, link and picture a page names exists. docs/README.md describes the tags.
+
+use std::path::{Path, PathBuf};
+
+/// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
+const PAGES: [&str; 11] = [
+    "README.md",
+    "docs/README.md",
+    "docs/language.md",
+    "docs/commands.md",
+    "docs/simulating.md",
+    "docs/linearizing.md",
+    "docs/bicycle.md",
+    "docs/python.md",
+    "docs/benchmarks.md",
+    "docs/examples.md",
+    "docs/testing.md",
+];
+
+/// The name a refused scene's diagnostic gives its file.
+const BAD_SCENE: &str = "bad.lag";
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A fenced code block: its tag (the info string), its lines without the fence's indentation,
+/// and the line of its opening fence.
+struct Block {
+    tag: String,
+    text: String,
+    line: usize,
+}
+
+/// The page's fenced blocks, and its text outside them.
+fn blocks(page: &str) -> (Vec<Block>, String) {
+    let mut out = Vec::new();
+    let mut prose = String::new();
+    let mut open: Option<(usize, String, usize, String)> = None;
+    for (i, line) in page.lines().enumerate() {
+        let trimmed = line.trim_start();
+        let indent = line.len() - trimmed.len();
+        if let Some(fence) = trimmed.strip_prefix("```") {
+            match open.take() {
+                None => open = Some((indent, fence.trim().to_string(), i + 1, String::new())),
+                Some((_, tag, start, text)) => out.push(Block { tag, text, line: start }),
+            }
+            continue;
+        }
+        match &mut open {
+            Some((indent, _, _, text)) => {
+                let strip = line.len() - line.trim_start().len();
+                text.push_str(&line[strip.min(*indent)..]);
+                text.push('\n');
+            }
+            None => {
+                prose.push_str(line);
+                prose.push('\n');
+            }
+        }
+    }
+    assert!(open.is_none(), "a code block is not closed");
+    (out, prose)
+}
+
+/// Words of a shell line: whitespace-separated, with '…' and "…" quoting, up to a `#` comment.
+fn words(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut word: Option<String> = None;
+    let mut quote: Option<char> = None;
+    for c in line.chars() {
+        match quote {
+            Some(q) if c == q => quote = None,
+            Some(_) => word.get_or_insert_with(String::new).push(c),
+            None if c == '\'' || c == '"' => {
+                quote = Some(c);
+                word.get_or_insert_with(String::new);
+            }
+            None if c == '#' && word.is_none() => break,
+            None if c.is_whitespace() => out.extend(word.take()),
+            None => word.get_or_insert_with(String::new).push(c),
+        }
+    }
+    out.extend(word);
+    out
+}
+
+/// The `--flag value` and `--flag=value` options of a command, and its other arguments.
+struct Args {
+    flags: Vec<(String, Option<String>)>,
+    positional: Vec<String>,
+}
+
+impl Args {
+    /// `switches` take no value.
+    fn parse(words: &[String], switches: &[&str]) -> Args {
+        let mut args = Args { flags: Vec::new(), positional: Vec::new() };
+        let mut rest = words.iter();
+        while let Some(w) = rest.next() {
+            if let Some(flag) = w.strip_prefix("--") {
+                if let Some((name, value)) = flag.split_once('=') {
+                    args.flags.push((name.to_string(), Some(value.to_string())));
+                } else if switches.contains(&flag) {
+                    args.flags.push((flag.to_string(), None));
+                } else {
+                    let value = rest.next().unwrap_or_else(|| panic!("--{flag} needs a value"));
+                    args.flags.push((flag.to_string(), Some(value.clone())));
+                }
+            } else {
+                args.positional.push(w.clone());
+            }
+        }
+        args
+    }
+
+    /// Every value of a flag, in order.
+    fn all(&self, name: &str) -> Vec<String> {
+        self.flags.iter().filter(|(n, _)| n == name).filter_map(|(_, v)| v.clone()).collect()
+    }
+
+    fn last(&self, name: &str) -> Option<String> {
+        self.all(name).pop()
+    }
+
+    fn has(&self, name: &str) -> bool {
+        self.flags.iter().any(|(n, _)| n == name)
+    }
+
+    fn number<T: std::str::FromStr>(&self, name: &str) -> Result<Option<T>, String> {
+        self.last(name)
+            .map(|v| v.parse().map_err(|_| format!("--{name} {v}: not a number")))
+            .transpose()
+    }
+
+    /// Refuses a flag the command does not take (or this test does not know).
+    fn only(&self, known: &[&str]) -> Result<(), String> {
+        match self.flags.iter().find(|(n, _)| !known.contains(&n.as_str())) {
+            Some((n, _)) => Err(format!("--{n} is not an option tests/docs.rs knows here")),
+            None => Ok(()),
+        }
+    }
+}
+
+fn extension(path: &str) -> &str {
+    Path::new(path).extension().and_then(|e| e.to_str()).unwrap_or("")
+}
+
+fn read(file: &str) -> Result<String, String> {
+    cli::read_scene(&root().join(file))
+}
+
+/// Runs one `lagrange` command through the library, as the command would, writing nothing;
+/// what it would show on a terminal (standard output, then standard error), or why it would
+/// not exit with status 0.
+fn run(words: &[String]) -> Result<String, String> {
+    let (command, rest) = words.split_first().ok_or("no command")?;
+    let units = |args: &Args| engine::Options { units: !args.has("no-units") };
+    match command.as_str() {
+        "derive" => {
+            let args = Args::parse(rest, &["no-units", "full"]);
+            args.only(&["format", "out", "no-units", "full"])?;
+            let [file] = &args.positional[..] else { return Err("one file".into()) };
+            let format = match args.last("format").as_deref() {
+                None | Some("text") => cli::Format::Text,
+                Some("latex") => cli::Format::Latex,
+                Some("json") => cli::Format::Json,
+                Some(other) => return Err(format!("no format {other}")),
+            };
+            let source = read(file)?;
+            let (report, warnings) =
+                cli::derive_report_with(file, &source, format, units(&args), args.has("full"))?;
+            let shown = if args.has("out") { String::new() } else { report };
+            Ok(shown + &warnings)
+        }
+        "check" => {
+            let args = Args::parse(rest, &["no-units"]);
+            args.only(&["no-units"])?;
+            let (mut shown, mut warned, mut held, mut failed) =
+                (String::new(), String::new(), 0, 0);
+            for file in &args.positional {
+                let result = cli::check::check_file_with(file, &read(file)?, units(&args));
+                if result.exit_code != 0 {
+                    return Err(format!("exit {}:\n{}", result.exit_code, result.report));
+                }
+                shown += &result.report;
+                warned += &result.warnings;
+                held += result.held;
+                failed += result.failed;
+            }
+            Ok(format!("{shown}{held} passed, {failed} failed\n{warned}"))
+        }
+        "simulate" => {
+            let args = Args::parse(rest, &["no-units"]);
+            args.only(&[
+                "until",
+                "method",
+                "tolerance",
+                "step",
+                "set",
+                "output",
+                "stop-when",
+                "event",
+                "samples",
+                "out",
+                "plot",
+                "animate",
+                "no-units",
+            ])?;
+            let [file] = &args.positional[..] else { return Err("one file".into()) };
+            for (flag, allowed) in
+                [("out", &["csv", "json"][..]), ("plot", &["svg"]), ("animate", &["html"])]
+            {
+                if let Some(target) = args.last(flag) {
+                    if !allowed.contains(&extension(&target)) {
+                        return Err(format!("--{flag} {target}: the command refuses the format"));
+                    }
+                }
+            }
+            let animate = args.has("animate");
+            let options = engine::simulate::Options {
+                until: args.number("until")?,
+                method: args.last("method"),
+                tolerance: args.number("tolerance")?,
+                step: args.number("step")?,
+                set: args.all("set"),
+                output: args.all("output"),
+                stop_when: args.all("stop-when"),
+                events: args.all("event"),
+                no_units: args.has("no-units"),
+                samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
+                animate,
+            };
+            let outcome = cli::simulate::simulate(&read(file)?, &options)
+                .map_err(|e| cli::diagnostics::error(file, &e))?;
+            if let Some(fault) = &outcome.run.fault {
+                return Err(format!("a numeric fault (exit 1): {fault:?}"));
+            }
+            if animate {
+                let animation = outcome.animation.as_ref().ok_or("no animation")?;
+                assert!(cli::animate::page(animation, file).contains("<canvas"));
+            }
+            let table = match args.last("out") {
+                Some(_) => String::new(),
+                None => cli::simulate::csv(&outcome),
+            };
+            Ok(table + &cli::simulate::summary(&outcome))
+        }
+        "linearize" => {
+            let args = Args::parse(rest, &["no-units"]);
+            args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units"])?;
+            let [file] = &args.positional[..] else { return Err("one file".into()) };
+            if let Some(plot) = args.last("plot") {
+                if extension(&plot) != "svg" || !args.has("sweep") {
+                    return Err(format!("--plot {plot}: the command refuses it"));
+                }
+            }
+            let options = engine::linearize::Options {
+                about: args.last("about"),
+                set: args.all("set"),
+                sweep: args.last("sweep"),
+                no_units: args.has("no-units"),
+            };
+            let linearized = engine::linearize::linearize(&read(file)?, &options)
+                .map_err(|e| cli::diagnostics::error(file, &e))?;
+            let report = match args.last("format").as_deref() {
+                None | Some("text") => cli::linearize::text(&linearized),
+                Some("json") => cli::linearize::json(&linearized),
+                Some(other) => return Err(format!("no format {other}")),
+            };
+            if let (Some(_), Some(sweep)) = (args.last("plot"), &linearized.sweep) {
+                assert!(cli::linearize::svg(file, sweep).starts_with("<svg"));
+            }
+            Ok(if args.has("out") { String::new() } else { report })
+        }
+        other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
+    }
+}
+
+/// The `lagrange` command of a shell line, if it is one that is run: `lagrange derive …` or
+/// `cargo run --release -- derive …`.
+fn command(line: &str) -> Option<Vec<String>> {
+    let words = words(line);
+    let rest = match words.first().map(String::as_str) {
+        Some("lagrange") => &words[1..],
+        Some("cargo") => {
+            let dashes = words.iter().position(|w| w == "--")?;
+            (words[1] == "run").then_some(&words[dashes + 1..])?
+        }
+        _ => return None,
+    };
+    let run = ["derive", "check", "simulate", "linearize"];
+    run.contains(&rest.first()?.as_str()).then(|| rest.to_vec())
+}
+
+/// Whether `shown` (with `…` lines standing for lines left out) is what `printed` says.
+fn shows(shown: &str, printed: &str) -> bool {
+    let printed: Vec<&str> = printed.trim_end().lines().map(str::trim_end).collect();
+    let lines: Vec<&str> = shown.trim_end().lines().map(str::trim_end).collect();
+    let chunks: Vec<&[&str]> = lines.split(|l| *l == "…").collect();
+    let mut at = 0;
+    for (i, chunk) in chunks.iter().enumerate() {
+        let first = i == 0;
+        let last = i + 1 == chunks.len();
+        if chunk.is_empty() {
+            continue;
+        }
+        let found = if first {
+            printed.starts_with(chunk).then_some(0)
+        } else if last {
+            printed.ends_with(chunk).then(|| printed.len() - chunk.len()).filter(|&s| s >= at)
+        } else {
+            (at..=printed.len().saturating_sub(chunk.len()))
+                .find(|&s| printed[s..].starts_with(chunk))
+        };
+        let Some(start) = found else { return false };
+        at = start + chunk.len();
+        if last && at != printed.len() {
+            return false;
+        }
+    }
+    true
+}
+
+/// The anchors GitHub gives a page's headings.
+fn anchors(page: &str) -> Vec<String> {
+    let (_, prose) = blocks(page);
+    prose
+        .lines()
+        .filter(|l| l.starts_with('#'))
+        .map(|l| {
+            l.trim_start_matches('#')
+                .trim()
+                .to_lowercase()
+                .chars()
+                .filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-' || *c == '_')
+                .map(|c| if c == ' ' { '-' } else { c })
+                .collect()
+        })
+        .collect()
+}
+
+/// What is wrong with a page, one message each.
+fn problems(name: &str) -> Vec<String> {
+    let path = root().join(name);
+    let page = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (blocks, prose) = blocks(&page);
+    let mut problems = Vec::new();
+    // What the last block that runs something printed, for a `text,output` block after it.
+    let mut printed: Option<(usize, String)> = None;
+    for block in &blocks {
+        let at = format!("{name}:{}", block.line);
+        match block.tag.as_str() {
+            "lagrange" => match cli::derive("scene.lag", &block.text, cli::Format::Text) {
+                Ok(report) => printed = Some((block.line, report)),
+                Err(e) => problems.push(format!("{at}: the scene is refused:\n{e}")),
+            },
+            "lagrange,error" => match cli::derive(BAD_SCENE, &block.text, cli::Format::Text) {
+                Ok(_) => problems.push(format!("{at}: the scene shown as a mistake derives")),
+                Err(e) => printed = Some((block.line, e)),
+            },
+            "sh" => {
+                for line in block.text.lines() {
+                    if let Some(words) = command(line) {
+                        match run(&words) {
+                            Ok(out) => printed = Some((block.line, out)),
+                            Err(e) => problems.push(format!("{at}: `{line}`: {e}")),
+                        }
+                    }
+                }
+            }
+            "text,output" => match printed.take() {
+                None => problems.push(format!("{at}: no command or scene before this output")),
+                Some((from, out)) if !shows(&block.text, &out) => problems.push(format!(
+                    "{at}: the block of line {from} prints something else now:\n{out}"
+                )),
+                Some(_) => {}
+            },
+            "text" | "python" => {}
+            "" => problems.push(format!("{at}: an untagged block (see docs/README.md)")),
+            other => problems.push(format!("{at}: an unknown tag `{other}`")),
+        }
+    }
+    // Paths under examples/, tests/ and crates/ named anywhere on the page.
+    let whole = page.as_str();
+    for prefix in ["examples/", "tests/", "crates/"] {
+        for (i, _) in whole.match_indices(prefix) {
+            let before = whole[..i].chars().next_back();
+            if before.is_some_and(|c| c.is_alphanumeric() || "./_-".contains(c)) {
+                continue;
+            }
+            let end = whole[i..]
+                .find(|c: char| !(c.is_ascii_alphanumeric() || "./_-".contains(c)))
+                .map_or(whole.len(), |e| i + e);
+            let named = whole[i..end].trim_end_matches(['.', ',']);
+            if !root().join(named).exists() {
+                problems.push(format!("{name}: `{named}` does not exist"));
+            }
+        }
+    }
+    // Relative links and pictures, with the heading an anchor names.
+    let dir = path.parent().expect("a folder");
+    for (i, _) in prose.match_indices("](") {
+        let rest = &prose[i + 2..];
+        let target = &rest[..rest.find(')').unwrap_or(rest.len())];
+        if target.contains("://") || target.starts_with("mailto:") {
+            continue;
+        }
+        let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
+        let linked = if file.is_empty() { path.clone() } else { dir.join(file) };
+        if !linked.exists() {
+            problems.push(format!("{name}: the link `{target}` leads nowhere"));
+        } else if !anchor.is_empty() {
+            let text = std::fs::read_to_string(&linked).unwrap_or_default();
+            if !anchors(&text).iter().any(|a| a == anchor) {
+                problems.push(format!("{name}: `{target}` names no heading there"));
+            }
+        }
+    }
+    problems
+}
+
+fn assert_honest(name: &str) {
+    let problems = problems(name);
+    assert!(problems.is_empty(), "{} problems:\n\n{}", problems.len(), problems.join("\n\n"));
+}
+
+#[test]
+fn every_page_is_tested() {
+    let mut found: Vec<String> = std::fs::read_dir(root().join("docs"))
+        .expect("docs/")
+        .flatten()
+        .map(|e| format!("docs/{}", e.file_name().to_string_lossy()))
+        .filter(|n| n.ends_with(".md"))
+        .collect();
+    found.push("README.md".into());
+    found.sort();
+    let mut listed: Vec<String> = PAGES.iter().map(|p| p.to_string()).collect();
+    listed.sort();
+    assert_eq!(found, listed, "list every page in PAGES, and a test for it below");
+}
+
+#[test]
+fn readme() {
+    assert_honest(PAGES[0]);
+}
+
+#[test]
+fn docs_index() {
+    assert_honest(PAGES[1]);
+}
+
+#[test]
+fn language() {
+    assert_honest(PAGES[2]);
+}
+
+#[test]
+fn commands() {
+    assert_honest(PAGES[3]);
+}
+
+#[test]
+fn simulating() {
+    assert_honest(PAGES[4]);
+}
+
+#[test]
+fn linearizing() {
+    assert_honest(PAGES[5]);
+}
+
+#[test]
+fn bicycle() {
+    assert_honest(PAGES[6]);
+}
+
+#[test]
+fn python() {
+    assert_honest(PAGES[7]);
+}
+
+#[test]
+fn benchmarks() {
+    assert_honest(PAGES[8]);
+}
+
+#[test]
+fn examples() {
+    assert_honest(PAGES[9]);
+}
+
+#[test]
+fn testing() {
+    assert_honest(PAGES[10]);
+}
+
+/// The tests' own helpers: elided output, shell words, and that a wrong page is caught.
+#[test]
+fn the_checks_catch_what_they_should() {
+    assert!(shows("a\nb\n", "a\nb\n"));
+    assert!(shows("…\nc\n", "a\nb\nc\n"));
+    assert!(shows("a\n…\nc\n", "a\nb\nc\n"));
+    assert!(!shows("a\n…\nb\n", "a\nb\nc\n"));
+    assert!(!shows("b\n", "a\nb\n"));
+    assert_eq!(
+        words("lagrange linearize f.lag --about 'theta=0' --set \"phi'=5\"   # why"),
+        ["lagrange", "linearize", "f.lag", "--about", "theta=0", "--set", "phi'=5"]
+    );
+    assert!(command("cargo test --workspace").is_none());
+    assert!(command("cargo run --release -- derive examples/ps5/falling_rod.lag").is_some());
+    assert!(run(&words("simulate examples/ps5/falling_rod.lag --nonsense 1")).is_err());
+    assert!(run(&words("derive examples/ps5/no_such_scene.lag")).is_err());
+    assert!(run(&words("linearize examples/classics/simple_pendulum.lag --about theta=1")).is_err());
+    assert_eq!(
+        anchors("# See it move\n```sh\n# not a heading\n```\n## Work–precision\n"),
+        ["see-it-move", "workprecision"]
+    );
+}
