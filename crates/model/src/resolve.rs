@@ -66,8 +66,9 @@ pub fn resolve_with(
     walk(file, source).finish(checks)
 }
 
-/// The dimension mismatches of as much of a scene as resolves.
-pub(crate) fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
+/// Checks that every term of the scene has one dimension. Returns the mismatches found, from
+/// as much of the scene as resolves.
+pub fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
     walk(file, "").units.solve()
 }
 
