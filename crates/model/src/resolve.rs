@@ -191,8 +191,7 @@ struct Resolver<'a> {
 impl<'a> Resolver<'a> {
     fn new(source: &'a str) -> Self {
         let mut pool = Pool::new();
-        pool.set_probe(numeric::value_and_scale);
-        pool.set_magnitude_probe(numeric::value_and_magnitude);
+        pool.set_zero_test(Box::new(numeric::GenericPoints));
         let time = pool.time();
         let mut names = HashMap::new();
         let mut placeholders = Vec::new();
