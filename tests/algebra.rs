@@ -90,7 +90,7 @@ fn build(pool: &mut Pool, vars: &[ExprId], t: &Tree) -> ExprId {
 
 fn setup() -> (Pool, Vec<SymId>, Vec<ExprId>) {
     let mut pool = Pool::new();
-    pool.set_probe(numeric::value_and_scale);
+    pool.set_zero_test(Box::new(numeric::GenericPoints));
     let syms: Vec<SymId> = ["x", "y", "z"].iter().map(|n| pool.param(n)).collect();
     let vars = syms.iter().map(|s| pool.sym(*s)).collect();
     (pool, syms, vars)

@@ -1,5 +1,7 @@
 //! House rules that a reviewer would otherwise check by hand: every Rust file opens with a
-//! `//!` line saying what it is for, and no source names a particular machine's paths.
+//! `//!` line saying what it is for, no source names a particular machine's paths, crates
+//! depend only on what ARCHITECTURE.md allows, `cas` names no float type, and the modules of a
+//! crate form no circles.
 
 use std::path::{Path, PathBuf};
 
@@ -84,4 +86,254 @@ fn crates_depend_only_on_what_architecture_md_allows() {
             }
         }
     }
+}
+
+/// `line` without its `//` comment; a `//` inside a string or a character literal is kept.
+fn code_of(line: &str) -> &str {
+    let bytes = line.as_bytes();
+    let mut in_string = false;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\\' if in_string => i += 1,
+            b'"' => in_string = !in_string,
+            // A character literal such as '"' or '\\'; a lifetime has no closing quote.
+            b'\'' if !in_string => {
+                if bytes.get(i + 1) == Some(&b'\\') {
+                    i += bytes[i + 2..].iter().position(|&b| b == b'\'').map_or(0, |p| p + 2);
+                } else if bytes.get(i + 2) == Some(&b'\'') {
+                    i += 2;
+                }
+            }
+            b'/' if !in_string && bytes.get(i + 1) == Some(&b'/') => return &line[..i],
+            _ => {}
+        }
+        i += 1;
+    }
+    line
+}
+
+/// The code of a source file as the module rules read it: comments dropped, and nothing from
+/// the first top-level `#[cfg(test)]` on (tests sit at the end of a file and may reach
+/// anywhere).
+fn code_without_tests(text: &str) -> String {
+    let mut code = String::new();
+    for line in text.lines() {
+        if line.trim_end() == "#[cfg(test)]" {
+            break;
+        }
+        code.push_str(code_of(line));
+        code.push('\n');
+    }
+    code
+}
+
+/// No `f64` in `cas`: it evaluates no floats (ARCHITECTURE.md); the numbers its zero test
+/// needs come from `numeric` through `cas::ZeroTest`.
+#[test]
+fn cas_has_no_floats() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files = Vec::new();
+    rust_files(&root.join("crates/cas/src"), &mut files);
+    assert!(!files.is_empty());
+    for f in files {
+        let text = std::fs::read_to_string(&f).expect("readable");
+        for (n, line) in text.lines().enumerate() {
+            let words = code_of(line).split(|c: char| !c.is_alphanumeric() && c != '_');
+            let float = words.into_iter().find(|w| *w == "f64" || *w == "f32");
+            assert!(float.is_none(), "{}:{}: `cas` names a float type", f.display(), n + 1);
+        }
+    }
+}
+
+/// Words and punctuation, `::` as one token.
+fn tokens(code: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(c) = rest.chars().next() {
+        let len = if c.is_alphanumeric() || c == '_' {
+            rest.find(|d: char| !d.is_alphanumeric() && d != '_').unwrap_or(rest.len())
+        } else if rest.starts_with("::") {
+            2
+        } else {
+            c.len_utf8()
+        };
+        if !c.is_whitespace() {
+            out.push(&rest[..len]);
+        }
+        rest = &rest[len..];
+    }
+    out
+}
+
+fn is_word(t: &str) -> bool {
+    t.chars().all(|c| c.is_alphanumeric() || c == '_')
+}
+
+/// The paths a path or `use` tree at `t[i..]` names, each after `prefix`: `a::{b, c::d}` gives
+/// `a::b` and `a::c::d`. Returns where the tree ends.
+fn use_tree(t: &[&str], mut i: usize, mut path: Vec<String>, out: &mut Vec<Vec<String>>) -> usize {
+    loop {
+        match t.get(i).copied() {
+            Some("{") => {
+                i += 1;
+                while i < t.len() && t[i] != "}" {
+                    i = use_tree(t, i, path.clone(), out);
+                    if t.get(i) == Some(&",") {
+                        i += 1;
+                    } else {
+                        break;
+                    }
+                }
+                return i + 1;
+            }
+            Some(w) if is_word(w) && w != "self" => {
+                path.push(w.to_string());
+                i += 1;
+            }
+            _ => break,
+        }
+        if t.get(i) != Some(&"::") {
+            break;
+        }
+        i += 1;
+    }
+    out.push(path);
+    i
+}
+
+/// The circles between the modules of one crate, given its source files as (path under
+/// `src/`, text). A file's module is its path (`lib.rs` and `main.rs` the root, `a/mod.rs` is
+/// `a`); it refers to another module by a `crate::…` or `super::…` path, in a `use` or in
+/// code, and the reference counts for the longest module the path names. A module includes its
+/// submodules (`mod` declarations make the tree), and a module and its own submodules may use
+/// each other freely, as Rust's `super::` idiom does; what must not happen is that two
+/// siblings (two modules under the same parent, each with its submodules) depend on each other,
+/// directly or round a longer circle. Paths through the crate root's re-exports (`crate::Name`)
+/// count for the root, and so for no sibling.
+fn module_cycles(files: &[(String, String)]) -> Vec<String> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let module = |path: &str| -> Vec<String> {
+        let mut parts: Vec<String> =
+            path.trim_end_matches(".rs").split('/').map(str::to_string).collect();
+        if parts.len() == 1 && (parts[0] == "lib" || parts[0] == "main")
+            || parts.last().map(String::as_str) == Some("mod")
+        {
+            parts.pop();
+        }
+        parts
+    };
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(p, _)| module(p)).collect();
+    let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
+    for (path, text) in files {
+        let from = module(path);
+        let code = code_without_tests(text);
+        let t = tokens(&code);
+        for i in 0..t.len() {
+            if !(matches!(t[i], "crate" | "super") && t.get(i + 1) == Some(&"::"))
+                || (i > 0 && t[i - 1] == "::")
+            {
+                continue;
+            }
+            let mut base = from.clone();
+            let mut j = i;
+            if t[j] == "crate" {
+                base.clear();
+                j += 2;
+            } else {
+                while t[j] == "super" && t.get(j + 1) == Some(&"::") {
+                    base.pop();
+                    j += 2;
+                }
+            }
+            let mut paths = Vec::new();
+            use_tree(&t, j, base, &mut paths);
+            for p in paths {
+                let target =
+                    (0..=p.len()).rev().map(|k| p[..k].to_vec()).find(|m| modules.contains(m));
+                let Some(to) = target else { continue };
+                let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
+                if common < from.len() && common < to.len() {
+                    let entry = edges.entry(from[..=common].to_vec()).or_default();
+                    entry.insert(to[..=common].to_vec());
+                }
+            }
+        }
+    }
+    // Depth first; an edge back to a module on the stack closes a circle.
+    fn visit(
+        m: &Vec<String>,
+        edges: &BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+        stack: &mut Vec<Vec<String>>,
+        done: &mut BTreeSet<Vec<String>>,
+        found: &mut Vec<String>,
+    ) {
+        stack.push(m.clone());
+        for next in edges.get(m).into_iter().flatten() {
+            if let Some(at) = stack.iter().position(|s| s == next) {
+                let circle: Vec<String> =
+                    stack[at..].iter().chain([next]).map(|s| s.join("::")).collect();
+                found.push(circle.join(" → "));
+            } else if !done.contains(next) {
+                visit(next, edges, stack, done, found);
+            }
+        }
+        stack.pop();
+        done.insert(m.clone());
+    }
+    let mut found = Vec::new();
+    let mut done = BTreeSet::new();
+    for m in edges.keys() {
+        if !done.contains(m) {
+            visit(m, &edges, &mut Vec::new(), &mut done, &mut found);
+        }
+    }
+    found
+}
+
+/// No two modules of a crate use each other, directly or round a circle (see
+/// [`module_cycles`]): each module sits above or below another, so that it can be read, tested
+/// and moved on its own.
+#[test]
+fn no_module_circles_within_a_crate() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut circles = Vec::new();
+    for entry in std::fs::read_dir(root.join("crates")).expect("crates/").flatten() {
+        let src = entry.path().join("src");
+        let mut paths = Vec::new();
+        rust_files(&src, &mut paths);
+        let files: Vec<(String, String)> = paths
+            .iter()
+            .map(|p| {
+                let rel = p.strip_prefix(&src).expect("under src").to_string_lossy();
+                (rel.replace('\\', "/"), std::fs::read_to_string(p).expect("readable"))
+            })
+            .collect();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        circles.extend(module_cycles(&files).into_iter().map(|c| format!("crates/{name}: {c}")));
+    }
+    assert!(circles.is_empty(), "module circles:\n{}", circles.join("\n"));
+}
+
+/// The circle check sees a circle through a `use` group and a submodule, and lets a submodule
+/// use its parent.
+#[test]
+fn the_circle_check_finds_circles() {
+    let files = |list: &[(&str, &str)]| -> Vec<(String, String)> {
+        list.iter().map(|(p, t)| (p.to_string(), t.to_string())).collect()
+    };
+    let fine = files(&[
+        ("lib.rs", "mod a;\nmod b;\n"),
+        ("a.rs", "mod inner;\nuse crate::b::B;\npub struct A;\n"),
+        ("a/inner.rs", "use super::A; // crate::b is fine too\n"),
+        ("b.rs", "pub struct B;\n#[cfg(test)]\nmod tests { use crate::a::A; }\n"),
+    ]);
+    assert!(module_cycles(&fine).is_empty(), "{:?}", module_cycles(&fine));
+    let circle = files(&[
+        ("lib.rs", "mod a;\nmod b;\n"),
+        ("a.rs", "mod inner;\nuse crate::{b::B, Other};\npub struct A;\n"),
+        ("a/inner.rs", "fn f() -> super::super::b::B { todo!() }\n"),
+        ("b.rs", "pub struct B(crate::a::A);\n"),
+    ]);
+    assert_eq!(module_cycles(&circle), vec!["a → b → a"]);
 }

@@ -34,7 +34,7 @@ fn dimension_errors(path: &str, source: &str) -> String {
         Ok(ast) => ast,
         Err(e) => panic!("{path} does not parse:\n{}", cli::diagnostics::render(path, source, &e)),
     };
-    cli::diagnostics::render(path, source, &model::units::check(&ast))
+    cli::diagnostics::render(path, source, &model::dimension_errors(&ast))
 }
 
 #[test]

@@ -16,9 +16,6 @@ const EXPANSION_TERM_LIMIT: usize = 20_000;
 /// bicycle's frames in space) is for numbers and generated code, not for reading.
 pub const SIMPLIFY_TERM_LIMIT: usize = 4_000;
 
-/// How many generic points [`Pool::at_generic_point`] has.
-pub const GENERIC_POINTS: usize = 2;
-
 /// Past this many terms the algebraic zero test gives up (and the numeric check decides).
 const ZERO_TEST_TERM_LIMIT: usize = 2_000;
 
@@ -472,85 +469,33 @@ impl Pool {
         self.mul(&[scale, rest, den])
     }
 
-    /// Evaluates, with the pool's probe, at a fixed generic point (every symbol at an
-    /// irrational-looking value in (0.3, 0.8)) and reports whether the value is clearly not
-    /// zero, relative to the size of the terms that make it up.
+    /// Whether `e` is clearly not zero at a generic point, by the zero test's numbers
+    /// ([`Pool::set_zero_test`]); `false` without them.
     fn clearly_nonzero_somewhere(&self, e: ExprId) -> bool {
-        let Some(probe) = self.probe else { return false };
-        let values: Vec<f64> = (0..self.symbol_count())
-            .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * 0.618_033_988_749_895).fract())
-            .collect();
-        let (value, scale) = probe(self, e, &values);
-        value.is_finite() && scale.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE)
+        self.zero_test().is_some_and(|z| z.clearly_nonzero_somewhere(self, e))
     }
 
-    /// Whether `e` is zero at two generic points (every symbol at an irrational-looking value
-    /// in (0.3, 0.8)), relative to its magnitude there (every part by its absolute value, so
-    /// that cancellations nested however deep show): how an expression too large for the
-    /// algebra is taken to vanish identically. Without a magnitude probe, only a literal zero
-    /// vanishes.
+    /// Whether `e` is zero at the generic points of the zero test's numbers (two points, every
+    /// symbol at an irrational-looking value in (0.3, 0.8)), relative to its magnitude there
+    /// (every part by its absolute value, so that cancellations nested however deep show): how
+    /// an expression too large for the algebra is taken to vanish identically. Without those
+    /// numbers ([`Pool::set_zero_test`]), only a literal zero vanishes.
     pub fn vanishes_at_generic_points(&self, e: ExprId) -> bool {
         // Zero is the combination of no rows.
         self.is_zero(e) || self.combination_at_generic_points(&[e], &[]).is_some()
-    }
-
-    /// The value and the magnitude of each expression at generic point `point` (of
-    /// [`GENERIC_POINTS`]); `None` without a magnitude probe.
-    pub fn at_generic_point(&self, exprs: &[ExprId], point: usize) -> Option<Vec<(f64, f64)>> {
-        let probe = self.magnitude_probe?;
-        let step = [0.618_033_988_749_895, 0.414_213_562_373_095][point % GENERIC_POINTS];
-        let values: Vec<f64> = (0..self.symbol_count())
-            .map(|i| 0.3 + 0.5 * ((i as f64 + 1.0) * step).fract())
-            .collect();
-        Some(exprs.iter().map(|e| probe(self, *e, &values)).collect())
     }
 
     /// Whether the vector `target` is, at every generic point, a combination of the vectors
     /// `rows` (each as long as it), the coefficients free to change from point to point; the
     /// rows the combination needs, by index, if so. For identities between expressions too
     /// large for the algebra, as [`Pool::vanishes_at_generic_points`] (the same points and
-    /// magnitudes); `None` without a magnitude probe.
+    /// magnitudes); `None` without the zero test's numbers ([`Pool::set_zero_test`]).
     pub fn combination_at_generic_points(
         &self,
         target: &[ExprId],
         rows: &[Vec<ExprId>],
     ) -> Option<Vec<usize>> {
-        let mut used = std::collections::BTreeSet::new();
-        for point in 0..GENERIC_POINTS {
-            let numbers = |exprs: &[ExprId]| -> Option<(Vec<f64>, f64)> {
-                let values = self.at_generic_point(exprs, point)?;
-                let scale = values.iter().map(|(_, m)| *m).fold(0.0, f64::max);
-                Some((values.into_iter().map(|(v, _)| v).collect(), scale))
-            };
-            let (mut residual, scale) = numbers(target)?;
-            if !scale.is_finite() || !residual.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-            // Gram–Schmidt against the rows, one after another.
-            let mut done: Vec<Vec<f64>> = Vec::new();
-            for (k, row) in rows.iter().enumerate() {
-                let (mut v, _) = numbers(row)?;
-                for d in &done {
-                    let along: f64 = v.iter().zip(d).map(|(a, b)| a * b).sum();
-                    v.iter_mut().zip(d).for_each(|(a, b)| *a -= along * b);
-                }
-                let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt();
-                if !norm.is_finite() || norm <= 1e-12 * scale.max(f64::MIN_POSITIVE) {
-                    continue;
-                }
-                v.iter_mut().for_each(|a| *a /= norm);
-                let along: f64 = residual.iter().zip(&v).map(|(a, b)| a * b).sum();
-                if along.abs() > 1e-9 * scale {
-                    used.insert(k);
-                }
-                residual.iter_mut().zip(&v).for_each(|(a, b)| *a -= along * b);
-                done.push(v);
-            }
-            if residual.iter().any(|r| r.abs() > 1e-9 * scale.max(f64::MIN_POSITIVE)) {
-                return None;
-            }
-        }
-        Some(used.into_iter().collect())
+        self.zero_test()?.combination_at_generic_points(self, target, rows)
     }
 
     /// The simplified form with its monomial content pulled out in front of a sum:

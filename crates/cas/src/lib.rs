@@ -9,7 +9,7 @@
 //! memoised per (node, symbol), which keeps the derivatives of large Lagrangians shared.
 //!
 //! It evaluates no floats: the one float evaluator of expressions is `numeric`'s, which sits
-//! above this crate and hands the zero test its quick numeric probe ([`Pool::set_probe`]).
+//! above this crate and hands the zero test its numbers ([`ZeroTest`], [`Pool::set_zero_test`]).
 
 mod diff;
 mod expand;
@@ -20,7 +20,6 @@ mod pool;
 pub mod print;
 mod subst;
 
-pub use expand::GENERIC_POINTS;
 pub use number::Rational;
-pub use pool::{ExprId, Func, Node, Pool, Probe, SymId, Symbol, SymbolKind};
+pub use pool::{ExprId, Func, Node, Pool, SymId, Symbol, SymbolKind, ZeroTest};
 pub use print::{greek_word, Style};

@@ -177,16 +177,6 @@ pub fn is_integer(q: &Rational) -> bool {
     q.is_integer()
 }
 
-pub fn to_f64(q: &Rational) -> f64 {
-    q.to_f64().unwrap_or_else(|| {
-        // Ratios of huge integers: scale both down before dividing.
-        let shift = q.numer().bits().max(q.denom().bits()).saturating_sub(1000);
-        let n = (q.numer() >> shift).to_f64().unwrap_or(f64::NAN);
-        let d = (q.denom() >> shift).to_f64().unwrap_or(f64::NAN);
-        n / d
-    })
-}
-
 /// The greatest common divisor of two rationals: gcd of numerators over lcm of denominators,
 /// so that both are integer multiples of it. Always positive.
 pub fn gcd(a: &Rational, b: &Rational) -> Rational {

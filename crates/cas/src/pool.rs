@@ -232,11 +232,24 @@ impl Symbol {
     }
 }
 
-/// The zero test's numeric probe: the value of `e` with symbol `s` at `values[s.index()]`,
-/// and the size of the terms it is a sum of. This crate evaluates no floats itself; the one
-/// evaluator lives in `numeric` (`numeric::value_and_scale`), above it, and whoever creates a
-/// pool for a derivation hands it in with [`Pool::set_probe`].
-pub type Probe = fn(&Pool, ExprId, &[f64]) -> (f64, f64);
+/// The numeric side of the zero test, handed in by a crate above this one ([`Pool::set_zero_test`]):
+/// this crate evaluates no floats, and the one evaluator of expressions lives in `numeric`
+/// (`numeric::GenericPoints`), which answers these questions at fixed generic points.
+pub trait ZeroTest {
+    /// Whether `e` is clearly not zero at a generic point, relative to the size of the terms
+    /// that make it up: one such point proves that `e` is not identically zero.
+    fn clearly_nonzero_somewhere(&self, pool: &Pool, e: ExprId) -> bool;
+
+    /// Whether the vector `target` is, at every generic point, a combination of the vectors
+    /// `rows` (each as long as it), the coefficients free to change from point to point; the
+    /// rows the combination needs, by index, if so. See [`Pool::combination_at_generic_points`].
+    fn combination_at_generic_points(
+        &self,
+        pool: &Pool,
+        target: &[ExprId],
+        rows: &[Vec<ExprId>],
+    ) -> Option<Vec<usize>>;
+}
 
 /// The arena that owns every expression and symbol of one derivation.
 pub struct Pool {
@@ -252,10 +265,8 @@ pub struct Pool {
     free_memo: Vec<Option<Rc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
-    pub(crate) probe: Option<Probe>,
-    /// The value and the magnitude (every part by its absolute value) of an expression at a
-    /// point: see [`Pool::vanishes_at_generic_points`].
-    pub(crate) magnitude_probe: Option<Probe>,
+    /// The numbers of the zero test, if a crate above handed them in.
+    zero_test: Option<Box<dyn ZeroTest>>,
 }
 
 impl Default for Pool {
@@ -278,24 +289,26 @@ impl Pool {
             free_memo: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
-            probe: None,
-            magnitude_probe: None,
+            zero_test: None,
         };
         pool.zero = pool.intern(Node::Num(Rational::zero()));
         pool.one = pool.intern(Node::Num(Rational::one()));
         pool
     }
 
-    /// Lets the zero test try a numeric point before the algebra: one point where the value
-    /// is clearly not zero settles most questions at a fraction of the algebra's cost.
-    /// Without a probe the answers are the same, only slower to reach.
-    pub fn set_probe(&mut self, probe: Probe) {
-        self.probe = Some(probe);
+    /// Hands in the numbers of the zero test: [`Pool::is_identically_zero`] tries a numeric
+    /// point before the algebra (one point where the value is clearly not zero settles most
+    /// questions at a fraction of the algebra's cost; without it the answers are the same, only
+    /// slower to reach), and [`Pool::vanishes_at_generic_points`] and
+    /// [`Pool::combination_at_generic_points`] decide with it what is too large for the
+    /// algebra.
+    pub fn set_zero_test(&mut self, test: Box<dyn ZeroTest>) {
+        self.zero_test = Some(test);
     }
 
-    /// Hands in the magnitude probe ([`Pool::vanishes_at_generic_points`]).
-    pub fn set_magnitude_probe(&mut self, probe: Probe) {
-        self.magnitude_probe = Some(probe);
+    /// The numbers of the zero test, if handed in ([`Pool::set_zero_test`]).
+    pub(crate) fn zero_test(&self) -> Option<&dyn ZeroTest> {
+        self.zero_test.as_deref()
     }
 
     fn intern(&mut self, node: Node) -> ExprId {

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use cas::{ExprId, SymId, SymbolKind};
 
 use crate::derive::Derivation;
-use crate::start::StartSolution;
+use crate::start_solution::StartSolution;
 
 /// What the algebra makes of one entry (lhs − rhs) of an `expect` line.
 #[derive(Clone, Debug)]

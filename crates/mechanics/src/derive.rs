@@ -16,6 +16,8 @@ use cas::{linear_system, ExprId, Pool, SymId};
 use lang::Diagnostic;
 use model::{Model, Placeholder, Value};
 
+use crate::start_solution::StartSolution;
+
 use eliminate::{eliminate_constraints, remaining_coordinates, Coordinates, Eliminated};
 use energies::energies;
 use equations::{coordinates_without_inertia, euler_lagrange_rows};
@@ -83,7 +85,7 @@ pub struct Derivation {
     /// q̈ and λ solved symbolically, for small systems; computed on first use.
     solved: Option<Option<HashMap<SymId, ExprId>>>,
     /// The unknowns at the start; computed on first use.
-    pub(crate) start: Option<crate::start::StartSolution>,
+    pub(crate) start: Option<StartSolution>,
     /// The start breaks a kept position constraint exactly: the `verify` crate decides in
     /// numbers whether that is the rounding of values given to some digits, or solves the free
     /// positions, before the start's rates are settled.

@@ -17,6 +17,7 @@ mod independent;
 mod linearize;
 mod present;
 mod start;
+mod start_solution;
 
 pub use independent::IndependentForm;
 pub use present::collect_by_motion;
@@ -25,4 +26,4 @@ pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
 pub use linearize::{KeptLinearization, LinearConstraint, Linearization, RatesLinearization};
 pub use present::{Equation, NumericStart, StartShows};
-pub use start::StartSolution;
+pub use start_solution::StartSolution;

@@ -7,7 +7,7 @@ use cas::ExprId;
 use model::Value;
 
 use crate::derive::Derivation;
-use crate::start::StartSolution;
+use crate::start_solution::StartSolution;
 
 /// One equation `lhs = rhs`.
 #[derive(Clone, Copy, Debug)]

@@ -7,24 +7,12 @@ use cas::linear_system::{self, Solution};
 use cas::{ExprId, SymId};
 
 use crate::derive::Derivation;
+use crate::start_solution::StartSolution;
 
 /// New expression nodes the exact solve at the start may build before it gives up. A dense
 /// system of a dozen unknowns needs millions and minutes; the 4-link pendulum at distinct
 /// angles needs about 1,800, and problem set 5 a few dozen.
 const START_BUDGET: usize = 25_000;
-
-/// The unknowns of the start, solved exactly if the algebra allows.
-#[derive(Clone, Debug)]
-pub enum StartSolution {
-    /// Accelerations and multipliers (and the initial state) as expressions of the parameters.
-    Exact(HashMap<SymId, ExprId>),
-    /// The mass matrix (with the constraints' rows) is singular at the start.
-    Singular,
-    /// The exact solution outgrew its budget; the unknowns are found numerically instead.
-    TooLarge { unknowns: usize },
-    /// The start's positions were solved in numbers, and so is the rest of the start.
-    Numeric { unknowns: usize },
-}
 
 impl Derivation {
     /// Accelerations and multipliers at the initial state, exactly when the algebra stays

@@ -10,7 +10,7 @@ mod resolve;
 pub mod units;
 mod value;
 
-pub use resolve::{resolve, resolve_with};
+pub use resolve::{dimension_errors, resolve, resolve_with};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};

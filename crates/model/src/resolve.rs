@@ -66,8 +66,9 @@ pub fn resolve_with(
     walk(file, source).finish(checks)
 }
 
-/// The dimension mismatches of as much of a scene as resolves.
-pub(crate) fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
+/// Checks that every term of the scene has one dimension. Returns the mismatches found, from
+/// as much of the scene as resolves.
+pub fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
     walk(file, "").units.solve()
 }
 
@@ -190,8 +191,7 @@ struct Resolver<'a> {
 impl<'a> Resolver<'a> {
     fn new(source: &'a str) -> Self {
         let mut pool = Pool::new();
-        pool.set_probe(numeric::value_and_scale);
-        pool.set_magnitude_probe(numeric::value_and_magnitude);
+        pool.set_zero_test(Box::new(numeric::GenericPoints));
         let time = pool.time();
         let mut names = HashMap::new();
         let mut placeholders = Vec::new();

@@ -11,7 +11,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 use cas::number::{One, Signed, Zero};
 use cas::Rational;
-use lang::{Diagnostic, SceneFile, Span, Unit};
+use lang::{Diagnostic, Span, Unit};
 
 /// The SI base quantities tracked: mass, length, time, current, temperature.
 const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];
@@ -414,12 +414,6 @@ impl Inference {
     }
 }
 
-/// Checks that every term of the scene has one dimension. Returns the mismatches found, from
-/// as much of the scene as resolves.
-pub fn check(file: &SceneFile) -> Vec<Diagnostic> {
-    crate::resolve::dimension_errors(file)
-}
-
 struct Solver<'a> {
     names: &'a HashMap<Unknown, String>,
     declared: &'a HashMap<Unknown, Declared>,
@@ -635,6 +629,8 @@ impl Solver<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    // The inference is checked through the walk that states its facts.
+    use crate::dimension_errors as check;
 
     fn errors(source: &str) -> Vec<String> {
         let file = lang::parse(source).expect("parses");

@@ -3,7 +3,20 @@
 //! machine (the standard library's versions are the platform's and may differ in the last
 //! bit).
 
+use cas::number::{Rational, ToPrimitive};
 use cas::Func;
+
+/// The float nearest a rational, or close to it: ratios of integers too large for a float are
+/// scaled down together first.
+pub fn to_f64(q: &Rational) -> f64 {
+    q.to_f64().unwrap_or_else(|| {
+        // Ratios of huge integers: scale both down before dividing.
+        let shift = q.numer().bits().max(q.denom().bits()).saturating_sub(1000);
+        let n = (q.numer() >> shift).to_f64().unwrap_or(f64::NAN);
+        let d = (q.denom() >> shift).to_f64().unwrap_or(f64::NAN);
+        n / d
+    })
+}
 
 /// `f(a)` for one of the scene language's functions.
 pub fn apply(f: Func, a: f64) -> f64 {

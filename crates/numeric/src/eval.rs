@@ -1,11 +1,10 @@
 //! Expressions evaluated at a point, for every number that is not a simulation's: parameter
-//! values, initial states, `expect` checks and the zero test's probe. They go through the
+//! values, initial states, `expect` checks and the zero test's numbers. They go through the
 //! same lowering and tape as the integrators, so a value is the same wherever it is computed.
 
-use cas::number::to_f64;
 use cas::{ExprId, Node, Pool, SymId};
 
-use crate::elementary::pow_int;
+use crate::elementary::{pow_int, to_f64};
 use crate::lower::lower_free;
 use crate::tape::Tape;
 
@@ -104,7 +103,7 @@ impl ScaledEvaluator {
 }
 
 /// The value of one expression at one point and the size of the terms it is a sum of: see
-/// [`ScaledEvaluator`]. Its signature is [`cas::Probe`]'s, so it serves the zero test.
+/// [`ScaledEvaluator`]: the zero test's quick probe ([`crate::GenericPoints`]).
 pub fn value_and_scale(pool: &Pool, e: ExprId, values: &[f64]) -> (f64, f64) {
     ScaledEvaluator::new(pool, &[e]).eval(values)[0]
 }
@@ -112,8 +111,8 @@ pub fn value_and_scale(pool: &Pool, e: ExprId, values: &[f64]) -> (f64, f64) {
 /// The value of one expression at one point and its magnitude: the same expression evaluated
 /// with every coefficient, term and factor by its absolute value, so that the rounding of the
 /// value is within a few ulps of the magnitude wherever cancellations hide, in a sum nested
-/// however deep. Its signature is [`cas::Probe`]'s, for the zero test of expressions too large
-/// for the algebra ([`Pool::vanishes_at_generic_points`]).
+/// however deep: for the zero test of expressions too large for the algebra
+/// ([`Pool::vanishes_at_generic_points`], through [`crate::GenericPoints`]).
 pub fn value_and_magnitude(pool: &Pool, e: ExprId, values: &[f64]) -> (f64, f64) {
     let mut memo = std::collections::HashMap::new();
     magnitude(pool, e, values, &mut memo)

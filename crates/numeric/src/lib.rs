@@ -12,16 +12,19 @@
 //!
 //! It is also the only float evaluator of expressions: [`Evaluator`] (and [`eval`],
 //! [`value_and_scale`]) lower and run the same tape for parameter values, initial states,
-//! `expect` checks and the zero test's probe, with the [`elementary`] functions of `libm`, so
-//! a value has the same bits wherever and on whatever machine it is computed.
+//! `expect` checks and the zero test's numbers ([`GenericPoints`], the [`cas::ZeroTest`] every
+//! derivation's pool is handed), with the [`elementary`] functions of `libm`, so a value has
+//! the same bits wherever and on whatever machine it is computed.
 
 pub mod elementary;
 mod eval;
 mod lower;
 pub mod rust;
 mod tape;
+mod zero_test;
 
-pub use elementary::pow_int;
+pub use elementary::{pow_int, to_f64};
 pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program};
 pub use tape::Tape;
+pub use zero_test::{GenericPoints, GENERIC_POINTS};

@@ -4,9 +4,10 @@
 use std::collections::HashMap;
 use std::fmt;
 
-use cas::number::{to_f64, Rational};
-use cas::number::{One, ToPrimitive};
+use cas::number::{One, Rational, ToPrimitive};
 use cas::{ExprId, Func, Node, Pool, SymId};
+
+use crate::elementary::to_f64;
 
 /// A register index. Registers are laid out as inputs, then constants, then one register per
 /// instruction, in order: the program is in static single-assignment form.

@@ -88,13 +88,13 @@ fn the_size_of_a_sum_is_the_sum_of_its_terms_magnitudes() {
     assert_eq!(both.eval(&values), vec![(0.0, 8.0), (1.0, 1.0)]);
 }
 
-/// The probe only spares the zero test its algebra: with or without it, the answers agree.
+/// The numbers only spare the zero test its algebra: with or without them, the answers agree.
 #[test]
 fn the_zero_test_answers_the_same_with_the_probe() {
     for probe in [false, true] {
         let mut p = Pool::new();
         if probe {
-            p.set_probe(numeric::value_and_scale);
+            p.set_zero_test(Box::new(numeric::GenericPoints));
         }
         let x = p.coordinate("x");
         let xe = p.sym(x);

@@ -1,10 +1,9 @@
 //! The tape against a direct walk of the expression, the evaluator against the tape bit for
 //! bit, and the sharing that lowering promises.
 
-use cas::number::to_f64;
 use cas::{ExprId, Func, Node, Pool};
 use numeric::elementary::{apply, atan2, pow};
-use numeric::{lower, LowerError, Tape};
+use numeric::{lower, to_f64, LowerError, Tape};
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-13 * a.abs().max(b.abs()).max(1.0)
