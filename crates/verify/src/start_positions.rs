@@ -79,7 +79,11 @@ pub fn settle_start_positions(d: &mut Derivation) -> Result<(), Vec<Diagnostic>>
             .collect());
     }
     match solve_positions(d, &free, values, false) {
-        Some(solved) => d.set_start_positions(&solved).map_err(|e| vec![e]),
+        Some(solved) => {
+            let exact: Vec<(SymId, cas::Rational)> =
+                solved.iter().filter_map(|(s, x)| Some((*s, shortest_decimal(*x)?))).collect();
+            d.set_start_positions(&exact).map_err(|e| vec![e])
+        }
         None => {
             let names: Vec<String> =
                 free.iter().map(|s| format!("`{}`", d.model.pool.symbol(*s).name)).collect();
@@ -100,6 +104,12 @@ pub fn settle_start_positions(d: &mut Derivation) -> Result<(), Vec<Diagnostic>>
             ))])
         }
     }
+}
+
+/// The shortest decimal that reads back as `x`, exactly: what a report prints of it.
+fn shortest_decimal(x: f64) -> Option<cas::Rational> {
+    let q = cas::number::parse_decimal(&format!("{:e}", x.abs()))?;
+    Some(if x < 0.0 { -q } else { q })
 }
 
 /// The error for a start off a kept position constraint, with the residual in numbers where

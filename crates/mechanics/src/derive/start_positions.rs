@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use cas::{ExprId, SymId};
+use cas::{ExprId, Rational, SymId};
 use lang::Diagnostic;
 use model::ConstraintKind;
 
@@ -84,14 +84,12 @@ impl Derivation {
         out
     }
 
-    /// Takes start positions solved in numbers (each as the shortest decimal of its float), marks
-    /// them as solved, and settles the start's rates at the new positions.
-    pub fn set_start_positions(&mut self, solved: &[(SymId, f64)]) -> Result<(), Diagnostic> {
-        for (s, x) in solved {
-            // The shortest decimal that reads back as the float: what the report prints.
-            let Some(q) = cas::number::parse_decimal(&format!("{:e}", x.abs())) else { continue };
-            let q = if *x < 0.0 { -q } else { q };
-            let value = self.model.pool.num(q);
+    /// Takes start positions solved in numbers (each as the exact decimal the `verify` crate
+    /// read its float as), marks them as solved, and settles the start's rates at the new
+    /// positions.
+    pub fn set_start_positions(&mut self, solved: &[(SymId, Rational)]) -> Result<(), Diagnostic> {
+        for (s, q) in solved {
+            let value = self.model.pool.num(q.clone());
             if let Some(c) = self.model.coords.iter_mut().find(|c| c.sym == *s) {
                 c.initial = value;
             }
