@@ -10,8 +10,8 @@ use lang::{Diagnostic, Severity};
 #[derive(Clone, Debug, PartialEq)]
 pub enum Error {
     /// The scene has errors: its diagnostics, with the text their spans point into. That text
-    /// is the scene's as loaded, which for a command that resolves extra expressions is the
-    /// file with `show` lines appended.
+    /// is the scene's as loaded (for `linearize --about`, still the file with the reference
+    /// appended as a `linearize about` line).
     Scene { diagnostics: Vec<Diagnostic>, source: String },
     /// An expression given besides the scene (a front end's output, event or value, or one of
     /// the scene's `simulate` block) has errors: its diagnostics, with the expression their
