@@ -11,6 +11,8 @@ pub use lang::render::render;
 pub fn error(path: &str, error: &engine::Error) -> String {
     match error {
         engine::Error::Scene { diagnostics, source } => render(path, source, diagnostics),
+        // An expression given besides the scene, rendered against itself.
+        engine::Error::Expression { diagnostics, text } => render("expression", text, diagnostics),
         engine::Error::Setting(_) => format!("error: {}\n", error.worded(flag)),
         other => format!("{other}\n"),
     }

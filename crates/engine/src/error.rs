@@ -10,9 +10,13 @@ use lang::{Diagnostic, Severity};
 #[derive(Clone, Debug, PartialEq)]
 pub enum Error {
     /// The scene has errors: its diagnostics, with the text their spans point into. That text
-    /// is the scene's as loaded, which for a command that resolves extra expressions is the
-    /// file with `show` lines appended.
+    /// is the scene's as loaded (for `linearize --about`, still the file with the reference
+    /// appended as a `linearize about` line).
     Scene { diagnostics: Vec<Diagnostic>, source: String },
+    /// An expression given besides the scene (a front end's output, event or value, or one of
+    /// the scene's `simulate` block) has errors: its diagnostics, with the expression their
+    /// spans point into.
+    Expression { diagnostics: Vec<Diagnostic>, text: String },
     /// A setting, option or value that cannot be used: what is wrong with it.
     Input(String),
     /// A front end's setting that cannot be used, in words that name the settings abstractly
@@ -27,7 +31,10 @@ impl Error {
     /// included), 1 for a numeric fault.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Error::Scene { .. } | Error::Input(_) | Error::Setting(_) => 2,
+            Error::Scene { .. }
+            | Error::Expression { .. }
+            | Error::Input(_)
+            | Error::Setting(_) => 2,
             Error::Numeric(_) => 1,
         }
     }
@@ -38,7 +45,9 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Scene { diagnostics, source } => {
+            Error::Scene { diagnostics, source: text }
+            | Error::Expression { diagnostics, text } => {
+                let source = text;
                 for (k, d) in diagnostics.iter().enumerate() {
                     let (line, col) = line_col(source, d.span.start);
                     let severity = match d.severity {
@@ -128,7 +137,7 @@ impl Error {
         match self {
             Error::Setting(pieces) => pieces.iter().map(word).collect(),
             Error::Input(message) | Error::Numeric(message) => message.clone(),
-            Error::Scene { .. } => self.to_string(),
+            Error::Scene { .. } | Error::Expression { .. } => self.to_string(),
         }
     }
 }

@@ -53,10 +53,29 @@ pub fn load(source: &str) -> Result<Scene, Error> {
 
 /// [`load`] with options.
 pub fn load_with(source: &str, options: Options) -> Result<Scene, Error> {
+    let (model, warnings) = resolve_with(source, options)?;
+    derive_resolved(source, model, warnings)
+}
+
+/// Parses and resolves one scene: its model, for more expressions to be resolved against
+/// ([`model::Model::resolve_expression`]) before it is derived, and its warnings.
+pub(crate) fn resolve_with(
+    source: &str,
+    options: Options,
+) -> Result<(model::Model, Vec<Diagnostic>), Error> {
     let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let ast = lang::parse(source).map_err(scene)?;
     let checks = model::Checks { units: options.units };
-    let (model, mut warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
+    model::resolve_with(&ast, source, checks).map_err(scene)
+}
+
+/// Derives and diagnoses a model resolved from `source`.
+pub(crate) fn derive_resolved(
+    source: &str,
+    model: model::Model,
+    mut warnings: Vec<Diagnostic>,
+) -> Result<Scene, Error> {
+    let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let mut derivation = mechanics::derive(model).map_err(scene)?;
     verify::diagnose(&mut derivation).map_err(scene)?;
     // Copied, not moved: the derivation's own stay with it for its report to cite.

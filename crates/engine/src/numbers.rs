@@ -21,36 +21,28 @@ pub struct Prepared {
     pub layout: Layout,
 }
 
-/// Loads `source` with `extra` scene expressions appended as `show` lines, so that they are
-/// resolved (and reactions they name derived) exactly like the scene's own. The appended
-/// lines follow the file; a diagnostic in one of them points into the whole text, which
-/// [`Error::Scene`] carries.
+/// Loads `source` with `extra` expressions resolved against it as the scene's `show` items
+/// are (reactions they name are derived too), before it is derived. A mistake in one of them
+/// is an [`Error::Expression`], its diagnostics pointing into the expression.
 pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepared, Error> {
-    let mut text = source.to_string();
-    if !text.ends_with('\n') {
-        text.push('\n');
+    let (mut model, warnings) = crate::resolve_with(source, options)?;
+    let mut values = Vec::new();
+    for text in extra {
+        let value = model
+            .resolve_expression(text)
+            .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
+        values.push(value);
     }
-    let start = text.len();
-    for e in extra {
-        text.push_str("show ");
-        text.push_str(e);
-        text.push('\n');
-    }
-    let mut derivation = crate::load_with(&text, options)?.derivation;
-    let shows: Vec<model::Show> =
-        derivation.model.shows.iter().filter(|s| s.span.start >= start).cloned().collect();
-    if shows.len() != extra.len() {
-        return Err(Error::Input(format!("could not resolve `{}`", extra.join("`, `"))));
-    }
+    let mut derivation = crate::derive_resolved(source, model, warnings)?.derivation;
     let mut exprs = Vec::new();
-    for (show, text) in shows.iter().zip(extra) {
-        let model::Value::Scalar(e) = show.value else {
+    for (value, text) in values.iter().zip(extra) {
+        let model::Value::Scalar(e) = value else {
             return Err(Error::Input(format!(
                 "`{text}` is {}, and only scalars can be recorded",
-                show.value.kind_name()
+                value.kind_name()
             )));
         };
-        exprs.push(derivation.expand_quantities(e, false));
+        exprs.push(derivation.expand_quantities(*e, false));
     }
     let parameters: Vec<SymId> = derivation.model.params.iter().map(|p| p.sym).collect();
     let layout = Layout {

@@ -138,32 +138,28 @@ fn zero_of(text: &str) -> String {
     }
 }
 
-/// The scene's `simulate` settings as text: key → values.
-fn scene_settings(source: &str) -> Vec<(String, Vec<String>, Option<String>)> {
-    let Ok(ast) = lang::parse(source) else { return Vec::new() };
-    let mut out = Vec::new();
-    for stmt in &ast.stmts {
-        if let lang::StmtKind::Simulate(settings) = &stmt.kind {
-            for s in settings {
-                let values = s
-                    .values
-                    .iter()
-                    .map(|e| source.get(e.span.start..e.span.end).unwrap_or("").trim().to_string())
-                    .collect();
-                // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
-                let unit = s
-                    .unit
-                    .as_ref()
-                    .map(|u| source.get(u.span.start..u.span.end).unwrap_or("").trim().to_string());
-                out.push((s.key.name.clone(), values, unit));
-            }
-        }
-    }
-    out
+/// The settings of the scene's `simulate` block as its model has them, as text: key → values,
+/// and the unit as written. A scene that does not resolve has none here; loading it reports
+/// why.
+fn scene_settings(source: &str, options: &Options) -> Vec<(String, Vec<String>, Option<String>)> {
+    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
+    let Ok((model, _)) = loaded else { return Vec::new() };
+    let text = |span: lang::Span| source.get(span.start..span.end).unwrap_or("").trim().to_string();
+    model
+        .simulate
+        .iter()
+        .map(|s| {
+            let values = s.values.iter().map(|e| text(e.span)).collect();
+            // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
+            let unit = s.unit.as_ref().map(|u| text(u.span));
+            (s.key.name.clone(), values, unit)
+        })
+        .collect()
 }
 
-/// The settings of a run of `source`: its `simulate` block, then the options. Read before the
-/// scene is loaded, so that a bad setting is reported before the scene's own errors.
+/// The settings of a run of `source`: its `simulate` block (read from its model, before the
+/// scene is derived, so that a bad setting is reported before the derivation's errors), then
+/// the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let mut until = 10.0;
     let mut method = Method::Dop853;
@@ -178,7 +174,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
             bad(format!("`{key} {text}` in the scene's simulate block is not a number"))
         })
     };
-    for (key, values, unit) in scene_settings(source) {
+    for (key, values, unit) in scene_settings(source, options) {
         match key.as_str() {
             "until" => {
                 until = number(&key, &values)?;

@@ -90,6 +90,79 @@ pub fn parse(source: &str) -> Result<SceneFile, Vec<Diagnostic>> {
     })
 }
 
+/// Parses one expression on its own (a front end's argument such as `--output theta'`); spans
+/// point into `text`.
+pub fn parse_expression(text: &str) -> Result<Expr, Vec<Diagnostic>> {
+    parse_lone(text, Rule::lone_expr, |builder, pair| {
+        let expr = pair.into_inner().find(|p| p.as_rule() == Rule::expr);
+        match expr {
+            Some(expr) => builder.expr(expr),
+            None => Err(Diagnostic::error(Span::default(), "expected an expression")),
+        }
+    })
+}
+
+/// Parses the items of a reference on their own (`--about "theta = 0, phi' = 2"`), as a
+/// `linearize about` line has them; spans point into `text`.
+pub fn parse_about(text: &str) -> Result<Vec<AboutItem>, Vec<Diagnostic>> {
+    parse_lone(text, Rule::lone_about, |builder, pair| {
+        let mut items = Vec::new();
+        for item in pair.into_inner().filter(|p| p.as_rule() == Rule::about_item) {
+            items.push(builder.about_item(item)?);
+        }
+        Ok(items)
+    })
+}
+
+/// A piece of text by one rule of the grammar, built by `build`, with the checks of [`parse`].
+fn parse_lone<T: Send>(
+    text: &str,
+    rule: Rule,
+    build: impl Fn(&Builder<'_>, Pair<'_, Rule>) -> Built<T> + Send + Sync,
+) -> Result<T, Vec<Diagnostic>> {
+    let here = || {
+        let scan = scan_brackets(text);
+        if let Some(too_deep) = scan.too_deep {
+            return Err(vec![too_deep]);
+        }
+        if !scan.problems.is_empty() {
+            return Err(bracket_diagnostics(text, &scan.problems));
+        }
+        let mut pairs = match SceneParser::parse(rule, text) {
+            Ok(pairs) => pairs,
+            Err(err) => return Err(vec![syntax_error(text, 0, &err).1]),
+        };
+        let mut diags = Vec::new();
+        let built = {
+            let builder = Builder { base: 0, diags: &mut diags };
+            let Some(pair) = pairs.next() else {
+                return Err(vec![Diagnostic::error(Span::default(), "expected an expression")]);
+            };
+            build(&builder, pair)
+        };
+        match built {
+            Ok(value) if diags.is_empty() => Ok(value),
+            Ok(_) => Err(diags),
+            Err(d) => {
+                diags.push(d);
+                Err(diags)
+            }
+        }
+    };
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .name("lang-parser".into())
+            .stack_size(PARSER_STACK_SIZE)
+            .spawn_scoped(scope, here);
+        match spawned {
+            Ok(handle) => handle.join().unwrap_or_else(|_| {
+                Err(vec![Diagnostic::error(Span::default(), "internal error: the parser crashed")])
+            }),
+            Err(_) => here(),
+        }
+    })
+}
+
 /// Stack for the parser thread: ample for [`MAX_BRACKET_DEPTH`] levels even in a debug build.
 const PARSER_STACK_SIZE: usize = 64 * 1024 * 1024;
 

@@ -10,7 +10,7 @@ mod resolve;
 pub mod units;
 mod value;
 
-pub use resolve::{dimension_errors, resolve, resolve_with};
+pub use resolve::{dimension_errors, resolve, resolve_with, Scope};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};
@@ -294,6 +294,8 @@ pub struct Linearize {
 
 /// Everything a scene says, resolved.
 pub struct Model {
+    /// What resolving the scene left for resolving more expressions against it.
+    pub scope: Scope,
     pub pool: Pool,
     pub title: Option<String>,
     pub time: SymId,

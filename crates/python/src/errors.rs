@@ -32,7 +32,29 @@ pub fn numeric_error(message: String) -> PyErr {
 /// rendered diagnostics.
 pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
     match error {
-        engine::Error::Scene { diagnostics, source } => Python::attach(|py| {
+        engine::Error::Scene { diagnostics, source } => scene_error(error, path, source, diagnostics),
+        // Rendered against the expression itself, which is not a line of the file.
+        engine::Error::Expression { diagnostics, text } => {
+            scene_error(error, EXPRESSION, text, diagnostics)
+        }
+        engine::Error::Input(message) => PyValueError::new_err(message.clone()),
+        engine::Error::Setting(_) => PyValueError::new_err(error.worded(keyword)),
+        engine::Error::Numeric(message) => numeric_error(message.clone()),
+    }
+}
+
+/// What the diagnostics of an expression given besides the scene name as their file.
+const EXPRESSION: &str = "expression";
+
+/// Diagnostics with spans into `source` as a `lagrange.SceneError`.
+fn scene_error(
+    error: &engine::Error,
+    path: &str,
+    source: &str,
+    diagnostics: &[lang::Diagnostic],
+) -> PyErr {
+    {
+        Python::attach(|py| {
             let rendered = lang::render::render(path, source, diagnostics);
             let first = diagnostics
                 .iter()
@@ -72,10 +94,7 @@ pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
                 Ok(attributes) => exception("SceneError", message, Some(attributes)),
                 Err(e) => e,
             }
-        }),
-        engine::Error::Input(message) => PyValueError::new_err(message.clone()),
-        engine::Error::Setting(_) => PyValueError::new_err(error.worded(keyword)),
-        engine::Error::Numeric(message) => numeric_error(message.clone()),
+        })
     }
 }
 
