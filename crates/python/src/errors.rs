@@ -32,7 +32,9 @@ pub fn numeric_error(message: String) -> PyErr {
 /// rendered diagnostics.
 pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
     match error {
-        engine::Error::Scene { diagnostics, source } => scene_error(error, path, source, diagnostics),
+        engine::Error::Scene { diagnostics, source } => {
+            scene_error(error, path, source, diagnostics)
+        }
         // Rendered against the expression itself, which is not a line of the file.
         engine::Error::Expression { diagnostics, text } => {
             scene_error(error, EXPRESSION, text, diagnostics)
