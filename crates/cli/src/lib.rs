@@ -124,13 +124,30 @@ pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
 
 /// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.
 pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Result<()> {
+    use std::io::Write;
     let dir =
         path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
     let name =
         path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, contents)?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        let _ = std::fs::remove_file(&tmp);
-    })
+    // Dropped on an error, the temporary file is removed.
+    let mut tmp = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(without_path)?;
+    tmp.as_file_mut().write_all(contents.as_bytes())?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// The operating system's error without the temporary path `tempfile` appends to its message
+/// (`… at path "…"`): the caller names the target, as it always has, not a file the user never
+/// asked for. The path is written with `{:?}`, so its own quotes are escaped and the first
+/// ` at path "` is where it starts.
+fn without_path(error: std::io::Error) -> std::io::Error {
+    let message = error.to_string();
+    match message.split_once(" at path \"") {
+        Some((message, _)) => std::io::Error::new(error.kind(), message),
+        None => error,
+    }
 }

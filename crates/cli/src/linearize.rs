@@ -9,7 +9,7 @@ use engine::linearize::{Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
 use serde_json::{json, Map, Value as Json};
 
 use crate::plot::{escape, frame, label, page, range, Frame};
-use crate::report::{bracketed, json_number, significant, value_text};
+use crate::report::{bracketed, json_number, significant, value_text, width};
 
 /// Digits of the numbers in the text report.
 const DIGITS: u32 = 10;
@@ -114,7 +114,7 @@ pub fn text(l: &Linearized) -> String {
         None => "Small motions".to_string(),
     };
     out.push(title.clone());
-    out.push("═".repeat(title.chars().count()));
+    out.push("═".repeat(width(&title)));
     out.push(String::new());
     out.push(format!("About  {about}"));
     if l.exact_reference {
@@ -298,14 +298,14 @@ fn sweep_lines(pool: &Pool, sweep: &Sweep) -> Vec<String> {
     let widths: Vec<usize> = (0..columns)
         .map(|j| {
             let cells = std::iter::once(&header).chain(&rows).filter_map(|r| r.get(j));
-            cells.map(|c| c.chars().count()).max().unwrap_or(0)
+            cells.map(|c| width(c)).max().unwrap_or(0)
         })
         .collect();
     for row in std::iter::once(&header).chain(&rows) {
         let cells: Vec<String> = row
             .iter()
             .zip(&widths)
-            .map(|(c, w)| format!("{c}{}", " ".repeat(w.saturating_sub(c.chars().count()))))
+            .map(|(c, w)| format!("{c}{}", " ".repeat(w.saturating_sub(width(c)))))
             .collect();
         out.push(format!("  {}", cells.join("   ").trim_end()));
     }

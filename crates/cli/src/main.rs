@@ -61,9 +61,9 @@ enum Command {
         /// End time (s); default: the scene's `simulate { until … }`, else 10.
         #[arg(long)]
         until: Option<f64>,
-        /// rk4, dopri5, dop853 (default), midpoint or gauss.
+        /// The integrator (default dop853).
         #[arg(long)]
-        method: Option<String>,
+        method: Option<MethodArg>,
         /// Relative and absolute tolerance of dopri5 and dop853 (default 1e-10).
         #[arg(long)]
         tolerance: Option<f64>,
@@ -173,6 +173,36 @@ enum LinearizeFormat {
     Json,
 }
 
+/// `--method`: the integrators of `sim::Method`, checked by clap (a typo is told the possible
+/// values and the nearest one), with the same other names the scene's `method` accepts.
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    /// Classic Runge–Kutta, fixed step.
+    Rk4,
+    /// Dormand–Prince 5(4), adaptive.
+    #[value(alias = "rk45")]
+    Dopri5,
+    /// Dormand–Prince 8(5,3), adaptive.
+    Dop853,
+    /// Implicit midpoint rule, fixed step, symplectic.
+    Midpoint,
+    /// Two-stage Gauss–Legendre (order 4), fixed step, symplectic.
+    #[value(alias = "gauss4")]
+    Gauss,
+}
+
+impl From<MethodArg> for sim::Method {
+    fn from(method: MethodArg) -> Self {
+        match method {
+            MethodArg::Rk4 => sim::Method::Rk4,
+            MethodArg::Dopri5 => sim::Method::Dopri5,
+            MethodArg::Dop853 => sim::Method::Dop853,
+            MethodArg::Midpoint => sim::Method::Midpoint,
+            MethodArg::Gauss => sim::Method::Gauss,
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum FormatArg {
     Text,
@@ -238,7 +268,8 @@ fn main() -> ExitCode {
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
                 until,
-                method,
+                // The engine's options are shared with Python, which names the method.
+                method: method.map(|m| sim::Method::from(m).name().to_string()),
                 tolerance,
                 step,
                 set,

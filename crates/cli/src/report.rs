@@ -108,8 +108,8 @@ fn unit_text(unit: &lang::Unit, style: Style) -> String {
 }
 
 /// Display width in terminal columns: combining marks (the dots of θ̇) take none.
-fn width(s: &str) -> usize {
-    s.chars().filter(|c| !matches!(*c as u32, 0x300..=0x36f | 0x20d0..=0x20ff)).count()
+pub(crate) fn width(s: &str) -> usize {
+    unicode_width::UnicodeWidthStr::width(s)
 }
 
 fn pad(s: &str, w: usize) -> String {

@@ -9,22 +9,19 @@ pub fn simulate(source: &str, options: &Options) -> Result<Outcome, Error> {
     engine::simulate::simulate_with(source, options, &mut crate::progress::Bar::new())
 }
 
-/// The recorded outputs as CSV: a header, then a row per recorded time.
+/// The recorded outputs as CSV: a header, then a row per recorded time. Numbers are written as
+/// Rust's shortest round-trip decimals (`{}`), which never need quoting.
 pub fn csv(outcome: &Outcome) -> String {
-    let mut s = String::from("t");
-    for c in &outcome.columns[..outcome.shown] {
-        s.push(',');
-        s.push_str(&csv_field(c));
-    }
-    s.push('\n');
+    let mut out = csv::Writer::from_writer(Vec::new());
+    let header =
+        std::iter::once("t").chain(outcome.columns[..outcome.shown].iter().map(String::as_str));
+    out.write_record(header).expect("writing to memory");
     for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
-        s.push_str(&format!("{t}"));
-        for v in &row[..outcome.shown] {
-            s.push_str(&format!(",{v}"));
-        }
-        s.push('\n');
+        let numbers = std::iter::once(t).chain(&row[..outcome.shown]);
+        out.write_record(numbers.map(f64::to_string)).expect("writing to memory");
     }
-    s
+    let bytes = out.into_inner().expect("writing to memory");
+    String::from_utf8(bytes).expect("UTF-8 in, UTF-8 out")
 }
 
 /// The recorded outputs, the events and the summary as JSON.
@@ -121,14 +118,6 @@ pub fn summary(outcome: &Outcome) -> String {
         (None, None) => s.push_str(&format!("reached t = {}\n", r.final_time)),
     }
     s
-}
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
 }
 
 fn json_number(v: f64) -> serde_json::Value {

@@ -648,26 +648,10 @@ fn nearest_keyword(word: &str) -> Option<&'static str> {
     let lower = word.to_lowercase();
     STATEMENT_KEYWORDS
         .iter()
-        .map(|&kw| (edit_distance(&lower, kw), kw))
+        .map(|&kw| (strsim::levenshtein(&lower, kw), kw))
         .filter(|&(d, _)| d <= 2)
         .min_by_key(|&(d, _)| d)
         .map(|(_, kw)| kw)
-}
-
-/// Levenshtein distance over characters.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diag = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let substitute = diag + usize::from(ca != cb);
-            diag = row[j + 1];
-            row[j + 1] = substitute.min(row[j] + 1).min(row[j + 1] + 1);
-        }
-    }
-    row[b.len()]
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -106,22 +106,6 @@ fn normalize(name: &str) -> String {
         .collect()
 }
 
-/// Edit distance, for "did you mean" hints.
-fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(row[j + 1] + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
-
 /// The closest candidate within a small edit distance.
 fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     // One letter away from a one- or two-letter name is any other name: only a change of
@@ -132,7 +116,7 @@ fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Opt
     let limit = (name.chars().count() / 3).clamp(1, 2);
     candidates
         .into_iter()
-        .map(|c| (distance(name, c), c))
+        .map(|c| (strsim::levenshtein(name, c), c))
         .filter(|(d, _)| *d <= limit)
         .min_by_key(|(d, c)| (*d, c.to_string()))
         .map(|(_, c)| c)
@@ -2078,7 +2062,6 @@ mod tests {
         assert_eq!(closest("q", ["theta", "phi"]), None);
         assert_eq!(closest("y", ["L", "x"]), None);
         assert_eq!(closest("l", ["L", "x"]), Some("L"));
-        assert_eq!(distance("kitten", "sitting"), 3);
     }
 
     #[test]
