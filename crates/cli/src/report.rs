@@ -2,7 +2,8 @@
 
 use cas::number::Signed;
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use mechanics::Derivation;
+use engine::derived::Derived;
+use mechanics::{Derivation, Equation};
 use model::Value;
 use serde_json::{json, Map, Value as Json};
 use verify::{NumericValue, ShownAtStart};
@@ -203,132 +204,316 @@ fn cells(pool: &Pool, rows: &[Vec<ExprId>], full: bool) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// One section of the `derive` report with its data, in the order the text report prints
+/// them. The three formats walk this one list, each rendering a section its own way (or not
+/// at all: LaTeX leaves out the parameters, only JSON carries the scene's primitive model).
+enum Section<'a> {
+    Title(Option<&'a str>),
+    Parameters(&'a [model::Param]),
+    /// As declared, and the generalized coordinates left after elimination.
+    Coordinates {
+        declared: &'a [model::Coord],
+        generalized: &'a [SymId],
+    },
+    Constraints {
+        constraints: &'a [model::Constraint],
+        sides: &'a [(ExprId, ExprId)],
+        left_out: &'a [Option<String>],
+    },
+    Energies {
+        kinetic: ExprId,
+        potential: ExprId,
+        lagrangian: Option<ExprId>,
+    },
+    Equations(&'a [Equation]),
+    MassMatrix {
+        mass: &'a [Vec<ExprId>],
+        forcing: &'a [ExprId],
+        multipliers: &'a [mechanics::Multiplier],
+    },
+    Independent(&'a mechanics::IndependentForm),
+    /// With the accelerations solved for, and as functions of the state.
+    Reactions {
+        reactions: &'a [(SymId, ExprId)],
+        of_state: &'a [(SymId, ExprId)],
+    },
+    Shown(&'a [(model::Show, Value)]),
+    AtStart {
+        at_start: &'a ShownAtStart,
+        state: &'a [(SymId, ExprId)],
+    },
+    Model,
+}
+
+/// The report's sections, built once from what `derive` computed.
+fn sections<'a>(d: &'a Derivation, derived: &'a Derived) -> Vec<Section<'a>> {
+    let mut sections = vec![
+        Section::Title(d.model.title.as_deref()),
+        Section::Parameters(&d.model.params),
+        Section::Coordinates { declared: &d.model.coords, generalized: &d.coords },
+        Section::Constraints {
+            constraints: &d.model.constraints,
+            sides: &derived.constraint_sides,
+            left_out: &derived.left_out,
+        },
+        Section::Energies {
+            kinetic: derived.kinetic,
+            potential: derived.potential,
+            lagrangian: derived.lagrangian,
+        },
+        Section::Equations(&derived.equations),
+        Section::MassMatrix {
+            mass: &derived.mass_matrix,
+            forcing: &derived.forcing,
+            multipliers: &d.multipliers,
+        },
+    ];
+    sections.extend(derived.independent.as_ref().map(Section::Independent));
+    sections.extend([
+        Section::Reactions { reactions: &derived.reactions, of_state: &derived.reactions_of_state },
+        Section::Shown(&derived.shown),
+        Section::AtStart { at_start: &derived.at_start, state: &derived.start_state },
+        Section::Model,
+    ]);
+    sections
+}
+
+/// A format of the report: it renders each section in turn, then gives its text.
+trait Renderer {
+    fn section(&mut self, section: &Section);
+    fn finish(self) -> String;
+}
+
+/// Derives what the report shows and walks its sections with the renderer `make` builds.
+fn render<'d, R: Renderer>(
+    d: &'d mut Derivation,
+    make: impl FnOnce(&'d Derivation) -> R,
+) -> String {
+    let derived = engine::derived::collect(d);
+    let d: &'d Derivation = d;
+    let mut renderer = make(d);
+    for section in &sections(d, &derived) {
+        renderer.section(section);
+    }
+    renderer.finish()
+}
+
+/// Lines joined, with a final newline.
+fn lines_text(out: &[String]) -> String {
+    let mut text = out.join("\n");
+    text.push('\n');
+    text
+}
+
 /// The report for people; `full` prints every entry whole (see [`TEXT_ENTRY_LIMIT`]).
 pub fn text_with(d: &mut Derivation, full: bool) -> String {
-    let derived = engine::derived::collect(d);
-    let pool = &d.model.pool;
-    let u = Style::Unicode;
-    let print = |e: ExprId| entry(pool, e, full);
-    let mut out = Vec::new();
-    if let Some(title) = &d.model.title {
-        out.push(title.clone());
-        out.push("═".repeat(width(title)));
-        out.push(String::new());
+    render(d, |d| Text { d, pool: &d.model.pool, full, out: Vec::new() })
+}
+
+/// The text report, a line at a time.
+struct Text<'a> {
+    d: &'a Derivation,
+    pool: &'a Pool,
+    full: bool,
+    out: Vec<String>,
+}
+
+const U: Style = Style::Unicode;
+
+impl Renderer for Text<'_> {
+    fn section(&mut self, section: &Section) {
+        match section {
+            Section::Title(Some(title)) => {
+                self.out.push(title.to_string());
+                self.out.push("═".repeat(width(title)));
+                self.out.push(String::new());
+            }
+            Section::Title(None) | Section::Model => {}
+            Section::Parameters(params) => self.parameters(params),
+            Section::Coordinates { declared, .. } => self.coordinates(declared),
+            Section::Constraints { constraints, sides, left_out } => {
+                self.constraints(constraints, sides, left_out)
+            }
+            Section::Energies { kinetic, potential, lagrangian } => {
+                self.out.push("Energies".into());
+                self.out.push(format!("  T = {}", self.print(*kinetic)));
+                self.out.push(format!("  V = {}", self.print(*potential)));
+                if let Some(l) = lagrangian {
+                    self.out.push(format!("  L = {}", self.print(*l)));
+                }
+            }
+            Section::Equations(equations) => {
+                self.out.push("Equations of motion".into());
+                for eq in *equations {
+                    self.out.push(format!("  {} = {}", self.print(eq.lhs), self.print(eq.rhs)));
+                }
+            }
+            Section::MassMatrix { mass, forcing, multipliers } => {
+                self.mass_matrix(mass, forcing, multipliers)
+            }
+            Section::Independent(form) => self.independent(form),
+            Section::Reactions { reactions, of_state } => self.reactions(reactions, of_state),
+            Section::Shown(shown) => self.shown(shown),
+            Section::AtStart { at_start, state } => self.at_start(at_start, state),
+        }
     }
-    if !d.model.params.is_empty() {
-        out.push("Parameters".into());
-        for p in &d.model.params {
-            let mut line = format!("  {}", sym_text(pool, p.sym, u));
+
+    fn finish(self) -> String {
+        lines_text(&self.out)
+    }
+}
+
+impl Text<'_> {
+    fn print(&self, e: ExprId) -> String {
+        entry(self.pool, e, self.full)
+    }
+
+    fn sym(&self, s: SymId) -> String {
+        sym_text(self.pool, s, U)
+    }
+
+    fn parameters(&mut self, params: &[model::Param]) {
+        if params.is_empty() {
+            return;
+        }
+        self.out.push("Parameters".into());
+        for p in params {
+            let mut line = format!("  {}", self.sym(p.sym));
             if let Some(v) = p.value {
-                line.push_str(&format!(" = {}", value_text(pool, v, u)));
+                line.push_str(&format!(" = {}", value_text(self.pool, v, U)));
             }
             if let Some(unit) = &p.unit {
-                line.push_str(&format!(" {}", unit_text(unit, u)));
+                line.push_str(&format!(" {}", unit_text(unit, U)));
             }
-            out.push(line);
+            self.out.push(line);
         }
     }
-    out.push("Coordinates".into());
-    for c in &d.model.coords {
-        let name = sym_text(pool, c.sym, u);
-        if let Some(e) = d.eliminated.iter().find(|e| e.coord == c.sym) {
-            let cname = &d.model.constraints[e.constraint].name;
-            out.push(format!("  {name} = {}   (eliminated by {cname})", print(e.solution)));
-        } else {
-            let rate_symbol = pool.lookup_symbol(&format!("{}'", c.name));
-            let rate = rate_symbol.map(|r| sym_text(pool, r, u)).unwrap_or_default();
-            let solved = if d.solved_start_positions.contains(&c.sym) {
-                ", solved from the constraints"
+
+    fn coordinates(&mut self, coords: &[model::Coord]) {
+        let (d, pool) = (self.d, self.pool);
+        self.out.push("Coordinates".into());
+        for c in coords {
+            let name = self.sym(c.sym);
+            if let Some(e) = d.eliminated.iter().find(|e| e.coord == c.sym) {
+                let cname = &d.model.constraints[e.constraint].name;
+                let solution = self.print(e.solution);
+                self.out.push(format!("  {name} = {solution}   (eliminated by {cname})"));
             } else {
-                ""
-            };
-            out.push(format!(
-                "  {name}   (from {name} {}, {rate} {}{solved})",
-                start_value_text(d, c.sym, c.initial, u),
-                start_value_text(d, rate_symbol.unwrap_or(c.sym), c.initial_rate, u)
-            ));
+                let rate_symbol = pool.lookup_symbol(&format!("{}'", c.name));
+                let rate = rate_symbol.map(|r| self.sym(r)).unwrap_or_default();
+                let solved = if d.solved_start_positions.contains(&c.sym) {
+                    ", solved from the constraints"
+                } else {
+                    ""
+                };
+                self.out.push(format!(
+                    "  {name}   (from {name} {}, {rate} {}{solved})",
+                    start_value_text(d, c.sym, c.initial, U),
+                    start_value_text(d, rate_symbol.unwrap_or(c.sym), c.initial_rate, U)
+                ));
+            }
         }
     }
-    if !d.model.constraints.is_empty() {
-        out.push("Constraints".into());
-        for (i, c) in d.model.constraints.iter().enumerate() {
-            let (lhs, rhs) = derived.constraint_sides[i];
-            out.push(format!("  {}: {} = {}", c.name, print(lhs), print(rhs)));
-            let force = sym_text(pool, c.force_symbol, u);
-            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
+
+    fn constraints(
+        &mut self,
+        constraints: &[model::Constraint],
+        sides: &[(ExprId, ExprId)],
+        left_out: &[Option<String>],
+    ) {
+        if constraints.is_empty() {
+            return;
+        }
+        self.out.push("Constraints".into());
+        for (i, c) in constraints.iter().enumerate() {
+            let (lhs, rhs) = sides[i];
+            self.out.push(format!("  {}: {} = {}", c.name, self.print(lhs), self.print(rhs)));
+            let force = self.sym(c.force_symbol);
+            if let Some(e) = self.d.eliminated.iter().find(|e| e.constraint == i) {
                 let what = if c.force_requested {
                     format!("; its reaction {force} is derived below")
                 } else {
                     String::new()
                 };
                 if let Some(phi) = e.integrated {
-                    out.push(format!("    integrates to {} = 0", print(phi)));
+                    self.out.push(format!("    integrates to {} = 0", self.print(phi)));
                 }
-                out.push(format!("    solved for {}{what}", sym_text(pool, e.coord, u)));
-            } else if let Some(why) = &derived.left_out[i] {
-                out.push(format!("    left out, as it restrains nothing more: {why}"));
+                self.out.push(format!("    solved for {}{what}", self.sym(e.coord)));
+            } else if let Some(why) = &left_out[i] {
+                self.out.push(format!("    left out, as it restrains nothing more: {why}"));
             } else if c.kind == model::ConstraintKind::Velocity {
-                out.push(format!(
+                self.out.push(format!(
                     "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
                 ));
             } else {
-                out.push(format!(
+                self.out.push(format!(
                     "    kept with the multiplier {force} (generalized force {force}·∂Φ/∂q)"
                 ));
             }
         }
     }
-    out.push("Energies".into());
-    out.push(format!("  T = {}", print(derived.kinetic)));
-    out.push(format!("  V = {}", print(derived.potential)));
-    if let Some(l) = derived.lagrangian {
-        out.push(format!("  L = {}", print(l)));
+
+    fn mass_matrix(
+        &mut self,
+        mass: &[Vec<ExprId>],
+        forcing: &[ExprId],
+        multipliers: &[mechanics::Multiplier],
+    ) {
+        let (pool, full) = (self.pool, self.full);
+        let q: Vec<String> = self.d.coords.iter().map(|s| self.sym(*s)).collect();
+        let extra = if multipliers.is_empty() { "" } else { " + Jᵀ·λ" };
+        self.out
+            .push(format!("Mass-matrix form  M(q)·q̈ = f(q, q̇){extra},  q = ({})", q.join(", ")));
+        self.out.extend(bracketed(&cells(pool, mass, full), "  M = "));
+        let f_rows: Vec<Vec<ExprId>> = forcing.iter().map(|e| vec![*e]).collect();
+        self.out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
+        for m in multipliers {
+            let name = self.sym(m.lambda);
+            let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
+            self.out.extend(bracketed(&row, &format!("  J({name}) = ")));
+            self.out.push(format!("  γ({name}) = {}", self.print(m.bias)));
+        }
     }
-    out.push("Equations of motion".into());
-    for eq in &derived.equations {
-        out.push(format!("  {} = {}", print(eq.lhs), print(eq.rhs)));
-    }
-    let q: Vec<String> = d.coords.iter().map(|s| sym_text(pool, *s, u)).collect();
-    let extra = if d.multipliers.is_empty() { "" } else { " + Jᵀ·λ" };
-    out.push(format!("Mass-matrix form  M(q)·q̈ = f(q, q̇){extra},  q = ({})", q.join(", ")));
-    out.extend(bracketed(&cells(pool, &derived.mass_matrix, full), "  M = "));
-    let f_rows: Vec<Vec<ExprId>> = derived.forcing.iter().map(|e| vec![*e]).collect();
-    out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
-    for m in &d.multipliers {
-        let name = sym_text(pool, m.lambda, u);
-        let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
-        out.extend(bracketed(&row, &format!("  J({name}) = ")));
-        out.push(format!("  γ({name}) = {}", print(m.bias)));
-    }
-    if let Some(form) = &derived.independent {
-        let names = |s: &[SymId]| s.iter().map(|r| sym_text(pool, *r, u)).collect::<Vec<_>>();
+
+    fn independent(&mut self, form: &mechanics::IndependentForm) {
+        let names = |s: &[SymId]| s.iter().map(|r| self.sym(*r)).collect::<Vec<_>>();
         let dependent: Vec<SymId> = form.dependent.iter().map(|(d, _)| *d).collect();
-        out.push(format!(
+        let heading = format!(
             "In the independent rates  ({}; the constraints give {})",
             names(&form.independent).join(", "),
             names(&dependent).join(", ")
-        ));
+        );
+        self.out.push(heading);
         for (d, e) in &form.dependent {
-            out.push(format!("  {} = {}", sym_text(pool, *d, u), print(*e)));
+            self.out.push(format!("  {} = {}", self.sym(*d), self.print(*e)));
         }
         for e in &form.equations {
-            out.push(format!("  {} = 0", print(*e)));
+            self.out.push(format!("  {} = 0", self.print(*e)));
         }
     }
-    if !derived.reactions.is_empty() {
-        out.push("Reactions".into());
-        for ((s, e), (_, explicit)) in derived.reactions.iter().zip(&derived.reactions_of_state) {
-            let mut line = format!("  {} = {}", sym_text(pool, *s, u), print(*e));
+
+    fn reactions(&mut self, reactions: &[(SymId, ExprId)], of_state: &[(SymId, ExprId)]) {
+        if reactions.is_empty() {
+            return;
+        }
+        self.out.push("Reactions".into());
+        for ((s, e), (_, explicit)) in reactions.iter().zip(of_state) {
+            let mut line = format!("  {} = {}", self.sym(*s), self.print(*e));
             if explicit != e {
-                line.push_str(&format!("\n    = {}", print(*explicit)));
+                line.push_str(&format!("\n    = {}", self.print(*explicit)));
             }
-            out.push(line);
+            self.out.push(line);
         }
     }
-    if !derived.shown.is_empty() {
-        out.push("Shown".into());
-        for (show, v) in &derived.shown {
-            let label = d.show_label(show, u);
+
+    fn shown(&mut self, shown: &[(model::Show, Value)]) {
+        if shown.is_empty() {
+            return;
+        }
+        let (d, pool) = (self.d, self.pool);
+        self.out.push("Shown".into());
+        for (show, v) in shown {
+            let label = d.show_label(show, U);
             let unsolved = match v {
                 Value::Scalar(e) => {
                     pool.as_sym(*e).filter(|s| d.multipliers.iter().any(|m| m.lambda == *s))
@@ -339,162 +524,191 @@ pub fn text_with(d: &mut Derivation, full: bool) -> String {
                 // Past the size where the symbolic solution stays readable, say so rather than
                 // print `λ = λ`.
                 let unknowns = d.coords.len() + d.multipliers.len();
-                out.push(format!(
+                self.out.push(format!(
                     "  {label}: a multiplier of the equations above; {unknowns} unknowns are too many to solve for it symbolically (`lagrange simulate --output {}` gives its values)",
                     show.label
                 ));
                 continue;
             }
-            out.extend(value_lines(pool, full, &format!("  {label} = "), v));
+            self.out.extend(value_lines(pool, self.full, &format!("  {label} = "), v));
         }
     }
-    let start_heading = || {
-        let state: Vec<String> = derived
-            .start_state
+
+    fn at_start(&mut self, at_start: &ShownAtStart, state: &[(SymId, ExprId)]) {
+        let (d, pool) = (self.d, self.pool);
+        let state: Vec<String> = state
             .iter()
-            .map(|(s, e)| format!("{} {}", sym_text(pool, *s, u), start_value_text(d, *s, *e, u)))
+            .map(|(s, e)| format!("{} {}", self.sym(*s), start_value_text(d, *s, *e, U)))
             .collect();
-        format!("At the start  ({})", state.join(", "))
-    };
-    match &derived.at_start {
-        ShownAtStart::Exact(items) if !items.is_empty() => {
-            out.push(start_heading());
-            for (show, v) in items {
-                let label = d.show_label(show, u);
-                out.extend(value_lines(pool, full, &format!("  {label} = "), v));
+        let start_heading = || format!("At the start  ({})", state.join(", "));
+        match at_start {
+            ShownAtStart::Exact(items) if !items.is_empty() => {
+                self.out.push(start_heading());
+                for (show, v) in items {
+                    let label = d.show_label(show, U);
+                    self.out.extend(value_lines(pool, self.full, &format!("  {label} = "), v));
+                }
             }
-        }
-        ShownAtStart::Exact(_) => {}
-        ShownAtStart::Numeric { items, unknowns, digits, params, because } => {
-            out.push(start_heading());
-            let at: Vec<String> = params
-                .iter()
-                .map(|(s, v)| format!("{} = {}", sym_text(pool, *s, u), significant(*v, 15, u)))
-                .collect();
-            out.push(format!(
-                "  solved numerically: {}; at {}, to about {digits} significant digits",
-                because.words(*unknowns),
-                at.join(", ")
-            ));
-            for (show, v) in items {
-                let label = d.show_label(show, u);
-                out.push(format!("  {label} ≈ {}", numeric_text(v, *digits, u)));
+            ShownAtStart::Exact(_) => {}
+            ShownAtStart::Numeric { items, unknowns, digits, params, because } => {
+                self.out.push(start_heading());
+                let at: Vec<String> = params
+                    .iter()
+                    .map(|(s, v)| format!("{} = {}", self.sym(*s), significant(*v, 15, U)))
+                    .collect();
+                self.out.push(format!(
+                    "  solved numerically: {}; at {}, to about {digits} significant digits",
+                    because.words(*unknowns),
+                    at.join(", ")
+                ));
+                for (show, v) in items {
+                    let label = d.show_label(show, U);
+                    self.out.push(format!("  {label} ≈ {}", numeric_text(v, *digits, U)));
+                }
             }
-        }
-        ShownAtStart::Unvalued { unknowns, missing } => out.push(format!(
-            "At the start: {unknowns} unknowns are too many to solve for exactly, and solving numerically needs a value for {}",
-            missing.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", ")
-        )),
-        ShownAtStart::Singular => {
-            out.push("At the start: the mass matrix is singular; nothing can be shown".into())
+            ShownAtStart::Unvalued { unknowns, missing } => self.out.push(format!(
+                "At the start: {unknowns} unknowns are too many to solve for exactly, and solving numerically needs a value for {}",
+                missing.iter().map(|m| format!("`{m}`")).collect::<Vec<_>>().join(", ")
+            )),
+            ShownAtStart::Singular => self
+                .out
+                .push("At the start: the mass matrix is singular; nothing can be shown".into()),
         }
     }
-    let mut text = out.join("\n");
-    text.push('\n');
-    text
 }
 
 /// The report as a LaTeX fragment (amsmath).
 pub fn latex(d: &mut Derivation) -> String {
-    let derived = engine::derived::collect(d);
-    let pool = &d.model.pool;
-    let l = Style::Latex;
-    let mut out = Vec::new();
-    if let Some(title) = &d.model.title {
-        out.push(format!("% {title}"));
-    }
-    out.push("% Energies".into());
-    out.push("\\begin{align}".into());
-    out.push(format!("  T &= {} \\\\", pool.print(derived.kinetic, l)));
-    let last = derived.lagrangian.map(|e| format!("  L &= {}", pool.print(e, l)));
-    match last {
-        Some(lag) => {
-            out.push(format!("  V &= {} \\\\", pool.print(derived.potential, l)));
-            out.push(lag);
-        }
-        None => out.push(format!("  V &= {}", pool.print(derived.potential, l))),
-    }
-    out.push("\\end{align}".into());
-    out.push("% Equations of motion".into());
-    out.push("\\begin{align}".into());
-    let n = derived.equations.len();
-    for (i, eq) in derived.equations.iter().enumerate() {
-        let end = if i + 1 < n { " \\\\" } else { "" };
-        out.push(format!("  {} &= {}{end}", pool.print(eq.lhs, l), pool.print(eq.rhs, l)));
-    }
-    out.push("\\end{align}".into());
-    out.push("% Mass-matrix form".into());
-    let matrix = |rows: &[Vec<ExprId>]| {
-        let body: Vec<String> = rows
-            .iter()
-            .map(|r| r.iter().map(|e| pool.print(*e, l)).collect::<Vec<_>>().join(" & "))
-            .collect();
-        format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", body.join(" \\\\ "))
-    };
-    let q: Vec<String> = d.accels.iter().map(|s| sym_text(pool, *s, l)).collect();
-    let f_rows: Vec<Vec<ExprId>> = derived.forcing.iter().map(|e| vec![*e]).collect();
-    out.push("\\begin{equation}".into());
-    out.push(format!(
-        "  {} \\begin{{bmatrix}} {} \\end{{bmatrix}} = {}",
-        matrix(&derived.mass_matrix),
-        q.join(" \\\\ "),
-        matrix(&f_rows)
-    ));
-    out.push("\\end{equation}".into());
-    if let Some(form) = &derived.independent {
-        out.push("% In the independent rates".into());
-        out.push("\\begin{align}".into());
-        let mut lines: Vec<String> = form
-            .dependent
-            .iter()
-            .map(|(r, e)| format!("  {} &= {}", sym_text(pool, *r, l), pool.print(*e, l)))
-            .collect();
-        lines.extend(form.equations.iter().map(|e| format!("  {} &= 0", pool.print(*e, l))));
-        let n = lines.len();
-        for (i, line) in lines.into_iter().enumerate() {
-            out.push(if i + 1 < n { format!("{line} \\\\") } else { line });
-        }
-        out.push("\\end{align}".into());
-    }
-    let mut items: Vec<(String, String)> = Vec::new();
-    for (s, e) in &derived.reactions {
-        items.push((sym_text(pool, *s, l), pool.print(*e, l)));
-    }
-    for (show, v) in &derived.shown {
-        items.push((d.show_label(show, l), value_latex(pool, v)));
-    }
-    match &derived.at_start {
-        ShownAtStart::Exact(at_start) => {
-            for (show, v) in at_start {
-                items.push((
-                    format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
-                    value_latex(pool, v),
+    render(d, |d| Latex { d, pool: &d.model.pool, out: Vec::new(), items: Vec::new() })
+}
+
+/// The LaTeX report: its reactions, shown quantities and those at the start share one
+/// `align`, printed last.
+struct Latex<'a> {
+    d: &'a Derivation,
+    pool: &'a Pool,
+    out: Vec<String>,
+    items: Vec<(String, String)>,
+}
+
+const L: Style = Style::Latex;
+
+/// Lines of an `align`, each but the last ended by `\\`.
+fn align_lines(lines: Vec<String>) -> Vec<String> {
+    let n = lines.len();
+    lines
+        .into_iter()
+        .enumerate()
+        .map(|(i, line)| if i + 1 < n { format!("{line} \\\\") } else { line })
+        .collect()
+}
+
+impl Renderer for Latex<'_> {
+    fn section(&mut self, section: &Section) {
+        let (d, pool) = (self.d, self.pool);
+        match section {
+            Section::Title(Some(title)) => self.out.push(format!("% {title}")),
+            Section::Title(None)
+            | Section::Parameters(_)
+            | Section::Coordinates { .. }
+            | Section::Constraints { .. }
+            | Section::Model => {}
+            Section::Energies { kinetic, potential, lagrangian } => {
+                self.out.push("% Energies".into());
+                self.out.push("\\begin{align}".into());
+                let mut lines = vec![
+                    format!("  T &= {}", pool.print(*kinetic, L)),
+                    format!("  V &= {}", pool.print(*potential, L)),
+                ];
+                lines.extend(lagrangian.map(|e| format!("  L &= {}", pool.print(e, L))));
+                self.out.extend(align_lines(lines));
+                self.out.push("\\end{align}".into());
+            }
+            Section::Equations(equations) => {
+                self.out.push("% Equations of motion".into());
+                self.out.push("\\begin{align}".into());
+                let lines = equations
+                    .iter()
+                    .map(|eq| format!("  {} &= {}", pool.print(eq.lhs, L), pool.print(eq.rhs, L)))
+                    .collect();
+                self.out.extend(align_lines(lines));
+                self.out.push("\\end{align}".into());
+            }
+            Section::MassMatrix { mass, forcing, .. } => {
+                self.out.push("% Mass-matrix form".into());
+                let matrix = |rows: &[Vec<ExprId>]| {
+                    let body: Vec<String> = rows
+                        .iter()
+                        .map(|r| {
+                            r.iter().map(|e| pool.print(*e, L)).collect::<Vec<_>>().join(" & ")
+                        })
+                        .collect();
+                    format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", body.join(" \\\\ "))
+                };
+                let q: Vec<String> = d.accels.iter().map(|s| sym_text(pool, *s, L)).collect();
+                let f_rows: Vec<Vec<ExprId>> = forcing.iter().map(|e| vec![*e]).collect();
+                self.out.push("\\begin{equation}".into());
+                self.out.push(format!(
+                    "  {} \\begin{{bmatrix}} {} \\end{{bmatrix}} = {}",
+                    matrix(mass),
+                    q.join(" \\\\ "),
+                    matrix(&f_rows)
                 ));
+                self.out.push("\\end{equation}".into());
+            }
+            Section::Independent(form) => {
+                self.out.push("% In the independent rates".into());
+                self.out.push("\\begin{align}".into());
+                let mut lines: Vec<String> = form
+                    .dependent
+                    .iter()
+                    .map(|(r, e)| format!("  {} &= {}", sym_text(pool, *r, L), pool.print(*e, L)))
+                    .collect();
+                lines
+                    .extend(form.equations.iter().map(|e| format!("  {} &= 0", pool.print(*e, L))));
+                self.out.extend(align_lines(lines));
+                self.out.push("\\end{align}".into());
+            }
+            Section::Reactions { reactions, .. } => {
+                for (s, e) in *reactions {
+                    self.items.push((sym_text(pool, *s, L), pool.print(*e, L)));
+                }
+            }
+            Section::Shown(shown) => {
+                for (show, v) in *shown {
+                    self.items.push((d.show_label(show, L), value_latex(pool, v)));
+                }
+            }
+            Section::AtStart { at_start, .. } => {
+                let at_t0 = |show| format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, L));
+                match at_start {
+                    ShownAtStart::Exact(at_start) => {
+                        for (show, v) in at_start {
+                            self.items.push((at_t0(show), value_latex(pool, v)));
+                        }
+                    }
+                    ShownAtStart::Numeric { items, digits, .. } => {
+                        for (show, v) in items {
+                            let value = format!("\\approx {}", numeric_text(v, *digits, L));
+                            self.items.push((at_t0(show), value));
+                        }
+                    }
+                    ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
+                }
             }
         }
-        ShownAtStart::Numeric { items: at_start, digits, .. } => {
-            for (show, v) in at_start {
-                items.push((
-                    format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, l)),
-                    format!("\\approx {}", numeric_text(v, *digits, l)),
-                ));
-            }
-        }
-        ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
     }
-    if !items.is_empty() {
-        out.push("% Reactions and shown quantities".into());
-        out.push("\\begin{align}".into());
-        let n = items.len();
-        for (i, (a, b)) in items.iter().enumerate() {
-            let end = if i + 1 < n { " \\\\" } else { "" };
-            out.push(format!("  {a} &= {b}{end}"));
+
+    fn finish(mut self) -> String {
+        if !self.items.is_empty() {
+            self.out.push("% Reactions and shown quantities".into());
+            self.out.push("\\begin{align}".into());
+            let lines = self.items.iter().map(|(a, b)| format!("  {a} &= {b}")).collect();
+            self.out.extend(align_lines(lines));
+            self.out.push("\\end{align}".into());
         }
-        out.push("\\end{align}".into());
+        lines_text(&self.out)
     }
-    let mut text = out.join("\n");
-    text.push('\n');
-    text
 }
 
 fn value_latex(pool: &Pool, v: &Value) -> String {
@@ -592,118 +806,185 @@ fn value_json(pool: &Pool, v: &Value) -> Json {
 
 /// The report as JSON; every expression is a string in the scene syntax.
 pub fn json(d: &mut Derivation) -> String {
-    let derived = engine::derived::collect(d);
-    let pool = &d.model.pool;
-    let a = Style::Ascii;
-    let name = |s: SymId| pool.symbol(s).name.clone();
-    let mut params = Map::new();
-    for p in &d.model.params {
+    render(d, |d| JsonReport { d, pool: &d.model.pool, fields: Map::new() })
+}
+
+/// The JSON report's keys, in the order it prints them.
+const JSON_KEYS: [&str; 16] = [
+    "scene",
+    "coordinates",
+    "parameters",
+    "constraints",
+    "kinetic_energy",
+    "potential_energy",
+    "equations",
+    "mass_matrix",
+    "forcing",
+    "reactions",
+    "reactions_with_accelerations",
+    "shown",
+    "at_start",
+    "model",
+    // Only scenes that keep a velocity constraint and ask for no contact force have this form.
+    "independent_rates",
+    // Numbers rather than exact expressions: how far to trust them.
+    "at_start_significant_digits",
+];
+
+/// The JSON report: each section sets its keys, printed in the order of [`JSON_KEYS`].
+struct JsonReport<'a> {
+    d: &'a Derivation,
+    pool: &'a Pool,
+    fields: Map<String, Json>,
+}
+
+const A: Style = Style::Ascii;
+
+impl Renderer for JsonReport<'_> {
+    fn section(&mut self, section: &Section) {
+        let (d, pool) = (self.d, self.pool);
+        let name = |s: SymId| pool.symbol(s).name.clone();
+        let prints = |es: &[ExprId]| es.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>();
+        let names = |ss: &[(SymId, ExprId)]| -> Map<String, Json> {
+            ss.iter().map(|(s, e)| (name(*s), json!(pool.print(*e, A)))).collect()
+        };
+        let mut set = |key: &str, value: Json| {
+            self.fields.insert(key.into(), value);
+        };
+        match section {
+            Section::Title(title) => set("scene", json!(title)),
+            Section::Parameters(params) => set("parameters", json_parameters(pool, params)),
+            Section::Coordinates { generalized, .. } => {
+                set("coordinates", json!(generalized.iter().map(|s| name(*s)).collect::<Vec<_>>()))
+            }
+            Section::Constraints { constraints, .. } => {
+                set("constraints", json_constraints(d, constraints))
+            }
+            Section::Energies { kinetic, potential, .. } => {
+                set("kinetic_energy", json!(pool.print(*kinetic, A)));
+                set("potential_energy", json!(pool.print(*potential, A)));
+            }
+            Section::Equations(equations) => set(
+                "equations",
+                equations
+                    .iter()
+                    .map(|e| json!({"lhs": pool.print(e.lhs, A), "rhs": pool.print(e.rhs, A)}))
+                    .collect(),
+            ),
+            Section::MassMatrix { mass, forcing, .. } => {
+                set("mass_matrix", json!(mass.iter().map(|r| prints(r)).collect::<Vec<_>>()));
+                set("forcing", json!(prints(forcing)));
+            }
+            Section::Independent(form) => {
+                let dependent: Map<String, Json> = form
+                    .dependent
+                    .iter()
+                    .map(|(r, e)| (name(*r), Json::String(pool.print(*e, A))))
+                    .collect();
+                set(
+                    "independent_rates",
+                    json!({
+                        "independent": form.independent.iter().map(|r| name(*r)).collect::<Vec<_>>(),
+                        "dependent": dependent,
+                        "equations": prints(&form.equations),
+                    }),
+                );
+            }
+            Section::Reactions { reactions, of_state } => {
+                set("reactions", Json::Object(names(of_state)));
+                set("reactions_with_accelerations", Json::Object(names(reactions)));
+            }
+            Section::Shown(shown) => {
+                let shown: Map<String, Json> = shown
+                    .iter()
+                    .map(|(show, v)| (show.label.clone(), value_json(pool, v)))
+                    .collect();
+                set("shown", Json::Object(shown));
+            }
+            Section::AtStart { at_start, .. } => {
+                let mut values = Map::new();
+                match at_start {
+                    ShownAtStart::Exact(items) => {
+                        for (show, v) in items {
+                            values.insert(show.label.clone(), value_json(pool, v));
+                        }
+                    }
+                    ShownAtStart::Numeric { items, digits, .. } => {
+                        for (show, v) in items {
+                            values.insert(show.label.clone(), numeric_json(v));
+                        }
+                        set("at_start_significant_digits", json!(digits));
+                    }
+                    ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
+                }
+                set("at_start", Json::Object(values));
+            }
+            Section::Model => set("model", model_json(d)),
+        }
+    }
+
+    fn finish(mut self) -> String {
+        let mut doc = Map::new();
+        for key in JSON_KEYS {
+            if let Some(value) = self.fields.remove(key) {
+                doc.insert(key.into(), value);
+            }
+        }
+        debug_assert!(self.fields.is_empty(), "a JSON key missing from JSON_KEYS");
+        let mut text = serde_json::to_string_pretty(&Json::Object(doc)).unwrap_or_default();
+        text.push('\n');
+        text
+    }
+}
+
+/// The parameters, each with its value as written and in numbers, and its unit.
+fn json_parameters(pool: &Pool, params: &[model::Param]) -> Json {
+    let mut out = Map::new();
+    for p in params {
         let numeric = p.value.map(|v| numeric::eval(pool, v, &[])).filter(|x| x.is_finite());
-        params.insert(
+        out.insert(
             p.name.clone(),
             json!({
-                "value": p.value.map(|v| pool.print(v, a)),
+                "value": p.value.map(|v| pool.print(v, A)),
                 "numeric": numeric,
-                "unit": p.unit.as_ref().map(|u| unit_text(u, a)),
+                "unit": p.unit.as_ref().map(|u| unit_text(u, A)),
             }),
         );
     }
-    let constraints: Vec<Json> = d
-        .model
-        .constraints
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let equation = format!("{} = {}", pool.print(c.lhs, a), pool.print(c.rhs, a));
-            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
-                json!({
-                    "name": c.name,
-                    "equation": equation,
-                    "treatment": "eliminated",
-                    "coordinate": name(e.coord),
-                    "solution": pool.print(e.solution, a),
-                })
-            } else {
-                let m = d.multipliers.iter().find(|m| m.constraint == i);
-                json!({
-                    "name": c.name,
-                    "equation": equation,
-                    "treatment": "multiplier",
-                    "multiplier": name(c.force_symbol),
-                    "jacobian": m.map(|m| m.jacobian.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>()),
-                    "bias": m.map(|m| pool.print(m.bias, a)),
-                })
-            }
-        })
-        .collect();
-    let mut reactions = Map::new();
-    for (s, e) in &derived.reactions_of_state {
-        reactions.insert(name(*s), json!(pool.print(*e, a)));
-    }
-    let mut reactions_with_accelerations = Map::new();
-    for (s, e) in &derived.reactions {
-        reactions_with_accelerations.insert(name(*s), json!(pool.print(*e, a)));
-    }
-    let mut shown = Map::new();
-    for (show, v) in &derived.shown {
-        shown.insert(show.label.clone(), value_json(pool, v));
-    }
-    let mut at_start = Map::new();
-    let mut at_start_digits = None;
-    match &derived.at_start {
-        ShownAtStart::Exact(items) => {
-            for (show, v) in items {
-                at_start.insert(show.label.clone(), value_json(pool, v));
-            }
-        }
-        ShownAtStart::Numeric { items, digits, .. } => {
-            for (show, v) in items {
-                at_start.insert(show.label.clone(), numeric_json(v));
-            }
-            at_start_digits = Some(*digits);
-        }
-        ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
-    }
-    let doc = json!({
-        "scene": d.model.title,
-        "coordinates": d.coords.iter().map(|s| name(*s)).collect::<Vec<_>>(),
-        "parameters": params,
-        "constraints": constraints,
-        "kinetic_energy": pool.print(derived.kinetic, a),
-        "potential_energy": pool.print(derived.potential, a),
-        "equations": derived.equations.iter().map(|e| json!({"lhs": pool.print(e.lhs, a), "rhs": pool.print(e.rhs, a)})).collect::<Vec<_>>(),
-        "mass_matrix": derived.mass_matrix.iter().map(|r| r.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>()).collect::<Vec<_>>(),
-        "forcing": derived.forcing.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
-        "reactions": reactions,
-        "reactions_with_accelerations": reactions_with_accelerations,
-        "shown": shown,
-        "at_start": at_start,
-        "model": model_json(d),
-    });
-    let mut doc = doc;
-    // Only scenes that keep a velocity constraint and ask for no contact force have this form.
-    if let (Some(form), Json::Object(map)) = (&derived.independent, &mut doc) {
-        let dependent: Map<String, Json> = form
-            .dependent
+    Json::Object(out)
+}
+
+/// Each constraint with how it was treated.
+fn json_constraints(d: &Derivation, constraints: &[model::Constraint]) -> Json {
+    let pool = &d.model.pool;
+    let name = |s: SymId| pool.symbol(s).name.clone();
+    let constraints: Vec<Json> = constraints
             .iter()
-            .map(|(r, e)| (name(*r), Json::String(pool.print(*e, a))))
+            .enumerate()
+            .map(|(i, c)| {
+                let equation = format!("{} = {}", pool.print(c.lhs, A), pool.print(c.rhs, A));
+                if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
+                    json!({
+                        "name": c.name,
+                        "equation": equation,
+                        "treatment": "eliminated",
+                        "coordinate": name(e.coord),
+                        "solution": pool.print(e.solution, A),
+                    })
+                } else {
+                    let m = d.multipliers.iter().find(|m| m.constraint == i);
+                    json!({
+                        "name": c.name,
+                        "equation": equation,
+                        "treatment": "multiplier",
+                        "multiplier": name(c.force_symbol),
+                        "jacobian": m.map(|m| m.jacobian.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
+                        "bias": m.map(|m| pool.print(m.bias, A)),
+                    })
+                }
+            })
             .collect();
-        map.insert(
-            "independent_rates".into(),
-            json!({
-                "independent": form.independent.iter().map(|r| name(*r)).collect::<Vec<_>>(),
-                "dependent": dependent,
-                "equations": form.equations.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
-            }),
-        );
-    }
-    // Numbers rather than exact expressions: say how far to trust them.
-    if let (Some(digits), Json::Object(map)) = (at_start_digits, &mut doc) {
-        map.insert("at_start_significant_digits".into(), json!(digits));
-    }
-    let mut text = serde_json::to_string_pretty(&doc).unwrap_or_default();
-    text.push('\n');
-    text
+    Json::Array(constraints)
 }
 
 /// The scene's primitive data (before any derivation), so that an independent tool can derive
