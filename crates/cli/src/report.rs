@@ -593,16 +593,6 @@ struct Latex<'a> {
 
 const L: Style = Style::Latex;
 
-/// Lines of an `align`, each but the last ended by `\\`.
-fn align_lines(lines: Vec<String>) -> Vec<String> {
-    let n = lines.len();
-    lines
-        .into_iter()
-        .enumerate()
-        .map(|(i, line)| if i + 1 < n { format!("{line} \\\\") } else { line })
-        .collect()
-}
-
 impl Renderer for Latex<'_> {
     fn section(&mut self, section: &Section) {
         let (d, pool) = (self.d, self.pool);
@@ -614,51 +604,33 @@ impl Renderer for Latex<'_> {
             | Section::Constraints { .. }
             | Section::Model => {}
             Section::Energies { kinetic, potential, lagrangian } => {
-                self.out.push("% Energies".into());
-                self.out.push("\\begin{align}".into());
                 let mut lines = vec![
                     format!("  T &= {}", pool.print(*kinetic, L)),
                     format!("  V &= {}", pool.print(*potential, L)),
                 ];
                 lines.extend(lagrangian.map(|e| format!("  L &= {}", pool.print(e, L))));
-                self.out.extend(align_lines(lines));
-                self.out.push("\\end{align}".into());
+                self.align("Energies", lines);
             }
             Section::Equations(equations) => {
-                self.out.push("% Equations of motion".into());
-                self.out.push("\\begin{align}".into());
                 let lines = equations
                     .iter()
                     .map(|eq| format!("  {} &= {}", pool.print(eq.lhs, L), pool.print(eq.rhs, L)))
                     .collect();
-                self.out.extend(align_lines(lines));
-                self.out.push("\\end{align}".into());
+                self.align("Equations of motion", lines);
             }
             Section::MassMatrix { mass, forcing, .. } => {
-                self.out.push("% Mass-matrix form".into());
-                let matrix = |rows: &[Vec<ExprId>]| {
-                    let body: Vec<String> = rows
-                        .iter()
-                        .map(|r| {
-                            r.iter().map(|e| pool.print(*e, L)).collect::<Vec<_>>().join(" & ")
-                        })
-                        .collect();
-                    format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", body.join(" \\\\ "))
-                };
                 let q: Vec<String> = d.accels.iter().map(|s| sym_text(pool, *s, L)).collect();
-                let f_rows: Vec<Vec<ExprId>> = forcing.iter().map(|e| vec![*e]).collect();
+                self.out.push("% Mass-matrix form".into());
                 self.out.push("\\begin{equation}".into());
                 self.out.push(format!(
-                    "  {} \\begin{{bmatrix}} {} \\end{{bmatrix}} = {}",
-                    matrix(mass),
-                    q.join(" \\\\ "),
-                    matrix(&f_rows)
+                    "  {} {} = {}",
+                    bmatrix(&latex_rows(pool, mass)),
+                    bmatrix(&q),
+                    bmatrix(&forcing.iter().map(|e| pool.print(*e, L)).collect::<Vec<_>>())
                 ));
                 self.out.push("\\end{equation}".into());
             }
             Section::Independent(form) => {
-                self.out.push("% In the independent rates".into());
-                self.out.push("\\begin{align}".into());
                 let mut lines: Vec<String> = form
                     .dependent
                     .iter()
@@ -666,8 +638,7 @@ impl Renderer for Latex<'_> {
                     .collect();
                 lines
                     .extend(form.equations.iter().map(|e| format!("  {} &= 0", pool.print(*e, L))));
-                self.out.extend(align_lines(lines));
-                self.out.push("\\end{align}".into());
+                self.align("In the independent rates", lines);
             }
             Section::Reactions { reactions, .. } => {
                 for (s, e) in *reactions {
@@ -679,54 +650,69 @@ impl Renderer for Latex<'_> {
                     self.items.push((d.show_label(show, L), value_latex(pool, v)));
                 }
             }
-            Section::AtStart { at_start, .. } => {
-                let at_t0 = |show| format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, L));
-                match at_start {
-                    ShownAtStart::Exact(at_start) => {
-                        for (show, v) in at_start {
-                            self.items.push((at_t0(show), value_latex(pool, v)));
-                        }
-                    }
-                    ShownAtStart::Numeric { items, digits, .. } => {
-                        for (show, v) in items {
-                            let value = format!("\\approx {}", numeric_text(v, *digits, L));
-                            self.items.push((at_t0(show), value));
-                        }
-                    }
-                    ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
-                }
-            }
+            Section::AtStart { at_start, .. } => self.at_start(at_start),
         }
     }
 
     fn finish(mut self) -> String {
         if !self.items.is_empty() {
-            self.out.push("% Reactions and shown quantities".into());
-            self.out.push("\\begin{align}".into());
             let lines = self.items.iter().map(|(a, b)| format!("  {a} &= {b}")).collect();
-            self.out.extend(align_lines(lines));
-            self.out.push("\\end{align}".into());
+            self.align("Reactions and shown quantities", lines);
         }
         lines_text(&self.out)
     }
 }
 
+impl Latex<'_> {
+    /// An `align` under a `% heading` comment, each line but the last ended by `\\`.
+    fn align(&mut self, heading: &str, lines: Vec<String>) {
+        self.out.push(format!("% {heading}"));
+        self.out.push("\\begin{align}".into());
+        let n = lines.len();
+        for (i, line) in lines.into_iter().enumerate() {
+            self.out.push(if i + 1 < n { format!("{line} \\\\") } else { line });
+        }
+        self.out.push("\\end{align}".into());
+    }
+
+    /// The shown quantities at the start join the reactions' `align`.
+    fn at_start(&mut self, at_start: &ShownAtStart) {
+        let (d, pool) = (self.d, self.pool);
+        let at_t0 = |show| format!("\\left.{}\\right|_{{t=0}}", d.show_label(show, L));
+        match at_start {
+            ShownAtStart::Exact(items) => {
+                for (show, v) in items {
+                    self.items.push((at_t0(show), value_latex(pool, v)));
+                }
+            }
+            ShownAtStart::Numeric { items, digits, .. } => {
+                for (show, v) in items {
+                    let value = format!("\\approx {}", numeric_text(v, *digits, L));
+                    self.items.push((at_t0(show), value));
+                }
+            }
+            ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
+        }
+    }
+}
+
+/// The rows of a matrix in LaTeX, their entries separated by `&`.
+fn latex_rows(pool: &Pool, rows: &[Vec<ExprId>]) -> Vec<String> {
+    rows.iter()
+        .map(|r| r.iter().map(|e| pool.print(*e, L)).collect::<Vec<_>>().join(" & "))
+        .collect()
+}
+
+/// A bracketed matrix of `rows` (a column, when each is one entry).
+fn bmatrix(rows: &[String]) -> String {
+    format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", rows.join(" \\\\ "))
+}
+
 fn value_latex(pool: &Pool, v: &Value) -> String {
     match v {
-        Value::Scalar(e) => pool.print(*e, Style::Latex),
-        Value::Vector(xs) => {
-            let parts: Vec<String> = xs.iter().map(|e| pool.print(*e, Style::Latex)).collect();
-            format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", parts.join(" \\\\ "))
-        }
-        Value::Matrix(m) => {
-            let rows: Vec<String> = m
-                .iter()
-                .map(|r| {
-                    r.iter().map(|e| pool.print(*e, Style::Latex)).collect::<Vec<_>>().join(" & ")
-                })
-                .collect();
-            format!("\\begin{{bmatrix}} {} \\end{{bmatrix}}", rows.join(" \\\\ "))
-        }
+        Value::Scalar(e) => pool.print(*e, L),
+        Value::Vector(xs) => bmatrix(&xs.iter().map(|e| pool.print(*e, L)).collect::<Vec<_>>()),
+        Value::Matrix(m) => bmatrix(&latex_rows(pool, m)),
     }
 }
 
