@@ -888,21 +888,17 @@ impl Renderer for JsonReport<'_> {
                 set("shown", Json::Object(shown));
             }
             Section::AtStart { at_start, .. } => {
-                let mut values = Map::new();
-                match at_start {
+                let label = |show: &model::Show| show.label.clone();
+                let values: Map<String, Json> = match at_start {
                     ShownAtStart::Exact(items) => {
-                        for (show, v) in items {
-                            values.insert(show.label.clone(), value_json(pool, v));
-                        }
+                        items.iter().map(|(show, v)| (label(show), value_json(pool, v))).collect()
                     }
                     ShownAtStart::Numeric { items, digits, .. } => {
-                        for (show, v) in items {
-                            values.insert(show.label.clone(), numeric_json(v));
-                        }
                         set("at_start_significant_digits", json!(digits));
+                        items.iter().map(|(show, v)| (label(show), numeric_json(v))).collect()
                     }
-                    ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => {}
-                }
+                    ShownAtStart::Unvalued { .. } | ShownAtStart::Singular => Map::new(),
+                };
                 set("at_start", Json::Object(values));
             }
             Section::Model => set("model", model_json(d)),
