@@ -161,156 +161,158 @@ impl Resolver<'_> {
     fn member_value(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<Value> {
         let name = normalize(&object.name);
         match self.names.get(&name).cloned() {
-            Some(Binding::Body(i)) => {
-                let body = self.bodies[i].clone();
-                let fields: &[&str] = match body.kind() {
-                    BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
-                    BodyKind::Planar => {
-                        &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"]
-                    }
-                    BodyKind::Spatial => &[
-                        "position",
-                        "velocity",
-                        "mass",
-                        "omega",
-                        "omega_body",
-                        "axes",
-                        "x",
-                        "y",
-                        "z",
-                    ],
-                };
-                if let Some(rotation @ Rotation::Spatial { orientation, .. }) = &body.rotation {
-                    let orientation = *orientation;
-                    let pool = &mut self.pool;
-                    let spatial = match field.name.as_str() {
-                        "omega" | "omega_body" => {
-                            let world = field.name == "omega";
-                            rotation
-                                .spatial_angular_velocity(pool, world)
-                                .map(|w| Value::Vector(w.to_vec()))
-                        }
-                        "axes" => Some(Value::Matrix(crate::kinematics::rows(&orientation))),
-                        _ => None,
-                    };
-                    if spatial.is_some() {
-                        return spatial;
-                    }
-                }
-                let value = match field.name.as_str() {
-                    "position" => Some(Value::Vector(body.position.clone())),
-                    "velocity" => Some(Value::Vector(
-                        body.position.iter().map(|x| self.pool.time_derivative(*x)).collect(),
-                    )),
-                    "mass" => Some(Value::Scalar(body.mass)),
-                    "angle" => body.angle().map(Value::Scalar),
-                    "omega" => body.angle().map(|a| Value::Scalar(self.pool.time_derivative(a))),
-                    "x" => body.position.first().map(|x| Value::Scalar(*x)),
-                    "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
-                    "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
-                    _ => None,
-                };
-                let value = match field.name.as_str() {
-                    "angle" if body.kind() == BodyKind::Spatial => None,
-                    _ => value,
-                };
-                if value.is_none() {
-                    let mut d = Diagnostic::error(
-                        field.span,
-                        format!("`{}` has no `{}`", object.name, field.name),
-                    )
-                    .with_label(format!("expected one of {}", fields.join(", ")));
-                    if body.kind() == BodyKind::Spatial && field.name == "angle" {
-                        d = d.with_hint(
-                            "a body turning in space has no single angle: its orientation is \
-                             `axes`, its angular velocity `omega` (world axes) or `omega_body`",
-                        );
-                    } else if body.kind() == BodyKind::Particle
-                        && matches!(field.name.as_str(), "omega" | "angle")
-                    {
-                        d = d.with_hint(
-                            "a particle has no orientation; declare a rigid `body` with an `angle`",
-                        );
-                    } else if let Some(near) = closest(&field.name, fields.iter().copied()) {
-                        d = d.with_hint(format!("did you mean `{near}`?"));
-                    }
-                    self.error(d);
-                }
-                value
-            }
+            Some(Binding::Body(i)) => self.body_member(i, object, field),
             Some(Binding::Constraint(components)) => {
-                if field.name != "force" {
-                    self.error(
-                        Diagnostic::error(
-                            field.span,
-                            format!("a constraint has no `{}`", field.name),
-                        )
-                        .with_label("expected `force`")
-                        .with_hint(format!("`{}.force` is its reaction", object.name)),
-                    );
-                    return None;
-                }
-                if self.in_drawing {
-                    self.error(
-                        Diagnostic::error(span, "a reaction cannot be drawn")
-                            .with_label("a force, not a point")
-                            .with_hint(
-                                "a `draw` line places shapes with positions, which may use the \
-                                 coordinates, their rates and `t`",
-                            ),
-                    );
-                    return None;
-                }
-                if !self.in_outputs {
-                    self.error(
-                        Diagnostic::error(span, "a reaction can only be shown or checked")
-                            .with_label("used in the model itself")
-                            .with_hint("use `.force` in `show` and `expect` lines"),
-                    );
-                    return None;
-                }
-                let mut forces = Vec::new();
-                for component in &components {
-                    forces.push(match component {
-                        Some(i) => {
-                            self.constraints[*i].force_requested = true;
-                            self.pool.sym(self.constraints[*i].force_symbol)
-                        }
-                        // A component that always holds exerts nothing.
-                        None => self.pool.zero(),
-                    });
-                }
-                // A vector constraint's reaction is the vector of its components' reactions.
-                let vector = components.len() > 1
-                    || components.iter().flatten().any(|i| self.constraints[*i].name.contains('.'));
-                match vector {
-                    false => Some(Value::Scalar(forces[0])),
-                    true => Some(Value::Vector(forces)),
-                }
+                self.reaction_member(&components, object, field, span)
             }
-            _ => {
-                if self.declared.contains_key(&name) {
-                    // Declared but failed to resolve: already reported.
-                    return None;
+            _ => self.unknown_member(&name, object),
+        }
+    }
+
+    /// `body.field`: a body's position, velocity, mass, angle or angular velocity.
+    fn body_member(&mut self, i: usize, object: &Ident, field: &Ident) -> Option<Value> {
+        let body = self.bodies[i].clone();
+        let fields: &[&str] = match body.kind() {
+            BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
+            BodyKind::Planar => &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"],
+            BodyKind::Spatial => {
+                &["position", "velocity", "mass", "omega", "omega_body", "axes", "x", "y", "z"]
+            }
+        };
+        if let Some(rotation @ Rotation::Spatial { orientation, .. }) = &body.rotation {
+            let orientation = *orientation;
+            let pool = &mut self.pool;
+            let spatial = match field.name.as_str() {
+                "omega" | "omega_body" => {
+                    let world = field.name == "omega";
+                    rotation
+                        .spatial_angular_velocity(pool, world)
+                        .map(|w| Value::Vector(w.to_vec()))
                 }
-                let mut candidates: Vec<&str> = self
-                    .names
-                    .iter()
-                    .filter(|(_, b)| matches!(b, Binding::Body(_) | Binding::Constraint(_)))
-                    .map(|(k, _)| k.as_str())
-                    .collect();
-                candidates.sort_unstable();
-                let mut d = Diagnostic::error(
-                    object.span,
-                    format!("no body or constraint named `{}`", object.name),
-                )
-                .with_label("unknown");
-                if let Some(near) = closest(&name, candidates) {
-                    d = d.with_hint(format!("did you mean `{near}`?"));
-                }
-                self.error(d);
-                None
+                "axes" => Some(Value::Matrix(crate::kinematics::rows(&orientation))),
+                _ => None,
+            };
+            if spatial.is_some() {
+                return spatial;
             }
         }
+        let value = match field.name.as_str() {
+            "position" => Some(Value::Vector(body.position.clone())),
+            "velocity" => Some(Value::Vector(
+                body.position.iter().map(|x| self.pool.time_derivative(*x)).collect(),
+            )),
+            "mass" => Some(Value::Scalar(body.mass)),
+            "angle" => body.angle().map(Value::Scalar),
+            "omega" => body.angle().map(|a| Value::Scalar(self.pool.time_derivative(a))),
+            "x" => body.position.first().map(|x| Value::Scalar(*x)),
+            "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
+            "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
+            _ => None,
+        };
+        let value = match field.name.as_str() {
+            "angle" if body.kind() == BodyKind::Spatial => None,
+            _ => value,
+        };
+        if value.is_none() {
+            let mut d =
+                Diagnostic::error(field.span, format!("`{}` has no `{}`", object.name, field.name))
+                    .with_label(format!("expected one of {}", fields.join(", ")));
+            if body.kind() == BodyKind::Spatial && field.name == "angle" {
+                d = d.with_hint(
+                    "a body turning in space has no single angle: its orientation is \
+                     `axes`, its angular velocity `omega` (world axes) or `omega_body`",
+                );
+            } else if body.kind() == BodyKind::Particle
+                && matches!(field.name.as_str(), "omega" | "angle")
+            {
+                d = d.with_hint(
+                    "a particle has no orientation; declare a rigid `body` with an `angle`",
+                );
+            } else if let Some(near) = closest(&field.name, fields.iter().copied()) {
+                d = d.with_hint(format!("did you mean `{near}`?"));
+            }
+            self.error(d);
+        }
+        value
+    }
+
+    /// `constraint.force`: the reaction of a constraint, in `show` and `expect` lines only.
+    fn reaction_member(
+        &mut self,
+        components: &[Option<usize>],
+        object: &Ident,
+        field: &Ident,
+        span: Span,
+    ) -> Option<Value> {
+        if field.name != "force" {
+            self.error(
+                Diagnostic::error(field.span, format!("a constraint has no `{}`", field.name))
+                    .with_label("expected `force`")
+                    .with_hint(format!("`{}.force` is its reaction", object.name)),
+            );
+            return None;
+        }
+        if self.in_drawing {
+            self.error(
+                Diagnostic::error(span, "a reaction cannot be drawn")
+                    .with_label("a force, not a point")
+                    .with_hint(
+                        "a `draw` line places shapes with positions, which may use the \
+                         coordinates, their rates and `t`",
+                    ),
+            );
+            return None;
+        }
+        if !self.in_outputs {
+            self.error(
+                Diagnostic::error(span, "a reaction can only be shown or checked")
+                    .with_label("used in the model itself")
+                    .with_hint("use `.force` in `show` and `expect` lines"),
+            );
+            return None;
+        }
+        let mut forces = Vec::new();
+        for component in components {
+            forces.push(match component {
+                Some(i) => {
+                    self.constraints[*i].force_requested = true;
+                    self.pool.sym(self.constraints[*i].force_symbol)
+                }
+                // A component that always holds exerts nothing.
+                None => self.pool.zero(),
+            });
+        }
+        // A vector constraint's reaction is the vector of its components' reactions.
+        let vector = components.len() > 1
+            || components.iter().flatten().any(|i| self.constraints[*i].name.contains('.'));
+        match vector {
+            false => Some(Value::Scalar(forces[0])),
+            true => Some(Value::Vector(forces)),
+        }
+    }
+
+    /// `name.field` where `name` is neither a body nor a constraint: reported, unless already.
+    fn unknown_member(&mut self, name: &str, object: &Ident) -> Option<Value> {
+        if self.declared.contains_key(name) {
+            // Declared but failed to resolve: already reported.
+            return None;
+        }
+        let mut candidates: Vec<&str> = self
+            .names
+            .iter()
+            .filter(|(_, b)| matches!(b, Binding::Body(_) | Binding::Constraint(_)))
+            .map(|(k, _)| k.as_str())
+            .collect();
+        candidates.sort_unstable();
+        let mut d = Diagnostic::error(
+            object.span,
+            format!("no body or constraint named `{}`", object.name),
+        )
+        .with_label("unknown");
+        if let Some(near) = closest(name, candidates) {
+            d = d.with_hint(format!("did you mean `{near}`?"));
+        }
+        self.error(d);
+        None
     }
 }

@@ -47,6 +47,16 @@ fn rotation_dims() -> Dims {
     Dims::Grid(vec![vec![Dims::Scalar(Form::default()); 3]; 3])
 }
 
+/// A call of one of [`SPACE_FUNCTIONS`] whose arguments have resolved.
+struct SpaceCall<'a> {
+    name: &'a str,
+    /// What it takes, for the messages.
+    takes: &'a str,
+    args: &'a [Expr],
+    values: Vec<Value>,
+    span: Span,
+}
+
 impl Resolver<'_> {
     /// A call of one of [`SPACE_FUNCTIONS`].
     pub(super) fn space_call(
@@ -78,44 +88,13 @@ impl Resolver<'_> {
         }
         let resolved = resolved.into_iter().collect::<Option<Vec<_>>>()?;
         let (values, dims): (Vec<Value>, Vec<Dims>) = resolved.into_iter().unzip();
-        let wrong = |this: &mut Self, i: usize, expected: &str| {
-            this.error(
-                Diagnostic::error(
-                    args[i].span,
-                    format!("`{name}` takes {takes}, not {}", values[i].kind_name()),
-                )
-                .with_label(format!("expected {expected}")),
-            );
-            None
-        };
+        let call = SpaceCall { name, takes, args, values, span };
         match name {
-            "dot" | "cross" => {
-                let (Some(u), Some(v)) = (as_vector(&values[0]), as_vector(&values[1])) else {
-                    let i = usize::from(as_vector(&values[0]).is_some());
-                    return wrong(self, i, "a vector");
-                };
-                let length = if name == "cross" { 3 } else { u.len() };
-                for (i, w) in [&u, &v].into_iter().enumerate() {
-                    if w.len() != length {
-                        return wrong(self, i, &format!("a {length}-vector"));
-                    }
-                }
-                let mut dims = dims.into_iter();
-                let a = self.components(dims.next().expect("two"), args[0].span);
-                let b = self.components(dims.next().expect("two"), args[1].span);
-                let product = a.plus(&b, &Rational::one());
-                if name == "dot" {
-                    Some((
-                        Value::Scalar(kinematics::dot(&mut self.pool, &u, &v)),
-                        Dims::Scalar(product),
-                    ))
-                } else {
-                    let w = kinematics::cross(&mut self.pool, &u, &v);
-                    Some((Value::Vector(w), Dims::Many(vec![product; 3])))
-                }
-            }
+            "dot" | "cross" => self.product_call(&call, dims),
             "norm" => {
-                let Some(u) = as_vector(&values[0]) else { return wrong(self, 0, "a vector") };
+                let Some(u) = as_vector(&call.values[0]) else {
+                    return self.wrong_argument(&call, 0, "a vector");
+                };
                 let form = self.components(dims.into_iter().next().expect("one"), args[0].span);
                 let squares: Vec<ExprId> = u.iter().map(|x| self.pool.powi(*x, 2)).collect();
                 let sum = self.pool.add(&squares);
@@ -123,7 +102,9 @@ impl Resolver<'_> {
                 Some((Value::Scalar(self.pool.sqrt(sum)), Dims::Scalar(form)))
             }
             "rotx" | "roty" | "rotz" => {
-                let Value::Scalar(angle) = values[0] else { return wrong(self, 0, "an angle") };
+                let Value::Scalar(angle) = call.values[0] else {
+                    return self.wrong_argument(&call, 0, "an angle");
+                };
                 let form = self.form(dims.into_iter().next().expect("one"));
                 self.units.dimensionless(&form, args[0].span, &format!("the angle of {name}"));
                 let axis = match name {
@@ -134,91 +115,150 @@ impl Resolver<'_> {
                 let r = kinematics::elementary(&mut self.pool, axis, angle);
                 Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
             }
-            "rotation" => {
-                let axis = as_vector(&values[0]).filter(|v| v.len() == 3);
-                let Some(axis) = axis else { return wrong(self, 0, "a 3-vector") };
-                let Value::Scalar(angle) = values[1] else { return wrong(self, 1, "an angle") };
-                if axis.iter().all(|x| self.pool.is_identically_zero(*x)) {
-                    self.error(
-                        Diagnostic::error(args[0].span, "a rotation's axis cannot be zero")
-                            .with_label("this vector is zero")
-                            .with_hint("give the direction to turn about, such as (0, 0, 1)"),
-                    );
-                    return None;
-                }
-                if let Some(d) = self.zero_at_values(&axis, &args[0]) {
-                    self.error(d);
-                    return None;
-                }
-                let mut dims = dims.into_iter();
-                self.components(dims.next().expect("two"), args[0].span);
-                let form = self.form(dims.next().expect("two"));
-                self.units.dimensionless(&form, args[1].span, "the angle of a rotation");
-                let axis = [axis[0], axis[1], axis[2]];
-                let r = kinematics::about_axis(&mut self.pool, axis, angle);
-                Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
-            }
-            "quaternion" => {
-                let mut e = Vec::new();
-                for (i, v) in values.iter().enumerate() {
-                    match v {
-                        Value::Scalar(x) => e.push(*x),
-                        _ => return wrong(self, i, "a scalar"),
-                    }
-                }
-                for (d, a) in dims.into_iter().zip(args) {
-                    let form = self.form(d);
-                    self.units.dimensionless(&form, a.span, "an Euler parameter");
-                }
-                let e = [e[0], e[1], e[2], e[3]];
-                let r = kinematics::from_quaternion(&mut self.pool, e);
-                let rows = kinematics::rows(&r);
-                self.quaternions.push((rows.clone(), e, span));
-                Some((Value::Matrix(rows), rotation_dims()))
-            }
-            "transpose" => {
-                let Value::Matrix(m) = &values[0] else { return wrong(self, 0, "a matrix") };
-                let t = kinematics::transpose(m);
-                let dims = match dims.into_iter().next().expect("one") {
-                    Dims::Grid(g) => {
-                        let columns = g.first().map_or(0, Vec::len);
-                        let mut out: Vec<Vec<Dims>> = vec![Vec::new(); columns];
-                        for row in g {
-                            for (j, d) in row.into_iter().enumerate() {
-                                out[j].push(d);
-                            }
-                        }
-                        Dims::Grid(out)
-                    }
-                    other => other,
-                };
-                Some((Value::Matrix(t), dims))
-            }
-            _ => {
-                // dt: the total time derivative, entry by entry.
-                if !self.derivative_exists(&values[0], 1, span) {
-                    return None;
-                }
-                let value = values[0].clone().map(|x| self.total_rate(x, span));
-                let dims = match dims.into_iter().next().expect("one") {
-                    Dims::Number { .. } => Dims::Scalar(Form::default()),
-                    Dims::Scalar(f) => Dims::Scalar(f.rate(1)),
-                    Dims::Many(v) => Dims::Many(v.iter().map(|f| f.rate(1)).collect()),
-                    Dims::Grid(g) => {
-                        let g = g
-                            .into_iter()
-                            .map(|row| {
-                                row.into_iter()
-                                    .map(|d| Dims::Scalar(self.form(d).rate(1)))
-                                    .collect()
-                            })
-                            .collect();
-                        Dims::Grid(g)
-                    }
-                };
-                Some((value, dims))
+            "rotation" => self.rotation_call(&call, dims),
+            "quaternion" => self.quaternion_call(&call, dims),
+            "transpose" => self.transpose_call(&call, dims),
+            _ => self.rate_call(&call, dims),
+        }
+    }
+
+    /// A wrong argument of a call of one of [`SPACE_FUNCTIONS`], reported.
+    fn wrong_argument(
+        &mut self,
+        call: &SpaceCall<'_>,
+        i: usize,
+        expected: &str,
+    ) -> Option<(Value, Dims)> {
+        let SpaceCall { name, takes, args, values, .. } = call;
+        self.error(
+            Diagnostic::error(
+                args[i].span,
+                format!("`{name}` takes {takes}, not {}", values[i].kind_name()),
+            )
+            .with_label(format!("expected {expected}")),
+        );
+        None
+    }
+
+    /// `dot(u, v)` or `cross(u, v)`: the product of two vectors, in the product of their units.
+    fn product_call(&mut self, call: &SpaceCall<'_>, dims: Vec<Dims>) -> Option<(Value, Dims)> {
+        let &SpaceCall { name, args, ref values, .. } = call;
+        let (Some(u), Some(v)) = (as_vector(&values[0]), as_vector(&values[1])) else {
+            let i = usize::from(as_vector(&values[0]).is_some());
+            return self.wrong_argument(call, i, "a vector");
+        };
+        let length = if name == "cross" { 3 } else { u.len() };
+        for (i, w) in [&u, &v].into_iter().enumerate() {
+            if w.len() != length {
+                return self.wrong_argument(call, i, &format!("a {length}-vector"));
             }
         }
+        let mut dims = dims.into_iter();
+        let a = self.components(dims.next().expect("two"), args[0].span);
+        let b = self.components(dims.next().expect("two"), args[1].span);
+        let product = a.plus(&b, &Rational::one());
+        if name == "dot" {
+            Some((Value::Scalar(kinematics::dot(&mut self.pool, &u, &v)), Dims::Scalar(product)))
+        } else {
+            let w = kinematics::cross(&mut self.pool, &u, &v);
+            Some((Value::Vector(w), Dims::Many(vec![product; 3])))
+        }
+    }
+
+    /// `rotation(axis, angle)`: the rotation matrix about a non-zero axis.
+    fn rotation_call(&mut self, call: &SpaceCall<'_>, dims: Vec<Dims>) -> Option<(Value, Dims)> {
+        let &SpaceCall { args, ref values, .. } = call;
+        let axis = as_vector(&values[0]).filter(|v| v.len() == 3);
+        let Some(axis) = axis else { return self.wrong_argument(call, 0, "a 3-vector") };
+        let Value::Scalar(angle) = values[1] else {
+            return self.wrong_argument(call, 1, "an angle");
+        };
+        if axis.iter().all(|x| self.pool.is_identically_zero(*x)) {
+            self.error(
+                Diagnostic::error(args[0].span, "a rotation's axis cannot be zero")
+                    .with_label("this vector is zero")
+                    .with_hint("give the direction to turn about, such as (0, 0, 1)"),
+            );
+            return None;
+        }
+        if let Some(d) = self.zero_at_values(&axis, &args[0]) {
+            self.error(d);
+            return None;
+        }
+        let mut dims = dims.into_iter();
+        self.components(dims.next().expect("two"), args[0].span);
+        let form = self.form(dims.next().expect("two"));
+        self.units.dimensionless(&form, args[1].span, "the angle of a rotation");
+        let axis = [axis[0], axis[1], axis[2]];
+        let r = kinematics::about_axis(&mut self.pool, axis, angle);
+        Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
+    }
+
+    /// `quaternion(e0, e1, e2, e3)`: the rotation matrix of four Euler parameters.
+    fn quaternion_call(&mut self, call: &SpaceCall<'_>, dims: Vec<Dims>) -> Option<(Value, Dims)> {
+        let &SpaceCall { args, ref values, span, .. } = call;
+        let mut e = Vec::new();
+        for (i, v) in values.iter().enumerate() {
+            match v {
+                Value::Scalar(x) => e.push(*x),
+                _ => return self.wrong_argument(call, i, "a scalar"),
+            }
+        }
+        for (d, a) in dims.into_iter().zip(args) {
+            let form = self.form(d);
+            self.units.dimensionless(&form, a.span, "an Euler parameter");
+        }
+        let e = [e[0], e[1], e[2], e[3]];
+        let r = kinematics::from_quaternion(&mut self.pool, e);
+        let rows = kinematics::rows(&r);
+        self.quaternions.push((rows.clone(), e, span));
+        Some((Value::Matrix(rows), rotation_dims()))
+    }
+
+    /// `transpose(m)`: a matrix with its rows and columns swapped, dimensions too.
+    fn transpose_call(&mut self, call: &SpaceCall<'_>, dims: Vec<Dims>) -> Option<(Value, Dims)> {
+        let SpaceCall { values, .. } = call;
+        let Value::Matrix(m) = &values[0] else { return self.wrong_argument(call, 0, "a matrix") };
+        let t = kinematics::transpose(m);
+        let dims = match dims.into_iter().next().expect("one") {
+            Dims::Grid(g) => {
+                let columns = g.first().map_or(0, Vec::len);
+                let mut out: Vec<Vec<Dims>> = vec![Vec::new(); columns];
+                for row in g {
+                    for (j, d) in row.into_iter().enumerate() {
+                        out[j].push(d);
+                    }
+                }
+                Dims::Grid(out)
+            }
+            other => other,
+        };
+        Some((Value::Matrix(t), dims))
+    }
+
+    /// `dt(x)`: the total time derivative, entry by entry, with each dimension per time.
+    fn rate_call(&mut self, call: &SpaceCall<'_>, dims: Vec<Dims>) -> Option<(Value, Dims)> {
+        let &SpaceCall { ref values, span, .. } = call;
+        // dt: the total time derivative, entry by entry.
+        if !self.derivative_exists(&values[0], 1, span) {
+            return None;
+        }
+        let value = values[0].clone().map(|x| self.total_rate(x, span));
+        let dims = match dims.into_iter().next().expect("one") {
+            Dims::Number { .. } => Dims::Scalar(Form::default()),
+            Dims::Scalar(f) => Dims::Scalar(f.rate(1)),
+            Dims::Many(v) => Dims::Many(v.iter().map(|f| f.rate(1)).collect()),
+            Dims::Grid(g) => {
+                let g = g
+                    .into_iter()
+                    .map(|row| {
+                        row.into_iter().map(|d| Dims::Scalar(self.form(d).rate(1))).collect()
+                    })
+                    .collect();
+                Dims::Grid(g)
+            }
+        };
+        Some((value, dims))
     }
 
     /// The one dimension all components of a vector share, stated as a fact.

@@ -17,118 +17,9 @@ impl Resolver<'_> {
     pub(super) fn statement(&mut self, stmt: &Stmt) {
         match &stmt.kind {
             StmtKind::Scene { title } => self.title = Some(title.clone()),
-            StmtKind::Param(decls) => {
-                for decl in decls {
-                    // Its unknown comes before any in its value: unknowns follow the file.
-                    let example = match (&decl.value, &decl.unit) {
-                        (Some(v), None) => {
-                            let value = self.text(v.span);
-                            let value = if value.is_empty() { "…" } else { value.as_str() };
-                            Some(format!("param {} = {value} rad", decl.name.name))
-                        }
-                        _ => None,
-                    };
-                    let form = self.units.declared(&decl.name.name, decl.name.span, example);
-                    let value = decl.value.as_ref().map(|v| self.constant(v));
-                    if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
-                        let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
-                        let v = self.with_unit(dims, decl.unit.as_ref());
-                        let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
-                        self.units.same(&form, &v, decl.name.span, span, "in this parameter");
-                    }
-                    let value =
-                        value.flatten().and_then(|(v, _)| self.in_si(v, decl.unit.as_ref()));
-                    let name = normalize(&decl.name.name);
-                    if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
-                        self.bind(&decl.name, Binding::Param(self.time));
-                        continue;
-                    }
-                    let sym = self.pool.param(&name);
-                    if self.bind(&decl.name, Binding::Param(sym)) {
-                        let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
-                        self.name_dims.insert(name.clone(), dims);
-                        if let (Some(v), Some(written)) = (value, &decl.value) {
-                            self.param_value(sym, v, written);
-                        }
-                        self.params.push(Param {
-                            name,
-                            sym,
-                            value,
-                            unit: decl.unit.clone(),
-                            span: decl.name.span,
-                        });
-                    }
-                }
-            }
-            StmtKind::Let { name, value } => {
-                if let Some((v, dims)) = self.value(value) {
-                    if let Value::Scalar(e) = v {
-                        self.lets.push((normalize(&name.name), e));
-                    }
-                    // A vector or matrix keeps the dimension of each entry.
-                    let (form, entries) = match dims {
-                        Dims::Grid(g) => {
-                            let g = g
-                                .into_iter()
-                                .map(|row| {
-                                    row.into_iter().map(|d| Dims::Scalar(self.form(d))).collect()
-                                })
-                                .collect();
-                            (None, Some(Dims::Grid(g)))
-                        }
-                        Dims::Many(v) => (None, Some(Dims::Many(v))),
-                        d => match self.shape(d) {
-                            Shape::Scalar(f) => (Some(f), None),
-                            Shape::Many(v) => (None, Some(Dims::Many(v))),
-                        },
-                    };
-                    if self.bind(name, Binding::Let(v)) {
-                        let dims = NameDims { at: self.stmt, form, entries };
-                        self.name_dims.insert(normalize(&name.name), dims);
-                    }
-                }
-            }
-            StmtKind::Coord(decls) => {
-                for decl in decls {
-                    let form = self.units.fresh(&decl.name.name);
-                    let initial = decl.value.as_ref().and_then(|v| self.constant(v));
-                    if let (Some((_, dims)), Some(written)) = (&initial, &decl.value) {
-                        let v = self.with_unit(Some(dims.clone()), decl.value_unit.as_ref());
-                        let what = "in this initial value";
-                        self.units.same(&form, &v, decl.name.span, written.span, what);
-                    }
-                    let initial =
-                        initial.and_then(|(v, _)| self.in_si(v, decl.value_unit.as_ref()));
-                    let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
-                    if let (Some((_, dims)), Some(written)) = (&rate, &decl.rate) {
-                        let v = self.with_unit(Some(dims.clone()), decl.rate_unit.as_ref());
-                        let what = "in this initial rate";
-                        self.units.same(&form.rate(1), &v, written.span, written.span, what);
-                    }
-                    let rate = rate.and_then(|(v, _)| self.in_si(v, decl.rate_unit.as_ref()));
-                    let name = normalize(&decl.name.name);
-                    if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
-                        self.bind(&decl.name, Binding::Param(self.time));
-                        continue;
-                    }
-                    let sym = self.pool.coordinate(&name);
-                    let zero = self.pool.zero();
-                    if self.bind(&decl.name, Binding::Coord(sym)) {
-                        let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
-                        self.name_dims.insert(name.clone(), dims);
-                        self.coords.push(Coord {
-                            name,
-                            sym,
-                            initial: initial.unwrap_or(zero),
-                            initial_rate: rate.unwrap_or(zero),
-                            initial_given: decl.value.is_some() || decl.rate.is_some(),
-                            initial_rate_given: decl.rate.is_some(),
-                            position_free: decl.value.is_none() || decl.guess,
-                            span: decl.name.span,
-                        });
-                    }
-                }
-            }
+            StmtKind::Param(decls) => self.param_statement(decls),
+            StmtKind::Let { name, value } => self.let_statement(name, value),
+            StmtKind::Coord(decls) => self.coord_statement(decls),
             StmtKind::Particle { name, props } => {
                 self.body(name, props, BodyKind::Particle, stmt.span)
             }
@@ -137,137 +28,16 @@ impl Resolver<'_> {
                 self.constraint(name.as_ref(), lhs, rhs, stmt.span)
             }
             StmtKind::Gravity { strength: written, direction } => {
-                let strength = self.scalar_in_role(written, &GRAVITY).map(|(g, dims)| {
-                    let form = self.form(dims);
-                    (g, form)
-                });
-                let direction = direction.as_ref().and_then(|d| {
-                    let (value, dims) = self.value_in_role(d, &GRAVITY)?;
-                    for f in self.shape(dims).forms() {
-                        self.units.dimensionless(&f, d.span, "a direction");
-                    }
-                    match value {
-                        Value::Vector(v) => Some(v),
-                        other => {
-                            self.error(
-                                Diagnostic::error(
-                                    d.span,
-                                    format!(
-                                        "a direction must be a vector, not {}",
-                                        other.kind_name()
-                                    ),
-                                )
-                                .with_label("expected `(x, y)` or `(x, y, z)`")
-                                .with_hint("write `gravity g along (0, -1)`"),
-                            );
-                            None
-                        }
-                    }
-                });
-                if let Some((_, g)) = &strength {
-                    self.gravity_energy(g, written.span);
-                }
-                let strength = strength.map(|(g, _)| g);
-                if let Some(previous) = &self.gravity {
-                    let first = previous.span;
-                    self.error(
-                        Diagnostic::error(stmt.span, "gravity is given twice")
-                            .with_label("second `gravity`")
-                            .with_related(first, "first given here"),
-                    );
-                } else if let Some(strength) = strength {
-                    self.gravity = Some(Gravity { strength, direction, span: stmt.span });
-                }
+                self.gravity_statement(written, direction.as_ref(), stmt.span)
             }
-            StmtKind::Potential(e) => {
-                if let Some((expr, dims)) = self.scalar_in_role(e, &POTENTIAL) {
-                    let f = self.form(dims);
-                    self.units.energy_term(&f, e.span);
-                    self.potentials.push(Term { expr, span: e.span });
-                }
-            }
-            StmtKind::Dissipation(e) => {
-                if let Some((expr, dims)) = self.scalar_in_role(e, &DISSIPATION) {
-                    // A Rayleigh function is a power: energy per time.
-                    let f = self.form(dims).plus(&crate::units::time(), &Rational::one());
-                    self.units.energy_term(&f, e.span);
-                    self.dissipation.push(Term { expr, span: e.span });
-                }
-            }
-            StmtKind::Lagrangian(e) => {
-                if let Some((expr, dims)) = self.scalar_in_role(e, &LAGRANGIAN) {
-                    let f = self.form(dims);
-                    self.units.energy_term(&f, e.span);
-                    self.lagrangians.push(Term { expr, span: e.span });
-                }
-            }
+            StmtKind::Potential(e) => self.potential_statement(e),
+            StmtKind::Dissipation(e) => self.dissipation_statement(e),
+            StmtKind::Lagrangian(e) => self.lagrangian_statement(e),
             StmtKind::Spring { name, a, b, stiffness, rest } => {
-                let (Some((len2, separation)), Some((k, k_dims))) = (
-                    self.separation_squared(a, b, &SPRING),
-                    self.scalar_in_role(stiffness, &SPRING),
-                ) else {
-                    return;
-                };
-                let rest = match rest {
-                    Some(r) => match self.scalar_in_role(r, &SPRING) {
-                        Some((l0, dims)) => Some((l0, (dims, r.span))),
-                        None => return,
-                    },
-                    None => None,
-                };
-                let (rest, rest_dims) = rest.unzip();
-                let len = separation.length;
-                self.spring_energy(&len, (k_dims, stiffness.span), rest_dims, a.span.join(b.span));
-                // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
-                let stretch2 = match rest {
-                    Some(l0) => {
-                        let len = self.pool.sqrt(len2);
-                        let s = self.pool.sub(len, l0);
-                        self.pool.powi(s, 2)
-                    }
-                    None => len2,
-                };
-                let e = self.pool.mul2(k, stretch2);
-                let expr = self.pool.scale(e, &Rational::new(1.into(), 2.into()));
-                self.potentials.push(Term { expr, span: stmt.span });
-                self.links.push(Link {
-                    name: name.name.clone(),
-                    kind: LinkKind::Spring,
-                    ends: separation.ends,
-                    span: stmt.span,
-                });
+                self.spring_statement(name, (a, b), stiffness, rest.as_ref(), stmt.span)
             }
             StmtKind::Damper { name, a, b, coefficient } => {
-                let (Some(separation), Some((c, c_dims))) =
-                    (self.separation(a, b, &ATTACHMENT), self.scalar_in_role(coefficient, &DAMPER))
-                else {
-                    return;
-                };
-                let Separation { difference: d, length: len, ends } = separation;
-                self.links.push(Link {
-                    name: name.name.clone(),
-                    kind: LinkKind::Damper,
-                    ends,
-                    span: stmt.span,
-                });
-                self.damper_energy(&len, c_dims, coefficient.span);
-                // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
-                // on a line (AB = u) it is exactly u'².
-                let mut dots = Vec::new();
-                let mut squares = Vec::new();
-                for x in &d {
-                    let v = self.pool.time_derivative(*x);
-                    dots.push(self.pool.mul2(*x, v));
-                    squares.push(self.pool.powi(*x, 2));
-                }
-                let dot = self.pool.add(&dots);
-                let len2 = self.pool.add(&squares);
-                let dot2 = self.pool.powi(dot, 2);
-                let inv = self.pool.powi(len2, -1);
-                let rate2 = self.pool.mul2(dot2, inv);
-                let d = self.pool.mul2(c, rate2);
-                let expr = self.pool.scale(d, &Rational::new(1.into(), 2.into()));
-                self.dissipation.push(Term { expr, span: stmt.span });
+                self.damper_statement(name, (a, b), coefficient, stmt.span)
             }
             StmtKind::Force { name, body, at, value } => {
                 self.load(name, body, at.as_ref(), value, stmt.span, false)
@@ -275,54 +45,324 @@ impl Resolver<'_> {
             StmtKind::Torque { name, body, value } => {
                 self.load(name, body, None, value, stmt.span, true)
             }
-            StmtKind::Show { at_start, items } => {
-                for item in items {
-                    if let Some((value, _)) = self.value(item) {
-                        let label = self.text(item.span);
-                        self.shows.push(Show {
-                            at_start: *at_start,
-                            label,
-                            value,
-                            span: item.span,
-                        });
-                    }
-                }
-            }
+            StmtKind::Show { at_start, items } => self.show_statement(*at_start, items),
             StmtKind::Expect { at_start, lhs, rhs } => {
-                let (l, r) = (self.value(lhs), self.value(rhs));
-                let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
-                let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
-                for (a, b) in lf.iter().zip(&rf) {
-                    let what = "between the sides of this expectation";
-                    self.units.same(a, b, lhs.span, rhs.span, what);
-                }
-                let (ln, rn) = (l.entries().len(), r.entries().len());
-                if ln != rn {
-                    self.error(
-                        Diagnostic::error(
-                            rhs.span,
-                            "the two sides of this `expect` have different shapes",
-                        )
-                        .with_label(r.kind_name())
-                        .with_related(lhs.span, l.kind_name()),
-                    );
-                    return;
-                }
-                let text = self.text(stmt.span);
-                self.expects.push(Expect {
-                    at_start: *at_start,
-                    text,
-                    lhs: l,
-                    rhs: r,
-                    span: stmt.span,
-                    lhs_span: lhs.span,
-                    rhs_span: rhs.span,
-                });
+                self.expect_statement(*at_start, lhs, rhs, stmt.span)
             }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
             StmtKind::Draw(shape) => self.draw(shape, stmt.span),
         }
+    }
+
+    /// A `param` line: each name is a symbol, with its unit and its value if given.
+    fn param_statement(&mut self, decls: &[lang::ParamDecl]) {
+        for decl in decls {
+            // Its unknown comes before any in its value: unknowns follow the file.
+            let example = match (&decl.value, &decl.unit) {
+                (Some(v), None) => {
+                    let value = self.text(v.span);
+                    let value = if value.is_empty() { "…" } else { value.as_str() };
+                    Some(format!("param {} = {value} rad", decl.name.name))
+                }
+                _ => None,
+            };
+            let form = self.units.declared(&decl.name.name, decl.name.span, example);
+            let value = decl.value.as_ref().map(|v| self.constant(v));
+            if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
+                let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
+                let v = self.with_unit(dims, decl.unit.as_ref());
+                let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
+                self.units.same(&form, &v, decl.name.span, span, "in this parameter");
+            }
+            let value = value.flatten().and_then(|(v, _)| self.in_si(v, decl.unit.as_ref()));
+            let name = normalize(&decl.name.name);
+            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Param(self.time));
+                continue;
+            }
+            let sym = self.pool.param(&name);
+            if self.bind(&decl.name, Binding::Param(sym)) {
+                let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
+                self.name_dims.insert(name.clone(), dims);
+                if let (Some(v), Some(written)) = (value, &decl.value) {
+                    self.param_value(sym, v, written);
+                }
+                self.params.push(Param {
+                    name,
+                    sym,
+                    value,
+                    unit: decl.unit.clone(),
+                    span: decl.name.span,
+                });
+            }
+        }
+    }
+
+    /// A `let` line: the name stands for its value, with the value's dimensions.
+    fn let_statement(&mut self, name: &lang::Ident, value: &lang::Expr) {
+        if let Some((v, dims)) = self.value(value) {
+            if let Value::Scalar(e) = v {
+                self.lets.push((normalize(&name.name), e));
+            }
+            // A vector or matrix keeps the dimension of each entry.
+            let (form, entries) = match dims {
+                Dims::Grid(g) => {
+                    let g = g
+                        .into_iter()
+                        .map(|row| row.into_iter().map(|d| Dims::Scalar(self.form(d))).collect())
+                        .collect();
+                    (None, Some(Dims::Grid(g)))
+                }
+                Dims::Many(v) => (None, Some(Dims::Many(v))),
+                d => match self.shape(d) {
+                    Shape::Scalar(f) => (Some(f), None),
+                    Shape::Many(v) => (None, Some(Dims::Many(v))),
+                },
+            };
+            if self.bind(name, Binding::Let(v)) {
+                let dims = NameDims { at: self.stmt, form, entries };
+                self.name_dims.insert(normalize(&name.name), dims);
+            }
+        }
+    }
+
+    /// A `coord` line: each name is a coordinate, with its initial value and rate.
+    fn coord_statement(&mut self, decls: &[lang::CoordDecl]) {
+        for decl in decls {
+            let form = self.units.fresh(&decl.name.name);
+            let initial = decl.value.as_ref().and_then(|v| self.constant(v));
+            if let (Some((_, dims)), Some(written)) = (&initial, &decl.value) {
+                let v = self.with_unit(Some(dims.clone()), decl.value_unit.as_ref());
+                let what = "in this initial value";
+                self.units.same(&form, &v, decl.name.span, written.span, what);
+            }
+            let initial = initial.and_then(|(v, _)| self.in_si(v, decl.value_unit.as_ref()));
+            let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
+            if let (Some((_, dims)), Some(written)) = (&rate, &decl.rate) {
+                let v = self.with_unit(Some(dims.clone()), decl.rate_unit.as_ref());
+                let what = "in this initial rate";
+                self.units.same(&form.rate(1), &v, written.span, written.span, what);
+            }
+            let rate = rate.and_then(|(v, _)| self.in_si(v, decl.rate_unit.as_ref()));
+            let name = normalize(&decl.name.name);
+            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Param(self.time));
+                continue;
+            }
+            let sym = self.pool.coordinate(&name);
+            let zero = self.pool.zero();
+            if self.bind(&decl.name, Binding::Coord(sym)) {
+                let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
+                self.name_dims.insert(name.clone(), dims);
+                self.coords.push(Coord {
+                    name,
+                    sym,
+                    initial: initial.unwrap_or(zero),
+                    initial_rate: rate.unwrap_or(zero),
+                    initial_given: decl.value.is_some() || decl.rate.is_some(),
+                    initial_rate_given: decl.rate.is_some(),
+                    position_free: decl.value.is_none() || decl.guess,
+                    span: decl.name.span,
+                });
+            }
+        }
+    }
+
+    /// A `gravity` line: its strength and direction, given once.
+    fn gravity_statement(
+        &mut self,
+        written: &lang::Expr,
+        direction: Option<&lang::Expr>,
+        span: Span,
+    ) {
+        let strength = self.scalar_in_role(written, &GRAVITY).map(|(g, dims)| {
+            let form = self.form(dims);
+            (g, form)
+        });
+        let direction = direction.and_then(|d| {
+            let (value, dims) = self.value_in_role(d, &GRAVITY)?;
+            for f in self.shape(dims).forms() {
+                self.units.dimensionless(&f, d.span, "a direction");
+            }
+            match value {
+                Value::Vector(v) => Some(v),
+                other => {
+                    self.error(
+                        Diagnostic::error(
+                            d.span,
+                            format!("a direction must be a vector, not {}", other.kind_name()),
+                        )
+                        .with_label("expected `(x, y)` or `(x, y, z)`")
+                        .with_hint("write `gravity g along (0, -1)`"),
+                    );
+                    None
+                }
+            }
+        });
+        if let Some((_, g)) = &strength {
+            self.gravity_energy(g, written.span);
+        }
+        let strength = strength.map(|(g, _)| g);
+        if let Some(previous) = &self.gravity {
+            let first = previous.span;
+            self.error(
+                Diagnostic::error(span, "gravity is given twice")
+                    .with_label("second `gravity`")
+                    .with_related(first, "first given here"),
+            );
+        } else if let Some(strength) = strength {
+            self.gravity = Some(Gravity { strength, direction, span });
+        }
+    }
+
+    /// A `potential` line: an energy term of the potential.
+    fn potential_statement(&mut self, e: &lang::Expr) {
+        if let Some((expr, dims)) = self.scalar_in_role(e, &POTENTIAL) {
+            let f = self.form(dims);
+            self.units.energy_term(&f, e.span);
+            self.potentials.push(Term { expr, span: e.span });
+        }
+    }
+
+    /// A `dissipation` line: a term of the Rayleigh function, a power.
+    fn dissipation_statement(&mut self, e: &lang::Expr) {
+        if let Some((expr, dims)) = self.scalar_in_role(e, &DISSIPATION) {
+            // A Rayleigh function is a power: energy per time.
+            let f = self.form(dims).plus(&crate::units::time(), &Rational::one());
+            self.units.energy_term(&f, e.span);
+            self.dissipation.push(Term { expr, span: e.span });
+        }
+    }
+
+    /// A `lagrangian` line: an energy term added to the Lagrangian.
+    fn lagrangian_statement(&mut self, e: &lang::Expr) {
+        if let Some((expr, dims)) = self.scalar_in_role(e, &LAGRANGIAN) {
+            let f = self.form(dims);
+            self.units.energy_term(&f, e.span);
+            self.lagrangians.push(Term { expr, span: e.span });
+        }
+    }
+
+    /// A `spring` line: its energy k/2 (|AB| − l0)², and the link for drawing.
+    fn spring_statement(
+        &mut self,
+        name: &lang::Ident,
+        ends: (&lang::Expr, &lang::Expr),
+        stiffness: &lang::Expr,
+        rest: Option<&lang::Expr>,
+        span: Span,
+    ) {
+        let (a, b) = ends;
+        let (Some((len2, separation)), Some((k, k_dims))) =
+            (self.separation_squared(a, b, &SPRING), self.scalar_in_role(stiffness, &SPRING))
+        else {
+            return;
+        };
+        let rest = match rest {
+            Some(r) => match self.scalar_in_role(r, &SPRING) {
+                Some((l0, dims)) => Some((l0, (dims, r.span))),
+                None => return,
+            },
+            None => None,
+        };
+        let (rest, rest_dims) = rest.unzip();
+        let len = separation.length;
+        self.spring_energy(&len, (k_dims, stiffness.span), rest_dims, a.span.join(b.span));
+        // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
+        let stretch2 = match rest {
+            Some(l0) => {
+                let len = self.pool.sqrt(len2);
+                let s = self.pool.sub(len, l0);
+                self.pool.powi(s, 2)
+            }
+            None => len2,
+        };
+        let e = self.pool.mul2(k, stretch2);
+        let expr = self.pool.scale(e, &Rational::new(1.into(), 2.into()));
+        self.potentials.push(Term { expr, span });
+        self.links.push(Link {
+            name: name.name.clone(),
+            kind: LinkKind::Spring,
+            ends: separation.ends,
+            span,
+        });
+    }
+
+    /// A `damper` line: its Rayleigh term c/2 (d|AB|/dt)², and the link for drawing.
+    fn damper_statement(
+        &mut self,
+        name: &lang::Ident,
+        ends: (&lang::Expr, &lang::Expr),
+        coefficient: &lang::Expr,
+        span: Span,
+    ) {
+        let (a, b) = ends;
+        let (Some(separation), Some((c, c_dims))) =
+            (self.separation(a, b, &ATTACHMENT), self.scalar_in_role(coefficient, &DAMPER))
+        else {
+            return;
+        };
+        let Separation { difference: d, length: len, ends } = separation;
+        self.links.push(Link { name: name.name.clone(), kind: LinkKind::Damper, ends, span });
+        self.damper_energy(&len, c_dims, coefficient.span);
+        // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
+        // on a line (AB = u) it is exactly u'².
+        let mut dots = Vec::new();
+        let mut squares = Vec::new();
+        for x in &d {
+            let v = self.pool.time_derivative(*x);
+            dots.push(self.pool.mul2(*x, v));
+            squares.push(self.pool.powi(*x, 2));
+        }
+        let dot = self.pool.add(&dots);
+        let len2 = self.pool.add(&squares);
+        let dot2 = self.pool.powi(dot, 2);
+        let inv = self.pool.powi(len2, -1);
+        let rate2 = self.pool.mul2(dot2, inv);
+        let d = self.pool.mul2(c, rate2);
+        let expr = self.pool.scale(d, &Rational::new(1.into(), 2.into()));
+        self.dissipation.push(Term { expr, span });
+    }
+
+    /// A `show` line: each item's value, labelled by its text.
+    fn show_statement(&mut self, at_start: bool, items: &[lang::Expr]) {
+        for item in items {
+            if let Some((value, _)) = self.value(item) {
+                let label = self.text(item.span);
+                self.shows.push(Show { at_start, label, value, span: item.span });
+            }
+        }
+    }
+
+    /// An `expect` line: two values of the same shape and dimensions, to compare.
+    fn expect_statement(&mut self, at_start: bool, lhs: &lang::Expr, rhs: &lang::Expr, span: Span) {
+        let (l, r) = (self.value(lhs), self.value(rhs));
+        let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+        let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
+        for (a, b) in lf.iter().zip(&rf) {
+            let what = "between the sides of this expectation";
+            self.units.same(a, b, lhs.span, rhs.span, what);
+        }
+        let (ln, rn) = (l.entries().len(), r.entries().len());
+        if ln != rn {
+            self.error(
+                Diagnostic::error(rhs.span, "the two sides of this `expect` have different shapes")
+                    .with_label(r.kind_name())
+                    .with_related(lhs.span, l.kind_name()),
+            );
+            return;
+        }
+        let text = self.text(span);
+        self.expects.push(Expect {
+            at_start,
+            text,
+            lhs: l,
+            rhs: r,
+            span,
+            lhs_span: lhs.span,
+            rhs_span: rhs.span,
+        });
     }
 
     /// A `linearize about` line: each item names a coordinate (or its rate) and gives it a
