@@ -16,7 +16,7 @@ pub fn run() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let source =
         std::fs::read_to_string(root.join("examples/bicycle/whipple.lag")).expect("the bicycle");
-    println!("## The Whipple bicycle\n");
+    outln!("## The Whipple bicycle\n");
 
     let bar = crate::progress::Bar::new("bicycle: deriving");
     let start = Instant::now();
@@ -61,13 +61,13 @@ pub fn run() {
         mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
     });
 
-    println!("| coordinates | kept constraints | derive (whole load, once) | linearize at 5 m/s (with its derivation, once) | lowered operations: all (M alone, f alone, constraint rows alone) | one right-hand side |");
-    println!("|---|---|---|---|---|---|");
-    println!(
+    outln!("| coordinates | kept constraints | derive (whole load, once) | linearize at 5 m/s (with its derivation, once) | lowered operations: all (M alone, f alone, constraint rows alone) | one right-hand side |");
+    outln!("|---|---|---|---|---|---|");
+    outln!(
         "| {n} | {kept} | {} | {} | {ops} ({mass_ops}, {forcing_ops}, {rows_ops}) | {} |",
         seconds(derive),
         seconds(linearize),
         seconds(rhs)
     );
-    println!();
+    outln!();
 }

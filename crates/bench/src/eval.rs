@@ -57,7 +57,7 @@ fn per_call(mut f: impl FnMut()) -> f64 {
 "#;
 
 pub fn run() {
-    println!("## One evaluation (n-link pendulum; median of 7 batches of ≥ 20 ms each)");
+    outln!("## One evaluation (n-link pendulum; median of 7 batches of ≥ 20 ms each)");
     let dir = std::env::temp_dir().join(format!("lagrange-bench-eval-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     std::fs::write(dir.join("hand.rs"), include_str!("hand.rs")).expect("write");
@@ -181,12 +181,12 @@ pub fn run() {
                 }
             }
         }
-        _ => println!(
+        _ => outln!(
             "(rustc could not build the timing program in {}; no generated figures)",
             dir.display()
         ),
     }
-    println!(
+    outln!(
         "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9} {:>9}",
         "n",
         "ops",
@@ -200,7 +200,7 @@ pub fn run() {
         "tape/gen"
     );
     for r in &rows {
-        println!(
+        outln!(
             "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9.2} {:>9.2}",
             r.n,
             r.ops,
@@ -231,10 +231,10 @@ pub fn run() {
     let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
     let mut dy = vec![0.0; 8];
     let t = crate::per_call(|| mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular"));
-    println!(
+    outln!(
         "4-link pendulum, one right-hand side on the tape (sim::Mechanical): {}",
         crate::seconds(t)
     );
-    println!("(gen, hand: rustc -O; tape: this binary; rhs = M, f and the solve of M q'' = f)\n");
+    outln!("(gen, hand: rustc -O; tape: this binary; rhs = M, f and the solve of M q'' = f)\n");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -14,6 +14,24 @@
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
 //! machine may be shared, so the figures are indicative.
 
+/// `print!` to standard output, but a reader that stops reading (`| head`) ends the output
+/// quietly instead of with a panic; other write errors are said on stderr.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        crate::emit(format_args!($($arg)*))
+    };
+}
+
+/// `println!` as [`out!`] prints.
+macro_rules! outln {
+    () => {
+        crate::emit(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        crate::emit(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod bicycle;
 mod eval;
 mod hand;
@@ -107,3 +125,14 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
 
 /// A duration with a unit that keeps three significant digits readable.
 pub use engine::bench::seconds;
+
+/// Writes to standard output for [`out!`] and [`outln!`].
+fn emit(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(e) = stdout.write_fmt(args).and_then(|()| stdout.flush()) {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("error: cannot write the output: {e}");
+        }
+    }
+}

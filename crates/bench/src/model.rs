@@ -9,14 +9,14 @@ use numeric::Tape;
 use sim::{Mechanical, Problem};
 
 pub fn run() {
-    println!("## Model only what the scene requires (falling rod)");
+    outln!("## Model only what the scene requires (falling rod)");
     let source = crate::precision::read("ps5/falling_rod.lag");
     let bare: String = source
         .lines()
         .filter(|l| !l.starts_with("show") && !l.starts_with("expect"))
         .map(|l| format!("{l}\n"))
         .collect();
-    println!(
+    outln!(
         "{:<26} {:>10} {:>9} {:>10} {:>8} {:>8} {:>12} {:>12}",
         "asked for",
         "derive",
@@ -63,7 +63,7 @@ pub fn run() {
             mech.observe(0.0, black_box(&y), black_box(&mut row)).expect("ok");
         });
         let label = if extra.is_empty() { "nothing".to_string() } else { extra.join(", ") };
-        println!(
+        outln!(
             "{:<26} {:>10} {:>9} {:>10} {:>8} {:>8} {:>12} {:>12}",
             label,
             crate::seconds(crate::median(&mut times)),
@@ -75,5 +75,5 @@ pub fn run() {
             crate::seconds(both)
         );
     }
-    println!("(rhs+observe: a step's right-hand side plus the recording of the outputs)\n");
+    outln!("(rhs+observe: a step's right-hand side plus the recording of the outputs)\n");
 }

@@ -41,16 +41,16 @@ pub fn rod_landing_time(theta0: f64) -> f64 {
 }
 
 fn section(title: &str, note: &str, trials: &[Trial]) {
-    println!("{title}\n{note}");
-    print!("{}", engine::bench::table(trials, &[]));
-    println!();
+    outln!("{title}\n{note}");
+    out!("{}", engine::bench::table(trials, &[]));
+    outln!();
 }
 
 /// The three work–precision tables, and the trials of the double pendulum for the plot.
 // The pendulum's exact period is a reference too (see `rod_landing_time`).
 #[allow(clippy::disallowed_methods)]
 pub fn run() -> Vec<Trial> {
-    println!("## Work–precision (integration wall time, median of 3 runs)\n");
+    outln!("## Work–precision (integration wall time, median of 3 runs)\n");
 
     // Double pendulum to t = 10.
     let rel = "classics/double_pendulum.lag";

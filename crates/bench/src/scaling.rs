@@ -62,23 +62,33 @@ pub fn measure(family: Family, n: usize, repeats: usize) -> Measured {
 pub fn json(family: Family, n: usize) {
     let m = measure(family, n, 5);
     let peak = m.peak_bytes.map_or("null".to_string(), |b| b.to_string());
-    println!(
+    outln!(
         "{{\"n\": {n}, \"derive_s\": {:e}, \"lowered_s\": {:e}, \"nodes\": {}, \"ops\": {}, \
          \"peak_rss_bytes\": {peak}}}",
-        m.derive, m.lowered, m.nodes, m.ops
+        m.derive,
+        m.lowered,
+        m.nodes,
+        m.ops
     );
 }
 
 // Timings extrapolated and growth exponents printed to two decimals: no last bit shows.
 #[allow(clippy::disallowed_methods)]
 pub fn run(budget: f64, max: usize) {
-    println!("## Derivation scaling (median of up to 5 runs; per-size budget {budget} s)");
+    outln!("## Derivation scaling (median of up to 5 runs; per-size budget {budget} s)");
     for family in [Family::Pendulum, Family::PendulumOnCart] {
         let name = Family::NAMES[family as usize];
-        println!("\n{name}");
-        println!(
+        outln!("\n{name}");
+        outln!(
             "{:>4} {:>12} {:>16} {:>10} {:>10} {:>8} {:>9} {:>10}",
-            "n", "derive", "+ lower M, f", "pool nodes", "ops M, f", "ops/n²", "growth", "peak RSS"
+            "n",
+            "derive",
+            "+ lower M, f",
+            "pool nodes",
+            "ops M, f",
+            "ops/n²",
+            "growth",
+            "peak RSS"
         );
         let mut previous: Option<(usize, f64)> = None;
         for &n in SIZES.iter().filter(|&&n| n <= max) {
@@ -86,7 +96,7 @@ pub fn run(budget: f64, max: usize) {
                 // Skip a size whose run, extrapolated with cubic growth, would pass the budget.
                 let predicted = pt * (n as f64 / pn as f64).powi(3);
                 if predicted > budget {
-                    println!(
+                    outln!(
                         "{n:>4} skipped: about {predicted:.0} s expected from n = {pn}, over the \
                          {budget} s budget"
                     );
@@ -103,7 +113,7 @@ pub fn run(budget: f64, max: usize) {
                 }
                 _ => String::new(),
             };
-            println!(
+            outln!(
                 "{n:>4} {:>12} {:>16} {:>10} {:>10} {:>8.1} {:>9} {:>10}",
                 crate::seconds(m.derive),
                 crate::seconds(m.lowered),
@@ -116,5 +126,5 @@ pub fn run(budget: f64, max: usize) {
             previous = Some((n, m.lowered));
         }
     }
-    println!();
+    outln!();
 }

@@ -19,9 +19,9 @@ const SCENES: [&str; 6] = [
 
 pub fn run() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    println!("## Bodies in space: load and derive\n");
-    println!("| scene | coordinates | derive | lowered operations (M, f) |");
-    println!("|---|---|---|---|");
+    outln!("## Bodies in space: load and derive\n");
+    outln!("| scene | coordinates | derive | lowered operations (M, f) |");
+    outln!("|---|---|---|---|");
     for rel in SCENES {
         let source = std::fs::read_to_string(root.join(rel)).expect("scene");
         let scene = engine::load(&source).expect("the scene derives");
@@ -37,7 +37,7 @@ pub fn run() {
         let outputs = prepared.dynamics_exprs();
         let program = prepared.lower(&inputs, &outputs).expect("lowers");
         let name = rel.rsplit('/').next().unwrap_or(rel);
-        println!("| {name} | {n} | {} | {} |", seconds(time), program.op_counts().total());
+        outln!("| {name} | {n} | {} | {} |", seconds(time), program.op_counts().total());
     }
-    println!();
+    outln!();
 }
