@@ -251,6 +251,23 @@ fn mass_matrix_by_columns(d: &Derivation) -> Vec<ExprId> {
 }
 
 impl Prepared {
+    /// A value per symbol at the start `y0` (`[q, q̇]` in slot order): the parameters, t = 0,
+    /// the coordinates and their rates.
+    fn start_values(&self, y0: &[f64], parameters: &[f64]) -> Vec<f64> {
+        let d = &self.derivation;
+        let n = d.coords.len();
+        let mut values = vec![f64::NAN; d.model.pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        values[d.model.time.index()] = 0.0;
+        for k in 0..n {
+            values[d.coords[k].index()] = y0[k];
+            values[d.rates[k].index()] = y0[n + k];
+        }
+        values
+    }
+
     /// Checks the start's positions against the kept position constraints at the values a
     /// run uses (the scene's, with `--set`): positions the scene left free are solved again
     /// there, and a start that breaks a constraint all the same is an error, rather than a run
@@ -261,16 +278,8 @@ impl Prepared {
         parameters: &[f64],
         set_positions: &[bool],
     ) -> Result<(), Error> {
+        let values = self.start_values(y0, parameters);
         let d = &mut self.derivation;
-        let n = d.coords.len();
-        let mut values = vec![f64::NAN; d.model.pool.symbol_count()];
-        for (s, v) in self.parameters.iter().zip(parameters) {
-            values[s.index()] = *v;
-        }
-        values[d.model.time.index()] = 0.0;
-        for k in 0..n {
-            values[d.coords[k].index()] = y0[k];
-        }
         let broken = |d: &mechanics::Derivation, values: &[f64]| {
             d.multipliers
                 .iter()
@@ -319,20 +328,13 @@ impl Prepared {
         parameters: &[f64],
         set_rates: &[bool],
     ) -> Result<(), Error> {
+        let start_values = self.start_values(y0, parameters);
         let d = &mut self.derivation;
         if d.multipliers.is_empty() {
             return Ok(());
         }
         let n = d.coords.len();
-        let rows: Vec<ExprId> = d
-            .multipliers
-            .clone()
-            .into_iter()
-            .map(|m| match m.kind {
-                model::ConstraintKind::Velocity => m.phi,
-                model::ConstraintKind::Position => d.model.pool.time_derivative(m.phi),
-            })
-            .collect();
+        let rows = d.velocity_rows();
         let pool = &mut d.model.pool;
         let free: Vec<usize> = (0..n)
             .filter(|k| {
@@ -342,15 +344,7 @@ impl Prepared {
                     && rows.iter().any(|r| pool.depends_on(*r, d.rates[*k]))
             })
             .collect();
-        let mut values = vec![f64::NAN; pool.symbol_count()];
-        for (s, v) in self.parameters.iter().zip(parameters) {
-            values[s.index()] = *v;
-        }
-        values[d.model.time.index()] = 0.0;
-        for k in 0..n {
-            values[d.coords[k].index()] = y0[k];
-            values[d.rates[k].index()] = y0[n + k];
-        }
+        let mut values = start_values;
         if free.len() != rows.len() {
             // Nothing to solve for: the rates must satisfy the rows as they are, or the run
             // would start off the constraints and be dragged back by the stabilisation.

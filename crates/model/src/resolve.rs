@@ -317,6 +317,13 @@ impl<'a> Resolver<'a> {
                 return Err(mismatches);
             }
         }
+        self.checks = checks;
+        let warnings = std::mem::take(&mut self.warnings);
+        Ok((self.into_model(), warnings))
+    }
+
+    /// The model resolved so far, with the scope that resolves more expressions against it.
+    fn into_model(self) -> Model {
         let scope = Scope {
             names: self.names,
             declared: self.declared,
@@ -328,35 +335,32 @@ impl<'a> Resolver<'a> {
             body_dims: self.body_dims,
             loose: self.loose,
             quaternions: self.quaternions,
-            checks,
+            checks: self.checks,
         };
-        Ok((
-            Model {
-                scope,
-                pool: self.pool,
-                title: self.title,
-                time: self.time,
-                params: self.params,
-                coords: self.coords,
-                bodies: self.bodies,
-                constraints: self.constraints,
-                gravity: self.gravity,
-                potentials: self.potentials,
-                forces: self.forces,
-                torques: self.torques,
-                dissipation: self.dissipation,
-                lagrangians: self.lagrangians,
-                shows: self.shows,
-                expects: self.expects,
-                drawings: self.drawings,
-                links: self.links,
-                simulate: self.simulate,
-                linearize: self.linearize,
-                placeholders: self.placeholders,
-                lets: self.lets,
-            },
-            self.warnings,
-        ))
+        Model {
+            scope,
+            pool: self.pool,
+            title: self.title,
+            time: self.time,
+            params: self.params,
+            coords: self.coords,
+            bodies: self.bodies,
+            constraints: self.constraints,
+            gravity: self.gravity,
+            potentials: self.potentials,
+            forces: self.forces,
+            torques: self.torques,
+            dissipation: self.dissipation,
+            lagrangians: self.lagrangians,
+            shows: self.shows,
+            expects: self.expects,
+            drawings: self.drawings,
+            links: self.links,
+            simulate: self.simulate,
+            linearize: self.linearize,
+            placeholders: self.placeholders,
+            lets: self.lets,
+        }
     }
 }
 

@@ -194,32 +194,28 @@ fn sample_at_start(d: &mut Derivation, residual: ExprId, unknowns: usize) -> Ver
     let params: Vec<SymId> = d.model.params.iter().map(|p| p.sym).collect();
     let mut solver = StartSolver::new(d);
     let mut measure = ScaledEvaluator::new(&d.model.pool, &[residual]);
-    if d.start_at_values_only {
-        // Elsewhere the start would break its constraints.
+    // A start that holds only at the scene's values is tried there alone: elsewhere it would
+    // break its constraints.
+    let at_values = if d.start_at_values_only {
         let Ok(values) = crate::start::parameter_values(d) else {
             return Verdict::Undecided {
                 reason: "the start holds only at the parameters' values, and some have none".into(),
             };
         };
-        let Some(start) = solver.solve(d, &values) else {
-            return Verdict::Undecided {
-                reason: "the mass matrix is singular at the start".into(),
-            };
-        };
-        let (value, scale) = measure.eval(&start.values)[0];
-        if let Some(mut f) = failure_at(d, residual, (value, scale), &start.values, &params) {
-            f.state.retain(|(s, _)| params.contains(s));
-            return Verdict::Fails(f);
-        }
-        return Verdict::Numeric { samples: 1, sampling: Sampling::AtStartValues { unknowns } };
-    }
+        Some(values)
+    } else {
+        None
+    };
+    let tries = if at_values.is_some() { 1 } else { SAMPLES * 4 };
     let mut good = 0;
-    for _ in 0..SAMPLES * 4 {
+    for _ in 0..tries {
         if good == SAMPLES {
             break;
         }
-        let values: Vec<(SymId, f64)> =
-            params.iter().map(|p| (*p, rng.gen_range(0.5..2.0))).collect();
+        let values: Vec<(SymId, f64)> = match &at_values {
+            Some(values) => values.clone(),
+            None => params.iter().map(|p| (*p, rng.gen_range(0.5..2.0))).collect(),
+        };
         let Some(start) = solver.solve(d, &values) else { continue };
         let (value, scale) = measure.eval(&start.values)[0];
         if let Some(mut f) = failure_at(d, residual, (value, scale), &start.values, &params) {
@@ -230,12 +226,20 @@ fn sample_at_start(d: &mut Derivation, residual: ExprId, unknowns: usize) -> Ver
             good += 1;
         }
     }
-    if good == 0 {
-        return Verdict::Undecided {
+    match (good, at_values) {
+        (0, Some(_)) => Verdict::Undecided {
+            reason: "the start could not be solved at the parameters' values, or the expression \
+                     is undefined there"
+                .into(),
+        },
+        (0, None) => Verdict::Undecided {
             reason: "the start could not be solved at any parameter values tried".into(),
-        };
+        },
+        (_, Some(_)) => {
+            Verdict::Numeric { samples: good, sampling: Sampling::AtStartValues { unknowns } }
+        }
+        (_, None) => Verdict::Numeric { samples: good, sampling: Sampling::AtStart { unknowns } },
     }
-    Verdict::Numeric { samples: good, sampling: Sampling::AtStart { unknowns } }
 }
 
 /// A failure when the residual, whose value and size at this state are `measured`, is

@@ -125,38 +125,6 @@ impl<'a> Resolver<'a> {
 
     /// Gives `model` back what [`Resolver::resume`] took, with what was added since.
     fn suspend(self, model: &mut Model) {
-        model.pool = self.pool;
-        model.title = self.title;
-        model.params = self.params;
-        model.coords = self.coords;
-        model.bodies = self.bodies;
-        model.constraints = self.constraints;
-        model.gravity = self.gravity;
-        model.potentials = self.potentials;
-        model.forces = self.forces;
-        model.torques = self.torques;
-        model.dissipation = self.dissipation;
-        model.lagrangians = self.lagrangians;
-        model.shows = self.shows;
-        model.expects = self.expects;
-        model.drawings = self.drawings;
-        model.links = self.links;
-        model.simulate = self.simulate;
-        model.linearize = self.linearize;
-        model.placeholders = self.placeholders;
-        model.lets = self.lets;
-        model.scope = Scope {
-            names: self.names,
-            declared: self.declared,
-            used: self.used,
-            param_values: self.param_values,
-            statements: self.stmt + 1,
-            units: self.units,
-            name_dims: self.name_dims,
-            body_dims: self.body_dims,
-            loose: self.loose,
-            quaternions: self.quaternions,
-            checks: self.checks,
-        };
+        *model = self.into_model();
     }
 }
