@@ -62,6 +62,13 @@ pub trait Problem {
     fn observations(&self) -> usize;
     /// Writes the recorded quantities of the state (outputs, event functions, energies).
     fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind>;
+    /// Writes the exact Jacobian ∂F/∂y at (t, y) into `jac` (row-major, dim × dim) and
+    /// returns `Ok(true)`. A problem without one returns `Ok(false)`, and implicit methods
+    /// difference [`Problem::rhs`] instead.
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        let _ = (t, y, jac);
+        Ok(false)
+    }
     /// The state in the physical variables (q, q̇), for reports of a fault or a run's end.
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         let _ = t;
