@@ -20,7 +20,7 @@ use crate::dense::{regular, rows_of, solve};
 use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
 use crate::layout::{Block, Outputs};
-use crate::reference::{self, Items};
+use crate::reference::{self, AtReference, Items};
 use crate::spectrum::Spectrum;
 use crate::{Case, CaseNumbers, Component, Linearization, Numbers, StateSpace};
 
@@ -84,7 +84,7 @@ pub(crate) fn linearize(
         pool.simplify(e)
     };
     let kept_index: Vec<usize> = (0..n).filter(|&i| kept[i]).collect();
-    let (mass, damping, stiffness, mut residual) =
+    let AtReference { mass, damping, stiffness, mut residual } =
         matrices(pool, &form, &accels, &d.coords, &kept_index, at);
     let mut residual_symbols = accels.clone();
     let mut kinematics = Vec::new();
@@ -249,7 +249,7 @@ fn matrices(
     coords: &[SymId],
     kept: &[usize],
     at: impl Fn(&mut Pool, ExprId) -> ExprId,
-) -> (Vec<Vec<ExprId>>, Vec<Vec<ExprId>>, Vec<Vec<ExprId>>, Vec<ExprId>) {
+) -> AtReference {
     let zero_accels: HashMap<SymId, ExprId> = accels.iter().map(|a| (*a, pool.zero())).collect();
     let (mut mass, mut damping, mut stiffness, mut residual) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -275,7 +275,7 @@ fn matrices(
         stiffness.push(k);
         residual.push(at(pool, h));
     }
-    (mass, damping, stiffness, residual)
+    AtReference { mass, damping, stiffness, residual }
 }
 
 /// Where the matrices of the equations in the independent rates sit among the program's
