@@ -15,10 +15,10 @@ use nalgebra::{DMatrix, DVector};
 use crate::dense::{accelerations_and_multipliers, null_space, regular, rows_of, solve};
 use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
-use crate::layout::{Block, ConstraintRows, Outputs};
-use crate::reference::{self, Equations, Items};
+use crate::layout::{self, ConstraintRows, Outputs};
+use crate::reference::{self, Items, Placed};
 use crate::spectrum::Spectrum;
-use crate::{Case, CaseNumbers, Component, LinearConstraint, Linearization, Numbers, StateSpace};
+use crate::{Case, CaseNumbers, Component, LinearConstraint, Linearization, Numbers};
 
 /// Linearizes with no velocity constraint kept, `errors` those found in the items already.
 pub(crate) fn linearize(
@@ -63,15 +63,8 @@ pub(crate) fn linearize(
         let e = pool.subst(e, &map);
         pool.simplify(e)
     };
-    let parts = Equations {
-        mass: &d.mass_matrix,
-        forcing: &d.forcing,
-        multipliers: &d.multipliers,
-        coords: &d.coords,
-        rates: &d.rates,
-    };
+    let exact = reference::at_reference(d, &cyclic, &mut at);
     let pool = &mut d.model.pool;
-    let exact = parts.at_reference(pool, &cyclic, &mut at);
     let residual_is_zero =
         d.multipliers.is_empty() && exact.residual.iter().all(|r| pool.is_identically_zero(*r));
     let constraints: Vec<LinearConstraint> = d
@@ -91,28 +84,14 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &exact.residual, &constraints, &[]);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
-    Ok(Linearization {
-        coords: d.coords.clone(),
-        cyclic,
-        positions,
-        rates,
-        mass: exact.mass,
-        damping: exact.damping,
-        stiffness: exact.stiffness,
-        residual: exact.residual,
-        residual_is_zero,
-        case: Case::Holonomic { constraints },
-        span,
-    })
+    let placed = Placed { cyclic, positions, rates };
+    let case = Case::Holonomic { constraints };
+    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, case, span))
 }
 
 /// Where the holonomic case's matrices sit among its program's outputs.
 pub(crate) struct Blocks {
-    mass: Block,
-    damping: Block,
-    stiffness: Block,
-    /// f + Jᵀλ, which is f with the multipliers at 0.
-    residual: Block,
+    equations: layout::Equations,
     constraints: ConstraintRows,
 }
 
@@ -120,23 +99,13 @@ impl Blocks {
     /// Places M, C, K, the residual and each constraint's J and γ; the inputs after the
     /// parameters are the multipliers.
     pub fn place(outputs: &mut Outputs, lin: &Linearization) -> Blocks {
-        let n = lin.coords.len();
-        let mass = outputs.matrix(&lin.mass, n);
-        let damping = outputs.matrix(&lin.damping, n);
-        let stiffness = outputs.matrix(&lin.stiffness, n);
-        let residual = outputs.column(&lin.residual);
+        let equations = layout::Equations::place(outputs, lin);
         let (mut jacobian, mut bias) = (Vec::new(), Vec::new());
         for c in lin.constraints() {
             jacobian.push(outputs.column(&c.jacobian));
             bias.push(outputs.value(c.bias));
         }
-        Blocks {
-            mass,
-            damping,
-            stiffness,
-            residual,
-            constraints: ConstraintRows { jacobian, bias },
-        }
+        Blocks { equations, constraints: ConstraintRows { jacobian, bias } }
     }
 }
 
@@ -155,8 +124,8 @@ pub(crate) fn at(
     if out.iter().any(|v| !v.is_finite()) {
         return Err(Fault::NotFinite("M, C, K or f"));
     }
-    let mass = blocks.mass.matrix(&out);
-    let forcing = blocks.residual.vector(&out);
+    let mass = blocks.equations.mass.matrix(&out);
+    let forcing = blocks.equations.residual.vector(&out);
     let (jacobian, bias) = blocks.constraints.read(&out, n);
 
     // On each kept constraint, then the accelerations (and the multipliers) there.
@@ -177,7 +146,7 @@ pub(crate) fn at(
     let multipliers: Vec<f64> = multipliers.iter().copied().collect();
     let accelerations: Vec<f64> = accelerations.iter().copied().collect();
     let out = e.outputs(parameters, &multipliers);
-    let stiffness = blocks.stiffness.matrix(&out);
+    let stiffness = blocks.equations.stiffness.matrix(&out);
     if !lin.residual_is_zero {
         let residual = e.residual(parameters, &multipliers);
         let held = residual.iter().enumerate().all(|(j, (r, size))| {
@@ -190,24 +159,14 @@ pub(crate) fn at(
             return Err(Fault::NotEquilibrium { accelerations, symbols: accels.to_vec() });
         }
     }
-    let damping = blocks.damping.matrix(&out);
+    let damping = blocks.equations.damping.matrix(&out);
     let basis = if k == 0 { DMatrix::identity(n, n) } else { basis(&jacobian, &lin.cyclic)? };
     let (state, a) = first_order(&basis, [&mass, &damping, &stiffness], &lin.cyclic, k)?;
     let spectrum = Spectrum::of(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
-    Ok(Numbers {
-        parameters: parameters.to_vec(),
-        mass: rows_of(&mass),
-        damping: rows_of(&damping),
-        stiffness: rows_of(&stiffness),
-        multipliers,
-        accelerations,
-        first_order: StateSpace { state, a: rows_of(&a) },
-        eigenvalues: spectrum.eigenvalues,
-        stability: spectrum.stability,
-        tolerance: spectrum.tolerance,
-        first_integrals: spectrum.first_integrals,
-        case: CaseNumbers::Holonomic { basis: (k > 0).then(|| rows_of(&basis)) },
-    })
+    let case = CaseNumbers::Holonomic { basis: (k > 0).then(|| rows_of(&basis)) };
+    let matrices = [&mass, &damping, &stiffness];
+    let solved = (multipliers, accelerations);
+    Ok(Numbers::new(parameters, matrices, solved, (state, &a), spectrum, case))
 }
 
 /// The reduced coordinates with constraints kept: the null space of J over the non-cyclic

@@ -20,9 +20,9 @@ use crate::dense::{regular, rows_of, solve};
 use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
 use crate::layout::{Block, Outputs};
-use crate::reference::{self, AtReference, Items};
+use crate::reference::{self, AtReference, Items, Placed};
 use crate::spectrum::Spectrum;
-use crate::{Case, CaseNumbers, Component, Linearization, Numbers, StateSpace};
+use crate::{Case, CaseNumbers, Component, Linearization, Numbers};
 
 /// What the equations in the independent rates add to a [`Linearization`].
 #[derive(Clone, Debug)]
@@ -117,25 +117,16 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &residual, &[], &more);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
-    Ok(Linearization {
-        coords: d.coords.clone(),
-        cyclic: kept.iter().map(|k| !k).collect(),
-        positions,
-        rates,
-        mass,
-        damping,
-        stiffness,
-        residual,
-        residual_is_zero,
-        case: Case::InRates(InRates {
-            rates: form.independent.clone(),
-            kept: kept_index,
-            kinematics,
-            dependent: form.dependent.clone(),
-            residual_symbols,
-        }),
-        span,
-    })
+    let placed = Placed { cyclic: kept.iter().map(|k| !k).collect(), positions, rates };
+    let exact = AtReference { mass, damping, stiffness, residual };
+    let case = Case::InRates(InRates {
+        rates: form.independent.clone(),
+        kept: kept_index,
+        kinematics,
+        dependent: form.dependent.clone(),
+        residual_symbols,
+    });
+    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, case, span))
 }
 
 /// The equations in the independent rates, or why they could not be formed, at the kept
@@ -363,18 +354,8 @@ pub(crate) fn at(
     let spectrum = Spectrum::deflated(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
     let positions = r.kept.iter().map(|&i| Component::Position(i));
     let state = positions.chain(blocks.rates.iter().map(|&i| Component::Rate(i))).collect();
-    Ok(Numbers {
-        parameters: parameters.to_vec(),
-        mass: rows_of(&mass),
-        damping: rows_of(&damping),
-        stiffness: rows_of(&stiffness),
-        multipliers: Vec::new(),
-        accelerations,
-        first_order: StateSpace { state, a: rows_of(&a) },
-        eigenvalues: spectrum.eigenvalues,
-        stability: spectrum.stability,
-        tolerance: spectrum.tolerance,
-        first_integrals: spectrum.first_integrals,
-        case: CaseNumbers::InRates { kinematics: rows_of(&kinematics) },
-    })
+    let case = CaseNumbers::InRates { kinematics: rows_of(&kinematics) };
+    let matrices = [&mass, &damping, &stiffness];
+    let solved = (Vec::new(), accelerations);
+    Ok(Numbers::new(parameters, matrices, solved, (state, &a), spectrum, case))
 }

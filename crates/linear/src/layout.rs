@@ -65,6 +65,28 @@ impl Outputs {
     }
 }
 
+/// M, C, K (n × n) and the residual (n) in all the coordinates, as the holonomic and the kept
+/// cases place them first.
+pub(crate) struct Equations {
+    pub mass: Block,
+    pub damping: Block,
+    pub stiffness: Block,
+    /// f + Jᵀλ, which is f with the multipliers at 0.
+    pub residual: Block,
+}
+
+impl Equations {
+    pub fn place(outputs: &mut Outputs, lin: &crate::Linearization) -> Equations {
+        let n = lin.coords.len();
+        Equations {
+            mass: outputs.matrix(&lin.mass, n),
+            damping: outputs.matrix(&lin.damping, n),
+            stiffness: outputs.matrix(&lin.stiffness, n),
+            residual: outputs.column(&lin.residual),
+        }
+    }
+}
+
 /// The rows of kept constraints, each a block of its own: the rows of J (each n long), then
 /// each constraint's γ.
 #[derive(Clone, Debug)]

@@ -146,6 +146,35 @@ impl Linearization {
     }
 }
 
+impl Linearization {
+    /// The parts every case fills alike: where the reference puts each coordinate, and the
+    /// exact second-order form there.
+    pub(crate) fn new(
+        coords: Vec<SymId>,
+        placed: reference::Placed,
+        exact: reference::AtReference,
+        residual_is_zero: bool,
+        case: Case,
+        span: Span,
+    ) -> Linearization {
+        let reference::Placed { cyclic, positions, rates } = placed;
+        let reference::AtReference { mass, damping, stiffness, residual } = exact;
+        Linearization {
+            coords,
+            cyclic,
+            positions,
+            rates,
+            mass,
+            damping,
+            stiffness,
+            residual,
+            residual_is_zero,
+            case,
+            span,
+        }
+    }
+}
+
 /// The first-order form ẋ = A·x of the small motions, its state named.
 #[derive(Clone, Debug)]
 pub struct StateSpace {
@@ -212,6 +241,31 @@ pub struct Numbers {
 }
 
 impl Numbers {
+    /// The parts every case fills alike, from its matrices in numbers.
+    pub(crate) fn new(
+        parameters: &[f64],
+        [mass, damping, stiffness]: [&nalgebra::DMatrix<f64>; 3],
+        (multipliers, accelerations): (Vec<f64>, Vec<f64>),
+        (state, a): (Vec<Component>, &nalgebra::DMatrix<f64>),
+        spectrum: spectrum::Spectrum,
+        case: CaseNumbers,
+    ) -> Numbers {
+        Numbers {
+            parameters: parameters.to_vec(),
+            mass: dense::rows_of(mass),
+            damping: dense::rows_of(damping),
+            stiffness: dense::rows_of(stiffness),
+            multipliers,
+            accelerations,
+            first_order: StateSpace { state, a: dense::rows_of(a) },
+            eigenvalues: spectrum.eigenvalues,
+            stability: spectrum.stability,
+            tolerance: spectrum.tolerance,
+            first_integrals: spectrum.first_integrals,
+            case,
+        }
+    }
+
     /// In the kept case, the coordinates whose positions stay in the state, then those whose
     /// rates are the independent rates, as the numbers chose them.
     pub fn reduced(&self) -> Option<(Vec<usize>, Vec<usize>)> {

@@ -11,7 +11,7 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Span};
-use mechanics::{Derivation, Multiplier};
+use mechanics::Derivation;
 
 use crate::LinearConstraint;
 
@@ -161,14 +161,11 @@ pub(crate) fn all_of(
     all
 }
 
-/// The equations of motion with their kept constraints, as the holonomic and the kept cases
-/// linearize them.
-pub(crate) struct Equations<'a> {
-    pub mass: &'a [Vec<ExprId>],
-    pub forcing: &'a [ExprId],
-    pub multipliers: &'a [Multiplier],
-    pub coords: &'a [SymId],
-    pub rates: &'a [SymId],
+/// Where the reference puts each coordinate (see [`crate::Linearization`]'s fields).
+pub(crate) struct Placed {
+    pub cyclic: Vec<bool>,
+    pub positions: Vec<Option<ExprId>>,
+    pub rates: Vec<ExprId>,
 }
 
 /// M, C, K and the residual at a reference.
@@ -179,45 +176,47 @@ pub(crate) struct AtReference {
     pub residual: Vec<ExprId>,
 }
 
-impl Equations<'_> {
-    /// With g = f + Jᵀλ (λ the multipliers' symbols): M, C = −∂f/∂q̇ (J has no rates, for a
-    /// velocity constraint either: it is linear in them), K = −∂g/∂q (zero for a cyclic
-    /// coordinate), and g, each put through `at` (the reference substituted).
-    pub fn at_reference(
-        &self,
-        pool: &mut Pool,
-        cyclic: &[bool],
-        at: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId,
-    ) -> AtReference {
-        let mut generalized = self.forcing.to_vec();
-        for m in self.multipliers {
-            let lambda = pool.sym(m.lambda);
-            for (j, g) in generalized.iter_mut().enumerate() {
-                let force = pool.mul2(m.jacobian[j], lambda);
-                *g = pool.add2(*g, force);
-            }
+/// The equations of motion with their kept constraints at the reference, as the holonomic
+/// and the kept cases linearize them. With g = f + Jᵀλ (λ the multipliers' symbols): M,
+/// C = −∂f/∂q̇ (J has no rates, for a velocity constraint either: it is linear in them),
+/// K = −∂g/∂q (zero for a cyclic coordinate), and g, each put through `at` (the reference
+/// substituted).
+pub(crate) fn at_reference(
+    d: &mut Derivation,
+    cyclic: &[bool],
+    at: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId,
+) -> AtReference {
+    let pool = &mut d.model.pool;
+    let (mass_matrix, forcing, multipliers) = (&d.mass_matrix, &d.forcing, &d.multipliers);
+    let (coords, rates) = (&d.coords, &d.rates);
+    let mut generalized = forcing.to_vec();
+    for m in multipliers {
+        let lambda = pool.sym(m.lambda);
+        for (j, g) in generalized.iter_mut().enumerate() {
+            let force = pool.mul2(m.jacobian[j], lambda);
+            *g = pool.add2(*g, force);
         }
-        let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
-        for (j, g) in generalized.iter().enumerate() {
-            let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
-            for (i, is_cyclic) in cyclic.iter().enumerate() {
-                m.push(at(pool, self.mass[j][i]));
-                let df = pool.diff(self.forcing[j], self.rates[i]);
-                let df = at(pool, df);
-                c.push(pool.neg(df));
-                k.push(if *is_cyclic {
-                    pool.zero()
-                } else {
-                    let dg = pool.diff(*g, self.coords[i]);
-                    let dg = at(pool, dg);
-                    pool.neg(dg)
-                });
-            }
-            mass.push(m);
-            damping.push(c);
-            stiffness.push(k);
-        }
-        let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
-        AtReference { mass, damping, stiffness, residual }
     }
+    let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
+    for (j, g) in generalized.iter().enumerate() {
+        let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
+        for (i, is_cyclic) in cyclic.iter().enumerate() {
+            m.push(at(pool, mass_matrix[j][i]));
+            let df = pool.diff(forcing[j], rates[i]);
+            let df = at(pool, df);
+            c.push(pool.neg(df));
+            k.push(if *is_cyclic {
+                pool.zero()
+            } else {
+                let dg = pool.diff(*g, coords[i]);
+                let dg = at(pool, dg);
+                pool.neg(dg)
+            });
+        }
+        mass.push(m);
+        damping.push(c);
+        stiffness.push(k);
+    }
+    let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+    AtReference { mass, damping, stiffness, residual }
 }

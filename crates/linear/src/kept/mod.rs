@@ -14,7 +14,7 @@ use lang::{Diagnostic, Span};
 use mechanics::Derivation;
 use model::ConstraintKind;
 
-use crate::reference::{self, Equations, Items};
+use crate::reference::{self, Items, Placed};
 use crate::{Case, LinearConstraint, Linearization};
 
 pub(crate) use reduce::{at, Blocks};
@@ -91,14 +91,8 @@ pub(crate) fn linearize(
         let e = pool.subst_memo(e, &map, &mut memo);
         pool.simplify(e)
     };
-    let parts = Equations {
-        mass: &d.mass_matrix,
-        forcing: &d.forcing,
-        multipliers: &d.multipliers,
-        coords: &d.coords,
-        rates: &d.rates,
-    };
-    let exact = parts.at_reference(pool, &cyclic, &mut at);
+    let exact = reference::at_reference(d, &cyclic, &mut at);
+    let pool = &mut d.model.pool;
     // The dependent rates at 0 in the rows that solve for them.
     let zero_dependent: HashMap<SymId, ExprId> =
         dependent.iter().map(|&i| (d.rates[i], pool.zero())).collect();
@@ -143,19 +137,10 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &exact.residual, &constraints, &more);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
-    Ok(Linearization {
-        coords: d.coords.clone(),
-        cyclic,
-        positions,
-        rates,
-        mass: exact.mass,
-        damping: exact.damping,
-        stiffness: exact.stiffness,
-        residual: exact.residual,
-        residual_is_zero: false,
-        case: Case::Kept(Kept { dependent, constraints, rows: velocity_rows }),
-        span,
-    })
+    let placed = Placed { cyclic, positions, rates };
+    let case = Case::Kept(Kept { dependent, constraints, rows: velocity_rows });
+    // The multipliers' values, and so the residual's, are for numbers to find.
+    Ok(Linearization::new(d.coords.clone(), placed, exact, false, case, span))
 }
 
 /// The reference's positions, the substitution its items make (the rates not given at 0 but

@@ -21,17 +21,14 @@ use crate::dense::{
 };
 use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
-use crate::layout::{Block, ConstraintRows, Outputs};
+use crate::layout::{self, Block, ConstraintRows, Outputs};
 use crate::spectrum::Spectrum;
-use crate::{CaseNumbers, Component, Linearization, Numbers, StateSpace};
+use crate::{CaseNumbers, Component, Linearization, Numbers};
 
 /// Where the kept case's matrices sit among its program's outputs; the inputs after the
 /// parameters are the multipliers, then the dependent rates.
 pub(crate) struct Blocks {
-    mass: Block,
-    damping: Block,
-    stiffness: Block,
-    residual: Block,
+    equations: layout::Equations,
     constraints: ConstraintRows,
     /// Each constraint's row at the velocity level.
     rates: Vec<Block>,
@@ -42,11 +39,7 @@ pub(crate) struct Blocks {
 
 impl Blocks {
     pub fn place(outputs: &mut Outputs, lin: &Linearization, kept: &Kept) -> Blocks {
-        let n = lin.coords.len();
-        let mass = outputs.matrix(&lin.mass, n);
-        let damping = outputs.matrix(&lin.damping, n);
-        let stiffness = outputs.matrix(&lin.stiffness, n);
-        let residual = outputs.column(&lin.residual);
+        let equations = layout::Equations::place(outputs, lin);
         let (mut jacobian, mut bias, mut rates, mut positions) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (c, row) in kept.constraints.iter().zip(&kept.rows) {
@@ -57,7 +50,7 @@ impl Blocks {
             positions.push((c.kind == ConstraintKind::Velocity).then_some(b));
         }
         let constraints = ConstraintRows { jacobian, bias };
-        Blocks { mass, damping, stiffness, residual, constraints, rates, positions }
+        Blocks { equations, constraints, rates, positions }
     }
 
     /// B of the velocity constraints, one row each, n columns.
@@ -127,25 +120,15 @@ pub(crate) fn at(
     let independent: Vec<usize> = rates_along.independent.iter().map(|&c| z[c]).collect();
     let state = positions.iter().map(|&i| Component::Position(i));
     let state = state.chain(independent.iter().map(|&i| Component::Rate(i))).collect();
-    Ok(Numbers {
-        parameters: parameters.to_vec(),
-        mass: rows_of(&first.mass),
-        damping: rows_of(&first.damping),
-        stiffness: rows_of(&first.stiffness),
-        multipliers: r.multipliers,
-        accelerations: r.accelerations,
-        first_order: StateSpace { state, a: rows_of(&first.a) },
-        eigenvalues: spectrum.eigenvalues,
-        stability: spectrum.stability,
-        tolerance: spectrum.tolerance,
-        first_integrals: spectrum.first_integrals,
-        case: CaseNumbers::Kept(Reduced {
-            dependent_rates: rates,
-            kinematics: rows_of(&first.kinematics),
-            positions,
-            rates: independent,
-        }),
-    })
+    let case = CaseNumbers::Kept(Reduced {
+        dependent_rates: rates,
+        kinematics: rows_of(&first.kinematics),
+        positions,
+        rates: independent,
+    });
+    let matrices = [&first.mass, &first.damping, &first.stiffness];
+    let solved = (r.multipliers, r.accelerations);
+    Ok(Numbers::new(parameters, matrices, solved, (state, &first.a), spectrum, case))
 }
 
 /// The dependent rates: J[:, dependent]·r = −(the rows with them at 0).
@@ -193,16 +176,16 @@ fn at_reference(
     if out.iter().any(|v| !v.is_finite()) {
         return Err(Fault::NotFinite("M, C, K, f or a constraint's rows"));
     }
-    let mass = blocks.mass.matrix(&out);
-    let forcing = blocks.residual.vector(&out);
+    let mass = blocks.equations.mass.matrix(&out);
+    let forcing = blocks.equations.residual.vector(&out);
     let (jacobian, bias) = blocks.constraints.read(&out, n);
     let (accelerations, multipliers) =
         accelerations_and_multipliers(&mass, &jacobian, &forcing, &bias);
     let accelerations: Vec<f64> = accelerations.iter().copied().collect();
     let multipliers: Vec<f64> = multipliers.iter().copied().collect();
     let out = e.outputs(parameters, &inputs(&multipliers));
-    let stiffness = blocks.stiffness.matrix(&out);
-    let damping = blocks.damping.matrix(&out);
+    let stiffness = blocks.equations.stiffness.matrix(&out);
+    let damping = blocks.equations.damping.matrix(&out);
     let residual = e.residual(parameters, &inputs(&multipliers));
     // Relative to the largest force in any row, f's or a reaction's: rows that vanish by
     // symmetry have no size of their own, and an expression too large to simplify hides
