@@ -294,6 +294,61 @@ impl Session<'_> {
 mod tests {
     use super::*;
 
+    const PENDULUM: &str = "
+param m = 1 kg, L = 2 m, g = 9.81 m/s^2
+coord theta
+particle bob { mass m; position (L*sin(theta), -L*cos(theta)) }
+gravity g
+";
+
+    fn about(source: &str, about: &str) -> Result<Linearized, Error> {
+        linearize(source, &Options { about: Some(about.into()), ..Default::default() })
+    }
+
+    #[test]
+    fn the_command_lines_reference_is_resolved_against_the_scene() {
+        // The scene's names, units and constants: θ = π standing, in degrees.
+        let l = about(PENDULUM, "theta = 180 deg").expect("linearizes");
+        assert_eq!(l.at.stability, Stability::Unstable);
+        assert_eq!(l.derivation.model.linearize.len(), 1);
+    }
+
+    #[test]
+    fn a_mistake_in_the_command_lines_reference_points_into_it() {
+        let Err(Error::WithArgument { diagnostics, source, setting, argument }) =
+            about(PENDULUM, "theta = 0, thta' = 0")
+        else {
+            panic!("a mistake in --about")
+        };
+        // The scene is not edited: its text is the file's, and the argument has its own.
+        assert_eq!(
+            (source.as_str(), setting, argument.as_str()),
+            (PENDULUM, Setting::About, "theta = 0, thta' = 0")
+        );
+        let start = lang::render::argument_start(PENDULUM);
+        let span = diagnostics[0].span;
+        assert_eq!(&argument[span.start - start..span.end - start], "thta");
+        assert!(diagnostics[0].label.ends_with("(from --about)"), "{diagnostics:?}");
+        let error = about(PENDULUM, "theta = 0, thta' = 0").err().expect("refused").to_string();
+        assert!(error.contains("(column 12 of `about`)"), "{error}");
+        // Found by the stage, not the resolver: the reference that is not at rest.
+        let Err(Error::WithArgument { diagnostics, .. }) = about(PENDULUM, "theta = 1") else {
+            panic!("not an equilibrium")
+        };
+        assert_eq!(diagnostics[0].span, lang::Span::new(start, start + "theta = 1".len()));
+    }
+
+    #[test]
+    fn a_mistake_in_the_scenes_own_line_stays_the_scenes() {
+        let scene = format!("{PENDULUM}linearize about theta = 0, theta' = 1\n");
+        let Err(Error::Scene { diagnostics, source }) = about(&scene, "theta = 0") else {
+            panic!("θ is not cyclic")
+        };
+        assert_eq!(source, scene);
+        let at = diagnostics[0].span;
+        assert_eq!(&scene[at.start..at.end], "theta' = 1");
+    }
+
     #[test]
     fn sweeps_are_parsed_and_checked() {
         assert_eq!(parse_sweep("w=0:100:11").ok(), Some(("w".to_string(), 0.0, 100.0, 11)));

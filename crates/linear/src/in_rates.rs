@@ -359,3 +359,44 @@ pub(crate) fn at(
     let solved = (Vec::new(), accelerations);
     Ok(Numbers::new(parameters, matrices, solved, (state, &a), spectrum, case))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::{derived, text};
+    use crate::{Analysis, Component, Stability};
+
+    /// A Chaplygin sleigh gliding straight on at speed v.
+    const SLEIGH: &str = "
+param m = 1 kg, I = 1/10 kg*m^2, a = 1/5 m, v = 1 m/s
+coord x = 0, x' = v
+coord y = 0
+coord theta = 0, theta' = 0
+body sleigh { mass m; inertia I; position (x + a*cos(theta), y + a*sin(theta)); angle theta }
+constraint blade: y'*cos(theta) = x'*sin(theta)
+linearize about theta = 0, x' = v
+";
+
+    #[test]
+    fn the_sleigh_is_linearized_in_its_independent_rates_and_turns_back_straight() {
+        let mut d = derived(SLEIGH);
+        let lin = crate::linearize(&mut d).expect("linearizes");
+        let r = lin.in_rates().expect("in the independent rates");
+        let pool = &d.model.pool;
+        let names: Vec<&str> = r.rates.iter().map(|u| pool.symbol(*u).name.as_str()).collect();
+        assert_eq!(names, ["x'", "theta'"]);
+        assert_eq!(r.kept, [2], "only θ's position matters");
+        assert_eq!(text(pool, &lin.damping), [["0", "0"], ["0", "m*a*v"]]);
+        assert!(lin.constraints().is_empty(), "the multipliers cancel");
+
+        let parameters: Vec<cas::SymId> = d.model.params.iter().map(|p| p.sym).collect();
+        let mut analysis = Analysis::new(&d, &parameters, lin).expect("lowers");
+        let at = analysis.at(&[1.0, 0.1, 0.2, 1.0]).expect("an equilibrium");
+        let state = [Component::Position(2), Component::Rate(0), Component::Rate(2)];
+        assert_eq!(at.first_order.state, state);
+        assert_eq!(at.first_order.a.len(), 3);
+        // The heading and the speed are neutral; the turn dies out.
+        assert_eq!((at.first_integrals, at.stability), (2, Stability::Stable));
+        let turning = -0.2 / (0.1 + 0.04);
+        assert!(at.eigenvalues.iter().any(|z| (z.0 - turning).abs() < 1e-12), "{at:?}");
+    }
+}

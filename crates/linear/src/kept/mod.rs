@@ -184,3 +184,52 @@ fn substitution(
     }
     (positions, map, errors)
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::derived;
+    use crate::{Analysis, Component};
+    use model::ConstraintKind;
+
+    /// A sleigh on its blade and, apart from it, a pendulum on its rod: a velocity and a
+    /// position constraint kept together.
+    const TWO: &str = "
+param m = 1 kg, I = 1/10 kg*m^2, a = 1/5 m, v = 1 m/s, mb = 2 kg, L = 3/2 m, g = 9.81 m/s^2
+coord x = 0, x' = v
+coord y = 0
+coord theta = 0, theta' = 0
+coord u = 0, w = -L
+body sleigh { mass m; inertia I; position (x + a*cos(theta), y + a*sin(theta)); angle theta }
+particle bob { mass mb; position (u, w) }
+constraint blade: y'*cos(theta) = x'*sin(theta)
+constraint rod: u^2 + w^2 = L^2
+potential mb*g*w
+linearize about theta = 0, x' = v, u = 0, w = -L
+";
+
+    #[test]
+    fn each_kept_constraint_brings_its_row_at_the_velocity_level() {
+        let mut d = derived(TWO);
+        let lin = crate::linearize(&mut d).expect("linearizes");
+        let kept = lin.kept().expect("kept together");
+        let kinds: Vec<ConstraintKind> = kept.constraints.iter().map(|c| c.kind).collect();
+        assert_eq!(kinds, [ConstraintKind::Velocity, ConstraintKind::Position]);
+        // B of the blade's A·δq̇ + B·δq = 0 over the five coordinates; none for the rod.
+        let widths: Vec<usize> = kept.rows.iter().map(|r| r.positions.len()).collect();
+        assert_eq!(widths, [5, 0]);
+        let pool = &d.model.pool;
+        let dependent: Vec<&str> =
+            kept.dependent.iter().map(|&i| pool.symbol(d.coords[i]).name.as_str()).collect();
+        assert_eq!(dependent, ["y", "w"]);
+
+        let parameters: Vec<cas::SymId> = d.model.params.iter().map(|p| p.sym).collect();
+        let mut analysis = Analysis::new(&d, &parameters, lin).expect("lowers");
+        let at = analysis.at(&[1.0, 0.1, 0.2, 1.0, 2.0, 1.5, 9.81]).expect("an equilibrium");
+        let (positions, rates) = at.reduced().expect("reduced in numbers");
+        assert_eq!((positions, rates), (vec![3], vec![0, 2, 3]));
+        // δu, then the rates of x, θ and u.
+        let expected =
+            [Component::Position(3), Component::Rate(0), Component::Rate(2), Component::Rate(3)];
+        assert_eq!(at.first_order.state, expected);
+    }
+}
