@@ -16,13 +16,21 @@
 //!   independent coordinates and rates are done in numbers.
 //!
 //! Every case ends in the same [`StateSpace`]: the state's [`Component`]s and A of ẋ = A·x.
-//! The inputs and outputs of the next step (ẋ = A·x + B·u, y = C·x + D·u) go there too: an
-//! input is a generalized force whose column of B each case forms as it forms A's lower rows
-//! (−M⁻¹ times the force's row, along N or Q where the case reduces), an output a row of C
-//! and D evaluated with the other matrices; keeping every coordinate in the state, rather
-//! than dropping cyclic and ignorable positions, is a choice of components, not a new case.
+//! The next step's inputs and outputs (ẋ = A·x + B·u, y = C·x + D·u) are more of the same,
+//! not new cases:
 //!
-//! The numbers of a case are read from one lowered program through a typed [`layout`]: each
+//! - an input is a generalized force Q_u·u: its exact column ∂f/∂u at the reference joins each
+//!   case's expressions as one more block of its layout, and each case forms B where it forms
+//!   A's lower rows, −M⁻¹·Q_u (along N in the holonomic case with constraints, projected by
+//!   the independent directions in the independent rates, by Qᵀ in the kept case); the
+//!   inputs are handed to [`linearize`] and [`Analysis::new`] as a list, not as options;
+//! - an output is an expression of the state: its gradient at the reference, lowered with the
+//!   rest, gives a row of C (and of D where it names an input), along the same components;
+//! - keeping every coordinate (SymPy's convention) rather than dropping cyclic and ignorable
+//!   positions changes which [`Component`]s a case lists and adds their zero columns to A; it
+//!   is a choice passed to the cases, not a case of its own.
+//!
+//! The numbers of a case are read from one lowered program through a typed layout: each
 //! matrix is a named block of the program's outputs, placed when the program is built.
 //!
 //! What it does not do: load scenes, resolve the command line's reference (the model's

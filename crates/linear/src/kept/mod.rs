@@ -1,7 +1,7 @@
 //! Position and velocity constraints kept together (or more velocity constraints than the
 //! independent rates' exact form takes). Exactly: M, C, K of all the coordinates, K with the
 //! multipliers' symbols as in the holonomic case, the dependent rates left as symbols in every
-//! matrix, and each constraint's row at the velocity level. In numbers ([`reduce`]): the
+//! matrix, and each constraint's row at the velocity level. In numbers (`reduce`): the
 //! dependent rates solved from those rows, the multipliers and the accelerations at the
 //! reference, and the reduction to the independent coordinates and rates.
 
