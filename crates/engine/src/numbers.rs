@@ -25,7 +25,18 @@ pub struct Prepared {
 /// are (reactions they name are derived too), before it is derived. A mistake in one of them
 /// is an [`Error::Expression`], its diagnostics pointing into the expression.
 pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepared, Error> {
-    let (mut model, warnings) = crate::resolve_with(source, options)?;
+    let (model, warnings) = crate::resolve_with(source, options)?;
+    prepare_resolved(source, model, warnings, extra)
+}
+
+/// [`prepare`] of a model already resolved from `source` (and extended through its scope, as
+/// `linearize --about` extends it), with its warnings.
+pub(crate) fn prepare_resolved(
+    source: &str,
+    mut model: model::Model,
+    warnings: Vec<lang::Diagnostic>,
+    extra: &[String],
+) -> Result<Prepared, Error> {
     let mut values = Vec::new();
     for text in extra {
         let value = model
@@ -132,14 +143,19 @@ impl Prepared {
     }
 
     pub fn lower(&self, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, Error> {
-        lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| match e {
+        lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| self.lower_error(e))
+    }
+
+    /// Why an expression could not be lowered, as an error.
+    pub fn lower_error(&self, e: numeric::LowerError) -> Error {
+        match e {
             numeric::LowerError::UnboundSymbol(s) => {
                 let name = &self.derivation.model.pool.symbol(s).name;
                 Error::Input(format!(
                     "`{name}` has no numeric value here (it is not part of the state)"
                 ))
             }
-        })
+        }
     }
 
     /// Parameter values in declaration order, with `overrides` (parameter index → expression

@@ -146,7 +146,7 @@ impl NativeScene {
             }
             numpy.call_method1("array", (list,))
         };
-        out.set_item("A", numpy.call_method1("array", (l.at.a.clone(),))?)?;
+        out.set_item("A", numpy.call_method1("array", (l.at.first_order.a.clone(),))?)?;
         out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
         out.set_item("stability", l.at.stability.name())?;
         out.set_item("tolerance", l.at.tolerance)?;
