@@ -65,9 +65,9 @@ impl Derivation {
                 .iter()
                 .map(|&s| {
                     let mut terms = Vec::with_capacity(n + multipliers.len() + 1);
-                    for j in 0..n {
-                        let dm = pool.diff(self.mass_matrix[i][j], s);
-                        terms.push(pool.mul2(dm, accels[j]));
+                    for (entry, accel) in self.mass_matrix[i].iter().zip(&accels) {
+                        let dm = pool.diff(*entry, s);
+                        terms.push(pool.mul2(dm, *accel));
                     }
                     for m in &multipliers {
                         let dj = pool.diff(m.jacobian[i], s);
@@ -89,10 +89,13 @@ impl Derivation {
             let row: Vec<ExprId> = state
                 .iter()
                 .map(|&s| {
-                    let mut terms: Vec<ExprId> = (0..n)
-                        .map(|j| {
-                            let dj = pool.diff(m.jacobian[j], s);
-                            pool.mul2(dj, accels[j])
+                    let mut terms: Vec<ExprId> = m
+                        .jacobian
+                        .iter()
+                        .zip(&accels)
+                        .map(|(entry, accel)| {
+                            let dj = pool.diff(*entry, s);
+                            pool.mul2(dj, *accel)
                         })
                         .collect();
                     let dgamma = pool.diff(m.bias, s);
