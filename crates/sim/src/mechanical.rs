@@ -112,11 +112,16 @@ impl Mechanical {
     /// Gives the problem its exact Jacobian: `partials` is the partials program of the
     /// [`Layout`].
     pub fn with_partials(mut self, partials: Tape) -> Self {
+        self.set_partials(partials);
+        self
+    }
+
+    /// [`Mechanical::with_partials`] on a problem already built (its Jacobian asked for late).
+    pub fn set_partials(&mut self, partials: Tape) {
         assert_eq!(partials.inputs(), self.layout.observation_inputs());
         assert_eq!(partials.outputs(), self.layout.partials_outputs());
         self.partials_out = vec![0.0; partials.outputs()];
         self.partials = Some(partials);
-        self
     }
 
     /// Says which kept constraints restrain velocities rather than positions.
