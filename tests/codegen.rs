@@ -6,7 +6,7 @@ use std::fmt::Write;
 use std::process::Command;
 
 use numeric::Tape;
-use sim::{Mechanical, Problem};
+use sim::Problem;
 
 /// Deterministic, varied input values: not special angles, not zero.
 fn inputs(len: usize, seed: usize) -> Vec<f64> {
@@ -19,21 +19,7 @@ const TIME: f64 = 0.25;
 /// ∂(q̇, q̈)/∂(q, q̇) of the module's scene at `y` by `sim::Mechanical` with no stabilisation,
 /// the rows the module's `rhs` solves; `None` where the system is singular there.
 fn mechanical_jacobian(module: &mut engine::codegen::Module, y: &[f64]) -> Option<Vec<f64>> {
-    let prepared = &mut module.prepared;
-    let lower = |prepared: &engine::numbers::Prepared, inputs: &[cas::SymId], exprs| {
-        Tape::new(prepared.lower(inputs, exprs).expect("lowers"))
-    };
-    let (dynamics_inputs, observation_inputs) =
-        (prepared.dynamics_inputs(), prepared.observation_inputs());
-    let exprs = prepared.dynamics_exprs();
-    let dynamics = lower(prepared, &dynamics_inputs, &exprs);
-    let observation = lower(prepared, &observation_inputs, &[]);
-    let exprs = prepared.partials_exprs();
-    let partials = lower(prepared, &observation_inputs, &exprs);
-    let mut mechanical =
-        Mechanical::new(prepared.layout, dynamics, observation, module.parameters.clone())
-            .with_kinds(prepared.stabilisation())
-            .with_partials(partials);
+    let mut mechanical = lagrange_tests::mechanical(&mut module.prepared, &module.parameters);
     mechanical.baumgarte = 0.0;
     let mut jac = vec![0.0; y.len() * y.len()];
     mechanical.jacobian(TIME, y, &mut jac).ok()?;

@@ -88,56 +88,26 @@ struct AtState {
     y: Vec<f64>,
 }
 
-fn problems(prepared: &mut Prepared, programs: &Programs, values: &[f64]) -> AtState {
+fn problems(prepared: &mut Prepared, values: &[f64]) -> AtState {
     let d = &prepared.derivation;
     let parameters: Vec<f64> = prepared.parameters.iter().map(|s| values[s.index()]).collect();
     let y: Vec<f64> = d.coords.iter().chain(&d.rates).map(|s| values[s.index()]).collect();
     let t = values[d.model.time.index()];
-    let build = || {
-        Mechanical::new(
-            prepared.layout,
-            Tape::new(programs.dynamics.clone()),
-            Tape::new(programs.observation.clone()),
-            parameters.clone(),
-        )
-        .with_kinds(prepared.stabilisation())
-    };
-    let mechanical = build().with_partials(Tape::new(programs.partials.clone()));
-    let canonical = programs.canonical.as_ref().map(|(momentum, partials)| {
-        let mut canonical = Canonical::new(build(), Tape::new(momentum.clone()))
-            .with_partials(Tape::new(partials.clone()));
+    let mechanical = lagrange_tests::mechanical(prepared, &parameters);
+    let canonical = (prepared.layout.multipliers == 0).then(|| {
+        let lower = |prepared: &Prepared, exprs: &[cas::ExprId]| {
+            Tape::new(prepared.lower(&prepared.dynamics_inputs(), exprs).expect("lowers"))
+        };
+        let exprs = prepared.momentum_exprs();
+        let momentum = lower(prepared, &exprs);
+        let exprs = prepared.canonical_partials_exprs();
+        let partials = lower(prepared, &exprs);
+        let inner = lagrange_tests::mechanical(prepared, &parameters);
+        let mut canonical = Canonical::new(inner, momentum).with_partials(partials);
         let z = canonical.from_physical(t, &y);
         (canonical, z)
     });
     AtState { mechanical, canonical, t, y }
-}
-
-/// The lowered programs of a scene.
-struct Programs {
-    dynamics: numeric::Program,
-    observation: numeric::Program,
-    partials: numeric::Program,
-    /// The momentum program and its partials, without kept multipliers.
-    canonical: Option<(numeric::Program, numeric::Program)>,
-}
-
-fn programs(prepared: &mut Prepared) -> Programs {
-    let lower = |prepared: &Prepared, inputs: &[cas::SymId], exprs: &[cas::ExprId]| {
-        prepared.lower(inputs, exprs).expect("lowers")
-    };
-    let (dynamics_inputs, observation_inputs) =
-        (prepared.dynamics_inputs(), prepared.observation_inputs());
-    let exprs = prepared.dynamics_exprs();
-    let dynamics = lower(prepared, &dynamics_inputs, &exprs);
-    let observation = lower(prepared, &observation_inputs, &[]);
-    let exprs = prepared.partials_exprs();
-    let partials = lower(prepared, &observation_inputs, &exprs);
-    let canonical = (prepared.layout.multipliers == 0).then(|| {
-        let momentum = prepared.momentum_exprs();
-        let exprs = prepared.canonical_partials_exprs();
-        (lower(prepared, &dynamics_inputs, &momentum), lower(prepared, &dynamics_inputs, &exprs))
-    });
-    Programs { dynamics, observation, partials, canonical }
 }
 
 /// Per scene: the worst agreement of each problem, and how many states were compared.
@@ -154,12 +124,11 @@ struct Tally {
 fn check_scene(rel: &str, source: &str, tally: &mut Tally) {
     let mut prepared =
         prepare(source, &[], engine::Options::default()).unwrap_or_else(|e| panic!("{rel}: {e}"));
-    let programs = programs(&mut prepared);
     let states = verify::admissible_states(&mut prepared.derivation, STATES, 0x7ac0_b1a2);
     let kept = prepared.layout.multipliers > 0;
     let mut compared = 0;
     for values in states {
-        let mut at = problems(&mut prepared, &programs, &values);
+        let mut at = problems(&mut prepared, &values);
         // A random state may be singular (a dead point); the others must agree.
         let Ok(worst) = compare(&mut at.mechanical, at.t, &at.y) else { continue };
         compared += 1;
