@@ -1,5 +1,6 @@
 //! The exact Jacobians against central differences of the right-hand side, for every example
-//! at random admissible states (random parameters too): of the first-order system in (q, q̇),
+//! (the bicycle in a test of its own, its derivation being the slowest) at random admissible
+//! states (random parameters too): of the first-order system in (q, q̇),
 //! constraints kept with multipliers solved with their Baumgarte rows, and of the canonical
 //! system in (q, p) the symplectic methods integrate.
 
@@ -167,4 +168,14 @@ fn every_example_has_the_jacobian_central_differences_give() {
         kept >= 15 && free >= 60 && canonical >= 60,
         "too few states: {kept}, {free}, {canonical}"
     );
+}
+
+#[test]
+fn the_bicycle_has_the_jacobian_central_differences_give() {
+    let mut tally = Tally::default();
+    let rel = "examples/bicycle/whipple.lag";
+    check_scene(rel, &lagrange_tests::example("bicycle/whipple.lag"), &mut tally);
+    assert!(tally.failures.is_empty(), "{}", tally.failures.join("\n"));
+    eprintln!("the bicycle: {} states; worst {:.1e}", tally.kept, tally.worst);
+    assert!(tally.kept >= 3, "too few states: {}", tally.kept);
 }
