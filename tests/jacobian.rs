@@ -2,7 +2,8 @@
 //! (the bicycle in a test of its own, its derivation being the slowest) at random admissible
 //! states (random parameters too): of the first-order system in (q, q̇),
 //! constraints kept with multipliers solved with their Baumgarte rows, and of the canonical
-//! system in (q, p) the symplectic methods integrate.
+//! system in (q, p) the symplectic methods integrate. And the raw partials a method keeping q̈
+//! and λ among its unknowns reads, against differences of the rows they are of.
 
 use engine::numbers::{prepare, Prepared};
 use numeric::Tape;
@@ -14,23 +15,39 @@ const STATES: usize = 5;
 const AGREEMENT: f64 = 1e-7;
 
 /// The largest discrepancy of `problem`'s exact Jacobian at (t, y) from central differences of
-/// its right-hand side. Each row is measured against its own size (the largest of its entries,
-/// exact or differenced), so that a dropped partial shows in the row it belongs to however
-/// small the row is; a row that vanishes but for rounding is measured against the matrix.
+/// its right-hand side (see [`discrepancy`]).
 fn compare(problem: &mut dyn Problem, t: f64, y: &[f64]) -> Result<f64, String> {
     let d = y.len();
     let mut exact = vec![0.0; d * d];
     let has = problem.jacobian(t, y, &mut exact).map_err(|f| format!("jacobian: {f:?}"))?;
     assert!(has, "the problem was given its partials");
+    discrepancy(&exact, y, |state| {
+        let mut rates = vec![0.0; d];
+        problem.rhs(t, state, &mut rates).map_err(|f| format!("rhs: {f:?}"))?;
+        Ok(rates)
+    })
+}
+
+/// The largest discrepancy of `exact` (row-major, a row per value of `f`, a column per entry
+/// of `y`) from central differences of `f` at `y`. Each row is measured against its own size
+/// (the largest of its entries, exact or differenced), so that a dropped partial shows in the
+/// row it belongs to however small the row is; a row that vanishes but for rounding is
+/// measured against the matrix.
+fn discrepancy(
+    exact: &[f64],
+    y: &[f64],
+    mut f: impl FnMut(&[f64]) -> Result<Vec<f64>, String>,
+) -> Result<f64, String> {
+    let d = y.len();
     // Differences are limited by truncation at large steps and by rounding at small ones, the
     // more so where M is ill-conditioned (a top's Euler angles in canonical variables): the
     // best of a few steps is how well differences can tell.
     let mut best = f64::INFINITY;
     for step in [3e-3, 1e-3, 3e-4, 1e-4] {
-        let differenced = differences(problem, t, y, step)?;
+        let differenced = differences(&mut f, y, step)?;
         let largest = exact.iter().chain(&differenced).fold(0.0f64, |m, v| m.max(v.abs()));
         let mut worst = 0.0f64;
-        for i in 0..d {
+        for i in 0..exact.len() / d {
             let row = i * d..(i + 1) * d;
             let size = exact[row.clone()]
                 .iter()
@@ -45,39 +62,31 @@ fn compare(problem: &mut dyn Problem, t: f64, y: &[f64]) -> Result<f64, String> 
     Ok(best)
 }
 
-/// ∂F/∂y by central differences at two steps, h and h/2 (h = `step` relative to each
-/// component), extrapolated (Richardson) so that the truncation error is of order h⁴.
+/// ∂f/∂y (row-major) by central differences at two steps, h and h/2 (h = `step` relative to
+/// each component), extrapolated (Richardson) so that the truncation error is of order h⁴.
 fn differences(
-    problem: &mut dyn Problem,
-    t: f64,
+    f: &mut impl FnMut(&[f64]) -> Result<Vec<f64>, String>,
     y: &[f64],
     step: f64,
 ) -> Result<Vec<f64>, String> {
     let d = y.len();
-    let mut out = vec![0.0; d * d];
-    let (mut plus, mut minus) = (vec![0.0; d], vec![0.0; d]);
+    let mut columns = Vec::with_capacity(d);
     let mut shifted = y.to_vec();
     for k in 0..d {
         let h = step * y[k].abs().max(1.0);
-        let mut central = |step: f64, column: &mut [f64]| -> Result<(), String> {
+        let mut central = |step: f64| -> Result<Vec<f64>, String> {
             shifted[k] = y[k] + step;
-            problem.rhs(t, &shifted, &mut plus).map_err(|f| format!("rhs: {f:?}"))?;
+            let plus = f(&shifted)?;
             shifted[k] = y[k] - step;
-            problem.rhs(t, &shifted, &mut minus).map_err(|f| format!("rhs: {f:?}"))?;
+            let minus = f(&shifted)?;
             shifted[k] = y[k];
-            for i in 0..d {
-                column[i] = (plus[i] - minus[i]) / (2.0 * step);
-            }
-            Ok(())
+            Ok(plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * step)).collect())
         };
-        let (mut wide, mut narrow) = (vec![0.0; d], vec![0.0; d]);
-        central(h, &mut wide)?;
-        central(h / 2.0, &mut narrow)?;
-        for i in 0..d {
-            out[i * d + k] = (4.0 * narrow[i] - wide[i]) / 3.0;
-        }
+        let (wide, narrow) = (central(h)?, central(h / 2.0)?);
+        columns.push(wide.iter().zip(&narrow).map(|(w, n)| (4.0 * n - w) / 3.0).collect());
     }
-    Ok(out)
+    let rows = columns.first().map_or(0, |c: &Vec<f64>| c.len());
+    Ok((0..rows * d).map(|e| columns[e % d][e / d]).collect())
 }
 
 /// The scene's problems at one admissible state (`values`, a value per symbol): the
@@ -178,4 +187,73 @@ fn the_bicycle_has_the_jacobian_central_differences_give() {
     assert!(tally.failures.is_empty(), "{}", tally.failures.join("\n"));
     eprintln!("the bicycle: {} states; worst {:.1e}", tally.kept, tally.worst);
     assert!(tally.kept >= 3, "too few states: {}", tally.kept);
+}
+
+/// The rows the raw partials are of, at a state and time with q̈ and λ held at `unknowns`:
+/// r = M q̈ − Jᵀλ − f, then c = J q̈ − γ, Φ and Φ̇ of each multiplier, from the dynamics
+/// program's outputs (the layout of `sim::Layout`).
+fn rows(layout: sim::Layout, dynamics: &[f64], unknowns: &[f64]) -> Vec<f64> {
+    let (n, m) = (layout.coordinates, layout.multipliers);
+    let (accelerations, multipliers) = unknowns.split_at(n);
+    let constraint = |c: usize| &dynamics[n * n + n + c * (n + 3)..n * n + n + (c + 1) * (n + 3)];
+    let mut out: Vec<f64> = (0..n)
+        .map(|i| {
+            let inertia: f64 = (0..n).map(|j| dynamics[j * n + i] * accelerations[j]).sum();
+            let reaction: f64 = (0..m).map(|c| constraint(c)[i] * multipliers[c]).sum();
+            inertia - reaction - dynamics[n * n + i]
+        })
+        .collect();
+    for c in 0..m {
+        let row = constraint(c);
+        out.push((0..n).map(|j| row[j] * accelerations[j]).sum::<f64>() - row[n]);
+    }
+    for slot in [n + 1, n + 2] {
+        out.extend((0..m).map(|c| constraint(c)[slot]));
+    }
+    out
+}
+
+#[test]
+fn the_raw_partials_are_those_of_the_rows_at_any_accelerations_and_multipliers() {
+    let mut compared = 0;
+    let mut failures = Vec::new();
+    for (rel, source) in lagrange_tests::examples() {
+        let mut prepared = prepare(&source, &[], engine::Options::default())
+            .unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let layout = prepared.layout;
+        if layout.multipliers == 0 {
+            continue;
+        }
+        let exprs = prepared.dynamics_exprs();
+        let program = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+        let mut dynamics = Tape::new(program);
+        for values in verify::admissible_states(&mut prepared.derivation, STATES, 0x4a11_00e5) {
+            let AtState { mut mechanical, t, y, .. } = problems(&mut prepared, &values);
+            let parameters: Vec<f64> =
+                prepared.parameters.iter().map(|s| values[s.index()]).collect();
+            // Not the solved ones: the partials hold q̈ and λ wherever they are.
+            let unknowns: Vec<f64> = (0..layout.coordinates + layout.multipliers)
+                .map(|i| 0.7 - 0.3 * i as f64)
+                .collect();
+            let exact = match mechanical.partials_at(t, &y, &unknowns) {
+                Ok(Some(p)) => p.to_vec(),
+                other => panic!("{rel}: {other:?}"),
+            };
+            let worst = discrepancy(&exact, &y, |state| {
+                let mut input = vec![t];
+                input.extend(state);
+                input.extend(&parameters);
+                let mut out = vec![0.0; layout.dynamics_outputs()];
+                dynamics.eval(&input, &mut out);
+                Ok(rows(layout, &out, &unknowns))
+            })
+            .unwrap_or_else(|e| panic!("{rel}: {e}"));
+            compared += 1;
+            if worst > AGREEMENT {
+                failures.push(format!("{rel}: raw partials off by {worst:.1e}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(compared >= 15, "only {compared} states compared");
 }
