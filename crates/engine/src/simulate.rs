@@ -416,10 +416,20 @@ pub fn run(
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
             let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
+            if method.uses_jacobian() {
+                let exprs = prepared.canonical_partials_exprs();
+                let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+                canonical = canonical.with_partials(Tape::new(partials));
+            }
             let z0 = canonical.from_physical(0.0, &y0);
             integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
         } else {
             let mut m = mechanical;
+            if method.uses_jacobian() {
+                let exprs = prepared.partials_exprs();
+                let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
+                m = m.with_partials(Tape::new(partials));
+            }
             integrate(&mut m as &mut dyn Problem, &y0, &run_settings, &watched, &mut update)
         }
     };

@@ -3,7 +3,8 @@
 //! This crate owns everything between a straight-line program and a trajectory: solving
 //! M(q)·q̈ = f for the accelerations (Cholesky where M is symmetric positive definite, LU with
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
-//! keep multipliers), the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and
+//! keep multipliers) and the exact Jacobians of those problems from the lowered partials of
+//! their equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and
 //! DOP853 with dense output, implicit Gauss–Legendre collocation that is symplectic in
 //! canonical variables), events located on the dense output, and the measurements of a run
 //! (steps, evaluations, energy and constraint drift). It works on numbered slots and

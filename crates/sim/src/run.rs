@@ -52,6 +52,12 @@ impl Method {
         matches!(self, Method::Midpoint | Method::Gauss)
     }
 
+    /// Whether the method solves implicit equations with the Jacobian of the right-hand side,
+    /// so that lowering the partials for the exact one pays.
+    pub fn uses_jacobian(self) -> bool {
+        matches!(self, Method::Midpoint | Method::Gauss)
+    }
+
     /// Whether the method can integrate constraints kept with multipliers. Those are solved
     /// with the augmented system on (q, q̇), which the symplectic methods, working in canonical
     /// variables (q, p), do not have.

@@ -131,7 +131,10 @@ class Scene:
         (q̇, q̈); ``f.batch(Y, t=0.0)`` evaluates every row of the 2-D array ``Y`` in one call
         (``t`` one time, or one per row). The scene's lowered programs compute it at the
         parameters' values (``f.parameters``), solving for constraint multipliers as
-        :meth:`simulate` does. A singular mass matrix raises :class:`NumericError`.
+        :meth:`simulate` does. ``f.jac(t, y)`` is the exact Jacobian ∂f/∂y, an n×n array,
+        for ``solve_ivp(f, ..., method="Radau", jac=f.jac)`` (also BDF and LSODA); its
+        partials are derived and lowered on the first call. A singular mass matrix raises
+        :class:`NumericError`.
         """
         return self._native.rhs()
 
