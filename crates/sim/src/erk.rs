@@ -30,6 +30,14 @@ pub(crate) trait Stepper {
     fn stiff_steps(&self) -> usize {
         0
     }
+    /// Jacobians evaluated (adaptive implicit methods only).
+    fn jacobians(&self) -> usize {
+        0
+    }
+    /// LU factorizations of the iteration matrices (adaptive implicit methods only).
+    fn factorizations(&self) -> usize {
+        0
+    }
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
