@@ -3,16 +3,19 @@
 //! This crate owns everything between a straight-line program and a trajectory: solving
 //! M(q)·q̈ = f for the accelerations (Cholesky where M is symmetric positive definite, LU with
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
-//! keep multipliers), the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and
-//! DOP853 with dense output, implicit Gauss–Legendre collocation that is symplectic in
-//! canonical variables), events located on the dense output, and the measurements of a run
-//! (steps, evaluations, energy and constraint drift). It works on numbered slots and
+//! keep multipliers, or those constraints as they are, the differential–algebraic system of
+//! index 3), the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
+//! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
+//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems),
+//! events located on the dense output, and the measurements of a run (steps, evaluations,
+//! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
 //! were derived.
 
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
+mod constrained;
 mod erk;
 mod gauss;
 pub mod linalg;
@@ -21,6 +24,7 @@ mod radau;
 pub mod reference;
 mod run;
 
+pub use constrained::Constrained;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Settings, Trajectory};
 

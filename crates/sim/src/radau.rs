@@ -85,9 +85,13 @@ impl Collocation {
 
 /// How one step's Newton iteration ended.
 enum Newton {
-    Converged { iterations: usize },
+    Converged {
+        iterations: usize,
+    },
     /// Retry with the step times `factor`.
-    Failed { factor: f64 },
+    Failed {
+        factor: f64,
+    },
 }
 
 pub(crate) struct Radau {
@@ -312,7 +316,9 @@ impl Radau {
             for i in 0..n {
                 let m = self.mass(i) / h;
                 let g: [f64; 3] = std::array::from_fn(|r| {
-                    T_INV[r][0] * self.f[0][i] + T_INV[r][1] * self.f[1][i] + T_INV[r][2] * self.f[2][i]
+                    T_INV[r][0] * self.f[0][i]
+                        + T_INV[r][1] * self.f[1][i]
+                        + T_INV[r][2] * self.f[2][i]
                 });
                 let (w1, w2, w3) = (self.w[0][i], self.w[1][i], self.w[2][i]);
                 delta[0][i] = g[0] - m * GAMMA * w1;
@@ -327,9 +333,8 @@ impl Radau {
                 delta[1][i] = self.solve[i].re;
                 delta[2][i] = self.solve[i].im;
             }
-            let norm = rms(
-                delta.iter().flat_map(|d| d.iter().zip(&self.scale).map(|(x, s)| x / s)),
-            );
+            let norm =
+                rms(delta.iter().flat_map(|d| d.iter().zip(&self.scale).map(|(x, s)| x / s)));
             if !norm.is_finite() {
                 return Newton::Failed { factor: 0.5 };
             }
@@ -345,7 +350,9 @@ impl Radau {
                 let predicted = pow(theta, left as f64) / (1.0 - theta) * norm;
                 if predicted > self.newton_tolerance {
                     let excess = (predicted / self.newton_tolerance).clamp(1e-4, 20.0);
-                    return Newton::Failed { factor: 0.8 * pow(excess, -1.0 / (4.0 + left as f64)) };
+                    return Newton::Failed {
+                        factor: 0.8 * pow(excess, -1.0 / (4.0 + left as f64)),
+                    };
                 }
             }
             previous = norm.max(f64::MIN_POSITIVE);
@@ -354,7 +361,8 @@ impl Radau {
                     self.w[r][i] += delta[r][i];
                 }
                 for r in 0..3 {
-                    self.z[r][i] = T[r][0] * self.w[0][i] + T[r][1] * self.w[1][i] + T[r][2] * self.w[2][i];
+                    self.z[r][i] =
+                        T[r][0] * self.w[0][i] + T[r][1] * self.w[1][i] + T[r][2] * self.w[2][i];
                 }
             }
             if self.eta * norm <= self.newton_tolerance {

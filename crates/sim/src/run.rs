@@ -24,8 +24,7 @@ pub enum Method {
 }
 
 impl Method {
-    pub const NAMES: [&'static str; 6] =
-        ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau"];
+    pub const NAMES: [&'static str; 6] = ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau"];
 
     pub fn from_name(name: &str) -> Option<Method> {
         Some(match name {
@@ -123,6 +122,9 @@ pub struct Run {
     /// Jacobians evaluated and LU factorizations of iteration matrices (radau).
     pub jacobians: usize,
     pub factorizations: usize,
+    /// The largest |value| of each observation at the start and the accepted steps: the
+    /// integrator's own points, where a recorded sample may come from the dense output.
+    pub peaks: Vec<f64>,
     pub events: Vec<EventHit>,
     /// The stop event that ended the run, if one did.
     pub stopped_by: Option<usize>,
@@ -166,6 +168,7 @@ pub fn integrate(
         stiff_steps: 0,
         jacobians: 0,
         factorizations: 0,
+        peaks: Vec::new(),
         events: Vec::new(),
         stopped_by: None,
         fault: None,
@@ -187,6 +190,7 @@ pub fn integrate(
         return run;
     }
     let mut previous_row = row.clone();
+    run.peaks = row.iter().map(|v| v.abs()).collect();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
     // `samples` times from the start to the end, both included, as numpy.linspace counts
@@ -214,6 +218,9 @@ pub fn integrate(
         if let Err(kind) = problem.observe(t, &y, &mut row) {
             run.fault = Some(fault(problem, kind, t, &y));
             break;
+        }
+        for (peak, v) in run.peaks.iter_mut().zip(&row) {
+            *peak = peak.max(v.abs());
         }
         // Events: sign changes of watched columns over the step, located in time order.
         let mut hits: Vec<EventHit> = Vec::new();

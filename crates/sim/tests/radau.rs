@@ -219,4 +219,3 @@ fn complete_elliptic_k(k: f64) -> f64 {
     }
     std::f64::consts::PI / (2.0 * a)
 }
-
