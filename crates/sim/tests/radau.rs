@@ -207,15 +207,6 @@ fn an_index_three_pendulum_keeps_its_constraint_and_energy() {
     let times: Vec<f64> = r.events.iter().map(|e| e.time).collect();
     assert!(times.len() >= 4, "{times:?}");
     let period = times[2] - times[0];
-    let want = 4.0 * complete_elliptic_k(0.5) / G.sqrt();
+    let want = 4.0 * sim::reference::elliptic_k(0.5) / G.sqrt();
     assert!((period - want).abs() < 1e-7, "period {period} against {want}");
-}
-
-/// K(k) by the arithmetic–geometric mean: π / (2·agm(1, √(1 − k²))).
-fn complete_elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    for _ in 0..40 {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
 }
