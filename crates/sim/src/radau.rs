@@ -133,6 +133,8 @@ pub(crate) struct Radau {
     last_rejected: bool,
     /// The fault a failed evaluation inside a step gave, reported if the step cannot shrink.
     pending: Option<FaultKind>,
+    /// The last step tried, for the report when none succeeds.
+    tried: f64,
     evals: usize,
     rejected: usize,
     jacobians: usize,
@@ -178,6 +180,7 @@ impl Radau {
             accepted: None,
             last_rejected: false,
             pending: None,
+            tried: 0.0,
             evals: 0,
             rejected: 0,
             jacobians: 0,
@@ -434,7 +437,7 @@ impl Radau {
                 return fault;
             }
         }
-        FaultKind::NewtonStalled { step: self.h, contraction: self.theta, singular }
+        FaultKind::NewtonStalled { step: self.tried, contraction: self.theta, singular }
     }
 }
 
@@ -471,11 +474,14 @@ impl Stepper for Radau {
         }
         let mut singular = false;
         loop {
-            let min_step = 10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
+            // Time's resolution over the run: a step below it is lost in rounding, and a
+            // Newton failure at t = 0 must not halve the step down to underflow.
+            let min_step = 10.0 * f64::EPSILON * t.abs().max(t_end.abs()).max(f64::MIN_POSITIVE);
             if self.h < min_step {
                 return Err(self.stalled(p, t, y, singular));
             }
             let h = if t + 1.0001 * self.h >= t_end { t_end - t } else { self.h };
+            self.tried = h;
             if self.jac_wanted {
                 self.jacobian(p, t, y)?;
             }

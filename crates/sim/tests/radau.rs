@@ -210,3 +210,42 @@ fn an_index_three_pendulum_keeps_its_constraint_and_energy() {
     let want = 4.0 * sim::reference::elliptic_k(0.5) / G.sqrt();
     assert!((period - want).abs() < 1e-7, "period {period} against {want}");
 }
+
+/// y₁' = y₂ with 0 = y₂² + 1: an algebraic equation no real y₂ satisfies, so no step, however
+/// small, has stages that solve the collocation equations.
+struct Impossible;
+
+impl Problem for Impossible {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        dy[0] = y[1];
+        dy[1] = y[1] * y[1] + 1.0;
+        Ok(())
+    }
+    fn components(&self) -> Components {
+        Components { differential: 1, by_index: [2, 0, 0] }
+    }
+    fn observations(&self) -> usize {
+        1
+    }
+    fn observe(&mut self, _t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        out[0] = y[0];
+        Ok(())
+    }
+}
+
+#[test]
+fn newton_that_cannot_converge_says_so_with_the_step_it_got_down_to() {
+    let r = integrate(&mut Impossible, &[0.0, 0.5], &settings(1e-8, 3.0), &[], &mut |_| {});
+    let fault = r.fault.expect("no step solves the stage equations");
+    assert_eq!((fault.time, r.steps), (0.0, 0), "{fault:?}");
+    match fault.kind {
+        FaultKind::NewtonStalled { step, singular: false, .. } => {
+            // Cut to the resolution of time over the run, not to underflow.
+            assert!(step < 1e-12 && step > 1e-16, "{fault:?}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
