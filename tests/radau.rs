@@ -178,3 +178,20 @@ fn andrews_squeezer_as_an_index_three_system_reaches_the_published_solution() {
     let drift = outcome.constraint_drift_at_steps().expect("six loops");
     assert!(drift < 1e-11, "{}", summary(&outcome));
 }
+
+#[test]
+fn a_velocity_constraint_is_held_as_the_index_two_system() {
+    // The Chaplygin sleigh's blade, a velocity constraint: no position level, index 2.
+    let source = lagrange_tests::example("classics/chaplygin_sleigh.lag");
+    let options = Options { tolerance: Some(1e-10), samples: 2, ..Options::default() };
+    let kept = run(&source, radau(options.clone()));
+    let stabilised = run(&source, options);
+    let drift = kept.constraint_drift_at_steps().expect("the blade");
+    assert!(drift < 1e-11, "{}", summary(&kept));
+    let baumgarte = stabilised.constraint_drift().expect("the blade");
+    assert!(drift * 100.0 < baumgarte, "{drift:e} against {baumgarte:e}");
+    let (a, b) = (last_row(&kept), last_row(&stabilised));
+    for k in 0..3 {
+        assert!((a[k] - b[k]).abs() < 1e-8, "column {k}: radau {a:?}, dop853 {b:?}");
+    }
+}
