@@ -427,7 +427,8 @@ impl Adaptive {
     }
 }
 
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
+/// The root mean square of the values.
+pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
     for x in v {
         s += x * x;

@@ -166,24 +166,7 @@ pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
 
 /// Solves with the factors of [`lu_in_place`].
 pub fn lu_solve(lu: &DMatrix<f64>, pivots: &[usize], b: &mut [f64]) {
-    let n = lu.nrows();
-    for k in 0..n {
-        b.swap(k, pivots[k]);
-    }
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= lu[(i, k)] * b[k];
-        }
-        b[i] = s;
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= lu[(i, k)] * b[k];
-        }
-        b[i] = s / lu[(i, i)];
-    }
+    lu_factor_solve(lu, pivots, b);
 }
 
 /// LU with partial pivoting of a real or complex matrix, for the iteration matrices of an

@@ -14,7 +14,7 @@
 use nalgebra::{Complex, DMatrix};
 use numeric::elementary::pow;
 
-use crate::erk::Stepper;
+use crate::erk::{rms, Stepper};
 use crate::{linalg, Components, FaultKind, Problem};
 
 /// The nodes (4 ∓ √6)/10 and 1.
@@ -438,19 +438,6 @@ impl Radau {
             }
         }
         FaultKind::NewtonStalled { step: self.tried, contraction: self.theta, singular }
-    }
-}
-
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for x in v {
-        s += x * x;
-        n += 1;
-    }
-    if n == 0 {
-        0.0
-    } else {
-        (s / n as f64).sqrt()
     }
 }
 

@@ -6,6 +6,9 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
+mod oscillator;
+
+use oscillator::Oscillator;
 use sim::{integrate, Components, Event, FaultKind, Method, Problem, Run, Settings};
 
 fn settings(tolerance: f64, until: f64) -> Settings {
@@ -24,28 +27,6 @@ fn run(problem: &mut dyn Problem, y0: &[f64], tolerance: f64, until: f64, events
     let run = integrate(problem, y0, &settings(tolerance, until), events, &mut |_| {});
     assert!(run.fault.is_none(), "{:?}", run.fault);
     run
-}
-
-/// y'' = −y from (1, 0), with y − 0.5 observed for events.
-struct Oscillator;
-
-impl Problem for Oscillator {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
-        dy[0] = y[1];
-        dy[1] = -y[0];
-        Ok(())
-    }
-    fn observations(&self) -> usize {
-        2
-    }
-    fn observe(&mut self, _t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
-        out[0] = y[0];
-        out[1] = y[0] - 0.5;
-        Ok(())
-    }
 }
 
 /// The error at t = 10 and the steps taken, at one tolerance.
