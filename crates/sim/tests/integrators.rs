@@ -4,7 +4,7 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
-use sim::{integrate, Event, FaultKind, Method, Problem, Settings};
+use sim::{integrate, Event, Method, Settings};
 
 mod oscillator;
 
