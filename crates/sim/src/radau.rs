@@ -120,8 +120,13 @@ pub(crate) struct Radau {
     z: [Vec<f64>; 3],
     w: [Vec<f64>; 3],
     f: [Vec<f64>; 3],
+    /// Newton's update ΔW, and beside it scratch vectors of the problem's size.
+    delta: [Vec<f64>; 3],
     scale: Vec<f64>,
     tmp: Vec<f64>,
+    column: Vec<f64>,
+    estimate: Vec<f64>,
+    combined: Vec<f64>,
     solve: Vec<Complex<f64>>,
     last: Option<Collocation>,
     /// θ/(1 − θ) of the last Newton iteration, carried to predict the next step's first.
@@ -171,8 +176,12 @@ impl Radau {
             z: zeros(),
             w: zeros(),
             f: zeros(),
+            delta: zeros(),
             scale: vec![0.0; n],
             tmp: vec![0.0; n],
+            column: vec![0.0; n],
+            estimate: vec![0.0; n],
+            combined: vec![0.0; n],
             solve: vec![Complex::new(0.0, 0.0); n],
             last: None,
             eta: 1.0,
@@ -220,7 +229,6 @@ impl Radau {
         let n = y.len();
         let f0 = self.f0.as_ref().expect("F at the point is known before its Jacobian");
         self.tmp.copy_from_slice(y);
-        let mut column = vec![0.0; n];
         // The step is relative to |y| or to the size the tolerances call small (atol/rtol),
         // whichever is larger: F often sums large terms that cancel, and a step relative to a
         // |y| near zero would difference its rounding noise.
@@ -228,10 +236,10 @@ impl Radau {
         for j in 0..n {
             let delta = f64::EPSILON.sqrt() * y[j].abs().max(typical);
             self.tmp[j] = y[j] + delta;
-            p.rhs(t, &self.tmp, &mut column)?;
+            p.rhs(t, &self.tmp, &mut self.column)?;
             self.evals += 1;
             for i in 0..n {
-                self.jac[i * n + j] = (column[i] - f0[i]) / delta;
+                self.jac[i * n + j] = (self.column[i] - f0[i]) / delta;
             }
             self.tmp[j] = y[j];
         }
@@ -304,7 +312,6 @@ impl Radau {
         let n = y.len();
         self.eta = pow(self.eta.max(f64::EPSILON), 0.8);
         let mut previous = 0.0;
-        let mut delta = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
         for k in 0..MAX_NEWTON {
             for s in 0..3 {
                 for i in 0..n {
@@ -324,20 +331,20 @@ impl Radau {
                         + T_INV[r][2] * self.f[2][i]
                 });
                 let (w1, w2, w3) = (self.w[0][i], self.w[1][i], self.w[2][i]);
-                delta[0][i] = g[0] - m * GAMMA * w1;
+                self.delta[0][i] = g[0] - m * GAMMA * w1;
                 self.solve[i] = Complex::new(
                     g[1] - m * (ALPHA * w2 - BETA * w3),
                     g[2] - m * (BETA * w2 + ALPHA * w3),
                 );
             }
-            linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut delta[0]);
+            linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut self.delta[0]);
             linalg::lu_factor_solve(&self.complex, &self.complex_pivots, &mut self.solve);
             for i in 0..n {
-                delta[1][i] = self.solve[i].re;
-                delta[2][i] = self.solve[i].im;
+                self.delta[1][i] = self.solve[i].re;
+                self.delta[2][i] = self.solve[i].im;
             }
             let norm =
-                rms(delta.iter().flat_map(|d| d.iter().zip(&self.scale).map(|(x, s)| x / s)));
+                rms(self.delta.iter().flat_map(|d| d.iter().zip(&self.scale).map(|(x, s)| x / s)));
             if !norm.is_finite() {
                 return Newton::Failed { factor: 0.5 };
             }
@@ -361,7 +368,7 @@ impl Radau {
             previous = norm.max(f64::MIN_POSITIVE);
             for i in 0..n {
                 for r in 0..3 {
-                    self.w[r][i] += delta[r][i];
+                    self.w[r][i] += self.delta[r][i];
                 }
                 for r in 0..3 {
                     self.z[r][i] =
@@ -381,27 +388,24 @@ impl Radau {
     fn error(&mut self, p: &mut dyn Problem, t: f64, y: &[f64], h: f64) -> f64 {
         let n = y.len();
         let f0 = self.f0.as_ref().expect("F at the point is known");
-        let mut combined = vec![0.0; n];
-        let mut estimate = vec![0.0; n];
         for i in 0..n {
             let sum = E[0] * self.z[0][i] + E[1] * self.z[1][i] + E[2] * self.z[2][i];
-            combined[i] = self.mass(i) * sum / h;
-            estimate[i] = f0[i] + combined[i];
+            self.combined[i] = self.mass(i) * sum / h;
+            self.estimate[i] = f0[i] + self.combined[i];
         }
-        linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut estimate);
-        let mut err = self.norm(&estimate).max(1e-10);
+        linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut self.estimate);
+        let mut err = self.norm(&self.estimate).max(1e-10);
         if err >= 1.0 && (self.accepted.is_none() || self.last_rejected) {
             for i in 0..n {
-                self.tmp[i] = y[i] + estimate[i];
+                self.tmp[i] = y[i] + self.estimate[i];
             }
-            let mut f = vec![0.0; n];
             self.evals += 1;
-            if p.rhs(t, &self.tmp, &mut f).is_ok() {
+            if p.rhs(t, &self.tmp, &mut self.column).is_ok() {
                 for i in 0..n {
-                    estimate[i] = f[i] + combined[i];
+                    self.estimate[i] = self.column[i] + self.combined[i];
                 }
-                linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut estimate);
-                err = self.norm(&estimate).max(1e-10);
+                linalg::lu_factor_solve(&self.real, &self.real_pivots, &mut self.estimate);
+                err = self.norm(&self.estimate).max(1e-10);
             }
         }
         if err.is_finite() {
@@ -508,7 +512,18 @@ impl Stepper for Radau {
             }
             // Accepted.
             let t_new = if h == t_end - t { t_end } else { t + h };
-            self.last = Some(Collocation { t0: t, h, y0: y.to_vec(), z: self.z.clone() });
+            match &mut self.last {
+                Some(last) => {
+                    (last.t0, last.h) = (t, h);
+                    last.y0.copy_from_slice(y);
+                    for (kept, z) in last.z.iter_mut().zip(&self.z) {
+                        kept.copy_from_slice(z);
+                    }
+                }
+                None => {
+                    self.last = Some(Collocation { t0: t, h, y0: y.to_vec(), z: self.z.clone() })
+                }
+            }
             for i in 0..n {
                 y[i] += self.z[2][i];
             }
