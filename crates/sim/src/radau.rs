@@ -510,8 +510,20 @@ impl Stepper for Radau {
                 }
                 continue;
             }
-            // Accepted.
+            // Accepted, if F can be evaluated at the end (a NaN or a singular mass matrix
+            // there may be the step's doing: a shorter one is tried first).
             let t_new = if h == t_end - t { t_end } else { t + h };
+            for i in 0..n {
+                self.tmp[i] = y[i] + self.z[2][i];
+            }
+            self.evals += 1;
+            if let Err(fault) = p.rhs(t_new, &self.tmp, &mut self.column) {
+                self.pending = Some(fault);
+                self.h = 0.5 * h;
+                self.rejected += 1;
+                self.last_rejected = true;
+                continue;
+            }
             match &mut self.last {
                 Some(last) => {
                     (last.t0, last.h) = (t, h);
@@ -524,13 +536,8 @@ impl Stepper for Radau {
                     self.last = Some(Collocation { t0: t, h, y0: y.to_vec(), z: self.z.clone() })
                 }
             }
-            for i in 0..n {
-                y[i] += self.z[2][i];
-            }
-            let mut f0 = self.f0.take().expect("set");
-            p.rhs(t_new, y, &mut f0)?;
-            self.evals += 1;
-            self.f0 = Some(f0);
+            y.copy_from_slice(&self.tmp);
+            std::mem::swap(self.f0.as_mut().expect("set"), &mut self.column);
             self.accepted = Some((h, err.max(1e-2)));
             let h_new = if self.last_rejected { h_new.min(h) } else { h_new };
             self.last_rejected = false;
