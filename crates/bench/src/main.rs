@@ -9,6 +9,8 @@
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
 //!   right-hand side;
+//! - `stiff [--largest K]`: dop853 and radau on a pendulum hung from a spring stiff up to
+//!   k = 1e12 (dop853 only up to K, 1e12 by default: it takes minutes there);
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -41,11 +43,13 @@ mod precision;
 mod progress;
 mod scaling;
 mod space;
+mod stiff;
 
 use std::time::Instant;
 
 const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | space | bicycle | derive n-link-pendulum[-on-cart] N]";
+                     precision | model | space | bicycle | stiff [--largest K] | \
+                     derive n-link-pendulum[-on-cart] N]";
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -68,6 +72,7 @@ fn main() {
         }
         "space" => space::run(),
         "bicycle" => bicycle::run(),
+        "stiff" => stiff::run(flag("--largest").unwrap_or(1e12)),
         "scaling" => scaling::run(budget, max),
         "eval" => eval::run(),
         "precision" => {

@@ -131,14 +131,39 @@ impl Mechanical {
         self
     }
 
-    /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
-    fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+    /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
+    pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
+        let Layout { coordinates: n, parameters: k, .. } = self.layout;
         self.input[0] = t;
         self.input[1..1 + 2 * n].copy_from_slice(y);
         self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
         self.dynamics.eval(&self.input, &mut self.dyn_out);
         check_finite(&self.dyn_out)?;
+        Ok(&self.dyn_out)
+    }
+
+    /// Which kept constraints restrain positions and which velocities.
+    pub(crate) fn kinds(&self) -> &[Stabilisation] {
+        &self.stabilisation
+    }
+
+    /// q̈ and λ at (t, q, q̇) from the constraints' second derivatives alone, J q̈ = γ, with no
+    /// stabilisation: the consistent start of the differential–algebraic form.
+    pub(crate) fn unstabilised_accelerations(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Vec<f64>, FaultKind> {
+        let rate = std::mem::replace(&mut self.baumgarte, 0.0);
+        let solved = self.accelerations(t, y);
+        self.baumgarte = rate;
+        solved.map(|()| self.solution.clone())
+    }
+
+    /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
+    fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.dynamics_at(t, y)?;
         let out = &self.dyn_out;
         for j in 0..n {
             for i in 0..n {
@@ -224,19 +249,29 @@ impl Problem for Mechanical {
 
     /// The observation program's outputs, then |Φ| of each kept constraint.
     fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
         self.accelerations(t, y)?;
+        let solution = std::mem::take(&mut self.solution);
+        self.observe_given(t, y, &solution, out);
+        self.solution = solution;
+        Ok(())
+    }
+}
+
+impl Mechanical {
+    /// The observations at (t, q, q̇) with the accelerations and multipliers `solution`, after
+    /// the dynamics program was evaluated there.
+    pub(crate) fn observe_given(&mut self, t: f64, y: &[f64], solution: &[f64], out: &mut [f64]) {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
         let inp = &mut self.obs_input;
         inp[0] = t;
         inp[1..1 + 2 * n].copy_from_slice(y);
-        inp[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&self.solution);
+        inp[1 + 2 * n..1 + 3 * n + m].copy_from_slice(solution);
         inp[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         let shown = self.observation.outputs();
         self.observation.eval(inp, &mut out[..shown]);
         for (o, phi) in out[shown..].iter_mut().zip(self.constraint_values().collect::<Vec<_>>()) {
             *o = phi.abs();
         }
-        Ok(())
     }
 }
 
