@@ -9,8 +9,9 @@
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
 //!   right-hand side;
-//! - `stiff [--largest K]`: dop853 and radau on a pendulum hung from a spring stiff up to
-//!   k = 1e12 (dop853 only up to K, 1e12 by default: it takes minutes there);
+//! - `stiff [--largest K] [--peer]`: the stiffness ladder, dop853 and radau on a pendulum hung
+//!   from a spring stiff up to k = 1e12 (dop853 only up to K, 1e12 by default: it takes
+//!   minutes there), with `--peer` SciPy's Radau and BDF in the same run;
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -48,7 +49,7 @@ mod stiff;
 use std::time::Instant;
 
 const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | space | bicycle | stiff [--largest K] | \
+                     precision | model | space | bicycle | stiff [--largest K] [--peer] | \
                      derive n-link-pendulum[-on-cart] N]";
 
 fn main() {
@@ -72,7 +73,9 @@ fn main() {
         }
         "space" => space::run(),
         "bicycle" => bicycle::run(),
-        "stiff" => stiff::run(flag("--largest").unwrap_or(1e12)),
+        "stiff" => {
+            stiff::run(flag("--largest").unwrap_or(1e12), args.iter().any(|a| a == "--peer"))
+        }
         "scaling" => scaling::run(budget, max),
         "eval" => eval::run(),
         "precision" => {
