@@ -132,7 +132,7 @@ fn until_in_the_scene_must_be_in_seconds() {
         };
         let (message, code) = (e.to_string(), e.exit_code());
         assert_eq!(code, 2, "{message}");
-        assert!(message.contains("is a time in s"), "{message}");
+        assert!(message.contains("`until` is a time, not in"), "{message}");
     }
 }
 

@@ -66,7 +66,10 @@ pub(crate) fn resolve_with(
     let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let ast = lang::parse(source).map_err(scene)?;
     let checks = model::Checks { units: options.units };
-    model::resolve_with(&ast, source, checks).map_err(scene)
+    let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
+    // The integrator's names are `sim`'s, which `model` does not know.
+    simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
+    Ok((model, warnings))
 }
 
 /// Derives and diagnoses a model resolved from `source`.

@@ -10,6 +10,8 @@ use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, R
 
 use crate::animate::{Animation, Plan};
 use crate::numbers::{prepare, Prepared};
+use lang::Diagnostic;
+
 use crate::{Error, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
@@ -138,72 +140,34 @@ fn zero_of(text: &str) -> String {
     }
 }
 
-/// The settings of the scene's `simulate` block as its model has them, as text: key → values,
-/// and the unit as written. A scene that does not resolve has none here; loading it reports
-/// why.
-fn scene_settings(source: &str, options: &Options) -> Vec<(String, Vec<String>, Option<String>)> {
-    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
-    let Ok((model, _)) = loaded else { return Vec::new() };
-    let text = |span: lang::Span| source.get(span.start..span.end).unwrap_or("").trim().to_string();
-    model
-        .simulate
-        .iter()
-        .map(|s| {
-            let values = s.values.iter().map(|e| text(e.span)).collect();
-            // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
-            let unit = s.unit.as_ref().map(|u| text(u.span));
-            (s.key.name.clone(), values, unit)
-        })
-        .collect()
+/// The method a scene's `simulate` block names, or why the integrator has none of that name.
+pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Method>, Diagnostic> {
+    let Some(name) = &simulation.method else { return Ok(None) };
+    let method = Method::from_name(&name.name);
+    method.map(Some).ok_or_else(|| {
+        let d = Diagnostic::error(name.span, format!("unknown method `{}`", name.name))
+            .with_label("not a method");
+        let known = Method::NAMES.join(", ");
+        match model::closest(&name.name, Method::NAMES) {
+            Some(near) => d.with_hint(format!("did you mean `{near}`? (known: {known})")),
+            None => d.with_hint(format!("the methods are {known}")),
+        }
+    })
 }
 
-/// The settings of a run of `source`: its `simulate` block (read from its model, before the
-/// scene is derived, so that a bad setting is reported before the derivation's errors), then
-/// the options.
+/// The settings of a run of `source`: its `simulate` block, as its model has read it (before
+/// the scene is derived; a scene that does not resolve has none, and loading it reports why),
+/// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
-    let mut until = 10.0;
-    let mut method = Method::Dop853;
-    let mut tolerance = 1e-10;
-    let mut step: Option<f64> = None;
-    let mut outputs: Vec<String> = Vec::new();
-    let mut stops: Vec<String> = Vec::new();
-    let mut events: Vec<String> = Vec::new();
-    let number = |key: &str, v: &[String]| -> Result<f64, Error> {
-        let text = v.first().map(String::as_str).unwrap_or("");
-        text.parse::<f64>().map_err(|_| {
-            bad(format!("`{key} {text}` in the scene's simulate block is not a number"))
-        })
-    };
-    for (key, values, unit) in scene_settings(source, options) {
-        match key.as_str() {
-            "until" => {
-                until = number(&key, &values)?;
-                if unit.as_deref().is_some_and(|u| u != "s") {
-                    return Err(bad(format!("`until` is a time in s, not in {unit:?}")));
-                }
-            }
-            "method" => {
-                let name = values.first().cloned().unwrap_or_default();
-                method = Method::from_name(&name).ok_or_else(|| {
-                    bad(format!(
-                        "unknown method `{name}` in the simulate block; one of {}",
-                        Method::NAMES.join(", ")
-                    ))
-                })?;
-            }
-            "tolerance" => tolerance = number(&key, &values)?,
-            "step" => step = Some(number(&key, &values)?),
-            "output" => outputs.extend(values),
-            "stop" => stops.extend(values),
-            "event" => events.extend(values),
-            other => {
-                return Err(bad(format!(
-                    "unknown setting `{other}` in the simulate block; known: until, method, \
-                     tolerance, step, output, stop, event"
-                )))
-            }
-        }
-    }
+    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
+    let scene = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    let number = |n: Option<model::Number>| n.map(|n| n.value);
+    let mut until = number(scene.until).unwrap_or(10.0);
+    // `resolve_with` has checked the name.
+    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
+    let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
+    let mut step = number(scene.step);
+    let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
     if let Some(u) = options.until {
         until = u;
     }

@@ -10,6 +10,7 @@ mod expressions;
 mod loads;
 mod names;
 mod session;
+mod simulation;
 mod space;
 mod statements;
 
@@ -23,7 +24,7 @@ pub use self::session::Scope;
 use crate::units::{Form, Inference};
 use crate::{
     Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Linearize, Link, Load, Model, Param,
-    Placeholder, Show, Term, Value,
+    Placeholder, Show, Simulation, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.
@@ -110,8 +111,9 @@ fn normalize(name: &str) -> String {
         .collect()
 }
 
-/// The closest candidate within a small edit distance.
-fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+/// The closest candidate within a small edit distance: the "did you mean" of a misspelt name,
+/// for every stage that suggests one.
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     // One letter away from a one- or two-letter name is any other name: only a change of
     // case counts there.
     if name.chars().count() <= 2 {
@@ -156,7 +158,7 @@ struct Resolver<'a> {
     expects: Vec<Expect>,
     drawings: Vec<Drawing>,
     links: Vec<Link>,
-    simulate: Vec<lang::Setting>,
+    simulation: Simulation,
     linearize: Vec<Linearize>,
     placeholders: Vec<(SymId, Placeholder)>,
     lets: Vec<(String, cas::ExprId)>,
@@ -218,7 +220,7 @@ impl<'a> Resolver<'a> {
             expects: Vec::new(),
             drawings: Vec::new(),
             links: Vec::new(),
-            simulate: Vec::new(),
+            simulation: Simulation::default(),
             linearize: Vec::new(),
             placeholders,
             lets: Vec::new(),
@@ -356,7 +358,7 @@ impl<'a> Resolver<'a> {
             expects: self.expects,
             drawings: self.drawings,
             links: self.links,
-            simulate: self.simulate,
+            simulation: self.simulation,
             linearize: self.linearize,
             placeholders: self.placeholders,
             lets: self.lets,

@@ -103,7 +103,7 @@ impl<'a> Resolver<'a> {
         r.expects = std::mem::take(&mut model.expects);
         r.drawings = std::mem::take(&mut model.drawings);
         r.links = std::mem::take(&mut model.links);
-        r.simulate = std::mem::take(&mut model.simulate);
+        r.simulation = std::mem::take(&mut model.simulation);
         r.linearize = std::mem::take(&mut model.linearize);
         r.placeholders = std::mem::take(&mut model.placeholders);
         r.lets = std::mem::take(&mut model.lets);

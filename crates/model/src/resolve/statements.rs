@@ -49,7 +49,7 @@ impl Resolver<'_> {
             StmtKind::Expect { at_start, lhs, rhs } => {
                 self.expect_statement(*at_start, lhs, rhs, stmt.span)
             }
-            StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
+            StmtKind::Simulate(settings) => self.simulate_statement(settings),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
             StmtKind::Draw(shape) => self.draw(shape, stmt.span),
         }
