@@ -42,27 +42,27 @@ impl Resolver<'_> {
         match setting.key.name.as_str() {
             "until" => {
                 if let Some(n) = self.setting_number(setting, Measure::Time) {
-                    self.simulation.until = Some(n);
+                    self.model.simulation.until = Some(n);
                 }
             }
             "step" => {
                 if let Some(n) = self.setting_number(setting, Measure::Time) {
-                    self.simulation.step = Some(n);
+                    self.model.simulation.step = Some(n);
                 }
             }
             "tolerance" => {
                 if let Some(n) = self.setting_number(setting, Measure::Ratio) {
-                    self.simulation.tolerance = Some(n);
+                    self.model.simulation.tolerance = Some(n);
                 }
             }
             "method" => {
                 if let Some(name) = self.setting_name(setting) {
-                    self.simulation.method = Some(name);
+                    self.model.simulation.method = Some(name);
                 }
             }
-            "output" => self.simulation.outputs = self.setting_texts(setting, "outputs"),
-            "stop" => self.simulation.stops = self.setting_texts(setting, "stops"),
-            "event" => self.simulation.events = self.setting_texts(setting, "events"),
+            "output" => self.model.simulation.outputs = self.setting_texts(setting, "outputs"),
+            "stop" => self.model.simulation.stops = self.setting_texts(setting, "stops"),
+            "event" => self.model.simulation.events = self.setting_texts(setting, "events"),
             other => {
                 let d = Diagnostic::error(
                     setting.key.span,
@@ -115,7 +115,7 @@ impl Resolver<'_> {
             },
         };
         let (written, _) = self.scalar(value)?;
-        if !self.pool.free_symbols(written).is_empty() {
+        if !self.model.pool.free_symbols(written).is_empty() {
             self.error(
                 Diagnostic::error(value.span, format!("`{key}` must be a number"))
                     .with_label("names a symbol")
@@ -127,7 +127,7 @@ impl Resolver<'_> {
             return None;
         }
         let si = self.in_si(written, scale)?;
-        let number = numeric::eval(&self.pool, si, &[]);
+        let number = numeric::eval(&self.model.pool, si, &[]);
         if !(number.is_finite() && number > 0.0) {
             self.error(
                 Diagnostic::error(value.span, format!("`{key}` must be positive"))
@@ -163,9 +163,9 @@ impl Resolver<'_> {
     /// earlier ones.
     fn setting_texts(&mut self, setting: &Setting, what: &str) -> Vec<String> {
         let mut texts = match setting.key.name.as_str() {
-            "output" => std::mem::take(&mut self.simulation.outputs),
-            "stop" => std::mem::take(&mut self.simulation.stops),
-            _ => std::mem::take(&mut self.simulation.events),
+            "output" => std::mem::take(&mut self.model.simulation.outputs),
+            "stop" => std::mem::take(&mut self.model.simulation.stops),
+            _ => std::mem::take(&mut self.model.simulation.events),
         };
         if let Some(unit) = &setting.unit {
             self.error(
