@@ -271,7 +271,7 @@ fn run(words: &[String]) -> Result<String, String> {
                 Some(other) => return Err(format!("no format {other}")),
             };
             if let (Some(_), Some(sweep)) = (args.last("plot"), &linearized.sweep) {
-                assert!(cli::linearize::svg(file, sweep).starts_with("<svg"));
+                assert!(cli::plot::sweep(file, sweep).starts_with("<svg"));
             }
             Ok(if args.has("out") { String::new() } else { report })
         }

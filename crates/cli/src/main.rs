@@ -429,7 +429,9 @@ fn simulate(
         let e0 = energy.first().copied().unwrap_or(0.0);
         series.push(("energy error E − E(0)".to_string(), energy.iter().map(|e| e - e0).collect()));
         let title = format!("{} ({})", path, outcome.method.name());
-        if let Err(e) = cli::write_atomically(&plot, &cli::plot::svg(&title, times, &series)) {
+        if let Err(e) =
+            cli::write_atomically(&plot, &cli::plot::time_series(&title, times, &series))
+        {
             eprintln!("error: cannot write {}: {e}", plot.display());
             code = ExitCode::from(2);
         }
@@ -481,7 +483,7 @@ fn linearize(
     };
     if let (Some(p), Some(sweep)) = (plot, &linearized.sweep) {
         let title = format!("Eigenvalues against {}: {path}", sweep.parameter);
-        if let Err(e) = cli::write_atomically(&p, &cli::linearize::svg(&title, sweep)) {
+        if let Err(e) = cli::write_atomically(&p, &cli::plot::sweep(&title, sweep)) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
         }
@@ -515,7 +517,7 @@ fn bench(
         10.0 * engine::bench::REFERENCE_TOLERANCE,
         report.reference_check
     ));
-    emit(&cli::bench::table(&report.trials, &report.inapplicable));
+    emit(&engine::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",
@@ -528,7 +530,7 @@ fn bench(
         let title = format!("Work–precision: {path}");
         if let Err(e) = cli::write_atomically(
             &p,
-            &cli::bench::svg(&title, &report.trials, &report.inapplicable),
+            &cli::plot::work_precision(&title, &report.trials, &report.inapplicable),
         ) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
