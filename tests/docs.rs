@@ -129,6 +129,15 @@ impl Args {
         self.flags.iter().any(|(n, _)| n == name)
     }
 
+    /// Every value of a flag, read as the command's value parser reads it.
+    fn parsed<T: std::str::FromStr<Err: std::fmt::Display>>(
+        &self,
+        name: &str,
+    ) -> Result<Vec<T>, String> {
+        let read = |v: String| v.parse().map_err(|e| format!("--{name} {v}: {e}"));
+        self.all(name).into_iter().map(read).collect()
+    }
+
     fn number<T: std::str::FromStr>(&self, name: &str) -> Result<Option<T>, String> {
         self.last(name)
             .map(|v| v.parse().map_err(|_| format!("--{name} {v}: not a number")))
@@ -225,7 +234,7 @@ fn run(words: &[String]) -> Result<String, String> {
                 method: args.last("method"),
                 tolerance: args.number("tolerance")?,
                 step: args.number("step")?,
-                set: args.all("set"),
+                set: args.parsed("set")?,
                 output: args.all("output"),
                 stop_when: args.all("stop-when"),
                 events: args.all("event"),

@@ -44,21 +44,66 @@ mod space;
 
 use std::time::Instant;
 
-const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | space | bicycle | derive n-link-pendulum[-on-cart] N]";
+use clap::{Args, Parser, Subcommand};
+use engine::generate::Family;
+
+/// The benchmarks of the speed/accuracy issue, printed as tables.
+#[derive(Parser)]
+#[command(name = "lagrange-bench")]
+struct Cli {
+    /// Which benchmark to run; all of them but `derive` when none is named.
+    #[command(subcommand)]
+    benchmark: Option<Benchmark>,
+}
+
+#[derive(Subcommand)]
+enum Benchmark {
+    /// Every benchmark but `derive`, in turn.
+    All(Limits),
+    /// Derivation time, expression size and peak memory of the n-link chains.
+    Scaling(Limits),
+    /// One evaluation on the tape, in generated Rust and by hand.
+    Eval,
+    /// Work–precision of every integrator against exact references.
+    Precision,
+    /// What asking for reactions and energies costs in the lowered program.
+    Model,
+    /// The scenes with bodies in space.
+    Space,
+    /// The Whipple bicycle.
+    Bicycle,
+    /// One scaling measurement as JSON, for `bench/sympy_compare.py`.
+    Derive {
+        #[arg(value_parser = family)]
+        family: Family,
+        n: usize,
+    },
+}
+
+/// How far `scaling` goes.
+#[derive(Args)]
+struct Limits {
+    /// The time each size may take (s): past it, the chain grows no longer.
+    #[arg(long, value_name = "SECONDS", default_value_t = Limits::DEFAULT.budget)]
+    budget: f64,
+    /// The largest n.
+    #[arg(long, default_value_t = Limits::DEFAULT.max)]
+    max: usize,
+}
+
+impl Limits {
+    const DEFAULT: Limits = Limits { budget: 20.0, max: 50 };
+}
+
+/// A family of generated scenes by its name.
+fn family(name: &str) -> Result<Family, String> {
+    Family::from_name(name).ok_or_else(|| format!("one of {}", Family::NAMES.join(", ")))
+}
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let flag = |name: &str| -> Option<f64> {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .and_then(|v| v.parse().ok())
-    };
-    let budget = flag("--budget").unwrap_or(20.0);
-    let max = flag("--max").map(|v| v as usize).unwrap_or(50);
-    match args.first().map(String::as_str).unwrap_or("all") {
-        "all" => {
+    let benchmark = Cli::parse().benchmark;
+    match benchmark.unwrap_or(Benchmark::All(Limits::DEFAULT)) {
+        Benchmark::All(Limits { budget, max }) => {
             scaling::run(budget, max);
             eval::run();
             precision::run();
@@ -66,27 +111,15 @@ fn main() {
             space::run();
             bicycle::run();
         }
-        "space" => space::run(),
-        "bicycle" => bicycle::run(),
-        "scaling" => scaling::run(budget, max),
-        "eval" => eval::run(),
-        "precision" => {
+        Benchmark::Space => space::run(),
+        Benchmark::Bicycle => bicycle::run(),
+        Benchmark::Scaling(Limits { budget, max }) => scaling::run(budget, max),
+        Benchmark::Eval => eval::run(),
+        Benchmark::Precision => {
             precision::run();
         }
-        "model" => model::run(),
-        "derive" => {
-            let family = args.get(1).and_then(|f| engine::generate::Family::from_name(f));
-            let n = args.get(2).and_then(|n| n.parse::<usize>().ok());
-            let (Some(family), Some(n)) = (family, n) else {
-                eprintln!("{USAGE}");
-                std::process::exit(2);
-            };
-            scaling::json(family, n);
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            std::process::exit(2);
-        }
+        Benchmark::Model => model::run(),
+        Benchmark::Derive { family, n } => scaling::json(family, n),
     }
 }
 

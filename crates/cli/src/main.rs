@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use engine::input::{Assignment, SweepRange};
 
 #[derive(Parser)]
 #[command(
@@ -72,7 +73,7 @@ enum Command {
         step: Option<f64>,
         /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -114,11 +115,11 @@ enum Command {
         about: Option<String>,
         /// Override a parameter: `--set g=1.62`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Tabulate the eigenvalues for n values of parameter p from a to b, and find where
         /// stability changes: `--sweep w=0:100:101`.
         #[arg(long, value_name = "P=A:B:N")]
-        sweep: Option<String>,
+        sweep: Option<SweepRange>,
         /// Draw the sweep's eigenvalues (real and imaginary parts against p) as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -151,7 +152,7 @@ enum Command {
         until: Option<f64>,
         /// Override a parameter or an initial value, as for simulate.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// End each run when this expression reaches zero, as for simulate.
         #[arg(long = "stop-when", value_name = "EXPR")]
         stop_when: Vec<String>,
@@ -284,6 +285,9 @@ fn main() -> ExitCode {
         }
         Command::Linearize { file, about, set, sweep, plot, format, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            // Typed here, read as text there; the same parser reads it back.
+            let set = set.iter().map(Assignment::to_string).collect();
+            let sweep = sweep.as_ref().map(SweepRange::to_string);
             let options = engine::linearize::Options { about, set, sweep, no_units };
             linearize(&file, &source, &options, format, out, plot)
         }

@@ -1,7 +1,8 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), with the scene's figures frame by frame
+//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
+//! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
 //! any size ([`generate`]), and analyses small motions about a reference ([`linearize`]).
@@ -17,6 +18,7 @@ pub mod codegen;
 pub mod derived;
 mod error;
 pub mod generate;
+pub mod input;
 pub mod linearize;
 pub mod numbers;
 pub mod simulate;

@@ -9,6 +9,7 @@ use numeric::Tape;
 use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run};
 
 use crate::animate::{Animation, Plan};
+use crate::input::Assignment;
 use crate::numbers::{prepare, Prepared};
 use lang::Diagnostic;
 
@@ -21,8 +22,8 @@ pub struct Options {
     pub method: Option<String>,
     pub tolerance: Option<f64>,
     pub step: Option<f64>,
-    /// `name=value` pairs.
-    pub set: Vec<String>,
+    /// Values in place of the scene's.
+    pub set: Vec<Assignment>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -53,8 +54,8 @@ pub struct Settings {
     pub stops: Vec<String>,
     /// Expressions whose zero crossings are recorded.
     pub events: Vec<String>,
-    /// `--set` values: (name, with a `'` for a rate, and the value as a scene expression).
-    pub sets: Vec<(String, String)>,
+    /// `--set` values, each a scene expression.
+    pub sets: Vec<Assignment>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -204,17 +205,6 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
 
-    // `--set name=value`: split here, resolved as expressions when the scene is loaded.
-    let mut sets: Vec<(String, String)> = Vec::new();
-    for s in &options.set {
-        let Some((name, value)) = s.split_once('=') else {
-            return Err(Error::setting(
-                Setting::Set,
-                format!(" `{s}` is not of the form name=value"),
-            ));
-        };
-        sets.push((name.trim().to_string(), value.trim().to_string()));
-    }
     Ok(Settings {
         until,
         method,
@@ -223,7 +213,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         outputs,
         stops,
         events,
-        sets,
+        sets: options.set.clone(),
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -264,7 +254,7 @@ pub fn run(
     extra.extend(events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    extra.extend(sets.iter().map(|(_, v)| v.clone()));
+    extra.extend(sets.iter().map(|a| a.value.clone()));
     let mut prepared = prepare(source, &extra, crate::Options { units: settings.units })?;
     let coordinate_names = prepared.coordinate_names();
     if !scene_has_outputs {
@@ -282,9 +272,8 @@ pub fn run(
     let model = &prepared.derivation.model;
     let mut param_overrides = Vec::new();
     let mut coord_overrides: Vec<(usize, bool, cas::ExprId)> = Vec::new();
-    for ((name, _), expr) in sets.iter().zip(&set_exprs) {
-        let base = name.trim_end_matches('\'');
-        let primes = name.len() - base.len();
+    for (set, expr) in sets.iter().zip(&set_exprs) {
+        let (name, (base, primes)) = (&set.name, set.base());
         if let Some(i) = model.params.iter().position(|p| p.name == base && primes == 0) {
             param_overrides.push((i, *expr));
         } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
