@@ -9,7 +9,7 @@
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
 //!   right-hand side;
-//! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
+//! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
 //! machine may be shared, so the figures are indicative.
@@ -72,7 +72,7 @@ enum Benchmark {
     Space,
     /// The Whipple bicycle.
     Bicycle,
-    /// One scaling measurement as JSON, for `bench/sympy_compare.py`.
+    /// One scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
     Derive {
         #[arg(value_parser = family)]
         family: Family,
