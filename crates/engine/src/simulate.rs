@@ -242,40 +242,142 @@ pub fn run(
     settings: &Settings,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    let Settings { until, method, tolerance, step, ref stops, ref events, ref sets, .. } =
-        *settings;
-    let mut outputs = settings.outputs.clone();
+    let (mut prepared, outputs, set_exprs) = load(source, settings)?;
+    let columns = Columns {
+        outputs: outputs.len(),
+        stops: settings.stops.len(),
+        events: settings.events.len(),
+    };
+    let values = overrides(&prepared, &settings.sets, &set_exprs)?;
+    let (parameters, y0) = start(&mut prepared, &values)?;
 
-    // --- load, with outputs, events and set values resolved as scene expressions ----------
-    let scene_has_outputs = !outputs.is_empty();
+    let dynamics_exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+    let mut observed: Vec<cas::ExprId> = prepared.extra[..columns.figures()].to_vec();
+    // The figures' numbers follow the energies, before the constraints' residuals that the
+    // integrator appends.
+    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
+    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
+    let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
+    let mechanical =
+        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
+            .with_kinds(prepared.stabilisation());
+    let (run, wall_seconds) =
+        integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
+
+    let dynamics = prepared.dynamics_exprs();
+    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
+    let figures = plan.map(|p| p.figures(&run.trajectory.rows, columns.figures()));
+    let mut outcome = Outcome {
+        columns: [&outputs[..], &settings.stops, &settings.events, &["KE".into(), "PE".into()]]
+            .concat(),
+        run,
+        shown: columns.outputs,
+        energy_columns: (columns.energies(), columns.energies() + 1),
+        constraint_columns: (0..prepared.layout.multipliers)
+            .map(|c| columns.figures() + n_drawn + c)
+            .collect(),
+        event_names: [&settings.stops[..], &settings.events].concat(),
+        stop_names: columns.stops,
+        method: settings.method,
+        wall_seconds,
+        state_names: prepared.state_names(),
+        constraint_names: prepared
+            .derivation
+            .multipliers
+            .iter()
+            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
+            .collect(),
+        angle_oriented_bodies: angle_oriented_bodies(&prepared.derivation.model),
+        conservative,
+        animation: None,
+    };
+    if let Some(figures) = figures {
+        let energy = outcome.energy();
+        let e0 = energy.first().copied().unwrap_or(0.0);
+        let model = &prepared.derivation.model;
+        outcome.animation = Some(Animation {
+            title: model.title.clone(),
+            dimension: model.dimension(),
+            times: outcome.run.trajectory.times.clone(),
+            energy_error: energy.iter().map(|e| e - e0).collect(),
+            conservative,
+            figures,
+        });
+    }
+    Ok(outcome)
+}
+
+/// Where a run's quantities sit among the observed columns: the outputs, the stops, the
+/// events, KE and PE, then the figures of an animation and the constraints' residuals.
+struct Columns {
+    outputs: usize,
+    stops: usize,
+    events: usize,
+}
+
+impl Columns {
+    /// The column of KE; PE follows it.
+    fn energies(&self) -> usize {
+        self.outputs + self.stops + self.events
+    }
+
+    /// The first column after the energies.
+    fn figures(&self) -> usize {
+        self.energies() + 2
+    }
+}
+
+/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
+/// then the `--set` values; with the outputs (the remaining coordinates when the settings name
+/// none) and the `--set` values' expressions.
+fn load(
+    source: &str,
+    settings: &Settings,
+) -> Result<(Prepared, Vec<String>, Vec<cas::ExprId>), Error> {
+    let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
-    extra.extend(stops.iter().cloned());
-    extra.extend(events.iter().cloned());
+    extra.extend(settings.stops.iter().cloned());
+    extra.extend(settings.events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    extra.extend(sets.iter().map(|a| a.value.clone()));
+    extra.extend(settings.sets.iter().map(|a| a.value.clone()));
     let mut prepared = prepare(source, &extra, crate::Options { units: settings.units })?;
-    let coordinate_names = prepared.coordinate_names();
-    if !scene_has_outputs {
+    if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
-        outputs = coordinate_names.clone();
+        outputs = prepared.coordinate_names();
         let coords = prepared.derivation.coords.clone();
         let pool = &mut prepared.derivation.model.pool;
         let exprs: Vec<cas::ExprId> = coords.iter().map(|q| pool.sym(*q)).collect();
         prepared.extra.splice(0..0, exprs);
     }
-    let (n_out, n_stop, n_event) = (outputs.len(), stops.len(), events.len());
-    let set_exprs = prepared.extra[n_out + n_stop + n_event + 2..].to_vec();
+    let sets_from = outputs.len() + settings.stops.len() + settings.events.len() + 2;
+    let set_exprs = prepared.extra[sets_from..].to_vec();
+    Ok((prepared, outputs, set_exprs))
+}
 
-    // --- parameter values and the initial state -------------------------------------------
+/// The `--set` values in place of the scene's: parameters by their index, and coordinates by
+/// theirs with whether the rate is set.
+struct Overrides {
+    params: Vec<(usize, cas::ExprId)>,
+    coords: Vec<(usize, bool, cas::ExprId)>,
+}
+
+/// Which parameter or coordinate each `--set` value replaces, or why it replaces none.
+fn overrides(
+    prepared: &Prepared,
+    sets: &[Assignment],
+    exprs: &[cas::ExprId],
+) -> Result<Overrides, Error> {
     let model = &prepared.derivation.model;
-    let mut param_overrides = Vec::new();
-    let mut coord_overrides: Vec<(usize, bool, cas::ExprId)> = Vec::new();
-    for (set, expr) in sets.iter().zip(&set_exprs) {
+    let coordinate_names = prepared.coordinate_names();
+    let mut found = Overrides { params: Vec::new(), coords: Vec::new() };
+    for (set, expr) in sets.iter().zip(exprs) {
         let (name, (base, primes)) = (&set.name, set.base());
         if let Some(i) = model.params.iter().position(|p| p.name == base && primes == 0) {
-            param_overrides.push((i, *expr));
+            found.params.push((i, *expr));
         } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
             if !prepared.derivation.coords.contains(&model.coords[i].sym) {
                 return Err(Error::given(
@@ -288,7 +390,7 @@ pub fn run(
                     ),
                 ));
             }
-            coord_overrides.push((i, primes == 1, *expr));
+            found.coords.push((i, primes == 1, *expr));
         } else {
             let mut known: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
             for c in &coordinate_names {
@@ -302,12 +404,18 @@ pub fn run(
             ));
         }
     }
-    let parameters = prepared.parameter_values(&param_overrides)?;
-    if !param_overrides.is_empty() {
+    Ok(found)
+}
+
+/// The parameters' values and the initial state, with the `--set` values in place and the
+/// start settled again on the kept constraints where they moved it.
+fn start(prepared: &mut Prepared, values: &Overrides) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let parameters = prepared.parameter_values(&values.params)?;
+    if !values.params.is_empty() {
         // The scene's masses were checked with its own values; `--set` may change their sign.
         prepared.masses_at(&parameters)?;
     }
-    let mut y0 = prepared.initial_state(&parameters, &coord_overrides)?;
+    let mut y0 = prepared.initial_state(&parameters, &values.coords)?;
     let set_in = |prepared: &Prepared, rates: bool| -> Vec<bool> {
         prepared
             .derivation
@@ -315,13 +423,13 @@ pub fn run(
             .iter()
             .map(|q| {
                 let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
-                coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate == rates)
+                values.coords.iter().any(|(j, rate, _)| Some(*j) == i && *rate == rates)
             })
             .collect()
     };
-    let (set_positions, set_rates) = (set_in(&prepared, false), set_in(&prepared, true));
+    let (set_positions, set_rates) = (set_in(prepared, false), set_in(prepared, true));
     // The scene's own start was settled when it was derived; `--set` values may break it.
-    if !param_overrides.is_empty() || !coord_overrides.is_empty() {
+    if !values.params.is_empty() || !values.coords.is_empty() {
         prepared.settle_positions(&mut y0, &parameters, &set_positions)?;
         prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
     }
@@ -331,20 +439,20 @@ pub fn run(
             prepared.state_names()[bad_slot]
         )));
     }
+    Ok((parameters, y0))
+}
 
-    // --- lower and run --------------------------------------------------------------------
-    let dynamics_exprs = prepared.dynamics_exprs();
-    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
-    let mut observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
-    // The figures' numbers follow the energies, before the constraints' residuals that the
-    // integrator appends.
-    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
-    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
-    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
-    let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
-    let mechanical =
-        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation());
+/// Integrates the lowered scene from `y0` with the settings' method, watching the stops and
+/// events; the run and its wall time.
+fn integrate_scene(
+    prepared: &mut Prepared,
+    mechanical: Mechanical,
+    y0: &[f64],
+    settings: &Settings,
+    columns: &Columns,
+    progress: &mut dyn Progress,
+) -> Result<(Run, f64), Error> {
+    let Settings { until, method, tolerance, step, .. } = *settings;
     let run_settings = sim::Settings {
         method,
         start: 0.0,
@@ -354,9 +462,10 @@ pub fn run(
         max_steps: 20_000_000,
         samples: settings.samples,
     };
-    let watched: Vec<Event> = (0..n_stop)
-        .map(|k| Event { column: n_out + k, stop: true })
-        .chain((0..n_event).map(|k| Event { column: n_out + n_stop + k, stop: false }))
+    let Columns { outputs, stops, events } = *columns;
+    let watched: Vec<Event> = (0..stops)
+        .map(|k| Event { column: outputs + k, stop: true })
+        .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
         .collect();
     if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
         return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853", method.name())));
@@ -369,74 +478,23 @@ pub fn run(
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
             let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
-            let z0 = canonical.from_physical(0.0, &y0);
+            let z0 = canonical.from_physical(0.0, y0);
             integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
         } else {
             let mut m = mechanical;
-            integrate(&mut m as &mut dyn Problem, &y0, &run_settings, &watched, &mut update)
+            integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
         }
     };
     progress.finish();
-    let wall_seconds = started.elapsed().as_secs_f64();
+    Ok((run, started.elapsed().as_secs_f64()))
+}
 
-    let dynamics = prepared.dynamics_exprs();
-    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
-    let mut columns: Vec<String> = outputs.clone();
-    columns.extend(stops.iter().cloned());
-    columns.extend(events.iter().cloned());
-    columns.push("KE".into());
-    columns.push("PE".into());
-    let constraint_columns = (0..prepared.layout.multipliers)
-        .map(|c| n_out + n_stop + n_event + 2 + n_drawn + c)
-        .collect();
-    let mut event_names = stops.clone();
-    event_names.extend(events.iter().cloned());
-    let figures = plan.map(|p| p.figures(&run.trajectory.rows, n_out + n_stop + n_event + 2));
-    let title = prepared.derivation.model.title.clone();
-    let dimension = prepared.derivation.model.dimension();
-    let mut outcome = Outcome {
-        columns,
-        run,
-        shown: n_out,
-        energy_columns: (n_out + n_stop + n_event, n_out + n_stop + n_event + 1),
-        constraint_columns,
-        event_names,
-        stop_names: n_stop,
-        method,
-        wall_seconds,
-        state_names: prepared.state_names(),
-        constraint_names: prepared
-            .derivation
-            .multipliers
-            .iter()
-            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
-            .collect(),
-        angle_oriented_bodies: prepared
-            .derivation
-            .model
-            .bodies
-            .iter()
-            .filter(|b| {
-                matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
-            })
-            .map(|b| b.name.clone())
-            .collect(),
-        conservative,
-        animation: None,
+/// Bodies in space oriented by angles (not Euler parameters).
+fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
+    let by_angles = |b: &&model::Body| {
+        matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
     };
-    if let Some(figures) = figures {
-        let energy = outcome.energy();
-        let e0 = energy.first().copied().unwrap_or(0.0);
-        outcome.animation = Some(Animation {
-            title,
-            dimension,
-            times: outcome.run.trajectory.times.clone(),
-            energy_error: energy.iter().map(|e| e - e0).collect(),
-            conservative,
-            figures,
-        });
-    }
-    Ok(outcome)
+    model.bodies.iter().filter(by_angles).map(|b| b.name.clone()).collect()
 }
 
 /// Whether T + V should stay at its start value. It does not when loads act that no potential
