@@ -307,8 +307,32 @@ impl Resolver<'_> {
             );
             return None;
         }
+        let tensor = self.inertia_tensor(name, &inertia, inertia_written)?;
+        if let Some((_, e, _)) = self.scope.quaternions.iter().find(|(m, _, _)| *m == orientation) {
+            // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
+            let e = *e;
+            self.unit_quaternion(name, e, orientation_span);
+            let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+            let euler_parameters = Some(e);
+            return Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters });
+        }
+        if !self.is_rotation(&orientation, orientation_span) {
+            return None;
+        }
+        let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+        Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
+    }
+
+    /// The inertia of a body in space as a symmetric tensor in body axes: a scalar is the same
+    /// about every axis, a 3-vector the principal moments. Checked to be one a body can have.
+    fn inertia_tensor(
+        &mut self,
+        name: &Ident,
+        inertia: &Value,
+        inertia_written: &Expr,
+    ) -> Option<[[ExprId; 3]; 3]> {
         let zero = self.model.pool.zero();
-        let tensor: [[ExprId; 3]; 3] = match &inertia {
+        let tensor: [[ExprId; 3]; 3] = match inertia {
             Value::Scalar(i) => {
                 std::array::from_fn(|r| std::array::from_fn(|c| if r == c { *i } else { zero }))
             }
@@ -365,16 +389,14 @@ impl Resolver<'_> {
         if self.diagnostics.errors.len() == errors {
             self.check_inertia_tensor(name, &tensor, inertia_written);
         }
-        if let Some((_, e, _)) = self.scope.quaternions.iter().find(|(m, _, _)| *m == orientation) {
-            // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
-            let e = *e;
-            self.unit_quaternion(name, e, orientation_span);
-            let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
-            let euler_parameters = Some(e);
-            return Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters });
-        }
-        let rows = kinematics::transpose(&orientation);
-        let gram = kinematics::product(&mut self.model.pool, &rows, &orientation);
+        Some(tensor)
+    }
+
+    /// Whether `orientation` is a rotation: Rᵀ·R = I and det R = 1; reported where it is
+    /// written if not.
+    fn is_rotation(&mut self, orientation: &[Vec<ExprId>], orientation_span: Span) -> bool {
+        let rows = kinematics::transpose(orientation);
+        let gram = kinematics::product(&mut self.model.pool, &rows, orientation);
         for (r, row) in gram.iter().enumerate() {
             for (c, entry) in row.iter().enumerate() {
                 let identity = if r == c { self.model.pool.one() } else { self.model.pool.zero() };
@@ -393,7 +415,7 @@ impl Resolver<'_> {
                                  products are rotations",
                             ),
                     );
-                    return None;
+                    return false;
                 }
             }
         }
@@ -416,10 +438,9 @@ impl Resolver<'_> {
                          rotation(axis, angle)",
                 ),
             );
-            return None;
+            return false;
         }
-        let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
-        Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
+        true
     }
 }
 
