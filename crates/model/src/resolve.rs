@@ -7,6 +7,7 @@ mod constraints;
 mod dims;
 mod draw;
 mod expressions;
+mod inertia;
 mod loads;
 mod names;
 mod session;
