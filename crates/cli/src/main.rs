@@ -220,27 +220,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units, full } => {
-            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let path = file.display().to_string();
-            let format = match format {
-                FormatArg::Text => cli::Format::Text,
-                FormatArg::Latex => cli::Format::Latex,
-                FormatArg::Json => cli::Format::Json,
-            };
-            let options = engine::Options { units: !no_units };
-            match cli::derive_keeping(&path, &source, format, options, full) {
-                Ok((report, warnings, derivation)) => {
-                    eprint!("{warnings}");
-                    // The process ends here: freeing a large model's expressions one by one (a
-                    // tenth of the bicycle's run) would be work for nothing.
-                    std::mem::forget(derivation);
-                    write_or_print(out.as_ref(), &report)
-                }
-                Err(diagnostics) => {
-                    eprint!("{diagnostics}");
-                    ExitCode::from(2)
-                }
-            }
+            derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
             let family =
@@ -309,33 +289,68 @@ fn main() -> ExitCode {
                 engine::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
             bench(&file, &source, &options, repeats, plot)
         }
-        Command::Check { files, no_units } => {
-            let mut worst = 0;
-            let (mut held, mut failed) = (0, 0);
-            for file in &files {
-                let Some(source) = read_or_report(file) else {
-                    worst = 2;
-                    continue;
-                };
-                let result = cli::check::check_file_with(
-                    &file.display().to_string(),
-                    &source,
-                    engine::Options { units: !no_units },
-                );
-                eprint!("{}", result.warnings);
-                if result.exit_code == 2 {
-                    eprint!("{}", result.report);
-                } else {
-                    emit(&result.report);
-                }
-                held += result.held;
-                failed += result.failed;
-                worst = worst.max(result.exit_code);
-            }
-            emit(&format!("{held} passed, {failed} failed\n"));
-            ExitCode::from(worst as u8)
+        Command::Check { files, no_units } => check(&files, no_units),
+    }
+}
+
+/// `lagrange derive`: the report to standard output or `out`, the warnings to stderr.
+fn derive(
+    file: &std::path::Path,
+    format: FormatArg,
+    out: Option<PathBuf>,
+    no_units: bool,
+    full: bool,
+) -> ExitCode {
+    let Some(source) = read_or_report(file) else { return ExitCode::from(2) };
+    let path = file.display().to_string();
+    let format = match format {
+        FormatArg::Text => cli::Format::Text,
+        FormatArg::Latex => cli::Format::Latex,
+        FormatArg::Json => cli::Format::Json,
+    };
+    let options = engine::Options { units: !no_units };
+    match cli::derive_keeping(&path, &source, format, options, full) {
+        Ok((report, warnings, derivation)) => {
+            eprint!("{warnings}");
+            // The process ends here: freeing a large model's expressions one by one (a
+            // tenth of the bicycle's run) would be work for nothing.
+            std::mem::forget(derivation);
+            write_or_print(out.as_ref(), &report)
+        }
+        Err(diagnostics) => {
+            eprint!("{diagnostics}");
+            ExitCode::from(2)
         }
     }
+}
+
+/// `lagrange check`: each file's report, then the count of `expect` lines that held and
+/// failed; the worst exit code of the files.
+fn check(files: &[PathBuf], no_units: bool) -> ExitCode {
+    let mut worst = 0;
+    let (mut held, mut failed) = (0, 0);
+    for file in files {
+        let Some(source) = read_or_report(file) else {
+            worst = 2;
+            continue;
+        };
+        let result = cli::check::check_file_with(
+            &file.display().to_string(),
+            &source,
+            engine::Options { units: !no_units },
+        );
+        eprint!("{}", result.warnings);
+        if result.exit_code == 2 {
+            eprint!("{}", result.report);
+        } else {
+            emit(&result.report);
+        }
+        held += result.held;
+        failed += result.failed;
+        worst = worst.max(result.exit_code);
+    }
+    emit(&format!("{held} passed, {failed} failed\n"));
+    ExitCode::from(worst as u8)
 }
 
 fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
