@@ -54,6 +54,24 @@ fn outline(s: &mut String, (left, top): (f64, f64), width: f64, height: f64) {
     );
 }
 
+/// A figure of panels stacked one above the other (a run's quantities, a sweep's parts of
+/// λ): its width, its margins left and right, and the gap above each panel.
+const WIDTH: f64 = 720.0;
+const LEFT: f64 = 90.0;
+const RIGHT: f64 = 20.0;
+const GAP: f64 = 40.0;
+
+/// The page of a stacked figure of `panels` panels of height `panel`.
+fn stacked_page(title: &str, panels: usize, panel: f64) -> String {
+    let height = GAP + panels as f64 * (panel + GAP) + 10.0;
+    page(WIDTH, height, title, (WIDTH / 2.0, 20.0))
+}
+
+/// The horizontal axis of a stacked figure, from `range` across every panel.
+fn across(range: (f64, f64)) -> Axis {
+    Axis { from: range, to: (LEFT, WIDTH - RIGHT) }
+}
+
 /// Where a panel sits in a figure of panels stacked one above the other.
 struct Frame {
     top: f64,
@@ -64,6 +82,11 @@ struct Frame {
 }
 
 impl Frame {
+    /// Panel `k`, counted from the top, of a stacked figure of panels of height `panel`.
+    fn stacked(k: usize, panel: f64) -> Frame {
+        Frame { top: GAP + k as f64 * (panel + GAP), panel, width: WIDTH, left: LEFT, right: RIGHT }
+    }
+
     /// The vertical axis from `range` up the panel.
     fn y(&self, range: (f64, f64)) -> Axis {
         Axis { from: range, to: (self.top + self.panel, self.top) }

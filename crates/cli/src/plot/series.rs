@@ -3,31 +3,20 @@
 
 use std::fmt::Write;
 
-use super::{label, page, range, Axis, Frame};
+use super::{across, label, range, stacked_page, Frame};
 
-const WIDTH: f64 = 720.0;
 const PANEL: f64 = 150.0;
-const LEFT: f64 = 90.0;
-const RIGHT: f64 = 20.0;
-const GAP: f64 = 40.0;
 /// Past this many points a series is thinned: the picture does not change, the file shrinks.
 const MAX_POINTS: usize = 2000;
 
 /// `series`: (title, values at `times`).
 pub fn time_series(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String {
-    let height = GAP + series.len() as f64 * (PANEL + GAP) + 10.0;
-    let mut s = page(WIDTH, height, title, (WIDTH / 2.0, 20.0));
+    let mut s = stacked_page(title, series.len(), PANEL);
     let (t0, t1) = range(times);
     let stride = times.len().div_ceil(MAX_POINTS).max(1);
-    let x = Axis { from: (t0, t1), to: (LEFT, WIDTH - RIGHT) };
+    let x = across((t0, t1));
     for (k, (name, values)) in series.iter().enumerate() {
-        let at = Frame {
-            top: GAP + k as f64 * (PANEL + GAP),
-            panel: PANEL,
-            width: WIDTH,
-            left: LEFT,
-            right: RIGHT,
-        };
+        let at = Frame::stacked(k, PANEL);
         let (v0, v1) = range(values);
         let y = at.y((v0, v1));
         let axis_end = format!("t = {}", label(t1));

@@ -5,30 +5,25 @@ use std::fmt::Write;
 
 use engine::linearize::Sweep;
 
-use super::{escape, label, page, range, Axis, Frame};
+use super::{across, escape, label, range, stacked_page, Frame, GAP, LEFT, RIGHT, WIDTH};
 
 /// One part of an eigenvalue (re, im).
 type Part = fn(&(f64, f64)) -> f64;
 
-const WIDTH: f64 = 720.0;
 const PANEL: f64 = 200.0;
-const LEFT: f64 = 90.0;
-const RIGHT: f64 = 20.0;
-const GAP: f64 = 40.0;
 
 /// The real and imaginary parts of the eigenvalues against the swept parameter, one panel
 /// each, with the changes of stability marked. A dot per eigenvalue and value: which
 /// eigenvalue continues which is not known, so no lines join them.
 pub fn sweep(title: &str, sweep: &Sweep) -> String {
-    let height = GAP + 2.0 * (PANEL + GAP) + 10.0;
-    let mut s = page(WIDTH, height, title, (WIDTH / 2.0, 20.0));
+    let mut s = stacked_page(title, 2, PANEL);
     let values: Vec<f64> = sweep.rows.iter().map(|r| r.value).collect();
     let (p0, p1) = range(&values);
     let panels: [(&str, Part); 2] = [("real part of λ", |z| z.0), ("imaginary part of λ", |z| z.1)];
-    let x = Axis { from: (p0, p1), to: (LEFT, WIDTH - RIGHT) };
+    let x = across((p0, p1));
     for (k, (name, part)) in panels.iter().enumerate() {
-        let top = GAP + k as f64 * (PANEL + GAP);
-        let at = Frame { top, panel: PANEL, width: WIDTH, left: LEFT, right: RIGHT };
+        let at = Frame::stacked(k, PANEL);
+        let top = at.top;
         let all: Vec<f64> =
             sweep.rows.iter().flat_map(|r| r.eigenvalues.iter().map(part)).collect();
         let (v0, v1) = range(&all);

@@ -83,15 +83,7 @@ impl Resolver<'_> {
         scale: f64,
         written: &Expr,
     ) -> bool {
-        for (rows, minor, degree) in principal_minors(&mut self.model.pool, known) {
-            let minor = self.model.pool.simplify(minor);
-            if !below_zero(
-                &self.model.pool,
-                minor,
-                numeric::elementary::pow_int(scale, degree as i32),
-            ) {
-                continue;
-            }
+        if let Some((rows, minor)) = self.negative_minor(known, scale) {
             let axis = |i: usize| ["x", "y", "z"][i - 1];
             let value = number_text(&self.model.pool, minor);
             let label = match rows[..] {
@@ -147,15 +139,7 @@ impl Resolver<'_> {
                 }
             })
         });
-        for (rows, minor, degree) in principal_minors(&mut self.model.pool, &second) {
-            let minor = self.model.pool.simplify(minor);
-            if !below_zero(
-                &self.model.pool,
-                minor,
-                numeric::elementary::pow_int(scale, degree as i32),
-            ) {
-                continue;
-            }
+        if let Some((rows, _)) = self.negative_minor(&second, scale) {
             let span = match (&written.kind, diagonal && rows.len() == 1) {
                 (ExprKind::Tuple(parts), true) if parts.len() == 3 => parts[rows[0] - 1].span,
                 _ => written.span,
@@ -191,7 +175,19 @@ impl Resolver<'_> {
                      centre has (m*(3*r^2 + h^2)/12, m*(3*r^2 + h^2)/12, m*r^2/2)",
                 ),
             );
-            return;
         }
+    }
+
+    /// The first principal minor of a matrix known in numbers that is below zero, within
+    /// rounding at `scale`: the rows it is taken over, and its value.
+    fn negative_minor(&mut self, m: &[[ExprId; 3]; 3], scale: f64) -> Option<(Vec<usize>, ExprId)> {
+        for (rows, minor, degree) in principal_minors(&mut self.model.pool, m) {
+            let minor = self.model.pool.simplify(minor);
+            let scale = numeric::elementary::pow_int(scale, degree as i32);
+            if below_zero(&self.model.pool, minor, scale) {
+                return Some((rows, minor));
+            }
+        }
+        None
     }
 }
