@@ -57,7 +57,7 @@ fn the_benchmark_comes_out_of_table_1() {
     let l = linearize(&whipple(), &options).unwrap_or_else(|e| panic!("linearizes: {e}"));
 
     // The roll–steer block: u = (φ̇, δ̇, θ̇R), p = (φ, δ).
-    let (positions, rates) = l.at.reduced.clone().expect("reduced in numbers");
+    let (positions, rates) = l.at.reduced().expect("reduced in numbers");
     let names: Vec<String> = positions
         .iter()
         .chain(&rates)

@@ -309,7 +309,7 @@ fn the_rolling_coin_stays_up_above_the_critical_spin() {
     let source = example("space/rolling_coin.lag");
     let l = linearize(&source, &Options::default()).expect("linearizes");
     assert!(l.exact_reference);
-    let rates = l.linearization.independent.as_ref().expect("in the independent rates");
+    let rates = l.linearization.in_rates().expect("in the independent rates");
     assert_eq!(rates.rates.len(), 3);
     assert_eq!(l.linearization.cyclic, [true, true, true, false, true]);
     assert_eq!(l.state, ["theta", "psi'", "theta'", "phi'"]);
@@ -402,8 +402,8 @@ potential mb*g*w                   # the bob's weight alone: the sleigh glides o
 linearize about theta = 0, x' = v, u = 0, w = -L
 ";
     let l = about(source, "theta = 0");
-    assert!(l.linearization.kept.is_some());
-    let (positions, rates) = l.at.reduced.clone().expect("reduced in numbers");
+    assert!(l.linearization.kept().is_some());
+    let (positions, rates) = l.at.reduced().expect("reduced in numbers");
     let name = |i: &usize| l.derivation.model.pool.symbol(l.linearization.coords[*i]).name.clone();
     // The rod's row fixes w, the blade's y'; the heading θ is ignorable at first order (no
     // force depends on it, and no rate kept), as x and y are.

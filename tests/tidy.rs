@@ -1,7 +1,7 @@
 //! House rules that a reviewer would otherwise check by hand: every Rust file opens with a
 //! `//!` line saying what it is for, no source names a particular machine's paths, crates
-//! depend only on what ARCHITECTURE.md allows, `cas` names no float type, and the modules of a
-//! crate form no circles.
+//! depend only on what ARCHITECTURE.md allows, `cas` and `mechanics` name no float type,
+//! `linear` parses nothing, and the modules of a crate form no circles.
 
 use std::path::{Path, PathBuf};
 
@@ -128,20 +128,40 @@ fn code_without_tests(text: &str) -> String {
     code
 }
 
-/// No `f64` in `cas`: it evaluates no floats (ARCHITECTURE.md); the numbers its zero test
-/// needs come from `numeric` through `cas::ZeroTest`.
+/// No `f64` in `cas` or `mechanics`: they evaluate no floats (ARCHITECTURE.md); the numbers
+/// `cas`'s zero test needs come from `numeric` through `cas::ZeroTest`, and what needs numbers
+/// of a derivation is `verify`'s and `linear`'s.
 #[test]
-fn cas_has_no_floats() {
+fn cas_and_mechanics_have_no_floats() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for name in ["cas", "mechanics"] {
+        let mut files = Vec::new();
+        rust_files(&root.join("crates").join(name).join("src"), &mut files);
+        assert!(!files.is_empty());
+        for f in files {
+            let text = std::fs::read_to_string(&f).expect("readable");
+            for (n, line) in text.lines().enumerate() {
+                let words = code_of(line).split(|c: char| !c.is_alphanumeric() && c != '_');
+                let float = words.into_iter().find(|w| *w == "f64" || *w == "f32");
+                assert!(float.is_none(), "{}:{}: `{name}` names a float type", f.display(), n + 1);
+            }
+        }
+    }
+}
+
+/// `linear` starts from a derivation: it parses and resolves nothing (the command line's
+/// reference reaches it resolved by the model, ARCHITECTURE.md).
+#[test]
+fn linear_parses_and_resolves_nothing() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut files = Vec::new();
-    rust_files(&root.join("crates/cas/src"), &mut files);
+    rust_files(&root.join("crates/linear/src"), &mut files);
     assert!(!files.is_empty());
+    let banned = ["lang::parse", "model::resolve", "resolve_about", "resolve_expression"];
     for f in files {
-        let text = std::fs::read_to_string(&f).expect("readable");
-        for (n, line) in text.lines().enumerate() {
-            let words = code_of(line).split(|c: char| !c.is_alphanumeric() && c != '_');
-            let float = words.into_iter().find(|w| *w == "f64" || *w == "f32");
-            assert!(float.is_none(), "{}:{}: `cas` names a float type", f.display(), n + 1);
+        let code = code_without_tests(&std::fs::read_to_string(&f).expect("readable"));
+        for name in banned {
+            assert!(!code.contains(name), "{}: `linear` calls {name}", f.display());
         }
     }
 }

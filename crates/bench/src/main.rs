@@ -9,6 +9,8 @@
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
 //!   right-hand side;
+//! - `stiff [--largest K]`: dop853 and radau on a pendulum hung from a spring stiff up to
+//!   k = 1e12 (dop853 only up to K, 1e12 by default: it takes minutes there);
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -41,6 +43,7 @@ mod precision;
 mod progress;
 mod scaling;
 mod space;
+mod stiff;
 
 use std::time::Instant;
 
@@ -72,6 +75,12 @@ enum Benchmark {
     Space,
     /// The Whipple bicycle.
     Bicycle,
+    /// dop853 and radau on a pendulum hung from a spring of growing stiffness.
+    Stiff {
+        /// The stiffest spring dop853 is run on (it takes minutes at 1e12).
+        #[arg(long, value_name = "K", default_value_t = 1e12)]
+        largest: f64,
+    },
     /// One scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
     Derive {
         #[arg(value_parser = family)]
@@ -113,6 +122,7 @@ fn main() {
         }
         Benchmark::Space => space::run(),
         Benchmark::Bicycle => bicycle::run(),
+        Benchmark::Stiff { largest } => stiff::run(largest),
         Benchmark::Scaling(Limits { budget, max }) => scaling::run(budget, max),
         Benchmark::Eval => eval::run(),
         Benchmark::Precision => {

@@ -11,6 +11,11 @@ pub use lang::render::render;
 pub fn error(path: &str, error: &engine::Error) -> String {
     match error {
         engine::Error::Scene { diagnostics, source } => render(path, source, diagnostics),
+        // The scene's and the argument's diagnostics, each against its own text.
+        engine::Error::WithArgument { diagnostics, source, setting, argument } => {
+            let name = format!("--{}", setting.name());
+            lang::render::render_with_argument((path, source), (&name, argument), diagnostics)
+        }
         // An expression given besides the scene, rendered against itself.
         engine::Error::Expression { diagnostics, text } => render("expression", text, diagnostics),
         engine::Error::Setting(_) => format!("error: {}\n", error.worded(flag)),

@@ -4,7 +4,7 @@
 //! [`crate::plot::sweep`].
 
 use cas::{ExprId, Pool, Style, SymId};
-use engine::linearize::{Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
+use engine::linearize::{CaseNumbers, Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
 use serde_json::{json, Map, Value as Json};
 
 use crate::report::{bracketed, json_number, significant, value_text, width};
@@ -89,14 +89,30 @@ fn verdict_text(numbers: &Numbers) -> String {
     }
 }
 
-/// The report for people.
+/// The report for people: the reference, the exact equations, the numbers, the first-order
+/// form and its eigenvalues, and the sweep.
 pub fn text(l: &Linearized) -> String {
+    let mut out = reference_lines(l);
+    out.extend(exact_lines(l));
+    out.extend(number_lines(l));
+    out.extend(first_order_lines(l));
+    if let Some(sweep) = &l.sweep {
+        out.push(String::new());
+        out.extend(sweep_lines(&l.derivation.model.pool, sweep));
+    }
+    let mut text = out.join("\n");
+    text.push('\n');
+    text
+}
+
+/// The title, the reference, whether it holds exactly, and the coordinates that leave the state.
+fn reference_lines(l: &Linearized) -> Vec<String> {
     let d = &l.derivation;
     let pool = &d.model.pool;
     let lin = &l.linearization;
     let u = Style::Unicode;
     let mut out = Vec::new();
-    let mut reference = engine::linearize::reference(lin);
+    let mut reference = lin.reference();
     // A dependent rate of kept constraints stays its own symbol: numbers solve it, below.
     reference.retain(|(q, rate, value)| {
         !*rate
@@ -126,29 +142,36 @@ pub fn text(l: &Linearized) -> String {
             number(largest)
         ));
     }
-    for (i, q) in lin.coords.iter().enumerate() {
-        if lin.cyclic[i] {
-            let name = pool.symbol_text(*q, u);
-            let rate = pool
-                .lookup_symbol(&format!("{}'", pool.symbol(*q).name))
-                .map(|s| pool.symbol_text(s, u))
-                .unwrap_or_default();
-            out.push(if lin.independent.is_some() {
-                format!(
-                    "  {name} is ignorable (in neither the equations in u nor the rates of p): \
-                     δ{name} leaves the state"
-                )
-            } else {
-                format!(
-                    "  {name} is cyclic (in neither M nor f): δ{name} leaves the state, δ{rate} stays"
-                )
-            });
-        }
+    for (q, _) in lin.coords.iter().zip(&lin.cyclic).filter(|(_, c)| **c) {
+        let name = pool.symbol_text(*q, u);
+        let rate = pool
+            .lookup_symbol(&format!("{}'", pool.symbol(*q).name))
+            .map(|s| pool.symbol_text(s, u))
+            .unwrap_or_default();
+        out.push(if lin.in_rates().is_some() {
+            format!(
+                "  {name} is ignorable (in neither the equations in u nor the rates of p): \
+                 δ{name} leaves the state"
+            )
+        } else {
+            format!(
+                "  {name} is cyclic (in neither M nor f): δ{name} leaves the state, δ{rate} stays"
+            )
+        });
     }
-    if let Some(r) = &lin.independent {
-        let names = |symbols: &mut dyn Iterator<Item = SymId>| -> String {
-            symbols.map(|s| pool.symbol_text(s, u)).collect::<Vec<_>>().join(", ")
-        };
+    out
+}
+
+/// The linearized equations exactly, in the case's form, with each kept constraint's row.
+fn exact_lines(l: &Linearized) -> Vec<String> {
+    let pool = &l.derivation.model.pool;
+    let lin = &l.linearization;
+    let u = Style::Unicode;
+    let names = |symbols: &mut dyn Iterator<Item = SymId>| -> String {
+        symbols.map(|s| pool.symbol_text(s, u)).collect::<Vec<_>>().join(", ")
+    };
+    let mut out = Vec::new();
+    if let Some(r) = lin.in_rates() {
         let rates = names(&mut r.rates.iter().copied());
         let kept = names(&mut r.kept.iter().map(|&i| lin.coords[i]));
         let dependent = names(&mut r.dependent.iter().map(|(d, _)| *d));
@@ -159,31 +182,34 @@ pub fn text(l: &Linearized) -> String {
         out.push(format!(
             "  (the velocity constraints give {dependent}; their multipliers cancel in this form)"
         ));
-        out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
-        out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
-        out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
-        if !r.kept.is_empty() {
-            out.push("Kinematics  δṗ = G·(δp, δu)".into());
-            out.extend(bracketed(&exact_rows(pool, &r.kinematics), "  G = "));
-        }
     } else {
-        let q: Vec<String> = lin.coords.iter().map(|s| pool.symbol_text(*s, u)).collect();
-        let constrained = !lin.constraints.is_empty();
-        let rhs = if constrained { "Jᵀ·δλ,  J·δq = 0" } else { "0" };
-        out.push(format!(
-            "Linearized equations  M·δq̈ + C·δq̇ + K·δq = {rhs},  q = ({})",
-            q.join(", ")
-        ));
-        out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
-        out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
-        out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+        let q = names(&mut lin.coords.iter().copied());
+        let rhs = if lin.constraints().is_empty() { "0" } else { "Jᵀ·δλ,  J·δq = 0" };
+        out.push(format!("Linearized equations  M·δq̈ + C·δq̇ + K·δq = {rhs},  q = ({q})"));
     }
-    for c in &lin.constraints {
+    out.extend(bracketed(&exact_rows(pool, &l.mass), "  M = "));
+    out.extend(bracketed(&exact_rows(pool, &l.damping), "  C = "));
+    out.extend(bracketed(&exact_rows(pool, &l.stiffness), "  K = "));
+    if let Some(r) = lin.in_rates().filter(|r| !r.kept.is_empty()) {
+        out.push("Kinematics  δṗ = G·(δp, δu)".into());
+        out.extend(bracketed(&exact_rows(pool, &r.kinematics), "  G = "));
+    }
+    for c in lin.constraints() {
         let name = pool.symbol_text(c.lambda, u);
         let row: Vec<String> = c.jacobian.iter().map(|e| pool.print(*e, u)).collect();
         out.extend(bracketed(&[row], &format!("  J({name}) = ")));
     }
+    out
+}
 
+/// The matrices at the parameters' values (reduced in numbers where the case is), and the
+/// multipliers.
+fn number_lines(l: &Linearized) -> Vec<String> {
+    let d = &l.derivation;
+    let pool = &d.model.pool;
+    let lin = &l.linearization;
+    let u = Style::Unicode;
+    let mut out = Vec::new();
     let at: Vec<String> = d
         .model
         .params
@@ -196,39 +222,51 @@ pub fn text(l: &Linearized) -> String {
     } else {
         format!("At {}", at.join(", "))
     });
-    if let (Some(kept), Some((p, r))) = (&lin.kept, &l.at.reduced) {
+    if let (Some(kept), CaseNumbers::Kept(r)) = (lin.kept(), &l.at.case) {
         let names = |is: &mut dyn Iterator<Item = SymId>| -> String {
             is.map(|s| pool.symbol_text(s, u)).collect::<Vec<_>>().join(", ")
         };
         let values: Vec<String> = kept
             .dependent
             .iter()
-            .zip(&l.at.dependent_rates)
+            .zip(&r.dependent_rates)
             .map(|(&i, v)| format!("{} = {}", pool.symbol_text(d.rates[i], u), number(*v)))
             .collect();
         out.push(format!("  the kept constraints give {}", values.join(", ")));
         out.push(format!(
             "  reduced in numbers: M·δu̇ + C·δu + K·δp = 0,  δṗ = G·(δp, δu),  u = ({}),  p = ({})",
-            names(&mut r.iter().map(|&i| d.rates[i])),
-            names(&mut p.iter().map(|&i| lin.coords[i]))
+            names(&mut r.rates.iter().map(|&i| d.rates[i])),
+            names(&mut r.positions.iter().map(|&i| lin.coords[i]))
         ));
     }
     out.extend(bracketed(&number_rows(&l.at.mass), "  M = "));
     out.extend(bracketed(&number_rows(&l.at.damping), "  C = "));
     out.extend(bracketed(&number_rows(&l.at.stiffness), "  K = "));
-    if let Some(g) = l.at.kinematics.as_ref().filter(|g| !g.is_empty()) {
+    let kinematics = match &l.at.case {
+        CaseNumbers::InRates { kinematics } => Some(kinematics),
+        CaseNumbers::Kept(r) => Some(&r.kinematics),
+        CaseNumbers::Holonomic { .. } => None,
+    };
+    if let Some(g) = kinematics.filter(|g| !g.is_empty()) {
         out.extend(bracketed(&number_rows(g), "  G = "));
     }
-    for (c, v) in lin.constraints.iter().zip(&l.at.multipliers) {
+    for (c, v) in lin.constraints().iter().zip(&l.at.multipliers) {
         out.push(format!("  {} = {}", pool.symbol_text(c.lambda, u), number(*v)));
     }
+    out
+}
+
+/// ẋ = A·x, its eigenvalues and the verdict.
+fn first_order_lines(l: &Linearized) -> Vec<String> {
+    let pool = &l.derivation.model.pool;
+    let mut out = Vec::new();
     let state: Vec<String> = l.state.iter().map(|s| format!("δ{}", state_text(pool, s))).collect();
     // Not x: a scene's coordinate is as likely as not to be called that.
     out.push(format!("First-order form  u̇ = A·u,  u = ({})", state.join(", ")));
-    if let Some(basis) = &l.at.basis {
+    if let CaseNumbers::Holonomic { basis: Some(basis) } = &l.at.case {
         out.extend(bracketed(&number_rows(basis), "  δq = N·z,  N = "));
     }
-    out.extend(bracketed(&number_rows(&l.at.a), "  A = "));
+    out.extend(bracketed(&number_rows(&l.at.first_order.a), "  A = "));
     out.push("Eigenvalues of A".into());
     // A part within the verdict's tolerance of zero is rounding: it prints as 0.
     let clean = |x: f64| if x.abs() <= l.at.tolerance { 0.0 } else { x };
@@ -236,13 +274,7 @@ pub fn text(l: &Linearized) -> String {
         out.push(format!("  {}", complex(clean(*re), clean(*im), DIGITS)));
     }
     out.push(verdict_text(&l.at));
-    if let Some(sweep) = &l.sweep {
-        out.push(String::new());
-        out.extend(sweep_lines(pool, sweep));
-    }
-    let mut text = out.join("\n");
-    text.push('\n');
-    text
+    out
 }
 
 /// A state name (`theta'`, `z1'`) as the report prints names (θ̇, ż1).
@@ -358,7 +390,7 @@ pub fn json(l: &Linearized) -> String {
     let a = Style::Ascii;
     let name = |s: SymId| pool.symbol(s).name.clone();
     let mut about = Map::new();
-    for (q, rate, value) in engine::linearize::reference(lin) {
+    for (q, rate, value) in lin.reference() {
         let key = if rate { format!("{}'", name(q)) } else { name(q) };
         about.insert(key, json!(pool.print(value, a)));
     }
@@ -368,7 +400,7 @@ pub fn json(l: &Linearized) -> String {
     }
     let matrix = |exact: &[Vec<ExprId>], value: &[Vec<f64>]| json!({ "exact": exact_json(pool, exact), "value": matrix_json(value) });
     let constraints: Vec<Json> = lin
-        .constraints
+        .constraints()
         .iter()
         .zip(&l.at.multipliers)
         .map(|(c, v)| {
@@ -401,10 +433,10 @@ pub fn json(l: &Linearized) -> String {
     if !constraints.is_empty() {
         out.insert("constraints".into(), Json::Array(constraints));
     }
-    if let Some(basis) = &l.at.basis {
+    if let CaseNumbers::Holonomic { basis: Some(basis) } = &l.at.case {
         out.insert("basis".into(), matrix_json(basis));
     }
-    if let (Some(r), Some(g)) = (&lin.independent, &l.at.kinematics) {
+    if let (Some(r), CaseNumbers::InRates { kinematics: g }) = (lin.in_rates(), &l.at.case) {
         out.insert(
             "independent_rates".into(),
             json!(r.rates.iter().map(|s| name(*s)).collect::<Vec<_>>()),
@@ -416,7 +448,7 @@ pub fn json(l: &Linearized) -> String {
         out.insert("G".into(), matrix(&r.kinematics, g));
     }
     out.insert("state".into(), json!(l.state));
-    out.insert("A".into(), matrix_json(&l.at.a));
+    out.insert("A".into(), matrix_json(&l.at.first_order.a));
     out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
     out.insert("stability".into(), json!(l.at.stability.name()));
     out.insert("tolerance".into(), json_number(l.at.tolerance));

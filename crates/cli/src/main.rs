@@ -190,6 +190,9 @@ enum MethodArg {
     /// Two-stage Gauss–Legendre (order 4), fixed step, symplectic.
     #[value(alias = "gauss4")]
     Gauss,
+    /// Radau IIA (order 5), adaptive and implicit: stiff scenes, and kept constraints as they are.
+    #[value(alias = "radau5")]
+    Radau,
 }
 
 impl From<MethodArg> for sim::Method {
@@ -200,6 +203,7 @@ impl From<MethodArg> for sim::Method {
             MethodArg::Dop853 => sim::Method::Dop853,
             MethodArg::Midpoint => sim::Method::Midpoint,
             MethodArg::Gauss => sim::Method::Gauss,
+            MethodArg::Radau => sim::Method::Radau,
         }
     }
 }

@@ -9,10 +9,18 @@ use lang::{Diagnostic, Severity};
 /// Why a front end's request could not be carried out.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Error {
-    /// The scene has errors: its diagnostics, with the text their spans point into. That text
-    /// is the scene's as loaded (for `linearize --about`, still the file with the reference
-    /// appended as a `linearize about` line).
+    /// The scene has errors: its diagnostics, with the text their spans point into, the
+    /// scene's as loaded.
     Scene { diagnostics: Vec<Diagnostic>, source: String },
+    /// Errors of the scene with a front end's argument resolved against it (`linearize
+    /// --about`): spans before [`lang::render::argument_start`] of `source` point into the
+    /// scene, spans from it on into `argument`, the text given for `setting`.
+    WithArgument {
+        diagnostics: Vec<Diagnostic>,
+        source: String,
+        setting: Setting,
+        argument: String,
+    },
     /// An expression given besides the scene (a front end's output, event or value, or one of
     /// the scene's `simulate` block) has errors: its diagnostics, with the expression their
     /// spans point into.
@@ -32,6 +40,7 @@ impl Error {
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Scene { .. }
+            | Error::WithArgument { .. }
             | Error::Expression { .. }
             | Error::Input(_)
             | Error::Setting(_) => 2,
@@ -50,10 +59,7 @@ impl fmt::Display for Error {
                 let source = text;
                 for (k, d) in diagnostics.iter().enumerate() {
                     let (line, col) = line_col(source, d.span.start);
-                    let severity = match d.severity {
-                        Severity::Error => "error",
-                        Severity::Warning => "warning",
-                    };
+                    let severity = severity_word(d.severity);
                     if k > 0 {
                         writeln!(f)?;
                     }
@@ -61,9 +67,37 @@ impl fmt::Display for Error {
                 }
                 Ok(())
             }
+            Error::WithArgument { diagnostics, source, setting, argument } => {
+                let start = lang::render::argument_start(source);
+                for (k, d) in diagnostics.iter().enumerate() {
+                    let severity = severity_word(d.severity);
+                    if k > 0 {
+                        writeln!(f)?;
+                    }
+                    let at = match d.span.start.checked_sub(start) {
+                        Some(offset) => {
+                            let (_, col) = line_col(argument, offset);
+                            format!("column {col} of `{}`", setting.name())
+                        }
+                        None => {
+                            let (line, col) = line_col(source, d.span.start);
+                            format!("line {line}, column {col}")
+                        }
+                    };
+                    write!(f, "{severity}: {} ({at})", d.message)?;
+                }
+                Ok(())
+            }
             Error::Input(message) | Error::Numeric(message) => write!(f, "error: {message}"),
             Error::Setting(_) => write!(f, "error: {}", self.worded(Piece::plain)),
         }
+    }
+}
+
+fn severity_word(severity: Severity) -> &'static str {
+    match severity {
+        Severity::Error => "error",
+        Severity::Warning => "warning",
     }
 }
 
@@ -137,7 +171,9 @@ impl Error {
         match self {
             Error::Setting(pieces) => pieces.iter().map(word).collect(),
             Error::Input(message) | Error::Numeric(message) => message.clone(),
-            Error::Scene { .. } | Error::Expression { .. } => self.to_string(),
+            Error::Scene { .. } | Error::WithArgument { .. } | Error::Expression { .. } => {
+                self.to_string()
+            }
         }
     }
 }

@@ -5,7 +5,8 @@
 //! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
-//! any size ([`generate`]), and analyses small motions about a reference ([`linearize`]).
+//! any size ([`generate`]), and runs the `linear` stage on small motions about a reference,
+//! the command line's reference resolved against the scene ([`linearize`]).
 //! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back

@@ -10,6 +10,8 @@ use sim::Layout;
 
 use crate::{Error, Options, Piece, Setting};
 
+mod partials;
+
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
 pub struct Prepared {
@@ -25,7 +27,18 @@ pub struct Prepared {
 /// are (reactions they name are derived too), before it is derived. A mistake in one of them
 /// is an [`Error::Expression`], its diagnostics pointing into the expression.
 pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepared, Error> {
-    let (mut model, warnings) = crate::resolve_with(source, options)?;
+    let (model, warnings) = crate::resolve_with(source, options)?;
+    prepare_resolved(source, model, warnings, extra)
+}
+
+/// [`prepare`] of a model already resolved from `source` (and extended through its scope, as
+/// `linearize --about` extends it), with its warnings.
+pub(crate) fn prepare_resolved(
+    source: &str,
+    mut model: model::Model,
+    warnings: Vec<lang::Diagnostic>,
+    extra: &[String],
+) -> Result<Prepared, Error> {
     let mut values = Vec::new();
     for text in extra {
         let value = model
@@ -99,10 +112,7 @@ impl Prepared {
             v.push(m.bias);
             v.push(m.phi);
             // A velocity constraint is stabilised on its residual alone.
-            v.push(match m.kind {
-                model::ConstraintKind::Position => d.model.pool.time_derivative(m.phi),
-                model::ConstraintKind::Velocity => d.model.pool.zero(),
-            });
+            v.push(m.drift_rate(&mut d.model.pool));
         }
         v
     }
@@ -132,14 +142,19 @@ impl Prepared {
     }
 
     pub fn lower(&self, inputs: &[SymId], outputs: &[ExprId]) -> Result<Program, Error> {
-        lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| match e {
+        lower(&self.derivation.model.pool, inputs, outputs).map_err(|e| self.lower_error(e))
+    }
+
+    /// Why an expression could not be lowered, as an error.
+    pub fn lower_error(&self, e: numeric::LowerError) -> Error {
+        match e {
             numeric::LowerError::UnboundSymbol(s) => {
                 let name = &self.derivation.model.pool.symbol(s).name;
                 Error::Input(format!(
                     "`{name}` has no numeric value here (it is not part of the state)"
                 ))
             }
-        })
+        }
     }
 
     /// Parameter values in declaration order, with `overrides` (parameter index → expression

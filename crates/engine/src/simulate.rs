@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use numeric::Tape;
-use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run};
+use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
 use crate::animate::{Animation, Plan};
 use crate::input::Assignment;
@@ -468,7 +468,7 @@ fn integrate_scene(
         .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
         .collect();
     if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
-        return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853", method.name())));
+        return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853 or radau", method.name())));
     }
     progress.start(until);
     let started = Instant::now();
@@ -478,10 +478,31 @@ fn integrate_scene(
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
             let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
+            if method.uses_jacobian() {
+                let exprs = prepared.canonical_partials_exprs();
+                let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+                canonical = canonical.with_partials(Tape::new(partials));
+            }
             let z0 = canonical.from_physical(0.0, y0);
             integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
+        } else if method.handles_algebraic() && prepared.layout.multipliers > 0 {
+            let mut constrained = Constrained::new(mechanical);
+            match constrained.consistent_state(0.0, y0) {
+                Ok(z0) => integrate(&mut constrained, &z0, &run_settings, &watched, &mut update),
+                // No consistent accelerations at the start: the stabilised form reports why
+                // (which of the mass matrix and the constraints lost rank) as its first fault.
+                Err(_) => {
+                    let mut m = constrained.into_inner();
+                    integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
+                }
+            }
         } else {
             let mut m = mechanical;
+            if method.uses_jacobian() {
+                let exprs = prepared.partials_exprs();
+                let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
+                m = m.with_partials(Tape::new(partials));
+            }
             integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
         }
     };
@@ -566,6 +587,22 @@ impl Outcome {
                 .iter()
                 .flat_map(|r| self.constraint_columns.iter().map(move |&c| r[c]))
                 .fold(0.0, f64::max),
+        )
+    }
+
+    /// The largest |Φ| at the integrator's own steps, leaving out the samples interpolated
+    /// between them: radau holds the constraints at its steps to Newton's tolerance, while its
+    /// collocation polynomial between them keeps them only to its own accuracy.
+    pub fn constraint_drift_at_steps(&self) -> Option<f64> {
+        if self.constraint_columns.is_empty() {
+            return None;
+        }
+        let peaks = &self.run.peaks;
+        Some(
+            self.constraint_columns
+                .iter()
+                .filter_map(|&c| peaks.get(c))
+                .fold(0.0, |m, v| m.max(*v)),
         )
     }
 
@@ -655,6 +692,23 @@ impl Outcome {
             FaultKind::NewtonFailed => (
                 "Newton's iteration of the implicit method did not converge".into(),
                 "the step is too large for this motion: lower the step".into(),
+            ),
+            FaultKind::NewtonStalled { step, contraction, singular } => (
+                if *singular {
+                    format!(
+                        "the implicit method's iteration matrix stayed singular down to a step of \
+                         {step:.1e}"
+                    )
+                } else {
+                    format!(
+                        "Newton's iteration of the implicit method did not converge although the \
+                         step was cut to {step:.1e} (successive corrections shrank by only \
+                         {contraction:.2})"
+                    )
+                },
+                "the equations are not smooth here (a kink, a switch, a square root at zero), or \
+                 the kept constraints cannot all hold here; a smaller tolerance will not help"
+                    .into(),
             ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),

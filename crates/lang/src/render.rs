@@ -3,24 +3,30 @@
 //! the `lagrange` command and the Python package print them alike.
 
 use codespan_reporting::diagnostic::{Diagnostic as Report, Label, Severity as ReportSeverity};
-use codespan_reporting::files::SimpleFile;
+use codespan_reporting::files::{SimpleFile, SimpleFiles};
 use codespan_reporting::term::{self, Config};
 use termcolor::{Buffer, WriteColor};
 
 use crate::{Diagnostic, Severity, Span};
 
-fn to_report(d: &Diagnostic) -> Report<()> {
-    let severity = match d.severity {
+fn severity(severity: Severity) -> ReportSeverity {
+    match severity {
         Severity::Error => ReportSeverity::Error,
         Severity::Warning => ReportSeverity::Warning,
-    };
+    }
+}
+
+fn to_report(d: &Diagnostic) -> Report<()> {
     let mut labels =
         vec![Label::primary((), d.span.start..d.span.end).with_message(d.label.clone())];
     for (span, text) in &d.related {
         labels.push(Label::secondary((), span.start..span.end).with_message(text.clone()));
     }
     let notes = d.hint.iter().map(|h| format!("hint: {h}")).collect();
-    Report::new(severity).with_message(d.message.clone()).with_labels(labels).with_notes(notes)
+    Report::new(severity(d.severity))
+        .with_message(d.message.clone())
+        .with_labels(labels)
+        .with_notes(notes)
 }
 
 /// The diagnostic with its spans inside the text, so that rendering cannot fail on them.
@@ -51,6 +57,65 @@ pub fn render(path: &str, source: &str, diagnostics: &[Diagnostic]) -> String {
     String::from_utf8_lossy(buffer.as_slice()).into_owned()
 }
 
+/// Where a front end's argument starts when it is resolved against a scene and its spans
+/// follow the scene's (`linearize --about`): a byte past the scene's end, so that no offset
+/// points into both.
+pub fn argument_start(source: &str) -> usize {
+    source.len() + 1
+}
+
+/// Writes diagnostics whose spans point into the scene `source` (named `path`) or, from
+/// [`argument_start`] on, into a front end's `argument` (named as the front end spells it:
+/// `--about`); one diagnostic may point into both.
+pub fn emit_with_argument(
+    out: &mut dyn WriteColor,
+    (path, source): (&str, &str),
+    (name, argument): (&str, &str),
+    diagnostics: &[Diagnostic],
+) {
+    let mut files = SimpleFiles::new();
+    let scene = files.add(path, source);
+    let given = files.add(name, argument);
+    let start = argument_start(source);
+    // Each span in the text it points into, clamped there.
+    let place = |s: Span| -> (usize, std::ops::Range<usize>) {
+        let (file, base, len) = if s.start >= start {
+            (given, start, argument.len())
+        } else {
+            (scene, 0, source.len())
+        };
+        let from = (s.start - base).min(len);
+        (file, from..(s.end.saturating_sub(base)).min(len).max(from))
+    };
+    let config = Config::default();
+    for d in diagnostics {
+        let (file, range) = place(d.span);
+        let mut labels = vec![Label::primary(file, range).with_message(d.label.clone())];
+        for (span, text) in &d.related {
+            let (file, range) = place(*span);
+            labels.push(Label::secondary(file, range).with_message(text.clone()));
+        }
+        let notes = d.hint.iter().map(|h| format!("hint: {h}")).collect();
+        let report = Report::new(severity(d.severity))
+            .with_message(d.message.clone())
+            .with_labels(labels)
+            .with_notes(notes);
+        // As in `emit`: a failure to write has nowhere better to go.
+        let _ = term::emit(out, &config, &files, &report);
+    }
+}
+
+/// [`emit_with_argument`] as plain text.
+pub fn render_with_argument(
+    scene: (&str, &str),
+    argument: (&str, &str),
+    diagnostics: &[Diagnostic],
+) -> String {
+    let mut buffer = Buffer::no_color();
+    emit_with_argument(&mut buffer, scene, argument, diagnostics);
+    String::from_utf8_lossy(buffer.as_slice()).into_owned()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -62,6 +127,19 @@ mod tests {
         assert!(text.contains("error: unknown name `y`"), "{text}");
         assert!(text.contains("scene.lag:2:1"), "{text}");
         assert!(text.contains("not declared"), "{text}");
+    }
+
+    #[test]
+    fn an_argument_after_the_scene_is_rendered_against_itself() {
+        let source = "coord x\nlinearize about x = 0\n";
+        let start = argument_start(source);
+        let d = Diagnostic::error(Span::new(start + 4, start + 5), "off the rod")
+            .with_label("here")
+            .with_related(Span::new(0, 7), "declared");
+        let text = render_with_argument(("s.lag", source), ("--about", "x = 2"), &[d]);
+        assert!(text.contains("--about:1:5"), "{text}");
+        assert!(text.contains("s.lag:1:1"), "{text}");
+        assert!(text.contains("1 │ x = 2"), "{text}");
     }
 
     #[test]

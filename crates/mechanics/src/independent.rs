@@ -13,7 +13,7 @@ use crate::derive::Derivation;
 use crate::present::collect_by_motion;
 
 /// Past this many kept constraints the dependent rates' exact solution is not worth printing.
-pub(crate) const DEPENDENT_LIMIT: usize = 4;
+pub const DEPENDENT_LIMIT: usize = 4;
 
 /// The dependent rates as functions of the independent ones, and one equation per independent
 /// rate, `lhs = 0`.
@@ -134,7 +134,7 @@ impl Derivation {
 
     /// One dependent rate per row: those the scene left for the constraints at the start when
     /// they are as many as the rows, else, row by row, the last declared rate the row moves.
-    pub(crate) fn dependent_rates(&mut self, rows: &[ExprId]) -> Option<Vec<SymId>> {
+    pub fn dependent_rates(&mut self, rows: &[ExprId]) -> Option<Vec<SymId>> {
         let pool = &mut self.model.pool;
         let mut not_given = Vec::new();
         for c in &self.model.coords {

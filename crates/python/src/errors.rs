@@ -33,11 +33,26 @@ pub fn numeric_error(message: String) -> PyErr {
 pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
     match error {
         engine::Error::Scene { diagnostics, source } => {
-            scene_error(error, path, source, diagnostics)
+            let rendered = lang::render::render(path, source, diagnostics);
+            scene_error(error, &rendered, &|at| in_text(path, source, at), diagnostics)
         }
         // Rendered against the expression itself, which is not a line of the file.
         engine::Error::Expression { diagnostics, text } => {
-            scene_error(error, EXPRESSION, text, diagnostics)
+            let rendered = lang::render::render(EXPRESSION, text, diagnostics);
+            scene_error(error, &rendered, &|at| in_text(EXPRESSION, text, at), diagnostics)
+        }
+        // The scene's diagnostics against the file, the argument's against the argument, named
+        // by its keyword.
+        engine::Error::WithArgument { diagnostics, source, setting, argument } => {
+            let name = setting.name();
+            let scene = (path, source.as_str());
+            let rendered = lang::render::render_with_argument(scene, (name, argument), diagnostics);
+            let start = lang::render::argument_start(source);
+            let locate = |at: usize| match at.checked_sub(start) {
+                Some(offset) => in_text(name, argument, offset),
+                None => in_text(path, source, at),
+            };
+            scene_error(error, &rendered, &locate, diagnostics)
         }
         engine::Error::Input(message) => PyValueError::new_err(message.clone()),
         engine::Error::Setting(_) => PyValueError::new_err(error.worded(keyword)),
@@ -48,56 +63,60 @@ pub fn engine_error(error: &engine::Error, path: &str) -> PyErr {
 /// What the diagnostics of an expression given besides the scene name as their file.
 const EXPRESSION: &str = "expression";
 
-/// Diagnostics with spans into `source` as a `lagrange.SceneError`.
-fn scene_error(
+/// The file, line and column of an offset into `text`, named `name`.
+fn in_text<'a>(name: &'a str, text: &str, at: usize) -> (&'a str, usize, usize) {
+    let (line, column) = engine::line_col(text, at);
+    (name, line, column)
+}
+
+/// Diagnostics as a `lagrange.SceneError`: `rendered` as the `lagrange` command prints them,
+/// `locate` the file, line and column of an offset their spans name.
+fn scene_error<'a>(
     error: &engine::Error,
-    path: &str,
-    source: &str,
+    rendered: &str,
+    locate: &dyn Fn(usize) -> (&'a str, usize, usize),
     diagnostics: &[lang::Diagnostic],
 ) -> PyErr {
-    {
-        Python::attach(|py| {
-            let rendered = lang::render::render(path, source, diagnostics);
-            let first = diagnostics
-                .iter()
-                .find(|d| d.severity == Severity::Error)
-                .or_else(|| diagnostics.first());
-            let (line, column) = first.map(|d| engine::line_col(source, d.span.start)).unzip();
-            let build = || -> PyResult<Bound<'_, PyDict>> {
-                let attributes = PyDict::new(py);
-                attributes.set_item("file", path)?;
-                attributes.set_item("line", line)?;
-                attributes.set_item("column", column)?;
-                attributes.set_item("rendered", &rendered)?;
-                let items = PyList::empty(py);
-                for d in diagnostics {
-                    let (line, column) = engine::line_col(source, d.span.start);
-                    let severity = match d.severity {
-                        Severity::Error => "error",
-                        Severity::Warning => "warning",
-                    };
-                    items.append((severity, d.message.clone(), line, column))?;
-                }
-                attributes.set_item("diagnostics", items)?;
-                Ok(attributes)
-            };
-            let message = match first {
-                Some(d) => {
-                    let (line, column) = (line.unwrap_or(1), column.unwrap_or(1));
-                    // The hint ("did you mean `g`?") is often the answer: str(e) keeps it.
-                    match &d.hint {
-                        Some(hint) => format!("{path}:{line}:{column}: {} ({hint})", d.message),
-                        None => format!("{path}:{line}:{column}: {}", d.message),
-                    }
-                }
-                None => error.to_string(),
-            };
-            match build() {
-                Ok(attributes) => exception("SceneError", message, Some(attributes)),
-                Err(e) => e,
+    Python::attach(|py| {
+        let first = diagnostics
+            .iter()
+            .find(|d| d.severity == Severity::Error)
+            .or_else(|| diagnostics.first());
+        let located = first.map(|d| locate(d.span.start));
+        let build = || -> PyResult<Bound<'_, PyDict>> {
+            let attributes = PyDict::new(py);
+            let file = located.map_or_else(|| locate(0).0, |(file, ..)| file);
+            attributes.set_item("file", file)?;
+            attributes.set_item("line", located.map(|(_, line, _)| line))?;
+            attributes.set_item("column", located.map(|(.., column)| column))?;
+            attributes.set_item("rendered", rendered)?;
+            let items = PyList::empty(py);
+            for d in diagnostics {
+                let (_, line, column) = locate(d.span.start);
+                let severity = match d.severity {
+                    Severity::Error => "error",
+                    Severity::Warning => "warning",
+                };
+                items.append((severity, d.message.clone(), line, column))?;
             }
-        })
-    }
+            attributes.set_item("diagnostics", items)?;
+            Ok(attributes)
+        };
+        let message = match (first, located) {
+            (Some(d), Some((file, line, column))) => {
+                // The hint ("did you mean `g`?") is often the answer: str(e) keeps it.
+                match &d.hint {
+                    Some(hint) => format!("{file}:{line}:{column}: {} ({hint})", d.message),
+                    None => format!("{file}:{line}:{column}: {}", d.message),
+                }
+            }
+            _ => error.to_string(),
+        };
+        match build() {
+            Ok(attributes) => exception("SceneError", message, Some(attributes)),
+            Err(e) => e,
+        }
+    })
 }
 
 /// A setting as a Python caller writes it: the keyword argument, `set={"gg": …}`.

@@ -109,9 +109,12 @@ impl NativeScene {
         out.set_item("steps", outcome.run.steps)?;
         out.set_item("rejected", outcome.run.rejected)?;
         out.set_item("evaluations", outcome.run.evaluations)?;
+        out.set_item("jacobians", outcome.run.jacobians)?;
+        out.set_item("factorizations", outcome.run.factorizations)?;
         out.set_item("energy_drift", outcome.energy_drift())?;
         out.set_item("conservative", outcome.conservative)?;
         out.set_item("constraint_drift", outcome.constraint_drift())?;
+        out.set_item("constraint_drift_at_steps", outcome.constraint_drift_at_steps())?;
         out.set_item("wall_seconds", outcome.wall_seconds)?;
         Ok(out)
     }
@@ -147,7 +150,7 @@ impl NativeScene {
             }
             numpy.call_method1("array", (list,))
         };
-        out.set_item("A", numpy.call_method1("array", (l.at.a.clone(),))?)?;
+        out.set_item("A", numpy.call_method1("array", (l.at.first_order.a.clone(),))?)?;
         out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
         out.set_item("stability", l.at.stability.name())?;
         out.set_item("tolerance", l.at.tolerance)?;

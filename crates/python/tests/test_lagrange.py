@@ -127,6 +127,49 @@ def test_batch_evaluates_rows_like_single_calls():
         f(0.0, [1.0])
 
 
+def central_differences(f, t, y, h=1e-5):
+    """∂f/∂y by central differences, column after column."""
+    columns = []
+    for k in range(len(y)):
+        step = h * max(1.0, abs(y[k]))
+        plus, minus = np.array(y, dtype=float), np.array(y, dtype=float)
+        plus[k] += step
+        minus[k] -= step
+        columns.append((f(t, plus) - f(t, minus)) / (2 * step))
+    return np.stack(columns, axis=1)
+
+
+@pytest.mark.parametrize(
+    "example", ["classics/double_pendulum.lag", "classics/pendulum_cartesian.lag"]
+)
+def test_jac_is_the_jacobian_of_the_rhs(example):
+    f = lagrange.load(EXAMPLES / example).rhs()
+    n = len(f.names)
+    rng = np.random.default_rng(7)
+    for y in [f.y0, f.y0 + 0.1 * rng.normal(size=n)]:
+        J = f.jac(0.3, y)
+        assert J.shape == (n, n)
+        differenced = central_differences(f, 0.3, y)
+        # Each row against its own size, so that a dropped partial shows however small its
+        # row; a row that vanishes but for rounding against the matrix.
+        scale = np.maximum(np.abs(J).max(axis=1, keepdims=True), 1e-6 * np.abs(J).max())
+        assert (np.abs(J - differenced) / scale).max() < 1e-6
+    with pytest.raises(ValueError):
+        f.jac(0.0, [1.0])
+
+
+def test_radau_with_the_exact_jacobian_agrees_with_dop853():
+    from scipy.integrate import solve_ivp
+
+    f = lagrange.load(EXAMPLES / "classics" / "double_pendulum.lag").rhs()
+    reference = solve_ivp(f, (0.0, 2.0), f.y0, method="DOP853", rtol=1e-12, atol=1e-12)
+    radau = solve_ivp(f, (0.0, 2.0), f.y0, method="Radau", jac=f.jac, rtol=1e-9, atol=1e-9)
+    assert reference.success and radau.success
+    # With the Jacobian given, SciPy never differences f for it.
+    assert radau.njev > 0
+    np.testing.assert_allclose(radau.y[:, -1], reference.y[:, -1], atol=1e-6)
+
+
 def test_mass_matrix_function_matches_sympy():
     scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
     M = scene.mass_matrix_function()

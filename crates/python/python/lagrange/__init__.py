@@ -155,7 +155,10 @@ class Scene:
         (q̇, q̈); ``f.batch(Y, t=0.0)`` evaluates every row of the 2-D array ``Y`` in one call
         (``t`` one time, or one per row). The scene's lowered programs compute it at the
         parameters' values (``f.parameters``), solving for constraint multipliers as
-        :meth:`simulate` does. A singular mass matrix raises :class:`NumericError`.
+        :meth:`simulate` does. ``f.jac(t, y)`` is the exact Jacobian ∂f/∂y, an n×n array,
+        for ``solve_ivp(f, ..., method="Radau", jac=f.jac)`` (also BDF and LSODA); its
+        partials are derived and lowered on the first call. A singular mass matrix raises
+        :class:`NumericError`.
         """
         return self._native.rhs()
 
@@ -182,8 +185,8 @@ class Scene:
         Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
 
         - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
-          midpoint, gauss; ``tolerance`` of the adaptive methods; ``step`` of the fixed-step
-          ones.
+          midpoint, gauss, radau; ``tolerance`` of the adaptive methods; ``step`` of the
+          fixed-step ones.
         - ``output``: scene expressions to record (a string or a list), e.g.
           ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
@@ -368,9 +371,10 @@ class Results(Mapping):
 
     Besides: ``energy`` (T + V at each time), ``events`` (a list of ``(name, time)``),
     ``stopped_by`` (the stop condition that ended the run, or ``None``), ``method``,
-    ``steps``, ``rejected``, ``evaluations``, ``energy_drift`` (largest absolute and relative
-    change of T + V), ``conservative`` (whether the scene should keep its energy),
-    ``constraint_drift``, ``wall_seconds`` and ``fault`` (``None`` for a finished run).
+    ``steps``, ``rejected``, ``evaluations``, ``jacobians`` and ``factorizations`` (radau's),
+    ``energy_drift`` (largest absolute and relative change of T + V), ``conservative`` (whether the scene should keep its energy),
+    ``constraint_drift`` (over the recorded times; ``constraint_drift_at_steps`` at the
+    integrator's own steps), ``wall_seconds`` and ``fault`` (``None`` for a finished run).
     """
 
     def __init__(self, raw):
@@ -384,9 +388,12 @@ class Results(Mapping):
         self.steps = raw["steps"]
         self.rejected = raw["rejected"]
         self.evaluations = raw["evaluations"]
+        self.jacobians = raw["jacobians"]
+        self.factorizations = raw["factorizations"]
         self.energy_drift = raw["energy_drift"]
         self.conservative = raw["conservative"]
         self.constraint_drift = raw["constraint_drift"]
+        self.constraint_drift_at_steps = raw["constraint_drift_at_steps"]
         self.wall_seconds = raw["wall_seconds"]
 
     def __getitem__(self, name):

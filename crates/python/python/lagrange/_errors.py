@@ -7,7 +7,9 @@ class SceneError(Exception):
     ``str(error)`` names the first mistake as ``file:line:column: message``; the attributes
     say more:
 
-    - ``file``: the file name (``"<string>"`` for :func:`lagrange.loads` unless named),
+    - ``file``: the file name (``"<string>"`` for :func:`lagrange.loads` unless named), or
+      ``"about"`` when the first error is in ``linearize``'s ``about`` argument (its
+      ``line`` and ``column`` then count in that text),
     - ``line``, ``column``: 1-based position of the first error,
     - ``rendered``: every diagnostic rendered as the ``lagrange`` command prints it (the
       source line, a caret under the culprit, hints),

@@ -50,6 +50,7 @@ class Rhs:
     def batch(
         self, y: npt.ArrayLike, t: Union[None, float, npt.ArrayLike] = None
     ) -> npt.NDArray[np.float64]: ...
+    def jac(self, t: float, y: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
 
 class MassMatrix:
     """M(t, q) of a scene at its parameters' values."""
