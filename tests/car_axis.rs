@@ -64,3 +64,14 @@ fn a_looser_tolerance_lands_further_off() {
     let loose = mixed_error(&at_three("dop853", 1e-5));
     assert!(loose > 10.0 * tight, "loose {loose:e}, tight {tight:e}");
 }
+
+#[test]
+fn radau_reaches_the_reference_as_the_index_3_system() {
+    // Integrated as the differential–algebraic system, no stabilisation: the positions keep
+    // nine digits, the velocities (index 2) and multipliers (solved from them) seven to eight.
+    let got = at_three("radau", 1e-12);
+    let error = mixed_error(&got);
+    assert!(error < 1e-7, "{got:?}: {error:e} off the reference");
+    let positions = mixed_error(&[&got[..4], &AT_3[4..]].concat());
+    assert!(positions < 5e-9, "positions {:?}: {positions:e} off", &got[..4]);
+}

@@ -61,7 +61,7 @@ impl Method {
     /// Whether the method solves implicit equations with the Jacobian of the right-hand side,
     /// so that lowering the partials for the exact one pays.
     pub fn uses_jacobian(self) -> bool {
-        matches!(self, Method::Midpoint | Method::Gauss)
+        matches!(self, Method::Midpoint | Method::Gauss | Method::Radau)
     }
 
     /// Whether the method can integrate constraints kept with multipliers. Those are solved
