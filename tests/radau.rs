@@ -30,8 +30,11 @@ fn radau(options: Options) -> Options {
 const STIFF: &str = "../examples/classics/stiff_spring_pendulum.lag";
 
 fn stiff(k: &str, method: &str) -> Outcome {
-    let options =
-        Options { method: Some(method.into()), set: vec![format!("k={k}")], ..Options::default() };
+    let options = Options {
+        method: Some(method.into()),
+        set: vec![format!("k={k}").parse().expect("name=value")],
+        ..Options::default()
+    };
     run(&scene(STIFF), options)
 }
 
@@ -103,7 +106,10 @@ fn pendulums(until: f64) -> (Outcome, Outcome) {
         until: Some(until),
         tolerance: Some(1e-10),
         output: vec!["x, y, KE + PE".into()],
-        set: vec!["x=L*sin(pi/3)".into(), "y=-L*cos(pi/3)".into()],
+        set: vec![
+            "x=L*sin(pi/3)".parse().expect("name=value"),
+            "y=-L*cos(pi/3)".parse().expect("name=value"),
+        ],
         events: vec!["x".into()],
         samples: 0,
         ..Options::default()
@@ -114,7 +120,7 @@ fn pendulums(until: f64) -> (Outcome, Outcome) {
         until: Some(until),
         tolerance: Some(1e-12),
         output: vec!["L*sin(theta), -L*cos(theta), KE + PE".into()],
-        set: vec!["theta=pi/3".into()],
+        set: vec!["theta=pi/3".parse().expect("name=value")],
         ..Options::default()
     };
     (kept, run(&angle, options))

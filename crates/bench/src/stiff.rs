@@ -10,6 +10,7 @@
 use std::path::Path;
 use std::process::Command;
 
+use engine::input::Assignment;
 use engine::simulate::{simulate, Options, Outcome};
 
 use crate::{median, seconds};
@@ -37,7 +38,7 @@ fn run_once(source: &str, method: &str, k: f64, tolerance: f64) -> Outcome {
     let options = Options {
         method: Some(method.into()),
         tolerance: Some(tolerance),
-        set: vec![format!("k={k:e}")],
+        set: vec![format!("k={k:e}").parse::<Assignment>().expect("k=… is an assignment")],
         output: vec![STATE.into()],
         samples: 2,
         ..Options::default()

@@ -7,7 +7,6 @@
 //! SVG, the HTML page that plays a motion) and draws progress.
 
 pub mod animate;
-pub mod bench;
 pub mod check;
 pub mod diagnostics;
 pub mod linearize;

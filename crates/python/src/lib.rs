@@ -71,6 +71,7 @@ impl NativeScene {
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
         let options = engine::simulate::Options {
             until,
             method,

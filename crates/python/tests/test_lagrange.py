@@ -195,6 +195,26 @@ def test_simulate_returns_named_arrays():
     assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == ["theta", "floor.force"]
 
 
+def test_set_takes_a_dict_or_the_command_line_s_texts():
+    scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
+    runs = [
+        scene.simulate(until=0.1, output="floor.force", set=given)
+        for given in ({"g": 1.62}, "g=1.62", ["g=1.62"], ["g = 81/50"])
+    ]
+    for run in runs:
+        np.testing.assert_allclose(run["floor.force"][0], 4 / 7 * 1.62, rtol=1e-12)
+    with pytest.raises(ValueError) as caught:
+        scene.simulate(until=0.1, set="g")
+    assert str(caught.value) == "`set` `g`: not of the form name=value (like g=1.62)", caught.value
+
+
+def test_sweep_takes_a_text_or_a_dict():
+    top = lagrange.load(EXAMPLES / "space" / "sleeping_top.lag")
+    as_text = top.linearize(sweep="w=0:100:11")["sweep"]["changes"]
+    as_dict = top.linearize(sweep={"w": (0, 100, 11)})["sweep"]["changes"]
+    assert as_text == as_dict and len(as_text) > 0
+
+
 def test_bad_scene_raises_scene_error_with_position():
     text = "param m = 1 kg\ncoord x = 0\nparticle p { mass m; position (x, y) }\n"
     with pytest.raises(lagrange.SceneError) as caught:

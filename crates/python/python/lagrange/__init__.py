@@ -71,6 +71,30 @@ def loads(text, *, name="<string>", units=True):
     return Scene(_native.loads(text, name, units))
 
 
+def _assignments(set):
+    """``set`` as ``name=value`` texts: from a dict of name to value (a number or a scene
+    expression), or texts already of that form, one string or a list of them."""
+    if set is None:
+        return []
+    if isinstance(set, str):
+        return [set]
+    if isinstance(set, dict):
+        return [f"{name}={_value_text(value)}" for name, value in set.items()]
+    return [str(item) for item in set]
+
+
+def _sweep_text(sweep):
+    """``sweep`` as ``p=a:b:n``: a text of that form, or a dict of one parameter to
+    ``(a, b, n)``."""
+    if not isinstance(sweep, dict):
+        return sweep
+    if len(sweep) != 1:
+        raise ValueError(f"a sweep takes one parameter, not {len(sweep)}")
+    ((name, ends),) = sweep.items()
+    a, b, n = ends
+    return f"{name}={float(a)!r}:{float(b)!r}:{int(n)}"
+
+
 def _value_text(value):
     """A ``set`` value as scene text: numbers exactly (0.1 is 1/10), strings as written."""
     if isinstance(value, str):
@@ -166,7 +190,8 @@ class Scene:
         - ``output``: scene expressions to record (a string or a list), e.g.
           ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
-          a scene expression, in place of the scene's values.
+          a scene expression, in place of the scene's values (``{"g": 1.62}``); or texts as
+          the command line takes them, ``"g=1.62"`` or a list of them.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -188,14 +213,13 @@ class Scene:
             raise TypeError(f"`samples` must be a whole number, not {samples!r}")
         if samples < 0:
             raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
         raw = self._native.simulate(
             until=None if until is None else float(until),
             method=method,
             tolerance=None if tolerance is None else float(tolerance),
             step=None if step is None else float(step),
             output=listed(output),
-            set=sets,
+            set=_assignments(set),
             stop_when=listed(stop_when),
             events=listed(events),
             samples=int(samples),
@@ -210,8 +234,10 @@ class Scene:
 
         - ``about``: ``"theta=0, phi'=2"`` (or a dict of name to value), extending or
           overriding the scene's ``linearize about`` line;
-        - ``set``: a dict of parameter name to value;
-        - ``sweep``: ``"w=0:100:201"``, n values of one parameter.
+        - ``set``: a dict of parameter name to value, or ``"name=value"`` texts as for
+          :meth:`simulate`;
+        - ``sweep``: ``"w=0:100:201"`` or ``{"w": (0, 100, 201)}``, n values of one
+          parameter from a to b.
 
         Returns a dict: ``state`` (the names of u in u' = A·u), ``M``, ``C``, ``K`` (exact
         SymPy matrices of M·δq'' + C·δq' + K·δq = 0), ``A`` and ``eigenvalues`` (NumPy, at the
@@ -221,8 +247,7 @@ class Scene:
         """
         if isinstance(about, dict):
             about = ", ".join(f"{k}={_value_text(v)}" for k, v in about.items())
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
-        return self._native.linearize(about=about, set=sets, sweep=sweep)
+        return self._native.linearize(about=about, set=_assignments(set), sweep=_sweep_text(sweep))
 
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
