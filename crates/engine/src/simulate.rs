@@ -486,7 +486,7 @@ fn integrate_scene(
             let z0 = canonical.from_physical(0.0, y0);
             integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
         } else if method.handles_algebraic() && prepared.layout.multipliers > 0 {
-            let mut constrained = Constrained::new(mechanical);
+            let mut constrained = Constrained::new(with_partials(prepared, method, mechanical)?);
             match constrained.consistent_state(0.0, y0) {
                 Ok(z0) => integrate(&mut constrained, &z0, &run_settings, &watched, &mut update),
                 // No consistent accelerations at the start: the stabilised form reports why
@@ -497,17 +497,27 @@ fn integrate_scene(
                 }
             }
         } else {
-            let mut m = mechanical;
-            if method.uses_jacobian() {
-                let exprs = prepared.partials_exprs();
-                let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
-                m = m.with_partials(Tape::new(partials));
-            }
+            let mut m = with_partials(prepared, method, mechanical)?;
             integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
         }
     };
     progress.finish();
     Ok((run, started.elapsed().as_secs_f64()))
+}
+
+/// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
+/// the methods that use one, so explicit runs lower nothing more.
+fn with_partials(
+    prepared: &mut Prepared,
+    method: Method,
+    mechanical: Mechanical,
+) -> Result<Mechanical, Error> {
+    if !method.uses_jacobian() {
+        return Ok(mechanical);
+    }
+    let exprs = prepared.partials_exprs();
+    let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
+    Ok(mechanical.with_partials(Tape::new(partials)))
 }
 
 /// Bodies in space oriented by angles (not Euler parameters).

@@ -91,6 +91,45 @@ impl Problem for Constrained {
         self.inner.observations()
     }
 
+    /// ∂F/∂y from the lowered partials: the rows q' = v and v' = a are identities, the
+    /// residual's are (∂r/∂q, ∂r/∂v, M, −Jᵀ), and each constraint's are its Φ row's partials
+    /// (J for a position constraint; ∂(A·v + b)/∂q and A for a velocity one).
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout();
+        let d = 3 * n + m;
+        jac.fill(0.0);
+        for i in 0..n {
+            jac[i * d + n + i] = 1.0;
+            jac[(n + i) * d + 2 * n + i] = 1.0;
+        }
+        let dynamics = self.inner.dynamics_at(t, &y[..2 * n])?;
+        let rows = n * n + n;
+        for i in 0..n {
+            let row = (2 * n + i) * d;
+            for j in 0..n {
+                // M is stored by columns.
+                jac[row + 2 * n + j] = dynamics[j * n + i];
+            }
+            for c in 0..m {
+                jac[row + 3 * n + c] = -dynamics[rows + c * (n + 3) + i];
+            }
+        }
+        let Some(partials) = self.inner.partials_at(t, &y[..2 * n], &y[2 * n..])? else {
+            return Ok(false);
+        };
+        // ∂(r, c, Φ, Φ̇)/∂(q, q̇), a row of 2n per value (see `Layout`).
+        for i in 0..n {
+            let row = (2 * n + i) * d;
+            jac[row..row + 2 * n].copy_from_slice(&partials[i * 2 * n..(i + 1) * 2 * n]);
+        }
+        for c in 0..m {
+            let row = (3 * n + c) * d;
+            let phi = (n + m + c) * 2 * n;
+            jac[row..row + 2 * n].copy_from_slice(&partials[phi..phi + 2 * n]);
+        }
+        Ok(true)
+    }
+
     /// Records what the state's positions and velocities give, with the accelerations and
     /// multipliers solved from them rather than read from the state: as index-3 components,
     /// the state's own a and λ converge at a lower order than q and v (on the car axis at
