@@ -1,0 +1,160 @@
+//! Inverse dynamics: the generalized forces τ = M(q, t)·q̈ − f(q, q̇, t) that make the scene
+//! move with given positions, rates and accelerations, from the same lowered M and f that
+//! `simulate` integrates. Applied as extra generalized forces (M·q̈ = f + τ), they reproduce
+//! the motion: computed-torque control and actuator sizing.
+//!
+//! With constraints kept with multipliers, M·q̈ = f + Jᵀλ + τ, and any τ + Jᵀμ gives the same
+//! motion: τ is fixed only up to what the constraints can carry. The τ given here is the one
+//! with λ = 0, the constraints carrying no load, so that it is exactly what an actuator on
+//! every remaining coordinate would supply; that needs accelerations the constraints allow
+//! (J·q̈ = γ), which the trajectory's are when they come from a run of the scene.
+
+use numeric::Tape;
+
+use crate::numbers::prepare;
+use crate::{Error, Options};
+
+/// The inverse dynamics of a loaded scene, at its parameters' values unless told others.
+pub struct InverseDynamics {
+    coordinates: Vec<String>,
+    parameter_names: Vec<String>,
+    parameters: Vec<f64>,
+    /// Names of the constraints kept with multipliers: τ is the one where they carry nothing.
+    kept: Vec<String>,
+    /// `[t, q, q̇, parameters]` → M (column-major), then f.
+    tape: Tape,
+    input: Vec<f64>,
+    output: Vec<f64>,
+}
+
+/// Loads `source` and lowers what its inverse dynamics needs.
+pub fn inverse_dynamics(source: &str, options: Options) -> Result<InverseDynamics, Error> {
+    let mut prepared = prepare(source, &[], options)?;
+    let parameters = prepared.parameter_values(&[])?;
+    let n = prepared.layout.coordinates;
+    let dynamics = prepared.dynamics_exprs();
+    let inputs = prepared.dynamics_inputs();
+    let program = prepared.lower(&inputs, &dynamics[..n * n + n])?;
+    let d = &prepared.derivation;
+    let kept = d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone());
+    Ok(InverseDynamics {
+        coordinates: prepared.coordinate_names(),
+        parameter_names: d.model.params.iter().map(|p| p.name.clone()).collect(),
+        parameters,
+        kept: kept.collect(),
+        tape: Tape::new(program),
+        input: vec![0.0; inputs.len()],
+        output: vec![0.0; n * n + n],
+    })
+}
+
+impl InverseDynamics {
+    /// The remaining coordinates, in the order of q and of τ.
+    pub fn coordinates(&self) -> &[String] {
+        &self.coordinates
+    }
+
+    /// The parameters' names, in declaration order.
+    pub fn parameter_names(&self) -> &[String] {
+        &self.parameter_names
+    }
+
+    /// The parameters' values in use, in declaration order.
+    pub fn parameters(&self) -> &[f64] {
+        &self.parameters
+    }
+
+    /// Uses these parameter values (in declaration order) from now on.
+    pub fn set_parameters(&mut self, values: &[f64]) -> Result<(), Error> {
+        if values.len() != self.parameters.len() {
+            return Err(Error::Input(format!(
+                "{} parameter values given for the {} parameters ({})",
+                values.len(),
+                self.parameters.len(),
+                self.parameter_names.join(", ")
+            )));
+        }
+        self.parameters.copy_from_slice(values);
+        Ok(())
+    }
+
+    /// The constraints kept with multipliers; when there are any, τ is the one with λ = 0.
+    pub fn kept_constraints(&self) -> &[String] {
+        &self.kept
+    }
+
+    /// τ = M·q̈ − f at time `t` with positions `q`, rates `rates` and accelerations
+    /// `accelerations` (each one value per coordinate), written into `tau`.
+    pub fn torques(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        rates: &[f64],
+        accelerations: &[f64],
+        tau: &mut [f64],
+    ) -> Result<(), Error> {
+        let n = self.coordinates.len();
+        for (what, values) in
+            [("positions", q), ("rates", rates), ("accelerations", accelerations), ("τ", tau)]
+        {
+            if values.len() != n {
+                return Err(Error::Input(format!(
+                    "{} {what} for the {n} coordinates ({})",
+                    values.len(),
+                    self.coordinates.join(", ")
+                )));
+            }
+        }
+        self.input[0] = t;
+        self.input[1..1 + n].copy_from_slice(q);
+        self.input[1 + n..1 + 2 * n].copy_from_slice(rates);
+        self.input[1 + 2 * n..].copy_from_slice(&self.parameters);
+        self.tape.eval(&self.input, &mut self.output);
+        let (mass, forcing) = self.output.split_at(n * n);
+        for (i, out) in tau.iter_mut().enumerate() {
+            let inertial: f64 = (0..n).map(|j| mass[j * n + i] * accelerations[j]).sum();
+            *out = inertial - forcing[i];
+        }
+        if let Some(i) = tau.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Numeric(format!(
+                "at t = {t}, the generalized force on `{}` is {} (M or f is not finite there)",
+                self.coordinates[i], tau[i]
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FLYWHEEL: &str = "param I = 1/2, tau = 2, b = 1/10\ncoord theta\n\
+        body wheel { mass 1; inertia I; position (0, 0); angle theta }\n\
+        torque motor on wheel: tau\ndissipation b/2*theta'^2\n";
+
+    #[test]
+    fn a_flywheel_needs_its_inertia_times_the_acceleration_less_the_forces() {
+        let mut inverse = inverse_dynamics(FLYWHEEL, Options::default()).unwrap();
+        let mut tau = [0.0];
+        inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
+        // I·θ̈ − (τ − b·θ̇) = 2.5 − 2 + 0.3.
+        assert!((tau[0] - 0.8).abs() < 1e-15, "{tau:?}");
+        inverse.set_parameters(&[1.0, 0.0, 0.0]).unwrap();
+        inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
+        assert_eq!(tau[0], 5.0);
+    }
+
+    #[test]
+    fn wrong_lengths_are_errors() {
+        let mut inverse = inverse_dynamics(FLYWHEEL, Options::default()).unwrap();
+        let mut tau = [0.0];
+        let e = inverse.torques(0.0, &[1.0, 2.0], &[3.0], &[5.0], &mut tau).unwrap_err();
+        assert_eq!(e.to_string(), "error: 2 positions for the 1 coordinates (theta)");
+        let e = inverse.set_parameters(&[1.0]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "error: 1 parameter values given for the 3 parameters (I, tau, b)"
+        );
+    }
+}
