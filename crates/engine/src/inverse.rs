@@ -4,10 +4,12 @@
 //! the motion: computed-torque control and actuator sizing.
 //!
 //! With constraints kept with multipliers, M·q̈ = f + Jᵀλ + τ, and any τ + Jᵀμ gives the same
-//! motion: τ is fixed only up to what the constraints can carry. The τ given here is the one
-//! with λ = 0, the constraints carrying no load, so that it is exactly what an actuator on
-//! every remaining coordinate would supply; that needs accelerations the constraints allow
-//! (J·q̈ = γ), which the trajectory's are when they come from a run of the scene.
+//! motion: τ is fixed only up to what the constraints can carry. The τ given here is the least
+//! in the norm τᵀ·M⁻¹·τ, the one with J·M⁻¹·τ = 0: the constraints carry the load they would
+//! carry without it, so a motion the scene makes on its own needs τ = 0 (a pendulum written
+//! with a kept rod needs no force to hang), and the choice does not depend on the units of the
+//! coordinates, as a plain least norm would. It presumes accelerations the constraints allow
+//! (J·q̈ = γ), which a trajectory of a run of the scene has.
 
 use numeric::Tape;
 
@@ -19,9 +21,9 @@ pub struct InverseDynamics {
     coordinates: Vec<String>,
     parameter_names: Vec<String>,
     parameters: Vec<f64>,
-    /// Names of the constraints kept with multipliers: τ is the one where they carry nothing.
+    /// Names of the constraints kept with multipliers: τ is the least in τᵀ·M⁻¹·τ.
     kept: Vec<String>,
-    /// `[t, q, q̇, parameters]` → M (column-major), then f.
+    /// `[t, q, q̇, parameters]` → M (column-major), f, then per kept constraint J, γ, Φ, Φ̇.
     tape: Tape,
     input: Vec<f64>,
     output: Vec<f64>,
@@ -31,10 +33,9 @@ pub struct InverseDynamics {
 pub fn inverse_dynamics(source: &str, options: Options) -> Result<InverseDynamics, Error> {
     let mut prepared = prepare(source, &[], options)?;
     let parameters = prepared.parameter_values(&[])?;
-    let n = prepared.layout.coordinates;
     let dynamics = prepared.dynamics_exprs();
     let inputs = prepared.dynamics_inputs();
-    let program = prepared.lower(&inputs, &dynamics[..n * n + n])?;
+    let program = prepared.lower(&inputs, &dynamics)?;
     let d = &prepared.derivation;
     let kept = d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone());
     Ok(InverseDynamics {
@@ -44,7 +45,7 @@ pub fn inverse_dynamics(source: &str, options: Options) -> Result<InverseDynamic
         kept: kept.collect(),
         tape: Tape::new(program),
         input: vec![0.0; inputs.len()],
-        output: vec![0.0; n * n + n],
+        output: vec![0.0; dynamics.len()],
     })
 }
 
@@ -78,7 +79,7 @@ impl InverseDynamics {
         Ok(())
     }
 
-    /// The constraints kept with multipliers; when there are any, τ is the one with λ = 0.
+    /// The constraints kept with multipliers; with any, τ is the least in τᵀ·M⁻¹·τ.
     pub fn kept_constraints(&self) -> &[String] {
         &self.kept
     }
@@ -115,12 +116,45 @@ impl InverseDynamics {
             let inertial: f64 = (0..n).map(|j| mass[j * n + i] * accelerations[j]).sum();
             *out = inertial - forcing[i];
         }
+        if !self.kept.is_empty() {
+            self.take_out_what_the_constraints_carry(t, tau)?;
+        }
         if let Some(i) = tau.iter().position(|v| !v.is_finite()) {
             return Err(Error::Numeric(format!(
                 "at t = {t}, the generalized force on `{}` is {} (M or f is not finite there)",
                 self.coordinates[i], tau[i]
             )));
         }
+        Ok(())
+    }
+}
+
+impl InverseDynamics {
+    /// τ − Jᵀ·μ with μ = (J·M⁻¹·Jᵀ)⁻¹·J·M⁻¹·τ, the part of τ that J·M⁻¹ does not see; M and
+    /// J are those of the last evaluation.
+    fn take_out_what_the_constraints_carry(&self, t: f64, tau: &mut [f64]) -> Result<(), Error> {
+        let n = tau.len();
+        let m = self.kept.len();
+        let mass = nalgebra::DMatrix::from_column_slice(n, n, &self.output[..n * n]);
+        let jacobian =
+            nalgebra::DMatrix::from_fn(m, n, |c, j| self.output[n * n + n + c * (n + 3) + j]);
+        let singular = |what: &str| {
+            Error::Numeric(format!(
+                "at t = {t}, {what} is singular, so the generalized forces are not determined \
+                 by the constraints ({})",
+                self.kept.join(", ")
+            ))
+        };
+        let lu = mass.lu();
+        let spread = lu.solve(&jacobian.transpose()).ok_or_else(|| singular("the mass matrix"))?;
+        let forces = nalgebra::DVector::from_column_slice(tau);
+        let seen = &jacobian * lu.solve(&forces).ok_or_else(|| singular("the mass matrix"))?;
+        let carried = (&jacobian * spread)
+            .lu()
+            .solve(&seen)
+            .ok_or_else(|| singular("J·M⁻¹·Jᵀ of the kept constraints"))?;
+        let remaining = forces - jacobian.transpose() * carried;
+        tau.copy_from_slice(remaining.as_slice());
         Ok(())
     }
 }
