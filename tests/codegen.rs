@@ -1,5 +1,6 @@
 //! The Rust that `lagrange codegen` writes, for every example: it compiles with plain
-//! `rustc`, and its functions agree with the tape to 1e-12 relative.
+//! `rustc`, and its functions agree with the tape to 1e-12 relative, its inverse dynamics
+//! with `engine::inverse`'s.
 
 use std::fmt::Write;
 use std::process::Command;
@@ -9,6 +10,31 @@ use numeric::Tape;
 /// Deterministic, varied input values: not special angles, not zero.
 fn inputs(len: usize, seed: usize) -> Vec<f64> {
     (0..len).map(|i| 0.3 + 0.37 * ((i * 7 + seed * 13) % 11) as f64 / 11.0).collect()
+}
+
+/// A call of the module's `inverse_dynamics` at a varied motion, printing τ, with what
+/// `engine::inverse` gives there appended to `expected`; none where the engine finds the
+/// forces undetermined (a singular mass matrix at these values).
+fn inverse_dynamics_call(main: &mut String, expected: &mut Vec<f64>, k: usize, source: &str) {
+    let mut inverse =
+        engine::inverse::inverse_dynamics(source, engine::Options::default()).unwrap();
+    let n = inverse.coordinates().len();
+    let motion = inputs(3 * n, k + 1);
+    let (q, rest) = motion.split_at(n);
+    let (rates, accelerations) = rest.split_at(n);
+    let mut tau = vec![0.0; n];
+    if inverse.torques(0.4, q, rates, accelerations, &mut tau).is_err() {
+        return;
+    }
+    expected.extend(&tau);
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        main,
+        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
+        list(q),
+        list(rates),
+        list(accelerations)
+    );
 }
 
 #[test]
@@ -36,6 +62,7 @@ fn generated_code_compiles_and_matches_the_tape() {
                 literals.join(", ")
             );
         }
+        inverse_dynamics_call(&mut main, &mut expected, k, &source);
     }
     main.push_str("}\n");
     std::fs::write(dir.join("main.rs"), format!("{modules}\n{main}")).unwrap();

@@ -1,6 +1,7 @@
 //! The equations of a scene as a self-contained Rust module (only `std`): the mass matrix, the
-//! forcing, the constraint rows, the right-hand side of the first-order system, the energies
-//! and the reactions, each a straight-line function lowered like the tape.
+//! forcing, the constraint rows, the right-hand side of the first-order system, the inverse
+//! dynamics, the energies and the reactions, each a straight-line function lowered like the
+//! tape.
 
 use std::fmt::Write;
 
@@ -122,6 +123,8 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
     }
     s.push_str(&rhs_function(n, m, k));
     s.push('\n');
+    s.push_str(&inverse_dynamics_function(n, m, k));
+    s.push('\n');
     s.push_str(HELPERS);
     Ok(Module { source: s, prepared, parameters, programs })
 }
@@ -164,6 +167,62 @@ fn rhs_function(n: usize, m: usize, k: usize) -> String {
     );
     let _ = writeln!(s, "    dy[..{n}].copy_from_slice(&y[{n}..]);");
     let _ = writeln!(s, "    dy[{n}..].copy_from_slice(&b[..{n}]);");
+    let _ = writeln!(s, "    true\n}}");
+    s
+}
+
+/// `inverse_dynamics(t, q, qd, qdd, parameters, tau)`: τ = M·q̈ − f, and with kept constraints
+/// the least in τᵀ·M⁻¹·τ, as `engine::inverse` gives it: τ + Jᵀμ with [M −Jᵀ; J 0]·(x, μ) =
+/// (τ, 0), the system `rhs` solves. False when it is singular.
+fn inverse_dynamics_function(n: usize, m: usize, k: usize) -> String {
+    let size = n + m;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "/// Inverse dynamics: the generalized forces tau = M·qdd − f that make the motion (q, qd,"
+    );
+    let _ = writeln!(s, "/// qdd) happen when added to f.");
+    if m > 0 {
+        let _ = writeln!(
+            s,
+            "/// With constraints kept, tau + Jᵀμ moves the scene alike for every μ: this is the one\n\
+             /// least in tauᵀ·M⁻¹·tau, which leaves the constraints the load they carry without it.\n\
+             /// Returns false when the augmented system is singular."
+        );
+    } else {
+        let _ =
+            writeln!(s, "/// Always true (the signature is that of scenes with kept constraints).");
+    }
+    let _ = writeln!(
+        s,
+        "pub fn inverse_dynamics(t: f64, q: &[f64; {n}], qd: &[f64; {n}], qdd: &[f64; {n}], \
+         parameters: &[f64; {k}], tau: &mut [f64; {n}]) -> bool {{"
+    );
+    let _ = writeln!(s, "    let mut input = [0.0; {}];", 1 + 2 * n + k);
+    let _ = writeln!(s, "    input[0] = t;");
+    let _ = writeln!(s, "    input[1..{}].copy_from_slice(q);", 1 + n);
+    let _ = writeln!(s, "    input[{}..{}].copy_from_slice(qd);", 1 + n, 1 + 2 * n);
+    let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
+    let _ = writeln!(s, "    let mut mass = [0.0; {}];", n * n);
+    let _ = writeln!(s, "    let mut f = [0.0; {n}];");
+    let _ = writeln!(s, "    mass_matrix(&input, &mut mass);");
+    let _ = writeln!(s, "    forcing(&input, &mut f);");
+    let _ = writeln!(s, "    for i in 0..{n} {{\n        let mut inertial = 0.0;\n        for j in 0..{n} {{\n            inertial += mass[j * {n} + i] * qdd[j];\n        }}\n        tau[i] = inertial - f[i];\n    }}");
+    if m == 0 {
+        let _ = writeln!(s, "    true\n}}");
+        return s;
+    }
+    let _ = writeln!(s, "    let mut rows = [0.0; {}];", m * (n + 3));
+    let _ = writeln!(s, "    constraints(&input, &mut rows);");
+    let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
+    let _ = writeln!(s, "    let mut b = [0.0; {size}];");
+    let _ = writeln!(s, "    for i in 0..{n} {{\n        for j in 0..{n} {{\n            a[i * {size} + j] = mass[j * {n} + i];\n        }}\n        b[i] = tau[i];\n    }}");
+    let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n    }}", n + 3);
+    let _ = writeln!(
+        s,
+        "    if !solve_in_place({size}, &mut a, &mut b) {{\n        return false;\n    }}"
+    );
+    let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            tau[j] += rows[c * {} + j] * b[{n} + c];\n        }}\n    }}", n + 3);
     let _ = writeln!(s, "    true\n}}");
     s
 }

@@ -5,7 +5,8 @@
 //!
 //! With constraints kept with multipliers, M·q̈ = f + Jᵀλ + τ, and any τ + Jᵀμ gives the same
 //! motion: τ is fixed only up to what the constraints can carry. The τ given here is the least
-//! in the norm τᵀ·M⁻¹·τ, the one with J·M⁻¹·τ = 0: the constraints carry the load they would
+//! in the norm τᵀ·M⁻¹·τ, the one with J·M⁻¹·τ = 0 (where M is singular, the same choice made
+//! through the augmented system a run solves): the constraints carry the load they would
 //! carry without it, so a motion the scene makes on its own needs τ = 0 (a pendulum written
 //! with a kept rod needs no force to hang), and the choice does not depend on the units of the
 //! coordinates, as a plain least norm would. It presumes accelerations the constraints allow
@@ -130,31 +131,32 @@ impl InverseDynamics {
 }
 
 impl InverseDynamics {
-    /// τ − Jᵀ·μ with μ = (J·M⁻¹·Jᵀ)⁻¹·J·M⁻¹·τ, the part of τ that J·M⁻¹ does not see; M and
-    /// J are those of the last evaluation.
+    /// τ + Jᵀ·μ where [M −Jᵀ; J 0]·(x, μ) = (τ, 0), the system a run solves: with M regular,
+    /// μ = −(J·M⁻¹·Jᵀ)⁻¹·J·M⁻¹·τ, which leaves J·M⁻¹·τ = 0. It needs only the augmented system
+    /// regular, not M (Euler parameters make M singular along e, their constraint not). M and J
+    /// are those of the last evaluation.
     fn take_out_what_the_constraints_carry(&self, t: f64, tau: &mut [f64]) -> Result<(), Error> {
         let n = tau.len();
         let m = self.kept.len();
-        let mass = nalgebra::DMatrix::from_column_slice(n, n, &self.output[..n * n]);
-        let jacobian =
-            nalgebra::DMatrix::from_fn(m, n, |c, j| self.output[n * n + n + c * (n + 3) + j]);
-        let singular = |what: &str| {
+        let jacobian = |c: usize, j: usize| self.output[n * n + n + c * (n + 3) + j];
+        let system = nalgebra::DMatrix::from_fn(n + m, n + m, |i, j| match (i < n, j < n) {
+            (true, true) => self.output[j * n + i],
+            (true, false) => -jacobian(j - n, i),
+            (false, true) => jacobian(i - n, j),
+            (false, false) => 0.0,
+        });
+        let mut rhs = nalgebra::DVector::zeros(n + m);
+        rhs.as_mut_slice()[..n].copy_from_slice(tau);
+        let solution = system.lu().solve(&rhs).ok_or_else(|| {
             Error::Numeric(format!(
-                "at t = {t}, {what} is singular, so the generalized forces are not determined \
-                 by the constraints ({})",
+                "at t = {t}, the mass matrix with the kept constraints ({}) is singular, so the \
+                 generalized forces are not determined",
                 self.kept.join(", ")
             ))
-        };
-        let lu = mass.lu();
-        let spread = lu.solve(&jacobian.transpose()).ok_or_else(|| singular("the mass matrix"))?;
-        let forces = nalgebra::DVector::from_column_slice(tau);
-        let seen = &jacobian * lu.solve(&forces).ok_or_else(|| singular("the mass matrix"))?;
-        let carried = (&jacobian * spread)
-            .lu()
-            .solve(&seen)
-            .ok_or_else(|| singular("J·M⁻¹·Jᵀ of the kept constraints"))?;
-        let remaining = forces - jacobian.transpose() * carried;
-        tau.copy_from_slice(remaining.as_slice());
+        })?;
+        for (j, out) in tau.iter_mut().enumerate() {
+            *out += (0..m).map(|c| jacobian(c, j) * solution[n + c]).sum::<f64>();
+        }
         Ok(())
     }
 }
