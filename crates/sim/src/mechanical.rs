@@ -92,6 +92,17 @@ impl Mechanical {
         }
     }
 
+    /// The parameter values the programs are evaluated at, in declaration order.
+    pub fn parameters(&self) -> &[f64] {
+        &self.parameters
+    }
+
+    /// Evaluates the programs at these parameter values from now on.
+    pub fn set_parameters(&mut self, values: &[f64]) {
+        assert_eq!(values.len(), self.layout.parameters);
+        self.parameters.copy_from_slice(values);
+    }
+
     /// Says which kept constraints restrain velocities rather than positions.
     pub fn with_kinds(mut self, kinds: Vec<Stabilisation>) -> Self {
         assert_eq!(kinds.len(), self.layout.multipliers);
