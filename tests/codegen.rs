@@ -16,8 +16,7 @@ fn inputs(len: usize, seed: usize) -> Vec<f64> {
 /// `engine::inverse` gives there appended to `expected`; none where the engine finds the
 /// forces undetermined (a singular mass matrix at these values).
 fn inverse_dynamics_call(main: &mut String, expected: &mut Vec<f64>, k: usize, source: &str) {
-    let mut inverse =
-        engine::inverse::inverse_dynamics(source, engine::Options::default()).unwrap();
+    let mut inverse = engine::inverse::inverse_dynamics(source, &Default::default()).unwrap();
     let n = inverse.coordinates().len();
     let motion = inputs(3 * n, k + 1);
     let (q, rest) = motion.split_at(n);

@@ -32,7 +32,7 @@ torque elbow_back on upper: -A2*cos(w*t)
 
 /// The scene's inverse dynamics with the motors off: what it returns is what the motors do.
 fn without_motors(source: &str) -> InverseDynamics {
-    let mut inverse = inverse_dynamics(source, engine::Options::default()).unwrap();
+    let mut inverse = inverse_dynamics(source, &Default::default()).unwrap();
     let mut values = inverse.parameters().to_vec();
     for (name, value) in inverse.parameter_names().iter().zip(&mut values) {
         if name.starts_with('A') {
@@ -73,7 +73,7 @@ fn the_torques_of_a_driven_run_come_back_from_its_trajectory() {
     assert!(worst < 1e-9, "largest difference from the applied torques: {worst:e}");
 
     // With the motors on, the scene's own forces account for everything: τ vanishes.
-    let mut inverse = inverse_dynamics(DRIVEN, engine::Options::default()).unwrap();
+    let mut inverse = inverse_dynamics(DRIVEN, &Default::default()).unwrap();
     let row = &outcome.run.trajectory.rows[100];
     inverse
         .torques(outcome.run.trajectory.times[100], &row[0..2], &row[2..4], &row[4..6], &mut tau)
@@ -238,7 +238,7 @@ fn cart_swing(t: f64) -> [Vec<f64>; 3] {
 
 #[test]
 fn with_a_kept_constraint_the_torques_leave_it_its_own_load() {
-    let mut inverse = inverse_dynamics(CART, engine::Options::default()).unwrap();
+    let mut inverse = inverse_dynamics(CART, &Default::default()).unwrap();
     assert_eq!(inverse.kept_constraints(), ["rod"]);
     assert_eq!(inverse.coordinates(), ["x", "px", "py"]);
     // The scene swinging on its own needs no force: the rod holds the bob.

@@ -150,6 +150,9 @@ enum Command {
         /// x'' (as `simulate --output x,x',x''` writes them); other columns are ignored.
         #[arg(long, value_name = "FILE.csv")]
         trajectory: PathBuf,
+        /// Override a parameter: `--set g=1.62`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
         /// Write the forces (CSV: t, then tau_x per coordinate) to this file, whole or not at
         /// all, instead of standard output.
         #[arg(long, short)]
@@ -315,9 +318,10 @@ fn main() -> ExitCode {
                 Err(e) => fail(&path, &e),
             }
         }
-        Command::InverseDynamics { file, trajectory, out, no_units } => {
+        Command::InverseDynamics { file, trajectory, set, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            inverse_dynamics(&file, &source, &trajectory, out, engine::Options { units: !no_units })
+            let options = engine::inverse::Options { set, no_units };
+            inverse_dynamics(&file, &source, &trajectory, out, &options)
         }
         Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
@@ -517,7 +521,7 @@ fn inverse_dynamics(
     source: &str,
     trajectory: &std::path::Path,
     out: Option<PathBuf>,
-    options: engine::Options,
+    options: &engine::inverse::Options,
 ) -> ExitCode {
     let path = file.display().to_string();
     let mut inverse = match engine::inverse::inverse_dynamics(source, options) {

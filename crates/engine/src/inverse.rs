@@ -15,7 +15,16 @@
 use numeric::Tape;
 
 use crate::numbers::prepare;
-use crate::{Error, Options};
+use crate::{Error, Setting};
+
+/// What a front end asks for.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// `name=value` pairs: parameter values (scene expressions) in place of the scene's.
+    pub set: Vec<String>,
+    /// Skip the dimension check.
+    pub no_units: bool,
+}
 
 /// The inverse dynamics of a loaded scene, at its parameters' values unless told others.
 pub struct InverseDynamics {
@@ -30,10 +39,29 @@ pub struct InverseDynamics {
     output: Vec<f64>,
 }
 
-/// Loads `source` and lowers what its inverse dynamics needs.
-pub fn inverse_dynamics(source: &str, options: Options) -> Result<InverseDynamics, Error> {
-    let mut prepared = prepare(source, &[], options)?;
-    let parameters = prepared.parameter_values(&[])?;
+/// Loads `source` and lowers what its inverse dynamics needs, at the parameters' values with
+/// the `set` ones in place of the scene's.
+pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynamics, Error> {
+    let mut sets = Vec::new();
+    for text in &options.set {
+        let Some((name, value)) = text.split_once('=') else {
+            return Err(Error::given(Setting::Set, text, ": not of the form name=value"));
+        };
+        sets.push((name.trim().to_string(), value.trim().to_string()));
+    }
+    let values: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
+    let mut prepared = prepare(source, &values, crate::Options { units: !options.no_units })?;
+    let params = &prepared.derivation.model.params;
+    let mut overrides = Vec::new();
+    for ((name, _), expr) in sets.iter().zip(&prepared.extra) {
+        let Some(k) = params.iter().position(|p| p.name == *name) else {
+            let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+            let rest = format!(": no parameter of that name; one of {}", known.join(", "));
+            return Err(Error::given(Setting::Set, name, rest));
+        };
+        overrides.push((k, *expr));
+    }
+    let parameters = prepared.parameter_values(&overrides)?;
     let dynamics = prepared.dynamics_exprs();
     let inputs = prepared.dynamics_inputs();
     let program = prepared.lower(&inputs, &dynamics)?;
@@ -171,7 +199,7 @@ mod tests {
 
     #[test]
     fn a_flywheel_needs_its_inertia_times_the_acceleration_less_the_forces() {
-        let mut inverse = inverse_dynamics(FLYWHEEL, Options::default()).unwrap();
+        let mut inverse = inverse_dynamics(FLYWHEEL, &Options::default()).unwrap();
         let mut tau = [0.0];
         inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
         // I·θ̈ − (τ − b·θ̇) = 2.5 − 2 + 0.3.
@@ -179,11 +207,19 @@ mod tests {
         inverse.set_parameters(&[1.0, 0.0, 0.0]).unwrap();
         inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
         assert_eq!(tau[0], 5.0);
+        let set = Options { set: vec!["tau = 0".into(), "b=I".into()], no_units: false };
+        let mut inverse = inverse_dynamics(FLYWHEEL, &set).unwrap();
+        inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
+        // I·θ̈ + b·θ̇ with b = I: 2.5 + 1.5.
+        assert!((tau[0] - 4.0).abs() < 1e-15, "{tau:?}");
     }
 
     #[test]
-    fn wrong_lengths_are_errors() {
-        let mut inverse = inverse_dynamics(FLYWHEEL, Options::default()).unwrap();
+    fn wrong_lengths_and_names_are_errors() {
+        let set = Options { set: vec!["J=1".into()], no_units: false };
+        let e = inverse_dynamics(FLYWHEEL, &set).err().unwrap();
+        assert_eq!(e.to_string(), "error: `set` J: no parameter of that name; one of I, tau, b");
+        let mut inverse = inverse_dynamics(FLYWHEEL, &Options::default()).unwrap();
         let mut tau = [0.0];
         let e = inverse.torques(0.0, &[1.0, 2.0], &[3.0], &[5.0], &mut tau).unwrap_err();
         assert_eq!(e.to_string(), "error: 2 positions for the 1 coordinates (theta)");

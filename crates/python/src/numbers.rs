@@ -306,7 +306,8 @@ pub struct InverseDynamics {
 
 impl InverseDynamics {
     pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
-        let inner = engine::inverse::inverse_dynamics(source, engine::Options { units })
+        let options = engine::inverse::Options { set: Vec::new(), no_units: !units };
+        let inner = engine::inverse::inverse_dynamics(source, &options)
             .map_err(|e| engine_error(&e, path))?;
         Ok(InverseDynamics {
             names: inner.coordinates().to_vec(),
