@@ -247,7 +247,7 @@ fn with_a_kept_constraint_the_torques_leave_it_its_own_load() {
         until: Some(2.0),
         tolerance: Some(1e-12),
         output: vec![names.join(", ")],
-        set: ["px=0.6", "py=-0.8", "x'=0.3", "px'=0.3"].map(String::from).to_vec(),
+        set: engine::input::assignments(&["px=0.6", "py=-0.8", "x'=0.3", "px'=0.3"]).unwrap(),
         samples: 41,
         ..Options::default()
     };

@@ -8,7 +8,6 @@
 //! writes its forces, and draws progress.
 
 pub mod animate;
-pub mod bench;
 pub mod check;
 pub mod diagnostics;
 pub mod inverse;

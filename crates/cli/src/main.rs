@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use engine::input::{Assignment, SweepRange};
 
 #[derive(Parser)]
 #[command(
@@ -72,7 +73,7 @@ enum Command {
         step: Option<f64>,
         /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -114,11 +115,11 @@ enum Command {
         about: Option<String>,
         /// Override a parameter: `--set g=1.62`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Tabulate the eigenvalues for n values of parameter p from a to b, and find where
         /// stability changes: `--sweep w=0:100:101`.
         #[arg(long, value_name = "P=A:B:N")]
-        sweep: Option<String>,
+        sweep: Option<SweepRange>,
         /// Draw the sweep's eigenvalues (real and imaginary parts against p) as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -152,7 +153,7 @@ enum Command {
         trajectory: PathBuf,
         /// Override a parameter: `--set g=1.62`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Write the forces (CSV: t, then tau_x per coordinate) to this file, whole or not at
         /// all, instead of standard output.
         #[arg(long, short)]
@@ -170,7 +171,7 @@ enum Command {
         until: Option<f64>,
         /// Override a parameter or an initial value, as for simulate.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// End each run when this expression reaches zero, as for simulate.
         #[arg(long = "stop-when", value_name = "EXPR")]
         stop_when: Vec<String>,
@@ -208,6 +209,9 @@ enum MethodArg {
     /// Two-stage Gauss–Legendre (order 4), fixed step, symplectic.
     #[value(alias = "gauss4")]
     Gauss,
+    /// Radau IIA (order 5), adaptive and implicit: stiff scenes, and kept constraints as they are.
+    #[value(alias = "radau5")]
+    Radau,
 }
 
 impl From<MethodArg> for sim::Method {
@@ -218,6 +222,7 @@ impl From<MethodArg> for sim::Method {
             MethodArg::Dop853 => sim::Method::Dop853,
             MethodArg::Midpoint => sim::Method::Midpoint,
             MethodArg::Gauss => sim::Method::Gauss,
+            MethodArg::Radau => sim::Method::Radau,
         }
     }
 }
@@ -238,27 +243,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units, full } => {
-            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let path = file.display().to_string();
-            let format = match format {
-                FormatArg::Text => cli::Format::Text,
-                FormatArg::Latex => cli::Format::Latex,
-                FormatArg::Json => cli::Format::Json,
-            };
-            let options = engine::Options { units: !no_units };
-            match cli::derive_keeping(&path, &source, format, options, full) {
-                Ok((report, warnings, derivation)) => {
-                    eprint!("{warnings}");
-                    // The process ends here: freeing a large model's expressions one by one (a
-                    // tenth of the bicycle's run) would be work for nothing.
-                    std::mem::forget(derivation);
-                    write_or_print(out.as_ref(), &report)
-                }
-                Err(diagnostics) => {
-                    eprint!("{diagnostics}");
-                    ExitCode::from(2)
-                }
-            }
+            derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
             let family =
@@ -303,6 +288,9 @@ fn main() -> ExitCode {
         }
         Command::Linearize { file, about, set, sweep, plot, format, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            // Typed here, read as text there; the same parser reads it back.
+            let set = set.iter().map(Assignment::to_string).collect();
+            let sweep = sweep.as_ref().map(SweepRange::to_string);
             let options = engine::linearize::Options { about, set, sweep, no_units };
             linearize(&file, &source, &options, format, out, plot)
         }
@@ -329,33 +317,68 @@ fn main() -> ExitCode {
                 engine::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
             bench(&file, &source, &options, repeats, plot)
         }
-        Command::Check { files, no_units } => {
-            let mut worst = 0;
-            let (mut held, mut failed) = (0, 0);
-            for file in &files {
-                let Some(source) = read_or_report(file) else {
-                    worst = 2;
-                    continue;
-                };
-                let result = cli::check::check_file_with(
-                    &file.display().to_string(),
-                    &source,
-                    engine::Options { units: !no_units },
-                );
-                eprint!("{}", result.warnings);
-                if result.exit_code == 2 {
-                    eprint!("{}", result.report);
-                } else {
-                    emit(&result.report);
-                }
-                held += result.held;
-                failed += result.failed;
-                worst = worst.max(result.exit_code);
-            }
-            emit(&format!("{held} passed, {failed} failed\n"));
-            ExitCode::from(worst as u8)
+        Command::Check { files, no_units } => check(&files, no_units),
+    }
+}
+
+/// `lagrange derive`: the report to standard output or `out`, the warnings to stderr.
+fn derive(
+    file: &std::path::Path,
+    format: FormatArg,
+    out: Option<PathBuf>,
+    no_units: bool,
+    full: bool,
+) -> ExitCode {
+    let Some(source) = read_or_report(file) else { return ExitCode::from(2) };
+    let path = file.display().to_string();
+    let format = match format {
+        FormatArg::Text => cli::Format::Text,
+        FormatArg::Latex => cli::Format::Latex,
+        FormatArg::Json => cli::Format::Json,
+    };
+    let options = engine::Options { units: !no_units };
+    match cli::derive_keeping(&path, &source, format, options, full) {
+        Ok((report, warnings, derivation)) => {
+            eprint!("{warnings}");
+            // The process ends here: freeing a large model's expressions one by one (a
+            // tenth of the bicycle's run) would be work for nothing.
+            std::mem::forget(derivation);
+            write_or_print(out.as_ref(), &report)
+        }
+        Err(diagnostics) => {
+            eprint!("{diagnostics}");
+            ExitCode::from(2)
         }
     }
+}
+
+/// `lagrange check`: each file's report, then the count of `expect` lines that held and
+/// failed; the worst exit code of the files.
+fn check(files: &[PathBuf], no_units: bool) -> ExitCode {
+    let mut worst = 0;
+    let (mut held, mut failed) = (0, 0);
+    for file in files {
+        let Some(source) = read_or_report(file) else {
+            worst = 2;
+            continue;
+        };
+        let result = cli::check::check_file_with(
+            &file.display().to_string(),
+            &source,
+            engine::Options { units: !no_units },
+        );
+        eprint!("{}", result.warnings);
+        if result.exit_code == 2 {
+            eprint!("{}", result.report);
+        } else {
+            emit(&result.report);
+        }
+        held += result.held;
+        failed += result.failed;
+        worst = worst.max(result.exit_code);
+    }
+    emit(&format!("{held} passed, {failed} failed\n"));
+    ExitCode::from(worst as u8)
 }
 
 fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
@@ -453,7 +476,9 @@ fn simulate(
         let e0 = energy.first().copied().unwrap_or(0.0);
         series.push(("energy error E − E(0)".to_string(), energy.iter().map(|e| e - e0).collect()));
         let title = format!("{} ({})", path, outcome.method.name());
-        if let Err(e) = cli::write_atomically(&plot, &cli::plot::svg(&title, times, &series)) {
+        if let Err(e) =
+            cli::write_atomically(&plot, &cli::plot::time_series(&title, times, &series))
+        {
             eprintln!("error: cannot write {}: {e}", plot.display());
             code = ExitCode::from(2);
         }
@@ -505,7 +530,7 @@ fn linearize(
     };
     if let (Some(p), Some(sweep)) = (plot, &linearized.sweep) {
         let title = format!("Eigenvalues against {}: {path}", sweep.parameter);
-        if let Err(e) = cli::write_atomically(&p, &cli::linearize::svg(&title, sweep)) {
+        if let Err(e) = cli::write_atomically(&p, &cli::plot::sweep(&title, sweep)) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
         }
@@ -574,7 +599,7 @@ fn bench(
         10.0 * engine::bench::REFERENCE_TOLERANCE,
         report.reference_check
     ));
-    emit(&cli::bench::table(&report.trials, &report.inapplicable));
+    emit(&engine::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",
@@ -587,7 +612,7 @@ fn bench(
         let title = format!("Work–precision: {path}");
         if let Err(e) = cli::write_atomically(
             &p,
-            &cli::bench::svg(&title, &report.trials, &report.inapplicable),
+            &cli::plot::work_precision(&title, &report.trials, &report.inapplicable),
         ) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);

@@ -172,6 +172,7 @@ fn settings_are_named_by_their_flags() {
         (&["--until=-1"][..], "error: --until must be a positive time, not -1"),
         (&["--set", "gg=1"][..], "error: --set gg: no parameter or coordinate of that name"),
         (&["--set", "m=-1"][..], "error: with the values of --set, `bob` has a mass of -1 kg"),
+        (&["--set", "m"][..], "'--set <NAME=VALUE>': not of the form name=value (like g=1.62)"),
     ] {
         let out = lagrange(&[&["simulate", pendulum.as_str()][..], args].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);

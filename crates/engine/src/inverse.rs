@@ -14,14 +14,15 @@
 
 use numeric::Tape;
 
+use crate::input::Assignment;
 use crate::numbers::prepare;
 use crate::{Error, Setting};
 
 /// What a front end asks for.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
-    /// `name=value` pairs: parameter values (scene expressions) in place of the scene's.
-    pub set: Vec<String>,
+    /// Parameter values (scene expressions) in place of the scene's.
+    pub set: Vec<Assignment>,
     /// Skip the dimension check.
     pub no_units: bool,
 }
@@ -42,18 +43,11 @@ pub struct InverseDynamics {
 /// Loads `source` and lowers what its inverse dynamics needs, at the parameters' values with
 /// the `set` ones in place of the scene's.
 pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynamics, Error> {
-    let mut sets = Vec::new();
-    for text in &options.set {
-        let Some((name, value)) = text.split_once('=') else {
-            return Err(Error::given(Setting::Set, text, ": not of the form name=value"));
-        };
-        sets.push((name.trim().to_string(), value.trim().to_string()));
-    }
-    let values: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
+    let values: Vec<String> = options.set.iter().map(|a| a.value.clone()).collect();
     let mut prepared = prepare(source, &values, crate::Options { units: !options.no_units })?;
     let params = &prepared.derivation.model.params;
     let mut overrides = Vec::new();
-    for ((name, _), expr) in sets.iter().zip(&prepared.extra) {
+    for (Assignment { name, .. }, expr) in options.set.iter().zip(&prepared.extra) {
         let Some(k) = params.iter().position(|p| p.name == *name) else {
             let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
             let rest = format!(": no parameter of that name; one of {}", known.join(", "));
@@ -193,6 +187,10 @@ impl InverseDynamics {
 mod tests {
     use super::*;
 
+    fn assignments(texts: &[&str]) -> Vec<Assignment> {
+        crate::input::assignments(texts).unwrap()
+    }
+
     const FLYWHEEL: &str = "param I = 1/2, tau = 2, b = 1/10\ncoord theta\n\
         body wheel { mass 1; inertia I; position (0, 0); angle theta }\n\
         torque motor on wheel: tau\ndissipation b/2*theta'^2\n";
@@ -207,7 +205,7 @@ mod tests {
         inverse.set_parameters(&[1.0, 0.0, 0.0]).unwrap();
         inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
         assert_eq!(tau[0], 5.0);
-        let set = Options { set: vec!["tau = 0".into(), "b=I".into()], no_units: false };
+        let set = Options { set: assignments(&["tau = 0", "b=I"]), no_units: false };
         let mut inverse = inverse_dynamics(FLYWHEEL, &set).unwrap();
         inverse.torques(0.0, &[1.0], &[3.0], &[5.0], &mut tau).unwrap();
         // I·θ̈ + b·θ̇ with b = I: 2.5 + 1.5.
@@ -216,7 +214,7 @@ mod tests {
 
     #[test]
     fn wrong_lengths_and_names_are_errors() {
-        let set = Options { set: vec!["J=1".into()], no_units: false };
+        let set = Options { set: assignments(&["J=1"]), no_units: false };
         let e = inverse_dynamics(FLYWHEEL, &set).err().unwrap();
         assert_eq!(e.to_string(), "error: `set` J: no parameter of that name; one of I, tau, b");
         let mut inverse = inverse_dynamics(FLYWHEEL, &Options::default()).unwrap();

@@ -1,7 +1,8 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), with the scene's figures frame by frame
+//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
+//! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
 //! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
@@ -19,6 +20,7 @@ pub mod codegen;
 pub mod derived;
 mod error;
 pub mod generate;
+pub mod input;
 pub mod inverse;
 pub mod linearize;
 pub mod numbers;
@@ -69,7 +71,10 @@ pub(crate) fn resolve_with(
     let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let ast = lang::parse(source).map_err(scene)?;
     let checks = model::Checks { units: options.units };
-    model::resolve_with(&ast, source, checks).map_err(scene)
+    let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
+    // The integrator's names are `sim`'s, which `model` does not know.
+    simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
+    Ok((model, warnings))
 }
 
 /// Derives and diagnoses a model resolved from `source`.

@@ -1,7 +1,8 @@
 //! The scene's equations as fast callables for NumPy and SciPy: `Scene.rhs()` gives
 //! y' = F(t, y) for `scipy.integrate.solve_ivp` (y = coordinates, then rates), evaluated by the
 //! lowered programs through `sim::Mechanical` exactly as `simulate` runs them, with
-//! `.batch(Y)` for many states in one call and parameter values per call or from then on;
+//! `.batch(Y)` for many states in one call, `.jac(t, y)`, the exact ∂F/∂y for `solve_ivp`'s
+//! `jac` (its partials lowered on first use), and parameter values per call or from then on;
 //! `Scene.mass_matrix_function()` gives M(t, q); the inverse dynamics τ = M·q̈ − f of
 //! `engine::inverse` over many states is [`InverseDynamics`].
 
@@ -63,6 +64,11 @@ pub struct Rhs {
     #[pyo3(get)]
     parameter_names: Vec<String>,
     dy: Vec<f64>,
+    /// The scene for numbers, kept to lower the partials when `jac` is first called (only
+    /// implicit methods want them); `None` once they are.
+    prepared: Option<Prepared>,
+    path: String,
+    jacobian: Vec<f64>,
 }
 
 impl Rhs {
@@ -92,6 +98,9 @@ impl Rhs {
             y0,
             parameter_names: parameter_names.collect(),
             dy: vec![0.0; dim],
+            prepared: Some(prepared),
+            path: path.to_string(),
+            jacobian: Vec::new(),
         })
     }
 
@@ -111,18 +120,43 @@ impl Rhs {
         result
     }
 
-    fn eval(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
-        if y.len() != self.dy.len() {
-            return Err(PyValueError::new_err(format!(
-                "the state has {} entries ({}), not {}",
-                self.dy.len(),
-                self.names.join(", "),
-                y.len()
-            )));
+    fn check_length(&self, y: &[f64]) -> PyResult<()> {
+        if y.len() == self.dy.len() {
+            return Ok(());
         }
+        Err(PyValueError::new_err(format!(
+            "the state has {} entries ({}), not {}",
+            self.dy.len(),
+            self.names.join(", "),
+            y.len()
+        )))
+    }
+
+    fn eval(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+        self.check_length(y)?;
         self.mechanical.rhs(t, y, &mut self.dy).map_err(|kind| {
             numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names)))
         })
+    }
+
+    /// The exact ∂F/∂y at (t, y) into `self.jacobian`, lowering the partials the first time.
+    fn eval_jacobian(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+        self.check_length(y)?;
+        if let Some(mut prepared) = self.prepared.take() {
+            let exprs = prepared.partials_exprs();
+            let program = prepared
+                .lower(&prepared.observation_inputs(), &exprs)
+                .map_err(|e| engine_error(&e, &self.path))?;
+            self.mechanical.set_partials(Tape::new(program));
+            self.jacobian = vec![0.0; self.dy.len() * self.dy.len()];
+        }
+        match self.mechanical.jacobian(t, y, &mut self.jacobian) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(numeric_error("the Jacobian's partials are missing".to_string())),
+            Err(kind) => {
+                Err(numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names))))
+            }
+        }
     }
 }
 
@@ -196,6 +230,25 @@ impl Rhs {
         })?;
         let flat = PyArray1::from_vec(py, out);
         flat.reshape([rows, width])
+    }
+
+    /// ∂F/∂y at (t, y), exactly, as the 2-D array `solve_ivp(..., jac=f.jac)` takes: row i,
+    /// column j is ∂F_i/∂y_j. From the equations' partials (lowered on the first call) and
+    /// the matrix the accelerations are solved with, stabilisation of kept constraints
+    /// included, so it is the Jacobian of `f` itself. `p` gives parameter values for this
+    /// call only, as `solve_ivp`'s `args` hands them to `jac` as well as to `f`.
+    #[pyo3(signature = (t, y, p = None))]
+    fn jac<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        y: PyArrayLike1<'py, f64, AllowTypeChange>,
+        p: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let y: Vec<f64> = y.as_array().iter().copied().collect();
+        self.with_parameters(p, |rhs| rhs.eval_jacobian(t, &y))?;
+        let d = self.dy.len();
+        PyArray1::from_slice(py, &self.jacobian).reshape([d, d])
     }
 
     /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.

@@ -118,3 +118,18 @@ def test_inverse_dynamics_with_a_kept_rod_needs_no_force_for_a_free_swing():
     tau = scene.inverse_dynamics(run["t"], columns(""), columns("'"), columns("''"))
     np.testing.assert_allclose(tau, 0.0, atol=1e-9)
     assert f.names == ["x", "y", "x'", "y'"]
+
+
+def test_jac_takes_the_values_solve_ivp_hands_to_f(pendulum):
+    from scipy.integrate import solve_ivp
+
+    f = pendulum
+    # θ̈ = −g/L·sin θ, so ∂θ̈/∂θ = −g/L·cos θ (L = 1).
+    assert f.jac(0.0, f.y0, {"g": 1.62})[1, 0] == pytest.approx(-1.62 * np.cos(0.5), rel=1e-14)
+    assert f.jac(0.0, f.y0)[1, 0] == pytest.approx(-9.81 * np.cos(0.5), rel=1e-14)
+    moon = solve_ivp(f, (0.0, 1.0), f.y0, method="Radau", jac=f.jac, args=({"g": 1.62},),
+                     rtol=1e-10, atol=1e-10)
+    assert moon.success
+    f.parameters = {"g": 1.62}
+    again = solve_ivp(f, (0.0, 1.0), f.y0, method="DOP853", rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(moon.y[:, -1], again.y[:, -1], atol=1e-7)

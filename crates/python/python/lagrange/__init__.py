@@ -73,6 +73,30 @@ def loads(text, *, name="<string>", units=True):
     return Scene(_native.loads(text, name, units))
 
 
+def _assignments(set):
+    """``set`` as ``name=value`` texts: from a dict of name to value (a number or a scene
+    expression), or texts already of that form, one string or a list of them."""
+    if set is None:
+        return []
+    if isinstance(set, str):
+        return [set]
+    if isinstance(set, dict):
+        return [f"{name}={_value_text(value)}" for name, value in set.items()]
+    return [str(item) for item in set]
+
+
+def _sweep_text(sweep):
+    """``sweep`` as ``p=a:b:n``: a text of that form, or a dict of one parameter to
+    ``(a, b, n)``."""
+    if not isinstance(sweep, dict):
+        return sweep
+    if len(sweep) != 1:
+        raise ValueError(f"a sweep takes one parameter, not {len(sweep)}")
+    ((name, ends),) = sweep.items()
+    a, b, n = ends
+    return f"{name}={float(a)!r}:{float(b)!r}:{int(n)}"
+
+
 def _value_text(value):
     """A ``set`` value as scene text: numbers exactly (0.1 is 1/10), strings as written."""
     if isinstance(value, str):
@@ -134,7 +158,10 @@ class Scene:
         (q̇, q̈); ``f.batch(Y, t=0.0)`` evaluates every row of the 2-D array ``Y`` in one call
         (``t`` one time, or one per row). The scene's lowered programs compute it at the
         parameters' values (``f.parameters``), solving for constraint multipliers as
-        :meth:`simulate` does. A singular mass matrix raises :class:`NumericError`.
+        :meth:`simulate` does. ``f.jac(t, y)`` is the exact Jacobian ∂f/∂y, an n×n array,
+        for ``solve_ivp(f, ..., method="Radau", jac=f.jac)`` (also BDF and LSODA); its
+        partials are derived and lowered on the first call. A singular mass matrix raises
+        :class:`NumericError`.
 
         Parameter values: ``f(t, y, p=…)`` and ``f.batch(Y, t, p=…)`` take them for that call
         only, as an array in the order of ``f.parameter_names`` or a dict of name to value
@@ -201,12 +228,13 @@ class Scene:
         Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
 
         - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
-          midpoint, gauss; ``tolerance`` of the adaptive methods; ``step`` of the fixed-step
-          ones.
+          midpoint, gauss, radau; ``tolerance`` of the adaptive methods; ``step`` of the
+          fixed-step ones.
         - ``output``: scene expressions to record (a string or a list), e.g.
           ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
-          a scene expression, in place of the scene's values.
+          a scene expression, in place of the scene's values (``{"g": 1.62}``); or texts as
+          the command line takes them, ``"g=1.62"`` or a list of them.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -228,14 +256,13 @@ class Scene:
             raise TypeError(f"`samples` must be a whole number, not {samples!r}")
         if samples < 0:
             raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
         raw = self._native.simulate(
             until=None if until is None else float(until),
             method=method,
             tolerance=None if tolerance is None else float(tolerance),
             step=None if step is None else float(step),
             output=listed(output),
-            set=sets,
+            set=_assignments(set),
             stop_when=listed(stop_when),
             events=listed(events),
             samples=int(samples),
@@ -250,8 +277,10 @@ class Scene:
 
         - ``about``: ``"theta=0, phi'=2"`` (or a dict of name to value), extending or
           overriding the scene's ``linearize about`` line;
-        - ``set``: a dict of parameter name to value;
-        - ``sweep``: ``"w=0:100:201"``, n values of one parameter.
+        - ``set``: a dict of parameter name to value, or ``"name=value"`` texts as for
+          :meth:`simulate`;
+        - ``sweep``: ``"w=0:100:201"`` or ``{"w": (0, 100, 201)}``, n values of one
+          parameter from a to b.
 
         Returns a dict: ``state`` (the names of u in u' = A·u), ``M``, ``C``, ``K`` (exact
         SymPy matrices of M·δq'' + C·δq' + K·δq = 0), ``A`` and ``eigenvalues`` (NumPy, at the
@@ -261,8 +290,7 @@ class Scene:
         """
         if isinstance(about, dict):
             about = ", ".join(f"{k}={_value_text(v)}" for k, v in about.items())
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
-        return self._native.linearize(about=about, set=sets, sweep=sweep)
+        return self._native.linearize(about=about, set=_assignments(set), sweep=_sweep_text(sweep))
 
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
@@ -392,9 +420,10 @@ class Results(Mapping):
 
     Besides: ``energy`` (T + V at each time), ``events`` (a list of ``(name, time)``),
     ``stopped_by`` (the stop condition that ended the run, or ``None``), ``method``,
-    ``steps``, ``rejected``, ``evaluations``, ``energy_drift`` (largest absolute and relative
-    change of T + V), ``conservative`` (whether the scene should keep its energy),
-    ``constraint_drift``, ``wall_seconds`` and ``fault`` (``None`` for a finished run).
+    ``steps``, ``rejected``, ``evaluations``, ``jacobians`` and ``factorizations`` (radau's),
+    ``energy_drift`` (largest absolute and relative change of T + V), ``conservative`` (whether the scene should keep its energy),
+    ``constraint_drift`` (over the recorded times; ``constraint_drift_at_steps`` at the
+    integrator's own steps), ``wall_seconds`` and ``fault`` (``None`` for a finished run).
     """
 
     def __init__(self, raw):
@@ -408,9 +437,12 @@ class Results(Mapping):
         self.steps = raw["steps"]
         self.rejected = raw["rejected"]
         self.evaluations = raw["evaluations"]
+        self.jacobians = raw["jacobians"]
+        self.factorizations = raw["factorizations"]
         self.energy_drift = raw["energy_drift"]
         self.conservative = raw["conservative"]
         self.constraint_drift = raw["constraint_drift"]
+        self.constraint_drift_at_steps = raw["constraint_drift_at_steps"]
         self.wall_seconds = raw["wall_seconds"]
 
     def __getitem__(self, name):

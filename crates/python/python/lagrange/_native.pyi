@@ -62,6 +62,9 @@ class Rhs:
         t: Union[None, float, npt.ArrayLike] = None,
         p: Optional[Parameters] = None,
     ) -> npt.NDArray[np.float64]: ...
+    def jac(
+        self, t: float, y: npt.ArrayLike, p: Optional[Parameters] = None
+    ) -> npt.NDArray[np.float64]: ...
 
 class InverseDynamics:
     """τ = M·q̈ − f of a scene over many motions."""
