@@ -15,20 +15,7 @@ use sim::{FaultKind, Problem};
 
 /// Two links on hinges, each angle from the downward vertical: a shoulder motor between the
 /// ground and the upper link, an elbow motor between the links, both functions of time.
-const DRIVEN: &str = "scene \"Driven double pendulum\"
-param m1 = 1 kg, m2 = 3/2 kg, l1 = 1 m, l2 = 4/5 m, g = 9.81 m/s^2
-param A1 = 3 N*m, A2 = 1 N*m, w = 2 rad/s
-coord theta1 = pi/4
-coord theta2 = 0
-let x1 = l1*sin(theta1)
-let y1 = -l1*cos(theta1)
-body upper { mass m1; inertia m1*l1^2/12; position (x1/2, y1/2); angle theta1 }
-body fore { mass m2; inertia m2*l2^2/12; position (x1 + l2/2*sin(theta2), y1 - l2/2*cos(theta2)); angle theta2 }
-gravity g
-torque shoulder on upper: A1*sin(w*t)
-torque elbow on fore: A2*cos(w*t)
-torque elbow_back on upper: -A2*cos(w*t)
-";
+const DRIVEN: &str = include_str!("scenes/driven_double_pendulum.lag");
 
 /// The scene's inverse dynamics with the motors off: what it returns is what the motors do.
 fn without_motors(source: &str) -> InverseDynamics {

@@ -12,20 +12,7 @@ ROOT = Path(__file__).resolve().parents[3]
 EXAMPLES = ROOT / "examples"
 
 # Two links on hinges, a shoulder motor and an elbow motor driven by functions of time.
-DRIVEN = """scene "Driven double pendulum"
-param m1 = 1 kg, m2 = 3/2 kg, l1 = 1 m, l2 = 4/5 m, g = 9.81 m/s^2
-param A1 = 3 N*m, A2 = 1 N*m, w = 2 rad/s
-coord theta1 = pi/4
-coord theta2 = 0
-let x1 = l1*sin(theta1)
-let y1 = -l1*cos(theta1)
-body upper { mass m1; inertia m1*l1^2/12; position (x1/2, y1/2); angle theta1 }
-body fore { mass m2; inertia m2*l2^2/12; position (x1 + l2/2*sin(theta2), y1 - l2/2*cos(theta2)); angle theta2 }
-gravity g
-torque shoulder on upper: A1*sin(w*t)
-torque elbow on fore: A2*cos(w*t)
-torque elbow_back on upper: -A2*cos(w*t)
-"""
+DRIVEN = ROOT / "tests" / "scenes" / "driven_double_pendulum.lag"
 
 
 @pytest.fixture()
@@ -82,7 +69,7 @@ def test_setting_parameters_takes_effect_or_is_refused(pendulum):
 
 
 def driven_run():
-    scene = lagrange.loads(DRIVEN, name="driven.lag")
+    scene = lagrange.load(DRIVEN)
     names = ["theta1", "theta2"]
     output = names + [n + "'" for n in names] + [n + "''" for n in names]
     run = scene.simulate(until=5.0, output=output, tolerance=1e-12, samples=101)
