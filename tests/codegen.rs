@@ -1,6 +1,7 @@
 //! The Rust that `lagrange codegen` writes, for every example: it compiles with plain
-//! `rustc`, its functions agree with the tape to 1e-12 relative, and its `jacobian` with the
-//! exact Jacobian of `sim::Mechanical` (unstabilised, as the module's `rhs` is) to 1e-9.
+//! `rustc`, its functions agree with the tape to 1e-12 relative, its `jacobian` with the
+//! exact Jacobian of `sim::Mechanical` (unstabilised, as the module's `rhs` is) to 1e-9, and
+//! its `inverse_dynamics` with `engine::inverse`'s to 1e-12.
 
 use std::fmt::Write;
 use std::process::Command;
@@ -24,6 +25,35 @@ fn mechanical_jacobian(module: &mut engine::codegen::Module, y: &[f64]) -> Optio
     let mut jac = vec![0.0; y.len() * y.len()];
     mechanical.jacobian(TIME, y, &mut jac).ok()?;
     Some(jac)
+}
+
+/// A call of the module's `inverse_dynamics` at a varied motion, printing τ, with what
+/// `engine::inverse` gives there appended to `expected`; none where the engine finds the
+/// forces undetermined (a singular mass matrix at these values).
+fn inverse_dynamics_call(
+    main: &mut String,
+    expected: &mut Vec<(f64, f64)>,
+    k: usize,
+    source: &str,
+) {
+    let mut inverse = engine::inverse::inverse_dynamics(source, &Default::default()).unwrap();
+    let n = inverse.coordinates().len();
+    let motion = inputs(3 * n, k + 1);
+    let (q, rest) = motion.split_at(n);
+    let (rates, accelerations) = rest.split_at(n);
+    let mut tau = vec![0.0; n];
+    if inverse.torques(0.4, q, rates, accelerations, &mut tau).is_err() {
+        return;
+    }
+    expected.extend(tau.iter().map(|v| (*v, 1e-12)));
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        main,
+        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
+        list(q),
+        list(rates),
+        list(accelerations)
+    );
 }
 
 #[test]
@@ -66,6 +96,7 @@ fn generated_code_compiles_and_matches_the_tape() {
                 literals.join(", ")
             );
         }
+        inverse_dynamics_call(&mut main, &mut expected, k, &source);
     }
     main.push_str("}\n");
     std::fs::write(dir.join("main.rs"), format!("{modules}\n{main}")).unwrap();

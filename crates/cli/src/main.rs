@@ -143,6 +143,25 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// The generalized forces that make a given motion happen: τ = M(q)·q̈ − f(q, q̇, t) at
+    /// every row of a trajectory. Exit 2 on bad input, 1 when the forces are not finite.
+    InverseDynamics {
+        file: PathBuf,
+        /// The motion, as CSV: a column `t` and, for each coordinate x, the columns x, x' and
+        /// x'' (as `simulate --output x,x',x''` writes them); other columns are ignored.
+        #[arg(long, value_name = "FILE.csv")]
+        trajectory: PathBuf,
+        /// Override a parameter: `--set g=1.62`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<Assignment>,
+        /// Write the forces (CSV: t, then tau_x per coordinate) to this file, whole or not at
+        /// all, instead of standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Measure every integrator over a ladder of tolerances or steps against a tight DOP853
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
@@ -286,6 +305,11 @@ fn main() -> ExitCode {
                 Ok(module) => write_or_print(out.as_ref(), &module.source),
                 Err(e) => fail(&path, &e),
             }
+        }
+        Command::InverseDynamics { file, trajectory, set, out, no_units } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let options = engine::inverse::Options { set, no_units };
+            inverse_dynamics(&file, &source, &trajectory, out, &options)
         }
         Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
@@ -515,6 +539,41 @@ fn linearize(
     // bicycle's run) would be work for nothing.
     std::mem::forget(linearized);
     write_or_print(out.as_ref(), &report)
+}
+
+fn inverse_dynamics(
+    file: &std::path::Path,
+    source: &str,
+    trajectory: &std::path::Path,
+    out: Option<PathBuf>,
+    options: &engine::inverse::Options,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let mut inverse = match engine::inverse::inverse_dynamics(source, options) {
+        Ok(inverse) => inverse,
+        Err(e) => return fail(&path, &e),
+    };
+    let table = std::fs::read(trajectory)
+        .map_err(|e| format!("error: cannot read {}: {e}", trajectory.display()))
+        .and_then(|bytes| {
+            let name = trajectory.display().to_string();
+            let text =
+                String::from_utf8(bytes).map_err(|_| format!("error: {name} is not UTF-8 text"))?;
+            cli::inverse::read_trajectory(&name, &text, inverse.coordinates())
+        });
+    let table = match table {
+        Ok(table) => table,
+        Err(message) => {
+            eprintln!("{message}");
+            return ExitCode::from(2);
+        }
+    };
+    let forces = match cli::inverse::torques_csv(&mut inverse, &table) {
+        Ok(forces) => forces,
+        Err(e) => return fail(&path, &e),
+    };
+    eprint!("{}", cli::inverse::note(&inverse));
+    write_or_print(out.as_ref(), &forces)
 }
 
 fn bench(

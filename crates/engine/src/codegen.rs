@@ -1,7 +1,7 @@
 //! The equations of a scene as a self-contained Rust module (only `std`): the mass matrix, the
 //! forcing, the constraint rows, the right-hand side of the first-order system and its exact
-//! Jacobian (from the partials of the equations, lowered too), the energies and the reactions,
-//! each a straight-line function lowered like the tape.
+//! Jacobian (from the partials of the equations, lowered too), the inverse dynamics, the
+//! energies and the reactions, each a straight-line function lowered like the tape.
 
 use std::fmt::Write;
 
@@ -137,6 +137,8 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
     s.push('\n');
     s.push_str(&jacobian_function(n, m, k));
     s.push('\n');
+    s.push_str(&inverse_dynamics_function(n, m, k));
+    s.push('\n');
     s.push_str(HELPERS);
     Ok(Module { source: s, prepared, parameters, programs })
 }
@@ -260,5 +262,57 @@ fn dynamics_input(n: usize, k: usize) -> String {
     let _ = writeln!(s, "    input[0] = t;");
     let _ = writeln!(s, "    input[1..{}].copy_from_slice(y);", 1 + 2 * n);
     let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
+    s
+}
+
+/// `inverse_dynamics(t, q, qd, qdd, parameters, tau)`: τ = M·q̈ − f, and with kept constraints
+/// the least in τᵀ·M⁻¹·τ, as `engine::inverse` gives it: τ + Jᵀμ with [M −Jᵀ; J 0]·(x, μ) =
+/// (τ, 0), the system `rhs` solves. False when it is singular.
+fn inverse_dynamics_function(n: usize, m: usize, k: usize) -> String {
+    let size = n + m;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "/// Inverse dynamics: the generalized forces tau = M·qdd − f that make the motion (q, qd,"
+    );
+    let _ = writeln!(s, "/// qdd) happen when added to f.");
+    if m > 0 {
+        let _ = writeln!(
+            s,
+            "/// With constraints kept, tau + Jᵀμ moves the scene alike for every μ: this is the one\n\
+             /// least in tauᵀ·M⁻¹·tau, which leaves the constraints the load they carry without it.\n\
+             /// Returns false when the augmented system is singular."
+        );
+    } else {
+        let _ =
+            writeln!(s, "/// Always true (the signature is that of scenes with kept constraints).");
+    }
+    let _ = writeln!(
+        s,
+        "pub fn inverse_dynamics(t: f64, q: &[f64; {n}], qd: &[f64; {n}], qdd: &[f64; {n}], \
+         parameters: &[f64; {k}], tau: &mut [f64; {n}]) -> bool {{"
+    );
+    let _ = writeln!(s, "    let mut input = [0.0; {}];", 1 + 2 * n + k);
+    let _ = writeln!(s, "    input[0] = t;");
+    let _ = writeln!(s, "    input[1..{}].copy_from_slice(q);", 1 + n);
+    let _ = writeln!(s, "    input[{}..{}].copy_from_slice(qd);", 1 + n, 1 + 2 * n);
+    let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
+    let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
+    let _ = writeln!(s, "    let mut b = [0.0; {size}];");
+    let _ = writeln!(s, "    augmented(&input, &mut a, &mut b);");
+    let _ = writeln!(s, "    for i in 0..{n} {{\n        let mut inertial = 0.0;\n        for j in 0..{n} {{\n            inertial += a[i * {size} + j] * qdd[j];\n        }}\n        tau[i] = inertial - b[i];\n    }}");
+    if m == 0 {
+        let _ = writeln!(s, "    true\n}}");
+        return s;
+    }
+    let _ = writeln!(s, "    let matrix = a;");
+    let _ = writeln!(s, "    b[..{n}].copy_from_slice(tau);");
+    let _ = writeln!(s, "    b[{n}..].fill(0.0);");
+    let _ = writeln!(
+        s,
+        "    if !solve_in_place({size}, &mut a, &mut b) {{\n        return false;\n    }}"
+    );
+    let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            tau[j] += matrix[({n} + c) * {size} + j] * b[{n} + c];\n        }}\n    }}");
+    let _ = writeln!(s, "    true\n}}");
     s
 }

@@ -5,8 +5,9 @@
 //! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
-//! any size ([`generate`]), and runs the `linear` stage on small motions about a reference,
-//! the command line's reference resolved against the scene ([`linearize`]).
+//! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
+//! the command line's reference resolved against the scene ([`linearize`]), and gives the
+//! generalized forces that make a given motion happen ([`inverse`]).
 //! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
@@ -20,6 +21,7 @@ pub mod derived;
 mod error;
 pub mod generate;
 pub mod input;
+pub mod inverse;
 pub mod linearize;
 pub mod numbers;
 pub mod simulate;

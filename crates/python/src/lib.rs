@@ -48,6 +48,11 @@ impl NativeScene {
         numbers::Rhs::new(&self.source, &self.path, self.units)
     }
 
+    /// τ = M·q̈ − f over many motions.
+    fn inverse_dynamics(&self) -> PyResult<numbers::InverseDynamics> {
+        numbers::InverseDynamics::new(&self.source, &self.path, self.units)
+    }
+
     /// M(t, q) at the parameters' values.
     fn mass_matrix_function(&self) -> PyResult<numbers::MassMatrix> {
         numbers::MassMatrix::new(&self.source, &self.path, self.units)
@@ -238,5 +243,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NativeScene>()?;
     m.add_class::<numbers::Rhs>()?;
     m.add_class::<numbers::MassMatrix>()?;
+    m.add_class::<numbers::InverseDynamics>()?;
     Ok(())
 }

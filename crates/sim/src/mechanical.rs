@@ -109,6 +109,17 @@ impl Mechanical {
         }
     }
 
+    /// The parameter values the programs are evaluated at, in declaration order.
+    pub fn parameters(&self) -> &[f64] {
+        &self.parameters
+    }
+
+    /// Evaluates the programs at these parameter values from now on.
+    pub fn set_parameters(&mut self, values: &[f64]) {
+        assert_eq!(values.len(), self.layout.parameters);
+        self.parameters.copy_from_slice(values);
+    }
+
     /// Gives the problem its exact Jacobian: `partials` is the partials program of the
     /// [`Layout`].
     pub fn with_partials(mut self, partials: Tape) -> Self {

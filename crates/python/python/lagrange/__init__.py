@@ -11,6 +11,7 @@ own simulations as NumPy arrays::
     d.mass_matrix                 # a sympy.Matrix
     d.at_start["theta''"]         # 12*g/(7*L), exactly
     f = scene.rhs()               # f(t, y) for solve_ivp, y = coordinates then rates
+    scene.inverse_dynamics(t, q, qd, qdd)   # the generalized forces of a motion
     run = scene.simulate(until=1.0)
     run["theta"], run["t"]        # NumPy arrays
 
@@ -30,7 +31,7 @@ from importlib import metadata as _metadata
 
 from . import _native
 from ._errors import NumericError, SceneError
-from ._native import MassMatrix, Rhs
+from ._native import InverseDynamics, MassMatrix, Rhs
 
 __all__ = [
     "load",
@@ -42,6 +43,7 @@ __all__ = [
     "Results",
     "Rhs",
     "MassMatrix",
+    "InverseDynamics",
     "SceneError",
     "NumericError",
     "__version__",
@@ -119,6 +121,7 @@ class Scene:
     def __init__(self, native):
         self._native = native
         self._derivation = None
+        self._inverse = None
 
     @property
     def title(self):
@@ -144,7 +147,7 @@ class Scene:
     def derive(self):
         """The derivation as SymPy objects: a :class:`Derivation` (computed once)."""
         if self._derivation is None:
-            self._derivation = Derivation(self._native.derive())
+            self._derivation = Derivation(self._native.derive(), scene=self)
         return self._derivation
 
     def rhs(self):
@@ -159,8 +162,48 @@ class Scene:
         for ``solve_ivp(f, ..., method="Radau", jac=f.jac)`` (also BDF and LSODA); its
         partials are derived and lowered on the first call. A singular mass matrix raises
         :class:`NumericError`.
+
+        Parameter values: ``f(t, y, p=…)`` and ``f.batch(Y, t, p=…)`` take them for that call
+        only, as an array in the order of ``f.parameter_names`` or a dict of name to value
+        (the values it does not name stay); ``solve_ivp(f, …, args=(p,))`` passes them.
+        ``f.parameters = {"g": 1.62}`` (or an array) changes them for every later call.
+        ``f.parameters`` itself is a read-only mapping: assigning to an item of it raises
+        ``TypeError`` rather than changing a copy that nothing reads. A parameter the scene
+        defines from others (``I = m*L^2/12``) is a value like any other here: give it too
+        when they change.
         """
         return self._native.rhs()
+
+    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+        """The generalized forces τ = M(q)·q̈ − f(q, q̇, t) that make the scene move with
+        positions ``q``, rates ``qd`` and accelerations ``qdd`` at time ``t``: added to the
+        scene's own forces (M·q̈ = f + τ), they reproduce the motion (computed-torque control,
+        actuator sizing).
+
+        One motion: ``t`` a number and ``q``, ``qd``, ``qdd`` 1-D arrays of the remaining
+        coordinates (``Derivation.coordinates``' order), giving a 1-D array. Many: ``t`` one
+        time per row (or one for all) and 2-D arrays with a motion a row, giving a 2-D array
+        with τ a row. ``p``: parameter values for this call only, as for :meth:`rhs`.
+
+        With constraints kept with multipliers, τ + Jᵀμ gives the same motion for every μ;
+        this is the one least in τᵀ·M⁻¹·τ, which leaves the constraints the load they carry
+        without it (a motion the scene makes on its own needs τ = 0). The accelerations must
+        be ones the constraints allow, as those of a run of the scene are. Forces that are not
+        finite raise :class:`NumericError`.
+        """
+        import numpy
+
+        if self._inverse is None:
+            self._inverse = self._native.inverse_dynamics()
+        n = len(self._inverse.names)
+        motion = [numpy.asarray(v, dtype=float) for v in (q, qd, qdd)]
+        single = all(m.ndim == 1 for m in motion) and numpy.ndim(t) == 0
+        rows = [numpy.atleast_2d(m) if m.size else m.reshape(0, n) for m in motion]
+        count = max(len(r) for r in rows)
+        rows = [numpy.broadcast_to(r, (count, r.shape[-1])) if len(r) == 1 else r for r in rows]
+        times = numpy.broadcast_to(numpy.asarray(t, dtype=float), (count,))
+        tau = self._inverse.batch(times, *rows, p=p)
+        return tau[0] if single else tau
 
     def mass_matrix_function(self):
         """M(t, q) at the parameters' values: ``M(t, q)`` returns an n×n NumPy array (q may
@@ -289,7 +332,8 @@ class Derivation:
     - ``latex``: the equations, mass-matrix form, reactions and start values in LaTeX.
     """
 
-    def __init__(self, raw):
+    def __init__(self, raw, scene=None):
+        self._scene = scene
         self.title = raw["title"]
         self.t = raw["t"]
         self.coordinates = raw["coordinates"]
@@ -321,6 +365,11 @@ class Derivation:
             for name, value in self.parameters.items()
             if value is not None
         }
+
+    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+        """The generalized forces of a motion: :meth:`Scene.inverse_dynamics` of the scene
+        this derivation is of."""
+        return self._scene.inverse_dynamics(t, q, qd, qdd, p=p)
 
     def _repr_latex_(self):
         return self.latex
