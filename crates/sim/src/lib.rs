@@ -7,7 +7,9 @@
 //! index 3) and the exact Jacobians of those problems from the lowered partials of their
 //! equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
 //! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
-//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems),
+//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems, and
+//! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
+//! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, and the measurements of a run (steps, evaluations,
 //! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
@@ -16,6 +18,7 @@
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
+mod auto;
 mod constrained;
 mod erk;
 mod gauss;
@@ -24,10 +27,12 @@ mod mechanical;
 mod radau;
 pub mod reference;
 mod run;
+mod spectrum;
 
 pub use constrained::Constrained;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
-pub use run::{integrate, Event, EventHit, Method, Run, Settings, Trajectory};
+pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
 /// What went wrong numerically, with the slots involved.
 #[derive(Clone, Debug, PartialEq)]

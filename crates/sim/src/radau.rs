@@ -197,6 +197,32 @@ impl Radau {
         }
     }
 
+    /// Starts afresh at a point another method reached, trying the step `h` first: the
+    /// Jacobian, the factors, the predicted stages and the controller's history are dropped.
+    pub fn restart(&mut self, h: f64) {
+        self.h = h;
+        self.f0 = None;
+        self.last = None;
+        self.accepted = None;
+        self.last_rejected = false;
+        self.jac_fresh = false;
+        self.jac_wanted = true;
+        self.factored = 0.0;
+        self.eta = 1.0;
+        self.theta = 1.0;
+        self.pending = None;
+    }
+
+    /// The last accepted step, if there was one since the start or restart.
+    pub fn last_step(&self) -> Option<f64> {
+        self.accepted.map(|(h, _)| h)
+    }
+
+    /// ∂F/∂y as last evaluated, row-major.
+    pub fn jacobian_matrix(&self) -> &[f64] {
+        &self.jac
+    }
+
     /// M's diagonal entry for component i.
     fn mass(&self, i: usize) -> f64 {
         if i < self.components.differential {
