@@ -8,6 +8,8 @@ use std::time::Instant;
 use numeric::Tape;
 use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+mod on_demand;
+
 use crate::animate::{Animation, Plan};
 use crate::numbers::{prepare, Prepared};
 use crate::{Error, Setting};
@@ -434,6 +436,9 @@ pub fn run(
                     integrate(&mut m as &mut dyn Problem, &y0, &run_settings, &watched, &mut update)
                 }
             }
+        } else if method == Method::Auto {
+            let mut lazy = on_demand::OnDemand::new(mechanical, &mut prepared);
+            integrate(&mut lazy, &y0, &run_settings, &watched, &mut update)
         } else {
             let mut m = mechanical;
             if method.uses_jacobian() {
