@@ -64,7 +64,8 @@ enum Command {
         /// The integrator (default dop853).
         #[arg(long)]
         method: Option<MethodArg>,
-        /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and auto (default 1e-10).
+        /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
+        /// auto (default 1e-10).
         #[arg(long)]
         tolerance: Option<f64>,
         /// Step of rk4, midpoint and gauss (default: until/1000).
