@@ -49,12 +49,16 @@ pub enum FaultKind {
     NonFinite { component: usize },
     /// The adaptive step fell below what floating point can resolve at this time.
     StepTooSmall { step: f64 },
-    /// Newton's iteration of an implicit method did not converge even at small steps.
-    NewtonFailed,
+    /// Newton's iteration of a fixed-step implicit method (gauss, midpoint) did not converge
+    /// at its `step`; `contraction` is the last ratio of successive Newton updates (≥ 1:
+    /// diverging), `exact_jacobian` whether the iteration had the problem's exact Jacobian
+    /// (else forward differences).
+    NewtonFailed { step: f64, contraction: f64, exact_jacobian: bool },
     /// Newton's iteration of an adaptive implicit method (radau) did not converge although it
     /// cut the step to `step`; `contraction` is the last ratio of successive Newton updates
-    /// (≥ 1: diverging), `singular` whether its iteration matrix was singular instead.
-    NewtonStalled { step: f64, contraction: f64, singular: bool },
+    /// (≥ 1: diverging), `singular` whether its iteration matrix was singular instead, and
+    /// `exact_jacobian` as for [`FaultKind::NewtonFailed`].
+    NewtonStalled { step: f64, contraction: f64, singular: bool, exact_jacobian: bool },
     /// The run took more steps than allowed.
     TooManySteps { limit: usize },
 }

@@ -109,6 +109,8 @@ pub(crate) struct Radau {
     jac_fresh: bool,
     /// Recompute `jac` before the next attempt.
     jac_wanted: bool,
+    /// `jac` is the problem's exact Jacobian, not differences.
+    exact_jacobian: bool,
     real: DMatrix<f64>,
     real_pivots: Vec<usize>,
     complex: DMatrix<Complex<f64>>,
@@ -167,6 +169,7 @@ impl Radau {
             jac: vec![0.0; n * n],
             jac_fresh: false,
             jac_wanted: true,
+            exact_jacobian: false,
             real: DMatrix::zeros(n, n),
             real_pivots: vec![0; n],
             complex: DMatrix::from_element(n, n, Complex::new(0.0, 0.0)),
@@ -249,7 +252,8 @@ impl Radau {
         self.jac_fresh = true;
         self.jac_wanted = false;
         self.factored = 0.0;
-        if p.jacobian(t, y, &mut self.jac)? {
+        self.exact_jacobian = p.jacobian(t, y, &mut self.jac)?;
+        if self.exact_jacobian {
             return Ok(());
         }
         let n = y.len();
@@ -467,7 +471,12 @@ impl Radau {
                 return fault;
             }
         }
-        FaultKind::NewtonStalled { step: self.tried, contraction: self.theta, singular }
+        FaultKind::NewtonStalled {
+            step: self.tried,
+            contraction: self.theta,
+            singular,
+            exact_jacobian: self.exact_jacobian,
+        }
     }
 }
 
