@@ -105,7 +105,7 @@ fn shares(shape: &[f64]) -> Vec<(usize, f64)> {
     let n = shape.len() / 2;
     let positions = &shape[..n];
     let total: f64 = positions.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Vec::new();
     }
     let mut v: Vec<(usize, f64)> = positions
