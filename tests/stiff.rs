@@ -136,3 +136,12 @@ fn gauss_whose_newton_fails_says_the_step_the_rate_and_the_jacobian() {
         assert!(text.contains(part), "{part:?} not in\n{text}");
     }
 }
+
+#[test]
+fn the_scenes_simulate_block_may_ask_for_auto() {
+    let source = scene(STIFF).replace("tolerance 1e-8;", "tolerance 1e-8; method auto;");
+    assert!(source.contains("method auto"), "the scene's simulate block changed");
+    let outcome = simulate(&source, &Options::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(outcome.method, Method::Auto);
+    assert_eq!(outcome.run.segments.len(), 2, "{:?}", outcome.run.segments);
+}
