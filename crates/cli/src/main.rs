@@ -65,7 +65,8 @@ enum Command {
         /// The integrator (default dop853).
         #[arg(long)]
         method: Option<MethodArg>,
-        /// Relative and absolute tolerance of dopri5 and dop853 (default 1e-10).
+        /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
+        /// auto (default 1e-10).
         #[arg(long)]
         tolerance: Option<f64>,
         /// Step of rk4, midpoint and gauss (default: until/1000).
@@ -212,6 +213,8 @@ enum MethodArg {
     /// Radau IIA (order 5), adaptive and implicit: stiff scenes, and kept constraints as they are.
     #[value(alias = "radau5")]
     Radau,
+    /// DOP853 while the scene is not stiff, radau while it is, switching as it changes.
+    Auto,
 }
 
 impl From<MethodArg> for sim::Method {
@@ -223,6 +226,7 @@ impl From<MethodArg> for sim::Method {
             MethodArg::Midpoint => sim::Method::Midpoint,
             MethodArg::Gauss => sim::Method::Gauss,
             MethodArg::Radau => sim::Method::Radau,
+            MethodArg::Auto => sim::Method::Auto,
         }
     }
 }

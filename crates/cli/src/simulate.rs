@@ -61,6 +61,11 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
     let (drift, relative) = outcome.energy_drift();
     serde_json::json!({
         "method": outcome.method.name(),
+        "segments": outcome.run.segments.iter().map(|s| serde_json::json!({
+            "method": s.method.name(),
+            "start": json_number(s.start),
+            "end": json_number(s.end),
+        })).collect::<Vec<_>>(),
         "steps": outcome.run.steps,
         "rejected_steps": outcome.run.rejected,
         "rhs_evaluations": outcome.run.evaluations,
@@ -93,6 +98,9 @@ pub fn summary(outcome: &Outcome) -> String {
         r.evaluations,
         outcome.wall_seconds
     );
+    if outcome.method == sim::Method::Auto {
+        s.push_str(&format!("{}\n", segments(&r.segments)));
+    }
     let (drift, relative) = outcome.energy_drift();
     let note = if outcome.conservative {
         ""
@@ -135,6 +143,29 @@ pub fn summary(outcome: &Outcome) -> String {
         (None, None) => s.push_str(&format!("reached t = {}\n", r.final_time)),
     }
     s
+}
+
+/// Which method ran where in an `auto` run: `auto: dop853 0–0.12 s, radau 0.12–10 s (1 switch)`.
+fn segments(segments: &[sim::Segment]) -> String {
+    let spans: Vec<String> = segments
+        .iter()
+        .map(|s| format!("{} {}–{} s", s.method.name(), time(s.start), time(s.end)))
+        .collect();
+    let switches = segments.len().saturating_sub(1);
+    let plural = if switches == 1 { "" } else { "es" };
+    format!("auto: {} ({switches} switch{plural})", spans.join(", "))
+}
+
+/// A time in a summary line, to three significant digits and no more characters than those
+/// need (`{:.2e}` rounds, `{}` prints the shortest decimal of the rounded value).
+fn time(t: f64) -> String {
+    let rounded = format!("{t:.2e}");
+    match rounded.parse::<f64>() {
+        // Below a millisecond the decimal would start with a row of zeros.
+        Ok(v) if v != 0.0 && v.abs() < 1e-3 => format!("{v:e}"),
+        Ok(v) => v.to_string(),
+        Err(_) => t.to_string(),
+    }
 }
 
 fn json_number(v: f64) -> serde_json::Value {

@@ -346,3 +346,41 @@ fn inverse_dynamics_reads_a_simulate_table_and_writes_the_forces() {
         "error: --set J: no parameter of that name; one of I, tau, b\n"
     );
 }
+
+#[test]
+fn auto_says_where_each_method_ran_and_a_stiff_rk4_run_says_why_it_failed() {
+    let stiff = example("classics/stiff_spring_pendulum.lag");
+    let scratch = Scratch::new("auto");
+    let json = scratch.file("auto.json");
+    let json_arg = json.to_string_lossy().into_owned();
+    let out =
+        lagrange(&["simulate", &stiff, "--set", "k=1e10", "--method", "auto", "--out", &json_arg]);
+    let errors = String::from_utf8(out.stderr).expect("utf-8");
+    assert_eq!(out.status.code(), Some(0), "{errors}");
+    let line = errors.lines().find(|l| l.starts_with("auto: dop853 ")).expect(&errors);
+    assert!(line.contains(", radau ") && line.ends_with("–10 s (1 switch)"), "{line}");
+    let value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("json");
+    let segments = value["summary"]["segments"].as_array().expect("segments");
+    assert_eq!(segments.len(), 2, "{segments:?}");
+    assert_eq!(
+        (segments[0]["method"].as_str(), segments[1]["method"].as_str()),
+        (Some("dop853"), Some("radau"))
+    );
+    assert_eq!(segments[0]["end"], segments[1]["start"]);
+    assert_eq!(segments[1]["end"].as_f64(), Some(10.0));
+
+    let out =
+        lagrange(&["simulate", &stiff, "--set", "k=1e12", "--method", "rk4", "--step", "1e-3"]);
+    let errors = String::from_utf8(out.stderr).expect("utf-8");
+    assert_eq!(out.status.code(), Some(1), "{errors}");
+    assert!(errors.contains("numeric fault at t = 0.001: the mass matrix is singular"), "{errors}");
+    assert!(
+        errors.contains(
+            "likely cause: the step, past rk4's stability limit: the fastest mode at t = 0 has \
+             eigenvalue λ ≈ -9.90e6/s (time scale 1.0e-7 s), moving `r` (100%); rk4 is stable \
+             along it for steps up to 2.8e-7 s, and its step was 1.0e-3 s, 3.6e3 times that."
+        ),
+        "{errors}"
+    );
+}

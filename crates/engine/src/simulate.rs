@@ -8,6 +8,11 @@ use std::time::Instant;
 use numeric::Tape;
 use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+mod fault;
+mod on_demand;
+
+pub use fault::FastestMode;
+
 use crate::animate::{Animation, Plan};
 use crate::input::Assignment;
 use crate::numbers::{prepare, Prepared};
@@ -99,6 +104,8 @@ pub struct Outcome {
     pub conservative: bool,
     /// The scene's figures at every recorded time, when the settings asked for them.
     pub animation: Option<Animation>,
+    /// The mode an explicit method's step could not follow, when that is what ended the run.
+    pub fastest_mode: Option<FastestMode>,
 }
 
 /// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
@@ -263,7 +270,7 @@ pub fn run(
     let mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
             .with_kinds(prepared.stabilisation());
-    let (run, wall_seconds) =
+    let (run, wall_seconds, fastest_mode) =
         integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
 
     let dynamics = prepared.dynamics_exprs();
@@ -292,6 +299,7 @@ pub fn run(
         angle_oriented_bodies: angle_oriented_bodies(&prepared.derivation.model),
         conservative,
         animation: None,
+        fastest_mode,
     };
     if let Some(figures) = figures {
         let energy = outcome.energy();
@@ -451,7 +459,7 @@ fn integrate_scene(
     settings: &Settings,
     columns: &Columns,
     progress: &mut dyn Progress,
-) -> Result<(Run, f64), Error> {
+) -> Result<(Run, f64, Option<FastestMode>), Error> {
     let Settings { until, method, tolerance, step, .. } = *settings;
     let run_settings = sim::Settings {
         method,
@@ -472,6 +480,7 @@ fn integrate_scene(
     }
     progress.start(until);
     let started = Instant::now();
+    let mut fastest_mode = None;
     let run = {
         let mut update = |t: f64| progress.update(t);
         if method.is_symplectic() {
@@ -496,13 +505,19 @@ fn integrate_scene(
                     integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
                 }
             }
+        } else if method == Method::Auto {
+            let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
+            integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
         } else {
             let mut m = with_partials(prepared, method, mechanical)?;
-            integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
+            let run =
+                integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update);
+            fastest_mode = fault::fastest_mode(&mut m, prepared, (method, step), y0, &run);
+            run
         }
     };
     progress.finish();
-    Ok((run, started.elapsed().as_secs_f64()))
+    Ok((run, started.elapsed().as_secs_f64(), fastest_mode))
 }
 
 /// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
@@ -699,31 +714,20 @@ impl Outcome {
                 format!("the step size fell to {step:.1e}"),
                 "a singularity ahead (the solution blows up) or a very stiff system".into(),
             ),
-            FaultKind::NewtonFailed => (
-                "Newton's iteration of the implicit method did not converge".into(),
-                "the step is too large for this motion: lower the step".into(),
-            ),
-            FaultKind::NewtonStalled { step, contraction, singular } => (
-                if *singular {
-                    format!(
-                        "the implicit method's iteration matrix stayed singular down to a step of \
-                         {step:.1e}"
-                    )
-                } else {
-                    format!(
-                        "Newton's iteration of the implicit method did not converge although the \
-                         step was cut to {step:.1e} (successive corrections shrank by only \
-                         {contraction:.2})"
-                    )
-                },
-                "the equations are not smooth here (a kink, a switch, a square root at zero), or \
-                 the kept constraints cannot all hold here; a smaller tolerance will not help"
-                    .into(),
-            ),
+            FaultKind::NewtonFailed { step, contraction, exact_jacobian } => {
+                fault::newton_failed(self.method, *step, *contraction, *exact_jacobian)
+            }
+            FaultKind::NewtonStalled { step, contraction, singular, exact_jacobian } => {
+                fault::newton_stalled(*step, *contraction, *singular, *exact_jacobian)
+            }
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
+        };
+        let cause = match &self.fastest_mode {
+            Some(mode) => fault::stiffness_cause(mode, self.method, &self.state_names),
+            None => cause,
         };
         format!(
             "numeric fault at t = {}: {what}\n  state: {}\n  likely cause: {cause}",

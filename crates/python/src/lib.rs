@@ -111,6 +111,11 @@ impl NativeScene {
         out.set_item("stopped_by", stopped_by)?;
         out.set_item("fault", outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)))?;
         out.set_item("method", outcome.method.name())?;
+        let segments = PyList::empty(py);
+        for segment in &outcome.run.segments {
+            segments.append((segment.method.name(), segment.start, segment.end))?;
+        }
+        out.set_item("segments", segments)?;
         out.set_item("steps", outcome.run.steps)?;
         out.set_item("rejected", outcome.run.rejected)?;
         out.set_item("evaluations", outcome.run.evaluations)?;

@@ -389,3 +389,16 @@ def test_mypy_accepts_a_typed_use_of_the_package(tmp_path):
     assert status == 1, out + err
     assert "use.py:5" in out and "NativeScene" in out, out
     assert out.count("error:") == 1, out
+
+
+def test_auto_reports_where_each_method_ran():
+    stiff = lagrange.load(EXAMPLES / "classics" / "stiff_spring_pendulum.lag")
+    results = stiff.simulate(method="auto", set={"k": 1e10})
+    assert results.method == "auto"
+    methods = [method for method, _, _ in results.segments]
+    assert methods == ["dop853", "radau"]
+    (_, start, switch), (_, again, end) = results.segments
+    assert start == 0.0 and switch == again and end == 10.0
+    # One method, one segment over the whole run.
+    plain = stiff.simulate(method="radau", set={"k": 1e10})
+    assert plain.segments == [("radau", 0.0, 10.0)]

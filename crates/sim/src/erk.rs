@@ -3,6 +3,7 @@
 //! Nørsett and Wanner, "Solving Ordinary Differential Equations I", and Shampine (1986) for the
 //! quartic dense output of the 5(4) pair.
 
+use nalgebra::Complex;
 use numeric::elementary::pow;
 
 use crate::{FaultKind, Problem};
@@ -37,6 +38,10 @@ pub(crate) trait Stepper {
     /// LU factorizations of the iteration matrices (adaptive implicit methods only).
     fn factorizations(&self) -> usize {
         0
+    }
+    /// The times at which the method switched sides (`auto` only).
+    fn switches(&self) -> &[f64] {
+        &[]
     }
 }
 
@@ -174,6 +179,17 @@ pub(crate) enum Pair {
     Dop853,
 }
 
+impl Pair {
+    /// The h·|λ| past which [`Adaptive::stiff`] counts a step as limited by stability: the
+    /// stability boundary on the negative real axis, rounded up a little.
+    pub fn stiffness_bound(self) -> f64 {
+        match self {
+            Pair::Dopri5 => 3.25,
+            Pair::Dop853 => 6.1,
+        }
+    }
+}
+
 /// An adaptive explicit pair with local extrapolation (the higher order propagates).
 pub(crate) struct Adaptive {
     pair: Pair,
@@ -230,6 +246,19 @@ impl Adaptive {
             rejected: 0,
             stiff: 0,
         }
+    }
+
+    /// Starts afresh at a point another method reached, trying the step `h` first: the
+    /// derivative there and the dense output are computed anew.
+    pub fn restart(&mut self, h: f64) {
+        self.f = None;
+        self.dense = None;
+        self.h = h;
+    }
+
+    /// The step the last accepted one was.
+    pub fn last_step(&self) -> f64 {
+        self.h_last
     }
 
     fn order(&self) -> f64 {
@@ -368,11 +397,7 @@ impl Adaptive {
             num += dk * dk;
             den += dy * dy;
         }
-        let bound = match self.pair {
-            Pair::Dopri5 => 3.25,
-            Pair::Dop853 => 6.1,
-        };
-        den > 0.0 && h.abs() * (num / den).sqrt() > bound
+        den > 0.0 && h.abs() * (num / den).sqrt() > self.pair.stiffness_bound()
     }
 
     fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
@@ -563,6 +588,56 @@ impl Stepper for Adaptive {
     fn stiff_steps(&self) -> usize {
         self.stiff
     }
+}
+
+/// The tableau (A's rows, the weights b) of classic RK4, for its stability region.
+const RK4_A: [&[f64]; 4] = [&[], &[0.5], &[0.0, 0.5], &[0.0, 0.0, 1.0]];
+const RK4_B: [f64; 4] = [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0];
+
+/// The tableau of an explicit method, for its stability region: RK4's for `None`, else the
+/// pair's propagating (higher-order) method.
+pub(crate) fn tableau(pair: Option<Pair>) -> (&'static [&'static [f64]], &'static [f64]) {
+    match pair {
+        None => (&RK4_A, &RK4_B),
+        Some(Pair::Dopri5) => (&DP5_A, &DP5_B),
+        Some(Pair::Dop853) => (&DOP853_A[..12], DOP853_A[12]),
+    }
+}
+
+/// The stability function R(z) of an explicit tableau: one step from y₀ = 1 of y' = λ·y with
+/// z = h·λ, whose stages are g = z·(1 + A·g).
+fn stability_function(a: &[&[f64]], b: &[f64], z: Complex<f64>) -> Complex<f64> {
+    let mut g = [Complex::new(0.0, 0.0); 16];
+    for (s, row) in a.iter().enumerate() {
+        let sum: Complex<f64> = row.iter().zip(&g).map(|(a, g)| g * *a).sum();
+        g[s] = z * (Complex::new(1.0, 0.0) + sum);
+    }
+    Complex::new(1.0, 0.0) + b.iter().zip(&g).map(|(b, g)| g * *b).sum::<Complex<f64>>()
+}
+
+/// How far from 0 along the ray z = r·`direction` (of modulus 1) the step stays stable,
+/// |R(z)| ≤ 1: the
+/// largest h·|λ| the method takes for an eigenvalue λ in that direction. The ray is walked out
+/// in small steps to the first unstable point, then bisected; 0 where it leaves the region at
+/// once (slightly unstable, as explicit methods are for some undamped modes).
+pub(crate) fn stability_radius(tableau: (&[&[f64]], &[f64]), direction: Complex<f64>) -> f64 {
+    let (a, b) = tableau;
+    let stable = |r: f64| stability_function(a, b, direction * r).norm() <= 1.0 + 1e-12;
+    let walk = 0.01;
+    let mut inside = 0.0;
+    while inside < 50.0 && stable(inside + walk) {
+        inside += walk;
+    }
+    let mut outside = inside + walk;
+    for _ in 0..50 {
+        let middle = 0.5 * (inside + outside);
+        if stable(middle) {
+            inside = middle;
+        } else {
+            outside = middle;
+        }
+    }
+    inside
 }
 
 const DP5_C: [f64; 6] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0];
@@ -881,3 +956,42 @@ const DOP853_D: [[f64; 16]; 4] = [
         -0.14972683625798562581422125276e3,
     ],
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_stability_intervals_on_the_negative_real_axis() {
+        let radius = |pair| stability_radius(tableau(pair), Complex::new(-1.0, 0.0));
+        // RK4: the real root of 1 + z + z²/2 + z³/6 + z⁴/24 = 1, near −2.7853.
+        assert!((radius(None) - 2.785_3).abs() < 1e-3, "{}", radius(None));
+        assert!((radius(Some(Pair::Dopri5)) - 3.31).abs() < 0.01, "{}", radius(Some(Pair::Dopri5)));
+        // DOP853's reaches a little past the 6.1 its stiffness test counts from.
+        assert!(
+            (radius(Some(Pair::Dop853)) - 6.394).abs() < 1e-3,
+            "{}",
+            radius(Some(Pair::Dop853))
+        );
+    }
+
+    #[test]
+    fn the_stability_functions_agree_with_the_exponential_to_their_order() {
+        // At z = −0.1, R(z) − e^z is of the size z^(p+1)/(p+1)!: 8e-8 for order 4, 1e-9 for
+        // order 5, 3e-15 for order 8.
+        let z = Complex::new(-0.1, 0.0);
+        let exact = numeric::elementary::pow(std::f64::consts::E, -0.1);
+        for (pair, bound) in [(None, 1e-7), (Some(Pair::Dopri5), 1e-8), (Some(Pair::Dop853), 1e-14)]
+        {
+            let (a, b) = tableau(pair);
+            let error = (stability_function(a, b, z) - exact).norm();
+            assert!(error < bound, "{error}");
+        }
+    }
+
+    #[test]
+    fn rk4_is_stable_on_the_imaginary_axis_up_to_twice_root_two() {
+        let radius = stability_radius(tableau(None), Complex::new(0.0, 1.0));
+        assert!((radius - 2.0 * std::f64::consts::SQRT_2).abs() < 1e-6, "{radius}");
+    }
+}

@@ -29,6 +29,8 @@ pub(crate) struct Gauss {
     exact: Vec<f64>,
     iteration: DMatrix<f64>,
     pivots: Vec<usize>,
+    /// The last Jacobian was the problem's exact one, not differences.
+    exact_jacobian: bool,
 }
 
 impl Gauss {
@@ -55,6 +57,7 @@ impl Gauss {
             exact: vec![0.0; dim * dim],
             iteration: DMatrix::zeros(stages * dim, stages * dim),
             pivots: vec![0; stages * dim],
+            exact_jacobian: false,
         }
     }
 
@@ -67,7 +70,8 @@ impl Gauss {
     ) -> Result<(), FaultKind> {
         let d = y.len();
         // A partial can be undefined where F is not (a square root at zero): differences then.
-        if p.jacobian(t, y, &mut self.exact).unwrap_or(false) {
+        self.exact_jacobian = p.jacobian(t, y, &mut self.exact).unwrap_or(false);
+        if self.exact_jacobian {
             for i in 0..d {
                 for j in 0..d {
                     self.jac[(i, j)] = self.exact[i * d + j];
@@ -126,6 +130,7 @@ impl Stepper for Gauss {
         let mut previous = f64::INFINITY;
         let scale = y.iter().fold(1.0f64, |m, v| m.max(v.abs()));
         let mut converged = false;
+        let mut contraction = f64::NAN;
         for _ in 0..50 {
             for (i, fi) in f.iter_mut().enumerate() {
                 for k in 0..d {
@@ -145,6 +150,9 @@ impl Stepper for Gauss {
             }
             linalg::lu_solve(&self.iteration, &self.pivots, &mut residual);
             let norm = residual.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if previous.is_finite() {
+                contraction = norm / previous;
+            }
             for (zk, dk) in z.iter_mut().zip(&residual) {
                 *zk += dk;
             }
@@ -157,7 +165,11 @@ impl Stepper for Gauss {
             previous = norm;
         }
         if !converged {
-            return Err(FaultKind::NewtonFailed);
+            return Err(FaultKind::NewtonFailed {
+                step: h,
+                contraction,
+                exact_jacobian: self.exact_jacobian,
+            });
         }
         for (i, fi) in f.iter_mut().enumerate() {
             for k in 0..d {

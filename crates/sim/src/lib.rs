@@ -7,7 +7,9 @@
 //! index 3) and the exact Jacobians of those problems from the lowered partials of their
 //! equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
 //! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
-//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems),
+//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems, and
+//! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
+//! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, and the measurements of a run (steps, evaluations,
 //! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
@@ -16,6 +18,7 @@
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
+mod auto;
 mod constrained;
 mod erk;
 mod gauss;
@@ -24,10 +27,12 @@ mod mechanical;
 mod radau;
 pub mod reference;
 mod run;
+mod spectrum;
 
 pub use constrained::Constrained;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
-pub use run::{integrate, Event, EventHit, Method, Run, Settings, Trajectory};
+pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
 /// What went wrong numerically, with the slots involved.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,12 +49,16 @@ pub enum FaultKind {
     NonFinite { component: usize },
     /// The adaptive step fell below what floating point can resolve at this time.
     StepTooSmall { step: f64 },
-    /// Newton's iteration of an implicit method did not converge even at small steps.
-    NewtonFailed,
+    /// Newton's iteration of a fixed-step implicit method (gauss, midpoint) did not converge
+    /// at its `step`; `contraction` is the last ratio of successive Newton updates (≥ 1:
+    /// diverging), `exact_jacobian` whether the iteration had the problem's exact Jacobian
+    /// (else forward differences).
+    NewtonFailed { step: f64, contraction: f64, exact_jacobian: bool },
     /// Newton's iteration of an adaptive implicit method (radau) did not converge although it
     /// cut the step to `step`; `contraction` is the last ratio of successive Newton updates
-    /// (≥ 1: diverging), `singular` whether its iteration matrix was singular instead.
-    NewtonStalled { step: f64, contraction: f64, singular: bool },
+    /// (≥ 1: diverging), `singular` whether its iteration matrix was singular instead, and
+    /// `exact_jacobian` as for [`FaultKind::NewtonFailed`].
+    NewtonStalled { step: f64, contraction: f64, singular: bool, exact_jacobian: bool },
     /// The run took more steps than allowed.
     TooManySteps { limit: usize },
 }

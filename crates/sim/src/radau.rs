@@ -109,6 +109,8 @@ pub(crate) struct Radau {
     jac_fresh: bool,
     /// Recompute `jac` before the next attempt.
     jac_wanted: bool,
+    /// `jac` is the problem's exact Jacobian, not differences.
+    exact_jacobian: bool,
     real: DMatrix<f64>,
     real_pivots: Vec<usize>,
     complex: DMatrix<Complex<f64>>,
@@ -167,6 +169,7 @@ impl Radau {
             jac: vec![0.0; n * n],
             jac_fresh: false,
             jac_wanted: true,
+            exact_jacobian: false,
             real: DMatrix::zeros(n, n),
             real_pivots: vec![0; n],
             complex: DMatrix::from_element(n, n, Complex::new(0.0, 0.0)),
@@ -197,6 +200,32 @@ impl Radau {
         }
     }
 
+    /// Starts afresh at a point another method reached, trying the step `h` first: the
+    /// Jacobian, the factors, the predicted stages and the controller's history are dropped.
+    pub fn restart(&mut self, h: f64) {
+        self.h = h;
+        self.f0 = None;
+        self.last = None;
+        self.accepted = None;
+        self.last_rejected = false;
+        self.jac_fresh = false;
+        self.jac_wanted = true;
+        self.factored = 0.0;
+        self.eta = 1.0;
+        self.theta = 1.0;
+        self.pending = None;
+    }
+
+    /// The last accepted step, if there was one since the start or restart.
+    pub fn last_step(&self) -> Option<f64> {
+        self.accepted.map(|(h, _)| h)
+    }
+
+    /// ∂F/∂y as last evaluated, row-major.
+    pub fn jacobian_matrix(&self) -> &[f64] {
+        &self.jac
+    }
+
     /// M's diagonal entry for component i.
     fn mass(&self, i: usize) -> f64 {
         if i < self.components.differential {
@@ -223,7 +252,8 @@ impl Radau {
         self.jac_fresh = true;
         self.jac_wanted = false;
         self.factored = 0.0;
-        if p.jacobian(t, y, &mut self.jac)? {
+        self.exact_jacobian = p.jacobian(t, y, &mut self.jac)?;
+        if self.exact_jacobian {
             return Ok(());
         }
         let n = y.len();
@@ -441,7 +471,12 @@ impl Radau {
                 return fault;
             }
         }
-        FaultKind::NewtonStalled { step: self.tried, contraction: self.theta, singular }
+        FaultKind::NewtonStalled {
+            step: self.tried,
+            contraction: self.theta,
+            singular,
+            exact_jacobian: self.exact_jacobian,
+        }
     }
 }
 

@@ -1,7 +1,8 @@
 //! A run: steps of one method from the start to the end time, the observations recorded at
 //! each accepted step, and events located on the dense output.
 
-use crate::erk::{Adaptive, Pair, Rk4, Stepper};
+use crate::auto::Auto;
+use crate::erk::{stability_radius, tableau, Adaptive, Pair, Rk4, Stepper};
 use crate::gauss::Gauss;
 use crate::radau::Radau;
 use crate::{Fault, FaultKind, Problem};
@@ -21,10 +22,14 @@ pub enum Method {
     /// Radau IIA (order 5), adaptive and implicit, L-stable: for stiff systems, and for
     /// constraints kept with multipliers integrated as the differential–algebraic system.
     Radau,
+    /// DOP853 while the scene is not stiff, radau while it is: switched by DOP853's stiffness
+    /// test and back by radau's step against DOP853's stability limit (see `crate::auto`).
+    Auto,
 }
 
 impl Method {
-    pub const NAMES: [&'static str; 6] = ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau"];
+    pub const NAMES: [&'static str; 7] =
+        ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau", "auto"];
 
     pub fn from_name(name: &str) -> Option<Method> {
         Some(match name {
@@ -34,6 +39,7 @@ impl Method {
             "midpoint" => Method::Midpoint,
             "gauss" | "gauss4" => Method::Gauss,
             "radau" | "radau5" => Method::Radau,
+            "auto" => Method::Auto,
             _ => return None,
         })
     }
@@ -46,11 +52,12 @@ impl Method {
             Method::Midpoint => "midpoint",
             Method::Gauss => "gauss",
             Method::Radau => "radau",
+            Method::Auto => "auto",
         }
     }
 
     pub fn is_adaptive(self) -> bool {
-        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau)
+        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau | Method::Auto)
     }
 
     /// Whether the method is symplectic, and so wants canonical variables.
@@ -61,7 +68,30 @@ impl Method {
     /// Whether the method solves implicit equations with the Jacobian of the right-hand side,
     /// so that lowering the partials for the exact one pays.
     pub fn uses_jacobian(self) -> bool {
-        matches!(self, Method::Midpoint | Method::Gauss | Method::Radau)
+        matches!(self, Method::Midpoint | Method::Gauss | Method::Radau | Method::Auto)
+    }
+
+    /// Whether the method is explicit, and so has a stability limit on its step.
+    pub fn is_explicit(self) -> bool {
+        matches!(self, Method::Rk4 | Method::Dopri5 | Method::Dop853)
+    }
+
+    /// The largest step an explicit method stays stable at for a mode of eigenvalue λ: the
+    /// radius of its stability region along λ's direction over |λ| (on the negative real axis
+    /// 2.785 for rk4, 3.31 for dopri5, 6.0 for dop853). `None` for implicit methods, which
+    /// `auto` is on the stiff side.
+    pub fn stable_step(self, eigenvalue: nalgebra::Complex<f64>) -> Option<f64> {
+        let pair = match self {
+            Method::Rk4 => None,
+            Method::Dopri5 => Some(Pair::Dopri5),
+            Method::Dop853 => Some(Pair::Dop853),
+            _ => return None,
+        };
+        let size = eigenvalue.norm();
+        if !(size > 0.0 && size.is_finite()) {
+            return Some(f64::INFINITY);
+        }
+        Some(stability_radius(tableau(pair), eigenvalue / size) / size)
     }
 
     /// Whether the method can integrate constraints kept with multipliers. Those are solved
@@ -138,6 +168,17 @@ pub struct Run {
     /// The final state in physical variables (q, q̇).
     pub final_state: Vec<f64>,
     pub final_time: f64,
+    /// Which method ran over which span of time, in order: one segment, unless `auto`
+    /// switched.
+    pub segments: Vec<Segment>,
+}
+
+/// A span of a run integrated by one method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub method: Method,
+    pub start: f64,
+    pub end: f64,
 }
 
 /// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
@@ -159,6 +200,7 @@ pub fn integrate(
         Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
         Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
         Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
+        Method::Auto => Box::new(Auto::new(d, tol)),
     };
     assert!(
         settings.method.handles_algebraic()
@@ -180,6 +222,7 @@ pub fn integrate(
         fault: None,
         final_state: Vec::new(),
         final_time: settings.start,
+        segments: Vec::new(),
     };
     let width = problem.observations();
     let mut t = settings.start;
@@ -285,7 +328,29 @@ pub fn integrate(
     run.factorizations = stepper.factorizations();
     run.final_time = t;
     run.final_state = problem.physical(t, &y);
+    run.segments = segments(settings, stepper.as_ref(), t);
     run
+}
+
+/// The spans each method integrated: the whole run for one method; for `auto`, the explicit
+/// side first and then the sides in turn at each switch.
+fn segments(settings: &Settings, stepper: &dyn Stepper, end: f64) -> Vec<Segment> {
+    if settings.method != Method::Auto {
+        return vec![Segment { method: settings.method, start: settings.start, end }];
+    }
+    let explicit = match crate::auto::EXPLICIT_PAIR {
+        Pair::Dopri5 => Method::Dopri5,
+        Pair::Dop853 => Method::Dop853,
+    };
+    let sides = [explicit, Method::Radau];
+    let mut segments = Vec::new();
+    let mut start = settings.start;
+    for (k, &switch) in stepper.switches().iter().enumerate() {
+        segments.push(Segment { method: sides[k % 2], start, end: switch });
+        start = switch;
+    }
+    segments.push(Segment { method: sides[stepper.switches().len() % 2], start, end });
+    segments
 }
 
 /// The time in [t0, t1] where observation `column` crosses zero, by the Illinois variant of

@@ -228,8 +228,8 @@ class Scene:
         Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
 
         - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
-          midpoint, gauss, radau; ``tolerance`` of the adaptive methods; ``step`` of the
-          fixed-step ones.
+          midpoint, gauss, radau, auto; ``tolerance`` of the adaptive methods; ``step`` of
+          the fixed-step ones.
         - ``output``: scene expressions to record (a string or a list), e.g.
           ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
@@ -420,7 +420,8 @@ class Results(Mapping):
 
     Besides: ``energy`` (T + V at each time), ``events`` (a list of ``(name, time)``),
     ``stopped_by`` (the stop condition that ended the run, or ``None``), ``method``,
-    ``steps``, ``rejected``, ``evaluations``, ``jacobians`` and ``factorizations`` (radau's),
+    ``segments`` (which method ran over which span of time: a list of
+    ``(method, start, end)``, several when ``auto`` switched), ``steps``, ``rejected``, ``evaluations``, ``jacobians`` and ``factorizations`` (radau's),
     ``energy_drift`` (largest absolute and relative change of T + V), ``conservative`` (whether the scene should keep its energy),
     ``constraint_drift`` (over the recorded times; ``constraint_drift_at_steps`` at the
     integrator's own steps), ``wall_seconds`` and ``fault`` (``None`` for a finished run).
@@ -434,6 +435,7 @@ class Results(Mapping):
         self.stopped_by = raw["stopped_by"]
         self.fault = raw["fault"]
         self.method = raw["method"]
+        self.segments = raw["segments"]
         self.steps = raw["steps"]
         self.rejected = raw["rejected"]
         self.evaluations = raw["evaluations"]

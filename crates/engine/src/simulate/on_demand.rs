@@ -1,0 +1,64 @@
+//! The exact Jacobian lowered when a method first asks for it: `auto` spends its explicit
+//! steps without one, and most scenes never turn stiff, so the partials' derivation and
+//! lowering (a noticeable share of a short run on a large scene) are paid only on a switch.
+
+use numeric::Tape;
+use sim::{Components, FaultKind, Mechanical, Problem};
+
+use crate::numbers::Prepared;
+
+/// A [`Mechanical`] problem whose partials program is lowered from `prepared` on the first
+/// call of [`Problem::jacobian`].
+pub(crate) struct OnDemand<'a> {
+    pub mechanical: Mechanical,
+    prepared: &'a mut Prepared,
+    /// Lowering was tried (and either gave the program or failed for good).
+    tried: bool,
+}
+
+impl<'a> OnDemand<'a> {
+    pub fn new(mechanical: Mechanical, prepared: &'a mut Prepared) -> Self {
+        OnDemand { mechanical, prepared, tried: false }
+    }
+}
+
+/// The partials program of a problem on (q, q̇), lowered from the derivation's partials.
+pub(crate) fn lower_partials(prepared: &mut Prepared) -> Option<Tape> {
+    let exprs = prepared.partials_exprs();
+    let program = prepared.lower(&prepared.observation_inputs(), &exprs).ok()?;
+    Some(Tape::new(program))
+}
+
+impl Problem for OnDemand<'_> {
+    fn dim(&self) -> usize {
+        self.mechanical.dim()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        self.mechanical.rhs(t, y, dy)
+    }
+    fn observations(&self) -> usize {
+        self.mechanical.observations()
+    }
+    fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        self.mechanical.observe(t, y, out)
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        if !self.tried {
+            self.tried = true;
+            // A program that does not lower leaves the method its differences.
+            if let Some(tape) = lower_partials(self.prepared) {
+                self.mechanical.set_partials(tape);
+            }
+        }
+        self.mechanical.jacobian(t, y, jac)
+    }
+    fn components(&self) -> Components {
+        self.mechanical.components()
+    }
+    fn explain_singular(&mut self, t: f64, y: &[f64]) -> Option<FaultKind> {
+        self.mechanical.explain_singular(t, y)
+    }
+    fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
+        self.mechanical.physical(t, y)
+    }
+}
