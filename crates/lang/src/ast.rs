@@ -90,7 +90,7 @@ pub const UNIT_NAMES: [&str; 24] = [
     "V", "T", "K", "rad", "deg", "rev", "rpm",
 ];
 
-/// `name = value unit`, one item of a `param` line.
+/// `name = value unit`, one item of a `param` or `input` line.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamDecl {
     pub name: Ident,
@@ -152,6 +152,10 @@ pub enum StmtKind {
     Scene { title: String },
     /// `param m = 1 kg, g = 9.81 m/s^2, k`
     Param(Vec<ParamDecl>),
+    /// `input F = 0 N, tau`: exogenous signals with their values when nothing drives them
+    Input(Vec<ParamDecl>),
+    /// `output tip: L*sin(theta)`
+    Output { name: Ident, value: Expr },
     /// `let h = L/2*cos(theta)`
     Let { name: Ident, value: Expr },
     /// `coord theta = pi/6, theta' = 0` or `coord x, y`

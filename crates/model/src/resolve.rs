@@ -10,6 +10,7 @@ mod expressions;
 mod loads;
 mod names;
 mod session;
+mod signals;
 mod space;
 mod statements;
 
@@ -22,8 +23,8 @@ use self::dims::{BodyDims, NameDims};
 pub use self::session::Scope;
 use crate::units::{Form, Inference};
 use crate::{
-    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Linearize, Link, Load, Model, Param,
-    Placeholder, Show, Term, Value,
+    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, Linearize, Link, Load, Model,
+    Output, Param, Placeholder, Show, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.
@@ -43,6 +44,7 @@ const MAX_EXPONENT: i64 = 64;
 #[derive(Clone, Debug)]
 enum Binding {
     Param(SymId),
+    Input(SymId),
     Coord(SymId),
     Let(Value),
     Body(usize),
@@ -84,6 +86,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         matches!(
             s.kind,
             StmtKind::Show { .. }
+                | StmtKind::Output { .. }
                 | StmtKind::Expect { .. }
                 | StmtKind::Linearize(_)
                 | StmtKind::Draw(_)
@@ -93,7 +96,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         r.enter(i);
         r.statement(stmt);
     }
-    // Show, expect, linearize and draw lines may name anything in the file, wherever they stand.
+    // Show, output, expect, linearize and draw lines may name anything in the file, wherever they stand.
     r.in_outputs = true;
     for (i, stmt) in outputs {
         r.enter(i);
@@ -143,6 +146,8 @@ struct Resolver<'a> {
     used: std::collections::HashSet<String>,
     title: Option<String>,
     params: Vec<Param>,
+    inputs: Vec<Input>,
+    outputs: Vec<Output>,
     coords: Vec<Coord>,
     bodies: Vec<Body>,
     constraints: Vec<Constraint>,
@@ -205,6 +210,8 @@ impl<'a> Resolver<'a> {
             used: std::collections::HashSet::new(),
             title: None,
             params: Vec::new(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
             coords: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
@@ -253,6 +260,7 @@ impl<'a> Resolver<'a> {
             };
             match &stmt.kind {
                 StmtKind::Param(ps) => ps.iter().for_each(|p| add(&p.name, "parameter")),
+                StmtKind::Input(us) => us.iter().for_each(|u| add(&u.name, "input")),
                 StmtKind::Coord(cs) => cs.iter().for_each(|c| add(&c.name, "coordinate")),
                 StmtKind::Let { name, .. } => add(name, "name"),
                 StmtKind::Particle { name, .. } | StmtKind::Body { name, .. } => add(name, "body"),
@@ -295,6 +303,15 @@ impl<'a> Resolver<'a> {
     }
 
     fn finish(mut self, checks: Checks) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+        let unused_inputs = self.inputs.iter().filter(|u| !self.used.contains(&u.name));
+        let unused_inputs: Vec<_> = unused_inputs.map(|u| (u.span, u.name.clone())).collect();
+        for (span, name) in unused_inputs {
+            self.warnings.push(
+                Diagnostic::warning(span, format!("input `{name}` is never used"))
+                    .with_label("declared here")
+                    .with_hint("use it in a force, torque, potential or dissipation, or remove it"),
+            );
+        }
         for p in &self.params {
             if !self.used.contains(&p.name) {
                 self.warnings.push(
@@ -343,6 +360,8 @@ impl<'a> Resolver<'a> {
             title: self.title,
             time: self.time,
             params: self.params,
+            inputs: self.inputs,
+            outputs: self.outputs,
             coords: self.coords,
             bodies: self.bodies,
             constraints: self.constraints,

@@ -110,6 +110,17 @@ impl Builder<'_> {
                 }
                 StmtKind::Param(decls)
             }
+            Rule::input_stmt => {
+                let mut decls = Vec::new();
+                while let Ok(item) = next() {
+                    decls.push(self.param_item(item)?);
+                }
+                StmtKind::Input(decls)
+            }
+            Rule::output_stmt => {
+                let name = self.ident(&next()?);
+                StmtKind::Output { name, value: self.expr(next()?)? }
+            }
             Rule::let_stmt => {
                 let name = self.ident(&next()?);
                 StmtKind::Let { name, value: self.expr(next()?)? }

@@ -44,52 +44,66 @@ impl Resolver<'_> {
                 return Some(Value::Scalar(self.pool.sym(self.time)));
             }
             "pi" if !self.names.contains_key("pi") => Value::Scalar(self.pool.pi()),
-            _ => match self.names.get(&name).cloned() {
-                Some(Binding::Param(s)) => {
-                    if primes > 0 {
+            _ => {
+                match self.names.get(&name).cloned() {
+                    Some(Binding::Param(s)) => {
+                        if primes > 0 {
+                            self.error(
+                                Diagnostic::error(
+                                    span,
+                                    format!("`{raw}` is a parameter, constant in time"),
+                                )
+                                .with_label("has no rate")
+                                .with_hint(format!("declare it with `coord {raw}` if it moves")),
+                            );
+                            return None;
+                        }
+                        Value::Scalar(self.pool.sym(s))
+                    }
+                    Some(Binding::Input(s)) => {
+                        if primes > 0 {
+                            self.error(
+                            Diagnostic::error(span, format!("`{raw}` is an input; its rate is not known"))
+                                .with_label("the rate of an input")
+                                .with_hint("an input is given as a value in time, not with its derivatives"),
+                        );
+                            return None;
+                        }
+                        Value::Scalar(self.pool.sym(s))
+                    }
+                    // KE stands for an expression only derived later; its rates are symbols of
+                    // their own (see `total_rate`), taken below as a `let` name's are.
+                    Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
+                    Some(Binding::Coord(s)) => {
+                        if primes > 2 {
+                            let base = self.pool.symbol(s).name.clone();
+                            self.past_acceleration(span, primes, &base, true);
+                            return None;
+                        }
+                        let d =
+                            self.pool.derivative_symbol(s, primes).expect("coordinates have rates");
+                        return Some(Value::Scalar(self.pool.sym(d)));
+                    }
+                    Some(Binding::Let(v)) => v,
+                    Some(Binding::Body(_)) | Some(Binding::Constraint(_)) => {
+                        let what = if matches!(self.names.get(&name), Some(Binding::Body(_))) {
+                            "a body: write `NAME.position`, `NAME.velocity` or `NAME.omega`"
+                        } else {
+                            "a constraint: write `NAME.force` for its reaction"
+                        };
                         self.error(
-                            Diagnostic::error(
-                                span,
-                                format!("`{raw}` is a parameter, constant in time"),
-                            )
-                            .with_label("has no rate")
-                            .with_hint(format!("declare it with `coord {raw}` if it moves")),
+                            Diagnostic::error(span, format!("`{raw}` is not a value"))
+                                .with_label("names a body or constraint")
+                                .with_hint(format!("`{raw}` is {what}")),
                         );
                         return None;
                     }
-                    Value::Scalar(self.pool.sym(s))
-                }
-                // KE stands for an expression only derived later; its rates are symbols of
-                // their own (see `total_rate`), taken below as a `let` name's are.
-                Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
-                Some(Binding::Coord(s)) => {
-                    if primes > 2 {
-                        let base = self.pool.symbol(s).name.clone();
-                        self.past_acceleration(span, primes, &base, true);
+                    None => {
+                        self.unknown_name(raw, &name, span);
                         return None;
                     }
-                    let d = self.pool.derivative_symbol(s, primes).expect("coordinates have rates");
-                    return Some(Value::Scalar(self.pool.sym(d)));
                 }
-                Some(Binding::Let(v)) => v,
-                Some(Binding::Body(_)) | Some(Binding::Constraint(_)) => {
-                    let what = if matches!(self.names.get(&name), Some(Binding::Body(_))) {
-                        "a body: write `NAME.position`, `NAME.velocity` or `NAME.omega`"
-                    } else {
-                        "a constraint: write `NAME.force` for its reaction"
-                    };
-                    self.error(
-                        Diagnostic::error(span, format!("`{raw}` is not a value"))
-                            .with_label("names a body or constraint")
-                            .with_hint(format!("`{raw}` is {what}")),
-                    );
-                    return None;
-                }
-                None => {
-                    self.unknown_name(raw, &name, span);
-                    return None;
-                }
-            },
+            }
         };
         if primes == 0 {
             return Some(base);

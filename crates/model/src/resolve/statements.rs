@@ -18,6 +18,8 @@ impl Resolver<'_> {
         match &stmt.kind {
             StmtKind::Scene { title } => self.title = Some(title.clone()),
             StmtKind::Param(decls) => self.param_statement(decls),
+            StmtKind::Input(decls) => self.input_statement(decls),
+            StmtKind::Output { name, value } => self.output_statement(name, value),
             StmtKind::Let { name, value } => self.let_statement(name, value),
             StmtKind::Coord(decls) => self.coord_statement(decls),
             StmtKind::Particle { name, props } => {
@@ -381,6 +383,7 @@ impl Resolver<'_> {
                 Some(other) => {
                     let what = match other {
                         Binding::Param(_) => "a parameter",
+                        Binding::Input(_) => "an input",
                         Binding::Let(_) => "a `let` name",
                         Binding::Body(_) => "a body",
                         Binding::Constraint(_) => "a constraint",

@@ -1,0 +1,133 @@
+//! `input` and `output` lines: the signals that enter the dynamics from outside, and the named
+//! quantities measured from it. An input is refused wherever the derivation would need its
+//! rate, which nothing knows.
+
+use cas::{ExprId, SymId};
+use lang::{Diagnostic, Expr, Span};
+
+use super::checks::{Role, OUTPUT};
+use super::dims::NameDims;
+use super::{normalize, Binding, Resolver};
+use crate::{Input, Output, Placeholder, Value};
+
+impl Resolver<'_> {
+    /// An `input` line: each name a symbol of its own, with its unit and the value it takes
+    /// when nothing drives it (0 when none is written).
+    pub(super) fn input_statement(&mut self, decls: &[lang::ParamDecl]) {
+        for decl in decls {
+            let form = self.units.declared(&decl.name.name, decl.name.span, None);
+            let value = decl.value.as_ref().map(|v| self.constant(v));
+            if let Some(Some((_, dims))) = &value {
+                let v = self.with_unit(Some(dims.clone()), decl.unit.as_ref());
+                let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
+                self.units.same(&form, &v, decl.name.span, span, "in this input");
+            }
+            let value = match value {
+                Some(v) => v.and_then(|(v, _)| self.in_si(v, decl.unit.as_ref())),
+                None => Some(self.pool.zero()),
+            };
+            let name = normalize(&decl.name.name);
+            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Input(self.time));
+                continue;
+            }
+            let sym = self.pool.param(&name);
+            if !self.bind(&decl.name, Binding::Input(sym)) {
+                continue;
+            }
+            let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
+            self.name_dims.insert(name.clone(), dims);
+            if let Some(value) = value {
+                let unit = decl.unit.clone();
+                self.inputs.push(Input { name, sym, value, unit, span: decl.name.span });
+            }
+        }
+    }
+
+    /// An `output` line: a scalar of the state, the inputs and time, with no acceleration and
+    /// no reaction (its gradient is a row of C and D).
+    pub(super) fn output_statement(&mut self, name: &lang::Ident, e: &Expr) {
+        let Some((value, _)) = self.scalar_in_role(e, &OUTPUT) else { return };
+        let reaction = self.pool.free_symbols(value).iter().copied().find(|s| {
+            self.placeholders.iter().any(|(p, k)| p == s && matches!(k, Placeholder::Reaction(_)))
+        });
+        if reaction.is_some() {
+            self.error(
+                Diagnostic::error(e.span, "an output cannot name a reaction")
+                    .with_label("a reaction is found with the accelerations")
+                    .with_hint(OUTPUT.hint),
+            );
+            return;
+        }
+        let key = normalize(&name.name);
+        if self.outputs.iter().any(|o| o.name == key) {
+            self.error(
+                Diagnostic::error(name.span, format!("output `{}` is given twice", name.name))
+                    .with_label("second output of this name"),
+            );
+            return;
+        }
+        self.outputs.push(Output { name: key, value, span: name.span });
+    }
+
+    /// The first input in `value`, if any.
+    pub(super) fn input_in(&mut self, value: &Value) -> Option<SymId> {
+        let inputs: Vec<SymId> = self.inputs.iter().map(|u| u.sym).collect();
+        value.entries().into_iter().find_map(|e| self.input_in_expr(e, &inputs))
+    }
+
+    fn input_in_expr(&mut self, e: ExprId, inputs: &[SymId]) -> Option<SymId> {
+        self.pool.free_symbols(e).iter().copied().find(|s| inputs.contains(s))
+    }
+
+    /// Whether `value` (of `e`) is free of inputs where its role needs it so; reports the
+    /// smallest part of `e` that names one.
+    pub(super) fn without_inputs(&mut self, e: &Expr, value: &Value, role: &Role) -> bool {
+        if role.inputs {
+            return true;
+        }
+        let Some(input) = self.input_in(value) else { return true };
+        let name = self.pool.symbol(input).name.clone();
+        let part = self.input_part(e);
+        let hint = format!(
+            "an input stands where no rate of it is needed: in a force, a torque, a potential, \
+             a dissipation function or a spring; {} cannot hold one, since deriving the \
+             equations would differentiate `{name}` in time",
+            role.what
+        );
+        self.error(
+            Diagnostic::error(
+                part.span,
+                format!("{} cannot depend on the input `{name}`", role.what),
+            )
+            .with_label(format!("depends on `{name}`"))
+            .with_hint(hint),
+        );
+        false
+    }
+
+    /// The smallest part of `e` whose value names an input.
+    fn input_part<'e>(&mut self, e: &'e Expr) -> &'e Expr {
+        for child in super::checks::children(e) {
+            let Some(v) = self.value_quietly(child) else { continue };
+            if self.input_in(&v).is_some() {
+                return self.input_part(child);
+            }
+        }
+        e
+    }
+
+    /// Refuses the rate of an expression that holds an input, at `span`: the input's rate is
+    /// not known. Whether it was refused.
+    pub(super) fn refuse_input_rate(&mut self, e: ExprId, span: Span) -> bool {
+        let inputs: Vec<SymId> = self.inputs.iter().map(|u| u.sym).collect();
+        let Some(input) = self.input_in_expr(e, &inputs) else { return false };
+        let name = self.pool.symbol(input).name.clone();
+        self.error(
+            Diagnostic::error(span, format!("this rate needs the rate of the input `{name}`"))
+                .with_label(format!("depends on `{name}`"))
+                .with_hint("an input's rate is not known: differentiate what drives it instead"),
+        );
+        true
+    }
+}
