@@ -249,8 +249,17 @@ fn run(words: &[String]) -> Result<String, String> {
             Ok(table + &cli::simulate::summary(&outcome))
         }
         "linearize" => {
-            let args = Args::parse(rest, &["no-units"]);
-            args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units"])?;
+            let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
+            args.only(&[
+                "about",
+                "set",
+                "sweep",
+                "plot",
+                "format",
+                "out",
+                "no-units",
+                "drop-cyclic",
+            ])?;
             let [file] = &args.positional[..] else { return Err("one file".into()) };
             if let Some(plot) = args.last("plot") {
                 if extension(&plot) != "svg" || !args.has("sweep") {
@@ -262,6 +271,7 @@ fn run(words: &[String]) -> Result<String, String> {
                 set: args.all("set"),
                 sweep: args.last("sweep"),
                 no_units: args.has("no-units"),
+                drop_cyclic: args.has("drop-cyclic"),
             };
             let linearized = engine::linearize::linearize(&read(file)?, &options)
                 .map_err(|e| cli::diagnostics::error(file, &e))?;

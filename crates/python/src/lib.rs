@@ -127,7 +127,13 @@ impl NativeScene {
         set: Vec<String>,
         sweep: Option<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let options = engine::linearize::Options { about, set, sweep, no_units: !self.units };
+        let options = engine::linearize::Options {
+            about,
+            set,
+            sweep,
+            no_units: !self.units,
+            drop_cyclic: false,
+        };
         let l = engine::linearize::linearize(&self.source, &options)
             .map_err(|e| engine_error(&e, &self.path))?;
         let mut s = sympy::ToSympy::new(py)?;

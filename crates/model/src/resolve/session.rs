@@ -90,6 +90,8 @@ impl<'a> Resolver<'a> {
         r.title = model.title.take();
         r.time = model.time;
         r.params = std::mem::take(&mut model.params);
+        r.inputs = std::mem::take(&mut model.inputs);
+        r.outputs = std::mem::take(&mut model.outputs);
         r.coords = std::mem::take(&mut model.coords);
         r.bodies = std::mem::take(&mut model.bodies);
         r.constraints = std::mem::take(&mut model.constraints);
