@@ -183,3 +183,29 @@ fn inputs_are_not_parameters() {
     let text = cli::diagnostics::error("cart.lag", &err);
     assert!(text.contains("no parameter of that name"), "{text}");
 }
+
+#[test]
+fn stability_results_are_checked_as_expectations() {
+    let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
+    let checked = cli::check::check_file("cart.lag", &source);
+    assert_eq!((checked.held, checked.failed, checked.exit_code), (4, 0, 0), "{}", checked.report);
+
+    // Each kind of expectation fails when what it names is not what linearize finds, with
+    // what was found instead.
+    let wrong = source
+        .replace("expect linearized: unstable", "expect linearized: stable")
+        .replace("eigenvalue = sqrt((M + m)*g/(M*L))", "eigenvalue = (0, sqrt((M + m)*g/(M*L)))");
+    let checked = cli::check::check_file("cart.lag", &wrong);
+    assert_eq!((checked.held, checked.failed, checked.exit_code), (2, 2, 1), "{}", checked.report);
+    assert!(checked.report.contains("unstable at the reference"), "{}", checked.report);
+    assert!(checked.report.contains("the nearest eigenvalue is"), "{}", checked.report);
+
+    let top = lagrange_tests::example("space/sleeping_top.lag");
+    let checked = cli::check::check_file("top.lag", &top);
+    assert_eq!((checked.failed, checked.exit_code), (0, 0), "{}", checked.report);
+    assert!(checked.report.contains("unstable → marginally stable at w = 51.14684"));
+    let off = top.replace("critical w = 2*sqrt", "critical w = 1.01*2*sqrt");
+    let checked = cli::check::check_file("top.lag", &off);
+    assert_eq!((checked.failed, checked.exit_code), (1, 1), "{}", checked.report);
+    assert!(checked.report.contains("does not change between"), "{}", checked.report);
+}

@@ -5,7 +5,8 @@
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
 //! any size ([`generate`]), and runs the `linear` stage on small motions about a reference,
-//! the command line's reference resolved against the scene ([`linearize`]).
+//! the command line's reference resolved against the scene ([`linearize`]), and decides the
+//! scene's `expect linearized:` lines ([`expect_linearized`]).
 //! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
@@ -17,6 +18,7 @@ pub mod bench;
 pub mod codegen;
 pub mod derived;
 mod error;
+pub mod expect_linearized;
 pub mod generate;
 pub mod linearize;
 pub mod numbers;

@@ -186,12 +186,25 @@ pub enum StmtKind {
     Show { at_start: bool, items: Vec<Expr> },
     /// `expect lhs = rhs` or `expect at start: lhs = rhs`
     Expect { at_start: bool, lhs: Expr, rhs: Expr },
+    /// `expect linearized: unstable`: what `linearize` finds at the scene's reference
+    ExpectLinearized(LinearExpectation),
     /// `simulate { until 2 s; method dop853 }`
     Simulate(Vec<Setting>),
     /// `linearize about theta = 0, theta' = 0`
     Linearize(Vec<AboutItem>),
     /// `draw line from (0, 0) to bob.position`: a shape for `simulate --animate`.
     Draw(Shape),
+}
+
+/// What an `expect linearized:` line expects of the linearization at the scene's reference.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinearExpectation {
+    /// `stable`, `marginally stable` or `unstable`, as written (blanks made single).
+    Verdict { word: String, span: Span },
+    /// `eigenvalue = value` (a scalar, or `(re, im)`).
+    Eigenvalue(Expr),
+    /// `critical p = value`.
+    Critical { parameter: Ident, value: Expr },
 }
 
 /// A shape of a `draw` line, in world coordinates; its points are vector expressions.

@@ -251,6 +251,40 @@ pub struct Expect {
     pub rhs_span: Span,
 }
 
+/// A verdict on stability, as an `expect linearized:` line names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExpectedStability {
+    Stable,
+    MarginallyStable,
+    Unstable,
+}
+
+/// What an `expect linearized:` line expects `lagrange linearize` to find at the scene's
+/// reference, at the parameters' values.
+#[derive(Clone, Debug)]
+pub enum LinearExpectation {
+    Stability(ExpectedStability),
+    /// An eigenvalue re + im·i, constants of the parameters.
+    Eigenvalue {
+        re: ExprId,
+        im: ExprId,
+    },
+    /// The value of a parameter (its index among the parameters) where the verdict changes.
+    Critical {
+        parameter: usize,
+        value: ExprId,
+    },
+}
+
+/// An `expect linearized:` line.
+#[derive(Clone, Debug)]
+pub struct LinearExpect {
+    pub expectation: LinearExpectation,
+    /// The line as written.
+    pub text: String,
+    pub span: Span,
+}
+
 /// What a `draw` line draws, in world coordinates: each point has as many components as the
 /// scene has dimensions.
 #[derive(Clone, Debug)]
@@ -339,6 +373,8 @@ pub struct Model {
     pub lagrangians: Vec<Term>,
     pub shows: Vec<Show>,
     pub expects: Vec<Expect>,
+    /// The `expect linearized:` lines, in the order written.
+    pub linear_expects: Vec<LinearExpect>,
     /// The `draw` lines, in the order written.
     pub drawings: Vec<Drawing>,
     /// The springs and dampers, in the order written.

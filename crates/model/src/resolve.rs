@@ -23,8 +23,8 @@ use self::dims::{BodyDims, NameDims};
 pub use self::session::Scope;
 use crate::units::{Form, Inference};
 use crate::{
-    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, Linearize, Link, Load, Model,
-    Output, Param, Placeholder, Show, Term, Value,
+    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
+    Link, Load, Model, Output, Param, Placeholder, Show, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.
@@ -88,6 +88,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
             StmtKind::Show { .. }
                 | StmtKind::Output { .. }
                 | StmtKind::Expect { .. }
+                | StmtKind::ExpectLinearized(_)
                 | StmtKind::Linearize(_)
                 | StmtKind::Draw(_)
         )
@@ -159,6 +160,7 @@ struct Resolver<'a> {
     lagrangians: Vec<Term>,
     shows: Vec<Show>,
     expects: Vec<Expect>,
+    linear_expects: Vec<LinearExpect>,
     drawings: Vec<Drawing>,
     links: Vec<Link>,
     simulate: Vec<lang::Setting>,
@@ -223,6 +225,7 @@ impl<'a> Resolver<'a> {
             lagrangians: Vec::new(),
             shows: Vec::new(),
             expects: Vec::new(),
+            linear_expects: Vec::new(),
             drawings: Vec::new(),
             links: Vec::new(),
             simulate: Vec::new(),
@@ -323,6 +326,12 @@ impl<'a> Resolver<'a> {
                 );
             }
         }
+        if let (Some(first), true) = (self.linear_expects.first(), self.linearize.is_empty()) {
+            let d = Diagnostic::error(first.span, "nothing is linearized to expect this of")
+                .with_label("the scene has no `linearize about` line")
+                .with_hint("add `linearize about …` naming the reference");
+            self.errors.push(d);
+        }
         if !self.errors.is_empty() {
             let mut errors = self.errors;
             errors.sort_by_key(|d| d.span.start);
@@ -373,6 +382,7 @@ impl<'a> Resolver<'a> {
             lagrangians: self.lagrangians,
             shows: self.shows,
             expects: self.expects,
+            linear_expects: self.linear_expects,
             drawings: self.drawings,
             links: self.links,
             simulate: self.simulate,

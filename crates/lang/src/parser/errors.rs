@@ -68,6 +68,11 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         string_text => (3, "the text of the title"),
         kw_along => (4, "`along`"),
         kw_about => (4, "`about`"),
+        kw_linearized => (4, "`linearized:`"),
+        linear_expectation | verdict_word | eigenvalue_item | critical_item | kw_eigenvalue
+        | kw_critical => {
+            (2, "`stable`, `unstable`, `marginally stable`, `eigenvalue = …` or `critical p = …`")
+        }
         kw_on => (4, "`on`"),
         kw_between => (4, "`between`"),
         kw_and => (4, "`and`"),

@@ -103,6 +103,7 @@ impl<'a> Resolver<'a> {
         r.lagrangians = std::mem::take(&mut model.lagrangians);
         r.shows = std::mem::take(&mut model.shows);
         r.expects = std::mem::take(&mut model.expects);
+        r.linear_expects = std::mem::take(&mut model.linear_expects);
         r.drawings = std::mem::take(&mut model.drawings);
         r.links = std::mem::take(&mut model.links);
         r.simulate = std::mem::take(&mut model.simulate);

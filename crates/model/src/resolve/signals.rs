@@ -131,3 +131,69 @@ impl Resolver<'_> {
         true
     }
 }
+
+impl Resolver<'_> {
+    /// An `expect linearized:` line: a verdict, an eigenvalue of constants, or a parameter
+    /// with the constant where the verdict changes.
+    pub(super) fn expect_linearized(&mut self, expectation: &lang::LinearExpectation, span: Span) {
+        use crate::{ExpectedStability, LinearExpectation};
+        let resolved = match expectation {
+            lang::LinearExpectation::Verdict { word, .. } => {
+                let stability = match word.as_str() {
+                    "stable" => ExpectedStability::Stable,
+                    "unstable" => ExpectedStability::Unstable,
+                    _ => ExpectedStability::MarginallyStable,
+                };
+                Some(LinearExpectation::Stability(stability))
+            }
+            lang::LinearExpectation::Eigenvalue(e) => self.eigenvalue(e),
+            lang::LinearExpectation::Critical { parameter, value } => {
+                let index = match self.names.get(&normalize(&parameter.name)) {
+                    Some(Binding::Param(s)) => self.params.iter().position(|p| p.sym == *s),
+                    _ => None,
+                };
+                self.used.insert(normalize(&parameter.name));
+                if index.is_none() {
+                    self.error(
+                        Diagnostic::error(
+                            parameter.span,
+                            format!("`{}` is not a parameter", parameter.name),
+                        )
+                        .with_label("not a parameter")
+                        .with_hint(
+                            "a critical value is one of a parameter, where the verdict changes",
+                        ),
+                    );
+                }
+                let value = self.constant(value).map(|(v, _)| v);
+                match (index, value) {
+                    (Some(parameter), Some(value)) => {
+                        Some(LinearExpectation::Critical { parameter, value })
+                    }
+                    _ => None,
+                }
+            }
+        };
+        if let Some(expectation) = resolved {
+            let text = self.text(span);
+            self.linear_expects.push(crate::LinearExpect { expectation, text, span });
+        }
+    }
+
+    /// An expected eigenvalue: a real constant, or `(re, im)`.
+    fn eigenvalue(&mut self, e: &Expr) -> Option<crate::LinearExpectation> {
+        if let lang::ExprKind::Tuple(parts) = &e.kind {
+            let [re, im] = &parts[..] else {
+                self.error(
+                    Diagnostic::error(e.span, "an eigenvalue is a number or a pair (re, im)")
+                        .with_label(format!("{} entries", parts.len())),
+                );
+                return None;
+            };
+            let (re, im) = (self.constant(re), self.constant(im));
+            return Some(crate::LinearExpectation::Eigenvalue { re: re?.0, im: im?.0 });
+        }
+        let (re, _) = self.constant(e)?;
+        Some(crate::LinearExpectation::Eigenvalue { re, im: self.pool.zero() })
+    }
+}

@@ -51,6 +51,9 @@ impl Resolver<'_> {
             StmtKind::Expect { at_start, lhs, rhs } => {
                 self.expect_statement(*at_start, lhs, rhs, stmt.span)
             }
+            StmtKind::ExpectLinearized(expectation) => {
+                self.expect_linearized(expectation, stmt.span)
+            }
             StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
             StmtKind::Draw(shape) => self.draw(shape, stmt.span),
