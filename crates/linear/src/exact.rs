@@ -1,6 +1,7 @@
 //! The first-order form exactly, where the algebra can give it: in the holonomic case with no
 //! constraint kept, A = [0, I; −M⁻¹K, −M⁻¹C] and B = [0; M⁻¹·Q_u] as expressions of the
-//! parameters, solved by `cas`'s exact linear systems within a budget.
+//! parameters, solved by `cas`'s exact linear systems within a budget, and C and D, the
+//! outputs' gradients along the state.
 
 use cas::linear_system::{solve_within, Solution};
 use cas::{ExprId, Pool};
@@ -10,13 +11,17 @@ use crate::{Case, Component, Linearization};
 /// How many new expression nodes the exact solve may build before numbers are left to do it.
 const BUDGET: usize = 200_000;
 
-/// A and B exactly, the state as the numbers name it (every coordinate's position, or all but
-/// the cyclic ones', then every rate).
+/// A, B, C and D exactly, the state as the numbers name it (every coordinate's position, or
+/// all but the cyclic ones', then every rate).
 #[derive(Clone, Debug)]
 pub struct ExactStateSpace {
     pub state: Vec<Component>,
     pub a: Vec<Vec<ExprId>>,
     pub b: Vec<Vec<ExprId>>,
+    /// One row per output: its gradient along the state.
+    pub c: Vec<Vec<ExprId>>,
+    /// One row per output, one column per input.
+    pub d: Vec<Vec<ExprId>>,
 }
 
 /// A and B exactly, or `None`: with constraints kept or velocity constraints (where the
@@ -69,7 +74,20 @@ pub fn exact_state_space(pool: &mut Pool, lin: &Linearization) -> Option<ExactSt
             b[p + j][k] = forces[k][j];
         }
     }
-    let state =
-        positions.iter().map(|&i| Component::Position(i)).chain((0..n).map(Component::Rate));
-    Some(ExactStateSpace { state: state.collect(), a, b })
+    let state: Vec<Component> = positions
+        .iter()
+        .map(|&i| Component::Position(i))
+        .chain((0..n).map(Component::Rate))
+        .collect();
+    let along = |row: &crate::OutputRow| -> Vec<ExprId> {
+        let of = |c: &Component| match *c {
+            Component::Position(i) => row.positions[i],
+            Component::Rate(i) => row.rates[i],
+            Component::Along(_) | Component::RateAlong(_) => zero,
+        };
+        state.iter().map(of).collect()
+    };
+    let c = lin.outputs.iter().map(along).collect();
+    let d = lin.outputs.iter().map(|row| row.inputs.clone()).collect();
+    Some(ExactStateSpace { state, a, b, c, d })
 }
