@@ -107,19 +107,16 @@ impl Builder<'_> {
                 let text = parts(string).next().map_or("", |p| p.as_str());
                 StmtKind::Scene { title: unescape(text) }
             }
-            Rule::param_stmt => {
+            // An `input` line's items are written as a `param` line's.
+            Rule::param_stmt | Rule::input_stmt => {
                 let mut decls = Vec::new();
                 while let Ok(item) = next() {
                     decls.push(self.param_item(item)?);
                 }
-                StmtKind::Param(decls)
-            }
-            Rule::input_stmt => {
-                let mut decls = Vec::new();
-                while let Ok(item) = next() {
-                    decls.push(self.param_item(item)?);
+                match rule {
+                    Rule::param_stmt => StmtKind::Param(decls),
+                    _ => StmtKind::Input(decls),
                 }
-                StmtKind::Input(decls)
             }
             Rule::output_stmt => {
                 let name = self.ident(&next()?);
