@@ -481,6 +481,7 @@ impl Resolver<'_> {
             if self.placeholder_order(*p).is_none() {
                 continue;
             }
+            self.refuse_placeholder_rate_with_inputs(*p, span);
             let rate = self.placeholder_rate(*p, span);
             let partial = self.pool.diff(e, *p);
             let rate = self.pool.sym(rate);

@@ -117,6 +117,28 @@ impl Resolver<'_> {
         e
     }
 
+    /// Refuses the rate of PE or of a reaction in a scene with inputs: what they stand for may
+    /// hold an input (a potential's, a force's), and its rate is not known. KE cannot hold one.
+    pub(super) fn refuse_placeholder_rate_with_inputs(&mut self, p: SymId, span: Span) {
+        let Some(input) = self.inputs.first() else { return };
+        let kind = self.placeholders.iter().find(|(s, _)| *s == p).map(|(_, k)| *k);
+        if matches!(kind, Some(Placeholder::KineticEnergy)) {
+            return;
+        }
+        let name = input.name.clone();
+        let what = self.pool.symbol(p).name.clone();
+        self.error(
+            Diagnostic::error(
+                span,
+                format!("the rate of `{what}` is not known in a scene with inputs"),
+            )
+            .with_label(format!("may depend on the rate of `{name}`"))
+            .with_hint(
+                "write the rate out from the terms it stands for, without the inputs' rates",
+            ),
+        );
+    }
+
     /// Refuses the rate of an expression that holds an input, at `span`: the input's rate is
     /// not known. Whether it was refused.
     pub(super) fn refuse_input_rate(&mut self, e: ExprId, span: Span) -> bool {
