@@ -1,14 +1,59 @@
 //! The Rust that `lagrange codegen` writes, for every example: it compiles with plain
-//! `rustc`, and its functions agree with the tape to 1e-12 relative.
+//! `rustc`, its functions agree with the tape to 1e-12 relative, its `jacobian` with the
+//! exact Jacobian of `sim::Mechanical` (unstabilised, as the module's `rhs` is) to 1e-9, and
+//! its `inverse_dynamics` with `engine::inverse`'s to 1e-12.
 
 use std::fmt::Write;
 use std::process::Command;
 
 use numeric::Tape;
+use sim::Problem;
 
 /// Deterministic, varied input values: not special angles, not zero.
 fn inputs(len: usize, seed: usize) -> Vec<f64> {
     (0..len).map(|i| 0.3 + 0.37 * ((i * 7 + seed * 13) % 11) as f64 / 11.0).collect()
+}
+
+/// The time at which the Jacobians are compared.
+const TIME: f64 = 0.25;
+
+/// ∂(q̇, q̈)/∂(q, q̇) of the module's scene at `y` by `sim::Mechanical` with no stabilisation,
+/// the rows the module's `rhs` solves; `None` where the system is singular there.
+fn mechanical_jacobian(module: &mut engine::codegen::Module, y: &[f64]) -> Option<Vec<f64>> {
+    let mut mechanical = lagrange_tests::mechanical(&mut module.prepared, &module.parameters);
+    mechanical.baumgarte = 0.0;
+    let mut jac = vec![0.0; y.len() * y.len()];
+    mechanical.jacobian(TIME, y, &mut jac).ok()?;
+    Some(jac)
+}
+
+/// A call of the module's `inverse_dynamics` at a varied motion, printing τ, with what
+/// `engine::inverse` gives there appended to `expected`; none where the engine finds the
+/// forces undetermined (a singular mass matrix at these values).
+fn inverse_dynamics_call(
+    main: &mut String,
+    expected: &mut Vec<(f64, f64)>,
+    k: usize,
+    source: &str,
+) {
+    let mut inverse = engine::inverse::inverse_dynamics(source, &Default::default()).unwrap();
+    let n = inverse.coordinates().len();
+    let motion = inputs(3 * n, k + 1);
+    let (q, rest) = motion.split_at(n);
+    let (rates, accelerations) = rest.split_at(n);
+    let mut tau = vec![0.0; n];
+    if inverse.torques(0.4, q, rates, accelerations, &mut tau).is_err() {
+        return;
+    }
+    expected.extend(tau.iter().map(|v| (*v, 1e-12)));
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        main,
+        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
+        list(q),
+        list(rates),
+        list(accelerations)
+    );
 }
 
 #[test]
@@ -17,9 +62,11 @@ fn generated_code_compiles_and_matches_the_tape() {
     std::fs::create_dir_all(&dir).unwrap();
     let mut main = String::from("fn main() {\n");
     let mut modules = String::new();
-    let mut expected: Vec<f64> = Vec::new();
+    // Each value the generated program prints, with how closely it must agree.
+    let mut expected: Vec<(f64, f64)> = Vec::new();
+    let mut jacobians = 0;
     for (k, (rel, source)) in lagrange_tests::examples().into_iter().enumerate() {
-        let module =
+        let mut module =
             engine::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
         std::fs::write(dir.join(format!("m{k}.rs")), &module.source).unwrap();
         let _ = writeln!(modules, "#[path = \"m{k}.rs\"]\nmod m{k};");
@@ -27,7 +74,7 @@ fn generated_code_compiles_and_matches_the_tape() {
             let input = inputs(program.inputs, k);
             let mut out = vec![0.0; program.outputs.len()];
             Tape::new(program.clone()).eval(&input, &mut out);
-            expected.extend(&out);
+            expected.extend(out.iter().map(|v| (*v, 1e-12)));
             let literals: Vec<String> = input.iter().map(|v| format!("{v:?}")).collect();
             let _ = writeln!(
                 main,
@@ -36,6 +83,20 @@ fn generated_code_compiles_and_matches_the_tape() {
                 literals.join(", ")
             );
         }
+        // The Jacobian comes through another solver, so agreement is to its rounding.
+        let y = inputs(2 * module.prepared.layout.coordinates, k + 1);
+        if let Some(jac) = mechanical_jacobian(&mut module, &y) {
+            jacobians += 1;
+            expected.extend(jac.iter().map(|v| (*v, 1e-9)));
+            let literals: Vec<String> = y.iter().map(|v| format!("{v:?}")).collect();
+            let _ = writeln!(
+                main,
+                "    {{ let mut jac = [0.0; {}]; assert!(m{k}::jacobian({TIME:?}, &[{}], &m{k}::PARAMETERS, &mut jac)); for v in jac {{ println!(\"{{v:?}}\"); }} }}",
+                jac.len(),
+                literals.join(", ")
+            );
+        }
+        inverse_dynamics_call(&mut main, &mut expected, k, &source);
     }
     main.push_str("}\n");
     std::fs::write(dir.join("main.rs"), format!("{modules}\n{main}")).unwrap();
@@ -49,12 +110,14 @@ fn generated_code_compiles_and_matches_the_tape() {
         .expect("rustc runs");
     assert!(status.success(), "the generated code does not compile (see {})", dir.display());
     let output = Command::new(&binary).output().expect("the generated program runs");
+    assert!(output.status.success(), "the generated program failed");
     let text = String::from_utf8(output.stdout).unwrap();
     let got: Vec<f64> = text.lines().map(|l| l.parse().unwrap()).collect();
     assert_eq!(got.len(), expected.len());
-    for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
+    for (i, (g, (e, tolerance))) in got.iter().zip(&expected).enumerate() {
         let scale = g.abs().max(e.abs()).max(1.0);
-        assert!((g - e).abs() <= 1e-12 * scale, "value {i}: generated {g}, tape {e}");
+        assert!((g - e).abs() <= tolerance * scale, "value {i}: generated {g}, tape {e}");
     }
+    assert!(jacobians >= 20, "only {jacobians} Jacobians compared");
     let _ = std::fs::remove_dir_all(&dir);
 }

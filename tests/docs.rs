@@ -5,6 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
+use engine::input::{Assignment, SweepRange};
+
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
 const PAGES: [&str; 11] = [
     "README.md",
@@ -129,6 +131,15 @@ impl Args {
         self.flags.iter().any(|(n, _)| n == name)
     }
 
+    /// Every value of a flag, read as the command's value parser reads it.
+    fn parsed<T: std::str::FromStr<Err: std::fmt::Display>>(
+        &self,
+        name: &str,
+    ) -> Result<Vec<T>, String> {
+        let read = |v: String| v.parse().map_err(|e| format!("--{name} {v}: {e}"));
+        self.all(name).into_iter().map(read).collect()
+    }
+
     fn number<T: std::str::FromStr>(&self, name: &str) -> Result<Option<T>, String> {
         self.last(name)
             .map(|v| v.parse().map_err(|_| format!("--{name} {v}: not a number")))
@@ -157,136 +168,143 @@ fn read(file: &str) -> Result<String, String> {
 /// not exit with status 0.
 fn run(words: &[String]) -> Result<String, String> {
     let (command, rest) = words.split_first().ok_or("no command")?;
-    let units = |args: &Args| engine::Options { units: !args.has("no-units") };
     match command.as_str() {
-        "derive" => {
-            let args = Args::parse(rest, &["no-units", "full"]);
-            args.only(&["format", "out", "no-units", "full"])?;
-            let [file] = &args.positional[..] else { return Err("one file".into()) };
-            let format = match args.last("format").as_deref() {
-                None | Some("text") => cli::Format::Text,
-                Some("latex") => cli::Format::Latex,
-                Some("json") => cli::Format::Json,
-                Some(other) => return Err(format!("no format {other}")),
-            };
-            let source = read(file)?;
-            let (report, warnings) =
-                cli::derive_report_with(file, &source, format, units(&args), args.has("full"))?;
-            let shown = if args.has("out") { String::new() } else { report };
-            Ok(shown + &warnings)
-        }
-        "check" => {
-            let args = Args::parse(rest, &["no-units"]);
-            args.only(&["no-units"])?;
-            let (mut shown, mut warned, mut held, mut failed) =
-                (String::new(), String::new(), 0, 0);
-            for file in &args.positional {
-                let result = cli::check::check_file_with(file, &read(file)?, units(&args));
-                if result.exit_code != 0 {
-                    return Err(format!("exit {}:\n{}", result.exit_code, result.report));
-                }
-                shown += &result.report;
-                warned += &result.warnings;
-                held += result.held;
-                failed += result.failed;
-            }
-            Ok(format!("{shown}{held} passed, {failed} failed\n{warned}"))
-        }
-        "simulate" => {
-            let args = Args::parse(rest, &["no-units"]);
-            args.only(&[
-                "until",
-                "method",
-                "tolerance",
-                "step",
-                "set",
-                "output",
-                "stop-when",
-                "event",
-                "samples",
-                "out",
-                "plot",
-                "animate",
-                "no-units",
-            ])?;
-            let [file] = &args.positional[..] else { return Err("one file".into()) };
-            for (flag, allowed) in
-                [("out", &["csv", "json"][..]), ("plot", &["svg"]), ("animate", &["html"])]
-            {
-                if let Some(target) = args.last(flag) {
-                    if !allowed.contains(&extension(&target)) {
-                        return Err(format!("--{flag} {target}: the command refuses the format"));
-                    }
-                }
-            }
-            let animate = args.has("animate");
-            let options = engine::simulate::Options {
-                until: args.number("until")?,
-                method: args.last("method"),
-                tolerance: args.number("tolerance")?,
-                step: args.number("step")?,
-                set: args.all("set"),
-                output: args.all("output"),
-                stop_when: args.all("stop-when"),
-                events: args.all("event"),
-                no_units: args.has("no-units"),
-                samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
-                animate,
-            };
-            let outcome = cli::simulate::simulate(&read(file)?, &options)
-                .map_err(|e| cli::diagnostics::error(file, &e))?;
-            if let Some(fault) = &outcome.run.fault {
-                return Err(format!("a numeric fault (exit 1): {fault:?}"));
-            }
-            if animate {
-                let animation = outcome.animation.as_ref().ok_or("no animation")?;
-                assert!(cli::animate::page(animation, file).contains("<canvas"));
-            }
-            let table = match args.last("out") {
-                Some(_) => String::new(),
-                None => cli::simulate::csv(&outcome),
-            };
-            Ok(table + &cli::simulate::summary(&outcome))
-        }
-        "linearize" => {
-            let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
-            args.only(&[
-                "about",
-                "set",
-                "sweep",
-                "plot",
-                "format",
-                "out",
-                "no-units",
-                "drop-cyclic",
-            ])?;
-            let [file] = &args.positional[..] else { return Err("one file".into()) };
-            if let Some(plot) = args.last("plot") {
-                if extension(&plot) != "svg" || !args.has("sweep") {
-                    return Err(format!("--plot {plot}: the command refuses it"));
-                }
-            }
-            let options = engine::linearize::Options {
-                about: args.last("about"),
-                set: args.all("set"),
-                sweep: args.last("sweep"),
-                no_units: args.has("no-units"),
-                drop_cyclic: args.has("drop-cyclic"),
-            };
-            let linearized = engine::linearize::linearize(&read(file)?, &options)
-                .map_err(|e| cli::diagnostics::error(file, &e))?;
-            let report = match args.last("format").as_deref() {
-                None | Some("text") => cli::linearize::text(&linearized),
-                Some("json") => cli::linearize::json(&linearized),
-                Some(other) => return Err(format!("no format {other}")),
-            };
-            if let (Some(_), Some(sweep)) = (args.last("plot"), &linearized.sweep) {
-                assert!(cli::linearize::svg(file, sweep).starts_with("<svg"));
-            }
-            Ok(if args.has("out") { String::new() } else { report })
-        }
+        "derive" => derive(rest),
+        "check" => check(rest),
+        "simulate" => simulate(rest),
+        "linearize" => linearize(rest),
         other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
     }
+}
+
+/// The checks a command's `--no-units` leaves.
+fn units(args: &Args) -> engine::Options {
+    engine::Options { units: !args.has("no-units") }
+}
+
+/// `lagrange derive`: the report, or nothing with `--out`, then the warnings.
+fn derive(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units", "full"]);
+    args.only(&["format", "out", "no-units", "full"])?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    let format = match args.last("format").as_deref() {
+        None | Some("text") => cli::Format::Text,
+        Some("latex") => cli::Format::Latex,
+        Some("json") => cli::Format::Json,
+        Some(other) => return Err(format!("no format {other}")),
+    };
+    let source = read(file)?;
+    let (report, warnings) =
+        cli::derive_report_with(file, &source, format, units(&args), args.has("full"))?;
+    let shown = if args.has("out") { String::new() } else { report };
+    Ok(shown + &warnings)
+}
+
+/// `lagrange check`: each file's report, the count, then the warnings.
+fn check(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    args.only(&["no-units"])?;
+    let (mut shown, mut warned, mut held, mut failed) = (String::new(), String::new(), 0, 0);
+    for file in &args.positional {
+        let result = cli::check::check_file_with(file, &read(file)?, units(&args));
+        if result.exit_code != 0 {
+            return Err(format!("exit {}:\n{}", result.exit_code, result.report));
+        }
+        shown += &result.report;
+        warned += &result.warnings;
+        held += result.held;
+        failed += result.failed;
+    }
+    Ok(format!("{shown}{held} passed, {failed} failed\n{warned}"))
+}
+
+/// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
+fn simulate(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    args.only(&[
+        "until",
+        "method",
+        "tolerance",
+        "step",
+        "set",
+        "output",
+        "stop-when",
+        "event",
+        "samples",
+        "out",
+        "plot",
+        "animate",
+        "no-units",
+    ])?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    for (flag, allowed) in
+        [("out", &["csv", "json"][..]), ("plot", &["svg"]), ("animate", &["html"])]
+    {
+        if let Some(target) = args.last(flag) {
+            if !allowed.contains(&extension(&target)) {
+                return Err(format!("--{flag} {target}: the command refuses the format"));
+            }
+        }
+    }
+    let animate = args.has("animate");
+    let options = engine::simulate::Options {
+        until: args.number("until")?,
+        method: args.last("method"),
+        tolerance: args.number("tolerance")?,
+        step: args.number("step")?,
+        set: args.parsed("set")?,
+        output: args.all("output"),
+        stop_when: args.all("stop-when"),
+        events: args.all("event"),
+        no_units: args.has("no-units"),
+        samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
+        animate,
+    };
+    let outcome = cli::simulate::simulate(&read(file)?, &options)
+        .map_err(|e| cli::diagnostics::error(file, &e))?;
+    if let Some(fault) = &outcome.run.fault {
+        return Err(format!("a numeric fault (exit 1): {fault:?}"));
+    }
+    if animate {
+        let animation = outcome.animation.as_ref().ok_or("no animation")?;
+        assert!(cli::animate::page(animation, file).contains("<canvas"));
+    }
+    let table = match args.last("out") {
+        Some(_) => String::new(),
+        None => cli::simulate::csv(&outcome),
+    };
+    Ok(table + &cli::simulate::summary(&outcome))
+}
+
+/// `lagrange linearize`: the report (unless `--out`); a sweep's plot made in memory.
+fn linearize(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
+    args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units", "drop-cyclic"])?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    if let Some(plot) = args.last("plot") {
+        if extension(&plot) != "svg" || !args.has("sweep") {
+            return Err(format!("--plot {plot}: the command refuses it"));
+        }
+    }
+    let options = engine::linearize::Options {
+        about: args.last("about"),
+        // Read as the command's value parsers read them, passed on as text.
+        set: args.parsed::<Assignment>("set")?.iter().map(Assignment::to_string).collect(),
+        sweep: args.parsed::<SweepRange>("sweep")?.pop().map(|s| s.to_string()),
+        no_units: args.has("no-units"),
+        drop_cyclic: args.has("drop-cyclic"),
+    };
+    let linearized = engine::linearize::linearize(&read(file)?, &options)
+        .map_err(|e| cli::diagnostics::error(file, &e))?;
+    let report = match args.last("format").as_deref() {
+        None | Some("text") => cli::linearize::text(&linearized),
+        Some("json") => cli::linearize::json(&linearized),
+        Some(other) => return Err(format!("no format {other}")),
+    };
+    if let (Some(_), Some(sweep)) = (args.last("plot"), &linearized.sweep) {
+        assert!(cli::plot::sweep(file, sweep).starts_with("<svg"));
+    }
+    Ok(if args.has("out") { String::new() } else { report })
 }
 
 /// The `lagrange` command of a shell line, if it is one that is run: `lagrange derive …` or

@@ -94,7 +94,10 @@ fn the_pendulum_period_is_scale_free_from_1e_minus_6_to_1e6() {
                 tolerance: Some(1e-13),
                 until: Some(2.0 * exact * scale),
                 stop_when: vec!["theta'".into()],
-                set: vec![format!("L={l}"), format!("m={m}")],
+                set: vec![
+                    format!("L={l}").parse().expect("name=value"),
+                    format!("m={m}").parse().expect("name=value"),
+                ],
                 ..Options::default()
             },
         );
@@ -134,7 +137,7 @@ fn a_rod_released_1e_minus_8_from_vertical_lands_when_the_energy_integral_says()
             method: Some("dop853".into()),
             tolerance: Some(1e-16),
             until: Some(10.0),
-            set: vec!["theta=1/100000000".into()],
+            set: vec!["theta=1/100000000".parse().expect("name=value")],
             ..Options::default()
         },
     );
@@ -154,7 +157,7 @@ fn a_million_steps_symplectic_energy_stays_bounded_while_rk4_drifts() {
                 method: Some(method.into()),
                 step: Some(0.01),
                 until: Some(10_000.0),
-                set: vec!["theta=2".into()],
+                set: vec!["theta=2".parse().expect("name=value")],
                 output: vec!["theta".into()],
                 ..Options::default()
             },

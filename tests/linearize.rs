@@ -215,7 +215,7 @@ fn text_and_plot_show_the_sweep() {
     assert!(text.contains("ψ is cyclic"), "{text}");
     assert!(text.contains("Stability changes\n  w = 51.1468474"), "{text}");
     let sweep = l.sweep.as_ref().expect("sweep");
-    let svg = cli::linearize::svg("top", sweep);
+    let svg = cli::plot::sweep("top", sweep);
     assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
     // A dot per eigenvalue and value, in both panels.
     assert_eq!(svg.matches("<circle").count(), 2 * 11 * 6);

@@ -86,7 +86,7 @@ fn symplectic_energy_error_stays_bounded_over_a_hundred_thousand_steps() {
             method: Some("gauss".into()),
             step: Some(0.01),
             until: Some(1000.0),
-            set: vec!["theta=2".into()],
+            set: vec!["theta=2".parse().expect("name=value")],
             ..Options::default()
         },
     );
@@ -106,10 +106,10 @@ fn bad_input_is_an_error_with_exit_code_two() {
     let path = lagrange_tests::examples_dir().join("ps5/falling_rod.lag");
     let source = std::fs::read_to_string(path).unwrap();
     for options in [
-        Options { set: vec!["thta=1".into()], ..Options::default() },
+        Options { set: vec!["thta=1".parse().expect("name=value")], ..Options::default() },
         Options { output: vec!["thta".into()], ..Options::default() },
         Options { method: Some("euler".into()), ..Options::default() },
-        Options { set: vec!["y=1".into()], ..Options::default() },
+        Options { set: vec!["y=1".parse().expect("name=value")], ..Options::default() },
     ] {
         let Err(e) = simulate(&source, &options) else {
             panic!("{options:?} should fail");
@@ -132,7 +132,7 @@ fn until_in_the_scene_must_be_in_seconds() {
         };
         let (message, code) = (e.to_string(), e.exit_code());
         assert_eq!(code, 2, "{message}");
-        assert!(message.contains("is a time in s"), "{message}");
+        assert!(message.contains("`until` is a time, not in"), "{message}");
     }
 }
 

@@ -245,7 +245,11 @@ fn a_singular_angle_set_is_named_when_simulate_meets_it() {
         .into_iter()
         .find(|(p, _)| p.ends_with("space/heavy_top.lag"))
         .expect("the top");
-    let options = Options { set: vec!["theta=0".into()], until: Some(1.0), ..Options::default() };
+    let options = Options {
+        set: vec!["theta=0".parse().expect("name=value")],
+        until: Some(1.0),
+        ..Options::default()
+    };
     let outcome = simulate(&source, &options).expect("runs until the fault");
     let fault = outcome.run.fault.as_ref().expect("the mass matrix is singular at θ = 0");
     let text = outcome.describe_fault(fault);
@@ -263,7 +267,7 @@ fn a_fast_coin_rolls_on_and_a_slow_one_falls() {
         let outcome = run(
             "space/rolling_coin.lag",
             Options {
-                set: vec![format!("phi'={spin}")],
+                set: vec![format!("phi'={spin}").parse().expect("name=value")],
                 tolerance: Some(1e-11),
                 output: vec!["theta".into()],
                 ..Options::default()

@@ -136,9 +136,13 @@ fn a_start_that_holds_at_the_parameters_values_is_decided_there() {
     let text = refused(&elsewhere);
     assert!(text.contains("the rates at the start do not satisfy `roll"), "{text}");
 
-    let options = |set: Vec<String>| Options { until: Some(0.1), set, ..Options::default() };
-    simulate(&at_values, &options(vec![])).unwrap_or_else(|e| panic!("{e}"));
-    let Err(error) = simulate(&at_values, &options(vec!["W=2".into()])) else {
+    let options = |set: &[&str]| Options {
+        until: Some(0.1),
+        set: set.iter().map(|s| s.parse().expect("name=value")).collect(),
+        ..Options::default()
+    };
+    simulate(&at_values, &options(&[])).unwrap_or_else(|e| panic!("{e}"));
+    let Err(error) = simulate(&at_values, &options(&["W=2"])) else {
         panic!("W = 2 breaks roll at the start, and the run went ahead")
     };
     assert!(error.to_string().contains("the start's rates break the constraint `roll"), "{error}");
@@ -152,7 +156,7 @@ fn set_values_that_move_the_constraint_solve_free_positions_again() {
         &source,
         &Options {
             until: Some(0.5),
-            set: vec!["L=2".into()],
+            set: vec!["L=2".parse().expect("name=value")],
             output: vec!["x^2 + y^2".into()],
             ..Options::default()
         },
@@ -163,7 +167,11 @@ fn set_values_that_move_the_constraint_solve_free_positions_again() {
 
     // Given positions are not moved: a length they do not fit is an error.
     let given = pendulum("coord x = 0.6 m, y = -0.8 m");
-    let set = Options { until: Some(0.5), set: vec!["L=2".into()], ..Options::default() };
+    let set = Options {
+        until: Some(0.5),
+        set: vec!["L=2".parse().expect("name=value")],
+        ..Options::default()
+    };
     let Err(error) = simulate(&given, &set) else { panic!("L = 2 is off the rod, and it ran") };
     assert!(error.to_string().contains("the start breaks the constraint `rod`"), "{error}");
 }

@@ -52,3 +52,21 @@ fn all_examples() -> Vec<(String, String)> {
     out.sort();
     out
 }
+
+/// The first-order problem of a scene loaded for numbers, at `parameters`, with its exact
+/// Jacobian: the programs `simulate` lowers for a method that uses one.
+pub fn mechanical(prepared: &mut engine::numbers::Prepared, parameters: &[f64]) -> sim::Mechanical {
+    let lower = |prepared: &engine::numbers::Prepared, inputs: &[cas::SymId], exprs| {
+        numeric::Tape::new(prepared.lower(inputs, exprs).expect("lowers"))
+    };
+    let (dynamics_inputs, observation_inputs) =
+        (prepared.dynamics_inputs(), prepared.observation_inputs());
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = lower(prepared, &dynamics_inputs, &exprs);
+    let observation = lower(prepared, &observation_inputs, &[]);
+    let exprs = prepared.partials_exprs();
+    let partials = lower(prepared, &observation_inputs, &exprs);
+    sim::Mechanical::new(prepared.layout, dynamics, observation, parameters.to_vec())
+        .with_kinds(prepared.stabilisation())
+        .with_partials(partials)
+}

@@ -64,59 +64,87 @@ pub fn run() {
     let mut main = String::from(TIMER);
     let _ = writeln!(main, "#[path = \"hand.rs\"]\nmod hand;");
     let mut body = String::from("fn main() {\n");
-    let mut rows = Vec::new();
-    for n in SIZES {
-        let scene = n_link(Family::Pendulum, n);
-        let mut prepared =
-            engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
-        let names: Vec<String> = prepared
-            .parameters
-            .iter()
-            .map(|s| prepared.derivation.model.pool.symbol(*s).name.clone())
-            .collect();
-        assert_eq!(names, ["m", "l", "g"], "the generator's parameter order");
-        let (m, l, g) = (1.0, 1.0, 9.81);
-        let exprs = prepared.dynamics_exprs();
-        let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
-        let ops = dynamics.op_counts().total();
-        let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
-        let (theta, rate) = state(n);
-        let mut input = vec![0.0];
-        input.extend(&theta);
-        input.extend(&rate);
-        input.extend([m, l, g]);
+    let rows: Vec<Row> =
+        SIZES.into_iter().map(|n| on_the_tape(n, &dir, &mut main, &mut body)).collect();
+    body.push_str("}\n");
+    main.push_str(&body);
+    std::fs::write(dir.join("main.rs"), &main).expect("write");
+    let rows = compiled(&dir, rows);
+    table(&rows);
+    four_link_rhs();
+    let _ = std::fs::remove_dir_all(&dir);
+}
 
-        // The floor must be right before it is fast: it matches the tape to 1e-12.
-        let mut tape = Tape::new(dynamics.clone());
-        let mut out = vec![0.0; n * n + n];
-        tape.eval(&input, &mut out);
-        let (mut trig, mut mass, mut f) = (vec![0.0; 2 * n], vec![0.0; n * n], vec![0.0; n]);
-        crate::hand::n_link_mass_forcing(&theta, &rate, m, l, g, &mut trig, &mut mass, &mut f);
-        let scale = out.iter().fold(1.0f64, |a, v| a.max(v.abs()));
-        for (k, (a, b)) in out.iter().zip(mass.iter().chain(&f)).enumerate() {
-            assert!(
-                (a - b).abs() <= 1e-12 * scale,
-                "n = {n}: hand-written value {k} is {b}, the tape says {a}"
-            );
-        }
+/// The n-link pendulum measured on the tape, after checking the hand-written floor against
+/// it; its generated module written into `dir` and its timing code added to the program's
+/// `main` and `body`.
+fn on_the_tape(n: usize, dir: &std::path::Path, main: &mut String, body: &mut String) -> Row {
+    let scene = n_link(Family::Pendulum, n);
+    let mut prepared =
+        engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
+    let names: Vec<String> = prepared
+        .parameters
+        .iter()
+        .map(|s| prepared.derivation.model.pool.symbol(*s).name.clone())
+        .collect();
+    assert_eq!(names, ["m", "l", "g"], "the generator's parameter order");
+    let (m, l, g) = (1.0, 1.0, 9.81);
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+    let ops = dynamics.op_counts().total();
+    let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+    let (theta, rate) = state(n);
+    let mut input = vec![0.0];
+    input.extend(&theta);
+    input.extend(&rate);
+    input.extend([m, l, g]);
 
-        let tape_mf = crate::per_call(|| tape.eval(black_box(&input), black_box(&mut out)));
-        let layout = prepared.layout;
-        let mut mech =
-            Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), vec![m, l, g]);
-        let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
-        let mut dy = vec![0.0; 2 * n];
-        let tape_rhs = crate::per_call(|| {
-            mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
-        });
+    // The floor must be right before it is fast: it matches the tape to 1e-12.
+    let mut tape = Tape::new(dynamics.clone());
+    let mut out = vec![0.0; n * n + n];
+    tape.eval(&input, &mut out);
+    let (mut trig, mut mass, mut f) = (vec![0.0; 2 * n], vec![0.0; n * n], vec![0.0; n]);
+    crate::hand::n_link_mass_forcing(&theta, &rate, m, l, g, &mut trig, &mut mass, &mut f);
+    let scale = out.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+    for (k, (a, b)) in out.iter().zip(mass.iter().chain(&f)).enumerate() {
+        assert!(
+            (a - b).abs() <= 1e-12 * scale,
+            "n = {n}: hand-written value {k} is {b}, the tape says {a}"
+        );
+    }
 
-        let module = engine::codegen::codegen("generated.lag", &scene).expect("codegen");
-        std::fs::write(dir.join(format!("m{n}.rs")), &module.source).expect("write");
-        let _ = writeln!(main, "#[path = \"m{n}.rs\"]\nmod m{n};");
-        let lit = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
-        let _ = write!(
-            body,
-            r#"    {{
+    let tape_mf = crate::per_call(|| tape.eval(black_box(&input), black_box(&mut out)));
+    let layout = prepared.layout;
+    let mut mech =
+        Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), vec![m, l, g]);
+    let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
+    let mut dy = vec![0.0; 2 * n];
+    let tape_rhs = crate::per_call(|| {
+        mech.rhs(0.0, black_box(&y), black_box(&mut dy)).expect("regular");
+    });
+
+    let module = engine::codegen::codegen("generated.lag", &scene).expect("codegen");
+    std::fs::write(dir.join(format!("m{n}.rs")), &module.source).expect("write");
+    let _ = writeln!(main, "#[path = \"m{n}.rs\"]\nmod m{n};");
+    body.push_str(&timing_block(n, &input, &y, (m, l, g)));
+    Row {
+        n,
+        ops,
+        tape_mf,
+        tape_rhs,
+        gen_mf: f64::NAN,
+        gen_rhs: f64::NAN,
+        hand_mf: f64::NAN,
+        hand_rhs: f64::NAN,
+    }
+}
+
+/// The program's timing of the generated module and the hand-written floor for one n: lines
+/// `n kind seconds` on its standard output.
+fn timing_block(n: usize, input: &[f64], y: &[f64], (m, l, g): (f64, f64, f64)) -> String {
+    let lit = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    format!(
+        r#"    {{
         let input: [f64; {len}] = [{input}];
         let y: [f64; {n2}] = [{y}];
         let (mut mass, mut f, mut dy) = ([0.0; {nn}], [0.0; {n}], [0.0; {n2}]);
@@ -137,26 +165,16 @@ pub fn run() {
         println!("{n} hand_rhs {{t:e}}");
     }}
 "#,
-            len = input.len(),
-            input = lit(&input),
-            n2 = 2 * n,
-            y = lit(&y),
-            nn = n * n,
-        );
-        rows.push(Row {
-            n,
-            ops,
-            tape_mf,
-            tape_rhs,
-            gen_mf: f64::NAN,
-            gen_rhs: f64::NAN,
-            hand_mf: f64::NAN,
-            hand_rhs: f64::NAN,
-        });
-    }
-    body.push_str("}\n");
-    main.push_str(&body);
-    std::fs::write(dir.join("main.rs"), &main).expect("write");
+        len = input.len(),
+        input = lit(input),
+        n2 = 2 * n,
+        y = lit(y),
+        nn = n * n,
+    )
+}
+
+/// The timing program built with `rustc -O` and run, its figures filled into the rows.
+fn compiled(dir: &std::path::Path, mut rows: Vec<Row>) -> Vec<Row> {
     let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
     let binary = dir.join("timer");
     let compiled = Command::new(&rustc)
@@ -186,6 +204,10 @@ pub fn run() {
             dir.display()
         ),
     }
+    rows
+}
+
+fn table(rows: &[Row]) {
     outln!(
         "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9} {:>9}",
         "n",
@@ -199,7 +221,7 @@ pub fn run() {
         "gen/hand",
         "tape/gen"
     );
-    for r in &rows {
+    for r in rows {
         outln!(
             "{:>3} {:>7} | {:>10} {:>10} {:>10} | {:>10} {:>10} {:>10} | {:>9.2} {:>9.2}",
             r.n,
@@ -214,7 +236,10 @@ pub fn run() {
             r.tape_mf / r.gen_mf
         );
     }
-    // The 4-link pendulum's right-hand side has its own target; measure it on the tape too.
+}
+
+/// The 4-link pendulum's right-hand side has its own target; measured on the tape too.
+fn four_link_rhs() {
     let scene = n_link(Family::Pendulum, 4);
     let mut prepared =
         engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
@@ -236,5 +261,4 @@ pub fn run() {
         crate::seconds(t)
     );
     outln!("(gen, hand: rustc -O; tape: this binary; rhs = M, f and the solve of M q'' = f)\n");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -9,7 +9,10 @@
 //! - `space`: derivation time and lowered size of the scenes with bodies in space;
 //! - `bicycle`: the Whipple bicycle's derivation and linearization, its lowered size and one
 //!   right-hand side;
-//! - `derive FAMILY N`: one scaling measurement as JSON, for `bench/sympy_compare.py`.
+//! - `stiff [--largest K] [--peer]`: the stiffness ladder, dop853 and radau on a pendulum hung
+//!   from a spring stiff up to k = 1e12 (dop853 only up to K, 1e12 by default: it takes
+//!   minutes there), with `--peer` SciPy's Radau and BDF in the same run;
+//! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
 //! machine may be shared, so the figures are indicative.
@@ -41,24 +44,81 @@ mod precision;
 mod progress;
 mod scaling;
 mod space;
+mod stiff;
 
 use std::time::Instant;
 
-const USAGE: &str = "usage: lagrange-bench [all | scaling [--budget SECONDS] [--max N] | eval | \
-                     precision | model | space | bicycle | derive n-link-pendulum[-on-cart] N]";
+use clap::{Args, Parser, Subcommand};
+use engine::generate::Family;
+
+/// The benchmarks of the speed/accuracy issue, printed as tables.
+#[derive(Parser)]
+#[command(name = "lagrange-bench")]
+struct Cli {
+    /// Which benchmark to run; all of them but `derive` when none is named.
+    #[command(subcommand)]
+    benchmark: Option<Benchmark>,
+}
+
+#[derive(Subcommand)]
+enum Benchmark {
+    /// Every benchmark but `derive`, in turn.
+    All(Limits),
+    /// Derivation time, expression size and peak memory of the n-link chains.
+    Scaling(Limits),
+    /// One evaluation on the tape, in generated Rust and by hand.
+    Eval,
+    /// Work–precision of every integrator against exact references.
+    Precision,
+    /// What asking for reactions and energies costs in the lowered program.
+    Model,
+    /// The scenes with bodies in space.
+    Space,
+    /// The Whipple bicycle.
+    Bicycle,
+    /// The stiffness ladder: dop853 and radau on a pendulum hung from a spring of growing
+    /// stiffness, against a tight reference.
+    Stiff {
+        /// The stiffest spring dop853 is run on (it takes minutes at 1e12).
+        #[arg(long, value_name = "K", default_value_t = 1e12)]
+        largest: f64,
+        /// Also run SciPy's Radau and BDF with the exact Jacobian (tests/sympy/stiff_peer.py,
+        /// which makes its own Python environment) in the same run.
+        #[arg(long)]
+        peer: bool,
+    },
+    /// One scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
+    Derive {
+        #[arg(value_parser = family)]
+        family: Family,
+        n: usize,
+    },
+}
+
+/// How far `scaling` goes.
+#[derive(Args)]
+struct Limits {
+    /// The time each size may take (s): past it, the chain grows no longer.
+    #[arg(long, value_name = "SECONDS", default_value_t = Limits::DEFAULT.budget)]
+    budget: f64,
+    /// The largest n.
+    #[arg(long, default_value_t = Limits::DEFAULT.max)]
+    max: usize,
+}
+
+impl Limits {
+    const DEFAULT: Limits = Limits { budget: 20.0, max: 50 };
+}
+
+/// A family of generated scenes by its name.
+fn family(name: &str) -> Result<Family, String> {
+    Family::from_name(name).ok_or_else(|| format!("one of {}", Family::NAMES.join(", ")))
+}
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let flag = |name: &str| -> Option<f64> {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .and_then(|v| v.parse().ok())
-    };
-    let budget = flag("--budget").unwrap_or(20.0);
-    let max = flag("--max").map(|v| v as usize).unwrap_or(50);
-    match args.first().map(String::as_str).unwrap_or("all") {
-        "all" => {
+    let benchmark = Cli::parse().benchmark;
+    match benchmark.unwrap_or(Benchmark::All(Limits::DEFAULT)) {
+        Benchmark::All(Limits { budget, max }) => {
             scaling::run(budget, max);
             eval::run();
             precision::run();
@@ -66,27 +126,16 @@ fn main() {
             space::run();
             bicycle::run();
         }
-        "space" => space::run(),
-        "bicycle" => bicycle::run(),
-        "scaling" => scaling::run(budget, max),
-        "eval" => eval::run(),
-        "precision" => {
+        Benchmark::Space => space::run(),
+        Benchmark::Bicycle => bicycle::run(),
+        Benchmark::Stiff { largest, peer } => stiff::run(largest, peer),
+        Benchmark::Scaling(Limits { budget, max }) => scaling::run(budget, max),
+        Benchmark::Eval => eval::run(),
+        Benchmark::Precision => {
             precision::run();
         }
-        "model" => model::run(),
-        "derive" => {
-            let family = args.get(1).and_then(|f| engine::generate::Family::from_name(f));
-            let n = args.get(2).and_then(|n| n.parse::<usize>().ok());
-            let (Some(family), Some(n)) = (family, n) else {
-                eprintln!("{USAGE}");
-                std::process::exit(2);
-            };
-            scaling::json(family, n);
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            std::process::exit(2);
-        }
+        Benchmark::Model => model::run(),
+        Benchmark::Derive { family, n } => scaling::json(family, n),
     }
 }
 

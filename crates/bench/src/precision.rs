@@ -10,8 +10,8 @@ use crate::progress::Bar;
 use sim::reference::{elliptic_k, gauss_legendre};
 use sim::Method;
 
-pub const METHODS: [Method; 5] =
-    [Method::Rk4, Method::Dopri5, Method::Dop853, Method::Midpoint, Method::Gauss];
+pub const METHODS: [Method; 6] =
+    [Method::Rk4, Method::Dopri5, Method::Dop853, Method::Midpoint, Method::Gauss, Method::Radau];
 
 pub fn examples() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")

@@ -59,17 +59,18 @@ pub fn measure(family: Family, n: usize, repeats: usize) -> Measured {
     }
 }
 
+/// One measurement of `family` at `n` as a line of JSON, for `tests/sympy/sympy_compare.py`.
 pub fn json(family: Family, n: usize) {
     let m = measure(family, n, 5);
-    let peak = m.peak_bytes.map_or("null".to_string(), |b| b.to_string());
-    outln!(
-        "{{\"n\": {n}, \"derive_s\": {:e}, \"lowered_s\": {:e}, \"nodes\": {}, \"ops\": {}, \
-         \"peak_rss_bytes\": {peak}}}",
-        m.derive,
-        m.lowered,
-        m.nodes,
-        m.ops
-    );
+    let line = serde_json::json!({
+        "n": n,
+        "derive_s": m.derive,
+        "lowered_s": m.lowered,
+        "nodes": m.nodes,
+        "ops": m.ops,
+        "peak_rss_bytes": m.peak_bytes,
+    });
+    outln!("{line}");
 }
 
 // Timings extrapolated and growth exponents printed to two decimals: no last bit shows.

@@ -215,78 +215,12 @@ impl Pool {
     /// written in angles leaves them in every product of rotations about it.
     pub(crate) fn fold_pythagoras_groups(&mut self, e: ExprId) -> ExprId {
         let Node::Add(constant, terms) = self.node(e).clone() else { return e };
-        // A group that folds to one term and that the pairwise folds left has a term of degree
-        // 2 or more in sin²u and cos²u: up to degree 1, the only such groups are their pairs.
-        // The angles with such a term, found without building anything.
-        let mut heavy: Vec<ExprId> = Vec::new();
-        for (t, _) in terms.iter() {
-            // A term of degree 2 is a product (sin²u·cos²u, sin⁴u).
-            let Node::Mul(_, fs) = self.node(*t) else { continue };
-            let mut degrees: Vec<(ExprId, u32)> = Vec::new();
-            for (b, x) in fs.iter() {
-                if let Node::Func(Func::Sin | Func::Cos, u) = self.node(*b) {
-                    let half = x.is_integer().then(|| x.to_u32()).flatten().unwrap_or(0) / 2;
-                    match degrees.iter_mut().find(|(v, _)| v == u) {
-                        Some((_, d)) => *d += half,
-                        None => degrees.push((*u, half)),
-                    }
-                }
-            }
-            heavy.extend(degrees.into_iter().filter(|(_, d)| *d >= 2).map(|(u, _)| u));
-        }
+        let heavy = self.heavy_angles(&terms);
         if heavy.is_empty() {
             return e;
         }
-        heavy.sort();
-        heavy.dedup();
-        let mut groups: BTreeMap<GroupKey, Vec<Member>> = BTreeMap::new();
         let one = self.one();
-        for (t, k) in terms.iter() {
-            let (c, fs) = self.factors(*t);
-            let mut angles: Vec<ExprId> = fs
-                .iter()
-                .filter_map(|(b, x)| match self.node(*b) {
-                    Node::Func(Func::Sin | Func::Cos, u)
-                        if x.is_integer()
-                            && x > &Rational::zero()
-                            && heavy.binary_search(u).is_ok() =>
-                    {
-                        Some(*u)
-                    }
-                    _ => None,
-                })
-                .collect();
-            angles.sort();
-            angles.dedup();
-            'angles: for u in angles {
-                let (mut sin_power, mut cos_power) = (0u32, 0u32);
-                let mut rest = Vec::with_capacity(fs.len());
-                for (b, x) in &fs {
-                    let power = match self.node(*b) {
-                        Node::Func(Func::Sin, v) if *v == u => &mut sin_power,
-                        Node::Func(Func::Cos, v) if *v == u => &mut cos_power,
-                        _ => {
-                            rest.push((*b, x.clone()));
-                            continue;
-                        }
-                    };
-                    // A quotient by sin u or cos u is no polynomial in them.
-                    match x.is_integer().then(|| x.to_u32()).flatten() {
-                        Some(n) => *power = n,
-                        None => continue 'angles,
-                    }
-                }
-                if (sin_power / 2) + (cos_power / 2) > GROUP_DEGREE_LIMIT {
-                    continue;
-                }
-                let x = self.product(&c, &rest);
-                let key =
-                    GroupKey { angle: u, rest: x, odd_sin: sin_power % 2, odd_cos: cos_power % 2 };
-                let member =
-                    Member { term: Some(*t), sin: sin_power / 2, cos: cos_power / 2, k: k.clone() };
-                groups.entry(key).or_default().push(member);
-            }
-        }
+        let groups = self.pythagoras_groups(&terms, &heavy);
         let original_constant = constant.clone();
         let mut terms: BTreeMap<ExprId, Rational> = terms.iter().cloned().collect();
         let mut constant = constant;
@@ -340,6 +274,89 @@ impl Pool {
             return e;
         }
         self.sum_of(constant, terms)
+    }
+
+    /// The angles u of the terms of degree 2 or more in sin²u and cos²u, sorted.
+    fn heavy_angles(&self, terms: &[(ExprId, Rational)]) -> Vec<ExprId> {
+        // A group that folds to one term and that the pairwise folds left has a term of degree
+        // 2 or more in sin²u and cos²u: up to degree 1, the only such groups are their pairs.
+        // The angles with such a term, found without building anything.
+        let mut heavy: Vec<ExprId> = Vec::new();
+        for (t, _) in terms.iter() {
+            // A term of degree 2 is a product (sin²u·cos²u, sin⁴u).
+            let Node::Mul(_, fs) = self.node(*t) else { continue };
+            let mut degrees: Vec<(ExprId, u32)> = Vec::new();
+            for (b, x) in fs.iter() {
+                if let Node::Func(Func::Sin | Func::Cos, u) = self.node(*b) {
+                    let half = x.is_integer().then(|| x.to_u32()).flatten().unwrap_or(0) / 2;
+                    match degrees.iter_mut().find(|(v, _)| v == u) {
+                        Some((_, d)) => *d += half,
+                        None => degrees.push((*u, half)),
+                    }
+                }
+            }
+            heavy.extend(degrees.into_iter().filter(|(_, d)| *d >= 2).map(|(u, _)| u));
+        }
+        heavy.sort();
+        heavy.dedup();
+        heavy
+    }
+
+    /// The terms gathered by what they share besides powers of sin u and cos u, for each
+    /// heavy angle u: X, and an odd sin u or cos u.
+    fn pythagoras_groups(
+        &mut self,
+        terms: &[(ExprId, Rational)],
+        heavy: &[ExprId],
+    ) -> BTreeMap<GroupKey, Vec<Member>> {
+        let mut groups: BTreeMap<GroupKey, Vec<Member>> = BTreeMap::new();
+        for (t, k) in terms.iter() {
+            let (c, fs) = self.factors(*t);
+            let mut angles: Vec<ExprId> = fs
+                .iter()
+                .filter_map(|(b, x)| match self.node(*b) {
+                    Node::Func(Func::Sin | Func::Cos, u)
+                        if x.is_integer()
+                            && x > &Rational::zero()
+                            && heavy.binary_search(u).is_ok() =>
+                    {
+                        Some(*u)
+                    }
+                    _ => None,
+                })
+                .collect();
+            angles.sort();
+            angles.dedup();
+            'angles: for u in angles {
+                let (mut sin_power, mut cos_power) = (0u32, 0u32);
+                let mut rest = Vec::with_capacity(fs.len());
+                for (b, x) in &fs {
+                    let power = match self.node(*b) {
+                        Node::Func(Func::Sin, v) if *v == u => &mut sin_power,
+                        Node::Func(Func::Cos, v) if *v == u => &mut cos_power,
+                        _ => {
+                            rest.push((*b, x.clone()));
+                            continue;
+                        }
+                    };
+                    // A quotient by sin u or cos u is no polynomial in them.
+                    match x.is_integer().then(|| x.to_u32()).flatten() {
+                        Some(n) => *power = n,
+                        None => continue 'angles,
+                    }
+                }
+                if (sin_power / 2) + (cos_power / 2) > GROUP_DEGREE_LIMIT {
+                    continue;
+                }
+                let x = self.product(&c, &rest);
+                let key =
+                    GroupKey { angle: u, rest: x, odd_sin: sin_power % 2, odd_cos: cos_power % 2 };
+                let member =
+                    Member { term: Some(*t), sin: sin_power / 2, cos: cos_power / 2, k: k.clone() };
+                groups.entry(key).or_default().push(member);
+            }
+        }
+        groups
     }
 
     /// [`Pool::fold_angle_sums`] with each term examined once, and again only when a term it

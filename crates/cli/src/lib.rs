@@ -4,12 +4,13 @@
 //! `engine` loads scenes, lowers and runs them; this crate reads the files, renders
 //! diagnostics with source context, formats the `derive`, `check` and `linearize` reports,
 //! writes the results of `simulate`, `bench` and `linearize` (CSV, JSON, summaries, tables,
-//! SVG, the HTML page that plays a motion) and draws progress.
+//! SVG, the HTML page that plays a motion), reads the trajectory `inverse-dynamics` takes and
+//! writes its forces, and draws progress.
 
 pub mod animate;
-pub mod bench;
 pub mod check;
 pub mod diagnostics;
+pub mod inverse;
 pub mod linearize;
 pub mod plot;
 pub mod progress;

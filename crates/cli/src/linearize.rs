@@ -1,14 +1,12 @@
 //! The `linearize` report: M, C, K exactly and at the parameters' values, the first-order
 //! matrix, the eigenvalues and the verdict, a sweep's table and its changes of stability, as
-//! text or JSON; and the sweep drawn as SVG.
-
-use std::fmt::Write;
+//! text or JSON. The sweep's figure is
+//! [`crate::plot::sweep`].
 
 use cas::{ExprId, Pool, Style, SymId};
 use engine::linearize::{CaseNumbers, Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
 use serde_json::{json, Map, Value as Json};
 
-use crate::plot::{escape, frame, label, page, range, Frame};
 use crate::report::{bracketed, json_number, significant, value_text, width};
 
 /// Digits of the numbers in the text report.
@@ -605,78 +603,4 @@ pub fn json(l: &Linearized) -> String {
     let mut text = serde_json::to_string_pretty(&report).unwrap_or_default();
     text.push('\n');
     text
-}
-
-/// One part of an eigenvalue (re, im).
-type Part = fn(&(f64, f64)) -> f64;
-
-const WIDTH: f64 = 720.0;
-const PANEL: f64 = 200.0;
-const LEFT: f64 = 90.0;
-const RIGHT: f64 = 20.0;
-const GAP: f64 = 40.0;
-
-/// The real and imaginary parts of the eigenvalues against the swept parameter, one panel
-/// each, with the changes of stability marked. A dot per eigenvalue and value: which
-/// eigenvalue continues which is not known, so no lines join them.
-pub fn svg(title: &str, sweep: &Sweep) -> String {
-    let height = GAP + 2.0 * (PANEL + GAP) + 10.0;
-    let mut s = page(WIDTH, height, title);
-    let values: Vec<f64> = sweep.rows.iter().map(|r| r.value).collect();
-    let (p0, p1) = range(&values);
-    let x = |p: f64| LEFT + (p - p0) / (p1 - p0) * (WIDTH - LEFT - RIGHT);
-    let panels: [(&str, Part); 2] = [("real part of λ", |z| z.0), ("imaginary part of λ", |z| z.1)];
-    for (k, (name, part)) in panels.iter().enumerate() {
-        let top = GAP + k as f64 * (PANEL + GAP);
-        let all: Vec<f64> =
-            sweep.rows.iter().flat_map(|r| r.eigenvalues.iter().map(part)).collect();
-        let (v0, v1) = range(&all);
-        let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
-        let axis_end = format!("{} = {}", sweep.parameter, label(p1));
-        let at = Frame { top, panel: PANEL, width: WIDTH, left: LEFT, right: RIGHT };
-        frame(&mut s, at, name, (v0, v1), (&label(p0), &axis_end));
-        if v0 < 0.0 && v1 > 0.0 {
-            let _ = writeln!(
-                s,
-                r##"<line x1="{LEFT}" y1="{y0:.2}" x2="{}" y2="{y0:.2}" stroke="#bbb"/>"##,
-                WIDTH - RIGHT,
-                y0 = y(0.0)
-            );
-        }
-        for c in &sweep.changes {
-            let _ = writeln!(
-                s,
-                r##"<line x1="{cx:.2}" y1="{top}" x2="{cx:.2}" y2="{}" stroke="#c0392b" stroke-dasharray="4 3"/>"##,
-                top + PANEL,
-                cx = x(c.value)
-            );
-        }
-        for r in &sweep.rows {
-            for z in &r.eigenvalues {
-                let v = part(z);
-                if v.is_finite() {
-                    let _ = writeln!(
-                        s,
-                        r##"<circle cx="{:.2}" cy="{:.2}" r="1.8" fill="#1f5fa8"/>"##,
-                        x(r.value),
-                        y(v)
-                    );
-                }
-            }
-        }
-    }
-    for (k, c) in sweep.changes.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            r##"<text x="{:.2}" y="{}" fill="#c0392b">{} = {} ({} → {})</text>"##,
-            x(c.value) + 4.0,
-            GAP + 14.0 * (k as f64 + 1.0),
-            escape(&sweep.parameter),
-            label(c.value),
-            c.from.name(),
-            c.to.name()
-        );
-    }
-    s.push_str("</svg>\n");
-    s
 }

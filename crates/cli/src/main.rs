@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use engine::input::{Assignment, SweepRange};
 
 #[derive(Parser)]
 #[command(
@@ -72,7 +73,7 @@ enum Command {
         step: Option<f64>,
         /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -115,11 +116,11 @@ enum Command {
         about: Option<String>,
         /// Override a parameter: `--set g=1.62`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// Tabulate the eigenvalues for n values of parameter p from a to b, and find where
         /// stability changes: `--sweep w=0:100:101`.
         #[arg(long, value_name = "P=A:B:N")]
-        sweep: Option<String>,
+        sweep: Option<SweepRange>,
         /// Leave the positions of cyclic coordinates out of the state (by default the state
         /// is the position and rate of every coordinate).
         #[arg(long)]
@@ -147,6 +148,25 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// The generalized forces that make a given motion happen: τ = M(q)·q̈ − f(q, q̇, t) at
+    /// every row of a trajectory. Exit 2 on bad input, 1 when the forces are not finite.
+    InverseDynamics {
+        file: PathBuf,
+        /// The motion, as CSV: a column `t` and, for each coordinate x, the columns x, x' and
+        /// x'' (as `simulate --output x,x',x''` writes them); other columns are ignored.
+        #[arg(long, value_name = "FILE.csv")]
+        trajectory: PathBuf,
+        /// Override a parameter: `--set g=1.62`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<Assignment>,
+        /// Write the forces (CSV: t, then tau_x per coordinate) to this file, whole or not at
+        /// all, instead of standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Measure every integrator over a ladder of tolerances or steps against a tight DOP853
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
@@ -156,7 +176,7 @@ enum Command {
         until: Option<f64>,
         /// Override a parameter or an initial value, as for simulate.
         #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<String>,
+        set: Vec<Assignment>,
         /// End each run when this expression reaches zero, as for simulate.
         #[arg(long = "stop-when", value_name = "EXPR")]
         stop_when: Vec<String>,
@@ -194,6 +214,9 @@ enum MethodArg {
     /// Two-stage Gauss–Legendre (order 4), fixed step, symplectic.
     #[value(alias = "gauss4")]
     Gauss,
+    /// Radau IIA (order 5), adaptive and implicit: stiff scenes, and kept constraints as they are.
+    #[value(alias = "radau5")]
+    Radau,
 }
 
 impl From<MethodArg> for sim::Method {
@@ -204,6 +227,7 @@ impl From<MethodArg> for sim::Method {
             MethodArg::Dop853 => sim::Method::Dop853,
             MethodArg::Midpoint => sim::Method::Midpoint,
             MethodArg::Gauss => sim::Method::Gauss,
+            MethodArg::Radau => sim::Method::Radau,
         }
     }
 }
@@ -224,27 +248,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units, full } => {
-            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let path = file.display().to_string();
-            let format = match format {
-                FormatArg::Text => cli::Format::Text,
-                FormatArg::Latex => cli::Format::Latex,
-                FormatArg::Json => cli::Format::Json,
-            };
-            let options = engine::Options { units: !no_units };
-            match cli::derive_keeping(&path, &source, format, options, full) {
-                Ok((report, warnings, derivation)) => {
-                    eprint!("{warnings}");
-                    // The process ends here: freeing a large model's expressions one by one (a
-                    // tenth of the bicycle's run) would be work for nothing.
-                    std::mem::forget(derivation);
-                    write_or_print(out.as_ref(), &report)
-                }
-                Err(diagnostics) => {
-                    eprint!("{diagnostics}");
-                    ExitCode::from(2)
-                }
-            }
+            derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
             let family =
@@ -299,6 +303,9 @@ fn main() -> ExitCode {
             no_units,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            // Typed here, read as text there; the same parser reads it back.
+            let set = set.iter().map(Assignment::to_string).collect();
+            let sweep = sweep.as_ref().map(SweepRange::to_string);
             let options = engine::linearize::Options { about, set, sweep, no_units, drop_cyclic };
             linearize(&file, &source, &options, format, out, plot)
         }
@@ -314,39 +321,79 @@ fn main() -> ExitCode {
                 Err(e) => fail(&path, &e),
             }
         }
+        Command::InverseDynamics { file, trajectory, set, out, no_units } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let options = engine::inverse::Options { set, no_units };
+            inverse_dynamics(&file, &source, &trajectory, out, &options)
+        }
         Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options =
                 engine::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
             bench(&file, &source, &options, repeats, plot)
         }
-        Command::Check { files, no_units } => {
-            let mut worst = 0;
-            let (mut held, mut failed) = (0, 0);
-            for file in &files {
-                let Some(source) = read_or_report(file) else {
-                    worst = 2;
-                    continue;
-                };
-                let result = cli::check::check_file_with(
-                    &file.display().to_string(),
-                    &source,
-                    engine::Options { units: !no_units },
-                );
-                eprint!("{}", result.warnings);
-                if result.exit_code == 2 {
-                    eprint!("{}", result.report);
-                } else {
-                    emit(&result.report);
-                }
-                held += result.held;
-                failed += result.failed;
-                worst = worst.max(result.exit_code);
-            }
-            emit(&format!("{held} passed, {failed} failed\n"));
-            ExitCode::from(worst as u8)
+        Command::Check { files, no_units } => check(&files, no_units),
+    }
+}
+
+/// `lagrange derive`: the report to standard output or `out`, the warnings to stderr.
+fn derive(
+    file: &std::path::Path,
+    format: FormatArg,
+    out: Option<PathBuf>,
+    no_units: bool,
+    full: bool,
+) -> ExitCode {
+    let Some(source) = read_or_report(file) else { return ExitCode::from(2) };
+    let path = file.display().to_string();
+    let format = match format {
+        FormatArg::Text => cli::Format::Text,
+        FormatArg::Latex => cli::Format::Latex,
+        FormatArg::Json => cli::Format::Json,
+    };
+    let options = engine::Options { units: !no_units };
+    match cli::derive_keeping(&path, &source, format, options, full) {
+        Ok((report, warnings, derivation)) => {
+            eprint!("{warnings}");
+            // The process ends here: freeing a large model's expressions one by one (a
+            // tenth of the bicycle's run) would be work for nothing.
+            std::mem::forget(derivation);
+            write_or_print(out.as_ref(), &report)
+        }
+        Err(diagnostics) => {
+            eprint!("{diagnostics}");
+            ExitCode::from(2)
         }
     }
+}
+
+/// `lagrange check`: each file's report, then the count of `expect` lines that held and
+/// failed; the worst exit code of the files.
+fn check(files: &[PathBuf], no_units: bool) -> ExitCode {
+    let mut worst = 0;
+    let (mut held, mut failed) = (0, 0);
+    for file in files {
+        let Some(source) = read_or_report(file) else {
+            worst = 2;
+            continue;
+        };
+        let result = cli::check::check_file_with(
+            &file.display().to_string(),
+            &source,
+            engine::Options { units: !no_units },
+        );
+        eprint!("{}", result.warnings);
+        if result.exit_code == 2 {
+            eprint!("{}", result.report);
+        } else {
+            emit(&result.report);
+        }
+        held += result.held;
+        failed += result.failed;
+        worst = worst.max(result.exit_code);
+    }
+    emit(&format!("{held} passed, {failed} failed\n"));
+    ExitCode::from(worst as u8)
 }
 
 fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
@@ -444,7 +491,9 @@ fn simulate(
         let e0 = energy.first().copied().unwrap_or(0.0);
         series.push(("energy error E − E(0)".to_string(), energy.iter().map(|e| e - e0).collect()));
         let title = format!("{} ({})", path, outcome.method.name());
-        if let Err(e) = cli::write_atomically(&plot, &cli::plot::svg(&title, times, &series)) {
+        if let Err(e) =
+            cli::write_atomically(&plot, &cli::plot::time_series(&title, times, &series))
+        {
             eprintln!("error: cannot write {}: {e}", plot.display());
             code = ExitCode::from(2);
         }
@@ -496,7 +545,7 @@ fn linearize(
     };
     if let (Some(p), Some(sweep)) = (plot, &linearized.sweep) {
         let title = format!("Eigenvalues against {}: {path}", sweep.parameter);
-        if let Err(e) = cli::write_atomically(&p, &cli::linearize::svg(&title, sweep)) {
+        if let Err(e) = cli::write_atomically(&p, &cli::plot::sweep(&title, sweep)) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
         }
@@ -505,6 +554,41 @@ fn linearize(
     // bicycle's run) would be work for nothing.
     std::mem::forget(linearized);
     write_or_print(out.as_ref(), &report)
+}
+
+fn inverse_dynamics(
+    file: &std::path::Path,
+    source: &str,
+    trajectory: &std::path::Path,
+    out: Option<PathBuf>,
+    options: &engine::inverse::Options,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let mut inverse = match engine::inverse::inverse_dynamics(source, options) {
+        Ok(inverse) => inverse,
+        Err(e) => return fail(&path, &e),
+    };
+    let table = std::fs::read(trajectory)
+        .map_err(|e| format!("error: cannot read {}: {e}", trajectory.display()))
+        .and_then(|bytes| {
+            let name = trajectory.display().to_string();
+            let text =
+                String::from_utf8(bytes).map_err(|_| format!("error: {name} is not UTF-8 text"))?;
+            cli::inverse::read_trajectory(&name, &text, inverse.coordinates())
+        });
+    let table = match table {
+        Ok(table) => table,
+        Err(message) => {
+            eprintln!("{message}");
+            return ExitCode::from(2);
+        }
+    };
+    let forces = match cli::inverse::torques_csv(&mut inverse, &table) {
+        Ok(forces) => forces,
+        Err(e) => return fail(&path, &e),
+    };
+    eprint!("{}", cli::inverse::note(&inverse));
+    write_or_print(out.as_ref(), &forces)
 }
 
 fn bench(
@@ -530,7 +614,7 @@ fn bench(
         10.0 * engine::bench::REFERENCE_TOLERANCE,
         report.reference_check
     ));
-    emit(&cli::bench::table(&report.trials, &report.inapplicable));
+    emit(&engine::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",
@@ -543,7 +627,7 @@ fn bench(
         let title = format!("Work–precision: {path}");
         if let Err(e) = cli::write_atomically(
             &p,
-            &cli::bench::svg(&title, &report.trials, &report.inapplicable),
+            &cli::plot::work_precision(&title, &report.trials, &report.inapplicable),
         ) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);

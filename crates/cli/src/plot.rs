@@ -1,19 +1,22 @@
-//! A small SVG plot written by hand: one panel per recorded quantity, and one for the energy
-//! error, all against time. Deterministic text, no fonts or libraries needed.
+//! Every figure `lagrange` draws, as SVG written by hand: the recorded quantities of a run
+//! against time ([`time_series`]), the eigenvalues of a sweep against its parameter
+//! ([`sweep`]) and the work–precision diagram of a benchmark ([`work_precision`]). They share
+//! this module's page, panel, axis, number labels and escaping. Deterministic text, no fonts
+//! or libraries needed.
+
+mod series;
+mod sweep;
+mod work_precision;
 
 use std::fmt::Write;
 
-const WIDTH: f64 = 720.0;
-const PANEL: f64 = 150.0;
-const LEFT: f64 = 90.0;
-const RIGHT: f64 = 20.0;
-const GAP: f64 = 40.0;
-/// Past this many points a series is thinned: the picture does not change, the file shrinks.
-const MAX_POINTS: usize = 2000;
+pub use self::series::time_series;
+pub use self::sweep::sweep;
+pub use self::work_precision::work_precision;
 
-/// An SVG page of the given size, white, with its title centred at the top; the caller adds
+/// An SVG page of the given size, white, with its title centred on `(x, y)`; the caller adds
 /// the panels and closes it.
-pub(crate) fn page(width: f64, height: f64, title: &str) -> String {
+fn page(width: f64, height: f64, title: &str, (x, y): (f64, f64)) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -22,107 +25,112 @@ pub(crate) fn page(width: f64, height: f64, title: &str) -> String {
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
         s,
-        r#"<text x="{}" y="20" font-size="14" text-anchor="middle">{}</text>"#,
-        width / 2.0,
+        r#"<text x="{x}" y="{y}" font-size="14" text-anchor="middle">{}</text>"#,
         escape(title)
     );
     s
 }
 
-/// Where a panel sits in a figure.
-pub(crate) struct Frame {
-    pub top: f64,
-    pub panel: f64,
-    pub width: f64,
-    pub left: f64,
-    pub right: f64,
+/// A linear map from values to pixels: `from.0` goes to `to.0` and `from.1` to `to.1` (a
+/// vertical axis maps its low value to the bottom, the larger pixel).
+#[derive(Clone, Copy)]
+struct Axis {
+    from: (f64, f64),
+    to: (f64, f64),
 }
 
-/// A panel's box, its name above it, its value range at the left edge and the ends of its
-/// horizontal axis below it.
-pub(crate) fn frame(
-    s: &mut String,
-    f: Frame,
-    name: &str,
-    (v0, v1): (f64, f64),
-    (x0, x1): (&str, &str),
-) {
-    let Frame { top, panel, width, left, right } = f;
+impl Axis {
+    fn at(self, v: f64) -> f64 {
+        let Axis { from: (v0, v1), to: (p0, p1) } = self;
+        p0 + (v - v0) / (v1 - v0) * (p1 - p0)
+    }
+}
+
+/// The outline of a panel.
+fn outline(s: &mut String, (left, top): (f64, f64), width: f64, height: f64) {
     let _ = writeln!(
         s,
-        r##"<rect x="{left}" y="{top}" width="{}" height="{panel}" fill="none" stroke="#888"/>"##,
-        width - left - right
-    );
-    let _ = writeln!(s, r#"<text x="{left}" y="{}">{}</text>"#, top - 6.0, escape(name));
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-        left - 6.0,
-        top + 10.0,
-        label(v1)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-        left - 6.0,
-        top + panel,
-        label(v0)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{left}" y="{}" text-anchor="middle">{}</text>"#,
-        top + panel + 14.0,
-        escape(x0)
-    );
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
-        width - right,
-        top + panel + 14.0,
-        escape(x1)
+        r##"<rect x="{left}" y="{top}" width="{width}" height="{height}" fill="none" stroke="#888"/>"##
     );
 }
 
-/// `series`: (title, values at `times`).
-pub fn svg(title: &str, times: &[f64], series: &[(String, Vec<f64>)]) -> String {
-    let height = GAP + series.len() as f64 * (PANEL + GAP) + 10.0;
-    let mut s = page(WIDTH, height, title);
-    let (t0, t1) = range(times);
-    let stride = times.len().div_ceil(MAX_POINTS).max(1);
-    for (k, (name, values)) in series.iter().enumerate() {
-        let top = GAP + k as f64 * (PANEL + GAP);
-        let (v0, v1) = range(values);
-        let x = |t: f64| LEFT + (t - t0) / (t1 - t0) * (WIDTH - LEFT - RIGHT);
-        let y = |v: f64| top + PANEL - (v - v0) / (v1 - v0) * PANEL;
-        let axis_end = format!("t = {}", label(t1));
-        frame(
-            &mut s,
-            Frame { top, panel: PANEL, width: WIDTH, left: LEFT, right: RIGHT },
-            name,
-            (v0, v1),
-            (&label(t0), &axis_end),
-        );
-        let mut points = String::new();
-        let indices = (0..times.len()).step_by(stride).chain(times.len().checked_sub(1));
-        let mut last = usize::MAX;
-        for i in indices {
-            if i == last || !values[i].is_finite() {
-                continue;
-            }
-            last = i;
-            let _ = write!(points, "{:.2},{:.2} ", x(times[i]), y(values[i]));
-        }
+/// A figure of panels stacked one above the other (a run's quantities, a sweep's parts of
+/// λ): its width, its margins left and right, and the gap above each panel.
+const WIDTH: f64 = 720.0;
+const LEFT: f64 = 90.0;
+const RIGHT: f64 = 20.0;
+const GAP: f64 = 40.0;
+
+/// The page of a stacked figure of `panels` panels of height `panel`.
+fn stacked_page(title: &str, panels: usize, panel: f64) -> String {
+    let height = GAP + panels as f64 * (panel + GAP) + 10.0;
+    page(WIDTH, height, title, (WIDTH / 2.0, 20.0))
+}
+
+/// The horizontal axis of a stacked figure, from `range` across every panel.
+fn across(range: (f64, f64)) -> Axis {
+    Axis { from: range, to: (LEFT, WIDTH - RIGHT) }
+}
+
+/// Where a panel sits in a figure of panels stacked one above the other.
+struct Frame {
+    top: f64,
+    panel: f64,
+    width: f64,
+    left: f64,
+    right: f64,
+}
+
+impl Frame {
+    /// Panel `k`, counted from the top, of a stacked figure of panels of height `panel`.
+    fn stacked(k: usize, panel: f64) -> Frame {
+        Frame { top: GAP + k as f64 * (panel + GAP), panel, width: WIDTH, left: LEFT, right: RIGHT }
+    }
+
+    /// The vertical axis from `range` up the panel.
+    fn y(&self, range: (f64, f64)) -> Axis {
+        Axis { from: range, to: (self.top + self.panel, self.top) }
+    }
+
+    /// The panel's box, its name above it, its value range at the left edge and the ends of
+    /// its horizontal axis below it.
+    fn draw(&self, s: &mut String, name: &str, (v0, v1): (f64, f64), (x0, x1): (&str, &str)) {
+        let Frame { top, panel, width, left, right } = *self;
+        outline(s, (left, top), width - left - right, panel);
+        let _ = writeln!(s, r#"<text x="{left}" y="{}">{}</text>"#, top - 6.0, escape(name));
         let _ = writeln!(
             s,
-            r##"<polyline fill="none" stroke="#1f5fa8" stroke-width="1.5" points="{}"/>"##,
-            points.trim_end()
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            left - 6.0,
+            top + 10.0,
+            label(v1)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            left - 6.0,
+            top + panel,
+            label(v0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{left}" y="{}" text-anchor="middle">{}</text>"#,
+            top + panel + 14.0,
+            escape(x0)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end">{}</text>"#,
+            width - right,
+            top + panel + 14.0,
+            escape(x1)
         );
     }
-    s.push_str("</svg>\n");
-    s
 }
 
-pub(crate) fn range(v: &[f64]) -> (f64, f64) {
+/// The smallest and largest finite value, widened when they (nearly) coincide so that a
+/// constant still has a panel to sit in.
+fn range(v: &[f64]) -> (f64, f64) {
     let (lo, hi) = v
         .iter()
         .filter(|x| x.is_finite())
@@ -137,7 +145,9 @@ pub(crate) fn range(v: &[f64]) -> (f64, f64) {
     (lo, hi)
 }
 
-pub(crate) fn label(v: f64) -> String {
+/// A number at an axis: four decimals, or three significant digits in scientific notation
+/// when it is very small or large.
+fn label(v: f64) -> String {
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
         format!("{v:.3e}")
     } else {
@@ -145,6 +155,7 @@ pub(crate) fn label(v: f64) -> String {
     }
 }
 
+/// Text as it may stand in SVG (and HTML) content.
 pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }

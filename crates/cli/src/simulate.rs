@@ -65,10 +65,13 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
         "rejected_steps": outcome.run.rejected,
         "rhs_evaluations": outcome.run.evaluations,
         "stiff_steps": outcome.run.stiff_steps,
+        "jacobians": outcome.run.jacobians,
+        "factorizations": outcome.run.factorizations,
         "final_time": outcome.run.final_time,
         "energy_drift": json_number(drift),
         "energy_drift_relative": json_number(relative),
         "constraint_drift": outcome.constraint_drift().map(json_number),
+        "constraint_drift_at_steps": outcome.constraint_drift_at_steps().map(json_number),
         "fault": outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)),
     })
 }
@@ -76,8 +79,14 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
 /// The summary printed on stderr after a run.
 pub fn summary(outcome: &Outcome) -> String {
     let r = &outcome.run;
+    // The implicit adaptive method's linear algebra, where its cost lies besides F.
+    let algebra = if r.jacobians > 0 {
+        format!(", {} Jacobians, {} LU factorizations", r.jacobians, r.factorizations)
+    } else {
+        String::new()
+    };
     let mut s = format!(
-        "{}: {} steps ({} rejected), {} right-hand-side evaluations, {:.3} s wall time\n",
+        "{}: {} steps ({} rejected), {} right-hand-side evaluations{algebra}, {:.3} s wall time\n",
         outcome.method.name(),
         r.steps,
         r.rejected,
@@ -103,7 +112,15 @@ pub fn summary(outcome: &Outcome) -> String {
         ));
     }
     if let Some(c) = outcome.constraint_drift() {
-        s.push_str(&format!("constraint drift: max |Φ| = {c:.3e} (Baumgarte-stabilised)\n"));
+        if outcome.method.handles_algebraic() {
+            let at_steps = outcome.constraint_drift_at_steps().unwrap_or(c);
+            s.push_str(&format!(
+                "constraint drift: max |Φ| = {at_steps:.3e} at the steps, {c:.3e} between them \
+                 (the differential–algebraic system, no stabilisation)\n"
+            ));
+        } else {
+            s.push_str(&format!("constraint drift: max |Φ| = {c:.3e} (Baumgarte-stabilised)\n"));
+        }
     }
     for e in &r.events {
         let kind = if e.event < outcome.stop_names { "stop" } else { "event" };

@@ -172,6 +172,7 @@ fn settings_are_named_by_their_flags() {
         (&["--until=-1"][..], "error: --until must be a positive time, not -1"),
         (&["--set", "gg=1"][..], "error: --set gg: no parameter or coordinate of that name"),
         (&["--set", "m=-1"][..], "error: with the values of --set, `bob` has a mass of -1 kg"),
+        (&["--set", "m"][..], "'--set <NAME=VALUE>': not of the form name=value (like g=1.62)"),
     ] {
         let out = lagrange(&[&["simulate", pendulum.as_str()][..], args].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -294,4 +295,54 @@ fn a_reader_that_stops_reading_is_not_a_panic() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(output.status.code(), Some(0), "{stderr}");
+}
+
+#[test]
+fn inverse_dynamics_reads_a_simulate_table_and_writes_the_forces() {
+    let scratch = Scratch::new("inverse");
+    let (run, forces) = (scratch.file("run.csv"), scratch.file("tau.csv"));
+    let flywheel = example("classics/driven_flywheel.lag");
+    let out = lagrange(&[
+        "simulate",
+        &flywheel,
+        "--until",
+        "2",
+        "--samples",
+        "11",
+        "--output",
+        "KE, theta, theta', theta''",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // With the motor off in the scene, the force the motion takes is the motor's, 2 N·m.
+    let args = ["inverse-dynamics", &flywheel, "--trajectory", run.to_str().unwrap()];
+    let out =
+        lagrange(&[&args[..], &["--set", "tau=0", "--out", forces.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.stdout.is_empty() && out.stderr.is_empty());
+    let table = std::fs::read_to_string(&forces).unwrap();
+    let mut lines = table.lines();
+    assert_eq!(lines.next(), Some("t,tau_theta"));
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 11);
+    for row in rows {
+        let tau: f64 = row.split(',').nth(1).unwrap().parse().unwrap();
+        assert!((tau - 2.0).abs() < 1e-9, "{row}");
+    }
+
+    std::fs::write(&run, "t,theta,theta',theta''\n0,0,0,4\n0.1,0.02,0.4,four\n").unwrap();
+    let out = lagrange(&args);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.ends_with("run.csv:3:4: `four` in the column `theta''` is not a finite number\n"),
+        "{stderr}"
+    );
+    let out = lagrange(&[&args[..], &["--set", "J=1"]].concat());
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        "error: --set J: no parameter of that name; one of I, tau, b\n"
+    );
 }

@@ -1,6 +1,7 @@
 //! The equations of a scene as a self-contained Rust module (only `std`): the mass matrix, the
-//! forcing, the constraint rows, the right-hand side of the first-order system, the energies
-//! and the reactions, each a straight-line function lowered like the tape.
+//! forcing, the constraint rows, the right-hand side of the first-order system and its exact
+//! Jacobian (from the partials of the equations, lowered too), the inverse dynamics, the
+//! energies and the reactions, each a straight-line function lowered like the tape.
 
 use std::fmt::Write;
 
@@ -58,6 +59,11 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
             prepared.lower(&dyn_inputs, &dynamics[n * n + n..])?,
         ));
     }
+    // ∂(r, c)/∂(q, q̇) of the rows the right-hand side solves: it is not stabilised, so the
+    // partials of Φ and Φ̇ that follow them in the partials layout are left out.
+    let partials = prepared.partials_exprs();
+    programs
+        .push(("partials".to_string(), prepared.lower(&obs_inputs, &partials[..(n + m) * 2 * n])?));
     programs.push(("energies".to_string(), prepared.lower(&dyn_inputs, &prepared.extra[..2])?));
     if !reactions.is_empty() {
         let exprs: Vec<cas::ExprId> = reactions.iter().map(|r| r.1).collect();
@@ -88,7 +94,8 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
         names(&prepared.derivation.rates),
         if k > 0 { format!(", {}", names(&prepared.parameters)) } else { String::new() }
     );
-    let _ = writeln!(s, "//! `input` of the reactions: [t, q, q̇, q̈, λ, parameters].");
+    let _ =
+        writeln!(s, "//! `input` of the partials and the reactions: [t, q, q̇, q̈, λ, parameters].");
     let _ = writeln!(s, "//! Operation counts per call:");
     for (name, p) in &programs {
         let _ = writeln!(s, "//!   {name}: {}", p.op_counts());
@@ -106,6 +113,10 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
             "mass_matrix" => "The mass matrix M, column-major (symmetric).",
             "forcing" => "The forcing f.",
             "constraints" => "Per kept constraint: its Jacobian row J (N values), then γ, Φ, Φ̇.",
+            "partials" => {
+                "With q̈ and λ held fixed, the partials of r = M·q̈ − Jᵀλ − f (N rows), then of\n\
+                 c = J·q̈ − γ (a row per kept constraint), each row ∂/∂q (N values) then ∂/∂q̇ (N)."
+            }
             "energies" => "Kinetic and potential energy.",
             _ => "The reactions, in the order the scene names them.",
         };
@@ -120,10 +131,45 @@ pub fn codegen_with(path: &str, source: &str, options: Options) -> Result<Module
         s.push_str(&function(p, name, &doc));
         s.push('\n');
     }
+    s.push_str(&augmented_function(n, m, k));
+    s.push('\n');
     s.push_str(&rhs_function(n, m, k));
+    s.push('\n');
+    s.push_str(&jacobian_function(n, m, k));
+    s.push('\n');
+    s.push_str(&inverse_dynamics_function(n, m, k));
     s.push('\n');
     s.push_str(HELPERS);
     Ok(Module { source: s, prepared, parameters, programs })
+}
+
+/// `augmented(input, a, b)`: the matrix [M −Jᵀ; J 0] (row-major) and the right-hand side
+/// (f, γ) that `rhs` and `jacobian` solve, without stabilisation.
+fn augmented_function(n: usize, m: usize, k: usize) -> String {
+    let size = n + m;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "/// [M −Jᵀ; J 0] (row-major) and (f, γ) at `input`, as `rhs` and `jacobian` solve them."
+    );
+    let _ = writeln!(
+        s,
+        "fn augmented(input: &[f64; {}], a: &mut [f64; {}], b: &mut [f64; {size}]) {{",
+        1 + 2 * n + k,
+        size * size
+    );
+    let _ = writeln!(s, "    let mut mass = [0.0; {}];", n * n);
+    let _ = writeln!(s, "    let mut f = [0.0; {n}];");
+    let _ = writeln!(s, "    mass_matrix(input, &mut mass);");
+    let _ = writeln!(s, "    forcing(input, &mut f);");
+    let _ = writeln!(s, "    for i in 0..{n} {{\n        for j in 0..{n} {{\n            a[i * {size} + j] = mass[j * {n} + i];\n        }}\n        b[i] = f[i];\n    }}");
+    if m > 0 {
+        let _ = writeln!(s, "    let mut rows = [0.0; {}];", m * (n + 3));
+        let _ = writeln!(s, "    constraints(input, &mut rows);");
+        let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n        b[{n} + c] = rows[c * {} + {n}];\n    }}", n + 3, n + 3);
+    }
+    s.push_str("}\n");
+    s
 }
 
 /// `rhs(t, y, parameters, dy)`: y = (q, q̇), dy = (q̇, q̈), solving M q̈ = f (with multipliers,
@@ -142,28 +188,131 @@ fn rhs_function(n: usize, m: usize, k: usize) -> String {
         2 * n,
         2 * n
     );
-    let _ = writeln!(s, "    let mut input = [0.0; {}];", 1 + 2 * n + k);
-    let _ = writeln!(s, "    input[0] = t;");
-    let _ = writeln!(s, "    input[1..{}].copy_from_slice(y);", 1 + 2 * n);
-    let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
-    let _ = writeln!(s, "    let mut mass = [0.0; {}];", n * n);
-    let _ = writeln!(s, "    let mut f = [0.0; {n}];");
-    let _ = writeln!(s, "    mass_matrix(&input, &mut mass);");
-    let _ = writeln!(s, "    forcing(&input, &mut f);");
+    s.push_str(&dynamics_input(n, k));
     let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
     let _ = writeln!(s, "    let mut b = [0.0; {size}];");
-    let _ = writeln!(s, "    for i in 0..{n} {{\n        for j in 0..{n} {{\n            a[i * {size} + j] = mass[j * {n} + i];\n        }}\n        b[i] = f[i];\n    }}");
-    if m > 0 {
-        let _ = writeln!(s, "    let mut rows = [0.0; {}];", m * (n + 3));
-        let _ = writeln!(s, "    constraints(&input, &mut rows);");
-        let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n        b[{n} + c] = rows[c * {} + {n}];\n    }}", n + 3, n + 3);
-    }
+    let _ = writeln!(s, "    augmented(&input, &mut a, &mut b);");
     let _ = writeln!(
         s,
         "    if !solve_in_place({size}, &mut a, &mut b) {{\n        return false;\n    }}"
     );
     let _ = writeln!(s, "    dy[..{n}].copy_from_slice(&y[{n}..]);");
     let _ = writeln!(s, "    dy[{n}..].copy_from_slice(&b[..{n}]);");
+    let _ = writeln!(s, "    true\n}}");
+    s
+}
+
+/// `jacobian(t, y, parameters, jac)`: ∂(q̇, q̈)/∂(q, q̇) of `rhs`, row-major. Differentiating
+/// r = 0 and c = 0 along the state with q̈ and λ free gives
+/// [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c): one solve per state component.
+fn jacobian_function(n: usize, m: usize, k: usize) -> String {
+    let (size, width) = (n + m, 2 * n);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "/// The exact Jacobian of `rhs`: ∂(q̇, q̈)/∂(q, q̇), row-major ({width}×{width}), from the"
+    );
+    let _ =
+        writeln!(s, "/// partials. Returns false when M (or the augmented system) is singular.");
+    let _ = writeln!(
+        s,
+        "pub fn jacobian(t: f64, y: &[f64; {width}], parameters: &[f64; {k}], jac: &mut [f64; {}]) -> bool {{",
+        width * width
+    );
+    s.push_str(&dynamics_input(n, k));
+    let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
+    let _ = writeln!(s, "    let mut b = [0.0; {size}];");
+    let _ = writeln!(s, "    augmented(&input, &mut a, &mut b);");
+    let _ = writeln!(s, "    let matrix = a;");
+    let _ = writeln!(
+        s,
+        "    if !solve_in_place({size}, &mut a, &mut b) {{\n        return false;\n    }}"
+    );
+    let _ = writeln!(s, "    // The partials at (t, q, q̇) with q̈ and λ as solved.");
+    let _ = writeln!(s, "    let mut held = [0.0; {}];", 1 + 3 * n + m + k);
+    let _ = writeln!(s, "    held[..{}].copy_from_slice(&input[..{}]);", 1 + 2 * n, 1 + 2 * n);
+    let _ = writeln!(s, "    held[{}..{}].copy_from_slice(&b);", 1 + 2 * n, 1 + 3 * n + m);
+    let _ = writeln!(s, "    held[{}..].copy_from_slice(parameters);", 1 + 3 * n + m);
+    let _ = writeln!(s, "    let mut d = [0.0; {}];", size * width);
+    let _ = writeln!(s, "    partials(&held, &mut d);");
+    let _ = writeln!(s, "    jac.fill(0.0);");
+    let _ =
+        writeln!(s, "    for i in 0..{n} {{\n        jac[i * {width} + {n} + i] = 1.0;\n    }}");
+    let _ = writeln!(s, "    for col in 0..{width} {{");
+    let _ = writeln!(s, "        let mut a = matrix;");
+    let _ = writeln!(s, "        let mut x = [0.0; {size}];");
+    let _ = writeln!(
+        s,
+        "        for i in 0..{size} {{\n            x[i] = -d[i * {width} + col];\n        }}"
+    );
+    let _ = writeln!(
+        s,
+        "        if !solve_in_place({size}, &mut a, &mut x) {{\n            return false;\n        }}"
+    );
+    let _ = writeln!(s, "        for i in 0..{n} {{\n            jac[({n} + i) * {width} + col] = x[i];\n        }}");
+    let _ = writeln!(s, "    }}");
+    let _ = writeln!(s, "    true\n}}");
+    s
+}
+
+/// The lines that gather `[t, q, q̇, parameters]` into `input`.
+fn dynamics_input(n: usize, k: usize) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "    let mut input = [0.0; {}];", 1 + 2 * n + k);
+    let _ = writeln!(s, "    input[0] = t;");
+    let _ = writeln!(s, "    input[1..{}].copy_from_slice(y);", 1 + 2 * n);
+    let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
+    s
+}
+
+/// `inverse_dynamics(t, q, qd, qdd, parameters, tau)`: τ = M·q̈ − f, and with kept constraints
+/// the least in τᵀ·M⁻¹·τ, as `engine::inverse` gives it: τ + Jᵀμ with [M −Jᵀ; J 0]·(x, μ) =
+/// (τ, 0), the system `rhs` solves. False when it is singular.
+fn inverse_dynamics_function(n: usize, m: usize, k: usize) -> String {
+    let size = n + m;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "/// Inverse dynamics: the generalized forces tau = M·qdd − f that make the motion (q, qd,"
+    );
+    let _ = writeln!(s, "/// qdd) happen when added to f.");
+    if m > 0 {
+        let _ = writeln!(
+            s,
+            "/// With constraints kept, tau + Jᵀμ moves the scene alike for every μ: this is the one\n\
+             /// least in tauᵀ·M⁻¹·tau, which leaves the constraints the load they carry without it.\n\
+             /// Returns false when the augmented system is singular."
+        );
+    } else {
+        let _ =
+            writeln!(s, "/// Always true (the signature is that of scenes with kept constraints).");
+    }
+    let _ = writeln!(
+        s,
+        "pub fn inverse_dynamics(t: f64, q: &[f64; {n}], qd: &[f64; {n}], qdd: &[f64; {n}], \
+         parameters: &[f64; {k}], tau: &mut [f64; {n}]) -> bool {{"
+    );
+    let _ = writeln!(s, "    let mut input = [0.0; {}];", 1 + 2 * n + k);
+    let _ = writeln!(s, "    input[0] = t;");
+    let _ = writeln!(s, "    input[1..{}].copy_from_slice(q);", 1 + n);
+    let _ = writeln!(s, "    input[{}..{}].copy_from_slice(qd);", 1 + n, 1 + 2 * n);
+    let _ = writeln!(s, "    input[{}..].copy_from_slice(parameters);", 1 + 2 * n);
+    let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
+    let _ = writeln!(s, "    let mut b = [0.0; {size}];");
+    let _ = writeln!(s, "    augmented(&input, &mut a, &mut b);");
+    let _ = writeln!(s, "    for i in 0..{n} {{\n        let mut inertial = 0.0;\n        for j in 0..{n} {{\n            inertial += a[i * {size} + j] * qdd[j];\n        }}\n        tau[i] = inertial - b[i];\n    }}");
+    if m == 0 {
+        let _ = writeln!(s, "    true\n}}");
+        return s;
+    }
+    let _ = writeln!(s, "    let matrix = a;");
+    let _ = writeln!(s, "    b[..{n}].copy_from_slice(tau);");
+    let _ = writeln!(s, "    b[{n}..].fill(0.0);");
+    let _ = writeln!(
+        s,
+        "    if !solve_in_place({size}, &mut a, &mut b) {{\n        return false;\n    }}"
+    );
+    let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            tau[j] += matrix[({n} + c) * {size} + j] * b[{n} + c];\n        }}\n    }}");
     let _ = writeln!(s, "    true\n}}");
     s
 }

@@ -1,12 +1,14 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), with the scene's figures frame by frame
+//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
+//! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
-//! any size ([`generate`]), and runs the `linear` stage on small motions about a reference,
-//! the command line's reference resolved against the scene ([`linearize`]), and decides the
-//! scene's `expect linearized:` lines ([`expect_linearized`]).
+//! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
+//! the command line's reference resolved against the scene ([`linearize`]), decides the
+//! scene's `expect linearized:` lines ([`expect_linearized`]), and gives the generalized
+//! forces that make a given motion happen ([`inverse`]).
 //! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
@@ -20,6 +22,8 @@ pub mod derived;
 mod error;
 pub mod expect_linearized;
 pub mod generate;
+pub mod input;
+pub mod inverse;
 pub mod linearize;
 pub mod numbers;
 pub mod simulate;
@@ -69,7 +73,10 @@ pub(crate) fn resolve_with(
     let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let ast = lang::parse(source).map_err(scene)?;
     let checks = model::Checks { units: options.units };
-    model::resolve_with(&ast, source, checks).map_err(scene)
+    let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
+    // The integrator's names are `sim`'s, which `model` does not know.
+    simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
+    Ok((model, warnings))
 }
 
 /// Derives and diagnoses a model resolved from `source`.

@@ -10,6 +10,8 @@ use sim::Layout;
 
 use crate::{Error, Options, Piece, Setting};
 
+mod partials;
+
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
 pub struct Prepared {
@@ -112,10 +114,7 @@ impl Prepared {
             v.push(m.bias);
             v.push(m.phi);
             // A velocity constraint is stabilised on its residual alone.
-            v.push(match m.kind {
-                model::ConstraintKind::Position => d.model.pool.time_derivative(m.phi),
-                model::ConstraintKind::Velocity => d.model.pool.zero(),
-            });
+            v.push(m.drift_rate(&mut d.model.pool));
         }
         v
     }

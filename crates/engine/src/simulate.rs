@@ -6,10 +6,13 @@
 use std::time::Instant;
 
 use numeric::Tape;
-use sim::{integrate, Canonical, Event, FaultKind, Mechanical, Method, Problem, Run};
+use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
 use crate::animate::{Animation, Plan};
+use crate::input::Assignment;
 use crate::numbers::{prepare, Prepared};
+use lang::Diagnostic;
+
 use crate::{Error, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
@@ -19,8 +22,8 @@ pub struct Options {
     pub method: Option<String>,
     pub tolerance: Option<f64>,
     pub step: Option<f64>,
-    /// `name=value` pairs.
-    pub set: Vec<String>,
+    /// Values in place of the scene's.
+    pub set: Vec<Assignment>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -51,8 +54,8 @@ pub struct Settings {
     pub stops: Vec<String>,
     /// Expressions whose zero crossings are recorded.
     pub events: Vec<String>,
-    /// `--set` values: (name, with a `'` for a rate, and the value as a scene expression).
-    pub sets: Vec<(String, String)>,
+    /// `--set` values, each a scene expression.
+    pub sets: Vec<Assignment>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -138,72 +141,34 @@ fn zero_of(text: &str) -> String {
     }
 }
 
-/// The settings of the scene's `simulate` block as its model has them, as text: key → values,
-/// and the unit as written. A scene that does not resolve has none here; loading it reports
-/// why.
-fn scene_settings(source: &str, options: &Options) -> Vec<(String, Vec<String>, Option<String>)> {
-    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
-    let Ok((model, _)) = loaded else { return Vec::new() };
-    let text = |span: lang::Span| source.get(span.start..span.end).unwrap_or("").trim().to_string();
-    model
-        .simulate
-        .iter()
-        .map(|s| {
-            let values = s.values.iter().map(|e| text(e.span)).collect();
-            // As written, powers and `/` included: `until 2 1/s` must not read as seconds.
-            let unit = s.unit.as_ref().map(|u| text(u.span));
-            (s.key.name.clone(), values, unit)
-        })
-        .collect()
+/// The method a scene's `simulate` block names, or why the integrator has none of that name.
+pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Method>, Diagnostic> {
+    let Some(name) = &simulation.method else { return Ok(None) };
+    let method = Method::from_name(&name.name);
+    method.map(Some).ok_or_else(|| {
+        let d = Diagnostic::error(name.span, format!("unknown method `{}`", name.name))
+            .with_label("not a method");
+        let known = Method::NAMES.join(", ");
+        match model::closest(&name.name, Method::NAMES) {
+            Some(near) => d.with_hint(format!("did you mean `{near}`? (known: {known})")),
+            None => d.with_hint(format!("the methods are {known}")),
+        }
+    })
 }
 
-/// The settings of a run of `source`: its `simulate` block (read from its model, before the
-/// scene is derived, so that a bad setting is reported before the derivation's errors), then
-/// the options.
+/// The settings of a run of `source`: its `simulate` block, as its model has read it (before
+/// the scene is derived; a scene that does not resolve has none, and loading it reports why),
+/// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
-    let mut until = 10.0;
-    let mut method = Method::Dop853;
-    let mut tolerance = 1e-10;
-    let mut step: Option<f64> = None;
-    let mut outputs: Vec<String> = Vec::new();
-    let mut stops: Vec<String> = Vec::new();
-    let mut events: Vec<String> = Vec::new();
-    let number = |key: &str, v: &[String]| -> Result<f64, Error> {
-        let text = v.first().map(String::as_str).unwrap_or("");
-        text.parse::<f64>().map_err(|_| {
-            bad(format!("`{key} {text}` in the scene's simulate block is not a number"))
-        })
-    };
-    for (key, values, unit) in scene_settings(source, options) {
-        match key.as_str() {
-            "until" => {
-                until = number(&key, &values)?;
-                if unit.as_deref().is_some_and(|u| u != "s") {
-                    return Err(bad(format!("`until` is a time in s, not in {unit:?}")));
-                }
-            }
-            "method" => {
-                let name = values.first().cloned().unwrap_or_default();
-                method = Method::from_name(&name).ok_or_else(|| {
-                    bad(format!(
-                        "unknown method `{name}` in the simulate block; one of {}",
-                        Method::NAMES.join(", ")
-                    ))
-                })?;
-            }
-            "tolerance" => tolerance = number(&key, &values)?,
-            "step" => step = Some(number(&key, &values)?),
-            "output" => outputs.extend(values),
-            "stop" => stops.extend(values),
-            "event" => events.extend(values),
-            other => {
-                return Err(bad(format!(
-                    "unknown setting `{other}` in the simulate block; known: until, method, \
-                     tolerance, step, output, stop, event"
-                )))
-            }
-        }
-    }
+    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
+    let scene = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    let number = |n: Option<model::Number>| n.map(|n| n.value);
+    let mut until = number(scene.until).unwrap_or(10.0);
+    // `resolve_with` has checked the name.
+    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
+    let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
+    let mut step = number(scene.step);
+    let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
     if let Some(u) = options.until {
         until = u;
     }
@@ -240,17 +205,6 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
 
-    // `--set name=value`: split here, resolved as expressions when the scene is loaded.
-    let mut sets: Vec<(String, String)> = Vec::new();
-    for s in &options.set {
-        let Some((name, value)) = s.split_once('=') else {
-            return Err(Error::setting(
-                Setting::Set,
-                format!(" `{s}` is not of the form name=value"),
-            ));
-        };
-        sets.push((name.trim().to_string(), value.trim().to_string()));
-    }
     Ok(Settings {
         until,
         method,
@@ -259,7 +213,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         outputs,
         stops,
         events,
-        sets,
+        sets: options.set.clone(),
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -288,41 +242,142 @@ pub fn run(
     settings: &Settings,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    let Settings { until, method, tolerance, step, ref stops, ref events, ref sets, .. } =
-        *settings;
-    let mut outputs = settings.outputs.clone();
+    let (mut prepared, outputs, set_exprs) = load(source, settings)?;
+    let columns = Columns {
+        outputs: outputs.len(),
+        stops: settings.stops.len(),
+        events: settings.events.len(),
+    };
+    let values = overrides(&prepared, &settings.sets, &set_exprs)?;
+    let (parameters, y0) = start(&mut prepared, &values)?;
 
-    // --- load, with outputs, events and set values resolved as scene expressions ----------
-    let scene_has_outputs = !outputs.is_empty();
+    let dynamics_exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+    let mut observed: Vec<cas::ExprId> = prepared.extra[..columns.figures()].to_vec();
+    // The figures' numbers follow the energies, before the constraints' residuals that the
+    // integrator appends.
+    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
+    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
+    let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
+    let mechanical =
+        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
+            .with_kinds(prepared.stabilisation());
+    let (run, wall_seconds) =
+        integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
+
+    let dynamics = prepared.dynamics_exprs();
+    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
+    let figures = plan.map(|p| p.figures(&run.trajectory.rows, columns.figures()));
+    let mut outcome = Outcome {
+        columns: [&outputs[..], &settings.stops, &settings.events, &["KE".into(), "PE".into()]]
+            .concat(),
+        run,
+        shown: columns.outputs,
+        energy_columns: (columns.energies(), columns.energies() + 1),
+        constraint_columns: (0..prepared.layout.multipliers)
+            .map(|c| columns.figures() + n_drawn + c)
+            .collect(),
+        event_names: [&settings.stops[..], &settings.events].concat(),
+        stop_names: columns.stops,
+        method: settings.method,
+        wall_seconds,
+        state_names: prepared.state_names(),
+        constraint_names: prepared
+            .derivation
+            .multipliers
+            .iter()
+            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
+            .collect(),
+        angle_oriented_bodies: angle_oriented_bodies(&prepared.derivation.model),
+        conservative,
+        animation: None,
+    };
+    if let Some(figures) = figures {
+        let energy = outcome.energy();
+        let e0 = energy.first().copied().unwrap_or(0.0);
+        let model = &prepared.derivation.model;
+        outcome.animation = Some(Animation {
+            title: model.title.clone(),
+            dimension: model.dimension(),
+            times: outcome.run.trajectory.times.clone(),
+            energy_error: energy.iter().map(|e| e - e0).collect(),
+            conservative,
+            figures,
+        });
+    }
+    Ok(outcome)
+}
+
+/// Where a run's quantities sit among the observed columns: the outputs, the stops, the
+/// events, KE and PE, then the figures of an animation and the constraints' residuals.
+struct Columns {
+    outputs: usize,
+    stops: usize,
+    events: usize,
+}
+
+impl Columns {
+    /// The column of KE; PE follows it.
+    fn energies(&self) -> usize {
+        self.outputs + self.stops + self.events
+    }
+
+    /// The first column after the energies.
+    fn figures(&self) -> usize {
+        self.energies() + 2
+    }
+}
+
+/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
+/// then the `--set` values; with the outputs (the remaining coordinates when the settings name
+/// none) and the `--set` values' expressions.
+fn load(
+    source: &str,
+    settings: &Settings,
+) -> Result<(Prepared, Vec<String>, Vec<cas::ExprId>), Error> {
+    let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
-    extra.extend(stops.iter().cloned());
-    extra.extend(events.iter().cloned());
+    extra.extend(settings.stops.iter().cloned());
+    extra.extend(settings.events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    extra.extend(sets.iter().map(|(_, v)| v.clone()));
+    extra.extend(settings.sets.iter().map(|a| a.value.clone()));
     let mut prepared = prepare(source, &extra, crate::Options { units: settings.units })?;
-    let coordinate_names = prepared.coordinate_names();
-    if !scene_has_outputs {
+    if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
-        outputs = coordinate_names.clone();
+        outputs = prepared.coordinate_names();
         let coords = prepared.derivation.coords.clone();
         let pool = &mut prepared.derivation.model.pool;
         let exprs: Vec<cas::ExprId> = coords.iter().map(|q| pool.sym(*q)).collect();
         prepared.extra.splice(0..0, exprs);
     }
-    let (n_out, n_stop, n_event) = (outputs.len(), stops.len(), events.len());
-    let set_exprs = prepared.extra[n_out + n_stop + n_event + 2..].to_vec();
+    let sets_from = outputs.len() + settings.stops.len() + settings.events.len() + 2;
+    let set_exprs = prepared.extra[sets_from..].to_vec();
+    Ok((prepared, outputs, set_exprs))
+}
 
-    // --- parameter values and the initial state -------------------------------------------
+/// The `--set` values in place of the scene's: parameters by their index, and coordinates by
+/// theirs with whether the rate is set.
+struct Overrides {
+    params: Vec<(usize, cas::ExprId)>,
+    coords: Vec<(usize, bool, cas::ExprId)>,
+}
+
+/// Which parameter or coordinate each `--set` value replaces, or why it replaces none.
+fn overrides(
+    prepared: &Prepared,
+    sets: &[Assignment],
+    exprs: &[cas::ExprId],
+) -> Result<Overrides, Error> {
     let model = &prepared.derivation.model;
-    let mut param_overrides = Vec::new();
-    let mut coord_overrides: Vec<(usize, bool, cas::ExprId)> = Vec::new();
-    for ((name, _), expr) in sets.iter().zip(&set_exprs) {
-        let base = name.trim_end_matches('\'');
-        let primes = name.len() - base.len();
+    let coordinate_names = prepared.coordinate_names();
+    let mut found = Overrides { params: Vec::new(), coords: Vec::new() };
+    for (set, expr) in sets.iter().zip(exprs) {
+        let (name, (base, primes)) = (&set.name, set.base());
         if let Some(i) = model.params.iter().position(|p| p.name == base && primes == 0) {
-            param_overrides.push((i, *expr));
+            found.params.push((i, *expr));
         } else if let Some(i) = model.coords.iter().position(|c| c.name == base && primes <= 1) {
             if !prepared.derivation.coords.contains(&model.coords[i].sym) {
                 return Err(Error::given(
@@ -335,7 +390,7 @@ pub fn run(
                     ),
                 ));
             }
-            coord_overrides.push((i, primes == 1, *expr));
+            found.coords.push((i, primes == 1, *expr));
         } else {
             let mut known: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
             for c in &coordinate_names {
@@ -349,12 +404,18 @@ pub fn run(
             ));
         }
     }
-    let parameters = prepared.parameter_values(&param_overrides)?;
-    if !param_overrides.is_empty() {
+    Ok(found)
+}
+
+/// The parameters' values and the initial state, with the `--set` values in place and the
+/// start settled again on the kept constraints where they moved it.
+fn start(prepared: &mut Prepared, values: &Overrides) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let parameters = prepared.parameter_values(&values.params)?;
+    if !values.params.is_empty() {
         // The scene's masses were checked with its own values; `--set` may change their sign.
         prepared.masses_at(&parameters)?;
     }
-    let mut y0 = prepared.initial_state(&parameters, &coord_overrides)?;
+    let mut y0 = prepared.initial_state(&parameters, &values.coords)?;
     let set_in = |prepared: &Prepared, rates: bool| -> Vec<bool> {
         prepared
             .derivation
@@ -362,13 +423,13 @@ pub fn run(
             .iter()
             .map(|q| {
                 let i = prepared.derivation.model.coords.iter().position(|c| c.sym == *q);
-                coord_overrides.iter().any(|(j, rate, _)| Some(*j) == i && *rate == rates)
+                values.coords.iter().any(|(j, rate, _)| Some(*j) == i && *rate == rates)
             })
             .collect()
     };
-    let (set_positions, set_rates) = (set_in(&prepared, false), set_in(&prepared, true));
+    let (set_positions, set_rates) = (set_in(prepared, false), set_in(prepared, true));
     // The scene's own start was settled when it was derived; `--set` values may break it.
-    if !param_overrides.is_empty() || !coord_overrides.is_empty() {
+    if !values.params.is_empty() || !values.coords.is_empty() {
         prepared.settle_positions(&mut y0, &parameters, &set_positions)?;
         prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
     }
@@ -378,20 +439,20 @@ pub fn run(
             prepared.state_names()[bad_slot]
         )));
     }
+    Ok((parameters, y0))
+}
 
-    // --- lower and run --------------------------------------------------------------------
-    let dynamics_exprs = prepared.dynamics_exprs();
-    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
-    let mut observed: Vec<cas::ExprId> = prepared.extra[..n_out + n_stop + n_event + 2].to_vec();
-    // The figures' numbers follow the energies, before the constraints' residuals that the
-    // integrator appends.
-    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
-    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
-    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
-    let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
-    let mechanical =
-        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation());
+/// Integrates the lowered scene from `y0` with the settings' method, watching the stops and
+/// events; the run and its wall time.
+fn integrate_scene(
+    prepared: &mut Prepared,
+    mechanical: Mechanical,
+    y0: &[f64],
+    settings: &Settings,
+    columns: &Columns,
+    progress: &mut dyn Progress,
+) -> Result<(Run, f64), Error> {
+    let Settings { until, method, tolerance, step, .. } = *settings;
     let run_settings = sim::Settings {
         method,
         start: 0.0,
@@ -401,12 +462,13 @@ pub fn run(
         max_steps: 20_000_000,
         samples: settings.samples,
     };
-    let watched: Vec<Event> = (0..n_stop)
-        .map(|k| Event { column: n_out + k, stop: true })
-        .chain((0..n_event).map(|k| Event { column: n_out + n_stop + k, stop: false }))
+    let Columns { outputs, stops, events } = *columns;
+    let watched: Vec<Event> = (0..stops)
+        .map(|k| Event { column: outputs + k, stop: true })
+        .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
         .collect();
     if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
-        return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853", method.name())));
+        return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853 or radau", method.name())));
     }
     progress.start(until);
     let started = Instant::now();
@@ -416,74 +478,54 @@ pub fn run(
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
             let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
-            let z0 = canonical.from_physical(0.0, &y0);
+            if method.uses_jacobian() {
+                let exprs = prepared.canonical_partials_exprs();
+                let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+                canonical = canonical.with_partials(Tape::new(partials));
+            }
+            let z0 = canonical.from_physical(0.0, y0);
             integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
+        } else if method.handles_algebraic() && prepared.layout.multipliers > 0 {
+            let mut constrained = Constrained::new(with_partials(prepared, method, mechanical)?);
+            match constrained.consistent_state(0.0, y0) {
+                Ok(z0) => integrate(&mut constrained, &z0, &run_settings, &watched, &mut update),
+                // No consistent accelerations at the start: the stabilised form reports why
+                // (which of the mass matrix and the constraints lost rank) as its first fault.
+                Err(_) => {
+                    let mut m = constrained.into_inner();
+                    integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
+                }
+            }
         } else {
-            let mut m = mechanical;
-            integrate(&mut m as &mut dyn Problem, &y0, &run_settings, &watched, &mut update)
+            let mut m = with_partials(prepared, method, mechanical)?;
+            integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
         }
     };
     progress.finish();
-    let wall_seconds = started.elapsed().as_secs_f64();
+    Ok((run, started.elapsed().as_secs_f64()))
+}
 
-    let dynamics = prepared.dynamics_exprs();
-    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
-    let mut columns: Vec<String> = outputs.clone();
-    columns.extend(stops.iter().cloned());
-    columns.extend(events.iter().cloned());
-    columns.push("KE".into());
-    columns.push("PE".into());
-    let constraint_columns = (0..prepared.layout.multipliers)
-        .map(|c| n_out + n_stop + n_event + 2 + n_drawn + c)
-        .collect();
-    let mut event_names = stops.clone();
-    event_names.extend(events.iter().cloned());
-    let figures = plan.map(|p| p.figures(&run.trajectory.rows, n_out + n_stop + n_event + 2));
-    let title = prepared.derivation.model.title.clone();
-    let dimension = prepared.derivation.model.dimension();
-    let mut outcome = Outcome {
-        columns,
-        run,
-        shown: n_out,
-        energy_columns: (n_out + n_stop + n_event, n_out + n_stop + n_event + 1),
-        constraint_columns,
-        event_names,
-        stop_names: n_stop,
-        method,
-        wall_seconds,
-        state_names: prepared.state_names(),
-        constraint_names: prepared
-            .derivation
-            .multipliers
-            .iter()
-            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
-            .collect(),
-        angle_oriented_bodies: prepared
-            .derivation
-            .model
-            .bodies
-            .iter()
-            .filter(|b| {
-                matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
-            })
-            .map(|b| b.name.clone())
-            .collect(),
-        conservative,
-        animation: None,
-    };
-    if let Some(figures) = figures {
-        let energy = outcome.energy();
-        let e0 = energy.first().copied().unwrap_or(0.0);
-        outcome.animation = Some(Animation {
-            title,
-            dimension,
-            times: outcome.run.trajectory.times.clone(),
-            energy_error: energy.iter().map(|e| e - e0).collect(),
-            conservative,
-            figures,
-        });
+/// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
+/// the methods that use one, so explicit runs lower nothing more.
+fn with_partials(
+    prepared: &mut Prepared,
+    method: Method,
+    mechanical: Mechanical,
+) -> Result<Mechanical, Error> {
+    if !method.uses_jacobian() {
+        return Ok(mechanical);
     }
-    Ok(outcome)
+    let exprs = prepared.partials_exprs();
+    let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
+    Ok(mechanical.with_partials(Tape::new(partials)))
+}
+
+/// Bodies in space oriented by angles (not Euler parameters).
+fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
+    let by_angles = |b: &&model::Body| {
+        matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
+    };
+    model.bodies.iter().filter(by_angles).map(|b| b.name.clone()).collect()
 }
 
 /// Whether T + V should stay at its start value. It does not when loads act that no potential
@@ -555,6 +597,22 @@ impl Outcome {
                 .iter()
                 .flat_map(|r| self.constraint_columns.iter().map(move |&c| r[c]))
                 .fold(0.0, f64::max),
+        )
+    }
+
+    /// The largest |Φ| at the integrator's own steps, leaving out the samples interpolated
+    /// between them: radau holds the constraints at its steps to Newton's tolerance, while its
+    /// collocation polynomial between them keeps them only to its own accuracy.
+    pub fn constraint_drift_at_steps(&self) -> Option<f64> {
+        if self.constraint_columns.is_empty() {
+            return None;
+        }
+        let peaks = &self.run.peaks;
+        Some(
+            self.constraint_columns
+                .iter()
+                .filter_map(|&c| peaks.get(c))
+                .fold(0.0, |m, v| m.max(*v)),
         )
     }
 
@@ -644,6 +702,23 @@ impl Outcome {
             FaultKind::NewtonFailed => (
                 "Newton's iteration of the implicit method did not converge".into(),
                 "the step is too large for this motion: lower the step".into(),
+            ),
+            FaultKind::NewtonStalled { step, contraction, singular } => (
+                if *singular {
+                    format!(
+                        "the implicit method's iteration matrix stayed singular down to a step of \
+                         {step:.1e}"
+                    )
+                } else {
+                    format!(
+                        "Newton's iteration of the implicit method did not converge although the \
+                         step was cut to {step:.1e} (successive corrections shrank by only \
+                         {contraction:.2})"
+                    )
+                },
+                "the equations are not smooth here (a kink, a switch, a square root at zero), or \
+                 the kept constraints cannot all hold here; a smaller tolerance will not help"
+                    .into(),
             ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),

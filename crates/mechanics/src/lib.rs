@@ -6,14 +6,16 @@
 //! constraint integrated when its coefficients are constant, kept otherwise), generalized
 //! forces by virtual work, the Euler–Lagrange equations as M(q, t)·q̈ = f(q, q̇, t), the same
 //! in the independent rates where velocity constraints are kept, reactions where a scene asks
-//! for them, and the algebraic side of checking `expect` lines (the linearization about a
-//! reference is the `linear` crate's). It is purely symbolic: what needs numbers
+//! for them, the algebraic side of checking `expect` lines, and the equations' exact partials
+//! in the state, which every exact Jacobian is made of (the linearization about a reference is
+//! the `linear` crate's). It is purely symbolic: what needs numbers
 //! (random states, the numeric start, verdicts sampled at states) is the `verify` crate's. It
 //! knows nothing of parsing or of files: it starts from a [`model::Model`].
 
 mod check;
 mod derive;
 mod independent;
+mod partials;
 mod present;
 mod start;
 mod start_solution;
@@ -23,5 +25,6 @@ pub use present::collect_by_motion;
 
 pub use check::Decision;
 pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
+pub use partials::{Partials, StatePartials};
 pub use present::{Equation, NumericStart, StartShows};
 pub use start_solution::StartSolution;

@@ -10,11 +10,11 @@ mod resolve;
 pub mod units;
 mod value;
 
-pub use resolve::{dimension_errors, resolve, resolve_with, Scope};
+pub use resolve::{closest, dimension_errors, resolve, resolve_with, Scope};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};
-use lang::{Setting, Span, Unit};
+use lang::{Ident, Span, Unit};
 
 /// What [`resolve_with`] checks besides names and meaning.
 #[derive(Clone, Copy, Debug, Default)]
@@ -350,6 +350,35 @@ pub struct Linearize {
     pub span: Span,
 }
 
+/// A number of a `simulate` block with where it is written.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Number {
+    /// In SI: a time in seconds.
+    pub value: f64,
+    pub span: Span,
+}
+
+/// The settings of the scene's `simulate { … }` blocks, each read into its type and checked:
+/// a setting given twice takes the later value; `output`, `stop` and `event` add up.
+#[derive(Clone, Debug, Default)]
+pub struct Simulation {
+    /// The end time; positive.
+    pub until: Option<Number>,
+    /// The integration method as written. Which names exist is the integrator's to say: the
+    /// front end checks it (`engine` against `sim::Method`).
+    pub method: Option<Ident>,
+    /// The tolerance of the adaptive methods; positive, without a unit.
+    pub tolerance: Option<Number>,
+    /// The step of the fixed-step methods; positive.
+    pub step: Option<Number>,
+    /// Quantities to record, as written: scene expressions resolved when a run asks for them.
+    pub outputs: Vec<String>,
+    /// Expressions whose zero ends the run, as written.
+    pub stops: Vec<String>,
+    /// Expressions whose zero crossings are recorded, as written.
+    pub events: Vec<String>,
+}
+
 /// Everything a scene says, resolved.
 pub struct Model {
     /// What resolving the scene left for resolving more expressions against it.
@@ -379,7 +408,8 @@ pub struct Model {
     pub drawings: Vec<Drawing>,
     /// The springs and dampers, in the order written.
     pub links: Vec<Link>,
-    pub simulate: Vec<Setting>,
+    /// The `simulate { … }` blocks, read into their settings.
+    pub simulation: Simulation,
     /// The `linearize about` lines, in the order written.
     pub linearize: Vec<Linearize>,
     pub placeholders: Vec<(SymId, Placeholder)>,

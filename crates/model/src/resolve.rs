@@ -7,24 +7,23 @@ mod constraints;
 mod dims;
 mod draw;
 mod expressions;
+mod inertia;
 mod loads;
 mod names;
 mod session;
 mod signals;
+mod simulation;
 mod space;
 mod statements;
-
-use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Ident, SceneFile, Span, StmtKind};
 
-use self::dims::{BodyDims, NameDims};
 pub use self::session::Scope;
-use crate::units::{Form, Inference};
+use crate::units::Form;
 use crate::{
     Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
-    Link, Load, Model, Output, Param, Placeholder, Show, Term, Value,
+    Link, Load, Model, Output, Param, Placeholder, Show, Simulation, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.
@@ -75,7 +74,7 @@ pub fn resolve_with(
 /// Checks that every term of the scene has one dimension. Returns the mismatches found, from
 /// as much of the scene as resolves.
 pub fn dimension_errors(file: &SceneFile) -> Vec<Diagnostic> {
-    walk(file, "").units.solve()
+    walk(file, "").scope.units.solve()
 }
 
 fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
@@ -114,8 +113,9 @@ fn normalize(name: &str) -> String {
         .collect()
 }
 
-/// The closest candidate within a small edit distance.
-fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+/// The closest candidate within a small edit distance: the "did you mean" of a misspelt name,
+/// for every stage that suggests one.
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
     // One letter away from a one- or two-letter name is any other name: only a change of
     // case counts there.
     if name.chars().count() <= 2 {
@@ -130,21 +130,37 @@ fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Opt
         .map(|(_, c)| c)
 }
 
+/// The walk over a scene: where it is, and its state in three parts, so that a method's
+/// signature of use shows what it reads and writes: the [`Scope`] (what names mean, the
+/// dimension facts, the parameters' values), the [`Draft`] of the model, and the
+/// [`Diagnostics`] found.
 struct Resolver<'a> {
+    /// The text the spans point into.
     source: &'a str,
-    pool: Pool,
-    time: SymId,
-    names: HashMap<String, Binding>,
-    /// Every name the file declares anywhere, for "used before it is declared".
-    declared: HashMap<String, (Span, &'static str)>,
-    errors: Vec<Diagnostic>,
-    warnings: Vec<Diagnostic>,
+    scope: Scope,
+    model: Draft,
+    diagnostics: Diagnostics,
+    /// The statement being resolved, by its place in the file.
+    stmt: usize,
+    /// Resolving `show`, `expect`, `linearize` and `draw` lines, which may name anything in
+    /// the file wherever they stand.
     in_outputs: bool,
     /// Resolving a `draw` line, where a reaction may not be named: asking for one would change
     /// the derivation, and a drawing must leave the equations as they are.
     in_drawing: bool,
-    /// Names looked up so far, for the warning about parameters nothing uses.
-    used: std::collections::HashSet<String>,
+}
+
+/// The errors and warnings found so far.
+#[derive(Default)]
+struct Diagnostics {
+    errors: Vec<Diagnostic>,
+    warnings: Vec<Diagnostic>,
+}
+
+/// The model under construction: a [`Model`] but for its scope, field by field.
+struct Draft {
+    pool: Pool,
+    time: SymId,
     title: Option<String>,
     params: Vec<Param>,
     inputs: Vec<Input>,
@@ -163,53 +179,25 @@ struct Resolver<'a> {
     linear_expects: Vec<LinearExpect>,
     drawings: Vec<Drawing>,
     links: Vec<Link>,
-    simulate: Vec<lang::Setting>,
+    simulation: Simulation,
     linearize: Vec<Linearize>,
     placeholders: Vec<(SymId, Placeholder)>,
     lets: Vec<(String, cas::ExprId)>,
-    /// Each parameter's value as a number (no symbols left), for the checks of constants.
-    param_values: HashMap<SymId, ExprId>,
-    /// The statement being resolved, by its place in the file.
-    stmt: usize,
-    /// What every expression resolved says about dimensions.
-    units: Inference,
-    /// The dimension of each name in `names`.
-    name_dims: HashMap<String, NameDims>,
-    /// The dimensions of each body in `bodies`, by the same index.
-    body_dims: Vec<BodyDims>,
-    /// Names whose dimension is not known where they are used (see [`Self::name_dims`]).
-    loose: HashMap<String, Form>,
-    /// Each `quaternion(…)` resolved: its matrix, its Euler parameters and where it is written.
-    quaternions: Vec<(Vec<Vec<ExprId>>, [ExprId; 4], Span)>,
-    /// What is checked besides names and meaning.
-    checks: Checks,
 }
 
-impl<'a> Resolver<'a> {
-    fn new(source: &'a str) -> Self {
+impl Draft {
+    /// An empty model with its pool, time, and the placeholders `KE` and `PE`.
+    fn new() -> Draft {
         let mut pool = Pool::new();
         pool.set_zero_test(Box::new(numeric::GenericPoints));
         let time = pool.time();
-        let mut names = HashMap::new();
-        let mut placeholders = Vec::new();
-        for (name, kind) in
+        let placeholders =
             [("KE", Placeholder::KineticEnergy), ("PE", Placeholder::PotentialEnergy)]
-        {
-            let s = pool.param(name);
-            names.insert(name.to_string(), Binding::Quantity(s));
-            placeholders.push((s, kind));
-        }
-        Resolver {
-            source,
+                .map(|(name, kind)| (pool.param(name), kind))
+                .to_vec();
+        Draft {
             pool,
             time,
-            names,
-            declared: HashMap::new(),
-            errors: Vec::new(),
-            warnings: Vec::new(),
-            in_outputs: false,
-            in_drawing: false,
-            used: std::collections::HashSet::new(),
             title: None,
             params: Vec::new(),
             inputs: Vec::new(),
@@ -228,28 +216,101 @@ impl<'a> Resolver<'a> {
             linear_expects: Vec::new(),
             drawings: Vec::new(),
             links: Vec::new(),
-            simulate: Vec::new(),
+            simulation: Simulation::default(),
             linearize: Vec::new(),
             placeholders,
             lets: Vec::new(),
-            param_values: HashMap::new(),
+        }
+    }
+
+    /// The draft of a resolved model, taken out of it to be added to; `model` keeps its scope.
+    fn take(model: &mut Model) -> Draft {
+        let mut pool = Pool::new();
+        std::mem::swap(&mut pool, &mut model.pool);
+        Draft {
+            pool,
+            time: model.time,
+            title: model.title.take(),
+            params: std::mem::take(&mut model.params),
+            inputs: std::mem::take(&mut model.inputs),
+            outputs: std::mem::take(&mut model.outputs),
+            coords: std::mem::take(&mut model.coords),
+            bodies: std::mem::take(&mut model.bodies),
+            constraints: std::mem::take(&mut model.constraints),
+            gravity: model.gravity.take(),
+            potentials: std::mem::take(&mut model.potentials),
+            forces: std::mem::take(&mut model.forces),
+            torques: std::mem::take(&mut model.torques),
+            dissipation: std::mem::take(&mut model.dissipation),
+            lagrangians: std::mem::take(&mut model.lagrangians),
+            shows: std::mem::take(&mut model.shows),
+            expects: std::mem::take(&mut model.expects),
+            linear_expects: std::mem::take(&mut model.linear_expects),
+            drawings: std::mem::take(&mut model.drawings),
+            links: std::mem::take(&mut model.links),
+            simulation: std::mem::take(&mut model.simulation),
+            linearize: std::mem::take(&mut model.linearize),
+            placeholders: std::mem::take(&mut model.placeholders),
+            lets: std::mem::take(&mut model.lets),
+        }
+    }
+
+    fn into_model(self, scope: Scope) -> Model {
+        Model {
+            scope,
+            pool: self.pool,
+            title: self.title,
+            time: self.time,
+            params: self.params,
+            inputs: self.inputs,
+            outputs: self.outputs,
+            coords: self.coords,
+            bodies: self.bodies,
+            constraints: self.constraints,
+            gravity: self.gravity,
+            potentials: self.potentials,
+            forces: self.forces,
+            torques: self.torques,
+            dissipation: self.dissipation,
+            lagrangians: self.lagrangians,
+            shows: self.shows,
+            expects: self.expects,
+            linear_expects: self.linear_expects,
+            drawings: self.drawings,
+            links: self.links,
+            simulation: self.simulation,
+            linearize: self.linearize,
+            placeholders: self.placeholders,
+            lets: self.lets,
+        }
+    }
+}
+
+impl<'a> Resolver<'a> {
+    fn new(source: &'a str) -> Self {
+        let model = Draft::new();
+        let mut scope = Scope::default();
+        for &(s, _) in &model.placeholders {
+            scope.names.insert(model.pool.symbol(s).name.clone(), Binding::Quantity(s));
+        }
+        Resolver {
+            source,
+            scope,
+            model,
+            diagnostics: Diagnostics::default(),
             stmt: 0,
-            units: Inference::default(),
-            name_dims: HashMap::new(),
-            body_dims: Vec::new(),
-            loose: HashMap::new(),
-            quaternions: Vec::new(),
-            checks: Checks::default(),
+            in_outputs: false,
+            in_drawing: false,
         }
     }
 
     fn enter(&mut self, index: usize) {
         self.stmt = index;
-        self.units.enter(index);
+        self.scope.units.enter(index);
     }
 
     fn error(&mut self, d: Diagnostic) {
-        self.errors.push(d);
+        self.diagnostics.errors.push(d);
     }
 
     fn text(&self, span: Span) -> String {
@@ -259,7 +320,7 @@ impl<'a> Resolver<'a> {
     fn declare_all(&mut self, file: &SceneFile) {
         for stmt in &file.stmts {
             let mut add = |id: &Ident, what: &'static str| {
-                self.declared.entry(normalize(&id.name)).or_insert((id.span, what));
+                self.scope.declared.entry(normalize(&id.name)).or_insert((id.span, what));
             };
             match &stmt.kind {
                 StmtKind::Param(ps) => ps.iter().for_each(|p| add(&p.name, "parameter")),
@@ -287,9 +348,9 @@ impl<'a> Resolver<'a> {
             );
             return false;
         }
-        if let Some(existing) = self.names.get(&name) {
+        if let Some(existing) = self.scope.names.get(&name) {
             if !matches!(existing, Binding::Quantity(_)) {
-                let first = self.declared.get(&name).map(|(s, _)| *s);
+                let first = self.scope.declared.get(&name).map(|(s, _)| *s);
                 let mut d = Diagnostic::error(id.span, format!("`{}` is declared twice", id.name))
                     .with_label("declared again here");
                 if let Some(first) = first.filter(|s| *s != id.span) {
@@ -301,23 +362,23 @@ impl<'a> Resolver<'a> {
                 return false;
             }
         }
-        self.names.insert(name, binding);
+        self.scope.names.insert(name, binding);
         true
     }
 
     fn finish(mut self, checks: Checks) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
-        let unused_inputs = self.inputs.iter().filter(|u| !self.used.contains(&u.name));
+        let unused_inputs = self.model.inputs.iter().filter(|u| !self.scope.used.contains(&u.name));
         let unused_inputs: Vec<_> = unused_inputs.map(|u| (u.span, u.name.clone())).collect();
         for (span, name) in unused_inputs {
-            self.warnings.push(
+            self.diagnostics.warnings.push(
                 Diagnostic::warning(span, format!("input `{name}` is never used"))
                     .with_label("declared here")
                     .with_hint("use it in a force, torque, potential or dissipation, or remove it"),
             );
         }
-        for p in &self.params {
-            if !self.used.contains(&p.name) {
-                self.warnings.push(
+        for p in &self.model.params {
+            if !self.scope.used.contains(&p.name) {
+                self.diagnostics.warnings.push(
                     Diagnostic::warning(p.span, format!("parameter `{}` is never used", p.name))
                         .with_label("declared here")
                         .with_hint(
@@ -326,70 +387,34 @@ impl<'a> Resolver<'a> {
                 );
             }
         }
-        if let (Some(first), true) = (self.linear_expects.first(), self.linearize.is_empty()) {
+        if let (Some(first), true) =
+            (self.model.linear_expects.first(), self.model.linearize.is_empty())
+        {
             let d = Diagnostic::error(first.span, "nothing is linearized to expect this of")
                 .with_label("the scene has no `linearize about` line")
                 .with_hint("add `linearize about …` naming the reference");
-            self.errors.push(d);
+            self.diagnostics.errors.push(d);
         }
-        if !self.errors.is_empty() {
-            let mut errors = self.errors;
+        if !self.diagnostics.errors.is_empty() {
+            let mut errors = self.diagnostics.errors;
             errors.sort_by_key(|d| d.span.start);
             return Err(errors);
         }
         if checks.units {
-            let mismatches = self.units.solve();
+            let mismatches = self.scope.units.solve();
             if !mismatches.is_empty() {
                 return Err(mismatches);
             }
         }
-        self.checks = checks;
-        let warnings = std::mem::take(&mut self.warnings);
+        self.scope.checks = checks;
+        let warnings = std::mem::take(&mut self.diagnostics.warnings);
         Ok((self.into_model(), warnings))
     }
 
     /// The model resolved so far, with the scope that resolves more expressions against it.
-    fn into_model(self) -> Model {
-        let scope = Scope {
-            names: self.names,
-            declared: self.declared,
-            used: self.used,
-            param_values: self.param_values,
-            statements: self.stmt + 1,
-            units: self.units,
-            name_dims: self.name_dims,
-            body_dims: self.body_dims,
-            loose: self.loose,
-            quaternions: self.quaternions,
-            checks: self.checks,
-        };
-        Model {
-            scope,
-            pool: self.pool,
-            title: self.title,
-            time: self.time,
-            params: self.params,
-            inputs: self.inputs,
-            outputs: self.outputs,
-            coords: self.coords,
-            bodies: self.bodies,
-            constraints: self.constraints,
-            gravity: self.gravity,
-            potentials: self.potentials,
-            forces: self.forces,
-            torques: self.torques,
-            dissipation: self.dissipation,
-            lagrangians: self.lagrangians,
-            shows: self.shows,
-            expects: self.expects,
-            linear_expects: self.linear_expects,
-            drawings: self.drawings,
-            links: self.links,
-            simulate: self.simulate,
-            linearize: self.linearize,
-            placeholders: self.placeholders,
-            lets: self.lets,
-        }
+    fn into_model(mut self) -> Model {
+        self.scope.statements = self.stmt + 1;
+        self.model.into_model(self.scope)
     }
 }
 

@@ -99,9 +99,31 @@ pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, P
     }
     out.set_item("shown", shown)?;
 
+    let (at_start, at_start_note) = at_start(py, &mut s, pool, &derived.at_start)?;
+    out.set_item("at_start", at_start)?;
+    out.set_item("at_start_note", at_start_note)?;
+
+    let constraints = constraints(py, &mut s, d)?;
+    out.set_item("constraints", constraints)?;
+
+    let independent =
+        derived.independent.as_ref().map(|form| independent(py, &mut s, pool, form)).transpose()?;
+    out.set_item("independent", independent)?;
+    out.set_item("latex", latex(d, &derived))?;
+    Ok(out)
+}
+
+/// `show at start:` items: exact, or numbers with a note of how they were found, or only the
+/// note of why there are none.
+fn at_start<'py>(
+    py: Python<'py>,
+    s: &mut ToSympy<'py>,
+    pool: &Pool,
+    shown: &ShownAtStart,
+) -> PyResult<(Bound<'py, PyDict>, Option<String>)> {
     let at_start = PyDict::new(py);
     let mut at_start_note: Option<String> = None;
-    match &derived.at_start {
+    match shown {
         ShownAtStart::Exact(items) => {
             for (show, value) in items {
                 at_start.set_item(&show.label, s.value(pool, value)?)?;
@@ -149,9 +171,16 @@ pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, P
             at_start_note = Some("the mass matrix is singular at the start".to_string());
         }
     }
-    out.set_item("at_start", at_start)?;
-    out.set_item("at_start_note", at_start_note)?;
+    Ok((at_start, at_start_note))
+}
 
+/// Each constraint: its equation, Φ, reaction, and how the derivation handled it.
+fn constraints<'py>(
+    py: Python<'py>,
+    s: &mut ToSympy<'py>,
+    d: &Derivation,
+) -> PyResult<Bound<'py, PyList>> {
+    let pool = &d.model.pool;
     let constraints = PyList::empty(py);
     for (k, c) in d.model.constraints.iter().enumerate() {
         let item = PyDict::new(py);
@@ -176,31 +205,32 @@ pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, P
         }
         constraints.append(item)?;
     }
-    out.set_item("constraints", constraints)?;
+    Ok(constraints)
+}
 
-    let independent = match &derived.independent {
-        None => None,
-        Some(form) => {
-            let item = PyDict::new(py);
-            let dependent = PyDict::new(py);
-            for (rate, e) in &form.dependent {
-                dependent.set_item(&pool.symbol(*rate).name, s.expr(pool, *e)?)?;
-            }
-            item.set_item("dependent", dependent)?;
-            item.set_item("independent", list(&mut s, &form.independent)?)?;
-            let zero = pool.zero();
-            let equations: Vec<_> = form
-                .equations
-                .iter()
-                .map(|e| s.equation(pool, *e, zero))
-                .collect::<PyResult<_>>()?;
-            item.set_item("equations", PyList::new(py, equations)?)?;
-            Some(item)
-        }
+/// The equations in the independent rates, with the dependent rates solved.
+fn independent<'py>(
+    py: Python<'py>,
+    s: &mut ToSympy<'py>,
+    pool: &Pool,
+    form: &mechanics::IndependentForm,
+) -> PyResult<Bound<'py, PyDict>> {
+    let list = |s: &mut ToSympy<'py>, syms: &[cas::SymId]| -> PyResult<Bound<'py, PyList>> {
+        let items: Vec<_> = syms.iter().map(|q| s.symbol(pool, *q)).collect::<PyResult<_>>()?;
+        PyList::new(py, items)
     };
-    out.set_item("independent", independent)?;
-    out.set_item("latex", latex(d, &derived))?;
-    Ok(out)
+    let item = PyDict::new(py);
+    let dependent = PyDict::new(py);
+    for (rate, e) in &form.dependent {
+        dependent.set_item(&pool.symbol(*rate).name, s.expr(pool, *e)?)?;
+    }
+    item.set_item("dependent", dependent)?;
+    item.set_item("independent", list(s, &form.independent)?)?;
+    let zero = pool.zero();
+    let equations: Vec<_> =
+        form.equations.iter().map(|e| s.equation(pool, *e, zero)).collect::<PyResult<_>>()?;
+    item.set_item("equations", PyList::new(py, equations)?)?;
+    Ok(item)
 }
 
 /// The equations of motion and the mass-matrix form in LaTeX, as a notebook shows them:

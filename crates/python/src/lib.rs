@@ -48,6 +48,11 @@ impl NativeScene {
         numbers::Rhs::new(&self.source, &self.path, self.units)
     }
 
+    /// τ = M·q̈ − f over many motions.
+    fn inverse_dynamics(&self) -> PyResult<numbers::InverseDynamics> {
+        numbers::InverseDynamics::new(&self.source, &self.path, self.units)
+    }
+
     /// M(t, q) at the parameters' values.
     fn mass_matrix_function(&self) -> PyResult<numbers::MassMatrix> {
         numbers::MassMatrix::new(&self.source, &self.path, self.units)
@@ -71,6 +76,7 @@ impl NativeScene {
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
         let options = engine::simulate::Options {
             until,
             method,
@@ -108,9 +114,12 @@ impl NativeScene {
         out.set_item("steps", outcome.run.steps)?;
         out.set_item("rejected", outcome.run.rejected)?;
         out.set_item("evaluations", outcome.run.evaluations)?;
+        out.set_item("jacobians", outcome.run.jacobians)?;
+        out.set_item("factorizations", outcome.run.factorizations)?;
         out.set_item("energy_drift", outcome.energy_drift())?;
         out.set_item("conservative", outcome.conservative)?;
         out.set_item("constraint_drift", outcome.constraint_drift())?;
+        out.set_item("constraint_drift_at_steps", outcome.constraint_drift_at_steps())?;
         out.set_item("wall_seconds", outcome.wall_seconds)?;
         Ok(out)
     }
@@ -276,5 +285,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NativeScene>()?;
     m.add_class::<numbers::Rhs>()?;
     m.add_class::<numbers::MassMatrix>()?;
+    m.add_class::<numbers::InverseDynamics>()?;
     Ok(())
 }

@@ -1,14 +1,19 @@
 //! The scene's equations as fast callables for NumPy and SciPy: `Scene.rhs()` gives
 //! y' = F(t, y) for `scipy.integrate.solve_ivp` (y = coordinates, then rates), evaluated by the
 //! lowered programs through `sim::Mechanical` exactly as `simulate` runs them, with
-//! `.batch(Y)` for many states in one call; `Scene.mass_matrix_function()` gives M(t, q).
+//! `.batch(Y)` for many states in one call, `.jac(t, y)`, the exact ∂F/∂y for `solve_ivp`'s
+//! `jac` (its partials lowered on first use), and parameter values per call or from then on;
+//! `Scene.mass_matrix_function()` gives M(t, q); the inverse dynamics τ = M·q̈ − f of
+//! `engine::inverse` over many states is [`InverseDynamics`].
 
 use engine::numbers::{prepare, Prepared};
 use numeric::Tape;
+use numpy::ndarray::ArrayView2;
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayMethods};
+use pyo3::exceptions::PyKeyError;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyMapping};
 use sim::{FaultKind, Mechanical, Problem};
 
 use crate::errors::{engine_error, numeric_error};
@@ -55,9 +60,15 @@ pub struct Rhs {
     #[pyo3(get)]
     names: Vec<String>,
     y0: Vec<f64>,
-    /// Parameter values in declaration order, as the programs use them.
-    parameters: Vec<(String, f64)>,
+    /// The parameters' names in declaration order, the order of their values.
+    #[pyo3(get)]
+    parameter_names: Vec<String>,
     dy: Vec<f64>,
+    /// The scene for numbers, kept to lower the partials when `jac` is first called (only
+    /// implicit methods want them); `None` once they are.
+    prepared: Option<Prepared>,
+    path: String,
+    jacobian: Vec<f64>,
 }
 
 impl Rhs {
@@ -72,14 +83,10 @@ impl Rhs {
             .lower(&prepared.observation_inputs(), &[])
             .map_err(|e| engine_error(&e, path))?;
         let names = prepared.state_names();
-        let named: Vec<(String, f64)> = prepared
-            .derivation
-            .model
-            .params
-            .iter()
-            .map(|p| p.name.clone())
-            .zip(parameters.iter().copied())
-            .collect();
+        // The slots of `parameters`: the parameters, then the inputs at their values.
+        let model = &prepared.derivation.model;
+        let parameter_names = model.params.iter().map(|p| p.name.clone());
+        let parameter_names = parameter_names.chain(model.inputs.iter().map(|u| u.name.clone()));
         let mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),
@@ -88,47 +95,102 @@ impl Rhs {
         )
         .with_kinds(prepared.stabilisation());
         let dim = mechanical.dim();
-        Ok(Rhs { mechanical, names, y0, parameters: named, dy: vec![0.0; dim] })
+        Ok(Rhs {
+            mechanical,
+            names,
+            y0,
+            parameter_names: parameter_names.collect(),
+            dy: vec![0.0; dim],
+            prepared: Some(prepared),
+            path: path.to_string(),
+            jacobian: Vec::new(),
+        })
+    }
+
+    /// Runs `body` with the parameter values `p` gives (none: those in use), and puts back
+    /// those in use afterwards, whatever `body` returns.
+    fn with_parameters<T>(
+        &mut self,
+        p: Option<&Bound<'_, PyAny>>,
+        body: impl FnOnce(&mut Self) -> PyResult<T>,
+    ) -> PyResult<T> {
+        let Some(p) = p else { return body(self) };
+        let kept = self.mechanical.parameters().to_vec();
+        let given = parameter_values(&self.parameter_names, &kept, p)?;
+        self.mechanical.set_parameters(&given);
+        let result = body(self);
+        self.mechanical.set_parameters(&kept);
+        result
+    }
+
+    fn check_length(&self, y: &[f64]) -> PyResult<()> {
+        if y.len() == self.dy.len() {
+            return Ok(());
+        }
+        Err(PyValueError::new_err(format!(
+            "the state has {} entries ({}), not {}",
+            self.dy.len(),
+            self.names.join(", "),
+            y.len()
+        )))
     }
 
     fn eval(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
-        if y.len() != self.dy.len() {
-            return Err(PyValueError::new_err(format!(
-                "the state has {} entries ({}), not {}",
-                self.dy.len(),
-                self.names.join(", "),
-                y.len()
-            )));
-        }
+        self.check_length(y)?;
         self.mechanical.rhs(t, y, &mut self.dy).map_err(|kind| {
             numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names)))
         })
+    }
+
+    /// The exact ∂F/∂y at (t, y) into `self.jacobian`, lowering the partials the first time.
+    fn eval_jacobian(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+        self.check_length(y)?;
+        if let Some(mut prepared) = self.prepared.take() {
+            let exprs = prepared.partials_exprs();
+            let program = prepared
+                .lower(&prepared.observation_inputs(), &exprs)
+                .map_err(|e| engine_error(&e, &self.path))?;
+            self.mechanical.set_partials(Tape::new(program));
+            self.jacobian = vec![0.0; self.dy.len() * self.dy.len()];
+        }
+        match self.mechanical.jacobian(t, y, &mut self.jacobian) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(numeric_error("the Jacobian's partials are missing".to_string())),
+            Err(kind) => {
+                Err(numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names))))
+            }
+        }
     }
 }
 
 #[pymethods]
 impl Rhs {
-    /// F(t, y): the rates of the state y = (q, q̇) at time t, as a 1-D array (q̇, q̈).
+    /// F(t, y): the rates of the state y = (q, q̇) at time t, as a 1-D array (q̇, q̈); `p`
+    /// gives parameter values for this call only (see [`parameter_values`]).
+    #[pyo3(signature = (t, y, p = None))]
     fn __call__<'py>(
         &mut self,
         py: Python<'py>,
         t: f64,
         y: PyArrayLike1<'py, f64, AllowTypeChange>,
+        p: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let y = y.as_array();
         let y: Vec<f64> = y.iter().copied().collect();
-        self.eval(t, &y)?;
+        self.with_parameters(p, |rhs| rhs.eval(t, &y))?;
         Ok(PyArray1::from_slice(py, &self.dy))
     }
 
     /// F at many states in one call: `Y` is a 2-D array with one state a row; `t` one time
-    /// for all rows or one time per row. Returns an array of the same shape as `Y`.
-    #[pyo3(signature = (y, t = None))]
+    /// for all rows or one time per row; `p` parameter values for this call only. Returns an
+    /// array of the same shape as `Y`.
+    #[pyo3(signature = (y, t = None, p = None))]
     fn batch<'py>(
         &mut self,
         py: Python<'py>,
         y: PyArrayLike2<'py, f64, AllowTypeChange>,
         t: Option<&Bound<'py, PyAny>>,
+        p: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let y = y.as_array();
         let rows = y.nrows();
@@ -159,15 +221,37 @@ impl Rhs {
         }
         let mut out = Vec::with_capacity(rows * width);
         let mut state = vec![0.0; width];
-        for (row, t) in y.rows().into_iter().zip(times) {
-            for (slot, v) in state.iter_mut().zip(row.iter()) {
-                *slot = *v;
+        self.with_parameters(p, |rhs| {
+            for (row, t) in y.rows().into_iter().zip(times) {
+                for (slot, v) in state.iter_mut().zip(row.iter()) {
+                    *slot = *v;
+                }
+                rhs.eval(t, &state)?;
+                out.extend_from_slice(&rhs.dy);
             }
-            self.eval(t, &state)?;
-            out.extend_from_slice(&self.dy);
-        }
+            Ok(())
+        })?;
         let flat = PyArray1::from_vec(py, out);
         flat.reshape([rows, width])
+    }
+
+    /// ∂F/∂y at (t, y), exactly, as the 2-D array `solve_ivp(..., jac=f.jac)` takes: row i,
+    /// column j is ∂F_i/∂y_j. From the equations' partials (lowered on the first call) and
+    /// the matrix the accelerations are solved with, stabilisation of kept constraints
+    /// included, so it is the Jacobian of `f` itself. `p` gives parameter values for this
+    /// call only, as `solve_ivp`'s `args` hands them to `jac` as well as to `f`.
+    #[pyo3(signature = (t, y, p = None))]
+    fn jac<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: f64,
+        y: PyArrayLike1<'py, f64, AllowTypeChange>,
+        p: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let y: Vec<f64> = y.as_array().iter().copied().collect();
+        self.with_parameters(p, |rhs| rhs.eval_jacobian(t, &y))?;
+        let d = self.dy.len();
+        PyArray1::from_slice(py, &self.jacobian).reshape([d, d])
     }
 
     /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.
@@ -176,18 +260,192 @@ impl Rhs {
         PyArray1::from_slice(py, &self.y0)
     }
 
-    /// The parameters' values the programs use: a dict of name to value.
+    /// The parameters' values the programs use, name to value, read-only: a change is made by
+    /// assigning to `parameters`, never lost in a copy.
     #[getter]
-    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let out = PyDict::new(py);
-        for (name, value) in &self.parameters {
-            out.set_item(name, value)?;
-        }
-        Ok(out)
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        read_only(py, &self.parameter_names, self.mechanical.parameters())
+    }
+
+    /// Uses these parameter values from now on: a dict replaces the values it names, an
+    /// array gives them all (see [`parameter_values`]).
+    #[setter]
+    fn set_parameters(&mut self, p: &Bound<'_, PyAny>) -> PyResult<()> {
+        let values = parameter_values(&self.parameter_names, self.mechanical.parameters(), p)?;
+        self.mechanical.set_parameters(&values);
+        Ok(())
     }
 
     fn __repr__(&self) -> String {
         format!("<lagrange rhs of ({})>", self.names.join(", "))
+    }
+}
+
+/// Parameter values from `given`: a mapping of name to value replaces the values it names in
+/// `current`; anything else is read as an array of every value in the order of `names`. Each
+/// value is finite. A parameter the scene defines from others is a value like any other here:
+/// it is not recomputed when they change.
+pub fn parameter_values(
+    names: &[String],
+    current: &[f64],
+    given: &Bound<'_, PyAny>,
+) -> PyResult<Vec<f64>> {
+    let finite = |name: &str, v: f64| {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(PyValueError::new_err(format!("parameter `{name}` must be finite, not {v}")))
+        }
+    };
+    if let Ok(mapping) = given.cast::<PyMapping>() {
+        let mut values = current.to_vec();
+        for item in mapping.items()?.iter() {
+            let (name, value): (String, f64) = item.extract()?;
+            let Some(k) = names.iter().position(|n| *n == name) else {
+                return Err(PyKeyError::new_err(format!(
+                    "no parameter `{name}`; the parameters are {}",
+                    names.join(", ")
+                )));
+            };
+            values[k] = finite(&name, value)?;
+        }
+        return Ok(values);
+    }
+    let array: PyArrayLike1<'_, f64, AllowTypeChange> = given.extract().map_err(|_| {
+        PyValueError::new_err(format!(
+            "parameter values are a dict of name to value or an array of {} values ({})",
+            names.len(),
+            names.join(", ")
+        ))
+    })?;
+    let values: Vec<f64> = array.as_array().iter().copied().collect();
+    if values.len() != names.len() {
+        return Err(PyValueError::new_err(format!(
+            "{} parameter values for the {} parameters ({})",
+            values.len(),
+            names.len(),
+            names.join(", ")
+        )));
+    }
+    names.iter().zip(values).map(|(name, v)| finite(name, v)).collect()
+}
+
+/// A read-only mapping of `names` to `values` (`types.MappingProxyType` over a dict): an item
+/// assigned to it raises rather than changing a copy that nothing reads.
+fn read_only<'py>(
+    py: Python<'py>,
+    names: &[String],
+    values: &[f64],
+) -> PyResult<Bound<'py, PyAny>> {
+    let dict = PyDict::new(py);
+    for (name, value) in names.iter().zip(values) {
+        dict.set_item(name, value)?;
+    }
+    py.import("types")?.getattr("MappingProxyType")?.call1((dict,))
+}
+
+/// τ = M·q̈ − f of a scene over many motions at once (`engine::inverse`): with constraints
+/// kept, the forces least in τᵀ·M⁻¹·τ.
+#[pyclass(unsendable, module = "lagrange")]
+pub struct InverseDynamics {
+    inner: engine::inverse::InverseDynamics,
+    /// The coordinates, in the order of q and of τ.
+    #[pyo3(get)]
+    names: Vec<String>,
+    /// The parameters' names, in the order of their values.
+    #[pyo3(get)]
+    parameter_names: Vec<String>,
+    /// The constraints kept with multipliers.
+    #[pyo3(get)]
+    kept_constraints: Vec<String>,
+}
+
+impl InverseDynamics {
+    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        let options = engine::inverse::Options { set: Vec::new(), no_units: !units };
+        let inner = engine::inverse::inverse_dynamics(source, &options)
+            .map_err(|e| engine_error(&e, path))?;
+        Ok(InverseDynamics {
+            names: inner.coordinates().to_vec(),
+            parameter_names: inner.parameter_names().to_vec(),
+            kept_constraints: inner.kept_constraints().to_vec(),
+            inner,
+        })
+    }
+
+    /// τ of each row of the motion, one after another in a flat vector.
+    fn rows(&mut self, t: &[f64], motion: [&ArrayView2<'_, f64>; 3]) -> PyResult<Vec<f64>> {
+        let n = self.names.len();
+        let mut out = Vec::with_capacity(t.len() * n);
+        let mut tau = vec![0.0; n];
+        let row = |m: &ArrayView2<'_, f64>, k: usize| -> Vec<f64> { m.row(k).to_vec() };
+        for (k, t) in t.iter().enumerate() {
+            let [q, rates, accelerations] = motion.map(|m| row(m, k));
+            self.inner
+                .torques(*t, &q, &rates, &accelerations, &mut tau)
+                .map_err(|e| numeric_error(e.worded(engine::Piece::plain)))?;
+            out.extend_from_slice(&tau);
+        }
+        Ok(out)
+    }
+}
+
+#[pymethods]
+impl InverseDynamics {
+    /// τ at N motions: `t` (N times), `q`, `qd`, `qdd` (N×n arrays, one motion a row); `p`
+    /// parameter values for this call only. Returns an N×n array.
+    #[pyo3(signature = (t, q, qd, qdd, p = None))]
+    fn batch<'py>(
+        &mut self,
+        py: Python<'py>,
+        t: PyArrayLike1<'py, f64, AllowTypeChange>,
+        q: PyArrayLike2<'py, f64, AllowTypeChange>,
+        qd: PyArrayLike2<'py, f64, AllowTypeChange>,
+        qdd: PyArrayLike2<'py, f64, AllowTypeChange>,
+        p: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let n = self.names.len();
+        let t: Vec<f64> = t.as_array().iter().copied().collect();
+        let (q, qd, qdd) = (q.as_array(), qd.as_array(), qdd.as_array());
+        for (what, m) in [("q", &q), ("qd", &qd), ("qdd", &qdd)] {
+            if m.nrows() != t.len() || m.ncols() != n {
+                return Err(PyValueError::new_err(format!(
+                    "`{what}` has {}×{} values for {} times of the {n} coordinates ({})",
+                    m.nrows(),
+                    m.ncols(),
+                    t.len(),
+                    self.names.join(", ")
+                )));
+            }
+        }
+        let kept = self.inner.parameters().to_vec();
+        if let Some(p) = p {
+            let given = parameter_values(&self.parameter_names, &kept, p)?;
+            self.inner.set_parameters(&given).map_err(|e| engine_error(&e, "<parameters>"))?;
+        }
+        let result = self.rows(&t, [&q, &qd, &qdd]);
+        self.inner.set_parameters(&kept).map_err(|e| engine_error(&e, "<parameters>"))?;
+        let flat = PyArray1::from_vec(py, result?);
+        flat.reshape([t.len(), n])
+    }
+
+    /// The parameters' values in use, name to value, read-only: assign to `parameters` to
+    /// change them.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        read_only(py, &self.parameter_names, self.inner.parameters())
+    }
+
+    /// Uses these parameter values from now on: a dict replaces those it names, an array gives
+    /// them all.
+    #[setter]
+    fn set_parameters(&mut self, p: &Bound<'_, PyAny>) -> PyResult<()> {
+        let values = parameter_values(&self.parameter_names, self.inner.parameters(), p)?;
+        self.inner.set_parameters(&values).map_err(|e| engine_error(&e, "<parameters>"))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<lagrange inverse dynamics of ({})>", self.names.join(", "))
     }
 }
 

@@ -127,6 +127,49 @@ def test_batch_evaluates_rows_like_single_calls():
         f(0.0, [1.0])
 
 
+def central_differences(f, t, y, h=1e-5):
+    """∂f/∂y by central differences, column after column."""
+    columns = []
+    for k in range(len(y)):
+        step = h * max(1.0, abs(y[k]))
+        plus, minus = np.array(y, dtype=float), np.array(y, dtype=float)
+        plus[k] += step
+        minus[k] -= step
+        columns.append((f(t, plus) - f(t, minus)) / (2 * step))
+    return np.stack(columns, axis=1)
+
+
+@pytest.mark.parametrize(
+    "example", ["classics/double_pendulum.lag", "classics/pendulum_cartesian.lag"]
+)
+def test_jac_is_the_jacobian_of_the_rhs(example):
+    f = lagrange.load(EXAMPLES / example).rhs()
+    n = len(f.names)
+    rng = np.random.default_rng(7)
+    for y in [f.y0, f.y0 + 0.1 * rng.normal(size=n)]:
+        J = f.jac(0.3, y)
+        assert J.shape == (n, n)
+        differenced = central_differences(f, 0.3, y)
+        # Each row against its own size, so that a dropped partial shows however small its
+        # row; a row that vanishes but for rounding against the matrix.
+        scale = np.maximum(np.abs(J).max(axis=1, keepdims=True), 1e-6 * np.abs(J).max())
+        assert (np.abs(J - differenced) / scale).max() < 1e-6
+    with pytest.raises(ValueError):
+        f.jac(0.0, [1.0])
+
+
+def test_radau_with_the_exact_jacobian_agrees_with_dop853():
+    from scipy.integrate import solve_ivp
+
+    f = lagrange.load(EXAMPLES / "classics" / "double_pendulum.lag").rhs()
+    reference = solve_ivp(f, (0.0, 2.0), f.y0, method="DOP853", rtol=1e-12, atol=1e-12)
+    radau = solve_ivp(f, (0.0, 2.0), f.y0, method="Radau", jac=f.jac, rtol=1e-9, atol=1e-9)
+    assert reference.success and radau.success
+    # With the Jacobian given, SciPy never differences f for it.
+    assert radau.njev > 0
+    np.testing.assert_allclose(radau.y[:, -1], reference.y[:, -1], atol=1e-6)
+
+
 def test_mass_matrix_function_matches_sympy():
     scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
     M = scene.mass_matrix_function()
@@ -150,6 +193,26 @@ def test_simulate_returns_named_arrays():
     pandas = pytest.importorskip("pandas")
     frame = run.to_pandas()
     assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == ["theta", "floor.force"]
+
+
+def test_set_takes_a_dict_or_the_command_line_s_texts():
+    scene = lagrange.load(EXAMPLES / "ps5" / "falling_rod.lag")
+    runs = [
+        scene.simulate(until=0.1, output="floor.force", set=given)
+        for given in ({"g": 1.62}, "g=1.62", ["g=1.62"], ["g = 81/50"])
+    ]
+    for run in runs:
+        np.testing.assert_allclose(run["floor.force"][0], 4 / 7 * 1.62, rtol=1e-12)
+    with pytest.raises(ValueError) as caught:
+        scene.simulate(until=0.1, set="g")
+    assert str(caught.value) == "`set` `g`: not of the form name=value (like g=1.62)", caught.value
+
+
+def test_sweep_takes_a_text_or_a_dict():
+    top = lagrange.load(EXAMPLES / "space" / "sleeping_top.lag")
+    as_text = top.linearize(sweep="w=0:100:11")["sweep"]["changes"]
+    as_dict = top.linearize(sweep={"w": (0, 100, 11)})["sweep"]["changes"]
+    assert as_text == as_dict and len(as_text) > 0
 
 
 def test_bad_scene_raises_scene_error_with_position():

@@ -30,6 +30,14 @@ pub(crate) trait Stepper {
     fn stiff_steps(&self) -> usize {
         0
     }
+    /// Jacobians evaluated (adaptive implicit methods only).
+    fn jacobians(&self) -> usize {
+        0
+    }
+    /// LU factorizations of the iteration matrices (adaptive implicit methods only).
+    fn factorizations(&self) -> usize {
+        0
+    }
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
@@ -419,7 +427,8 @@ impl Adaptive {
     }
 }
 
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
+/// The root mean square of the values.
+pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
     for x in v {
         s += x * x;

@@ -4,8 +4,9 @@
 //! error stays bounded over long runs instead of drifting.
 //!
 //! The stage equations Z = h (A ⊗ I) F(y + Z) are solved by simplified Newton iterations with
-//! a finite-difference Jacobian of F at the start of each step, until the update stops
-//! shrinking at round-off level: symplecticity holds only for the converged solution.
+//! the Jacobian of F at the start of each step (the problem's exact one where it has it, forward
+//! differences otherwise), until the update stops shrinking at round-off level: symplecticity
+//! holds only for the converged solution.
 
 use nalgebra::DMatrix;
 
@@ -24,6 +25,8 @@ pub(crate) struct Gauss {
     pub newton_iterations: usize,
     last: Hermite,
     jac: DMatrix<f64>,
+    /// The problem's exact Jacobian, row-major, before it is copied into `jac`.
+    exact: Vec<f64>,
     iteration: DMatrix<f64>,
     pivots: Vec<usize>,
 }
@@ -49,6 +52,7 @@ impl Gauss {
             newton_iterations: 0,
             last: Hermite::default(),
             jac: DMatrix::zeros(dim, dim),
+            exact: vec![0.0; dim * dim],
             iteration: DMatrix::zeros(stages * dim, stages * dim),
             pivots: vec![0; stages * dim],
         }
@@ -62,6 +66,15 @@ impl Gauss {
         f0: &[f64],
     ) -> Result<(), FaultKind> {
         let d = y.len();
+        // A partial can be undefined where F is not (a square root at zero): differences then.
+        if p.jacobian(t, y, &mut self.exact).unwrap_or(false) {
+            for i in 0..d {
+                for j in 0..d {
+                    self.jac[(i, j)] = self.exact[i * d + j];
+                }
+            }
+            return Ok(());
+        }
         let mut yp = y.to_vec();
         let mut fp = vec![0.0; d];
         for j in 0..d {

@@ -3,23 +3,29 @@
 //! This crate owns everything between a straight-line program and a trajectory: solving
 //! M(q)·q̈ = f for the accelerations (Cholesky where M is symmetric positive definite, LU with
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
-//! keep multipliers), the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and
-//! DOP853 with dense output, implicit Gauss–Legendre collocation that is symplectic in
-//! canonical variables), events located on the dense output, and the measurements of a run
-//! (steps, evaluations, energy and constraint drift). It works on numbered slots and
+//! keep multipliers, or those constraints as they are, the differential–algebraic system of
+//! index 3) and the exact Jacobians of those problems from the lowered partials of their
+//! equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
+//! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
+//! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems),
+//! events located on the dense output, and the measurements of a run (steps, evaluations,
+//! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
 //! were derived.
 
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
+mod constrained;
 mod erk;
 mod gauss;
 pub mod linalg;
 mod mechanical;
+mod radau;
 pub mod reference;
 mod run;
 
+pub use constrained::Constrained;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Settings, Trajectory};
 
@@ -40,6 +46,10 @@ pub enum FaultKind {
     StepTooSmall { step: f64 },
     /// Newton's iteration of an implicit method did not converge even at small steps.
     NewtonFailed,
+    /// Newton's iteration of an adaptive implicit method (radau) did not converge although it
+    /// cut the step to `step`; `contraction` is the last ratio of successive Newton updates
+    /// (≥ 1: diverging), `singular` whether its iteration matrix was singular instead.
+    NewtonStalled { step: f64, contraction: f64, singular: bool },
     /// The run took more steps than allowed.
     TooManySteps { limit: usize },
 }
@@ -69,10 +79,50 @@ pub trait Problem {
         let _ = (t, y, jac);
         Ok(false)
     }
+    /// How the components of y enter the problem: all differential, index 1, unless the
+    /// problem is differential–algebraic (only [`Method::Radau`] integrates those).
+    fn components(&self) -> Components {
+        Components::ordinary(self.dim())
+    }
+    /// Why the problem cannot be solved for its algebraic components at (t, y), when an
+    /// implicit method found its iteration matrix singular there; `None` if it can.
+    fn explain_singular(&mut self, t: f64, y: &[f64]) -> Option<FaultKind> {
+        let _ = (t, y);
+        None
+    }
     /// The state in the physical variables (q, q̇), for reports of a fault or a run's end.
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         let _ = t;
         y.to_vec()
+    }
+}
+
+/// The structure of a problem M·y' = F(t, y) with M = diag(I, 0): how many leading components
+/// of y are differential, and how many, in order, have differential index 1, 2 and 3. An
+/// implicit method scales the errors of index-2 and index-3 components by h and h², whose
+/// local errors are of lower order (Hairer & Wanner, Solving ODEs II, VII.8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Components {
+    pub differential: usize,
+    pub by_index: [usize; 3],
+}
+
+impl Components {
+    /// An ordinary differential equation of `dim` components.
+    pub fn ordinary(dim: usize) -> Self {
+        Components { differential: dim, by_index: [dim, 0, 0] }
+    }
+
+    /// The differential index of component `i`.
+    pub fn index(&self, i: usize) -> u8 {
+        let [one, two, _] = self.by_index;
+        if i < one {
+            1
+        } else if i < one + two {
+            2
+        } else {
+            3
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! positive definite matrices, LU with partial pivoting for the rest, each reporting the
 //! columns where it broke down.
 
-use nalgebra::DMatrix;
+use nalgebra::{ComplexField, DMatrix};
 
 use crate::FaultKind;
 
@@ -166,6 +166,56 @@ pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
 
 /// Solves with the factors of [`lu_in_place`].
 pub fn lu_solve(lu: &DMatrix<f64>, pivots: &[usize], b: &mut [f64]) {
+    lu_factor_solve(lu, pivots, b);
+}
+
+/// LU with partial pivoting of a real or complex matrix, for the iteration matrices of an
+/// implicit method. Unlike [`lu_in_place`] it sets no condition limit: those matrices mix
+/// 1/h with the Jacobian's entries and are badly scaled without being singular, and Newton's
+/// iteration corrects what the factors lose. Fails with the first column whose pivot is zero
+/// or not finite.
+pub fn lu_factor<T: ComplexField<RealField = f64> + Copy>(
+    a: &mut DMatrix<T>,
+    pivots: &mut [usize],
+) -> Result<(), usize> {
+    let n = a.nrows();
+    for k in 0..n {
+        let mut p = k;
+        for i in k + 1..n {
+            if a[(i, k)].norm1() > a[(p, k)].norm1() {
+                p = i;
+            }
+        }
+        pivots[k] = p;
+        if p != k {
+            a.swap_rows(k, p);
+        }
+        let pivot = a[(k, k)];
+        let size = pivot.norm1();
+        if size == 0.0 || !size.is_finite() {
+            return Err(k);
+        }
+        let inverse = T::one() / pivot;
+        for i in k + 1..n {
+            let factor = a[(i, k)] * inverse;
+            a[(i, k)] = factor;
+            if factor.norm1() != 0.0 {
+                for j in k + 1..n {
+                    let u = a[(k, j)];
+                    a[(i, j)] -= factor * u;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Solves with the factors of [`lu_factor`].
+pub fn lu_factor_solve<T: ComplexField<RealField = f64> + Copy>(
+    lu: &DMatrix<T>,
+    pivots: &[usize],
+    b: &mut [T],
+) {
     let n = lu.nrows();
     for k in 0..n {
         b.swap(k, pivots[k]);
@@ -235,5 +285,37 @@ mod tests {
         assert!(
             matches!(err, FaultKind::SingularMass { ref coordinates, .. } if coordinates == &[1])
         );
+    }
+    #[test]
+    fn complex_lu_solves_a_complex_system() {
+        use nalgebra::Complex;
+        let c = |re, im| Complex::new(re, im);
+        let m = DMatrix::from_row_slice(
+            3,
+            3,
+            &[
+                c(0.0, 1.0),
+                c(2.0, 0.0),
+                c(0.0, 0.0),
+                c(1.0, -1.0),
+                c(0.5, 0.5),
+                c(3.0, 0.0),
+                c(0.0, 0.0),
+                c(1.0, 2.0),
+                c(-1.0, 1.0),
+            ],
+        );
+        let want = [c(1.0, 2.0), c(-0.5, 0.25), c(0.0, -3.0)];
+        let mut b: Vec<Complex<f64>> =
+            (0..3).map(|i| (0..3).map(|j| m[(i, j)] * want[j]).sum()).collect();
+        let mut lu = m.clone();
+        let mut pivots = [0; 3];
+        lu_factor(&mut lu, &mut pivots).unwrap();
+        lu_factor_solve(&lu, &pivots, &mut b);
+        for i in 0..3 {
+            assert!((b[i] - want[i]).norm() < 1e-14, "{:?}", b);
+        }
+        let mut singular = DMatrix::from_element(2, 2, c(1.0, 1.0));
+        assert_eq!(lu_factor(&mut singular, &mut [0; 2]), Err(1));
     }
 }

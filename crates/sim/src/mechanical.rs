@@ -1,5 +1,6 @@
 //! Equations of motion as a first-order problem: the state (q, q̇) with accelerations from
-//! M q̈ = f, or (q, p) in canonical variables for the symplectic method.
+//! M q̈ = f, or (q, p) in canonical variables for the symplectic method, each with its exact
+//! Jacobian when the partials of its equations were lowered too.
 
 use nalgebra::DMatrix;
 use numeric::Tape;
@@ -7,10 +8,16 @@ use numeric::Tape;
 use crate::linalg;
 use crate::{check_finite, FaultKind, Problem};
 
+mod jacobian;
+
 /// How the slots of the programs are laid out. The dynamics program takes
 /// `[t, q (n), q̇ (n), parameters (k)]` and gives `M` (n×n, column-major), `f` (n), then per
 /// multiplier the Jacobian row J (n values), γ, Φ and Φ̇. The observation program takes
-/// `[t, q, q̇, q̈ (n), λ (m), parameters]` and gives the recorded quantities.
+/// `[t, q, q̇, q̈ (n), λ (m), parameters]` and gives the recorded quantities. The partials
+/// program, which only implicit methods need, takes the observation inputs and gives
+/// ∂(r, c, Φ, Φ̇)/∂(q, q̇) with q̈ and λ held fixed, row-major: the rows are r = M q̈ − Jᵀλ − f
+/// (n), then c = J q̈ − γ, Φ and Φ̇ of each multiplier (m each, the drift rows as the dynamics
+/// program gives them), and each row has its n partials in q, then its n in q̇.
 #[derive(Clone, Copy, Debug)]
 pub struct Layout {
     pub coordinates: usize,
@@ -30,6 +37,11 @@ impl Layout {
 
     pub fn observation_inputs(&self) -> usize {
         1 + 3 * self.coordinates + self.multipliers + self.parameters
+    }
+
+    /// The partials program's outputs: (n + 3m) rows of 2n.
+    pub fn partials_outputs(&self) -> usize {
+        (self.coordinates + 3 * self.multipliers) * 2 * self.coordinates
     }
 }
 
@@ -66,6 +78,9 @@ pub struct Mechanical {
     backup: DMatrix<f64>,
     solution: Vec<f64>,
     pivots: Vec<usize>,
+    /// The partials program and its outputs, when an exact Jacobian was asked for.
+    partials: Option<Tape>,
+    partials_out: Vec<f64>,
 }
 
 impl Mechanical {
@@ -89,7 +104,35 @@ impl Mechanical {
             backup: DMatrix::zeros(size, size),
             solution: vec![0.0; size],
             pivots: vec![0; size],
+            partials: None,
+            partials_out: Vec::new(),
         }
+    }
+
+    /// The parameter values the programs are evaluated at, in declaration order.
+    pub fn parameters(&self) -> &[f64] {
+        &self.parameters
+    }
+
+    /// Evaluates the programs at these parameter values from now on.
+    pub fn set_parameters(&mut self, values: &[f64]) {
+        assert_eq!(values.len(), self.layout.parameters);
+        self.parameters.copy_from_slice(values);
+    }
+
+    /// Gives the problem its exact Jacobian: `partials` is the partials program of the
+    /// [`Layout`].
+    pub fn with_partials(mut self, partials: Tape) -> Self {
+        self.set_partials(partials);
+        self
+    }
+
+    /// [`Mechanical::with_partials`] on a problem already built (its Jacobian asked for late).
+    pub fn set_partials(&mut self, partials: Tape) {
+        assert_eq!(partials.inputs(), self.layout.observation_inputs());
+        assert_eq!(partials.outputs(), self.layout.partials_outputs());
+        self.partials_out = vec![0.0; partials.outputs()];
+        self.partials = Some(partials);
     }
 
     /// Says which kept constraints restrain velocities rather than positions.
@@ -99,14 +142,39 @@ impl Mechanical {
         self
     }
 
-    /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
-    fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+    /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
+    pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
+        let Layout { coordinates: n, parameters: k, .. } = self.layout;
         self.input[0] = t;
         self.input[1..1 + 2 * n].copy_from_slice(y);
         self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
         self.dynamics.eval(&self.input, &mut self.dyn_out);
         check_finite(&self.dyn_out)?;
+        Ok(&self.dyn_out)
+    }
+
+    /// Which kept constraints restrain positions and which velocities.
+    pub(crate) fn kinds(&self) -> &[Stabilisation] {
+        &self.stabilisation
+    }
+
+    /// q̈ and λ at (t, q, q̇) from the constraints' second derivatives alone, J q̈ = γ, with no
+    /// stabilisation: the consistent start of the differential–algebraic form.
+    pub(crate) fn unstabilised_accelerations(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Vec<f64>, FaultKind> {
+        let rate = std::mem::replace(&mut self.baumgarte, 0.0);
+        let solved = self.accelerations(t, y);
+        self.baumgarte = rate;
+        solved.map(|()| self.solution.clone())
+    }
+
+    /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
+    fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.dynamics_at(t, y)?;
         let out = &self.dyn_out;
         for j in 0..n {
             for i in 0..n {
@@ -181,25 +249,40 @@ impl Problem for Mechanical {
         check_finite(dy)
     }
 
+    /// ∂(q̇, q̈)/∂(q, q̇) from the partials and the augmented matrix, when they were lowered.
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        self.exact_jacobian(t, y, jac)
+    }
+
     fn observations(&self) -> usize {
         self.observation.outputs() + self.layout.multipliers
     }
 
     /// The observation program's outputs, then |Φ| of each kept constraint.
     fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
         self.accelerations(t, y)?;
+        let solution = std::mem::take(&mut self.solution);
+        self.observe_given(t, y, &solution, out);
+        self.solution = solution;
+        Ok(())
+    }
+}
+
+impl Mechanical {
+    /// The observations at (t, q, q̇) with the accelerations and multipliers `solution`, after
+    /// the dynamics program was evaluated there.
+    pub(crate) fn observe_given(&mut self, t: f64, y: &[f64], solution: &[f64], out: &mut [f64]) {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
         let inp = &mut self.obs_input;
         inp[0] = t;
         inp[1..1 + 2 * n].copy_from_slice(y);
-        inp[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&self.solution);
+        inp[1 + 2 * n..1 + 3 * n + m].copy_from_slice(solution);
         inp[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         let shown = self.observation.outputs();
         self.observation.eval(inp, &mut out[..shown]);
         for (o, phi) in out[shown..].iter_mut().zip(self.constraint_values().collect::<Vec<_>>()) {
             *o = phi.abs();
         }
-        Ok(())
     }
 }
 
@@ -214,6 +297,9 @@ pub struct Canonical {
     out: Vec<f64>,
     rates: Vec<f64>,
     physical: Vec<f64>,
+    /// The canonical partials program and its outputs, when an exact Jacobian was asked for.
+    partials: Option<Tape>,
+    partials_out: Vec<f64>,
 }
 
 impl Canonical {
@@ -229,7 +315,20 @@ impl Canonical {
             physical: vec![0.0; 2 * n],
             inner,
             momentum,
+            partials: None,
+            partials_out: Vec::new(),
         }
+    }
+
+    /// Gives the problem its exact Jacobian. `partials` takes the dynamics inputs and gives,
+    /// row-major and n×n each, ∂p/∂q, ∂g/∂q and ∂g/∂q̇ of p = ∂L/∂q̇ and g = ∂L/∂q + Q.
+    pub fn with_partials(mut self, partials: Tape) -> Self {
+        let n = self.inner.layout.coordinates;
+        assert_eq!(partials.inputs(), self.inner.layout.dynamics_inputs());
+        assert_eq!(partials.outputs(), 3 * n * n);
+        self.partials_out = vec![0.0; 3 * n * n];
+        self.partials = Some(partials);
+        self
     }
 
     fn set_input(&mut self, t: f64, q: &[f64], rates: Option<&[f64]>) {
@@ -292,6 +391,11 @@ impl Problem for Canonical {
         dy[n..].copy_from_slice(&self.out[n * n + n..]);
         self.rates = rates;
         check_finite(dy)
+    }
+
+    /// ∂(q̇, ṗ)/∂(q, p) from the canonical partials and M, when they were lowered.
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        self.exact_jacobian(t, y, jac)
     }
 
     fn observations(&self) -> usize {

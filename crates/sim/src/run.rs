@@ -3,6 +3,7 @@
 
 use crate::erk::{Adaptive, Pair, Rk4, Stepper};
 use crate::gauss::Gauss;
+use crate::radau::Radau;
 use crate::{Fault, FaultKind, Problem};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -17,10 +18,13 @@ pub enum Method {
     Midpoint,
     /// Two-stage Gauss–Legendre collocation (order 4), fixed step, symplectic.
     Gauss,
+    /// Radau IIA (order 5), adaptive and implicit, L-stable: for stiff systems, and for
+    /// constraints kept with multipliers integrated as the differential–algebraic system.
+    Radau,
 }
 
 impl Method {
-    pub const NAMES: [&'static str; 5] = ["rk4", "dopri5", "dop853", "midpoint", "gauss"];
+    pub const NAMES: [&'static str; 6] = ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau"];
 
     pub fn from_name(name: &str) -> Option<Method> {
         Some(match name {
@@ -29,6 +33,7 @@ impl Method {
             "dop853" => Method::Dop853,
             "midpoint" => Method::Midpoint,
             "gauss" | "gauss4" => Method::Gauss,
+            "radau" | "radau5" => Method::Radau,
             _ => return None,
         })
     }
@@ -40,11 +45,12 @@ impl Method {
             Method::Dop853 => "dop853",
             Method::Midpoint => "midpoint",
             Method::Gauss => "gauss",
+            Method::Radau => "radau",
         }
     }
 
     pub fn is_adaptive(self) -> bool {
-        matches!(self, Method::Dopri5 | Method::Dop853)
+        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau)
     }
 
     /// Whether the method is symplectic, and so wants canonical variables.
@@ -52,11 +58,24 @@ impl Method {
         matches!(self, Method::Midpoint | Method::Gauss)
     }
 
+    /// Whether the method solves implicit equations with the Jacobian of the right-hand side,
+    /// so that lowering the partials for the exact one pays.
+    pub fn uses_jacobian(self) -> bool {
+        matches!(self, Method::Midpoint | Method::Gauss | Method::Radau)
+    }
+
     /// Whether the method can integrate constraints kept with multipliers. Those are solved
     /// with the augmented system on (q, q̇), which the symplectic methods, working in canonical
     /// variables (q, p), do not have.
     pub fn handles_multipliers(self) -> bool {
         !self.is_symplectic()
+    }
+
+    /// Whether the method integrates differential–algebraic problems (see
+    /// [`crate::Components`]); it then takes constraints kept with multipliers as they are,
+    /// with no stabilisation.
+    pub fn handles_algebraic(self) -> bool {
+        self == Method::Radau
     }
 }
 
@@ -106,6 +125,12 @@ pub struct Run {
     /// Accepted steps whose size stability, not accuracy, decided (adaptive methods): many
     /// of them mean the system is stiff for an explicit method.
     pub stiff_steps: usize,
+    /// Jacobians evaluated and LU factorizations of iteration matrices (radau).
+    pub jacobians: usize,
+    pub factorizations: usize,
+    /// The largest |value| of each observation at the start and the accepted steps: the
+    /// integrator's own points, where a recorded sample may come from the dense output.
+    pub peaks: Vec<f64>,
     pub events: Vec<EventHit>,
     /// The stop event that ended the run, if one did.
     pub stopped_by: Option<usize>,
@@ -133,13 +158,23 @@ pub fn integrate(
         Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
         Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
         Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
+        Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
     };
+    assert!(
+        settings.method.handles_algebraic()
+            || problem.components() == crate::Components::ordinary(d),
+        "{} integrates ordinary differential equations only",
+        settings.method.name()
+    );
     let mut run = Run {
         trajectory: Trajectory::default(),
         steps: 0,
         rejected: 0,
         evaluations: 0,
         stiff_steps: 0,
+        jacobians: 0,
+        factorizations: 0,
+        peaks: Vec::new(),
         events: Vec::new(),
         stopped_by: None,
         fault: None,
@@ -161,6 +196,7 @@ pub fn integrate(
         return run;
     }
     let mut previous_row = row.clone();
+    run.peaks = row.iter().map(|v| v.abs()).collect();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
     // `samples` times from the start to the end, both included, as numpy.linspace counts
@@ -188,6 +224,9 @@ pub fn integrate(
         if let Err(kind) = problem.observe(t, &y, &mut row) {
             run.fault = Some(fault(problem, kind, t, &y));
             break;
+        }
+        for (peak, v) in run.peaks.iter_mut().zip(&row) {
+            *peak = peak.max(v.abs());
         }
         // Events: sign changes of watched columns over the step, located in time order.
         let mut hits: Vec<EventHit> = Vec::new();
@@ -242,6 +281,8 @@ pub fn integrate(
     run.evaluations = stepper.evaluations();
     run.rejected = stepper.rejected();
     run.stiff_steps = stepper.stiff_steps();
+    run.jacobians = stepper.jacobians();
+    run.factorizations = stepper.factorizations();
     run.final_time = t;
     run.final_state = problem.physical(t, &y);
     run

@@ -4,29 +4,11 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
-use sim::{integrate, Event, FaultKind, Method, Problem, Settings};
+use sim::{integrate, Event, Method, Settings};
 
-/// y'' = −y from y = 1, y' = 0; observations: y, and y − 0.5 (for events).
-struct Oscillator;
+mod oscillator;
 
-impl Problem for Oscillator {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
-        dy[0] = y[1];
-        dy[1] = -y[0];
-        Ok(())
-    }
-    fn observations(&self) -> usize {
-        2
-    }
-    fn observe(&mut self, _t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
-        out[0] = y[0];
-        out[1] = y[0] - 0.5;
-        Ok(())
-    }
-}
+use oscillator::Oscillator;
 
 fn settings(method: Method, tolerance: f64, step: f64) -> Settings {
     Settings { method, start: 0.0, until: 10.0, tolerance, step, max_steps: 10_000_000, samples: 0 }

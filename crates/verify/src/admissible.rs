@@ -49,6 +49,26 @@ pub(crate) fn random_state(d: &Derivation, rng: &mut ChaCha8Rng) -> Vec<f64> {
     values
 }
 
+/// Up to `count` random admissible states, each a value per symbol of the derivation's pool
+/// (parameters, time, coordinates and rates drawn as `check` draws them, then projected onto
+/// the kept constraints; NaN elsewhere), from `4·count` draws at most. Seeded by `seed`, so a
+/// caller gets the same states on every run.
+pub fn admissible_states(d: &mut Derivation, count: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut constraints = ConstraintSet::first(d, d.multipliers.len());
+    let mut states = Vec::with_capacity(count);
+    for _ in 0..4 * count {
+        if states.len() == count {
+            break;
+        }
+        let mut values = random_state(d, &mut rng);
+        if constraints.project(&mut values).is_ok() {
+            states.push(values);
+        }
+    }
+    states
+}
+
 /// Why a start could not be brought onto the constraints.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Projection {

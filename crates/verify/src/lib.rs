@@ -17,6 +17,7 @@ mod start_positions;
 mod system;
 mod undecidable;
 
+pub use admissible::admissible_states;
 pub use check::{check, check_all, Failure, Sampling, Verdict, SAMPLES};
 pub use present::{shown_at_start, NumericValue, ShownAtStart};
 pub use start::{parameter_values, start_numeric, NumericStart};

@@ -56,6 +56,14 @@ fn is_noise(rule: Rule) -> bool {
 }
 
 /// The inner pairs that carry meaning.
+/// The next part of a statement. The grammar guarantees the shape of every statement; a
+/// missing part is a bug here, reported as an error rather than a panic.
+fn next_part<'i>(items: &mut impl Iterator<Item = Pair<'i, Rule>>) -> Built<Pair<'i, Rule>> {
+    items.next().ok_or_else(|| {
+        Diagnostic::error(Span::default(), "internal error: unexpected parse tree shape")
+    })
+}
+
 fn parts(pair: Pair<'_, Rule>) -> impl Iterator<Item = Pair<'_, Rule>> {
     pair.into_inner().filter(|p| !is_noise(p.as_rule()))
 }
@@ -94,13 +102,7 @@ impl Builder<'_> {
         let at_start = pair.clone().into_inner().any(|p| p.as_rule() == Rule::at_start);
         let linearized = pair.clone().into_inner().any(|p| p.as_rule() == Rule::kw_linearized);
         let mut items = parts(pair).filter(|p| p.as_rule() != Rule::at_start);
-        // The grammar guarantees the shape of every statement; a missing part is a bug here,
-        // reported as an error rather than a panic.
-        let mut next = || {
-            items.next().ok_or_else(|| {
-                Diagnostic::error(Span::default(), "internal error: unexpected parse tree shape")
-            })
-        };
+        let mut next = || next_part(&mut items);
         Ok(match rule {
             Rule::scene_stmt => {
                 let string = next()?;
@@ -133,37 +135,8 @@ impl Builder<'_> {
                 }
                 StmtKind::Coord(self.coord_items(items)?)
             }
-            Rule::particle_stmt | Rule::body_stmt => {
-                let name = self.ident(&next()?);
-                let mut props = Vec::new();
-                while let Ok(prop) = next() {
-                    let mut kv = parts(prop);
-                    let (Some(key), Some(value)) = (kv.next(), kv.next()) else {
-                        continue;
-                    };
-                    props.push(Property { key: self.ident(&key), value: self.expr(value)? });
-                }
-                if rule == Rule::particle_stmt {
-                    StmtKind::Particle { name, props }
-                } else {
-                    StmtKind::Body { name, props }
-                }
-            }
-            Rule::constraint_stmt => {
-                let mut rest = Vec::new();
-                while let Ok(p) = next() {
-                    rest.push(p);
-                }
-                let name = match rest.first() {
-                    Some(p) if p.as_rule() == Rule::ident => Some(self.ident(&rest.remove(0))),
-                    _ => None,
-                };
-                let mut rest = rest.into_iter();
-                let (Some(lhs), Some(rhs)) = (rest.next(), rest.next()) else {
-                    return Err(Diagnostic::error(Span::default(), "internal error: constraint"));
-                };
-                StmtKind::Constraint { name, lhs: self.expr(lhs)?, rhs: self.expr(rhs)? }
-            }
+            Rule::particle_stmt | Rule::body_stmt => self.body_stmt(rule, &mut items)?,
+            Rule::constraint_stmt => self.constraint_stmt(&mut items)?,
             Rule::gravity_stmt => {
                 let strength = self.expr(next()?)?;
                 let direction = match next() {
@@ -175,36 +148,8 @@ impl Builder<'_> {
             Rule::potential_stmt => StmtKind::Potential(self.expr(next()?)?),
             Rule::dissipation_stmt => StmtKind::Dissipation(self.expr(next()?)?),
             Rule::lagrangian_stmt => StmtKind::Lagrangian(self.expr(next()?)?),
-            Rule::spring_stmt | Rule::damper_stmt => {
-                let name = self.ident(&next()?);
-                let a = self.expr(next()?)?;
-                let b = self.expr(next()?)?;
-                let coefficient = self.expr(next()?)?;
-                if rule == Rule::spring_stmt {
-                    let rest = match next() {
-                        Ok(p) => Some(self.expr(p)?),
-                        Err(_) => None,
-                    };
-                    StmtKind::Spring { name, a, b, stiffness: coefficient, rest }
-                } else {
-                    StmtKind::Damper { name, a, b, coefficient }
-                }
-            }
-            Rule::force_stmt | Rule::torque_stmt => {
-                let name = self.ident(&next()?);
-                let body = self.ident(&next()?);
-                let first = self.expr(next()?)?;
-                // `at P` comes before the value when it is given.
-                let (at, value) = match next() {
-                    Ok(p) => (Some(first), self.expr(p)?),
-                    Err(_) => (None, first),
-                };
-                if rule == Rule::force_stmt {
-                    StmtKind::Force { name, body, at, value }
-                } else {
-                    StmtKind::Torque { name, body, value }
-                }
-            }
+            Rule::spring_stmt | Rule::damper_stmt => self.link_stmt(rule, &mut items)?,
+            Rule::force_stmt | Rule::torque_stmt => self.load_stmt(rule, &mut items)?,
             Rule::show_stmt => {
                 let mut items = Vec::new();
                 while let Ok(item) = next() {
@@ -239,6 +184,94 @@ impl Builder<'_> {
             _ => {
                 return Err(Diagnostic::error(Span::default(), "internal error: unknown statement"))
             }
+        })
+    }
+
+    /// A `particle` or `body` statement: its name and its properties.
+    fn body_stmt<'i>(
+        &mut self,
+        rule: Rule,
+        items: &mut impl Iterator<Item = Pair<'i, Rule>>,
+    ) -> Built<StmtKind> {
+        let mut next = || next_part(items);
+        let name = self.ident(&next()?);
+        let mut props = Vec::new();
+        while let Ok(prop) = next() {
+            let mut kv = parts(prop);
+            let (Some(key), Some(value)) = (kv.next(), kv.next()) else {
+                continue;
+            };
+            props.push(Property { key: self.ident(&key), value: self.expr(value)? });
+        }
+        Ok(if rule == Rule::particle_stmt {
+            StmtKind::Particle { name, props }
+        } else {
+            StmtKind::Body { name, props }
+        })
+    }
+
+    /// A constraint: its name if given, and its two sides.
+    fn constraint_stmt<'i>(
+        &mut self,
+        items: &mut impl Iterator<Item = Pair<'i, Rule>>,
+    ) -> Built<StmtKind> {
+        let mut next = || next_part(items);
+        let mut rest = Vec::new();
+        while let Ok(p) = next() {
+            rest.push(p);
+        }
+        let name = match rest.first() {
+            Some(p) if p.as_rule() == Rule::ident => Some(self.ident(&rest.remove(0))),
+            _ => None,
+        };
+        let mut rest = rest.into_iter();
+        let (Some(lhs), Some(rhs)) = (rest.next(), rest.next()) else {
+            return Err(Diagnostic::error(Span::default(), "internal error: constraint"));
+        };
+        Ok(StmtKind::Constraint { name, lhs: self.expr(lhs)?, rhs: self.expr(rhs)? })
+    }
+
+    /// A `spring` or `damper`: its name, its two ends and its coefficient (and a spring's rest length).
+    fn link_stmt<'i>(
+        &mut self,
+        rule: Rule,
+        items: &mut impl Iterator<Item = Pair<'i, Rule>>,
+    ) -> Built<StmtKind> {
+        let mut next = || next_part(items);
+        let name = self.ident(&next()?);
+        let a = self.expr(next()?)?;
+        let b = self.expr(next()?)?;
+        let coefficient = self.expr(next()?)?;
+        Ok(if rule == Rule::spring_stmt {
+            let rest = match next() {
+                Ok(p) => Some(self.expr(p)?),
+                Err(_) => None,
+            };
+            StmtKind::Spring { name, a, b, stiffness: coefficient, rest }
+        } else {
+            StmtKind::Damper { name, a, b, coefficient }
+        })
+    }
+
+    /// A `force` or `torque`: its name, its body, where a force acts if not at the centre of mass, and its value.
+    fn load_stmt<'i>(
+        &mut self,
+        rule: Rule,
+        items: &mut impl Iterator<Item = Pair<'i, Rule>>,
+    ) -> Built<StmtKind> {
+        let mut next = || next_part(items);
+        let name = self.ident(&next()?);
+        let body = self.ident(&next()?);
+        let first = self.expr(next()?)?;
+        // `at P` comes before the value when it is given.
+        let (at, value) = match next() {
+            Ok(p) => (Some(first), self.expr(p)?),
+            Err(_) => (None, first),
+        };
+        Ok(if rule == Rule::force_stmt {
+            StmtKind::Force { name, body, at, value }
+        } else {
+            StmtKind::Torque { name, body, value }
         })
     }
 

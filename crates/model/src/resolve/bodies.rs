@@ -85,9 +85,9 @@ impl Resolver<'_> {
             ok = false;
         }
         let (Some(mass), Some(position), true) = (mass, position, ok) else { return };
-        let index = self.bodies.len();
+        let index = self.model.bodies.len();
         if self.bind(name, Binding::Body(index)) {
-            self.body_dims.push(BodyDims {
+            self.scope.body_dims.push(BodyDims {
                 at: self.stmt,
                 mass: mass_dims.unwrap_or_default(),
                 position: position_dims.into_iter().map(|(f, _)| f).collect(),
@@ -101,7 +101,13 @@ impl Resolver<'_> {
                 }
                 _ => None,
             };
-            self.bodies.push(Body { name: normalize(&name.name), mass, position, rotation, span });
+            self.model.bodies.push(Body {
+                name: normalize(&name.name),
+                mass,
+                position,
+                rotation,
+                span,
+            });
         }
     }
 
@@ -153,7 +159,7 @@ impl Resolver<'_> {
                     got.inertia_dims = forms.first().cloned().map(|f| (f, p.value.span));
                     for f in &forms[1.min(forms.len())..] {
                         let what = "between the entries of an inertia";
-                        self.units.same(&forms[0], f, p.value.span, p.value.span, what);
+                        self.scope.units.same(&forms[0], f, p.value.span, p.value.span, what);
                     }
                     if let Value::Scalar(i) = v {
                         got.inertia = Some(i);
@@ -179,7 +185,7 @@ impl Resolver<'_> {
             Some((Value::Matrix(m), d)) if m.len() == 3 && m.iter().all(|r| r.len() == 3) => {
                 for f in self.shape(d).forms() {
                     let what = "an entry of an orientation";
-                    self.units.dimensionless(&f, value.span, what);
+                    self.scope.units.dimensionless(&f, value.span, what);
                 }
                 got.orientation = Some((m, value.span));
             }

@@ -58,22 +58,22 @@ impl Resolver<'_> {
             return None;
         }
         let v = match name {
-            "atan2" => self.pool.atan2(xs[0], xs[1]),
-            "sqrt" => self.pool.sqrt(xs[0]),
+            "atan2" => self.model.pool.atan2(xs[0], xs[1]),
+            "sqrt" => self.model.pool.sqrt(xs[0]),
             // (a + b ∓ |a − b|)/2: no node of their own, so everything that knows `abs`
             // (derivatives, numbers, printing, SymPy) knows them.
             "min" | "max" => {
-                let sum = self.pool.add2(xs[0], xs[1]);
-                let gap = self.pool.sub(xs[0], xs[1]);
-                let mut gap = self.pool.func(Func::Abs, gap);
+                let sum = self.model.pool.add2(xs[0], xs[1]);
+                let gap = self.model.pool.sub(xs[0], xs[1]);
+                let mut gap = self.model.pool.func(Func::Abs, gap);
                 if name == "min" {
-                    gap = self.pool.neg(gap);
+                    gap = self.model.pool.neg(gap);
                 }
-                let twice = self.pool.add2(sum, gap);
-                let half = self.pool.num(cas::Rational::new(1.into(), 2.into()));
-                self.pool.mul2(half, twice)
+                let twice = self.model.pool.add2(sum, gap);
+                let half = self.model.pool.num(cas::Rational::new(1.into(), 2.into()));
+                self.model.pool.mul2(half, twice)
             }
-            _ => self.pool.func(Func::from_name(name).expect("checked above"), xs[0]),
+            _ => self.model.pool.func(Func::from_name(name).expect("checked above"), xs[0]),
         };
         let dims = self.call_dims(name, arg_dims, args, v);
         Some((Value::Scalar(v), dims))
@@ -105,9 +105,9 @@ impl Resolver<'_> {
             BinOp::Add | BinOp::Sub => {
                 let mut combine = |a: cas::ExprId, b: cas::ExprId| {
                     if op == BinOp::Add {
-                        self.pool.add2(a, b)
+                        self.model.pool.add2(a, b)
                     } else {
-                        self.pool.sub(a, b)
+                        self.model.pool.sub(a, b)
                     }
                 };
                 match (&l, &r) {
@@ -129,23 +129,23 @@ impl Resolver<'_> {
                 }
             }
             BinOp::Mul => match (&l, &r) {
-                (Scalar(a), Scalar(b)) => Some(Scalar(self.pool.mul2(*a, *b))),
+                (Scalar(a), Scalar(b)) => Some(Scalar(self.model.pool.mul2(*a, *b))),
                 (Scalar(s), other) | (other, Scalar(s)) => {
                     let s = *s;
-                    Some(other.map(|x| self.pool.mul2(s, x)))
+                    Some(other.map(|x| self.model.pool.mul2(s, x)))
                 }
                 (Matrix(a), Matrix(b)) if a[0].len() == b.len() => {
-                    Some(Matrix(crate::kinematics::product(&mut self.pool, a, b)))
+                    Some(Matrix(crate::kinematics::product(&mut self.model.pool, a, b)))
                 }
                 // R*v: a vector in the rotated axes carried into the fixed ones.
                 (Matrix(a), Vector(v)) if a[0].len() == v.len() => {
-                    Some(Vector(crate::kinematics::apply(&mut self.pool, a, v)))
+                    Some(Vector(crate::kinematics::apply(&mut self.model.pool, a, v)))
                 }
                 _ => mismatch(self, "multiply"),
             },
             BinOp::Div => match (&l, &r) {
                 (_, Scalar(b)) => {
-                    if self.pool.is_zero(*b) {
+                    if self.model.pool.is_zero(*b) {
                         self.error(
                             Diagnostic::error(re.span, "division by zero").with_label("this is 0"),
                         );
@@ -156,13 +156,13 @@ impl Resolver<'_> {
                         return None;
                     }
                     let b = *b;
-                    Some(l.map(|x| self.pool.div(x, b)))
+                    Some(l.map(|x| self.model.pool.div(x, b)))
                 }
                 _ => mismatch(self, "divide"),
             },
             BinOp::Pow => match (&l, &r) {
                 (Scalar(a), Scalar(b)) => {
-                    if let Some(q) = self.pool.as_num(*b) {
+                    if let Some(q) = self.model.pool.as_num(*b) {
                         if q.numer().bits() > 32
                             || q.denom().bits() > 32
                             || q.abs() > Rational::from_integer(MAX_EXPONENT.into())
@@ -176,7 +176,7 @@ impl Resolver<'_> {
                             );
                             return None;
                         }
-                        if self.pool.is_zero(*a) && q < &Rational::from_integer(0.into()) {
+                        if self.model.pool.is_zero(*a) && q < &Rational::from_integer(0.into()) {
                             self.error(
                                 Diagnostic::error(span, "division by zero")
                                     .with_label("0 to a negative power"),
@@ -188,7 +188,7 @@ impl Resolver<'_> {
                         self.error(d);
                         return None;
                     }
-                    Some(Scalar(self.pool.pow(*a, *b)))
+                    Some(Scalar(self.model.pool.pow(*a, *b)))
                 }
                 _ => mismatch(self, "raise to a power"),
             },

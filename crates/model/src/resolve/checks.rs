@@ -13,7 +13,7 @@ use crate::{Placeholder, Value};
 
 /// How far from a function's domain an inexact value must fall before it counts as outside:
 /// rounding can take an exact boundary value (`1 - sin(pi/2)`) a hair across it.
-const ROUNDING_MARGIN: f64 = 1e-9;
+pub(super) const ROUNDING_MARGIN: f64 = 1e-9;
 
 /// Where an expression stands, and how many time derivatives of the coordinates it may hold.
 pub(super) struct Role {
@@ -187,7 +187,7 @@ fn ordinal(n: u8) -> String {
 }
 
 /// A value for a label: exact when it is a rational, else to six significant digits.
-fn number_text(pool: &cas::Pool, e: ExprId) -> String {
+pub(super) fn number_text(pool: &cas::Pool, e: ExprId) -> String {
     match pool.as_num(e) {
         Some(_) => pool.print(e, cas::Style::Ascii),
         None => approx(numeric::eval(pool, e, &[])),
@@ -224,11 +224,11 @@ impl Resolver<'_> {
     fn highest_coordinate(&mut self, v: &Value) -> Option<(u8, SymId)> {
         let mut best: Option<(u8, SymId)> = None;
         for e in v.entries() {
-            for s in self.pool.free_symbols(e).iter() {
-                if !matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }) {
+            for s in self.model.pool.free_symbols(e).iter() {
+                if !matches!(self.model.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }) {
                     continue;
                 }
-                let order = self.pool.symbol(*s).order();
+                let order = self.model.pool.symbol(*s).order();
                 let higher = match best {
                     Some((b, _)) => order > b,
                     None => true,
@@ -249,10 +249,10 @@ impl Resolver<'_> {
     /// Resolves `e` again without reporting anything, to look inside an expression that
     /// resolved once already.
     pub(super) fn value_quietly(&mut self, e: &Expr) -> Option<Value> {
-        let (errors, facts) = (self.errors.len(), self.units.mark());
+        let (errors, facts) = (self.diagnostics.errors.len(), self.scope.units.mark());
         let v = self.value(e);
-        self.errors.truncate(errors);
-        self.units.rollback(facts);
+        self.diagnostics.errors.truncate(errors);
+        self.scope.units.rollback(facts);
         v.map(|(v, _)| v)
     }
 
@@ -281,7 +281,7 @@ impl Resolver<'_> {
         let part = self.fastest_part(e, role.max_order);
         let (order, base) = match self.value_quietly(part) {
             Some(v) => match self.highest_derivative(&v) {
-                Some((o, s)) => (o, self.pool.symbol(s).base_name().to_string()),
+                Some((o, s)) => (o, self.model.pool.symbol(s).base_name().to_string()),
                 None => (order, String::new()),
             },
             None => (order, String::new()),
@@ -316,7 +316,7 @@ impl Resolver<'_> {
             return;
         }
         let mut seen = std::collections::HashSet::new();
-        if !value.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+        if !value.entries().into_iter().any(|x| kinked(&mut self.model.pool, x, &mut seen)) {
             return;
         }
         let (span, name) = self.kinked_call(e).unwrap_or((e.span, String::new()));
@@ -331,7 +331,7 @@ impl Resolver<'_> {
             "abs" => "has a kink where its argument is 0",
             _ => "has a kink or a jump",
         };
-        self.warnings.push(
+        self.diagnostics.warnings.push(
             Diagnostic::warning(
                 span,
                 format!(
@@ -355,7 +355,7 @@ impl Resolver<'_> {
             if NOT_SMOOTH.contains(&func.name.as_str()) {
                 let v = self.value_quietly(e)?;
                 let mut seen = std::collections::HashSet::new();
-                if v.entries().into_iter().any(|x| kinked(&mut self.pool, x, &mut seen)) {
+                if v.entries().into_iter().any(|x| kinked(&mut self.model.pool, x, &mut seen)) {
                     return Some((e.span, func.name.clone()));
                 }
             }
@@ -400,7 +400,7 @@ impl Resolver<'_> {
         }
         match self.highest_coordinate(v) {
             Some((order, sym)) if usize::from(order) + usize::from(primes) > 2 => {
-                let base = self.pool.symbol(sym).base_name().to_string();
+                let base = self.model.pool.symbol(sym).base_name().to_string();
                 let order = order.saturating_add(primes);
                 self.past_acceleration(span, order, &base, false);
                 return false;
@@ -409,7 +409,7 @@ impl Resolver<'_> {
         }
         match self.highest_placeholder(v) {
             Some((order, root, root_order)) if usize::from(order) + usize::from(primes) > 2 => {
-                let name = self.pool.symbol(root).name.clone();
+                let name = self.model.pool.symbol(root).name.clone();
                 let written = self.text(span);
                 let (has, times) = match root_order {
                     0 => ("positions", "twice"),
@@ -443,7 +443,7 @@ impl Resolver<'_> {
     fn highest_placeholder(&mut self, v: &Value) -> Option<(u8, SymId, u8)> {
         let mut best: Option<(u8, SymId, u8)> = None;
         for e in v.entries() {
-            for s in self.pool.free_symbols(e).iter() {
+            for s in self.model.pool.free_symbols(e).iter() {
                 let Some((order, root, root_order)) = self.placeholder_order(*s) else {
                     continue;
                 };
@@ -458,7 +458,7 @@ impl Resolver<'_> {
     /// A placeholder's order (see [`Self::highest_placeholder`]), with the quantity it is a
     /// rate of and that quantity's order.
     fn placeholder_order(&self, s: SymId) -> Option<(u8, SymId, u8)> {
-        let kind = self.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)?;
+        let kind = self.model.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)?;
         Some(match kind {
             Placeholder::PotentialEnergy => (0, s, 0),
             Placeholder::KineticEnergy | Placeholder::Reaction(_) => (1, s, 1),
@@ -475,33 +475,33 @@ impl Resolver<'_> {
     /// replaces by the derivative of what p turns out to be.
     pub(super) fn total_rate(&mut self, e: ExprId, span: Span) -> ExprId {
         self.refuse_input_rate(e, span);
-        let mut parts = vec![self.pool.time_derivative(e)];
-        let free = self.pool.free_symbols(e);
+        let mut parts = vec![self.model.pool.time_derivative(e)];
+        let free = self.model.pool.free_symbols(e);
         for p in free.iter() {
             if self.placeholder_order(*p).is_none() {
                 continue;
             }
             self.refuse_placeholder_rate_with_inputs(*p, span);
             let rate = self.placeholder_rate(*p, span);
-            let partial = self.pool.diff(e, *p);
-            let rate = self.pool.sym(rate);
-            parts.push(self.pool.mul2(partial, rate));
+            let partial = self.model.pool.diff(e, *p);
+            let rate = self.model.pool.sym(rate);
+            parts.push(self.model.pool.mul2(partial, rate));
         }
-        self.pool.add(&parts)
+        self.model.pool.add(&parts)
     }
 
     /// The symbol for the rate of placeholder `p`, made on first use.
     fn placeholder_rate(&mut self, p: SymId, span: Span) -> SymId {
-        let made = self.placeholders.iter().find_map(|(r, k)| match k {
+        let made = self.model.placeholders.iter().find_map(|(r, k)| match k {
             Placeholder::Rate { of, .. } if *of == p => Some(*r),
             _ => None,
         });
         if let Some(r) = made {
             return r;
         }
-        let name = format!("{}'", self.pool.symbol(p).name);
-        let r = self.pool.param(&name);
-        self.placeholders.push((r, Placeholder::Rate { of: p, span }));
+        let name = format!("{}'", self.model.pool.symbol(p).name);
+        let r = self.model.pool.param(&name);
+        self.model.placeholders.push((r, Placeholder::Rate { of: p, span }));
         r
     }
 
@@ -511,15 +511,15 @@ impl Resolver<'_> {
     /// scene means by it. `None` when a coordinate, time or a parameter without a value
     /// appears.
     pub(super) fn known(&mut self, e: ExprId) -> Option<ExprId> {
-        let free = self.pool.free_symbols(e);
-        if !free.iter().all(|s| self.param_values.contains_key(s)) {
+        let free = self.model.pool.free_symbols(e);
+        if !free.iter().all(|s| self.scope.param_values.contains_key(s)) {
             return None;
         }
         if free.is_empty() {
             return Some(e);
         }
-        let map: HashMap<SymId, ExprId> = self.param_values.clone();
-        Some(self.pool.subst(e, &map))
+        let map: HashMap<SymId, ExprId> = self.scope.param_values.clone();
+        Some(self.model.pool.subst(e, &map))
     }
 
     /// Whether a constant is a finite number where its value is known; reports it otherwise.
@@ -527,7 +527,7 @@ impl Resolver<'_> {
     /// such as `1e400`.
     pub(super) fn finite(&mut self, value: ExprId, written: &Expr) -> bool {
         let Some(v) = self.known(value) else { return true };
-        let x = numeric::eval(&self.pool, v, &[]);
+        let x = numeric::eval(&self.model.pool, v, &[]);
         if x.is_finite() {
             return true;
         }
@@ -550,7 +550,7 @@ impl Resolver<'_> {
             return;
         }
         if let Some(v) = self.known(value) {
-            self.param_values.insert(sym, v);
+            self.scope.param_values.insert(sym, v);
         }
     }
 
@@ -564,11 +564,12 @@ impl Resolver<'_> {
         span: Span,
     ) -> Option<Diagnostic> {
         let known: Vec<ExprId> = args.iter().map(|a| self.known(*a)).collect::<Option<Vec<_>>>()?;
-        let values: Vec<f64> = numeric::Evaluator::new(&self.pool, &known).eval(&[]).to_vec();
+        let values: Vec<f64> = numeric::Evaluator::new(&self.model.pool, &known).eval(&[]).to_vec();
         if !values.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let exact: Option<Rational> = known.first().and_then(|k| self.pool.as_num(*k)).cloned();
+        let exact: Option<Rational> =
+            known.first().and_then(|k| self.model.pool.as_num(*k)).cloned();
         let a = values[0];
         // Exact constants are judged exactly; others with a margin for rounding.
         let negative = exact.as_ref().map_or(a < -ROUNDING_MARGIN, |q| q.is_negative());
@@ -599,13 +600,13 @@ impl Resolver<'_> {
         let written_arg = written.first();
         if let Some((message, hint)) = problem {
             let arg_text = written_arg.map(|w| self.text(w.span)).unwrap_or_default();
-            let value = number_text(&self.pool, known[0]);
+            let value = number_text(&self.model.pool, known[0]);
             let label = if arg_text == value {
                 format!("the argument is {value}")
             } else {
                 format!("the argument `{arg_text}` is {value}")
             };
-            let hint = if self.pool.free_symbols(args[0]).is_empty() {
+            let hint = if self.model.pool.free_symbols(args[0]).is_empty() {
                 hint.to_string()
             } else {
                 format!("{hint} (parameters count at their given values)")
@@ -623,7 +624,7 @@ impl Resolver<'_> {
                 Diagnostic::error(span, "this value is too large for floating point")
                     .with_label(format!(
                         "{name} of {} overflows",
-                        number_text(&self.pool, known[0])
+                        number_text(&self.model.pool, known[0])
                     ))
                     .with_hint(
                         "values must be of magnitude below about 1.8e308; check the formula",
@@ -636,9 +637,9 @@ impl Resolver<'_> {
     /// A known divisor that is 0 at the parameters' values: the error at the divisor.
     pub(super) fn zero_divisor(&mut self, divisor: ExprId, written: &Expr) -> Option<Diagnostic> {
         let k = self.known(divisor)?;
-        let zero = match self.pool.as_num(k) {
+        let zero = match self.model.pool.as_num(k) {
             Some(q) => q.is_zero(),
-            None => numeric::eval(&self.pool, k, &[]) == 0.0,
+            None => numeric::eval(&self.model.pool, k, &[]) == 0.0,
         };
         if !zero {
             return None;
@@ -660,9 +661,10 @@ impl Resolver<'_> {
         span: Span,
     ) -> Option<Diagnostic> {
         let (b, x) = (self.known(base)?, self.known(exponent)?);
-        let (bv, xv) = (numeric::eval(&self.pool, b, &[]), numeric::eval(&self.pool, x, &[]));
-        let exact_base = self.pool.as_num(b).cloned();
-        let exact_exponent = self.pool.as_num(x).cloned();
+        let (bv, xv) =
+            (numeric::eval(&self.model.pool, b, &[]), numeric::eval(&self.model.pool, x, &[]));
+        let exact_base = self.model.pool.as_num(b).cloned();
+        let exact_exponent = self.model.pool.as_num(x).cloned();
         let base_zero = exact_base.as_ref().map_or(bv == 0.0, |q| q.is_zero());
         let negative_exponent = exact_exponent.as_ref().map_or(xv < 0.0, |q| q.is_negative());
         if base_zero && negative_exponent {
@@ -679,8 +681,8 @@ impl Resolver<'_> {
                 Diagnostic::error(span, "a negative number to a fractional power is not real")
                     .with_label(format!(
                         "{} to the power {}",
-                        number_text(&self.pool, b),
-                        number_text(&self.pool, x)
+                        number_text(&self.model.pool, b),
+                        number_text(&self.model.pool, x)
                     ))
                     .with_hint("a fractional power needs a base of 0 or more; check the sign"),
             );
@@ -699,11 +701,11 @@ impl Resolver<'_> {
         inertia: bool,
     ) {
         let Some(k) = self.known(value) else { return };
-        let x = numeric::eval(&self.pool, k, &[]);
+        let x = numeric::eval(&self.model.pool, k, &[]);
         if !x.is_finite() {
             return;
         }
-        let (negative, zero) = match self.pool.as_num(k) {
+        let (negative, zero) = match self.model.pool.as_num(k) {
             Some(q) => (q.is_negative(), q.is_zero()),
             // An inertia may be exactly 0, which rounding can take a hair below; a mass may
             // not be 0 either way, and tiny masses (1e-12 kg) are real.
@@ -715,7 +717,7 @@ impl Resolver<'_> {
         }
         let (what, unit) = if inertia { ("inertia", "kg·m²") } else { ("mass", "kg") };
         let sign = if negative { "negative" } else { "zero" };
-        let shown = number_text(&self.pool, k);
+        let shown = number_text(&self.model.pool, k);
         let text = self.text(written.span);
         let label = if text == shown {
             format!("this is {shown} {unit}")
@@ -737,9 +739,9 @@ impl Resolver<'_> {
                 .with_hint(hint);
         if let ExprKind::Name { name, primes: 0 } = &written.kind {
             let key = normalize(name);
-            if let Some(Binding::Param(s)) = self.names.get(&key) {
+            if let Some(Binding::Param(s)) = self.scope.names.get(&key) {
                 let s = *s;
-                if let Some(p) = self.params.iter().find(|p| p.sym == s) {
+                if let Some(p) = self.model.params.iter().find(|p| p.sym == s) {
                     d = d.with_related(p.span, format!("`{}` is given its value here", p.name));
                 }
             }
@@ -783,157 +785,6 @@ impl Resolver<'_> {
     }
 }
 
-/// How an inequality between known constants came out: exactly when the constant is a
-/// rational, otherwise in floating point with a margin relative to `scale`, so that an exact
-/// boundary (a thin plate's C = A + B written with `sqrt`) is not refused for rounding.
-fn below_zero(pool: &cas::Pool, value: ExprId, scale: f64) -> bool {
-    match pool.as_num(value) {
-        Some(q) => q.is_negative(),
-        None => {
-            let x = numeric::eval(pool, value, &[]);
-            x.is_finite() && x < -ROUNDING_MARGIN * scale.max(f64::MIN_POSITIVE)
-        }
-    }
-}
-
-/// The principal minors of a symmetric 3×3 matrix, each with the rows it is taken over
-/// (counted from 1), smallest first: a symmetric matrix is positive semidefinite exactly when
-/// none is negative (the leading minors alone would miss `diag(0, -1, 0)`).
-fn principal_minors(pool: &mut cas::Pool, m: &[[ExprId; 3]; 3]) -> Vec<(Vec<usize>, ExprId, u32)> {
-    let mut out: Vec<(Vec<usize>, ExprId, u32)> =
-        (0..3).map(|i| (vec![i + 1], m[i][i], 1)).collect();
-    for (r, c) in [(0, 1), (0, 2), (1, 2)] {
-        let diagonal = pool.mul2(m[r][r], m[c][c]);
-        let off = pool.powi(m[r][c], 2);
-        out.push((vec![r + 1, c + 1], pool.sub(diagonal, off), 2));
-    }
-    let rows: Vec<Vec<ExprId>> = m.iter().map(|r| r.to_vec()).collect();
-    let cross = crate::kinematics::cross(pool, &rows[1], &rows[2]);
-    out.push((vec![1, 2, 3], crate::kinematics::dot(pool, &rows[0], &cross), 3));
-    out
-}
-
-impl Resolver<'_> {
-    /// A body's inertia tensor in space, at the parameters' values: positive semidefinite (or
-    /// ½·ωᵀ·I·ω is negative for some ω, and the motion blows up), and with each principal
-    /// moment at most the sum of the other two, as every distribution of mass has (equal for
-    /// a thin plate). Left alone where the tensor depends on the state.
-    pub(super) fn check_inertia_tensor(
-        &mut self,
-        body: &Ident,
-        tensor: &[[ExprId; 3]; 3],
-        written: &Expr,
-    ) {
-        let mut known = [[tensor[0][0]; 3]; 3];
-        for r in 0..3 {
-            for c in 0..3 {
-                let Some(k) = self.known(tensor[r][c]) else { return };
-                known[r][c] = k;
-            }
-        }
-        let scale = known
-            .iter()
-            .flatten()
-            .map(|e| numeric::eval(&self.pool, *e, &[]).abs())
-            .fold(0.0, f64::max);
-        if !scale.is_finite() {
-            return;
-        }
-        let diagonal = (0..3).all(|r| {
-            (0..3).all(|c| r == c || self.pool.as_num(known[r][c]).is_some_and(|q| q.is_zero()))
-        });
-        for (rows, minor, degree) in principal_minors(&mut self.pool, &known) {
-            let minor = self.pool.simplify(minor);
-            if !below_zero(&self.pool, minor, numeric::elementary::pow_int(scale, degree as i32)) {
-                continue;
-            }
-            let axis = |i: usize| ["x", "y", "z"][i - 1];
-            let value = number_text(&self.pool, minor);
-            let label = match rows[..] {
-                [r] => format!("I{0}{0} is {value} kg·m²", axis(r)),
-                [r, c] => format!(
-                    "I{0}{0}·I{1}{1} − I{0}{1}² is {value} kg²·m⁴: the product of inertia \
-                     I{0}{1} is too large",
-                    axis(r),
-                    axis(c)
-                ),
-                _ => format!("its determinant is {value} kg³·m⁶"),
-            };
-            self.error(
-                Diagnostic::error(
-                    written.span,
-                    format!("the inertia tensor of `{}` is not positive semidefinite", body.name),
-                )
-                .with_label(label)
-                .with_hint(
-                    "with it some turning would have negative kinetic energy; a tensor's \
-                     diagonal entries are 0 or more and each product of inertia is at most \
-                     the geometric mean of its two moments (Ixy² ≤ Ixx·Iyy); check signs and \
-                     parameters' values",
-                ),
-            );
-            return;
-        }
-        // Σ = tr(I)/2·1 − I is the second moment ∫ r·rᵀ dm of the mass, which no mass
-        // distribution can make indefinite; its diagonal is (B + C − A)/2 and so on.
-        let trace = self.pool.add(&[known[0][0], known[1][1], known[2][2]]);
-        let half = self.pool.num(Rational::new(1.into(), 2.into()));
-        let half = self.pool.mul2(half, trace);
-        let second: [[ExprId; 3]; 3] = std::array::from_fn(|r| {
-            std::array::from_fn(|c| {
-                let minus = self.pool.neg(known[r][c]);
-                if r == c {
-                    self.pool.add(&[half, minus])
-                } else {
-                    minus
-                }
-            })
-        });
-        for (rows, minor, degree) in principal_minors(&mut self.pool, &second) {
-            let minor = self.pool.simplify(minor);
-            if !below_zero(&self.pool, minor, numeric::elementary::pow_int(scale, degree as i32)) {
-                continue;
-            }
-            let span = match (&written.kind, diagonal && rows.len() == 1) {
-                (ExprKind::Tuple(parts), true) if parts.len() == 3 => parts[rows[0] - 1].span,
-                _ => written.span,
-            };
-            let moments = if diagonal {
-                let i = rows[0] - 1;
-                let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-                let others = self.pool.add(&[known[j][j], known[k][k]]);
-                let others = self.pool.simplify(others);
-                let name = if span == written.span {
-                    let axis = ["x", "y", "z"][i];
-                    format!("I{axis}{axis}")
-                } else {
-                    format!("`{}`", self.text(span))
-                };
-                format!(
-                    "{name} is {} kg·m², more than the other two moments together ({} kg·m²)",
-                    number_text(&self.pool, known[i][i]),
-                    number_text(&self.pool, others)
-                )
-            } else {
-                "one principal moment is more than the other two together".to_string()
-            };
-            self.error(
-                Diagnostic::error(
-                    span,
-                    format!("no rigid body has the inertia given to `{}`", body.name),
-                )
-                .with_label(moments)
-                .with_hint(
-                    "each principal moment is at most the sum of the other two (equal for a \
-                     thin plate); e.g. a solid cylinder of radius r and height h about its \
-                     centre has (m*(3*r^2 + h^2)/12, m*(3*r^2 + h^2)/12, m*r^2/2)",
-                ),
-            );
-            return;
-        }
-    }
-}
-
 impl Resolver<'_> {
     /// A vector whose every component is 0 at the parameters' values (a rotation's axis,
     /// `(a, 0, 0)` with `a = 0`): the error at the vector, naming the parameters it has.
@@ -941,14 +792,14 @@ impl Resolver<'_> {
         let mut params = Vec::new();
         for x in v {
             let k = self.known(*x)?;
-            let zero = match self.pool.as_num(k) {
+            let zero = match self.model.pool.as_num(k) {
                 Some(q) => q.is_zero(),
-                None => numeric::eval(&self.pool, k, &[]) == 0.0,
+                None => numeric::eval(&self.model.pool, k, &[]) == 0.0,
             };
             if !zero {
                 return None;
             }
-            params.extend(self.pool.free_symbols(*x).iter().copied());
+            params.extend(self.model.pool.free_symbols(*x).iter().copied());
         }
         let text = self.text(written.span);
         let mut d = Diagnostic::error(written.span, "a rotation's axis cannot be zero")
@@ -960,7 +811,7 @@ impl Resolver<'_> {
         params.sort();
         params.dedup();
         for s in params {
-            if let Some(p) = self.params.iter().find(|p| p.sym == s) {
+            if let Some(p) = self.model.params.iter().find(|p| p.sym == s) {
                 d = d.with_related(p.span, format!("`{}` is given its value here", p.name));
             }
         }

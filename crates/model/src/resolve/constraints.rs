@@ -42,16 +42,16 @@ impl Resolver<'_> {
         let vector = ls.len() > 1 || !matches!(l, Value::Scalar(_));
         let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
         for (a, b) in lf.iter().zip(&rf) {
-            self.units.same(a, b, lhs.span, rhs.span, "between the sides of this constraint");
+            self.scope.units.same(a, b, lhs.span, rhs.span, "between the sides of this constraint");
         }
         let base = match name {
             Some(id) => normalize(&id.name),
-            None => format!("constraint{}", self.constraints.len() + 1),
+            None => format!("constraint{}", self.model.constraints.len() + 1),
         };
         let mut indices = Vec::new();
         for (k, (l, r)) in ls.into_iter().zip(rs).enumerate() {
-            let phi = self.pool.sub(l, r);
-            if vector && self.pool.is_identically_zero(phi) {
+            let phi = self.model.pool.sub(l, r);
+            if vector && self.model.pool.is_identically_zero(phi) {
                 // A component that holds whatever the motion (the height of a ball's contact
                 // with the floor it rolls on) restrains nothing.
                 indices.push(None);
@@ -60,18 +60,21 @@ impl Resolver<'_> {
             let cname =
                 if vector { format!("{base}.{}", ["x", "y", "z"][k.min(2)]) } else { base.clone() };
             let Some(kind) = self.constraint_kind(phi, span) else { return };
-            let index = self.constraints.len();
-            let force_symbol = self.pool.param(&format!("{cname}.force"));
-            let lhs_free = self.pool.free_symbols(l);
+            let index = self.model.constraints.len();
+            let force_symbol = self.model.pool.param(&format!("{cname}.force"));
+            let lhs_free = self.model.pool.free_symbols(l);
             let lhs_coords = lhs_free
                 .iter()
                 .copied()
                 .filter(|s| {
-                    matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. })
+                    matches!(
+                        self.model.pool.symbol(*s).kind,
+                        SymbolKind::Coordinate { order: 0, .. }
+                    )
                 })
                 .collect();
-            self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
-            self.constraints.push(Constraint {
+            self.model.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+            self.model.constraints.push(Constraint {
                 name: cname,
                 kind,
                 lhs: l,
@@ -101,8 +104,8 @@ impl Resolver<'_> {
     /// Whether Φ = 0 restrains positions or velocities; `None` (with the error reported) when
     /// it is neither: accelerations, rates not entering linearly, or no coordinate at all.
     fn constraint_kind(&mut self, phi: ExprId, span: Span) -> Option<ConstraintKind> {
-        let free = self.pool.free_symbols(phi);
-        if free.iter().any(|s| self.pool.symbol(*s).order() > 1) {
+        let free = self.model.pool.free_symbols(phi);
+        if free.iter().any(|s| self.model.pool.symbol(*s).order() > 1) {
             self.error(
                 Diagnostic::error(span, "this constraint involves accelerations")
                     .with_label("an acceleration appears here")
@@ -110,7 +113,9 @@ impl Resolver<'_> {
             );
             return None;
         }
-        if !free.iter().any(|s| matches!(self.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }))
+        if !free
+            .iter()
+            .any(|s| matches!(self.model.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }))
         {
             self.error(
                 Diagnostic::error(span, "this constraint involves no coordinate")
@@ -120,16 +125,19 @@ impl Resolver<'_> {
             return None;
         }
         let rates: Vec<SymId> =
-            free.iter().copied().filter(|s| self.pool.symbol(*s).order() == 1).collect();
+            free.iter().copied().filter(|s| self.model.pool.symbol(*s).order() == 1).collect();
         if rates.is_empty() {
             return Some(ConstraintKind::Position);
         }
         // A(q, t)·q̇ + b(q, t): no rate may remain in a derivative by a rate.
         for v in &rates {
-            let dv = self.pool.diff(phi, *v);
-            let dv_free = self.pool.free_symbols(dv);
-            if let Some(w) = dv_free.iter().find(|s| self.pool.symbol(**s).order() == 1) {
-                let (v, w) = (self.pool.symbol(*v).name.clone(), self.pool.symbol(*w).name.clone());
+            let dv = self.model.pool.diff(phi, *v);
+            let dv_free = self.model.pool.free_symbols(dv);
+            if let Some(w) = dv_free.iter().find(|s| self.model.pool.symbol(**s).order() == 1) {
+                let (v, w) = (
+                    self.model.pool.symbol(*v).name.clone(),
+                    self.model.pool.symbol(*w).name.clone(),
+                );
                 self.error(
                     Diagnostic::error(span, "this constraint is not linear in the rates")
                         .with_label(format!("the coefficient of {v} depends on {w}"))

@@ -76,7 +76,7 @@ fn exponent_value(e: &Expr) -> Option<Rational> {
 
 impl Resolver<'_> {
     pub(super) fn number_dims(&mut self, value: ExprId, decided: bool) -> Dims {
-        Dims::Number { id: self.units.reserve(), value, decided }
+        Dims::Number { id: self.scope.units.reserve(), value, decided }
     }
 
     /// The dimension of a value wherever it stands. A number is dimensionless there, except
@@ -84,8 +84,8 @@ impl Resolver<'_> {
     pub(super) fn shape(&mut self, d: Dims) -> Shape {
         match d {
             Dims::Number { id, value, decided } => {
-                Shape::Scalar(if decided && self.pool.is_identically_zero(value) {
-                    self.units.named(id, "zero")
+                Shape::Scalar(if decided && self.model.pool.is_identically_zero(value) {
+                    self.scope.units.named(id, "zero")
                 } else {
                     Form::default()
                 })
@@ -104,7 +104,7 @@ impl Resolver<'_> {
     /// dimensionless, so coefficients are checked, unless it is zero (see [`Self::shape`]).
     pub(super) fn operand(&mut self, d: Dims) -> Shape {
         match d {
-            Dims::Number { id, .. } => Shape::Scalar(self.units.named(id, "a number")),
+            Dims::Number { id, .. } => Shape::Scalar(self.scope.units.named(id, "a number")),
             other => self.shape(other),
         }
     }
@@ -126,23 +126,23 @@ impl Resolver<'_> {
     /// One unknown for a name wherever its dimension is not known: before its declaration,
     /// or for a vector or matrix `let`.
     fn loose(&mut self, raw: &str, name: &str) -> Form {
-        if let Some(f) = self.loose.get(name) {
+        if let Some(f) = self.scope.loose.get(name) {
             return f.clone();
         }
-        let f = self.units.fresh(raw);
-        self.loose.insert(name.to_string(), f.clone());
+        let f = self.scope.units.fresh(raw);
+        self.scope.loose.insert(name.to_string(), f.clone());
         f
     }
 
     /// The dimension of a declared name with `primes` rates.
     pub(super) fn name_dims(&mut self, raw: &str, name: &str, primes: u8) -> Dims {
-        let declared = self.name_dims.get(name).filter(|d| !self.ahead(d.at));
+        let declared = self.scope.name_dims.get(name).filter(|d| !self.ahead(d.at));
         if let Some(entries) = declared.and_then(|d| d.entries.clone()) {
             return self.rate_dims(entries, primes);
         }
         let form = match declared.and_then(|d| d.form.clone()) {
             Some(f) => f,
-            None if matches!(name, "KE" | "PE") => self.units.energy(),
+            None if matches!(name, "KE" | "PE") => self.scope.units.energy(),
             None => self.loose(raw, name),
         };
         Dims::Scalar(form.rate(primes))
@@ -174,10 +174,12 @@ impl Resolver<'_> {
         field: &Ident,
         body: Option<usize>,
     ) -> Dims {
-        let body = body.filter(|i| !self.ahead(self.body_dims[*i].at));
-        let Some(b) = body.map(|i| &self.body_dims[i]) else {
+        let body = body.filter(|i| !self.ahead(self.scope.body_dims[*i].at));
+        let Some(b) = body.map(|i| &self.scope.body_dims[i]) else {
             // A reaction, or a body not declared yet: its dimension is its own unknown.
-            return Dims::Scalar(self.units.fresh(&format!("{}.{}", object.name, field.name)));
+            return Dims::Scalar(
+                self.scope.units.fresh(&format!("{}.{}", object.name, field.name)),
+            );
         };
         match field.name.as_str() {
             "position" => Dims::Many(b.position.clone()),
@@ -195,7 +197,7 @@ impl Resolver<'_> {
                 };
                 Dims::Scalar(b.position.get(i).cloned().unwrap_or_default())
             }
-            _ => Dims::Scalar(self.units.fresh(&field.name)),
+            _ => Dims::Scalar(self.scope.units.fresh(&field.name)),
         }
     }
 
@@ -215,7 +217,7 @@ impl Resolver<'_> {
             // Like the terms of a sum: a number alone takes the other side's dimension.
             let forms: Vec<Form> = args.into_iter().map(|d| self.operand_form(d)).collect();
             let what = format!("between the arguments of {name}");
-            self.units.same(&forms[0], &forms[1], written[0].span, written[1].span, &what);
+            self.scope.units.same(&forms[0], &forms[1], written[0].span, written[1].span, &what);
             return Dims::Scalar(forms[0].clone());
         }
         let forms: Vec<Form> = args.into_iter().map(|d| self.form(d)).collect();
@@ -231,7 +233,7 @@ impl Resolver<'_> {
             "abs" => Dims::Scalar(forms.first().cloned().unwrap_or_default()),
             "sign" => Dims::Scalar(Form::default()),
             "atan2" if forms.len() == 2 => {
-                self.units.same(
+                self.scope.units.same(
                     &forms[0],
                     &forms[1],
                     written[0].span,
@@ -242,7 +244,7 @@ impl Resolver<'_> {
             }
             _ => {
                 for (f, a) in forms.iter().zip(written) {
-                    self.units.dimensionless(f, a.span, &format!("the argument of {name}"));
+                    self.scope.units.dimensionless(f, a.span, &format!("the argument of {name}"));
                 }
                 Dims::Scalar(Form::default())
             }
@@ -261,7 +263,7 @@ impl Resolver<'_> {
         if let (Dims::Number { decided: a, .. }, Dims::Number { decided: b, value: rv, .. }) =
             (&l, &r)
         {
-            let decided = *a && *b && (op != BinOp::Pow || self.pool.as_num(*rv).is_some());
+            let decided = *a && *b && (op != BinOp::Pow || self.model.pool.as_num(*rv).is_some());
             if let Value::Scalar(v) = value {
                 return self.number_dims(*v, decided);
             }
@@ -295,7 +297,7 @@ impl Resolver<'_> {
                             .map(|(x, brow)| x.plus(&brow[j], &Rational::one()))
                             .collect();
                         for t in terms.iter().skip(1) {
-                            self.units.same(
+                            self.scope.units.same(
                                 &terms[0],
                                 t,
                                 le.span,
@@ -320,7 +322,7 @@ impl Resolver<'_> {
             }
             (BinOp::Add | BinOp::Sub, l, r) => {
                 let (l, r) = (self.operand(l), self.operand(r));
-                self.units.sum(l, r, le.span, re.span).into()
+                self.scope.units.sum(l, r, le.span, re.span).into()
             }
             (BinOp::Mul | BinOp::Div, l, r) => {
                 let k = if op == BinOp::Mul { Rational::one() } else { -Rational::one() };
@@ -348,8 +350,8 @@ impl Resolver<'_> {
                             Shape::Many(_) => Form::default(),
                         };
                         let what = "a base raised to a symbolic power";
-                        self.units.dimensionless(&base, le.span, what);
-                        self.units.dimensionless(&exponent, re.span, "an exponent");
+                        self.scope.units.dimensionless(&base, le.span, what);
+                        self.scope.units.dimensionless(&exponent, re.span, "an exponent");
                         Dims::Scalar(Form::default())
                     }
                 }
@@ -364,7 +366,7 @@ impl Resolver<'_> {
             Some(Dims::Number { .. }) if unit.is_some() => Form::default(),
             Some(d) if unit.is_some() => self.form(d),
             Some(d) => self.operand_form(d),
-            None => self.units.fresh("a value"),
+            None => self.scope.units.fresh("a value"),
         };
         match unit.map(units::parse_unit) {
             Some(Ok((d, _))) => f.plus(&Form::known(d), &Rational::one()),
@@ -382,16 +384,17 @@ impl Resolver<'_> {
     ) {
         let m = mass.unwrap_or_default();
         for (x, span) in position {
-            self.units.energy_term(&m.plus(&x.rate(1), &two()), *span);
+            self.scope.units.energy_term(&m.plus(&x.rate(1), &two()), *span);
         }
         if let (Some((i, span)), Some(a)) = (inertia, angle) {
-            self.units.energy_term(&i.plus(&a.rate(1), &two()), span);
+            self.scope.units.energy_term(&i.plus(&a.rate(1), &two()), span);
         }
     }
 
     /// The potential of gravity on each body so far is an energy: m·g·x.
     pub(super) fn gravity_energy(&mut self, g: &Form, span: Span) {
         let terms: Vec<Form> = self
+            .scope
             .body_dims
             .iter()
             .flat_map(|b| {
@@ -401,7 +404,7 @@ impl Resolver<'_> {
             })
             .collect();
         for e in terms {
-            self.units.energy_term(&e, span);
+            self.scope.units.energy_term(&e, span);
         }
     }
 
@@ -417,16 +420,16 @@ impl Resolver<'_> {
         if let Some((rest, span)) = rest {
             let l0 = self.operand_form(rest);
             let what = "between a rest length and the distance it rests at";
-            self.units.same(&l0, len, span, ends, what);
+            self.scope.units.same(&l0, len, span, ends, what);
         }
-        self.units.energy_term(&stiffness.plus(len, &two()), k.1);
+        self.scope.units.energy_term(&stiffness.plus(len, &two()), k.1);
     }
 
     /// A damper's c/2·(d|AB|/dt)² is a power: c·len²/T² = energy/T.
     pub(super) fn damper_energy(&mut self, len: &Form, c: Dims, span: Span) {
         let c = self.form(c);
         let e = c.plus(len, &two()).plus(&units::time(), &-Rational::one());
-        self.units.energy_term(&e, span);
+        self.scope.units.energy_term(&e, span);
     }
 
     /// The work of a force along its body's position, or of a torque through its angle, is an
@@ -439,24 +442,24 @@ impl Resolver<'_> {
         torque: bool,
         point: Option<Vec<Form>>,
     ) {
-        if torque && self.body_dims[body].spatial {
+        if torque && self.scope.body_dims[body].spatial {
             // τ·ω dt: the rotation's entries are dimensionless, so each component is an energy.
             for f in self.shape(value).forms() {
-                self.units.energy_term(&f, span);
+                self.scope.units.energy_term(&f, span);
             }
             return;
         }
         if torque {
             let f = self.form(value);
-            if let Some(a) = self.body_dims[body].angle.clone() {
-                self.units.energy_term(&f.plus(&a, &Rational::one()), span);
+            if let Some(a) = self.scope.body_dims[body].angle.clone() {
+                self.scope.units.energy_term(&f.plus(&a, &Rational::one()), span);
             }
             return;
         }
         let forms = self.shape(value).forms();
-        let position = point.unwrap_or_else(|| self.body_dims[body].position.clone());
+        let position = point.unwrap_or_else(|| self.scope.body_dims[body].position.clone());
         for (f, x) in forms.iter().zip(position) {
-            self.units.energy_term(&f.plus(&x, &Rational::one()), span);
+            self.scope.units.energy_term(&f.plus(&x, &Rational::one()), span);
         }
     }
 
@@ -465,7 +468,7 @@ impl Resolver<'_> {
     pub(super) fn separation_dims(&mut self, ends: Vec<Form>, a: Span, b: Span) -> Form {
         let Some(first) = ends.first().cloned() else { return Form::default() };
         for f in &ends[1..] {
-            self.units.same(&first, f, a, b, "between the coordinates of a spring's ends");
+            self.scope.units.same(&first, f, a, b, "between the coordinates of a spring's ends");
         }
         first
     }

@@ -18,7 +18,7 @@ impl Resolver<'_> {
         self.in_drawing = false;
         if let Some(figure) = figure {
             let label = self.text(span);
-            self.drawings.push(Drawing { label, figure, span });
+            self.model.drawings.push(Drawing { label, figure, span });
         }
     }
 
@@ -36,7 +36,7 @@ impl Resolver<'_> {
                 let (radius, dims) = self.scalar_in_role(written, &DRAWING)?;
                 let form = self.operand_form(dims);
                 if let Some((first, at)) = &length {
-                    self.units.same(first, &form, *at, written.span, "in this drawing");
+                    self.scope.units.same(first, &form, *at, written.span, "in this drawing");
                 }
                 Some(Figure::Circle { centre: centre?, radius })
             }
@@ -52,14 +52,16 @@ impl Resolver<'_> {
     /// the plane is padded with z = 0 in a scene in space).
     fn point(&mut self, e: &Expr, length: &mut Option<(Form, Span)>) -> Option<Vec<ExprId>> {
         let body = match &e.kind {
-            ExprKind::Name { name, primes: 0 } => match self.names.get(&normalize(name)) {
+            ExprKind::Name { name, primes: 0 } => match self.scope.names.get(&normalize(name)) {
                 Some(Binding::Body(i)) => Some(*i),
                 _ => None,
             },
             _ => None,
         };
         let (mut point, forms) = match body {
-            Some(i) => (self.bodies[i].position.clone(), self.body_dims[i].position.clone()),
+            Some(i) => {
+                (self.model.bodies[i].position.clone(), self.scope.body_dims[i].position.clone())
+            }
             None => {
                 let (value, dims) = self.value_in_role(e, &DRAWING)?;
                 let forms = self.operand(dims).forms();
@@ -84,11 +86,14 @@ impl Resolver<'_> {
         };
         for form in forms {
             match length {
-                Some((first, at)) => self.units.same(first, &form, *at, e.span, "in this drawing"),
+                Some((first, at)) => {
+                    self.scope.units.same(first, &form, *at, e.span, "in this drawing")
+                }
                 None => *length = Some((form, e.span)),
             }
         }
-        let dimension = self.bodies.iter().map(|b| b.position.len()).max().unwrap_or(2).max(2);
+        let dimension =
+            self.model.bodies.iter().map(|b| b.position.len()).max().unwrap_or(2).max(2);
         if point.len() > dimension {
             self.error(
                 Diagnostic::error(
@@ -103,7 +108,7 @@ impl Resolver<'_> {
             );
             return None;
         }
-        point.resize(dimension, self.pool.zero());
+        point.resize(dimension, self.model.pool.zero());
         Some(point)
     }
 }

@@ -20,10 +20,10 @@ impl Resolver<'_> {
         let Some(unit) = unit else { return Some(value) };
         match crate::units::parse_unit(unit) {
             Ok((_, scale)) => {
-                let k = self.pool.num(scale.rational);
-                let pi = self.pool.pi();
-                let pi = self.pool.powi(pi, i64::from(scale.pi_power));
-                Some(self.pool.mul(&[value, k, pi]))
+                let k = self.model.pool.num(scale.rational);
+                let pi = self.model.pool.pi();
+                let pi = self.model.pool.powi(pi, i64::from(scale.pi_power));
+                Some(self.model.pool.mul(&[value, k, pi]))
             }
             Err(d) => {
                 self.error(d);
@@ -36,9 +36,12 @@ impl Resolver<'_> {
     /// with the dimensions of its coordinates.
     fn anchor(&mut self, e: &Expr, role: &Role) -> Option<(Vec<cas::ExprId>, Vec<Form>)> {
         if let ExprKind::Name { name, primes: 0 } = &e.kind {
-            if let Some(Binding::Body(i)) = self.names.get(&normalize(name)) {
+            if let Some(Binding::Body(i)) = self.scope.names.get(&normalize(name)) {
                 let i = *i;
-                return Some((self.bodies[i].position.clone(), self.body_dims[i].position.clone()));
+                return Some((
+                    self.model.bodies[i].position.clone(),
+                    self.scope.body_dims[i].position.clone(),
+                ));
             }
         }
         let (value, dims) = self.value_in_role(e, role)?;
@@ -64,9 +67,9 @@ impl Resolver<'_> {
         ends.extend(b_ends);
         let length = self.separation_dims(ends, a.span, b.span);
         let n = pa.len().max(pb.len());
-        let zero = self.pool.zero();
+        let zero = self.model.pool.zero();
         let difference = (0..n)
-            .map(|i| self.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
+            .map(|i| self.model.pool.sub(*pb.get(i).unwrap_or(&zero), *pa.get(i).unwrap_or(&zero)))
             .collect();
         Some(Separation { difference, length, ends: [pa, pb] })
     }
@@ -80,20 +83,21 @@ impl Resolver<'_> {
     ) -> Option<(cas::ExprId, Separation)> {
         let separation = self.separation(a, b, role)?;
         let squares: Vec<cas::ExprId> =
-            separation.difference.iter().map(|x| self.pool.powi(*x, 2)).collect();
-        Some((self.pool.add(&squares), separation))
+            separation.difference.iter().map(|x| self.model.pool.powi(*x, 2)).collect();
+        Some((self.model.pool.add(&squares), separation))
     }
 
     /// A scalar that may not depend on coordinates or time (initial values, parameter values).
     pub(super) fn constant(&mut self, e: &Expr) -> Option<(cas::ExprId, Dims)> {
         let (v, dims) = self.scalar(e)?;
         let moving = self
+            .model
             .pool
             .free_symbols(v)
             .iter()
-            .any(|s| !matches!(self.pool.symbol(*s).kind, SymbolKind::Param));
+            .any(|s| !matches!(self.model.pool.symbol(*s).kind, SymbolKind::Param));
         if let (false, Some(input)) = (moving, self.input_in(&Value::Scalar(v))) {
-            let name = self.pool.symbol(input).name.clone();
+            let name = self.model.pool.symbol(input).name.clone();
             self.error(
                 Diagnostic::error(e.span, "this value must be a constant")
                     .with_label(format!("depends on the input `{name}`"))
@@ -157,7 +161,7 @@ impl Resolver<'_> {
         match &e.kind {
             ExprKind::Number(text) => match cas::number::parse_decimal(text) {
                 Some(q) => {
-                    let v = self.pool.num(q);
+                    let v = self.model.pool.num(q);
                     Some((Value::Scalar(v), self.number_dims(v, true)))
                 }
                 None => {
@@ -181,7 +185,7 @@ impl Resolver<'_> {
                 if c.name == "force"
                     && matches!(field.name.as_str(), "x" | "y" | "z")
                     && matches!(
-                        self.names.get(&normalize(&object.name)),
+                        self.scope.names.get(&normalize(&object.name)),
                         Some(Binding::Constraint(_))
                     ) =>
             {
@@ -195,7 +199,7 @@ impl Resolver<'_> {
             ExprKind::Call { func, args } => self.call(func, args, e.span),
             ExprKind::Neg(inner) => {
                 let (v, dims) = self.value(inner)?;
-                let v = v.map(|x| self.pool.neg(x));
+                let v = v.map(|x| self.model.pool.neg(x));
                 let dims = match (dims, &v) {
                     (Dims::Number { decided, .. }, Value::Scalar(x)) => {
                         self.number_dims(*x, decided)

@@ -17,10 +17,11 @@ impl Resolver<'_> {
         torque: bool,
     ) {
         let key = normalize(&body.name);
-        let index = match self.names.get(&key) {
+        let index = match self.scope.names.get(&key) {
             Some(Binding::Body(i)) => *i,
             _ => {
-                let bodies: Vec<String> = self.bodies.iter().map(|b| b.name.clone()).collect();
+                let bodies: Vec<String> =
+                    self.model.bodies.iter().map(|b| b.name.clone()).collect();
                 let mut d = Diagnostic::error(body.span, format!("no body named `{}`", body.name))
                     .with_label("not a particle or body");
                 if let Some(near) = closest(&key, bodies.iter().map(String::as_str)) {
@@ -31,8 +32,8 @@ impl Resolver<'_> {
             }
         };
         let role = if torque { &TORQUE } else { &FORCE };
-        let dim = self.bodies[index].position.len();
-        let kind = self.bodies[index].kind();
+        let dim = self.model.bodies[index].position.len();
+        let kind = self.model.bodies[index].kind();
         // The point a force acts at, when it is not the centre of mass.
         let mut point = None;
         if let Some(at) = at {
@@ -77,7 +78,7 @@ impl Resolver<'_> {
             (Value::Scalar(_), false) => dim == 1,
             _ => false,
         };
-        if torque && self.bodies[index].kind() == BodyKind::Particle {
+        if torque && self.model.bodies[index].kind() == BodyKind::Particle {
             self.error(
                 Diagnostic::error(
                     body.span,
@@ -108,9 +109,9 @@ impl Resolver<'_> {
         let at = point.map(|(p, _)| p);
         let load = Load { name: normalize(&name.name), body: index, value: v, at, span };
         if torque {
-            self.torques.push(load);
+            self.model.torques.push(load);
         } else {
-            self.forces.push(load);
+            self.model.forces.push(load);
         }
     }
 }

@@ -13,26 +13,26 @@ impl Resolver<'_> {
         let value = self.name_value(raw, primes, span)?;
         let name = normalize(raw);
         let dims = match (name.as_str(), &value) {
-            ("t", _) if !self.names.contains_key("t") => Dims::Scalar(crate::units::time()),
-            ("pi", Value::Scalar(pi)) if !self.names.contains_key("pi") && primes == 0 => {
+            ("t", _) if !self.scope.names.contains_key("t") => Dims::Scalar(crate::units::time()),
+            ("pi", Value::Scalar(pi)) if !self.scope.names.contains_key("pi") && primes == 0 => {
                 self.number_dims(*pi, true)
             }
-            ("pi", _) if !self.names.contains_key("pi") => {
+            ("pi", _) if !self.scope.names.contains_key("pi") => {
                 Dims::Scalar(Form::default().rate(primes))
             }
             _ => self.name_dims(raw, &name, primes),
         };
         if let Dims::Scalar(f) = &dims {
-            self.units.used(f, span);
+            self.scope.units.used(f, span);
         }
         Some((value, dims))
     }
 
     fn name_value(&mut self, raw: &str, primes: u8, span: Span) -> Option<Value> {
         let name = normalize(raw);
-        self.used.insert(name.clone());
+        self.scope.used.insert(name.clone());
         let base = match name.as_str() {
-            "t" if !self.names.contains_key("t") => {
+            "t" if !self.scope.names.contains_key("t") => {
                 if primes > 0 {
                     self.error(
                         Diagnostic::error(span, "`t` is time; it has no rate")
@@ -41,69 +41,75 @@ impl Resolver<'_> {
                     );
                     return None;
                 }
-                return Some(Value::Scalar(self.pool.sym(self.time)));
+                return Some(Value::Scalar(self.model.pool.sym(self.model.time)));
             }
-            "pi" if !self.names.contains_key("pi") => Value::Scalar(self.pool.pi()),
-            _ => {
-                match self.names.get(&name).cloned() {
-                    Some(Binding::Param(s)) => {
-                        if primes > 0 {
-                            self.error(
-                                Diagnostic::error(
-                                    span,
-                                    format!("`{raw}` is a parameter, constant in time"),
-                                )
-                                .with_label("has no rate")
-                                .with_hint(format!("declare it with `coord {raw}` if it moves")),
-                            );
-                            return None;
-                        }
-                        Value::Scalar(self.pool.sym(s))
-                    }
-                    Some(Binding::Input(s)) => {
-                        if primes > 0 {
-                            self.error(
-                            Diagnostic::error(span, format!("`{raw}` is an input; its rate is not known"))
-                                .with_label("the rate of an input")
-                                .with_hint("an input is given as a value in time, not with its derivatives"),
-                        );
-                            return None;
-                        }
-                        Value::Scalar(self.pool.sym(s))
-                    }
-                    // KE stands for an expression only derived later; its rates are symbols of
-                    // their own (see `total_rate`), taken below as a `let` name's are.
-                    Some(Binding::Quantity(s)) => Value::Scalar(self.pool.sym(s)),
-                    Some(Binding::Coord(s)) => {
-                        if primes > 2 {
-                            let base = self.pool.symbol(s).name.clone();
-                            self.past_acceleration(span, primes, &base, true);
-                            return None;
-                        }
-                        let d =
-                            self.pool.derivative_symbol(s, primes).expect("coordinates have rates");
-                        return Some(Value::Scalar(self.pool.sym(d)));
-                    }
-                    Some(Binding::Let(v)) => v,
-                    Some(Binding::Body(_)) | Some(Binding::Constraint(_)) => {
-                        let what = if matches!(self.names.get(&name), Some(Binding::Body(_))) {
-                            "a body: write `NAME.position`, `NAME.velocity` or `NAME.omega`"
-                        } else {
-                            "a constraint: write `NAME.force` for its reaction"
-                        };
+            "pi" if !self.scope.names.contains_key("pi") => Value::Scalar(self.model.pool.pi()),
+            _ => match self.scope.names.get(&name).cloned() {
+                Some(Binding::Param(s)) => {
+                    if primes > 0 {
                         self.error(
-                            Diagnostic::error(span, format!("`{raw}` is not a value"))
-                                .with_label("names a body or constraint")
-                                .with_hint(format!("`{raw}` is {what}")),
+                            Diagnostic::error(
+                                span,
+                                format!("`{raw}` is a parameter, constant in time"),
+                            )
+                            .with_label("has no rate")
+                            .with_hint(format!("declare it with `coord {raw}` if it moves")),
                         );
                         return None;
                     }
-                    None => {
-                        self.unknown_name(raw, &name, span);
+                    Value::Scalar(self.model.pool.sym(s))
+                }
+                Some(Binding::Input(s)) => {
+                    if primes > 0 {
+                        self.error(
+                            Diagnostic::error(
+                                span,
+                                format!("`{raw}` is an input; its rate is not known"),
+                            )
+                            .with_label("the rate of an input")
+                            .with_hint(
+                                "an input is given as a value in time, not with its derivatives",
+                            ),
+                        );
                         return None;
                     }
+                    Value::Scalar(self.model.pool.sym(s))
                 }
-            }
+                // KE stands for an expression only derived later; its rates are symbols of
+                // their own (see `total_rate`), taken below as a `let` name's are.
+                Some(Binding::Quantity(s)) => Value::Scalar(self.model.pool.sym(s)),
+                Some(Binding::Coord(s)) => {
+                    if primes > 2 {
+                        let base = self.model.pool.symbol(s).name.clone();
+                        self.past_acceleration(span, primes, &base, true);
+                        return None;
+                    }
+                    let d = self
+                        .model
+                        .pool
+                        .derivative_symbol(s, primes)
+                        .expect("coordinates have rates");
+                    return Some(Value::Scalar(self.model.pool.sym(d)));
+                }
+                Some(Binding::Let(v)) => v,
+                Some(Binding::Body(_)) | Some(Binding::Constraint(_)) => {
+                    let what = if matches!(self.scope.names.get(&name), Some(Binding::Body(_))) {
+                        "a body: write `NAME.position`, `NAME.velocity` or `NAME.omega`"
+                    } else {
+                        "a constraint: write `NAME.force` for its reaction"
+                    };
+                    self.error(
+                        Diagnostic::error(span, format!("`{raw}` is not a value"))
+                            .with_label("names a body or constraint")
+                            .with_hint(format!("`{raw}` is {what}")),
+                    );
+                    return None;
+                }
+                None => {
+                    self.unknown_name(raw, &name, span);
+                    return None;
+                }
+            },
         };
         if primes == 0 {
             return Some(base);
@@ -121,7 +127,7 @@ impl Resolver<'_> {
     }
 
     pub(super) fn unknown_name(&mut self, raw: &str, name: &str, span: Span) {
-        if let Some((decl, what)) = self.declared.get(name).copied() {
+        if let Some((decl, what)) = self.scope.declared.get(name).copied() {
             if decl.start > span.start && !self.in_outputs {
                 self.error(
                     Diagnostic::error(
@@ -137,7 +143,7 @@ impl Resolver<'_> {
             // Declared, but its declaration had an error of its own: already reported.
             return;
         }
-        let mut candidates: Vec<&str> = self.names.keys().map(String::as_str).collect();
+        let mut candidates: Vec<&str> = self.scope.names.keys().map(String::as_str).collect();
         candidates.extend(["t", "pi"]);
         candidates.sort_unstable();
         let mut d =
@@ -157,7 +163,7 @@ impl Resolver<'_> {
         field: &Ident,
         span: Span,
     ) -> Option<(Value, Dims)> {
-        if let Some(Binding::Let(v)) = self.names.get(&normalize(&object.name)) {
+        if let Some(Binding::Let(v)) = self.scope.names.get(&normalize(&object.name)) {
             if !matches!(v, Value::Scalar(_)) {
                 // A component of a vector `let`.
                 let (v, dims) = self.name(&object.name, 0, object.span)?;
@@ -165,7 +171,7 @@ impl Resolver<'_> {
             }
         }
         let value = self.member_value(object, field, span)?;
-        let body = match self.names.get(&normalize(&object.name)) {
+        let body = match self.scope.names.get(&normalize(&object.name)) {
             Some(Binding::Body(i)) => Some(*i),
             _ => None,
         };
@@ -174,7 +180,7 @@ impl Resolver<'_> {
 
     fn member_value(&mut self, object: &Ident, field: &Ident, span: Span) -> Option<Value> {
         let name = normalize(&object.name);
-        match self.names.get(&name).cloned() {
+        match self.scope.names.get(&name).cloned() {
             Some(Binding::Body(i)) => self.body_member(i, object, field),
             Some(Binding::Constraint(components)) => {
                 self.reaction_member(&components, object, field, span)
@@ -185,7 +191,7 @@ impl Resolver<'_> {
 
     /// `body.field`: a body's position, velocity, mass, angle or angular velocity.
     fn body_member(&mut self, i: usize, object: &Ident, field: &Ident) -> Option<Value> {
-        let body = self.bodies[i].clone();
+        let body = self.model.bodies[i].clone();
         let fields: &[&str] = match body.kind() {
             BodyKind::Particle => &["position", "velocity", "mass", "x", "y", "z"],
             BodyKind::Planar => &["position", "velocity", "mass", "angle", "omega", "x", "y", "z"],
@@ -195,7 +201,7 @@ impl Resolver<'_> {
         };
         if let Some(rotation @ Rotation::Spatial { orientation, .. }) = &body.rotation {
             let orientation = *orientation;
-            let pool = &mut self.pool;
+            let pool = &mut self.model.pool;
             let spatial = match field.name.as_str() {
                 "omega" | "omega_body" => {
                     let world = field.name == "omega";
@@ -213,11 +219,11 @@ impl Resolver<'_> {
         let value = match field.name.as_str() {
             "position" => Some(Value::Vector(body.position.clone())),
             "velocity" => Some(Value::Vector(
-                body.position.iter().map(|x| self.pool.time_derivative(*x)).collect(),
+                body.position.iter().map(|x| self.model.pool.time_derivative(*x)).collect(),
             )),
             "mass" => Some(Value::Scalar(body.mass)),
             "angle" => body.angle().map(Value::Scalar),
-            "omega" => body.angle().map(|a| Value::Scalar(self.pool.time_derivative(a))),
+            "omega" => body.angle().map(|a| Value::Scalar(self.model.pool.time_derivative(a))),
             "x" => body.position.first().map(|x| Value::Scalar(*x)),
             "y" => body.position.get(1).map(|x| Value::Scalar(*x)),
             "z" => body.position.get(2).map(|x| Value::Scalar(*x)),
@@ -289,16 +295,16 @@ impl Resolver<'_> {
         for component in components {
             forces.push(match component {
                 Some(i) => {
-                    self.constraints[*i].force_requested = true;
-                    self.pool.sym(self.constraints[*i].force_symbol)
+                    self.model.constraints[*i].force_requested = true;
+                    self.model.pool.sym(self.model.constraints[*i].force_symbol)
                 }
                 // A component that always holds exerts nothing.
-                None => self.pool.zero(),
+                None => self.model.pool.zero(),
             });
         }
         // A vector constraint's reaction is the vector of its components' reactions.
         let vector = components.len() > 1
-            || components.iter().flatten().any(|i| self.constraints[*i].name.contains('.'));
+            || components.iter().flatten().any(|i| self.model.constraints[*i].name.contains('.'));
         match vector {
             false => Some(Value::Scalar(forces[0])),
             true => Some(Value::Vector(forces)),
@@ -307,11 +313,12 @@ impl Resolver<'_> {
 
     /// `name.field` where `name` is neither a body nor a constraint: reported, unless already.
     fn unknown_member(&mut self, name: &str, object: &Ident) -> Option<Value> {
-        if self.declared.contains_key(name) {
+        if self.scope.declared.contains_key(name) {
             // Declared but failed to resolve: already reported.
             return None;
         }
         let mut candidates: Vec<&str> = self
+            .scope
             .names
             .iter()
             .filter(|(_, b)| matches!(b, Binding::Body(_) | Binding::Constraint(_)))

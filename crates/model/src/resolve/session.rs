@@ -14,6 +14,7 @@ use crate::{Checks, Model, Value};
 /// What resolving a scene leaves behind for resolving more expressions against it later: its
 /// names and what they are bound to, the dimension facts and the values of its parameters.
 /// A [`Model`] keeps it, for [`Model::resolve_expression`] and [`Model::resolve_about`].
+#[derive(Default)]
 pub struct Scope {
     pub(super) names: HashMap<String, Binding>,
     pub(super) declared: HashMap<String, (Span, &'static str)>,
@@ -57,16 +58,16 @@ impl Model {
         resolve: impl FnOnce(&mut Resolver<'_>) -> Option<T>,
     ) -> Result<T, Vec<Diagnostic>> {
         let mut r = Resolver::resume(self, text);
-        let mark = r.units.mark();
+        let mark = r.scope.units.mark();
         let index = r.stmt + 1;
         r.enter(index);
         let value = resolve(&mut r);
-        let mut errors = std::mem::take(&mut r.errors);
-        if errors.is_empty() && r.checks.units {
-            errors = r.units.solve();
+        let mut errors = std::mem::take(&mut r.diagnostics.errors);
+        if errors.is_empty() && r.scope.checks.units {
+            errors = r.scope.units.solve();
         }
         if !errors.is_empty() {
-            r.units.rollback(mark);
+            r.scope.units.rollback(mark);
         }
         r.suspend(self);
         match value {
@@ -86,42 +87,9 @@ impl<'a> Resolver<'a> {
     /// A resolver that goes on from where `model` was left, reading `source`.
     fn resume(model: &mut Model, source: &'a str) -> Resolver<'a> {
         let mut r = Resolver::new(source);
-        std::mem::swap(&mut r.pool, &mut model.pool);
-        r.title = model.title.take();
-        r.time = model.time;
-        r.params = std::mem::take(&mut model.params);
-        r.inputs = std::mem::take(&mut model.inputs);
-        r.outputs = std::mem::take(&mut model.outputs);
-        r.coords = std::mem::take(&mut model.coords);
-        r.bodies = std::mem::take(&mut model.bodies);
-        r.constraints = std::mem::take(&mut model.constraints);
-        r.gravity = model.gravity.take();
-        r.potentials = std::mem::take(&mut model.potentials);
-        r.forces = std::mem::take(&mut model.forces);
-        r.torques = std::mem::take(&mut model.torques);
-        r.dissipation = std::mem::take(&mut model.dissipation);
-        r.lagrangians = std::mem::take(&mut model.lagrangians);
-        r.shows = std::mem::take(&mut model.shows);
-        r.expects = std::mem::take(&mut model.expects);
-        r.linear_expects = std::mem::take(&mut model.linear_expects);
-        r.drawings = std::mem::take(&mut model.drawings);
-        r.links = std::mem::take(&mut model.links);
-        r.simulate = std::mem::take(&mut model.simulate);
-        r.linearize = std::mem::take(&mut model.linearize);
-        r.placeholders = std::mem::take(&mut model.placeholders);
-        r.lets = std::mem::take(&mut model.lets);
-        let scope = &mut model.scope;
-        r.names = std::mem::take(&mut scope.names);
-        r.declared = std::mem::take(&mut scope.declared);
-        r.used = std::mem::take(&mut scope.used);
-        r.param_values = std::mem::take(&mut scope.param_values);
-        r.stmt = scope.statements;
-        r.units = std::mem::take(&mut scope.units);
-        r.name_dims = std::mem::take(&mut scope.name_dims);
-        r.body_dims = std::mem::take(&mut scope.body_dims);
-        r.loose = std::mem::take(&mut scope.loose);
-        r.quaternions = std::mem::take(&mut scope.quaternions);
-        r.checks = scope.checks;
+        r.model = super::Draft::take(model);
+        r.scope = std::mem::take(&mut model.scope);
+        r.stmt = r.scope.statements;
         r.in_outputs = true;
         r
     }

@@ -15,31 +15,31 @@ impl Resolver<'_> {
     /// when nothing drives it (0 when none is written).
     pub(super) fn input_statement(&mut self, decls: &[lang::ParamDecl]) {
         for decl in decls {
-            let form = self.units.declared(&decl.name.name, decl.name.span, None);
+            let form = self.scope.units.declared(&decl.name.name, decl.name.span, None);
             let value = decl.value.as_ref().map(|v| self.constant(v));
             if let Some(Some((_, dims))) = &value {
                 let v = self.with_unit(Some(dims.clone()), decl.unit.as_ref());
                 let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
-                self.units.same(&form, &v, decl.name.span, span, "in this input");
+                self.scope.units.same(&form, &v, decl.name.span, span, "in this input");
             }
             let value = match value {
                 Some(v) => v.and_then(|(v, _)| self.in_si(v, decl.unit.as_ref())),
-                None => Some(self.pool.zero()),
+                None => Some(self.model.pool.zero()),
             };
             let name = normalize(&decl.name.name);
-            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
-                self.bind(&decl.name, Binding::Input(self.time));
+            if self.scope.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Input(self.model.time));
                 continue;
             }
-            let sym = self.pool.param(&name);
+            let sym = self.model.pool.param(&name);
             if !self.bind(&decl.name, Binding::Input(sym)) {
                 continue;
             }
             let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
-            self.name_dims.insert(name.clone(), dims);
+            self.scope.name_dims.insert(name.clone(), dims);
             if let Some(value) = value {
                 let unit = decl.unit.clone();
-                self.inputs.push(Input { name, sym, value, unit, span: decl.name.span });
+                self.model.inputs.push(Input { name, sym, value, unit, span: decl.name.span });
             }
         }
     }
@@ -48,8 +48,11 @@ impl Resolver<'_> {
     /// no reaction (its gradient is a row of C and D).
     pub(super) fn output_statement(&mut self, name: &lang::Ident, e: &Expr) {
         let Some((value, _)) = self.scalar_in_role(e, &OUTPUT) else { return };
-        let reaction = self.pool.free_symbols(value).iter().copied().find(|s| {
-            self.placeholders.iter().any(|(p, k)| p == s && matches!(k, Placeholder::Reaction(_)))
+        let reaction = self.model.pool.free_symbols(value).iter().copied().find(|s| {
+            self.model
+                .placeholders
+                .iter()
+                .any(|(p, k)| p == s && matches!(k, Placeholder::Reaction(_)))
         });
         if reaction.is_some() {
             self.error(
@@ -60,24 +63,24 @@ impl Resolver<'_> {
             return;
         }
         let key = normalize(&name.name);
-        if self.outputs.iter().any(|o| o.name == key) {
+        if self.model.outputs.iter().any(|o| o.name == key) {
             self.error(
                 Diagnostic::error(name.span, format!("output `{}` is given twice", name.name))
                     .with_label("second output of this name"),
             );
             return;
         }
-        self.outputs.push(Output { name: key, value, span: name.span });
+        self.model.outputs.push(Output { name: key, value, span: name.span });
     }
 
     /// The first input in `value`, if any.
     pub(super) fn input_in(&mut self, value: &Value) -> Option<SymId> {
-        let inputs: Vec<SymId> = self.inputs.iter().map(|u| u.sym).collect();
+        let inputs: Vec<SymId> = self.model.inputs.iter().map(|u| u.sym).collect();
         value.entries().into_iter().find_map(|e| self.input_in_expr(e, &inputs))
     }
 
     fn input_in_expr(&mut self, e: ExprId, inputs: &[SymId]) -> Option<SymId> {
-        self.pool.free_symbols(e).iter().copied().find(|s| inputs.contains(s))
+        self.model.pool.free_symbols(e).iter().copied().find(|s| inputs.contains(s))
     }
 
     /// Whether `value` (of `e`) is free of inputs where its role needs it so; reports the
@@ -87,7 +90,7 @@ impl Resolver<'_> {
             return true;
         }
         let Some(input) = self.input_in(value) else { return true };
-        let name = self.pool.symbol(input).name.clone();
+        let name = self.model.pool.symbol(input).name.clone();
         let part = self.input_part(e);
         let hint = format!(
             "an input stands where no rate of it is needed: in a force, a torque, a potential, \
@@ -120,13 +123,13 @@ impl Resolver<'_> {
     /// Refuses the rate of PE or of a reaction in a scene with inputs: what they stand for may
     /// hold an input (a potential's, a force's), and its rate is not known. KE cannot hold one.
     pub(super) fn refuse_placeholder_rate_with_inputs(&mut self, p: SymId, span: Span) {
-        let Some(input) = self.inputs.first() else { return };
-        let kind = self.placeholders.iter().find(|(s, _)| *s == p).map(|(_, k)| *k);
+        let Some(input) = self.model.inputs.first() else { return };
+        let kind = self.model.placeholders.iter().find(|(s, _)| *s == p).map(|(_, k)| *k);
         if matches!(kind, Some(Placeholder::KineticEnergy)) {
             return;
         }
         let name = input.name.clone();
-        let what = self.pool.symbol(p).name.clone();
+        let what = self.model.pool.symbol(p).name.clone();
         self.error(
             Diagnostic::error(
                 span,
@@ -142,9 +145,9 @@ impl Resolver<'_> {
     /// Refuses the rate of an expression that holds an input, at `span`: the input's rate is
     /// not known. Whether it was refused.
     pub(super) fn refuse_input_rate(&mut self, e: ExprId, span: Span) -> bool {
-        let inputs: Vec<SymId> = self.inputs.iter().map(|u| u.sym).collect();
+        let inputs: Vec<SymId> = self.model.inputs.iter().map(|u| u.sym).collect();
         let Some(input) = self.input_in_expr(e, &inputs) else { return false };
-        let name = self.pool.symbol(input).name.clone();
+        let name = self.model.pool.symbol(input).name.clone();
         self.error(
             Diagnostic::error(span, format!("this rate needs the rate of the input `{name}`"))
                 .with_label(format!("depends on `{name}`"))
@@ -170,11 +173,11 @@ impl Resolver<'_> {
             }
             lang::LinearExpectation::Eigenvalue(e) => self.eigenvalue(e),
             lang::LinearExpectation::Critical { parameter, value } => {
-                let index = match self.names.get(&normalize(&parameter.name)) {
-                    Some(Binding::Param(s)) => self.params.iter().position(|p| p.sym == *s),
+                let index = match self.scope.names.get(&normalize(&parameter.name)) {
+                    Some(Binding::Param(s)) => self.model.params.iter().position(|p| p.sym == *s),
                     _ => None,
                 };
-                self.used.insert(normalize(&parameter.name));
+                self.scope.used.insert(normalize(&parameter.name));
                 if index.is_none() {
                     self.error(
                         Diagnostic::error(
@@ -198,7 +201,7 @@ impl Resolver<'_> {
         };
         if let Some(expectation) = resolved {
             let text = self.text(span);
-            self.linear_expects.push(crate::LinearExpect { expectation, text, span });
+            self.model.linear_expects.push(crate::LinearExpect { expectation, text, span });
         }
     }
 
@@ -216,6 +219,6 @@ impl Resolver<'_> {
             return Some(crate::LinearExpectation::Eigenvalue { re: re?.0, im: im?.0 });
         }
         let (re, _) = self.constant(e)?;
-        Some(crate::LinearExpectation::Eigenvalue { re, im: self.pool.zero() })
+        Some(crate::LinearExpectation::Eigenvalue { re, im: self.model.pool.zero() })
     }
 }

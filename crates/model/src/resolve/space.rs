@@ -96,23 +96,27 @@ impl Resolver<'_> {
                     return self.wrong_argument(&call, 0, "a vector");
                 };
                 let form = self.components(dims.into_iter().next().expect("one"), args[0].span);
-                let squares: Vec<ExprId> = u.iter().map(|x| self.pool.powi(*x, 2)).collect();
-                let sum = self.pool.add(&squares);
-                let sum = self.pool.simplify(sum);
-                Some((Value::Scalar(self.pool.sqrt(sum)), Dims::Scalar(form)))
+                let squares: Vec<ExprId> = u.iter().map(|x| self.model.pool.powi(*x, 2)).collect();
+                let sum = self.model.pool.add(&squares);
+                let sum = self.model.pool.simplify(sum);
+                Some((Value::Scalar(self.model.pool.sqrt(sum)), Dims::Scalar(form)))
             }
             "rotx" | "roty" | "rotz" => {
                 let Value::Scalar(angle) = call.values[0] else {
                     return self.wrong_argument(&call, 0, "an angle");
                 };
                 let form = self.form(dims.into_iter().next().expect("one"));
-                self.units.dimensionless(&form, args[0].span, &format!("the angle of {name}"));
+                self.scope.units.dimensionless(
+                    &form,
+                    args[0].span,
+                    &format!("the angle of {name}"),
+                );
                 let axis = match name {
                     "rotx" => 0,
                     "roty" => 1,
                     _ => 2,
                 };
-                let r = kinematics::elementary(&mut self.pool, axis, angle);
+                let r = kinematics::elementary(&mut self.model.pool, axis, angle);
                 Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
             }
             "rotation" => self.rotation_call(&call, dims),
@@ -158,9 +162,12 @@ impl Resolver<'_> {
         let b = self.components(dims.next().expect("two"), args[1].span);
         let product = a.plus(&b, &Rational::one());
         if name == "dot" {
-            Some((Value::Scalar(kinematics::dot(&mut self.pool, &u, &v)), Dims::Scalar(product)))
+            Some((
+                Value::Scalar(kinematics::dot(&mut self.model.pool, &u, &v)),
+                Dims::Scalar(product),
+            ))
         } else {
-            let w = kinematics::cross(&mut self.pool, &u, &v);
+            let w = kinematics::cross(&mut self.model.pool, &u, &v);
             Some((Value::Vector(w), Dims::Many(vec![product; 3])))
         }
     }
@@ -173,7 +180,7 @@ impl Resolver<'_> {
         let Value::Scalar(angle) = values[1] else {
             return self.wrong_argument(call, 1, "an angle");
         };
-        if axis.iter().all(|x| self.pool.is_identically_zero(*x)) {
+        if axis.iter().all(|x| self.model.pool.is_identically_zero(*x)) {
             self.error(
                 Diagnostic::error(args[0].span, "a rotation's axis cannot be zero")
                     .with_label("this vector is zero")
@@ -188,9 +195,9 @@ impl Resolver<'_> {
         let mut dims = dims.into_iter();
         self.components(dims.next().expect("two"), args[0].span);
         let form = self.form(dims.next().expect("two"));
-        self.units.dimensionless(&form, args[1].span, "the angle of a rotation");
+        self.scope.units.dimensionless(&form, args[1].span, "the angle of a rotation");
         let axis = [axis[0], axis[1], axis[2]];
-        let r = kinematics::about_axis(&mut self.pool, axis, angle);
+        let r = kinematics::about_axis(&mut self.model.pool, axis, angle);
         Some((Value::Matrix(kinematics::rows(&r)), rotation_dims()))
     }
 
@@ -206,12 +213,12 @@ impl Resolver<'_> {
         }
         for (d, a) in dims.into_iter().zip(args) {
             let form = self.form(d);
-            self.units.dimensionless(&form, a.span, "an Euler parameter");
+            self.scope.units.dimensionless(&form, a.span, "an Euler parameter");
         }
         let e = [e[0], e[1], e[2], e[3]];
-        let r = kinematics::from_quaternion(&mut self.pool, e);
+        let r = kinematics::from_quaternion(&mut self.model.pool, e);
         let rows = kinematics::rows(&r);
-        self.quaternions.push((rows.clone(), e, span));
+        self.scope.quaternions.push((rows.clone(), e, span));
         Some((Value::Matrix(rows), rotation_dims()))
     }
 
@@ -266,7 +273,7 @@ impl Resolver<'_> {
         let forms = self.shape(d).forms();
         let Some(first) = forms.first().cloned() else { return Form::default() };
         for f in &forms[1..] {
-            self.units.same(&first, f, span, span, "between the components of a vector");
+            self.scope.units.same(&first, f, span, span, "between the components of a vector");
         }
         first
     }
@@ -300,8 +307,32 @@ impl Resolver<'_> {
             );
             return None;
         }
-        let zero = self.pool.zero();
-        let tensor: [[ExprId; 3]; 3] = match &inertia {
+        let tensor = self.inertia_tensor(name, &inertia, inertia_written)?;
+        if let Some((_, e, _)) = self.scope.quaternions.iter().find(|(m, _, _)| *m == orientation) {
+            // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
+            let e = *e;
+            self.unit_quaternion(name, e, orientation_span);
+            let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+            let euler_parameters = Some(e);
+            return Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters });
+        }
+        if !self.is_rotation(&orientation, orientation_span) {
+            return None;
+        }
+        let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
+        Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
+    }
+
+    /// The inertia of a body in space as a symmetric tensor in body axes: a scalar is the same
+    /// about every axis, a 3-vector the principal moments. Checked to be one a body can have.
+    fn inertia_tensor(
+        &mut self,
+        name: &Ident,
+        inertia: &Value,
+        inertia_written: &Expr,
+    ) -> Option<[[ExprId; 3]; 3]> {
+        let zero = self.model.pool.zero();
+        let tensor: [[ExprId; 3]; 3] = match inertia {
             Value::Scalar(i) => {
                 std::array::from_fn(|r| std::array::from_fn(|c| if r == c { *i } else { zero }))
             }
@@ -311,8 +342,8 @@ impl Resolver<'_> {
             Value::Matrix(m) if kinematics::matrix3(m).is_some() => {
                 let m = kinematics::matrix3(m).expect("checked");
                 for (r, c) in [(0, 1), (0, 2), (1, 2)] {
-                    let d = self.pool.sub(m[r][c], m[c][r]);
-                    if !self.pool.is_identically_zero(d) {
+                    let d = self.model.pool.sub(m[r][c], m[c][r]);
+                    if !self.model.pool.is_identically_zero(d) {
                         self.error(
                             Diagnostic::error(
                                 inertia_written.span,
@@ -349,30 +380,28 @@ impl Resolver<'_> {
                 return None;
             }
         };
-        let errors = self.errors.len();
+        let errors = self.diagnostics.errors.len();
         for (r, row) in tensor.iter().enumerate() {
             if !matches!(inertia, Value::Scalar(_)) {
                 self.check_sign(name, row[r], inertia_written, true);
             }
         }
-        if self.errors.len() == errors {
+        if self.diagnostics.errors.len() == errors {
             self.check_inertia_tensor(name, &tensor, inertia_written);
         }
-        if let Some((_, e, _)) = self.quaternions.iter().find(|(m, _, _)| *m == orientation) {
-            // Orthogonal only where e0² + e1² + e2² + e3² = 1, which a constraint then keeps.
-            let e = *e;
-            self.unit_quaternion(name, e, orientation_span);
-            let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
-            let euler_parameters = Some(e);
-            return Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters });
-        }
-        let rows = kinematics::transpose(&orientation);
-        let gram = kinematics::product(&mut self.pool, &rows, &orientation);
+        Some(tensor)
+    }
+
+    /// Whether `orientation` is a rotation: Rᵀ·R = I and det R = 1; reported where it is
+    /// written if not.
+    fn is_rotation(&mut self, orientation: &[Vec<ExprId>], orientation_span: Span) -> bool {
+        let rows = kinematics::transpose(orientation);
+        let gram = kinematics::product(&mut self.model.pool, &rows, orientation);
         for (r, row) in gram.iter().enumerate() {
             for (c, entry) in row.iter().enumerate() {
-                let identity = if r == c { self.pool.one() } else { self.pool.zero() };
-                let d = self.pool.sub(*entry, identity);
-                if !self.pool.is_identically_zero(d) {
+                let identity = if r == c { self.model.pool.one() } else { self.model.pool.zero() };
+                let d = self.model.pool.sub(*entry, identity);
+                if !self.model.pool.is_identically_zero(d) {
                     self.error(
                         Diagnostic::error(orientation_span, "this orientation is not a rotation")
                             .with_label(format!(
@@ -386,16 +415,16 @@ impl Resolver<'_> {
                                  products are rotations",
                             ),
                     );
-                    return None;
+                    return false;
                 }
             }
         }
         // Rᵀ·R = I leaves det R = ±1; −1 is a mirror image, and Rᵀ·Ṙ is then not the body's ω.
-        let cross = kinematics::cross(&mut self.pool, &orientation[1], &orientation[2]);
-        let det = kinematics::dot(&mut self.pool, &orientation[0], &cross);
-        let one = self.pool.one();
-        let off = self.pool.sub(det, one);
-        if !self.pool.is_identically_zero(off) {
+        let cross = kinematics::cross(&mut self.model.pool, &orientation[1], &orientation[2]);
+        let det = kinematics::dot(&mut self.model.pool, &orientation[0], &cross);
+        let one = self.model.pool.one();
+        let off = self.model.pool.sub(det, one);
+        if !self.model.pool.is_identically_zero(off) {
             self.error(
                 Diagnostic::error(
                     orientation_span,
@@ -409,10 +438,9 @@ impl Resolver<'_> {
                          rotation(axis, angle)",
                 ),
             );
-            return None;
+            return false;
         }
-        let orientation = kinematics::matrix3(&orientation).expect("3×3 checked by the caller");
-        Some(Rotation::Spatial { inertia: tensor, orientation, euler_parameters: None })
+        true
     }
 }
 
@@ -421,18 +449,18 @@ impl Resolver<'_> {
     /// `BODY_unit`; it is kept with a multiplier, so the parameters never leave the unit
     /// sphere, and a body that tumbles meets no singular configuration.
     fn unit_quaternion(&mut self, body: &Ident, e: [ExprId; 4], span: Span) {
-        if self.constraints.iter().any(|c| c.quaternion == Some(e)) {
+        if self.model.constraints.iter().any(|c| c.quaternion == Some(e)) {
             return;
         }
-        let squares: Vec<ExprId> = e.iter().map(|x| self.pool.powi(*x, 2)).collect();
-        let lhs = self.pool.add(&squares);
-        let rhs = self.pool.one();
-        let phi = self.pool.sub(lhs, rhs);
-        let index = self.constraints.len();
+        let squares: Vec<ExprId> = e.iter().map(|x| self.model.pool.powi(*x, 2)).collect();
+        let lhs = self.model.pool.add(&squares);
+        let rhs = self.model.pool.one();
+        let phi = self.model.pool.sub(lhs, rhs);
+        let index = self.model.constraints.len();
         let name = format!("{}_unit", normalize(&body.name));
-        let force_symbol = self.pool.param(&format!("{name}.force"));
-        self.placeholders.push((force_symbol, Placeholder::Reaction(index)));
-        self.constraints.push(Constraint {
+        let force_symbol = self.model.pool.param(&format!("{name}.force"));
+        self.model.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+        self.model.constraints.push(Constraint {
             name,
             kind: ConstraintKind::Position,
             lhs,

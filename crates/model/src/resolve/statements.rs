@@ -16,7 +16,7 @@ use crate::{
 impl Resolver<'_> {
     pub(super) fn statement(&mut self, stmt: &Stmt) {
         match &stmt.kind {
-            StmtKind::Scene { title } => self.title = Some(title.clone()),
+            StmtKind::Scene { title } => self.model.title = Some(title.clone()),
             StmtKind::Param(decls) => self.param_statement(decls),
             StmtKind::Input(decls) => self.input_statement(decls),
             StmtKind::Output { name, value } => self.output_statement(name, value),
@@ -54,7 +54,7 @@ impl Resolver<'_> {
             StmtKind::ExpectLinearized(expectation) => {
                 self.expect_linearized(expectation, stmt.span)
             }
-            StmtKind::Simulate(settings) => self.simulate.extend(settings.iter().cloned()),
+            StmtKind::Simulate(settings) => self.simulate_statement(settings),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
             StmtKind::Draw(shape) => self.draw(shape, stmt.span),
         }
@@ -72,28 +72,28 @@ impl Resolver<'_> {
                 }
                 _ => None,
             };
-            let form = self.units.declared(&decl.name.name, decl.name.span, example);
+            let form = self.scope.units.declared(&decl.name.name, decl.name.span, example);
             let value = decl.value.as_ref().map(|v| self.constant(v));
             if !matches!(value, Some(None)) && (value.is_some() || decl.unit.is_some()) {
                 let dims = value.as_ref().and_then(|v| v.as_ref()).map(|(_, d)| d.clone());
                 let v = self.with_unit(dims, decl.unit.as_ref());
                 let span = decl.value.as_ref().map_or(decl.name.span, |v| v.span);
-                self.units.same(&form, &v, decl.name.span, span, "in this parameter");
+                self.scope.units.same(&form, &v, decl.name.span, span, "in this parameter");
             }
             let value = value.flatten().and_then(|(v, _)| self.in_si(v, decl.unit.as_ref()));
             let name = normalize(&decl.name.name);
-            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
-                self.bind(&decl.name, Binding::Param(self.time));
+            if self.scope.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Param(self.model.time));
                 continue;
             }
-            let sym = self.pool.param(&name);
+            let sym = self.model.pool.param(&name);
             if self.bind(&decl.name, Binding::Param(sym)) {
                 let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
-                self.name_dims.insert(name.clone(), dims);
+                self.scope.name_dims.insert(name.clone(), dims);
                 if let (Some(v), Some(written)) = (value, &decl.value) {
                     self.param_value(sym, v, written);
                 }
-                self.params.push(Param {
+                self.model.params.push(Param {
                     name,
                     sym,
                     value,
@@ -108,7 +108,7 @@ impl Resolver<'_> {
     fn let_statement(&mut self, name: &lang::Ident, value: &lang::Expr) {
         if let Some((v, dims)) = self.value(value) {
             if let Value::Scalar(e) = v {
-                self.lets.push((normalize(&name.name), e));
+                self.model.lets.push((normalize(&name.name), e));
             }
             // A vector or matrix keeps the dimension of each entry.
             let (form, entries) = match dims {
@@ -127,7 +127,7 @@ impl Resolver<'_> {
             };
             if self.bind(name, Binding::Let(v)) {
                 let dims = NameDims { at: self.stmt, form, entries };
-                self.name_dims.insert(normalize(&name.name), dims);
+                self.scope.name_dims.insert(normalize(&name.name), dims);
             }
         }
     }
@@ -135,32 +135,32 @@ impl Resolver<'_> {
     /// A `coord` line: each name is a coordinate, with its initial value and rate.
     fn coord_statement(&mut self, decls: &[lang::CoordDecl]) {
         for decl in decls {
-            let form = self.units.fresh(&decl.name.name);
+            let form = self.scope.units.fresh(&decl.name.name);
             let initial = decl.value.as_ref().and_then(|v| self.constant(v));
             if let (Some((_, dims)), Some(written)) = (&initial, &decl.value) {
                 let v = self.with_unit(Some(dims.clone()), decl.value_unit.as_ref());
                 let what = "in this initial value";
-                self.units.same(&form, &v, decl.name.span, written.span, what);
+                self.scope.units.same(&form, &v, decl.name.span, written.span, what);
             }
             let initial = initial.and_then(|(v, _)| self.in_si(v, decl.value_unit.as_ref()));
             let rate = decl.rate.as_ref().and_then(|v| self.constant(v));
             if let (Some((_, dims)), Some(written)) = (&rate, &decl.rate) {
                 let v = self.with_unit(Some(dims.clone()), decl.rate_unit.as_ref());
                 let what = "in this initial rate";
-                self.units.same(&form.rate(1), &v, written.span, written.span, what);
+                self.scope.units.same(&form.rate(1), &v, written.span, written.span, what);
             }
             let rate = rate.and_then(|(v, _)| self.in_si(v, decl.rate_unit.as_ref()));
             let name = normalize(&decl.name.name);
-            if self.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
-                self.bind(&decl.name, Binding::Param(self.time));
+            if self.scope.names.get(&name).is_some_and(|b| !matches!(b, Binding::Quantity(_))) {
+                self.bind(&decl.name, Binding::Param(self.model.time));
                 continue;
             }
-            let sym = self.pool.coordinate(&name);
-            let zero = self.pool.zero();
+            let sym = self.model.pool.coordinate(&name);
+            let zero = self.model.pool.zero();
             if self.bind(&decl.name, Binding::Coord(sym)) {
                 let dims = NameDims { at: self.stmt, form: Some(form), entries: None };
-                self.name_dims.insert(name.clone(), dims);
-                self.coords.push(Coord {
+                self.scope.name_dims.insert(name.clone(), dims);
+                self.model.coords.push(Coord {
                     name,
                     sym,
                     initial: initial.unwrap_or(zero),
@@ -188,7 +188,7 @@ impl Resolver<'_> {
         let direction = direction.and_then(|d| {
             let (value, dims) = self.value_in_role(d, &GRAVITY)?;
             for f in self.shape(dims).forms() {
-                self.units.dimensionless(&f, d.span, "a direction");
+                self.scope.units.dimensionless(&f, d.span, "a direction");
             }
             match value {
                 Value::Vector(v) => Some(v),
@@ -209,7 +209,7 @@ impl Resolver<'_> {
             self.gravity_energy(g, written.span);
         }
         let strength = strength.map(|(g, _)| g);
-        if let Some(previous) = &self.gravity {
+        if let Some(previous) = &self.model.gravity {
             let first = previous.span;
             self.error(
                 Diagnostic::error(span, "gravity is given twice")
@@ -217,7 +217,7 @@ impl Resolver<'_> {
                     .with_related(first, "first given here"),
             );
         } else if let Some(strength) = strength {
-            self.gravity = Some(Gravity { strength, direction, span });
+            self.model.gravity = Some(Gravity { strength, direction, span });
         }
     }
 
@@ -225,8 +225,8 @@ impl Resolver<'_> {
     fn potential_statement(&mut self, e: &lang::Expr) {
         if let Some((expr, dims)) = self.scalar_in_role(e, &POTENTIAL) {
             let f = self.form(dims);
-            self.units.energy_term(&f, e.span);
-            self.potentials.push(Term { expr, span: e.span });
+            self.scope.units.energy_term(&f, e.span);
+            self.model.potentials.push(Term { expr, span: e.span });
         }
     }
 
@@ -235,8 +235,8 @@ impl Resolver<'_> {
         if let Some((expr, dims)) = self.scalar_in_role(e, &DISSIPATION) {
             // A Rayleigh function is a power: energy per time.
             let f = self.form(dims).plus(&crate::units::time(), &Rational::one());
-            self.units.energy_term(&f, e.span);
-            self.dissipation.push(Term { expr, span: e.span });
+            self.scope.units.energy_term(&f, e.span);
+            self.model.dissipation.push(Term { expr, span: e.span });
         }
     }
 
@@ -244,8 +244,8 @@ impl Resolver<'_> {
     fn lagrangian_statement(&mut self, e: &lang::Expr) {
         if let Some((expr, dims)) = self.scalar_in_role(e, &LAGRANGIAN) {
             let f = self.form(dims);
-            self.units.energy_term(&f, e.span);
-            self.lagrangians.push(Term { expr, span: e.span });
+            self.scope.units.energy_term(&f, e.span);
+            self.model.lagrangians.push(Term { expr, span: e.span });
         }
     }
 
@@ -277,16 +277,16 @@ impl Resolver<'_> {
         // k/2 (|AB| − l0)²; with no rest length, k/2 |AB|², which needs no square root.
         let stretch2 = match rest {
             Some(l0) => {
-                let len = self.pool.sqrt(len2);
-                let s = self.pool.sub(len, l0);
-                self.pool.powi(s, 2)
+                let len = self.model.pool.sqrt(len2);
+                let s = self.model.pool.sub(len, l0);
+                self.model.pool.powi(s, 2)
             }
             None => len2,
         };
-        let e = self.pool.mul2(k, stretch2);
-        let expr = self.pool.scale(e, &Rational::new(1.into(), 2.into()));
-        self.potentials.push(Term { expr, span });
-        self.links.push(Link {
+        let e = self.model.pool.mul2(k, stretch2);
+        let expr = self.model.pool.scale(e, &Rational::new(1.into(), 2.into()));
+        self.model.potentials.push(Term { expr, span });
+        self.model.links.push(Link {
             name: name.name.clone(),
             kind: LinkKind::Spring,
             ends: separation.ends,
@@ -309,25 +309,25 @@ impl Resolver<'_> {
             return;
         };
         let Separation { difference: d, length: len, ends } = separation;
-        self.links.push(Link { name: name.name.clone(), kind: LinkKind::Damper, ends, span });
+        self.model.links.push(Link { name: name.name.clone(), kind: LinkKind::Damper, ends, span });
         self.damper_energy(&len, c_dims, coefficient.span);
         // c/2 (d|AB|/dt)², with d|AB|/dt = (AB·AB')/|AB|: squared, no root is left, and
         // on a line (AB = u) it is exactly u'².
         let mut dots = Vec::new();
         let mut squares = Vec::new();
         for x in &d {
-            let v = self.pool.time_derivative(*x);
-            dots.push(self.pool.mul2(*x, v));
-            squares.push(self.pool.powi(*x, 2));
+            let v = self.model.pool.time_derivative(*x);
+            dots.push(self.model.pool.mul2(*x, v));
+            squares.push(self.model.pool.powi(*x, 2));
         }
-        let dot = self.pool.add(&dots);
-        let len2 = self.pool.add(&squares);
-        let dot2 = self.pool.powi(dot, 2);
-        let inv = self.pool.powi(len2, -1);
-        let rate2 = self.pool.mul2(dot2, inv);
-        let d = self.pool.mul2(c, rate2);
-        let expr = self.pool.scale(d, &Rational::new(1.into(), 2.into()));
-        self.dissipation.push(Term { expr, span });
+        let dot = self.model.pool.add(&dots);
+        let len2 = self.model.pool.add(&squares);
+        let dot2 = self.model.pool.powi(dot, 2);
+        let inv = self.model.pool.powi(len2, -1);
+        let rate2 = self.model.pool.mul2(dot2, inv);
+        let d = self.model.pool.mul2(c, rate2);
+        let expr = self.model.pool.scale(d, &Rational::new(1.into(), 2.into()));
+        self.model.dissipation.push(Term { expr, span });
     }
 
     /// A `show` line: each item's value, labelled by its text.
@@ -335,7 +335,7 @@ impl Resolver<'_> {
         for item in items {
             if let Some((value, _)) = self.value(item) {
                 let label = self.text(item.span);
-                self.shows.push(Show { at_start, label, value, span: item.span });
+                self.model.shows.push(Show { at_start, label, value, span: item.span });
             }
         }
     }
@@ -347,7 +347,7 @@ impl Resolver<'_> {
         let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
         for (a, b) in lf.iter().zip(&rf) {
             let what = "between the sides of this expectation";
-            self.units.same(a, b, lhs.span, rhs.span, what);
+            self.scope.units.same(a, b, lhs.span, rhs.span, what);
         }
         let (ln, rn) = (l.entries().len(), r.entries().len());
         if ln != rn {
@@ -359,7 +359,7 @@ impl Resolver<'_> {
             return;
         }
         let text = self.text(span);
-        self.expects.push(Expect {
+        self.model.expects.push(Expect {
             at_start,
             text,
             lhs: l,
@@ -377,7 +377,7 @@ impl Resolver<'_> {
         for item in items {
             let raw = &item.name.name;
             let name = normalize(raw);
-            let coord = match self.names.get(&name).cloned() {
+            let coord = match self.scope.names.get(&name).cloned() {
                 Some(Binding::Coord(s)) => s,
                 None => {
                     self.unknown_name(raw, &name, item.name.span);
@@ -410,7 +410,7 @@ impl Resolver<'_> {
             let written = self.with_unit(Some(dims), item.unit.as_ref());
             let expected = self.form(coord_dims);
             let what = "in this reference value";
-            self.units.same(&expected, &written, primed, item.value.span, what);
+            self.scope.units.same(&expected, &written, primed, item.value.span, what);
             let Some(value) = self.in_si(value, item.unit.as_ref()) else { continue };
             let rate = item.primes == 1;
             if let Some(first) = out.iter().find(|a| a.coord == coord && a.rate == rate) {
@@ -425,6 +425,6 @@ impl Resolver<'_> {
             }
             out.push(About { coord, rate, value, span: item.span });
         }
-        self.linearize.push(Linearize { items: out, span });
+        self.model.linearize.push(Linearize { items: out, span });
     }
 }

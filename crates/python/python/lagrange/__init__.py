@@ -11,6 +11,7 @@ own simulations as NumPy arrays::
     d.mass_matrix                 # a sympy.Matrix
     d.at_start["theta''"]         # 12*g/(7*L), exactly
     f = scene.rhs()               # f(t, y) for solve_ivp, y = coordinates then rates
+    scene.inverse_dynamics(t, q, qd, qdd)   # the generalized forces of a motion
     run = scene.simulate(until=1.0)
     run["theta"], run["t"]        # NumPy arrays
 
@@ -30,7 +31,7 @@ from importlib import metadata as _metadata
 
 from . import _native
 from ._errors import NumericError, SceneError
-from ._native import MassMatrix, Rhs
+from ._native import InverseDynamics, MassMatrix, Rhs
 
 __all__ = [
     "load",
@@ -43,6 +44,7 @@ __all__ = [
     "Results",
     "Rhs",
     "MassMatrix",
+    "InverseDynamics",
     "SceneError",
     "NumericError",
     "__version__",
@@ -72,6 +74,30 @@ def loads(text, *, name="<string>", units=True):
     return Scene(_native.loads(text, name, units))
 
 
+def _assignments(set):
+    """``set`` as ``name=value`` texts: from a dict of name to value (a number or a scene
+    expression), or texts already of that form, one string or a list of them."""
+    if set is None:
+        return []
+    if isinstance(set, str):
+        return [set]
+    if isinstance(set, dict):
+        return [f"{name}={_value_text(value)}" for name, value in set.items()]
+    return [str(item) for item in set]
+
+
+def _sweep_text(sweep):
+    """``sweep`` as ``p=a:b:n``: a text of that form, or a dict of one parameter to
+    ``(a, b, n)``."""
+    if not isinstance(sweep, dict):
+        return sweep
+    if len(sweep) != 1:
+        raise ValueError(f"a sweep takes one parameter, not {len(sweep)}")
+    ((name, ends),) = sweep.items()
+    a, b, n = ends
+    return f"{name}={float(a)!r}:{float(b)!r}:{int(n)}"
+
+
 def _value_text(value):
     """A ``set`` value as scene text: numbers exactly (0.1 is 1/10), strings as written."""
     if isinstance(value, str):
@@ -96,6 +122,7 @@ class Scene:
     def __init__(self, native):
         self._native = native
         self._derivation = None
+        self._inverse = None
 
     @property
     def title(self):
@@ -121,7 +148,7 @@ class Scene:
     def derive(self):
         """The derivation as SymPy objects: a :class:`Derivation` (computed once)."""
         if self._derivation is None:
-            self._derivation = Derivation(self._native.derive())
+            self._derivation = Derivation(self._native.derive(), scene=self)
         return self._derivation
 
     def rhs(self):
@@ -132,9 +159,52 @@ class Scene:
         (q̇, q̈); ``f.batch(Y, t=0.0)`` evaluates every row of the 2-D array ``Y`` in one call
         (``t`` one time, or one per row). The scene's lowered programs compute it at the
         parameters' values (``f.parameters``), solving for constraint multipliers as
-        :meth:`simulate` does. A singular mass matrix raises :class:`NumericError`.
+        :meth:`simulate` does. ``f.jac(t, y)`` is the exact Jacobian ∂f/∂y, an n×n array,
+        for ``solve_ivp(f, ..., method="Radau", jac=f.jac)`` (also BDF and LSODA); its
+        partials are derived and lowered on the first call. A singular mass matrix raises
+        :class:`NumericError`.
+
+        Parameter values: ``f(t, y, p=…)`` and ``f.batch(Y, t, p=…)`` take them for that call
+        only, as an array in the order of ``f.parameter_names`` or a dict of name to value
+        (the values it does not name stay); ``solve_ivp(f, …, args=(p,))`` passes them.
+        ``f.parameters = {"g": 1.62}`` (or an array) changes them for every later call.
+        ``f.parameters`` itself is a read-only mapping: assigning to an item of it raises
+        ``TypeError`` rather than changing a copy that nothing reads. A parameter the scene
+        defines from others (``I = m*L^2/12``) is a value like any other here: give it too
+        when they change.
         """
         return self._native.rhs()
+
+    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+        """The generalized forces τ = M(q)·q̈ − f(q, q̇, t) that make the scene move with
+        positions ``q``, rates ``qd`` and accelerations ``qdd`` at time ``t``: added to the
+        scene's own forces (M·q̈ = f + τ), they reproduce the motion (computed-torque control,
+        actuator sizing).
+
+        One motion: ``t`` a number and ``q``, ``qd``, ``qdd`` 1-D arrays of the remaining
+        coordinates (``Derivation.coordinates``' order), giving a 1-D array. Many: ``t`` one
+        time per row (or one for all) and 2-D arrays with a motion a row, giving a 2-D array
+        with τ a row. ``p``: parameter values for this call only, as for :meth:`rhs`.
+
+        With constraints kept with multipliers, τ + Jᵀμ gives the same motion for every μ;
+        this is the one least in τᵀ·M⁻¹·τ, which leaves the constraints the load they carry
+        without it (a motion the scene makes on its own needs τ = 0). The accelerations must
+        be ones the constraints allow, as those of a run of the scene are. Forces that are not
+        finite raise :class:`NumericError`.
+        """
+        import numpy
+
+        if self._inverse is None:
+            self._inverse = self._native.inverse_dynamics()
+        n = len(self._inverse.names)
+        motion = [numpy.asarray(v, dtype=float) for v in (q, qd, qdd)]
+        single = all(m.ndim == 1 for m in motion) and numpy.ndim(t) == 0
+        rows = [numpy.atleast_2d(m) if m.size else m.reshape(0, n) for m in motion]
+        count = max(len(r) for r in rows)
+        rows = [numpy.broadcast_to(r, (count, r.shape[-1])) if len(r) == 1 else r for r in rows]
+        times = numpy.broadcast_to(numpy.asarray(t, dtype=float), (count,))
+        tau = self._inverse.batch(times, *rows, p=p)
+        return tau[0] if single else tau
 
     def mass_matrix_function(self):
         """M(t, q) at the parameters' values: ``M(t, q)`` returns an n×n NumPy array (q may
@@ -159,12 +229,13 @@ class Scene:
         Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
 
         - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
-          midpoint, gauss; ``tolerance`` of the adaptive methods; ``step`` of the fixed-step
-          ones.
+          midpoint, gauss, radau; ``tolerance`` of the adaptive methods; ``step`` of the
+          fixed-step ones.
         - ``output``: scene expressions to record (a string or a list), e.g.
           ``["theta", "floor.force", "KE + PE"]``; by default every remaining coordinate.
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
-          a scene expression, in place of the scene's values.
+          a scene expression, in place of the scene's values (``{"g": 1.62}``); or texts as
+          the command line takes them, ``"g=1.62"`` or a list of them.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -186,14 +257,13 @@ class Scene:
             raise TypeError(f"`samples` must be a whole number, not {samples!r}")
         if samples < 0:
             raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
         raw = self._native.simulate(
             until=None if until is None else float(until),
             method=method,
             tolerance=None if tolerance is None else float(tolerance),
             step=None if step is None else float(step),
             output=listed(output),
-            set=sets,
+            set=_assignments(set),
             stop_when=listed(stop_when),
             events=listed(events),
             samples=int(samples),
@@ -210,8 +280,10 @@ class Scene:
 
         - ``about``: ``"theta=0, phi'=2"`` (or a dict of name to value), extending or
           overriding the scene's ``linearize about`` line;
-        - ``set``: a dict of parameter name to value;
-        - ``sweep``: ``"w=0:100:201"``, n values of one parameter;
+        - ``set``: a dict of parameter name to value, or ``"name=value"`` texts as for
+          :meth:`simulate`;
+        - ``sweep``: ``"w=0:100:201"`` or ``{"w": (0, 100, 201)}``, n values of one
+          parameter from a to b;
         - ``inputs``, ``outputs``: the names of the scene's ``input`` and ``output`` lines to
           keep, in that order (the columns of B and D, the rows of C and D); all by default;
         - ``keep_cyclic``: whether the positions of cyclic coordinates stay in the state
@@ -224,8 +296,9 @@ class Scene:
         """
         if isinstance(about, dict):
             about = ", ".join(f"{k}={_value_text(v)}" for k, v in about.items())
-        sets = [f"{name}={_value_text(value)}" for name, value in (set or {}).items()]
-        raw = self._native.linearize(about=about, set=sets, sweep=sweep, keep_cyclic=keep_cyclic)
+        raw = self._native.linearize(
+            about=about, set=_assignments(set), sweep=_sweep_text(sweep), keep_cyclic=keep_cyclic
+        )
         return Linearization(raw, inputs, outputs)
 
     def check(self):
@@ -350,7 +423,8 @@ class Derivation:
     - ``latex``: the equations, mass-matrix form, reactions and start values in LaTeX.
     """
 
-    def __init__(self, raw):
+    def __init__(self, raw, scene=None):
+        self._scene = scene
         self.title = raw["title"]
         self.t = raw["t"]
         self.coordinates = raw["coordinates"]
@@ -382,6 +456,11 @@ class Derivation:
             for name, value in self.parameters.items()
             if value is not None
         }
+
+    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+        """The generalized forces of a motion: :meth:`Scene.inverse_dynamics` of the scene
+        this derivation is of."""
+        return self._scene.inverse_dynamics(t, q, qd, qdd, p=p)
 
     def _repr_latex_(self):
         return self.latex
@@ -432,9 +511,10 @@ class Results(Mapping):
 
     Besides: ``energy`` (T + V at each time), ``events`` (a list of ``(name, time)``),
     ``stopped_by`` (the stop condition that ended the run, or ``None``), ``method``,
-    ``steps``, ``rejected``, ``evaluations``, ``energy_drift`` (largest absolute and relative
-    change of T + V), ``conservative`` (whether the scene should keep its energy),
-    ``constraint_drift``, ``wall_seconds`` and ``fault`` (``None`` for a finished run).
+    ``steps``, ``rejected``, ``evaluations``, ``jacobians`` and ``factorizations`` (radau's),
+    ``energy_drift`` (largest absolute and relative change of T + V), ``conservative`` (whether the scene should keep its energy),
+    ``constraint_drift`` (over the recorded times; ``constraint_drift_at_steps`` at the
+    integrator's own steps), ``wall_seconds`` and ``fault`` (``None`` for a finished run).
     """
 
     def __init__(self, raw):
@@ -448,9 +528,12 @@ class Results(Mapping):
         self.steps = raw["steps"]
         self.rejected = raw["rejected"]
         self.evaluations = raw["evaluations"]
+        self.jacobians = raw["jacobians"]
+        self.factorizations = raw["factorizations"]
         self.energy_drift = raw["energy_drift"]
         self.conservative = raw["conservative"]
         self.constraint_drift = raw["constraint_drift"]
+        self.constraint_drift_at_steps = raw["constraint_drift_at_steps"]
         self.wall_seconds = raw["wall_seconds"]
 
     def __getitem__(self, name):

@@ -1,10 +1,13 @@
 # Types of the native half, `lagrange._native` (crates/python/src): what mypy and editors see
 # of the compiled module. tests/test_lagrange.py holds it to the module's names.
 
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
+
+# Parameter values: a mapping of name to value, or an array of every value in order.
+Parameters = Union[Mapping[str, float], npt.ArrayLike]
 
 class NativeScene:
     @property
@@ -18,6 +21,7 @@ class NativeScene:
     def derive(self) -> dict[str, Any]: ...
     def rhs(self) -> Rhs: ...
     def mass_matrix_function(self) -> MassMatrix: ...
+    def inverse_dynamics(self) -> InverseDynamics: ...
     def simulate(
         self,
         until: Optional[float] = None,
@@ -43,13 +47,43 @@ class Rhs:
     """y' = F(t, y) of a scene for ``scipy.integrate.solve_ivp``."""
 
     names: list[str]
+    parameter_names: list[str]
     @property
     def y0(self) -> npt.NDArray[np.float64]: ...
     @property
-    def parameters(self) -> dict[str, float]: ...
-    def __call__(self, t: float, y: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
+    def parameters(self) -> Mapping[str, float]: ...
+    @parameters.setter
+    def parameters(self, p: Parameters) -> None: ...
+    def __call__(
+        self, t: float, y: npt.ArrayLike, p: Optional[Parameters] = None
+    ) -> npt.NDArray[np.float64]: ...
     def batch(
-        self, y: npt.ArrayLike, t: Union[None, float, npt.ArrayLike] = None
+        self,
+        y: npt.ArrayLike,
+        t: Union[None, float, npt.ArrayLike] = None,
+        p: Optional[Parameters] = None,
+    ) -> npt.NDArray[np.float64]: ...
+    def jac(
+        self, t: float, y: npt.ArrayLike, p: Optional[Parameters] = None
+    ) -> npt.NDArray[np.float64]: ...
+
+class InverseDynamics:
+    """τ = M·q̈ − f of a scene over many motions."""
+
+    names: list[str]
+    parameter_names: list[str]
+    kept_constraints: list[str]
+    @property
+    def parameters(self) -> Mapping[str, float]: ...
+    @parameters.setter
+    def parameters(self, p: Parameters) -> None: ...
+    def batch(
+        self,
+        t: npt.ArrayLike,
+        q: npt.ArrayLike,
+        qd: npt.ArrayLike,
+        qdd: npt.ArrayLike,
+        p: Optional[Parameters] = None,
     ) -> npt.NDArray[np.float64]: ...
 
 class MassMatrix:

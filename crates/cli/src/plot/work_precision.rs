@@ -1,19 +1,19 @@
-//! `lagrange bench`'s outputs: the table of trials `engine::bench` measured (error, wall time,
-//! right-hand-side evaluations) and the work–precision diagram, error against time with one
-//! line per method. A method that cannot run the scene at all is listed as not applicable.
+//! The work–precision diagram of `lagrange bench`: error against wall time, both
+//! logarithmic, one line per method, and the methods that cannot run the scene named apart.
 
 use std::fmt::Write;
 
-pub use engine::bench::{seconds, table};
 use engine::bench::{Inapplicable, Trial};
 use sim::Method;
 
+use super::{escape, outline, page, Axis};
+
 /// The work–precision diagram: error against wall time, both logarithmic, one polyline per
-/// method, hand-written SVG like [`crate::plot`]. The methods left out are named in grey under
+/// method, drawn as the other figures are. The methods left out are named in grey under
 /// the legend, each with its reason as a tooltip.
 // Logarithmic axes of a picture: a last bit of a pixel's position shows nowhere.
 #[allow(clippy::disallowed_methods)]
-pub fn svg(title: &str, trials: &[Trial], inapplicable: &[Inapplicable]) -> String {
+pub fn work_precision(title: &str, trials: &[Trial], inapplicable: &[Inapplicable]) -> String {
     const W: f64 = 720.0;
     const H: f64 = 480.0;
     const LEFT: f64 = 80.0;
@@ -34,26 +34,12 @@ pub fn svg(title: &str, trials: &[Trial], inapplicable: &[Inapplicable]) -> Stri
     };
     let (x0, x1) = decades(&|t| t.seconds);
     let (y0, y1) = decades(&|t| t.error);
-    let px = |s: f64| LEFT + (s.log10() - x0) / (x1 - x0) * (W - LEFT - RIGHT);
-    let py = |e: f64| TOP + (y1 - e.log10()) / (y1 - y0) * (H - TOP - BOTTOM);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" viewBox="0 0 {W} {H}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{}" y="22" font-size="14" text-anchor="middle">{}</text>"#,
-        (W - RIGHT + LEFT) / 2.0,
-        escape(title)
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect x="{LEFT}" y="{TOP}" width="{}" height="{}" fill="none" stroke="#888"/>"##,
-        W - LEFT - RIGHT,
-        H - TOP - BOTTOM
-    );
+    let x = Axis { from: (x0, x1), to: (LEFT, W - RIGHT) };
+    let y = Axis { from: (y1, y0), to: (TOP, H - BOTTOM) };
+    let px = |s: f64| x.at(s.log10());
+    let py = |e: f64| y.at(e.log10());
+    let mut s = page(W, H, title, ((W - RIGHT + LEFT) / 2.0, 22.0));
+    outline(&mut s, (LEFT, TOP), W - LEFT - RIGHT, H - TOP - BOTTOM);
     for k in x0 as i32..=x1 as i32 {
         let x = px(10f64.powi(k));
         let _ = writeln!(
@@ -136,10 +122,6 @@ pub fn svg(title: &str, trials: &[Trial], inapplicable: &[Inapplicable]) -> Stri
     s
 }
 
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,7 +145,7 @@ mod tests {
             trial(Method::Gauss, f64::NAN, 1e-2),
             trial(Method::Gauss, 1e-8, 1e-1),
         ];
-        let svg = svg("t", &trials, &[]);
+        let svg = work_precision("t", &trials, &[]);
         assert_eq!(svg.matches("<polyline").count(), 2);
         assert_eq!(svg.matches("<circle").count(), 3);
         assert!(svg.contains(">rk4<") && svg.contains(">gauss<"));
@@ -185,11 +167,11 @@ mod tests {
             Inapplicable { method: Method::Midpoint, reason: NO_MULTIPLIERS },
             Inapplicable { method: Method::Gauss, reason: NO_MULTIPLIERS },
         ];
-        let text = table(&trials, &out);
+        let text = engine::bench::table(&trials, &out);
         assert!(text.contains("rk4"), "{text}");
         assert!(text.contains(&format!("midpoint  not applicable: {NO_MULTIPLIERS}")), "{text}");
         assert!(text.contains(&format!("gauss     not applicable: {NO_MULTIPLIERS}")), "{text}");
-        let svg = svg("t", &trials, &out);
+        let svg = work_precision("t", &trials, &out);
         assert_eq!(svg.matches("<polyline").count(), 1);
         assert!(svg.contains(">not applicable:<"), "{svg}");
         assert!(svg.contains(">midpoint<title>") && svg.contains(">gauss<title>"), "{svg}");

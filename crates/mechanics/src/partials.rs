@@ -1,0 +1,173 @@
+//! The equations of motion differentiated by the state, exactly: the source of every exact
+//! Jacobian (the first-order system's, the augmented system's with kept multipliers, the
+//! index-3 formulation's) and of the stiffness and damping of a linearization.
+//!
+//! The equations are taken in residual form with the accelerations and multipliers as symbols
+//! of their own, r = M(q)·q̈ − Jᵀ(q)·λ − f(q, q̇) and, per kept constraint, c = J·q̈ − γ, so
+//! that their partials in q and q̇ hold q̈ and λ fixed. A Jacobian in numbers then comes from
+//! one solve with the matrix [M −Jᵀ; J 0] the accelerations already need: differentiating
+//! r = 0, c = 0 along the state gives [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c). About a reference
+//! where q̈ = 0, ∂r/∂q is K and ∂r/∂q̇ is C of M·δq̈ + C·δq̇ + K·δq = Jᵀ·δλ.
+
+use cas::{ExprId, Pool, SymId};
+use model::ConstraintKind;
+
+use crate::derive::{Derivation, Multiplier};
+
+/// ∂/∂q and ∂/∂q̇ of one family of rows: `positions[i][k]` is ∂(row i)/∂q_k and
+/// `rates[i][k]` is ∂(row i)/∂q̇_k, over the remaining coordinates in the derivation's order.
+#[derive(Clone, Debug, Default)]
+pub struct StatePartials {
+    pub positions: Vec<Vec<ExprId>>,
+    pub rates: Vec<Vec<ExprId>>,
+}
+
+/// The partials of the equations of motion in residual form, in the symbols of the
+/// derivation: its coordinates, rates, accelerations (`Derivation::accels`, held fixed) and
+/// multipliers (each `Multiplier::lambda`, held fixed).
+#[derive(Clone, Debug)]
+pub struct Partials {
+    /// Of r = M·q̈ − Jᵀ·λ − f: n rows.
+    pub residual: StatePartials,
+    /// Of c = J·q̈ − γ, one row per kept constraint.
+    pub constraint: StatePartials,
+    /// Of Φ of each kept constraint (a velocity constraint's residual A·q̇ + b).
+    pub phi: StatePartials,
+    /// Of each kept constraint's [`Multiplier::drift_rate`].
+    pub drift_rate: StatePartials,
+}
+
+impl Multiplier {
+    /// The rate at which the constraint drifts, which a stabilisation damps beside Φ: Φ̇ for
+    /// a position constraint; zero for a velocity constraint, whose Φ is a rate already.
+    pub fn drift_rate(&self, pool: &mut Pool) -> ExprId {
+        match self.kind {
+            ConstraintKind::Position => pool.time_derivative(self.phi),
+            ConstraintKind::Velocity => pool.zero(),
+        }
+    }
+}
+
+impl Derivation {
+    /// The partials of the equations of motion in residual form (see [`Partials`]). Each
+    /// entry is a sum of memoised derivatives of M, J, f, γ and Φ, so that lowering them
+    /// beside those expressions shares what they have in common.
+    pub fn partials(&mut self) -> Partials {
+        let n = self.coords.len();
+        let state: Vec<SymId> = self.coords.iter().chain(&self.rates).copied().collect();
+        let accels: Vec<ExprId> = self.accels.iter().map(|a| self.model.pool.sym(*a)).collect();
+        let multipliers = self.multipliers.clone();
+        let pool = &mut self.model.pool;
+
+        let mut residual = Vec::with_capacity(n);
+        for i in 0..n {
+            let row: Vec<ExprId> = state
+                .iter()
+                .map(|&s| {
+                    let mut terms = Vec::with_capacity(n + multipliers.len() + 1);
+                    for (entry, accel) in self.mass_matrix[i].iter().zip(&accels) {
+                        let dm = pool.diff(*entry, s);
+                        terms.push(pool.mul2(dm, *accel));
+                    }
+                    for m in &multipliers {
+                        let dj = pool.diff(m.jacobian[i], s);
+                        let lambda = pool.sym(m.lambda);
+                        let term = pool.mul2(dj, lambda);
+                        terms.push(pool.neg(term));
+                    }
+                    let df = pool.diff(self.forcing[i], s);
+                    terms.push(pool.neg(df));
+                    pool.add(&terms)
+                })
+                .collect();
+            residual.push(row);
+        }
+
+        let (mut constraint, mut phi, mut drift_rate) = (Vec::new(), Vec::new(), Vec::new());
+        for m in &multipliers {
+            let drift = m.drift_rate(pool);
+            let row: Vec<ExprId> = state
+                .iter()
+                .map(|&s| {
+                    let mut terms: Vec<ExprId> = m
+                        .jacobian
+                        .iter()
+                        .zip(&accels)
+                        .map(|(entry, accel)| {
+                            let dj = pool.diff(*entry, s);
+                            pool.mul2(dj, *accel)
+                        })
+                        .collect();
+                    let dgamma = pool.diff(m.bias, s);
+                    terms.push(pool.neg(dgamma));
+                    pool.add(&terms)
+                })
+                .collect();
+            constraint.push(row);
+            phi.push(state.iter().map(|&s| pool.diff(m.phi, s)).collect());
+            drift_rate.push(state.iter().map(|&s| pool.diff(drift, s)).collect());
+        }
+        Partials {
+            residual: split(residual, n),
+            constraint: split(constraint, n),
+            phi: split(phi, n),
+            drift_rate: split(drift_rate, n),
+        }
+    }
+}
+
+/// Rows over (q, q̇) split into their q and q̇ halves.
+fn split(rows: Vec<Vec<ExprId>>, n: usize) -> StatePartials {
+    let mut out = StatePartials::default();
+    for mut row in rows {
+        let rates = row.split_off(n);
+        out.positions.push(row);
+        out.rates.push(rates);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::derive::testing::{ascii, derived};
+
+    #[test]
+    fn a_pendulum_stiffens_with_its_angle_and_a_damper_with_its_rate() {
+        let mut d = derived(
+            "param m, L, g, c
+coord theta
+particle bob { mass m; position (L*sin(theta), -L*cos(theta)) }
+gravity g
+dissipation c/2*theta'^2",
+        );
+        let p = d.partials();
+        let pool = d.pool();
+        // r = m·L²·θ̈ + m·g·L·sin θ + c·θ̇.
+        assert_eq!(ascii(pool, p.residual.positions[0][0]), "m*L*g*cos(theta)");
+        assert_eq!(ascii(pool, p.residual.rates[0][0]), "c");
+        assert!(p.constraint.positions.is_empty() && p.phi.rates.is_empty());
+    }
+
+    #[test]
+    fn a_kept_rod_adds_its_multiplier_and_its_rows() {
+        let mut d = derived(
+            "param m, L, g
+coord x, y
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g",
+        );
+        let p = d.partials();
+        let pool = d.pool();
+        let text = |rows: &[Vec<cas::ExprId>]| -> Vec<Vec<String>> {
+            rows.iter().map(|r| r.iter().map(|e| ascii(pool, *e)).collect()).collect()
+        };
+        // r = m·(ẍ, ÿ) − λ·(2x, 2y) − (0, −m·g); c = 2x·ẍ + 2y·ÿ + 2ẋ² + 2ẏ².
+        assert_eq!(text(&p.residual.positions), [["-2*rod.force", "0"], ["0", "-2*rod.force"]]);
+        assert_eq!(text(&p.residual.rates), [["0", "0"], ["0", "0"]]);
+        assert_eq!(text(&p.constraint.positions), [["2*x''", "2*y''"]]);
+        assert_eq!(text(&p.constraint.rates), [["4*x'", "4*y'"]]);
+        assert_eq!(text(&p.phi.positions), [["2*x", "2*y"]]);
+        assert_eq!(text(&p.drift_rate.rates), [["2*x", "2*y"]]);
+    }
+}

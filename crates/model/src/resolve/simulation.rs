@@ -1,0 +1,247 @@
+//! The `simulate { … }` block: each setting read into its type ([`Simulation`]), numbers
+//! converted to SI, and every mistake reported where it is written, so that a run never meets
+//! a setting it cannot read.
+
+use lang::{Diagnostic, ExprKind, Ident, Setting};
+
+use super::{closest, Resolver};
+use crate::units::{parse_unit, Dim};
+use crate::Number;
+
+/// The settings a `simulate` block knows, in the order a hint lists them.
+const SETTINGS: [&str; 7] = ["until", "method", "tolerance", "step", "output", "stop", "event"];
+
+/// What a number setting measures.
+#[derive(Clone, Copy, PartialEq)]
+enum Measure {
+    /// In seconds unless written with another time unit.
+    Time,
+    /// A pure number, written without a unit.
+    Ratio,
+}
+
+impl Measure {
+    /// A setting of this measure, written well.
+    fn example(self, key: &str) -> String {
+        match self {
+            Measure::Time => format!("`{key} 10 s`"),
+            Measure::Ratio => format!("`{key} 1e-10`"),
+        }
+    }
+}
+
+impl Resolver<'_> {
+    /// A `simulate { … }` block: its settings added to those of earlier blocks.
+    pub(super) fn simulate_statement(&mut self, settings: &[Setting]) {
+        for setting in settings {
+            self.setting(setting);
+        }
+    }
+
+    fn setting(&mut self, setting: &Setting) {
+        match setting.key.name.as_str() {
+            "until" => {
+                if let Some(n) = self.setting_number(setting, Measure::Time) {
+                    self.model.simulation.until = Some(n);
+                }
+            }
+            "step" => {
+                if let Some(n) = self.setting_number(setting, Measure::Time) {
+                    self.model.simulation.step = Some(n);
+                }
+            }
+            "tolerance" => {
+                if let Some(n) = self.setting_number(setting, Measure::Ratio) {
+                    self.model.simulation.tolerance = Some(n);
+                }
+            }
+            "method" => {
+                if let Some(name) = self.setting_name(setting) {
+                    self.model.simulation.method = Some(name);
+                }
+            }
+            "output" => self.model.simulation.outputs = self.setting_texts(setting, "outputs"),
+            "stop" => self.model.simulation.stops = self.setting_texts(setting, "stops"),
+            "event" => self.model.simulation.events = self.setting_texts(setting, "events"),
+            other => {
+                let d = Diagnostic::error(
+                    setting.key.span,
+                    format!("unknown setting `{other}` in the simulate block"),
+                )
+                .with_label("not a setting");
+                let known = SETTINGS.join(", ");
+                self.error(match closest(other, SETTINGS) {
+                    Some(near) => d.with_hint(format!("did you mean `{near}`? (known: {known})")),
+                    None => d.with_hint(format!("the settings are {known}")),
+                });
+            }
+        }
+    }
+
+    /// The one number of an `until`, `step` or `tolerance` setting, in SI and positive.
+    fn setting_number(&mut self, setting: &Setting, measure: Measure) -> Option<Number> {
+        let key = &setting.key.name;
+        let value = self.single_value(setting)?;
+        let scale = match (&setting.unit, measure) {
+            (None, _) => None,
+            (Some(unit), Measure::Ratio) => {
+                self.error(
+                    Diagnostic::error(unit.span, format!("`{key}` takes no unit"))
+                        .with_label("a unit")
+                        .with_hint(format!("`{key}` is a pure number: {}", measure.example(key))),
+                );
+                return None;
+            }
+            (Some(unit), Measure::Time) => match parse_unit(unit) {
+                Err(d) => {
+                    self.error(d);
+                    return None;
+                }
+                Ok((dim, _)) if dim != Dim::base(2) => {
+                    self.error(
+                        Diagnostic::error(
+                            unit.span,
+                            format!("`{key}` is a time, not in {}", self.text(unit.span)),
+                        )
+                        .with_label("not a time")
+                        .with_hint(format!(
+                            "write it in seconds (or ms, min, h): {}",
+                            measure.example(key)
+                        )),
+                    );
+                    return None;
+                }
+                Ok(_) => Some(unit),
+            },
+        };
+        let (written, _) = self.scalar(value)?;
+        if !self.model.pool.free_symbols(written).is_empty() {
+            self.error(
+                Diagnostic::error(value.span, format!("`{key}` must be a number"))
+                    .with_label("names a symbol")
+                    .with_hint(format!(
+                        "settings take numbers, not parameters: {}",
+                        measure.example(key)
+                    )),
+            );
+            return None;
+        }
+        let si = self.in_si(written, scale)?;
+        let number = numeric::eval(&self.model.pool, si, &[]);
+        if !(number.is_finite() && number > 0.0) {
+            self.error(
+                Diagnostic::error(value.span, format!("`{key}` must be positive"))
+                    .with_label(format!("= {number}"))
+                    .with_hint(format!("for example {}", measure.example(key))),
+            );
+            return None;
+        }
+        Some(Number { value: number, span: value.span })
+    }
+
+    /// The method's name: one bare name, checked against the integrator's names by the front
+    /// end that runs it.
+    fn setting_name(&mut self, setting: &Setting) -> Option<Ident> {
+        let value = self.single_value(setting)?;
+        match (&value.kind, &setting.unit) {
+            (ExprKind::Name { name, primes: 0 }, None) => {
+                Some(Ident { name: name.clone(), span: value.span })
+            }
+            _ => {
+                let span = setting.unit.as_ref().map_or(value.span, |u| u.span);
+                self.error(
+                    Diagnostic::error(span, "a method is a name")
+                        .with_label("not a method's name")
+                        .with_hint("for example `method dop853`"),
+                );
+                None
+            }
+        }
+    }
+
+    /// The expressions of an `output`, `stop` or `event` setting as written, added to those of
+    /// earlier ones.
+    fn setting_texts(&mut self, setting: &Setting, what: &str) -> Vec<String> {
+        let mut texts = match setting.key.name.as_str() {
+            "output" => std::mem::take(&mut self.model.simulation.outputs),
+            "stop" => std::mem::take(&mut self.model.simulation.stops),
+            _ => std::mem::take(&mut self.model.simulation.events),
+        };
+        if let Some(unit) = &setting.unit {
+            self.error(
+                Diagnostic::error(unit.span, format!("{what} take no unit"))
+                    .with_label("a unit")
+                    .with_hint("each is a scene expression, in SI like the scene's own"),
+            );
+        }
+        texts.extend(setting.values.iter().map(|v| self.text(v.span)));
+        texts
+    }
+
+    /// The value of a setting that takes one.
+    fn single_value<'s>(&mut self, setting: &'s Setting) -> Option<&'s lang::Expr> {
+        let key = &setting.key.name;
+        if let Some(second) = setting.values.get(1) {
+            self.error(
+                Diagnostic::error(second.span, format!("`{key}` takes one value"))
+                    .with_label("a second value")
+                    .with_hint(format!(
+                        "give `{key}` once; only `output`, `stop` and `event` take lists"
+                    )),
+            );
+            return None;
+        }
+        setting.values.first()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{resolve, Simulation};
+
+    const SCENE: &str = "param m = 1\ncoord x = 1\nparticle p { mass m; position (x, 0) }\n";
+
+    fn simulation(block: &str) -> Result<Simulation, Vec<String>> {
+        let source = format!("{SCENE}{block}\n");
+        let ast = lang::parse(&source).expect("parses");
+        match resolve(&ast, &source) {
+            Ok((model, _)) => Ok(model.simulation),
+            Err(errors) => Err(errors.into_iter().map(|d| d.message).collect()),
+        }
+    }
+
+    #[test]
+    fn settings_are_typed_and_in_si() {
+        let s = simulation("simulate { until 2 min; step 5 ms; tolerance 1e-8; method rk4 }")
+            .expect("resolves");
+        assert_eq!(s.until.map(|n| n.value), Some(120.0));
+        assert_eq!(s.step.map(|n| n.value), Some(0.005));
+        assert_eq!(s.tolerance.map(|n| n.value), Some(1e-8));
+        assert_eq!(s.method.map(|m| m.name), Some("rk4".to_string()));
+    }
+
+    #[test]
+    fn later_blocks_override_numbers_and_add_to_lists() {
+        let s = simulation(
+            "simulate { until 1; output x }\nsimulate { until 3 s; output x', KE + PE }",
+        )
+        .expect("resolves");
+        assert_eq!(s.until.map(|n| n.value), Some(3.0));
+        assert_eq!(s.outputs, ["x", "x'", "KE + PE"]);
+    }
+
+    #[test]
+    fn mistakes_are_reported_where_they_stand() {
+        for (block, message) in [
+            ("simulate { untill 2 }", "unknown setting `untill` in the simulate block"),
+            ("simulate { until 2 m }", "`until` is a time, not in m"),
+            ("simulate { until -1 }", "`until` must be positive"),
+            ("simulate { until 1, 2 }", "`until` takes one value"),
+            ("simulate { tolerance 1 s }", "`tolerance` takes no unit"),
+            ("simulate { step m }", "`step` must be a number"),
+            ("simulate { method 4 }", "a method is a name"),
+        ] {
+            assert_eq!(simulation(block).err(), Some(vec![message.to_string()]), "{block}");
+        }
+    }
+}

@@ -1,0 +1,155 @@
+//! Exact Jacobians of the first-order problems, from the partials of their equations lowered
+//! beside them. The accelerations solve r = M q̈ − Jᵀλ − f = 0 together with the (stabilised)
+//! constraint rows, so along the state [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c): one LU of the matrix
+//! the accelerations were solved with, and a solve per state component, give the exact
+//! ∂q̈/∂(q, q̇) with no step size to choose.
+
+use super::{Canonical, Layout, Mechanical, Stabilisation};
+use crate::{check_finite, linalg, FaultKind};
+
+impl Mechanical {
+    /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
+    pub fn has_partials(&self) -> bool {
+        self.partials.is_some()
+    }
+
+    /// The raw partials ∂(r, c, Φ, Φ̇)/∂(q, q̇) at the state `y` = (q, q̇) and time `t`, with
+    /// the accelerations and multipliers held at `unknowns` = (q̈ (n), λ (m)), in the layout of
+    /// the partials program ([`Layout`]): row-major, n + 3m rows of 2n (r, then c, Φ and Φ̇ of
+    /// each multiplier; in each row the partials in q, then in q̇). `None` without a partials
+    /// program. This is what a method integrating the constraints as they are (index 3, with
+    /// q̈ and λ among its unknowns) needs besides M and J.
+    pub fn partials_at(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        unknowns: &[f64],
+    ) -> Result<Option<&[f64]>, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        let Some(tape) = self.partials.as_mut() else { return Ok(None) };
+        assert_eq!(y.len(), 2 * n, "state length");
+        assert_eq!(unknowns.len(), n + m, "accelerations and multipliers");
+        let input = &mut self.obs_input;
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(unknowns);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        tape.eval(input, &mut self.partials_out);
+        check_finite(&self.partials_out)?;
+        Ok(Some(&self.partials_out))
+    }
+
+    /// ∂(q̇, q̈)/∂(q, q̇), row-major, into `jac`; false without a partials program.
+    pub(super) fn exact_jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        jac: &mut [f64],
+    ) -> Result<bool, FaultKind> {
+        if self.partials.is_none() {
+            return Ok(false);
+        }
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.accelerations(t, y)?;
+        let mut column = std::mem::take(&mut self.solution);
+        let evaluated = self.partials_at(t, y, &column).map(|_| ());
+        if let Err(fault) = evaluated {
+            self.solution = column;
+            return Err(fault);
+        }
+        // The accelerations may have been solved by Cholesky; one LU serves every column.
+        self.system.copy_from(&self.backup);
+        if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
+            self.solution = column;
+            return Err(fault);
+        }
+        let width = 2 * n;
+        let alpha = self.baumgarte;
+        let out = &self.partials_out;
+        jac.fill(0.0);
+        for i in 0..n {
+            jac[i * width + n + i] = 1.0;
+        }
+        for k in 0..width {
+            for i in 0..n {
+                column[i] = -out[i * width + k];
+            }
+            for c in 0..m {
+                let row = |block: usize| out[(n + block * m + c) * width + k];
+                // The partials of the row the accelerations satisfy, stabilisation included.
+                let stabilised = match self.stabilisation[c] {
+                    Stabilisation::Position => {
+                        row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
+                    }
+                    Stabilisation::Velocity => row(0) + alpha * row(1),
+                };
+                column[n + c] = -stabilised;
+            }
+            linalg::lu_solve(&self.system, &self.pivots, &mut column);
+            for i in 0..n {
+                jac[(n + i) * width + k] = column[i];
+            }
+        }
+        self.solution = column;
+        check_finite(jac)?;
+        Ok(true)
+    }
+}
+
+impl Canonical {
+    /// ∂(q̇, ṗ)/∂(q, p), row-major, into `jac`; false without a partials program.
+    ///
+    /// With q̇ = v(q, p) solving p = M(q)·v + b(q) and ṗ = g(q, v): ∂v/∂p = M⁻¹,
+    /// ∂v/∂q = −M⁻¹·∂p/∂q (v held), and the chain rule through v for ṗ.
+    pub(super) fn exact_jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        jac: &mut [f64],
+    ) -> Result<bool, FaultKind> {
+        let n = self.inner.layout.coordinates;
+        if self.partials.is_none() {
+            return Ok(false);
+        }
+        self.velocities(t, y)?;
+        let rates = std::mem::take(&mut self.rates);
+        self.set_input(t, &y[..n], Some(&rates));
+        self.rates = rates;
+        if let Some(tape) = self.partials.as_mut() {
+            tape.eval(&self.input, &mut self.partials_out);
+        }
+        check_finite(&self.partials_out)?;
+        let inner = &mut self.inner;
+        inner.system.copy_from(&inner.backup);
+        linalg::lu_in_place(&mut inner.system, &mut inner.pivots)?;
+        let (momentum_q, force_q, force_v) = (
+            &self.partials_out[..n * n],
+            &self.partials_out[n * n..2 * n * n],
+            &self.partials_out[2 * n * n..],
+        );
+        let width = 2 * n;
+        // The top rows: ∂v/∂(q, p) = M⁻¹·[−∂p/∂q | I], a column at a time.
+        let mut column = vec![0.0; n];
+        for k in 0..width {
+            for (i, slot) in column.iter_mut().enumerate() {
+                *slot =
+                    if k < n { -momentum_q[i * n + k] } else { f64::from(u8::from(i + n == k)) };
+            }
+            linalg::lu_solve(&inner.system, &inner.pivots, &mut column);
+            for i in 0..n {
+                jac[i * width + k] = column[i];
+            }
+        }
+        for i in 0..n {
+            for k in 0..width {
+                let mut acc = if k < n { force_q[i * n + k] } else { 0.0 };
+                for j in 0..n {
+                    acc += force_v[i * n + j] * jac[j * width + k];
+                }
+                jac[(n + i) * width + k] = acc;
+            }
+        }
+        check_finite(jac)?;
+        Ok(true)
+    }
+}
