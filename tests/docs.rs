@@ -278,8 +278,8 @@ fn simulate(rest: &[String]) -> Result<String, String> {
 
 /// `lagrange linearize`: the report (unless `--out`); a sweep's plot made in memory.
 fn linearize(rest: &[String]) -> Result<String, String> {
-    let args = Args::parse(rest, &["no-units"]);
-    args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units"])?;
+    let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
+    args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units", "drop-cyclic"])?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
     if let Some(plot) = args.last("plot") {
         if extension(&plot) != "svg" || !args.has("sweep") {
@@ -292,6 +292,7 @@ fn linearize(rest: &[String]) -> Result<String, String> {
         set: args.parsed::<Assignment>("set")?.iter().map(Assignment::to_string).collect(),
         sweep: args.parsed::<SweepRange>("sweep")?.pop().map(|s| s.to_string()),
         no_units: args.has("no-units"),
+        drop_cyclic: args.has("drop-cyclic"),
     };
     let linearized = engine::linearize::linearize(&read(file)?, &options)
         .map_err(|e| cli::diagnostics::error(file, &e))?;

@@ -58,15 +58,18 @@ fn the_pendulum_on_a_cart_has_the_hand_derived_matrices() {
     assert_eq!(exact(&l, &l.damping), [["0", "0"], ["0", "0"]]);
     assert_eq!(exact(&l, &l.stiffness), [["0", "0"], ["0", "m*L*g"]]);
     assert_eq!(l.linearization.cyclic, [true, false]);
-    assert_eq!(l.state, ["theta", "x'", "theta'"]);
+    // Every coordinate stays in the state; the cart's position brings a zero of its own.
+    assert_eq!(l.state, ["x", "theta", "x'", "theta'"]);
+    assert_eq!(l.at.cyclic_zeros, 1);
     let (big, m, length, g) = (2.0, 1.0, 1.0, 9.81);
     assert_eq!(l.at.mass, [[big + m, m * length], [m * length, m * length * length]]);
     assert_eq!(l.at.stiffness, [[0.0, 0.0], [0.0, m * g * length]]);
-    // det(K − ω²M) = 0: ω² = (M + m)·g/(M·L), and the cart's free drift δẋ gives 0.
+    // det(K − ω²M) = 0: ω² = (M + m)·g/(M·L), and the cart's free drift δẋ and its position
+    // δx give a zero each.
     let omega = ((big + m) * g / (big * length)).sqrt();
     let e = &l.at.eigenvalues;
-    assert_eq!(e.len(), 3);
-    assert!(close(e[0].1, omega, 1e-12) && e[1] == (0.0, 0.0), "{e:?}");
+    assert_eq!(e.len(), 4);
+    assert!(close(e[0].1, omega, 1e-12) && e[1] == (0.0, 0.0) && e[2] == (0.0, 0.0), "{e:?}");
     assert!(e.iter().all(|(re, _)| re.abs() <= 1e-12 * omega), "{e:?}");
     assert_eq!(l.at.stability, Stability::MarginallyStable);
 }
@@ -186,15 +189,18 @@ fn json_has_the_matrices_the_eigenvalues_and_the_sweep() {
     assert_eq!(lin["C"]["exact"][0][1], "C*w");
     assert_eq!(lin["K"]["exact"][1][1], "-m*g*l");
     assert_eq!(lin["K"]["value"][1][1], -0.5 * 9.81 * 0.04);
-    assert_eq!(lin["A"].as_array().map(Vec::len), Some(5));
+    // ψ's position stays in the state: six components, its zero set aside.
+    assert_eq!(lin["A"].as_array().map(Vec::len), Some(6));
+    assert_eq!(lin["first_order"]["state"][2], "psi");
+    assert_eq!(lin["cyclic_zeros"], 1);
     let eigenvalues = lin["eigenvalues"].as_array().expect("eigenvalues");
-    assert_eq!(eigenvalues.len(), 5);
+    assert_eq!(eigenvalues.len(), 6);
     assert!(eigenvalues.iter().all(|z| z.as_array().is_some_and(|z| z.len() == 2)));
     assert_eq!(lin["stability"], "marginally stable");
     let rows = lin["sweep"].as_array().expect("rows");
     assert_eq!(rows.len(), 5);
     assert_eq!(rows[0]["value"], 40.0);
-    assert_eq!(rows[0]["eigenvalues"].as_array().map(Vec::len), Some(5));
+    assert_eq!(rows[0]["eigenvalues"].as_array().map(Vec::len), Some(6));
     assert_eq!(lin["changes"][0]["from"], "unstable");
     let value = lin["changes"][0]["value"].as_f64().expect("a number");
     assert!((value - 51.14684741).abs() < 1e-6, "{value}");
@@ -212,7 +218,7 @@ fn text_and_plot_show_the_sweep() {
     let svg = cli::plot::sweep("top", sweep);
     assert!(svg.starts_with("<svg") && svg.ends_with("</svg>\n"));
     // A dot per eigenvalue and value, in both panels.
-    assert_eq!(svg.matches("<circle").count(), 2 * 11 * 5);
+    assert_eq!(svg.matches("<circle").count(), 2 * 11 * 6);
     assert_eq!(svg.matches("stroke-dasharray").count(), 2);
 }
 

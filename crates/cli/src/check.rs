@@ -6,6 +6,7 @@ use lang::Diagnostic;
 use mechanics::Derivation;
 use verify::Verdict;
 
+use engine::expect_linearized::LinearVerdict;
 use engine::{line_col, Options};
 
 use crate::diagnostics::render;
@@ -41,12 +42,65 @@ pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck 
             };
         }
     };
-    let mut result = check_derivation(path, source, &mut d);
-    result.warnings = render(path, source, &warnings);
-    result
+    let mut tally = check_derivation(path, source, &mut d);
+    if !d.model.linear_expects.is_empty() {
+        let verdicts = engine::expect_linearized::check_linearized(source, options.units);
+        check_linearized(&mut tally, (path, source), &d, &verdicts);
+    }
+    let mut report = tally.lines.join("\n");
+    if !report.is_empty() {
+        report.push('\n');
+    }
+    if !tally.failures.is_empty() {
+        report.push_str(&render(path, source, &tally.failures));
+    }
+    FileCheck {
+        report,
+        exit_code: if tally.failed > 0 { 1 } else { 0 },
+        held: tally.held,
+        failed: tally.failed,
+        warnings: render(path, source, &warnings),
+    }
 }
 
-fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
+/// Each expectation's line of the report, the diagnostics of those that fail, and the counts.
+#[derive(Default)]
+struct Tally {
+    lines: Vec<String>,
+    failures: Vec<Diagnostic>,
+    held: usize,
+    failed: usize,
+}
+
+/// The `expect linearized:` lines' verdicts, added to the report.
+fn check_linearized(
+    tally: &mut Tally,
+    (path, source): (&str, &str),
+    d: &Derivation,
+    verdicts: &[LinearVerdict],
+) {
+    for (expect, verdict) in d.model.linear_expects.iter().zip(verdicts) {
+        let (line, _) = line_col(source, expect.span.start);
+        let (mark, how) = match verdict {
+            LinearVerdict::Holds(how) => ("ok  ", how.clone()),
+            LinearVerdict::Fails(what) => ("FAIL", what.clone()),
+            LinearVerdict::Undecided(why) => ("FAIL", why.clone()),
+        };
+        tally.lines.push(format!("{mark} {path}:{line}  {}  — {how}", expect.text));
+        if verdict.holds() {
+            tally.held += 1;
+            continue;
+        }
+        tally.failed += 1;
+        let message = match verdict {
+            LinearVerdict::Undecided(_) => "this expectation could not be decided",
+            _ => "this expectation does not hold",
+        };
+        tally.failures.push(Diagnostic::error(expect.span, message).with_label(how));
+    }
+}
+
+fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> Tally {
     let verdicts = verify::check_all(d);
     let mut lines = Vec::new();
     let mut failures = Vec::new();
@@ -91,18 +145,5 @@ fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> FileCheck {
             _ => {}
         }
     }
-    let mut report = lines.join("\n");
-    if !report.is_empty() {
-        report.push('\n');
-    }
-    if !failures.is_empty() {
-        report.push_str(&render(path, source, &failures));
-    }
-    FileCheck {
-        report,
-        exit_code: if failed > 0 { 1 } else { 0 },
-        held,
-        failed,
-        warnings: String::new(),
-    }
+    Tally { lines, failures, held, failed }
 }

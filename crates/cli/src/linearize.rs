@@ -76,7 +76,7 @@ fn verdict_text(numbers: &Numbers) -> String {
             format!("Unstable: some real part is above {tolerance}")
         }
     };
-    match numbers.first_integrals {
+    let verdict = match numbers.first_integrals {
         0 => verdict,
         1 => format!(
             "{verdict}, apart from one zero: a first integral's, which leads to neighbouring \
@@ -86,6 +86,17 @@ fn verdict_text(numbers: &Numbers) -> String {
             "{verdict}, apart from {k} zeros: first integrals', which lead to neighbouring \
              steady motions"
         ),
+    };
+    match numbers.cyclic_zeros {
+        0 => verdict,
+        1 => format!(
+            "{verdict}; apart from one zero: a cyclic coordinate's position, which drifts with \
+             its rate"
+        ),
+        k => format!(
+            "{verdict}; apart from {k} zeros: cyclic coordinates' positions, which drift with \
+             their rates"
+        ),
     }
 }
 
@@ -94,6 +105,7 @@ fn verdict_text(numbers: &Numbers) -> String {
 pub fn text(l: &Linearized) -> String {
     let mut out = reference_lines(l);
     out.extend(exact_lines(l));
+    out.extend(exact_first_order_lines(l));
     out.extend(number_lines(l));
     out.extend(first_order_lines(l));
     if let Some(sweep) = &l.sweep {
@@ -148,10 +160,15 @@ fn reference_lines(l: &Linearized) -> Vec<String> {
             .lookup_symbol(&format!("{}'", pool.symbol(*q).name))
             .map(|s| pool.symbol_text(s, u))
             .unwrap_or_default();
-        out.push(if lin.in_rates().is_some() {
+        out.push(if lin.in_rates().is_some() || lin.kept().is_some() {
             format!(
                 "  {name} is ignorable (in neither the equations in u nor the rates of p): \
                  δ{name} leaves the state"
+            )
+        } else if lin.keep_cyclic {
+            format!(
+                "  {name} is cyclic (in neither M nor f): δ{name} stays in the state with a zero \
+                 eigenvalue, set aside from the verdict (--drop-cyclic leaves it out)"
             )
         } else {
             format!(
@@ -262,11 +279,24 @@ fn first_order_lines(l: &Linearized) -> Vec<String> {
     let mut out = Vec::new();
     let state: Vec<String> = l.state.iter().map(|s| format!("δ{}", state_text(pool, s))).collect();
     // Not x: a scene's coordinate is as likely as not to be called that.
-    out.push(format!("First-order form  u̇ = A·u,  u = ({})", state.join(", ")));
+    out.push(format!("First-order form  {},  u = ({})", form_text(l), state.join(", ")));
     if let CaseNumbers::Holonomic { basis: Some(basis) } = &l.at.case {
         out.extend(bracketed(&number_rows(basis), "  δq = N·z,  N = "));
     }
-    out.extend(bracketed(&number_rows(&l.at.first_order.a), "  A = "));
+    let space = &l.at.first_order;
+    out.extend(bracketed(&number_rows(&space.a), "  A = "));
+    if !l.inputs.is_empty() {
+        out.extend(bracketed(&number_rows(&space.b), "  B = "));
+    }
+    if !l.outputs.is_empty() {
+        out.push(format!("Outputs  y = C·u + D·w,  y = ({})", l.outputs.join(", ")));
+        out.extend(bracketed(&number_rows(&space.c), "  C = "));
+        if !l.inputs.is_empty() {
+            out.extend(bracketed(&number_rows(&space.d), "  D = "));
+        }
+    }
+    out.extend(rank_line("Controllable", "[B, AB, …]", space.controllability));
+    out.extend(rank_line("Observable", "[C; CA; …]", space.observability));
     out.push("Eigenvalues of A".into());
     // A part within the verdict's tolerance of zero is rounding: it prints as 0.
     let clean = |x: f64| if x.abs() <= l.at.tolerance { 0.0 } else { x };
@@ -274,6 +304,58 @@ fn first_order_lines(l: &Linearized) -> Vec<String> {
         out.push(format!("  {}", complex(clean(*re), clean(*im), DIGITS)));
     }
     out.push(verdict_text(&l.at));
+    out
+}
+
+/// The rank of the controllability or observability matrix in words, with the tolerance and
+/// how far the singular values are from it.
+fn rank_line(what: &str, matrix: &str, rank: Option<engine::linearize::Rank>) -> Option<String> {
+    let r = rank?;
+    let verdict =
+        if r.rank == r.full { what.to_string() } else { format!("Not {}", what.to_lowercase()) };
+    let s = |v: f64| significant(v, 2, Style::Unicode);
+    let mut line = format!(
+        "{verdict}: {matrix} has rank {} of {} (columns scaled to length 1; singular values \
+         below {} × the largest count as zero; the smallest counted is {} of the largest",
+        r.rank,
+        r.full,
+        s(r.tolerance),
+        s(r.smallest_counted)
+    );
+    if r.rank < r.full {
+        line.push_str(&format!(", the largest left out {}", s(r.largest_left_out)));
+    }
+    line.push(')');
+    if r.doubtful() {
+        line.push_str(" — doubtful: a singular value lies within a factor 1000 of the tolerance");
+    }
+    Some(line)
+}
+
+/// `u̇ = A·u`, or `u̇ = A·u + B·w, w = (F)` with inputs.
+fn form_text(l: &Linearized) -> String {
+    match l.inputs.is_empty() {
+        true => "u̇ = A·u".into(),
+        false => format!("u̇ = A·u + B·w,  w = ({})", l.inputs.join(", ")),
+    }
+}
+
+/// The first-order form exactly, where the algebra gives it.
+fn exact_first_order_lines(l: &Linearized) -> Vec<String> {
+    let Some(exact) = &l.exact else { return Vec::new() };
+    let pool = &l.derivation.model.pool;
+    let coords = &l.linearization.coords;
+    let state: Vec<String> = exact
+        .state
+        .iter()
+        .map(|c| format!("δ{}", state_text(pool, &c.name(pool, coords))))
+        .collect();
+    let form = form_text(l);
+    let mut out = vec![format!("First-order form exactly  {form},  u = ({})", state.join(", "))];
+    out.extend(bracketed(&exact_rows(pool, &exact.a), "  A = "));
+    if !l.inputs.is_empty() {
+        out.extend(bracketed(&exact_rows(pool, &exact.b), "  B = "));
+    }
     out
 }
 
@@ -449,6 +531,43 @@ pub fn json(l: &Linearized) -> String {
     }
     out.insert("state".into(), json!(l.state));
     out.insert("A".into(), matrix_json(&l.at.first_order.a));
+    // `C` is the damping's at the top level: the state space is an object of its own, its
+    // rows named by `state` (the top-level `state` and `A` stay for readers of both).
+    let space = &l.at.first_order;
+    let mut first_order = Map::new();
+    first_order.insert("state".into(), json!(l.state));
+    first_order.insert("inputs".into(), json!(l.inputs));
+    first_order.insert("outputs".into(), json!(l.outputs));
+    first_order.insert("A".into(), matrix_json(&space.a));
+    first_order.insert("B".into(), matrix_json(&space.b));
+    first_order.insert("C".into(), matrix_json(&space.c));
+    first_order.insert("D".into(), matrix_json(&space.d));
+    if let Some(exact) = &l.exact {
+        let names: Vec<String> = exact.state.iter().map(|c| c.name(pool, &lin.coords)).collect();
+        let exact = json!({
+            "state": names,
+            "A": exact_json(pool, &exact.a),
+            "B": exact_json(pool, &exact.b),
+        });
+        first_order.insert("exact".into(), exact);
+    }
+    let rank = |r: Option<engine::linearize::Rank>| {
+        r.map(|r| {
+            json!({
+                "rank": r.rank,
+                "of": r.full,
+                "tolerance": json_number(r.tolerance),
+                "smallest_counted": json_number(r.smallest_counted),
+                "largest_left_out": json_number(r.largest_left_out),
+                "doubtful": r.doubtful(),
+            })
+        })
+    };
+    first_order.insert("controllability".into(), json!(rank(space.controllability)));
+    first_order.insert("observability".into(), json!(rank(space.observability)));
+    out.insert("first_order".into(), Json::Object(first_order));
+    out.insert("cyclic_zeros".into(), json!(l.at.cyclic_zeros));
+    out.insert("first_integrals".into(), json!(l.at.first_integrals));
     out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
     out.insert("stability".into(), json!(l.at.stability.name()));
     out.insert("tolerance".into(), json_number(l.at.tolerance));

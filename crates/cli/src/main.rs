@@ -106,8 +106,9 @@ enum Command {
         samples: Option<usize>,
     },
     /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
-    /// the first-order matrix A, its eigenvalues and the verdict on stability. Exit 2 on bad
-    /// input, a reference that is not an equilibrium included.
+    /// the first-order form ẋ = A·x + B·u, y = C·x + D·u of the scene's inputs and outputs,
+    /// its eigenvalues, the verdict on stability, controllability and observability. Exit 2 on
+    /// bad input, a reference that is not an equilibrium included.
     Linearize {
         file: PathBuf,
         /// The reference, overriding or extending the scene's `linearize about` line:
@@ -121,6 +122,10 @@ enum Command {
         /// stability changes: `--sweep w=0:100:101`.
         #[arg(long, value_name = "P=A:B:N")]
         sweep: Option<SweepRange>,
+        /// Leave the positions of cyclic coordinates out of the state (by default the state
+        /// is the position and rate of every coordinate).
+        #[arg(long)]
+        drop_cyclic: bool,
         /// Draw the sweep's eigenvalues (real and imaginary parts against p) as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -290,12 +295,22 @@ fn main() -> ExitCode {
             };
             simulate(&file, &source, &options, out, Figures { plot, animate })
         }
-        Command::Linearize { file, about, set, sweep, plot, format, out, no_units } => {
+        Command::Linearize {
+            file,
+            about,
+            set,
+            sweep,
+            drop_cyclic,
+            plot,
+            format,
+            out,
+            no_units,
+        } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             // Typed here, read as text there; the same parser reads it back.
             let set = set.iter().map(Assignment::to_string).collect();
             let sweep = sweep.as_ref().map(SweepRange::to_string);
-            let options = engine::linearize::Options { about, set, sweep, no_units };
+            let options = engine::linearize::Options { about, set, sweep, no_units, drop_cyclic };
             linearize(&file, &source, &options, format, out, plot)
         }
         Command::Codegen { file, out, no_units } => {

@@ -218,6 +218,11 @@ fn cells(pool: &Pool, rows: &[Vec<ExprId>], full: bool) -> Vec<Vec<String>> {
 enum Section<'a> {
     Title(Option<&'a str>),
     Parameters(&'a [model::Param]),
+    /// The inputs with their values when nothing drives them, and the outputs.
+    Signals {
+        inputs: &'a [model::Input],
+        outputs: &'a [model::Output],
+    },
     /// As declared, and the generalized coordinates left after elimination.
     Coordinates {
         declared: &'a [model::Coord],
@@ -258,6 +263,7 @@ fn sections<'a>(d: &'a Derivation, derived: &'a Derived) -> Vec<Section<'a>> {
     let mut sections = vec![
         Section::Title(d.model.title.as_deref()),
         Section::Parameters(&d.model.params),
+        Section::Signals { inputs: &d.model.inputs, outputs: &d.model.outputs },
         Section::Coordinates { declared: &d.model.coords, generalized: &d.coords },
         Section::Constraints {
             constraints: &d.model.constraints,

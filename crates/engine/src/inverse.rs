@@ -63,7 +63,14 @@ pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynami
     let kept = d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone());
     Ok(InverseDynamics {
         coordinates: prepared.coordinate_names(),
-        parameter_names: d.model.params.iter().map(|p| p.name.clone()).collect(),
+        // The slots of `parameters`: the parameters, then the inputs at their values.
+        parameter_names: d
+            .model
+            .params
+            .iter()
+            .map(|p| p.name.clone())
+            .chain(d.model.inputs.iter().map(|u| u.name.clone()))
+            .collect(),
         parameters,
         kept: kept.collect(),
         tape: Tape::new(program),
@@ -78,7 +85,8 @@ impl InverseDynamics {
         &self.coordinates
     }
 
-    /// The parameters' names, in declaration order.
+    /// The parameters' names, in declaration order, then the scene's inputs' (held at the
+    /// values given to them).
     pub fn parameter_names(&self) -> &[String] {
         &self.parameter_names
     }

@@ -6,8 +6,9 @@
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
 //! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
-//! the command line's reference resolved against the scene ([`linearize`]), and gives the
-//! generalized forces that make a given motion happen ([`inverse`]).
+//! the command line's reference resolved against the scene ([`linearize`]), decides the
+//! scene's `expect linearized:` lines ([`expect_linearized`]), and gives the generalized
+//! forces that make a given motion happen ([`inverse`]).
 //! What goes wrong comes back as an [`Error`].
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
@@ -19,6 +20,7 @@ pub mod bench;
 pub mod codegen;
 pub mod derived;
 mod error;
+pub mod expect_linearized;
 pub mod generate;
 pub mod input;
 pub mod inverse;

@@ -12,8 +12,8 @@ use crate::numbers::{prepare_resolved, Prepared};
 use crate::{Error, Piece, Setting};
 
 pub use linear::{
-    Analysis, Case, CaseNumbers, Change, Component, Linearization, Numbers, Row, Stability,
-    StateSpace, Sweep, RELATIVE_TOLERANCE,
+    Analysis, Case, CaseNumbers, Change, Component, ExactStateSpace, Linearization, Numbers,
+    OutputRow, Rank, Row, Stability, StateSpace, Sweep, RANK_TOLERANCE, RELATIVE_TOLERANCE,
 };
 
 /// Past this many sweep values the table stops being a table.
@@ -30,6 +30,9 @@ pub struct Options {
     pub sweep: Option<String>,
     /// Skip the dimension check.
     pub no_units: bool,
+    /// Leave the positions of cyclic coordinates out of the state (by default the state is
+    /// (q, q̇) of every coordinate).
+    pub drop_cyclic: bool,
 }
 
 /// Everything `linearize` reports.
@@ -46,6 +49,12 @@ pub struct Linearized {
     /// Whether the algebra showed the accelerations zero at the reference for every value of
     /// the parameters (else numbers showed it at each value used).
     pub exact_reference: bool,
+    /// A and B exactly, where the algebra gives them (see [`linear::exact_state_space`]).
+    pub exact: Option<ExactStateSpace>,
+    /// The inputs' names, the columns of B and D.
+    pub inputs: Vec<String>,
+    /// The outputs' names, the rows of C and D.
+    pub outputs: Vec<String>,
     pub at: Numbers,
     pub sweep: Option<Sweep>,
 }
@@ -169,7 +178,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
             Piece::Given(Setting::About, "theta=0".into()),
         ]));
     }
-    let linearization = linear::linearize(&mut prepared.derivation)
+    let linearization = linear::linearize(&mut prepared.derivation, !options.drop_cyclic)
         .map_err(|diagnostics| scene_error(source, about.as_ref(), diagnostics))?;
     if linearization.coords.is_empty() {
         return Err(bad("the constraints fix every coordinate: nothing is left to linearize"));
@@ -202,9 +211,16 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         shown(&linearization.damping),
         shown(&linearization.stiffness),
     );
+    let exact = linear::exact_state_space(pool, &linearization);
     let pool = &prepared.derivation.model.pool;
     let state = at.first_order.state.iter().map(|c| c.name(pool, &linearization.coords)).collect();
+    let model = &prepared.derivation.model;
+    let inputs = model.inputs.iter().map(|u| u.name.clone()).collect();
+    let outputs = model.outputs.iter().map(|o| o.name.clone()).collect();
     Ok(Linearized {
+        exact,
+        inputs,
+        outputs,
         derivation: prepared.derivation,
         exact_reference: linearization.residual_is_zero,
         linearization,

@@ -57,7 +57,9 @@ pub(crate) fn prepare_resolved(
         };
         exprs.push(derivation.expand_quantities(*e, false));
     }
-    let parameters: Vec<SymId> = derivation.model.params.iter().map(|p| p.sym).collect();
+    // The inputs' slots follow the parameters', filled with their values when nothing drives
+    // them.
+    let parameters: Vec<SymId> = derivation.model.constants().iter().map(|(s, _)| *s).collect();
     let layout = Layout {
         coordinates: derivation.coords.len(),
         multipliers: derivation.multipliers.len(),
@@ -158,7 +160,8 @@ impl Prepared {
     }
 
     /// Parameter values in declaration order, with `overrides` (parameter index → expression
-    /// of earlier parameters) taking the place of the scene's values.
+    /// of earlier parameters) taking the place of the scene's values; then the inputs' values
+    /// when nothing drives them (the slots of [`Prepared::parameters`]).
     pub fn parameter_values(&self, overrides: &[(usize, ExprId)]) -> Result<Vec<f64>, Error> {
         let pool = &self.derivation.model.pool;
         let mut values = vec![f64::NAN; pool.symbol_count()];
@@ -179,6 +182,13 @@ impl Prepared {
                 return Err(Error::Input(format!("parameter `{}` evaluates to {v}", p.name)));
             }
             values[p.sym.index()] = v;
+            out.push(v);
+        }
+        for u in &self.derivation.model.inputs {
+            let v = numeric::eval(pool, u.value, &values);
+            if !v.is_finite() {
+                return Err(Error::Input(format!("input `{}` evaluates to {v}", u.name)));
+            }
             out.push(v);
         }
         Ok(out)

@@ -90,7 +90,7 @@ pub const UNIT_NAMES: [&str; 24] = [
     "V", "T", "K", "rad", "deg", "rev", "rpm",
 ];
 
-/// `name = value unit`, one item of a `param` line.
+/// `name = value unit`, one item of a `param` or `input` line.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamDecl {
     pub name: Ident,
@@ -152,6 +152,10 @@ pub enum StmtKind {
     Scene { title: String },
     /// `param m = 1 kg, g = 9.81 m/s^2, k`
     Param(Vec<ParamDecl>),
+    /// `input F = 0 N, tau`: exogenous signals with their values when nothing drives them
+    Input(Vec<ParamDecl>),
+    /// `output tip: L*sin(theta)`
+    Output { name: Ident, value: Expr },
     /// `let h = L/2*cos(theta)`
     Let { name: Ident, value: Expr },
     /// `coord theta = pi/6, theta' = 0` or `coord x, y`
@@ -182,12 +186,25 @@ pub enum StmtKind {
     Show { at_start: bool, items: Vec<Expr> },
     /// `expect lhs = rhs` or `expect at start: lhs = rhs`
     Expect { at_start: bool, lhs: Expr, rhs: Expr },
+    /// `expect linearized: unstable`: what `linearize` finds at the scene's reference
+    ExpectLinearized(LinearExpectation),
     /// `simulate { until 2 s; method dop853 }`
     Simulate(Vec<Setting>),
     /// `linearize about theta = 0, theta' = 0`
     Linearize(Vec<AboutItem>),
     /// `draw line from (0, 0) to bob.position`: a shape for `simulate --animate`.
     Draw(Shape),
+}
+
+/// What an `expect linearized:` line expects of the linearization at the scene's reference.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinearExpectation {
+    /// `stable`, `marginally stable` or `unstable`, as written (blanks made single).
+    Verdict { word: String, span: Span },
+    /// `eigenvalue = value` (a scalar, or `(re, im)`).
+    Eigenvalue(Expr),
+    /// `critical p = value`.
+    Critical { parameter: Ident, value: Expr },
 }
 
 /// A shape of a `draw` line, in world coordinates; its points are vector expressions.

@@ -41,11 +41,13 @@ const PRATT_OPERATORS: [Rule; 6] =
     [Rule::add_op, Rule::sub_op, Rule::mul_op, Rule::div_op, Rule::pow_op, Rule::neg_op];
 
 /// The statement keywords, in the order they are listed to the user.
-pub(crate) const STATEMENT_KEYWORDS: [&str; 20] = [
+pub(crate) const STATEMENT_KEYWORDS: [&str; 22] = [
     "scene",
     "param",
     "let",
     "coord",
+    "input",
+    "output",
     "particle",
     "body",
     "constraint",

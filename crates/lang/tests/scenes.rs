@@ -19,7 +19,15 @@ fn exprs_of(kind: &StmtKind) -> Vec<&Expr> {
     let mut out: Vec<&Expr> = Vec::new();
     match kind {
         StmtKind::Scene { .. } => {}
-        StmtKind::Param(decls) => out.extend(decls.iter().filter_map(|d| d.value.as_ref())),
+        StmtKind::Param(decls) | StmtKind::Input(decls) => {
+            out.extend(decls.iter().filter_map(|d| d.value.as_ref()))
+        }
+        StmtKind::Output { value, .. } => out.push(value),
+        StmtKind::ExpectLinearized(lang::LinearExpectation::Eigenvalue(value))
+        | StmtKind::ExpectLinearized(lang::LinearExpectation::Critical { value, .. }) => {
+            out.push(value)
+        }
+        StmtKind::ExpectLinearized(_) => {}
         StmtKind::Let { value, .. } => out.push(value),
         StmtKind::Coord(decls) => {
             for d in decls {

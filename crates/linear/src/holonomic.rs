@@ -17,8 +17,10 @@ use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
 use crate::layout::{self, ConstraintRows, Outputs};
 use crate::reference::{self, Items, Placed};
-use crate::spectrum::Spectrum;
-use crate::{Case, CaseNumbers, Component, LinearConstraint, Linearization, Numbers};
+use crate::signals::{self, SignalBlocks};
+use crate::{
+    Case, CaseNumbers, Component, FirstOrder, LinearConstraint, Linearization, Numbers, Signals,
+};
 
 /// Linearizes with no velocity constraint kept, `errors` those found in the items already.
 pub(crate) fn linearize(
@@ -52,6 +54,7 @@ pub(crate) fn linearize(
     for i in 0..n {
         map.entry(d.rates[i]).or_insert(pool.zero());
     }
+    map.extend(signals::reference_inputs(&d.model.inputs));
     let missing: Vec<SymId> =
         (0..n).filter(|&i| !cyclic[i] && positions[i].is_none()).map(|i| d.coords[i]).collect();
     errors.extend(reference::missing_positions(pool, &missing, span, "a cyclic"));
@@ -84,15 +87,21 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &exact.residual, &constraints, &[]);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
+    let inputs: Vec<SymId> = d.model.inputs.iter().map(|u| u.sym).collect();
+    let input_forces = signals::input_columns(pool, &d.forcing, &inputs, &mut at);
+    let outputs = signals::output_rows(d, &mut at, None)?;
+    let signals = Signals { inputs, input_forces, outputs };
+
     let placed = Placed { cyclic, positions, rates };
     let case = Case::Holonomic { constraints };
-    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, case, span))
+    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, (case, signals), span))
 }
 
 /// Where the holonomic case's matrices sit among its program's outputs.
 pub(crate) struct Blocks {
     equations: layout::Equations,
     constraints: ConstraintRows,
+    signals: SignalBlocks,
 }
 
 impl Blocks {
@@ -105,7 +114,8 @@ impl Blocks {
             jacobian.push(outputs.column(&c.jacobian));
             bias.push(outputs.value(c.bias));
         }
-        Blocks { equations, constraints: ConstraintRows { jacobian, bias } }
+        let signals = SignalBlocks::place(outputs, lin);
+        Blocks { equations, constraints: ConstraintRows { jacobian, bias }, signals }
     }
 }
 
@@ -160,13 +170,25 @@ pub(crate) fn at(
         }
     }
     let damping = blocks.equations.damping.matrix(&out);
+    let forces = blocks.signals.forces(&out);
     let basis = if k == 0 { DMatrix::identity(n, n) } else { basis(&jacobian, &lin.cyclic)? };
-    let (state, a) = first_order(&basis, [&mass, &damping, &stiffness], &lin.cyclic, k)?;
-    let spectrum = Spectrum::of(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
+    let along = Along { basis: &basis, cyclic: &lin.cyclic, k, keep_cyclic: lin.keep_cyclic };
+    let first = first_order(&along, [&mass, &damping, &stiffness], &forces)?;
+    let (space, spectrum) = signals::complete(first, &blocks.signals, &out, false)?;
     let case = CaseNumbers::Holonomic { basis: (k > 0).then(|| rows_of(&basis)) };
     let matrices = [&mass, &damping, &stiffness];
     let solved = (multipliers, accelerations);
-    Ok(Numbers::new(parameters, matrices, solved, (state, &a), spectrum, case))
+    Ok(Numbers::new(parameters, matrices, solved, space, spectrum, case))
+}
+
+/// The reduced coordinates: δq = N·z, N's columns those of the null space of the kept
+/// constraints (or the coordinates themselves without), then one per cyclic coordinate.
+struct Along<'a> {
+    basis: &'a DMatrix<f64>,
+    cyclic: &'a [bool],
+    /// How many constraints are kept.
+    k: usize,
+    keep_cyclic: bool,
 }
 
 /// The reduced coordinates with constraints kept: the null space of J over the non-cyclic
@@ -189,45 +211,64 @@ fn basis(jacobian: &DMatrix<f64>, cyclic: &[bool]) -> Result<DMatrix<f64>, Fault
     Ok(basis)
 }
 
-/// The state and A along `basis`: the positions of the reduced coordinates but the cyclic
-/// ones, then the rates of all of them.
+/// The state, A and B along the reduced coordinates: the positions of the reduced
+/// coordinates (the cyclic ones' only if kept), then the rates of all of them;
+/// A = [0, I; −M⁻¹K, −M⁻¹C] and B = [0; M⁻¹·Q_u], with M, C, K and the input forces Q_u
+/// taken along N.
 fn first_order(
-    basis: &DMatrix<f64>,
+    along: &Along,
     [mass, damping, stiffness]: [&DMatrix<f64>; 3],
-    cyclic: &[bool],
-    k: usize,
-) -> Result<(Vec<Component>, DMatrix<f64>), Fault> {
+    forces: &DMatrix<f64>,
+) -> Result<FirstOrder, Fault> {
+    let Along { basis, cyclic, k, keep_cyclic } = *along;
     let n = cyclic.len();
-    let free = cyclic.iter().filter(|c| **c).count();
+    let free_coords: Vec<usize> = (0..n).filter(|&i| cyclic[i]).collect();
+    let free = free_coords.len();
     let r = basis.ncols();
     if r == 0 {
         return Err(Fault::NoMotion);
     }
     let reduce = |m: &DMatrix<f64>| basis.transpose() * m * basis;
     let (mr, cr, kr) = (reduce(mass), reduce(damping), reduce(stiffness));
-    // Which reduced coordinates keep their position in the state: all but the cyclic.
-    let positions: Vec<usize> =
-        if k == 0 { (0..n).filter(|&i| !cyclic[i]).collect() } else { (0..r - free).collect() };
+    // Whether each reduced coordinate is a cyclic one, whose position stays only if kept.
+    let is_cyclic = |j: usize| if k == 0 { cyclic[j] } else { j >= r - free };
+    let positions: Vec<usize> = (0..r).filter(|&j| keep_cyclic || !is_cyclic(j)).collect();
     let lu = regular(&mr)?;
     let p = positions.len();
-    let mut a = DMatrix::zeros(p + r, p + r);
+    let size = p + r;
+    let mut a = DMatrix::zeros(size, size);
     for (row, &j) in positions.iter().enumerate() {
         a[(row, p + j)] = 1.0;
     }
     let stiff = DMatrix::from_fn(r, p, |row, col| kr[(row, positions[col])]);
     a.view_mut((p, 0), (r, p)).copy_from(&(-solve(&lu, &stiff)?));
     a.view_mut((p, p), (r, r)).copy_from(&(-solve(&lu, &cr)?));
+    let mut b = DMatrix::zeros(size, forces.ncols());
+    b.view_mut((p, 0), (r, forces.ncols())).copy_from(&solve(&lu, &(basis.transpose() * forces))?);
 
-    let state = if k == 0 {
-        let rates = (0..n).map(Component::Rate);
-        positions.iter().map(|&i| Component::Position(i)).chain(rates).collect()
-    } else {
-        let along = (0..r - free).map(Component::Along);
-        let rates = (0..r - free).map(Component::RateAlong);
-        let cyclic_rates = (0..n).filter(|&i| cyclic[i]).map(Component::Rate);
-        along.chain(rates).chain(cyclic_rates).collect()
+    // δq = N·(positions of x), δq̇ = N·(rates of x).
+    let mut at_positions = DMatrix::zeros(n, size);
+    let mut at_rates = DMatrix::zeros(n, size);
+    for (row, &j) in positions.iter().enumerate() {
+        at_positions.column_mut(row).copy_from(&basis.column(j));
+    }
+    for j in 0..r {
+        at_rates.column_mut(p + j).copy_from(&basis.column(j));
+    }
+    let cyclic_rows: Vec<usize> = (0..p).filter(|&row| is_cyclic(positions[row])).collect();
+
+    let position_of = |j: usize| match k {
+        0 => Component::Position(j),
+        _ if j >= r - free => Component::Position(free_coords[j - (r - free)]),
+        _ => Component::Along(j),
     };
-    Ok((state, a))
+    let rate_of = |j: usize| match k {
+        0 => Component::Rate(j),
+        _ if j >= r - free => Component::Rate(free_coords[j - (r - free)]),
+        _ => Component::RateAlong(j),
+    };
+    let state = positions.iter().map(|&j| position_of(j)).chain((0..r).map(rate_of)).collect();
+    Ok(FirstOrder { state, a, b, positions: at_positions, rates: at_rates, cyclic: cyclic_rows })
 }
 
 #[cfg(test)]
@@ -237,7 +278,7 @@ mod tests {
     /// M, C and K of a scene about its reference.
     fn matrices(source: &str) -> [Vec<Vec<String>>; 3] {
         let mut d = derived(source);
-        let lin = crate::linearize(&mut d).expect("linearizes");
+        let lin = crate::linearize(&mut d, true).expect("linearizes");
         let pool = &d.model.pool;
         [text(pool, &lin.mass), text(pool, &lin.damping), text(pool, &lin.stiffness)]
     }
@@ -271,7 +312,7 @@ gravity g
 linearize about theta = 0
 ";
         let mut d = derived(source);
-        let lin = crate::linearize(&mut d).expect("linearizes");
+        let lin = crate::linearize(&mut d, true).expect("linearizes");
         assert_eq!(lin.cyclic, [true, false]);
         assert!(lin.residual_is_zero);
         let [m, _, k] = matrices(source);
@@ -288,10 +329,10 @@ particle bob { mass m; position (L*sin(theta)*cos(phi), L*sin(theta)*sin(phi), -
 gravity g
 ";
         let mut d = derived(&format!("{source}linearize about phi' = w"));
-        let errors = crate::linearize(&mut d).expect_err("θ has no position");
+        let errors = crate::linearize(&mut d, true).expect_err("θ has no position");
         assert!(errors[0].message.contains("no position for `theta`"), "{errors:?}");
         let mut d = derived(&format!("{source}linearize about theta = 0, theta' = w"));
-        let errors = crate::linearize(&mut d).expect_err("θ moves");
+        let errors = crate::linearize(&mut d, true).expect_err("θ moves");
         assert!(errors[0].message.contains("does not stay put"), "{errors:?}");
     }
 
@@ -305,7 +346,7 @@ potential k/2*x^2
 force push on p: (F*cos(w*t), 0)
 linearize about x = 0
 ";
-        let errors = crate::linearize(&mut derived(source)).expect_err("driven");
+        let errors = crate::linearize(&mut derived(source), true).expect_err("driven");
         assert!(errors[0].message.contains("depend on time"), "{errors:?}");
     }
 }

@@ -21,8 +21,8 @@ use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
 use crate::layout::{Block, Outputs};
 use crate::reference::{self, AtReference, Items, Placed};
-use crate::spectrum::Spectrum;
-use crate::{Case, CaseNumbers, Component, Linearization, Numbers};
+use crate::signals::{self, SignalBlocks};
+use crate::{Case, CaseNumbers, Component, FirstOrder, Linearization, Numbers, Signals};
 
 /// What the equations in the independent rates add to a [`Linearization`].
 #[derive(Clone, Debug)]
@@ -72,6 +72,7 @@ pub(crate) fn linearize(
     for a in &accels {
         map.insert(*a, pool.zero());
     }
+    map.extend(signals::reference_inputs(&d.model.inputs));
     let missing: Vec<SymId> =
         (0..n).filter(|&i| kept[i] && positions[i].is_none()).map(|i| d.coords[i]).collect();
     errors.extend(reference::missing_positions(pool, &missing, span, "an ignorable"));
@@ -117,6 +118,20 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &residual, &[], &more);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
+    // M̃·δu̇ + … + (∂h/∂u)·δu = 0: the inputs' forces are −∂h/∂u.
+    let inputs: Vec<SymId> = d.model.inputs.iter().map(|u| u.sym).collect();
+    let zero_accels: HashMap<SymId, ExprId> = accels.iter().map(|a| (*a, pool.zero())).collect();
+    let mut minus_at = |pool: &mut Pool, e: ExprId| {
+        let e = pool.subst(e, &zero_accels);
+        let e = at(pool, e);
+        pool.neg(e)
+    };
+    let input_forces = signals::input_columns(pool, &form.equations, &inputs, &mut minus_at);
+    let dependent: Vec<SymId> = form.dependent.iter().map(|(r, _)| *r).collect();
+    let why = "a dependent rate, which the state gives only through the constraints";
+    let outputs = signals::output_rows(d, &mut |p, e| at(p, e), Some((&dependent, why)))?;
+    let signals = Signals { inputs, input_forces, outputs };
+
     let placed = Placed { cyclic: kept.iter().map(|k| !k).collect(), positions, rates };
     let exact = AtReference { mass, damping, stiffness, residual };
     let case = Case::InRates(InRates {
@@ -126,7 +141,7 @@ pub(crate) fn linearize(
         dependent: form.dependent.clone(),
         residual_symbols,
     });
-    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, case, span))
+    Ok(Linearization::new(d.coords.clone(), placed, exact, residual_is_zero, (case, signals), span))
 }
 
 /// The equations in the independent rates, or why they could not be formed, at the kept
@@ -279,6 +294,7 @@ pub(crate) struct Blocks {
     kinematics: Block,
     /// The independent rates' coordinates (indices into `coords`).
     rates: Vec<usize>,
+    signals: SignalBlocks,
 }
 
 impl Blocks {
@@ -296,6 +312,7 @@ impl Blocks {
             residual: outputs.column(&lin.residual),
             kinematics: outputs.matrix(&r.kinematics, np + nu),
             rates: r.rates.iter().filter_map(|u| rates.iter().position(|v| v == u)).collect(),
+            signals: SignalBlocks::place(outputs, lin),
         }
     }
 }
@@ -351,13 +368,31 @@ pub(crate) fn at(
     if size == 0 {
         return Err(Fault::NoMotion);
     }
-    let spectrum = Spectrum::deflated(&a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
+    let forces = blocks.signals.forces(&out);
+    let mut b = DMatrix::zeros(size, forces.ncols());
+    b.view_mut((np, 0), (nu, forces.ncols())).copy_from(&solve(&lu, &forces)?);
+    // δq of the positions kept; δq̇ of the independent rates, and of the positions kept by G.
+    let n = lin.coords.len();
+    let mut at_positions = DMatrix::zeros(n, size);
+    let mut at_rates = DMatrix::zeros(n, size);
+    for (row, &i) in r.kept.iter().enumerate() {
+        at_positions[(i, row)] = 1.0;
+    }
+    for (j, &i) in blocks.rates.iter().enumerate() {
+        at_rates[(i, np + j)] = 1.0;
+    }
+    for (row, &i) in r.kept.iter().enumerate() {
+        at_rates.row_mut(i).copy_from(&kinematics.row(row));
+    }
     let positions = r.kept.iter().map(|&i| Component::Position(i));
     let state = positions.chain(blocks.rates.iter().map(|&i| Component::Rate(i))).collect();
+    let first =
+        FirstOrder { state, a, b, positions: at_positions, rates: at_rates, cyclic: vec![] };
+    let (space, spectrum) = signals::complete(first, &blocks.signals, &out, true)?;
     let case = CaseNumbers::InRates { kinematics: rows_of(&kinematics) };
     let matrices = [&mass, &damping, &stiffness];
     let solved = (Vec::new(), accelerations);
-    Ok(Numbers::new(parameters, matrices, solved, (state, &a), spectrum, case))
+    Ok(Numbers::new(parameters, matrices, solved, space, spectrum, case))
 }
 
 #[cfg(test)]
@@ -379,7 +414,7 @@ linearize about theta = 0, x' = v
     #[test]
     fn the_sleigh_is_linearized_in_its_independent_rates_and_turns_back_straight() {
         let mut d = derived(SLEIGH);
-        let lin = crate::linearize(&mut d).expect("linearizes");
+        let lin = crate::linearize(&mut d, true).expect("linearizes");
         let r = lin.in_rates().expect("in the independent rates");
         let pool = &d.model.pool;
         let names: Vec<&str> = r.rates.iter().map(|u| pool.symbol(*u).name.as_str()).collect();

@@ -44,9 +44,11 @@ pub mod kept;
 mod analysis;
 mod dense;
 mod evaluation;
+mod exact;
 mod fault;
 mod layout;
 mod reference;
+mod signals;
 mod spectrum;
 mod sweep;
 
@@ -56,7 +58,9 @@ use mechanics::Derivation;
 use model::ConstraintKind;
 
 pub use analysis::Analysis;
+pub use exact::{exact_state_space, ExactStateSpace};
 pub use fault::Fault;
+pub use signals::{OutputRow, Rank, RANK_TOLERANCE};
 pub use spectrum::{Stability, RELATIVE_TOLERANCE};
 pub use sweep::{sweep, Change, Row, Sweep};
 
@@ -86,6 +90,24 @@ pub struct Linearization {
     pub case: Case,
     /// The last `linearize about` line, which the reference is reported at.
     pub span: Span,
+    /// Whether the positions of cyclic coordinates stay in the state (the default: the
+    /// state is (q, q̇) of every coordinate), their eigenvalues zeros set aside from the verdict.
+    /// Ignorable positions in the nonholonomic cases leave the state either way.
+    pub keep_cyclic: bool,
+    /// The scene's inputs, each at the value it takes when nothing drives it.
+    pub inputs: Vec<SymId>,
+    /// ∂f/∂u at the reference: one row per row of `mass`, one column per input (in the
+    /// independent rates, of the right-hand side of M̃·δu̇ + … = B̃·δu).
+    pub input_forces: Vec<Vec<ExprId>>,
+    /// The scene's outputs' gradients at the reference.
+    pub outputs: Vec<OutputRow>,
+}
+
+/// What every case adds about inputs and outputs (see [`Linearization`]'s fields).
+pub(crate) struct Signals {
+    pub inputs: Vec<SymId>,
+    pub input_forces: Vec<Vec<ExprId>>,
+    pub outputs: Vec<OutputRow>,
 }
 
 /// What the matrices of a [`Linearization`] mean, and what else its case needs.
@@ -162,12 +184,17 @@ impl Linearization {
         placed: reference::Placed,
         exact: reference::AtReference,
         residual_is_zero: bool,
-        case: Case,
+        (case, signals): (Case, Signals),
         span: Span,
     ) -> Linearization {
         let reference::Placed { cyclic, positions, rates } = placed;
         let reference::AtReference { mass, damping, stiffness, residual } = exact;
+        let Signals { inputs, input_forces, outputs } = signals;
         Linearization {
+            keep_cyclic: true,
+            inputs,
+            input_forces,
+            outputs,
             coords,
             cyclic,
             positions,
@@ -183,13 +210,36 @@ impl Linearization {
     }
 }
 
-/// The first-order form ẋ = A·x of the small motions, its state named.
+/// The first-order form ẋ = A·x + B·u, y = C·x + D·u of the small motions, its state named.
 #[derive(Clone, Debug)]
 pub struct StateSpace {
     /// What each component of x is.
     pub state: Vec<Component>,
     /// A, one row per component of x.
     pub a: Vec<Vec<f64>>,
+    /// B, one row per component of x, one column per input.
+    pub b: Vec<Vec<f64>>,
+    /// C, one row per output, one column per component of x.
+    pub c: Vec<Vec<f64>>,
+    /// D, one row per output, one column per input.
+    pub d: Vec<Vec<f64>>,
+    /// The rank of the controllability matrix (`None` without inputs).
+    pub controllability: Option<Rank>,
+    /// The rank of the observability matrix (`None` without outputs).
+    pub observability: Option<Rank>,
+}
+
+/// A case's first-order form in numbers, before C and D: the state, A and B, and where the
+/// state puts δq and δq̇ (δq = P·x, δq̇ = V·x, n × the state's size each).
+pub(crate) struct FirstOrder {
+    pub state: Vec<Component>,
+    pub a: nalgebra::DMatrix<f64>,
+    pub b: nalgebra::DMatrix<f64>,
+    pub positions: nalgebra::DMatrix<f64>,
+    pub rates: nalgebra::DMatrix<f64>,
+    /// The components that are the positions of cyclic coordinates kept: their columns of A
+    /// are zero, so each is an eigenvalue 0, set aside from the verdict.
+    pub cyclic: Vec<usize>,
 }
 
 /// A component of the state.
@@ -245,6 +295,9 @@ pub struct Numbers {
     /// How many of the zero eigenvalues are first integrals' (conserved combinations of the
     /// state, which the verdict leaves aside: they lead to neighbouring steady motions).
     pub first_integrals: usize,
+    /// How many of the zero eigenvalues are those of cyclic coordinates' positions kept in the
+    /// state (the verdict leaves them aside too: such a position drifts with its rate).
+    pub cyclic_zeros: usize,
     pub case: CaseNumbers,
 }
 
@@ -254,7 +307,7 @@ impl Numbers {
         parameters: &[f64],
         [mass, damping, stiffness]: [&nalgebra::DMatrix<f64>; 3],
         (multipliers, accelerations): (Vec<f64>, Vec<f64>),
-        (state, a): (Vec<Component>, &nalgebra::DMatrix<f64>),
+        first_order: StateSpace,
         spectrum: spectrum::Spectrum,
         case: CaseNumbers,
     ) -> Numbers {
@@ -265,11 +318,12 @@ impl Numbers {
             stiffness: dense::rows_of(stiffness),
             multipliers,
             accelerations,
-            first_order: StateSpace { state, a: dense::rows_of(a) },
+            first_order,
             eigenvalues: spectrum.eigenvalues,
             stability: spectrum.stability,
             tolerance: spectrum.tolerance,
             first_integrals: spectrum.first_integrals,
+            cyclic_zeros: spectrum.cyclic_zeros,
             case,
         }
     }
@@ -302,7 +356,16 @@ pub enum CaseNumbers {
 /// constraints call for. Errors point at the items or lines at fault: a coordinate that was
 /// eliminated, a position missing, a non-cyclic coordinate given a rate, equations that
 /// depend on time there.
-pub fn linearize(d: &mut Derivation) -> Result<Linearization, Vec<Diagnostic>> {
+///
+/// With `keep_cyclic`, the positions of cyclic coordinates stay in the state (the default of
+/// every front end); without, they leave it as their rates' first integrals do.
+pub fn linearize(d: &mut Derivation, keep_cyclic: bool) -> Result<Linearization, Vec<Diagnostic>> {
+    let mut lin = linearize_case(d)?;
+    lin.keep_cyclic = keep_cyclic;
+    Ok(lin)
+}
+
+fn linearize_case(d: &mut Derivation) -> Result<Linearization, Vec<Diagnostic>> {
     let Some(span) = d.model.linearize.last().map(|l| l.span) else {
         return Err(vec![Diagnostic::error(Span::default(), "no `linearize about` line")
             .with_hint("add `linearize about q = …` naming the reference")]);

@@ -40,6 +40,7 @@ pub(crate) struct Spectrum {
     pub stability: Stability,
     pub tolerance: f64,
     pub first_integrals: usize,
+    pub cyclic_zeros: usize,
 }
 
 impl Spectrum {
@@ -48,7 +49,18 @@ impl Spectrum {
     pub fn of(a: &DMatrix<f64>) -> Option<Spectrum> {
         let eigenvalues = eigenvalues(a)?;
         let (stability, tolerance) = stability(&eigenvalues);
-        Some(Spectrum { eigenvalues, stability, tolerance, first_integrals: 0 })
+        Some(Spectrum { eigenvalues, stability, tolerance, first_integrals: 0, cyclic_zeros: 0 })
+    }
+
+    /// With `count` zeros more, those of cyclic positions kept in the state: the verdict and
+    /// its tolerance stay those of the rest.
+    pub fn with_cyclic_zeros(mut self, count: usize) -> Spectrum {
+        self.eigenvalues.extend(std::iter::repeat_n((0.0, 0.0), count));
+        let tolerance = self.tolerance;
+        let key = |re: f64| if re.abs() <= tolerance { 0.0 } else { re };
+        self.eigenvalues.sort_by(|x, y| key(y.0).total_cmp(&key(x.0)).then(y.1.total_cmp(&x.1)));
+        self.cyclic_zeros = count;
+        self
     }
 
     /// The eigenvalues with A's first integrals deflated first ([`deflated_eigenvalues`]), the
@@ -56,7 +68,7 @@ impl Spectrum {
     pub fn deflated(a: &DMatrix<f64>) -> Option<Spectrum> {
         let (eigenvalues, first_integrals) = deflated_eigenvalues(a)?;
         let (stability, tolerance) = stability_apart(&eigenvalues, first_integrals);
-        Some(Spectrum { eigenvalues, stability, tolerance, first_integrals })
+        Some(Spectrum { eigenvalues, stability, tolerance, first_integrals, cyclic_zeros: 0 })
     }
 }
 
@@ -149,9 +161,11 @@ fn apart_from_first_integrals(
         .collect()
 }
 
-/// The largest real part among the eigenvalues apart from the first integrals' zeros.
+/// The largest real part among the eigenvalues apart from the zeros of the first integrals
+/// and of the cyclic positions kept.
 pub(crate) fn largest_real_part(numbers: &crate::Numbers) -> f64 {
-    apart_from_first_integrals(&numbers.eigenvalues, numbers.first_integrals)
+    let set_aside = numbers.first_integrals + numbers.cyclic_zeros;
+    apart_from_first_integrals(&numbers.eigenvalues, set_aside)
         .iter()
         .map(|z| z.0)
         .fold(f64::NEG_INFINITY, f64::max)

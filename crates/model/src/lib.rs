@@ -34,6 +34,30 @@ pub struct Param {
     pub span: Span,
 }
 
+/// An exogenous signal u(t) (`input F = 0 N`): a symbol of its own in the derivation, which
+/// keeps f(q, q̇, u, t), but not a constant of the scene: `--set` does not take it, and numbers
+/// fill its slot (after the parameters') with `value` when nothing drives it. It stands only
+/// where no time derivative is taken of it (forces, torques, potentials, dissipation), since
+/// its rate is not known.
+#[derive(Clone, Debug)]
+pub struct Input {
+    pub name: String,
+    pub sym: SymId,
+    /// The value when nothing drives it, in terms of the parameters, in SI.
+    pub value: ExprId,
+    pub unit: Option<Unit>,
+    pub span: Span,
+}
+
+/// An `output NAME: EXPR` line: a named measured quantity of the state, the inputs and time,
+/// whose gradients give the rows of C and D.
+#[derive(Clone, Debug)]
+pub struct Output {
+    pub name: String,
+    pub value: ExprId,
+    pub span: Span,
+}
+
 /// A generalized coordinate with its initial value and rate.
 #[derive(Clone, Debug)]
 pub struct Coord {
@@ -227,6 +251,40 @@ pub struct Expect {
     pub rhs_span: Span,
 }
 
+/// A verdict on stability, as an `expect linearized:` line names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExpectedStability {
+    Stable,
+    MarginallyStable,
+    Unstable,
+}
+
+/// What an `expect linearized:` line expects `lagrange linearize` to find at the scene's
+/// reference, at the parameters' values.
+#[derive(Clone, Debug)]
+pub enum LinearExpectation {
+    Stability(ExpectedStability),
+    /// An eigenvalue re + im·i, constants of the parameters.
+    Eigenvalue {
+        re: ExprId,
+        im: ExprId,
+    },
+    /// The value of a parameter (its index among the parameters) where the verdict changes.
+    Critical {
+        parameter: usize,
+        value: ExprId,
+    },
+}
+
+/// An `expect linearized:` line.
+#[derive(Clone, Debug)]
+pub struct LinearExpect {
+    pub expectation: LinearExpectation,
+    /// The line as written.
+    pub text: String,
+    pub span: Span,
+}
+
 /// What a `draw` line draws, in world coordinates: each point has as many components as the
 /// scene has dimensions.
 #[derive(Clone, Debug)]
@@ -329,6 +387,10 @@ pub struct Model {
     pub title: Option<String>,
     pub time: SymId,
     pub params: Vec<Param>,
+    /// The `input` lines' signals, in the order written.
+    pub inputs: Vec<Input>,
+    /// The `output` lines, in the order written.
+    pub outputs: Vec<Output>,
     pub coords: Vec<Coord>,
     pub bodies: Vec<Body>,
     pub constraints: Vec<Constraint>,
@@ -340,6 +402,8 @@ pub struct Model {
     pub lagrangians: Vec<Term>,
     pub shows: Vec<Show>,
     pub expects: Vec<Expect>,
+    /// The `expect linearized:` lines, in the order written.
+    pub linear_expects: Vec<LinearExpect>,
     /// The `draw` lines, in the order written.
     pub drawings: Vec<Drawing>,
     /// The springs and dampers, in the order written.
@@ -356,6 +420,19 @@ pub struct Model {
 impl Model {
     pub fn placeholder(&self, s: SymId) -> Option<Placeholder> {
         self.placeholders.iter().find(|(p, _)| *p == s).map(|(_, k)| *k)
+    }
+
+    /// The symbols numbers fill before the state, each with its value: the parameters in
+    /// declaration order (`None` for one without a value), then the inputs at the values they
+    /// take when nothing drives them.
+    pub fn constants(&self) -> Vec<(SymId, Option<ExprId>)> {
+        let params = self.params.iter().map(|p| (p.sym, p.value));
+        params.chain(self.inputs.iter().map(|u| (u.sym, Some(u.value)))).collect()
+    }
+
+    /// Whether `s` is an input's symbol.
+    pub fn is_input(&self, s: SymId) -> bool {
+        self.inputs.iter().any(|u| u.sym == s)
     }
 
     /// The spatial dimension of the scene: 3 when any body or force is 3D, else 2.

@@ -11,6 +11,7 @@ mod inertia;
 mod loads;
 mod names;
 mod session;
+mod signals;
 mod simulation;
 mod space;
 mod statements;
@@ -21,8 +22,8 @@ use lang::{Diagnostic, Ident, SceneFile, Span, StmtKind};
 pub use self::session::Scope;
 use crate::units::Form;
 use crate::{
-    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Linearize, Link, Load, Model, Param,
-    Placeholder, Show, Simulation, Term, Value,
+    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
+    Link, Load, Model, Output, Param, Placeholder, Show, Simulation, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.
@@ -42,6 +43,7 @@ const MAX_EXPONENT: i64 = 64;
 #[derive(Clone, Debug)]
 enum Binding {
     Param(SymId),
+    Input(SymId),
     Coord(SymId),
     Let(Value),
     Body(usize),
@@ -83,7 +85,9 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         matches!(
             s.kind,
             StmtKind::Show { .. }
+                | StmtKind::Output { .. }
                 | StmtKind::Expect { .. }
+                | StmtKind::ExpectLinearized(_)
                 | StmtKind::Linearize(_)
                 | StmtKind::Draw(_)
         )
@@ -92,7 +96,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         r.enter(i);
         r.statement(stmt);
     }
-    // Show, expect, linearize and draw lines may name anything in the file, wherever they stand.
+    // Show, output, expect, linearize and draw lines may name anything in the file, wherever they stand.
     r.in_outputs = true;
     for (i, stmt) in outputs {
         r.enter(i);
@@ -159,6 +163,8 @@ struct Draft {
     time: SymId,
     title: Option<String>,
     params: Vec<Param>,
+    inputs: Vec<Input>,
+    outputs: Vec<Output>,
     coords: Vec<Coord>,
     bodies: Vec<Body>,
     constraints: Vec<Constraint>,
@@ -170,6 +176,7 @@ struct Draft {
     lagrangians: Vec<Term>,
     shows: Vec<Show>,
     expects: Vec<Expect>,
+    linear_expects: Vec<LinearExpect>,
     drawings: Vec<Drawing>,
     links: Vec<Link>,
     simulation: Simulation,
@@ -193,6 +200,8 @@ impl Draft {
             time,
             title: None,
             params: Vec::new(),
+            inputs: Vec::new(),
+            outputs: Vec::new(),
             coords: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
@@ -204,6 +213,7 @@ impl Draft {
             lagrangians: Vec::new(),
             shows: Vec::new(),
             expects: Vec::new(),
+            linear_expects: Vec::new(),
             drawings: Vec::new(),
             links: Vec::new(),
             simulation: Simulation::default(),
@@ -222,6 +232,8 @@ impl Draft {
             time: model.time,
             title: model.title.take(),
             params: std::mem::take(&mut model.params),
+            inputs: std::mem::take(&mut model.inputs),
+            outputs: std::mem::take(&mut model.outputs),
             coords: std::mem::take(&mut model.coords),
             bodies: std::mem::take(&mut model.bodies),
             constraints: std::mem::take(&mut model.constraints),
@@ -233,6 +245,7 @@ impl Draft {
             lagrangians: std::mem::take(&mut model.lagrangians),
             shows: std::mem::take(&mut model.shows),
             expects: std::mem::take(&mut model.expects),
+            linear_expects: std::mem::take(&mut model.linear_expects),
             drawings: std::mem::take(&mut model.drawings),
             links: std::mem::take(&mut model.links),
             simulation: std::mem::take(&mut model.simulation),
@@ -249,6 +262,8 @@ impl Draft {
             title: self.title,
             time: self.time,
             params: self.params,
+            inputs: self.inputs,
+            outputs: self.outputs,
             coords: self.coords,
             bodies: self.bodies,
             constraints: self.constraints,
@@ -260,6 +275,7 @@ impl Draft {
             lagrangians: self.lagrangians,
             shows: self.shows,
             expects: self.expects,
+            linear_expects: self.linear_expects,
             drawings: self.drawings,
             links: self.links,
             simulation: self.simulation,
@@ -308,6 +324,7 @@ impl<'a> Resolver<'a> {
             };
             match &stmt.kind {
                 StmtKind::Param(ps) => ps.iter().for_each(|p| add(&p.name, "parameter")),
+                StmtKind::Input(us) => us.iter().for_each(|u| add(&u.name, "input")),
                 StmtKind::Coord(cs) => cs.iter().for_each(|c| add(&c.name, "coordinate")),
                 StmtKind::Let { name, .. } => add(name, "name"),
                 StmtKind::Particle { name, .. } | StmtKind::Body { name, .. } => add(name, "body"),
@@ -350,6 +367,15 @@ impl<'a> Resolver<'a> {
     }
 
     fn finish(mut self, checks: Checks) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+        let unused_inputs = self.model.inputs.iter().filter(|u| !self.scope.used.contains(&u.name));
+        let unused_inputs: Vec<_> = unused_inputs.map(|u| (u.span, u.name.clone())).collect();
+        for (span, name) in unused_inputs {
+            self.diagnostics.warnings.push(
+                Diagnostic::warning(span, format!("input `{name}` is never used"))
+                    .with_label("declared here")
+                    .with_hint("use it in a force, torque, potential or dissipation, or remove it"),
+            );
+        }
         for p in &self.model.params {
             if !self.scope.used.contains(&p.name) {
                 self.diagnostics.warnings.push(
@@ -360,6 +386,14 @@ impl<'a> Resolver<'a> {
                         ),
                 );
             }
+        }
+        if let (Some(first), true) =
+            (self.model.linear_expects.first(), self.model.linearize.is_empty())
+        {
+            let d = Diagnostic::error(first.span, "nothing is linearized to expect this of")
+                .with_label("the scene has no `linearize about` line")
+                .with_hint("add `linearize about …` naming the reference");
+            self.diagnostics.errors.push(d);
         }
         if !self.diagnostics.errors.is_empty() {
             let mut errors = self.diagnostics.errors;

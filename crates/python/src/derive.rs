@@ -30,7 +30,7 @@ pub fn parameter_values(d: &Derivation) -> Vec<(String, Option<f64>)> {
 pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, PyDict>> {
     let derived = collect(d);
     // Each coordinate with its rate and acceleration, which every scene may name.
-    let mut named_symbols: Vec<cas::SymId> = d.model.params.iter().map(|p| p.sym).collect();
+    let mut named_symbols: Vec<cas::SymId> = d.model.constants().iter().map(|c| c.0).collect();
     for c in d.model.coords.clone() {
         let rate = d.model.pool.rate(c.sym);
         let acceleration = rate.and_then(|r| d.model.pool.rate(r));

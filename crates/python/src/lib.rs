@@ -130,18 +130,26 @@ impl NativeScene {
     }
 
     /// Small motions about an equilibrium or a steady motion, as `lagrange linearize` finds
-    /// them: exact M, C, K (SymPy matrices), the first-order A and its eigenvalues (NumPy),
-    /// the verdict, and with `sweep` the eigenvalues against one parameter and where the
-    /// verdict changes.
-    #[pyo3(signature = (about = None, set = Vec::new(), sweep = None))]
+    /// them: exact M, C, K (SymPy matrices), the first-order A, B, C, D (NumPy; exactly too
+    /// where the algebra gives them) and the eigenvalues, the verdict, the ranks of
+    /// controllability and observability, and with `sweep` the eigenvalues against one
+    /// parameter and where the verdict changes.
+    #[pyo3(signature = (about = None, set = Vec::new(), sweep = None, keep_cyclic = true))]
     fn linearize<'py>(
         &self,
         py: Python<'py>,
         about: Option<String>,
         set: Vec<String>,
         sweep: Option<String>,
+        keep_cyclic: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let options = engine::linearize::Options { about, set, sweep, no_units: !self.units };
+        let options = engine::linearize::Options {
+            about,
+            set,
+            sweep,
+            no_units: !self.units,
+            drop_cyclic: !keep_cyclic,
+        };
         let l = engine::linearize::linearize(&self.source, &options)
             .map_err(|e| engine_error(&e, &self.path))?;
         let mut s = sympy::ToSympy::new(py)?;
@@ -160,7 +168,41 @@ impl NativeScene {
             }
             numpy.call_method1("array", (list,))
         };
-        out.set_item("A", numpy.call_method1("array", (l.at.first_order.a.clone(),))?)?;
+        let space = &l.at.first_order;
+        // An empty list has no shape for NumPy: give it its columns.
+        let array = |rows: &[Vec<f64>], columns: usize| -> PyResult<Bound<'py, PyAny>> {
+            let a = numpy.call_method1("array", (rows.to_vec(),))?;
+            a.call_method1("reshape", (rows.len(), columns))
+        };
+        let size = space.state.len();
+        out.set_item("A", array(&space.a, size)?)?;
+        out.set_item("B", array(&space.b, l.inputs.len())?)?;
+        out.set_item("C", array(&space.c, size)?)?;
+        out.set_item("D", array(&space.d, l.inputs.len())?)?;
+        out.set_item("inputs", &l.inputs)?;
+        out.set_item("outputs", &l.outputs)?;
+        out.set_item("cyclic_zeros", l.at.cyclic_zeros)?;
+        if let Some(exact) = &l.exact {
+            let exact_matrices = PyDict::new(py);
+            exact_matrices.set_item("A", s.matrix(pool, &exact.a)?)?;
+            exact_matrices.set_item("B", s.matrix(pool, &exact.b)?)?;
+            exact_matrices.set_item("C", s.matrix(pool, &exact.c)?)?;
+            exact_matrices.set_item("D", s.matrix(pool, &exact.d)?)?;
+            out.set_item("exact", exact_matrices)?;
+        }
+        for (key, rank) in
+            [("controllability", space.controllability), ("observability", space.observability)]
+        {
+            let Some(rank) = rank else { continue };
+            let item = PyDict::new(py);
+            item.set_item("rank", rank.rank)?;
+            item.set_item("of", rank.full)?;
+            item.set_item("tolerance", rank.tolerance)?;
+            item.set_item("smallest_counted", rank.smallest_counted)?;
+            item.set_item("largest_left_out", rank.largest_left_out)?;
+            item.set_item("doubtful", rank.doubtful())?;
+            out.set_item(key, item)?;
+        }
         out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
         out.set_item("stability", l.at.stability.name())?;
         out.set_item("tolerance", l.at.tolerance)?;

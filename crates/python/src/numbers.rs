@@ -83,7 +83,10 @@ impl Rhs {
             .lower(&prepared.observation_inputs(), &[])
             .map_err(|e| engine_error(&e, path))?;
         let names = prepared.state_names();
-        let parameter_names = prepared.derivation.model.params.iter().map(|p| p.name.clone());
+        // The slots of `parameters`: the parameters, then the inputs at their values.
+        let model = &prepared.derivation.model;
+        let parameter_names = model.params.iter().map(|p| p.name.clone());
+        let parameter_names = parameter_names.chain(model.inputs.iter().map(|u| u.name.clone()));
         let mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),

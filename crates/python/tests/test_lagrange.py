@@ -306,6 +306,43 @@ def test_linearize_the_pendulum_and_sweep_the_sleeping_top():
         pendulum.linearize(about="theta = 1")
 
 
+def test_the_cart_pole_state_space_for_a_controller():
+    scene = lagrange.load(EXAMPLES / "classics" / "inverted_pendulum_on_cart.lag")
+    lin = scene.linearize()
+    assert lin.state == ["x", "theta", "x'", "theta'"]
+    assert lin.inputs == ["F"] and lin.outputs == ["position", "tip"]
+    M, m, L, g = sp.symbols("M m L g")
+    # The hand derivation, exactly: det M = M·m·L².
+    hand_a = sp.Matrix(
+        [[0, 0, 1, 0], [0, 0, 0, 1], [0, -m * g / M, 0, 0], [0, (M + m) * g / (M * L), 0, 0]]
+    )
+    assert lin.exact
+    assert sp.simplify(lin.A_sym - hand_a) == sp.zeros(4, 4)
+    assert sp.simplify(lin.B_sym - sp.Matrix([0, 0, 1 / M, -1 / (M * L)])) == sp.zeros(4, 1)
+    assert lin.C_sym == sp.Matrix([[1, 0, 0, 0], [1, L, 0, 0]])
+    values = {M: 2, m: 1, L: 1, g: 9.81}
+    assert np.allclose(lin.A, np.array(hand_a.subs(values), dtype=float), rtol=1e-14)
+    assert np.allclose(lin.B[:, 0], [0, 0, 0.5, -0.5], rtol=1e-14)
+    assert lin.controllability["rank"] == 4 and lin.observability["rank"] == 4
+    # The dict it always was, and the cyclic position left out on request.
+    assert lin["stability"] == "unstable" and lin["cyclic_zeros"] == 1
+    dropped = scene.linearize(keep_cyclic=False, outputs=["tip"])
+    assert dropped.state == ["theta", "x'", "theta'"]
+    assert dropped.C.shape == (1, 3) and dropped.D.shape == (1, 1)
+    with pytest.raises(ValueError) as caught:
+        scene.linearize(inputs=["G"])
+    assert "no input 'G'" in str(caught.value)
+    try:
+        import control
+    except ImportError:
+        with pytest.raises(ImportError):
+            lin.to_control()
+    else:
+        ss = lin.to_control()
+        assert isinstance(ss, control.StateSpace)
+        assert np.allclose(ss.A, lin.A) and np.allclose(ss.B, lin.B)
+
+
 def test_settings_are_named_as_python_callers_write_them():
     scene = lagrange.load(EXAMPLES / "classics" / "simple_pendulum.lag")
     with pytest.raises(ValueError) as caught:

@@ -21,10 +21,11 @@ const ON_CONSTRAINT: f64 = 1e-11;
 /// A singular value this small relative to the largest is a lost rank.
 const RANK_TOLERANCE: f64 = 1e-8;
 
-/// The symbols a random state gives values to: parameters, time, coordinates and rates.
+/// The symbols a random state gives values to: parameters and inputs, time, coordinates and
+/// rates.
 pub(crate) fn state_symbols(d: &Derivation) -> Vec<SymId> {
     let pool = &d.model.pool;
-    let mut syms: Vec<SymId> = d.model.params.iter().map(|p| p.sym).collect();
+    let mut syms: Vec<SymId> = d.model.constants().iter().map(|(s, _)| *s).collect();
     syms.push(d.model.time);
     syms.extend(d.coords.iter().copied());
     syms.extend(d.rates.iter().copied());

@@ -191,7 +191,7 @@ fn sample(d: &mut Derivation, residual: ExprId, solve: bool) -> Verdict {
 /// solved numerically and the residual evaluated there.
 fn sample_at_start(d: &mut Derivation, residual: ExprId, unknowns: usize) -> Verdict {
     let mut rng = ChaCha8Rng::seed_from_u64(0x5747_a247);
-    let params: Vec<SymId> = d.model.params.iter().map(|p| p.sym).collect();
+    let params: Vec<SymId> = d.model.constants().iter().map(|(s, _)| *s).collect();
     let mut solver = StartSolver::new(d);
     let mut measure = ScaledEvaluator::new(&d.model.pool, &[residual]);
     // A start that holds only at the scene's values is tried there alone: elsewhere it would

@@ -18,20 +18,21 @@ pub struct NumericStart {
     pub digits: u32,
 }
 
-/// The scene's parameter values, as numbers; `Err` names the parameters without one.
+/// The scene's parameter values (then its inputs' when undriven), as numbers; `Err` names the parameters without one.
 pub fn parameter_values(d: &Derivation) -> Result<Vec<(SymId, f64)>, Vec<String>> {
     let pool = &d.model.pool;
     let mut values = vec![f64::NAN; pool.symbol_count()];
     let mut out = Vec::new();
     let mut missing = Vec::new();
-    for p in &d.model.params {
-        match p.value {
+    // The inputs follow, at their values when nothing drives them.
+    for (sym, value) in d.model.constants() {
+        match value {
             Some(v) => {
                 let x = numeric::eval(pool, v, &values);
-                values[p.sym.index()] = x;
-                out.push((p.sym, x));
+                values[sym.index()] = x;
+                out.push((sym, x));
             }
-            None => missing.push(p.name.clone()),
+            None => missing.push(pool.symbol(sym).name.clone()),
         }
     }
     if missing.is_empty() {

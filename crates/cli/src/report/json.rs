@@ -8,10 +8,12 @@ pub fn json(d: &mut Derivation) -> String {
 }
 
 /// The JSON report's keys, in the order it prints them.
-const JSON_KEYS: [&str; 16] = [
+const JSON_KEYS: [&str; 18] = [
     "scene",
     "coordinates",
     "parameters",
+    "inputs",
+    "outputs",
     "constraints",
     "kinetic_energy",
     "potential_energy",
@@ -52,6 +54,17 @@ impl Renderer for JsonReport<'_> {
         match section {
             Section::Title(title) => set("scene", json!(title)),
             Section::Parameters(params) => set("parameters", json_parameters(pool, params)),
+            // Only a scene with signals has these keys, so that others read as before.
+            Section::Signals { inputs, outputs } => {
+                if !inputs.is_empty() {
+                    set("inputs", json_inputs(pool, inputs));
+                }
+                if !outputs.is_empty() {
+                    let outputs =
+                        outputs.iter().map(|o| (o.name.clone(), json!(pool.print(o.value, A))));
+                    set("outputs", Json::Object(outputs.collect()));
+                }
+            }
             Section::Coordinates { generalized, .. } => {
                 set("coordinates", json!(generalized.iter().map(|s| name(*s)).collect::<Vec<_>>()))
             }
@@ -146,6 +159,18 @@ fn json_parameters(pool: &Pool, params: &[model::Param]) -> Json {
         );
     }
     Json::Object(out)
+}
+
+fn json_inputs(pool: &Pool, inputs: &[model::Input]) -> Json {
+    let inputs = inputs.iter().map(|u| {
+        let numeric = Some(numeric::eval(pool, u.value, &[])).filter(|x| x.is_finite());
+        let unit = u.unit.as_ref().map(|u| unit_text(u, A));
+        (
+            u.name.clone(),
+            json!({ "value": pool.print(u.value, A), "numeric": numeric, "unit": unit }),
+        )
+    });
+    Json::Object(inputs.collect())
 }
 
 /// Each constraint with how it was treated.

@@ -25,6 +25,7 @@ impl Renderer for Latex<'_> {
             Section::Title(Some(title)) => self.out.push(format!("% {title}")),
             Section::Title(None)
             | Section::Parameters(_)
+            | Section::Signals { .. }
             | Section::Coordinates { .. }
             | Section::Constraints { .. }
             | Section::Model => {}

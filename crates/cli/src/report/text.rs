@@ -27,6 +27,7 @@ impl Renderer for Text<'_> {
             }
             Section::Title(None) | Section::Model => {}
             Section::Parameters(params) => self.parameters(params),
+            Section::Signals { inputs, outputs } => self.signals(inputs, outputs),
             Section::Coordinates { declared, .. } => self.coordinates(declared),
             Section::Constraints { constraints, sides, left_out } => {
                 self.constraints(constraints, sides, left_out)
@@ -83,6 +84,25 @@ impl Text<'_> {
                 line.push_str(&format!(" {}", unit_text(unit, U)));
             }
             self.out.push(line);
+        }
+    }
+
+    fn signals(&mut self, inputs: &[model::Input], outputs: &[model::Output]) {
+        if !inputs.is_empty() {
+            self.out.push("Inputs (each at its value when nothing drives it)".into());
+        }
+        for u in inputs {
+            let mut line = format!("  {} = {}", self.sym(u.sym), value_text(self.pool, u.value, U));
+            if let Some(unit) = &u.unit {
+                line.push_str(&format!(" {}", unit_text(unit, U)));
+            }
+            self.out.push(line);
+        }
+        if !outputs.is_empty() {
+            self.out.push("Outputs".into());
+        }
+        for o in outputs {
+            self.out.push(format!("  {} = {}", o.name, self.pool.print(o.value, U)));
         }
     }
 

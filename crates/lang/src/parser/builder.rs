@@ -35,6 +35,9 @@ fn is_noise(rule: Rule) -> bool {
                 | kw_from
                 | kw_to
                 | kw_radius
+                | kw_linearized
+                | kw_eigenvalue
+                | kw_critical
                 | kw_at
                 | kw_start
                 | eq
@@ -97,6 +100,7 @@ impl Builder<'_> {
     fn stmt(&mut self, pair: Pair<'_, Rule>) -> Built<StmtKind> {
         let rule = pair.as_rule();
         let at_start = pair.clone().into_inner().any(|p| p.as_rule() == Rule::at_start);
+        let linearized = pair.clone().into_inner().any(|p| p.as_rule() == Rule::kw_linearized);
         let mut items = parts(pair).filter(|p| p.as_rule() != Rule::at_start);
         let mut next = || next_part(&mut items);
         Ok(match rule {
@@ -105,12 +109,20 @@ impl Builder<'_> {
                 let text = parts(string).next().map_or("", |p| p.as_str());
                 StmtKind::Scene { title: unescape(text) }
             }
-            Rule::param_stmt => {
+            // An `input` line's items are written as a `param` line's.
+            Rule::param_stmt | Rule::input_stmt => {
                 let mut decls = Vec::new();
                 while let Ok(item) = next() {
                     decls.push(self.param_item(item)?);
                 }
-                StmtKind::Param(decls)
+                match rule {
+                    Rule::param_stmt => StmtKind::Param(decls),
+                    _ => StmtKind::Input(decls),
+                }
+            }
+            Rule::output_stmt => {
+                let name = self.ident(&next()?);
+                StmtKind::Output { name, value: self.expr(next()?)? }
             }
             Rule::let_stmt => {
                 let name = self.ident(&next()?);
@@ -144,6 +156,10 @@ impl Builder<'_> {
                     items.push(self.expr(item)?);
                 }
                 StmtKind::Show { at_start, items }
+            }
+            Rule::expect_stmt if linearized => {
+                let expectation = next()?;
+                StmtKind::ExpectLinearized(self.linear_expectation(expectation)?)
             }
             Rule::expect_stmt => {
                 let lhs = self.expr(next()?)?;
@@ -277,6 +293,30 @@ impl Builder<'_> {
             _ => None,
         };
         shape.ok_or_else(|| Diagnostic::error(Span::default(), "internal error: draw"))
+    }
+
+    fn linear_expectation(&self, pair: Pair<'_, Rule>) -> Built<LinearExpectation> {
+        let inner = parts(pair).next();
+        let missing = || Diagnostic::error(Span::default(), "internal error: expect linearized");
+        let inner = inner.ok_or_else(missing)?;
+        match inner.as_rule() {
+            Rule::verdict_word => {
+                let word = inner.as_str().split_whitespace().collect::<Vec<_>>().join(" ");
+                Ok(LinearExpectation::Verdict { word, span: self.span(&inner) })
+            }
+            Rule::eigenvalue_item => {
+                let value = parts(inner).next().ok_or_else(missing)?;
+                Ok(LinearExpectation::Eigenvalue(self.expr(value)?))
+            }
+            _ => {
+                let mut items = parts(inner);
+                let (Some(parameter), Some(value)) = (items.next(), items.next()) else {
+                    return Err(missing());
+                };
+                let parameter = self.ident(&parameter);
+                Ok(LinearExpectation::Critical { parameter, value: self.expr(value)? })
+            }
+        }
     }
 
     fn param_item(&self, item: Pair<'_, Rule>) -> Built<ParamDecl> {

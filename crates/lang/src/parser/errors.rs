@@ -51,10 +51,10 @@ fn leading_token(text: &str) -> &str {
 fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     use Rule::*;
     Some(match rule {
-        kw_scene | kw_param | kw_let | kw_coord | kw_particle | kw_body | kw_constraint
-        | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring | kw_damper
-        | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate | kw_linearize
-        | kw_draw => (0, "a statement"),
+        kw_scene | kw_param | kw_input | kw_output | kw_let | kw_coord | kw_particle | kw_body
+        | kw_constraint | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring
+        | kw_damper | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate
+        | kw_linearize | kw_draw => (0, "a statement"),
         kw_line | kw_circle | kw_polyline => (2, "a shape (`line`, `circle` or `polyline`)"),
         expr | number | call | func | member | name | paren | matrix | matrix_row | neg_op => {
             (1, "an expression")
@@ -68,6 +68,11 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         string_text => (3, "the text of the title"),
         kw_along => (4, "`along`"),
         kw_about => (4, "`about`"),
+        kw_linearized => (4, "`linearized:`"),
+        linear_expectation | verdict_word | eigenvalue_item | critical_item | kw_eigenvalue
+        | kw_critical => {
+            (2, "`stable`, `unstable`, `marginally stable`, `eigenvalue = …` or `critical p = …`")
+        }
         kw_on => (4, "`on`"),
         kw_between => (4, "`between`"),
         kw_and => (4, "`and`"),
@@ -102,6 +107,8 @@ fn is_statement_start(rule: Rule) -> bool {
             rule,
             file | scene_stmt
                 | param_stmt
+                | input_stmt
+                | output_stmt
                 | let_stmt
                 | coord_stmt
                 | particle_stmt
@@ -127,6 +134,8 @@ pub(super) fn is_statement_keyword(rule: Rule) -> bool {
         rule,
         kw_scene
             | kw_param
+            | kw_input
+            | kw_output
             | kw_let
             | kw_coord
             | kw_particle

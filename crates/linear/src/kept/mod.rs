@@ -15,7 +15,8 @@ use mechanics::Derivation;
 use model::ConstraintKind;
 
 use crate::reference::{self, Items, Placed};
-use crate::{Case, LinearConstraint, Linearization};
+use crate::signals;
+use crate::{Case, LinearConstraint, Linearization, Signals};
 
 pub(crate) use reduce::{at, Blocks};
 
@@ -76,8 +77,9 @@ pub(crate) fn linearize(
         dependent_rates.iter().filter_map(|r| d.rates.iter().position(|x| x == r)).collect();
     let cyclic = reference::cyclic_flags(d);
     let pool = &mut d.model.pool;
-    let (positions, map, mut errors) =
+    let (positions, mut map, mut errors) =
         substitution(pool, (&d.coords, &d.rates), items, &dependent, &cyclic);
+    map.extend(signals::reference_inputs(&d.model.inputs));
     let missing: Vec<SymId> =
         (0..n).filter(|&i| !cyclic[i] && positions[i].is_none()).map(|i| d.coords[i]).collect();
     errors.extend(reference::missing_positions(pool, &missing, span, "a cyclic"));
@@ -137,10 +139,15 @@ pub(crate) fn linearize(
     let all = reference::all_of(matrices, &exact.residual, &constraints, &more);
     reference::refuse_time_dependence(pool, &all, d.model.time, span)?;
 
+    let inputs: Vec<SymId> = d.model.inputs.iter().map(|u| u.sym).collect();
+    let input_forces = signals::input_columns(pool, &d.forcing, &inputs, &mut at);
+    let outputs = signals::output_rows(d, &mut at, None)?;
+    let signals = Signals { inputs, input_forces, outputs };
+
     let placed = Placed { cyclic, positions, rates };
     let case = Case::Kept(Kept { dependent, constraints, rows: velocity_rows });
     // The multipliers' values, and so the residual's, are for numbers to find.
-    Ok(Linearization::new(d.coords.clone(), placed, exact, false, case, span))
+    Ok(Linearization::new(d.coords.clone(), placed, exact, false, (case, signals), span))
 }
 
 /// The reference's positions, the substitution its items make (the rates not given at 0 but
@@ -210,7 +217,7 @@ linearize about theta = 0, x' = v, u = 0, w = -L
     #[test]
     fn each_kept_constraint_brings_its_row_at_the_velocity_level() {
         let mut d = derived(TWO);
-        let lin = crate::linearize(&mut d).expect("linearizes");
+        let lin = crate::linearize(&mut d, true).expect("linearizes");
         let kept = lin.kept().expect("kept together");
         let kinds: Vec<ConstraintKind> = kept.constraints.iter().map(|c| c.kind).collect();
         assert_eq!(kinds, [ConstraintKind::Velocity, ConstraintKind::Position]);

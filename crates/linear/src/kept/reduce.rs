@@ -22,8 +22,8 @@ use crate::dense::{
 use crate::evaluation::Evaluation;
 use crate::fault::{Fault, EQUILIBRIUM_TOLERANCE};
 use crate::layout::{self, Block, ConstraintRows, Outputs};
-use crate::spectrum::Spectrum;
-use crate::{CaseNumbers, Component, Linearization, Numbers};
+use crate::signals::{self, SignalBlocks};
+use crate::{CaseNumbers, Component, FirstOrder as FirstOrderSpace, Linearization, Numbers};
 
 /// Where the kept case's matrices sit among its program's outputs; the inputs after the
 /// parameters are the multipliers, then the dependent rates.
@@ -35,6 +35,7 @@ pub(crate) struct Blocks {
     /// Each velocity constraint's B row (by the constraint's index; `None` for a position
     /// constraint).
     positions: Vec<Option<Block>>,
+    signals: SignalBlocks,
 }
 
 impl Blocks {
@@ -50,7 +51,8 @@ impl Blocks {
             positions.push((c.kind == ConstraintKind::Velocity).then_some(b));
         }
         let constraints = ConstraintRows { jacobian, bias };
-        Blocks { equations, constraints, rates, positions }
+        let signals = SignalBlocks::place(outputs, lin);
+        Blocks { equations, constraints, rates, positions, signals }
     }
 
     /// B of the velocity constraints, one row each, n columns.
@@ -113,13 +115,34 @@ pub(crate) fn at(
     let bn = &r.velocity_positions * &basis;
     let z_preferred = |c: usize| preferred(z[c]);
     let rates_along = along_rates(&an, &bn, &z_preferred)?;
-    let first = first_order(&r, &basis, &rates_along)?;
-    let spectrum =
-        Spectrum::deflated(&first.a).ok_or(Fault::NotFinite("the first-order matrix A"))?;
+    let out: Vec<f64> = r.multipliers.iter().chain(&rates).copied().collect();
+    let out = e.outputs(parameters, &out);
+    let forces = blocks.signals.forces(&out);
+    let first = first_order(&r, &basis, &rates_along, &forces)?;
     let positions: Vec<usize> = first.kept_z.iter().map(|&c| z[c]).collect();
     let independent: Vec<usize> = rates_along.independent.iter().map(|&c| z[c]).collect();
     let state = positions.iter().map(|&i| Component::Position(i));
     let state = state.chain(independent.iter().map(|&i| Component::Rate(i))).collect();
+    // δq = N·δz of the positions kept; δq̇ = N·(S·δz + T·δu).
+    let (np, nu) = (first.kept_z.len(), independent.len());
+    let mut at_positions = DMatrix::zeros(n, np + nu);
+    let mut at_rates = DMatrix::zeros(n, np + nu);
+    for (col, &c) in first.kept_z.iter().enumerate() {
+        at_positions.column_mut(col).copy_from(&basis.column(c));
+        at_rates.column_mut(col).copy_from(&(&basis * rates_along.s.column(c)));
+    }
+    for col in 0..nu {
+        at_rates.column_mut(np + col).copy_from(&(&basis * rates_along.t.column(col)));
+    }
+    let reduced = FirstOrderSpace {
+        state,
+        a: first.a,
+        b: first.b,
+        positions: at_positions,
+        rates: at_rates,
+        cyclic: Vec::new(),
+    };
+    let (space, spectrum) = signals::complete(reduced, &blocks.signals, &out, true)?;
     let case = CaseNumbers::Kept(Reduced {
         dependent_rates: rates,
         kinematics: rows_of(&first.kinematics),
@@ -128,7 +151,7 @@ pub(crate) fn at(
     });
     let matrices = [&first.mass, &first.damping, &first.stiffness];
     let solved = (r.multipliers, r.accelerations);
-    Ok(Numbers::new(parameters, matrices, solved, (state, &first.a), spectrum, case))
+    Ok(Numbers::new(parameters, matrices, solved, space, spectrum, case))
 }
 
 /// The dependent rates: J[:, dependent]·r = −(the rows with them at 0).
@@ -287,6 +310,7 @@ struct FirstOrder {
     stiffness: DMatrix<f64>,
     kinematics: DMatrix<f64>,
     a: DMatrix<f64>,
+    b: DMatrix<f64>,
     /// The z whose positions stay in the state.
     kept_z: Vec<usize>,
 }
@@ -295,6 +319,7 @@ fn first_order(
     r: &AtReference,
     basis: &DMatrix<f64>,
     along: &AlongRates,
+    input_forces: &DMatrix<f64>,
 ) -> Result<FirstOrder, Fault> {
     let (t, s) = (&along.t, &along.s);
     let (nz, nu) = (t.nrows(), t.ncols());
@@ -348,5 +373,17 @@ fn first_order(
     let mut a = DMatrix::zeros(size, size);
     a.view_mut((0, 0), (np, size)).copy_from(&kinematics);
     a.view_mut((np, 0), (nu, size)).copy_from(&(-solve(&lu, &forces)?));
-    Ok(FirstOrder { mass: m_reduced, damping: c_reduced, stiffness: k_kept, kinematics, a, kept_z })
+    // The inputs' forces along Q, where the multipliers cancel: M̃·δu̇ + … = Qᵀ·Q_u·δu.
+    let mut b = DMatrix::zeros(size, input_forces.ncols());
+    let along_q = q.transpose() * input_forces;
+    b.view_mut((np, 0), (nu, input_forces.ncols())).copy_from(&solve(&lu, &along_q)?);
+    Ok(FirstOrder {
+        mass: m_reduced,
+        damping: c_reduced,
+        stiffness: k_kept,
+        kinematics,
+        a,
+        b,
+        kept_z,
+    })
 }

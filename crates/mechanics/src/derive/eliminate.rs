@@ -195,9 +195,9 @@ impl Derivation {
     pub(super) fn warn_about_overridden_initial_values(&mut self) {
         let mut state = self.initial_state();
         // Compare with the parameters' values, as the numbers will see them.
-        for p in &self.model.params {
-            if let Some(v) = p.value {
-                state.insert(p.sym, v);
+        for (sym, value) in self.model.constants() {
+            if let Some(v) = value {
+                state.insert(sym, v);
             }
         }
         for e in self.eliminated.clone() {

@@ -15,13 +15,14 @@ use super::Derivation;
 
 impl Derivation {
     /// Each parameter's value as numbers only (earlier parameters' values substituted),
-    /// exactly; parameters without a value are left out.
+    /// exactly, and each input's when nothing drives it; parameters without a value are left
+    /// out.
     pub fn parameter_values(&mut self) -> HashMap<SymId, ExprId> {
         let mut values: HashMap<SymId, ExprId> = HashMap::new();
-        for p in self.model.params.clone() {
-            let Some(v) = p.value else { continue };
+        for (sym, value) in self.model.constants() {
+            let Some(v) = value else { continue };
             let v = self.model.pool.subst(v, &values);
-            values.insert(p.sym, v);
+            values.insert(sym, v);
         }
         values
     }

@@ -25,6 +25,8 @@ pub(super) struct Role {
     /// Whether deriving the equations of motion differentiates it (by the coordinates or
     /// the rates), so that a kink in it becomes a jump in a force.
     pub differentiated: bool,
+    /// Whether an input may appear in it: only where no time derivative of it is taken.
+    pub inputs: bool,
 }
 
 pub(super) const POSITION: Role = Role {
@@ -33,6 +35,7 @@ pub(super) const POSITION: Role = Role {
     hint: "write where the body is as a function of the coordinates (and `t`); its velocity \
            follows by differentiation",
     differentiated: true,
+    inputs: false,
 };
 pub(super) const ANGLE: Role = Role {
     what: "an angle",
@@ -40,18 +43,21 @@ pub(super) const ANGLE: Role = Role {
     hint: "write the body's orientation as a function of the coordinates (and `t`); its angular \
            velocity follows by differentiation",
     differentiated: true,
+    inputs: false,
 };
 pub(super) const MASS: Role = Role {
     what: "a mass",
     max_order: 0,
     hint: "a mass is a constant, or a function of the coordinates and `t`",
     differentiated: true,
+    inputs: false,
 };
 pub(super) const INERTIA: Role = Role {
     what: "an inertia",
     max_order: 0,
     hint: "an inertia is a constant, or a function of the coordinates and `t`",
     differentiated: true,
+    inputs: false,
 };
 pub(super) const POTENTIAL: Role = Role {
     what: "a potential",
@@ -59,12 +65,14 @@ pub(super) const POTENTIAL: Role = Role {
     hint: "a potential depends on the configuration only; put terms with rates in `lagrangian` \
            (added to T − V) or, for friction, in `dissipation`",
     differentiated: true,
+    inputs: true,
 };
 pub(super) const GRAVITY: Role = Role {
     what: "gravity",
     max_order: 0,
     hint: "gravity's strength and direction may depend on the coordinates and `t` only",
     differentiated: true,
+    inputs: true,
 };
 pub(super) const SPRING: Role = Role {
     what: "a spring",
@@ -72,12 +80,14 @@ pub(super) const SPRING: Role = Role {
     hint: "a spring's ends, stiffness and rest length may depend on the coordinates and `t` \
            only; for a force that grows with speed, use a `damper`",
     differentiated: true,
+    inputs: true,
 };
 pub(super) const ATTACHMENT: Role = Role {
     what: "an attachment point",
     max_order: 0,
     hint: "attach to a body by name, or to a point given as a function of the coordinates",
     differentiated: true,
+    inputs: false,
 };
 pub(super) const DAMPER: Role = Role {
     what: "a damper",
@@ -85,6 +95,7 @@ pub(super) const DAMPER: Role = Role {
     hint: "the equations of motion are solved for the accelerations, so a damping coefficient \
            may depend on the coordinates and rates, not on accelerations",
     differentiated: false,
+    inputs: true,
 };
 pub(super) const FORCE: Role = Role {
     what: "a force",
@@ -92,6 +103,7 @@ pub(super) const FORCE: Role = Role {
     hint: "the equations of motion are solved for the accelerations, so a force may depend on \
            the coordinates, rates and `t`, not on accelerations",
     differentiated: false,
+    inputs: true,
 };
 pub(super) const TORQUE: Role = Role {
     what: "a torque",
@@ -99,12 +111,14 @@ pub(super) const TORQUE: Role = Role {
     hint: "the equations of motion are solved for the accelerations, so a torque may depend on \
            the coordinates, rates and `t`, not on accelerations",
     differentiated: false,
+    inputs: true,
 };
 pub(super) const DISSIPATION: Role = Role {
     what: "a dissipation function",
     max_order: 1,
     hint: "Rayleigh's dissipation function depends on the coordinates and rates",
     differentiated: true,
+    inputs: true,
 };
 pub(super) const LAGRANGIAN: Role = Role {
     what: "a Lagrangian",
@@ -112,6 +126,7 @@ pub(super) const LAGRANGIAN: Role = Role {
     hint: "lagrange derives second-order equations from L(q, q', t); a Lagrangian with \
            accelerations would give higher-order ones",
     differentiated: true,
+    inputs: false,
 };
 
 pub(super) const DRAWING: Role = Role {
@@ -120,12 +135,22 @@ pub(super) const DRAWING: Role = Role {
     hint: "a drawing shows the state: its points may use the coordinates, their rates and `t`, \
            not accelerations",
     differentiated: false,
+    inputs: true,
+};
+
+pub(super) const OUTPUT: Role = Role {
+    what: "an output",
+    max_order: 1,
+    hint: "an output is a quantity measured from the state: it may use the coordinates, their \
+           rates, the inputs and `t`, not accelerations or reactions",
+    differentiated: false,
+    inputs: true,
 };
 
 /// Not a role an expression is refused in, but one whose kinks matter: a constraint's
 /// gradient is its derivative.
 pub(super) const CONSTRAINT: Role =
-    Role { what: "a constraint", max_order: 1, hint: "", differentiated: true };
+    Role { what: "a constraint", max_order: 1, hint: "", differentiated: true, inputs: false };
 
 /// The functions whose derivative jumps (`abs`, `min`, `max`) or is a spike (`sign`).
 const NOT_SMOOTH: [&str; 4] = ["abs", "sign", "min", "max"];
@@ -184,7 +209,7 @@ fn approx(v: f64) -> String {
 }
 
 /// The sub-expressions an expression is built from.
-fn children(e: &Expr) -> Vec<&Expr> {
+pub(super) fn children(e: &Expr) -> Vec<&Expr> {
     match &e.kind {
         ExprKind::Number(_) | ExprKind::Name { .. } | ExprKind::Member { .. } => Vec::new(),
         ExprKind::Neg(inner) => vec![inner],
@@ -223,7 +248,7 @@ impl Resolver<'_> {
 
     /// Resolves `e` again without reporting anything, to look inside an expression that
     /// resolved once already.
-    fn value_quietly(&mut self, e: &Expr) -> Option<Value> {
+    pub(super) fn value_quietly(&mut self, e: &Expr) -> Option<Value> {
         let (errors, facts) = (self.diagnostics.errors.len(), self.scope.units.mark());
         let v = self.value(e);
         self.diagnostics.errors.truncate(errors);
@@ -246,6 +271,9 @@ impl Resolver<'_> {
     /// Whether `value` (of the expression `e`) stays within the derivatives its role allows;
     /// reports the part that does not.
     pub(super) fn within_role(&mut self, e: &Expr, value: &Value, role: &Role) -> bool {
+        if !self.without_inputs(e, value, role) {
+            return false;
+        }
         let Some((order, _)) = self.highest_derivative(value) else { return true };
         if order <= role.max_order {
             return true;
@@ -446,12 +474,14 @@ impl Resolver<'_> {
     /// algebra; so each contributes ∂e/∂p times a symbol for its rate, which the derivation
     /// replaces by the derivative of what p turns out to be.
     pub(super) fn total_rate(&mut self, e: ExprId, span: Span) -> ExprId {
+        self.refuse_input_rate(e, span);
         let mut parts = vec![self.model.pool.time_derivative(e)];
         let free = self.model.pool.free_symbols(e);
         for p in free.iter() {
             if self.placeholder_order(*p).is_none() {
                 continue;
             }
+            self.refuse_placeholder_rate_with_inputs(*p, span);
             let rate = self.placeholder_rate(*p, span);
             let partial = self.model.pool.diff(e, *p);
             let rate = self.model.pool.sym(rate);

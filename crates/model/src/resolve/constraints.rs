@@ -11,6 +11,11 @@ impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
         let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+        let constant_inputs = self.without_inputs(lhs, &l, &checks::CONSTRAINT)
+            & self.without_inputs(rhs, &r, &checks::CONSTRAINT);
+        if !constant_inputs {
+            return;
+        }
         self.warn_kinks(lhs, &l, &checks::CONSTRAINT);
         self.warn_kinks(rhs, &r, &checks::CONSTRAINT);
         // A vector constraint is one scalar constraint per component (`roll.x`, `roll.y`, …).

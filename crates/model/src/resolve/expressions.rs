@@ -96,6 +96,17 @@ impl Resolver<'_> {
             .free_symbols(v)
             .iter()
             .any(|s| !matches!(self.model.pool.symbol(*s).kind, SymbolKind::Param));
+        if let (false, Some(input)) = (moving, self.input_in(&Value::Scalar(v))) {
+            let name = self.model.pool.symbol(input).name.clone();
+            self.error(
+                Diagnostic::error(e.span, "this value must be a constant")
+                    .with_label(format!("depends on the input `{name}`"))
+                    .with_hint(
+                        "an input varies in time; constants may use numbers and parameters only",
+                    ),
+            );
+            return None;
+        }
         if moving {
             self.error(
                 Diagnostic::error(e.span, "this value must be a constant")

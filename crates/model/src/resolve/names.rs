@@ -59,6 +59,22 @@ impl Resolver<'_> {
                     }
                     Value::Scalar(self.model.pool.sym(s))
                 }
+                Some(Binding::Input(s)) => {
+                    if primes > 0 {
+                        self.error(
+                            Diagnostic::error(
+                                span,
+                                format!("`{raw}` is an input; its rate is not known"),
+                            )
+                            .with_label("the rate of an input")
+                            .with_hint(
+                                "an input is given as a value in time, not with its derivatives",
+                            ),
+                        );
+                        return None;
+                    }
+                    Value::Scalar(self.model.pool.sym(s))
+                }
                 // KE stands for an expression only derived later; its rates are symbols of
                 // their own (see `total_rate`), taken below as a `let` name's are.
                 Some(Binding::Quantity(s)) => Value::Scalar(self.model.pool.sym(s)),

@@ -18,6 +18,8 @@ impl Resolver<'_> {
         match &stmt.kind {
             StmtKind::Scene { title } => self.model.title = Some(title.clone()),
             StmtKind::Param(decls) => self.param_statement(decls),
+            StmtKind::Input(decls) => self.input_statement(decls),
+            StmtKind::Output { name, value } => self.output_statement(name, value),
             StmtKind::Let { name, value } => self.let_statement(name, value),
             StmtKind::Coord(decls) => self.coord_statement(decls),
             StmtKind::Particle { name, props } => {
@@ -48,6 +50,9 @@ impl Resolver<'_> {
             StmtKind::Show { at_start, items } => self.show_statement(*at_start, items),
             StmtKind::Expect { at_start, lhs, rhs } => {
                 self.expect_statement(*at_start, lhs, rhs, stmt.span)
+            }
+            StmtKind::ExpectLinearized(expectation) => {
+                self.expect_linearized(expectation, stmt.span)
             }
             StmtKind::Simulate(settings) => self.simulate_statement(settings),
             StmtKind::Linearize(items) => self.linearize(items, stmt.span),
@@ -381,6 +386,7 @@ impl Resolver<'_> {
                 Some(other) => {
                     let what = match other {
                         Binding::Param(_) => "a parameter",
+                        Binding::Input(_) => "an input",
                         Binding::Let(_) => "a `let` name",
                         Binding::Body(_) => "a body",
                         Binding::Constraint(_) => "a constraint",

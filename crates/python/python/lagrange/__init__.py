@@ -40,6 +40,7 @@ __all__ = [
     "Derivation",
     "Constraint",
     "Expectation",
+    "Linearization",
     "Results",
     "Rhs",
     "MassMatrix",
@@ -272,7 +273,9 @@ class Scene:
             raise NumericError(results.fault, results=results)
         return results
 
-    def linearize(self, about=None, set=None, sweep=None):
+    def linearize(
+        self, about=None, set=None, sweep=None, inputs=None, outputs=None, keep_cyclic=True
+    ):
         """Small motions about an equilibrium or a steady motion, as ``lagrange linearize``.
 
         - ``about``: ``"theta=0, phi'=2"`` (or a dict of name to value), extending or
@@ -280,17 +283,23 @@ class Scene:
         - ``set``: a dict of parameter name to value, or ``"name=value"`` texts as for
           :meth:`simulate`;
         - ``sweep``: ``"w=0:100:201"`` or ``{"w": (0, 100, 201)}``, n values of one
-          parameter from a to b.
+          parameter from a to b;
+        - ``inputs``, ``outputs``: the names of the scene's ``input`` and ``output`` lines to
+          keep, in that order (the columns of B and D, the rows of C and D); all by default;
+        - ``keep_cyclic``: whether the positions of cyclic coordinates stay in the state
+          (the default: the state is (q, q') of every coordinate).
 
-        Returns a dict: ``state`` (the names of u in u' = A·u), ``M``, ``C``, ``K`` (exact
-        SymPy matrices of M·δq'' + C·δq' + K·δq = 0), ``A`` and ``eigenvalues`` (NumPy, at the
-        parameters' values), ``stability`` ("stable", "marginally stable" or "unstable") with
-        its ``tolerance``, and with ``sweep`` the rows and the values where the verdict
-        changes. A reference that is not an equilibrium raises :class:`SceneError`.
+        Returns a :class:`Linearization`: a dict as before (``state``, the exact ``M``,
+        ``C``, ``K``, ``A``, ``eigenvalues``, ``stability``, ``tolerance``, ``sweep``…) with
+        the state space ẋ = A·x + B·u, y = C·x + D·u as attributes. A reference that is not an
+        equilibrium raises :class:`SceneError`.
         """
         if isinstance(about, dict):
             about = ", ".join(f"{k}={_value_text(v)}" for k, v in about.items())
-        return self._native.linearize(about=about, set=_assignments(set), sweep=_sweep_text(sweep))
+        raw = self._native.linearize(
+            about=about, set=_assignments(set), sweep=_sweep_text(sweep), keep_cyclic=keep_cyclic
+        )
+        return Linearization(raw, inputs, outputs)
 
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
@@ -299,6 +308,88 @@ class Scene:
     def __repr__(self):
         title = f" {self.title!r}" if self.title else ""
         return f"<lagrange.Scene{title} from {self.path}>"
+
+
+def _chosen(names, chosen, what):
+    """The indices of ``chosen`` among ``names`` (all of them for ``None``)."""
+    if chosen is None:
+        return list(range(len(names)))
+    if isinstance(chosen, str):
+        chosen = [chosen]
+    unknown = [c for c in chosen if c not in names]
+    if unknown:
+        known = ", ".join(names) or "none"
+        raise ValueError(f"no {what} {unknown[0]!r} in the scene (its {what}s: {known})")
+    return [names.index(c) for c in chosen]
+
+
+class Linearization(dict):
+    """Small motions about a reference: the dict ``Scene.linearize`` always gave, with the
+    state space ẋ = A·x + B·u, y = C·x + D·u as attributes.
+
+    - ``state``: the names of x; ``inputs`` and ``outputs``: those of u and y, as chosen.
+    - ``A``, ``B``, ``C``, ``D``: NumPy arrays at the parameters' values. Without outputs,
+      C is the identity (y = x) and D is zero, so that a controller sees the whole state.
+    - ``A_sym``, ``B_sym``, ``C_sym``, ``D_sym``: the same as SymPy matrices, exact
+      (expressions of the parameters) where the algebra gives them (no constraint kept), else
+      the numbers as ``sympy.Float``; ``exact`` says which.
+    - ``controllability``, ``observability``: ``{rank, of, tolerance, smallest_counted,
+      largest_left_out, doubtful}`` (``None`` without inputs, outputs).
+    - ``to_control()``: a ``control.StateSpace``, with python-control installed.
+    """
+
+    def __init__(self, raw, inputs=None, outputs=None):
+        super().__init__(raw)
+        import numpy as np
+        import sympy as sp
+
+        columns = _chosen(raw["inputs"], inputs, "input")
+        rows = _chosen(raw["outputs"], outputs, "output")
+        self.inputs = [raw["inputs"][k] for k in columns]
+        self.outputs = [raw["outputs"][k] for k in rows]
+        self.A = raw["A"]
+        n = self.A.shape[0]
+        self.B = raw["B"][:, columns]
+        if raw["outputs"]:
+            self.C = raw["C"][rows, :]
+            self.D = raw["D"][rows, :][:, columns]
+        else:
+            self.C, self.D = np.eye(n), np.zeros((n, len(columns)))
+        exact = raw.get("exact")
+        self.exact = exact is not None
+        if exact is not None:
+            self.A_sym = exact["A"]
+            self.B_sym = exact["B"].extract(list(range(n)), columns)
+            if raw["outputs"]:
+                self.C_sym = exact["C"].extract(rows, list(range(n)))
+                self.D_sym = exact["D"].extract(rows, columns)
+            else:
+                self.C_sym, self.D_sym = sp.eye(n), sp.zeros(n, len(columns))
+        else:
+            self.A_sym, self.B_sym, self.C_sym, self.D_sym = (
+                sp.Matrix(m.shape[0], m.shape[1], [sp.Float(x) for x in m.flat])
+                for m in (self.A, self.B, self.C, self.D)
+            )
+        self.controllability = raw.get("controllability")
+        self.observability = raw.get("observability")
+
+    @property
+    def state(self):
+        return self["state"]
+
+    def to_control(self):
+        """The state space as ``control.StateSpace`` (python-control must be installed)."""
+        try:
+            import control
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_control() needs python-control: pip install control") from e
+        return control.ss(self.A, self.B, self.C, self.D)
+
+    def __repr__(self):
+        return (
+            f"<lagrange.Linearization {self['stability']}: {len(self.state)} states, "
+            f"{len(self.inputs)} inputs, {len(self.outputs)} outputs>"
+        )
 
 
 class Derivation:

@@ -39,6 +39,7 @@ class NativeScene:
         about: Optional[str] = None,
         set: Sequence[str] = ...,
         sweep: Optional[str] = None,
+        keep_cyclic: bool = True,
     ) -> dict[str, Any]: ...
     def check(self) -> list[dict[str, Any]]: ...
 

@@ -1,0 +1,144 @@
+//! `expect linearized:` lines, decided: the scene linearized about its reference at the
+//! parameters' values, and each expectation compared with what was found (a verdict, an
+//! eigenvalue within the verdict's tolerance, or a change of verdict found by a sweep about
+//! the expected critical value), so that a stability result is checked like an equation.
+
+use model::{ExpectedStability, LinearExpectation};
+
+use crate::linearize::{linearize, Linearized, Options, Stability};
+use crate::Error;
+
+/// How far about an expected critical value the sweep looks, relatively.
+const CRITICAL_WINDOW: f64 = 1e-3;
+
+/// How close the change found must be to the expected critical value, relatively: the
+/// bisection brackets it to 1e-10.
+const CRITICAL_TOLERANCE: f64 = 1e-8;
+
+/// What became of one `expect linearized:` line.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinearVerdict {
+    /// It holds; how, in words.
+    Holds(String),
+    /// It does not; what was found instead.
+    Fails(String),
+    /// The linearization itself failed; why.
+    Undecided(String),
+}
+
+impl LinearVerdict {
+    pub fn holds(&self) -> bool {
+        matches!(self, LinearVerdict::Holds(_))
+    }
+}
+
+/// Each `expect linearized:` line of `source`, decided (none without such lines).
+pub fn check_linearized(source: &str, units: bool) -> Vec<LinearVerdict> {
+    let options = Options { no_units: !units, ..Default::default() };
+    let l = match linearize(source, &options) {
+        Ok(l) => l,
+        Err(e) => {
+            let why = format!("the scene does not linearize: {}", first_line(&e));
+            let count = match crate::resolve_with(source, crate::Options { units }) {
+                Ok((model, _)) => model.linear_expects.len(),
+                Err(_) => 0,
+            };
+            return vec![LinearVerdict::Undecided(why); count];
+        }
+    };
+    let expectations = l.derivation.model.linear_expects.clone();
+    expectations.iter().map(|e| decide(source, &l, &e.expectation, units)).collect()
+}
+
+fn first_line(e: &Error) -> String {
+    e.to_string().lines().next().unwrap_or("").to_string()
+}
+
+/// A constant of the parameters at the values the linearization used.
+fn value_at(l: &Linearized, e: cas::ExprId) -> f64 {
+    let pool = &l.derivation.model.pool;
+    let mut values = vec![f64::NAN; pool.symbol_count()];
+    for (p, v) in l.derivation.model.params.iter().zip(&l.at.parameters) {
+        values[p.sym.index()] = *v;
+    }
+    numeric::eval(pool, e, &values)
+}
+
+fn decide(source: &str, l: &Linearized, e: &LinearExpectation, units: bool) -> LinearVerdict {
+    match e {
+        LinearExpectation::Stability(expected) => {
+            let expected = match expected {
+                ExpectedStability::Stable => Stability::Stable,
+                ExpectedStability::MarginallyStable => Stability::MarginallyStable,
+                ExpectedStability::Unstable => Stability::Unstable,
+            };
+            let found = l.at.stability;
+            match found == expected {
+                true => LinearVerdict::Holds(format!("{} at the reference", found.name())),
+                false => LinearVerdict::Fails(format!("{} at the reference", found.name())),
+            }
+        }
+        LinearExpectation::Eigenvalue { re, im } => {
+            let (re, im) = (value_at(l, *re), value_at(l, *im));
+            let distance = |z: &(f64, f64)| {
+                let (dr, di) = (z.0 - re, z.1 - im);
+                (dr * dr + di * di).sqrt()
+            };
+            let nearest =
+                l.at.eigenvalues.iter().min_by(|a, b| distance(a).total_cmp(&distance(b)));
+            let Some(nearest) = nearest else {
+                return LinearVerdict::Fails("A has no eigenvalues".into());
+            };
+            // The verdict's tolerance, or rounding's where every eigenvalue is zero.
+            let tolerance = l.at.tolerance.max(1e-12);
+            let text = format!("{} + {}i", nearest.0, nearest.1);
+            match distance(nearest) <= tolerance {
+                true => LinearVerdict::Holds(format!("an eigenvalue is {text}, within {tolerance:.1e}")),
+                false => LinearVerdict::Fails(format!(
+                    "the nearest eigenvalue is {text}, {:.3e} away (the tolerance is {tolerance:.1e})",
+                    distance(nearest)
+                )),
+            }
+        }
+        LinearExpectation::Critical { parameter, value } => {
+            let name = l.derivation.model.params[*parameter].name.clone();
+            critical(source, &name, value_at(l, *value), units)
+        }
+    }
+}
+
+/// Whether the verdict changes within [`CRITICAL_TOLERANCE`] of `value`, by a sweep of the
+/// parameter across a window about it, bisected where the verdict changes.
+fn critical(source: &str, name: &str, value: f64, units: bool) -> LinearVerdict {
+    if !value.is_finite() {
+        return LinearVerdict::Undecided(format!("the critical value of `{name}` is {value}"));
+    }
+    let half = CRITICAL_WINDOW * value.abs().max(1.0);
+    let sweep = format!("{name}={}:{}:3", value - half, value + half);
+    let options = Options { sweep: Some(sweep), no_units: !units, ..Default::default() };
+    let l = match linearize(source, &options) {
+        Ok(l) => l,
+        Err(e) => return LinearVerdict::Undecided(first_line(&e)),
+    };
+    let changes = l.sweep.map(|s| s.changes).unwrap_or_default();
+    let scale = value.abs().max(f64::MIN_POSITIVE);
+    let near = changes.iter().find(|c| (c.value - value).abs() <= CRITICAL_TOLERANCE * scale);
+    match (near, changes.first()) {
+        (Some(c), _) => LinearVerdict::Holds(format!(
+            "{} → {} at {name} = {}",
+            c.from.name(),
+            c.to.name(),
+            c.value
+        )),
+        (None, Some(c)) => LinearVerdict::Fails(format!(
+            "the verdict changes at {name} = {}, {:.3e} away",
+            c.value,
+            (c.value - value).abs()
+        )),
+        (None, None) => LinearVerdict::Fails(format!(
+            "the verdict does not change between {name} = {} and {}",
+            value - half,
+            value + half
+        )),
+    }
+}
