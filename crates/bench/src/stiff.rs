@@ -1,6 +1,6 @@
 //! The stiffness ladder: the pendulum hung from a spring of stiffness k and damping ratio 5
 //! (`examples/classics/stiff_spring_pendulum.lag`, to t = 10 s at tolerance 1e-8), for k from
-//! 1e4 to 1e12 N/m, integrated by dop853 and radau and, with `--peer`, by SciPy's Radau and BDF
+//! 1e4 to 1e12 N/m, integrated by dop853, auto and radau and, with `--peer`, by SciPy's Radau and BDF
 //! with the exact Jacobian written by hand (`tests/sympy/stiff_peer.py`) in the same run: steps,
 //! rejections, right-hand sides, Jacobians, LU factorizations, the wall time of one run and
 //! the error of the state at t = 10 against a reference, radau itself at tolerance 1e-12
@@ -75,7 +75,7 @@ pub fn run(largest: f64, peer: bool) {
 
     let mut rows = Vec::new();
     for (k, reference) in ks.iter().zip(&references) {
-        for method in ["dop853", "radau"] {
+        for method in ["dop853", "auto", "radau"] {
             if method == "dop853" && *k > largest {
                 continue;
             }
