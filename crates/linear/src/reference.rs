@@ -178,45 +178,45 @@ pub(crate) struct AtReference {
 
 /// The equations of motion with their kept constraints at the reference, as the holonomic
 /// and the kept cases linearize them. With g = f + Jᵀλ (λ the multipliers' symbols): M,
-/// C = −∂f/∂q̇ (J has no rates, for a velocity constraint either: it is linear in them),
-/// K = −∂g/∂q (zero for a cyclic coordinate), and g, each put through `at` (the reference
-/// substituted).
+/// C = −∂g/∂q̇ (= −∂f/∂q̇: J has no rates, for a velocity constraint either: it is linear in
+/// them), K = −∂g/∂q (zero for a cyclic coordinate), and g, each put through `at` (the
+/// reference substituted).
 pub(crate) fn at_reference(
     d: &mut Derivation,
     cyclic: &[bool],
     at: &mut dyn FnMut(&mut Pool, ExprId) -> ExprId,
 ) -> AtReference {
-    let pool = &mut d.model.pool;
-    let (mass_matrix, forcing, multipliers) = (&d.mass_matrix, &d.forcing, &d.multipliers);
-    let (coords, rates) = (&d.coords, &d.rates);
-    let mut generalized = forcing.to_vec();
-    for m in multipliers {
-        let lambda = pool.sym(m.lambda);
-        for (j, g) in generalized.iter_mut().enumerate() {
-            let force = pool.mul2(m.jacobian[j], lambda);
-            *g = pool.add2(*g, force);
-        }
-    }
+    let n = d.coords.len();
     let (mut mass, mut damping, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
-    for (j, g) in generalized.iter().enumerate() {
+    for j in 0..n {
         let (mut m, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
         for (i, is_cyclic) in cyclic.iter().enumerate() {
-            m.push(at(pool, mass_matrix[j][i]));
-            let df = pool.diff(forcing[j], rates[i]);
-            let df = at(pool, df);
-            c.push(pool.neg(df));
-            k.push(if *is_cyclic {
-                pool.zero()
-            } else {
-                let dg = pool.diff(*g, coords[i]);
-                let dg = at(pool, dg);
-                pool.neg(dg)
+            // C and K are the residual's partials at rest, the same derivatives an implicit
+            // method's exact Jacobian is made of (`Derivation::force_partial`).
+            let (rate, coord) = (d.rates[i], d.coords[i]);
+            let dc = d.force_partial(j, rate);
+            let dk = (!is_cyclic).then(|| d.force_partial(j, coord));
+            let pool = &mut d.model.pool;
+            m.push(at(pool, d.mass_matrix[j][i]));
+            c.push(at(pool, dc));
+            k.push(match dk {
+                Some(dk) => at(pool, dk),
+                None => pool.zero(),
             });
         }
         mass.push(m);
         damping.push(c);
         stiffness.push(k);
     }
-    let residual: Vec<ExprId> = generalized.iter().map(|g| at(pool, *g)).collect();
+    let pool = &mut d.model.pool;
+    let mut residual = d.forcing.to_vec();
+    for m in &d.multipliers {
+        let lambda = pool.sym(m.lambda);
+        for (j, g) in residual.iter_mut().enumerate() {
+            let force = pool.mul2(m.jacobian[j], lambda);
+            *g = pool.add2(*g, force);
+        }
+    }
+    let residual: Vec<ExprId> = residual.iter().map(|g| at(pool, *g)).collect();
     AtReference { mass, damping, stiffness, residual }
 }

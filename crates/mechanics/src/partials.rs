@@ -49,6 +49,24 @@ impl Multiplier {
 }
 
 impl Derivation {
+    /// −∂(f + Jᵀλ)/∂s of row `i`, λ the multipliers' symbols: the residual's partial with
+    /// the accelerations at rest. It is K's entry (s a coordinate) and C's (s a rate) about a
+    /// reference, where q̈ = 0, and, with the mass matrix's term, the residual's partial every
+    /// exact Jacobian is made of: one derivative for both.
+    pub fn force_partial(&mut self, i: usize, s: SymId) -> ExprId {
+        let pool = &mut self.model.pool;
+        let mut terms = Vec::with_capacity(self.multipliers.len() + 1);
+        for m in &self.multipliers {
+            let dj = pool.diff(m.jacobian[i], s);
+            let lambda = pool.sym(m.lambda);
+            let term = pool.mul2(dj, lambda);
+            terms.push(pool.neg(term));
+        }
+        let df = pool.diff(self.forcing[i], s);
+        terms.push(pool.neg(df));
+        pool.add(&terms)
+    }
+
     /// The partials of the equations of motion in residual form (see [`Partials`]). Each
     /// entry is a sum of memoised derivatives of M, J, f, γ and Φ, so that lowering them
     /// beside those expressions shares what they have in common.
@@ -57,31 +75,24 @@ impl Derivation {
         let state: Vec<SymId> = self.coords.iter().chain(&self.rates).copied().collect();
         let accels: Vec<ExprId> = self.accels.iter().map(|a| self.model.pool.sym(*a)).collect();
         let multipliers = self.multipliers.clone();
-        let pool = &mut self.model.pool;
 
         let mut residual = Vec::with_capacity(n);
         for i in 0..n {
-            let row: Vec<ExprId> = state
-                .iter()
-                .map(|&s| {
-                    let mut terms = Vec::with_capacity(n + multipliers.len() + 1);
-                    for (entry, accel) in self.mass_matrix[i].iter().zip(&accels) {
-                        let dm = pool.diff(*entry, s);
-                        terms.push(pool.mul2(dm, *accel));
-                    }
-                    for m in &multipliers {
-                        let dj = pool.diff(m.jacobian[i], s);
-                        let lambda = pool.sym(m.lambda);
-                        let term = pool.mul2(dj, lambda);
-                        terms.push(pool.neg(term));
-                    }
-                    let df = pool.diff(self.forcing[i], s);
-                    terms.push(pool.neg(df));
-                    pool.add(&terms)
-                })
-                .collect();
+            let mut row = Vec::with_capacity(state.len());
+            for &s in &state {
+                let at_rest = self.force_partial(i, s);
+                let pool = &mut self.model.pool;
+                let mut terms = Vec::with_capacity(n + 1);
+                for (entry, accel) in self.mass_matrix[i].iter().zip(&accels) {
+                    let dm = pool.diff(*entry, s);
+                    terms.push(pool.mul2(dm, *accel));
+                }
+                terms.push(at_rest);
+                row.push(pool.add(&terms));
+            }
             residual.push(row);
         }
+        let pool = &mut self.model.pool;
 
         let (mut constraint, mut phi, mut drift_rate) = (Vec::new(), Vec::new(), Vec::new());
         for m in &multipliers {
