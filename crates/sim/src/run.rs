@@ -192,22 +192,7 @@ pub fn integrate(
     progress: &mut dyn FnMut(f64),
 ) -> Run {
     let d = problem.dim();
-    let tol = settings.tolerance;
-    let mut stepper: Box<dyn Stepper> = match settings.method {
-        Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
-        Method::Dopri5 => Box::new(Adaptive::new(Pair::Dopri5, d, tol, tol)),
-        Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
-        Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
-        Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
-        Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
-        Method::Auto => Box::new(Auto::new(d, tol)),
-    };
-    assert!(
-        settings.method.handles_algebraic()
-            || problem.components() == crate::Components::ordinary(d),
-        "{} integrates ordinary differential equations only",
-        settings.method.name()
-    );
+    let mut stepper = stepper_for(settings, problem);
     let mut run = Run {
         trajectory: Trajectory::default(),
         steps: 0,
@@ -228,11 +213,6 @@ pub fn integrate(
     let mut t = settings.start;
     let mut y = y0.to_vec();
     let mut row = vec![0.0; width];
-    let fault = |problem: &mut dyn Problem, kind: FaultKind, t: f64, y: &[f64]| Fault {
-        kind,
-        time: t,
-        state: problem.physical(t, y),
-    };
     if let Err(kind) = problem.observe(t, &y, &mut row) {
         run.fault = Some(fault(problem, kind, t, &y));
         run.final_state = problem.physical(t, &y);
@@ -242,12 +222,7 @@ pub fn integrate(
     run.peaks = row.iter().map(|v| v.abs()).collect();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
-    // `samples` times from the start to the end, both included, as numpy.linspace counts
-    // them: `samples − 1` intervals. One sample is the start, and the end is recorded anyway.
-    let intervals = settings.samples.saturating_sub(1).max(1);
-    let sample_time =
-        |k: usize| settings.start + (settings.until - settings.start) * k as f64 / intervals as f64;
-    let mut next_sample = 1;
+    let mut sampler = Sampler::new(settings);
 
     while t < settings.until {
         if run.steps >= settings.max_steps {
@@ -271,32 +246,10 @@ pub fn integrate(
         for (peak, v) in run.peaks.iter_mut().zip(&row) {
             *peak = peak.max(v.abs());
         }
-        // Events: sign changes of watched columns over the step, located in time order.
-        let mut hits: Vec<EventHit> = Vec::new();
-        for (k, e) in events.iter().enumerate() {
-            let (g0, g1) = (previous_row[e.column], row[e.column]);
-            if g0 != 0.0 && g0 * g1 <= 0.0 {
-                let time = locate(problem, stepper.as_mut(), e.column, (t0, g0), (t, g1), width);
-                hits.push(EventHit { event: k, time });
-            }
-        }
-        hits.sort_by(|a, b| a.time.total_cmp(&b.time));
-        if settings.samples > 0 {
-            // The evenly spaced times this step covers (up to a stop, if one comes), from the
-            // step's dense output.
-            let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
-            let mut ys = vec![0.0; d];
-            let mut sample_row = vec![0.0; width];
-            while next_sample <= intervals && sample_time(next_sample) < end {
-                let s = sample_time(next_sample);
-                stepper.interpolate(problem, s, &mut ys);
-                if problem.observe(s, &ys, &mut sample_row).is_ok() {
-                    run.trajectory.times.push(s);
-                    run.trajectory.rows.push(sample_row.clone());
-                }
-                next_sample += 1;
-            }
-        }
+        let hits = crossings(problem, stepper.as_mut(), events, (t0, &previous_row), (t, &row));
+        // The evenly spaced times this step covers, up to a stop if one comes.
+        let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
+        sampler.record(problem, stepper.as_mut(), end, &mut run.trajectory);
         if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
             let hit = hits[stop];
             run.events.extend_from_slice(&hits[..=stop]);
@@ -330,6 +283,101 @@ pub fn integrate(
     run.final_state = problem.physical(t, &y);
     run.segments = segments(settings, stepper.as_ref(), t);
     run
+}
+
+/// The method's stepper for a problem of this size and structure.
+fn stepper_for(settings: &Settings, problem: &dyn Problem) -> Box<dyn Stepper> {
+    let d = problem.dim();
+    let tol = settings.tolerance;
+    assert!(
+        settings.method.handles_algebraic()
+            || problem.components() == crate::Components::ordinary(d),
+        "{} integrates ordinary differential equations only",
+        settings.method.name()
+    );
+    match settings.method {
+        Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
+        Method::Dopri5 => Box::new(Adaptive::new(Pair::Dopri5, d, tol, tol)),
+        Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
+        Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
+        Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
+        Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
+        Method::Auto => Box::new(Auto::new(d, tol)),
+    }
+}
+
+/// A fault at (t, y), with the state in the physical variables.
+fn fault(problem: &mut dyn Problem, kind: FaultKind, t: f64, y: &[f64]) -> Fault {
+    Fault { kind, time: t, state: problem.physical(t, y) }
+}
+
+/// The watched columns' sign changes over the step from `before` to `after` (each a time and
+/// its recorded row), located on the dense output, in time order.
+fn crossings(
+    problem: &mut dyn Problem,
+    stepper: &mut dyn Stepper,
+    events: &[Event],
+    before: (f64, &[f64]),
+    after: (f64, &[f64]),
+) -> Vec<EventHit> {
+    let width = problem.observations();
+    let mut hits: Vec<EventHit> = Vec::new();
+    for (k, e) in events.iter().enumerate() {
+        let (g0, g1) = (before.1[e.column], after.1[e.column]);
+        if g0 != 0.0 && g0 * g1 <= 0.0 {
+            let time = locate(problem, stepper, e.column, (before.0, g0), (after.0, g1), width);
+            hits.push(EventHit { event: k, time });
+        }
+    }
+    hits.sort_by(|a, b| a.time.total_cmp(&b.time));
+    hits
+}
+
+/// The evenly spaced times a run records from the dense output: `samples` of them from the
+/// start to the end, both included, as numpy.linspace counts them (`samples − 1` intervals;
+/// one sample is the start, and the end is recorded anyway). No samples: every step instead.
+struct Sampler {
+    start: f64,
+    until: f64,
+    intervals: usize,
+    /// The next sample to record; past `intervals` when done or not sampling.
+    next: usize,
+}
+
+impl Sampler {
+    fn new(settings: &Settings) -> Self {
+        let intervals = settings.samples.saturating_sub(1).max(1);
+        let next = if settings.samples > 0 { 1 } else { usize::MAX };
+        Sampler { start: settings.start, until: settings.until, intervals, next }
+    }
+
+    fn time(&self, k: usize) -> f64 {
+        self.start + (self.until - self.start) * k as f64 / self.intervals as f64
+    }
+
+    /// Records the samples before `end` that the last step covered.
+    fn record(
+        &mut self,
+        problem: &mut dyn Problem,
+        stepper: &mut dyn Stepper,
+        end: f64,
+        trajectory: &mut Trajectory,
+    ) {
+        if self.next > self.intervals {
+            return;
+        }
+        let mut ys = vec![0.0; problem.dim()];
+        let mut row = vec![0.0; problem.observations()];
+        while self.next <= self.intervals && self.time(self.next) < end {
+            let s = self.time(self.next);
+            stepper.interpolate(problem, s, &mut ys);
+            if problem.observe(s, &ys, &mut row).is_ok() {
+                trajectory.times.push(s);
+                trajectory.rows.push(row.clone());
+            }
+            self.next += 1;
+        }
+    }
 }
 
 /// The spans each method integrated: the whole run for one method; for `auto`, the explicit
