@@ -531,8 +531,27 @@ pub fn json(l: &Linearized) -> String {
     }
     out.insert("state".into(), json!(l.state));
     out.insert("A".into(), matrix_json(&l.at.first_order.a));
-    // `C` is the damping's at the top level: the state space is an object of its own, its
-    // rows named by `state` (the top-level `state` and `A` stay for readers of both).
+    out.insert("first_order".into(), first_order_json(l));
+    out.insert("cyclic_zeros".into(), json!(l.at.cyclic_zeros));
+    out.insert("first_integrals".into(), json!(l.at.first_integrals));
+    out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
+    out.insert("stability".into(), json!(l.at.stability.name()));
+    out.insert("tolerance".into(), json_number(l.at.tolerance));
+    if let Some(sweep) = &l.sweep {
+        sweep_json(sweep, &mut out);
+    }
+    let report = json!({ "linearization": Json::Object(out) });
+    let mut text = serde_json::to_string_pretty(&report).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+/// The state space, an object of its own: at the top level `C` is the damping's, so A, B, C
+/// and D sit here with their rows named by `state` (the top-level `state` and `A` stay for
+/// readers of both).
+fn first_order_json(l: &Linearized) -> Json {
+    let pool = &l.derivation.model.pool;
+    let lin = &l.linearization;
     let space = &l.at.first_order;
     let mut first_order = Map::new();
     first_order.insert("state".into(), json!(l.state));
@@ -565,42 +584,35 @@ pub fn json(l: &Linearized) -> String {
     };
     first_order.insert("controllability".into(), json!(rank(space.controllability)));
     first_order.insert("observability".into(), json!(rank(space.observability)));
-    out.insert("first_order".into(), Json::Object(first_order));
-    out.insert("cyclic_zeros".into(), json!(l.at.cyclic_zeros));
-    out.insert("first_integrals".into(), json!(l.at.first_integrals));
-    out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
-    out.insert("stability".into(), json!(l.at.stability.name()));
-    out.insert("tolerance".into(), json_number(l.at.tolerance));
-    if let Some(sweep) = &l.sweep {
-        out.insert("sweep_parameter".into(), json!(sweep.parameter));
-        let rows: Vec<Json> = sweep
-            .rows
-            .iter()
-            .map(|r| {
-                json!({
-                    "value": json_number(r.value),
-                    "eigenvalues": eigenvalues_json(&r.eigenvalues),
-                    "stability": r.stability.name(),
-                })
+    Json::Object(first_order)
+}
+
+/// The sweep's rows and the values where its verdict changes.
+fn sweep_json(sweep: &engine::linearize::Sweep, out: &mut Map<String, Json>) {
+    out.insert("sweep_parameter".into(), json!(sweep.parameter));
+    let rows: Vec<Json> = sweep
+        .rows
+        .iter()
+        .map(|r| {
+            json!({
+                "value": json_number(r.value),
+                "eigenvalues": eigenvalues_json(&r.eigenvalues),
+                "stability": r.stability.name(),
             })
-            .collect();
-        out.insert("sweep".into(), Json::Array(rows));
-        let changes: Vec<Json> = sweep
-            .changes
-            .iter()
-            .map(|c| {
-                json!({
-                    "value": json_number(c.value),
-                    "from": c.from.name(),
-                    "to": c.to.name(),
-                    "bracket": [json_number(c.bracket.0), json_number(c.bracket.1)],
-                })
+        })
+        .collect();
+    out.insert("sweep".into(), Json::Array(rows));
+    let changes: Vec<Json> = sweep
+        .changes
+        .iter()
+        .map(|c| {
+            json!({
+                "value": json_number(c.value),
+                "from": c.from.name(),
+                "to": c.to.name(),
+                "bracket": [json_number(c.bracket.0), json_number(c.bracket.1)],
             })
-            .collect();
-        out.insert("changes".into(), Json::Array(changes));
-    }
-    let report = json!({ "linearization": Json::Object(out) });
-    let mut text = serde_json::to_string_pretty(&report).unwrap_or_default();
-    text.push('\n');
-    text
+        })
+        .collect();
+    out.insert("changes".into(), Json::Array(changes));
 }
