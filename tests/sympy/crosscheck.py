@@ -312,7 +312,9 @@ def crosscheck(report, n_states, seed):
     model = report["model"]
     declared = model["coordinates"]
     remaining = report["coordinates"]
-    scope = Scope(report["parameters"].keys(), declared)
+    # Inputs are symbols of their own in the derivation; here they are compared like
+    # parameters, at random values (a driven run substitutes them, nothing else changes).
+    scope = Scope(list(report["parameters"]) + list(report.get("inputs", {})), declared)
     t = scope.t
     rng = random.Random(seed)
 

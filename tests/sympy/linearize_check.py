@@ -30,12 +30,16 @@ def sympy_eigenvalues(report, lin):
     """Eigenvalues of SymPy's linearized state equation at lagrange's reference."""
     model = report["model"]
     coords = report["coordinates"]
-    scope = Scope(report["parameters"].keys(), coords)
+    # Inputs are held at their declared values, as `linearize` takes them; here they are
+    # symbols beside the parameters.
+    inputs = report.get("inputs", {})
+    scope = Scope(list(report["parameters"]) + list(inputs), coords)
     MM, FF, _ = sympy_system(model, scope, coords, {}, [])
     n = len(coords)
     evaluator = Evaluator(scope, coords)
     mm, ff = evaluator.function(list(MM)), evaluator.function(list(FF))
-    params = [mpmath.mpf(report["parameters"][p]["numeric"]) for p in scope.params]
+    given = {**report["parameters"], **inputs}
+    params = [mpmath.mpf(given[p]["numeric"]) for p in scope.params]
     # The reference as lagrange read it (expressions of the parameters), at their values.
     values = {scope.params[p]: v for p, v in zip(scope.params, params)}
     about = {k: mpmath.mpf(str(scope.parse(v).subs(values).evalf(40)))
