@@ -75,6 +75,11 @@ enum Command {
         /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
+        /// Drive an input by an expression of t, the coordinates, their rates and the
+        /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`. An input not
+        /// driven keeps its declared value.
+        #[arg(long = "input", value_name = "NAME=EXPR")]
+        input: Vec<Assignment>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -267,6 +272,7 @@ fn main() -> ExitCode {
             tolerance,
             step,
             set,
+            input,
             output,
             stop_when,
             event,
@@ -286,6 +292,7 @@ fn main() -> ExitCode {
                 tolerance,
                 step,
                 set,
+                input,
                 output,
                 stop_when,
                 events: event,

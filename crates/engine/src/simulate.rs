@@ -8,6 +8,7 @@ use std::time::Instant;
 use numeric::Tape;
 use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+mod drive;
 mod fault;
 mod on_demand;
 
@@ -15,7 +16,7 @@ pub use fault::FastestMode;
 
 use crate::animate::{Animation, Plan};
 use crate::input::Assignment;
-use crate::numbers::{prepare, Prepared};
+use crate::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
 
 use crate::{Error, Setting};
@@ -29,6 +30,8 @@ pub struct Options {
     pub step: Option<f64>,
     /// Values in place of the scene's.
     pub set: Vec<Assignment>,
+    /// Inputs driven by expressions of t, the state and the parameters (`F=-20*x - 5*x'`).
+    pub input: Vec<Assignment>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -61,6 +64,8 @@ pub struct Settings {
     pub events: Vec<String>,
     /// `--set` values, each a scene expression.
     pub sets: Vec<Assignment>,
+    /// The inputs driven, each by a scene expression of t, the state and the parameters.
+    pub drives: Vec<Assignment>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -221,6 +226,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         stops,
         events,
         sets: options.set.clone(),
+        drives: options.input.clone(),
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -338,7 +344,7 @@ impl Columns {
 }
 
 /// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
-/// then the `--set` values; with the outputs (the remaining coordinates when the settings name
+/// then the `--set` values, and its driven inputs replaced by their laws; with the outputs (the remaining coordinates when the settings name
 /// none) and the `--set` values' expressions.
 fn load(
     source: &str,
@@ -352,7 +358,12 @@ fn load(
     extra.push("KE".into());
     extra.push("PE".into());
     extra.extend(settings.sets.iter().map(|a| a.value.clone()));
-    let mut prepared = prepare(source, &extra, crate::Options { units: settings.units })?;
+    let (mut model, warnings) =
+        crate::resolve_with(source, crate::Options { units: settings.units })?;
+    let laws = drive::laws(&mut model, &settings.drives)?;
+    let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
+    prepared.drive(&laws);
+    drive::check_method(&mut prepared, &laws, settings.method)?;
     if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
         outputs = prepared.coordinate_names();
