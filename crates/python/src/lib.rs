@@ -60,8 +60,8 @@ impl NativeScene {
 
     /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
-                        output = Vec::new(), set = Vec::new(), stop_when = Vec::new(),
-                        events = Vec::new(), samples = 0))]
+                        output = Vec::new(), set = Vec::new(), input = Vec::new(),
+                        stop_when = Vec::new(), events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
@@ -72,17 +72,21 @@ impl NativeScene {
         step: Option<f64>,
         output: Vec<String>,
         set: Vec<String>,
+        input: Vec<String>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
+        let input = engine::input::assignments_of(engine::Setting::Input, &input)
+            .map_err(|e| engine_error(&e, &self.path))?;
         let options = engine::simulate::Options {
             until,
             method,
             tolerance,
             step,
             set,
+            input,
             output,
             stop_when,
             events,

@@ -220,6 +220,7 @@ class Scene:
         set=None,
         *,
         step=None,
+        input=None,
         stop_when=None,
         events=None,
         samples=0,
@@ -236,6 +237,10 @@ class Scene:
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
           a scene expression, in place of the scene's values (``{"g": 1.62}``); or texts as
           the command line takes them, ``"g=1.62"`` or a list of them.
+        - ``input``: a dict of the scene's input name to what drives it, a number or a scene
+          expression of ``t``, the coordinates, their rates and the parameters, such as a
+          state-feedback law (``{"F": "-20*x - 5*x'"}``); or ``"F=..."`` texts. An input not
+          driven keeps its declared value.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -264,6 +269,7 @@ class Scene:
             step=None if step is None else float(step),
             output=listed(output),
             set=_assignments(set),
+            input=_assignments(input),
             stop_when=listed(stop_when),
             events=listed(events),
             samples=int(samples),
