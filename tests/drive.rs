@@ -170,3 +170,32 @@ fn laws_that_cannot_drive_an_input_are_refused_where_they_go_wrong() {
     let (message, _) = refused(&lagrange_tests::example("classics/double_pendulum.lag"), "F=1");
     assert!(message.contains("the scene has no input"), "{message}");
 }
+
+/// A mass on a spring of its own law: x'' = F/m with F = −k·x − c·ẋ, as the scene's
+/// `simulate` block drives it; the command line's law for the same input wins.
+const DRIVEN_BY_THE_SCENE: &str = "\
+param m = 1 kg, k = 4 N/m, c = 1 N*s/m
+input F = 0 N
+coord x = 1
+particle p { mass m; position (x, 0) }
+force push on p: (F, 0)
+simulate { until 1 s; input F = -k*x - c*x'; output x, F }
+";
+
+#[test]
+fn the_scene_s_simulate_block_drives_an_input_and_the_command_line_overrides_it() {
+    let options = Options { samples: 3, tolerance: Some(1e-12), ..Options::default() };
+    let scene = simulate(DRIVEN_BY_THE_SCENE, &options).expect("runs");
+    // x'' + x' + 4·x = 0 from x = 1 at rest: x = e^(−t/2)·(cos ωt + sin ωt/(2ω)), ω² = 15/4.
+    let w = 15f64.sqrt() / 2.0;
+    let exact = |t: f64| (-t / 2.0).exp() * ((w * t).cos() + (w * t).sin() / (2.0 * w));
+    for (t, row) in scene.run.trajectory.times.iter().zip(&scene.run.trajectory.rows) {
+        assert!((row[0] - exact(*t)).abs() < 1e-9, "t = {t}: x = {}", row[0]);
+    }
+    let input = vec!["F=0".parse().expect("an assignment")];
+    let held = simulate(DRIVEN_BY_THE_SCENE, &Options { input, ..options }).expect("runs");
+    assert!(held.run.trajectory.rows.iter().all(|r| r[0] == 1.0 && r[1] == 0.0));
+    let misnamed = DRIVEN_BY_THE_SCENE.replace("input F = -k", "input G = -k");
+    let error = simulate(&misnamed, &Options::default()).err().expect("refused").to_string();
+    assert!(error.contains("no input `G` (line 6, column 29)"), "{error}");
+}

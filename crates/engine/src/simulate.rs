@@ -181,6 +181,14 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
     let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
+    // The scene's laws, each replaced by the front end's for the same input.
+    let mut drives: Vec<Assignment> = scene
+        .drives
+        .into_iter()
+        .filter(|d| !options.input.iter().any(|a| a.name == d.input))
+        .map(|d| Assignment { name: d.input, value: d.law })
+        .collect();
+    drives.extend(options.input.iter().cloned());
     if let Some(u) = options.until {
         until = u;
     }
@@ -226,7 +234,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         stops,
         events,
         sets: options.set.clone(),
-        drives: options.input.clone(),
+        drives,
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
