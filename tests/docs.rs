@@ -255,6 +255,7 @@ fn simulate(rest: &[String]) -> Result<String, String> {
         step: args.number("step")?,
         set: args.parsed("set")?,
         input: args.parsed("input")?,
+        input_series: Vec::new(),
         output: args.all("output"),
         stop_when: args.all("stop-when"),
         events: args.all("event"),

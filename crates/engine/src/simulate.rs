@@ -32,6 +32,8 @@ pub struct Options {
     pub set: Vec<Assignment>,
     /// Inputs driven by expressions of t, the state and the parameters (`F=-20*x - 5*x'`).
     pub input: Vec<Assignment>,
+    /// Inputs given as time series (read from files by the front end), by name.
+    pub input_series: Vec<(String, sim::Series)>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -66,6 +68,8 @@ pub struct Settings {
     pub sets: Vec<Assignment>,
     /// The inputs driven, each by a scene expression of t, the state and the parameters.
     pub drives: Vec<Assignment>,
+    /// The inputs given as time series, by name.
+    pub series: Vec<(String, sim::Series)>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -186,6 +190,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         .drives
         .into_iter()
         .filter(|d| !options.input.iter().any(|a| a.name == d.input))
+        .filter(|d| !options.input_series.iter().any(|(name, _)| *name == d.input))
         .map(|d| Assignment { name: d.input, value: d.law })
         .collect();
     drives.extend(options.input.iter().cloned());
@@ -235,6 +240,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         events,
         sets: options.set.clone(),
         drives,
+        series: options.input_series.clone(),
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -281,9 +287,11 @@ pub fn run(
     let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
     observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
     let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
+    let signals = drive::signals(&prepared, settings)?;
     let mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation());
+            .with_kinds(prepared.stabilisation())
+            .with_signals(signals);
     let (run, wall_seconds, fastest_mode) =
         integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
 

@@ -87,6 +87,7 @@ impl NativeScene {
             step,
             set,
             input,
+            input_series: Vec::new(),
             output,
             stop_when,
             events,

@@ -21,7 +21,11 @@ pub(super) fn laws(
     let mut laws: Vec<(SymId, ExprId)> = Vec::new();
     for drive in drives {
         let Some(index) = model.inputs.iter().position(|u| u.name == drive.name) else {
-            return Err(Error::given(Setting::Input, &drive.name, unknown_input(model, drive)));
+            return Err(Error::given(
+                Setting::Input,
+                &drive.name,
+                unknown_input(model, &drive.name),
+            ));
         };
         let sym = model.inputs[index].sym;
         if laws.iter().any(|(s, _)| *s == sym) {
@@ -35,14 +39,51 @@ pub(super) fn laws(
     Ok(laws)
 }
 
-/// Why no input has the name `drive` gives, with the nearest name and the inputs there are.
-fn unknown_input(model: &model::Model, drive: &Assignment) -> String {
+/// The parameter slots of the inputs the settings give as time series, each with its series;
+/// refused where a series does not cover the run, or its input is also driven by a law.
+pub(super) fn signals(
+    prepared: &Prepared,
+    settings: &super::Settings,
+) -> Result<Vec<(usize, sim::Series)>, Error> {
+    let model = &prepared.derivation.model;
+    let mut signals = Vec::new();
+    for (name, series) in &settings.series {
+        let Some(input) = model.inputs.iter().find(|u| u.name == *name) else {
+            return Err(Error::given(Setting::Input, name, unknown_input(model, name)));
+        };
+        let Some(slot) = prepared.parameters.iter().position(|s| *s == input.sym) else {
+            return Err(Error::given(Setting::Input, name, ": has no slot in this run"));
+        };
+        if settings.drives.iter().any(|d| d.name == *name)
+            || signals.iter().any(|(s, _)| *s == slot)
+        {
+            return Err(Error::given(Setting::Input, name, ": driven twice"));
+        }
+        let (first, last) = series.span();
+        if first > 0.0 || last < settings.until {
+            return Err(Error::given(
+                Setting::Input,
+                name,
+                format!(
+                    ": the series spans t = {first} to {last} s, and the run needs it from 0 to \
+                     {} s; extend it, or shorten the run",
+                    settings.until
+                ),
+            ));
+        }
+        signals.push((slot, series.clone()));
+    }
+    Ok(signals)
+}
+
+/// Why no input has the name given, with the nearest name and the inputs there are.
+fn unknown_input(model: &model::Model, given: &str) -> String {
     let names: Vec<&str> = model.inputs.iter().map(|u| u.name.as_str()).collect();
     if names.is_empty() {
         return ": the scene has no input; declare one with `input NAME = VALUE UNIT`".into();
     }
     let known = names.join(", ");
-    match model::closest(&drive.name, names.iter().copied()) {
+    match model::closest(given, names.iter().copied()) {
         Some(near) => format!(": no input of that name; did you mean `{near}`? (inputs: {known})"),
         None => format!(": no input of that name; the inputs are {known}"),
     }
