@@ -199,3 +199,46 @@ fn the_scene_s_simulate_block_drives_an_input_and_the_command_line_overrides_it(
     let error = simulate(&misnamed, &Options::default()).err().expect("refused").to_string();
     assert!(error.contains("no input `G` (line 6, column 29)"), "{error}");
 }
+
+/// A free mass pushed by a force given as samples: F = 2·t up to t = 1, then 2, linear in
+/// between; x = t³/6, then 1/6 + (t − 1)/2 + (t − 1)²/2.
+#[test]
+fn an_input_follows_a_time_series_between_its_samples() {
+    let scene = "\
+param m = 2 kg
+input F = 0 N
+coord x
+particle p { mass m; position (x, 0) }
+force push on p: (F, 0)
+";
+    let series = cli::series::parse("t, F\n0, 0\n1, 2\n2, 2\n").expect("a series");
+    let options = Options {
+        input_series: vec![("F".into(), series.clone())],
+        until: Some(2.0),
+        samples: 9,
+        tolerance: Some(1e-12),
+        output: vec!["x, F".into()],
+        ..Options::default()
+    };
+    let exact = |t: f64| {
+        if t <= 1.0 {
+            t.powi(3) / 6.0
+        } else {
+            1.0 / 6.0 + (t - 1.0) / 2.0 + (t - 1.0).powi(2) / 2.0
+        }
+    };
+    for method in ["dop853", "radau"] {
+        let options = Options { method: Some(method.into()), ..options.clone() };
+        let run = simulate(scene, &options).unwrap_or_else(|e| panic!("{method}: {e}"));
+        for (t, row) in run.run.trajectory.times.iter().zip(&run.run.trajectory.rows) {
+            assert!((row[0] - exact(*t)).abs() < 1e-8, "{method} t = {t}: x = {}", row[0]);
+            assert_eq!(row[1], series.at(*t), "{method} t = {t}");
+        }
+    }
+    let longer = Options { until: Some(3.0), ..options.clone() };
+    let error = simulate(scene, &longer).err().expect("past the series").to_string();
+    assert!(error.contains("the series spans t = 0 to 2 s"), "{error}");
+    let twice = Options { input: vec!["F=1".parse().expect("an assignment")], ..options };
+    let error = simulate(scene, &twice).err().expect("driven twice").to_string();
+    assert!(error.contains("driven twice"), "{error}");
+}

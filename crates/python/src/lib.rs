@@ -13,6 +13,7 @@ mod numbers;
 mod sympy;
 
 use numpy::PyArray1;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -61,7 +62,8 @@ impl NativeScene {
     /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
                         output = Vec::new(), set = Vec::new(), input = Vec::new(),
-                        stop_when = Vec::new(), events = Vec::new(), samples = 0))]
+                        input_series = Vec::new(), stop_when = Vec::new(),
+                        events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
@@ -73,6 +75,7 @@ impl NativeScene {
         output: Vec<String>,
         set: Vec<String>,
         input: Vec<String>,
+        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
@@ -80,6 +83,12 @@ impl NativeScene {
         let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
         let input = engine::input::assignments_of(engine::Setting::Input, &input)
             .map_err(|e| engine_error(&e, &self.path))?;
+        let mut series = Vec::new();
+        for (name, times, values) in input_series {
+            let samples = sim::Series::new(times, values)
+                .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
+            series.push((name, samples));
+        }
         let options = engine::simulate::Options {
             until,
             method,
@@ -87,7 +96,7 @@ impl NativeScene {
             step,
             set,
             input,
-            input_series: Vec::new(),
+            input_series: series,
             output,
             stop_when,
             events,

@@ -60,6 +60,18 @@ pub enum SeriesError {
     NotFinite(usize),
 }
 
+impl std::fmt::Display for SeriesError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SeriesError::TooShort => f.write_str("a series needs at least two samples"),
+            SeriesError::NotIncreasing(k) => {
+                write!(f, "the time of sample {k} (from 0) is not after the one before")
+            }
+            SeriesError::NotFinite(k) => write!(f, "sample {k} (from 0) is not a finite number"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
