@@ -74,7 +74,7 @@ mod tests {
 
     #[test]
     fn a_bad_cell_is_found_by_line_and_column() {
-        let at = |text: &str| parse(text).err().map(|(l, c, m)| (l, c, m));
+        let at = |text: &str| parse(text).err();
         assert_eq!(at("t,F\n0,1\n1, x1\n"), Some((3, 4, "`x1` is not a number".into())));
         assert_eq!(
             at("0,1\n1,2,3\n").map(|e| (e.0, e.2)),
