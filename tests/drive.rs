@@ -251,3 +251,33 @@ force push on p: (F, 0)
     let error = simulate(scene, &twice).err().expect("driven twice").to_string();
     assert!(error.contains("driven twice"), "{error}");
 }
+
+/// A `draw` line that shows the input draws what drives it: here from the mass to
+/// x + F/k = 0, always at the origin.
+#[test]
+fn a_drawing_of_a_driven_input_shows_its_law() {
+    let scene = "\
+param m = 1 kg, k = 4 N/m
+input F = 0 N
+coord x = 1
+particle p { mass m; position (x, 0) }
+force push on p: (F, 0)
+draw line from p to p.position + (F/k, 0)
+";
+    let options = Options {
+        input: vec!["F=-k*x".parse().expect("an assignment")],
+        until: Some(1.0),
+        samples: 11,
+        animate: true,
+        ..Options::default()
+    };
+    let outcome = simulate(scene, &options).expect("runs");
+    let animation = outcome.animation.expect("an animation");
+    let line = animation.figures.iter().find(|f| f.label.contains("F/k")).expect("the line");
+    assert_eq!(line.frames.len(), 11);
+    for frame in &line.frames {
+        // (x, 0) to (x + F/k, 0) = (0, 0), with x moving.
+        assert!(frame[2].abs() < 1e-12, "{frame:?}");
+    }
+    assert!(line.frames.iter().any(|f| (f[0] - 1.0).abs() > 0.1), "the mass moves");
+}

@@ -283,7 +283,11 @@ pub fn run(
     let mut observed: Vec<cas::ExprId> = prepared.extra[..columns.figures()].to_vec();
     // The figures' numbers follow the energies, before the constraints' residuals that the
     // integrator appends.
-    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    let mut plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    // A `draw` line may show an input: what drives it, in a driven run.
+    for e in plan.iter_mut().flat_map(|p| p.exprs.iter_mut()) {
+        *e = prepared.with_laws(*e);
+    }
     let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
     observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
     let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;

@@ -111,6 +111,12 @@ impl Prepared {
             driven(&mut m.phi);
         }
         self.extra.iter_mut().for_each(&mut driven);
+        self.driven = map;
+    }
+
+    /// `e` with the driven inputs' laws in place of their symbols.
+    pub(super) fn with_laws(&mut self, e: ExprId) -> ExprId {
+        self.derivation.model.pool.subst(e, &self.driven)
     }
 }
 
