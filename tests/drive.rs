@@ -281,3 +281,31 @@ draw line from p to p.position + (F/k, 0)
     }
     assert!(line.frames.iter().any(|f| (f[0] - 1.0).abs() > 0.1), "the mass moves");
 }
+
+/// gauss and midpoint differentiate the Lagrangian, where an input in a potential would
+/// bring its law's derivative along; they refuse such a run, and dop853 takes it.
+#[test]
+fn the_symplectic_methods_refuse_an_input_driven_inside_a_potential() {
+    let scene = "\
+param m = 1 kg
+input F = 0 N
+coord x = 1
+particle p { mass m; position (x, 0) }
+potential -F*x
+";
+    let options = |method: &str| Options {
+        input: vec!["F=1".parse().expect("an assignment")],
+        method: Some(method.into()),
+        until: Some(0.1),
+        samples: 2,
+        ..Options::default()
+    };
+    for method in ["gauss", "midpoint"] {
+        let error = simulate(scene, &options(method)).err().expect("refused").to_string();
+        assert!(error.contains("the driven input `F` is in it"), "{error}");
+    }
+    // x'' = F/m = 1 from rest: x = 1 + t²/2.
+    let run = simulate(scene, &options("dop853")).expect("runs");
+    let x = run.run.trajectory.rows.last().expect("rows")[0];
+    assert!((x - 1.005).abs() < 1e-12, "x(0.1) = {x}");
+}
