@@ -15,6 +15,7 @@ pub mod linearize;
 pub mod plot;
 pub mod progress;
 pub mod report;
+pub mod series;
 pub mod simulate;
 
 use engine::Options;

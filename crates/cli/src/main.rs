@@ -75,6 +75,12 @@ enum Command {
         /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
+        /// Drive an input by an expression of t, the coordinates, their rates and the
+        /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`; or by a time
+        /// series, `--input F=push.csv` (a time and a value a row, linear in between). An input
+        /// not driven keeps its declared value.
+        #[arg(long = "input", value_name = "NAME=EXPR")]
+        input: Vec<Assignment>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -267,6 +273,7 @@ fn main() -> ExitCode {
             tolerance,
             step,
             set,
+            input,
             output,
             stop_when,
             event,
@@ -277,6 +284,18 @@ fn main() -> ExitCode {
             samples,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let (files, input): (Vec<_>, Vec<_>) =
+                input.into_iter().partition(cli::series::is_series);
+            let mut input_series = Vec::new();
+            for given in files {
+                match cli::series::read(std::path::Path::new(&given.value)) {
+                    Ok(series) => input_series.push((given.name, series)),
+                    Err(e) => {
+                        eprintln!("error: --input {}: {e}", given.name);
+                        return ExitCode::from(2);
+                    }
+                }
+            }
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
@@ -286,6 +305,8 @@ fn main() -> ExitCode {
                 tolerance,
                 step,
                 set,
+                input,
+                input_series,
                 output,
                 stop_when,
                 events: event,

@@ -112,6 +112,8 @@ pub enum Setting {
     Set,
     Sweep,
     About,
+    /// An input driven in a run, `name=expression`.
+    Input,
 }
 
 impl Setting {
@@ -124,6 +126,7 @@ impl Setting {
             Setting::Set => "set",
             Setting::Sweep => "sweep",
             Setting::About => "about",
+            Setting::Input => "input",
         }
     }
 }

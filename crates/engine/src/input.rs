@@ -69,9 +69,17 @@ impl fmt::Display for Assignment {
 /// each read as [`Assignment::from_str`] reads it; the first that cannot be, as an
 /// [`Error::Setting`] naming it.
 pub fn assignments<S: AsRef<str>>(texts: &[S]) -> Result<Vec<Assignment>, Error> {
+    assignments_of(Setting::Set, texts)
+}
+
+/// [`assignments`] given for `setting` (`set`, or `input` for the inputs a run drives).
+pub fn assignments_of<S: AsRef<str>>(
+    setting: Setting,
+    texts: &[S],
+) -> Result<Vec<Assignment>, Error> {
     let read = |text: &S| {
         let text = text.as_ref();
-        text.parse().map_err(|e| Error::setting(Setting::Set, format!(" `{text}`: {e}")))
+        text.parse().map_err(|e| Error::setting(setting, format!(" `{text}`: {e}")))
     };
     texts.iter().map(read).collect()
 }

@@ -21,6 +21,8 @@ pub struct Prepared {
     pub extra: Vec<ExprId>,
     pub parameters: Vec<SymId>,
     pub layout: Layout,
+    /// The inputs a run drives by laws, each with its law (empty unless `simulate --input`).
+    pub driven: std::collections::HashMap<SymId, ExprId>,
 }
 
 /// Loads `source` with `extra` expressions resolved against it as the scene's `show` items
@@ -65,7 +67,7 @@ pub(crate) fn prepare_resolved(
         multipliers: derivation.multipliers.len(),
         parameters: parameters.len(),
     };
-    Ok(Prepared { derivation, extra: exprs, parameters, layout })
+    Ok(Prepared { derivation, extra: exprs, parameters, layout, driven: Default::default() })
 }
 
 impl Prepared {

@@ -8,6 +8,7 @@ use std::time::Instant;
 use numeric::Tape;
 use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+mod drive;
 mod fault;
 mod on_demand;
 
@@ -15,7 +16,7 @@ pub use fault::FastestMode;
 
 use crate::animate::{Animation, Plan};
 use crate::input::Assignment;
-use crate::numbers::{prepare, Prepared};
+use crate::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
 
 use crate::{Error, Setting};
@@ -29,6 +30,10 @@ pub struct Options {
     pub step: Option<f64>,
     /// Values in place of the scene's.
     pub set: Vec<Assignment>,
+    /// Inputs driven by expressions of t, the state and the parameters (`F=-20*x - 5*x'`).
+    pub input: Vec<Assignment>,
+    /// Inputs given as time series (read from files by the front end), by name.
+    pub input_series: Vec<(String, sim::Series)>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -61,6 +66,10 @@ pub struct Settings {
     pub events: Vec<String>,
     /// `--set` values, each a scene expression.
     pub sets: Vec<Assignment>,
+    /// The inputs driven, each by a scene expression of t, the state and the parameters.
+    pub drives: Vec<Assignment>,
+    /// The inputs given as time series, by name.
+    pub series: Vec<(String, sim::Series)>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -176,6 +185,15 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
     let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
+    // The scene's laws, each replaced by the front end's for the same input.
+    let mut drives: Vec<Assignment> = scene
+        .drives
+        .into_iter()
+        .filter(|d| !options.input.iter().any(|a| a.name == d.input))
+        .filter(|d| !options.input_series.iter().any(|(name, _)| *name == d.input))
+        .map(|d| Assignment { name: d.input, value: d.law })
+        .collect();
+    drives.extend(options.input.iter().cloned());
     if let Some(u) = options.until {
         until = u;
     }
@@ -221,6 +239,8 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         stops,
         events,
         sets: options.set.clone(),
+        drives,
+        series: options.input_series.clone(),
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -263,13 +283,19 @@ pub fn run(
     let mut observed: Vec<cas::ExprId> = prepared.extra[..columns.figures()].to_vec();
     // The figures' numbers follow the energies, before the constraints' residuals that the
     // integrator appends.
-    let plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    let mut plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
+    // A `draw` line may show an input: what drives it, in a driven run.
+    for e in plan.iter_mut().flat_map(|p| p.exprs.iter_mut()) {
+        *e = prepared.with_laws(*e);
+    }
     let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
     observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
     let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
+    let signals = drive::signals(&prepared, settings)?;
     let mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation());
+            .with_kinds(prepared.stabilisation())
+            .with_signals(signals);
     let (run, wall_seconds, fastest_mode) =
         integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
 
@@ -338,7 +364,7 @@ impl Columns {
 }
 
 /// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
-/// then the `--set` values; with the outputs (the remaining coordinates when the settings name
+/// then the `--set` values, and its driven inputs replaced by their laws; with the outputs (the remaining coordinates when the settings name
 /// none) and the `--set` values' expressions.
 fn load(
     source: &str,
@@ -352,7 +378,12 @@ fn load(
     extra.push("KE".into());
     extra.push("PE".into());
     extra.extend(settings.sets.iter().map(|a| a.value.clone()));
-    let mut prepared = prepare(source, &extra, crate::Options { units: settings.units })?;
+    let (mut model, warnings) =
+        crate::resolve_with(source, crate::Options { units: settings.units })?;
+    let laws = drive::laws(&mut model, &settings.drives)?;
+    let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
+    prepared.drive(&laws);
+    drive::check_method(&mut prepared, &laws, settings.method)?;
     if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
         outputs = prepared.coordinate_names();

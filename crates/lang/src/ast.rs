@@ -124,6 +124,8 @@ pub struct Property {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Setting {
     pub key: Ident,
+    /// What the setting sets, where the key takes one: `input F = …` names `F`.
+    pub target: Option<Ident>,
     pub values: Vec<Expr>,
     pub unit: Option<Unit>,
 }

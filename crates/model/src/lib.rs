@@ -377,6 +377,16 @@ pub struct Simulation {
     pub stops: Vec<String>,
     /// Expressions whose zero crossings are recorded, as written.
     pub events: Vec<String>,
+    /// Inputs driven in a run (`input F = -k*x`), each named once, the last line winning.
+    pub drives: Vec<Drive>,
+}
+
+/// An `input NAME = EXPR` setting of a `simulate` block: the input (one the scene declares)
+/// and the law that drives it, as written, resolved when a run asks for it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Drive {
+    pub input: String,
+    pub law: String,
 }
 
 /// Everything a scene says, resolved.

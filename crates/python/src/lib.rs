@@ -13,6 +13,7 @@ mod numbers;
 mod sympy;
 
 use numpy::PyArray1;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -60,7 +61,8 @@ impl NativeScene {
 
     /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
-                        output = Vec::new(), set = Vec::new(), stop_when = Vec::new(),
+                        output = Vec::new(), set = Vec::new(), input = Vec::new(),
+                        input_series = Vec::new(), stop_when = Vec::new(),
                         events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
@@ -72,17 +74,29 @@ impl NativeScene {
         step: Option<f64>,
         output: Vec<String>,
         set: Vec<String>,
+        input: Vec<String>,
+        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
+        let input = engine::input::assignments_of(engine::Setting::Input, &input)
+            .map_err(|e| engine_error(&e, &self.path))?;
+        let mut series = Vec::new();
+        for (name, times, values) in input_series {
+            let samples = sim::Series::new(times, values)
+                .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
+            series.push((name, samples));
+        }
         let options = engine::simulate::Options {
             until,
             method,
             tolerance,
             step,
             set,
+            input,
+            input_series: series,
             output,
             stop_when,
             events,

@@ -10,7 +10,8 @@
 //! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems, and
 //! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
-//! events located on the dense output, and the measurements of a run (steps, evaluations,
+//! events located on the dense output, signals given as time series put into their parameter
+//! slots before each evaluation, and the measurements of a run (steps, evaluations,
 //! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
 //! were derived.
@@ -27,11 +28,13 @@ mod mechanical;
 mod radau;
 pub mod reference;
 mod run;
+mod series;
 mod spectrum;
 
 pub use constrained::Constrained;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use series::{Series, SeriesError};
 pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
 /// What went wrong numerically, with the slots involved.

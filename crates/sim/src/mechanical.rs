@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use numeric::Tape;
 
 use crate::linalg;
-use crate::{check_finite, FaultKind, Problem};
+use crate::{check_finite, FaultKind, Problem, Series};
 
 mod jacobian;
 
@@ -81,6 +81,8 @@ pub struct Mechanical {
     /// The partials program and its outputs, when an exact Jacobian was asked for.
     partials: Option<Tape>,
     partials_out: Vec<f64>,
+    /// Parameter slots that follow a time series: set from t before each evaluation.
+    signals: Vec<(usize, Series)>,
 }
 
 impl Mechanical {
@@ -106,6 +108,7 @@ impl Mechanical {
             pivots: vec![0; size],
             partials: None,
             partials_out: Vec::new(),
+            signals: Vec::new(),
         }
     }
 
@@ -135,6 +138,21 @@ impl Mechanical {
         self.partials = Some(partials);
     }
 
+    /// Makes each parameter slot given follow its series: the slot takes the series' value
+    /// at t before every evaluation at t.
+    pub fn with_signals(mut self, signals: Vec<(usize, Series)>) -> Self {
+        assert!(signals.iter().all(|(slot, _)| *slot < self.layout.parameters));
+        self.signals = signals;
+        self
+    }
+
+    /// Puts the signals' values at `t` into their parameter slots.
+    pub(crate) fn follow_signals(&mut self, t: f64) {
+        for (slot, series) in &self.signals {
+            self.parameters[*slot] = series.at(t);
+        }
+    }
+
     /// Says which kept constraints restrain velocities rather than positions.
     pub fn with_kinds(mut self, kinds: Vec<Stabilisation>) -> Self {
         assert_eq!(kinds.len(), self.layout.multipliers);
@@ -145,6 +163,7 @@ impl Mechanical {
     /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
     pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
         let Layout { coordinates: n, parameters: k, .. } = self.layout;
+        self.follow_signals(t);
         self.input[0] = t;
         self.input[1..1 + 2 * n].copy_from_slice(y);
         self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
@@ -273,6 +292,7 @@ impl Mechanical {
     /// the dynamics program was evaluated there.
     pub(crate) fn observe_given(&mut self, t: f64, y: &[f64], solution: &[f64], out: &mut [f64]) {
         let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.follow_signals(t);
         let inp = &mut self.obs_input;
         inp[0] = t;
         inp[1..1 + 2 * n].copy_from_slice(y);
@@ -339,6 +359,7 @@ impl Canonical {
             Some(r) => self.input[1 + n..1 + 2 * n].copy_from_slice(r),
             None => self.input[1 + n..1 + 2 * n].iter_mut().for_each(|v| *v = 0.0),
         }
+        self.inner.follow_signals(t);
         let k = self.inner.parameters.len();
         self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.inner.parameters);
     }

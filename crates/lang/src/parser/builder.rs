@@ -467,15 +467,18 @@ impl Builder<'_> {
             .next()
             .map(|p| self.ident(&p))
             .unwrap_or_else(|| Ident { name: String::new(), span: Span::default() });
-        let mut values = Vec::new();
-        let mut unit = None;
+        let (mut target, mut values, mut unit) = (None, Vec::new(), None);
         for p in parts {
             match p.as_rule() {
                 Rule::unit => unit = Some(self.unit(p)?),
+                Rule::setting_target => {
+                    target = p.into_inner().next().map(|name| self.ident(&name));
+                }
+                Rule::eq => {}
                 _ => values.push(self.expr(p)?),
             }
         }
-        Ok(Setting { key, values, unit })
+        Ok(Setting { key, target, values, unit })
     }
 
     fn unit(&self, pair: Pair<'_, Rule>) -> Built<Unit> {

@@ -138,6 +138,17 @@ pub(super) const DRAWING: Role = Role {
     inputs: true,
 };
 
+/// What drives an input in a run (`simulate --input F=-20*x`): evaluated before the
+/// accelerations are solved for, so it cannot need them.
+pub(super) const DRIVE: Role = Role {
+    what: "what drives an input",
+    max_order: 1,
+    hint: "an input is driven by an expression of `t`, the coordinates, their rates and the \
+           parameters (a state-feedback law such as `-k*x - c*x'`), not accelerations or \
+           reactions, which are solved for with the input's value",
+    differentiated: false,
+    inputs: true,
+};
 pub(super) const OUTPUT: Role = Role {
     what: "an output",
     max_order: 1,

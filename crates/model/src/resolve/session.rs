@@ -39,6 +39,15 @@ impl Model {
         self.resolving(text, |r| r.value(&expr).map(|(v, _)| v))
     }
 
+    /// Resolves `text`, what drives the input of index `input` in a run (a feedback law such
+    /// as `-20*x - 5*x'`), against the scene as an expression after it: of `t`, the state and
+    /// the parameters, with the input's dimension. On failure, the diagnostics, with spans
+    /// into `text`.
+    pub fn resolve_drive(&mut self, input: usize, text: &str) -> Result<ExprId, Vec<Diagnostic>> {
+        let expr = lang::parse_expression(text)?;
+        self.resolving(text, |r| r.drive(input, &expr))
+    }
+
     /// Resolves `text`, the items of a reference (`theta = 0, phi' = 2`), against the scene as
     /// a `linearize about` line after the scene's own, which it overrides item by item. On
     /// failure, the diagnostics, with spans into `text`.

@@ -5,7 +5,7 @@
 use cas::{ExprId, SymId};
 use lang::{Diagnostic, Expr, Span};
 
-use super::checks::{Role, OUTPUT};
+use super::checks::{Role, DRIVE, OUTPUT};
 use super::dims::NameDims;
 use super::{normalize, Binding, Resolver};
 use crate::{Input, Output, Placeholder, Value};
@@ -48,13 +48,7 @@ impl Resolver<'_> {
     /// no reaction (its gradient is a row of C and D).
     pub(super) fn output_statement(&mut self, name: &lang::Ident, e: &Expr) {
         let Some((value, _)) = self.scalar_in_role(e, &OUTPUT) else { return };
-        let reaction = self.model.pool.free_symbols(value).iter().copied().find(|s| {
-            self.model
-                .placeholders
-                .iter()
-                .any(|(p, k)| p == s && matches!(k, Placeholder::Reaction(_)))
-        });
-        if reaction.is_some() {
+        if self.names_reaction(value) {
             self.error(
                 Diagnostic::error(e.span, "an output cannot name a reaction")
                     .with_label("a reaction is found with the accelerations")
@@ -71,6 +65,45 @@ impl Resolver<'_> {
             return;
         }
         self.model.outputs.push(Output { name: key, value, span: name.span });
+    }
+
+    /// Whether `value` names a reaction, which is found only with the accelerations.
+    fn names_reaction(&mut self, value: ExprId) -> bool {
+        self.model.pool.free_symbols(value).iter().any(|s| {
+            self.model
+                .placeholders
+                .iter()
+                .any(|(p, k)| p == s && matches!(k, Placeholder::Reaction(_)))
+        })
+    }
+
+    /// What drives the input `input` (its index) in a run: a scalar of `t`, the state and the
+    /// parameters, of the input's dimension, naming no acceleration, reaction or input.
+    pub(super) fn drive(&mut self, input: usize, e: &Expr) -> Option<ExprId> {
+        let (value, dims) = self.scalar_in_role(e, &DRIVE)?;
+        let name = self.model.inputs[input].name.clone();
+        let refusal = if self.names_reaction(value) {
+            Some(("cannot name a reaction", "a reaction is found with the accelerations"))
+        } else if self.input_in(&Value::Scalar(value)).is_some() {
+            Some(("cannot name an input", "an input, driven or held at its value"))
+        } else {
+            None
+        };
+        if let Some((message, label)) = refusal {
+            self.error(
+                Diagnostic::error(e.span, format!("what drives `{name}` {message}"))
+                    .with_label(label)
+                    .with_hint(DRIVE.hint),
+            );
+            return None;
+        }
+        // A number alone takes the input's dimension, as a force written `(1, 0)` does.
+        let form = self.operand_form(dims);
+        if let Some(declared) = self.scope.name_dims.get(&name).and_then(|d| d.form.clone()) {
+            let what = format!("between the input `{name}` and what drives it");
+            self.scope.units.same(&declared, &form, e.span, e.span, &what);
+        }
+        Some(value)
     }
 
     /// The first input in `value`, if any.

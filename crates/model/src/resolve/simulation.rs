@@ -9,7 +9,8 @@ use crate::units::{parse_unit, Dim};
 use crate::Number;
 
 /// The settings a `simulate` block knows, in the order a hint lists them.
-const SETTINGS: [&str; 7] = ["until", "method", "tolerance", "step", "output", "stop", "event"];
+const SETTINGS: [&str; 8] =
+    ["until", "method", "tolerance", "step", "output", "stop", "event", "input"];
 
 /// What a number setting measures.
 #[derive(Clone, Copy, PartialEq)]
@@ -39,6 +40,14 @@ impl Resolver<'_> {
     }
 
     fn setting(&mut self, setting: &Setting) {
+        if let (Some(target), false) = (&setting.target, setting.key.name == "input") {
+            self.error(
+                Diagnostic::error(target.span, format!("`{}` takes no name", setting.key.name))
+                    .with_label("`NAME =` is for `input`")
+                    .with_hint("only `input F = EXPR` names what it sets"),
+            );
+            return;
+        }
         match setting.key.name.as_str() {
             "until" => {
                 if let Some(n) = self.setting_number(setting, Measure::Time) {
@@ -63,6 +72,7 @@ impl Resolver<'_> {
             "output" => self.model.simulation.outputs = self.setting_texts(setting, "outputs"),
             "stop" => self.model.simulation.stops = self.setting_texts(setting, "stops"),
             "event" => self.model.simulation.events = self.setting_texts(setting, "events"),
+            "input" => self.drive_setting(setting),
             other => {
                 let d = Diagnostic::error(
                     setting.key.span,
@@ -176,6 +186,46 @@ impl Resolver<'_> {
         }
         texts.extend(setting.values.iter().map(|v| self.text(v.span)));
         texts
+    }
+
+    /// `input F = EXPR`: an input the scene declares, driven in a run by a law kept as
+    /// written, which the run resolves.
+    fn drive_setting(&mut self, setting: &Setting) {
+        let form = "write `input NAME = EXPR`, such as `input F = -k*x`";
+        let Some(target) = &setting.target else {
+            self.error(
+                Diagnostic::error(setting.key.span, "`input` needs the input it drives")
+                    .with_label("no `NAME =`")
+                    .with_hint(form),
+            );
+            return;
+        };
+        let name = super::normalize(&target.name);
+        if !self.model.inputs.iter().any(|u| u.name == name) {
+            let inputs: Vec<&str> = self.model.inputs.iter().map(|u| u.name.as_str()).collect();
+            let d = Diagnostic::error(target.span, format!("no input `{}`", target.name))
+                .with_label("not an input");
+            let hint = match (closest(&name, inputs.iter().copied()), inputs.is_empty()) {
+                (_, true) => "the scene declares no input: add `input NAME = VALUE UNIT`".into(),
+                (Some(near), false) => format!("did you mean `{near}`?"),
+                (None, false) => format!("the inputs are {}", inputs.join(", ")),
+            };
+            self.error(d.with_hint(hint));
+            return;
+        }
+        let (Some(value), 1, None) = (setting.values.first(), setting.values.len(), &setting.unit)
+        else {
+            self.error(
+                Diagnostic::error(setting.key.span, "`input` takes one law and no unit")
+                    .with_label("here")
+                    .with_hint(form),
+            );
+            return;
+        };
+        let law = self.text(value.span);
+        let drives = &mut self.model.simulation.drives;
+        drives.retain(|d| d.input != name);
+        drives.push(crate::Drive { input: name, law });
     }
 
     /// The value of a setting that takes one.

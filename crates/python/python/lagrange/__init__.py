@@ -86,6 +86,21 @@ def _assignments(set):
     return [str(item) for item in set]
 
 
+def _inputs(given):
+    """``input`` as laws (``name=value`` texts) and time series (name, times, values): a dict
+    of name to a law, or to a pair ``(times, values)`` of equal-length sequences."""
+    if not isinstance(given, dict):
+        return _assignments(given), []
+    laws, series = {}, []
+    for name, value in given.items():
+        if isinstance(value, (tuple, list)) and len(value) == 2 and not isinstance(value[0], str):
+            times, values = value
+            series.append((str(name), [float(t) for t in times], [float(v) for v in values]))
+        else:
+            laws[name] = value
+    return _assignments(laws), series
+
+
 def _sweep_text(sweep):
     """``sweep`` as ``p=a:b:n``: a text of that form, or a dict of one parameter to
     ``(a, b, n)``."""
@@ -220,6 +235,7 @@ class Scene:
         set=None,
         *,
         step=None,
+        input=None,
         stop_when=None,
         events=None,
         samples=0,
@@ -236,6 +252,11 @@ class Scene:
         - ``set``: a dict of parameter, coordinate or rate (``"theta'"``) name to a number or
           a scene expression, in place of the scene's values (``{"g": 1.62}``); or texts as
           the command line takes them, ``"g=1.62"`` or a list of them.
+        - ``input``: a dict of the scene's input name to what drives it, a number or a scene
+          expression of ``t``, the coordinates, their rates and the parameters, such as a
+          state-feedback law (``{"F": "-20*x - 5*x'"}``), or a time series as a pair
+          ``(times, values)``, linear between the samples and spanning the run; or ``"F=..."``
+          texts. An input not driven keeps its declared value.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -257,6 +278,7 @@ class Scene:
             raise TypeError(f"`samples` must be a whole number, not {samples!r}")
         if samples < 0:
             raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
+        laws, series = _inputs(input)
         raw = self._native.simulate(
             until=None if until is None else float(until),
             method=method,
@@ -264,6 +286,8 @@ class Scene:
             step=None if step is None else float(step),
             output=listed(output),
             set=_assignments(set),
+            input=laws,
+            input_series=series,
             stop_when=listed(stop_when),
             events=listed(events),
             samples=int(samples),

@@ -26,6 +26,7 @@ impl Mechanical {
         unknowns: &[f64],
     ) -> Result<Option<&[f64]>, FaultKind> {
         let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.follow_signals(t);
         let Some(tape) = self.partials.as_mut() else { return Ok(None) };
         assert_eq!(y.len(), 2 * n, "state length");
         assert_eq!(unknowns.len(), n + m, "accelerations and multipliers");
