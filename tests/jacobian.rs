@@ -151,10 +151,7 @@ fn check_scene(rel: &str, source: &str, tally: &mut Tally) {
         if kept {
             // The same state in the differential–algebraic form, with its consistent a and λ
             // (where the augmented system is regular there).
-            let parameters: Vec<f64> =
-                prepared.parameters.iter().map(|s| values[s.index()]).collect();
-            let mut constrained =
-                Constrained::new(lagrange_tests::mechanical(&mut prepared, &parameters));
+            let mut constrained = Constrained::new(at.mechanical);
             if let Ok(z) = constrained.consistent_state(at.t, &at.y) {
                 let worst =
                     compare(&mut constrained, at.t, &z).unwrap_or_else(|e| panic!("{rel}: {e}"));

@@ -561,9 +561,7 @@ fn with_partials(
     if !method.uses_jacobian() {
         return Ok(mechanical);
     }
-    let exprs = prepared.partials_exprs();
-    let partials = prepared.lower(&prepared.observation_inputs(), &exprs)?;
-    Ok(mechanical.with_partials(Tape::new(partials)))
+    Ok(mechanical.with_partials(on_demand::lower_partials(prepared)?))
 }
 
 /// Bodies in space oriented by angles (not Euler parameters).

@@ -137,12 +137,16 @@ impl Problem for Constrained {
     /// solution at (q, v) is as accurate as they are.
     fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
         let n = self.layout().coordinates;
+        // The solve evaluates the dynamics at (t, q, v), whose constraint values the
+        // observation reads; where the augmented system is singular the state's own a and λ
+        // are all there is, and the dynamics are evaluated for the observation alone.
         let solved = match self.inner.unstabilised_accelerations(t, &y[..2 * n]) {
             Ok(solved) => solved,
-            // Where the augmented system is singular the state's own values are all there is.
-            Err(_) => y[2 * n..].to_vec(),
+            Err(_) => {
+                self.inner.dynamics_at(t, &y[..2 * n])?;
+                y[2 * n..].to_vec()
+            }
         };
-        self.inner.dynamics_at(t, &y[..2 * n])?;
         self.inner.observe_given(t, &y[..2 * n], &solved, out);
         Ok(())
     }

@@ -63,7 +63,7 @@ pub(crate) fn fastest_mode(
         return None;
     }
     if !problem.has_partials() {
-        problem.set_partials(lower_partials(prepared)?);
+        problem.set_partials(lower_partials(prepared).ok()?);
     }
     let n = problem.dim();
     let mut jac = vec![0.0; n * n];

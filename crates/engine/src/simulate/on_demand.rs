@@ -6,6 +6,7 @@ use numeric::Tape;
 use sim::{Components, FaultKind, Mechanical, Problem};
 
 use crate::numbers::Prepared;
+use crate::Error;
 
 /// A [`Mechanical`] problem whose partials program is lowered from `prepared` on the first
 /// call of [`Problem::jacobian`].
@@ -23,10 +24,9 @@ impl<'a> OnDemand<'a> {
 }
 
 /// The partials program of a problem on (q, q̇), lowered from the derivation's partials.
-pub(crate) fn lower_partials(prepared: &mut Prepared) -> Option<Tape> {
+pub(crate) fn lower_partials(prepared: &mut Prepared) -> Result<Tape, Error> {
     let exprs = prepared.partials_exprs();
-    let program = prepared.lower(&prepared.observation_inputs(), &exprs).ok()?;
-    Some(Tape::new(program))
+    Ok(Tape::new(prepared.lower(&prepared.observation_inputs(), &exprs)?))
 }
 
 impl Problem for OnDemand<'_> {
@@ -46,7 +46,7 @@ impl Problem for OnDemand<'_> {
         if !self.tried {
             self.tried = true;
             // A program that does not lower leaves the method its differences.
-            if let Some(tape) = lower_partials(self.prepared) {
+            if let Ok(tape) = lower_partials(self.prepared) {
                 self.mechanical.set_partials(tape);
             }
         }
