@@ -46,11 +46,11 @@ fn run_once(source: &str, method: &str, k: f64, tolerance: f64) -> Outcome {
     simulate(source, &options).expect("the scene runs")
 }
 
-/// (r, θ, ṙ, θ̇) at the end: the first columns of the last row (the run records its energy
-/// after the outputs asked for).
+/// (r, θ, ṙ, θ̇) at the end: the columns asked for, before what the run records after them
+/// (its energies).
 fn final_state(outcome: &Outcome) -> Vec<f64> {
     let last = outcome.run.trajectory.rows.last().cloned().unwrap_or_default();
-    last.into_iter().take(4).collect()
+    last.into_iter().take(outcome.shown).collect()
 }
 
 fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
