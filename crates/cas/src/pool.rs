@@ -6,7 +6,7 @@
 //! collected, numbers folded, exact values of functions at special points taken.
 
 use std::collections::HashMap;
-use std::rc::Rc;
+use std::sync::Arc;
 
 use rustc_hash::FxHashMap;
 
@@ -25,7 +25,9 @@ pub use node::{ExprId, Func, Node, SymId, Symbol, SymbolKind};
 /// The numeric side of the zero test, handed in by a crate above this one ([`Pool::set_zero_test`]):
 /// this crate evaluates no floats, and the one evaluator of expressions lives in `numeric`
 /// (`numeric::GenericPoints`), which answers these questions at fixed generic points.
-pub trait ZeroTest {
+/// `Send + Sync` as the pool is: a loaded scene may move to another thread or be read from
+/// several (the Python package's objects are used from any thread).
+pub trait ZeroTest: Send + Sync {
     /// Whether `e` is clearly not zero at a generic point, relative to the size of the terms
     /// that make it up: one such point proves that `e` is not identically zero.
     fn clearly_nonzero_somewhere(&self, pool: &Pool, e: ExprId) -> bool;
@@ -52,7 +54,8 @@ pub struct Pool {
     pub(crate) time_memo: FxHashMap<ExprId, ExprId>,
     pub(crate) expand_memo: FxHashMap<ExprId, ExprId>,
     pub(crate) simplify_memo: FxHashMap<ExprId, ExprId>,
-    free_memo: Vec<Option<Rc<[SymId]>>>,
+    // `Arc`, not `Rc`, here and in the sum and product nodes: a pool is `Send + Sync`.
+    free_memo: Vec<Option<Arc<[SymId]>>>,
     zero: ExprId,
     one: ExprId,
     /// The numbers of the zero test, if a crate above handed them in.

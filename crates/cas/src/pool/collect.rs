@@ -1,7 +1,7 @@
 //! The collectors of sums and products: like terms and like powers gathered before a sum or
 //! product is interned.
 
-use std::rc::Rc;
+use std::sync::Arc;
 
 use num_bigint::BigInt;
 use num_traits::{One, Signed, Zero};
@@ -68,7 +68,7 @@ impl SumBuilder {
                 let (t, k) = &terms[0];
                 pool.scale(*t, k)
             }
-            _ => pool.intern(Node::Add(self.constant, Rc::from(terms))),
+            _ => pool.intern(Node::Add(self.constant, Arc::from(terms))),
         }
     }
 }
@@ -251,6 +251,6 @@ impl ProductBuilder {
                 return pool.scale(b, &self.coef);
             }
         }
-        pool.intern(Node::Mul(self.coef, Rc::from(factors)))
+        pool.intern(Node::Mul(self.coef, Arc::from(factors)))
     }
 }

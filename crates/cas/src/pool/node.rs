@@ -2,7 +2,7 @@
 //! equality and hashing interning relies on) and symbols.
 
 use std::hash::{Hash, Hasher};
-use std::rc::Rc;
+use std::sync::Arc;
 
 use crate::number::Rational;
 
@@ -113,10 +113,10 @@ pub enum Node {
     Pi,
     /// `constant + Σ coefficient·term`, terms sorted by id; no term is a number, a sum, or a
     /// product with a coefficient other than 1; at least two parts.
-    Add(Rational, Rc<[(ExprId, Rational)]>),
+    Add(Rational, Arc<[(ExprId, Rational)]>),
     /// `coefficient · Π base^exponent`, bases sorted by id; no base is a product raised to an
     /// integer power or a rational raised to an integer power.
-    Mul(Rational, Rc<[(ExprId, Rational)]>),
+    Mul(Rational, Arc<[(ExprId, Rational)]>),
     /// A power whose exponent is not a number (numeric powers are one-factor products).
     Pow(ExprId, ExprId),
     Func(Func, ExprId),

@@ -1,6 +1,6 @@
 //! Structure queries: free symbols, children, terms and factors of an expression.
 
-use std::rc::Rc;
+use std::sync::Arc;
 
 use num_traits::{One, Zero};
 
@@ -12,13 +12,13 @@ impl Pool {
     // ----- structure queries ---------------------------------------------------------------
 
     /// The symbols `e` depends on, sorted by id. Memoised.
-    pub fn free_symbols(&mut self, e: ExprId) -> Rc<[SymId]> {
+    pub fn free_symbols(&mut self, e: ExprId) -> Arc<[SymId]> {
         if let Some(Some(s)) = self.free_memo.get(e.index()) {
             return s.clone();
         }
         let children = self.children(e);
-        let set: Rc<[SymId]> = match self.node(e) {
-            Node::Sym(s) => Rc::from(vec![*s]),
+        let set: Arc<[SymId]> = match self.node(e) {
+            Node::Sym(s) => Arc::from(vec![*s]),
             _ => {
                 let mut all: Vec<SymId> = Vec::new();
                 for c in children {
@@ -26,7 +26,7 @@ impl Pool {
                 }
                 all.sort_unstable();
                 all.dedup();
-                Rc::from(all)
+                Arc::from(all)
             }
         };
         if self.free_memo.len() <= e.index() {
