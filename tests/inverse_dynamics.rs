@@ -178,7 +178,9 @@ fn tracking_error(source: &str, motion: Motion, until: f64) -> f64 {
         max_steps: 1_000_000,
         samples: 101,
     };
-    let run = sim::integrate(&mut problem, &y0, &settings, &[], &mut |_| {});
+    let run = sim::integrate(&mut problem, &y0, &settings, &[], &mut |_| {
+        std::ops::ControlFlow::Continue(())
+    });
     assert!(run.fault.is_none());
     assert_eq!(run.trajectory.times.len(), 101);
     let mut worst = 0.0f64;

@@ -1,6 +1,8 @@
 //! A run: steps of one method from the start to the end time, the observations recorded at
 //! each accepted step, and events located on the dense output.
 
+use std::ops::ControlFlow;
+
 use crate::auto::Auto;
 use crate::erk::{stability_radius, tableau, Adaptive, Pair, Rk4, Stepper};
 use crate::gauss::Gauss;
@@ -171,6 +173,9 @@ pub struct Run {
     /// Which method ran over which span of time, in order: one segment, unless `auto`
     /// switched.
     pub segments: Vec<Segment>,
+    /// The progress callback asked the run to stop (a front end's Ctrl-C): it ended at
+    /// `final_time`, with what was computed up to there.
+    pub interrupted: bool,
 }
 
 /// A span of a run integrated by one method.
@@ -183,13 +188,16 @@ pub struct Segment {
 
 /// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
 /// observations at every accepted step (and at located events). A fault ends the run early:
-/// what was computed up to it is kept, and the fault says when and where.
+/// what was computed up to it is kept, and the fault says when and where. `progress` is told
+/// the time after every accepted step and may end the run there ([`Run::interrupted`]); it is
+/// the one hook a front end has into the loop, so a check it makes should be cheap or
+/// throttled.
 pub fn integrate(
     problem: &mut dyn Problem,
     y0: &[f64],
     settings: &Settings,
     events: &[Event],
-    progress: &mut dyn FnMut(f64),
+    progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
 ) -> Run {
     let d = problem.dim();
     let mut stepper = stepper_for(settings, problem);
@@ -208,6 +216,7 @@ pub fn integrate(
         final_state: Vec::new(),
         final_time: settings.start,
         segments: Vec::new(),
+        interrupted: false,
     };
     let width = problem.observations();
     let mut t = settings.start;
@@ -272,7 +281,10 @@ pub fn integrate(
             run.trajectory.rows.push(row.clone());
         }
         std::mem::swap(&mut previous_row, &mut row);
-        progress(t);
+        if progress(t).is_break() {
+            run.interrupted = true;
+            break;
+        }
     }
     run.evaluations = stepper.evaluations();
     run.rejected = stepper.rejected();

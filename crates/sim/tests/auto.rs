@@ -10,6 +10,7 @@ mod oscillator;
 
 use oscillator::Oscillator;
 use sim::{integrate, Event, FaultKind, Method, Problem, Run, Segment, Settings};
+use std::ops::ControlFlow;
 
 fn settings(method: Method, until: f64, samples: usize) -> Settings {
     Settings {
@@ -56,7 +57,7 @@ impl Problem for Bump {
 }
 
 fn run(problem: &mut dyn Problem, y0: &[f64], settings: &Settings, events: &[Event]) -> Run {
-    let run = integrate(problem, y0, settings, events, &mut |_| {});
+    let run = integrate(problem, y0, settings, events, &mut |_| ControlFlow::Continue(()));
     assert!(run.fault.is_none(), "{:?}", run.fault);
     run
 }

@@ -5,6 +5,7 @@
 #![allow(clippy::disallowed_methods)]
 
 use sim::{integrate, Event, Method, Settings};
+use std::ops::ControlFlow;
 
 mod oscillator;
 
@@ -20,7 +21,7 @@ fn final_error(method: Method, tolerance: f64, step: f64) -> f64 {
         &[1.0, 0.0],
         &settings(method, tolerance, step),
         &[],
-        &mut |_| {},
+        &mut |_| ControlFlow::Continue(()),
     );
     assert!(run.fault.is_none());
     assert_eq!(run.final_time, 10.0);
@@ -47,8 +48,10 @@ fn adaptive_methods_meet_their_tolerance() {
     }
     // DOP853 needs far fewer evaluations than the 5(4) pair at tight tolerance.
     let count = |m| {
-        integrate(&mut Oscillator, &[1.0, 0.0], &settings(m, 1e-12, 0.0), &[], &mut |_| {})
-            .evaluations
+        integrate(&mut Oscillator, &[1.0, 0.0], &settings(m, 1e-12, 0.0), &[], &mut |_| {
+            ControlFlow::Continue(())
+        })
+        .evaluations
     };
     assert!(count(Method::Dop853) < count(Method::Dopri5));
 }
@@ -62,7 +65,7 @@ fn events_are_located_on_the_dense_output() {
             &[1.0, 0.0],
             &settings(method, 1e-12, 1e-3),
             &[Event { column: 1, stop: true }],
-            &mut |_| {},
+            &mut |_| ControlFlow::Continue(()),
         );
         assert_eq!(run.stopped_by, Some(0));
         let t = run.final_time;
@@ -74,8 +77,45 @@ fn events_are_located_on_the_dense_output() {
         &[1.0, 0.0],
         &settings(Method::Dop853, 1e-10, 0.0),
         &[Event { column: 1, stop: false }],
-        &mut |_| {},
+        &mut |_| ControlFlow::Continue(()),
     );
     assert_eq!(run.events.len(), 3);
     assert_eq!(run.final_time, 10.0);
+}
+
+#[test]
+fn progress_that_breaks_interrupts_the_run_where_it_is() {
+    // The callback ends the run at its first accepted step past t = 2; what was computed up
+    // to there is kept, as far as it got.
+    let mut calls = 0;
+    let run = integrate(
+        &mut Oscillator,
+        &[1.0, 0.0],
+        &settings(Method::Dop853, 1e-10, 0.0),
+        &[],
+        &mut |t| {
+            calls += 1;
+            if t > 2.0 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
+    );
+    assert!(run.interrupted);
+    assert!(run.fault.is_none());
+    assert!(run.final_time > 2.0 && run.final_time < 10.0, "{}", run.final_time);
+    assert_eq!(calls, run.steps);
+    assert_eq!(run.trajectory.times.last(), Some(&run.final_time));
+    assert!((run.final_state[0] - run.final_time.cos()).abs() < 1e-8);
+    // A callback that never breaks leaves the run whole.
+    let whole = integrate(
+        &mut Oscillator,
+        &[1.0, 0.0],
+        &settings(Method::Dop853, 1e-10, 0.0),
+        &[],
+        &mut |_| ControlFlow::Continue(()),
+    );
+    assert!(!whole.interrupted);
+    assert_eq!(whole.final_time, 10.0);
 }

@@ -10,6 +10,7 @@ mod oscillator;
 
 use oscillator::Oscillator;
 use sim::{integrate, Components, Event, FaultKind, Method, Problem, Run, Settings};
+use std::ops::ControlFlow;
 
 fn settings(tolerance: f64, until: f64) -> Settings {
     Settings {
@@ -24,7 +25,9 @@ fn settings(tolerance: f64, until: f64) -> Settings {
 }
 
 fn run(problem: &mut dyn Problem, y0: &[f64], tolerance: f64, until: f64, events: &[Event]) -> Run {
-    let run = integrate(problem, y0, &settings(tolerance, until), events, &mut |_| {});
+    let run = integrate(problem, y0, &settings(tolerance, until), events, &mut |_| {
+        ControlFlow::Continue(())
+    });
     assert!(run.fault.is_none(), "{:?}", run.fault);
     run
 }
@@ -219,7 +222,9 @@ impl Problem for Impossible {
 
 #[test]
 fn newton_that_cannot_converge_says_so_with_the_step_it_got_down_to() {
-    let r = integrate(&mut Impossible, &[0.0, 0.5], &settings(1e-8, 3.0), &[], &mut |_| {});
+    let r = integrate(&mut Impossible, &[0.0, 0.5], &settings(1e-8, 3.0), &[], &mut |_| {
+        ControlFlow::Continue(())
+    });
     let fault = r.fault.expect("no step solves the stage equations");
     assert_eq!((fault.time, r.steps), (0.0, 0), "{fault:?}");
     match fault.kind {
