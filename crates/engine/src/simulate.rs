@@ -3,18 +3,22 @@
 //! `--set` values resolved as expressions in the scene's scope; the initial state, the lowered
 //! programs and the run. Writing the results is the front end's.
 
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 use numeric::Tape;
 use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
 
+mod compiled;
 mod drive;
 mod fault;
 mod on_demand;
 
+pub use compiled::Compiled;
+
 pub use fault::FastestMode;
 
-use crate::animate::{Animation, Plan};
+use crate::animate::Animation;
 use crate::input::Assignment;
 use crate::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
@@ -86,6 +90,12 @@ pub trait Progress {
     fn update(&mut self, _t: f64) {}
     /// The integration is over.
     fn finish(&mut self) {}
+    /// Whether the front end wants the run to stop now (its user pressed Ctrl-C). Asked after
+    /// every accepted step, so it is cheap or throttled; a run stopped so ends where it is,
+    /// [`sim::Run::interrupted`].
+    fn interrupted(&mut self) -> bool {
+        false
+    }
 }
 
 impl Progress for () {}
@@ -177,7 +187,13 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
 /// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
-    let scene = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    settings_of(loaded.map(|(model, _)| model.simulation).unwrap_or_default(), options)
+}
+
+/// The settings of a run of a scene whose `simulate` block is `scene` (a loaded scene's
+/// `model.simulation`, its method name checked), then the options: [`settings`] without
+/// resolving the scene again.
+pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settings, Error> {
     let number = |n: Option<model::Number>| n.map(|n| n.value);
     let mut until = number(scene.until).unwrap_or(10.0);
     // `resolve_with` has checked the name.
@@ -269,78 +285,7 @@ pub fn run(
     settings: &Settings,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    let (mut prepared, outputs, set_exprs) = load(source, settings)?;
-    let columns = Columns {
-        outputs: outputs.len(),
-        stops: settings.stops.len(),
-        events: settings.events.len(),
-    };
-    let values = overrides(&prepared, &settings.sets, &set_exprs)?;
-    let (parameters, y0) = start(&mut prepared, &values)?;
-
-    let dynamics_exprs = prepared.dynamics_exprs();
-    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
-    let mut observed: Vec<cas::ExprId> = prepared.extra[..columns.figures()].to_vec();
-    // The figures' numbers follow the energies, before the constraints' residuals that the
-    // integrator appends.
-    let mut plan = settings.animate.then(|| Plan::new(&mut prepared, &parameters));
-    // A `draw` line may show an input: what drives it, in a driven run.
-    for e in plan.iter_mut().flat_map(|p| p.exprs.iter_mut()) {
-        *e = prepared.with_laws(*e);
-    }
-    let n_drawn = plan.as_ref().map_or(0, |p| p.exprs.len());
-    observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
-    let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
-    let signals = drive::signals(&prepared, settings)?;
-    let mechanical =
-        Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_kinds(prepared.stabilisation())
-            .with_signals(signals);
-    let (run, wall_seconds, fastest_mode) =
-        integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
-
-    let dynamics = prepared.dynamics_exprs();
-    let conservative = conserves_energy(&mut prepared.derivation, &dynamics);
-    let figures = plan.map(|p| p.figures(&run.trajectory.rows, columns.figures()));
-    let mut outcome = Outcome {
-        columns: [&outputs[..], &settings.stops, &settings.events, &["KE".into(), "PE".into()]]
-            .concat(),
-        run,
-        shown: columns.outputs,
-        energy_columns: (columns.energies(), columns.energies() + 1),
-        constraint_columns: (0..prepared.layout.multipliers)
-            .map(|c| columns.figures() + n_drawn + c)
-            .collect(),
-        event_names: [&settings.stops[..], &settings.events].concat(),
-        stop_names: columns.stops,
-        method: settings.method,
-        wall_seconds,
-        state_names: prepared.state_names(),
-        constraint_names: prepared
-            .derivation
-            .multipliers
-            .iter()
-            .map(|m| prepared.derivation.model.constraints[m.constraint].name.clone())
-            .collect(),
-        angle_oriented_bodies: angle_oriented_bodies(&prepared.derivation.model),
-        conservative,
-        animation: None,
-        fastest_mode,
-    };
-    if let Some(figures) = figures {
-        let energy = outcome.energy();
-        let e0 = energy.first().copied().unwrap_or(0.0);
-        let model = &prepared.derivation.model;
-        outcome.animation = Some(Animation {
-            title: model.title.clone(),
-            dimension: model.dimension(),
-            times: outcome.run.trajectory.times.clone(),
-            energy_error: energy.iter().map(|e| e - e0).collect(),
-            conservative,
-            figures,
-        });
-    }
-    Ok(outcome)
+    Compiled::new(source, settings)?.run(settings, progress)
 }
 
 /// Where a run's quantities sit among the observed columns: the outputs, the stops, the
@@ -363,13 +308,10 @@ impl Columns {
     }
 }
 
-/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
-/// then the `--set` values, and its driven inputs replaced by their laws; with the outputs (the remaining coordinates when the settings name
-/// none) and the `--set` values' expressions.
-fn load(
-    source: &str,
-    settings: &Settings,
-) -> Result<(Prepared, Vec<String>, Vec<cas::ExprId>), Error> {
+/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order,
+/// and its driven inputs replaced by their laws; with the outputs (the remaining coordinates
+/// when the settings name none).
+fn load(source: &str, settings: &Settings) -> Result<(Prepared, Vec<String>), Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -377,7 +319,6 @@ fn load(
     extra.extend(settings.events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    extra.extend(settings.sets.iter().map(|a| a.value.clone()));
     let (mut model, warnings) =
         crate::resolve_with(source, crate::Options { units: settings.units })?;
     let laws = drive::laws(&mut model, &settings.drives)?;
@@ -392,9 +333,32 @@ fn load(
         let exprs: Vec<cas::ExprId> = coords.iter().map(|q| pool.sym(*q)).collect();
         prepared.extra.splice(0..0, exprs);
     }
-    let sets_from = outputs.len() + settings.stops.len() + settings.events.len() + 2;
-    let set_exprs = prepared.extra[sets_from..].to_vec();
-    Ok((prepared, outputs, set_exprs))
+    Ok((prepared, outputs))
+}
+
+/// The `--set` values resolved as expressions of the derived scene's parameters: after the
+/// derivation, so that a scene derived once runs with value after value.
+fn set_expressions(
+    prepared: &mut Prepared,
+    sets: &[Assignment],
+) -> Result<Vec<cas::ExprId>, Error> {
+    let mut exprs = Vec::with_capacity(sets.len());
+    for set in sets {
+        let text = &set.value;
+        let value = prepared
+            .derivation
+            .model
+            .resolve_expression(text)
+            .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
+        let model::Value::Scalar(e) = value else {
+            return Err(Error::Input(format!(
+                "`{text}` is {}, and only scalars can be recorded",
+                value.kind_name()
+            )));
+        };
+        exprs.push(prepared.derivation.expand_quantities(e, false));
+    }
+    Ok(exprs)
 }
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by
@@ -513,7 +477,14 @@ fn integrate_scene(
     let started = Instant::now();
     let mut fastest_mode = None;
     let run = {
-        let mut update = |t: f64| progress.update(t);
+        let mut update = |t: f64| {
+            progress.update(t);
+            if progress.interrupted() {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        };
         if method.is_symplectic() {
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
