@@ -10,7 +10,10 @@
 mod derive;
 mod errors;
 mod numbers;
+mod runs;
 mod sympy;
+
+use std::sync::{Mutex, MutexGuard};
 
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
@@ -19,34 +22,77 @@ use pyo3::types::{PyDict, PyList};
 
 use errors::engine_error;
 
-/// A loaded scene: its text, the name it goes by in diagnostics, and its derivation.
-#[pyclass(unsendable, module = "lagrange._native")]
+/// A loaded scene: its text, the name it goes by in diagnostics, and its derivation. Usable
+/// from any thread: the derivation is behind a lock (the forms of `derive` and `check` are
+/// computed on demand into its pool), and runs take compiled scenes of their own from `runs`.
+#[pyclass(frozen, module = "lagrange._native")]
 struct NativeScene {
     source: String,
     path: String,
     units: bool,
-    scene: engine::Scene,
+    /// The scene's `simulate` block, read into each run's settings.
+    simulation: model::Simulation,
+    title: Option<String>,
+    scene: Mutex<engine::Scene>,
+    runs: runs::Store,
 }
 
-/// Parses, resolves and derives a scene's text; `path` names it in diagnostics.
+/// Parses, resolves and derives a scene's text; `path` names it in diagnostics. The GIL is
+/// released meanwhile.
 #[pyfunction]
 #[pyo3(signature = (text, path = "<string>".to_string(), units = true))]
-fn loads(text: String, path: String, units: bool) -> PyResult<NativeScene> {
-    let scene =
-        engine::load_with(&text, engine::Options { units }).map_err(|e| engine_error(&e, &path))?;
-    Ok(NativeScene { source: text, path, units, scene })
+fn loads(py: Python<'_>, text: String, path: String, units: bool) -> PyResult<NativeScene> {
+    let scene = py
+        .detach(|| engine::load_with(&text, engine::Options { units }))
+        .map_err(|e| engine_error(&e, &path))?;
+    let model = &scene.derivation.model;
+    Ok(NativeScene {
+        simulation: model.simulation.clone(),
+        title: model.title.clone(),
+        source: text,
+        path,
+        units,
+        scene: Mutex::new(scene),
+        runs: runs::Store::default(),
+    })
+}
+
+impl NativeScene {
+    /// The loaded scene, for one thread at a time. A thread that panicked while holding it
+    /// cannot have left it half changed in a way that matters: what `derive` and `check` add
+    /// to the pool are memoised forms, each complete or absent.
+    fn scene(&self) -> MutexGuard<'_, engine::Scene> {
+        self.scene.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The settings of a run: the scene's `simulate` block, then `options`.
+    fn settings(
+        &self,
+        options: &engine::simulate::Options,
+    ) -> PyResult<engine::simulate::Settings> {
+        engine::simulate::settings_of(self.simulation.clone(), options)
+            .map_err(|e| engine_error(&e, &self.path))
+    }
 }
 
 #[pymethods]
 impl NativeScene {
     /// The forms a `derive` report shows, as a dict of SymPy objects.
-    fn derive<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        derive::derive(py, &mut self.scene.derivation)
+    fn derive<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        derive::derive(py, &mut self.scene().derivation)
     }
 
     /// y' = F(t, y) for `solve_ivp`.
-    fn rhs(&self) -> PyResult<numbers::Rhs> {
-        numbers::Rhs::new(&self.source, &self.path, self.units)
+    fn rhs(&self, py: Python<'_>) -> PyResult<numbers::Rhs> {
+        py.detach(|| numbers::Rhs::new(&self.source, &self.path, self.units))
+    }
+
+    /// Pickles as what it is made from, the scene's text and settings: unpickling loads it
+    /// again.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let rebuild = py.import("lagrange._native")?.getattr("loads")?;
+        let arguments = (self.source.clone(), self.path.clone(), self.units);
+        (rebuild, arguments).into_pyobject(py).map(|t| t.into_any())
     }
 
     /// τ = M·q̈ − f over many motions.
@@ -59,7 +105,10 @@ impl NativeScene {
         numbers::MassMatrix::new(&self.source, &self.path, self.units)
     }
 
-    /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
+    /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting. The GIL
+    /// is released while it runs (other Python threads go on), signals are handled every few
+    /// milliseconds (Ctrl-C stops it), and the scene compiled for these settings is kept for
+    /// the next call.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
                         output = Vec::new(), set = Vec::new(), input = Vec::new(),
                         input_series = Vec::new(), stop_when = Vec::new(),
@@ -80,67 +129,78 @@ impl NativeScene {
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let set = engine::input::assignments(&set).map_err(|e| engine_error(&e, &self.path))?;
-        let input = engine::input::assignments_of(engine::Setting::Input, &input)
-            .map_err(|e| engine_error(&e, &self.path))?;
-        let mut series = Vec::new();
-        for (name, times, values) in input_series {
-            let samples = sim::Series::new(times, values)
-                .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
-            series.push((name, samples));
-        }
-        let options = engine::simulate::Options {
-            until,
-            method,
-            tolerance,
-            step,
-            set,
-            input,
-            input_series: series,
-            output,
+        let options = RunOptions { until, method, tolerance, step, output, set, input }.with(
+            input_series,
             stop_when,
             events,
-            no_units: !self.units,
             samples,
-            animate: false,
-        };
-        let outcome = engine::simulate::simulate(&self.source, &options)
+            self,
+        )?;
+        let settings = self.settings(&options)?;
+        let mut check = runs::SignalCheck::new();
+        let outcome = py.detach(|| self.runs.run(&self.source, &settings, &mut check));
+        if let Some(raised) = check.raised {
+            return Err(raised);
+        }
+        let outcome = outcome.map_err(|e| engine_error(&e, &self.path))?;
+        outcome_dict(py, &outcome)
+    }
+
+    /// Runs the scene once per row of `values`, the values of `names` (parameters,
+    /// coordinates, rates) in that run, on `threads` threads with the GIL released; the other
+    /// settings as for `simulate`, the same for every run. Returns the batch's arrays (see
+    /// `runs::batch_dict`).
+    #[pyo3(signature = (names, values, threads = 1, until = None, method = None,
+                        tolerance = None, step = None, output = Vec::new(), set = Vec::new(),
+                        input = Vec::new(), input_series = Vec::new(),
+                        stop_when = Vec::new(), events = Vec::new(), samples = 0))]
+    #[allow(clippy::too_many_arguments)]
+    fn batch<'py>(
+        &self,
+        py: Python<'py>,
+        names: Vec<String>,
+        values: numpy::PyReadonlyArray2<'py, f64>,
+        threads: usize,
+        until: Option<f64>,
+        method: Option<String>,
+        tolerance: Option<f64>,
+        step: Option<f64>,
+        output: Vec<String>,
+        set: Vec<String>,
+        input: Vec<String>,
+        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        stop_when: Vec<String>,
+        events: Vec<String>,
+        samples: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let options = RunOptions { until, method, tolerance, step, output, set, input }.with(
+            input_series,
+            stop_when,
+            events,
+            samples,
+            self,
+        )?;
+        let values = values.as_array();
+        if values.ncols() != names.len() {
+            return Err(PyValueError::new_err(format!(
+                "each row holds a value of each of the {} names ({}), not {}",
+                names.len(),
+                names.join(", "),
+                values.ncols()
+            )));
+        }
+        let mut each = Vec::with_capacity(values.nrows());
+        for row in values.rows() {
+            let mut options = options.clone();
+            for (name, value) in names.iter().zip(row) {
+                options.set.push(runs::exact_assignment(name, *value)?);
+            }
+            each.push(self.settings(&options)?);
+        }
+        let outcomes = runs::batch(py, &self.runs, &self.source, &each, threads)?
             .map_err(|e| engine_error(&e, &self.path))?;
-        let trajectory = &outcome.run.trajectory;
-        let out = PyDict::new(py);
-        out.set_item("t", PyArray1::from_slice(py, &trajectory.times))?;
-        let columns = PyDict::new(py);
-        for (k, name) in outcome.columns.iter().enumerate().take(outcome.shown) {
-            let values: Vec<f64> = trajectory.rows.iter().map(|r| r[k]).collect();
-            columns.set_item(name, PyArray1::from_vec(py, values))?;
-        }
-        out.set_item("columns", columns)?;
-        out.set_item("energy", PyArray1::from_vec(py, outcome.energy()))?;
-        let hits = PyList::empty(py);
-        for hit in &outcome.run.events {
-            hits.append((outcome.event_names.get(hit.event).cloned(), hit.time))?;
-        }
-        out.set_item("events", hits)?;
-        let stopped_by = outcome.run.stopped_by.and_then(|k| outcome.event_names.get(k).cloned());
-        out.set_item("stopped_by", stopped_by)?;
-        out.set_item("fault", outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)))?;
-        out.set_item("method", outcome.method.name())?;
-        let segments = PyList::empty(py);
-        for segment in &outcome.run.segments {
-            segments.append((segment.method.name(), segment.start, segment.end))?;
-        }
-        out.set_item("segments", segments)?;
-        out.set_item("steps", outcome.run.steps)?;
-        out.set_item("rejected", outcome.run.rejected)?;
-        out.set_item("evaluations", outcome.run.evaluations)?;
-        out.set_item("jacobians", outcome.run.jacobians)?;
-        out.set_item("factorizations", outcome.run.factorizations)?;
-        out.set_item("energy_drift", outcome.energy_drift())?;
-        out.set_item("conservative", outcome.conservative)?;
-        out.set_item("constraint_drift", outcome.constraint_drift())?;
-        out.set_item("constraint_drift_at_steps", outcome.constraint_drift_at_steps())?;
-        out.set_item("wall_seconds", outcome.wall_seconds)?;
-        Ok(out)
+        let sampling = each.first().map_or((0.0, 0), |s| (s.until, s.samples));
+        runs::batch_dict(py, &outcomes, &self.path, sampling)
     }
 
     /// Small motions about an equilibrium or a steady motion, as `lagrange linearize` finds
@@ -248,9 +308,10 @@ impl NativeScene {
 
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
-    fn check<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let d = &mut self.scene.derivation;
-        let verdicts = verify::check_all(d);
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let mut scene = self.scene();
+        let d = &mut scene.derivation;
+        let verdicts = py.detach(|| verify::check_all(d));
         let mut s = sympy::ToSympy::new(py)?;
         let out = PyList::empty(py);
         for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
@@ -278,12 +339,17 @@ impl NativeScene {
     /// The scene's warnings, rendered as the `lagrange` command prints them ("" if none).
     #[getter]
     fn warnings(&self) -> String {
-        lang::render::render(&self.path, &self.source, &self.scene.warnings)
+        lang::render::render(&self.path, &self.source, &self.scene().warnings)
     }
 
     #[getter]
     fn title(&self) -> Option<String> {
-        self.scene.derivation.model.title.clone()
+        self.title.clone()
+    }
+
+    #[getter]
+    fn units(&self) -> bool {
+        self.units
     }
 
     #[getter]
@@ -297,10 +363,116 @@ impl NativeScene {
     }
 }
 
+/// The options of `simulate` and `batch` that Python hands over as they are.
+struct RunOptions {
+    until: Option<f64>,
+    method: Option<String>,
+    tolerance: Option<f64>,
+    step: Option<f64>,
+    output: Vec<String>,
+    set: Vec<String>,
+    input: Vec<String>,
+}
+
+impl RunOptions {
+    /// The engine's options, with the rest of a run's: the texts read into values, the time
+    /// series checked.
+    fn with(
+        self,
+        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        stop_when: Vec<String>,
+        events: Vec<String>,
+        samples: usize,
+        scene: &NativeScene,
+    ) -> PyResult<engine::simulate::Options> {
+        let path = &scene.path;
+        let set = engine::input::assignments(&self.set).map_err(|e| engine_error(&e, path))?;
+        let input = engine::input::assignments_of(engine::Setting::Input, &self.input)
+            .map_err(|e| engine_error(&e, path))?;
+        let mut series = Vec::new();
+        for (name, times, values) in input_series {
+            let samples = sim::Series::new(times, values)
+                .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
+            series.push((name, samples));
+        }
+        Ok(engine::simulate::Options {
+            until: self.until,
+            method: self.method,
+            tolerance: self.tolerance,
+            step: self.step,
+            set,
+            input,
+            input_series: series,
+            output: self.output,
+            stop_when,
+            events,
+            no_units: !scene.units,
+            samples,
+            animate: false,
+        })
+    }
+}
+
+/// A run's outcome as the dict the Python `Results` wraps.
+fn outcome_dict<'py>(
+    py: Python<'py>,
+    outcome: &engine::simulate::Outcome,
+) -> PyResult<Bound<'py, PyDict>> {
+    let trajectory = &outcome.run.trajectory;
+    let out = PyDict::new(py);
+    out.set_item("t", PyArray1::from_slice(py, &trajectory.times))?;
+    let columns = PyDict::new(py);
+    for (k, name) in outcome.columns.iter().enumerate().take(outcome.shown) {
+        let values: Vec<f64> = trajectory.rows.iter().map(|r| r[k]).collect();
+        columns.set_item(name, PyArray1::from_vec(py, values))?;
+    }
+    out.set_item("columns", columns)?;
+    out.set_item("energy", PyArray1::from_vec(py, outcome.energy()))?;
+    let hits = PyList::empty(py);
+    for hit in &outcome.run.events {
+        hits.append((outcome.event_names.get(hit.event).cloned(), hit.time))?;
+    }
+    out.set_item("events", hits)?;
+    let stopped_by = outcome.run.stopped_by.and_then(|k| outcome.event_names.get(k).cloned());
+    out.set_item("stopped_by", stopped_by)?;
+    out.set_item("fault", outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)))?;
+    out.set_item("method", outcome.method.name())?;
+    let segments = PyList::empty(py);
+    for segment in &outcome.run.segments {
+        segments.append((segment.method.name(), segment.start, segment.end))?;
+    }
+    out.set_item("segments", segments)?;
+    out.set_item("steps", outcome.run.steps)?;
+    out.set_item("rejected", outcome.run.rejected)?;
+    out.set_item("evaluations", outcome.run.evaluations)?;
+    out.set_item("jacobians", outcome.run.jacobians)?;
+    out.set_item("factorizations", outcome.run.factorizations)?;
+    out.set_item("energy_drift", outcome.energy_drift())?;
+    out.set_item("conservative", outcome.conservative)?;
+    out.set_item("constraint_drift", outcome.constraint_drift())?;
+    out.set_item("constraint_drift_at_steps", outcome.constraint_drift_at_steps())?;
+    out.set_item("wall_seconds", outcome.wall_seconds)?;
+    Ok(out)
+}
+
+/// An `Rhs` made again from its pickle: the scene's text and settings, and the parameter
+/// values it had.
+#[pyfunction]
+fn _rhs_from(
+    py: Python<'_>,
+    source: String,
+    path: String,
+    units: bool,
+    parameters: Vec<f64>,
+) -> PyResult<numbers::Rhs> {
+    py.detach(|| numbers::Rhs::from_pickle(&source, &path, units, &parameters))
+}
+
 /// The native half of the `lagrange` package.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_function(wrap_pyfunction!(_rhs_from, m)?)?;
     m.add_class::<NativeScene>()?;
     m.add_class::<numbers::Rhs>()?;
     m.add_class::<numbers::MassMatrix>()?;

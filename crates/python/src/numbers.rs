@@ -15,6 +15,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyMapping};
 use sim::{FaultKind, Mechanical, Problem};
+use std::sync::{Mutex, MutexGuard};
 
 use crate::errors::{engine_error, numeric_error};
 
@@ -53,9 +54,10 @@ fn fault_text(kind: &FaultKind, names: &[String]) -> String {
 /// y' = F(t, y) of a scene, y = (q, q̇) of its remaining coordinates: what
 /// `scipy.integrate.solve_ivp` takes. Evaluated by the scene's lowered programs; constraints
 /// kept with multipliers are solved with them (and Baumgarte-stabilised) as in `simulate`.
-#[pyclass(unsendable, module = "lagrange")]
+/// Usable from any thread: the programs and their buffers are behind a lock, held for one
+/// call at a time.
+#[pyclass(frozen, module = "lagrange")]
 pub struct Rhs {
-    mechanical: Mechanical,
     /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
     #[pyo3(get)]
     names: Vec<String>,
@@ -63,6 +65,17 @@ pub struct Rhs {
     /// The parameters' names in declaration order, the order of their values.
     #[pyo3(get)]
     parameter_names: Vec<String>,
+    /// What it is made from, to be made again when unpickled.
+    source: String,
+    units: bool,
+    path: String,
+    state: Mutex<RhsState>,
+}
+
+/// The programs of an [`Rhs`] and their buffers: what a call changes.
+struct RhsState {
+    mechanical: Mechanical,
+    names: Vec<String>,
     dy: Vec<f64>,
     /// The scene for numbers, kept to lower the partials when `jac` is first called (only
     /// implicit methods want them); `None` once they are.
@@ -72,6 +85,27 @@ pub struct Rhs {
 }
 
 impl Rhs {
+    /// An [`Rhs`] made again from what it pickles as: the scene's text and settings, and the
+    /// parameter values it had.
+    pub fn from_pickle(
+        source: &str,
+        path: &str,
+        units: bool,
+        parameters: &[f64],
+    ) -> PyResult<Self> {
+        let rhs = Rhs::new(source, path, units)?;
+        if parameters.len() != rhs.parameter_names.len() {
+            return Err(PyValueError::new_err(format!(
+                "{} parameter values for the {} parameters ({})",
+                parameters.len(),
+                rhs.parameter_names.len(),
+                rhs.parameter_names.join(", ")
+            )));
+        }
+        rhs.state().mechanical.set_parameters(parameters);
+        Ok(rhs)
+    }
+
     pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
         let (mut prepared, parameters, y0) =
             prepared(source, units).map_err(|e| engine_error(&e, path))?;
@@ -86,7 +120,8 @@ impl Rhs {
         // The slots of `parameters`: the parameters, then the inputs at their values.
         let model = &prepared.derivation.model;
         let parameter_names = model.params.iter().map(|p| p.name.clone());
-        let parameter_names = parameter_names.chain(model.inputs.iter().map(|u| u.name.clone()));
+        let parameter_names: Vec<String> =
+            parameter_names.chain(model.inputs.iter().map(|u| u.name.clone())).collect();
         let mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),
@@ -95,34 +130,52 @@ impl Rhs {
         )
         .with_kinds(prepared.stabilisation());
         let dim = mechanical.dim();
-        Ok(Rhs {
+        let state = RhsState {
             mechanical,
-            names,
-            y0,
-            parameter_names: parameter_names.collect(),
+            names: names.clone(),
             dy: vec![0.0; dim],
             prepared: Some(prepared),
             path: path.to_string(),
             jacobian: Vec::new(),
+        };
+        Ok(Rhs {
+            names,
+            y0,
+            parameter_names,
+            source: source.to_string(),
+            units,
+            path: path.to_string(),
+            state: Mutex::new(state),
         })
     }
 
-    /// Runs `body` with the parameter values `p` gives (none: those in use), and puts back
-    /// those in use afterwards, whatever `body` returns.
-    fn with_parameters<T>(
-        &mut self,
-        p: Option<&Bound<'_, PyAny>>,
-        body: impl FnOnce(&mut Self) -> PyResult<T>,
-    ) -> PyResult<T> {
-        let Some(p) = p else { return body(self) };
-        let kept = self.mechanical.parameters().to_vec();
-        let given = parameter_values(&self.parameter_names, &kept, p)?;
-        self.mechanical.set_parameters(&given);
-        let result = body(self);
-        self.mechanical.set_parameters(&kept);
-        result
+    /// The programs, for this thread alone until the guard is dropped. A call that panicked
+    /// holding them left at worst parameters of its own in place; the next call sets its own.
+    fn state(&self) -> MutexGuard<'_, RhsState> {
+        self.state.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    /// Runs `body` on the programs with the parameter values `p` gives (none: those in use),
+    /// and puts back those in use afterwards, whatever `body` returns. `p` is read before the
+    /// programs are locked: reading it may run Python code.
+    fn with_parameters<T>(
+        &self,
+        p: Option<&Bound<'_, PyAny>>,
+        body: impl FnOnce(&mut RhsState) -> PyResult<T>,
+    ) -> PyResult<T> {
+        let Some(p) = p else { return body(&mut self.state()) };
+        let kept = self.state().mechanical.parameters().to_vec();
+        let given = parameter_values(&self.parameter_names, &kept, p)?;
+        let mut state = self.state();
+        let kept = state.mechanical.parameters().to_vec();
+        state.mechanical.set_parameters(&given);
+        let result = body(&mut state);
+        state.mechanical.set_parameters(&kept);
+        result
+    }
+}
+
+impl RhsState {
     fn check_length(&self, y: &[f64]) -> PyResult<()> {
         if y.len() == self.dy.len() {
             return Ok(());
@@ -169,7 +222,7 @@ impl Rhs {
     /// gives parameter values for this call only (see [`parameter_values`]).
     #[pyo3(signature = (t, y, p = None))]
     fn __call__<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         t: f64,
         y: PyArrayLike1<'py, f64, AllowTypeChange>,
@@ -177,8 +230,8 @@ impl Rhs {
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let y = y.as_array();
         let y: Vec<f64> = y.iter().copied().collect();
-        self.with_parameters(p, |rhs| rhs.eval(t, &y))?;
-        Ok(PyArray1::from_slice(py, &self.dy))
+        let dy = self.with_parameters(p, |rhs| rhs.eval(t, &y).map(|()| rhs.dy.clone()))?;
+        Ok(PyArray1::from_vec(py, dy))
     }
 
     /// F at many states in one call: `Y` is a 2-D array with one state a row; `t` one time
@@ -186,7 +239,7 @@ impl Rhs {
     /// array of the same shape as `Y`.
     #[pyo3(signature = (y, t = None, p = None))]
     fn batch<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         y: PyArrayLike2<'py, f64, AllowTypeChange>,
         t: Option<&Bound<'py, PyAny>>,
@@ -211,7 +264,7 @@ impl Rhs {
                 }
             },
         };
-        let width = self.dy.len();
+        let width = self.y0.len();
         if y.ncols() != width {
             return Err(PyValueError::new_err(format!(
                 "each row is a state of {width} entries ({}), not {}",
@@ -242,16 +295,17 @@ impl Rhs {
     /// call only, as `solve_ivp`'s `args` hands them to `jac` as well as to `f`.
     #[pyo3(signature = (t, y, p = None))]
     fn jac<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         t: f64,
         y: PyArrayLike1<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let y: Vec<f64> = y.as_array().iter().copied().collect();
-        self.with_parameters(p, |rhs| rhs.eval_jacobian(t, &y))?;
-        let d = self.dy.len();
-        PyArray1::from_slice(py, &self.jacobian).reshape([d, d])
+        let jacobian =
+            self.with_parameters(p, |rhs| rhs.eval_jacobian(t, &y).map(|()| rhs.jacobian.clone()))?;
+        let d = self.y0.len();
+        PyArray1::from_vec(py, jacobian).reshape([d, d])
     }
 
     /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.
@@ -264,16 +318,27 @@ impl Rhs {
     /// assigning to `parameters`, never lost in a copy.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        read_only(py, &self.parameter_names, self.mechanical.parameters())
+        let values = self.state().mechanical.parameters().to_vec();
+        read_only(py, &self.parameter_names, &values)
     }
 
     /// Uses these parameter values from now on: a dict replaces the values it names, an
     /// array gives them all (see [`parameter_values`]).
     #[setter]
-    fn set_parameters(&mut self, p: &Bound<'_, PyAny>) -> PyResult<()> {
-        let values = parameter_values(&self.parameter_names, self.mechanical.parameters(), p)?;
-        self.mechanical.set_parameters(&values);
+    fn set_parameters(&self, p: &Bound<'_, PyAny>) -> PyResult<()> {
+        let current = self.state().mechanical.parameters().to_vec();
+        let values = parameter_values(&self.parameter_names, &current, p)?;
+        self.state().mechanical.set_parameters(&values);
         Ok(())
+    }
+
+    /// Pickles as what it is made from: the scene's text and settings, and the parameter
+    /// values in use; unpickling derives and lowers the scene again.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let rebuild = py.import("lagrange._native")?.getattr("_rhs_from")?;
+        let parameters = self.state().mechanical.parameters().to_vec();
+        let arguments = (self.source.clone(), self.path.clone(), self.units, parameters);
+        (rebuild, arguments).into_pyobject(py).map(|t| t.into_any())
     }
 
     fn __repr__(&self) -> String {
@@ -346,7 +411,7 @@ fn read_only<'py>(
 
 /// τ = M·q̈ − f of a scene over many motions at once (`engine::inverse`): with constraints
 /// kept, the forces least in τᵀ·M⁻¹·τ.
-#[pyclass(unsendable, module = "lagrange")]
+#[pyclass(module = "lagrange")]
 pub struct InverseDynamics {
     inner: engine::inverse::InverseDynamics,
     /// The coordinates, in the order of q and of τ.
@@ -450,7 +515,7 @@ impl InverseDynamics {
 }
 
 /// M(t, q) of a scene at its parameter values: its remaining coordinates' mass matrix.
-#[pyclass(unsendable, module = "lagrange")]
+#[pyclass(module = "lagrange")]
 pub struct MassMatrix {
     tape: Tape,
     n: usize,

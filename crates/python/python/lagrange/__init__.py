@@ -29,6 +29,10 @@ import os
 
 from importlib import metadata as _metadata
 
+# NumPy comes with the package: imported here once, rather than on a first call that may run
+# on a worker thread (where a first import holds the import lock) or inside a timed loop.
+import numpy
+
 from . import _native
 from ._errors import NumericError, SceneError
 from ._native import InverseDynamics, MassMatrix, Rhs
@@ -42,6 +46,7 @@ __all__ = [
     "Expectation",
     "Linearization",
     "Results",
+    "Batch",
     "Rhs",
     "MassMatrix",
     "InverseDynamics",
@@ -72,6 +77,42 @@ def load(path, *, units=True):
 def loads(text, *, name="<string>", units=True):
     """Loads a scene from its text; ``name`` stands for the file in diagnostics."""
     return Scene(_native.loads(text, name, units))
+
+
+def _scene_from(text, name, units):
+    """A :class:`Scene` made again from its pickle."""
+    return Scene(_native.loads(text, name, units))
+
+
+def _listed(value):
+    """``None``, one string or a sequence of them, as a list of strings."""
+    if value is None:
+        return []
+    if isinstance(value, str):
+        return [value]
+    return [str(v) for v in value]
+
+
+def _run_options(until, method, tolerance, output, set, step, input, stop_when, events, samples):
+    """The keyword arguments of the native ``simulate`` and ``batch``, checked."""
+    if isinstance(samples, bool) or not isinstance(samples, numbers.Integral):
+        raise TypeError(f"`samples` must be a whole number, not {samples!r}")
+    if samples < 0:
+        raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
+    laws, series = _inputs(input)
+    return dict(
+        until=None if until is None else float(until),
+        method=method,
+        tolerance=None if tolerance is None else float(tolerance),
+        step=None if step is None else float(step),
+        output=_listed(output),
+        set=_assignments(set),
+        input=laws,
+        input_series=series,
+        stop_when=_listed(stop_when),
+        events=_listed(events),
+        samples=int(samples),
+    )
 
 
 def _assignments(set):
@@ -131,13 +172,56 @@ def _value_text(value):
     return text
 
 
+def _batch_values(values, names):
+    """The names and the 2-D array of a batch's values, from any of the forms
+    :meth:`Scene.batch` takes."""
+    if isinstance(values, Mapping):
+        if names is not None:
+            raise TypeError("names come from the dict's keys; leave `names` out")
+        names = [str(k) for k in values]
+        columns = [numpy.asarray(values[k], dtype=float).reshape(-1) for k in values]
+        lengths = {len(c) for c in columns}
+        if len(lengths) > 1:
+            raise ValueError(f"every name needs as many values; got {sorted(lengths)}")
+        rows = numpy.stack(columns, axis=1) if columns else numpy.zeros((0, 0))
+        return names, numpy.ascontiguousarray(rows)
+    if names is None:
+        values = list(values)
+        if not all(isinstance(v, Mapping) for v in values):
+            raise TypeError("give `names` with a 2-D array of values, or a list of dicts")
+        names = list(dict.fromkeys(str(k) for v in values for k in v))
+        missing = [k for v in values for k in names if k not in v]
+        if missing:
+            raise ValueError(f"every run needs a value of each name; one lacks {missing[0]!r}")
+        rows = numpy.array([[float(v[k]) for k in names] for v in values], dtype=float)
+        return names, rows.reshape(len(values), len(names))
+    names = [names] if isinstance(names, str) else [str(n) for n in names]
+    rows = numpy.asarray(values, dtype=float)
+    if rows.ndim == 1 and len(names) == 1:
+        rows = rows.reshape(-1, 1)
+    if rows.ndim != 2 or rows.shape[1] != len(names):
+        raise ValueError(
+            f"`values` needs a row a run and a column for each of {len(names)} names, "
+            f"not shape {rows.shape}"
+        )
+    return names, numpy.ascontiguousarray(rows)
+
+
 class Scene:
-    """A loaded scene: parsed, resolved and derived. Made by :func:`load` or :func:`loads`."""
+    """A loaded scene: parsed, resolved and derived. Made by :func:`load` or :func:`loads`.
+
+    A scene may be shared between threads: its runs release the GIL and run side by side.
+    It pickles as its text and settings (``multiprocessing``, ``concurrent.futures``' process
+    pools and Dask send it so), and is loaded again where it is unpickled.
+    """
 
     def __init__(self, native):
         self._native = native
         self._derivation = None
         self._inverse = None
+
+    def __reduce__(self):
+        return (_scene_from, (self._native.source, self._native.path, self._native.units))
 
     @property
     def title(self):
@@ -266,36 +350,63 @@ class Scene:
 
         A run that faults raises :class:`NumericError` whose ``results`` hold what was
         computed before the fault.
-        """
-        def listed(value):
-            if value is None:
-                return []
-            if isinstance(value, str):
-                return [value]
-            return [str(v) for v in value]
 
-        if isinstance(samples, bool) or not isinstance(samples, numbers.Integral):
-            raise TypeError(f"`samples` must be a whole number, not {samples!r}")
-        if samples < 0:
-            raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
-        laws, series = _inputs(input)
-        raw = self._native.simulate(
-            until=None if until is None else float(until),
-            method=method,
-            tolerance=None if tolerance is None else float(tolerance),
-            step=None if step is None else float(step),
-            output=listed(output),
-            set=_assignments(set),
-            input=laws,
-            input_series=series,
-            stop_when=listed(stop_when),
-            events=listed(events),
-            samples=int(samples),
+        The GIL is released while the scene integrates, so other Python threads run
+        meanwhile (several threads may simulate one scene at once), and Ctrl-C stops a long
+        run with ``KeyboardInterrupt``. The scene is derived and lowered for a run's outputs,
+        stops, events, inputs and method on the first call and kept: later calls that change
+        only ``until``, ``tolerance``, ``step``, ``samples``, ``set`` or input series start
+        integrating at once.
+        """
+        options = _run_options(
+            until, method, tolerance, output, set, step, input, stop_when, events, samples
         )
+        raw = self._native.simulate(**options)
         results = Results(raw)
         if results.fault is not None:
             raise NumericError(results.fault, results=results)
         return results
+
+    def batch(
+        self,
+        values,
+        names=None,
+        *,
+        threads=1,
+        until=None,
+        method=None,
+        tolerance=None,
+        output=None,
+        set=None,
+        step=None,
+        input=None,
+        stop_when=None,
+        events=None,
+        samples=0,
+    ):
+        """Runs the scene once per set of values and returns a :class:`Batch` of NumPy arrays,
+        one entry a run.
+
+        ``values``: a 2-D array with a run a row and a column per name of ``names``
+        (parameters, coordinates for start positions, ``"theta'"`` for start rates); or a
+        list of dicts of name to number (then ``names`` is left out), or a dict of name to a
+        1-D array of values (one entry a run). Every run takes the other settings, as
+        :meth:`simulate` does (``set`` the same for all). ``threads``: how many threads of
+        its own the batch runs on; the numbers are the same whatever the count. The GIL is
+        released meanwhile, and Ctrl-C stops the batch.
+
+        The scene is derived and lowered once per thread; each run settles its start and
+        integrates. A run that faults gives its fault in ``Batch.fault`` (and NaN-free values
+        up to it); settings that cannot run raise as :meth:`simulate` does.
+        """
+        names, rows = _batch_values(values, names)
+        if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+            raise ValueError(f"`threads` must be a positive whole number, not {threads!r}")
+        options = _run_options(
+            until, method, tolerance, output, set, step, input, stop_when, events, samples
+        )
+        raw = self._native.batch(names, rows, threads=int(threads), **options)
+        return Batch(raw, names, rows)
 
     def linearize(
         self, about=None, set=None, sweep=None, inputs=None, outputs=None, keep_cyclic=True
@@ -583,3 +694,52 @@ class Results(Mapping):
     def __repr__(self):
         names = ", ".join(k for k in self._columns if k != "t")
         return f"<lagrange.Results {len(self.t)} times of ({names}), {self.method}>"
+
+
+class Batch(Mapping):
+    """The runs of :meth:`Scene.batch`: a mapping of each recorded quantity's name (and
+    ``"t"``) to a NumPy array with an entry per run, its value where the run ended (at
+    ``until``, or where a stop condition ended it).
+
+    Besides: ``names`` and ``values`` (the batch's values, a row a run), ``stopped_by`` and
+    ``fault`` (lists, ``None`` where none), ``steps`` and ``wall_seconds`` (arrays); with
+    ``samples``, ``samples_t`` (the times) and ``samples[name]``, a 2-D array with a row a run
+    (NaN after a run's stop).
+    """
+
+    def __init__(self, raw, names, values):
+        self.names = list(names)
+        self.values = values
+        self.t = raw["t"]
+        self._columns = {"t": raw["t"], **raw["columns"]}
+        self.stopped_by = raw["stopped_by"]
+        self.fault = raw["fault"]
+        self.steps = raw["steps"]
+        self.wall_seconds = raw["wall_seconds"]
+        sampled = raw.get("samples")
+        self.samples_t = None if sampled is None else sampled.pop("t")
+        self.samples = sampled
+
+    def __getitem__(self, name):
+        return self._columns[name]
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __len__(self):
+        return len(self._columns)
+
+    def to_pandas(self):
+        """One row a run: the values varied, then where each run ended (needs pandas)."""
+        try:
+            import pandas
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Batch.to_pandas needs pandas: pip install pandas") from e
+        frame = pandas.DataFrame(self.values, columns=self.names)
+        for name, column in self._columns.items():
+            frame[name if name not in self.names else f"{name} (end)"] = column
+        return frame
+
+    def __repr__(self):
+        names = ", ".join(k for k in self._columns if k != "t")
+        return f"<lagrange.Batch {len(self.t)} runs of ({names})>"

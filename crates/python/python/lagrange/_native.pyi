@@ -18,6 +18,8 @@ class NativeScene:
     def source(self) -> str: ...
     @property
     def path(self) -> str: ...
+    @property
+    def units(self) -> bool: ...
     def derive(self) -> dict[str, Any]: ...
     def rhs(self) -> Rhs: ...
     def mass_matrix_function(self) -> MassMatrix: ...
@@ -30,6 +32,23 @@ class NativeScene:
         step: Optional[float] = None,
         output: Sequence[str] = ...,
         set: Sequence[str] = ...,
+        stop_when: Sequence[str] = ...,
+        events: Sequence[str] = ...,
+        samples: int = 0,
+    ) -> dict[str, Any]: ...
+    def batch(
+        self,
+        names: Sequence[str],
+        values: npt.NDArray[np.float64],
+        threads: int = 1,
+        until: Optional[float] = None,
+        method: Optional[str] = None,
+        tolerance: Optional[float] = None,
+        step: Optional[float] = None,
+        output: Sequence[str] = ...,
+        set: Sequence[str] = ...,
+        input: Sequence[str] = ...,
+        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
         stop_when: Sequence[str] = ...,
         events: Sequence[str] = ...,
         samples: int = 0,
