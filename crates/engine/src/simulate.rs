@@ -345,6 +345,16 @@ fn set_expressions(
     let mut exprs = Vec::with_capacity(sets.len());
     for set in sets {
         let text = &set.value;
+        // A plain number is its exact value: no scope to look in, no dimensions to infer
+        // again (which a batch of thousands of runs would pay for each).
+        let (sign, digits) = match text.trim().strip_prefix('-') {
+            Some(rest) => (-1, rest),
+            None => (1, text.trim()),
+        };
+        if let Some(q) = cas::number::parse_decimal(digits) {
+            exprs.push(prepared.derivation.model.pool.num(q * cas::number::int(sign)));
+            continue;
+        }
         let value = prepared
             .derivation
             .model

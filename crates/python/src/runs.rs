@@ -5,6 +5,7 @@
 //! sets of one scene on threads of its own.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -126,14 +127,14 @@ pub fn batch(
     let threads = threads.clamp(1, each.len());
     let stop = AtomicBool::new(false);
     let next = AtomicUsize::new(0);
-    let finished = AtomicUsize::new(0);
     let slots: Vec<Mutex<Option<BatchRun>>> = each.iter().map(|_| Mutex::new(None)).collect();
     let outcome = py.detach(|| {
+        let (finished, done) = std::sync::mpsc::channel::<()>();
         let compiled: Vec<Compiled> =
             (0..threads).map(|_| store.take(source, first)).collect::<Result<_, _>>()?;
         let raised = std::thread::scope(|scope| {
             for mut compiled in compiled {
-                let (stop, next, finished, slots) = (&stop, &next, &finished, &slots);
+                let (stop, next, slots, finished) = (&stop, &next, &slots, finished.clone());
                 scope.spawn(move || {
                     loop {
                         let k = next.fetch_add(1, Ordering::Relaxed);
@@ -145,14 +146,24 @@ pub fn batch(
                         *slots[k].lock().unwrap_or_else(|p| p.into_inner()) = Some(outcome);
                     }
                     store.give_back(compiled);
-                    finished.fetch_add(1, Ordering::Relaxed);
+                    // The receiver outlives the workers (the scope ends after its loop).
+                    let _ = finished.send(());
                 });
             }
+            // Only the workers' senders are left: should one end without sending (a panic),
+            // the channel closes rather than leaving this loop waiting.
+            drop(finished);
             let mut check = SignalCheck::new();
-            while finished.load(Ordering::Relaxed) < threads {
-                std::thread::sleep(SIGNAL_PERIOD / 4);
-                if check.look() {
-                    stop.store(true, Ordering::Relaxed);
+            let mut running = threads;
+            while running > 0 {
+                match done.recv_timeout(SIGNAL_PERIOD) {
+                    Ok(()) => running -= 1,
+                    Err(RecvTimeoutError::Timeout) => {
+                        if check.look() {
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    Err(RecvTimeoutError::Disconnected) => break,
                 }
             }
             check.raised
