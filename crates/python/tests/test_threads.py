@@ -55,9 +55,10 @@ def test_a_shared_scene_and_rhs_give_the_serial_numbers_on_threads(pendulum):
     assert f.parameters["g"] == 9.81
 
 
-def counter_rate(seconds, during=None):
-    """Increments per second of a pure-Python counter on a thread of its own, over `seconds`
-    or over `during()`, whichever the caller gives, with the time it took."""
+def counter_rate(seconds=None, during=None):
+    """Increments per second of a pure-Python counter on a thread of its own, counted from
+    just before to just after `time.sleep(seconds)` or `during()`: what that call let the
+    thread do (a call that holds the GIL lets it do nothing)."""
     count = [0]
     stop = threading.Event()
 
@@ -66,28 +67,30 @@ def counter_rate(seconds, during=None):
             count[0] += 1
 
     worker = threading.Thread(target=spin)
-    started = time.perf_counter()
     worker.start()
+    time.sleep(0.05)  # the thread is counting
+    before, started = count[0], time.perf_counter()
     if during is None:
         time.sleep(seconds)
     else:
         during()
-    stop.set()
     elapsed = time.perf_counter() - started
+    counted = count[0] - before
+    stop.set()
     worker.join()
-    return count[0] / elapsed, elapsed
+    return counted / elapsed, elapsed
 
 
 def test_python_threads_run_while_a_scene_integrates(pendulum):
     long_run = lambda: pendulum.simulate(until=400.0, tolerance=1e-12, output="theta1")
     long_run()  # compiled once, so that the timed call only integrates
     alone, _ = counter_rate(0.3)
-    during, elapsed = counter_rate(None, during=long_run)
+    during, elapsed = counter_rate(during=long_run)
     assert elapsed > 0.1, "the run is too short to measure anything"
-    # Holding the GIL, the counter would make no progress at all until the run returned (0.6 %
-    # of its rate was measured before the GIL was released); released, it runs at a fair share
-    # of its rate even on a loaded machine.
-    assert during > 0.1 * alone, (during, alone)
+    # Holding the GIL, the call let the counter count at 5 to 16 % of its rate alone (what
+    # the interpreter's switches around the call allow); released, at 74 to 85 % on two
+    # loaded cores, and about half of it with one core to share.
+    assert during > 0.3 * alone, (during, alone)
 
 
 def test_batch_gives_the_numbers_of_single_runs_whatever_the_threads(pendulum):
