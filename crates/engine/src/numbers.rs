@@ -23,6 +23,9 @@ pub struct Prepared {
     pub layout: Layout,
     /// The inputs a run drives by laws, each with its law (empty unless `simulate --input`).
     pub driven: std::collections::HashMap<SymId, ExprId>,
+    /// The partials program of the equations in (q, q̇), once a run has lowered it: a scene
+    /// compiled for many runs lowers it once (`simulate::Compiled`).
+    pub partials_program: Option<Program>,
 }
 
 /// Loads `source` with `extra` expressions resolved against it as the scene's `show` items
@@ -67,7 +70,14 @@ pub(crate) fn prepare_resolved(
         multipliers: derivation.multipliers.len(),
         parameters: parameters.len(),
     };
-    Ok(Prepared { derivation, extra: exprs, parameters, layout, driven: Default::default() })
+    Ok(Prepared {
+        derivation,
+        extra: exprs,
+        parameters,
+        layout,
+        driven: Default::default(),
+        partials_program: None,
+    })
 }
 
 impl Prepared {
