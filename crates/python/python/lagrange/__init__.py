@@ -93,8 +93,20 @@ def _listed(value):
     return [str(v) for v in value]
 
 
-def _run_options(until, method, tolerance, output, set, step, input, stop_when, events, samples):
-    """The keyword arguments of the native ``simulate`` and ``batch``, checked."""
+def _run_options(
+    until=None,
+    method=None,
+    tolerance=None,
+    output=None,
+    set=None,
+    step=None,
+    input=None,
+    stop_when=None,
+    events=None,
+    samples=0,
+):
+    """The keyword arguments of the native ``simulate`` and ``batch``, checked: the settings
+    :meth:`Scene.simulate` takes."""
     if isinstance(samples, bool) or not isinstance(samples, numbers.Integral):
         raise TypeError(f"`samples` must be a whole number, not {samples!r}")
     if samples < 0:
@@ -359,7 +371,16 @@ class Scene:
         integrating at once.
         """
         options = _run_options(
-            until, method, tolerance, output, set, step, input, stop_when, events, samples
+            until=until,
+            method=method,
+            tolerance=tolerance,
+            output=output,
+            set=set,
+            step=step,
+            input=input,
+            stop_when=stop_when,
+            events=events,
+            samples=samples,
         )
         raw = self._native.simulate(**options)
         results = Results(raw)
@@ -367,44 +388,26 @@ class Scene:
             raise NumericError(results.fault, results=results)
         return results
 
-    def batch(
-        self,
-        values,
-        names=None,
-        *,
-        threads=1,
-        until=None,
-        method=None,
-        tolerance=None,
-        output=None,
-        set=None,
-        step=None,
-        input=None,
-        stop_when=None,
-        events=None,
-        samples=0,
-    ):
+    def batch(self, values, names=None, *, threads=1, **settings):
         """Runs the scene once per set of values and returns a :class:`Batch` of NumPy arrays,
         one entry a run.
 
         ``values``: a 2-D array with a run a row and a column per name of ``names``
         (parameters, coordinates for start positions, ``"theta'"`` for start rates); or a
         list of dicts of name to number (then ``names`` is left out), or a dict of name to a
-        1-D array of values (one entry a run). Every run takes the other settings, as
-        :meth:`simulate` does (``set`` the same for all). ``threads``: how many threads of
-        its own the batch runs on; the numbers are the same whatever the count. The GIL is
-        released meanwhile, and Ctrl-C stops the batch.
+        1-D array of values (one entry a run). Every run takes ``settings``, the keyword
+        arguments of :meth:`simulate` (``set`` the same for all). ``threads``: how many
+        threads of its own the batch runs on; the numbers are the same whatever the count.
+        The GIL is released meanwhile, and Ctrl-C stops the batch.
 
         The scene is derived and lowered once per thread; each run settles its start and
-        integrates. A run that faults gives its fault in ``Batch.fault`` (and NaN-free values
-        up to it); settings that cannot run raise as :meth:`simulate` does.
+        integrates. A run that faults has its fault in ``Batch.fault`` and its values where it
+        stopped; settings that cannot run raise as :meth:`simulate` does.
         """
         names, rows = _batch_values(values, names)
         if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
             raise ValueError(f"`threads` must be a positive whole number, not {threads!r}")
-        options = _run_options(
-            until, method, tolerance, output, set, step, input, stop_when, events, samples
-        )
+        options = _run_options(**settings)
         raw = self._native.batch(names, rows, threads=int(threads), **options)
         return Batch(raw, names, rows)
 
@@ -640,7 +643,29 @@ class Expectation:
         return self.held
 
 
-class Results(Mapping):
+class _Columns(Mapping):
+    """A mapping of names to NumPy arrays, kept in ``_columns``: what :class:`Results` and
+    :class:`Batch` are besides their attributes."""
+
+    def __getitem__(self, name):
+        return self._columns[name]
+
+    def __iter__(self):
+        return iter(self._columns)
+
+    def __len__(self):
+        return len(self._columns)
+
+    def _pandas(self, what):
+        """pandas, or an ImportError that says ``what`` needs it."""
+        try:
+            import pandas
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError(f"{what} needs pandas: pip install pandas") from e
+        return pandas
+
+
+class Results(_Columns):
     """A simulation: a mapping of each recorded quantity's name (and ``"t"``) to a NumPy
     array, one value per recorded time.
 
@@ -673,21 +698,9 @@ class Results(Mapping):
         self.constraint_drift_at_steps = raw["constraint_drift_at_steps"]
         self.wall_seconds = raw["wall_seconds"]
 
-    def __getitem__(self, name):
-        return self._columns[name]
-
-    def __iter__(self):
-        return iter(self._columns)
-
-    def __len__(self):
-        return len(self._columns)
-
     def to_pandas(self):
         """The columns as a ``pandas.DataFrame`` indexed by ``t`` (needs pandas)."""
-        try:
-            import pandas
-        except ImportError as e:  # pragma: no cover - depends on the environment
-            raise ImportError("Results.to_pandas needs pandas: pip install pandas") from e
+        pandas = self._pandas("Results.to_pandas")
         columns = {k: v for k, v in self._columns.items() if k != "t"}
         return pandas.DataFrame(columns, index=pandas.Index(self.t, name="t"))
 
@@ -696,7 +709,7 @@ class Results(Mapping):
         return f"<lagrange.Results {len(self.t)} times of ({names}), {self.method}>"
 
 
-class Batch(Mapping):
+class Batch(_Columns):
     """The runs of :meth:`Scene.batch`: a mapping of each recorded quantity's name (and
     ``"t"``) to a NumPy array with an entry per run, its value where the run ended (at
     ``until``, or where a stop condition ended it).
@@ -720,21 +733,9 @@ class Batch(Mapping):
         self.samples_t = None if sampled is None else sampled.pop("t")
         self.samples = sampled
 
-    def __getitem__(self, name):
-        return self._columns[name]
-
-    def __iter__(self):
-        return iter(self._columns)
-
-    def __len__(self):
-        return len(self._columns)
-
     def to_pandas(self):
         """One row a run: the values varied, then where each run ended (needs pandas)."""
-        try:
-            import pandas
-        except ImportError as e:  # pragma: no cover - depends on the environment
-            raise ImportError("Batch.to_pandas needs pandas: pip install pandas") from e
+        pandas = self._pandas("Batch.to_pandas")
         frame = pandas.DataFrame(self.values, columns=self.names)
         for name, column in self._columns.items():
             frame[name if name not in self.names else f"{name} (end)"] = column
