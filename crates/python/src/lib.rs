@@ -224,7 +224,8 @@ impl NativeScene {
             no_units: !self.units,
             drop_cyclic: !keep_cyclic,
         };
-        let l = engine::linearize::linearize(&self.source, &options)
+        let l = py
+            .detach(|| engine::linearize::linearize(&self.source, &options))
             .map_err(|e| engine_error(&e, &self.path))?;
         let mut s = sympy::ToSympy::new(py)?;
         let pool = &l.derivation.model.pool;
