@@ -81,6 +81,11 @@ enum Command {
         /// not driven keeps its declared value.
         #[arg(long = "input", value_name = "NAME=EXPR")]
         input: Vec<Assignment>,
+        /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
+        /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
+        /// them continuously. Default: the scene's `simulate { hold … }`, else none.
+        #[arg(long, value_name = "PERIOD")]
+        hold: Option<f64>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -274,6 +279,7 @@ fn main() -> ExitCode {
             step,
             set,
             input,
+            hold,
             output,
             stop_when,
             event,
@@ -307,6 +313,7 @@ fn main() -> ExitCode {
                 set,
                 input,
                 input_series,
+                hold,
                 output,
                 stop_when,
                 events: event,

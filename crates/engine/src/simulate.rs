@@ -34,6 +34,9 @@ pub struct Options {
     pub input: Vec<Assignment>,
     /// Inputs given as time series (read from files by the front end), by name.
     pub input_series: Vec<(String, sim::Series)>,
+    /// Sample the inputs driven by laws every this many seconds and hold each sample (a
+    /// zero-order hold), rather than apply the laws continuously.
+    pub hold: Option<f64>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -70,6 +73,9 @@ pub struct Settings {
     pub drives: Vec<Assignment>,
     /// The inputs given as time series, by name.
     pub series: Vec<(String, sim::Series)>,
+    /// The period of the zero-order hold of the driven inputs' laws (positive); none: the laws
+    /// act continuously.
+    pub hold: Option<f64>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -184,6 +190,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
+    let hold = options.hold.or(number(scene.hold));
     let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
     // The scene's laws, each replaced by the front end's for the same input.
     let mut drives: Vec<Assignment> = scene
@@ -229,6 +236,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     if !(step.is_finite() && step > 0.0) {
         return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
+    drive::check_hold(hold, &drives)?;
 
     Ok(Settings {
         until,
@@ -241,6 +249,7 @@ pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
         sets: options.set.clone(),
         drives,
         series: options.input_series.clone(),
+        hold,
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -269,7 +278,7 @@ pub fn run(
     settings: &Settings,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    let (mut prepared, outputs, set_exprs) = load(source, settings)?;
+    let Loaded { mut prepared, outputs, set_exprs, held } = load(source, settings)?;
     let columns = Columns {
         outputs: outputs.len(),
         stops: settings.stops.len(),
@@ -292,10 +301,14 @@ pub fn run(
     observed.extend(plan.iter().flat_map(|p| p.exprs.iter().copied()));
     let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
     let signals = drive::signals(&prepared, settings)?;
-    let mechanical =
+    let hold = drive::hold(&mut prepared, &held, settings.hold)?;
+    let mut mechanical =
         Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observation), parameters)
             .with_kinds(prepared.stabilisation())
             .with_signals(signals);
+    if let Some(hold) = hold {
+        mechanical = mechanical.with_hold(hold);
+    }
     let (run, wall_seconds, fastest_mode) =
         integrate_scene(&mut prepared, mechanical, &y0, settings, &columns, progress)?;
 
@@ -363,13 +376,21 @@ impl Columns {
     }
 }
 
-/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order and
-/// then the `--set` values, and its driven inputs replaced by their laws; with the outputs (the remaining coordinates when the settings name
-/// none) and the `--set` values' expressions.
-fn load(
-    source: &str,
-    settings: &Settings,
-) -> Result<(Prepared, Vec<String>, Vec<cas::ExprId>), Error> {
+/// A scene loaded for a run.
+struct Loaded {
+    /// With the run's expressions resolved in its scope, in [`Columns`] order and then the
+    /// `--set` values, and the inputs driven continuously replaced by their laws.
+    prepared: Prepared,
+    /// The outputs' names: the remaining coordinates when the settings name none.
+    outputs: Vec<String>,
+    /// The `--set` values' expressions.
+    set_exprs: Vec<cas::ExprId>,
+    /// The laws of the inputs held between samples, each with its input.
+    held: Vec<(cas::SymId, cas::ExprId)>,
+}
+
+/// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
+fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -382,8 +403,14 @@ fn load(
         crate::resolve_with(source, crate::Options { units: settings.units })?;
     let laws = drive::laws(&mut model, &settings.drives)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
-    prepared.drive(&laws);
-    drive::check_method(&mut prepared, &laws, settings.method)?;
+    // Held laws keep their inputs' slots; the others take their inputs' places.
+    let held = if settings.hold.is_some() {
+        laws
+    } else {
+        prepared.drive(&laws);
+        drive::check_method(&mut prepared, &laws, settings.method)?;
+        Vec::new()
+    };
     if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
         outputs = prepared.coordinate_names();
@@ -394,7 +421,7 @@ fn load(
     }
     let sets_from = outputs.len() + settings.stops.len() + settings.events.len() + 2;
     let set_exprs = prepared.extra[sets_from..].to_vec();
-    Ok((prepared, outputs, set_exprs))
+    Ok(Loaded { prepared, outputs, set_exprs, held })
 }
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by

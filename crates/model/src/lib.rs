@@ -379,6 +379,9 @@ pub struct Simulation {
     pub events: Vec<String>,
     /// Inputs driven in a run (`input F = -k*x`), each named once, the last line winning.
     pub drives: Vec<Drive>,
+    /// The period at which the laws of `drives` are sampled and held (`hold 10 ms`); none:
+    /// they act continuously.
+    pub hold: Option<Number>,
 }
 
 /// An `input NAME = EXPR` setting of a `simulate` block: the input (one the scene declares)

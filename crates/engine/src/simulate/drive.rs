@@ -76,6 +76,48 @@ pub(super) fn signals(
     Ok(signals)
 }
 
+/// Refuses a hold that is not a positive time, or that would hold nothing: it samples the laws
+/// of driven inputs, and a run with none is surely not what was meant.
+pub(super) fn check_hold(hold: Option<f64>, drives: &[Assignment]) -> Result<(), Error> {
+    let Some(period) = hold else { return Ok(()) };
+    if !(period.is_finite() && period > 0.0) {
+        return Err(Error::setting(
+            Setting::Hold,
+            format!(" must be a positive time, not {period}"),
+        ));
+    }
+    if drives.is_empty() {
+        return Err(Error::setting(
+            Setting::Hold,
+            " samples the laws that drive inputs, and no input is driven by one; give a law \
+             with `input NAME=EXPR`",
+        ));
+    }
+    Ok(())
+}
+
+/// The zero-order hold of the laws `held`, sampled every `period`: each law lowered from the
+/// dynamics program's inputs into its input's parameter slot.
+pub(super) fn hold(
+    prepared: &mut Prepared,
+    held: &[(SymId, ExprId)],
+    period: Option<f64>,
+) -> Result<Option<sim::Hold>, Error> {
+    let Some(period) = period else { return Ok(None) };
+    let mut slots = Vec::new();
+    let mut exprs = Vec::new();
+    for (sym, law) in held {
+        let Some(slot) = prepared.parameters.iter().position(|s| s == sym) else {
+            let name = prepared.derivation.model.pool.symbol(*sym).name.clone();
+            return Err(Error::given(Setting::Input, &name, ": has no slot in this run"));
+        };
+        slots.push(slot);
+        exprs.push(prepared.derivation.expand_quantities(*law, false));
+    }
+    let laws = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+    Ok(Some(sim::Hold::new(period, slots, numeric::Tape::new(laws))))
+}
+
 /// Why no input has the name given, with the nearest name and the inputs there are.
 fn unknown_input(model: &model::Model, given: &str) -> String {
     let names: Vec<&str> = model.inputs.iter().map(|u| u.name.as_str()).collect();
