@@ -302,10 +302,45 @@ potential -F*x
     };
     for method in ["gauss", "midpoint"] {
         let error = simulate(scene, &options(method)).err().expect("refused").to_string();
-        assert!(error.contains("the driven input `F` is in it"), "{error}");
+        assert!(error.contains("must not be in it (through a potential): `F` is"), "{error}");
     }
+    // Held, the input is a constant between samples, which the Lagrangian may hold.
+    let held = Options { hold: Some(0.05), ..options("gauss") };
+    let x = simulate(scene, &held).expect("runs").run.trajectory.rows.last().expect("rows")[0];
+    assert!((x - 1.005).abs() < 1e-12, "x(0.1) = {x}");
     // x'' = F/m = 1 from rest: x = 1 + t²/2.
     let run = simulate(scene, &options("dop853")).expect("runs");
     let x = run.run.trajectory.rows.last().expect("rows")[0];
     assert!((x - 1.005).abs() < 1e-12, "x(0.1) = {x}");
+}
+
+/// `lagrange bench --input`: every run, the reference included, is of the driven scene, and
+/// the methods that refuse it are left out with the reason rather than failing the bench.
+#[test]
+fn bench_measures_the_driven_scene_and_leaves_out_the_methods_that_refuse_it() {
+    let scene = "\
+param m = 1 kg
+input F = 0 N
+coord x = 1
+particle p { mass m; position (x, 0) }
+potential -F*x
+";
+    let base = Options {
+        input: vec!["F=1".parse().expect("an assignment")],
+        until: Some(0.1),
+        ..Options::default()
+    };
+    let report = engine::bench::bench(scene, &base, 1, &mut ()).expect("benchmarks");
+    let left_out: Vec<(&str, &str)> =
+        report.inapplicable.iter().map(|m| (m.method.name(), m.reason)).collect();
+    let reason = engine::simulate::DRIVEN_IN_LAGRANGIAN;
+    assert_eq!(left_out, [("midpoint", reason), ("gauss", reason)]);
+    assert!(report.trials.iter().all(|t| !t.method.is_symplectic()));
+    // Undriven, x would stay at 1 and be 5e-3 from the reference's 1.005.
+    let worst = report.trials.iter().map(|t| t.error).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "the largest error is {worst:e}");
+    // Held, the input is a constant between samples, which the symplectic methods take.
+    let held = Options { hold: Some(0.05), ..base };
+    let report = engine::bench::bench(scene, &held, 1, &mut ()).expect("benchmarks");
+    assert!(report.inapplicable.is_empty());
 }

@@ -121,12 +121,21 @@ pub struct Outcome {
     pub animation: Option<Animation>,
     /// The mode an explicit method's step could not follow, when that is what ended the run.
     pub fastest_mode: Option<FastestMode>,
+    /// An input driven continuously by a law is in the Lagrangian: the symplectic methods
+    /// refuse the run ([`DRIVEN_IN_LAGRANGIAN`]).
+    pub lagrangian_driven: bool,
 }
 
 /// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
 /// constraints; shared by `simulate`'s error and `bench`'s list of methods left out.
 pub const NO_MULTIPLIERS: &str =
     "works in canonical variables and does not handle constraints kept with multipliers";
+
+/// Why a symplectic method cannot run a scene whose Lagrangian holds an input driven by a
+/// law; shared by `simulate`'s error and `bench`'s list of methods left out.
+pub const DRIVEN_IN_LAGRANGIAN: &str =
+    "works from the Lagrangian, and an input driven by a law must not be in it (through a \
+     potential)";
 
 fn bad(message: impl Into<String>) -> Error {
     Error::Input(message.into())
@@ -278,7 +287,8 @@ pub fn run(
     settings: &Settings,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    let Loaded { mut prepared, outputs, set_exprs, held } = load(source, settings)?;
+    let Loaded { mut prepared, outputs, set_exprs, held, lagrangian_driven } =
+        load(source, settings)?;
     let columns = Columns {
         outputs: outputs.len(),
         stops: settings.stops.len(),
@@ -339,6 +349,7 @@ pub fn run(
         conservative,
         animation: None,
         fastest_mode,
+        lagrangian_driven,
     };
     if let Some(figures) = figures {
         let energy = outcome.energy();
@@ -387,6 +398,8 @@ struct Loaded {
     set_exprs: Vec<cas::ExprId>,
     /// The laws of the inputs held between samples, each with its input.
     held: Vec<(cas::SymId, cas::ExprId)>,
+    /// An input driven continuously is in the Lagrangian.
+    lagrangian_driven: bool,
 }
 
 /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
@@ -404,12 +417,12 @@ fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let laws = drive::laws(&mut model, &settings.drives)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
     // Held laws keep their inputs' slots; the others take their inputs' places.
-    let held = if settings.hold.is_some() {
-        laws
+    let (held, lagrangian_driven) = if settings.hold.is_some() {
+        (laws, false)
     } else {
         prepared.drive(&laws);
         drive::check_method(&mut prepared, &laws, settings.method)?;
-        Vec::new()
+        (Vec::new(), drive::in_lagrangian(&mut prepared, &laws).is_some())
     };
     if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
@@ -421,7 +434,7 @@ fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     }
     let sets_from = outputs.len() + settings.stops.len() + settings.events.len() + 2;
     let set_exprs = prepared.extra[sets_from..].to_vec();
-    Ok(Loaded { prepared, outputs, set_exprs, held })
+    Ok(Loaded { prepared, outputs, set_exprs, held, lagrangian_driven })
 }
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by

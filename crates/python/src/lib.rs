@@ -9,6 +9,7 @@
 
 mod derive;
 mod errors;
+mod inputs;
 mod numbers;
 mod sympy;
 
@@ -62,7 +63,7 @@ impl NativeScene {
     /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
                         output = Vec::new(), set = Vec::new(), input = Vec::new(),
-                        input_series = Vec::new(), stop_when = Vec::new(),
+                        input_series = Vec::new(), hold = None, stop_when = Vec::new(),
                         events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
@@ -76,6 +77,7 @@ impl NativeScene {
         set: Vec<String>,
         input: Vec<String>,
         input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        hold: Option<f64>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
@@ -97,6 +99,7 @@ impl NativeScene {
             set,
             input,
             input_series: series,
+            hold,
             output,
             stop_when,
             events,

@@ -162,6 +162,13 @@ impl Prepared {
     }
 }
 
+/// The first input driven by a law that is in the Lagrangian (through a potential), if any.
+pub(super) fn in_lagrangian(prepared: &mut Prepared, laws: &[(SymId, ExprId)]) -> Option<SymId> {
+    let d = &mut prepared.derivation;
+    let in_lagrangian = d.model.pool.free_symbols(d.lagrangian);
+    laws.iter().map(|(s, _)| *s).find(|s| in_lagrangian.contains(s))
+}
+
 /// Refuses a symplectic method where a driven input enters the Lagrangian (through a
 /// potential): those methods differentiate L, and the law must not be differentiated with it.
 pub(super) fn check_method(
@@ -169,18 +176,13 @@ pub(super) fn check_method(
     laws: &[(SymId, ExprId)],
     method: Method,
 ) -> Result<(), Error> {
-    if !method.is_symplectic() {
-        return Ok(());
-    }
-    let d = &mut prepared.derivation;
-    let in_lagrangian = d.model.pool.free_symbols(d.lagrangian);
-    let Some((sym, _)) = laws.iter().find(|(s, _)| in_lagrangian.contains(s)) else {
+    let Some(sym) = in_lagrangian(prepared, laws).filter(|_| method.is_symplectic()) else {
         return Ok(());
     };
     Err(Error::Input(format!(
-        "{} works from the Lagrangian, and the driven input `{}` is in it (through a \
-         potential); use dop853 or radau",
+        "{} {}: `{}` is; use dop853 or radau",
         method.name(),
-        d.model.pool.symbol(*sym).name
+        super::DRIVEN_IN_LAGRANGIAN,
+        prepared.derivation.model.pool.symbol(sym).name
     )))
 }
