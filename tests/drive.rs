@@ -344,3 +344,39 @@ potential -F*x
     let report = engine::bench::bench(scene, &held, 1, &mut ()).expect("benchmarks");
     assert!(report.inapplicable.is_empty());
 }
+
+/// An input cannot drive a constraint: γ would need its first and second rates, which neither
+/// a law of the state nor a series gives exactly. The scene is refused where the input stands,
+/// whatever `--input` says, with the hint to write the driver in `t`; written so, it runs.
+#[test]
+fn an_input_in_a_constraint_is_refused_at_the_input_and_a_driver_in_t_runs() {
+    let scene = |driver: &str| {
+        format!(
+            "param m = 1 kg, L = 1 m, g = 9.81 m/s^2, A = 0.1 m, w = 2 rad/s
+input s = 0 m
+coord x, y = -1
+particle bob {{ mass m; position (x, y) }}
+gravity g
+constraint rod: (x - {driver})^2 + y^2 = L^2
+"
+        )
+    };
+    let options = Options {
+        input: vec!["s=0.1*sin(t)".parse().expect("an assignment")],
+        until: Some(1.0),
+        ..Options::default()
+    };
+    let source = scene("s");
+    let Err(Error::Scene { diagnostics, .. }) = simulate(&source, &options) else {
+        panic!("an input in a constraint is refused as a scene error");
+    };
+    let d = &diagnostics[0];
+    assert_eq!(d.message, "a constraint cannot depend on the input `s`");
+    assert_eq!(&source[d.span.start..d.span.end], "s");
+    assert!(source[..d.span.start].ends_with("constraint rod: (x - "));
+    let hint = d.hint.as_deref().unwrap_or_default();
+    assert!(hint.contains("write its driver as an expression of `t`"), "{hint}");
+    let in_t = Options { input: Vec::new(), ..options };
+    let run = simulate(&scene("A*sin(w*t)"), &in_t).expect("a driver in t runs");
+    assert!(run.run.fault.is_none());
+}

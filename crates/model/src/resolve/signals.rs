@@ -125,12 +125,15 @@ impl Resolver<'_> {
         let Some(input) = self.input_in(value) else { return true };
         let name = self.model.pool.symbol(input).name.clone();
         let part = self.input_part(e);
-        let hint = format!(
+        let mut hint = format!(
             "an input stands where no rate of it is needed: in a force, a torque, a potential, \
              a dissipation function or a spring; {} cannot hold one, since deriving the \
              equations would differentiate `{name}` in time",
             role.what
         );
+        if !role.instead_of_input.is_empty() {
+            hint = format!("{hint}; {}", role.instead_of_input);
+        }
         self.error(
             Diagnostic::error(
                 part.span,
