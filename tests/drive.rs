@@ -345,38 +345,87 @@ potential -F*x
     assert!(report.inapplicable.is_empty());
 }
 
-/// An input cannot drive a constraint: γ would need its first and second rates, which neither
-/// a law of the state nor a series gives exactly. The scene is refused where the input stands,
-/// whatever `--input` says, with the hint to write the driver in `t`; written so, it runs.
-#[test]
-fn an_input_in_a_constraint_is_refused_at_the_input_and_a_driver_in_t_runs() {
-    let scene = |driver: &str| {
-        format!(
-            "param m = 1 kg, L = 1 m, g = 9.81 m/s^2, A = 0.1 m, w = 2 rad/s
-input s = 0 m
-coord x, y = -1
+/// A pendulum whose pivot slides along x as `driver` says.
+fn sliding_pivot(driver: &str) -> String {
+    format!(
+        "param m = 1 kg, L = 1 m, g = 9.81 m/s^2, A = 0.1 m, w = 2 rad/s
+input s = 0.05 m
+coord x = 0.3, y ~ -1
 particle bob {{ mass m; position (x, y) }}
 gravity g
 constraint rod: (x - {driver})^2 + y^2 = L^2
 "
-        )
-    };
+    )
+}
+
+fn rows(source: &str, input: &[&str], method: &str) -> Result<Vec<Vec<f64>>, Error> {
     let options = Options {
-        input: vec!["s=0.1*sin(t)".parse().expect("an assignment")],
-        until: Some(1.0),
+        input: input.iter().map(|i| i.parse().expect("an assignment")).collect(),
+        method: Some(method.into()),
+        until: Some(2.0),
+        tolerance: Some(1e-11),
+        output: vec!["x, y, x', y', rod.force".into()],
+        samples: 41,
         ..Options::default()
     };
-    let source = scene("s");
-    let Err(Error::Scene { diagnostics, .. }) = simulate(&source, &options) else {
-        panic!("an input in a constraint is refused as a scene error");
+    let outcome = simulate(source, &options)?;
+    assert!(outcome.run.fault.is_none(), "{:?}", outcome.run.fault);
+    Ok(outcome.run.trajectory.rows)
+}
+
+fn largest_gap(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().flatten().zip(b.iter().flatten()).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max)
+}
+
+/// An input in a constraint takes its law before the equations are derived, so that the
+/// driver's rates and second derivative in γ are the law's, exactly: driven by a law of t, or
+/// of a coordinate, the pivot moves as the same driver written into the constraint moves it;
+/// undriven, it stands at the input's declared value.
+#[test]
+fn an_input_drives_a_constraint_as_its_law_written_there_does() {
+    let driven = sliding_pivot("s");
+    for (law, written) in
+        [("s=A*(1 - cos(w*t))", "A*(1 - cos(w*t))"), ("s=x*cos(w*t)/4", "x*cos(w*t)/4")]
+    {
+        for method in ["dop853", "radau"] {
+            let by_input = rows(&driven, &[law], method).expect("runs");
+            let by_hand = rows(&sliding_pivot(written), &[], method).expect("runs");
+            let gap = largest_gap(&by_input, &by_hand);
+            assert!(gap < 1e-12, "{law} by {method}: {gap:e} from the driver written out");
+            // The pivot moves: the run is not the undriven one.
+            let still = rows(&sliding_pivot("0.05"), &[], method).expect("runs");
+            assert!(largest_gap(&by_input, &still) > 1e-3, "{law} by {method}");
+        }
+    }
+    let undriven = rows(&driven, &[], "dop853").expect("runs");
+    let at_declared = rows(&sliding_pivot("0.05"), &[], "dop853").expect("runs");
+    assert!(largest_gap(&undriven, &at_declared) < 1e-12);
+}
+
+/// What cannot drive a constraint is refused naming the input and the constraint: a law of
+/// the rates, a time series, a hold; and a command that derives the equations with the input
+/// as a symbol refuses the scene where the input stands, with the hint of what works.
+#[test]
+fn an_input_in_a_constraint_is_refused_where_its_rates_are_not_known() {
+    let driven = sliding_pivot("s");
+    let error = |options: Options| simulate(&driven, &options).err().expect("refused").to_string();
+    let law = |text: &str| vec![text.parse().expect("an assignment")];
+    let of_rates = error(Options { input: law("s=A*x'/(w*L)"), ..Options::default() });
+    assert!(of_rates.contains("`input` s: drives the constraint `rod`, so its law may name t"));
+    let series = sim::Series::new(vec![0.0, 20.0], vec![0.0, 1.0]).expect("a series");
+    let given = Options { input_series: vec![("s".into(), series)], ..Options::default() };
+    assert!(error(given).contains("and a time series has none"));
+    let held = Options { input: law("s=A*sin(w*t)"), hold: Some(0.1), ..Options::default() };
+    assert!(error(held).contains("which a held value would make jump at every sample"));
+
+    let Err(Error::Scene { diagnostics, .. }) = engine::load(&driven) else {
+        panic!("deriving with the input as a symbol is refused");
     };
     let d = &diagnostics[0];
     assert_eq!(d.message, "a constraint cannot depend on the input `s`");
-    assert_eq!(&source[d.span.start..d.span.end], "s");
-    assert!(source[..d.span.start].ends_with("constraint rod: (x - "));
+    assert_eq!(&driven[d.span.start..d.span.end], "s");
+    assert!(driven[..d.span.start].ends_with("constraint rod: (x - "));
     let hint = d.hint.as_deref().unwrap_or_default();
-    assert!(hint.contains("write its driver as an expression of `t`"), "{hint}");
-    let in_t = Options { input: Vec::new(), ..options };
-    let run = simulate(&scene("A*sin(w*t)"), &in_t).expect("a driver in t runs");
-    assert!(run.run.fault.is_none());
+    assert!(hint.contains("`simulate --input s=…` puts a law of `t`"), "{hint}");
 }

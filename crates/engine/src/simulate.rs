@@ -191,7 +191,8 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
 /// the scene is derived; a scene that does not resolve has none, and loading it reports why),
 /// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
-    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
+    let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
+    let loaded = crate::resolve_checked(source, checks);
     let scene = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
     let number = |n: Option<model::Number>| n.map(|n| n.value);
     let mut until = number(scene.until).unwrap_or(10.0);
@@ -412,9 +413,11 @@ fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     extra.push("KE".into());
     extra.push("PE".into());
     extra.extend(settings.sets.iter().map(|a| a.value.clone()));
-    let (mut model, warnings) =
-        crate::resolve_with(source, crate::Options { units: settings.units })?;
+    // An input in a constraint takes its law (or value) before anything is derived.
+    let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
+    let (mut model, warnings) = crate::resolve_checked(source, checks)?;
     let laws = drive::laws(&mut model, &settings.drives)?;
+    drive::into_constraints(&mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
     // Held laws keep their inputs' slots; the others take their inputs' places.
     let (held, lagrangian_driven) = if settings.hold.is_some() {

@@ -21,6 +21,11 @@ use lang::{Ident, Span, Unit};
 pub struct Checks {
     /// That every sum, equation and energy term has one dimension.
     pub units: bool,
+    /// Let an input stand in a constraint: the front end puts a law of t and the coordinates
+    /// (or the input's declared value) in its place before anything is derived, as a run does.
+    /// Otherwise such a constraint is an error, since deriving it would differentiate the
+    /// input in time.
+    pub inputs_in_constraints: bool,
 }
 
 /// A named constant: symbolic in every derivation, its value used only for numbers.

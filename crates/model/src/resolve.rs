@@ -155,6 +155,8 @@ struct Resolver<'a> {
 struct Diagnostics {
     errors: Vec<Diagnostic>,
     warnings: Vec<Diagnostic>,
+    /// Inputs in constraints: errors unless the checks let them stand ([`Checks`]).
+    inputs_in_constraints: Vec<Diagnostic>,
 }
 
 /// The model under construction: a [`Model`] but for its scope, field by field.
@@ -394,6 +396,10 @@ impl<'a> Resolver<'a> {
                 .with_label("the scene has no `linearize about` line")
                 .with_hint("add `linearize about …` naming the reference");
             self.diagnostics.errors.push(d);
+        }
+        if !checks.inputs_in_constraints {
+            let refused = std::mem::take(&mut self.diagnostics.inputs_in_constraints);
+            self.diagnostics.errors.extend(refused);
         }
         if !self.diagnostics.errors.is_empty() {
             let mut errors = self.diagnostics.errors;

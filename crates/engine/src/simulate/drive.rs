@@ -39,6 +39,60 @@ pub(super) fn laws(
     Ok(laws)
 }
 
+/// Puts each input that stands in a constraint out of it: its law, or its declared value when
+/// nothing drives it. The constraint's rates and second derivative are then derived with the
+/// law in place, exactly. Refused where they cannot be: a law of the rates (the constraint
+/// would restrain velocities), a time series (it has no rates), a hold (the constraint would
+/// jump at each sample).
+pub(super) fn into_constraints(
+    model: &mut model::Model,
+    laws: &[(SymId, ExprId)],
+    settings: &super::Settings,
+) -> Result<(), Error> {
+    let mut values: HashMap<SymId, ExprId> = HashMap::new();
+    for input in &model.inputs {
+        let Some(constraint) = model.constraints.iter().find(|c| {
+            model.pool.free_symbols(c.lhs).contains(&input.sym)
+                || model.pool.free_symbols(c.rhs).contains(&input.sym)
+        }) else {
+            continue;
+        };
+        let refuse = |why: &str| {
+            let text = format!(": drives the constraint `{}`, {why}", constraint.name);
+            Err(Error::given(Setting::Input, &input.name, text))
+        };
+        if settings.series.iter().any(|(name, _)| *name == input.name) {
+            return refuse(
+                "whose second derivative needs the input's first and second rates, and a time \
+                 series has none; give a law of t and the coordinates",
+            );
+        }
+        let law = laws.iter().find(|(s, _)| *s == input.sym).map(|(_, law)| *law);
+        if law.is_some() && settings.hold.is_some() {
+            return refuse("which a held value would make jump at every sample; drop the hold");
+        }
+        let value = law.unwrap_or(input.value);
+        let free = model.pool.free_symbols(value);
+        if free.iter().any(|s| model.pool.symbol(*s).order() > 0) {
+            return refuse(
+                "so its law may name t, the coordinates and the parameters, not rates (the \
+                 constraint would then restrain velocities)",
+            );
+        }
+        values.insert(input.sym, value);
+    }
+    if values.is_empty() {
+        return Ok(());
+    }
+    let pool = &mut model.pool;
+    for c in &mut model.constraints {
+        c.lhs = pool.subst(c.lhs, &values);
+        c.rhs = pool.subst(c.rhs, &values);
+        c.phi = pool.subst(c.phi, &values);
+    }
+    Ok(())
+}
+
 /// The parameter slots of the inputs the settings give as time series, each with its series;
 /// refused where a series does not cover the run, or its input is also driven by a law.
 pub(super) fn signals(

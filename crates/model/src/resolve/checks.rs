@@ -27,8 +27,8 @@ pub(super) struct Role {
     pub differentiated: bool,
     /// Whether an input may appear in it: only where no time derivative of it is taken.
     pub inputs: bool,
-    /// Where an input may not appear: what to write instead, when there is more to say than
-    /// where inputs may stand.
+    /// Where an input may not appear and there is more to say than where inputs may stand:
+    /// the hint, `{name}` standing for the input.
     pub instead_of_input: &'static str,
 }
 
@@ -185,10 +185,11 @@ pub(super) const CONSTRAINT: Role = Role {
     hint: "",
     differentiated: true,
     inputs: false,
-    instead_of_input: "to move a constraint with time, write its driver as an expression of `t` \
-                       in the constraint (`y = A*sin(w*t)`, with parameters that `--set` \
-                       changes); a controller acts through a force or a torque, where an input \
-                       may stand",
+    instead_of_input: "deriving the equations would differentiate `{name}` in time, which only \
+                       a run can: `simulate --input {name}=…` puts a law of `t` and the \
+                       coordinates in its place first (its declared value when nothing drives \
+                       it); to derive them here, write the driver as an expression of `t` \
+                       (`y = A*sin(w*t)`)",
 };
 
 /// The functions whose derivative jumps (`abs`, `min`, `max`) or is a spike (`sign`).
