@@ -398,6 +398,30 @@ fn an_input_drives_a_constraint_as_its_law_written_there_does() {
             assert!(largest_gap(&by_input, &still) > 1e-3, "{law} by {method}");
         }
     }
+    // Independently: with θ from the downward vertical, x = s + L·sin θ, y = −L·cos θ and
+    // L·θ̈ + s̈·cos θ + g·sin θ = 0, s̈ = A·w²·cos(w·t); integrated here by RK4.
+    let by_input = rows(&driven, &["s=A*(1 - cos(w*t))"], "dop853").expect("runs");
+    let (a, w, g, l) = (0.1, 2.0, 9.81, 1.0);
+    let rate = |t: f64, [theta, omega]: [f64; 2]| {
+        let pivot = a * w * w * cos(w * t);
+        [omega, -(pivot * cos(theta) + g * sin(theta)) / l]
+    };
+    let (h, mut t, mut y) = (1e-4, 0.0, [apply(cas::Func::Asin, 0.3), 0.0]);
+    for (k, row) in by_input.iter().enumerate() {
+        while t < 0.05 * k as f64 - 1e-9 {
+            let k1 = rate(t, y);
+            let k2 = rate(t + h / 2.0, [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]]);
+            let k3 = rate(t + h / 2.0, [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]]);
+            let k4 = rate(t + h, [y[0] + h * k3[0], y[1] + h * k3[1]]);
+            for i in 0..2 {
+                y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+            t += h;
+        }
+        let pivot = a * (1.0 - cos(w * t));
+        let (x, height) = (pivot + l * sin(y[0]), -l * cos(y[0]));
+        assert!((row[0] - x).abs() < 1e-9 && (row[1] - height).abs() < 1e-9, "t = {t}: {row:?}");
+    }
     let undriven = rows(&driven, &[], "dop853").expect("runs");
     let at_declared = rows(&sliding_pivot("0.05"), &[], "dop853").expect("runs");
     assert!(largest_gap(&undriven, &at_declared) < 1e-12);
