@@ -417,7 +417,7 @@ fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
     let (mut model, warnings) = crate::resolve_checked(source, checks)?;
     let laws = drive::laws(&mut model, &settings.drives)?;
-    drive::into_constraints(&mut model, &laws, settings)?;
+    drive::into_constraints(source, &mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
     // Held laws keep their inputs' slots; the others take their inputs' places.
     let (held, lagrangian_driven) = if settings.hold.is_some() {

@@ -428,6 +428,9 @@ pub struct Model {
     pub links: Vec<Link>,
     /// The `simulate { … }` blocks, read into their settings.
     pub simulation: Simulation,
+    /// Each input that stands in a constraint, where [`Checks::inputs_in_constraints`] let it,
+    /// with the error it would otherwise have been: a run that does not drive it reports it.
+    pub inputs_in_constraints: Vec<(SymId, lang::Diagnostic)>,
     /// The `linearize about` lines, in the order written.
     pub linearize: Vec<Linearize>,
     pub placeholders: Vec<(SymId, Placeholder)>,

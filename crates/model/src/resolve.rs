@@ -156,7 +156,7 @@ struct Diagnostics {
     errors: Vec<Diagnostic>,
     warnings: Vec<Diagnostic>,
     /// Inputs in constraints: errors unless the checks let them stand ([`Checks`]).
-    inputs_in_constraints: Vec<Diagnostic>,
+    inputs_in_constraints: Vec<(SymId, Diagnostic)>,
 }
 
 /// The model under construction: a [`Model`] but for its scope, field by field.
@@ -281,6 +281,7 @@ impl Draft {
             drawings: self.drawings,
             links: self.links,
             simulation: self.simulation,
+            inputs_in_constraints: Vec::new(),
             linearize: self.linearize,
             placeholders: self.placeholders,
             lets: self.lets,
@@ -397,9 +398,9 @@ impl<'a> Resolver<'a> {
                 .with_hint("add `linearize about …` naming the reference");
             self.diagnostics.errors.push(d);
         }
+        let mut inputs_in_constraints = std::mem::take(&mut self.diagnostics.inputs_in_constraints);
         if !checks.inputs_in_constraints {
-            let refused = std::mem::take(&mut self.diagnostics.inputs_in_constraints);
-            self.diagnostics.errors.extend(refused);
+            self.diagnostics.errors.extend(inputs_in_constraints.drain(..).map(|(_, d)| d));
         }
         if !self.diagnostics.errors.is_empty() {
             let mut errors = self.diagnostics.errors;
@@ -414,7 +415,9 @@ impl<'a> Resolver<'a> {
         }
         self.scope.checks = checks;
         let warnings = std::mem::take(&mut self.diagnostics.warnings);
-        Ok((self.into_model(), warnings))
+        let mut model = self.into_model();
+        model.inputs_in_constraints = inputs_in_constraints;
+        Ok((model, warnings))
     }
 
     /// The model resolved so far, with the scope that resolves more expressions against it.

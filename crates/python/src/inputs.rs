@@ -74,24 +74,34 @@ fn source(name: &str, value: &Bound<'_, PyAny>, rows: Option<usize>) -> PyResult
 }
 
 fn every_value(names: &[String], given: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    let array: PyArrayLike1<'_, f64, AllowTypeChange> = given.extract().map_err(|_| {
-        PyTypeError::new_err(format!(
-            "inputs are a dict of name to a number or a callable of (t, y), or an array of {} \
-             values ({})",
-            names.len(),
-            names.join(", ")
-        ))
-    })?;
+    let form = PyTypeError::new_err(format!(
+        "inputs are a dict of name to a number or a callable of (t, y), or an array of {} \
+         values ({})",
+        names.len(),
+        names.join(", ")
+    ));
+    in_order(names, given, "input", form)
+}
+
+/// The values of `names`, each a `what` (parameter, input), from an array of them all in
+/// their order, each finite; `form` when `given` is not an array.
+pub fn in_order(
+    names: &[String],
+    given: &Bound<'_, PyAny>,
+    what: &str,
+    form: PyErr,
+) -> PyResult<Vec<f64>> {
+    let array: PyArrayLike1<'_, f64, AllowTypeChange> = given.extract().map_err(|_| form)?;
     let values: Vec<f64> = array.as_array().iter().copied().collect();
     if values.len() != names.len() {
         return Err(PyValueError::new_err(format!(
-            "{} input values for the {} inputs ({})",
+            "{} {what} values for the {} {what}s ({})",
             values.len(),
             names.len(),
             names.join(", ")
         )));
     }
-    names.iter().zip(values).map(|(name, v)| finite(name, v)).collect()
+    names.iter().zip(values).map(|(name, v)| finite_value(what, name, v)).collect()
 }
 
 fn unknown_input(names: &[String], parameters: &[String], name: &str) -> PyErr {
@@ -109,10 +119,15 @@ fn unknown_input(names: &[String], parameters: &[String], name: &str) -> PyErr {
 }
 
 fn finite(name: &str, v: f64) -> PyResult<f64> {
+    finite_value("input", name, v)
+}
+
+/// `v`, or why a `what` (parameter, input) may not take it.
+pub fn finite_value(what: &str, name: &str, v: f64) -> PyResult<f64> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(PyValueError::new_err(format!("input `{name}` must be finite, not {v}")))
+        Err(PyValueError::new_err(format!("{what} `{name}` must be finite, not {v}")))
     }
 }
 

@@ -404,13 +404,6 @@ pub fn parameter_values(
     current: &[f64],
     given: &Bound<'_, PyAny>,
 ) -> PyResult<Vec<f64>> {
-    let finite = |name: &str, v: f64| {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(PyValueError::new_err(format!("parameter `{name}` must be finite, not {v}")))
-        }
-    };
     if let Ok(mapping) = given.cast::<PyMapping>() {
         let mut values = current.to_vec();
         for item in mapping.items()?.iter() {
@@ -421,27 +414,16 @@ pub fn parameter_values(
                     names.join(", ")
                 )));
             };
-            values[k] = finite(&name, value)?;
+            values[k] = inputs::finite_value("parameter", &name, value)?;
         }
         return Ok(values);
     }
-    let array: PyArrayLike1<'_, f64, AllowTypeChange> = given.extract().map_err(|_| {
-        PyValueError::new_err(format!(
-            "parameter values are a dict of name to value or an array of {} values ({})",
-            names.len(),
-            names.join(", ")
-        ))
-    })?;
-    let values: Vec<f64> = array.as_array().iter().copied().collect();
-    if values.len() != names.len() {
-        return Err(PyValueError::new_err(format!(
-            "{} parameter values for the {} parameters ({})",
-            values.len(),
-            names.len(),
-            names.join(", ")
-        )));
-    }
-    names.iter().zip(values).map(|(name, v)| finite(name, v)).collect()
+    let form = PyValueError::new_err(format!(
+        "parameter values are a dict of name to value or an array of {} values ({})",
+        names.len(),
+        names.join(", ")
+    ));
+    inputs::in_order(names, given, "parameter", form)
 }
 
 /// A read-only mapping of `names` to `values` (`types.MappingProxyType` over a dict): an item

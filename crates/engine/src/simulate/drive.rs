@@ -39,12 +39,13 @@ pub(super) fn laws(
     Ok(laws)
 }
 
-/// Puts each input that stands in a constraint out of it: its law, or its declared value when
-/// nothing drives it. The constraint's rates and second derivative are then derived with the
-/// law in place, exactly. Refused where they cannot be: a law of the rates (the constraint
-/// would restrain velocities), a time series (it has no rates), a hold (the constraint would
-/// jump at each sample).
+/// Puts each input that stands in a constraint out of it: its law. The constraint's rates and
+/// second derivative are then derived with the law in place, exactly. Refused where they
+/// cannot be: no law (the scene's error where the input stands, as every other command
+/// gives it), a law of the rates (the constraint would restrain velocities), a time series (it
+/// has no rates), a hold (the constraint would jump at each sample).
 pub(super) fn into_constraints(
+    source: &str,
     model: &mut model::Model,
     laws: &[(SymId, ExprId)],
     settings: &super::Settings,
@@ -67,11 +68,14 @@ pub(super) fn into_constraints(
                  series has none; give a law of t and the coordinates",
             );
         }
-        let law = laws.iter().find(|(s, _)| *s == input.sym).map(|(_, law)| *law);
-        if law.is_some() && settings.hold.is_some() {
+        let Some(value) = laws.iter().find(|(s, _)| *s == input.sym).map(|(_, law)| *law) else {
+            let refused = model.inputs_in_constraints.iter().filter(|(s, _)| *s == input.sym);
+            let diagnostics = refused.map(|(_, d)| d.clone()).collect();
+            return Err(Error::Scene { diagnostics, source: source.to_string() });
+        };
+        if settings.hold.is_some() {
             return refuse("which a held value would make jump at every sample; drop the hold");
         }
-        let value = law.unwrap_or(input.value);
         let free = model.pool.free_symbols(value);
         if free.iter().any(|s| model.pool.symbol(*s).order() > 0) {
             return refuse(

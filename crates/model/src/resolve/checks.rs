@@ -187,8 +187,7 @@ pub(super) const CONSTRAINT: Role = Role {
     inputs: false,
     instead_of_input: "deriving the equations would differentiate `{name}` in time, which only \
                        a run can: `simulate --input {name}=…` puts a law of `t` and the \
-                       coordinates in its place first (its declared value when nothing drives \
-                       it); to derive them here, write the driver as an expression of `t` \
+                       coordinates in its place first; to derive them here, write the driver as an expression of `t` \
                        (`y = A*sin(w*t)`)",
 };
 

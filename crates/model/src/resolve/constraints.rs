@@ -13,8 +13,8 @@ impl Resolver<'_> {
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
         // Whether an input may stand here is the checks' to say, known when the walk is done.
         for (e, value) in [(lhs, &l), (rhs, &r)] {
-            if let Some(d) = self.input_diagnostic(e, value, &checks::CONSTRAINT) {
-                self.diagnostics.inputs_in_constraints.push(d);
+            if let Some(refused) = self.input_diagnostic(e, value, &checks::CONSTRAINT) {
+                self.diagnostics.inputs_in_constraints.push(refused);
             }
         }
         self.warn_kinks(lhs, &l, &checks::CONSTRAINT);

@@ -119,19 +119,19 @@ impl Resolver<'_> {
     /// Whether `value` (of `e`) is free of inputs where its role needs it so; reports the
     /// smallest part of `e` that names one.
     pub(super) fn without_inputs(&mut self, e: &Expr, value: &Value, role: &Role) -> bool {
-        let Some(d) = self.input_diagnostic(e, value, role) else { return true };
+        let Some((_, d)) = self.input_diagnostic(e, value, role) else { return true };
         self.error(d);
         false
     }
 
-    /// Why `value` (of `e`) may not hold the input it holds in its role, at the smallest part
+    /// The input `value` (of `e`) holds where its role may not, and why, at the smallest part
     /// of `e` that names it; `None` where it holds none or may.
     pub(super) fn input_diagnostic(
         &mut self,
         e: &Expr,
         value: &Value,
         role: &Role,
-    ) -> Option<Diagnostic> {
+    ) -> Option<(SymId, Diagnostic)> {
         if role.inputs {
             return None;
         }
@@ -148,14 +148,13 @@ impl Resolver<'_> {
         } else {
             role.instead_of_input.replace("{name}", &name)
         };
-        Some(
-            Diagnostic::error(
-                part.span,
-                format!("{} cannot depend on the input `{name}`", role.what),
-            )
-            .with_label(format!("depends on `{name}`"))
-            .with_hint(hint),
+        let d = Diagnostic::error(
+            part.span,
+            format!("{} cannot depend on the input `{name}`", role.what),
         )
+        .with_label(format!("depends on `{name}`"))
+        .with_hint(hint);
+        Some((input, d))
     }
 
     /// The smallest part of `e` whose value names an input.
