@@ -282,17 +282,20 @@ draw line from p to p.position + (F/k, 0)
     assert!(line.frames.iter().any(|f| (f[0] - 1.0).abs() > 0.1), "the mass moves");
 }
 
-/// gauss and midpoint differentiate the Lagrangian, where an input in a potential would
-/// bring its law's derivative along; they refuse such a run, and dop853 takes it.
-#[test]
-fn the_symplectic_methods_refuse_an_input_driven_inside_a_potential() {
-    let scene = "\
+/// A mass pushed by an input that stands in a potential, not a force.
+const PUSHED_INSIDE_A_POTENTIAL: &str = "\
 param m = 1 kg
 input F = 0 N
 coord x = 1
 particle p { mass m; position (x, 0) }
 potential -F*x
 ";
+
+/// gauss and midpoint differentiate the Lagrangian, where an input in a potential would
+/// bring its law's derivative along; they refuse such a run, and dop853 takes it.
+#[test]
+fn the_symplectic_methods_refuse_an_input_driven_inside_a_potential() {
+    let scene = PUSHED_INSIDE_A_POTENTIAL;
     let options = |method: &str| Options {
         input: vec!["F=1".parse().expect("an assignment")],
         method: Some(method.into()),
@@ -302,10 +305,149 @@ potential -F*x
     };
     for method in ["gauss", "midpoint"] {
         let error = simulate(scene, &options(method)).err().expect("refused").to_string();
-        assert!(error.contains("the driven input `F` is in it"), "{error}");
+        assert!(error.contains("must not be in it (through a potential): `F` is"), "{error}");
     }
+    // Held, the input is a constant between samples, which the Lagrangian may hold.
+    let held = Options { hold: Some(0.05), ..options("gauss") };
+    let x = simulate(scene, &held).expect("runs").run.trajectory.rows.last().expect("rows")[0];
+    assert!((x - 1.005).abs() < 1e-12, "x(0.1) = {x}");
     // x'' = F/m = 1 from rest: x = 1 + t²/2.
     let run = simulate(scene, &options("dop853")).expect("runs");
     let x = run.run.trajectory.rows.last().expect("rows")[0];
     assert!((x - 1.005).abs() < 1e-12, "x(0.1) = {x}");
+}
+
+/// `lagrange bench --input`: every run, the reference included, is of the driven scene, and
+/// the methods that refuse it are left out with the reason rather than failing the bench.
+#[test]
+fn bench_measures_the_driven_scene_and_leaves_out_the_methods_that_refuse_it() {
+    let scene = PUSHED_INSIDE_A_POTENTIAL;
+    let base = Options {
+        input: vec!["F=1".parse().expect("an assignment")],
+        until: Some(0.1),
+        ..Options::default()
+    };
+    let report = engine::bench::bench(scene, &base, 1, &mut ()).expect("benchmarks");
+    let left_out: Vec<(&str, &str)> =
+        report.inapplicable.iter().map(|m| (m.method.name(), m.reason)).collect();
+    let reason = engine::simulate::DRIVEN_IN_LAGRANGIAN;
+    assert_eq!(left_out, [("midpoint", reason), ("gauss", reason)]);
+    assert!(report.trials.iter().all(|t| !t.method.is_symplectic()));
+    // Undriven, x would stay at 1 and be 5e-3 from the reference's 1.005.
+    let worst = report.trials.iter().map(|t| t.error).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "the largest error is {worst:e}");
+    // Held, the input is a constant between samples, which the symplectic methods take.
+    let held = Options { hold: Some(0.05), ..base };
+    let report = engine::bench::bench(scene, &held, 1, &mut ()).expect("benchmarks");
+    assert!(report.inapplicable.is_empty());
+}
+
+/// A pendulum whose pivot slides along x as `driver` says.
+fn sliding_pivot(driver: &str) -> String {
+    format!(
+        "param m = 1 kg, L = 1 m, g = 9.81 m/s^2, A = 0.1 m, w = 2 rad/s
+input s = 0.05 m
+coord x = 0.3, y ~ -1
+particle bob {{ mass m; position (x, y) }}
+gravity g
+constraint rod: (x - {driver})^2 + y^2 = L^2
+"
+    )
+}
+
+fn rows(source: &str, input: &[&str], method: &str) -> Result<Vec<Vec<f64>>, Error> {
+    let options = Options {
+        input: input.iter().map(|i| i.parse().expect("an assignment")).collect(),
+        method: Some(method.into()),
+        until: Some(2.0),
+        tolerance: Some(1e-11),
+        output: vec!["x, y, x', y', rod.force".into()],
+        samples: 41,
+        ..Options::default()
+    };
+    let outcome = simulate(source, &options)?;
+    assert!(outcome.run.fault.is_none(), "{:?}", outcome.run.fault);
+    Ok(outcome.run.trajectory.rows)
+}
+
+fn largest_gap(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().flatten().zip(b.iter().flatten()).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max)
+}
+
+/// An input in a constraint takes its law before the equations are derived, so that the
+/// driver's rates and second derivative in γ are the law's, exactly: driven by a law of t, or
+/// of a coordinate, the pivot moves as the same driver written into the constraint moves it,
+/// and as θ's own equation integrated here says.
+#[test]
+fn an_input_drives_a_constraint_as_its_law_written_there_does() {
+    let driven = sliding_pivot("s");
+    for (law, written) in
+        [("s=A*(1 - cos(w*t))", "A*(1 - cos(w*t))"), ("s=x*cos(w*t)/4", "x*cos(w*t)/4")]
+    {
+        for method in ["dop853", "radau"] {
+            let by_input = rows(&driven, &[law], method).expect("runs");
+            let by_hand = rows(&sliding_pivot(written), &[], method).expect("runs");
+            let gap = largest_gap(&by_input, &by_hand);
+            assert!(gap < 1e-12, "{law} by {method}: {gap:e} from the driver written out");
+            // The pivot moves: the run is not the undriven one.
+            let still = rows(&sliding_pivot("0.05"), &[], method).expect("runs");
+            assert!(largest_gap(&by_input, &still) > 1e-3, "{law} by {method}");
+        }
+    }
+    // Independently: with θ from the downward vertical, x = s + L·sin θ, y = −L·cos θ and
+    // L·θ̈ + s̈·cos θ + g·sin θ = 0, s̈ = A·w²·cos(w·t); integrated here by RK4.
+    let by_input = rows(&driven, &["s=A*(1 - cos(w*t))"], "dop853").expect("runs");
+    let (a, w, g, l) = (0.1, 2.0, 9.81, 1.0);
+    let rate = |t: f64, [theta, omega]: [f64; 2]| {
+        let pivot = a * w * w * cos(w * t);
+        [omega, -(pivot * cos(theta) + g * sin(theta)) / l]
+    };
+    let (h, mut t, mut y) = (1e-4, 0.0, [apply(cas::Func::Asin, 0.3), 0.0]);
+    for (k, row) in by_input.iter().enumerate() {
+        while t < 0.05 * k as f64 - 1e-9 {
+            let k1 = rate(t, y);
+            let k2 = rate(t + h / 2.0, [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]]);
+            let k3 = rate(t + h / 2.0, [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]]);
+            let k4 = rate(t + h, [y[0] + h * k3[0], y[1] + h * k3[1]]);
+            for i in 0..2 {
+                y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+            t += h;
+        }
+        let pivot = a * (1.0 - cos(w * t));
+        let (x, height) = (pivot + l * sin(y[0]), -l * cos(y[0]));
+        assert!((row[0] - x).abs() < 1e-9 && (row[1] - height).abs() < 1e-9, "t = {t}: {row:?}");
+    }
+}
+
+/// What cannot drive a constraint is refused naming the input and the constraint: a law of
+/// the rates, a time series, a hold. A run that does not drive it, and every command that
+/// derives the equations with the input as a symbol, refuse the scene where the input stands,
+/// with the hint of what works.
+#[test]
+fn an_input_in_a_constraint_is_refused_where_its_rates_are_not_known() {
+    let driven = sliding_pivot("s");
+    let error = |options: Options| simulate(&driven, &options).err().expect("refused").to_string();
+    let law = |text: &str| vec![text.parse().expect("an assignment")];
+    let of_rates = error(Options { input: law("s=A*x'/(w*L)"), ..Options::default() });
+    assert!(of_rates.contains("`input` s: drives the constraint `rod`, so its law may name t"));
+    let series = sim::Series::new(vec![0.0, 20.0], vec![0.0, 1.0]).expect("a series");
+    let given = Options { input_series: vec![("s".into(), series)], ..Options::default() };
+    assert!(error(given).contains("and a time series has none"));
+    let held = Options { input: law("s=A*sin(w*t)"), hold: Some(0.1), ..Options::default() };
+    assert!(error(held).contains("which a held value would make jump at every sample"));
+
+    let refused = [engine::load(&driven).err(), simulate(&driven, &Options::default()).err()];
+    for error in refused {
+        let Some(Error::Scene { diagnostics, .. }) = error else {
+            panic!("an input in a constraint with no law is refused as a scene error");
+        };
+        let d = &diagnostics[0];
+        assert_eq!(d.message, "a constraint cannot depend on the input `s`");
+        assert_eq!(&driven[d.span.start..d.span.end], "s");
+        assert!(driven[..d.span.start].ends_with("constraint rod: (x - "));
+        let hint = d.hint.as_deref().unwrap_or_default();
+        assert!(hint.contains("`simulate --input s=…` puts a law of `t`"), "{hint}");
+    }
 }

@@ -81,6 +81,11 @@ enum Command {
         /// not driven keeps its declared value.
         #[arg(long = "input", value_name = "NAME=EXPR")]
         input: Vec<Assignment>,
+        /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
+        /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
+        /// them continuously. Default: the scene's `simulate { hold … }`, else none.
+        #[arg(long, value_name = "PERIOD")]
+        hold: Option<f64>,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
@@ -187,6 +192,13 @@ enum Command {
         /// End each run when this expression reaches zero, as for simulate.
         #[arg(long = "stop-when", value_name = "EXPR")]
         stop_when: Vec<String>,
+        /// Drive an input by a law or a time series, as for simulate: every run, the reference
+        /// included, is of the driven scene.
+        #[arg(long = "input", value_name = "NAME=EXPR")]
+        input: Vec<Assignment>,
+        /// Hold the laws of `--input` between samples PERIOD seconds apart, as for simulate.
+        #[arg(long, value_name = "PERIOD")]
+        hold: Option<f64>,
         /// Time each run this many times and report the median.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
@@ -274,6 +286,7 @@ fn main() -> ExitCode {
             step,
             set,
             input,
+            hold,
             output,
             stop_when,
             event,
@@ -284,18 +297,9 @@ fn main() -> ExitCode {
             samples,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let (files, input): (Vec<_>, Vec<_>) =
-                input.into_iter().partition(cli::series::is_series);
-            let mut input_series = Vec::new();
-            for given in files {
-                match cli::series::read(std::path::Path::new(&given.value)) {
-                    Ok(series) => input_series.push((given.name, series)),
-                    Err(e) => {
-                        eprintln!("error: --input {}: {e}", given.name);
-                        return ExitCode::from(2);
-                    }
-                }
-            }
+            let Some((input, input_series)) = laws_and_series(input) else {
+                return ExitCode::from(2);
+            };
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
@@ -307,6 +311,7 @@ fn main() -> ExitCode {
                 set,
                 input,
                 input_series,
+                hold,
                 output,
                 stop_when,
                 events: event,
@@ -351,14 +356,45 @@ fn main() -> ExitCode {
             let options = engine::inverse::Options { set, no_units };
             inverse_dynamics(&file, &source, &trajectory, out, &options)
         }
-        Command::Bench { file, until, set, stop_when, repeats, plot, no_units } => {
+        Command::Bench { file, until, set, stop_when, input, hold, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let options =
-                engine::simulate::Options { until, set, stop_when, no_units, ..Default::default() };
+            let Some((input, input_series)) = laws_and_series(input) else {
+                return ExitCode::from(2);
+            };
+            let options = engine::simulate::Options {
+                until,
+                set,
+                stop_when,
+                input,
+                input_series,
+                hold,
+                no_units,
+                ..Default::default()
+            };
             bench(&file, &source, &options, repeats, plot)
         }
         Command::Check { files, no_units } => check(&files, no_units),
     }
+}
+
+/// `--input` values split into laws and time series, each series read from its file; `None`
+/// when a file cannot be read, said on stderr.
+#[allow(clippy::type_complexity)]
+fn laws_and_series(
+    input: Vec<Assignment>,
+) -> Option<(Vec<Assignment>, Vec<(String, sim::Series)>)> {
+    let (files, laws): (Vec<_>, Vec<_>) = input.into_iter().partition(cli::series::is_series);
+    let mut series = Vec::new();
+    for given in files {
+        match cli::series::read(std::path::Path::new(&given.value)) {
+            Ok(read) => series.push((given.name, read)),
+            Err(e) => {
+                eprintln!("error: --input {}: {e}", given.name);
+                return None;
+            }
+        }
+    }
+    Some((laws, series))
 }
 
 /// `lagrange derive`: the report to standard output or `out`, the warnings to stderr.

@@ -10,7 +10,9 @@ use std::fmt::Write;
 
 use sim::Method;
 
-use crate::simulate::{simulate_with, Options, Outcome, Progress, NO_MULTIPLIERS};
+use crate::simulate::{
+    simulate_with, Options, Outcome, Progress, DRIVEN_IN_LAGRANGIAN, NO_MULTIPLIERS,
+};
 use crate::Error;
 
 /// What one rung of a ladder sets: a tolerance, or a number of fixed steps over the span.
@@ -200,14 +202,17 @@ pub fn bench(
     let span = reference.run.final_time;
     // One constraint column per multiplier.
     let multipliers = !reference.constraint_columns.is_empty();
-    let (methods, inapplicable): (Vec<Method>, Vec<Method>) = Method::NAMES
-        .iter()
-        .filter_map(|n| Method::from_name(n))
-        .partition(|m| !multipliers || m.handles_multipliers());
-    let inapplicable = inapplicable
-        .into_iter()
-        .map(|method| Inapplicable { method, reason: NO_MULTIPLIERS })
-        .collect();
+    let mut methods = Vec::new();
+    let mut inapplicable = Vec::new();
+    for method in Method::NAMES.iter().filter_map(|n| Method::from_name(n)) {
+        if multipliers && !method.handles_multipliers() {
+            inapplicable.push(Inapplicable { method, reason: NO_MULTIPLIERS });
+        } else if reference.lagrangian_driven && method.is_symplectic() {
+            inapplicable.push(Inapplicable { method, reason: DRIVEN_IN_LAGRANGIAN });
+        } else {
+            methods.push(method);
+        }
+    }
     let mut error = |o: &Outcome| final_state_error(&reference, o);
     let trials = work_precision(source, base, span, &methods, repeats, &mut error, progress)?;
     Ok(Report { trials, inapplicable, reference_check, span })

@@ -114,6 +114,8 @@ pub enum Setting {
     About,
     /// An input driven in a run, `name=expression`.
     Input,
+    /// The period of the zero-order hold of the inputs driven by laws.
+    Hold,
 }
 
 impl Setting {
@@ -127,6 +129,7 @@ impl Setting {
             Setting::Sweep => "sweep",
             Setting::About => "about",
             Setting::Input => "input",
+            Setting::Hold => "hold",
         }
     }
 }

@@ -70,9 +70,16 @@ pub(crate) fn resolve_with(
     source: &str,
     options: Options,
 ) -> Result<(model::Model, Vec<Diagnostic>), Error> {
+    resolve_checked(source, model::Checks { units: options.units, inputs_in_constraints: false })
+}
+
+/// [`resolve_with`] with the model's checks given as they are.
+pub(crate) fn resolve_checked(
+    source: &str,
+    checks: model::Checks,
+) -> Result<(model::Model, Vec<Diagnostic>), Error> {
     let scene = |diagnostics| Error::Scene { diagnostics, source: source.to_string() };
     let ast = lang::parse(source).map_err(scene)?;
-    let checks = model::Checks { units: options.units };
     let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
     // The integrator's names are `sim`'s, which `model` does not know.
     simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;

@@ -38,6 +38,9 @@ pub struct Options {
     pub input: Vec<Assignment>,
     /// Inputs given as time series (read from files by the front end), by name.
     pub input_series: Vec<(String, sim::Series)>,
+    /// Sample the inputs driven by laws every this many seconds and hold each sample (a
+    /// zero-order hold), rather than apply the laws continuously.
+    pub hold: Option<f64>,
     /// Quantities to record, comma-separated lists.
     pub output: Vec<String>,
     /// Expressions whose zero (or `lhs = rhs`) ends the run.
@@ -74,6 +77,9 @@ pub struct Settings {
     pub drives: Vec<Assignment>,
     /// The inputs given as time series, by name.
     pub series: Vec<(String, sim::Series)>,
+    /// The period of the zero-order hold of the driven inputs' laws (positive); none: the laws
+    /// act continuously.
+    pub hold: Option<f64>,
     /// Evenly spaced times to record at (0: every accepted step).
     pub samples: usize,
     /// Check dimensions when loading.
@@ -125,12 +131,21 @@ pub struct Outcome {
     pub animation: Option<Animation>,
     /// The mode an explicit method's step could not follow, when that is what ended the run.
     pub fastest_mode: Option<FastestMode>,
+    /// An input driven continuously by a law is in the Lagrangian: the symplectic methods
+    /// refuse the run ([`DRIVEN_IN_LAGRANGIAN`]).
+    pub lagrangian_driven: bool,
 }
 
 /// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
 /// constraints; shared by `simulate`'s error and `bench`'s list of methods left out.
 pub const NO_MULTIPLIERS: &str =
     "works in canonical variables and does not handle constraints kept with multipliers";
+
+/// Why a symplectic method cannot run a scene whose Lagrangian holds an input driven by a
+/// law; shared by `simulate`'s error and `bench`'s list of methods left out.
+pub const DRIVEN_IN_LAGRANGIAN: &str =
+    "works from the Lagrangian, and an input driven by a law must not be in it (through a \
+     potential)";
 
 fn bad(message: impl Into<String>) -> Error {
     Error::Input(message.into())
@@ -186,7 +201,8 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
 /// the scene is derived; a scene that does not resolve has none, and loading it reports why),
 /// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
-    let loaded = crate::resolve_with(source, crate::Options { units: !options.no_units });
+    let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
+    let loaded = crate::resolve_checked(source, checks);
     settings_of(loaded.map(|(model, _)| model.simulation).unwrap_or_default(), options)
 }
 
@@ -200,6 +216,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
     let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
+    let hold = options.hold.or(number(scene.hold));
     let (mut outputs, mut stops, mut events) = (scene.outputs, scene.stops, scene.events);
     // The scene's laws, each replaced by the front end's for the same input.
     let mut drives: Vec<Assignment> = scene
@@ -245,6 +262,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
     if !(step.is_finite() && step > 0.0) {
         return Err(Error::setting(Setting::Step, format!(" must be positive, not {step}")));
     }
+    drive::check_hold(hold, &drives)?;
 
     Ok(Settings {
         until,
@@ -257,6 +275,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
         sets: options.set.clone(),
         drives,
         series: options.input_series.clone(),
+        hold,
         samples: options.samples,
         units: !options.no_units,
         animate: options.animate,
@@ -308,10 +327,21 @@ impl Columns {
     }
 }
 
-/// The scene loaded with the run's expressions resolved in its scope, in [`Columns`] order,
-/// and its driven inputs replaced by their laws; with the outputs (the remaining coordinates
-/// when the settings name none).
-fn load(source: &str, settings: &Settings) -> Result<(Prepared, Vec<String>), Error> {
+/// A scene loaded for runs.
+struct Loaded {
+    /// With the run's expressions resolved in its scope, in [`Columns`] order, and the inputs
+    /// driven continuously replaced by their laws.
+    prepared: Prepared,
+    /// The outputs' names: the remaining coordinates when the settings name none.
+    outputs: Vec<String>,
+    /// The laws of the inputs held between samples, each with its input.
+    held: Vec<(cas::SymId, cas::ExprId)>,
+    /// An input driven continuously is in the Lagrangian.
+    lagrangian_driven: bool,
+}
+
+/// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
+fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -319,12 +349,20 @@ fn load(source: &str, settings: &Settings) -> Result<(Prepared, Vec<String>), Er
     extra.extend(settings.events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    let (mut model, warnings) =
-        crate::resolve_with(source, crate::Options { units: settings.units })?;
+    // An input in a constraint takes its law (or value) before anything is derived.
+    let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
+    let (mut model, warnings) = crate::resolve_checked(source, checks)?;
     let laws = drive::laws(&mut model, &settings.drives)?;
+    drive::into_constraints(source, &mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
-    prepared.drive(&laws);
-    drive::check_method(&mut prepared, &laws, settings.method)?;
+    // Held laws keep their inputs' slots; the others take their inputs' places.
+    let (held, lagrangian_driven) = if settings.hold.is_some() {
+        (laws, false)
+    } else {
+        prepared.drive(&laws);
+        drive::check_method(&mut prepared, &laws, settings.method)?;
+        (Vec::new(), drive::in_lagrangian(&mut prepared, &laws).is_some())
+    };
     if outputs.is_empty() {
         // Default outputs: every remaining coordinate.
         outputs = prepared.coordinate_names();
@@ -333,7 +371,7 @@ fn load(source: &str, settings: &Settings) -> Result<(Prepared, Vec<String>), Er
         let exprs: Vec<cas::ExprId> = coords.iter().map(|q| pool.sym(*q)).collect();
         prepared.extra.splice(0..0, exprs);
     }
-    Ok((prepared, outputs))
+    Ok(Loaded { prepared, outputs, held, lagrangian_driven })
 }
 
 /// The `--set` values resolved as expressions of the derived scene's parameters: after the

@@ -21,6 +21,11 @@ use lang::{Ident, Span, Unit};
 pub struct Checks {
     /// That every sum, equation and energy term has one dimension.
     pub units: bool,
+    /// Let an input stand in a constraint: the front end puts a law of t and the coordinates
+    /// (or the input's declared value) in its place before anything is derived, as a run does.
+    /// Otherwise such a constraint is an error, since deriving it would differentiate the
+    /// input in time.
+    pub inputs_in_constraints: bool,
 }
 
 /// A named constant: symbolic in every derivation, its value used only for numbers.
@@ -379,6 +384,9 @@ pub struct Simulation {
     pub events: Vec<String>,
     /// Inputs driven in a run (`input F = -k*x`), each named once, the last line winning.
     pub drives: Vec<Drive>,
+    /// The period at which the laws of `drives` are sampled and held (`hold 10 ms`); none:
+    /// they act continuously.
+    pub hold: Option<Number>,
 }
 
 /// An `input NAME = EXPR` setting of a `simulate` block: the input (one the scene declares)
@@ -420,6 +428,9 @@ pub struct Model {
     pub links: Vec<Link>,
     /// The `simulate { … }` blocks, read into their settings.
     pub simulation: Simulation,
+    /// Each input that stands in a constraint, where [`Checks::inputs_in_constraints`] let it,
+    /// with the error it would otherwise have been: a run that does not drive it reports it.
+    pub inputs_in_constraints: Vec<(SymId, lang::Diagnostic)>,
     /// The `linearize about` lines, in the order written.
     pub linearize: Vec<Linearize>,
     pub placeholders: Vec<(SymId, Placeholder)>,

@@ -155,6 +155,8 @@ struct Resolver<'a> {
 struct Diagnostics {
     errors: Vec<Diagnostic>,
     warnings: Vec<Diagnostic>,
+    /// Inputs in constraints: errors unless the checks let them stand ([`Checks`]).
+    inputs_in_constraints: Vec<(SymId, Diagnostic)>,
 }
 
 /// The model under construction: a [`Model`] but for its scope, field by field.
@@ -279,6 +281,7 @@ impl Draft {
             drawings: self.drawings,
             links: self.links,
             simulation: self.simulation,
+            inputs_in_constraints: Vec::new(),
             linearize: self.linearize,
             placeholders: self.placeholders,
             lets: self.lets,
@@ -395,6 +398,10 @@ impl<'a> Resolver<'a> {
                 .with_hint("add `linearize about …` naming the reference");
             self.diagnostics.errors.push(d);
         }
+        let mut inputs_in_constraints = std::mem::take(&mut self.diagnostics.inputs_in_constraints);
+        if !checks.inputs_in_constraints {
+            self.diagnostics.errors.extend(inputs_in_constraints.drain(..).map(|(_, d)| d));
+        }
         if !self.diagnostics.errors.is_empty() {
             let mut errors = self.diagnostics.errors;
             errors.sort_by_key(|d| d.span.start);
@@ -408,7 +415,9 @@ impl<'a> Resolver<'a> {
         }
         self.scope.checks = checks;
         let warnings = std::mem::take(&mut self.diagnostics.warnings);
-        Ok((self.into_model(), warnings))
+        let mut model = self.into_model();
+        model.inputs_in_constraints = inputs_in_constraints;
+        Ok((model, warnings))
     }
 
     /// The model resolved so far, with the scope that resolves more expressions against it.

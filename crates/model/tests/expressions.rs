@@ -12,7 +12,9 @@ constraint fixed: x = 0
 
 fn model() -> Model {
     let ast = lang::parse(SCENE).expect("parses");
-    model::resolve_with(&ast, SCENE, Checks { units: true }).expect("resolves").0
+    model::resolve_with(&ast, SCENE, Checks { units: true, ..Checks::default() })
+        .expect("resolves")
+        .0
 }
 
 #[test]

@@ -9,6 +9,7 @@
 
 mod derive;
 mod errors;
+mod inputs;
 mod numbers;
 mod runs;
 mod sympy;
@@ -111,7 +112,7 @@ impl NativeScene {
     /// the next call.
     #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
                         output = Vec::new(), set = Vec::new(), input = Vec::new(),
-                        input_series = Vec::new(), stop_when = Vec::new(),
+                        input_series = Vec::new(), hold = None, stop_when = Vec::new(),
                         events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
@@ -125,17 +126,13 @@ impl NativeScene {
         set: Vec<String>,
         input: Vec<String>,
         input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        hold: Option<f64>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let options = RunOptions { until, method, tolerance, step, output, set, input }.with(
-            input_series,
-            stop_when,
-            events,
-            samples,
-            self,
-        )?;
+        let options = RunOptions { until, method, tolerance, step, output, set, input, hold }
+            .with(input_series, stop_when, events, samples, self)?;
         let settings = self.settings(&options)?;
         let mut check = runs::SignalCheck::new();
         let outcome = py.detach(|| self.runs.run(&self.source, &settings, &mut check));
@@ -152,7 +149,7 @@ impl NativeScene {
     /// `runs::batch_dict`).
     #[pyo3(signature = (names, values, threads = 1, until = None, method = None,
                         tolerance = None, step = None, output = Vec::new(), set = Vec::new(),
-                        input = Vec::new(), input_series = Vec::new(),
+                        input = Vec::new(), input_series = Vec::new(), hold = None,
                         stop_when = Vec::new(), events = Vec::new(), samples = 0))]
     #[allow(clippy::too_many_arguments)]
     fn batch<'py>(
@@ -169,17 +166,13 @@ impl NativeScene {
         set: Vec<String>,
         input: Vec<String>,
         input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        hold: Option<f64>,
         stop_when: Vec<String>,
         events: Vec<String>,
         samples: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let options = RunOptions { until, method, tolerance, step, output, set, input }.with(
-            input_series,
-            stop_when,
-            events,
-            samples,
-            self,
-        )?;
+        let options = RunOptions { until, method, tolerance, step, output, set, input, hold }
+            .with(input_series, stop_when, events, samples, self)?;
         let values = values.as_array();
         if values.ncols() != names.len() {
             return Err(PyValueError::new_err(format!(
@@ -373,6 +366,7 @@ struct RunOptions {
     output: Vec<String>,
     set: Vec<String>,
     input: Vec<String>,
+    hold: Option<f64>,
 }
 
 impl RunOptions {
@@ -404,6 +398,7 @@ impl RunOptions {
             set,
             input,
             input_series: series,
+            hold: self.hold,
             output: self.output,
             stop_when,
             events,

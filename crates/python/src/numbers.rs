@@ -2,7 +2,8 @@
 //! y' = F(t, y) for `scipy.integrate.solve_ivp` (y = coordinates, then rates), evaluated by the
 //! lowered programs through `sim::Mechanical` exactly as `simulate` runs them, with
 //! `.batch(Y)` for many states in one call, `.jac(t, y)`, the exact ∂F/∂y for `solve_ivp`'s
-//! `jac` (its partials lowered on first use), and parameter values per call or from then on;
+//! `jac` (its partials lowered on first use), parameter values per call or from then on, and
+//! the inputs' values per call (numbers, arrays per row or callables of (t, y): `inputs`);
 //! `Scene.mass_matrix_function()` gives M(t, q); the inverse dynamics τ = M·q̈ − f of
 //! `engine::inverse` over many states is [`InverseDynamics`].
 
@@ -13,11 +14,13 @@ use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyA
 use pyo3::exceptions::PyKeyError;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::sync::MutexExt;
 use pyo3::types::{PyDict, PyMapping};
 use sim::{FaultKind, Mechanical, Problem};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::errors::{engine_error, numeric_error};
+use crate::inputs::{self, Source};
 
 /// Loads `source` for numbers, with its parameter values and initial state.
 fn prepared(source: &str, units: bool) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
@@ -54,39 +57,44 @@ fn fault_text(kind: &FaultKind, names: &[String]) -> String {
 /// y' = F(t, y) of a scene, y = (q, q̇) of its remaining coordinates: what
 /// `scipy.integrate.solve_ivp` takes. Evaluated by the scene's lowered programs; constraints
 /// kept with multipliers are solved with them (and Baumgarte-stabilised) as in `simulate`.
-/// Usable from any thread: the programs and their buffers are behind a lock, held for one
-/// call at a time.
+/// Usable from any thread: a call has the programs to itself.
 #[pyclass(frozen, module = "lagrange")]
 pub struct Rhs {
     /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
     #[pyo3(get)]
     names: Vec<String>,
-    y0: Vec<f64>,
-    /// The parameters' names in declaration order, the order of their values.
+    /// The parameters' names in declaration order, the order of their values. The inputs are
+    /// not among them.
     #[pyo3(get)]
     parameter_names: Vec<String>,
+    /// The inputs' names in declaration order, the order of `u=` as an array.
+    #[pyo3(get)]
+    input_names: Vec<String>,
     /// What it is made from, to be made again when unpickled.
     source: String,
     units: bool,
     path: String,
-    state: Mutex<RhsState>,
-}
-
-/// The programs of an [`Rhs`] and their buffers: what a call changes.
-struct RhsState {
-    mechanical: Mechanical,
-    names: Vec<String>,
-    dy: Vec<f64>,
-    /// The scene for numbers, kept to lower the partials when `jac` is first called (only
-    /// implicit methods want them); `None` once they are.
-    prepared: Option<Prepared>,
-    path: String,
-    jacobian: Vec<f64>,
+    /// The programs, one call at a time; a thread waiting for them lets go of the GIL, so a
+    /// call whose input callables run Python never blocks another thread's.
+    inner: Mutex<RhsInner>,
 }
 
 impl Rhs {
+    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        let inner = RhsInner::new(source, path, units)?;
+        Ok(Rhs {
+            names: inner.names.clone(),
+            parameter_names: inner.parameter_names.clone(),
+            input_names: inner.input_names.clone(),
+            source: source.to_string(),
+            units,
+            path: path.to_string(),
+            inner: Mutex::new(inner),
+        })
+    }
+
     /// An [`Rhs`] made again from what it pickles as: the scene's text and settings, and the
-    /// parameter values it had.
+    /// values of its parameters.
     pub fn from_pickle(
         source: &str,
         path: &str,
@@ -94,6 +102,8 @@ impl Rhs {
         parameters: &[f64],
     ) -> PyResult<Self> {
         let rhs = Rhs::new(source, path, units)?;
+        let mut inner = rhs.inner.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let mut all = inner.mechanical.parameters().to_vec();
         if parameters.len() != rhs.parameter_names.len() {
             return Err(PyValueError::new_err(format!(
                 "{} parameter values for the {} parameters ({})",
@@ -102,10 +112,43 @@ impl Rhs {
                 rhs.parameter_names.join(", ")
             )));
         }
-        rhs.state().mechanical.set_parameters(parameters);
+        all[..parameters.len()].copy_from_slice(parameters);
+        inner.mechanical.set_parameters(&all);
+        drop(inner);
         Ok(rhs)
     }
 
+    /// The programs, for this thread alone until the guard is dropped; the GIL is let go while
+    /// waiting for them. A call that panicked holding them left at worst its own parameter
+    /// values in place, which the next call that gives its own replaces.
+    fn inner(&self, py: Python<'_>) -> MutexGuard<'_, RhsInner> {
+        self.inner.lock_py_attached(py).unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+/// The programs of an [`Rhs`], their buffers and what a call reads: what one call at a
+/// time uses.
+struct RhsInner {
+    mechanical: Mechanical,
+    /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
+    names: Vec<String>,
+    y0: Vec<f64>,
+    /// The parameters' names in declaration order, the order of their values. The inputs are
+    /// not among them.
+    parameter_names: Vec<String>,
+    /// The inputs' names in declaration order, the order of `u=` as an array.
+    input_names: Vec<String>,
+    /// The inputs' declared values, which they take where `u=` does not name them.
+    declared_inputs: Vec<f64>,
+    dy: Vec<f64>,
+    /// The scene for numbers, kept to lower the partials when `jac` is first called (only
+    /// implicit methods want them); `None` once they are.
+    prepared: Option<Prepared>,
+    path: String,
+    jacobian: Vec<f64>,
+}
+
+impl RhsInner {
     pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
         let (mut prepared, parameters, y0) =
             prepared(source, units).map_err(|e| engine_error(&e, path))?;
@@ -119,9 +162,9 @@ impl Rhs {
         let names = prepared.state_names();
         // The slots of `parameters`: the parameters, then the inputs at their values.
         let model = &prepared.derivation.model;
-        let parameter_names = model.params.iter().map(|p| p.name.clone());
-        let parameter_names: Vec<String> =
-            parameter_names.chain(model.inputs.iter().map(|u| u.name.clone())).collect();
+        let parameter_names: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
+        let input_names: Vec<String> = model.inputs.iter().map(|u| u.name.clone()).collect();
+        let declared_inputs = parameters[parameter_names.len()..].to_vec();
         let mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),
@@ -130,52 +173,38 @@ impl Rhs {
         )
         .with_kinds(prepared.stabilisation());
         let dim = mechanical.dim();
-        let state = RhsState {
+        Ok(RhsInner {
             mechanical,
-            names: names.clone(),
+            names,
+            y0,
+            parameter_names,
+            input_names,
+            declared_inputs,
             dy: vec![0.0; dim],
             prepared: Some(prepared),
             path: path.to_string(),
             jacobian: Vec::new(),
-        };
-        Ok(Rhs {
-            names,
-            y0,
-            parameter_names,
-            source: source.to_string(),
-            units,
-            path: path.to_string(),
-            state: Mutex::new(state),
         })
     }
 
-    /// The programs, for this thread alone until the guard is dropped. A call that panicked
-    /// holding them left at worst parameters of its own in place; the next call sets its own.
-    fn state(&self) -> MutexGuard<'_, RhsState> {
-        self.state.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-    }
-
-    /// Runs `body` on the programs with the parameter values `p` gives (none: those in use),
-    /// and puts back those in use afterwards, whatever `body` returns. `p` is read before the
-    /// programs are locked: reading it may run Python code.
+    /// Runs `body` with the parameter values `p` gives (none: those in use), and puts back
+    /// those in use afterwards, whatever `body` returns.
     fn with_parameters<T>(
-        &self,
+        &mut self,
         p: Option<&Bound<'_, PyAny>>,
-        body: impl FnOnce(&mut RhsState) -> PyResult<T>,
+        body: impl FnOnce(&mut Self) -> PyResult<T>,
     ) -> PyResult<T> {
-        let Some(p) = p else { return body(&mut self.state()) };
-        let kept = self.state().mechanical.parameters().to_vec();
-        let given = parameter_values(&self.parameter_names, &kept, p)?;
-        let mut state = self.state();
-        let kept = state.mechanical.parameters().to_vec();
-        state.mechanical.set_parameters(&given);
-        let result = body(&mut state);
-        state.mechanical.set_parameters(&kept);
+        let Some(p) = p else { return body(self) };
+        let kept = self.mechanical.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let mut given = kept.clone();
+        given[..k].copy_from_slice(&parameter_values(&self.parameter_names, &kept[..k], p)?);
+        self.mechanical.set_parameters(&given);
+        let result = body(self);
+        self.mechanical.set_parameters(&kept);
         result
     }
-}
 
-impl RhsState {
     fn check_length(&self, y: &[f64]) -> PyResult<()> {
         if y.len() == self.dy.len() {
             return Ok(());
@@ -188,16 +217,96 @@ impl RhsState {
         )))
     }
 
-    fn eval(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+    /// What drives each input in a call: `u` read against the inputs (see
+    /// [`inputs::sources`]); `rows` for a batch.
+    fn sources(&self, u: Option<&Bound<'_, PyAny>>, rows: Option<usize>) -> PyResult<Vec<Source>> {
+        let (names, parameters) = (&self.input_names, &self.parameter_names);
+        inputs::sources(names, &self.declared_inputs, parameters, u, rows)
+    }
+
+    /// Puts the inputs' values at (t, y) into their slots (row `row` of a batch).
+    fn set_inputs(
+        &mut self,
+        py: Python<'_>,
+        sources: &[Source],
+        t: f64,
+        y: &[f64],
+        row: usize,
+    ) -> PyResult<()> {
+        if sources.is_empty() {
+            return Ok(());
+        }
+        let values = inputs::values(py, &self.input_names, sources, t, y, row)?;
+        let mut all = self.mechanical.parameters().to_vec();
+        all[self.parameter_names.len()..].copy_from_slice(&values);
+        self.mechanical.set_parameters(&all);
+        Ok(())
+    }
+
+    fn eval(
+        &mut self,
+        py: Python<'_>,
+        t: f64,
+        y: &[f64],
+        sources: &[Source],
+        row: usize,
+    ) -> PyResult<()> {
         self.check_length(y)?;
+        self.set_inputs(py, sources, t, y, row)?;
+        self.rhs_here(t, y)
+    }
+
+    /// F at (t, y) into `self.dy`, with the slots as they are.
+    fn rhs_here(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
         self.mechanical.rhs(t, y, &mut self.dy).map_err(|kind| {
             numeric_error(format!("at t = {t}: {}", fault_text(&kind, &self.names)))
         })
     }
 
-    /// The exact ∂F/∂y at (t, y) into `self.jacobian`, lowering the partials the first time.
-    fn eval_jacobian(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
+    /// ∂F/∂y at (t, y) into `self.jacobian` with the inputs `sources` give: exact where they are
+    /// numbers; an input given by a callable adds ∂F/∂u·∂u/∂y, both by central differences
+    /// (the callable has no exact derivative, and ∂F/∂u is not lowered).
+    fn eval_jacobian(
+        &mut self,
+        py: Python<'_>,
+        t: f64,
+        y: &[f64],
+        sources: &[Source],
+    ) -> PyResult<()> {
         self.check_length(y)?;
+        self.set_inputs(py, sources, t, y, 0)?;
+        self.exact_jacobian(t, y)?;
+        let d = self.dy.len();
+        let k = self.parameter_names.len();
+        for (j, source) in sources.iter().enumerate() {
+            let Source::Law(law) = source else { continue };
+            let gradient = inputs::law_gradient(py, law, t, y)?;
+            let mut slots = self.mechanical.parameters().to_vec();
+            let u = slots[k + j];
+            let h = inputs::central_step(u);
+            let mut sensitivity = vec![0.0; d];
+            for (sign, weight) in [(1.0, 1.0), (-1.0, -1.0)] {
+                slots[k + j] = u + sign * h;
+                self.mechanical.set_parameters(&slots);
+                self.rhs_here(t, y)?;
+                for (s, f) in sensitivity.iter_mut().zip(&self.dy) {
+                    *s += weight * f / (2.0 * h);
+                }
+            }
+            slots[k + j] = u;
+            self.mechanical.set_parameters(&slots);
+            for (r, s) in sensitivity.iter().enumerate() {
+                for (c, g) in gradient.iter().enumerate() {
+                    self.jacobian[r * d + c] += s * g;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The exact ∂F/∂y at (t, y) with the slots as they are, lowering the partials the first
+    /// time.
+    fn exact_jacobian(&mut self, t: f64, y: &[f64]) -> PyResult<()> {
         if let Some(mut prepared) = self.prepared.take() {
             let exprs = prepared.partials_exprs();
             let program = prepared
@@ -219,31 +328,37 @@ impl RhsState {
 #[pymethods]
 impl Rhs {
     /// F(t, y): the rates of the state y = (q, q̇) at time t, as a 1-D array (q̇, q̈); `p`
-    /// gives parameter values for this call only (see [`parameter_values`]).
-    #[pyo3(signature = (t, y, p = None))]
+    /// gives parameter values for this call only (see [`parameter_values`]), `u` the inputs'
+    /// values (see [`inputs::sources`]).
+    #[pyo3(signature = (t, y, p = None, u = None))]
     fn __call__<'py>(
         &self,
         py: Python<'py>,
         t: f64,
         y: PyArrayLike1<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
+        u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let y = y.as_array();
         let y: Vec<f64> = y.iter().copied().collect();
-        let dy = self.with_parameters(p, |rhs| rhs.eval(t, &y).map(|()| rhs.dy.clone()))?;
-        Ok(PyArray1::from_vec(py, dy))
+        let mut this = self.inner(py);
+        let sources = this.sources(u, None)?;
+        this.with_parameters(p, |rhs| rhs.eval(py, t, &y, &sources, 0))?;
+        Ok(PyArray1::from_slice(py, &this.dy))
     }
 
     /// F at many states in one call: `Y` is a 2-D array with one state a row; `t` one time
-    /// for all rows or one time per row; `p` parameter values for this call only. Returns an
-    /// array of the same shape as `Y`.
-    #[pyo3(signature = (y, t = None, p = None))]
+    /// for all rows or one time per row; `p` parameter values for this call only; `u` the
+    /// inputs' values, a dict's value also an array of one value per row. Returns an array of
+    /// the same shape as `Y`.
+    #[pyo3(signature = (y, t = None, p = None, u = None))]
     fn batch<'py>(
         &self,
         py: Python<'py>,
         y: PyArrayLike2<'py, f64, AllowTypeChange>,
         t: Option<&Bound<'py, PyAny>>,
         p: Option<&Bound<'py, PyAny>>,
+        u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let y = y.as_array();
         let rows = y.nrows();
@@ -264,22 +379,24 @@ impl Rhs {
                 }
             },
         };
-        let width = self.y0.len();
+        let mut this = self.inner(py);
+        let width = this.dy.len();
         if y.ncols() != width {
             return Err(PyValueError::new_err(format!(
                 "each row is a state of {width} entries ({}), not {}",
-                self.names.join(", "),
+                this.names.join(", "),
                 y.ncols()
             )));
         }
         let mut out = Vec::with_capacity(rows * width);
         let mut state = vec![0.0; width];
-        self.with_parameters(p, |rhs| {
-            for (row, t) in y.rows().into_iter().zip(times) {
+        let sources = this.sources(u, Some(rows))?;
+        this.with_parameters(p, |rhs| {
+            for (k, (row, t)) in y.rows().into_iter().zip(times).enumerate() {
                 for (slot, v) in state.iter_mut().zip(row.iter()) {
                     *slot = *v;
                 }
-                rhs.eval(t, &state)?;
+                rhs.eval(py, t, &state, &sources, k)?;
                 out.extend_from_slice(&rhs.dy);
             }
             Ok(())
@@ -292,33 +409,38 @@ impl Rhs {
     /// column j is ∂F_i/∂y_j. From the equations' partials (lowered on the first call) and
     /// the matrix the accelerations are solved with, stabilisation of kept constraints
     /// included, so it is the Jacobian of `f` itself. `p` gives parameter values for this
-    /// call only, as `solve_ivp`'s `args` hands them to `jac` as well as to `f`.
-    #[pyo3(signature = (t, y, p = None))]
+    /// call only, as `solve_ivp`'s `args` hands them to `jac` as well as to `f`; `u` the
+    /// inputs' values, as for `f`: an input a callable gives (a feedback law) adds its
+    /// ∂F/∂u·∂u/∂y, by central differences.
+    #[pyo3(signature = (t, y, p = None, u = None))]
     fn jac<'py>(
         &self,
         py: Python<'py>,
         t: f64,
         y: PyArrayLike1<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
+        u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let y: Vec<f64> = y.as_array().iter().copied().collect();
-        let jacobian =
-            self.with_parameters(p, |rhs| rhs.eval_jacobian(t, &y).map(|()| rhs.jacobian.clone()))?;
-        let d = self.y0.len();
-        PyArray1::from_vec(py, jacobian).reshape([d, d])
+        let mut this = self.inner(py);
+        let sources = this.sources(u, None)?;
+        this.with_parameters(p, |rhs| rhs.eval_jacobian(py, t, &y, &sources))?;
+        let d = this.dy.len();
+        PyArray1::from_slice(py, &this.jacobian).reshape([d, d])
     }
 
     /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.
     #[getter]
     fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.y0)
+        PyArray1::from_slice(py, &self.inner(py).y0)
     }
 
     /// The parameters' values the programs use, name to value, read-only: a change is made by
     /// assigning to `parameters`, never lost in a copy.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let values = self.state().mechanical.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let values = self.inner(py).mechanical.parameters()[..k].to_vec();
         read_only(py, &self.parameter_names, &values)
     }
 
@@ -326,9 +448,12 @@ impl Rhs {
     /// array gives them all (see [`parameter_values`]).
     #[setter]
     fn set_parameters(&self, p: &Bound<'_, PyAny>) -> PyResult<()> {
-        let current = self.state().mechanical.parameters().to_vec();
-        let values = parameter_values(&self.parameter_names, &current, p)?;
-        self.state().mechanical.set_parameters(&values);
+        let mut this = self.inner(p.py());
+        let mut all = this.mechanical.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let values = parameter_values(&self.parameter_names, &all[..k], p)?;
+        all[..k].copy_from_slice(&values);
+        this.mechanical.set_parameters(&all);
         Ok(())
     }
 
@@ -336,9 +461,18 @@ impl Rhs {
     /// values in use; unpickling derives and lowers the scene again.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let rebuild = py.import("lagrange._native")?.getattr("_rhs_from")?;
-        let parameters = self.state().mechanical.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let parameters = self.inner(py).mechanical.parameters()[..k].to_vec();
         let arguments = (self.source.clone(), self.path.clone(), self.units, parameters);
         (rebuild, arguments).into_pyobject(py).map(|t| t.into_any())
+    }
+
+    /// The inputs' declared values, name to value, read-only: what each takes in a call whose
+    /// `u` does not name it.
+    #[getter]
+    fn inputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let declared = self.inner(py).declared_inputs.clone();
+        read_only(py, &self.input_names, &declared)
     }
 
     fn __repr__(&self) -> String {
@@ -355,13 +489,6 @@ pub fn parameter_values(
     current: &[f64],
     given: &Bound<'_, PyAny>,
 ) -> PyResult<Vec<f64>> {
-    let finite = |name: &str, v: f64| {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(PyValueError::new_err(format!("parameter `{name}` must be finite, not {v}")))
-        }
-    };
     if let Ok(mapping) = given.cast::<PyMapping>() {
         let mut values = current.to_vec();
         for item in mapping.items()?.iter() {
@@ -372,27 +499,16 @@ pub fn parameter_values(
                     names.join(", ")
                 )));
             };
-            values[k] = finite(&name, value)?;
+            values[k] = inputs::finite_value("parameter", &name, value)?;
         }
         return Ok(values);
     }
-    let array: PyArrayLike1<'_, f64, AllowTypeChange> = given.extract().map_err(|_| {
-        PyValueError::new_err(format!(
-            "parameter values are a dict of name to value or an array of {} values ({})",
-            names.len(),
-            names.join(", ")
-        ))
-    })?;
-    let values: Vec<f64> = array.as_array().iter().copied().collect();
-    if values.len() != names.len() {
-        return Err(PyValueError::new_err(format!(
-            "{} parameter values for the {} parameters ({})",
-            values.len(),
-            names.len(),
-            names.join(", ")
-        )));
-    }
-    names.iter().zip(values).map(|(name, v)| finite(name, v)).collect()
+    let form = PyValueError::new_err(format!(
+        "parameter values are a dict of name to value or an array of {} values ({})",
+        names.len(),
+        names.join(", ")
+    ));
+    inputs::in_order(names, given, "parameter", form)
 }
 
 /// A read-only mapping of `names` to `values` (`types.MappingProxyType` over a dict): an item
@@ -417,9 +533,12 @@ pub struct InverseDynamics {
     /// The coordinates, in the order of q and of τ.
     #[pyo3(get)]
     names: Vec<String>,
-    /// The parameters' names, in the order of their values.
+    /// The parameters' names, in the order of their values; the inputs are not among them.
     #[pyo3(get)]
     parameter_names: Vec<String>,
+    /// The inputs' names, in the order of `u=` as an array.
+    #[pyo3(get)]
+    input_names: Vec<String>,
     /// The constraints kept with multipliers.
     #[pyo3(get)]
     kept_constraints: Vec<String>,
@@ -430,22 +549,43 @@ impl InverseDynamics {
         let options = engine::inverse::Options { set: Vec::new(), no_units: !units };
         let inner = engine::inverse::inverse_dynamics(source, &options)
             .map_err(|e| engine_error(&e, path))?;
+        // The engine's slots: the parameters, then the inputs.
+        let inputs = prepared(source, units).map_err(|e| engine_error(&e, path))?.0;
+        let input_names: Vec<String> =
+            inputs.derivation.model.inputs.iter().map(|u| u.name.clone()).collect();
+        let all = inner.parameter_names();
         Ok(InverseDynamics {
             names: inner.coordinates().to_vec(),
-            parameter_names: inner.parameter_names().to_vec(),
+            parameter_names: all[..all.len() - input_names.len()].to_vec(),
+            input_names,
             kept_constraints: inner.kept_constraints().to_vec(),
             inner,
         })
     }
 
-    /// τ of each row of the motion, one after another in a flat vector.
-    fn rows(&mut self, t: &[f64], motion: [&ArrayView2<'_, f64>; 3]) -> PyResult<Vec<f64>> {
+    /// τ of each row of the motion, one after another in a flat vector, with the inputs
+    /// `sources` give at each.
+    fn rows(
+        &mut self,
+        py: Python<'_>,
+        t: &[f64],
+        motion: [&ArrayView2<'_, f64>; 3],
+        sources: &[Source],
+    ) -> PyResult<Vec<f64>> {
         let n = self.names.len();
         let mut out = Vec::with_capacity(t.len() * n);
         let mut tau = vec![0.0; n];
         let row = |m: &ArrayView2<'_, f64>, k: usize| -> Vec<f64> { m.row(k).to_vec() };
-        for (k, t) in t.iter().enumerate() {
-            let [q, rates, accelerations] = motion.map(|m| row(m, k));
+        let k = self.parameter_names.len();
+        for (r, t) in t.iter().enumerate() {
+            let [q, rates, accelerations] = motion.map(|m| row(m, r));
+            if !sources.is_empty() {
+                let state = [&q[..], &rates[..]].concat();
+                let values = inputs::values(py, &self.input_names, sources, *t, &state, r)?;
+                let mut all = self.inner.parameters().to_vec();
+                all[k..].copy_from_slice(&values);
+                self.inner.set_parameters(&all).map_err(|e| engine_error(&e, "<inputs>"))?;
+            }
             self.inner
                 .torques(*t, &q, &rates, &accelerations, &mut tau)
                 .map_err(|e| numeric_error(e.worded(engine::Piece::plain)))?;
@@ -458,8 +598,10 @@ impl InverseDynamics {
 #[pymethods]
 impl InverseDynamics {
     /// τ at N motions: `t` (N times), `q`, `qd`, `qdd` (N×n arrays, one motion a row); `p`
-    /// parameter values for this call only. Returns an N×n array.
-    #[pyo3(signature = (t, q, qd, qdd, p = None))]
+    /// parameter values for this call only, `u` the inputs' (as for `rhs.batch`, a callable
+    /// taking t and the state (q, q̇)). Returns an N×n array.
+    #[pyo3(signature = (t, q, qd, qdd, p = None, u = None))]
+    #[allow(clippy::too_many_arguments)]
     fn batch<'py>(
         &mut self,
         py: Python<'py>,
@@ -468,6 +610,7 @@ impl InverseDynamics {
         qd: PyArrayLike2<'py, f64, AllowTypeChange>,
         qdd: PyArrayLike2<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
+        u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let n = self.names.len();
         let t: Vec<f64> = t.as_array().iter().copied().collect();
@@ -484,11 +627,16 @@ impl InverseDynamics {
             }
         }
         let kept = self.inner.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let declared = &kept[k..];
+        let sources =
+            inputs::sources(&self.input_names, declared, &self.parameter_names, u, Some(t.len()))?;
         if let Some(p) = p {
-            let given = parameter_values(&self.parameter_names, &kept, p)?;
+            let mut given = kept.clone();
+            given[..k].copy_from_slice(&parameter_values(&self.parameter_names, &kept[..k], p)?);
             self.inner.set_parameters(&given).map_err(|e| engine_error(&e, "<parameters>"))?;
         }
-        let result = self.rows(&t, [&q, &qd, &qdd]);
+        let result = self.rows(py, &t, [&q, &qd, &qdd], &sources);
         self.inner.set_parameters(&kept).map_err(|e| engine_error(&e, "<parameters>"))?;
         let flat = PyArray1::from_vec(py, result?);
         flat.reshape([t.len(), n])
@@ -498,15 +646,19 @@ impl InverseDynamics {
     /// change them.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        read_only(py, &self.parameter_names, self.inner.parameters())
+        let k = self.parameter_names.len();
+        read_only(py, &self.parameter_names, &self.inner.parameters()[..k])
     }
 
     /// Uses these parameter values from now on: a dict replaces those it names, an array gives
     /// them all.
     #[setter]
     fn set_parameters(&mut self, p: &Bound<'_, PyAny>) -> PyResult<()> {
-        let values = parameter_values(&self.parameter_names, self.inner.parameters(), p)?;
-        self.inner.set_parameters(&values).map_err(|e| engine_error(&e, "<parameters>"))
+        let mut all = self.inner.parameters().to_vec();
+        let k = self.parameter_names.len();
+        let values = parameter_values(&self.parameter_names, &all[..k], p)?;
+        all[..k].copy_from_slice(&values);
+        self.inner.set_parameters(&all).map_err(|e| engine_error(&e, "<parameters>"))
     }
 
     fn __repr__(&self) -> String {

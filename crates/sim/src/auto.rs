@@ -164,6 +164,11 @@ impl Stepper for Auto {
         self.radau.factorizations()
     }
 
+    fn after_jump(&mut self) {
+        self.explicit.after_jump();
+        self.radau.after_jump();
+    }
+
     fn switches(&self) -> &[f64] {
         &self.switches
     }

@@ -158,6 +158,19 @@ impl Problem for Constrained {
         self.inner.unstabilised_accelerations(t, &y[..2 * n]).err()
     }
 
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.inner.next_sample(t)
+    }
+
+    /// The accelerations and multipliers jump with the held values: solved anew at (q, q̇).
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let n = self.layout().coordinates;
+        self.inner.sample(t, &mut y[..2 * n])?;
+        let solved = self.inner.unstabilised_accelerations(t, &y[..2 * n])?;
+        y[2 * n..].copy_from_slice(&solved);
+        Ok(())
+    }
+
     fn physical(&mut self, _t: f64, y: &[f64]) -> Vec<f64> {
         y[..2 * self.layout().coordinates].to_vec()
     }

@@ -43,6 +43,10 @@ pub(crate) trait Stepper {
     fn switches(&self) -> &[f64] {
         &[]
     }
+    /// The right-hand side jumped where the last step ended (a held input was sampled): what
+    /// the method carries from step to step (a derivative, a dense output, predicted stages)
+    /// belongs to the old one and is dropped; the step size is kept.
+    fn after_jump(&mut self) {}
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
@@ -587,6 +591,10 @@ impl Stepper for Adaptive {
 
     fn stiff_steps(&self) -> usize {
         self.stiff
+    }
+
+    fn after_jump(&mut self) {
+        self.restart(self.h);
     }
 }
 

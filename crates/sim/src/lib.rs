@@ -11,7 +11,8 @@
 //! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, signals given as time series put into their parameter
-//! slots before each evaluation, and the measurements of a run (steps, evaluations,
+//! slots before each evaluation, laws of the state held between samples (a zero-order hold, at
+//! whose samples a run stops and restarts its method), and the measurements of a run (steps, evaluations,
 //! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
 //! were derived.
@@ -23,6 +24,7 @@ mod auto;
 mod constrained;
 mod erk;
 mod gauss;
+mod hold;
 pub mod linalg;
 mod mechanical;
 mod radau;
@@ -32,6 +34,7 @@ mod series;
 mod spectrum;
 
 pub use constrained::Constrained;
+pub use hold::Hold;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
 pub use series::{Series, SeriesError};
@@ -101,6 +104,20 @@ pub trait Problem {
     fn explain_singular(&mut self, t: f64, y: &[f64]) -> Option<FaultKind> {
         let _ = (t, y);
         None
+    }
+    /// The first time after `t` at which the right-hand side jumps (a held input takes its
+    /// next sample), if any: a run ends its step there and restarts its method after
+    /// [`Problem::sample`].
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        let _ = t;
+        None
+    }
+    /// Takes the samples due at (t, y). The held values change the right-hand side, and `y`
+    /// where the state depends on them (canonical momenta, a DAE's accelerations and
+    /// multipliers).
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let _ = (t, y);
+        Ok(())
     }
     /// The state in the physical variables (q, q̇), for reports of a fault or a run's end.
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {

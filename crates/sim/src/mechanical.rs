@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use numeric::Tape;
 
 use crate::linalg;
-use crate::{check_finite, FaultKind, Problem, Series};
+use crate::{check_finite, FaultKind, Hold, Problem, Series};
 
 mod jacobian;
 
@@ -83,6 +83,8 @@ pub struct Mechanical {
     partials_out: Vec<f64>,
     /// Parameter slots that follow a time series: set from t before each evaluation.
     signals: Vec<(usize, Series)>,
+    /// Parameter slots that hold laws of the state sampled every period.
+    hold: Option<Hold>,
 }
 
 impl Mechanical {
@@ -109,6 +111,7 @@ impl Mechanical {
             partials: None,
             partials_out: Vec::new(),
             signals: Vec::new(),
+            hold: None,
         }
     }
 
@@ -143,6 +146,13 @@ impl Mechanical {
     pub fn with_signals(mut self, signals: Vec<(usize, Series)>) -> Self {
         assert!(signals.iter().all(|(slot, _)| *slot < self.layout.parameters));
         self.signals = signals;
+        self
+    }
+
+    /// Holds the laws of `hold` in their parameter slots, sampled every period from the first
+    /// sample at the start of a run.
+    pub fn with_hold(mut self, hold: Hold) -> Self {
+        self.hold = Some(hold);
         self
     }
 
@@ -275,6 +285,17 @@ impl Problem for Mechanical {
 
     fn observations(&self) -> usize {
         self.observation.outputs() + self.layout.multipliers
+    }
+
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.hold.as_ref().map(|h| h.next_after(t))
+    }
+
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let Some(hold) = &mut self.hold else { return Ok(()) };
+        let n = self.layout.coordinates;
+        hold.sample(t, &y[..2 * n], &mut self.parameters)
+            .map_err(|slot| FaultKind::NonFinite { component: 2 * n + slot })
     }
 
     /// The observation program's outputs, then |Φ| of each kept constraint.
@@ -430,6 +451,19 @@ impl Problem for Canonical {
 
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         self.physical_state(t, y).unwrap_or_else(|_| y.to_vec())
+    }
+
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.inner.next_sample(t)
+    }
+
+    /// The rates carry over a sample (the held force is finite), the momenta are taken anew:
+    /// an input in a term of the Lagrangian with the rates moves p.
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let mut physical = self.physical_state(t, y)?;
+        self.inner.sample(t, &mut physical)?;
+        y.copy_from_slice(&self.from_physical(t, &physical));
+        Ok(())
     }
 }
 

@@ -587,6 +587,14 @@ impl Stepper for Radau {
         }
     }
 
+    /// The Jacobian and its factors are kept (Newton's iteration needs only an approximate
+    /// one, and asks for a fresh one if it fails); F and the predicted stages are not.
+    fn after_jump(&mut self) {
+        self.f0 = None;
+        self.last = None;
+        self.jac_fresh = false;
+    }
+
     fn interpolate(&mut self, _p: &mut dyn Problem, t: f64, out: &mut [f64]) {
         let Some(last) = &self.last else { return };
         let s = (t - last.t0) / last.h;

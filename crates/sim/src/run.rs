@@ -187,11 +187,12 @@ pub struct Segment {
 }
 
 /// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
-/// observations at every accepted step (and at located events). A fault ends the run early:
-/// what was computed up to it is kept, and the fault says when and where. `progress` is told
-/// the time after every accepted step and may end the run there ([`Run::interrupted`]); it is
-/// the one hook a front end has into the loop, so a check it makes should be cheap or
-/// throttled.
+/// observations at every accepted step (and at located events). A problem that samples held
+/// inputs ([`Problem::next_sample`]) is sampled at the start and at each sample time, where a
+/// step ends and the method restarts. A fault ends the run early: what was computed up to it
+/// is kept, and the fault says when and where. `progress` is told the time after every
+/// accepted step and may end the run there ([`Run::interrupted`]); it is the one hook a front
+/// end has into the loop, so a check it makes should be cheap or throttled.
 pub fn integrate(
     problem: &mut dyn Problem,
     y0: &[f64],
@@ -222,7 +223,9 @@ pub fn integrate(
     let mut t = settings.start;
     let mut y = y0.to_vec();
     let mut row = vec![0.0; width];
-    if let Err(kind) = problem.observe(t, &y, &mut row) {
+    // A held input's first sample is at the start.
+    let mut next_sample = problem.next_sample(t);
+    if let Err(kind) = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row)) {
         run.fault = Some(fault(problem, kind, t, &y));
         run.final_state = problem.physical(t, &y);
         return run;
@@ -240,7 +243,8 @@ pub fn integrate(
             break;
         }
         let t0 = t;
-        match stepper.advance(problem, t, &mut y, settings.until) {
+        let t_end = next_sample.map_or(settings.until, |s| s.min(settings.until));
+        match stepper.advance(problem, t, &mut y, t_end) {
             Ok(t1) => t = t1,
             Err(kind) => {
                 run.fault = Some(fault(problem, kind, t, &y));
@@ -258,7 +262,11 @@ pub fn integrate(
         let hits = crossings(problem, stepper.as_mut(), events, (t0, &previous_row), (t, &row));
         // The evenly spaced times this step covers, up to a stop if one comes.
         let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
-        sampler.record(problem, stepper.as_mut(), end, &mut run.trajectory);
+        let held_from = next_sample.filter(|s| *s == end);
+        // A recorded time within rounding of a sample is the sample's: it shows the new held
+        // value, recorded after the jump (k·T and the evenly spaced times may differ by an ulp).
+        let before = held_from.map_or(end, |s| s - 4.0 * f64::EPSILON * s.abs().max(1.0));
+        sampler.record(problem, stepper.as_mut(), before, &mut run.trajectory);
         if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
             let hit = hits[stop];
             run.events.extend_from_slice(&hits[..=stop]);
@@ -276,6 +284,17 @@ pub fn integrate(
             break;
         }
         run.events.extend(hits);
+        // The step ended on a sample: the held values change, and so the right-hand side;
+        // the row recorded here shows the new ones, as the hold gives them from now on.
+        if held_from.is_some() {
+            let sampled = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row));
+            if let Err(kind) = sampled {
+                run.fault = Some(fault(problem, kind, t, &y));
+                break;
+            }
+            stepper.after_jump();
+            next_sample = problem.next_sample(t);
+        }
         if settings.samples == 0 || t >= settings.until {
             run.trajectory.times.push(t);
             run.trajectory.rows.push(row.clone());

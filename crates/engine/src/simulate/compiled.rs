@@ -10,7 +10,7 @@ use sim::Mechanical;
 
 use super::{
     angle_oriented_bodies, conserves_energy, drive, integrate_scene, load, overrides,
-    set_expressions, start, Columns, Outcome, Progress, Settings,
+    set_expressions, start, Columns, Loaded, Outcome, Progress, Settings,
 };
 use crate::animate::{Animation, Plan};
 use crate::numbers::Prepared;
@@ -29,12 +29,16 @@ pub struct Compiled {
     /// take the run's parameter values and are lowered with each run.
     observation: Option<Program>,
     conservative: bool,
+    /// The laws of the inputs held between samples, each with its input.
+    held: Vec<(cas::SymId, cas::ExprId)>,
+    /// An input driven continuously is in the Lagrangian.
+    lagrangian_driven: bool,
 }
 
 impl Compiled {
     /// Loads and derives `source` with the settings' expressions and lowers its programs.
     pub fn new(source: &str, settings: &Settings) -> Result<Compiled, Error> {
-        let (mut prepared, outputs) = load(source, settings)?;
+        let Loaded { mut prepared, outputs, held, lagrangian_driven } = load(source, settings)?;
         let columns = Columns {
             outputs: outputs.len(),
             stops: settings.stops.len(),
@@ -57,6 +61,8 @@ impl Compiled {
             dynamics,
             observation,
             conservative,
+            held,
+            lagrangian_driven,
         })
     }
 
@@ -97,7 +103,8 @@ impl Compiled {
             }
         };
         let signals = drive::signals(prepared, settings)?;
-        let mechanical = Mechanical::new(
+        let hold = drive::hold(prepared, &self.held, settings.hold)?;
+        let mut mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(self.dynamics.clone()),
             Tape::new(observation),
@@ -105,6 +112,9 @@ impl Compiled {
         )
         .with_kinds(prepared.stabilisation())
         .with_signals(signals);
+        if let Some(hold) = hold {
+            mechanical = mechanical.with_hold(hold);
+        }
         let (run, wall_seconds, fastest_mode) =
             integrate_scene(prepared, mechanical, &y0, settings, columns, progress)?;
 
@@ -140,6 +150,7 @@ impl Compiled {
             conservative,
             animation: None,
             fastest_mode,
+            lagrangian_driven: self.lagrangian_driven,
         };
         if let Some(figures) = figures {
             let energy = outcome.energy();

@@ -39,6 +39,64 @@ pub(super) fn laws(
     Ok(laws)
 }
 
+/// Puts each input that stands in a constraint out of it: its law. The constraint's rates and
+/// second derivative are then derived with the law in place, exactly. Refused where they
+/// cannot be: no law (the scene's error where the input stands, as every other command
+/// gives it), a law of the rates (the constraint would restrain velocities), a time series (it
+/// has no rates), a hold (the constraint would jump at each sample).
+pub(super) fn into_constraints(
+    source: &str,
+    model: &mut model::Model,
+    laws: &[(SymId, ExprId)],
+    settings: &super::Settings,
+) -> Result<(), Error> {
+    let mut values: HashMap<SymId, ExprId> = HashMap::new();
+    for input in &model.inputs {
+        let Some(constraint) = model.constraints.iter().find(|c| {
+            model.pool.free_symbols(c.lhs).contains(&input.sym)
+                || model.pool.free_symbols(c.rhs).contains(&input.sym)
+        }) else {
+            continue;
+        };
+        let refuse = |why: &str| {
+            let text = format!(": drives the constraint `{}`, {why}", constraint.name);
+            Err(Error::given(Setting::Input, &input.name, text))
+        };
+        if settings.series.iter().any(|(name, _)| *name == input.name) {
+            return refuse(
+                "whose second derivative needs the input's first and second rates, and a time \
+                 series has none; give a law of t and the coordinates",
+            );
+        }
+        let Some(value) = laws.iter().find(|(s, _)| *s == input.sym).map(|(_, law)| *law) else {
+            let refused = model.inputs_in_constraints.iter().filter(|(s, _)| *s == input.sym);
+            let diagnostics = refused.map(|(_, d)| d.clone()).collect();
+            return Err(Error::Scene { diagnostics, source: source.to_string() });
+        };
+        if settings.hold.is_some() {
+            return refuse("which a held value would make jump at every sample; drop the hold");
+        }
+        let free = model.pool.free_symbols(value);
+        if free.iter().any(|s| model.pool.symbol(*s).order() > 0) {
+            return refuse(
+                "so its law may name t, the coordinates and the parameters, not rates (the \
+                 constraint would then restrain velocities)",
+            );
+        }
+        values.insert(input.sym, value);
+    }
+    if values.is_empty() {
+        return Ok(());
+    }
+    let pool = &mut model.pool;
+    for c in &mut model.constraints {
+        c.lhs = pool.subst(c.lhs, &values);
+        c.rhs = pool.subst(c.rhs, &values);
+        c.phi = pool.subst(c.phi, &values);
+    }
+    Ok(())
+}
+
 /// The parameter slots of the inputs the settings give as time series, each with its series;
 /// refused where a series does not cover the run, or its input is also driven by a law.
 pub(super) fn signals(
@@ -74,6 +132,48 @@ pub(super) fn signals(
         signals.push((slot, series.clone()));
     }
     Ok(signals)
+}
+
+/// Refuses a hold that is not a positive time, or that would hold nothing: it samples the laws
+/// of driven inputs, and a run with none is surely not what was meant.
+pub(super) fn check_hold(hold: Option<f64>, drives: &[Assignment]) -> Result<(), Error> {
+    let Some(period) = hold else { return Ok(()) };
+    if !(period.is_finite() && period > 0.0) {
+        return Err(Error::setting(
+            Setting::Hold,
+            format!(" must be a positive time, not {period}"),
+        ));
+    }
+    if drives.is_empty() {
+        return Err(Error::setting(
+            Setting::Hold,
+            " samples the laws that drive inputs, and no input is driven by one; give a law \
+             with `input NAME=EXPR`",
+        ));
+    }
+    Ok(())
+}
+
+/// The zero-order hold of the laws `held`, sampled every `period`: each law lowered from the
+/// dynamics program's inputs into its input's parameter slot.
+pub(super) fn hold(
+    prepared: &mut Prepared,
+    held: &[(SymId, ExprId)],
+    period: Option<f64>,
+) -> Result<Option<sim::Hold>, Error> {
+    let Some(period) = period else { return Ok(None) };
+    let mut slots = Vec::new();
+    let mut exprs = Vec::new();
+    for (sym, law) in held {
+        let Some(slot) = prepared.parameters.iter().position(|s| s == sym) else {
+            let name = prepared.derivation.model.pool.symbol(*sym).name.clone();
+            return Err(Error::given(Setting::Input, &name, ": has no slot in this run"));
+        };
+        slots.push(slot);
+        exprs.push(prepared.derivation.expand_quantities(*law, false));
+    }
+    let laws = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+    Ok(Some(sim::Hold::new(period, slots, numeric::Tape::new(laws))))
 }
 
 /// Why no input has the name given, with the nearest name and the inputs there are.
@@ -120,6 +220,13 @@ impl Prepared {
     }
 }
 
+/// The first input driven by a law that is in the Lagrangian (through a potential), if any.
+pub(super) fn in_lagrangian(prepared: &mut Prepared, laws: &[(SymId, ExprId)]) -> Option<SymId> {
+    let d = &mut prepared.derivation;
+    let in_lagrangian = d.model.pool.free_symbols(d.lagrangian);
+    laws.iter().map(|(s, _)| *s).find(|s| in_lagrangian.contains(s))
+}
+
 /// Refuses a symplectic method where a driven input enters the Lagrangian (through a
 /// potential): those methods differentiate L, and the law must not be differentiated with it.
 pub(super) fn check_method(
@@ -127,18 +234,13 @@ pub(super) fn check_method(
     laws: &[(SymId, ExprId)],
     method: Method,
 ) -> Result<(), Error> {
-    if !method.is_symplectic() {
-        return Ok(());
-    }
-    let d = &mut prepared.derivation;
-    let in_lagrangian = d.model.pool.free_symbols(d.lagrangian);
-    let Some((sym, _)) = laws.iter().find(|(s, _)| in_lagrangian.contains(s)) else {
+    let Some(sym) = in_lagrangian(prepared, laws).filter(|_| method.is_symplectic()) else {
         return Ok(());
     };
     Err(Error::Input(format!(
-        "{} works from the Lagrangian, and the driven input `{}` is in it (through a \
-         potential); use dop853 or radau",
+        "{} {}: `{}` is; use dop853 or radau",
         method.name(),
-        d.model.pool.symbol(*sym).name
+        super::DRIVEN_IN_LAGRANGIAN,
+        prepared.derivation.model.pool.symbol(sym).name
     )))
 }

@@ -67,4 +67,10 @@ impl Problem for OnDemand<'_> {
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         self.mechanical.physical(t, y)
     }
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.mechanical.next_sample(t)
+    }
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        self.mechanical.sample(t, y)
+    }
 }

@@ -27,6 +27,9 @@ pub(super) struct Role {
     pub differentiated: bool,
     /// Whether an input may appear in it: only where no time derivative of it is taken.
     pub inputs: bool,
+    /// Where an input may not appear and there is more to say than where inputs may stand:
+    /// the hint, `{name}` standing for the input.
+    pub instead_of_input: &'static str,
 }
 
 pub(super) const POSITION: Role = Role {
@@ -36,6 +39,7 @@ pub(super) const POSITION: Role = Role {
            follows by differentiation",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 pub(super) const ANGLE: Role = Role {
     what: "an angle",
@@ -44,6 +48,7 @@ pub(super) const ANGLE: Role = Role {
            velocity follows by differentiation",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 pub(super) const MASS: Role = Role {
     what: "a mass",
@@ -51,6 +56,7 @@ pub(super) const MASS: Role = Role {
     hint: "a mass is a constant, or a function of the coordinates and `t`",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 pub(super) const INERTIA: Role = Role {
     what: "an inertia",
@@ -58,6 +64,7 @@ pub(super) const INERTIA: Role = Role {
     hint: "an inertia is a constant, or a function of the coordinates and `t`",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 pub(super) const POTENTIAL: Role = Role {
     what: "a potential",
@@ -66,6 +73,7 @@ pub(super) const POTENTIAL: Role = Role {
            (added to T − V) or, for friction, in `dissipation`",
     differentiated: true,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const GRAVITY: Role = Role {
     what: "gravity",
@@ -73,6 +81,7 @@ pub(super) const GRAVITY: Role = Role {
     hint: "gravity's strength and direction may depend on the coordinates and `t` only",
     differentiated: true,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const SPRING: Role = Role {
     what: "a spring",
@@ -81,6 +90,7 @@ pub(super) const SPRING: Role = Role {
            only; for a force that grows with speed, use a `damper`",
     differentiated: true,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const ATTACHMENT: Role = Role {
     what: "an attachment point",
@@ -88,6 +98,7 @@ pub(super) const ATTACHMENT: Role = Role {
     hint: "attach to a body by name, or to a point given as a function of the coordinates",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 pub(super) const DAMPER: Role = Role {
     what: "a damper",
@@ -96,6 +107,7 @@ pub(super) const DAMPER: Role = Role {
            may depend on the coordinates and rates, not on accelerations",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const FORCE: Role = Role {
     what: "a force",
@@ -104,6 +116,7 @@ pub(super) const FORCE: Role = Role {
            the coordinates, rates and `t`, not on accelerations",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const TORQUE: Role = Role {
     what: "a torque",
@@ -112,6 +125,7 @@ pub(super) const TORQUE: Role = Role {
            the coordinates, rates and `t`, not on accelerations",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const DISSIPATION: Role = Role {
     what: "a dissipation function",
@@ -119,6 +133,7 @@ pub(super) const DISSIPATION: Role = Role {
     hint: "Rayleigh's dissipation function depends on the coordinates and rates",
     differentiated: true,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const LAGRANGIAN: Role = Role {
     what: "a Lagrangian",
@@ -127,6 +142,7 @@ pub(super) const LAGRANGIAN: Role = Role {
            accelerations would give higher-order ones",
     differentiated: true,
     inputs: false,
+    instead_of_input: "",
 };
 
 pub(super) const DRAWING: Role = Role {
@@ -136,6 +152,7 @@ pub(super) const DRAWING: Role = Role {
            not accelerations",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 
 /// What drives an input in a run (`simulate --input F=-20*x`): evaluated before the
@@ -148,6 +165,7 @@ pub(super) const DRIVE: Role = Role {
            reactions, which are solved for with the input's value",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 pub(super) const OUTPUT: Role = Role {
     what: "an output",
@@ -156,12 +174,22 @@ pub(super) const OUTPUT: Role = Role {
            rates, the inputs and `t`, not accelerations or reactions",
     differentiated: false,
     inputs: true,
+    instead_of_input: "",
 };
 
 /// Not a role an expression is refused in, but one whose kinks matter: a constraint's
 /// gradient is its derivative.
-pub(super) const CONSTRAINT: Role =
-    Role { what: "a constraint", max_order: 1, hint: "", differentiated: true, inputs: false };
+pub(super) const CONSTRAINT: Role = Role {
+    what: "a constraint",
+    max_order: 1,
+    hint: "",
+    differentiated: true,
+    inputs: false,
+    instead_of_input: "deriving the equations would differentiate `{name}` in time, which only \
+                       a run can: `simulate --input {name}=…` puts a law of `t` and the \
+                       coordinates in its place first; to derive them here, write the driver as an expression of `t` \
+                       (`y = A*sin(w*t)`)",
+};
 
 /// The functions whose derivative jumps (`abs`, `min`, `max`) or is a spike (`sign`).
 const NOT_SMOOTH: [&str; 4] = ["abs", "sign", "min", "max"];

@@ -11,10 +11,11 @@ impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
         let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
-        let constant_inputs = self.without_inputs(lhs, &l, &checks::CONSTRAINT)
-            & self.without_inputs(rhs, &r, &checks::CONSTRAINT);
-        if !constant_inputs {
-            return;
+        // Whether an input may stand here is the checks' to say, known when the walk is done.
+        for (e, value) in [(lhs, &l), (rhs, &r)] {
+            if let Some(refused) = self.input_diagnostic(e, value, &checks::CONSTRAINT) {
+                self.diagnostics.inputs_in_constraints.push(refused);
+            }
         }
         self.warn_kinks(lhs, &l, &checks::CONSTRAINT);
         self.warn_kinks(rhs, &r, &checks::CONSTRAINT);

@@ -119,27 +119,42 @@ impl Resolver<'_> {
     /// Whether `value` (of `e`) is free of inputs where its role needs it so; reports the
     /// smallest part of `e` that names one.
     pub(super) fn without_inputs(&mut self, e: &Expr, value: &Value, role: &Role) -> bool {
+        let Some((_, d)) = self.input_diagnostic(e, value, role) else { return true };
+        self.error(d);
+        false
+    }
+
+    /// The input `value` (of `e`) holds where its role may not, and why, at the smallest part
+    /// of `e` that names it; `None` where it holds none or may.
+    pub(super) fn input_diagnostic(
+        &mut self,
+        e: &Expr,
+        value: &Value,
+        role: &Role,
+    ) -> Option<(SymId, Diagnostic)> {
         if role.inputs {
-            return true;
+            return None;
         }
-        let Some(input) = self.input_in(value) else { return true };
+        let input = self.input_in(value)?;
         let name = self.model.pool.symbol(input).name.clone();
         let part = self.input_part(e);
-        let hint = format!(
-            "an input stands where no rate of it is needed: in a force, a torque, a potential, \
-             a dissipation function or a spring; {} cannot hold one, since deriving the \
-             equations would differentiate `{name}` in time",
-            role.what
-        );
-        self.error(
-            Diagnostic::error(
-                part.span,
-                format!("{} cannot depend on the input `{name}`", role.what),
+        let hint = if role.instead_of_input.is_empty() {
+            format!(
+                "an input stands where no rate of it is needed: in a force, a torque, a \
+                 potential, a dissipation function or a spring; {} cannot hold one, since \
+                 deriving the equations would differentiate `{name}` in time",
+                role.what
             )
-            .with_label(format!("depends on `{name}`"))
-            .with_hint(hint),
-        );
-        false
+        } else {
+            role.instead_of_input.replace("{name}", &name)
+        };
+        let d = Diagnostic::error(
+            part.span,
+            format!("{} cannot depend on the input `{name}`", role.what),
+        )
+        .with_label(format!("depends on `{name}`"))
+        .with_hint(hint);
+        Some((input, d))
     }
 
     /// The smallest part of `e` whose value names an input.

@@ -9,8 +9,8 @@ use crate::units::{parse_unit, Dim};
 use crate::Number;
 
 /// The settings a `simulate` block knows, in the order a hint lists them.
-const SETTINGS: [&str; 8] =
-    ["until", "method", "tolerance", "step", "output", "stop", "event", "input"];
+const SETTINGS: [&str; 9] =
+    ["until", "method", "tolerance", "step", "output", "stop", "event", "input", "hold"];
 
 /// What a number setting measures.
 #[derive(Clone, Copy, PartialEq)]
@@ -57,6 +57,11 @@ impl Resolver<'_> {
             "step" => {
                 if let Some(n) = self.setting_number(setting, Measure::Time) {
                     self.model.simulation.step = Some(n);
+                }
+            }
+            "hold" => {
+                if let Some(n) = self.setting_number(setting, Measure::Time) {
+                    self.model.simulation.hold = Some(n);
                 }
             }
             "tolerance" => {

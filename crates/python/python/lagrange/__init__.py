@@ -101,6 +101,7 @@ def _run_options(
     set=None,
     step=None,
     input=None,
+    hold=None,
     stop_when=None,
     events=None,
     samples=0,
@@ -121,6 +122,7 @@ def _run_options(
         set=_assignments(set),
         input=laws,
         input_series=series,
+        hold=None if hold is None else float(hold),
         stop_when=_listed(stop_when),
         events=_listed(events),
         samples=int(samples),
@@ -278,6 +280,14 @@ class Scene:
         Parameter values: ``f(t, y, p=…)`` and ``f.batch(Y, t, p=…)`` take them for that call
         only, as an array in the order of ``f.parameter_names`` or a dict of name to value
         (the values it does not name stay); ``solve_ivp(f, …, args=(p,))`` passes them.
+        The scene's inputs are not parameters (``f.parameter_names`` leaves them out, as
+        :meth:`Derivation.parameter_values` does): ``u=`` gives them, for that call, as a dict
+        of input name to a number, to a callable ``law(t, y)`` returning a number (a feedback
+        law or a signal of time), or in ``batch`` to an array of one value per row; or as an
+        array in the order of ``f.input_names``. An input ``u`` does not name takes its
+        declared value (``f.inputs``). ``solve_ivp(f, …, args=(None, u), jac=f.jac)`` hands
+        ``u`` to both. ``f.jac(t, y, u=…)`` is exact for numbers; an input a callable gives
+        adds ∂f/∂u·∂u/∂y, both by central differences (a callable has no exact derivative).
         ``f.parameters = {"g": 1.62}`` (or an array) changes them for every later call.
         ``f.parameters`` itself is a read-only mapping: assigning to an item of it raises
         ``TypeError`` rather than changing a copy that nothing reads. A parameter the scene
@@ -286,7 +296,7 @@ class Scene:
         """
         return self._native.rhs()
 
-    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+    def inverse_dynamics(self, t, q, qd, qdd, p=None, u=None):
         """The generalized forces τ = M(q)·q̈ − f(q, q̇, t) that make the scene move with
         positions ``q``, rates ``qd`` and accelerations ``qdd`` at time ``t``: added to the
         scene's own forces (M·q̈ = f + τ), they reproduce the motion (computed-torque control,
@@ -295,7 +305,8 @@ class Scene:
         One motion: ``t`` a number and ``q``, ``qd``, ``qdd`` 1-D arrays of the remaining
         coordinates (``Derivation.coordinates``' order), giving a 1-D array. Many: ``t`` one
         time per row (or one for all) and 2-D arrays with a motion a row, giving a 2-D array
-        with τ a row. ``p``: parameter values for this call only, as for :meth:`rhs`.
+        with τ a row. ``p``: parameter values for this call only, as for :meth:`rhs`; ``u``:
+        the inputs' values, as for :meth:`rhs` (a callable takes t and the state (q, q̇)).
 
         With constraints kept with multipliers, τ + Jᵀμ gives the same motion for every μ;
         this is the one least in τᵀ·M⁻¹·τ, which leaves the constraints the load they carry
@@ -314,7 +325,7 @@ class Scene:
         count = max(len(r) for r in rows)
         rows = [numpy.broadcast_to(r, (count, r.shape[-1])) if len(r) == 1 else r for r in rows]
         times = numpy.broadcast_to(numpy.asarray(t, dtype=float), (count,))
-        tau = self._inverse.batch(times, *rows, p=p)
+        tau = self._inverse.batch(times, *rows, p=p, u=u)
         return tau[0] if single else tau
 
     def mass_matrix_function(self):
@@ -332,6 +343,7 @@ class Scene:
         *,
         step=None,
         input=None,
+        hold=None,
         stop_when=None,
         events=None,
         samples=0,
@@ -353,6 +365,10 @@ class Scene:
           state-feedback law (``{"F": "-20*x - 5*x'"}``), or a time series as a pair
           ``(times, values)``, linear between the samples and spanning the run; or ``"F=..."``
           texts. An input not driven keeps its declared value.
+        - ``hold``: a period in seconds at which the laws of ``input`` are sampled from the
+          state and held until the next sample (a zero-order hold, as a discrete controller
+          acts), rather than applied continuously; the scene's ``simulate { hold … }`` when
+          ``None``. Time series are not held.
         - ``stop_when``: expressions (or ``"lhs = rhs"``) whose zero ends the run;
           ``events``: expressions whose zero crossings are recorded.
         - ``samples``: record at this many evenly spaced times from 0 to ``until``, both
@@ -378,6 +394,7 @@ class Scene:
             set=set,
             step=step,
             input=input,
+            hold=hold,
             stop_when=stop_when,
             events=events,
             samples=samples,
@@ -595,10 +612,10 @@ class Derivation:
             if value is not None
         }
 
-    def inverse_dynamics(self, t, q, qd, qdd, p=None):
+    def inverse_dynamics(self, t, q, qd, qdd, p=None, u=None):
         """The generalized forces of a motion: :meth:`Scene.inverse_dynamics` of the scene
         this derivation is of."""
-        return self._scene.inverse_dynamics(t, q, qd, qdd, p=p)
+        return self._scene.inverse_dynamics(t, q, qd, qdd, p=p, u=u)
 
     def _repr_latex_(self):
         return self.latex

@@ -8,6 +8,9 @@ import numpy.typing as npt
 
 # Parameter values: a mapping of name to value, or an array of every value in order.
 Parameters = Union[Mapping[str, float], npt.ArrayLike]
+# Input values: a mapping of name to a number, an array of one value per row of a batch, or a
+# callable of (t, y); or an array of every input's value in order.
+Inputs = Union[Mapping[str, Any], npt.ArrayLike]
 
 class NativeScene:
     @property
@@ -32,6 +35,9 @@ class NativeScene:
         step: Optional[float] = None,
         output: Sequence[str] = ...,
         set: Sequence[str] = ...,
+        input: Sequence[str] = ...,
+        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
+        hold: Optional[float] = None,
         stop_when: Sequence[str] = ...,
         events: Sequence[str] = ...,
         samples: int = 0,
@@ -49,6 +55,7 @@ class NativeScene:
         set: Sequence[str] = ...,
         input: Sequence[str] = ...,
         input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
+        hold: Optional[float] = None,
         stop_when: Sequence[str] = ...,
         events: Sequence[str] = ...,
         samples: int = 0,
@@ -67,23 +74,35 @@ class Rhs:
 
     names: list[str]
     parameter_names: list[str]
+    input_names: list[str]
     @property
     def y0(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def inputs(self) -> Mapping[str, float]: ...
     @property
     def parameters(self) -> Mapping[str, float]: ...
     @parameters.setter
     def parameters(self, p: Parameters) -> None: ...
     def __call__(
-        self, t: float, y: npt.ArrayLike, p: Optional[Parameters] = None
+        self,
+        t: float,
+        y: npt.ArrayLike,
+        p: Optional[Parameters] = None,
+        u: Optional[Inputs] = None,
     ) -> npt.NDArray[np.float64]: ...
     def batch(
         self,
         y: npt.ArrayLike,
         t: Union[None, float, npt.ArrayLike] = None,
         p: Optional[Parameters] = None,
+        u: Optional[Inputs] = None,
     ) -> npt.NDArray[np.float64]: ...
     def jac(
-        self, t: float, y: npt.ArrayLike, p: Optional[Parameters] = None
+        self,
+        t: float,
+        y: npt.ArrayLike,
+        p: Optional[Parameters] = None,
+        u: Optional[Inputs] = None,
     ) -> npt.NDArray[np.float64]: ...
 
 class InverseDynamics:
@@ -91,6 +110,7 @@ class InverseDynamics:
 
     names: list[str]
     parameter_names: list[str]
+    input_names: list[str]
     kept_constraints: list[str]
     @property
     def parameters(self) -> Mapping[str, float]: ...
@@ -103,6 +123,7 @@ class InverseDynamics:
         qd: npt.ArrayLike,
         qdd: npt.ArrayLike,
         p: Optional[Parameters] = None,
+        u: Optional[Inputs] = None,
     ) -> npt.NDArray[np.float64]: ...
 
 class MassMatrix:
