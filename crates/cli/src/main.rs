@@ -111,6 +111,67 @@ enum Command {
         #[arg(long)]
         samples: Option<usize>,
     },
+    /// Run a scene many times over a grid of parameter values or random draws, on all cores,
+    /// and record values of each run: a CSV row per run, and a picture. A run that fails is a
+    /// row with its reason. Exit 2 on bad input.
+    Ensemble {
+        file: PathBuf,
+        /// A parameter to vary: a grid axis `--vary a=-3:3:60` (N values from A to B; axes are
+        /// crossed, the first varying slowest), or random draws `--vary "m=normal(1, 0.1)"`,
+        /// `--vary "g=uniform(9.7, 9.9)"` with --runs. A start given by a parameter in `coord`
+        /// follows it.
+        #[arg(long, value_name = "NAME=SPEC", required = true)]
+        vary: Vec<String>,
+        /// The number of random draws (at each grid point, if there is a grid too).
+        #[arg(long)]
+        runs: Option<usize>,
+        /// The seed of the random draws: the same seed gives the same draws on every machine.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// What to record per run, comma-separated: scene expressions at the end or at the
+        /// stop (`t` is the stop's time), `max(EXPR)` and `min(EXPR)` over the run.
+        /// Default: the coordinates at the end.
+        #[arg(long, value_name = "EXPRS")]
+        record: Vec<String>,
+        /// End time (s); default: the scene's `simulate { until … }`, else 10.
+        #[arg(long)]
+        until: Option<f64>,
+        /// The integrator (default dop853).
+        #[arg(long)]
+        method: Option<MethodArg>,
+        /// Tolerance of the adaptive methods (default 1e-10).
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// Step of rk4, midpoint and gauss (default: until/1000).
+        #[arg(long)]
+        step: Option<f64>,
+        /// Override a parameter or an initial value in every run, as for simulate.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<Assignment>,
+        /// Drive an input, as for simulate.
+        #[arg(long = "input", value_name = "NAME=EXPR")]
+        input: Vec<Assignment>,
+        /// End each run when this expression reaches zero, or `lhs = rhs` holds.
+        #[arg(long = "stop-when", value_name = "EXPR")]
+        stop_when: Vec<String>,
+        /// Watch this expression's zero crossings (as simulate's events).
+        #[arg(long = "event", value_name = "EXPR")]
+        event: Vec<String>,
+        /// Write the table here, .csv, whole or not at all (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Draw the first recorded quantity (.svg or .png): a heat map over two grid axes, a
+        /// line over one, a histogram of random draws.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Threads to run on (default: the machine's cores). The table is the same whatever
+        /// the number.
+        #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
+        threads: Option<u16>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
     /// the first-order form ẋ = A·x + B·u, y = C·x + D·u of the scene's inputs and outputs,
     /// its eigenvalues, the verdict on stability, controllability and observability. Exit 2 on
@@ -284,18 +345,7 @@ fn main() -> ExitCode {
             samples,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let (files, input): (Vec<_>, Vec<_>) =
-                input.into_iter().partition(cli::series::is_series);
-            let mut input_series = Vec::new();
-            for given in files {
-                match cli::series::read(std::path::Path::new(&given.value)) {
-                    Ok(series) => input_series.push((given.name, series)),
-                    Err(e) => {
-                        eprintln!("error: --input {}: {e}", given.name);
-                        return ExitCode::from(2);
-                    }
-                }
-            }
+            let Some((input, input_series)) = drives(input) else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
@@ -315,6 +365,53 @@ fn main() -> ExitCode {
                 animate: animate.is_some(),
             };
             simulate(&file, &source, &options, out, Figures { plot, animate })
+        }
+        Command::Ensemble {
+            file,
+            vary,
+            runs,
+            seed,
+            record,
+            until,
+            method,
+            tolerance,
+            step,
+            set,
+            input,
+            stop_when,
+            event,
+            out,
+            plot,
+            threads,
+            no_units,
+        } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let Some((input, input_series)) = drives(input) else { return ExitCode::from(2) };
+            let mut varied = Vec::new();
+            for text in &vary {
+                match engine::input::Vary::parse(text) {
+                    Ok(v) => varied.push(v),
+                    Err(d) => {
+                        eprint!("{}", cli::diagnostics::render("--vary", text, &[d]));
+                        return ExitCode::from(2);
+                    }
+                }
+            }
+            let simulate = engine::simulate::Options {
+                until,
+                method: method.map(|m| sim::Method::from(m).name().to_string()),
+                tolerance,
+                step,
+                set,
+                input,
+                input_series,
+                stop_when,
+                events: event,
+                no_units,
+                ..Default::default()
+            };
+            let options = engine::ensemble::Options { simulate, vary: varied, runs, seed, record };
+            ensemble(&file, &source, &options, threads.map(usize::from), out, plot)
         }
         Command::Linearize {
             file,
@@ -359,6 +456,23 @@ fn main() -> ExitCode {
         }
         Command::Check { files, no_units } => check(&files, no_units),
     }
+}
+
+/// The `--input` laws and, read from their files, the time series; `None` after saying on
+/// stderr which file could not be read.
+fn drives(input: Vec<Assignment>) -> Option<(Vec<Assignment>, Vec<(String, sim::Series)>)> {
+    let (files, laws): (Vec<_>, Vec<_>) = input.into_iter().partition(cli::series::is_series);
+    let mut series = Vec::new();
+    for given in files {
+        match cli::series::read(std::path::Path::new(&given.value)) {
+            Ok(s) => series.push((given.name, s)),
+            Err(e) => {
+                eprintln!("error: --input {}: {e}", given.name);
+                return None;
+            }
+        }
+    }
+    Some((laws, series))
 }
 
 /// `lagrange derive`: the report to standard output or `out`, the warnings to stderr.
@@ -530,6 +644,44 @@ fn simulate(
         }
     }
     eprint!("{}", cli::simulate::summary(&outcome));
+    code
+}
+
+fn ensemble(
+    file: &std::path::Path,
+    source: &str,
+    options: &engine::ensemble::Options,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let formats = [(out.as_ref(), &["csv"][..]), (plot.as_ref(), &["svg", "png"][..])];
+    for (target, allowed) in formats {
+        let Some(target) = target else { continue };
+        let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if !allowed.contains(&ext) {
+            let wanted = allowed.join(" or .");
+            eprintln!("error: cannot tell the format of {}: use .{wanted}", target.display());
+            return ExitCode::from(2);
+        }
+    }
+    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    let started = std::time::Instant::now();
+    let table = match cli::ensemble::ensemble(source, options, Some(threads)) {
+        Ok(table) => table,
+        Err(e) => return fail(&path, &e),
+    };
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let mut code = write_or_print(out.as_ref(), &cli::ensemble::csv(&table));
+    if let Some(plot) = plot {
+        let title = format!("{path}: {}", table.columns.get(table.varied).map_or("", |c| c));
+        if let Err(e) = cli::plot::ensemble::ensemble(&table, &title, &plot) {
+            eprintln!("error: {e}");
+            code = ExitCode::from(2);
+        }
+    }
+    eprint!("{}", cli::ensemble::summary(&table, wall_seconds, threads));
     code
 }
 

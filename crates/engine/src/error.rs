@@ -114,6 +114,10 @@ pub enum Setting {
     About,
     /// An input driven in a run, `name=expression`.
     Input,
+    /// A parameter an ensemble varies, `name=a:b:n` or a distribution.
+    Vary,
+    /// The number of an ensemble's random draws.
+    Runs,
 }
 
 impl Setting {
@@ -127,6 +131,8 @@ impl Setting {
             Setting::Sweep => "sweep",
             Setting::About => "about",
             Setting::Input => "input",
+            Setting::Vary => "vary",
+            Setting::Runs => "runs",
         }
     }
 }

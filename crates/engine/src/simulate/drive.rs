@@ -41,7 +41,7 @@ pub(super) fn laws(
 
 /// The parameter slots of the inputs the settings give as time series, each with its series;
 /// refused where a series does not cover the run, or its input is also driven by a law.
-pub(super) fn signals(
+pub(crate) fn signals(
     prepared: &Prepared,
     settings: &super::Settings,
 ) -> Result<Vec<(usize, sim::Series)>, Error> {

@@ -1,0 +1,172 @@
+//! The ensemble benchmark: the double pendulum's 60×60 flip-time map to t = 10
+//! (`examples/classics/double_pendulum_flip.lag`, both start angles from −3 to 3, dop853 at
+//! the default tolerance 1e-10, each run ended by the first flip), run on one thread and on
+//! two: the wall time of each, whether the two tables are the same bits, and with `--peer`
+//! SciPy's DOP853 on a right-hand side lambdified from SymPy (`tests/sympy/ensemble_peer.py`)
+//! on an even sample of the map's starts, against the same starts here, one run at a time.
+
+use std::io::Write;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use engine::ensemble::{Ensemble, Options, Table};
+use engine::input::Vary;
+
+use crate::{median, seconds};
+
+const SCENE: &str = "examples/classics/double_pendulum_flip.lag";
+const PEER: &str = "tests/sympy/ensemble_peer.py";
+const SIDE: usize = 60;
+
+/// `peer`: run SciPy on `sample` of the map's starts in the same run; `repeats`: how often
+/// each thread count's map is timed (the median is shown).
+pub fn run(peer: bool, sample: usize, repeats: usize) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let source = std::fs::read_to_string(root.join(SCENE)).expect("scene");
+    let axis = |name: &str| Vary::parse(&format!("{name}=-3:3:{SIDE}")).expect("a grid axis");
+    let options = Options {
+        vary: vec![axis("a1"), axis("a2")],
+        record: vec!["t".into()],
+        ..Options::default()
+    };
+    let started = Instant::now();
+    let ensemble = Ensemble::new(&source, &options).expect("the ensemble loads");
+    let setup = started.elapsed().as_secs_f64();
+    let runs = ensemble.runs();
+
+    let mut timed = |threads: usize| -> (f64, Table) {
+        let mut times = Vec::new();
+        let mut table = None;
+        for _ in 0..repeats.max(1) {
+            let started = Instant::now();
+            let bar = &mut crate::progress::Bar::new(format!("{runs} runs on {threads} thread(s)"));
+            table = Some(ensemble.run(0..runs, threads, bar));
+            times.push(started.elapsed().as_secs_f64());
+        }
+        (median(&mut times), table.expect("timed at least once"))
+    };
+    let (one, table) = timed(1);
+    let (two, other) = timed(2);
+    let same = bits(&table) == bits(&other);
+    let failed = table.failures.iter().filter(|f| f.is_some()).count();
+    let flipped = table.rows.iter().filter(|r| r[2] < 10.0).count();
+
+    outln!("## Ensemble: the double pendulum's {SIDE}×{SIDE} flip-time map to t = 10\n");
+    outln!(
+        "{runs} runs of dop853 at tolerance 1e-10, each until the first flip (|θ| = π) or \
+         t = 10; {flipped} flipped, {failed} failed. Loading, deriving, lowering and making \
+         the starts took {} once. Time: the whole map, the median of {} timing(s).\n",
+        seconds(setup),
+        repeats.max(1)
+    );
+    outln!("| threads | wall time | per run | against 1 thread |");
+    outln!("|---:|---:|---:|---:|");
+    for (threads, time) in [(1, one), (2, two)] {
+        outln!(
+            "| {threads} | {} | {} | {:.2} |",
+            seconds(time),
+            seconds(time / runs as f64),
+            time / one
+        );
+    }
+    outln!();
+    outln!(
+        "The two tables are {} (the target: the same bits); 2 threads took {:.2} of 1 \
+         thread's time (the target: at most 0.65).",
+        if same { "the same bits" } else { "DIFFERENT" },
+        two / one
+    );
+    if peer {
+        scipy(&root, &ensemble, sample);
+    }
+    outln!();
+}
+
+/// Every number of the table as its bits, NaN included.
+fn bits(table: &Table) -> Vec<u64> {
+    table.rows.iter().flatten().map(|v| v.to_bits()).collect()
+}
+
+/// SciPy on `sample` starts spread evenly over the map, against our runs of the same starts,
+/// each timed alone on one thread.
+fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
+    let runs = ensemble.runs();
+    let step = (runs / sample.clamp(1, runs)).max(1);
+    let picked: Vec<usize> = (0..runs).step_by(step).collect();
+    let mut ours = Vec::new();
+    let mut rows = Vec::new();
+    for &k in &picked {
+        rows.push(ensemble.run(k..k + 1, 1, &mut ()).rows.remove(0));
+        let mut times: Vec<f64> = (0..5)
+            .map(|_| {
+                let started = Instant::now();
+                ensemble.run(k..k + 1, 1, &mut ());
+                started.elapsed().as_secs_f64()
+            })
+            .collect();
+        ours.push(median(&mut times));
+    }
+    let input: String = rows
+        .iter()
+        .map(|r| serde_json::json!({ "a1": r[0], "a2": r[1] }).to_string() + "\n")
+        .collect();
+    let theirs = match peer(root, &input) {
+        Ok(theirs) => theirs,
+        Err(why) => {
+            outln!("SciPy not run: {why}");
+            return;
+        }
+    };
+    let (mut ratios, mut agree) = (Vec::new(), 0);
+    for ((row, our_time), (t, their_time)) in rows.iter().zip(&ours).zip(&theirs) {
+        ratios.push(their_time / our_time);
+        // A start near the edge of a flip basin may flip on one side and not the other.
+        if (row[2] - t).abs() <= 1e-6 * t.max(1.0) {
+            agree += 1;
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let their_mean = mean(&theirs.iter().map(|p| p.1).collect::<Vec<_>>());
+    outln!(
+        "SciPy's DOP853 (rtol = atol = 1e-10) on a SymPy right-hand side lambdified to Python, \
+         on {} starts spread evenly over the map: {} per run against {} here for the same \
+         starts, {:.0}× (the median of the per-run ratios {:.0}×; the target: at least 100×). \
+         The first flip's time agrees to 1e-6 at {agree} of the {} starts.",
+        theirs.len(),
+        seconds(their_mean),
+        seconds(mean(&ours)),
+        their_mean / mean(&ours),
+        median(&mut ratios),
+        theirs.len()
+    );
+}
+
+/// The peer's (first flip, seconds) for each start of `input`, or why it did not run.
+fn peer(root: &Path, input: &str) -> Result<Vec<(f64, f64)>, String> {
+    let mut child = Command::new("python3")
+        .arg(root.join(PEER))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("python3: {e}"))?;
+    child
+        .stdin
+        .take()
+        .ok_or("no standard input")?
+        .write_all(input.as_bytes())
+        .map_err(|e| e.to_string())?;
+    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    if !output.status.success() {
+        return Err(String::from_utf8_lossy(&output.stderr).trim().to_string());
+    }
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter(|l| l.starts_with('{'))
+        .map(|line| {
+            let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
+            Ok((v["t"].as_f64().unwrap_or(f64::NAN), v["seconds"].as_f64().unwrap_or(f64::NAN)))
+        })
+        .collect()
+}
