@@ -17,6 +17,9 @@ const SIZE: (u32, u32) = (760, 600);
 const BAR_WIDTH: u32 = 110;
 /// The colour of a run that failed.
 const FAILED: RGBColor = RGBColor(200, 200, 200);
+/// The size of the numbers on the axes, and of the axes' names.
+const LABELS: u32 = 14;
+const NAMES: u32 = 16;
 
 type Drawn = Result<(), Box<dyn Error>>;
 
@@ -134,7 +137,14 @@ where
             (x.0 - dx / 2.0)..(x.1 + dx / 2.0),
             (y.0 - dy / 2.0)..(y.1 + dy / 2.0),
         )?;
-    chart.configure_mesh().disable_mesh().x_desc(xs.0.as_str()).y_desc(ys.0.as_str()).draw()?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .label_style(("sans-serif", LABELS))
+        .axis_desc_style(("sans-serif", NAMES))
+        .x_desc(xs.0.as_str())
+        .y_desc(ys.0.as_str())
+        .draw()?;
     // Runs are in grid order, the second axis fastest: row k is cell (k / ny, k % ny).
     let ny = ys.1.len();
     chart.draw_series(table.rows.iter().enumerate().map(|(k, row)| {
@@ -159,13 +169,15 @@ where
         .margin_top(44)
         .margin_bottom(56)
         .margin_right(8)
-        .y_label_area_size(60)
+        .margin_left(8)
+        .y_label_area_size(72)
         .build_cartesian_2d(0.0..1.0, z.0..z.1)?;
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
+        .label_style(("sans-serif", LABELS))
+        .axis_desc_style(("sans-serif", NAMES))
         .y_desc(name)
-        .y_label_formatter(&|v| format!("{v:.3}"))
         .draw()?;
     let steps = 128;
     let height = (z.1 - z.0) / steps as f64;
@@ -191,7 +203,13 @@ where
         .x_label_area_size(44)
         .y_label_area_size(64)
         .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
-    chart.configure_mesh().x_desc(axis.0.as_str()).y_desc(name).draw()?;
+    chart
+        .configure_mesh()
+        .label_style(("sans-serif", LABELS))
+        .axis_desc_style(("sans-serif", NAMES))
+        .x_desc(axis.0.as_str())
+        .y_desc(name)
+        .draw()?;
     // A failed run breaks the line rather than joining its neighbours across it.
     let points: Vec<(f64, f64)> =
         axis.1.iter().zip(&table.rows).map(|(x, r)| (*x, r[column])).collect();
@@ -224,7 +242,13 @@ where
         .x_label_area_size(44)
         .y_label_area_size(56)
         .build_cartesian_2d(x.0..x.1, 0.0..tallest as f64 * 1.05)?;
-    chart.configure_mesh().x_desc(name).y_desc("runs").draw()?;
+    chart
+        .configure_mesh()
+        .label_style(("sans-serif", LABELS))
+        .axis_desc_style(("sans-serif", NAMES))
+        .x_desc(name)
+        .y_desc("runs")
+        .draw()?;
     chart.draw_series(counts.iter().enumerate().map(|(k, n)| {
         let left = x.0 + width * k as f64;
         Rectangle::new([(left, 0.0), (left + width, *n as f64)], BLUE.mix(0.6).filled())
