@@ -8,12 +8,13 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 11] = [
+const PAGES: [&str; 12] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
     "docs/commands.md",
     "docs/simulating.md",
+    "docs/ensembles.md",
     "docs/linearizing.md",
     "docs/bicycle.md",
     "docs/python.md",
@@ -491,6 +492,11 @@ fn language() {
 #[test]
 fn commands() {
     assert_honest(PAGES[3]);
+}
+
+#[test]
+fn ensembles() {
+    assert_honest("docs/ensembles.md");
 }
 
 #[test]

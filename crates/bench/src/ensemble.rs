@@ -35,7 +35,7 @@ pub fn run(peer: bool, sample: usize, repeats: usize) {
     let setup = started.elapsed().as_secs_f64();
     let runs = ensemble.runs();
 
-    let mut timed = |threads: usize| -> (f64, Table) {
+    let timed = |threads: usize| -> (f64, Table) {
         let mut times = Vec::new();
         let mut table = None;
         for _ in 0..repeats.max(1) {

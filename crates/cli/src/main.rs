@@ -666,6 +666,10 @@ fn ensemble(
             return ExitCode::from(2);
         }
     }
+    if let Err(e) = plot.as_ref().map_or(Ok(()), |_| cli::plot::ensemble::check(&options.vary)) {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let threads = threads.unwrap_or_else(engine::ensemble::cores);
     let started = std::time::Instant::now();
     let table = match cli::ensemble::ensemble(source, options, Some(threads)) {

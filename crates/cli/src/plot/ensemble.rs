@@ -14,7 +14,7 @@ use plotters::style::colors::colormaps::ViridisRGB;
 
 /// The picture's size in pixels: the chart, and the colour bar beside a heat map.
 const SIZE: (u32, u32) = (760, 600);
-const BAR_WIDTH: u32 = 110;
+const BAR_WIDTH: u32 = 120;
 /// The colour of a run that failed.
 const FAILED: RGBColor = RGBColor(200, 200, 200);
 /// The size of the numbers on the axes, and of the axes' names.
@@ -33,16 +33,7 @@ enum Kind {
 /// Writes the ensemble's picture to `path` (whole or not at all), as SVG or PNG by its
 /// extension; an ensemble with more than two grid axes has none.
 pub fn ensemble(table: &Table, title: &str, path: &Path) -> Result<(), String> {
-    let kind = match (table.random, table.axes.len()) {
-        (true, _) => Kind::Histogram,
-        (false, 1) => Kind::Line,
-        (false, 2) => Kind::HeatMap,
-        (false, n) => {
-            return Err(format!(
-                "--plot draws one or two grid axes, or random draws; this ensemble has {n} axes"
-            ))
-        }
-    };
+    let kind = kind(table.random, table.axes.len())?;
     register_font()?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     let drawn = match ext {
@@ -64,6 +55,24 @@ pub fn ensemble(table: &Table, title: &str, path: &Path) -> Result<(), String> {
         _ => return Err(format!("cannot tell the format of {}: use .svg or .png", path.display())),
     };
     drawn.map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Whether an ensemble varied so has a picture, before it is run.
+pub fn check(vary: &[engine::input::Vary]) -> Result<(), String> {
+    let random = vary.iter().any(|v| v.spread.is_random());
+    kind(random, vary.iter().filter(|v| !v.spread.is_random()).count()).map(|_| ())
+}
+
+/// The picture of an ensemble with random draws or with `axes` grid axes.
+fn kind(random: bool, axes: usize) -> Result<Kind, String> {
+    match (random, axes) {
+        (true, _) => Ok(Kind::Histogram),
+        (false, 1) => Ok(Kind::Line),
+        (false, 2) => Ok(Kind::HeatMap),
+        (false, n) => Err(format!(
+            "--plot draws one or two grid axes, or random draws; this ensemble has {n} axes"
+        )),
+    }
 }
 
 /// Draws the picture on `root`, whichever the backend.
@@ -168,9 +177,9 @@ where
     let mut bar = ChartBuilder::on(area)
         .margin_top(44)
         .margin_bottom(56)
-        .margin_right(8)
-        .margin_left(8)
-        .y_label_area_size(72)
+        .margin_left(4)
+        .margin_right(4)
+        .right_y_label_area_size(78)
         .build_cartesian_2d(0.0..1.0, z.0..z.1)?;
     bar.configure_mesh()
         .disable_mesh()
