@@ -3,7 +3,8 @@
 //! the default tolerance 1e-10, each run ended by the first flip), run on one thread and on
 //! two: the wall time of each, whether the two tables are the same bits, and with `--peer`
 //! SciPy's DOP853 on a right-hand side lambdified from SymPy (`tests/sympy/ensemble_peer.py`)
-//! on an even sample of the map's starts, against the same starts here, one run at a time.
+//! on a sample of the map's starts spread over both angles, against the same starts here,
+//! one run at a time.
 
 use std::io::Write;
 use std::path::Path;
@@ -35,19 +36,21 @@ pub fn run(peer: bool, sample: usize, repeats: usize) {
     let setup = started.elapsed().as_secs_f64();
     let runs = ensemble.runs();
 
-    let timed = |threads: usize| -> (f64, Table) {
-        let mut times = Vec::new();
+    // The wall time and the process's CPU time of the whole map, the median of the repeats.
+    let timed = |threads: usize| -> ((f64, f64), Table) {
+        let (mut walls, mut cpus) = (Vec::new(), Vec::new());
         let mut table = None;
         for _ in 0..repeats.max(1) {
-            let started = Instant::now();
             let bar = &mut crate::progress::Bar::new(format!("{runs} runs on {threads} thread(s)"));
+            let (started, cpu) = (Instant::now(), cpu_time::ProcessTime::now());
             table = Some(ensemble.run(0..runs, threads, bar));
-            times.push(started.elapsed().as_secs_f64());
+            walls.push(started.elapsed().as_secs_f64());
+            cpus.push(cpu.elapsed().as_secs_f64());
         }
-        (median(&mut times), table.expect("timed at least once"))
+        ((median(&mut walls), median(&mut cpus)), table.expect("timed at least once"))
     };
-    let (one, table) = timed(1);
-    let (two, other) = timed(2);
+    let ((one, one_cpu), table) = timed(1);
+    let ((two, two_cpu), other) = timed(2);
     let same = bits(&table) == bits(&other);
     let failed = table.failures.iter().filter(|f| f.is_some()).count();
     let flipped = table.rows.iter().filter(|r| r[2] < 10.0).count();
@@ -56,18 +59,22 @@ pub fn run(peer: bool, sample: usize, repeats: usize) {
     outln!(
         "{runs} runs of dop853 at tolerance 1e-10, each until the first flip (|θ| = π) or \
          t = 10; {flipped} flipped, {failed} failed. Loading, deriving, lowering and making \
-         the starts took {} once. Time: the whole map, the median of {} timing(s).\n",
+         the starts took {} once. Time: the whole map, the median of {} timing(s); CPU: the \
+         process's CPU time over the same run, and cores: CPU over wall time, how many cores \
+         the run had on average.\n",
         seconds(setup),
         repeats.max(1)
     );
-    outln!("| threads | wall time | per run | against 1 thread |");
-    outln!("|---:|---:|---:|---:|");
-    for (threads, time) in [(1, one), (2, two)] {
+    outln!("| threads | wall time | per run | against 1 thread | CPU | cores |");
+    outln!("|---:|---:|---:|---:|---:|---:|");
+    for (threads, time, cpu) in [(1, one, one_cpu), (2, two, two_cpu)] {
         outln!(
-            "| {threads} | {} | {} | {:.2} |",
+            "| {threads} | {} | {} | {:.2} | {} | {:.2} |",
             seconds(time),
             seconds(time / runs as f64),
-            time / one
+            time / one,
+            seconds(cpu),
+            cpu / time
         );
     }
     outln!();
@@ -92,8 +99,7 @@ fn bits(table: &Table) -> Vec<u64> {
 /// each timed alone on one thread.
 fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
     let runs = ensemble.runs();
-    let step = (runs / sample.clamp(1, runs)).max(1);
-    let picked: Vec<usize> = (0..runs).step_by(step).collect();
+    let picked = spread(runs, sample.clamp(1, runs));
     let mut ours = Vec::new();
     let mut rows = Vec::new();
     for &k in &picked {
@@ -130,7 +136,7 @@ fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
     let their_mean = mean(&theirs.iter().map(|p| p.1).collect::<Vec<_>>());
     outln!(
         "SciPy's DOP853 (rtol = atol = 1e-10) on a SymPy right-hand side lambdified to Python, \
-         on {} starts spread evenly over the map: {} per run against {} here for the same \
+         on {} starts spread over the map: {} per run against {} here for the same \
          starts, {:.0}× (the median of the per-run ratios {:.0}×; the target: at least 100×). \
          The first flip's time agrees to 1e-6 at {agree} of the {} starts.",
         theirs.len(),
@@ -140,6 +146,24 @@ fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
         median(&mut ratios),
         theirs.len()
     );
+}
+
+/// `sample` run indices spread over both axes of the map: steps of the golden ratio's share
+/// of the runs (made prime to their number), so that neither axis is sampled at one value.
+fn spread(runs: usize, sample: usize) -> Vec<usize> {
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut stride = ((runs as f64) * 0.5 * (5f64.sqrt() - 1.0)).round() as usize;
+    while gcd(stride.max(1), runs) != 1 {
+        stride += 1;
+    }
+    let mut picked: Vec<usize> = (0..sample).map(|i| i * stride % runs).collect();
+    picked.sort_unstable();
+    picked
 }
 
 /// The peer's (first flip, seconds) for each start of `input`, or why it did not run.
