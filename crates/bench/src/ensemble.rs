@@ -100,18 +100,18 @@ fn bits(table: &Table) -> Vec<u64> {
 fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
     let runs = ensemble.runs();
     let picked = spread(runs, sample.clamp(1, runs));
-    let mut ours = Vec::new();
-    let mut rows = Vec::new();
+    let (mut ours, mut rows) = (Vec::new(), Vec::new());
     for &k in &picked {
         rows.push(ensemble.run(k..k + 1, 1, &mut ()).rows.remove(0));
-        let mut times: Vec<f64> = (0..5)
+        // One thread: the run is on this one, whose CPU time is the run's.
+        let (mut walls, mut cpus): (Vec<f64>, Vec<f64>) = (0..5)
             .map(|_| {
-                let started = Instant::now();
+                let (started, cpu) = (Instant::now(), cpu_time::ThreadTime::now());
                 ensemble.run(k..k + 1, 1, &mut ());
-                started.elapsed().as_secs_f64()
+                (started.elapsed().as_secs_f64(), cpu.elapsed().as_secs_f64())
             })
-            .collect();
-        ours.push(median(&mut times));
+            .unzip();
+        ours.push(Timing { wall: median(&mut walls), cpu: median(&mut cpus) });
     }
     let input: String = rows
         .iter()
@@ -124,28 +124,41 @@ fn scipy(root: &Path, ensemble: &Ensemble, sample: usize) {
             return;
         }
     };
-    let (mut ratios, mut agree) = (Vec::new(), 0);
-    for ((row, our_time), (t, their_time)) in rows.iter().zip(&ours).zip(&theirs) {
-        ratios.push(their_time / our_time);
+    let agree = rows
+        .iter()
+        .zip(&theirs)
         // A start near the edge of a flip basin may flip on one side and not the other.
-        if (row[2] - t).abs() <= 1e-6 * t.max(1.0) {
-            agree += 1;
-        }
-    }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let their_mean = mean(&theirs.iter().map(|p| p.1).collect::<Vec<_>>());
+        .filter(|(row, (t, _))| (row[2] - t).abs() <= 1e-6 * t.max(1.0))
+        .count();
+    let mean = |v: &mut dyn Iterator<Item = f64>| {
+        let (sum, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+        sum / n.max(1) as f64
+    };
+    let (their_wall, their_cpu) =
+        (mean(&mut theirs.iter().map(|p| p.1.wall)), mean(&mut theirs.iter().map(|p| p.1.cpu)));
+    let (our_wall, our_cpu) =
+        (mean(&mut ours.iter().map(|t| t.wall)), mean(&mut ours.iter().map(|t| t.cpu)));
     outln!(
         "SciPy's DOP853 (rtol = atol = 1e-10) on a SymPy right-hand side lambdified to Python, \
-         on {} starts spread over the map: {} per run against {} here for the same \
-         starts, {:.0}× (the median of the per-run ratios {:.0}×; the target: at least 100×). \
-         The first flip's time agrees to 1e-6 at {agree} of the {} starts.",
+         on {} starts spread over the map, against the same starts here (ours each the median of \
+         five runs): {} of CPU per run against {} here, {:.0}× (wall time {} against {}, \
+         {:.0}×; the target: at least 100×). The first flip's time agrees to 1e-6 at {agree} \
+         of the {} starts.",
         theirs.len(),
-        seconds(their_mean),
-        seconds(mean(&ours)),
-        their_mean / mean(&ours),
-        median(&mut ratios),
+        seconds(their_cpu),
+        seconds(our_cpu),
+        their_cpu / our_cpu,
+        seconds(their_wall),
+        seconds(our_wall),
+        their_wall / our_wall,
         theirs.len()
     );
+}
+
+/// A run's wall time and CPU time.
+struct Timing {
+    wall: f64,
+    cpu: f64,
 }
 
 /// `sample` run indices spread over both axes of the map: steps of the golden ratio's share
@@ -166,8 +179,8 @@ fn spread(runs: usize, sample: usize) -> Vec<usize> {
     picked
 }
 
-/// The peer's (first flip, seconds) for each start of `input`, or why it did not run.
-fn peer(root: &Path, input: &str) -> Result<Vec<(f64, f64)>, String> {
+/// The peer's first flip and timing for each start of `input`, or why it did not run.
+fn peer(root: &Path, input: &str) -> Result<Vec<(f64, Timing)>, String> {
     let mut child = Command::new("python3")
         .arg(root.join(PEER))
         .stdin(Stdio::piped())
@@ -190,7 +203,8 @@ fn peer(root: &Path, input: &str) -> Result<Vec<(f64, f64)>, String> {
         .filter(|l| l.starts_with('{'))
         .map(|line| {
             let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
-            Ok((v["t"].as_f64().unwrap_or(f64::NAN), v["seconds"].as_f64().unwrap_or(f64::NAN)))
+            let number = |key: &str| v[key].as_f64().unwrap_or(f64::NAN);
+            Ok((number("t"), Timing { wall: number("seconds"), cpu: number("cpu_seconds") }))
         })
         .collect()
 }
