@@ -138,7 +138,7 @@ fn a_bad_vary_points_at_its_mistake() {
         (&["a1=0:1:2"][..], Some(3), "--runs counts random draws"),
     ] {
         let options = Options { vary: vary(texts), runs, ..Default::default() };
-        let error = ensemble(&source, &options, Some(1)).err().expect("refused");
+        let error = ensemble(&source, &options, Some(1)).expect_err("refused");
         let shown = cli::diagnostics::error("flip.lag", &error);
         assert!(shown.starts_with(&format!("error: {expected}")), "{shown}");
         assert_eq!(error.exit_code(), 2);

@@ -458,9 +458,12 @@ fn main() -> ExitCode {
     }
 }
 
+/// An input given as a time series, by name.
+type Series = (String, sim::Series);
+
 /// The `--input` laws and, read from their files, the time series; `None` after saying on
 /// stderr which file could not be read.
-fn drives(input: Vec<Assignment>) -> Option<(Vec<Assignment>, Vec<(String, sim::Series)>)> {
+fn drives(input: Vec<Assignment>) -> Option<(Vec<Assignment>, Vec<Series>)> {
     let (files, laws): (Vec<_>, Vec<_>) = input.into_iter().partition(cli::series::is_series);
     let mut series = Vec::new();
     for given in files {

@@ -11,7 +11,7 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use sim::{Event, Run};
+use sim::Event;
 
 mod draws;
 mod record;
@@ -67,8 +67,8 @@ pub struct Ensemble {
     recorded: Vec<Recorded>,
     /// The varied values of each run, in the order of [`Options::vary`].
     values: Vec<Vec<f64>>,
-    /// Each run's parameters and initial state, or why they could not be made.
-    starts: Vec<Result<(Vec<f64>, Vec<f64>), String>>,
+    /// Each run's start, or why it could not be made.
+    starts: Vec<Result<Start, String>>,
     columns: Vec<String>,
     axes: Vec<(String, Vec<f64>)>,
     random: bool,
@@ -76,6 +76,15 @@ pub struct Ensemble {
     constraint_names: Vec<String>,
     angle_oriented_bodies: Vec<String>,
 }
+
+/// A run's parameter values and initial state (q, q̇).
+struct Start {
+    parameters: Vec<f64>,
+    state: Vec<f64>,
+}
+
+/// What a run gives: its recorded values (NaN where it failed), and why it failed.
+type Outcome = (Vec<f64>, Option<String>);
 
 /// Runs the ensemble on `threads` threads (`None`: one per core), showing nothing.
 pub fn ensemble(source: &str, options: &Options, threads: Option<usize>) -> Result<Table, Error> {
@@ -138,7 +147,9 @@ impl Ensemble {
             .map(|run| {
                 let numbers: Vec<(usize, f64)> =
                     given.iter().copied().zip(run.iter().copied()).collect();
-                simulate::start(&mut prepared, &sets, &numbers).map_err(|e| e.worded(Piece::plain))
+                simulate::start(&mut prepared, &sets, &numbers)
+                    .map(|(parameters, state)| Start { parameters, state })
+                    .map_err(|e| e.worded(Piece::plain))
             })
             .collect();
         let mut names: Vec<String> = options.vary.iter().map(|v| v.parameter.clone()).collect();
@@ -217,7 +228,7 @@ impl Ensemble {
         next: &AtomicUsize,
         done: &AtomicUsize,
         report: &mut dyn FnMut(usize),
-    ) -> Vec<(usize, (Vec<f64>, Option<String>))> {
+    ) -> Vec<(usize, Outcome)> {
         let mut integrand = self.integrand.clone();
         let mut results = Vec::new();
         loop {
@@ -231,22 +242,22 @@ impl Ensemble {
     }
 
     /// Run `k` on `integrand`: its recorded values, and why it failed.
-    fn run_one(&self, integrand: &mut Integrand, k: usize) -> (Vec<f64>, Option<String>) {
+    fn run_one(&self, integrand: &mut Integrand, k: usize) -> Outcome {
         let failed = |why: String| (vec![f64::NAN; self.recorded.len()], Some(why));
-        let (parameters, y0) = match &self.starts[k] {
+        let start = match &self.starts[k] {
             Ok(start) => start,
             Err(why) => return failed(why.clone()),
         };
-        integrand.mechanical().set_parameters(parameters);
-        let run = integrand.integrate(y0, &self.run_settings, &self.watched, &mut |_| {});
+        integrand.mechanical().set_parameters(&start.parameters);
+        let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut |_| {});
         match &run.fault {
-            Some(fault) => failed(self.describe(&run, fault)),
+            Some(fault) => failed(self.describe(fault)),
             None => (self.recorded.iter().map(|r| r.value(&run)).collect(), None),
         }
     }
 
     /// A fault in one line: when, and what went wrong.
-    fn describe(&self, _run: &Run, fault: &sim::Fault) -> String {
+    fn describe(&self, fault: &sim::Fault) -> String {
         let names = FaultNames {
             method: self.run_settings.method,
             state: &self.state_names,

@@ -15,8 +15,8 @@ use crate::Error;
 pub(crate) enum Integrand {
     /// y = (q, q̇), with the partials of the exact Jacobian for the methods that use one.
     Mechanical(Mechanical),
-    /// y = (q, p), for the symplectic methods.
-    Canonical(Canonical),
+    /// y = (q, p), for the symplectic methods (boxed: it holds the problem in (q, q̇) too).
+    Canonical(Box<Canonical>),
     /// y = (q, q̇, q̈, λ), the differential–algebraic system radau takes constraints as.
     Constrained(Constrained),
 }
@@ -44,7 +44,7 @@ impl Integrand {
                 let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
                 canonical = canonical.with_partials(Tape::new(partials));
             }
-            return Ok(Integrand::Canonical(canonical));
+            return Ok(Integrand::Canonical(Box::new(canonical)));
         }
         let mechanical = with_partials(prepared, method, mechanical)?;
         if method.handles_algebraic() && prepared.layout.multipliers > 0 {
@@ -74,7 +74,7 @@ impl Integrand {
             Integrand::Mechanical(m) => integrate(m, y0, settings, watched, progress),
             Integrand::Canonical(c) => {
                 let z0 = c.from_physical(0.0, y0);
-                integrate(c, &z0, settings, watched, progress)
+                integrate(&mut **c, &z0, settings, watched, progress)
             }
             Integrand::Constrained(c) => match c.consistent_state(0.0, y0) {
                 Ok(z0) => integrate(c, &z0, settings, watched, progress),
