@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use engine::input::{Assignment, SweepRange};
 
 #[derive(Parser)]
@@ -59,38 +59,12 @@ enum Command {
     /// still written).
     Simulate {
         file: PathBuf,
-        /// End time (s); default: the scene's `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
-        /// The integrator (default dop853).
-        #[arg(long)]
-        method: Option<MethodArg>,
-        /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
-        /// auto (default 1e-10).
-        #[arg(long)]
-        tolerance: Option<f64>,
-        /// Step of rk4, midpoint and gauss (default: until/1000).
-        #[arg(long)]
-        step: Option<f64>,
-        /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<Assignment>,
-        /// Drive an input by an expression of t, the coordinates, their rates and the
-        /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`; or by a time
-        /// series, `--input F=push.csv` (a time and a value a row, linear in between). An input
-        /// not driven keeps its declared value.
-        #[arg(long = "input", value_name = "NAME=EXPR")]
-        input: Vec<Assignment>,
+        #[command(flatten)]
+        run: RunArgs,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
         output: Vec<String>,
-        /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
-        #[arg(long = "stop-when", value_name = "EXPR")]
-        stop_when: Vec<String>,
-        /// Record the times when this expression crosses zero.
-        #[arg(long = "event", value_name = "EXPR")]
-        event: Vec<String>,
         /// Write the recorded quantities here: .csv or .json (default: CSV on standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -101,9 +75,6 @@ enum Command {
         /// and `draw` shapes, with the energy error beside them.
         #[arg(long, value_name = "OUT.html")]
         animate: Option<PathBuf>,
-        /// Do not check that terms added or equated have one dimension.
-        #[arg(long)]
-        no_units: bool,
         /// Record at this many evenly spaced times (the start and the end included), from the
         /// integrator's dense output; 0 records at every accepted step instead. Events and the
         /// end are always recorded.
@@ -133,30 +104,8 @@ enum Command {
         /// Default: the coordinates at the end.
         #[arg(long, value_name = "EXPRS")]
         record: Vec<String>,
-        /// End time (s); default: the scene's `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
-        /// The integrator (default dop853).
-        #[arg(long)]
-        method: Option<MethodArg>,
-        /// Tolerance of the adaptive methods (default 1e-10).
-        #[arg(long)]
-        tolerance: Option<f64>,
-        /// Step of rk4, midpoint and gauss (default: until/1000).
-        #[arg(long)]
-        step: Option<f64>,
-        /// Override a parameter or an initial value in every run, as for simulate.
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<Assignment>,
-        /// Drive an input, as for simulate.
-        #[arg(long = "input", value_name = "NAME=EXPR")]
-        input: Vec<Assignment>,
-        /// End each run when this expression reaches zero, or `lhs = rhs` holds.
-        #[arg(long = "stop-when", value_name = "EXPR")]
-        stop_when: Vec<String>,
-        /// Watch this expression's zero crossings (as simulate's events).
-        #[arg(long = "event", value_name = "EXPR")]
-        event: Vec<String>,
+        #[command(flatten)]
+        run: RunArgs,
         /// Write the table here, .csv, whole or not at all (default: standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -168,9 +117,6 @@ enum Command {
         /// the number.
         #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
         threads: Option<u16>,
-        /// Do not check that terms added or equated have one dimension.
-        #[arg(long)]
-        no_units: bool,
     },
     /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
     /// the first-order form ẋ = A·x + B·u, y = C·x + D·u of the scene's inputs and outputs,
@@ -260,6 +206,64 @@ enum Command {
     },
 }
 
+/// The settings of a run, shared by `simulate` and `ensemble`.
+#[derive(Args)]
+struct RunArgs {
+    /// End time (s); default: the scene's `simulate { until … }`, else 10.
+    #[arg(long)]
+    until: Option<f64>,
+    /// The integrator (default dop853).
+    #[arg(long)]
+    method: Option<MethodArg>,
+    /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
+    /// auto (default 1e-10).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Step of rk4, midpoint and gauss (default: until/1000).
+    #[arg(long)]
+    step: Option<f64>,
+    /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<Assignment>,
+    /// Drive an input by an expression of t, the coordinates, their rates and the
+    /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`; or by a time
+    /// series, `--input F=push.csv` (a time and a value a row, linear in between). An input
+    /// not driven keeps its declared value.
+    #[arg(long = "input", value_name = "NAME=EXPR")]
+    input: Vec<Assignment>,
+    /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
+    #[arg(long = "stop-when", value_name = "EXPR")]
+    stop_when: Vec<String>,
+    /// Record the times when this expression crosses zero.
+    #[arg(long = "event", value_name = "EXPR")]
+    event: Vec<String>,
+    /// Do not check that terms added or equated have one dimension.
+    #[arg(long)]
+    no_units: bool,
+}
+
+impl RunArgs {
+    /// The engine's options of a run, the inputs' time series read from their files; `None`
+    /// after saying on stderr which file could not be read.
+    fn options(self) -> Option<engine::simulate::Options> {
+        let (input, input_series) = drives(self.input)?;
+        Some(engine::simulate::Options {
+            until: self.until,
+            // The engine's options are shared with Python, which names the method.
+            method: self.method.map(|m| sim::Method::from(m).name().to_string()),
+            tolerance: self.tolerance,
+            step: self.step,
+            set: self.set,
+            input,
+            input_series,
+            stop_when: self.stop_when,
+            events: self.event,
+            no_units: self.no_units,
+            ..Default::default()
+        })
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum LinearizeFormat {
     Text,
@@ -327,66 +331,22 @@ fn main() -> ExitCode {
             emit(&engine::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
-        Command::Simulate {
-            file,
-            until,
-            method,
-            tolerance,
-            step,
-            set,
-            input,
-            output,
-            stop_when,
-            event,
-            out,
-            plot,
-            animate,
-            no_units,
-            samples,
-        } => {
+        Command::Simulate { file, run, output, out, plot, animate, samples } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let Some((input, input_series)) = drives(input) else { return ExitCode::from(2) };
+            let Some(options) = run.options() else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
-                until,
-                // The engine's options are shared with Python, which names the method.
-                method: method.map(|m| sim::Method::from(m).name().to_string()),
-                tolerance,
-                step,
-                set,
-                input,
-                input_series,
                 output,
-                stop_when,
-                events: event,
-                no_units,
                 samples: samples.unwrap_or(default_samples),
                 animate: animate.is_some(),
+                ..options
             };
             simulate(&file, &source, &options, out, Figures { plot, animate })
         }
-        Command::Ensemble {
-            file,
-            vary,
-            runs,
-            seed,
-            record,
-            until,
-            method,
-            tolerance,
-            step,
-            set,
-            input,
-            stop_when,
-            event,
-            out,
-            plot,
-            threads,
-            no_units,
-        } => {
+        Command::Ensemble { file, vary, runs, seed, record, run, out, plot, threads } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let Some((input, input_series)) = drives(input) else { return ExitCode::from(2) };
+            let Some(simulate) = run.options() else { return ExitCode::from(2) };
             let mut varied = Vec::new();
             for text in &vary {
                 match engine::input::Vary::parse(text) {
@@ -397,19 +357,6 @@ fn main() -> ExitCode {
                     }
                 }
             }
-            let simulate = engine::simulate::Options {
-                until,
-                method: method.map(|m| sim::Method::from(m).name().to_string()),
-                tolerance,
-                step,
-                set,
-                input,
-                input_series,
-                stop_when,
-                events: event,
-                no_units,
-                ..Default::default()
-            };
             let options = engine::ensemble::Options { simulate, vary: varied, runs, seed, record };
             ensemble(&file, &source, &options, threads.map(usize::from), out, plot)
         }
