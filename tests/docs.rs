@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 11] = [
+const PAGES: [&str; 12] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -20,6 +20,7 @@ const PAGES: [&str; 11] = [
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
+    "docs/ensembles.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -493,6 +494,11 @@ fn language() {
 #[test]
 fn commands() {
     assert_honest(PAGES[3]);
+}
+
+#[test]
+fn ensembles() {
+    assert_honest(PAGES[11]);
 }
 
 #[test]

@@ -85,7 +85,7 @@ impl Compiled {
         let columns = &self.columns;
         let set_exprs = set_expressions(prepared, &settings.sets)?;
         let values = overrides(prepared, &settings.sets, &set_exprs)?;
-        let (parameters, y0) = start(prepared, &values)?;
+        let (parameters, y0) = start(prepared, &values, &[])?;
         // The figures' numbers follow the energies, before the constraints' residuals that
         // the integrator appends.
         let mut plan = settings.animate.then(|| Plan::new(prepared, &parameters));
