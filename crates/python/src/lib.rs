@@ -8,6 +8,7 @@
 //! a Python exception ([`errors`]), never as a panic across the boundary.
 
 mod derive;
+mod ensemble;
 mod errors;
 mod inputs;
 mod numbers;
@@ -194,6 +195,47 @@ impl NativeScene {
             .map_err(|e| engine_error(&e, &self.path))?;
         let sampling = each.first().map_or((0.0, 0), |s| (s.until, s.samples));
         runs::batch_dict(py, &outcomes, &self.path, sampling)
+    }
+
+    /// `lagrange ensemble`: the scene run over the grid axes and random draws of `vary`
+    /// (`NAME=A:B:N`, `NAME=normal(MU, SIGMA)`, `NAME=uniform(A, B)`; `runs` draws from
+    /// `seed`), recording `record` per run, on `threads` threads (`None`: one per core), the
+    /// runs `start` to `stop` of it (`None`: to the last); the other settings as for
+    /// `simulate`. Returns the table's columns (see `ensemble::ensemble`).
+    #[pyo3(signature = (vary, runs = None, seed = 0, record = Vec::new(), threads = None,
+                        start = 0, stop = None, until = None, method = None, tolerance = None,
+                        step = None, set = Vec::new(), input = Vec::new(),
+                        input_series = Vec::new(), hold = None, stop_when = Vec::new(),
+                        events = Vec::new()))]
+    #[allow(clippy::too_many_arguments)]
+    fn ensemble<'py>(
+        &self,
+        py: Python<'py>,
+        vary: Vec<String>,
+        runs: Option<usize>,
+        seed: u64,
+        record: Vec<String>,
+        threads: Option<usize>,
+        start: usize,
+        stop: Option<usize>,
+        until: Option<f64>,
+        method: Option<String>,
+        tolerance: Option<f64>,
+        step: Option<f64>,
+        set: Vec<String>,
+        input: Vec<String>,
+        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
+        hold: Option<f64>,
+        stop_when: Vec<String>,
+        events: Vec<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let output = Vec::new();
+        let simulate = RunOptions { until, method, tolerance, step, output, set, input, hold }
+            .with(input_series, stop_when, events, 0, self)?;
+        let vary = engine::input::varies(&vary).map_err(|e| engine_error(&e, &self.path))?;
+        let options = engine::ensemble::Options { simulate, vary, runs, seed, record };
+        let request = ensemble::Request { options, threads, from: start, to: stop };
+        ensemble::ensemble(py, &self.source, &self.path, request)
     }
 
     /// Small motions about an equilibrium or a steady motion, as `lagrange linearize` finds

@@ -173,9 +173,12 @@ def interrupt_after(seconds):
 
 def test_ctrl_c_stops_a_long_run(pendulum):
     # A run of some minutes, stopped 0.3 s in: KeyboardInterrupt well before it would end.
+    flip = lagrange.load(EXAMPLES / "classics" / "double_pendulum_flip.lag")
+    many = {"a1": (-3, 3, 300), "a2": (-3, 3, 300)}  # 90,000 runs of a few milliseconds
     for long_run in (
         lambda: pendulum.simulate(until=1e6, tolerance=1e-12, output="theta1"),
         lambda: pendulum.batch({"theta1": [0.5, 1.0, 1.5]}, until=1e6, threads=2),
+        lambda: flip.ensemble(many, threads=2),
     ):
         started = time.perf_counter()
         timer = interrupt_after(0.3)

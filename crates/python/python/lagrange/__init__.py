@@ -47,6 +47,7 @@ __all__ = [
     "Linearization",
     "Results",
     "Batch",
+    "EnsembleTable",
     "Rhs",
     "MassMatrix",
     "InverseDynamics",
@@ -184,6 +185,23 @@ def _value_text(value):
         q = Fraction(value)
         return f"{q.numerator}/{q.denominator}" if q.denominator != 1 else str(q.numerator)
     return text
+
+
+def _vary_texts(vary):
+    """``vary`` as ``--vary`` texts: from a dict of name to ``(a, b, n)`` or to a
+    distribution's text, or texts already of that form."""
+    if isinstance(vary, str):
+        return [vary]
+    if not isinstance(vary, Mapping):
+        return [str(v) for v in vary]
+    texts = []
+    for name, spread in vary.items():
+        if isinstance(spread, str):
+            texts.append(f"{name}={spread}")
+        else:
+            a, b, n = spread
+            texts.append(f"{name}={float(a)!r}:{float(b)!r}:{int(n)}")
+    return texts
 
 
 def _batch_values(values, names):
@@ -427,6 +445,47 @@ class Scene:
         options = _run_options(**settings)
         raw = self._native.batch(names, rows, threads=int(threads), **options)
         return Batch(raw, names, rows)
+
+    def ensemble(
+        self, vary, *, runs=None, seed=0, record=None, threads=None, start=0, stop=None, **settings
+    ):
+        """``lagrange ensemble`` on this scene: runs it over grid axes and random draws of its
+        parameters, on ``threads`` threads (``None``: one per core), and returns an
+        :class:`EnsembleTable` of NumPy columns, a value per run.
+
+        - ``vary``: a dict of parameter name to ``(a, b, n)`` (a grid axis of n values from a
+          to b; axes are crossed, the first varying slowest), ``"normal(mu, sigma)"`` or
+          ``"uniform(a, b)"`` (``runs`` random draws from ``seed``, at each grid point); or
+          texts as ``--vary`` takes them (``"a1=-3:3:60"``). A start that a parameter gives
+          (``coord theta = a``) follows it.
+        - ``record``: scene expressions at the end of each run (or where a stop ended it;
+          ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run; by
+          default the coordinates at the end.
+        - ``start``, ``stop``: run only these runs of the ensemble (in its order), for a front
+          end that spreads chunks over processes or machines; joined in order, the chunks
+          give the whole table.
+        - ``settings``: :meth:`simulate`'s keyword arguments but ``output`` and ``samples``.
+
+        The scene is derived and lowered once per call; the table is the same whatever the
+        thread count, as the command's is. The GIL is released meanwhile, and Ctrl-C stops the
+        ensemble. A run that fails has NaN values and its reason in ``failures``.
+        """
+        for unused in ("output", "samples"):
+            if unused in settings:
+                raise TypeError(f"an ensemble records `record`, not `{unused}`")
+        options = _run_options(**settings)
+        del options["output"], options["samples"]
+        raw = self._native.ensemble(
+            _vary_texts(vary),
+            runs=None if runs is None else int(runs),
+            seed=int(seed),
+            record=_listed(record),
+            threads=None if threads is None else int(threads),
+            start=int(start),
+            stop=None if stop is None else int(stop),
+            **options,
+        )
+        return EnsembleTable(raw)
 
     def linearize(
         self, about=None, set=None, sweep=None, inputs=None, outputs=None, keep_cyclic=True
@@ -761,3 +820,39 @@ class Batch(_Columns):
     def __repr__(self):
         names = ", ".join(k for k in self._columns if k != "t")
         return f"<lagrange.Batch {len(self.t)} runs of ({names})>"
+
+
+class EnsembleTable(_Columns):
+    """The table of :meth:`Scene.ensemble`: a mapping of each column's name (the varied
+    parameters, then the recorded quantities as written) to a NumPy array with a value per
+    run, in the ensemble's order.
+
+    Besides: ``varied`` (the varied parameters' names), ``recorded`` (the recorded columns'
+    names), ``failures`` (a reason, or ``None``, per run), ``axes`` (each grid axis's name to
+    its values), ``random`` (whether some values were drawn) and ``runs`` (how many runs the
+    whole ensemble has, of which a ``start``/``stop`` chunk holds some).
+    """
+
+    def __init__(self, raw):
+        self._columns = dict(raw["columns"])
+        names = list(self._columns)
+        self.varied = names[: raw["varied"]]
+        self.recorded = names[raw["varied"] :]
+        self.failures = raw["failures"]
+        self.axes = {name: values for name, values in raw["axes"]}
+        self.random = raw["random"]
+        self.runs = raw["runs"]
+
+    def to_pandas(self):
+        """A ``pandas.DataFrame`` with a row a run, as ``--out FILE.csv`` writes it (needs
+        pandas)."""
+        pandas = self._pandas("EnsembleTable.to_pandas")
+        frame = pandas.DataFrame(self._columns)
+        frame["fault"] = self.failures
+        return frame
+
+    def __repr__(self):
+        return (
+            f"<lagrange.EnsembleTable {len(self.failures)} runs of ({', '.join(self.varied)}): "
+            f"{', '.join(self.recorded)}>"
+        )

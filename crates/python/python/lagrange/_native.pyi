@@ -60,6 +60,26 @@ class NativeScene:
         events: Sequence[str] = ...,
         samples: int = 0,
     ) -> dict[str, Any]: ...
+    def ensemble(
+        self,
+        vary: Sequence[str],
+        runs: Optional[int] = None,
+        seed: int = 0,
+        record: Sequence[str] = ...,
+        threads: Optional[int] = None,
+        start: int = 0,
+        stop: Optional[int] = None,
+        until: Optional[float] = None,
+        method: Optional[str] = None,
+        tolerance: Optional[float] = None,
+        step: Optional[float] = None,
+        set: Sequence[str] = ...,
+        input: Sequence[str] = ...,
+        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
+        hold: Optional[float] = None,
+        stop_when: Sequence[str] = ...,
+        events: Sequence[str] = ...,
+    ) -> dict[str, Any]: ...
     def linearize(
         self,
         about: Optional[str] = None,
