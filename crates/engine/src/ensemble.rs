@@ -173,12 +173,7 @@ impl Ensemble {
             axes: design.axes(),
             random: design.is_random(),
             state_names: prepared.state_names(),
-            constraint_names: prepared
-                .derivation
-                .multipliers
-                .iter()
-                .map(|m| model.constraints[m.constraint].name.clone())
-                .collect(),
+            constraint_names: prepared.kept_constraint_names(),
             angle_oriented_bodies: simulate::angle_oriented_bodies(model),
         })
     }

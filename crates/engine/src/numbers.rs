@@ -93,6 +93,12 @@ impl Prepared {
         d.coords.iter().chain(&d.rates).map(|s| pool.symbol(*s).name.clone()).collect()
     }
 
+    /// The constraints kept with multipliers, by name, in the order of their slots.
+    pub fn kept_constraint_names(&self) -> Vec<String> {
+        let d = &self.derivation;
+        d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone()).collect()
+    }
+
     /// `[t, q, q̇, parameters]`.
     pub fn dynamics_inputs(&self) -> Vec<SymId> {
         let d = &self.derivation;

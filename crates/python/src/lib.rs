@@ -107,34 +107,12 @@ impl NativeScene {
         numbers::MassMatrix::new(&self.source, &self.path, self.units)
     }
 
-    /// Runs the scene as `lagrange simulate` does; `None` leaves the scene's setting. The GIL
-    /// is released while it runs (other Python threads go on), signals are handled every few
-    /// milliseconds (Ctrl-C stops it), and the scene compiled for these settings is kept for
-    /// the next call.
-    #[pyo3(signature = (until = None, method = None, tolerance = None, step = None,
-                        output = Vec::new(), set = Vec::new(), input = Vec::new(),
-                        input_series = Vec::new(), hold = None, stop_when = Vec::new(),
-                        events = Vec::new(), samples = 0))]
-    #[allow(clippy::too_many_arguments)]
-    fn simulate<'py>(
-        &self,
-        py: Python<'py>,
-        until: Option<f64>,
-        method: Option<String>,
-        tolerance: Option<f64>,
-        step: Option<f64>,
-        output: Vec<String>,
-        set: Vec<String>,
-        input: Vec<String>,
-        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
-        hold: Option<f64>,
-        stop_when: Vec<String>,
-        events: Vec<String>,
-        samples: usize,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let options = RunOptions { until, method, tolerance, step, output, set, input, hold }
-            .with(input_series, stop_when, events, samples, self)?;
-        let settings = self.settings(&options)?;
+    /// Runs the scene as `lagrange simulate` does, with `options` (see [`RunOptions`]). The
+    /// GIL is released while it runs (other Python threads go on), signals are handled every
+    /// few milliseconds (Ctrl-C stops it), and the scene compiled for these settings is kept
+    /// for the next call.
+    fn simulate<'py>(&self, py: Python<'py>, options: RunOptions) -> PyResult<Bound<'py, PyDict>> {
+        let settings = self.settings(&options.engine(self)?)?;
         let mut check = runs::SignalCheck::new();
         let outcome = py.detach(|| self.runs.run(&self.source, &settings, &mut check));
         if let Some(raised) = check.raised {
@@ -145,35 +123,18 @@ impl NativeScene {
     }
 
     /// Runs the scene once per row of `values`, the values of `names` (parameters,
-    /// coordinates, rates) in that run, on `threads` threads with the GIL released; the other
-    /// settings as for `simulate`, the same for every run. Returns the batch's arrays (see
+    /// coordinates, rates) in that run, on `threads` threads with the GIL released; `options`
+    /// as for `simulate`, the same for every run. Returns the batch's arrays (see
     /// `runs::batch_dict`).
-    #[pyo3(signature = (names, values, threads = 1, until = None, method = None,
-                        tolerance = None, step = None, output = Vec::new(), set = Vec::new(),
-                        input = Vec::new(), input_series = Vec::new(), hold = None,
-                        stop_when = Vec::new(), events = Vec::new(), samples = 0))]
-    #[allow(clippy::too_many_arguments)]
     fn batch<'py>(
         &self,
         py: Python<'py>,
         names: Vec<String>,
         values: numpy::PyReadonlyArray2<'py, f64>,
         threads: usize,
-        until: Option<f64>,
-        method: Option<String>,
-        tolerance: Option<f64>,
-        step: Option<f64>,
-        output: Vec<String>,
-        set: Vec<String>,
-        input: Vec<String>,
-        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
-        hold: Option<f64>,
-        stop_when: Vec<String>,
-        events: Vec<String>,
-        samples: usize,
+        options: RunOptions,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let options = RunOptions { until, method, tolerance, step, output, set, input, hold }
-            .with(input_series, stop_when, events, samples, self)?;
+        let options = options.engine(self)?;
         let values = values.as_array();
         if values.ncols() != names.len() {
             return Err(PyValueError::new_err(format!(
@@ -200,13 +161,9 @@ impl NativeScene {
     /// `lagrange ensemble`: the scene run over the grid axes and random draws of `vary`
     /// (`NAME=A:B:N`, `NAME=normal(MU, SIGMA)`, `NAME=uniform(A, B)`; `runs` draws from
     /// `seed`), recording `record` per run, on `threads` threads (`None`: one per core), the
-    /// runs `start` to `stop` of it (`None`: to the last); the other settings as for
-    /// `simulate`. Returns the table's columns (see `ensemble::ensemble`).
-    #[pyo3(signature = (vary, runs = None, seed = 0, record = Vec::new(), threads = None,
-                        start = 0, stop = None, until = None, method = None, tolerance = None,
-                        step = None, set = Vec::new(), input = Vec::new(),
-                        input_series = Vec::new(), hold = None, stop_when = Vec::new(),
-                        events = Vec::new()))]
+    /// runs `start` to `stop` of it (`None`: to the last); `options` as for `simulate` (its
+    /// outputs and samples unused). Returns the table's columns (see `ensemble::ensemble`).
+    #[pyo3(signature = (vary, runs, seed, record, threads, start, stop, options))]
     #[allow(clippy::too_many_arguments)]
     fn ensemble<'py>(
         &self,
@@ -218,20 +175,9 @@ impl NativeScene {
         threads: Option<usize>,
         start: usize,
         stop: Option<usize>,
-        until: Option<f64>,
-        method: Option<String>,
-        tolerance: Option<f64>,
-        step: Option<f64>,
-        set: Vec<String>,
-        input: Vec<String>,
-        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
-        hold: Option<f64>,
-        stop_when: Vec<String>,
-        events: Vec<String>,
+        options: RunOptions,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let output = Vec::new();
-        let simulate = RunOptions { until, method, tolerance, step, output, set, input, hold }
-            .with(input_series, stop_when, events, 0, self)?;
+        let simulate = options.engine(self)?;
         let vary = engine::input::varies(&vary).map_err(|e| engine_error(&e, &self.path))?;
         let options = engine::ensemble::Options { simulate, vary, runs, seed, record };
         let request = ensemble::Request { options, threads, from: start, to: stop };
@@ -399,7 +345,10 @@ impl NativeScene {
     }
 }
 
-/// The options of `simulate` and `batch` that Python hands over as they are.
+/// The settings of a run as Python hands them over: the dict `lagrange._run_options` makes of
+/// `simulate`'s keyword arguments, every key there, `None` or empty for the scene's setting.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
 struct RunOptions {
     until: Option<f64>,
     method: Option<String>,
@@ -408,26 +357,23 @@ struct RunOptions {
     output: Vec<String>,
     set: Vec<String>,
     input: Vec<String>,
+    /// Inputs given as time series: name, times, values.
+    input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
     hold: Option<f64>,
+    stop_when: Vec<String>,
+    events: Vec<String>,
+    samples: usize,
 }
 
 impl RunOptions {
-    /// The engine's options, with the rest of a run's: the texts read into values, the time
-    /// series checked.
-    fn with(
-        self,
-        input_series: Vec<(String, Vec<f64>, Vec<f64>)>,
-        stop_when: Vec<String>,
-        events: Vec<String>,
-        samples: usize,
-        scene: &NativeScene,
-    ) -> PyResult<engine::simulate::Options> {
+    /// The engine's options: the texts read into values, the time series checked.
+    fn engine(self, scene: &NativeScene) -> PyResult<engine::simulate::Options> {
         let path = &scene.path;
         let set = engine::input::assignments(&self.set).map_err(|e| engine_error(&e, path))?;
         let input = engine::input::assignments_of(engine::Setting::Input, &self.input)
             .map_err(|e| engine_error(&e, path))?;
         let mut series = Vec::new();
-        for (name, times, values) in input_series {
+        for (name, times, values) in self.input_series {
             let samples = sim::Series::new(times, values)
                 .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
             series.push((name, samples));
@@ -442,10 +388,10 @@ impl RunOptions {
             input_series: series,
             hold: self.hold,
             output: self.output,
-            stop_when,
-            events,
+            stop_when: self.stop_when,
+            events: self.events,
             no_units: !scene.units,
-            samples,
+            samples: self.samples,
             animate: false,
         })
     }

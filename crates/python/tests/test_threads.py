@@ -5,6 +5,7 @@ pickle (into other processes too), and Ctrl-C stops a long run."""
 
 import _thread
 import concurrent.futures
+import importlib.util
 import multiprocessing
 import pickle
 import subprocess
@@ -55,30 +56,16 @@ def test_a_shared_scene_and_rhs_give_the_serial_numbers_on_threads(pendulum):
     assert f.parameters["g"] == 9.81
 
 
-def counter_rate(seconds=None, during=None):
-    """Increments per second of a pure-Python counter on a thread of its own, counted from
-    just before to just after `time.sleep(seconds)` or `during()`: what that call let the
-    thread do (a call that holds the GIL lets it do nothing)."""
-    count = [0]
-    stop = threading.Event()
+def bench_module(name):
+    """A script of crates/python/bench, imported: the test measures as the benchmark does."""
+    path = Path(__file__).resolve().parents[1] / "bench" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
-    def spin():
-        while not stop.is_set():
-            count[0] += 1
 
-    worker = threading.Thread(target=spin)
-    worker.start()
-    time.sleep(0.05)  # the thread is counting
-    before, started = count[0], time.perf_counter()
-    if during is None:
-        time.sleep(seconds)
-    else:
-        during()
-    elapsed = time.perf_counter() - started
-    counted = count[0] - before
-    stop.set()
-    worker.join()
-    return counted / elapsed, elapsed
+counter_rate = bench_module("threads").counting
 
 
 def test_python_threads_run_while_a_scene_integrates(pendulum):

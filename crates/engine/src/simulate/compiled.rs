@@ -140,12 +140,7 @@ impl Compiled {
             method: settings.method,
             wall_seconds,
             state_names: prepared.state_names(),
-            constraint_names: prepared
-                .derivation
-                .multipliers
-                .iter()
-                .map(|m| model.constraints[m.constraint].name.clone())
-                .collect(),
+            constraint_names: prepared.kept_constraint_names(),
             angle_oriented_bodies: angle_oriented_bodies(model),
             conservative,
             animation: None,

@@ -417,7 +417,7 @@ class Scene:
             events=events,
             samples=samples,
         )
-        raw = self._native.simulate(**options)
+        raw = self._native.simulate(options)
         results = Results(raw)
         if results.fault is not None:
             raise NumericError(results.fault, results=results)
@@ -443,7 +443,7 @@ class Scene:
         if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
             raise ValueError(f"`threads` must be a positive whole number, not {threads!r}")
         options = _run_options(**settings)
-        raw = self._native.batch(names, rows, threads=int(threads), **options)
+        raw = self._native.batch(names, rows, int(threads), options)
         return Batch(raw, names, rows)
 
     def ensemble(
@@ -474,16 +474,15 @@ class Scene:
             if unused in settings:
                 raise TypeError(f"an ensemble records `record`, not `{unused}`")
         options = _run_options(**settings)
-        del options["output"], options["samples"]
         raw = self._native.ensemble(
             _vary_texts(vary),
-            runs=None if runs is None else int(runs),
-            seed=int(seed),
-            record=_listed(record),
-            threads=None if threads is None else int(threads),
-            start=int(start),
-            stop=None if stop is None else int(stop),
-            **options,
+            None if runs is None else int(runs),
+            int(seed),
+            _listed(record),
+            None if threads is None else int(threads),
+            int(start),
+            None if stop is None else int(stop),
+            options,
         )
         return EnsembleTable(raw)
 

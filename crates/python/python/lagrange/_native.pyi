@@ -6,6 +6,11 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as np
 import numpy.typing as npt
 
+# The settings of a run, as lagrange._run_options makes them: every key of simulate's keyword
+# arguments (until, method, tolerance, step, output, set, input, input_series, hold,
+# stop_when, events, samples), None or empty for the scene's setting.
+RunOptions = Mapping[str, Any]
+
 # Parameter values: a mapping of name to value, or an array of every value in order.
 Parameters = Union[Mapping[str, float], npt.ArrayLike]
 # Input values: a mapping of name to a number, an array of one value per row of a batch, or a
@@ -27,58 +32,24 @@ class NativeScene:
     def rhs(self) -> Rhs: ...
     def mass_matrix_function(self) -> MassMatrix: ...
     def inverse_dynamics(self) -> InverseDynamics: ...
-    def simulate(
-        self,
-        until: Optional[float] = None,
-        method: Optional[str] = None,
-        tolerance: Optional[float] = None,
-        step: Optional[float] = None,
-        output: Sequence[str] = ...,
-        set: Sequence[str] = ...,
-        input: Sequence[str] = ...,
-        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
-        hold: Optional[float] = None,
-        stop_when: Sequence[str] = ...,
-        events: Sequence[str] = ...,
-        samples: int = 0,
-    ) -> dict[str, Any]: ...
+    def simulate(self, options: RunOptions) -> dict[str, Any]: ...
     def batch(
         self,
         names: Sequence[str],
         values: npt.NDArray[np.float64],
-        threads: int = 1,
-        until: Optional[float] = None,
-        method: Optional[str] = None,
-        tolerance: Optional[float] = None,
-        step: Optional[float] = None,
-        output: Sequence[str] = ...,
-        set: Sequence[str] = ...,
-        input: Sequence[str] = ...,
-        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
-        hold: Optional[float] = None,
-        stop_when: Sequence[str] = ...,
-        events: Sequence[str] = ...,
-        samples: int = 0,
+        threads: int,
+        options: RunOptions,
     ) -> dict[str, Any]: ...
     def ensemble(
         self,
         vary: Sequence[str],
-        runs: Optional[int] = None,
-        seed: int = 0,
-        record: Sequence[str] = ...,
-        threads: Optional[int] = None,
-        start: int = 0,
-        stop: Optional[int] = None,
-        until: Optional[float] = None,
-        method: Optional[str] = None,
-        tolerance: Optional[float] = None,
-        step: Optional[float] = None,
-        set: Sequence[str] = ...,
-        input: Sequence[str] = ...,
-        input_series: Sequence[tuple[str, Sequence[float], Sequence[float]]] = ...,
-        hold: Optional[float] = None,
-        stop_when: Sequence[str] = ...,
-        events: Sequence[str] = ...,
+        runs: Optional[int],
+        seed: int,
+        record: Sequence[str],
+        threads: Optional[int],
+        start: int,
+        stop: Optional[int],
+        options: RunOptions,
     ) -> dict[str, Any]: ...
     def linearize(
         self,
