@@ -12,11 +12,12 @@ use numeric::Tape;
 use numpy::ndarray::ArrayView2;
 use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayMethods};
 use pyo3::exceptions::PyKeyError;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::MutexExt;
 use pyo3::types::{PyDict, PyMapping};
 use sim::{FaultKind, Mechanical, Problem};
+use std::cell::RefCell;
 use std::sync::{Mutex, MutexGuard};
 
 use crate::errors::{engine_error, numeric_error};
@@ -70,6 +71,8 @@ pub struct Rhs {
     /// The inputs' names in declaration order, the order of `u=` as an array.
     #[pyo3(get)]
     input_names: Vec<String>,
+    /// The scene's initial state.
+    y0: Vec<f64>,
     /// What it is made from, to be made again when unpickled.
     source: String,
     units: bool,
@@ -86,6 +89,7 @@ impl Rhs {
             names: inner.names.clone(),
             parameter_names: inner.parameter_names.clone(),
             input_names: inner.input_names.clone(),
+            y0: inner.y0.clone(),
             source: source.to_string(),
             units,
             path: path.to_string(),
@@ -120,9 +124,51 @@ impl Rhs {
 
     /// The programs, for this thread alone until the guard is dropped; the GIL is let go while
     /// waiting for them. A call that panicked holding them left at worst its own parameter
-    /// values in place, which the next call that gives its own replaces.
-    fn inner(&self, py: Python<'_>) -> MutexGuard<'_, RhsInner> {
-        self.inner.lock_py_attached(py).unwrap_or_else(|poisoned| poisoned.into_inner())
+    /// values in place, which the next call that gives its own replaces. A call from inside a
+    /// call of the same `Rhs` on the same thread (an input callable that calls the `Rhs` it
+    /// drives) would wait for itself: it raises instead.
+    fn inner(&self, py: Python<'_>) -> PyResult<Held<'_>> {
+        let key = self as *const Rhs as usize;
+        if HELD.with(|held| held.borrow().contains(&key)) {
+            return Err(PyRuntimeError::new_err(
+                "this rhs is already in a call on this thread: an input callable (u=) may not \
+                 call the rhs it drives",
+            ));
+        }
+        let guard =
+            self.inner.lock_py_attached(py).unwrap_or_else(|poisoned| poisoned.into_inner());
+        HELD.with(|held| held.borrow_mut().push(key));
+        Ok(Held { guard, key })
+    }
+}
+
+thread_local! {
+    /// The `Rhs` objects whose programs this thread holds, by address.
+    static HELD: RefCell<Vec<usize>> = const { RefCell::new(Vec::new()) };
+}
+
+/// An [`Rhs`]'s programs, held by this thread until dropped.
+struct Held<'a> {
+    guard: MutexGuard<'a, RhsInner>,
+    key: usize,
+}
+
+impl std::ops::Deref for Held<'_> {
+    type Target = RhsInner;
+    fn deref(&self) -> &RhsInner {
+        &self.guard
+    }
+}
+
+impl std::ops::DerefMut for Held<'_> {
+    fn deref_mut(&mut self) -> &mut RhsInner {
+        &mut self.guard
+    }
+}
+
+impl Drop for Held<'_> {
+    fn drop(&mut self) {
+        HELD.with(|held| held.borrow_mut().retain(|k| *k != self.key));
     }
 }
 
@@ -341,7 +387,7 @@ impl Rhs {
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let y = y.as_array();
         let y: Vec<f64> = y.iter().copied().collect();
-        let mut this = self.inner(py);
+        let mut this = self.inner(py)?;
         let sources = this.sources(u, None)?;
         this.with_parameters(p, |rhs| rhs.eval(py, t, &y, &sources, 0))?;
         Ok(PyArray1::from_slice(py, &this.dy))
@@ -379,7 +425,7 @@ impl Rhs {
                 }
             },
         };
-        let mut this = self.inner(py);
+        let mut this = self.inner(py)?;
         let width = this.dy.len();
         if y.ncols() != width {
             return Err(PyValueError::new_err(format!(
@@ -422,7 +468,7 @@ impl Rhs {
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let y: Vec<f64> = y.as_array().iter().copied().collect();
-        let mut this = self.inner(py);
+        let mut this = self.inner(py)?;
         let sources = this.sources(u, None)?;
         this.with_parameters(p, |rhs| rhs.eval_jacobian(py, t, &y, &sources))?;
         let d = this.dy.len();
@@ -432,7 +478,7 @@ impl Rhs {
     /// The scene's initial state (q, q̇), as `solve_ivp`'s `y0`.
     #[getter]
     fn y0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner(py).y0)
+        PyArray1::from_slice(py, &self.y0)
     }
 
     /// The parameters' values the programs use, name to value, read-only: a change is made by
@@ -440,7 +486,7 @@ impl Rhs {
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let k = self.parameter_names.len();
-        let values = self.inner(py).mechanical.parameters()[..k].to_vec();
+        let values = self.inner(py)?.mechanical.parameters()[..k].to_vec();
         read_only(py, &self.parameter_names, &values)
     }
 
@@ -448,7 +494,7 @@ impl Rhs {
     /// array gives them all (see [`parameter_values`]).
     #[setter]
     fn set_parameters(&self, p: &Bound<'_, PyAny>) -> PyResult<()> {
-        let mut this = self.inner(p.py());
+        let mut this = self.inner(p.py())?;
         let mut all = this.mechanical.parameters().to_vec();
         let k = self.parameter_names.len();
         let values = parameter_values(&self.parameter_names, &all[..k], p)?;
@@ -462,7 +508,7 @@ impl Rhs {
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let rebuild = py.import("lagrange._native")?.getattr("_rhs_from")?;
         let k = self.parameter_names.len();
-        let parameters = self.inner(py).mechanical.parameters()[..k].to_vec();
+        let parameters = self.inner(py)?.mechanical.parameters()[..k].to_vec();
         let arguments = (self.source.clone(), self.path.clone(), self.units, parameters);
         (rebuild, arguments).into_pyobject(py).map(|t| t.into_any())
     }
@@ -471,7 +517,7 @@ impl Rhs {
     /// `u` does not name it.
     #[getter]
     fn inputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let declared = self.inner(py).declared_inputs.clone();
+        let declared = self.inner(py)?.declared_inputs.clone();
         read_only(py, &self.input_names, &declared)
     }
 

@@ -181,3 +181,18 @@ def test_numpy_is_imported_with_the_package():
     code = "import sys, lagrange; print('numpy' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "True"
+
+
+def test_an_input_callable_that_calls_its_own_rhs_raises_rather_than_waiting():
+    # The rhs holds its programs for the call; a law that calls the same rhs would wait for
+    # itself. Another rhs of the same scene is free to call.
+    cart = lagrange.load(EXAMPLES / "classics" / "inverted_pendulum_on_cart.lag", units=False)
+    f, other = cart.rhs(), cart.rhs()
+    y = np.zeros(len(f.names))
+    with pytest.raises(RuntimeError, match="may not call the rhs it drives"):
+        f(0.0, y, u={"F": lambda t, state: f(t, state, u={"F": 0.0})[-1]})
+    pushed = 1.0 + other(0.0, y, u={"F": 0.0})[-1]
+    through_other = f(0.0, y, u={"F": lambda t, state: 1.0 + other(t, state, u={"F": 0.0})[-1]})
+    np.testing.assert_array_equal(through_other, f(0.0, y, u={"F": pushed}))
+    # And the rhs works afterwards.
+    np.testing.assert_array_equal(f(0.0, y, u={"F": 2.0}), other(0.0, y, u={"F": 2.0}))
