@@ -288,15 +288,16 @@ fn arm_run(set: &[&str]) -> engine::simulate::Outcome {
 #[test]
 fn the_arm_tracks_its_trajectory_by_computed_torque() {
     // The law cancels the arm's dynamics only if the model written in the scene is the one
-    // lagrange derives: then e = qd − q obeys e'' + 20·e' + 100·e = 0 exactly. From
-    // q1 = −π/2 + 0.1 at rest, e1(0) = −0.1 and e1'(0) = qd1'(0) = 0.8, so
-    // e1 = (−0.1 + (0.8 − 1)·t)·exp(−10·t); the elbow starts on its path and stays there.
+    // lagrange derives: then e = qd − q obeys e'' + 20·e' + 100·e = 0 exactly, whose solution
+    // is e = (e(0) + (e'(0) + 10·e(0))·t)·exp(−10·t). From q = (−π/2 + 0.1, 0.1) at rest,
+    // e(0) = (−0.1, −0.1) and e'(0) = qd'(0) = (0.8, 0), so e1 = (−0.1 − 0.2·t)·exp(−10·t) and
+    // e2 = (−0.1 − t)·exp(−10·t).
     let outcome = arm_run(&[]);
     let (mut off_law, mut late) = (0.0f64, 0.0f64);
     for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
         let [qd, _, _] = arm_motion(*t);
         let error = [qd[0] - row[0], qd[1] - row[1]];
-        let law = [(-0.1 - 0.2 * t) * (-10.0 * t).exp(), 0.0];
+        let law = [(-0.1 - 0.2 * t) * (-10.0 * t).exp(), (-0.1 - t) * (-10.0 * t).exp()];
         for (e, expected) in error.iter().zip(law) {
             off_law = off_law.max((e - expected).abs());
         }
@@ -311,7 +312,7 @@ fn the_arm_tracks_its_trajectory_by_computed_torque() {
 
     // Started on the trajectory it stays there, and the torques the law applies are the
     // inverse dynamics of the desired motion (the inputs at their value 0: the motors' part).
-    let outcome = arm_run(&["q1=-pi/2", "q1'=0.8"]);
+    let outcome = arm_run(&["q1=-pi/2", "q2=0", "q1'=0.8"]);
     let mut inverse = inverse_dynamics(&lagrange_tests::example(ARM), &Default::default()).unwrap();
     let (mut off_path, mut off_torque) = (0.0f64, 0.0f64);
     let mut tau = [0.0; 2];

@@ -9,7 +9,7 @@ Run it from anywhere, with the lagrange package and python-control installed:
     python3 examples/control/cart_pole_lqr.py
 
 It prints A, B, K, the closed loop's poles, where the run ends, and the `lagrange simulate`
-command that runs (and, with --animate or --plot, draws) the same closed loop.
+command that runs (and, with --plot or --animate, draws) the same closed loop.
 """
 
 from pathlib import Path
@@ -44,9 +44,11 @@ def design(scene):
     return lin, np.asarray(gain)[0]
 
 
-def law(gain, state=("x", "theta", "x'", "theta'")):
-    """F = -K·x as a scene expression; repr keeps every bit of each gain."""
-    terms = " + ".join(f"{-float(k)!r}*{name}" for k, name in zip(gain, state))
+def law(gain, digits=None, state=("x", "theta", "x'", "theta'")):
+    """F = -K·x as a scene expression: every bit of each gain (repr), or `digits` significant
+    digits of it, to be read."""
+    shown = repr if digits is None else (lambda k: f"{k:.{digits}g}")
+    terms = " + ".join(f"{shown(-float(k))}*{name}" for k, name in zip(gain, state))
     return terms.replace("+ -", "- ")
 
 
@@ -79,10 +81,10 @@ def main():
         f"t = {run['t'][-1]:g} s: theta = {run['theta'][-1]:.3e}, x = {run['x'][-1]:.3e}, "
         f"largest |F| = {np.abs(run['F']).max():.3f} N"
     )
-    print("The same closed loop from the command line:")
+    print("The same closed loop from the command line, the gains to 6 digits:")
     print(
-        f'lagrange simulate examples/control/cart_pole.lag --no-units --until {UNTIL:g} '
-        f'--input "F={law(gain)}" --output x,theta,F --plot cart_pole.svg'
+        f"lagrange simulate examples/control/cart_pole.lag --no-units --until {UNTIL:g} "
+        f'--input "F={law(gain, 6)}" --output x,theta --plot cart_pole.svg'
     )
 
 
