@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 11] = [
+const PAGES: [&str; 12] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -20,6 +20,7 @@ const PAGES: [&str; 11] = [
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
+    "docs/control.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -528,6 +529,11 @@ fn examples() {
 #[test]
 fn testing() {
     assert_honest(PAGES[10]);
+}
+
+#[test]
+fn control() {
+    assert_honest(PAGES[11]);
 }
 
 /// The tests' own helpers: elided output, shell words, and that a wrong page is caught.
