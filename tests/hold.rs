@@ -83,8 +83,15 @@ fn a_held_feedback_meets_the_exact_discrete_time_solution() {
     let exact = exact(period, 30);
     // Every accepted step, and evenly spaced samples on the hold's own grid (k·T and k·3/30
     // differ by an ulp at some k: the row there must still show the new sample).
-    for (method, samples) in [("dop853", 0), ("dop853", 31), ("radau", 0), ("rk4", 0), ("gauss", 0)]
-    {
+    for (method, samples) in [
+        ("dop853", 0),
+        ("dop853", 31),
+        ("dopri5", 0),
+        ("auto", 0),
+        ("radau", 0),
+        ("rk4", 0),
+        ("gauss", 0),
+    ] {
         let outcome = run(method, Some(period), until, samples);
         let times = &outcome.run.trajectory.times;
         let on_samples =
