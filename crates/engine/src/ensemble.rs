@@ -149,7 +149,7 @@ impl Ensemble {
                     given.iter().copied().zip(run.iter().copied()).collect();
                 simulate::start(&mut prepared, &sets, &numbers)
                     .map(|(parameters, state)| Start { parameters, state })
-                    .map_err(|e| e.worded(Piece::plain))
+                    .map_err(|e| e.worded(run_words))
             })
             .collect();
         let mut names: Vec<String> = options.vary.iter().map(|v| v.parameter.clone()).collect();
@@ -266,6 +266,15 @@ impl Ensemble {
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)
+    }
+}
+
+/// A start's error in words that fit a run: its values are the run's (and `--set`'s), where
+/// `simulate`'s are `--set`'s alone.
+fn run_words(piece: &Piece) -> String {
+    match piece {
+        Piece::Setting(Setting::Set) => "this run".to_string(),
+        other => other.plain(),
     }
 }
 
