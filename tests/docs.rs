@@ -175,6 +175,7 @@ fn run(words: &[String]) -> Result<String, String> {
         "check" => check(rest),
         "simulate" => simulate(rest),
         "linearize" => linearize(rest),
+        "ensemble" => ensemble(rest),
         other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
     }
 }
@@ -281,6 +282,71 @@ fn simulate(rest: &[String]) -> Result<String, String> {
     Ok(table + &cli::simulate::summary(&outcome))
 }
 
+/// `lagrange ensemble`: the CSV (unless `--out`) and the summary; `--plot` checked as the
+/// command checks it, and not drawn.
+fn ensemble(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    args.only(&[
+        "vary",
+        "runs",
+        "seed",
+        "record",
+        "until",
+        "method",
+        "tolerance",
+        "step",
+        "set",
+        "input",
+        "stop-when",
+        "event",
+        "out",
+        "plot",
+        "threads",
+        "no-units",
+    ])?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    for (flag, allowed) in [("out", &["csv"][..]), ("plot", &["svg", "png"])] {
+        if let Some(target) = args.last(flag) {
+            if !allowed.contains(&extension(&target)) {
+                return Err(format!("--{flag} {target}: the command refuses the format"));
+            }
+        }
+    }
+    let mut vary = Vec::new();
+    for text in args.all("vary") {
+        let parsed = engine::input::Vary::parse(&text);
+        vary.push(parsed.map_err(|d| cli::diagnostics::render("--vary", &text, &[d]))?);
+    }
+    if args.has("plot") {
+        cli::plot::ensemble::check(&vary)?;
+    }
+    let simulate = engine::simulate::Options {
+        until: args.number("until")?,
+        method: args.last("method"),
+        tolerance: args.number("tolerance")?,
+        step: args.number("step")?,
+        set: args.parsed("set")?,
+        input: args.parsed("input")?,
+        stop_when: args.all("stop-when"),
+        events: args.all("event"),
+        no_units: args.has("no-units"),
+        ..Default::default()
+    };
+    let options = engine::ensemble::Options {
+        simulate,
+        vary,
+        runs: args.number("runs")?,
+        seed: args.number("seed")?.unwrap_or(0),
+        record: args.all("record"),
+    };
+    let threads: Option<usize> = args.number("threads")?;
+    let table = cli::ensemble::ensemble(&read(file)?, &options, threads)
+        .map_err(|e| cli::diagnostics::error(file, &e))?;
+    let shown = if args.has("out") { String::new() } else { cli::ensemble::csv(&table) };
+    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    Ok(shown + &cli::ensemble::summary(&table, 0.0, threads))
+}
+
 /// `lagrange linearize`: the report (unless `--out`); a sweep's plot made in memory.
 fn linearize(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
@@ -324,7 +390,7 @@ fn command(line: &str) -> Option<Vec<String>> {
         }
         _ => return None,
     };
-    let run = ["derive", "check", "simulate", "linearize"];
+    let run = ["derive", "check", "simulate", "linearize", "ensemble"];
     run.contains(&rest.first()?.as_str()).then(|| rest.to_vec())
 }
 
