@@ -121,6 +121,21 @@ fn failed_runs_are_rows_with_their_reason() {
     assert!(summary.starts_with("6 runs, 5 failed"), "{summary}");
 }
 
+#[test]
+fn without_record_a_row_holds_the_scenes_outputs_else_the_coordinates() {
+    let unrecorded = |texts: &[&str]| Options {
+        simulate: simulate::Options { until: Some(0.5), ..Default::default() },
+        vary: vary(texts),
+        ..Default::default()
+    };
+    let flip = run(&lagrange_tests::example(FLIP), &unrecorded(&["a1=1:2:2"]), 1);
+    assert_eq!(flip.columns, ["a1", "theta1", "theta2"]);
+    let with_output = format!("{PENDULUM}simulate {{ output theta' }}\n");
+    let pendulum = run(&with_output, &unrecorded(&["l=1:2:2"]), 1);
+    assert_eq!(pendulum.columns, ["l", "theta'"]);
+    assert!(pendulum.rows.iter().all(|r| r[1] < 0.0), "{:?}", pendulum.rows);
+}
+
 /// A front end may build an ensemble on one thread and run its ranges on others.
 #[test]
 fn an_ensemble_and_its_table_go_between_threads() {

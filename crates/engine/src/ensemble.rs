@@ -38,7 +38,8 @@ pub struct Options {
     /// The seed of the random draws.
     pub seed: u64,
     /// What to record per run, comma-separated lists: scene expressions at the end (or the
-    /// stop), `max(EXPR)` and `min(EXPR)` over the run. None: the coordinates at the end.
+    /// stop), `max(EXPR)` and `min(EXPR)` over the run. None: the scene's `output`
+    /// quantities, else the coordinates, at the end.
     pub record: Vec<String>,
 }
 
@@ -114,7 +115,10 @@ impl Ensemble {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);
         let mut settings = simulate::settings(source, &options.simulate)?;
-        settings.outputs = record::expressions(&recorded);
+        // Nothing asked for: the scene's `output` quantities, else the coordinates, at the end.
+        if !recorded.is_empty() {
+            settings.outputs = record::expressions(&recorded);
+        }
         let (mut prepared, outputs, set_exprs) = simulate::load(source, &settings)?;
         let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
         let given = varied_parameters(&prepared, &options.vary)?;
