@@ -221,50 +221,50 @@ fn check(rest: &[String]) -> Result<String, String> {
     Ok(format!("{shown}{held} passed, {failed} failed\n{warned}"))
 }
 
-/// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
-fn simulate(rest: &[String]) -> Result<String, String> {
-    let args = Args::parse(rest, &["no-units"]);
-    args.only(&[
-        "until",
-        "method",
-        "tolerance",
-        "step",
-        "set",
-        "input",
-        "output",
-        "stop-when",
-        "event",
-        "samples",
-        "out",
-        "plot",
-        "animate",
-        "no-units",
-    ])?;
-    let [file] = &args.positional[..] else { return Err("one file".into()) };
-    for (flag, allowed) in
-        [("out", &["csv", "json"][..]), ("plot", &["svg"]), ("animate", &["html"])]
-    {
+/// Refuses a file whose extension the command refuses for its flag.
+fn formats(args: &Args, allowed: &[(&str, &[&str])]) -> Result<(), String> {
+    for (flag, extensions) in allowed {
         if let Some(target) = args.last(flag) {
-            if !allowed.contains(&extension(&target)) {
+            if !extensions.contains(&extension(&target)) {
                 return Err(format!("--{flag} {target}: the command refuses the format"));
             }
         }
     }
-    let animate = args.has("animate");
-    let options = engine::simulate::Options {
+    Ok(())
+}
+
+/// The flags of [`run_settings`].
+const RUN_FLAGS: [&str; 9] =
+    ["until", "method", "tolerance", "step", "set", "input", "stop-when", "event", "no-units"];
+
+/// The settings of a run that `simulate` and `ensemble` share.
+fn run_settings(args: &Args) -> Result<engine::simulate::Options, String> {
+    Ok(engine::simulate::Options {
         until: args.number("until")?,
         method: args.last("method"),
         tolerance: args.number("tolerance")?,
         step: args.number("step")?,
         set: args.parsed("set")?,
         input: args.parsed("input")?,
-        input_series: Vec::new(),
-        output: args.all("output"),
         stop_when: args.all("stop-when"),
         events: args.all("event"),
         no_units: args.has("no-units"),
+        ..Default::default()
+    })
+}
+
+/// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
+fn simulate(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    args.only(&[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate"]].concat())?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    formats(&args, &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"])])?;
+    let animate = args.has("animate");
+    let options = engine::simulate::Options {
+        output: args.all("output"),
         samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
         animate,
+        ..run_settings(&args)?
     };
     let outcome = cli::simulate::simulate(&read(file)?, &options)
         .map_err(|e| cli::diagnostics::error(file, &e))?;
@@ -286,32 +286,10 @@ fn simulate(rest: &[String]) -> Result<String, String> {
 /// command checks it, and not drawn.
 fn ensemble(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units"]);
-    args.only(&[
-        "vary",
-        "runs",
-        "seed",
-        "record",
-        "until",
-        "method",
-        "tolerance",
-        "step",
-        "set",
-        "input",
-        "stop-when",
-        "event",
-        "out",
-        "plot",
-        "threads",
-        "no-units",
-    ])?;
+    let own = ["vary", "runs", "seed", "record", "out", "plot", "threads"];
+    args.only(&[&RUN_FLAGS[..], &own].concat())?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
-    for (flag, allowed) in [("out", &["csv"][..]), ("plot", &["svg", "png"])] {
-        if let Some(target) = args.last(flag) {
-            if !allowed.contains(&extension(&target)) {
-                return Err(format!("--{flag} {target}: the command refuses the format"));
-            }
-        }
-    }
+    formats(&args, &[("out", &["csv"]), ("plot", &["svg", "png"])])?;
     let mut vary = Vec::new();
     for text in args.all("vary") {
         let parsed = engine::input::Vary::parse(&text);
@@ -320,20 +298,8 @@ fn ensemble(rest: &[String]) -> Result<String, String> {
     if args.has("plot") {
         cli::plot::ensemble::check(&vary)?;
     }
-    let simulate = engine::simulate::Options {
-        until: args.number("until")?,
-        method: args.last("method"),
-        tolerance: args.number("tolerance")?,
-        step: args.number("step")?,
-        set: args.parsed("set")?,
-        input: args.parsed("input")?,
-        stop_when: args.all("stop-when"),
-        events: args.all("event"),
-        no_units: args.has("no-units"),
-        ..Default::default()
-    };
     let options = engine::ensemble::Options {
-        simulate,
+        simulate: run_settings(&args)?,
         vary,
         runs: args.number("runs")?,
         seed: args.number("seed")?.unwrap_or(0),
