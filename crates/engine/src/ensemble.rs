@@ -22,8 +22,9 @@ use crate::input::{Spread, Vary};
 use crate::simulate::{self, Columns, FaultNames, Integrand, Progress};
 use crate::{Error, Piece, Setting};
 
-/// The most runs an ensemble may have.
-pub const MAX_RUNS: usize = 100_000_000;
+/// The most runs an ensemble may have: every run's start is made before the first runs, at
+/// a hundred or two bytes each.
+pub const MAX_RUNS: usize = 10_000_000;
 
 /// What a front end asks for.
 #[derive(Clone, Debug, Default)]
