@@ -111,6 +111,7 @@ fn failed_runs_are_rows_with_their_reason() {
     assert_eq!(lines[0], "m,l,theta,fault");
     // m = −1 and m = 0 cannot start; l = 0 has no inertia; m = 1, l = 1 runs.
     assert!(lines[1].starts_with("-1,0,,") && lines[1].contains("must be positive"), "{csv}");
+    assert!(lines[1].contains("with the values of this run, `bob` has a mass of -1 kg"), "{csv}");
     assert!(lines[5].starts_with("1,0,,") && lines[5].contains("numeric fault at t = 0"), "{csv}");
     assert!(lines[5].contains("mass matrix"), "{csv}");
     let ran = lines[6].strip_suffix(',').expect("no fault");
@@ -118,6 +119,30 @@ fn failed_runs_are_rows_with_their_reason() {
     assert_eq!(table.failures.iter().filter(|f| f.is_some()).count(), 5);
     let summary = cli::ensemble::summary(&table, 0.5, 2);
     assert!(summary.starts_with("6 runs, 5 failed"), "{summary}");
+}
+
+#[test]
+fn without_record_a_row_holds_the_scenes_outputs_else_the_coordinates() {
+    let unrecorded = |texts: &[&str]| Options {
+        simulate: simulate::Options { until: Some(0.5), ..Default::default() },
+        vary: vary(texts),
+        ..Default::default()
+    };
+    let flip = run(&lagrange_tests::example(FLIP), &unrecorded(&["a1=1:2:2"]), 1);
+    assert_eq!(flip.columns, ["a1", "theta1", "theta2"]);
+    let with_output = format!("{PENDULUM}simulate {{ output theta' }}\n");
+    let pendulum = run(&with_output, &unrecorded(&["l=1:2:2"]), 1);
+    assert_eq!(pendulum.columns, ["l", "theta'"]);
+    assert!(pendulum.rows.iter().all(|r| r[1] < 0.0), "{:?}", pendulum.rows);
+}
+
+/// A front end may build an ensemble on one thread and run its ranges on others.
+#[test]
+fn an_ensemble_and_its_table_go_between_threads() {
+    fn shared<T: Send + Sync>() {}
+    shared::<engine::ensemble::Ensemble>();
+    shared::<Table>();
+    shared::<Options>();
 }
 
 #[test]

@@ -101,7 +101,7 @@ enum Command {
         seed: u64,
         /// What to record per run, comma-separated: scene expressions at the end or at the
         /// stop (`t` is the stop's time), `max(EXPR)` and `min(EXPR)` over the run.
-        /// Default: the coordinates at the end.
+        /// Default: the scene's `output`, else the coordinates, at the end.
         #[arg(long, value_name = "EXPRS")]
         record: Vec<String>,
         #[command(flatten)]

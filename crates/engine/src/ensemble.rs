@@ -22,8 +22,9 @@ use crate::input::{Spread, Vary};
 use crate::simulate::{self, Columns, FaultNames, Integrand, Progress};
 use crate::{Error, Piece, Setting};
 
-/// The most runs an ensemble may have.
-pub const MAX_RUNS: usize = 100_000_000;
+/// The most runs an ensemble may have: every run's start is made before the first runs, at
+/// a hundred or two bytes each.
+pub const MAX_RUNS: usize = 10_000_000;
 
 /// What a front end asks for.
 #[derive(Clone, Debug, Default)]
@@ -38,7 +39,8 @@ pub struct Options {
     /// The seed of the random draws.
     pub seed: u64,
     /// What to record per run, comma-separated lists: scene expressions at the end (or the
-    /// stop), `max(EXPR)` and `min(EXPR)` over the run. None: the coordinates at the end.
+    /// stop), `max(EXPR)` and `min(EXPR)` over the run. None: the scene's `output`
+    /// quantities, else the coordinates, at the end.
     pub record: Vec<String>,
 }
 
@@ -114,7 +116,10 @@ impl Ensemble {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);
         let mut settings = simulate::settings(source, &options.simulate)?;
-        settings.outputs = record::expressions(&recorded);
+        // Nothing asked for: the scene's `output` quantities, else the coordinates, at the end.
+        if !recorded.is_empty() {
+            settings.outputs = record::expressions(&recorded);
+        }
         let simulate::Loaded { mut prepared, outputs, held, .. } =
             simulate::load(source, &settings)?;
         let set_exprs = simulate::set_expressions(&mut prepared, &settings.sets)?;
@@ -155,7 +160,7 @@ impl Ensemble {
                     given.iter().copied().zip(run.iter().copied()).collect();
                 simulate::start(&mut prepared, &sets, &numbers)
                     .map(|(parameters, state)| Start { parameters, state })
-                    .map_err(|e| e.worded(Piece::plain))
+                    .map_err(|e| e.worded(run_words))
             })
             .collect();
         let mut names: Vec<String> = options.vary.iter().map(|v| v.parameter.clone()).collect();
@@ -285,6 +290,15 @@ impl Ensemble {
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)
+    }
+}
+
+/// A start's error in words that fit a run: its values are the run's (and `--set`'s), where
+/// `simulate`'s are `--set`'s alone.
+fn run_words(piece: &Piece) -> String {
+    match piece {
+        Piece::Setting(Setting::Set) => "this run".to_string(),
+        other => other.plain(),
     }
 }
 

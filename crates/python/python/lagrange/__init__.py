@@ -460,7 +460,7 @@ class Scene:
           (``coord theta = a``) follows it.
         - ``record``: scene expressions at the end of each run (or where a stop ended it;
           ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run; by
-          default the coordinates at the end.
+          default the scene's ``output`` quantities at the end, else the coordinates.
         - ``start``, ``stop``: run only these runs of the ensemble (in its order), for a front
           end that spreads chunks over processes or machines; joined in order, the chunks
           give the whole table.
