@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 12] = [
+const PAGES: [&str; 13] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -21,6 +21,7 @@ const PAGES: [&str; 12] = [
     "docs/examples.md",
     "docs/testing.md",
     "docs/control.md",
+    "docs/ensembles.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -174,6 +175,7 @@ fn run(words: &[String]) -> Result<String, String> {
         "check" => check(rest),
         "simulate" => simulate(rest),
         "linearize" => linearize(rest),
+        "ensemble" => ensemble(rest),
         other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
     }
 }
@@ -219,52 +221,61 @@ fn check(rest: &[String]) -> Result<String, String> {
     Ok(format!("{shown}{held} passed, {failed} failed\n{warned}"))
 }
 
-/// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
-fn simulate(rest: &[String]) -> Result<String, String> {
-    let args = Args::parse(rest, &["no-units"]);
-    args.only(&[
-        "until",
-        "method",
-        "tolerance",
-        "step",
-        "set",
-        "input",
-        "hold",
-        "output",
-        "stop-when",
-        "event",
-        "samples",
-        "out",
-        "plot",
-        "animate",
-        "no-units",
-    ])?;
-    let [file] = &args.positional[..] else { return Err("one file".into()) };
-    for (flag, allowed) in
-        [("out", &["csv", "json"][..]), ("plot", &["svg"]), ("animate", &["html"])]
-    {
+/// Refuses a file whose extension the command refuses for its flag.
+fn formats(args: &Args, allowed: &[(&str, &[&str])]) -> Result<(), String> {
+    for (flag, extensions) in allowed {
         if let Some(target) = args.last(flag) {
-            if !allowed.contains(&extension(&target)) {
+            if !extensions.contains(&extension(&target)) {
                 return Err(format!("--{flag} {target}: the command refuses the format"));
             }
         }
     }
-    let animate = args.has("animate");
-    let options = engine::simulate::Options {
+    Ok(())
+}
+
+/// The flags of [`run_settings`].
+const RUN_FLAGS: [&str; 10] = [
+    "until",
+    "method",
+    "tolerance",
+    "step",
+    "set",
+    "input",
+    "hold",
+    "stop-when",
+    "event",
+    "no-units",
+];
+
+/// The settings of a run that `simulate` and `ensemble` share.
+fn run_settings(args: &Args) -> Result<engine::simulate::Options, String> {
+    Ok(engine::simulate::Options {
         until: args.number("until")?,
         method: args.last("method"),
         tolerance: args.number("tolerance")?,
         step: args.number("step")?,
         set: args.parsed("set")?,
         input: args.parsed("input")?,
-        input_series: Vec::new(),
         hold: args.number("hold")?,
-        output: args.all("output"),
         stop_when: args.all("stop-when"),
         events: args.all("event"),
         no_units: args.has("no-units"),
+        ..Default::default()
+    })
+}
+
+/// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
+fn simulate(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    args.only(&[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate"]].concat())?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    formats(&args, &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"])])?;
+    let animate = args.has("animate");
+    let options = engine::simulate::Options {
+        output: args.all("output"),
         samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
         animate,
+        ..run_settings(&args)?
     };
     let outcome = cli::simulate::simulate(&read(file)?, &options)
         .map_err(|e| cli::diagnostics::error(file, &e))?;
@@ -280,6 +291,37 @@ fn simulate(rest: &[String]) -> Result<String, String> {
         None => cli::simulate::csv(&outcome),
     };
     Ok(table + &cli::simulate::summary(&outcome))
+}
+
+/// `lagrange ensemble`: the CSV (unless `--out`) and the summary; `--plot` checked as the
+/// command checks it, and not drawn.
+fn ensemble(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units"]);
+    let own = ["vary", "runs", "seed", "record", "out", "plot", "threads"];
+    args.only(&[&RUN_FLAGS[..], &own].concat())?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    formats(&args, &[("out", &["csv"]), ("plot", &["svg", "png"])])?;
+    let mut vary = Vec::new();
+    for text in args.all("vary") {
+        let parsed = engine::input::Vary::parse(&text);
+        vary.push(parsed.map_err(|d| cli::diagnostics::render("--vary", &text, &[d]))?);
+    }
+    if args.has("plot") {
+        cli::plot::ensemble::check(&vary)?;
+    }
+    let options = engine::ensemble::Options {
+        simulate: run_settings(&args)?,
+        vary,
+        runs: args.number("runs")?,
+        seed: args.number("seed")?.unwrap_or(0),
+        record: args.all("record"),
+    };
+    let threads: Option<usize> = args.number("threads")?;
+    let table = cli::ensemble::ensemble(&read(file)?, &options, threads)
+        .map_err(|e| cli::diagnostics::error(file, &e))?;
+    let shown = if args.has("out") { String::new() } else { cli::ensemble::csv(&table) };
+    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    Ok(shown + &cli::ensemble::summary(&table, 0.0, threads))
 }
 
 /// `lagrange linearize`: the report (unless `--out`); a sweep's plot made in memory.
@@ -325,7 +367,7 @@ fn command(line: &str) -> Option<Vec<String>> {
         }
         _ => return None,
     };
-    let run = ["derive", "check", "simulate", "linearize"];
+    let run = ["derive", "check", "simulate", "linearize", "ensemble"];
     run.contains(&rest.first()?.as_str()).then(|| rest.to_vec())
 }
 
@@ -494,6 +536,11 @@ fn language() {
 #[test]
 fn commands() {
     assert_honest(PAGES[3]);
+}
+
+#[test]
+fn ensembles() {
+    assert_honest(PAGES[12]);
 }
 
 #[test]

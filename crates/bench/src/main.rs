@@ -12,6 +12,8 @@
 //! - `stiff [--largest K] [--peer]`: the stiffness ladder, dop853 and radau on a pendulum hung
 //!   from a spring stiff up to k = 1e12 (dop853 only up to K, 1e12 by default: it takes
 //!   minutes there), with `--peer` SciPy's Radau and BDF in the same run;
+//! - `ensemble [--peer]`: the double pendulum's 60×60 flip-time map on one thread and on two,
+//!   with `--peer` SciPy's DOP853 on a lambdified SymPy right-hand side on a sample of it;
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -36,6 +38,7 @@ macro_rules! outln {
 }
 
 mod bicycle;
+mod ensemble;
 mod eval;
 mod hand;
 mod memory;
@@ -87,6 +90,20 @@ enum Benchmark {
         #[arg(long)]
         peer: bool,
     },
+    /// The double pendulum's 60×60 flip-time map on one thread and on two.
+    Ensemble {
+        /// Also run SciPy's DOP853 on a lambdified SymPy right-hand side
+        /// (tests/sympy/ensemble_peer.py, which makes its own Python environment) on a sample
+        /// of the map's starts, in the same run.
+        #[arg(long)]
+        peer: bool,
+        /// How many of the map's starts the peer runs.
+        #[arg(long, default_value_t = 60)]
+        sample: usize,
+        /// How often each thread count's map is timed.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
     /// One scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
     Derive {
         #[arg(value_parser = family)]
@@ -129,6 +146,7 @@ fn main() {
         Benchmark::Space => space::run(),
         Benchmark::Bicycle => bicycle::run(),
         Benchmark::Stiff { largest, peer } => stiff::run(largest, peer),
+        Benchmark::Ensemble { peer, sample, repeats } => ensemble::run(peer, sample, repeats),
         Benchmark::Scaling(Limits { budget, max }) => scaling::run(budget, max),
         Benchmark::Eval => eval::run(),
         Benchmark::Precision => {

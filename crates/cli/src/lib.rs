@@ -10,6 +10,7 @@
 pub mod animate;
 pub mod check;
 pub mod diagnostics;
+pub mod ensemble;
 pub mod inverse;
 pub mod linearize;
 pub mod plot;
@@ -138,6 +139,28 @@ pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Resu
         .tempfile_in(dir)
         .map_err(without_path)?;
     tmp.as_file_mut().write_all(contents.as_bytes())?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+/// Writes a file whole or not at all by `write`, which writes to the path it is given: a
+/// temporary file beside the target with the target's extension (a writer may choose its
+/// format by it), renamed over the target once `write` succeeds.
+pub fn write_atomically_by(
+    path: &std::path::Path,
+    write: impl FnOnce(&std::path::Path) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let dir =
+        path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    let stem =
+        path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = tempfile::Builder::new()
+        .prefix(&format!(".{stem}."))
+        .suffix(&format!(".tmp.{ext}"))
+        .tempfile_in(dir)
+        .map_err(without_path)?;
+    write(tmp.path())?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
 }

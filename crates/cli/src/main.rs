@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use engine::input::{Assignment, SweepRange};
 
 #[derive(Parser)]
@@ -59,43 +59,12 @@ enum Command {
     /// still written).
     Simulate {
         file: PathBuf,
-        /// End time (s); default: the scene's `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
-        /// The integrator (default dop853).
-        #[arg(long)]
-        method: Option<MethodArg>,
-        /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
-        /// auto (default 1e-10).
-        #[arg(long)]
-        tolerance: Option<f64>,
-        /// Step of rk4, midpoint and gauss (default: until/1000).
-        #[arg(long)]
-        step: Option<f64>,
-        /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
-        #[arg(long = "set", value_name = "NAME=VALUE")]
-        set: Vec<Assignment>,
-        /// Drive an input by an expression of t, the coordinates, their rates and the
-        /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`; or by a time
-        /// series, `--input F=push.csv` (a time and a value a row, linear in between). An input
-        /// not driven keeps its declared value.
-        #[arg(long = "input", value_name = "NAME=EXPR")]
-        input: Vec<Assignment>,
-        /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
-        /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
-        /// them continuously. Default: the scene's `simulate { hold … }`, else none.
-        #[arg(long, value_name = "PERIOD")]
-        hold: Option<f64>,
+        #[command(flatten)]
+        run: RunArgs,
         /// Quantities to record, comma-separated: coordinates, rates, reactions, KE, PE, any
         /// scene expression. Default: the scene's `output`, else the coordinates.
         #[arg(long)]
         output: Vec<String>,
-        /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
-        #[arg(long = "stop-when", value_name = "EXPR")]
-        stop_when: Vec<String>,
-        /// Record the times when this expression crosses zero.
-        #[arg(long = "event", value_name = "EXPR")]
-        event: Vec<String>,
         /// Write the recorded quantities here: .csv or .json (default: CSV on standard output).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -106,15 +75,48 @@ enum Command {
         /// and `draw` shapes, with the energy error beside them.
         #[arg(long, value_name = "OUT.html")]
         animate: Option<PathBuf>,
-        /// Do not check that terms added or equated have one dimension.
-        #[arg(long)]
-        no_units: bool,
         /// Record at this many evenly spaced times (the start and the end included), from the
         /// integrator's dense output; 0 records at every accepted step instead. Events and the
         /// end are always recorded.
         /// Default: 200, or 1000 with --animate (frames of the animation).
         #[arg(long)]
         samples: Option<usize>,
+    },
+    /// Run a scene many times over a grid of parameter values or random draws, on all cores,
+    /// and record values of each run: a CSV row per run, and a picture. A run that fails is a
+    /// row with its reason. Exit 2 on bad input.
+    Ensemble {
+        file: PathBuf,
+        /// A parameter to vary: a grid axis `--vary a=-3:3:60` (N values from A to B; axes are
+        /// crossed, the first varying slowest), or random draws `--vary "m=normal(1, 0.1)"`,
+        /// `--vary "g=uniform(9.7, 9.9)"` with --runs. A start given by a parameter in `coord`
+        /// follows it.
+        #[arg(long, value_name = "NAME=SPEC", required = true)]
+        vary: Vec<String>,
+        /// The number of random draws (at each grid point, if there is a grid too).
+        #[arg(long)]
+        runs: Option<usize>,
+        /// The seed of the random draws: the same seed gives the same draws on every machine.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// What to record per run, comma-separated: scene expressions at the end or at the
+        /// stop (`t` is the stop's time), `max(EXPR)` and `min(EXPR)` over the run.
+        /// Default: the scene's `output`, else the coordinates, at the end.
+        #[arg(long, value_name = "EXPRS")]
+        record: Vec<String>,
+        #[command(flatten)]
+        run: RunArgs,
+        /// Write the table here, .csv, whole or not at all (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Draw the first recorded quantity (.svg or .png): a heat map over two grid axes, a
+        /// line over one, a histogram of random draws.
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Threads to run on (default: the machine's cores). The table is the same whatever
+        /// the number.
+        #[arg(long, value_parser = clap::value_parser!(u16).range(1..=1024))]
+        threads: Option<u16>,
     },
     /// Linearize about an equilibrium or a steady motion: M, C, K of M·δq̈ + C·δq̇ + K·δq = 0,
     /// the first-order form ẋ = A·x + B·u, y = C·x + D·u of the scene's inputs and outputs,
@@ -211,6 +213,70 @@ enum Command {
     },
 }
 
+/// The settings of a run, shared by `simulate` and `ensemble`.
+#[derive(Args)]
+struct RunArgs {
+    /// End time (s); default: the scene's `simulate { until … }`, else 10.
+    #[arg(long)]
+    until: Option<f64>,
+    /// The integrator (default dop853).
+    #[arg(long)]
+    method: Option<MethodArg>,
+    /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
+    /// auto (default 1e-10).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Step of rk4, midpoint and gauss (default: until/1000).
+    #[arg(long)]
+    step: Option<f64>,
+    /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<Assignment>,
+    /// Drive an input by an expression of t, the coordinates, their rates and the
+    /// parameters, such as a state-feedback law: `--input "F=-20*x - 5*x'"`; or by a time
+    /// series, `--input F=push.csv` (a time and a value a row, linear in between). An input
+    /// not driven keeps its declared value.
+    #[arg(long = "input", value_name = "NAME=EXPR")]
+    input: Vec<Assignment>,
+    /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
+    /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
+    /// them continuously. Default: the scene's `simulate { hold … }`, else none.
+    #[arg(long, value_name = "PERIOD")]
+    hold: Option<f64>,
+    /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
+    #[arg(long = "stop-when", value_name = "EXPR")]
+    stop_when: Vec<String>,
+    /// Record the times when this expression crosses zero.
+    #[arg(long = "event", value_name = "EXPR")]
+    event: Vec<String>,
+    /// Do not check that terms added or equated have one dimension.
+    #[arg(long)]
+    no_units: bool,
+}
+
+impl RunArgs {
+    /// The engine's options of a run, the inputs' time series read from their files; `None`
+    /// after saying on stderr which file could not be read.
+    fn options(self) -> Option<engine::simulate::Options> {
+        let (input, input_series) = drives(self.input)?;
+        Some(engine::simulate::Options {
+            until: self.until,
+            // The engine's options are shared with Python, which names the method.
+            method: self.method.map(|m| sim::Method::from(m).name().to_string()),
+            tolerance: self.tolerance,
+            step: self.step,
+            set: self.set,
+            input,
+            input_series,
+            hold: self.hold,
+            stop_when: self.stop_when,
+            events: self.event,
+            no_units: self.no_units,
+            ..Default::default()
+        })
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum LinearizeFormat {
     Text,
@@ -278,48 +344,34 @@ fn main() -> ExitCode {
             emit(&engine::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
-        Command::Simulate {
-            file,
-            until,
-            method,
-            tolerance,
-            step,
-            set,
-            input,
-            hold,
-            output,
-            stop_when,
-            event,
-            out,
-            plot,
-            animate,
-            no_units,
-            samples,
-        } => {
+        Command::Simulate { file, run, output, out, plot, animate, samples } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let Some((input, input_series)) = laws_and_series(input) else {
-                return ExitCode::from(2);
-            };
+            let Some(options) = run.options() else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
             let options = engine::simulate::Options {
-                until,
-                // The engine's options are shared with Python, which names the method.
-                method: method.map(|m| sim::Method::from(m).name().to_string()),
-                tolerance,
-                step,
-                set,
-                input,
-                input_series,
-                hold,
                 output,
-                stop_when,
-                events: event,
-                no_units,
                 samples: samples.unwrap_or(default_samples),
                 animate: animate.is_some(),
+                ..options
             };
             simulate(&file, &source, &options, out, Figures { plot, animate })
+        }
+        Command::Ensemble { file, vary, runs, seed, record, run, out, plot, threads } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let Some(simulate) = run.options() else { return ExitCode::from(2) };
+            let mut varied = Vec::new();
+            for text in &vary {
+                match engine::input::Vary::parse(text) {
+                    Ok(v) => varied.push(v),
+                    Err(d) => {
+                        eprint!("{}", cli::diagnostics::render("--vary", text, &[d]));
+                        return ExitCode::from(2);
+                    }
+                }
+            }
+            let options = engine::ensemble::Options { simulate, vary: varied, runs, seed, record };
+            ensemble(&file, &source, &options, threads.map(usize::from), out, plot)
         }
         Command::Linearize {
             file,
@@ -358,7 +410,7 @@ fn main() -> ExitCode {
         }
         Command::Bench { file, until, set, stop_when, input, hold, repeats, plot, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let Some((input, input_series)) = laws_and_series(input) else {
+            let Some((input, input_series)) = drives(input) else {
                 return ExitCode::from(2);
             };
             let options = engine::simulate::Options {
@@ -377,17 +429,17 @@ fn main() -> ExitCode {
     }
 }
 
-/// `--input` values split into laws and time series, each series read from its file; `None`
-/// when a file cannot be read, said on stderr.
-#[allow(clippy::type_complexity)]
-fn laws_and_series(
-    input: Vec<Assignment>,
-) -> Option<(Vec<Assignment>, Vec<(String, sim::Series)>)> {
+/// An input given as a time series, by name.
+type Series = (String, sim::Series);
+
+/// The `--input` laws and, read from their files, the time series; `None` after saying on
+/// stderr which file could not be read.
+fn drives(input: Vec<Assignment>) -> Option<(Vec<Assignment>, Vec<Series>)> {
     let (files, laws): (Vec<_>, Vec<_>) = input.into_iter().partition(cli::series::is_series);
     let mut series = Vec::new();
     for given in files {
         match cli::series::read(std::path::Path::new(&given.value)) {
-            Ok(read) => series.push((given.name, read)),
+            Ok(s) => series.push((given.name, s)),
             Err(e) => {
                 eprintln!("error: --input {}: {e}", given.name);
                 return None;
@@ -566,6 +618,48 @@ fn simulate(
         }
     }
     eprint!("{}", cli::simulate::summary(&outcome));
+    code
+}
+
+fn ensemble(
+    file: &std::path::Path,
+    source: &str,
+    options: &engine::ensemble::Options,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let formats = [(out.as_ref(), &["csv"][..]), (plot.as_ref(), &["svg", "png"][..])];
+    for (target, allowed) in formats {
+        let Some(target) = target else { continue };
+        let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if !allowed.contains(&ext) {
+            let wanted = allowed.join(" or .");
+            eprintln!("error: cannot tell the format of {}: use .{wanted}", target.display());
+            return ExitCode::from(2);
+        }
+    }
+    if let Err(e) = plot.as_ref().map_or(Ok(()), |_| cli::plot::ensemble::check(&options.vary)) {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
+    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    let started = std::time::Instant::now();
+    let table = match cli::ensemble::ensemble(source, options, Some(threads)) {
+        Ok(table) => table,
+        Err(e) => return fail(&path, &e),
+    };
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let mut code = write_or_print(out.as_ref(), &cli::ensemble::csv(&table));
+    if let Some(plot) = plot {
+        let title = format!("{path}: {}", table.columns.get(table.varied).map_or("", |c| c));
+        if let Err(e) = cli::plot::ensemble::ensemble(&table, &title, &plot) {
+            eprintln!("error: {e}");
+            code = ExitCode::from(2);
+        }
+    }
+    eprint!("{}", cli::ensemble::summary(&table, wall_seconds, threads));
     code
 }
 

@@ -2,8 +2,10 @@
 //! against time ([`time_series`]), the eigenvalues of a sweep against its parameter
 //! ([`sweep`]) and the work–precision diagram of a benchmark ([`work_precision`]). They share
 //! this module's page, panel, axis, number labels and escaping. Deterministic text, no fonts
-//! or libraries needed.
+//! or libraries needed. The one exception is an ensemble's picture ([`mod@ensemble`]), a heat
+//! map with a colour bar, a line or a histogram as SVG or PNG, which plotters draws.
 
+pub mod ensemble;
 mod series;
 mod sweep;
 mod work_precision;

@@ -1,4 +1,5 @@
-//! A progress line on stderr for runs that last, shown only when stderr is a terminal.
+//! A progress line on stderr for runs that last, shown only when stderr is a terminal: the
+//! time a run has reached, or how many of an ensemble's runs are done.
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
@@ -9,6 +10,8 @@ pub struct Bar {
     started: Instant,
     last: Option<Instant>,
     enabled: bool,
+    /// Counting an ensemble's runs rather than a run's time.
+    runs: bool,
 }
 
 impl Bar {
@@ -18,7 +21,13 @@ impl Bar {
             started: Instant::now(),
             last: None,
             enabled: std::io::stderr().is_terminal(),
+            runs: false,
         }
+    }
+
+    /// A bar of an ensemble's runs: its `t` is the number done, its `until` the number in all.
+    pub fn runs() -> Self {
+        Bar { runs: true, ..Bar::new() }
     }
 }
 
@@ -49,12 +58,12 @@ impl engine::simulate::Progress for Bar {
         self.last = Some(now);
         let fraction = (t / self.until).clamp(0.0, 1.0);
         let filled = (fraction * 30.0) as usize;
-        eprint!(
-            "\r[{}{}] t = {t:.4} / {}",
-            "#".repeat(filled),
-            " ".repeat(30 - filled),
-            self.until
-        );
+        let bar = format!("[{}{}]", "#".repeat(filled), " ".repeat(30 - filled));
+        if self.runs {
+            eprint!("\r{bar} {t} / {} runs", self.until);
+        } else {
+            eprint!("\r{bar} t = {t:.4} / {}", self.until);
+        }
         let _ = std::io::stderr().flush();
     }
 

@@ -116,6 +116,10 @@ pub enum Setting {
     Input,
     /// The period of the zero-order hold of the inputs driven by laws.
     Hold,
+    /// A parameter an ensemble varies, `name=a:b:n` or a distribution.
+    Vary,
+    /// The number of an ensemble's random draws.
+    Runs,
 }
 
 impl Setting {
@@ -130,6 +134,8 @@ impl Setting {
             Setting::About => "about",
             Setting::Input => "input",
             Setting::Hold => "hold",
+            Setting::Vary => "vary",
+            Setting::Runs => "runs",
         }
     }
 }

@@ -1,7 +1,7 @@
-//! The values a front end's options carry, typed: `name=value` ([`Assignment`]) and
-//! `p=a:b:n` ([`SweepRange`]). Each is parsed here once, by [`FromStr`], for the command
-//! line's value parsers, the benchmarks and the Python package alike; the errors say what
-//! form was wanted and leave naming the option to the front end.
+//! The values a front end's options carry, typed: `name=value` ([`Assignment`]), `p=a:b:n`
+//! ([`SweepRange`]) and an ensemble's varied parameter ([`Vary`]). Each is parsed here once,
+//! for the command line's value parsers, the benchmarks and the Python package alike; the
+//! errors say what form was wanted and leave naming the option to the front end.
 
 use std::fmt;
 use std::str::FromStr;
@@ -128,6 +128,190 @@ impl fmt::Display for SweepRange {
     }
 }
 
+/// `NAME=A:B:N`, `NAME=normal(MU, SIGMA)` or `NAME=uniform(A, B)`: how an ensemble varies a
+/// parameter, over a grid axis or by random draws.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vary {
+    pub parameter: String,
+    pub spread: Spread,
+}
+
+/// The values a varied parameter takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spread {
+    /// `values` evenly spaced from `from` to `to`, both included.
+    Grid { from: f64, to: f64, values: usize },
+    /// Drawn from the normal distribution of this mean and standard deviation (positive).
+    Normal { mean: f64, deviation: f64 },
+    /// Drawn evenly from `[low, high)`, `low < high`.
+    Uniform { low: f64, high: f64 },
+}
+
+impl Spread {
+    /// Whether the values are random draws rather than a grid axis.
+    pub fn is_random(&self) -> bool {
+        !matches!(self, Spread::Grid { .. })
+    }
+}
+
+const VARY_FORMS: &str = "the forms are NAME=A:B:N (a grid of N values from A to B), \
+                          NAME=normal(MU, SIGMA) and NAME=uniform(A, B)";
+
+impl Vary {
+    /// Reads `text`; a mistake is a diagnostic whose span points into `text`, with a hint
+    /// that shows the forms.
+    pub fn parse(text: &str) -> Result<Vary, lang::Diagnostic> {
+        let at = |start: usize, end: usize, message: &str, label: &str| {
+            let end = end.max(start + 1).min(text.len().max(start + 1));
+            lang::Diagnostic::error(lang::Span::new(start, end), message)
+                .with_label(label)
+                .with_hint(VARY_FORMS)
+        };
+        let Some(equals) = text.find('=') else {
+            return Err(at(0, text.len(), "no `=` in what to vary", "expected NAME=…"));
+        };
+        let parameter = text[..equals].trim();
+        if parameter.is_empty() {
+            return Err(at(0, equals + 1, "no parameter named before `=`", "expected NAME"));
+        }
+        let spec_start = equals + 1;
+        let spec = &text[spec_start..];
+        let spread = if let Some(open) = spec.find('(') {
+            distribution(text, spec_start, open, &at)?
+        } else {
+            grid(text, spec_start, &at)?
+        };
+        Ok(Vary { parameter: parameter.to_string(), spread })
+    }
+}
+
+/// The pieces of `text[start..end]` between `separator`s, each trimmed, with its span.
+fn pieces(text: &str, start: usize, end: usize, separator: char) -> Vec<(usize, usize, &str)> {
+    let mut found = Vec::new();
+    let mut from = start;
+    for (i, c) in text[start..end].char_indices() {
+        if c == separator {
+            found.push(trimmed(text, from, start + i));
+            from = start + i + 1;
+        }
+    }
+    found.push(trimmed(text, from, end));
+    found
+}
+
+fn trimmed(text: &str, start: usize, end: usize) -> (usize, usize, &str) {
+    let piece = &text[start..end];
+    let lead = piece.len() - piece.trim_start().len();
+    let body = piece.trim();
+    (start + lead, start + lead + body.len(), body)
+}
+
+type Located<'a> = &'a dyn Fn(usize, usize, &str, &str) -> lang::Diagnostic;
+
+/// A number of the spec: a plain decimal, finite.
+fn number(piece: (usize, usize, &str), what: &str, at: Located) -> Result<f64, lang::Diagnostic> {
+    let (start, end, body) = piece;
+    match body.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ if body.is_empty() => Err(at(start, end, &format!("no {what}"), "a number goes here")),
+        _ => Err(at(start, end, &format!("the {what} is not a number"), "not a plain number")),
+    }
+}
+
+fn grid(text: &str, start: usize, at: Located) -> Result<Spread, lang::Diagnostic> {
+    let parts = pieces(text, start, text.len(), ':');
+    let [a, b, n] = parts[..] else {
+        let label = format!("{} part(s), where a grid has three, A:B:N", parts.len());
+        return Err(at(start, text.len(), "not a grid axis A:B:N nor a distribution", &label));
+    };
+    let (from, to) = (number(a, "first value", at)?, number(b, "last value", at)?);
+    let values = match n.2.parse::<usize>() {
+        Ok(values) if (2..=MAX_SWEEP_VALUES).contains(&values) => values,
+        _ => {
+            let label = format!("a whole number from 2 to {MAX_SWEEP_VALUES}");
+            return Err(at(n.0, n.1, "the number of values is not a count", &label));
+        }
+    };
+    if from == to {
+        return Err(at(a.0, b.1, "a grid axis from a value to itself", "two different ends"));
+    }
+    Ok(Spread::Grid { from, to, values })
+}
+
+fn distribution(
+    text: &str,
+    start: usize,
+    open: usize,
+    at: Located,
+) -> Result<Spread, lang::Diagnostic> {
+    let (name_start, name_end, name) = trimmed(text, start, start + open);
+    let args_start = start + open + 1;
+    let Some(close) = text[args_start..].rfind(')').map(|i| args_start + i) else {
+        return Err(at(start + open, text.len(), "no closing `)`", "this `(` is not closed"));
+    };
+    if !text[close + 1..].trim().is_empty() {
+        return Err(at(close + 1, text.len(), "text after the distribution", "not expected"));
+    }
+    let args = pieces(text, args_start, close, ',');
+    let [first, second] = args[..] else {
+        let label = format!("{} argument(s), where it takes two", args.len());
+        return Err(at(args_start, close, "a distribution takes two numbers", &label));
+    };
+    match name {
+        "normal" => {
+            let mean = number(first, "mean", at)?;
+            let deviation = number(second, "standard deviation", at)?;
+            if deviation <= 0.0 {
+                let (s, e, _) = second;
+                return Err(at(s, e, "the standard deviation must be positive", "not positive"));
+            }
+            Ok(Spread::Normal { mean, deviation })
+        }
+        "uniform" => {
+            let (low, high) = (number(first, "low end", at)?, number(second, "high end", at)?);
+            if low >= high {
+                return Err(at(first.0, second.1, "uniform(A, B) needs A < B", "A is not below B"));
+            }
+            Ok(Spread::Uniform { low, high })
+        }
+        _ => {
+            let label = match strsim_nearest(name) {
+                Some(near) => format!("did you mean `{near}`?"),
+                None => "not normal or uniform".to_string(),
+            };
+            Err(at(name_start, name_end, &format!("unknown distribution `{name}`"), &label))
+        }
+    }
+}
+
+/// The distribution a misspelt name was likely meant to be.
+fn strsim_nearest(name: &str) -> Option<&'static str> {
+    model::closest(name, ["normal", "uniform"])
+}
+
+/// As it is parsed back.
+impl fmt::Display for Vary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = &self.parameter;
+        match self.spread {
+            Spread::Grid { from, to, values } => write!(f, "{name}={from}:{to}:{values}"),
+            Spread::Normal { mean, deviation } => write!(f, "{name}=normal({mean}, {deviation})"),
+            Spread::Uniform { low, high } => write!(f, "{name}=uniform({low}, {high})"),
+        }
+    }
+}
+
+/// Varied parameters given as text by a front end without a parser of its own; the first
+/// that cannot be read, as an [`Error::Expression`] pointing into it.
+pub fn varies<S: AsRef<str>>(texts: &[S]) -> Result<Vec<Vary>, Error> {
+    let read = |text: &S| {
+        let text = text.as_ref();
+        Vary::parse(text)
+            .map_err(|d| Error::Expression { diagnostics: vec![d], text: text.to_string() })
+    };
+    texts.iter().map(read).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -166,5 +350,41 @@ mod tests {
         }
         assert!(matches!("w=1:1:5".parse::<SweepRange>(), Err(e) if e.0.contains("different")));
         assert!(matches!("w=0:1:1".parse::<SweepRange>(), Err(e) if e.0.contains("from 2")));
+    }
+
+    #[test]
+    fn varies_are_read_and_written_back() {
+        for text in ["a=-3:3:60", "m=normal(1, 0.1)", "g=uniform(9.7, 9.9)"] {
+            let vary = Vary::parse(text).expect(text);
+            assert_eq!(Vary::parse(&vary.to_string()), Ok(vary.clone()), "{text}");
+        }
+        let grid = Vary::parse(" a = -3 : 3 : 60 ").expect("a grid");
+        assert_eq!(grid.parameter, "a");
+        assert_eq!(grid.spread, Spread::Grid { from: -3.0, to: 3.0, values: 60 });
+        assert!(Vary::parse("m=normal(1, 0.1)").expect("normal").spread.is_random());
+    }
+
+    #[test]
+    fn bad_varies_point_at_the_culprit() {
+        for (text, message, culprit) in [
+            ("a", "no `=` in what to vary", "a"),
+            ("=1:2:3", "no parameter named before `=`", "="),
+            ("a=1:2", "not a grid axis A:B:N nor a distribution", "1:2"),
+            ("a=1:x:3", "the last value is not a number", "x"),
+            ("a=1:2:1", "the number of values is not a count", "1"),
+            ("a=2:2:5", "a grid axis from a value to itself", "2:2"),
+            ("m=normal(1, -2)", "the standard deviation must be positive", "-2"),
+            ("m=normal(1)", "a distribution takes two numbers", "1"),
+            ("m=gauss(0, 1)", "unknown distribution `gauss`", "gauss"),
+            ("m=uniform(2, 1)", "uniform(A, B) needs A < B", "2, 1"),
+            ("m=normal(1, 2", "no closing `)`", "(1, 2"),
+        ] {
+            let d = Vary::parse(text).expect_err(text);
+            assert_eq!(d.message, message, "{text}");
+            assert_eq!(&text[d.span.start..d.span.end], culprit, "{text}");
+            assert!(d.hint.as_deref().is_some_and(|h| h.contains("NAME=A:B:N")), "{text}");
+        }
+        let error = varies(&["a=1:2:3", "b"]).expect_err("`b` has no spec");
+        assert!(matches!(error, Error::Expression { text, .. } if text == "b"));
     }
 }

@@ -165,10 +165,26 @@ impl Prepared {
     /// of earlier parameters) taking the place of the scene's values; then the inputs' values
     /// when nothing drives them (the slots of [`Prepared::parameters`]).
     pub fn parameter_values(&self, overrides: &[(usize, ExprId)]) -> Result<Vec<f64>, Error> {
+        self.parameter_values_given(overrides, &[])
+    }
+
+    /// [`Prepared::parameter_values`] with numbers `given` to some parameters (by index), in
+    /// place of their expressions: an ensemble's run. Later parameters defined through them
+    /// follow.
+    pub fn parameter_values_given(
+        &self,
+        overrides: &[(usize, ExprId)],
+        given: &[(usize, f64)],
+    ) -> Result<Vec<f64>, Error> {
         let pool = &self.derivation.model.pool;
         let mut values = vec![f64::NAN; pool.symbol_count()];
         let mut out = Vec::new();
         for (i, p) in self.derivation.model.params.iter().enumerate() {
+            if let Some((_, v)) = given.iter().rev().find(|(k, _)| *k == i) {
+                values[p.sym.index()] = *v;
+                out.push(*v);
+                continue;
+            }
             let expr = overrides.iter().rev().find(|(k, _)| *k == i).map(|(_, e)| *e).or(p.value);
             let Some(expr) = expr else {
                 return Err(Error::Setting(vec![

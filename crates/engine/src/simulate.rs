@@ -6,13 +6,16 @@
 use std::time::Instant;
 
 use numeric::Tape;
-use sim::{integrate, Canonical, Constrained, Event, FaultKind, Mechanical, Method, Problem, Run};
+use sim::{integrate, FaultKind, Mechanical, Method, Run};
 
 mod drive;
 mod fault;
+mod integrand;
 mod on_demand;
 
+pub(crate) use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
+pub(crate) use integrand::{run_settings, watched, Integrand};
 
 use crate::animate::{Animation, Plan};
 use crate::input::Assignment;
@@ -296,7 +299,7 @@ pub fn run(
         events: settings.events.len(),
     };
     let values = overrides(&prepared, &settings.sets, &set_exprs)?;
-    let (parameters, y0) = start(&mut prepared, &values)?;
+    let (parameters, y0) = start(&mut prepared, &values, &[])?;
 
     let dynamics_exprs = prepared.dynamics_exprs();
     let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
@@ -370,41 +373,41 @@ pub fn run(
 
 /// Where a run's quantities sit among the observed columns: the outputs, the stops, the
 /// events, KE and PE, then the figures of an animation and the constraints' residuals.
-struct Columns {
-    outputs: usize,
-    stops: usize,
-    events: usize,
+pub(crate) struct Columns {
+    pub outputs: usize,
+    pub stops: usize,
+    pub events: usize,
 }
 
 impl Columns {
     /// The column of KE; PE follows it.
-    fn energies(&self) -> usize {
+    pub fn energies(&self) -> usize {
         self.outputs + self.stops + self.events
     }
 
     /// The first column after the energies.
-    fn figures(&self) -> usize {
+    pub fn figures(&self) -> usize {
         self.energies() + 2
     }
 }
 
 /// A scene loaded for a run.
-struct Loaded {
+pub(crate) struct Loaded {
     /// With the run's expressions resolved in its scope, in [`Columns`] order and then the
     /// `--set` values, and the inputs driven continuously replaced by their laws.
-    prepared: Prepared,
+    pub prepared: Prepared,
     /// The outputs' names: the remaining coordinates when the settings name none.
-    outputs: Vec<String>,
+    pub outputs: Vec<String>,
     /// The `--set` values' expressions.
-    set_exprs: Vec<cas::ExprId>,
+    pub set_exprs: Vec<cas::ExprId>,
     /// The laws of the inputs held between samples, each with its input.
-    held: Vec<(cas::SymId, cas::ExprId)>,
+    pub held: Vec<(cas::SymId, cas::ExprId)>,
     /// An input driven continuously is in the Lagrangian.
-    lagrangian_driven: bool,
+    pub lagrangian_driven: bool,
 }
 
 /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
-fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
+pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -442,13 +445,13 @@ fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by
 /// theirs with whether the rate is set.
-struct Overrides {
-    params: Vec<(usize, cas::ExprId)>,
-    coords: Vec<(usize, bool, cas::ExprId)>,
+pub(crate) struct Overrides {
+    pub params: Vec<(usize, cas::ExprId)>,
+    pub coords: Vec<(usize, bool, cas::ExprId)>,
 }
 
 /// Which parameter or coordinate each `--set` value replaces, or why it replaces none.
-fn overrides(
+pub(crate) fn overrides(
     prepared: &Prepared,
     sets: &[Assignment],
     exprs: &[cas::ExprId],
@@ -489,11 +492,16 @@ fn overrides(
     Ok(found)
 }
 
-/// The parameters' values and the initial state, with the `--set` values in place and the
-/// start settled again on the kept constraints where they moved it.
-fn start(prepared: &mut Prepared, values: &Overrides) -> Result<(Vec<f64>, Vec<f64>), Error> {
-    let parameters = prepared.parameter_values(&values.params)?;
-    if !values.params.is_empty() {
+/// The parameters' values and the initial state, with the `--set` values and the `given`
+/// parameters' numbers (by index) in place and the start settled again on the kept
+/// constraints where they moved it.
+pub(crate) fn start(
+    prepared: &mut Prepared,
+    values: &Overrides,
+    given: &[(usize, f64)],
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
+    let parameters = prepared.parameter_values_given(&values.params, given)?;
+    if !values.params.is_empty() || !given.is_empty() {
         // The scene's masses were checked with its own values; `--set` may change their sign.
         prepared.masses_at(&parameters)?;
     }
@@ -511,7 +519,7 @@ fn start(prepared: &mut Prepared, values: &Overrides) -> Result<(Vec<f64>, Vec<f
     };
     let (set_positions, set_rates) = (set_in(prepared, false), set_in(prepared, true));
     // The scene's own start was settled when it was derived; `--set` values may break it.
-    if !values.params.is_empty() || !values.coords.is_empty() {
+    if !values.params.is_empty() || !values.coords.is_empty() || !given.is_empty() {
         prepared.settle_positions(&mut y0, &parameters, &set_positions)?;
         prepared.settle_rates(&mut y0, &parameters, &set_rates)?;
     }
@@ -534,59 +542,23 @@ fn integrate_scene(
     columns: &Columns,
     progress: &mut dyn Progress,
 ) -> Result<(Run, f64, Option<FastestMode>), Error> {
-    let Settings { until, method, tolerance, step, .. } = *settings;
-    let run_settings = sim::Settings {
-        method,
-        start: 0.0,
-        until,
-        tolerance,
-        step,
-        max_steps: 20_000_000,
-        samples: settings.samples,
-    };
-    let Columns { outputs, stops, events } = *columns;
-    let watched: Vec<Event> = (0..stops)
-        .map(|k| Event { column: outputs + k, stop: true })
-        .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
-        .collect();
-    if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
-        return Err(bad(format!("{} {NO_MULTIPLIERS}; use dop853 or radau", method.name())));
-    }
+    let Settings { until, method, step, .. } = *settings;
+    let run_settings = integrand::run_settings(settings, settings.samples);
+    let watched = integrand::watched(columns);
     progress.start(until);
     let started = Instant::now();
     let mut fastest_mode = None;
     let run = {
         let mut update = |t: f64| progress.update(t);
-        if method.is_symplectic() {
-            let momentum_exprs = prepared.momentum_exprs();
-            let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
-            let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
-            if method.uses_jacobian() {
-                let exprs = prepared.canonical_partials_exprs();
-                let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
-                canonical = canonical.with_partials(Tape::new(partials));
-            }
-            let z0 = canonical.from_physical(0.0, y0);
-            integrate(&mut canonical, &z0, &run_settings, &watched, &mut update)
-        } else if method.handles_algebraic() && prepared.layout.multipliers > 0 {
-            let mut constrained = Constrained::new(with_partials(prepared, method, mechanical)?);
-            match constrained.consistent_state(0.0, y0) {
-                Ok(z0) => integrate(&mut constrained, &z0, &run_settings, &watched, &mut update),
-                // No consistent accelerations at the start: the stabilised form reports why
-                // (which of the mass matrix and the constraints lost rank) as its first fault.
-                Err(_) => {
-                    let mut m = constrained.into_inner();
-                    integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update)
-                }
-            }
-        } else if method == Method::Auto {
+        if method == Method::Auto {
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
             integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
         } else {
-            let mut m = with_partials(prepared, method, mechanical)?;
-            let run =
-                integrate(&mut m as &mut dyn Problem, y0, &run_settings, &watched, &mut update);
-            fastest_mode = fault::fastest_mode(&mut m, prepared, (method, step), y0, &run);
+            let mut integrand = Integrand::new(prepared, mechanical, method)?;
+            let run = integrand.integrate(y0, &run_settings, &watched, &mut update);
+            if let Integrand::Mechanical(m) = &mut integrand {
+                fastest_mode = fault::fastest_mode(m, prepared, (method, step), y0, &run);
+            }
             run
         }
     };
@@ -596,7 +568,7 @@ fn integrate_scene(
 
 /// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
 /// the methods that use one, so explicit runs lower nothing more.
-fn with_partials(
+pub(crate) fn with_partials(
     prepared: &mut Prepared,
     method: Method,
     mechanical: Mechanical,
@@ -608,7 +580,7 @@ fn with_partials(
 }
 
 /// Bodies in space oriented by angles (not Euler parameters).
-fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
+pub(crate) fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
     let by_angles = |b: &&model::Body| {
         matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
     };
@@ -706,14 +678,45 @@ impl Outcome {
     pub fn describe_fault(&self, f: &sim::Fault) -> String {
         let state: Vec<String> =
             self.state_names.iter().zip(&f.state).map(|(n, v)| format!("{n} = {v}")).collect();
+        let names = FaultNames {
+            method: self.method,
+            state: &self.state_names,
+            constraints: &self.constraint_names,
+            angle_oriented_bodies: &self.angle_oriented_bodies,
+        };
+        let (what, cause) = names.words(&f.kind);
+        let cause = match &self.fastest_mode {
+            Some(mode) => fault::stiffness_cause(mode, self.method, &self.state_names),
+            None => cause,
+        };
+        format!(
+            "numeric fault at t = {}: {what}\n  state: {}\n  likely cause: {cause}",
+            f.time,
+            state.join(", ")
+        )
+    }
+}
+
+/// What a fault's words name: the method, the state's and the kept constraints' names, and
+/// the bodies oriented by angles.
+pub(crate) struct FaultNames<'a> {
+    pub method: Method,
+    pub state: &'a [String],
+    pub constraints: &'a [String],
+    pub angle_oriented_bodies: &'a [String],
+}
+
+impl FaultNames<'_> {
+    /// What went wrong, and its likely cause.
+    pub fn words(&self, kind: &FaultKind) -> (String, String) {
         let coords = |idx: &[usize]| -> String {
             idx.iter()
-                .filter_map(|i| self.state_names.get(*i))
+                .filter_map(|i| self.state.get(*i))
                 .map(|s| format!("`{s}`"))
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let (what, cause) = match &f.kind {
+        match kind {
             FaultKind::SingularMass { coordinates, condition }
                 if !self.angle_oriented_bodies.is_empty() =>
             {
@@ -754,7 +757,7 @@ impl Outcome {
             FaultKind::SingularConstraints { constraints } => {
                 let names: Vec<String> = constraints
                     .iter()
-                    .filter_map(|i| self.constraint_names.get(*i))
+                    .filter_map(|i| self.constraints.get(*i))
                     .map(|s| format!("`{s}`"))
                     .collect();
                 (
@@ -796,15 +799,6 @@ impl Outcome {
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
-        };
-        let cause = match &self.fastest_mode {
-            Some(mode) => fault::stiffness_cause(mode, self.method, &self.state_names),
-            None => cause,
-        };
-        format!(
-            "numeric fault at t = {}: {what}\n  state: {}\n  likely cause: {cause}",
-            f.time,
-            state.join(", ")
-        )
+        }
     }
 }

@@ -19,6 +19,7 @@ use crate::{Components, FaultKind, Problem};
 /// itself, so they do not drift as the second-derivative form J·a = γ lets them; q, v, a and λ
 /// are indices 1, 2, 3, 3 (velocity constraints alone: 1, 1, 2, 2), which the method's error
 /// control and Newton's iteration weigh by powers of the step.
+#[derive(Clone)]
 pub struct Constrained {
     inner: Mechanical,
 }
@@ -35,6 +36,11 @@ impl Constrained {
         let mut state = y.to_vec();
         state.extend(solved);
         Ok(state)
+    }
+
+    /// The equations in their stabilised first-order form, to set their parameters.
+    pub fn inner_mut(&mut self) -> &mut Mechanical {
+        &mut self.inner
     }
 
     /// The equations in their stabilised first-order form.

@@ -50,23 +50,25 @@ pub(crate) trait Stepper {
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
-/// enough to locate events of fixed-step methods.
+/// enough to locate events of fixed-step methods. Its buffers are reused from step to step.
 #[derive(Default)]
 pub(crate) struct Hermite {
     pub t0: f64,
     pub t1: f64,
     pub y0: Vec<f64>,
     pub y1: Vec<f64>,
-    pub f0: Option<Vec<f64>>,
-    pub f1: Option<Vec<f64>>,
+    pub f0: Vec<f64>,
+    pub f1: Vec<f64>,
+    /// Whether `f1` holds the derivative at the end of the current step.
+    f1_known: bool,
 }
 
 impl Hermite {
     /// Records the start of a step: the state and its derivative there.
-    pub fn begin(&mut self, t: f64, y: &[f64], f: Vec<f64>) {
+    pub fn begin(&mut self, t: f64, y: &[f64], f: &[f64]) {
         self.t0 = t;
-        self.y0 = y.to_vec();
-        self.f0 = Some(f);
+        refill(&mut self.y0, y);
+        refill(&mut self.f0, f);
     }
 
     /// Records the end of a step of size `h` from `t` and returns its time, landing exactly on
@@ -74,27 +76,24 @@ impl Hermite {
     pub fn end(&mut self, t: f64, h: f64, t_end: f64, y: &[f64]) -> f64 {
         let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
         self.t1 = t1;
-        self.y1 = y.to_vec();
-        self.f1 = None;
+        refill(&mut self.y1, y);
+        self.f1_known = false;
         t1
     }
 
-    /// Evaluates, computing end derivatives on demand (counted in `evals`).
+    /// Evaluates, computing the end derivative on demand (counted in `evals`).
     pub fn eval(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64], evals: &mut usize) {
         let d = self.y0.len();
-        for (slot, (tt, y)) in [(0, (self.t0, &self.y0)), (1, (self.t1, &self.y1))] {
-            let f = if slot == 0 { &mut self.f0 } else { &mut self.f1 };
-            if f.is_none() {
-                let mut v = vec![0.0; d];
-                // A fault here already showed up when the step was taken.
-                let _ = p.rhs(tt, y, &mut v);
-                *evals += 1;
-                *f = Some(v);
-            }
+        if !self.f1_known {
+            self.f1.resize(d, 0.0);
+            // A fault here already showed up when the step was taken.
+            let _ = p.rhs(self.t1, &self.y1, &mut self.f1);
+            *evals += 1;
+            self.f1_known = true;
         }
         let h = self.t1 - self.t0;
         let s = (t - self.t0) / h;
-        let (f0, f1) = (self.f0.as_ref().expect("set"), self.f1.as_ref().expect("set"));
+        let (f0, f1) = (&self.f0, &self.f1);
         let h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s);
         let h10 = s * (1.0 - s) * (1.0 - s);
         let h01 = s * s * (3.0 - 2.0 * s);
@@ -103,6 +102,12 @@ impl Hermite {
             out[i] = h00 * self.y0[i] + h10 * h * f0[i] + h01 * self.y1[i] + h11 * h * f1[i];
         }
     }
+}
+
+/// Makes `buffer` a copy of `values`, in the memory it already has once it is large enough.
+fn refill(buffer: &mut Vec<f64>, values: &[f64]) {
+    buffer.clear();
+    buffer.extend_from_slice(values);
 }
 
 /// The classic fourth-order Runge–Kutta method with a fixed step.
@@ -151,7 +156,7 @@ impl Stepper for Rk4 {
         }
         p.rhs(t + h, &self.tmp, k4)?;
         self.evals += 4;
-        self.last.begin(t, y, k1.clone());
+        self.last.begin(t, y, k1);
         for i in 0..d {
             y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }

@@ -178,7 +178,7 @@ impl Stepper for Gauss {
             p.rhs(t + self.c[i] * h, &stage, fi)?;
             self.evals += 1;
         }
-        self.last.begin(t, y, f0);
+        self.last.begin(t, y, &f0);
         for k in 0..d {
             let mut acc = 0.0;
             for (i, fi) in f.iter().enumerate() {

@@ -6,6 +6,7 @@ use numeric::Tape;
 
 /// Laws sampled at t = k·T (k = 0, 1, …) from the state at that instant, each held in its
 /// parameter slot until the next sample.
+#[derive(Clone)]
 pub struct Hold {
     period: f64,
     /// The parameter slot each output of the law program fills.

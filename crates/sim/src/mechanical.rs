@@ -62,6 +62,10 @@ pub enum Stabilisation {
 /// their second derivative is imposed. Baumgarte stabilisation replaces J q̈ = γ by
 /// J q̈ = γ − 2α Φ̇ − β² Φ, which makes Φ decay like a critically damped oscillator with the
 /// rate `baumgarte` (α = β); the run reports the largest |Φ| it saw.
+///
+/// A clone is a problem of its own (its programs' registers and its solver's buffers copied):
+/// an ensemble clones one per thread and runs it at one set of parameters after another.
+#[derive(Clone)]
 pub struct Mechanical {
     pub layout: Layout,
     dynamics: Tape,
@@ -321,7 +325,7 @@ impl Mechanical {
         inp[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         let shown = self.observation.outputs();
         self.observation.eval(inp, &mut out[..shown]);
-        for (o, phi) in out[shown..].iter_mut().zip(self.constraint_values().collect::<Vec<_>>()) {
+        for (o, phi) in out[shown..].iter_mut().zip(self.constraint_values()) {
             *o = phi.abs();
         }
     }
@@ -331,6 +335,7 @@ impl Mechanical {
 /// symplectic only there: q̇ = M⁻¹(p − b(q)), ṗ = ∂L/∂q + Q. The momentum program takes the
 /// dynamics inputs and gives M (n×n), p(q, q̇) (n) and ∂L/∂q + Q (n); since p is affine in q̇,
 /// b(q) = p(q, 0). Constraints kept with multipliers are not supported here.
+#[derive(Clone)]
 pub struct Canonical {
     pub inner: Mechanical,
     momentum: Tape,

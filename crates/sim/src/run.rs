@@ -161,6 +161,9 @@ pub struct Run {
     /// The largest |value| of each observation at the start and the accepted steps: the
     /// integrator's own points, where a recorded sample may come from the dense output.
     pub peaks: Vec<f64>,
+    /// The least and the greatest value of each observation over the run: at the start, the
+    /// accepted steps before the end, and the end (a stop's point, not the step past it).
+    pub extremes: Vec<(f64, f64)>,
     pub events: Vec<EventHit>,
     /// The stop event that ended the run, if one did.
     pub stopped_by: Option<usize>,
@@ -204,6 +207,7 @@ pub fn integrate(
         jacobians: 0,
         factorizations: 0,
         peaks: Vec::new(),
+        extremes: Vec::new(),
         events: Vec::new(),
         stopped_by: None,
         fault: None,
@@ -224,6 +228,7 @@ pub fn integrate(
     }
     let mut previous_row = row.clone();
     run.peaks = row.iter().map(|v| v.abs()).collect();
+    run.extremes = row.iter().map(|v| (*v, *v)).collect();
     run.trajectory.times.push(t);
     run.trajectory.rows.push(row.clone());
     let mut sampler = Sampler::new(settings);
@@ -270,11 +275,13 @@ pub fn integrate(
                 run.fault = Some(fault(problem, kind, t, &y));
                 break;
             }
+            widen(&mut run.extremes, &row);
             run.trajectory.times.push(t);
             run.trajectory.rows.push(row.clone());
             run.stopped_by = Some(hit.event);
             break;
         }
+        widen(&mut run.extremes, &row);
         run.events.extend(hits);
         // The step ended on a sample: the held values change, and so the right-hand side;
         // the row recorded here shows the new ones, as the hold gives them from now on.
@@ -303,6 +310,14 @@ pub fn integrate(
     run.final_state = problem.physical(t, &y);
     run.segments = segments(settings, stepper.as_ref(), t);
     run
+}
+
+/// Takes each observation's value in `row` into its least and greatest.
+fn widen(extremes: &mut [(f64, f64)], row: &[f64]) {
+    for ((least, greatest), v) in extremes.iter_mut().zip(row) {
+        *least = least.min(*v);
+        *greatest = greatest.max(*v);
+    }
 }
 
 /// The method's stepper for a problem of this size and structure.
@@ -383,7 +398,8 @@ impl Sampler {
         end: f64,
         trajectory: &mut Trajectory,
     ) {
-        if self.next > self.intervals {
+        // Most steps cover no sample: they allocate nothing.
+        if self.next > self.intervals || self.time(self.next) >= end {
             return;
         }
         let mut ys = vec![0.0; problem.dim()];

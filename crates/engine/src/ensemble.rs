@@ -1,0 +1,336 @@
+//! An ensemble: one scene run many times, its parameters varied over a grid (axes crossed)
+//! or drawn at random, a row of recorded values per run. The scene is derived and lowered
+//! once; each thread clones the lowered problem and runs one start after another, taking the
+//! next run's index as it is free, and the rows are put back in run order, so the table is
+//! the same whatever the number of threads. A run that faults, or whose start cannot be
+//! made, is a row with its reason rather than the end of the ensemble.
+//!
+//! [`Ensemble`] is built once and can run any range of its runs from any thread, which is
+//! what a front end that spreads the work itself (in chunks, over processes) needs.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use sim::Event;
+
+mod draws;
+mod record;
+
+pub use record::{Extreme, Recorded};
+
+use crate::input::{Spread, Vary};
+use crate::simulate::{self, Columns, FaultNames, Integrand, Progress};
+use crate::{Error, Piece, Setting};
+
+/// The most runs an ensemble may have: every run's start is made before the first runs, at
+/// a hundred or two bytes each.
+pub const MAX_RUNS: usize = 10_000_000;
+
+/// What a front end asks for.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// The settings of each run, as `simulate` takes them (its outputs and samples unused).
+    pub simulate: simulate::Options,
+    /// The parameters varied, in order: grid axes are crossed, the first varying slowest;
+    /// random ones are drawn [`Options::runs`] times at each grid point.
+    pub vary: Vec<Vary>,
+    /// The number of random draws (at each grid point); only with a random [`Spread`].
+    pub runs: Option<usize>,
+    /// The seed of the random draws.
+    pub seed: u64,
+    /// What to record per run, comma-separated lists: scene expressions at the end (or the
+    /// stop), `max(EXPR)` and `min(EXPR)` over the run. None: the scene's `output`
+    /// quantities, else the coordinates, at the end.
+    pub record: Vec<String>,
+}
+
+/// The rows of an ensemble, in run order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table {
+    /// The varied parameters' names, then the recorded quantities as written.
+    pub columns: Vec<String>,
+    /// How many of the columns are the varied parameters.
+    pub varied: usize,
+    /// A row per run: the varied values, then the recorded ones (NaN where the run failed).
+    pub rows: Vec<Vec<f64>>,
+    /// Why each run failed, or `None` where it ran.
+    pub failures: Vec<Option<String>>,
+    /// The grid's axes, each a parameter and its values, in the order of the columns.
+    pub axes: Vec<(String, Vec<f64>)>,
+    /// Whether some values were drawn at random.
+    pub random: bool,
+}
+
+/// A scene lowered once, with every run's start made: ready to run any of its runs.
+pub struct Ensemble {
+    integrand: Integrand,
+    run_settings: sim::Settings,
+    watched: Vec<Event>,
+    recorded: Vec<Recorded>,
+    /// The varied values of each run, in the order of [`Options::vary`].
+    values: Vec<Vec<f64>>,
+    /// Each run's start, or why it could not be made.
+    starts: Vec<Result<Start, String>>,
+    columns: Vec<String>,
+    axes: Vec<(String, Vec<f64>)>,
+    random: bool,
+    state_names: Vec<String>,
+    constraint_names: Vec<String>,
+    angle_oriented_bodies: Vec<String>,
+}
+
+/// A run's parameter values and initial state (q, q̇).
+struct Start {
+    parameters: Vec<f64>,
+    state: Vec<f64>,
+}
+
+/// What a run gives: its recorded values (NaN where it failed), and why it failed.
+type Outcome = (Vec<f64>, Option<String>);
+
+/// Runs the ensemble on `threads` threads (`None`: one per core), showing nothing.
+pub fn ensemble(source: &str, options: &Options, threads: Option<usize>) -> Result<Table, Error> {
+    ensemble_with(source, options, threads, &mut ())
+}
+
+/// [`ensemble`], telling `progress` how many runs are done (as its `t`, out of the runs).
+pub fn ensemble_with(
+    source: &str,
+    options: &Options,
+    threads: Option<usize>,
+    progress: &mut dyn Progress,
+) -> Result<Table, Error> {
+    let ensemble = Ensemble::new(source, options)?;
+    let threads = threads.unwrap_or_else(cores);
+    Ok(ensemble.run(0..ensemble.runs(), threads, progress))
+}
+
+/// The number of threads the machine runs at once.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+impl Ensemble {
+    /// Loads, derives and lowers `source` once, and makes every run's start.
+    pub fn new(source: &str, options: &Options) -> Result<Ensemble, Error> {
+        let design = draws::Design::new(&options.vary, options.runs)?;
+        let recorded = record::parse(&options.record);
+        let mut settings = simulate::settings(source, &options.simulate)?;
+        // Nothing asked for: the scene's `output` quantities, else the coordinates, at the end.
+        if !recorded.is_empty() {
+            settings.outputs = record::expressions(&recorded);
+        }
+        let simulate::Loaded { mut prepared, outputs, set_exprs, held, .. } =
+            simulate::load(source, &settings)?;
+        let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
+        let given = varied_parameters(&prepared, &options.vary)?;
+        let sets = simulate::overrides(&prepared, &settings.sets, &set_exprs)?;
+        let columns = Columns {
+            outputs: outputs.len(),
+            stops: settings.stops.len(),
+            events: settings.events.len(),
+        };
+        // The scene's own values fill the parameters' slots until each run sets its own.
+        let (parameters, _) = simulate::start(&mut prepared, &sets, &[])?;
+        let dynamics_exprs = prepared.dynamics_exprs();
+        let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+        let observed = prepared.extra[..columns.figures()].to_vec();
+        let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
+        let signals = simulate::drive_signals(&prepared, &settings)?;
+        let hold = simulate::drive_hold(&mut prepared, &held, settings.hold)?;
+        let mut mechanical = sim::Mechanical::new(
+            prepared.layout,
+            numeric::Tape::new(dynamics),
+            numeric::Tape::new(observation),
+            parameters,
+        )
+        .with_kinds(prepared.stabilisation())
+        .with_signals(signals);
+        if let Some(hold) = hold {
+            mechanical = mechanical.with_hold(hold);
+        }
+        let integrand = Integrand::new(&mut prepared, mechanical, settings.method)?;
+
+        let values = design.values(options.seed);
+        let starts = values
+            .iter()
+            .map(|run| {
+                let numbers: Vec<(usize, f64)> =
+                    given.iter().copied().zip(run.iter().copied()).collect();
+                simulate::start(&mut prepared, &sets, &numbers)
+                    .map(|(parameters, state)| Start { parameters, state })
+                    .map_err(|e| e.worded(run_words))
+            })
+            .collect();
+        let mut names: Vec<String> = options.vary.iter().map(|v| v.parameter.clone()).collect();
+        names.extend(recorded.iter().map(|r| r.name.clone()));
+        let model = &prepared.derivation.model;
+        Ok(Ensemble {
+            integrand,
+            // One sample: the start; the end (or the stop) is recorded anyway.
+            run_settings: simulate::run_settings(&settings, 1),
+            watched: simulate::watched(&columns),
+            recorded,
+            values,
+            starts,
+            columns: names,
+            axes: design.axes(),
+            random: design.is_random(),
+            state_names: prepared.state_names(),
+            constraint_names: prepared
+                .derivation
+                .multipliers
+                .iter()
+                .map(|m| model.constraints[m.constraint].name.clone())
+                .collect(),
+            angle_oriented_bodies: simulate::angle_oriented_bodies(model),
+        })
+    }
+
+    /// How many runs the ensemble has.
+    pub fn runs(&self) -> usize {
+        self.values.len()
+    }
+
+    /// The runs in `runs` (clipped to the ensemble's) on `threads` threads, the calling one
+    /// among them; `progress` hears from the calling thread how many are done.
+    pub fn run(&self, runs: Range<usize>, threads: usize, progress: &mut dyn Progress) -> Table {
+        let runs = runs.start.min(self.runs())..runs.end.min(self.runs());
+        let next = AtomicUsize::new(runs.start);
+        let done = AtomicUsize::new(0);
+        let helpers = threads.clamp(1, runs.len().max(1)) - 1;
+        progress.start(runs.len() as f64);
+        let mut results = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..helpers)
+                .map(|_| scope.spawn(|| self.work(&runs, &next, &done, &mut |_| {})))
+                .collect();
+            let mut mine = self.work(&runs, &next, &done, &mut |n| progress.update(n as f64));
+            for worker in workers {
+                // A worker's panic is a bug of ours; it is not input's to cause.
+                mine.extend(worker.join().expect("an ensemble's worker panicked"));
+            }
+            mine
+        });
+        progress.finish();
+        results.sort_by_key(|(k, _)| *k);
+        let mut table = Table {
+            columns: self.columns.clone(),
+            varied: self.values.first().map_or(0, Vec::len),
+            rows: Vec::with_capacity(results.len()),
+            failures: Vec::with_capacity(results.len()),
+            axes: self.axes.clone(),
+            random: self.random,
+        };
+        for (k, (recorded, failure)) in results {
+            let mut row = self.values[k].clone();
+            row.extend(recorded);
+            table.rows.push(row);
+            table.failures.push(failure);
+        }
+        table
+    }
+
+    /// Takes run after run until none is left: each run's index, its recorded values and why
+    /// it failed, if it did. `report` hears how many runs are done in all.
+    fn work(
+        &self,
+        runs: &Range<usize>,
+        next: &AtomicUsize,
+        done: &AtomicUsize,
+        report: &mut dyn FnMut(usize),
+    ) -> Vec<(usize, Outcome)> {
+        let mut integrand = self.integrand.clone();
+        let mut results = Vec::new();
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            if k >= runs.end {
+                return results;
+            }
+            results.push((k, self.run_one(&mut integrand, k)));
+            report(done.fetch_add(1, Ordering::Relaxed) + 1);
+        }
+    }
+
+    /// Run `k` on `integrand`: its recorded values, and why it failed.
+    fn run_one(&self, integrand: &mut Integrand, k: usize) -> Outcome {
+        let failed = |why: String| (vec![f64::NAN; self.recorded.len()], Some(why));
+        let start = match &self.starts[k] {
+            Ok(start) => start,
+            Err(why) => return failed(why.clone()),
+        };
+        integrand.mechanical().set_parameters(&start.parameters);
+        let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut |_| {});
+        match &run.fault {
+            Some(fault) => failed(self.describe(fault)),
+            None => (self.recorded.iter().map(|r| r.value(&run)).collect(), None),
+        }
+    }
+
+    /// A fault in one line: when, and what went wrong.
+    fn describe(&self, fault: &sim::Fault) -> String {
+        let names = FaultNames {
+            method: self.run_settings.method,
+            state: &self.state_names,
+            constraints: &self.constraint_names,
+            angle_oriented_bodies: &self.angle_oriented_bodies,
+        };
+        let (what, _) = names.words(&fault.kind);
+        format!("numeric fault at t = {}: {what}", fault.time)
+    }
+}
+
+/// A start's error in words that fit a run: its values are the run's (and `--set`'s), where
+/// `simulate`'s are `--set`'s alone.
+fn run_words(piece: &Piece) -> String {
+    match piece {
+        Piece::Setting(Setting::Set) => "this run".to_string(),
+        other => other.plain(),
+    }
+}
+
+/// The index of each varied parameter among the model's, or why one is not a parameter.
+fn varied_parameters(
+    prepared: &crate::numbers::Prepared,
+    vary: &[Vary],
+) -> Result<Vec<usize>, Error> {
+    let model = &prepared.derivation.model;
+    let mut found = Vec::new();
+    for (k, v) in vary.iter().enumerate() {
+        let name = &v.parameter;
+        if vary[..k].iter().any(|earlier| earlier.parameter == *name) {
+            return Err(Error::given(Setting::Vary, name, ": varied twice; give it once"));
+        }
+        if let Some(i) = model.params.iter().position(|p| p.name == *name) {
+            found.push(i);
+            continue;
+        }
+        let params: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
+        let mut rest = format!(": no parameter of that name; one of {}", params.join(", "));
+        if let Some(c) = model.coords.iter().find(|c| c.name == *name) {
+            rest = format!(
+                ": `{}` is a coordinate; vary a parameter its start is given by (coord {} = a, \
+                 with param a), one of {}",
+                c.name,
+                c.name,
+                params.join(", ")
+            );
+        } else if let Some(near) = model::closest(name, params.iter().copied()) {
+            rest = format!(": no parameter of that name; did you mean `{near}`?");
+        }
+        return Err(Error::given(Setting::Vary, name, rest));
+    }
+    Ok(found)
+}
+
+impl Spread {
+    /// The `k`th of a grid axis's values, the last exactly its end.
+    pub fn grid_value(&self, k: usize) -> f64 {
+        match *self {
+            Spread::Grid { to, values, .. } if k + 1 == values => to,
+            Spread::Grid { from, to, values } => {
+                from + (to - from) * k as f64 / (values - 1) as f64
+            }
+            _ => f64::NAN,
+        }
+    }
+}

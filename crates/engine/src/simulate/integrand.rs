@@ -1,0 +1,111 @@
+//! The problem a method integrates, built once from the lowered programs: the equations in
+//! (q, q̇), in canonical variables for the symplectic methods, or with the kept constraints as
+//! they are for radau. `simulate` runs it once; an ensemble clones it per thread and runs it
+//! at one set of parameters after another.
+
+use numeric::Tape;
+use sim::{integrate, Canonical, Constrained, Event, Mechanical, Method, Problem, Run};
+
+use super::{with_partials, Columns, Settings, NO_MULTIPLIERS};
+use crate::numbers::Prepared;
+use crate::Error;
+
+/// The equations of a run in the form its method integrates.
+#[derive(Clone)]
+pub(crate) enum Integrand {
+    /// y = (q, q̇), with the partials of the exact Jacobian for the methods that use one.
+    Mechanical(Mechanical),
+    /// y = (q, p), for the symplectic methods (boxed: it holds the problem in (q, q̇) too).
+    Canonical(Box<Canonical>),
+    /// y = (q, q̇, q̈, λ), the differential–algebraic system radau takes constraints as.
+    Constrained(Constrained),
+}
+
+impl Integrand {
+    /// The form `method` integrates, with what it needs lowered now (`auto`'s partials
+    /// included, which a single run lowers at its first switch instead).
+    pub fn new(
+        prepared: &mut Prepared,
+        mechanical: Mechanical,
+        method: Method,
+    ) -> Result<Integrand, Error> {
+        if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
+            return Err(Error::Input(format!(
+                "{} {NO_MULTIPLIERS}; use dop853 or radau",
+                method.name()
+            )));
+        }
+        if method.is_symplectic() {
+            let momentum_exprs = prepared.momentum_exprs();
+            let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
+            let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
+            if method.uses_jacobian() {
+                let exprs = prepared.canonical_partials_exprs();
+                let partials = prepared.lower(&prepared.dynamics_inputs(), &exprs)?;
+                canonical = canonical.with_partials(Tape::new(partials));
+            }
+            return Ok(Integrand::Canonical(Box::new(canonical)));
+        }
+        let mechanical = with_partials(prepared, method, mechanical)?;
+        if method.handles_algebraic() && prepared.layout.multipliers > 0 {
+            return Ok(Integrand::Constrained(Constrained::new(mechanical)));
+        }
+        Ok(Integrand::Mechanical(mechanical))
+    }
+
+    /// The equations in (q, q̇) underneath, whose parameters a run sets.
+    pub fn mechanical(&mut self) -> &mut Mechanical {
+        match self {
+            Integrand::Mechanical(m) => m,
+            Integrand::Canonical(c) => &mut c.inner,
+            Integrand::Constrained(c) => c.inner_mut(),
+        }
+    }
+
+    /// Integrates from the physical state `y0` = (q, q̇) at t = 0.
+    pub fn integrate(
+        &mut self,
+        y0: &[f64],
+        settings: &sim::Settings,
+        watched: &[Event],
+        progress: &mut dyn FnMut(f64),
+    ) -> Run {
+        match self {
+            Integrand::Mechanical(m) => integrate(m, y0, settings, watched, progress),
+            Integrand::Canonical(c) => {
+                let z0 = c.from_physical(0.0, y0);
+                integrate(&mut **c, &z0, settings, watched, progress)
+            }
+            Integrand::Constrained(c) => match c.consistent_state(0.0, y0) {
+                Ok(z0) => integrate(c, &z0, settings, watched, progress),
+                // No consistent accelerations at the start: the stabilised form reports why
+                // (which of the mass matrix and the constraints lost rank) as its first fault.
+                Err(_) => {
+                    integrate(c.inner_mut() as &mut dyn Problem, y0, settings, watched, progress)
+                }
+            },
+        }
+    }
+}
+
+/// The integrator's settings of a run recording `samples` evenly spaced times.
+pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
+    sim::Settings {
+        method: settings.method,
+        start: 0.0,
+        until: settings.until,
+        tolerance: settings.tolerance,
+        step: settings.step,
+        max_steps: 20_000_000,
+        samples,
+    }
+}
+
+/// The stops and events watched, by their observation columns.
+pub(crate) fn watched(columns: &Columns) -> Vec<Event> {
+    let Columns { outputs, stops, events } = *columns;
+    (0..stops)
+        .map(|k| Event { column: outputs + k, stop: true })
+        .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
+        .collect()
+}
