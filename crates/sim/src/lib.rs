@@ -32,6 +32,7 @@ mod series;
 mod spectrum;
 
 pub use constrained::Constrained;
+pub use erk::{dop853_tableau, Dop853Tableau};
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
 pub use series::{Series, SeriesError};
