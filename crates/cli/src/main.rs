@@ -145,6 +145,25 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// Export the scene as an FMI 2.0 FMU (Model Exchange and Co-Simulation in one archive),
+    /// its binary compiled for this platform with the system C compiler (`cc`, or `CC`).
+    Export {
+        file: PathBuf,
+        /// Write the FMU here (whole or not at all).
+        #[arg(long, value_name = "OUT.fmu")]
+        fmu: PathBuf,
+        /// The Co-Simulation integrator's tolerance (relative and absolute) when the importer
+        /// sets none; default: the scene's `simulate { tolerance … }`, else 1e-10.
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// The stop time of the FMU's default experiment (s); default: the scene's
+        /// `simulate { until … }`, else 10.
+        #[arg(long)]
+        until: Option<f64>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Write the equations of motion as a self-contained Rust module (only std needed).
     Codegen {
         file: PathBuf,
@@ -334,6 +353,11 @@ fn main() -> ExitCode {
             let options = engine::linearize::Options { about, set, sweep, no_units, drop_cyclic };
             linearize(&file, &source, &options, format, out, plot)
         }
+        Command::Export { file, fmu, tolerance, until, no_units } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let options = engine::fmu::ExportOptions { tolerance, until, no_units };
+            export(&file, &source, &options, &fmu)
+        }
         Command::Codegen { file, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
@@ -451,6 +475,30 @@ fn emit(text: &str) {
 }
 
 /// Says on stderr why the engine could not do what was asked; its exit code.
+/// `lagrange export --fmu`: the FMU's contents from the engine, compiled and archived.
+fn export(
+    file: &std::path::Path,
+    source: &str,
+    options: &engine::fmu::ExportOptions,
+    out: &std::path::Path,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let fmu = match engine::fmu::export(&path, source, options) {
+        Ok(fmu) => fmu,
+        Err(e) => return fail(&path, &e),
+    };
+    match cli::export::export(&fmu, &cli::export::compiler(), out) {
+        Ok(()) => {
+            eprintln!("wrote {} (FMI 2.0, Model Exchange and Co-Simulation)", out.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
 fn fail(path: &str, error: &engine::Error) -> ExitCode {
     let message = cli::diagnostics::error(path, error);
     eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });

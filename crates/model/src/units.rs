@@ -45,6 +45,19 @@ impl Dim {
         Dim(std::array::from_fn(|i| cas::number::times(&self.0[i], k)))
     }
 
+    /// The exponents of kg, m, s, A and K, when all are integers (a front end that names
+    /// units by their SI base, as an FMU's unit definitions do).
+    pub fn integer_exponents(&self) -> Option<[i32; 5]> {
+        let mut out = [0; 5];
+        for (e, o) in self.0.iter().zip(&mut out) {
+            if !e.is_integer() {
+                return None;
+            }
+            *o = i32::try_from(e.to_integer()).ok()?;
+        }
+        Some(out)
+    }
+
     /// `kg·m²/s²`, or `1` for a dimensionless quantity.
     pub fn text(&self) -> String {
         let power = |e: &Rational| -> String {

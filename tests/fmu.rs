@@ -1,0 +1,101 @@
+//! `lagrange export --fmu`: the archive holds what FMI 2.0 asks for, the binary exports the
+//! FMI functions, and a missing compiler is a clear error. FMPy's validation and the runs
+//! against `simulate` are in tests/fmu/check_fmu.py, which CI runs.
+
+use std::io::Read;
+
+use engine::fmu::{CModel, ExportOptions, Fmu};
+
+fn scene(path: &str) -> String {
+    std::fs::read_to_string(format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"))).expect("reads")
+}
+
+/// The FMU of the simple pendulum, from the hand-written stand-in of its generated C.
+fn pendulum() -> Fmu {
+    let dir = format!("{}/fmu/standin", env!("CARGO_MANIFEST_DIR"));
+    let files = ["simple_pendulum.h", "simple_pendulum.c"]
+        .iter()
+        .map(|f| (f.to_string(), std::fs::read_to_string(format!("{dir}/{f}")).expect("reads")))
+        .collect();
+    let c = CModel { name: "simple_pendulum".into(), files };
+    let source = scene("examples/classics/simple_pendulum.lag");
+    engine::fmu::fmu(c, &source, &ExportOptions::default()).expect("exports")
+}
+
+#[test]
+fn the_archive_holds_the_description_the_binary_the_sources_and_the_documentation() {
+    let fmu = pendulum();
+    let dir = tempfile_dir();
+    let out = dir.join("simple_pendulum.fmu");
+    cli::export::export(&fmu, &cli::export::compiler(), &out).expect("compiles and writes");
+    let bytes = std::fs::read(&out).expect("written");
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).expect("a zip archive");
+    let names: Vec<String> = zip.file_names().map(String::from).collect();
+    let (platform, extension) = Fmu::platform();
+    for expected in [
+        "modelDescription.xml".to_string(),
+        format!("binaries/{platform}/simple_pendulum.{extension}"),
+        "sources/simple_pendulum.c".into(),
+        "sources/simple_pendulum.h".into(),
+        "sources/fmu.c".into(),
+        "sources/fmi2.h".into(),
+        "sources/dop853.c".into(),
+        "sources/dop853_tableau.h".into(),
+        "documentation/index.html".into(),
+    ] {
+        assert!(names.contains(&expected), "{expected} missing from {names:?}");
+    }
+    let mut description = String::new();
+    zip.by_name("modelDescription.xml").expect("entry").read_to_string(&mut description).unwrap();
+    assert!(description.contains("<ModelExchange modelIdentifier=\"simple_pendulum\""));
+    assert!(description.contains("<CoSimulation modelIdentifier=\"simple_pendulum\""));
+    assert!(description.contains("name=\"der(theta')\""), "{description}");
+    assert!(description.contains(&format!("guid=\"{}\"", guid_of(&fmu))));
+    // The DOP853 tableau printed into C reads back to the bits `sim` steps with.
+    let tableau = &fmu.sources.iter().find(|s| s.0 == "dop853_tableau.h").unwrap().1;
+    let t = sim::dop853_tableau();
+    for x in t.a.iter().flat_map(|row| row.iter()).chain(t.b).chain(t.e5) {
+        assert!(tableau.contains(&format!("{x:e}")), "{x:e} missing");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+fn guid_of(fmu: &Fmu) -> String {
+    let header = &fmu.sources.iter().find(|s| s.0 == "fmu_model.h").expect("shim").1;
+    let line = header.lines().find(|l| l.starts_with("#define MODEL_GUID")).expect("GUID");
+    line.split('"').nth(1).expect("quoted").to_string()
+}
+
+#[test]
+fn without_a_compiler_the_export_says_so_and_writes_nothing() {
+    let fmu = pendulum();
+    let dir = tempfile_dir();
+    let out = dir.join("nothing.fmu");
+    let error = cli::export::export(&fmu, "/nonexistent/cc", &out).expect_err("no compiler");
+    let message = error.to_string();
+    assert!(
+        message.starts_with("no C compiler: `/nonexistent/cc` could not be started"),
+        "{message}"
+    );
+    assert!(message.contains("CC environment variable"), "{message}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn an_export_is_reproducible() {
+    let (a, b) = (pendulum(), pendulum());
+    assert_eq!(a.model_description, b.model_description);
+    assert_eq!(a.sources, b.sources);
+}
+
+/// A fresh folder under the target directory's temporary space.
+fn tempfile_dir() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "lagrange-fmu-test-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::create_dir_all(&dir).expect("temporary folder");
+    dir
+}

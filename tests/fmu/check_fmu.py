@@ -1,0 +1,95 @@
+"""FMUs of lagrange scenes checked with FMPy, as CI runs it (.ci/run).
+
+For each scene: `lagrange export --fmu`, FMPy's validator (no problems), then FMPy's runs as
+Co-Simulation (the FMU's own DOP853) and as Model Exchange (FMPy's CVode), each compared with
+`lagrange simulate` of the same scene at the same times. Exits 1 on the first failure.
+
+    python tests/fmu/check_fmu.py --lagrange target/release/lagrange SCENE:UNTIL ...
+"""
+
+import argparse
+import csv
+import io
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+from fmpy import read_model_description, simulate_fmu
+from fmpy.validation import validate_fmu
+
+TOLERANCE = 1e-10
+AGREEMENT = 1e-6
+SAMPLES = 200
+
+
+def states_of(fmu):
+    """The FMU's continuous states, by name, in the order of their derivatives."""
+    description = read_model_description(fmu)
+    return [d.variable.derivative.name for d in description.derivatives]
+
+
+def simulate(lagrange, scene, until, names):
+    """`lagrange simulate` of the scene: times and the named columns, at SAMPLES + 1 points."""
+    run = subprocess.run(
+        [lagrange, "simulate", scene, "--until", repr(until), "--tolerance", repr(TOLERANCE),
+         "--samples", str(SAMPLES + 1), "--output", ",".join(names)],
+        check=True, capture_output=True, text=True)
+    rows = list(csv.reader(io.StringIO(run.stdout)))
+    header, body = rows[0], np.array([[float(x) for x in r] for r in rows[1:]])
+    return body[:, 0], {name: body[:, header.index(name)] for name in names}
+
+
+def worst_difference(times, reference, result, names):
+    """The largest |difference| over the names at the reference's times, relative to the
+    size of the value where it exceeds 1."""
+    worst = 0.0
+    for name in names:
+        got = np.interp(times, result["time"], result[name])
+        scale = np.maximum(1.0, np.abs(reference[name]))
+        worst = max(worst, float(np.max(np.abs(got - reference[name]) / scale)))
+    return worst
+
+
+def check(lagrange, scene, until, folder):
+    name = os.path.splitext(os.path.basename(scene))[0]
+    fmu = os.path.join(folder, name + ".fmu")
+    subprocess.run([lagrange, "export", scene, "--fmu", fmu, "--tolerance", repr(TOLERANCE)],
+                   check=True, capture_output=True, text=True)
+    problems = validate_fmu(fmu)
+    if problems:
+        print(f"{scene}: FMPy's validator found problems:", *problems, sep="\n  ")
+        return False
+    names = states_of(fmu)
+    times, reference = simulate(lagrange, scene, until, names)
+    interval = until / SAMPLES
+    ok = True
+    for interface, extra in [("CoSimulation", {}),
+                             ("ModelExchange", {"solver": "CVode",
+                                                "relative_tolerance": TOLERANCE})]:
+        result = simulate_fmu(fmu, fmi_type=interface, stop_time=until,
+                              output_interval=interval, output=names, **extra)
+        worst = worst_difference(times, reference, result, names)
+        verdict = "ok" if worst <= AGREEMENT else "FAILED"
+        print(f"{scene} as {interface}: largest difference from simulate {worst:.1e} "
+              f"over {len(names)} states to t = {until} s: {verdict}")
+        ok = ok and worst <= AGREEMENT
+    return ok
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--lagrange", required=True, help="the lagrange binary")
+    parser.add_argument("scenes", nargs="+", help="SCENE.lag:UNTIL, the run's end in seconds")
+    args = parser.parse_args()
+    ok = True
+    with tempfile.TemporaryDirectory() as folder:
+        for item in args.scenes:
+            scene, until = item.rsplit(":", 1)
+            ok = check(args.lagrange, scene, float(until), folder) and ok
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()
