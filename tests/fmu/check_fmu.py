@@ -24,10 +24,12 @@ AGREEMENT = 1e-6
 SAMPLES = 200
 
 
-def states_of(fmu):
-    """The FMU's continuous states, by name, in the order of their derivatives."""
+def compared(fmu):
+    """The FMU's continuous states, in the order of their derivatives, then its outputs (the
+    scene's `output` lines, KE and PE), by name."""
     description = read_model_description(fmu)
-    return [d.variable.derivative.name for d in description.derivatives]
+    states = [d.variable.derivative.name for d in description.derivatives]
+    return states + [o.variable.name for o in description.outputs]
 
 
 def simulate(lagrange, scene, until, names):
@@ -61,7 +63,7 @@ def check(lagrange, scene, until, folder):
     if problems:
         print(f"{scene}: FMPy's validator found problems:", *problems, sep="\n  ")
         return False
-    names = states_of(fmu)
+    names = compared(fmu)
     times, reference = simulate(lagrange, scene, until, names)
     interval = until / SAMPLES
     ok = True
@@ -73,7 +75,7 @@ def check(lagrange, scene, until, folder):
         worst = worst_difference(times, reference, result, names)
         verdict = "ok" if worst <= AGREEMENT else "FAILED"
         print(f"{scene} as {interface}: largest difference from simulate {worst:.1e} "
-              f"over {len(names)} states to t = {until} s: {verdict}")
+              f"over {len(names)} states and outputs to t = {until} s: {verdict}")
         ok = ok and worst <= AGREEMENT
     return ok
 
