@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 11] = [
+const PAGES: [&str; 12] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -17,6 +17,7 @@ const PAGES: [&str; 11] = [
     "docs/linearizing.md",
     "docs/bicycle.md",
     "docs/python.md",
+    "docs/fmu.md",
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
