@@ -51,6 +51,9 @@ fn the_archive_holds_the_description_the_binary_the_sources_and_the_documentatio
     assert!(description.contains("<CoSimulation modelIdentifier=\"simple_pendulum\""));
     assert!(description.contains("name=\"der(theta')\""), "{description}");
     assert!(description.contains(&format!("guid=\"{}\"", guid_of(&fmu))));
+    // g = 9.81 m/s^2: a tunable parameter in its SI unit, declared by its base.
+    assert!(description.contains("<Unit name=\"m/s2\"><BaseUnit m=\"1\" s=\"-2\"/></Unit>"));
+    assert!(description.contains("<Real start=\"9.81e0\" unit=\"m/s2\"/>"), "{description}");
     // The DOP853 tableau printed into C reads back to the bits `sim` steps with.
     let tableau = &fmu.sources.iter().find(|s| s.0 == "dop853_tableau.h").unwrap().1;
     let t = sim::dop853_tableau();
