@@ -4,39 +4,36 @@
 
 use std::io::Read;
 
-use engine::fmu::{CModel, ExportOptions, Fmu};
+use engine::fmu::{ExportOptions, Fmu};
 
 fn scene(path: &str) -> String {
     std::fs::read_to_string(format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"))).expect("reads")
 }
 
-/// The FMU of the simple pendulum, from the hand-written stand-in of its generated C.
-fn pendulum() -> Fmu {
-    let dir = format!("{}/fmu/standin", env!("CARGO_MANIFEST_DIR"));
-    let files = ["simple_pendulum.h", "simple_pendulum.c"]
-        .iter()
-        .map(|f| (f.to_string(), std::fs::read_to_string(format!("{dir}/{f}")).expect("reads")))
-        .collect();
-    let c = CModel { name: "simple_pendulum".into(), files };
-    let source = scene("examples/classics/simple_pendulum.lag");
-    engine::fmu::fmu(c, &source, &ExportOptions::default()).expect("exports")
+/// The FMU of an example, as `lagrange export` makes it.
+fn export(path: &str) -> Fmu {
+    engine::fmu::export(path, &scene(path), &ExportOptions::default()).expect("exports")
 }
+
+const PENDULUM: &str = "examples/classics/double_pendulum.lag";
 
 #[test]
 fn the_archive_holds_the_description_the_binary_the_sources_and_the_documentation() {
-    let fmu = pendulum();
+    let fmu = export(PENDULUM);
     let dir = tempfile_dir();
-    let out = dir.join("simple_pendulum.fmu");
-    cli::export::export(&fmu, &cli::export::compiler(), &out).expect("compiles and writes");
+    let out = dir.join("double_pendulum.fmu");
+    // The sources compile without a warning, as the C generator's do.
+    let strict = format!("{} -Wall -Wextra -Werror -pedantic", cli::export::compiler());
+    cli::export::export(&fmu, &strict, &out).expect("compiles and writes");
     let bytes = std::fs::read(&out).expect("written");
     let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).expect("a zip archive");
     let names: Vec<String> = zip.file_names().map(String::from).collect();
     let (platform, extension) = Fmu::platform();
     for expected in [
         "modelDescription.xml".to_string(),
-        format!("binaries/{platform}/simple_pendulum.{extension}"),
-        "sources/simple_pendulum.c".into(),
-        "sources/simple_pendulum.h".into(),
+        format!("binaries/{platform}/double_pendulum.{extension}"),
+        "sources/double_pendulum.c".into(),
+        "sources/double_pendulum.h".into(),
         "sources/fmu.c".into(),
         "sources/fmi2.h".into(),
         "sources/dop853.c".into(),
@@ -47,13 +44,16 @@ fn the_archive_holds_the_description_the_binary_the_sources_and_the_documentatio
     }
     let mut description = String::new();
     zip.by_name("modelDescription.xml").expect("entry").read_to_string(&mut description).unwrap();
-    assert!(description.contains("<ModelExchange modelIdentifier=\"simple_pendulum\""));
-    assert!(description.contains("<CoSimulation modelIdentifier=\"simple_pendulum\""));
-    assert!(description.contains("name=\"der(theta')\""), "{description}");
+    assert!(description.contains("<ModelExchange modelIdentifier=\"double_pendulum\""));
+    assert!(description.contains("<CoSimulation modelIdentifier=\"double_pendulum\""));
+    assert!(description.contains("name=\"der(theta2')\""), "{description}");
     assert!(description.contains(&format!("guid=\"{}\"", guid_of(&fmu))));
     // g = 9.81 m/s^2: a tunable parameter in its SI unit, declared by its base.
     assert!(description.contains("<Unit name=\"m/s2\"><BaseUnit m=\"1\" s=\"-2\"/></Unit>"));
     assert!(description.contains("<Real start=\"9.81e0\" unit=\"m/s2\"/>"), "{description}");
+    // Both angles start at π/2, as the scene puts them.
+    let start = format!("<Real start=\"{:e}\"/>", std::f64::consts::FRAC_PI_2);
+    assert_eq!(description.matches(&start).count(), 2, "{description}");
     // The DOP853 tableau printed into C reads back to the bits `sim` steps with.
     let tableau = &fmu.sources.iter().find(|s| s.0 == "dop853_tableau.h").unwrap().1;
     let t = sim::dop853_tableau();
@@ -71,7 +71,7 @@ fn guid_of(fmu: &Fmu) -> String {
 
 #[test]
 fn without_a_compiler_the_export_says_so_and_writes_nothing() {
-    let fmu = pendulum();
+    let fmu = export(PENDULUM);
     let dir = tempfile_dir();
     let out = dir.join("nothing.fmu");
     let error = cli::export::export(&fmu, "/nonexistent/cc", &out).expect_err("no compiler");
@@ -87,12 +87,12 @@ fn without_a_compiler_the_export_says_so_and_writes_nothing() {
 
 #[test]
 fn an_export_is_reproducible() {
-    let (a, b) = (pendulum(), pendulum());
+    let (a, b) = (export(PENDULUM), export(PENDULUM));
     assert_eq!(a.model_description, b.model_description);
     assert_eq!(a.sources, b.sources);
 }
 
-/// A fresh folder under the target directory's temporary space.
+/// A fresh folder in the system's temporary space.
 fn tempfile_dir() -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!(
         "lagrange-fmu-test-{}-{:?}",

@@ -164,10 +164,15 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
-    /// Write the equations of motion as a self-contained Rust module (only std needed).
+    /// Write the equations of motion as source code: a self-contained Rust module (only std
+    /// needed), or C99 (a header and a source, only libm needed).
     Codegen {
         file: PathBuf,
-        /// Write the module to this file (whole or not at all) instead of standard output.
+        /// The language: rust (one module) or c (NAME.h and NAME.c, NAME the file's stem).
+        #[arg(long, value_enum, default_value_t = LangArg::Rust)]
+        lang: LangArg,
+        /// Rust: write the module to this file (whole or not at all) instead of standard
+        /// output. C: the directory to write NAME.h and NAME.c into (required).
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// Do not check that terms added or equated have one dimension.
@@ -216,6 +221,12 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LangArg {
+    Rust,
+    C,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -358,16 +369,16 @@ fn main() -> ExitCode {
             let options = engine::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
-        Command::Codegen { file, out, no_units } => {
+        Command::Codegen { file, lang, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
-            match engine::codegen::codegen_with(
-                &path,
-                &source,
-                engine::Options { units: !no_units },
-            ) {
-                Ok(module) => write_or_print(out.as_ref(), &module.source),
-                Err(e) => fail(&path, &e),
+            let options = engine::Options { units: !no_units };
+            match lang {
+                LangArg::Rust => match engine::codegen::codegen_with(&path, &source, options) {
+                    Ok(module) => write_or_print(out.as_ref(), &module.source),
+                    Err(e) => fail(&path, &e),
+                },
+                LangArg::C => codegen_c(&path, &source, options, out.as_deref()),
             }
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {
@@ -459,6 +470,35 @@ fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
             ExitCode::SUCCESS
         }
     }
+}
+
+/// `lagrange codegen --lang c`: NAME.h and NAME.c into the directory `out`.
+fn codegen_c(
+    path: &str,
+    source: &str,
+    options: engine::Options,
+    out: Option<&std::path::Path>,
+) -> ExitCode {
+    let Some(dir) = out else {
+        eprintln!("error: `codegen --lang c` writes two files: give the directory with --out DIR");
+        return ExitCode::from(2);
+    };
+    let module = match engine::codegen::c(path, source, options) {
+        Ok(module) => module,
+        Err(e) => return fail(path, &e),
+    };
+    if let Err(e) = std::fs::create_dir_all(dir) {
+        eprintln!("error: cannot create {}: {e}", dir.display());
+        return ExitCode::from(2);
+    }
+    for (ext, text) in [("h", &module.header), ("c", &module.source)] {
+        let file = dir.join(format!("{}.{ext}", module.name));
+        if let Err(e) = cli::write_atomically(&file, text) {
+            eprintln!("error: cannot write {}: {e}", file.display());
+            return ExitCode::from(2);
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 /// Writes to standard output. A reader that stops reading (`| head`) is not an error: the

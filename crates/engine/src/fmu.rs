@@ -6,7 +6,6 @@
 
 use std::fmt::Write;
 
-use crate::numbers::{prepare, Prepared};
 use crate::{Error, Options};
 
 mod description;
@@ -36,13 +35,14 @@ pub struct Fmu {
     pub tolerance: f64,
 }
 
-/// The scene's equations as C, which an FMU wraps: the header and source `lagrange codegen
-/// --lang c` writes.
-pub struct CModel {
-    /// The C identifier that prefixes every name in them.
+/// An SI unit as the FMU declares it: its name (as the generated C's `NAME_parameter_units`
+/// spells it) and its exponents of the base units, radians included.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) struct SiUnit {
     pub name: String,
-    /// (file name, text): the header `NAME.h` and the source `NAME.c`.
-    pub files: Vec<(String, String)>,
+    /// Exponents of kg, m, s, A, K.
+    pub base: [i32; 5],
+    pub radians: i32,
 }
 
 /// What a scene's FMU declares, read from the scene at its parameters' values.
@@ -51,42 +51,35 @@ pub(crate) struct Interface {
     pub identifier: String,
     pub guid: String,
     pub states: Vec<(String, f64)>,
-    /// Name, SI unit (exponents of kg, m, s, A, K), value.
-    pub parameters: Vec<(String, Option<[i32; 5]>, f64)>,
-    pub inputs: Vec<(String, Option<[i32; 5]>, f64)>,
+    /// Name, SI unit, value.
+    pub parameters: Vec<(String, Option<SiUnit>, f64)>,
+    pub inputs: Vec<(String, Option<SiUnit>, f64)>,
     /// The scene's `output` lines, then KE and PE.
     pub outputs: Vec<String>,
     pub until: f64,
     pub tolerance: f64,
 }
 
-/// The FMU of the scene `source` read from `path` (whose stem names the model): its C
-/// generated, then wrapped.
+/// The FMU of the scene `source` read from `path`, whose stem names the model (as it names
+/// the generated C).
 pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, Error> {
-    let c = c_model(path, source, options)?;
-    fmu(c, source, options)
-}
-
-/// The scene's C, as `lagrange codegen --lang c` writes it.
-fn c_model(path: &str, source: &str, options: &ExportOptions) -> Result<CModel, Error> {
-    let _ = (path, source, options);
-    Err(Error::Input("C code generation is not in this build yet".into()))
-}
-
-/// The FMU of the scene `source`, wrapping the C the scene generated (`c`).
-pub fn fmu(c: CModel, source: &str, options: &ExportOptions) -> Result<Fmu, Error> {
-    let prepared = prepare(source, &[], Options { units: !options.no_units })?;
-    let mut interface = interface(&prepared, &c.name, source, options)?;
-    interface.guid = guid(&[source, &c.files.iter().map(|f| f.1.as_str()).collect::<String>()]);
+    let module = crate::codegen::c(path, source, Options { units: !options.no_units })?;
+    let mut interface = interface(&module, source, options)?;
+    interface.guid = guid(&[source, &module.header, &module.source]);
     let model_description = description::model_description(&interface);
-    let mut sources = c.files;
-    sources.push(("fmu_model.h".into(), model_header(&interface, &prepared)));
-    sources.push(("dop853_tableau.h".into(), tableau_header()));
-    for (name, text) in WRAPPER {
-        sources.push((name.to_string(), text.to_string()));
+    let fields = crate::codegen::parameter_fields(&module.equations);
+    let name = &module.name;
+    let mut sources = vec![
+        (format!("{name}.h"), module.header.clone()),
+        (format!("{name}.c"), module.source.clone()),
+        ("fmu_model.h".into(), model_header(&interface, &fields, module.equations.sizes)),
+        ("dop853_tableau.h".into(), tableau_header()),
+    ];
+    for (file, text) in WRAPPER {
+        sources.push((file.to_string(), text.to_string()));
     }
     Ok(Fmu {
-        model_identifier: c.name,
+        model_identifier: module.name.clone(),
         documentation: description::documentation(&interface),
         model_description,
         sources,
@@ -122,11 +115,12 @@ impl Fmu {
 }
 
 fn interface(
-    prepared: &Prepared,
-    identifier: &str,
+    module: &crate::codegen::CModule,
     source: &str,
     options: &ExportOptions,
 ) -> Result<Interface, Error> {
+    let equations = &module.equations;
+    let prepared = &equations.prepared;
     let model = &prepared.derivation.model;
     let settings = crate::simulate::settings(
         source,
@@ -137,27 +131,30 @@ fn interface(
             ..Default::default()
         },
     )?;
-    let values = prepared.parameter_values(&[])?;
-    let y0 = prepared.initial_state(&values, &[])?;
-    let si = |unit: &Option<lang::Unit>| {
-        unit.as_ref()
-            .and_then(|u| model::units::parse_unit(u).ok())
-            .and_then(|(dim, _)| dim.integer_exponents())
-    };
-    let parameters: Vec<_> =
-        model.params.iter().zip(&values).map(|(p, v)| (p.name.clone(), si(&p.unit), *v)).collect();
+    let values = &equations.values;
+    // The start as the generated C's `NAME_initial_state` computes it: from the same program.
+    let mut tape = numeric::Tape::new(equations.start.clone());
+    let mut y0 = vec![0.0; 2 * equations.sizes.coordinates];
+    let slots: Vec<f64> = std::iter::once(0.0).chain(values.iter().copied()).collect();
+    tape.eval(&slots, &mut y0);
+    let parameters: Vec<_> = model
+        .params
+        .iter()
+        .zip(values)
+        .map(|(p, v)| (p.name.clone(), si_unit(&p.unit), *v))
+        .collect();
     let inputs: Vec<_> = model
         .inputs
         .iter()
         .zip(&values[model.params.len()..])
-        .map(|(u, v)| (u.name.clone(), si(&u.unit), *v))
+        .map(|(u, v)| (u.name.clone(), si_unit(&u.unit), *v))
         .collect();
-    let mut outputs: Vec<String> = model.outputs.iter().map(|o| o.name.clone()).collect();
+    let mut outputs = equations.outputs.clone();
     outputs.extend(["KE".to_string(), "PE".to_string()]);
     let states: Vec<(String, f64)> = prepared.state_names().into_iter().zip(y0).collect();
     let interface = Interface {
-        title: model.title.clone().unwrap_or_else(|| identifier.to_string()),
-        identifier: identifier.to_string(),
+        title: equations.title.clone(),
+        identifier: module.name.clone(),
         guid: String::new(),
         states,
         parameters,
@@ -170,9 +167,19 @@ fn interface(
     Ok(interface)
 }
 
+/// The SI unit of a value written with `unit`: named as the generated C names it, with
+/// `rad` where the written unit is an angle's.
+fn si_unit(unit: &Option<lang::Unit>) -> Option<SiUnit> {
+    let unit = unit.as_ref()?;
+    let name = model::units::si_text(unit).ok()?;
+    let (dim, _) = model::units::parse_unit(unit).ok()?;
+    let radians = i32::from(name == "rad" || name.starts_with("rad.") || name.starts_with("rad/"));
+    Some(SiUnit { name, base: dim.integer_exponents()?, radians })
+}
+
 /// `fmu_model.h`: the generated C's names under the ones the wrapper uses, the parameters by
 /// index, and what the export fixed (the GUID, the default tolerance).
-fn model_header(interface: &Interface, prepared: &Prepared) -> String {
+fn model_header(interface: &Interface, fields: &[String], sizes: crate::codegen::Sizes) -> String {
     let name = &interface.identifier;
     let mut s = String::new();
     let _ =
@@ -181,7 +188,7 @@ fn model_header(interface: &Interface, prepared: &Prepared) -> String {
     let _ = writeln!(s, "#include <stddef.h>\n\n#include \"{name}.h\"\n");
     let _ = writeln!(s, "#define MODEL_GUID \"{}\"", interface.guid);
     let _ = writeln!(s, "#define MODEL_TOLERANCE {:e}", interface.tolerance);
-    let _ = writeln!(s, "#define MODEL_STATES {}", 2 * prepared.layout.coordinates);
+    let _ = writeln!(s, "#define MODEL_STATES {}", 2 * sizes.coordinates);
     let _ = writeln!(s, "#define MODEL_PARAMETERS {}", interface.parameters.len());
     let _ = writeln!(s, "#define MODEL_INPUTS {}", interface.inputs.len());
     // KE and PE are not among the generated C's outputs.
@@ -193,16 +200,12 @@ fn model_header(interface: &Interface, prepared: &Prepared) -> String {
     }
     let _ = writeln!(s, "\nstatic double *model_parameter(model_parameters *p, size_t i) {{");
     let _ = writeln!(s, "    switch (i) {{");
-    for (i, (param, _, _)) in interface.parameters.iter().enumerate() {
-        let _ = writeln!(s, "    case {i}:\n        return &p->{param};");
+    for (i, field) in fields.iter().enumerate() {
+        let _ = writeln!(s, "    case {i}:\n        return &p->{field};");
     }
     let _ = writeln!(s, "    default:\n        return (double *)0;\n    }}\n}}\n");
     let _ = writeln!(s, "static double model_default_input(size_t i) {{");
-    if interface.inputs.is_empty() {
-        let _ = writeln!(s, "    (void)i;\n    return 0.0;\n}}\n");
-    } else {
-        let _ = writeln!(s, "    return {name}_default_inputs[i];\n}}\n");
-    }
+    let _ = writeln!(s, "    return {name}_default_inputs[i];\n}}\n");
     let _ = writeln!(s, "#endif");
     s
 }

@@ -155,6 +155,35 @@ pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
     Ok((dim, scale))
 }
 
+/// The SI unit a value written in `u` is held in, spelled as Modelica and FMI spell units
+/// (`kg.m2/s2`, `rad/s`; `1` for a dimensionless value): values are converted to SI when
+/// resolved, so this is the unit of the number, not the one written. An angle keeps `rad`.
+pub fn si_text(u: &Unit) -> Result<String, Diagnostic> {
+    let (dim, _) = parse_unit(u)?;
+    let angle = u
+        .factors
+        .iter()
+        .any(|(name, _)| matches!(name.name.as_str(), "rad" | "deg" | "rev" | "rpm"));
+    let power = |e: &Rational| if e.is_one() { String::new() } else { e.to_string() };
+    let mut up: Vec<String> = (0..5)
+        .filter(|&i| dim.0[i].is_positive())
+        .map(|i| format!("{}{}", BASES[i], power(&dim.0[i])))
+        .collect();
+    if angle {
+        up.insert(0, "rad".to_string());
+    }
+    let down: Vec<String> = (0..5)
+        .filter(|&i| dim.0[i].is_negative())
+        .map(|i| format!("{}{}", BASES[i], power(&-dim.0[i].clone())))
+        .collect();
+    let up = if up.is_empty() { "1".to_string() } else { up.join(".") };
+    Ok(match down.len() {
+        0 => up,
+        1 => format!("{up}/{}", down[0]),
+        _ => format!("{up}/({})", down.join(".")),
+    })
+}
+
 /// The time dimension, which each prime takes off.
 pub(crate) fn time() -> Form {
     Form::known(Dim::base(2))

@@ -8,32 +8,11 @@
 use std::collections::BTreeSet;
 use std::fmt::Write;
 
-use super::Interface;
+use super::{Interface, SiUnit};
 use crate::Error;
 
 /// SI base units in the order of `model::units`' exponents, as FMI's `BaseUnit` names them.
 const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];
-
-/// The name of an SI unit from its exponents, in Modelica's notation (`kg.m2/s2`), or `1`.
-pub(crate) fn unit_name(exponents: &[i32; 5]) -> String {
-    let factor = |i: usize, e: i32| {
-        if e == 1 {
-            BASES[i].to_string()
-        } else {
-            format!("{}{e}", BASES[i])
-        }
-    };
-    let up: Vec<String> =
-        (0..5).filter(|&i| exponents[i] > 0).map(|i| factor(i, exponents[i])).collect();
-    let down: Vec<String> =
-        (0..5).filter(|&i| exponents[i] < 0).map(|i| factor(i, -exponents[i])).collect();
-    match (up.is_empty(), down.is_empty()) {
-        (true, true) => "1".to_string(),
-        (false, true) => up.join("."),
-        (true, false) => format!("1/{}", down.join(".")),
-        (false, false) => format!("{}/{}", up.join("."), down.join(".")),
-    }
-}
 
 /// Refuses a scene whose variables would share a name in the FMU.
 pub(crate) fn check_names(interface: &Interface) -> Result<(), Error> {
@@ -114,8 +93,8 @@ fn variables(interface: &Interface) -> Vec<Variable<'static>> {
             real: format!("derivative=\"{}\"", i + 1),
         });
     }
-    let with_unit = |unit: &Option<[i32; 5]>, start: f64| match unit {
-        Some(u) => format!("start=\"{}\" unit=\"{}\"", number(start), escape(&unit_name(u))),
+    let with_unit = |unit: &Option<SiUnit>, start: f64| match unit {
+        Some(u) => format!("start=\"{}\" unit=\"{}\"", number(start), escape(&u.name)),
         None => format!("start=\"{}\"", number(start)),
     };
     for (name, unit, value) in &interface.parameters {
@@ -182,23 +161,26 @@ pub(crate) fn model_description(interface: &Interface) -> String {
         "  <CoSimulation modelIdentifier=\"{id}\" canHandleVariableCommunicationStepSize=\"true\" \
          canNotUseMemoryManagementFunctions=\"false\"/>"
     );
-    let units: BTreeSet<[i32; 5]> = interface
+    let units: BTreeSet<&SiUnit> = interface
         .parameters
         .iter()
         .chain(&interface.inputs)
-        .filter_map(|(_, unit, _)| *unit)
+        .filter_map(|(_, unit, _)| unit.as_ref())
         .collect();
     if !units.is_empty() {
         let _ = writeln!(s, "  <UnitDefinitions>");
         for u in &units {
-            let base: Vec<String> = (0..5)
-                .filter(|&i| u[i] != 0)
-                .map(|i| format!(" {}=\"{}\"", BASES[i], u[i]))
+            let mut base: Vec<String> = (0..5)
+                .filter(|&i| u.base[i] != 0)
+                .map(|i| format!(" {}=\"{}\"", BASES[i], u.base[i]))
                 .collect();
+            if u.radians != 0 {
+                base.push(format!(" rad=\"{}\"", u.radians));
+            }
             let _ = writeln!(
                 s,
                 "    <Unit name=\"{}\"><BaseUnit{}/></Unit>",
-                escape(&unit_name(u)),
+                escape(&u.name),
                 base.concat()
             );
         }
