@@ -46,7 +46,7 @@ def main():
     reference = np.array([[float(x) for x in r] for r in rows[1:]])
 
     plt.rcParams["svg.hashsalt"] = "lagrange"
-    figure, axis = plt.subplots(figsize=(8, 4))
+    figure, axis = plt.subplots(figsize=(8, 4.6))
     for name, colour in [("theta1", "tab:blue"), ("theta2", "tab:orange")]:
         axis.plot(cs["time"], cs[name], color=colour, lw=2.5, alpha=0.45,
                   label=f"{name}, FMU as Co-Simulation (its DOP853)")
@@ -59,7 +59,7 @@ def main():
     axis.set_xlabel("t (s)")
     axis.set_ylabel("angle (rad)")
     axis.set_title("Double pendulum: lagrange export --fmu, simulated by FMPy")
-    axis.legend(fontsize=7, loc="lower left")
+    axis.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3)
     figure.tight_layout()
     figure.savefig(args.out, metadata={"Date": None})
     print("wrote", args.out)
