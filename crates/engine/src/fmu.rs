@@ -66,7 +66,6 @@ pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, 
     let module = crate::codegen::c(path, source, Options { units: !options.no_units })?;
     let mut interface = interface(&module, source, options)?;
     interface.guid = guid(&[source, &module.header, &module.source]);
-    let model_description = description::model_description(&interface);
     let fields = crate::codegen::parameter_fields(&module.equations);
     let name = &module.name;
     let mut sources = vec![
@@ -78,13 +77,15 @@ pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, 
     for (file, text) in WRAPPER {
         sources.push((file.to_string(), text.to_string()));
     }
-    Ok(Fmu {
+    let mut fmu = Fmu {
         model_identifier: module.name.clone(),
         documentation: description::documentation(&interface),
-        model_description,
+        model_description: String::new(),
         sources,
         tolerance: interface.tolerance,
-    })
+    };
+    fmu.model_description = description::model_description(&interface, &fmu.compile_units());
+    Ok(fmu)
 }
 
 /// The wrapper's sources, the same for every scene.

@@ -137,7 +137,8 @@ fn variables(interface: &Interface) -> Vec<Variable<'static>> {
 }
 
 /// modelDescription.xml.
-pub(crate) fn model_description(interface: &Interface) -> String {
+/// `compile_units`: the sources under `sources/` a compiler is given.
+pub(crate) fn model_description(interface: &Interface, compile_units: &[&str]) -> String {
     let vars = variables(interface);
     let mut s = String::new();
     let _ = writeln!(s, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
@@ -152,14 +153,19 @@ pub(crate) fn model_description(interface: &Interface) -> String {
         env!("CARGO_PKG_VERSION"),
     );
     let id = &interface.identifier;
+    // The sources to compile, for an importer that builds the binary for its own platform.
+    let files: String =
+        compile_units.iter().map(|f| format!("      <File name=\"{}\"/>\n", escape(f))).collect();
+    let sources = format!("    <SourceFiles>\n{files}    </SourceFiles>\n");
     let _ = writeln!(
         s,
-        "  <ModelExchange modelIdentifier=\"{id}\" canNotUseMemoryManagementFunctions=\"false\"/>"
+        "  <ModelExchange modelIdentifier=\"{id}\" canNotUseMemoryManagementFunctions=\"false\">\n\
+         {sources}  </ModelExchange>"
     );
     let _ = writeln!(
         s,
         "  <CoSimulation modelIdentifier=\"{id}\" canHandleVariableCommunicationStepSize=\"true\" \
-         canNotUseMemoryManagementFunctions=\"false\"/>"
+         canNotUseMemoryManagementFunctions=\"false\">\n{sources}  </CoSimulation>"
     );
     let units: BTreeSet<&SiUnit> = interface
         .parameters
