@@ -345,3 +345,102 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
     assert!(compared > 5_000, "only {compared} values compared");
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// The fenced blocks of a page tagged `tag`, in order.
+fn blocks(page: &str, tag: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    // The open block's tag and text.
+    let mut open: Option<(String, String)> = None;
+    for line in page.lines() {
+        match (line.strip_prefix("```"), open.take()) {
+            (Some(fence), None) => open = Some((fence.trim().to_string(), String::new())),
+            (Some(_), Some((t, text))) => {
+                if t == tag {
+                    found.push(text);
+                }
+            }
+            (None, Some((t, mut text))) => {
+                text.push_str(line);
+                text.push('\n');
+                open = Some((t, text));
+            }
+            (None, None) => {}
+        }
+    }
+    found
+}
+
+/// Compiles `program` with the module's C in `dir` and runs it; what it prints.
+fn build_and_run(compiler: &str, dir: &Path, module: &CModule, program: &str) -> String {
+    std::fs::write(dir.join("driver.c"), program).unwrap();
+    let binary = dir.join("driver");
+    let built = Command::new(compiler)
+        .args(FLAGS)
+        .args(["-O2", "-o"])
+        .arg(&binary)
+        .arg(dir.join("driver.c"))
+        .arg(dir.join(format!("{}.c", module.name)))
+        .arg("-lm")
+        .output()
+        .expect("the compiler runs");
+    assert!(built.status.success(), "{}", String::from_utf8_lossy(&built.stderr));
+    let ran = Command::new(&binary).output().expect("the driver runs");
+    assert!(ran.status.success(), "the driver fails");
+    String::from_utf8(ran.stdout).unwrap()
+}
+
+/// docs/c.md's driver: compiled with the cart-pole's C, it prints the line the page shows,
+/// and ends where `simulate` ends the same RK4 run with the same law driving F, to 1e-9
+/// relative.
+#[test]
+fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
+    let Some(compiler) = compilers().into_iter().next() else {
+        eprintln!("skipped: no C compiler (cc, $CC or clang) runs on this machine");
+        return;
+    };
+    let page = std::fs::read_to_string(lagrange_tests::examples_dir().join("../docs/c.md"))
+        .expect("docs/c.md");
+    let [program] = &blocks(&page, "c")[..] else { panic!("one C program on the page") };
+    let shown = blocks(&page, "text").pop().expect("the line it prints");
+    let rel = "examples/classics/inverted_pendulum_on_cart.lag";
+    let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
+    let module = engine::codegen::c(rel, &source, Default::default()).expect("generates");
+    let dir = std::env::temp_dir().join(format!("lagrange-c-page-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{}.h", module.name)), &module.header).unwrap();
+    std::fs::write(dir.join(format!("{}.c", module.name)), &module.source).unwrap();
+    let printed = build_and_run(&compiler, &dir, &module, program);
+    assert_eq!(printed, shown, "docs/c.md shows another line than its program prints");
+    // The same program printing every digit.
+    let exact = program.replace("%.2e", "%.17g");
+    let printed = build_and_run(&compiler, &dir, &module, &exact);
+    let number = |after: &str| -> f64 {
+        let rest = &printed[printed.find(after).expect("printed") + after.len()..];
+        rest.split(' ').next().unwrap().parse().expect("a number")
+    };
+    let (x, theta) = (number("x = "), number("theta = "));
+    let options = engine::simulate::Options {
+        input: vec!["F=10.7*x + 129.6*theta + 16.26*x' + 38.26*theta'".parse().unwrap()],
+        method: Some("rk4".into()),
+        step: Some(1e-3),
+        until: Some(10.0),
+        output: vec!["x, theta".into()],
+        no_units: true,
+        ..Default::default()
+    };
+    let outcome = engine::simulate::simulate(&source, &options).expect("runs");
+    let last = outcome.run.trajectory.rows.last().expect("rows");
+    assert_eq!(*outcome.run.trajectory.times.last().unwrap(), 10.0);
+    // Balanced, the state is small at the end: the agreement is relative.
+    assert!(
+        (last[0] - x).abs() <= 1e-9 * x.abs(),
+        "simulate ends at x = {}, the driver at {x}",
+        last[0]
+    );
+    assert!(
+        (last[1] - theta).abs() <= 1e-9 * theta.abs(),
+        "simulate ends at theta = {}, the driver at {theta}",
+        last[1]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
