@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 12] = [
+const PAGES: [&str; 13] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -21,6 +21,7 @@ const PAGES: [&str; 12] = [
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
+    "docs/c.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -410,7 +411,8 @@ fn problems(name: &str) -> Vec<String> {
                 )),
                 Some(_) => {}
             },
-            "text" | "python" => {}
+            // C is compiled and run by tests/codegen_c.rs.
+            "text" | "python" | "c" => {}
             "" => problems.push(format!("{at}: an untagged block (see docs/README.md)")),
             other => problems.push(format!("{at}: an unknown tag `{other}`")),
         }
@@ -527,6 +529,11 @@ fn examples() {
 #[test]
 fn testing() {
     assert_honest(PAGES[10]);
+}
+
+#[test]
+fn c_page() {
+    assert_honest(PAGES[11]);
 }
 
 /// The tests' own helpers: elided output, shell words, and that a wrong page is caught.
