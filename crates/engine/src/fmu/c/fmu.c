@@ -236,22 +236,16 @@ FMI2_EXPORT fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
                                    fmi2Real value[]) {
     instance *m = c;
     size_t i;
-    if (nvr > 0 && m->phase != INSTANTIATED) {
-        for (i = 0; i < nvr; i++) {
-            if (vr[i] >= VR_DERIVATIVES && vr[i] < VR_PARAMETERS) {
-                fmi2Status status = refresh(m);
-                if (status != fmi2OK) {
-                    return status;
-                }
-                break;
+    /* Derivatives and outputs are computed; before initialization they read 0. */
+    for (i = 0; i < nvr && m->phase != INSTANTIATED; i++) {
+        int computed = (vr[i] >= VR_DERIVATIVES && vr[i] < VR_PARAMETERS) ||
+                       (vr[i] >= VR_OUTPUTS && vr[i] < VR_END);
+        if (computed) {
+            fmi2Status status = refresh(m);
+            if (status != fmi2OK) {
+                return status;
             }
-            if (vr[i] >= VR_OUTPUTS && vr[i] < VR_END) {
-                fmi2Status status = refresh(m);
-                if (status != fmi2OK) {
-                    return status;
-                }
-                break;
-            }
+            break;
         }
     }
     for (i = 0; i < nvr; i++) {
