@@ -86,6 +86,22 @@ fn without_a_compiler_the_export_says_so_and_writes_nothing() {
 }
 
 #[test]
+fn an_output_named_as_another_variable_is_refused() {
+    for (name, other) in [("KE", "the kinetic energy"), ("m", "the parameter")] {
+        let source = format!(
+            "param m = 1 kg, g = 9.81 m/s^2\ncoord x\nparticle p {{ mass m; position (0, x) }}\n\
+             gravity g\noutput {name}: x\n"
+        );
+        let Err(engine::Error::Input(message)) =
+            engine::fmu::export("scene.lag", &source, &ExportOptions::default())
+        else {
+            panic!("an output named as {other} is refused");
+        };
+        assert!(message.contains(&format!("would be named `{name}`")), "{message}");
+    }
+}
+
+#[test]
 fn an_export_is_reproducible() {
     let (a, b) = (export(PENDULUM), export(PENDULUM));
     assert_eq!(a.model_description, b.model_description);
