@@ -35,7 +35,7 @@ fn inverse_dynamics_call(
     expected: &mut Vec<(f64, f64)>,
     k: usize,
     source: &str,
-    inputs: &str,
+    declared: &str,
 ) {
     let mut inverse = engine::inverse::inverse_dynamics(source, &Default::default()).unwrap();
     let n = inverse.coordinates().len();
@@ -50,7 +50,7 @@ fn inverse_dynamics_call(
     let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
     let _ = writeln!(
         main,
-        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &{inputs}, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
+        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &{declared}, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
         list(q),
         list(rates),
         list(accelerations),
