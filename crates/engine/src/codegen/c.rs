@@ -224,7 +224,11 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
     for ((field, scene), unit) in
         names.fields.iter().zip(&names.parameters).zip(&names.parameter_units)
     {
-        let _ = writeln!(s, "    double {field}; /* {} {unit} */", ascii(scene));
+        let _ = writeln!(
+            s,
+            "    double {field}; /* {} */",
+            ascii(&format!("{scene} {unit}")).trim_end()
+        );
     }
     let _ = writeln!(s, "}} {name}_parameters;\n");
     let declarations = [
