@@ -480,3 +480,49 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Andrews' squeezer with its start positions left to the kept constraints (guesses only):
+/// they are solved in numbers when the scene is derived, so the C's start is those numbers
+/// whatever the parameters, and the header says so.
+#[test]
+fn a_start_solved_in_numbers_is_fixed_and_said_so() {
+    let mut guessed = lagrange_tests::example("classics/andrews_squeezer.lag");
+    for (given, guess) in [
+        ("coord Theta = 0,", "coord Theta ~ 0.1,"),
+        ("coord gamma = 0.455279819163070380255912382449,", "coord gamma ~ 0.4,"),
+        ("coord Phi = 0.222668390165885884674473185609,", "coord Phi ~ 0.2,"),
+        ("coord delta = 0.487364979543842550225598953530,", "coord delta ~ 0.5,"),
+        ("coord Omega = -0.222668390165885884674473185609,", "coord Omega ~ -0.2,"),
+        ("coord epsilon = 1.23054744454982119249735015568,", "coord epsilon ~ 1.2,"),
+    ] {
+        assert!(guessed.contains(given), "{given}");
+        guessed = guessed.replace(given, guess);
+    }
+    let module =
+        engine::codegen::c("andrews.lag", &guessed, Default::default()).expect("generates");
+    let e = &module.equations;
+    assert_eq!(e.fixed_start().len(), 6);
+    assert!(
+        module.header.contains("The start of Theta, gamma, Phi, delta, Omega, epsilon was solved"),
+        "{}",
+        module.header
+    );
+    let at = |scale: f64| {
+        let mut input = vec![0.0];
+        input.extend(e.values.iter().map(|v| v * scale));
+        run(&e.start, &input)
+    };
+    let (scene, moved) = (at(1.0), at(1.1));
+    let n = e.sizes.coordinates;
+    let names = e.prepared.state_names();
+    let mut fixed = 0;
+    for (k, name) in names[..n].iter().enumerate() {
+        if e.fixed_start().contains(name) {
+            fixed += 1;
+            assert_eq!(scene[k], moved[k], "{name}");
+        }
+    }
+    assert_eq!(fixed, 6);
+    let y0 = e.prepared.initial_state(&e.values, &[]).expect("a start");
+    assert_eq!(scene, y0);
+}

@@ -440,3 +440,26 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
     s.push_str("}\n\n");
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{identifier, string};
+
+    #[test]
+    fn names_become_identifiers_c_accepts() {
+        assert_eq!(identifier("double_pendulum"), "double_pendulum");
+        assert_eq!(identifier("θ"), "theta");
+        assert_eq!(identifier("Ω₁"), "Omegau2081");
+        assert_eq!(identifier("int"), "int_");
+        assert_eq!(identifier("_hidden"), "scene__hidden");
+        assert_eq!(identifier("5-link"), "scene_5u2dlink");
+        assert_eq!(identifier(""), "scene_");
+    }
+
+    #[test]
+    fn strings_escape_what_is_not_printable_ascii() {
+        assert_eq!(string("x'"), "\"x'\"");
+        assert_eq!(string("a\"b\\"), "\"a\\\"b\\\\\"");
+        assert_eq!(string("θ1"), "\"\\316\\2701\"");
+    }
+}
