@@ -53,14 +53,6 @@ impl Dialect for Rust {
         format!("    let r{reg} = {value};\n")
     }
 
-    fn store(&self, slot: usize, value: &str) -> String {
-        format!("    out[{slot}] = {value};\n")
-    }
-
-    fn close(&self) -> String {
-        "}\n".to_string()
-    }
-
     fn call(&self, operation: Call, operands: &[String]) -> String {
         let a = &operands[0];
         match operation {

@@ -17,10 +17,14 @@ pub trait Dialect {
     fn open(&self, name: &str, doc: &str, inputs: usize, outputs: usize) -> String;
     /// A statement defining register `reg` as `value`.
     fn define(&self, reg: usize, value: &str) -> String;
-    /// The statement storing `value` as output `slot`.
-    fn store(&self, slot: usize, value: &str) -> String;
+    /// The statement storing `value` as output `slot`; both languages write `out[slot] = value;`.
+    fn store(&self, slot: usize, value: &str) -> String {
+        format!("    out[{slot}] = {value};\n")
+    }
     /// The function's closing line.
-    fn close(&self) -> String;
+    fn close(&self) -> String {
+        "}\n".to_string()
+    }
     /// A square root, a real power, an elementary function, atan2 and the helpers the
     /// language's generated code defines (`sign`, `pow_int`).
     fn call(&self, operation: Call, operands: &[String]) -> String;
