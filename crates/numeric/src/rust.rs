@@ -39,7 +39,7 @@ impl Dialect for Rust {
         literal(v)
     }
 
-    fn open(&self, name: &str, doc: &str, inputs: usize, outputs: usize) -> String {
+    fn open(&self, name: &str, doc: &str, inputs: usize, _: usize, outputs: usize) -> String {
         let mut s = String::new();
         for line in doc.lines() {
             let _ = writeln!(s, "/// {line}");

@@ -425,7 +425,15 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
         "static void gather(double t, const double *q, const double *qd, \
          const {name}_parameters *p, const double *u, double *input)\n{{"
     );
-    s.push_str("    int i;\n    (void)p;\n    (void)u;\n    input[0] = t;\n");
+    s.push_str("    int i;\n");
+    // Without parameters or inputs, `-Wextra` would warn of the argument not read.
+    if sizes.parameters == 0 {
+        s.push_str("    (void)p;\n");
+    }
+    if sizes.inputs == 0 {
+        s.push_str("    (void)u;\n");
+    }
+    s.push_str("    input[0] = t;\n");
     let _ = writeln!(
         s,
         "    for (i = 0; i < {n}; i++) {{\n        input[1 + i] = q[i];\n        input[{} + i] = qd[i];\n    }}",
