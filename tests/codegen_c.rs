@@ -298,6 +298,52 @@ fn compilers() -> Vec<String> {
     found
 }
 
+/// Scenes of corner cases the examples leave out, derived without the dimension check: no
+/// parameter, no input, no output and every function of the language; names that C reserves
+/// or spells otherwise, with an input and outputs.
+const CORNERS: [(&str, &str); 2] = [
+    (
+        "no_parameters.lag",
+        "coord x = 3/10\ncoord θ = 1/5, θ' = 1\nparticle p { mass 1; position (x, 0) }\n\
+         particle q { mass 2; position (x + cos(θ), sin(θ)) }\ngravity 9.81\n\
+         force push on p: (-sign(x')*abs(x)^(3/2) - atan2(x, 1 + x^2)*exp(-x^2)/sqrt(2 + x^2) \
+         + x^7 - tanh(x) + ln(2 + x) + asin(x/9) + acos(x/9) + atan(x) + sinh(x) + cosh(x) \
+         + tan(x/3), 0)\n",
+    ),
+    (
+        "int.lag",
+        "param double = 2, α = 3, _hidden = 1/2\ninput int = 1\ncoord x = double/10\n\
+         particle p { mass double; position (x, 0) }\npotential α*(x - _hidden)^2/2\n\
+         force drive on p: (int, 0)\noutput stretch: x - _hidden\noutput doubled: 2*x*int\n",
+    ),
+];
+
+/// Generates, compiles and checks one scene (the `seed`-th) in a folder of its own under
+/// `root`; the mismatches, and how many values were compared.
+fn check_scene(
+    root: &Path,
+    seed: usize,
+    (rel, source, options): (&str, &str, engine::Options),
+    compilers: &[String],
+) -> (Vec<String>, usize) {
+    let module = engine::codegen::c(rel, source, options).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let dir = root.join(&module.name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let points = points(&module.equations, seed);
+    let mut expected = Expected::new();
+    for (at, point) in points.iter().enumerate() {
+        expected_at(&module.equations, point, at, &mut expected);
+    }
+    std::fs::write(dir.join(format!("{}.h", module.name)), &module.header).unwrap();
+    std::fs::write(dir.join(format!("{}.c", module.name)), &module.source).unwrap();
+    std::fs::write(dir.join("driver.c"), driver(&module, &points)).unwrap();
+    let mut failures = Vec::new();
+    for compiler in compilers {
+        failures.extend(check_with(compiler, &dir, &module, &expected));
+    }
+    (failures, expected.values().map(Vec::len).sum())
+}
+
 #[test]
 fn generated_c_compiles_warning_free_and_matches_the_tape() {
     let compilers = compilers();
@@ -306,36 +352,26 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
         return;
     }
     let root = std::env::temp_dir().join(format!("lagrange-codegen-c-{}", std::process::id()));
-    let mut examples = lagrange_tests::examples();
-    examples.push((
+    let mut scenes = lagrange_tests::examples();
+    scenes.push((
         "examples/bicycle/whipple.lag".into(),
         lagrange_tests::example("bicycle/whipple.lag"),
     ));
+    let examples = scenes.len();
+    scenes.extend(CORNERS.iter().map(|(name, text)| (name.to_string(), text.to_string())));
     let next = AtomicUsize::new(0);
     let failures = Mutex::new(Vec::new());
     let compared = AtomicUsize::new(0);
+    // Two workers: the deriving and the compiling of one scene overlap another's.
     std::thread::scope(|scope| {
         for _ in 0..2 {
             scope.spawn(|| loop {
                 let k = next.fetch_add(1, Ordering::SeqCst);
-                let Some((rel, source)) = examples.get(k) else { break };
-                let module = engine::codegen::c(rel, source, Default::default())
-                    .unwrap_or_else(|e| panic!("{rel}: {e}"));
-                let dir = root.join(&module.name);
-                std::fs::create_dir_all(&dir).unwrap();
-                let points = points(&module.equations, k);
-                let mut expected = Expected::new();
-                for (at, point) in points.iter().enumerate() {
-                    expected_at(&module.equations, point, at, &mut expected);
-                }
-                std::fs::write(dir.join(format!("{}.h", module.name)), &module.header).unwrap();
-                std::fs::write(dir.join(format!("{}.c", module.name)), &module.source).unwrap();
-                std::fs::write(dir.join("driver.c"), driver(&module, &points)).unwrap();
-                for compiler in &compilers {
-                    let found = check_with(compiler, &dir, &module, &expected);
-                    failures.lock().unwrap().extend(found);
-                }
-                compared.fetch_add(expected.values().map(Vec::len).sum(), Ordering::SeqCst);
+                let Some((rel, source)) = scenes.get(k) else { break };
+                let options = engine::Options { units: k < examples };
+                let (found, count) = check_scene(&root, k, (rel, source, options), &compilers);
+                failures.lock().unwrap().extend(found);
+                compared.fetch_add(count, Ordering::SeqCst);
             });
         }
     });
@@ -443,4 +479,40 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
         last[1]
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Andrews' squeezer with its start positions left to the kept constraints (guesses only):
+/// they are solved in numbers when the scene is derived, so the C's start is those numbers
+/// whatever the parameters, and the header says so.
+#[test]
+fn a_start_solved_in_numbers_is_fixed_and_said_so() {
+    let source = lagrange_tests::example("classics/andrews_squeezer.lag");
+    let guessed = lagrange_tests::andrews_with_guesses(&source);
+    let module =
+        engine::codegen::c("andrews.lag", &guessed, Default::default()).expect("generates");
+    let e = &module.equations;
+    assert_eq!(e.fixed_start().len(), 6);
+    assert!(
+        module.header.contains("The start of Theta, gamma, Phi, delta, Omega, epsilon was solved"),
+        "{}",
+        module.header
+    );
+    let at = |scale: f64| {
+        let mut input = vec![0.0];
+        input.extend(e.values.iter().map(|v| v * scale));
+        run(&e.start, &input)
+    };
+    let (scene, moved) = (at(1.0), at(1.1));
+    let n = e.sizes.coordinates;
+    let names = e.prepared.state_names();
+    let mut fixed = 0;
+    for (k, name) in names[..n].iter().enumerate() {
+        if e.fixed_start().contains(name) {
+            fixed += 1;
+            assert_eq!(scene[k], moved[k], "{name}");
+        }
+    }
+    assert_eq!(fixed, 6);
+    let y0 = e.prepared.initial_state(&e.values, &[]).expect("a start");
+    assert_eq!(scene, y0);
 }

@@ -680,6 +680,21 @@ mod tests {
     }
 
     #[test]
+    fn si_units_are_spelled_as_modelica_spells_them() {
+        let source = "param a = 1 N, b = 2 kg/s^2, c = 30 deg, d = 60 rpm, e = 1 J/kg, f = 3 \
+                      cm/ms, g = 1 T, h = 1/2 rad, i = 1/2\ncoord x\nparticle p { mass 1; position (x, 0) }\n";
+        let file = lang::parse(source).expect("parses");
+        let (model, _) = crate::resolve(&file, source).expect("resolves");
+        let units: Vec<String> = model
+            .params
+            .iter()
+            .map(|p| p.unit.as_ref().map(|u| si_text(u).expect("a unit")).unwrap_or_default())
+            .collect();
+        let expected = ["kg.m/s2", "kg/s2", "rad", "rad/s", "m2/s2", "m/s", "kg/(s2.A)", "rad", ""];
+        assert_eq!(units, expected);
+    }
+
+    #[test]
     fn consistent_scenes_pass() {
         let rod = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\ncoord x = L/4, y, theta = pi/6\nbody rod { mass m; inertia m*L^2/12; position (x, y); angle theta }\nconstraint floor: y = L/2*cos(theta)\ngravity g\nexpect x'' = 0\nexpect at start: theta'' = 12/7*g/L\n";
         assert_eq!(errors(rod), Vec::<String>::new());

@@ -54,24 +54,19 @@ impl Dialect for C {
         literal(v)
     }
 
-    fn open(&self, name: &str, doc: &str, inputs: usize, outputs: usize) -> String {
+    fn open(&self, name: &str, doc: &str, inputs: usize, reads: usize, outputs: usize) -> String {
         let mut s = comment(doc, "");
         let _ = writeln!(s, "static void {name}(const double *input, double *out)\n{{");
-        // A program of constants reads no input; this keeps `-Wextra` quiet about it.
-        let _ = writeln!(s, "    /* {inputs} values in, {outputs} out. */\n    (void)input;");
+        let _ = writeln!(s, "    /* {inputs} values in, {outputs} out. */");
+        if reads == 0 {
+            // A program of constants; `-Wextra` would warn of the argument it does not read.
+            s.push_str("    (void)input;\n");
+        }
         s
     }
 
     fn define(&self, reg: usize, value: &str) -> String {
         format!("    const double r{reg} = {value};\n")
-    }
-
-    fn store(&self, slot: usize, value: &str) -> String {
-        format!("    out[{slot}] = {value};\n")
-    }
-
-    fn close(&self) -> String {
-        "}\n".to_string()
     }
 
     fn call(&self, operation: Call, operands: &[String]) -> String {

@@ -39,7 +39,7 @@ impl Dialect for Rust {
         literal(v)
     }
 
-    fn open(&self, name: &str, doc: &str, inputs: usize, outputs: usize) -> String {
+    fn open(&self, name: &str, doc: &str, inputs: usize, _: usize, outputs: usize) -> String {
         let mut s = String::new();
         for line in doc.lines() {
             let _ = writeln!(s, "/// {line}");
@@ -51,14 +51,6 @@ impl Dialect for Rust {
 
     fn define(&self, reg: usize, value: &str) -> String {
         format!("    let r{reg} = {value};\n")
-    }
-
-    fn store(&self, slot: usize, value: &str) -> String {
-        format!("    out[{slot}] = {value};\n")
-    }
-
-    fn close(&self) -> String {
-        "}\n".to_string()
     }
 
     fn call(&self, operation: Call, operands: &[String]) -> String {

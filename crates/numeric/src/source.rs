@@ -12,15 +12,19 @@ pub trait Dialect {
     /// A literal that reads back as exactly `v` (negative ones in parentheses, so that any
     /// operand may follow an operator).
     fn literal(&self, v: f64) -> String;
-    /// The function's documentation and opening line, for `inputs` values in and `outputs`
-    /// values out.
-    fn open(&self, name: &str, doc: &str, inputs: usize, outputs: usize) -> String;
+    /// The function's documentation and opening line, for `inputs` values in (`reads` of
+    /// them read) and `outputs` values out.
+    fn open(&self, name: &str, doc: &str, inputs: usize, reads: usize, outputs: usize) -> String;
     /// A statement defining register `reg` as `value`.
     fn define(&self, reg: usize, value: &str) -> String;
-    /// The statement storing `value` as output `slot`.
-    fn store(&self, slot: usize, value: &str) -> String;
+    /// The statement storing `value` as output `slot`; both languages write `out[slot] = value;`.
+    fn store(&self, slot: usize, value: &str) -> String {
+        format!("    out[{slot}] = {value};\n")
+    }
     /// The function's closing line.
-    fn close(&self) -> String;
+    fn close(&self) -> String {
+        "}\n".to_string()
+    }
     /// A square root, a real power, an elementary function, atan2 and the helpers the
     /// language's generated code defines (`sign`, `pow_int`).
     fn call(&self, operation: Call, operands: &[String]) -> String;
@@ -53,7 +57,8 @@ pub fn function(program: &Program, name: &str, doc: &str, dialect: &dyn Dialect)
             format!("r{r}")
         }
     };
-    let mut s = dialect.open(name, doc, inputs, program.outputs.len());
+    let reads = used[..inputs].iter().filter(|u| **u).count();
+    let mut s = dialect.open(name, doc, inputs, reads, program.outputs.len());
     for (i, _) in used.iter().enumerate().take(inputs).filter(|(_, u)| **u) {
         s.push_str(&dialect.define(i, &format!("input[{i}]")));
     }

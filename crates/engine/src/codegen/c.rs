@@ -230,7 +230,11 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
     for ((field, scene), unit) in
         names.fields.iter().zip(&names.parameters).zip(&names.parameter_units)
     {
-        let _ = writeln!(s, "    double {field}; /* {} {unit} */", ascii(scene));
+        let _ = writeln!(
+            s,
+            "    double {field}; /* {} */",
+            ascii(&format!("{scene} {unit}")).trim_end()
+        );
     }
     let _ = writeln!(s, "}} {name}_parameters;\n");
     let declarations = [
@@ -427,7 +431,15 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
         "static void gather(double t, const double *q, const double *qd, \
          const {name}_parameters *p, const double *u, double *input)\n{{"
     );
-    s.push_str("    int i;\n    (void)p;\n    (void)u;\n    input[0] = t;\n");
+    s.push_str("    int i;\n");
+    // Without parameters or inputs, `-Wextra` would warn of the argument not read.
+    if sizes.parameters == 0 {
+        s.push_str("    (void)p;\n");
+    }
+    if sizes.inputs == 0 {
+        s.push_str("    (void)u;\n");
+    }
+    s.push_str("    input[0] = t;\n");
     let _ = writeln!(
         s,
         "    for (i = 0; i < {n}; i++) {{\n        input[1 + i] = q[i];\n        input[{} + i] = qd[i];\n    }}",
@@ -441,4 +453,27 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
     }
     s.push_str("}\n\n");
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{identifier, string};
+
+    #[test]
+    fn names_become_identifiers_c_accepts() {
+        assert_eq!(identifier("double_pendulum"), "double_pendulum");
+        assert_eq!(identifier("θ"), "theta");
+        assert_eq!(identifier("Ω₁"), "Omegau2081");
+        assert_eq!(identifier("int"), "int_");
+        assert_eq!(identifier("_hidden"), "scene__hidden");
+        assert_eq!(identifier("5-link"), "scene_5u2dlink");
+        assert_eq!(identifier(""), "scene_");
+    }
+
+    #[test]
+    fn strings_escape_what_is_not_printable_ascii() {
+        assert_eq!(string("x'"), "\"x'\"");
+        assert_eq!(string("a\"b\\"), "\"a\\\"b\\\\\"");
+        assert_eq!(string("θ1"), "\"\\316\\2701\"");
+    }
 }

@@ -116,12 +116,14 @@ fn initial_state(e: &Equations, name: &str) -> String {
         d = e.sizes.dynamics_inputs()
     );
     let _ = writeln!(s, "    input[0] = 0.0;");
-    let _ = writeln!(
-        s,
-        "    for (i = 0; i < {}; i++) {{\n        input[1 + i] = slots[{} + i];\n    }}",
-        k + e.sizes.inputs,
-        1 + 2 * e.sizes.coordinates
-    );
+    if k + e.sizes.inputs > 0 {
+        let _ = writeln!(
+            s,
+            "    for (i = 0; i < {}; i++) {{\n        input[1 + i] = slots[{} + i];\n    }}",
+            k + e.sizes.inputs,
+            1 + 2 * e.sizes.coordinates
+        );
+    }
     s.push_str("    eval_start(input, y);\n}\n\n");
     s
 }
