@@ -85,6 +85,31 @@ fn without_a_compiler_the_export_says_so_and_writes_nothing() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Corner scenes (derived without the dimension check): no parameter and no input; names C
+/// reserves or spells otherwise, with an input and outputs.
+const CORNERS: [(&str, &str); 2] = [
+    ("nothing.lag", "coord x = 1/2\nparticle p { mass 1; position (x, 0) }\npotential x^2/2\n"),
+    (
+        "int.lag",
+        "param double = 2, α = 3\ninput int = 1\ncoord x = double/10\n\
+         particle p { mass double; position (x, 0) }\npotential α*x^2/2\n\
+         force drive on p: (int, 0)\noutput doubled: 2*x*int\n",
+    ),
+];
+
+#[test]
+fn corner_scenes_compile_without_a_warning() {
+    let dir = tempfile_dir();
+    for (path, source) in CORNERS {
+        let options = ExportOptions { no_units: true, ..Default::default() };
+        let fmu = engine::fmu::export(path, source, &options).expect("exports");
+        let strict = format!("{} -Wall -Wextra -Werror -pedantic", cli::export::compiler());
+        let out = dir.join(path).with_extension("fmu");
+        cli::export::export(&fmu, &strict, &out).unwrap_or_else(|e| panic!("{path}: {e}"));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn an_output_named_as_another_variable_is_refused() {
     for (name, other) in [("KE", "the kinetic energy"), ("m", "the parameter")] {

@@ -200,6 +200,9 @@ fn model_header(interface: &Interface, fields: &[String], sizes: crate::codegen:
         let _ = writeln!(s, "#define model_{f} {name}_{f}");
     }
     let _ = writeln!(s, "\nstatic double *model_parameter(model_parameters *p, size_t i) {{");
+    if fields.is_empty() {
+        let _ = writeln!(s, "    (void)p;");
+    }
     let _ = writeln!(s, "    switch (i) {{");
     for (i, field) in fields.iter().enumerate() {
         let _ = writeln!(s, "    case {i}:\n        return &p->{field};");
