@@ -1,8 +1,9 @@
 """FMUs of lagrange scenes checked with FMPy, as CI runs it (.ci/run).
 
-For each scene: `lagrange export --fmu`, FMPy's validator (no problems), then FMPy's runs as
-Co-Simulation (the FMU's own DOP853) and as Model Exchange (FMPy's CVode), each compared with
-`lagrange simulate` of the same scene at the same times. Exits 1 on the first failure.
+For each scene: `lagrange export --fmu`, FMPy's validator and the checks of FMU Manipulation
+Toolbox (`fmutool -check`: the XML schema and its semantic checks) with no problem, then FMPy's
+runs as Co-Simulation (the FMU's own DOP853) and as Model Exchange (FMPy's CVode), each compared
+with `lagrange simulate` of the same scene at the same times. Exits 1 when any of them fails.
 
     python tests/fmu/check_fmu.py --lagrange target/release/lagrange SCENE:UNTIL ...
 """
@@ -33,6 +34,15 @@ def compared(fmu):
     outputs = [o.variable.name for o in description.outputs]
     assert outputs[-2:] == ["KE", "PE"], outputs
     return states + ["KE", "PE"]
+
+
+def toolbox_check(fmu):
+    """FMU Manipulation Toolbox's `fmutool -input FMU -check`, through its entry point in this
+    interpreter (wherever pip put the script): (passed, what it printed)."""
+    code = ("import sys; from fmu_manipulation_toolbox.cli.fmutool import fmutool; "
+            "sys.argv = ['fmutool', '-input', sys.argv[1], '-check']; sys.exit(fmutool())")
+    run = subprocess.run([sys.executable, "-c", code, fmu], capture_output=True, text=True)
+    return run.returncode == 0, run.stdout + run.stderr
 
 
 def simulate(lagrange, scene, until, names, inputs, parameters):
@@ -69,6 +79,11 @@ def check(lagrange, scene, until, folder):
     if problems:
         print(f"{scene}: FMPy's validator found problems:", *problems, sep="\n  ")
         return False
+    passed, report = toolbox_check(fmu)
+    if not passed:
+        print(f"{scene}: fmutool -check found problems:\n{report}")
+        return False
+    print(f"{scene}: FMPy's validator and fmutool -check find no problem")
     names = compared(fmu)
     variables = read_model_description(fmu).modelVariables
     inputs = [v.name for v in variables if v.causality == "input"]
