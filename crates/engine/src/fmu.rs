@@ -32,7 +32,6 @@ pub struct Fmu {
     pub sources: Vec<(String, String)>,
     /// `documentation/index.html`.
     pub documentation: String,
-    pub tolerance: f64,
 }
 
 /// An SI unit as the FMU declares it: its name (as the generated C's `NAME_parameter_units`
@@ -82,7 +81,6 @@ pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, 
         documentation: description::documentation(&interface),
         model_description: String::new(),
         sources,
-        tolerance: interface.tolerance,
     };
     fmu.model_description = description::model_description(&interface, &fmu.compile_units());
     Ok(fmu)
