@@ -285,12 +285,15 @@ fn check_with(compiler: &str, dir: &Path, module: &CModule, expected: &Expected)
 }
 
 /// The C compilers to test with: the system's `cc` (or `CC`), and clang where installed.
+/// With `LAGRANGE_C_TEST=required` (CI sets it) both must run.
 fn compilers() -> Vec<String> {
     let system = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    let required = std::env::var("LAGRANGE_C_TEST").is_ok_and(|v| v == "required");
     let mut found = Vec::new();
     for compiler in [system, "clang".to_string()] {
         let works =
             Command::new(&compiler).arg("--version").output().is_ok_and(|o| o.status.success());
+        assert!(works || !required, "LAGRANGE_C_TEST=required, and `{compiler}` does not run");
         if works && !found.contains(&compiler) {
             found.push(compiler);
         }

@@ -21,6 +21,7 @@ const PAGES: [&str; 13] = [
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
+    "docs/control.md",
     "docs/c.md",
 ];
 
@@ -532,8 +533,13 @@ fn testing() {
 }
 
 #[test]
-fn c_page() {
+fn control() {
     assert_honest(PAGES[11]);
+}
+
+#[test]
+fn c_page() {
+    assert_honest(PAGES[12]);
 }
 
 /// The tests' own helpers: elided output, shell words, and that a wrong page is caught.

@@ -1,7 +1,9 @@
 //! Inverse dynamics against the forward dynamics it inverts: the torques a driven double
 //! pendulum was simulated with come back from its trajectory, and the torques computed for a
 //! prescribed motion, applied as generalized forces, make the scene follow that motion; with a
-//! constraint kept, τ leaves the constraint its own load, and still reproduces the motion.
+//! constraint kept, τ leaves the constraint its own load, and still reproduces the motion. The
+//! two-link arm of examples/control tracks its trajectory by computed torque: its error obeys
+//! the law's linear equation, and on the path its torques are the inverse dynamics.
 
 // The prescribed motion and the drive are closed forms in the test, evaluated by the
 // platform's functions, far from a last bit.
@@ -252,4 +254,79 @@ fn with_a_kept_constraint_the_torques_leave_it_its_own_load() {
     let worst = tracking_error(CART, cart_swing, 2.0);
     eprintln!("largest difference from the prescribed motion: {worst:e}");
     assert!(worst < 1e-9, "largest difference from the prescribed motion: {worst:e}");
+}
+
+/// examples/control/two_link_arm.lag: the shoulder and elbow torques driven by the
+/// computed-torque law of its `simulate` block, written from the hand-derived model.
+const ARM: &str = "control/two_link_arm.lag";
+
+/// The arm's desired motion as the scene writes it (w = 1 rad/s): positions, rates and
+/// accelerations of (q1, q2) at t.
+fn arm_motion(t: f64) -> [Vec<f64>; 3] {
+    let (s, c, s2, c2) = (t.sin(), t.cos(), (2.0 * t).sin(), (2.0 * t).cos());
+    [
+        vec![-std::f64::consts::FRAC_PI_2 + 0.8 * s, 0.6 * (1.0 - c2)],
+        vec![0.8 * c, 1.2 * s2],
+        vec![-0.8 * s, 2.4 * c2],
+    ]
+}
+
+fn arm_run(set: &[&str]) -> engine::simulate::Outcome {
+    let options = Options {
+        tolerance: Some(1e-12),
+        output: vec!["q1, q2, q1', q2', tau1, tau2".into()],
+        set: engine::input::assignments(set).unwrap(),
+        samples: 121,
+        ..Options::default()
+    };
+    let outcome = simulate(&lagrange_tests::example(ARM), &options).unwrap();
+    assert!(outcome.run.fault.is_none(), "{:?}", outcome.run.fault);
+    assert_eq!(*outcome.run.trajectory.times.last().unwrap(), 6.0);
+    outcome
+}
+
+#[test]
+fn the_arm_tracks_its_trajectory_by_computed_torque() {
+    // The law cancels the arm's dynamics only if the model written in the scene is the one
+    // lagrange derives: then e = qd − q obeys e'' + 20·e' + 100·e = 0 exactly, whose solution
+    // is e = (e(0) + (e'(0) + 10·e(0))·t)·exp(−10·t). From q = (−π/2 + 0.1, 0.1) at rest,
+    // e(0) = (−0.1, −0.1) and e'(0) = qd'(0) = (0.8, 0), so e1 = (−0.1 − 0.2·t)·exp(−10·t) and
+    // e2 = (−0.1 − t)·exp(−10·t).
+    let outcome = arm_run(&[]);
+    let (mut off_law, mut late) = (0.0f64, 0.0f64);
+    for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
+        let [qd, _, _] = arm_motion(*t);
+        let error = [qd[0] - row[0], qd[1] - row[1]];
+        let law = [(-0.1 - 0.2 * t) * (-10.0 * t).exp(), (-0.1 - t) * (-10.0 * t).exp()];
+        for (e, expected) in error.iter().zip(law) {
+            off_law = off_law.max((e - expected).abs());
+        }
+        if *t >= 1.0 {
+            late = late.max(error[0].abs()).max(error[1].abs());
+        }
+    }
+    eprintln!("largest departure from e'' + kd·e' + kp·e = 0: {off_law:e}");
+    eprintln!("largest tracking error after 1 s: {late:e}");
+    assert!(off_law < 1e-9, "the error departs from its law by {off_law:e}");
+    assert!(late < 1e-4, "the tracking error after 1 s reaches {late:e}");
+
+    // Started on the trajectory it stays there, and the torques the law applies are the
+    // inverse dynamics of the desired motion (the inputs at their value 0: the motors' part).
+    let outcome = arm_run(&["q1=-pi/2", "q2=0", "q1'=0.8"]);
+    let mut inverse = inverse_dynamics(&lagrange_tests::example(ARM), &Default::default()).unwrap();
+    let (mut off_path, mut off_torque) = (0.0f64, 0.0f64);
+    let mut tau = [0.0; 2];
+    for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
+        let [q, rates, accelerations] = arm_motion(*t);
+        for (got, want) in row[..4].iter().zip(q.iter().chain(&rates)) {
+            off_path = off_path.max((got - want).abs());
+        }
+        inverse.torques(*t, &q, &rates, &accelerations, &mut tau).unwrap();
+        for (got, want) in row[4..6].iter().zip(tau) {
+            off_torque = off_torque.max((got - want).abs());
+        }
+    }
+    eprintln!("on the path: {off_path:e} from it, torques {off_torque:e} from inverse dynamics");
+    assert!(off_path < 1e-9, "{off_path:e}");
+    assert!(off_torque < 1e-9, "{off_torque:e}");
 }
