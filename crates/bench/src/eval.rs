@@ -150,7 +150,7 @@ fn timing_block(n: usize, input: &[f64], y: &[f64], (m, l, g): (f64, f64, f64)) 
         let (mut mass, mut f, mut dy) = ([0.0; {nn}], [0.0; {n}], [0.0; {n2}]);
         let t = per_call(|| {{ m{n}::mass_matrix(black_box(&input), &mut mass); m{n}::forcing(black_box(&input), &mut f); black_box((&mass, &f)); }});
         println!("{n} gen_mf {{t:e}}");
-        let t = per_call(|| {{ m{n}::rhs(0.0, black_box(&y), &m{n}::PARAMETERS, &mut dy); black_box(&dy); }});
+        let t = per_call(|| {{ m{n}::rhs(0.0, black_box(&y), &m{n}::PARAMETERS, &[], &mut dy); black_box(&dy); }});
         println!("{n} gen_rhs {{t:e}}");
         let (theta, rate) = y.split_at({n});
         let mut trig = [0.0; {n2}];

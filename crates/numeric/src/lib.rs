@@ -7,7 +7,8 @@
 //! instructions are numbered once more so that products like `2·x` shared by several sums are
 //! computed once. A program runs on the [`Tape`] evaluator (no allocation per call; it writes
 //! into any `&mut [f64]`, such as the storage of an `nalgebra` matrix) or is printed as Rust
-//! source by [`rust`]. It takes expression ids and a symbol → input-slot mapping and knows
+//! source by [`rust`] or as C99 by [`c`], one walk over the program ([`source`]) spelled by
+//! each language. It takes expression ids and a symbol → input-slot mapping and knows
 //! nothing of how the expressions were derived: no mechanics, no names, no files.
 //!
 //! It is also the only float evaluator of expressions: [`Evaluator`] (and [`eval`],
@@ -16,10 +17,12 @@
 //! derivation's pool is handed), with the [`elementary`] functions of `libm`, so a value has
 //! the same bits wherever and on whatever machine it is computed.
 
+pub mod c;
 pub mod elementary;
 mod eval;
 mod lower;
 pub mod rust;
+pub mod source;
 mod tape;
 mod zero_test;
 
