@@ -43,7 +43,8 @@ impl BatchTape {
     pub fn eval_many(&mut self, inputs: &[f64], out: &mut [f64]) {
         let (width, outputs) = (self.program.inputs, self.program.outputs.len());
         assert!(width > 0 || inputs.is_empty(), "batch tape without inputs");
-        let points = if width == 0 { out.len() / outputs.max(1) } else { inputs.len() / width };
+        // A program without inputs has as many points as `out` has rows.
+        let points = inputs.len().checked_div(width).unwrap_or_else(|| out.len() / outputs.max(1));
         assert_eq!(inputs.len(), points * width, "batch tape inputs");
         assert_eq!(out.len(), points * outputs, "batch tape outputs");
         for first in (0..points).step_by(LANES) {
