@@ -157,7 +157,7 @@ fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
     let inputs: Vec<f64> = (0..points)
         .flat_map(|i| {
             let i = i as f64;
-            [(i * 0.37).sin() * 2.0, (i * 0.61).cos() * (i % 5.0), i * 0.25 - 1.0]
+            [(i * 0.37 % 4.0) - 2.0, (i * 0.61 % 3.0) * (i % 5.0), i * 0.25 - 1.0]
         })
         .collect();
     let mut many = vec![0.0; points * outputs.len()];
