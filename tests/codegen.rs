@@ -35,6 +35,7 @@ fn inverse_dynamics_call(
     expected: &mut Vec<(f64, f64)>,
     k: usize,
     source: &str,
+    declared: &str,
 ) {
     let mut inverse = engine::inverse::inverse_dynamics(source, &Default::default()).unwrap();
     let n = inverse.coordinates().len();
@@ -49,10 +50,10 @@ fn inverse_dynamics_call(
     let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
     let _ = writeln!(
         main,
-        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
+        "    {{ let mut tau = [0.0; {n}]; assert!(m{k}::inverse_dynamics(0.4, &[{}], &[{}], &[{}], &m{k}::PARAMETERS, &{declared}, &mut tau)); for v in tau {{ println!(\"{{v:?}}\"); }} }}",
         list(q),
         list(rates),
-        list(accelerations)
+        list(accelerations),
     );
 }
 
@@ -85,18 +86,24 @@ fn generated_code_compiles_and_matches_the_tape() {
         }
         // The Jacobian comes through another solver, so agreement is to its rounding.
         let y = inputs(2 * module.prepared.layout.coordinates, k + 1);
+        // The inputs at their declared values, as the tape's parameter slots hold them.
+        let declared = if module.prepared.derivation.model.inputs.is_empty() {
+            "[]".to_string()
+        } else {
+            format!("m{k}::INPUTS")
+        };
         if let Some(jac) = mechanical_jacobian(&mut module, &y) {
             jacobians += 1;
             expected.extend(jac.iter().map(|v| (*v, 1e-9)));
             let literals: Vec<String> = y.iter().map(|v| format!("{v:?}")).collect();
             let _ = writeln!(
                 main,
-                "    {{ let mut jac = [0.0; {}]; assert!(m{k}::jacobian({TIME:?}, &[{}], &m{k}::PARAMETERS, &mut jac)); for v in jac {{ println!(\"{{v:?}}\"); }} }}",
+                "    {{ let mut jac = [0.0; {}]; assert!(m{k}::jacobian({TIME:?}, &[{}], &m{k}::PARAMETERS, &{declared}, &mut jac)); for v in jac {{ println!(\"{{v:?}}\"); }} }}",
                 jac.len(),
                 literals.join(", ")
             );
         }
-        inverse_dynamics_call(&mut main, &mut expected, k, &source);
+        inverse_dynamics_call(&mut main, &mut expected, k, &source, &declared);
     }
     main.push_str("}\n");
     std::fs::write(dir.join("main.rs"), format!("{modules}\n{main}")).unwrap();

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 13] = [
+const PAGES: [&str; 15] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -17,11 +17,13 @@ const PAGES: [&str; 13] = [
     "docs/linearizing.md",
     "docs/bicycle.md",
     "docs/python.md",
+    "docs/fmu.md",
     "docs/benchmarks.md",
     "docs/examples.md",
     "docs/testing.md",
     "docs/control.md",
     "docs/ensembles.md",
+    "docs/c.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -454,7 +456,8 @@ fn problems(name: &str) -> Vec<String> {
                 )),
                 Some(_) => {}
             },
-            "text" | "python" => {}
+            // C is compiled and run by tests/codegen_c.rs.
+            "text" | "python" | "c" => {}
             "" => problems.push(format!("{at}: an untagged block (see docs/README.md)")),
             other => problems.push(format!("{at}: an unknown tag `{other}`")),
         }
@@ -581,6 +584,11 @@ fn testing() {
 #[test]
 fn control() {
     assert_honest(PAGES[11]);
+}
+
+#[test]
+fn c_page() {
+    assert_honest(PAGES[12]);
 }
 
 /// The tests' own helpers: elided output, shell words, and that a wrong page is caught.

@@ -70,3 +70,21 @@ pub fn mechanical(prepared: &mut engine::numbers::Prepared, parameters: &[f64]) 
         .with_kinds(prepared.stabilisation())
         .with_partials(partials)
 }
+
+/// Andrews' squeezer (`source`, the example) with its start positions left to the kept
+/// constraints: each published position replaced by a guess (`coord gamma ~ 0.4`).
+pub fn andrews_with_guesses(source: &str) -> String {
+    let mut guessed = source.to_string();
+    for (given, guess) in [
+        ("coord Theta = 0,", "coord Theta ~ 0.1,"),
+        ("coord gamma = 0.455279819163070380255912382449,", "coord gamma ~ 0.4,"),
+        ("coord Phi = 0.222668390165885884674473185609,", "coord Phi ~ 0.2,"),
+        ("coord delta = 0.487364979543842550225598953530,", "coord delta ~ 0.5,"),
+        ("coord Omega = -0.222668390165885884674473185609,", "coord Omega ~ -0.2,"),
+        ("coord epsilon = 1.23054744454982119249735015568,", "coord epsilon ~ 1.2,"),
+    ] {
+        assert!(guessed.contains(given), "{given}");
+        guessed = guessed.replace(given, guess);
+    }
+    guessed
+}

@@ -72,6 +72,7 @@ pub fn run() {
     let rows = compiled(&dir, rows);
     table(&rows);
     four_link_rhs();
+    many_points();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -150,7 +151,7 @@ fn timing_block(n: usize, input: &[f64], y: &[f64], (m, l, g): (f64, f64, f64)) 
         let (mut mass, mut f, mut dy) = ([0.0; {nn}], [0.0; {n}], [0.0; {n2}]);
         let t = per_call(|| {{ m{n}::mass_matrix(black_box(&input), &mut mass); m{n}::forcing(black_box(&input), &mut f); black_box((&mass, &f)); }});
         println!("{n} gen_mf {{t:e}}");
-        let t = per_call(|| {{ m{n}::rhs(0.0, black_box(&y), &m{n}::PARAMETERS, &mut dy); black_box(&dy); }});
+        let t = per_call(|| {{ m{n}::rhs(0.0, black_box(&y), &m{n}::PARAMETERS, &[], &mut dy); black_box(&dy); }});
         println!("{n} gen_rhs {{t:e}}");
         let (theta, rate) = y.split_at({n});
         let mut trig = [0.0; {n2}];
@@ -261,4 +262,51 @@ fn four_link_rhs() {
         crate::seconds(t)
     );
     outln!("(gen, hand: rustc -O; tape: this binary; rhs = M, f and the solve of M q'' = f)\n");
+}
+
+/// M and f at many states at once on the batch tape, per state, against the tape one state at
+/// a time (the same bits: `numeric`'s tests hold them so).
+fn many_points() {
+    const POINTS: usize = 1024;
+    outln!();
+    outln!("M and f at {POINTS} states, per state: the tape one state at a time, the batch tape");
+    outln!("({} states a register)", numeric::LANES);
+    outln!("{:>3} | {:>10} {:>10} | {:>7}", "n", "tape", "batch", "speedup");
+    for n in SIZES {
+        let scene = n_link(Family::Pendulum, n);
+        let mut prepared =
+            engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
+        let exprs = prepared.dynamics_exprs();
+        let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+        let width = dynamics.inputs;
+        let outputs = dynamics.outputs.len();
+        let (theta, rate) = state(n);
+        let inputs: Vec<f64> = (0..POINTS)
+            .flat_map(|i| {
+                let shift = i as f64 * 1e-3;
+                let mut row = vec![0.0];
+                row.extend(theta.iter().map(|v| v + shift));
+                row.extend(rate.iter().map(|v| v - shift));
+                row.extend([1.0, 1.0, 9.81]);
+                row
+            })
+            .collect();
+        assert_eq!(inputs.len(), POINTS * width, "the n-link's inputs");
+        let mut out = vec![0.0; POINTS * outputs];
+        let mut tape = Tape::new(dynamics.clone());
+        let one = crate::per_call(|| {
+            for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
+                tape.eval(black_box(point), black_box(row));
+            }
+        }) / POINTS as f64;
+        let mut batch = numeric::BatchTape::new(dynamics);
+        let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
+            / POINTS as f64;
+        outln!(
+            "{n:>3} | {:>10} {:>10} | {:>7.2}",
+            crate::seconds(one),
+            crate::seconds(many),
+            one / many
+        );
+    }
 }

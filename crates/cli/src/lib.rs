@@ -5,12 +5,13 @@
 //! diagnostics with source context, formats the `derive`, `check` and `linearize` reports,
 //! writes the results of `simulate`, `bench` and `linearize` (CSV, JSON, summaries, tables,
 //! SVG, the HTML page that plays a motion), reads the trajectory `inverse-dynamics` takes and
-//! writes its forces, and draws progress.
+//! writes its forces, compiles and writes an FMU (`export`), and draws progress.
 
 pub mod animate;
 pub mod check;
 pub mod diagnostics;
 pub mod ensemble;
+pub mod export;
 pub mod inverse;
 pub mod linearize;
 pub mod plot;
@@ -127,6 +128,11 @@ pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
 
 /// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.
 pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Result<()> {
+    write_bytes_atomically(path, contents.as_bytes())
+}
+
+/// [`write_atomically`] of bytes.
+pub fn write_bytes_atomically(path: &std::path::Path, contents: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
     let dir =
         path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
@@ -138,7 +144,7 @@ pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Resu
         .suffix(".tmp")
         .tempfile_in(dir)
         .map_err(without_path)?;
-    tmp.as_file_mut().write_all(contents.as_bytes())?;
+    tmp.as_file_mut().write_all(contents)?;
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
 }

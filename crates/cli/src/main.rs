@@ -152,10 +152,34 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
-    /// Write the equations of motion as a self-contained Rust module (only std needed).
+    /// Export the scene as an FMI 2.0 FMU (Model Exchange and Co-Simulation in one archive),
+    /// its binary compiled for this platform with the system C compiler (`cc`, or `CC`).
+    Export {
+        file: PathBuf,
+        /// Write the FMU here (whole or not at all).
+        #[arg(long, value_name = "OUT.fmu")]
+        fmu: PathBuf,
+        /// The Co-Simulation integrator's tolerance (relative and absolute) when the importer
+        /// sets none; default: the scene's `simulate { tolerance … }`, else 1e-10.
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// The stop time of the FMU's default experiment (s); default: the scene's
+        /// `simulate { until … }`, else 10.
+        #[arg(long)]
+        until: Option<f64>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
+    /// Write the equations of motion as source code: a self-contained Rust module (only std
+    /// needed), or C99 (a header and a source, only libm needed).
     Codegen {
         file: PathBuf,
-        /// Write the module to this file (whole or not at all) instead of standard output.
+        /// The language: rust (one module) or c (NAME.h and NAME.c, NAME the file's stem).
+        #[arg(long, value_enum, default_value_t = LangArg::Rust)]
+        lang: LangArg,
+        /// Rust: write the module to this file (whole or not at all) instead of standard
+        /// output. C: the directory to write NAME.h and NAME.c into (required).
         #[arg(long, short)]
         out: Option<PathBuf>,
         /// Do not check that terms added or equated have one dimension.
@@ -278,6 +302,12 @@ impl RunArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum LangArg {
+    Rust,
+    C,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum LinearizeFormat {
     Text,
     Json,
@@ -391,16 +421,21 @@ fn main() -> ExitCode {
             let options = engine::linearize::Options { about, set, sweep, no_units, drop_cyclic };
             linearize(&file, &source, &options, format, out, plot)
         }
-        Command::Codegen { file, out, no_units } => {
+        Command::Export { file, fmu, tolerance, until, no_units } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let options = engine::fmu::ExportOptions { tolerance, until, no_units };
+            export(&file, &source, &options, &fmu)
+        }
+        Command::Codegen { file, lang, out, no_units } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
-            match engine::codegen::codegen_with(
-                &path,
-                &source,
-                engine::Options { units: !no_units },
-            ) {
-                Ok(module) => write_or_print(out.as_ref(), &module.source),
-                Err(e) => fail(&path, &e),
+            let options = engine::Options { units: !no_units };
+            match lang {
+                LangArg::Rust => match engine::codegen::codegen_with(&path, &source, options) {
+                    Ok(module) => write_or_print(out.as_ref(), &module.source),
+                    Err(e) => fail(&path, &e),
+                },
+                LangArg::C => codegen_c(&path, &source, options, out.as_deref()),
             }
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {
@@ -525,6 +560,35 @@ fn write_or_print(out: Option<&PathBuf>, text: &str) -> ExitCode {
     }
 }
 
+/// `lagrange codegen --lang c`: NAME.h and NAME.c into the directory `out`.
+fn codegen_c(
+    path: &str,
+    source: &str,
+    options: engine::Options,
+    out: Option<&std::path::Path>,
+) -> ExitCode {
+    let Some(dir) = out else {
+        eprintln!("error: `codegen --lang c` writes two files: give the directory with --out DIR");
+        return ExitCode::from(2);
+    };
+    let module = match engine::codegen::c(path, source, options) {
+        Ok(module) => module,
+        Err(e) => return fail(path, &e),
+    };
+    if let Err(e) = std::fs::create_dir_all(dir) {
+        eprintln!("error: cannot create {}: {e}", dir.display());
+        return ExitCode::from(2);
+    }
+    for (ext, text) in [("h", &module.header), ("c", &module.source)] {
+        let file = dir.join(format!("{}.{ext}", module.name));
+        if let Err(e) = cli::write_atomically(&file, text) {
+            eprintln!("error: cannot write {}: {e}", file.display());
+            return ExitCode::from(2);
+        }
+    }
+    ExitCode::SUCCESS
+}
+
 /// Writes to standard output. A reader that stops reading (`| head`) is not an error: the
 /// rest of the output is dropped and the command ends with its own exit code, where `print!`
 /// would panic.
@@ -539,6 +603,30 @@ fn emit(text: &str) {
 }
 
 /// Says on stderr why the engine could not do what was asked; its exit code.
+/// `lagrange export --fmu`: the FMU's contents from the engine, compiled and archived.
+fn export(
+    file: &std::path::Path,
+    source: &str,
+    options: &engine::fmu::ExportOptions,
+    out: &std::path::Path,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let fmu = match engine::fmu::export(&path, source, options) {
+        Ok(fmu) => fmu,
+        Err(e) => return fail(&path, &e),
+    };
+    match cli::export::export(&fmu, &cli::export::compiler(), out) {
+        Ok(()) => {
+            eprintln!("wrote {} (FMI 2.0, Model Exchange and Co-Simulation)", out.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
 fn fail(path: &str, error: &engine::Error) -> ExitCode {
     let message = cli::diagnostics::error(path, error);
     eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });

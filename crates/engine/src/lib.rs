@@ -5,7 +5,8 @@
 //! random draws of its parameters on all cores ([`ensemble`]), with the options' values typed
 //! ([`input`]), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
-//! ([`mod@bench`]), builds a Rust module of the equations ([`codegen`]) and generates scenes of
+//! ([`mod@bench`]), builds a Rust module or C99 of the equations ([`codegen`]), says what an
+//! FMU of the scene holds ([`fmu`]) and generates scenes of
 //! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
 //! the command line's reference resolved against the scene ([`linearize`]), decides the
 //! scene's `expect linearized:` lines ([`expect_linearized`]), and gives the generalized
@@ -23,6 +24,7 @@ pub mod derived;
 pub mod ensemble;
 mod error;
 pub mod expect_linearized;
+pub mod fmu;
 pub mod generate;
 pub mod input;
 pub mod inverse;

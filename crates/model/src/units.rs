@@ -45,6 +45,19 @@ impl Dim {
         Dim(std::array::from_fn(|i| cas::number::times(&self.0[i], k)))
     }
 
+    /// The exponents of kg, m, s, A and K, when all are integers (a front end that names
+    /// units by their SI base, as an FMU's unit definitions do).
+    pub fn integer_exponents(&self) -> Option<[i32; 5]> {
+        let mut out = [0; 5];
+        for (e, o) in self.0.iter().zip(&mut out) {
+            if !e.is_integer() {
+                return None;
+            }
+            *o = i32::try_from(e.to_integer()).ok()?;
+        }
+        Some(out)
+    }
+
     /// `kg·m²/s²`, or `1` for a dimensionless quantity.
     pub fn text(&self) -> String {
         let power = |e: &Rational| -> String {
@@ -140,6 +153,35 @@ pub fn parse_unit(u: &Unit) -> Result<(Dim, Scale), Diagnostic> {
         scale.pi_power += p * power;
     }
     Ok((dim, scale))
+}
+
+/// The SI unit a value written in `u` is held in, spelled as Modelica and FMI spell units
+/// (`kg.m2/s2`, `rad/s`; `1` for a dimensionless value): values are converted to SI when
+/// resolved, so this is the unit of the number, not the one written. An angle keeps `rad`.
+pub fn si_text(u: &Unit) -> Result<String, Diagnostic> {
+    let (dim, _) = parse_unit(u)?;
+    let angle = u
+        .factors
+        .iter()
+        .any(|(name, _)| matches!(name.name.as_str(), "rad" | "deg" | "rev" | "rpm"));
+    let power = |e: &Rational| if e.is_one() { String::new() } else { e.to_string() };
+    let mut up: Vec<String> = (0..5)
+        .filter(|&i| dim.0[i].is_positive())
+        .map(|i| format!("{}{}", BASES[i], power(&dim.0[i])))
+        .collect();
+    if angle {
+        up.insert(0, "rad".to_string());
+    }
+    let down: Vec<String> = (0..5)
+        .filter(|&i| dim.0[i].is_negative())
+        .map(|i| format!("{}{}", BASES[i], power(&-dim.0[i].clone())))
+        .collect();
+    let up = if up.is_empty() { "1".to_string() } else { up.join(".") };
+    Ok(match down.len() {
+        0 => up,
+        1 => format!("{up}/{}", down[0]),
+        _ => format!("{up}/({})", down.join(".")),
+    })
 }
 
 /// The time dimension, which each prime takes off.
@@ -635,6 +677,21 @@ mod tests {
     fn errors(source: &str) -> Vec<String> {
         let file = lang::parse(source).expect("parses");
         check(&file).into_iter().map(|d| d.message).collect()
+    }
+
+    #[test]
+    fn si_units_are_spelled_as_modelica_spells_them() {
+        let source = "param a = 1 N, b = 2 kg/s^2, c = 30 deg, d = 60 rpm, e = 1 J/kg, f = 3 \
+                      cm/ms, g = 1 T, h = 1/2 rad, i = 1/2\ncoord x\nparticle p { mass 1; position (x, 0) }\n";
+        let file = lang::parse(source).expect("parses");
+        let (model, _) = crate::resolve(&file, source).expect("resolves");
+        let units: Vec<String> = model
+            .params
+            .iter()
+            .map(|p| p.unit.as_ref().map(|u| si_text(u).expect("a unit")).unwrap_or_default())
+            .collect();
+        let expected = ["kg.m/s2", "kg/s2", "rad", "rad/s", "m2/s2", "m/s", "kg/(s2.A)", "rad", ""];
+        assert_eq!(units, expected);
     }
 
     #[test]

@@ -6,8 +6,10 @@
 //! sub-expressions), every node becomes a few instructions on registers, and equal
 //! instructions are numbered once more so that products like `2·x` shared by several sums are
 //! computed once. A program runs on the [`Tape`] evaluator (no allocation per call; it writes
-//! into any `&mut [f64]`, such as the storage of an `nalgebra` matrix) or is printed as Rust
-//! source by [`rust`]. It takes expression ids and a symbol → input-slot mapping and knows
+//! into any `&mut [f64]`, such as the storage of an `nalgebra` matrix), on the [`BatchTape`] at
+//! many points at once (the same bits, a vector of points per register), or is printed as Rust
+//! source by [`rust`] or as C99 by [`c`], one walk over the program ([`source`]) spelled by
+//! each language. It takes expression ids and a symbol → input-slot mapping and knows
 //! nothing of how the expressions were derived: no mechanics, no names, no files.
 //!
 //! It is also the only float evaluator of expressions: [`Evaluator`] (and [`eval`],
@@ -16,13 +18,17 @@
 //! derivation's pool is handed), with the [`elementary`] functions of `libm`, so a value has
 //! the same bits wherever and on whatever machine it is computed.
 
+mod batch;
+pub mod c;
 pub mod elementary;
 mod eval;
 mod lower;
 pub mod rust;
+pub mod source;
 mod tape;
 mod zero_test;
 
+pub use batch::{BatchTape, LANES};
 pub use elementary::{pow_int, to_f64};
 pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program};

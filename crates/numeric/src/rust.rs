@@ -5,7 +5,8 @@ use std::fmt::Write;
 
 use cas::Func;
 
-use crate::lower::{Instr, Program, Reg};
+use crate::lower::Program;
+use crate::source::{self, Call, Dialect};
 
 /// A literal that reads back as exactly `v`.
 pub fn literal(v: f64) -> String {
@@ -27,78 +28,42 @@ pub fn literal(v: f64) -> String {
 /// The source of `pub fn NAME(input: &[f64; N], out: &mut [f64; K])`, computing the program's
 /// outputs from its inputs with the same operations, in the same order, as the tape.
 pub fn function(program: &Program, name: &str, doc: &str) -> String {
-    let inputs = program.inputs;
-    let constants = program.constants.len();
-    let base = inputs + constants;
-    let mut used = vec![false; program.registers()];
-    let mut mark = |r: Reg| used[r as usize] = true;
-    for i in &program.code {
-        match *i {
-            Instr::Add(a, b)
-            | Instr::Sub(a, b)
-            | Instr::Mul(a, b)
-            | Instr::Div(a, b)
-            | Instr::PowF(a, b)
-            | Instr::Atan2(a, b) => {
-                mark(a);
-                mark(b);
-            }
-            Instr::Neg(a) | Instr::PowInt(a, _) | Instr::Sqrt(a) | Instr::Func(_, a) => mark(a),
-        }
-    }
-    program.outputs.iter().for_each(|&r| mark(r));
-
-    let operand = |r: Reg| -> String {
-        let r = r as usize;
-        if (inputs..base).contains(&r) {
-            literal(program.constants[r - inputs])
-        } else {
-            format!("r{r}")
-        }
-    };
-    let mut s = String::new();
-    for line in doc.lines() {
-        let _ = writeln!(s, "/// {line}");
-    }
-    let _ = writeln!(
-        s,
-        "pub fn {name}(input: &[f64; {inputs}], out: &mut [f64; {}]) {{",
-        program.outputs.len()
-    );
-    for (i, _) in used.iter().enumerate().take(inputs).filter(|(_, u)| **u) {
-        let _ = writeln!(s, "    let r{i} = input[{i}];");
-    }
-    for (k, instr) in program.code.iter().enumerate() {
-        let reg = base + k;
-        if !used[reg] {
-            continue;
-        }
-        let e = match *instr {
-            Instr::Add(a, b) => format!("{} + {}", operand(a), operand(b)),
-            Instr::Sub(a, b) => format!("{} - {}", operand(a), operand(b)),
-            Instr::Mul(a, b) => format!("{} * {}", operand(a), operand(b)),
-            Instr::Div(a, b) => format!("{} / {}", operand(a), operand(b)),
-            Instr::Neg(a) => format!("-{}", operand(a)),
-            Instr::PowInt(a, n) => format!("pow_int({}, {n})", operand(a)),
-            Instr::Sqrt(a) => format!("{}.sqrt()", operand(a)),
-            Instr::PowF(a, b) => format!("{}.powf({})", operand(a), operand(b)),
-            Instr::Func(Func::Sign, a) => format!("sign({})", operand(a)),
-            Instr::Func(f, a) => format!("{}.{}()", operand(a), method(f)),
-            Instr::Atan2(y, x) => format!("{}.atan2({})", operand(y), operand(x)),
-        };
-        let _ = writeln!(s, "    let r{reg} = {e};");
-    }
-    for (i, &r) in program.outputs.iter().enumerate() {
-        let _ = writeln!(s, "    out[{i}] = {};", operand(r));
-    }
-    s.push_str("}\n");
-    s
+    source::function(program, name, doc, &Rust)
 }
 
-fn method(f: Func) -> &'static str {
-    match f {
-        Func::Ln => "ln",
-        other => other.name(),
+/// Rust's spelling of a straight-line function.
+struct Rust;
+
+impl Dialect for Rust {
+    fn literal(&self, v: f64) -> String {
+        literal(v)
+    }
+
+    fn open(&self, name: &str, doc: &str, inputs: usize, _: usize, outputs: usize) -> String {
+        let mut s = String::new();
+        for line in doc.lines() {
+            let _ = writeln!(s, "/// {line}");
+        }
+        let _ =
+            writeln!(s, "pub fn {name}(input: &[f64; {inputs}], out: &mut [f64; {outputs}]) {{");
+        s
+    }
+
+    fn define(&self, reg: usize, value: &str) -> String {
+        format!("    let r{reg} = {value};\n")
+    }
+
+    fn call(&self, operation: Call, operands: &[String]) -> String {
+        let a = &operands[0];
+        match operation {
+            Call::Sqrt => format!("{a}.sqrt()"),
+            Call::PowF => format!("{a}.powf({})", operands[1]),
+            Call::PowInt(n) => format!("pow_int({a}, {n})"),
+            Call::Func(Func::Sign) => format!("sign({a})"),
+            Call::Func(Func::Ln) => format!("{a}.ln()"),
+            Call::Func(f) => format!("{a}.{}()", f.name()),
+            Call::Atan2 => format!("{a}.atan2({})", operands[1]),
+        }
     }
 }
 

@@ -131,3 +131,42 @@ fn angle_differences_share_one_sine_and_cosine_per_angle() {
         assert!(close(*a, b), "{a} vs {b}");
     }
 }
+
+#[test]
+fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
+    let mut p = Pool::new();
+    let (x, y, t) = (p.coordinate("x"), p.coordinate("y"), p.param("t0"));
+    let (xe, ye, te) = (p.sym(x), p.sym(y), p.sym(t));
+    let sx = p.sin(xe);
+    let cy = p.cos(ye);
+    let xy = p.mul(&[sx, cy, te]);
+    let root = p.powq(xe, &cas::number::ratio(1, 2));
+    let inv = p.powi(ye, -3);
+    let minus = p.neg(inv);
+    let lin = p.add(&[xy, root, minus]);
+    let e = p.func(Func::Exp, lin);
+    let a2 = p.atan2(ye, xe);
+    let pw = p.pow(xe, ye);
+    let quotient = p.div(sx, ye);
+    let outputs = [lin, e, a2, pw, quotient, te];
+    let program = lower(&p, &[x, y, t], &outputs).unwrap();
+    let mut tape = Tape::new(program.clone());
+    let mut batch = numeric::BatchTape::new(program);
+    // Two whole chunks and a part of one; x < 0 makes NaN roots, y = 0 infinite powers.
+    let points = 2 * numeric::LANES + 5;
+    let inputs: Vec<f64> = (0..points)
+        .flat_map(|i| {
+            let i = i as f64;
+            [(i * 0.37 % 4.0) - 2.0, (i * 0.61 % 3.0) * (i % 5.0), i * 0.25 - 1.0]
+        })
+        .collect();
+    let mut many = vec![0.0; points * outputs.len()];
+    batch.eval_many(&inputs, &mut many);
+    let mut one = [0.0; 6];
+    for (point, row) in inputs.chunks(3).zip(many.chunks(outputs.len())) {
+        tape.eval(point, &mut one);
+        for (a, b) in one.iter().zip(row) {
+            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{a} vs {b}");
+        }
+    }
+}

@@ -8,6 +8,9 @@ use numeric::elementary::pow;
 
 use crate::{FaultKind, Problem};
 
+mod tableau;
+pub use tableau::{dop853_tableau, Dop853Tableau};
+
 /// Advances one accepted step at a time and interpolates inside the last one.
 pub(crate) trait Stepper {
     /// Advances from `t` (with `y` its state, updated in place) by one accepted step that does

@@ -5,8 +5,7 @@
 use numeric::Tape;
 
 /// Laws sampled at t = k·T (k = 0, 1, …) from the state at that instant, each held in its
-/// parameter slot until the next sample. A clone holds the same laws with buffers of its own
-/// (an ensemble's threads each run a clone of the problem).
+/// parameter slot until the next sample.
 #[derive(Clone)]
 pub struct Hold {
     period: f64,

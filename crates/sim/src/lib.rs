@@ -34,6 +34,7 @@ mod series;
 mod spectrum;
 
 pub use constrained::Constrained;
+pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation};
 pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};

@@ -1,0 +1,479 @@
+//! The equations as C99: a header `NAME.h` and a source `NAME.c` that need only libm. The
+//! programs of [`Equations`] are `static` functions of a slot vector; what a caller uses are
+//! the functions of the state (t, y) with the parameters in a struct of named fields and the
+//! inputs in an array of their own, each returning 0, or 1 where a system it solves is
+//! singular. The names and signatures are a contract (the FMU export builds on them): add,
+//! do not change.
+
+use std::fmt::Write;
+
+use numeric::c::{comment, function, helpers, literal};
+
+use super::{Equations, Sizes};
+use crate::{Error, Options};
+
+mod functions;
+
+/// A generated header and source, with the equations they were printed from.
+pub struct CModule {
+    /// The C identifier every exported name starts with (the scene file's stem).
+    pub name: String,
+    pub header: String,
+    pub source: String,
+    pub equations: Equations,
+}
+
+/// The C of the scene `source`, read from `path`: its exported names start with the file's
+/// stem made an identifier.
+pub fn c(path: &str, source: &str, options: Options) -> Result<CModule, Error> {
+    let equations = Equations::gather(path, source, options)?;
+    let stem = std::path::Path::new(path).file_stem().map(|s| s.to_string_lossy());
+    let name = identifier(stem.as_deref().unwrap_or("scene"));
+    let names = Names::of(&equations);
+    let header = header(&equations, &name, path, &names);
+    let source = implementation(&equations, &name, path, &names);
+    Ok(CModule { name, header, source, equations })
+}
+
+/// `text` as a C identifier that is not a keyword and not reserved: letters, digits and `_`
+/// kept, Greek letters spelled out, anything else as its code point; `scene_` in front of a
+/// leading digit or underscore.
+pub fn identifier(text: &str) -> String {
+    let mut s = String::new();
+    for ch in text.chars() {
+        if ch.is_ascii_alphanumeric() || ch == '_' {
+            s.push(ch);
+        } else if let Some(name) = greek(ch) {
+            s.push_str(name);
+        } else {
+            let _ = write!(s, "u{:x}", ch as u32);
+        }
+    }
+    if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit() || c == '_') {
+        s.insert_str(0, "scene_");
+    }
+    if KEYWORDS.contains(&s.as_str()) {
+        s.push('_');
+    }
+    s
+}
+
+const KEYWORDS: [&str; 37] = [
+    "auto",
+    "break",
+    "case",
+    "char",
+    "const",
+    "continue",
+    "default",
+    "do",
+    "double",
+    "else",
+    "enum",
+    "extern",
+    "float",
+    "for",
+    "goto",
+    "if",
+    "inline",
+    "int",
+    "long",
+    "register",
+    "restrict",
+    "return",
+    "short",
+    "signed",
+    "sizeof",
+    "static",
+    "struct",
+    "switch",
+    "typedef",
+    "union",
+    "unsigned",
+    "void",
+    "volatile",
+    "while",
+    "_Bool",
+    "_Complex",
+    "_Imaginary",
+];
+
+fn greek(ch: char) -> Option<&'static str> {
+    const LOWER: [&str; 25] = [
+        "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
+        "lambda", "mu", "nu", "xi", "omicron", "pi", "rho", "sigmaf", "sigma", "tau", "upsilon",
+        "phi", "chi", "psi", "omega",
+    ];
+    const UPPER: [&str; 25] = [
+        "Alpha", "Beta", "Gamma", "Delta", "Epsilon", "Zeta", "Eta", "Theta", "Iota", "Kappa",
+        "Lambda", "Mu", "Nu", "Xi", "Omicron", "Pi", "Rho", "", "Sigma", "Tau", "Upsilon", "Phi",
+        "Chi", "Psi", "Omega",
+    ];
+    let code = ch as u32;
+    let name = match code {
+        0x3b1..=0x3c9 => LOWER[(code - 0x3b1) as usize],
+        0x391..=0x3a9 => UPPER[(code - 0x391) as usize],
+        _ => "",
+    };
+    (!name.is_empty()).then_some(name)
+}
+
+/// `text` as a C string literal: printable ASCII as it is, every other byte (UTF-8 included)
+/// as an octal escape, which cannot run into a following digit as a hex escape would.
+fn string(text: &str) -> String {
+    let mut s = String::from("\"");
+    for b in text.bytes() {
+        match b {
+            b'"' | b'\\' => {
+                s.push('\\');
+                s.push(b as char);
+            }
+            0x20..=0x7e => s.push(b as char),
+            _ => {
+                let _ = write!(s, "\\{b:03o}");
+            }
+        }
+    }
+    s.push('"');
+    s
+}
+
+/// The names a module exports, as the scene writes them, and the parameters' fields.
+struct Names {
+    parameters: Vec<String>,
+    /// The parameters' fields in the struct: their names made identifiers, made unique.
+    fields: Vec<String>,
+    parameter_units: Vec<String>,
+    states: Vec<String>,
+    inputs: Vec<String>,
+    input_units: Vec<String>,
+}
+
+impl Names {
+    fn of(e: &Equations) -> Names {
+        let model = &e.prepared.derivation.model;
+        let unit = |u: &Option<lang::Unit>| {
+            u.as_ref().and_then(|u| model::units::si_text(u).ok()).unwrap_or_default()
+        };
+        let parameters: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
+        let mut fields: Vec<String> = Vec::new();
+        for p in &parameters {
+            let mut field = identifier(p);
+            while fields.contains(&field) {
+                field.push('_');
+            }
+            fields.push(field);
+        }
+        Names {
+            parameters,
+            fields,
+            parameter_units: model.params.iter().map(|p| unit(&p.unit)).collect(),
+            states: e.prepared.state_names(),
+            inputs: model.inputs.iter().map(|u| u.name.clone()).collect(),
+            input_units: model.inputs.iter().map(|u| unit(&u.unit)).collect(),
+        }
+    }
+}
+
+/// The fields of `NAME_parameters`, in the parameters' order: what a wrapper (the FMU's)
+/// addresses them by.
+pub fn parameter_fields(e: &Equations) -> Vec<String> {
+    Names::of(e).fields
+}
+
+/// The signature of a function of the state: `(t, y, p, u, out)`.
+fn of_state(name: &str, function: &str, out: &str) -> String {
+    format!(
+        "int {name}_{function}(double t, const double *y, const {name}_parameters *p, \
+         const double *u, double *{out})"
+    )
+}
+
+fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
+    let sizes = e.sizes;
+    let (n, m) = (sizes.coordinates, sizes.constraints);
+    let guard = format!("{}_H", name.to_uppercase());
+    let mut s = comment(
+        &format!(
+            "Equations of motion of \"{}\", generated by `lagrange codegen --lang c {path}`.\n\
+             C99; needs only libm. Do not edit: regenerate from the scene.\n\
+             \n\
+             y = (q, qdot) with q = ({}); M(q, t) qddot = f(q, qdot, u, t){}.\n\
+             The functions returning int return 0, or 1 when a system they solve is singular.\n\
+             u may be NULL when {name}_INPUTS is 0.",
+            ascii(&e.title),
+            ascii(&names.states[..n].join(", ")),
+            if m > 0 { " + J^T lambda, J qddot = gamma" } else { "" },
+        ),
+        "",
+    );
+    let _ = writeln!(s, "#ifndef {guard}\n#define {guard}\n");
+    s.push_str("#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n");
+    let counts = [
+        ("COORDINATES", n, "q"),
+        ("STATES", 2 * n, "y = (q, qdot)"),
+        ("CONSTRAINTS", m, "kept with multipliers"),
+        ("PARAMETERS", sizes.parameters, "fields of the parameters"),
+        ("INPUTS", sizes.inputs, "u"),
+        ("OUTPUTS", e.outputs.len(), "the scene's `output` lines"),
+        ("REACTIONS", e.reactions.len(), "the reactions the scene names"),
+    ];
+    for (what, count, doc) in counts {
+        let _ = writeln!(s, "#define {name}_{what} {count} /* {doc} */");
+    }
+    s.push('\n');
+    s.push_str(&comment("The scene's parameters, in SI units.", ""));
+    s.push_str("typedef struct {\n");
+    if names.fields.is_empty() {
+        s.push_str("    char none; /* the scene has no parameters; C has no empty struct */\n");
+    }
+    for ((field, scene), unit) in
+        names.fields.iter().zip(&names.parameters).zip(&names.parameter_units)
+    {
+        let _ = writeln!(
+            s,
+            "    double {field}; /* {} */",
+            ascii(&format!("{scene} {unit}")).trim_end()
+        );
+    }
+    let _ = writeln!(s, "}} {name}_parameters;\n");
+    let declarations = [
+        ("const {name}_parameters {name}_default_parameters", "The scene's values."),
+        (
+            "const char *const {name}_parameter_names[]",
+            "Each parameter's name in the scene (UTF-8), then NULL; and its SI unit as\nModelica writes units (\"\" where the scene gives none).",
+        ),
+        ("const char *const {name}_parameter_units[]", ""),
+        ("const char *const {name}_state_names[]", "The coordinates, then their rates (x'), then NULL."),
+        ("const char *const {name}_input_names[]", "The inputs' names, then NULL; and their SI units."),
+        ("const char *const {name}_input_units[]", ""),
+        ("const char *const {name}_output_names[]", "The outputs, then NULL."),
+        ("const char *const {name}_reaction_names[]", "The reactions, then NULL."),
+        (
+            "const double {name}_default_inputs[]",
+            "The inputs' declared values ({name}_INPUTS of them; one unused 0 when there\nare none, as C has no empty array).",
+        ),
+    ];
+    for (declaration, doc) in declarations {
+        s.push_str(&comment(&doc.replace("{name}", name), ""));
+        let _ = writeln!(s, "extern {};", declaration.replace("{name}", name));
+    }
+    s.push('\n');
+    s.push_str(&function_declarations(e, name));
+    s.push_str("#ifdef __cplusplus\n}\n#endif\n\n");
+    let _ = writeln!(s, "#endif /* {guard} */");
+    s
+}
+
+/// The functions' declarations in the header, each with what it computes.
+fn function_declarations(e: &Equations, name: &str) -> String {
+    let (n, m) = (e.sizes.coordinates, e.sizes.constraints);
+    let fixed = e.fixed_start();
+    let start_doc = if fixed.is_empty() {
+        "The scene's start y = (q, qdot) at the parameters p.".to_string()
+    } else {
+        format!(
+            "The scene's start y = (q, qdot) at the parameters p. The start of {} was solved\n\
+             numerically from the kept constraints at the scene's values, so it is a fixed number\n\
+             here whatever p holds.",
+            ascii(&fixed.join(", "))
+        )
+    };
+    let mut s = comment(&start_doc, "");
+    let _ = writeln!(s, "void {name}_initial_state(const {name}_parameters *p, double *y);");
+    let state = [
+        ("mass_matrix", "M", format!("The mass matrix M, {n} by {n}, column-major.")),
+        ("forcing", "f", "The forcing f.".to_string()),
+        (
+            "constraints",
+            "rows",
+            format!(
+                "Per kept constraint, {} values: its row of J ({n}), then gamma, Phi and\nd(Phi)/dt.",
+                n + 3
+            ),
+        ),
+        (
+            "rhs",
+            "dy",
+            "dy = (qdot, qddot), solving M qddot = f (with kept constraints, the system\n[M -J^T; J 0] (qddot, lambda) = (f, gamma), not stabilised).".to_string(),
+        ),
+        (
+            "jacobian",
+            "jac",
+            format!("The exact Jacobian of rhs, d(dy)/dy, {0} by {0}, row-major.", 2 * n),
+        ),
+        ("outputs", "out", "The scene's outputs, in order.".to_string()),
+        ("energies", "ke_pe", "The kinetic energy, then the potential energy.".to_string()),
+        (
+            "reactions",
+            "out",
+            "The reactions, in order, at the accelerations rhs solves for.".to_string(),
+        ),
+    ];
+    for (function, out, doc) in state {
+        if function == "constraints" && m == 0 {
+            s.push_str(&comment("The scene keeps no constraint: writes nothing.", ""));
+        } else {
+            s.push_str(&comment(&doc, ""));
+        }
+        let _ = writeln!(s, "{};", of_state(name, function, out));
+    }
+    s.push_str(&comment(
+        "Inverse dynamics: the generalized forces tau = M qddot - f that make the motion\n\
+         (q, qd, qdd) happen when added to f; with kept constraints, the one least in\n\
+         tau^T M^-1 tau.",
+        "",
+    ));
+    let _ = writeln!(
+        s,
+        "int {name}_inverse_dynamics(double t, const double *q, const double *qd, \
+         const double *qdd, const {name}_parameters *p, const double *u, double *tau);\n"
+    );
+    s
+}
+
+/// Text for a C comment: ASCII, the rest as `?` (a comment must not end early either).
+fn ascii(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_ascii() && c != '\n' { c } else { '?' })
+        .collect::<String>()
+        .replace("*/", "* /")
+}
+
+/// The source file: the data, the helpers, the programs and the functions of the state.
+fn implementation(e: &Equations, name: &str, path: &str, names: &Names) -> String {
+    let mut doc = format!(
+        "Equations of motion of \"{}\", generated by `lagrange codegen --lang c {path}`.\n\
+         Operation counts per call:\n",
+        e.title
+    );
+    for (program, p) in &e.programs {
+        let _ = writeln!(doc, "  {program}: {}", p.op_counts());
+    }
+    let mut s = comment(&ascii_lines(&doc), "");
+    let _ = writeln!(s, "#include <math.h>\n#include <stddef.h>\n\n#include \"{name}.h\"\n");
+    s.push_str(&data(e, name, names));
+    let programs: Vec<&numeric::Program> =
+        e.programs.iter().map(|(_, p)| p).chain([&e.start]).collect();
+    s.push_str(&helpers(&programs));
+    for (program, p) in &e.programs {
+        s.push('\n');
+        s.push_str(&function(p, &format!("eval_{program}"), &program_doc(program)));
+    }
+    s.push('\n');
+    s.push_str(&function(&e.start, "eval_start", "The start from [t, parameters, inputs]."));
+    s.push('\n');
+    s.push_str(&gather(e.sizes, name, names));
+    s.push_str(&functions::all(e, name));
+    s
+}
+
+fn ascii_lines(text: &str) -> String {
+    text.lines().map(ascii).collect::<Vec<_>>().join("\n")
+}
+
+fn program_doc(program: &str) -> String {
+    match program {
+        "mass_matrix" => "M, column-major, from [t, q, qdot, parameters, inputs].",
+        "forcing" => "f, from [t, q, qdot, parameters, inputs].",
+        "constraints" => "Per kept constraint: J's row, gamma, Phi, d(Phi)/dt.",
+        "partials" => {
+            "With qddot and lambda held: d/dq then d/dqdot of r = M qddot - J^T lambda - f\n\
+             (a row per coordinate), then of c = J qddot - gamma (a row per kept constraint),\n\
+             from [t, q, qdot, qddot, lambda, parameters, inputs]."
+        }
+        "energies" => "KE and PE, from [t, q, qdot, parameters, inputs].",
+        "reactions" => "The reactions, from [t, q, qdot, qddot, lambda, parameters, inputs].",
+        _ => "The outputs, from [t, q, qdot, parameters, inputs].",
+    }
+    .to_string()
+}
+
+/// The definitions of the exported data.
+fn data(e: &Equations, name: &str, names: &Names) -> String {
+    let k = e.sizes.parameters;
+    let mut s = format!("const {name}_parameters {name}_default_parameters = {{\n");
+    if k == 0 {
+        s.push_str("    0\n");
+    }
+    for (i, (value, scene)) in e.values[..k].iter().zip(&names.parameters).enumerate() {
+        let comma = if i + 1 < k { "," } else { "" };
+        let _ = writeln!(s, "    {}{comma} /* {} = {value:?} */", literal(*value), ascii(scene));
+    }
+    s.push_str("};\n\n");
+    let lists = [
+        ("parameter_names", &names.parameters),
+        ("parameter_units", &names.parameter_units),
+        ("state_names", &names.states),
+        ("input_names", &names.inputs),
+        ("input_units", &names.input_units),
+        ("output_names", &e.outputs),
+        ("reaction_names", &e.reactions),
+    ];
+    for (list, items) in lists {
+        let mut entries: Vec<String> = items.iter().map(|t| string(t)).collect();
+        entries.push("NULL".to_string());
+        let _ = writeln!(s, "const char *const {name}_{list}[] = {{ {} }};", entries.join(", "));
+    }
+    let inputs: Vec<String> = e.values[k..].iter().map(|v| literal(*v)).collect();
+    let inputs =
+        if inputs.is_empty() { "0.0 /* no inputs */".to_string() } else { inputs.join(", ") };
+    let _ = writeln!(s, "const double {name}_default_inputs[] = {{ {inputs} }};\n");
+    s
+}
+
+/// `gather`: the slot vector [t, q, qdot, parameters, inputs] the programs read.
+fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
+    let n = sizes.coordinates;
+    let mut s = comment("[t, q, qdot, parameters, inputs], the slots the programs read.", "");
+    let _ = writeln!(
+        s,
+        "static void gather(double t, const double *q, const double *qd, \
+         const {name}_parameters *p, const double *u, double *input)\n{{"
+    );
+    s.push_str("    int i;\n");
+    // Without parameters or inputs, `-Wextra` would warn of the argument not read.
+    if sizes.parameters == 0 {
+        s.push_str("    (void)p;\n");
+    }
+    if sizes.inputs == 0 {
+        s.push_str("    (void)u;\n");
+    }
+    s.push_str("    input[0] = t;\n");
+    let _ = writeln!(
+        s,
+        "    for (i = 0; i < {n}; i++) {{\n        input[1 + i] = q[i];\n        input[{} + i] = qd[i];\n    }}",
+        1 + n
+    );
+    for (i, field) in names.fields.iter().enumerate() {
+        let _ = writeln!(s, "    input[{}] = p->{field};", 1 + 2 * n + i);
+    }
+    for i in 0..sizes.inputs {
+        let _ = writeln!(s, "    input[{}] = u[{i}];", 1 + 2 * n + sizes.parameters + i);
+    }
+    s.push_str("}\n\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{identifier, string};
+
+    #[test]
+    fn names_become_identifiers_c_accepts() {
+        assert_eq!(identifier("double_pendulum"), "double_pendulum");
+        assert_eq!(identifier("θ"), "theta");
+        assert_eq!(identifier("Ω₁"), "Omegau2081");
+        assert_eq!(identifier("int"), "int_");
+        assert_eq!(identifier("_hidden"), "scene__hidden");
+        assert_eq!(identifier("5-link"), "scene_5u2dlink");
+        assert_eq!(identifier(""), "scene_");
+    }
+
+    #[test]
+    fn strings_escape_what_is_not_printable_ascii() {
+        assert_eq!(string("x'"), "\"x'\"");
+        assert_eq!(string("a\"b\\"), "\"a\\\"b\\\\\"");
+        assert_eq!(string("θ1"), "\"\\316\\2701\"");
+    }
+}

@@ -1,0 +1,149 @@
+//! The equations of a scene as source code that needs nothing of lagrange: a Rust module (only
+//! `std`, [`codegen`]) or a C99 header and source (only libm, [`c`]). Both print the same
+//! lowered programs, gathered once here: the mass matrix, the forcing, the constraint rows,
+//! the partials that give the exact Jacobian of the first-order system, the energies, the
+//! reactions, the scene's outputs and the start, each a straight-line function lowered like
+//! the tape. Parameters and inputs are separate arguments of the functions a caller uses.
+
+use cas::ExprId;
+
+use crate::numbers::{prepare, Prepared};
+use crate::{Error, Options};
+
+mod c;
+mod rust;
+
+pub use c::{c, identifier, parameter_fields, CModule};
+pub use rust::{codegen, codegen_with, Module};
+
+/// How many of each thing the generated functions handle.
+#[derive(Clone, Copy, Debug)]
+pub struct Sizes {
+    /// Coordinates n; the state is (q, q̇), 2n values.
+    pub coordinates: usize,
+    /// Constraints kept with multipliers, m.
+    pub constraints: usize,
+    /// The scene's parameters (without the inputs).
+    pub parameters: usize,
+    pub inputs: usize,
+}
+
+impl Sizes {
+    /// `[t, q, q̇, parameters, inputs]`: the input of M, f, the constraints, the energies and
+    /// the outputs.
+    pub fn dynamics_inputs(&self) -> usize {
+        1 + 2 * self.coordinates + self.parameters + self.inputs
+    }
+}
+
+/// The programs both languages print, gathered once from a scene.
+pub struct Equations {
+    pub prepared: Prepared,
+    /// The values of the parameters' slots: the scene's parameters, then the inputs' declared
+    /// values.
+    pub values: Vec<f64>,
+    pub sizes: Sizes,
+    /// (function name, program), in the order the module prints them.
+    pub programs: Vec<(String, numeric::Program)>,
+    /// The reactions' names, in the order of the `reactions` program's outputs.
+    pub reactions: Vec<String>,
+    /// The scene's `output` names, in the order of the `outputs` program's outputs.
+    pub outputs: Vec<String>,
+    /// `[t, parameters, inputs]` → the start (q, q̇): the scene's initial values, which may
+    /// depend on the parameters.
+    pub start: numeric::Program,
+    /// The scene's title, or the path when it has none.
+    pub title: String,
+}
+
+impl Equations {
+    /// The equations of the scene `source`; `path` names it when the scene has no title.
+    pub fn gather(path: &str, source: &str, options: Options) -> Result<Equations, Error> {
+        // Reactions the scene derives are part of the module; asking for KE and PE changes
+        // nothing.
+        let mut prepared = prepare(source, &["KE".into(), "PE".into()], options)?;
+        let values = prepared.parameter_values(&[])?;
+        let d = &mut prepared.derivation;
+        let mut reactions = Vec::new();
+        let mut reaction_exprs = Vec::new();
+        for r in d.reactions.clone() {
+            reactions.push(d.model.pool.symbol(r.symbol).name.clone());
+            reaction_exprs.push(d.expand_quantities(r.expr, false));
+        }
+        let outputs: Vec<String> = d.model.outputs.iter().map(|o| o.name.clone()).collect();
+        let output_exprs: Vec<ExprId> =
+            d.model.outputs.clone().iter().map(|o| d.expand_quantities(o.value, false)).collect();
+        let sizes = Sizes {
+            coordinates: prepared.layout.coordinates,
+            constraints: prepared.layout.multipliers,
+            parameters: d.model.params.len(),
+            inputs: d.model.inputs.len(),
+        };
+        let (n, m) = (sizes.coordinates, sizes.constraints);
+        let dynamics = prepared.dynamics_exprs();
+        let dyn_inputs = prepared.dynamics_inputs();
+        let obs_inputs = prepared.observation_inputs();
+        let mut programs = vec![
+            ("mass_matrix".to_string(), prepared.lower(&dyn_inputs, &dynamics[..n * n])?),
+            ("forcing".to_string(), prepared.lower(&dyn_inputs, &dynamics[n * n..n * n + n])?),
+        ];
+        if m > 0 {
+            // J (m×n row-major) then γ, Φ, Φ̇ per constraint, as the dynamics layout has them.
+            programs.push((
+                "constraints".to_string(),
+                prepared.lower(&dyn_inputs, &dynamics[n * n + n..])?,
+            ));
+        }
+        // ∂(r, c)/∂(q, q̇) of the rows the right-hand side solves: it is not stabilised, so the
+        // partials of Φ and Φ̇ that follow them in the partials layout are left out.
+        let partials = prepared.partials_exprs();
+        programs.push((
+            "partials".to_string(),
+            prepared.lower(&obs_inputs, &partials[..(n + m) * 2 * n])?,
+        ));
+        programs.push(("energies".to_string(), prepared.lower(&dyn_inputs, &prepared.extra[..2])?));
+        if !reaction_exprs.is_empty() {
+            programs.push(("reactions".to_string(), prepared.lower(&obs_inputs, &reaction_exprs)?));
+        }
+        if !output_exprs.is_empty() {
+            programs.push(("outputs".to_string(), prepared.lower(&dyn_inputs, &output_exprs)?));
+        }
+        let start = start_program(&prepared)?;
+        let title = prepared.derivation.model.title.clone().unwrap_or_else(|| path.to_string());
+        Ok(Equations { prepared, values, sizes, programs, reactions, outputs, start, title })
+    }
+
+    /// The program named `name`, if the scene has it.
+    pub fn program(&self, name: &str) -> Option<&numeric::Program> {
+        self.programs.iter().find(|(n, _)| n == name).map(|(_, p)| p)
+    }
+
+    /// Names of `syms`, joined by commas.
+    fn names(&self, syms: &[cas::SymId]) -> String {
+        let pool = &self.prepared.derivation.model.pool;
+        syms.iter().map(|s| pool.symbol(*s).name.clone()).collect::<Vec<_>>().join(", ")
+    }
+
+    /// The coordinates whose start was solved in numbers when the scene was derived: their
+    /// start is a number, the same whatever the parameters.
+    pub fn fixed_start(&self) -> Vec<String> {
+        let d = &self.prepared.derivation;
+        let pool = &d.model.pool;
+        d.solved_start_positions.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+}
+
+/// The start (q, then q̇, of the remaining coordinates) as a program of `[t, parameters,
+/// inputs]`: the scene's initial values are expressions of the parameters.
+fn start_program(prepared: &Prepared) -> Result<numeric::Program, Error> {
+    let d = &prepared.derivation;
+    let initial = |q: &cas::SymId, rate: bool| {
+        let c = d.model.coords.iter().find(|c| c.sym == *q);
+        c.map_or(d.model.pool.zero(), |c| if rate { c.initial_rate } else { c.initial })
+    };
+    let mut exprs: Vec<ExprId> = d.coords.iter().map(|q| initial(q, false)).collect();
+    exprs.extend(d.coords.iter().map(|q| initial(q, true)));
+    let mut inputs = vec![d.model.time];
+    inputs.extend(&prepared.parameters);
+    prepared.lower(&inputs, &exprs)
+}
