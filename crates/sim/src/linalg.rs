@@ -1,4 +1,4 @@
-//! Dense solves in place, allocation-free: Cholesky for symmetric positive definite
+//! Dense solves in place, allocation-free: LDLᵀ for symmetric positive definite
 //! matrices, LU with partial pivoting for the rest, each reporting the columns where it broke
 //! down. They work on any [`Square`] storage: `nalgebra`'s dynamic matrices, or [`Small`] on
 //! the stack for the few coordinates of most scenes, where indexing a heap matrix cost more
@@ -77,31 +77,28 @@ impl Square for Small {
 /// integrating; a report beats silently wrong accelerations.
 pub const CONDITION_LIMIT: f64 = 1e13;
 
-/// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factor and `b` with `x`.
-/// Tries Cholesky; if `a` is not positive definite, `reload` puts the matrix back into `a`
-/// and LU factors it.
+/// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factors and `b` with `x`.
+/// Tries LDLᵀ; if `a` is not positive definite, `reload` puts the matrix back into `a` and LU
+/// factors it.
 pub fn solve_symmetric<M: Square>(
     a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
     reload: impl FnOnce(&mut M),
 ) -> Result<(), FaultKind> {
-    if cholesky_in_place(a).is_ok() {
+    if ldl_in_place(a).is_ok() {
         let n = a.order();
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         for i in 0..n {
-            let d = a[(i, i)] * a[(i, i)];
-            lo = lo.min(d);
-            hi = hi.max(d);
+            lo = lo.min(a[(i, i)]);
+            hi = hi.max(a[(i, i)]);
         }
         // The ratio of the extreme pivots bounds the condition number from below.
         if hi / lo > CONDITION_LIMIT {
-            let worst = (0..n)
-                .filter(|&i| a[(i, i)] * a[(i, i)] * CONDITION_LIMIT < hi)
-                .collect::<Vec<_>>();
+            let worst = (0..n).filter(|&i| a[(i, i)] * CONDITION_LIMIT < hi).collect::<Vec<_>>();
             return Err(FaultKind::SingularMass { coordinates: worst, condition: hi / lo });
         }
-        cholesky_solve(a, b);
+        ldl_solve(a, b);
         return Ok(());
     }
     reload(a);
@@ -119,24 +116,25 @@ pub fn solve_general<M: Square>(
     Ok(())
 }
 
-/// Lower-triangular Cholesky factor in the lower triangle of `a`. Fails at the first column
-/// whose pivot is not positive.
-pub fn cholesky_in_place<M: Square>(a: &mut M) -> Result<(), usize> {
+/// a = L·D·Lᵀ in place: the unit lower factor L below the diagonal, the pivots D on it.
+/// Cholesky's factor without its square roots, which with the divisions by them made most of
+/// a small solve's time: they sit in one dependent chain. Fails at the first column whose
+/// pivot is not positive.
+pub fn ldl_in_place<M: Square>(a: &mut M) -> Result<(), usize> {
     let n = a.order();
     for j in 0..n {
         let mut d = a[(j, j)];
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            d -= a[(j, k)] * a[(j, k)] * a[(k, k)];
         }
         if d <= 0.0 || !d.is_finite() {
             return Err(j);
         }
-        let d = d.sqrt();
         a[(j, j)] = d;
         for i in j + 1..n {
             let mut s = a[(i, j)];
             for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
+                s -= a[(i, k)] * a[(j, k)] * a[(k, k)];
             }
             a[(i, j)] = s / d;
         }
@@ -144,21 +142,25 @@ pub fn cholesky_in_place<M: Square>(a: &mut M) -> Result<(), usize> {
     Ok(())
 }
 
-fn cholesky_solve<M: Square>(l: &M, b: &mut [f64]) {
-    let n = l.order();
+/// Solves with the factors of [`ldl_in_place`]: L, then D, then Lᵀ.
+fn ldl_solve<M: Square>(ldl: &M, b: &mut [f64]) {
+    let n = ldl.order();
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {
-            s -= l[(i, k)] * b[k];
+            s -= ldl[(i, k)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
+    }
+    for (i, v) in b.iter_mut().enumerate().take(n) {
+        *v /= ldl[(i, i)];
     }
     for i in (0..n).rev() {
         let mut s = b[i];
         for k in i + 1..n {
-            s -= l[(k, i)] * b[k];
+            s -= ldl[(k, i)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
     }
 }
 
@@ -314,7 +316,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cholesky_and_lu_solve_the_same_system() {
+    fn ldl_and_lu_solve_the_same_system() {
         let m = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
         let want = [1.0, -2.0, 0.5];
         let rhs: Vec<f64> = (0..3).map(|i| (0..3).map(|j| m[(i, j)] * want[j]).sum()).collect();
@@ -333,7 +335,7 @@ mod tests {
 
     #[test]
     fn stack_and_heap_storage_give_the_same_bits() {
-        // A symmetric positive definite 3×3 by Cholesky and a 4×4 with a zero corner by LU.
+        // A symmetric positive definite 3×3 by LDLᵀ and a 4×4 with a zero corner by LU.
         let entries = [
             (3, vec![4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]),
             (

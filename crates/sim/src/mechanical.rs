@@ -524,7 +524,7 @@ fn load_system(out: &[f64], layout: Layout, a: &mut impl Square) {
     }
 }
 
-/// Solves the augmented system of `out` for the right side `b`, in place: by Cholesky when
+/// Solves the augmented system of `out` for the right side `b`, in place: by LDLᵀ when
 /// there are no multipliers (M alone, symmetric), by LU otherwise.
 fn solve_system<M: Square>(
     out: &[f64],

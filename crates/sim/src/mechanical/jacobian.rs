@@ -60,7 +60,7 @@ impl Mechanical {
             self.solution = column;
             return Err(fault);
         }
-        // The accelerations may have been solved by Cholesky; one LU serves every column.
+        // The accelerations may have been solved by LDLᵀ; one LU serves every column.
         super::load_system(&self.dyn_out, self.layout, &mut self.system);
         if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
             self.solution = column;
