@@ -1,14 +1,69 @@
 //! The tape evaluator: runs a [`Program`] over a register file allocated once.
 
-use crate::elementary::{apply, atan2, pow, pow_int};
-use crate::lower::{Instr, Program};
+use cas::Func;
+
+use crate::elementary::{apply, atan2, pow, pow_int, sin_cos};
+use crate::lower::{Instr, Program, Reg};
 
 /// A program with its registers. Evaluation allocates nothing; the elementary functions are
 /// those of [`crate::elementary`], so the same inputs give the same bits on every machine.
 #[derive(Clone, Debug)]
 pub struct Tape {
     program: Program,
+    /// The program's code as the evaluator runs it, each op with the register it writes: the
+    /// same operations in the same order, with the sine and cosine of one register fused.
+    ops: Vec<(Reg, Op)>,
     registers: Vec<f64>,
+    fixed: Option<Fixed>,
+}
+
+/// Inputs that change seldom, such as parameters ([`Tape::with_fixed_inputs`]), and the ops
+/// that depend on the other inputs: while the fixed inputs keep their bits, only those run,
+/// and the registers of the rest keep the values the same operations gave them before.
+#[derive(Clone, Debug)]
+struct Fixed {
+    inputs: std::ops::Range<usize>,
+    /// Their values at the last run that ran every op; `None` before the first.
+    last: Option<Vec<f64>>,
+    varying: Vec<(Reg, Op)>,
+}
+
+/// An instruction of [`Program::code`] as the tape runs it: the k-th writes register
+/// `inputs + constants + k`.
+#[derive(Clone, Copy, Debug)]
+enum Op {
+    Plain(Instr),
+    /// The sine and cosine of `arg` at once (the same bits as each alone, at the cost of
+    /// one): this op's register gets the one its instruction asked for, `other` the other.
+    SinCos {
+        arg: Reg,
+        sine_here: bool,
+        other: Reg,
+    },
+    /// The value was written by an earlier [`Op::SinCos`].
+    Written,
+}
+
+/// The program's code with each sine and cosine of the same register fused into the first
+/// of the two; `base` is the register the first instruction writes.
+fn fuse_sin_cos(code: &[Instr], base: usize) -> Vec<Op> {
+    let mut ops: Vec<Op> = code.iter().map(|i| Op::Plain(*i)).collect();
+    let mut first: std::collections::HashMap<(Reg, bool), usize> = Default::default();
+    for (k, instr) in code.iter().enumerate() {
+        let (sine, arg) = match *instr {
+            Instr::Func(Func::Sin, a) => (true, a),
+            Instr::Func(Func::Cos, a) => (false, a),
+            _ => continue,
+        };
+        if let Some(earlier) = first.remove(&(arg, !sine)) {
+            let other = Reg::try_from(base + k).expect("registers fit a Reg");
+            ops[earlier] = Op::SinCos { arg, sine_here: !sine, other };
+            ops[k] = Op::Written;
+        } else {
+            first.entry((arg, sine)).or_insert(k);
+        }
+    }
+    ops
 }
 
 impl Tape {
@@ -16,7 +71,35 @@ impl Tape {
         let mut registers = vec![0.0; program.registers()];
         registers[program.inputs..program.inputs + program.constants.len()]
             .copy_from_slice(&program.constants);
-        Tape { program, registers }
+        let base = program.inputs + program.constants.len();
+        let ops = fuse_sin_cos(&program.code, base)
+            .into_iter()
+            .enumerate()
+            .map(|(k, op)| (Reg::try_from(base + k).expect("registers fit a Reg"), op))
+            .collect();
+        Tape { program, ops, registers, fixed: None }
+    }
+
+    /// Declares the inputs in `inputs` fixed from run to run but for now and then (the
+    /// parameters): the operations that depend on nothing else run again only when one of
+    /// them changed its bits, which saves their work and changes no result.
+    pub fn with_fixed_inputs(mut self, inputs: std::ops::Range<usize>) -> Tape {
+        assert!(inputs.end <= self.program.inputs, "fixed inputs are inputs");
+        let mut varies = vec![false; self.registers.len()];
+        varies[..self.program.inputs].iter_mut().enumerate().for_each(|(i, v)| {
+            *v = !inputs.contains(&i);
+        });
+        for (k, instr) in self.program.code.iter().enumerate() {
+            let mut any = false;
+            instr.map_registers(|r| {
+                any |= varies[r as usize];
+                r
+            });
+            varies[self.ops[k].0 as usize] = any;
+        }
+        let varying = self.ops.iter().filter(|(dst, _)| varies[*dst as usize]).copied().collect();
+        self.fixed = Some(Fixed { inputs, last: None, varying });
+        self
     }
 
     pub fn program(&self) -> &Program {
@@ -36,14 +119,54 @@ impl Tape {
     /// # Panics
     /// When `inputs` or `out` have the wrong length: a caller's bug, not bad data.
     pub fn eval(&mut self, inputs: &[f64], out: &mut [f64]) {
+        assert_eq!(inputs.len(), self.program.inputs, "tape inputs");
+        self.inputs_mut().copy_from_slice(inputs);
+        self.run(out);
+    }
+
+    /// The input registers, to be filled in place before [`Tape::run`]: a caller that builds
+    /// its inputs anyway saves copying them in.
+    pub fn inputs_mut(&mut self) -> &mut [f64] {
+        &mut self.registers[..self.program.inputs]
+    }
+
+    /// Evaluates the program at the inputs in [`Tape::inputs_mut`], writing output `i` to
+    /// `out[i]`.
+    ///
+    /// # Panics
+    /// When `out` has the wrong length: a caller's bug, not bad data.
+    pub fn run(&mut self, out: &mut [f64]) {
         let p = &self.program;
-        assert_eq!(inputs.len(), p.inputs, "tape inputs");
         assert_eq!(out.len(), p.outputs.len(), "tape outputs");
         let r = &mut self.registers;
-        r[..p.inputs].copy_from_slice(inputs);
-        let base = p.inputs + p.constants.len();
-        for (k, instr) in p.code.iter().enumerate() {
-            let v = match *instr {
+        let ops = match &mut self.fixed {
+            None => &self.ops,
+            Some(Fixed { inputs, last, varying }) => {
+                let now = &r[inputs.clone()];
+                let same = last.as_ref().is_some_and(|last| {
+                    last.iter().zip(now).all(|(a, b)| a.to_bits() == b.to_bits())
+                });
+                if same {
+                    &*varying
+                } else {
+                    *last = Some(now.to_vec());
+                    &self.ops
+                }
+            }
+        };
+        for &(dst, op) in ops {
+            let instr = match op {
+                Op::Plain(instr) => instr,
+                Op::SinCos { arg, sine_here, other } => {
+                    let (sine, cosine) = sin_cos(r[arg as usize]);
+                    let (here, there) = if sine_here { (sine, cosine) } else { (cosine, sine) };
+                    r[other as usize] = there;
+                    r[dst as usize] = here;
+                    continue;
+                }
+                Op::Written => continue,
+            };
+            r[dst as usize] = match instr {
                 Instr::Add(a, b) => r[a as usize] + r[b as usize],
                 Instr::Sub(a, b) => r[a as usize] - r[b as usize],
                 Instr::Mul(a, b) => r[a as usize] * r[b as usize],
@@ -55,10 +178,79 @@ impl Tape {
                 Instr::Func(f, a) => apply(f, r[a as usize]),
                 Instr::Atan2(y, x) => atan2(r[y as usize], r[x as usize]),
             };
-            r[base + k] = v;
         }
         for (o, reg) in out.iter_mut().zip(&p.outputs) {
             *o = r[*reg as usize];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elementary::apply;
+
+    #[test]
+    fn fused_sine_and_cosine_are_the_bits_of_each_alone() {
+        let mut args = vec![0.0, -0.0, 1e-300, 1e-9, 2e-8, 7.45e-9, 0.5, 0.785, 1.0, 3.0, -2.5];
+        args.extend([1e6, -3e8, 1e22, 1e300, f64::INFINITY, f64::NAN]);
+        args.extend((0..20_000).map(|i| (i as f64 - 10_000.0) * 0.000_731_3));
+        for x in args {
+            let (s, c) = sin_cos(x);
+            assert_eq!(s.to_bits(), apply(Func::Sin, x).to_bits(), "sin {x}");
+            assert_eq!(c.to_bits(), apply(Func::Cos, x).to_bits(), "cos {x}");
+        }
+    }
+
+    #[test]
+    fn a_tape_with_fused_pairs_gives_what_the_instructions_say() {
+        // cos x, x·x, sin x, sin y, cos y in that order, and x once more as an output.
+        let program = Program {
+            inputs: 2,
+            constants: Vec::new(),
+            code: vec![
+                Instr::Func(Func::Cos, 0),
+                Instr::Mul(0, 0),
+                Instr::Func(Func::Sin, 0),
+                Instr::Func(Func::Sin, 1),
+                Instr::Func(Func::Cos, 1),
+            ],
+            outputs: vec![2, 3, 4, 5, 6, 0],
+        };
+        let mut tape = Tape::new(program);
+        assert!(matches!(tape.ops[0].1, Op::SinCos { arg: 0, sine_here: false, other: 4 }));
+        assert!(matches!(tape.ops[4].1, Op::Written));
+        let (x, y) = (0.7, -4.1);
+        let mut out = [0.0; 6];
+        tape.eval(&[x, y], &mut out);
+        let (sin, cos) = (|v| apply(Func::Sin, v), |v| apply(Func::Cos, v));
+        let want = [cos(x), x * x, sin(x), sin(y), cos(y), x];
+        for (got, want) in out.iter().zip(want) {
+            assert_eq!(got.to_bits(), want.to_bits(), "{out:?}");
+        }
+    }
+
+    #[test]
+    fn ops_on_fixed_inputs_alone_run_again_when_those_change() {
+        // p·p (fixed alone), x·(p·p), x + 1.
+        let program = Program {
+            inputs: 2,
+            constants: vec![1.0],
+            code: vec![Instr::Mul(1, 1), Instr::Mul(0, 3), Instr::Add(0, 2)],
+            outputs: vec![3, 4, 5],
+        };
+        let mut plain = Tape::new(program.clone());
+        let mut fixed = Tape::new(program).with_fixed_inputs(1..2);
+        assert_eq!(fixed.fixed.as_ref().map(|f| f.varying.len()), Some(2));
+        let mut want = [0.0; 3];
+        let mut got = [0.0; 3];
+        for input in [[2.0, 3.0], [5.0, 3.0], [5.0, -4.0], [0.5, -4.0], [0.5, f64::NAN], [1.0, 3.0]]
+        {
+            plain.eval(&input, &mut want);
+            fixed.eval(&input, &mut got);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&want), "at {input:?}");
+        }
+        assert_eq!(got, [9.0, 9.0, 2.0]);
     }
 }

@@ -1,7 +1,7 @@
 //! Numerical integration of lowered equations of motion.
 //!
 //! This crate owns everything between a straight-line program and a trajectory: solving
-//! M(q)·q̈ = f for the accelerations (Cholesky where M is symmetric positive definite, LU with
+//! M(q)·q̈ = f for the accelerations (LDLᵀ where M is symmetric positive definite, LU with
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
 //! keep multipliers, or those constraints as they are, the differential–algebraic system of
 //! index 3) and the exact Jacobians of those problems from the lowered partials of their

@@ -1,48 +1,113 @@
-//! Dense solves in place on `nalgebra` storage, allocation-free: Cholesky for symmetric
-//! positive definite matrices, LU with partial pivoting for the rest, each reporting the
-//! columns where it broke down.
+//! Dense solves in place, allocation-free: LDLᵀ for symmetric positive definite
+//! matrices, LU with partial pivoting for the rest, each reporting the columns where it broke
+//! down. They work on any [`Square`] storage: `nalgebra`'s dynamic matrices, or [`Small`] on
+//! the stack for the few coordinates of most scenes, where indexing a heap matrix cost more
+//! than the arithmetic. Both run the same operations in the same order, so the same bits.
 
-use nalgebra::{ComplexField, DMatrix};
+use std::ops::{Index, IndexMut};
+
+use nalgebra::{ComplexField, DMatrix, Scalar};
 
 use crate::FaultKind;
+
+/// Square storage the solves work on, indexed (row, column).
+pub trait Square<T = f64>:
+    Index<(usize, usize), Output = T> + IndexMut<(usize, usize), Output = T>
+{
+    /// The number of rows, which is that of columns.
+    fn order(&self) -> usize;
+    fn swap_rows(&mut self, a: usize, b: usize);
+}
+
+impl<T: Scalar> Square<T> for DMatrix<T> {
+    fn order(&self) -> usize {
+        self.nrows()
+    }
+
+    fn swap_rows(&mut self, a: usize, b: usize) {
+        nalgebra::Matrix::swap_rows(self, a, b);
+    }
+}
+
+/// The largest order [`Small`] holds.
+pub const SMALL: usize = 8;
+
+/// A square matrix of order at most [`SMALL`] on the stack, column-major with a fixed stride
+/// so that an index is a shift and an add.
+#[derive(Clone, Copy, Debug)]
+pub struct Small {
+    order: usize,
+    entries: [f64; SMALL * SMALL],
+}
+
+impl Small {
+    /// A zero matrix of this order, `None` past [`SMALL`].
+    pub fn zeros(order: usize) -> Option<Small> {
+        (order <= SMALL).then_some(Small { order, entries: [0.0; SMALL * SMALL] })
+    }
+}
+
+impl Index<(usize, usize)> for Small {
+    type Output = f64;
+
+    fn index(&self, (i, j): (usize, usize)) -> &f64 {
+        &self.entries[i + SMALL * j]
+    }
+}
+
+impl IndexMut<(usize, usize)> for Small {
+    fn index_mut(&mut self, (i, j): (usize, usize)) -> &mut f64 {
+        &mut self.entries[i + SMALL * j]
+    }
+}
+
+impl Square for Small {
+    fn order(&self) -> usize {
+        self.order
+    }
+
+    fn swap_rows(&mut self, a: usize, b: usize) {
+        for j in 0..self.order {
+            self.entries.swap(a + SMALL * j, b + SMALL * j);
+        }
+    }
+}
 
 /// Past this estimated condition number the solution has no correct digits left worth
 /// integrating; a report beats silently wrong accelerations.
 pub const CONDITION_LIMIT: f64 = 1e13;
 
-/// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factor and `b` with `x`.
-/// Tries Cholesky; if `a` is not positive definite, refactors a copy from `backup` by LU.
-pub fn solve_symmetric(
-    a: &mut DMatrix<f64>,
-    backup: &DMatrix<f64>,
+/// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factors and `b` with `x`.
+/// Tries LDLᵀ; if `a` is not positive definite, `reload` puts the matrix back into `a` and LU
+/// factors it.
+pub fn solve_symmetric<M: Square>(
+    a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
+    reload: impl FnOnce(&mut M),
 ) -> Result<(), FaultKind> {
-    if cholesky_in_place(a).is_ok() {
-        let n = a.nrows();
+    if ldl_in_place(a).is_ok() {
+        let n = a.order();
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         for i in 0..n {
-            let d = a[(i, i)] * a[(i, i)];
-            lo = lo.min(d);
-            hi = hi.max(d);
+            lo = lo.min(a[(i, i)]);
+            hi = hi.max(a[(i, i)]);
         }
         // The ratio of the extreme pivots bounds the condition number from below.
         if hi / lo > CONDITION_LIMIT {
-            let worst = (0..n)
-                .filter(|&i| a[(i, i)] * a[(i, i)] * CONDITION_LIMIT < hi)
-                .collect::<Vec<_>>();
+            let worst = (0..n).filter(|&i| a[(i, i)] * CONDITION_LIMIT < hi).collect::<Vec<_>>();
             return Err(FaultKind::SingularMass { coordinates: worst, condition: hi / lo });
         }
-        cholesky_solve(a, b);
+        ldl_solve(a, b);
         return Ok(());
     }
-    a.copy_from(backup);
+    reload(a);
     solve_general(a, b, pivots)
 }
 
 /// Solves `a·x = b` by LU with partial pivoting, overwriting `a` and `b`.
-pub fn solve_general(
-    a: &mut DMatrix<f64>,
+pub fn solve_general<M: Square>(
+    a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
 ) -> Result<(), FaultKind> {
@@ -51,24 +116,25 @@ pub fn solve_general(
     Ok(())
 }
 
-/// Lower-triangular Cholesky factor in the lower triangle of `a`. Fails at the first column
-/// whose pivot is not positive.
-pub fn cholesky_in_place(a: &mut DMatrix<f64>) -> Result<(), usize> {
-    let n = a.nrows();
+/// a = L·D·Lᵀ in place: the unit lower factor L below the diagonal, the pivots D on it.
+/// Cholesky's factor without its square roots, which with the divisions by them made most of
+/// a small solve's time: they sit in one dependent chain. Fails at the first column whose
+/// pivot is not positive.
+pub fn ldl_in_place<M: Square>(a: &mut M) -> Result<(), usize> {
+    let n = a.order();
     for j in 0..n {
         let mut d = a[(j, j)];
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            d -= a[(j, k)] * a[(j, k)] * a[(k, k)];
         }
         if d <= 0.0 || !d.is_finite() {
             return Err(j);
         }
-        let d = d.sqrt();
         a[(j, j)] = d;
         for i in j + 1..n {
             let mut s = a[(i, j)];
             for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
+                s -= a[(i, k)] * a[(j, k)] * a[(k, k)];
             }
             a[(i, j)] = s / d;
         }
@@ -76,29 +142,38 @@ pub fn cholesky_in_place(a: &mut DMatrix<f64>) -> Result<(), usize> {
     Ok(())
 }
 
-fn cholesky_solve(l: &DMatrix<f64>, b: &mut [f64]) {
-    let n = l.nrows();
+/// Solves with the factors of [`ldl_in_place`]: L, then D, then Lᵀ.
+fn ldl_solve<M: Square>(ldl: &M, b: &mut [f64]) {
+    let n = ldl.order();
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {
-            s -= l[(i, k)] * b[k];
+            s -= ldl[(i, k)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
+    }
+    for (i, v) in b.iter_mut().enumerate().take(n) {
+        *v /= ldl[(i, i)];
     }
     for i in (0..n).rev() {
         let mut s = b[i];
         for k in i + 1..n {
-            s -= l[(k, i)] * b[k];
+            s -= ldl[(k, i)] * b[k];
         }
-        b[i] = s / l[(i, i)];
+        b[i] = s;
     }
 }
 
 /// LU with partial pivoting; `pivots[k]` is the row swapped into place k. A pivot that
 /// vanishes relative to the largest entry, or an extreme pivot ratio, is a singular matrix.
-pub fn lu_in_place(a: &mut DMatrix<f64>, pivots: &mut [usize]) -> Result<(), FaultKind> {
-    let n = a.nrows();
-    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+pub fn lu_in_place<M: Square>(a: &mut M, pivots: &mut [usize]) -> Result<(), FaultKind> {
+    let n = a.order();
+    let mut scale = 0.0f64;
+    for j in 0..n {
+        for i in 0..n {
+            scale = scale.max(a[(i, j)].abs());
+        }
+    }
     if !scale.is_finite() {
         return Err(FaultKind::NonFinite { component: 0 });
     }
@@ -165,7 +240,7 @@ pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
 }
 
 /// Solves with the factors of [`lu_in_place`].
-pub fn lu_solve(lu: &DMatrix<f64>, pivots: &[usize], b: &mut [f64]) {
+pub fn lu_solve<M: Square>(lu: &M, pivots: &[usize], b: &mut [f64]) {
     lu_factor_solve(lu, pivots, b);
 }
 
@@ -211,12 +286,12 @@ pub fn lu_factor<T: ComplexField<RealField = f64> + Copy>(
 }
 
 /// Solves with the factors of [`lu_factor`].
-pub fn lu_factor_solve<T: ComplexField<RealField = f64> + Copy>(
-    lu: &DMatrix<T>,
+pub fn lu_factor_solve<T: ComplexField<RealField = f64> + Copy, M: Square<T>>(
+    lu: &M,
     pivots: &[usize],
     b: &mut [T],
 ) {
-    let n = lu.nrows();
+    let n = lu.order();
     for k in 0..n {
         b.swap(k, pivots[k]);
     }
@@ -241,14 +316,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cholesky_and_lu_solve_the_same_system() {
+    fn ldl_and_lu_solve_the_same_system() {
         let m = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
         let want = [1.0, -2.0, 0.5];
         let rhs: Vec<f64> = (0..3).map(|i| (0..3).map(|j| m[(i, j)] * want[j]).sum()).collect();
         let mut pivots = [0; 3];
         let mut a = m.clone();
         let mut x = rhs.clone();
-        solve_symmetric(&mut a, &m, &mut x, &mut pivots).unwrap();
+        solve_symmetric(&mut a, &mut x, &mut pivots, |a| a.copy_from(&m)).unwrap();
         let mut a = m.clone();
         let mut y = rhs.clone();
         solve_general(&mut a, &mut y, &mut pivots).unwrap();
@@ -259,11 +334,52 @@ mod tests {
     }
 
     #[test]
+    fn stack_and_heap_storage_give_the_same_bits() {
+        // A symmetric positive definite 3×3 by LDLᵀ and a 4×4 with a zero corner by LU.
+        let entries = [
+            (3, vec![4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]),
+            (
+                4,
+                vec![
+                    2.0, 0.3, 1.0, 0.0, 0.3, 1.5, -1.0, 0.7, -1.0, 1.0, 0.0, 0.0, 0.0, -0.7, 0.0,
+                    0.0,
+                ],
+            ),
+        ];
+        for (n, values) in entries {
+            let heap = DMatrix::from_column_slice(n, n, &values);
+            let mut small = Small::zeros(n).expect("small enough");
+            for j in 0..n {
+                for i in 0..n {
+                    small[(i, j)] = heap[(i, j)];
+                }
+            }
+            let rhs: Vec<f64> = (0..n).map(|i| 1.0 / (i as f64 + 0.7)).collect();
+            let (mut x, mut y) = (rhs.clone(), rhs.clone());
+            let (mut a, mut b) = (heap.clone(), small);
+            if n == 3 {
+                solve_symmetric(&mut a, &mut x, &mut [0; 3], |a| a.copy_from(&heap)).unwrap();
+                solve_symmetric(&mut b, &mut y, &mut [0; 3], |_| unreachable!()).unwrap();
+            } else {
+                solve_general(&mut a, &mut x, &mut [0; 4]).unwrap();
+                solve_general(&mut b, &mut y, &mut [0; 4]).unwrap();
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&x), bits(&y));
+            let residual = (0..n)
+                .map(|i| ((0..n).map(|j| heap[(i, j)] * x[j]).sum::<f64>() - rhs[i]).abs())
+                .fold(0.0, f64::max);
+            assert!(residual < 1e-14, "{residual}");
+        }
+        assert!(Small::zeros(SMALL + 1).is_none());
+    }
+
+    #[test]
     fn indefinite_falls_back_to_lu() {
         let m = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, 1.0, 0.0]);
         let mut a = m.clone();
         let mut x = [2.0, 3.0];
-        solve_symmetric(&mut a, &m, &mut x, &mut [0; 2]).unwrap();
+        solve_symmetric(&mut a, &mut x, &mut [0; 2], |a| a.copy_from(&m)).unwrap();
         assert_eq!(x, [3.0, 2.0]);
     }
 
@@ -281,7 +397,8 @@ mod tests {
     fn singular_matrix_names_the_vanishing_column() {
         let m = DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 0.0, 0.0]);
         let mut a = m.clone();
-        let err = solve_symmetric(&mut a, &m, &mut [1.0, 1.0], &mut [0; 2]).unwrap_err();
+        let err =
+            solve_symmetric(&mut a, &mut [1.0, 1.0], &mut [0; 2], |a| a.copy_from(&m)).unwrap_err();
         assert!(
             matches!(err, FaultKind::SingularMass { ref coordinates, .. } if coordinates == &[1])
         );

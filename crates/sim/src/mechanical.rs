@@ -5,7 +5,7 @@
 use nalgebra::DMatrix;
 use numeric::Tape;
 
-use crate::linalg;
+use crate::linalg::{self, Small, Square};
 use crate::{check_finite, FaultKind, Hold, Problem, Series};
 
 mod jacobian;
@@ -75,12 +75,18 @@ pub struct Mechanical {
     pub baumgarte: f64,
     /// One per kept constraint; position constraints unless [`Mechanical::with_kinds`] says.
     stabilisation: Vec<Stabilisation>,
-    input: Vec<f64>,
     dyn_out: Vec<f64>,
     obs_input: Vec<f64>,
+    /// The augmented system on the heap, for large systems and the exact Jacobian.
     system: DMatrix<f64>,
     backup: DMatrix<f64>,
+    /// The same on the stack when it is small enough, as it is for most scenes.
+    small: Option<Small>,
     solution: Vec<f64>,
+    /// The Baumgarte rate (as bits) `solution` was solved with at the state and parameters in
+    /// the dynamics program's inputs; `None` once `input`, `dyn_out` or `solution` moved on. A step's observations
+    /// are taken where its last stage was evaluated: this saves solving there again.
+    solved: Option<u64>,
     pivots: Vec<usize>,
     /// The partials program and its outputs, when an exact Jacobian was asked for.
     partials: Option<Tape>,
@@ -98,6 +104,11 @@ impl Mechanical {
         assert_eq!(observation.inputs(), layout.observation_inputs());
         assert_eq!(parameters.len(), layout.parameters);
         let size = layout.coordinates + layout.multipliers;
+        // The parameters close both programs' inputs; a run changes them seldom, if at all.
+        let state = 1 + 2 * layout.coordinates;
+        let dynamics = dynamics.with_fixed_inputs(state..layout.dynamics_inputs());
+        let observed = state + layout.coordinates + layout.multipliers;
+        let observation = observation.with_fixed_inputs(observed..layout.observation_inputs());
         Mechanical {
             layout,
             dynamics,
@@ -105,12 +116,13 @@ impl Mechanical {
             parameters,
             baumgarte: 10.0,
             stabilisation: vec![Stabilisation::Position; layout.multipliers],
-            input: vec![0.0; layout.dynamics_inputs()],
             dyn_out: vec![0.0; layout.dynamics_outputs()],
             obs_input: vec![0.0; layout.observation_inputs()],
             system: DMatrix::zeros(size, size),
             backup: DMatrix::zeros(size, size),
+            small: Small::zeros(size),
             solution: vec![0.0; size],
+            solved: None,
             pivots: vec![0; size],
             partials: None,
             partials_out: Vec::new(),
@@ -171,17 +183,20 @@ impl Mechanical {
     pub fn with_kinds(mut self, kinds: Vec<Stabilisation>) -> Self {
         assert_eq!(kinds.len(), self.layout.multipliers);
         self.stabilisation = kinds;
+        self.solved = None;
         self
     }
 
     /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
     pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
         let Layout { coordinates: n, parameters: k, .. } = self.layout;
+        self.solved = None;
         self.follow_signals(t);
-        self.input[0] = t;
-        self.input[1..1 + 2 * n].copy_from_slice(y);
-        self.input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
-        self.dynamics.eval(&self.input, &mut self.dyn_out);
+        let input = self.dynamics.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        self.dynamics.run(&mut self.dyn_out);
         check_finite(&self.dyn_out)?;
         Ok(&self.dyn_out)
     }
@@ -206,59 +221,66 @@ impl Mechanical {
 
     /// Solves for q̈ and λ at (t, q, q̇); they are left in `self.solution`.
     fn accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        if self.solved_at(t, y) {
+            return Ok(());
+        }
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         self.dynamics_at(t, y)?;
         let out = &self.dyn_out;
-        for j in 0..n {
-            for i in 0..n {
-                self.system[(i, j)] = out[j * n + i];
-            }
-            self.solution[j] = out[n * n + j];
-        }
-        if m == 0 {
-            self.backup.copy_from(&self.system);
-            return linalg::solve_symmetric(
-                &mut self.system,
-                &self.backup,
-                &mut self.solution,
-                &mut self.pivots,
-            );
-        }
-        let rows = n * n + n;
+        self.solution[..n].copy_from_slice(&out[n * n..n * n + n]);
         let a = self.baumgarte;
         for c in 0..m {
-            let base = rows + c * (n + 3);
-            for j in 0..n {
-                let jac = out[base + j];
-                self.system[(n + c, j)] = jac;
-                self.system[(j, n + c)] = -jac;
-            }
-            for d in 0..m {
-                self.system[(n + c, n + d)] = 0.0;
-            }
+            let base = n * n + n + c * (n + 3);
             let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
             self.solution[n + c] = match self.stabilisation[c] {
                 Stabilisation::Position => gamma - 2.0 * a * phi_rate - a * a * phi,
                 Stabilisation::Velocity => gamma - a * phi,
             };
         }
-        self.backup.copy_from(&self.system);
-        match linalg::solve_general(&mut self.system, &mut self.solution, &mut self.pivots) {
-            Err(FaultKind::SingularMass { .. }) => Err(self.which_lost_rank()),
-            other => other,
+        let (solution, pivots) = (&mut self.solution, &mut self.pivots);
+        let solved = match self.small.as_mut() {
+            Some(small) => solve_system(out, self.layout, small, solution, pivots),
+            None => solve_system(out, self.layout, &mut self.system, solution, pivots),
+        };
+        match solved {
+            Ok(()) => {
+                self.solved = Some(self.baumgarte.to_bits());
+                Ok(())
+            }
+            Err(FaultKind::SingularMass { .. }) if m > 0 => Err(self.which_lost_rank()),
+            Err(fault) => Err(fault),
         }
+    }
+
+    /// Whether `self.solution` holds the accelerations at (t, y) as they would be solved now:
+    /// the last evaluation was at the same bits of t, y and the parameters, with the same
+    /// Baumgarte rate.
+    fn solved_at(&mut self, t: f64, y: &[f64]) -> bool {
+        if self.solved != Some(self.baumgarte.to_bits()) {
+            return false;
+        }
+        self.follow_signals(t);
+        let same = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits())
+        };
+        let state = 1 + y.len();
+        let input = self.dynamics.inputs_mut();
+        input[0].to_bits() == t.to_bits()
+            && same(&input[1..state], y)
+            && same(&input[state..], &self.parameters)
     }
 
     /// After the augmented system [M −Jᵀ; J 0] failed: whether M itself or the constraint
     /// Jacobian J lost rank, the two faults a user fixes in different places.
     fn which_lost_rank(&self) -> FaultKind {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
-        let mut mass = self.backup.view((0, 0), (n, n)).into_owned();
+        let out = &self.dyn_out;
+        let mut mass = DMatrix::from_fn(n, n, |i, j| out[j * n + i]);
         let mut pivots = vec![0; n];
         if let Err(fault) = linalg::lu_in_place(&mut mass, &mut pivots) {
             return fault;
         }
-        let jacobian = self.backup.view((n, 0), (m, n)).into_owned();
+        let jacobian = DMatrix::from_fn(m, n, |c, j| out[n * n + n + c * (n + 3) + j]);
         FaultKind::SingularConstraints { constraints: linalg::dependent_rows(&jacobian) }
     }
 
@@ -354,13 +376,14 @@ impl Canonical {
         assert_eq!(inner.layout.multipliers, 0);
         assert_eq!(momentum.inputs(), inner.layout.dynamics_inputs());
         assert_eq!(momentum.outputs(), n * n + 2 * n);
+        let k = inner.layout.parameters;
         Canonical {
             input: vec![0.0; inner.layout.dynamics_inputs()],
             out: vec![0.0; n * n + 2 * n],
             rates: vec![0.0; n],
             physical: vec![0.0; 2 * n],
             inner,
-            momentum,
+            momentum: momentum.with_fixed_inputs(1 + 2 * n..1 + 2 * n + k),
             partials: None,
             partials_out: Vec::new(),
         }
@@ -403,13 +426,11 @@ impl Canonical {
             }
             self.rates[j] = y[n + j] - self.out[n * n + j];
         }
-        self.inner.backup.copy_from(&self.inner.system);
-        linalg::solve_symmetric(
-            &mut self.inner.system,
-            &self.inner.backup,
-            &mut self.rates,
-            &mut self.inner.pivots,
-        )
+        let inner = &mut self.inner;
+        inner.backup.copy_from(&inner.system);
+        linalg::solve_symmetric(&mut inner.system, &mut self.rates, &mut inner.pivots, |a| {
+            a.copy_from(&inner.backup)
+        })
     }
 
     /// (q, p) from (q, q̇).
@@ -479,5 +500,43 @@ impl Canonical {
         self.physical[..n].copy_from_slice(&y[..n]);
         self.physical[n..].copy_from_slice(&self.rates);
         Ok(self.physical.clone())
+    }
+}
+
+/// Writes the augmented matrix [M −Jᵀ; J 0] of the dynamics outputs `out` into `a`.
+fn load_system(out: &[f64], layout: Layout, a: &mut impl Square) {
+    let Layout { coordinates: n, multipliers: m, .. } = layout;
+    for j in 0..n {
+        for i in 0..n {
+            a[(i, j)] = out[j * n + i];
+        }
+    }
+    for c in 0..m {
+        let base = n * n + n + c * (n + 3);
+        for j in 0..n {
+            let jac = out[base + j];
+            a[(n + c, j)] = jac;
+            a[(j, n + c)] = -jac;
+        }
+        for d in 0..m {
+            a[(n + c, n + d)] = 0.0;
+        }
+    }
+}
+
+/// Solves the augmented system of `out` for the right side `b`, in place: by LDLᵀ when
+/// there are no multipliers (M alone, symmetric), by LU otherwise.
+fn solve_system<M: Square>(
+    out: &[f64],
+    layout: Layout,
+    a: &mut M,
+    b: &mut [f64],
+    pivots: &mut [usize],
+) -> Result<(), FaultKind> {
+    load_system(out, layout, a);
+    if layout.multipliers == 0 {
+        linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, a))
+    } else {
+        linalg::solve_general(a, b, pivots)
     }
 }

@@ -53,13 +53,15 @@ impl Mechanical {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         self.accelerations(t, y)?;
         let mut column = std::mem::take(&mut self.solution);
+        // `column` is a work space below: the accelerations are gone from it.
+        self.solved = None;
         let evaluated = self.partials_at(t, y, &column).map(|_| ());
         if let Err(fault) = evaluated {
             self.solution = column;
             return Err(fault);
         }
-        // The accelerations may have been solved by Cholesky; one LU serves every column.
-        self.system.copy_from(&self.backup);
+        // The accelerations may have been solved by LDLᵀ; one LU serves every column.
+        super::load_system(&self.dyn_out, self.layout, &mut self.system);
         if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
             self.solution = column;
             return Err(fault);
