@@ -20,27 +20,13 @@ Usage:
     echo '{"a1": 2, "a2": 2}' | tests/sympy/ensemble_peer.py [--tol 1e-10] [--until 10]
 """
 
-import os
-import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-VENV = os.path.join(HERE, ".venv-ensemble")
-PYTHON = os.path.join(VENV, "bin", "python")
 PACKAGES = ["numpy==2.3.5", "scipy==1.16.3", "sympy==1.14.0"]
 
+from pinned import run_inside  # noqa: E402
 
-def ensure_venv():
-    """Re-runs this script inside the pinned virtual environment, creating it if needed."""
-    if os.path.realpath(sys.prefix) == os.path.realpath(VENV):
-        return
-    if not os.path.exists(PYTHON):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-        subprocess.check_call([PYTHON, "-m", "pip", "install", "-q", *PACKAGES])
-    os.execv(PYTHON, [PYTHON, *sys.argv])
-
-
-ensure_venv()
+run_inside("ensemble", PACKAGES)
 
 import argparse  # noqa: E402
 import json  # noqa: E402

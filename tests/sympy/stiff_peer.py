@@ -24,27 +24,11 @@ Usage:
     tests/sympy/stiff_peer.py [--ks 1e4,1e6,1e8,1e10,1e12] [--tol 1e-8] [--repeat 3] [--json]
 """
 
-import os
-import subprocess
-import sys
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-VENV = os.path.join(HERE, ".venv-stiff")
-PYTHON = os.path.join(VENV, "bin", "python")
 PACKAGES = ["numpy==2.3.5", "scipy==1.16.3"]
 
+from pinned import run_inside  # noqa: E402
 
-def ensure_venv():
-    """Re-runs this script inside the pinned virtual environment, creating it if needed."""
-    if os.path.realpath(sys.prefix) == os.path.realpath(VENV):
-        return
-    if not os.path.exists(PYTHON):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-        subprocess.check_call([PYTHON, "-m", "pip", "install", "-q", *PACKAGES])
-    os.execv(PYTHON, [PYTHON, *sys.argv])
-
-
-ensure_venv()
+run_inside("stiff", PACKAGES)
 
 import argparse  # noqa: E402
 import json  # noqa: E402
