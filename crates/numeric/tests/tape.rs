@@ -28,9 +28,9 @@ fn reference(p: &Pool, e: ExprId, values: &[f64]) -> f64 {
     }
 }
 
-#[test]
-fn tape_agrees_with_a_walk_of_the_tree() {
-    let mut p = Pool::new();
+/// Sums with negative terms, roots, powers, a quotient, exp, atan2 and a constant in x, y
+/// and t0: the symbols and the expressions.
+fn assorted(p: &mut Pool) -> ([cas::SymId; 3], Vec<ExprId>) {
     let (x, y, t) = (p.coordinate("x"), p.coordinate("y"), p.param("t0"));
     let (xe, ye, te) = (p.sym(x), p.sym(y), p.sym(t));
     let sx = p.sin(xe);
@@ -47,18 +47,25 @@ fn tape_agrees_with_a_walk_of_the_tree() {
     let a2 = p.atan2(ye, xe);
     let pw = p.pow(xe, ye);
     let k = p.scale(pw, &cas::number::ratio(-7, 3));
-    let outputs = [lin, e, a2, k, xe, three];
+    let quotient = p.div(sx, ye);
+    ([x, y, t], vec![lin, e, a2, k, xe, three, quotient])
+}
+
+#[test]
+fn tape_agrees_with_a_walk_of_the_tree() {
+    let mut p = Pool::new();
+    let ([x, y, t], outputs) = assorted(&mut p);
     let program = lower(&p, &[x, y, t], &outputs).unwrap();
     let mut tape = Tape::new(program);
-    let mut out = [0.0; 6];
+    let mut out = vec![0.0; outputs.len()];
     for (xv, yv, tv) in [(0.3, 1.7, 2.0), (2.5, 0.4, -1.0), (1.0, 1.0, 0.0)] {
         tape.eval(&[xv, yv, tv], &mut out);
         let mut values = vec![f64::NAN; p.symbol_count()];
         values[x.index()] = xv;
         values[y.index()] = yv;
         values[t.index()] = tv;
-        for (o, e) in out.iter().zip(outputs) {
-            let want = reference(&p, e, &values);
+        for (o, e) in out.iter().zip(&outputs) {
+            let want = reference(&p, *e, &values);
             assert!(close(*o, want), "{o} vs {want}");
         }
     }
@@ -135,20 +142,7 @@ fn angle_differences_share_one_sine_and_cosine_per_angle() {
 #[test]
 fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
     let mut p = Pool::new();
-    let (x, y, t) = (p.coordinate("x"), p.coordinate("y"), p.param("t0"));
-    let (xe, ye, te) = (p.sym(x), p.sym(y), p.sym(t));
-    let sx = p.sin(xe);
-    let cy = p.cos(ye);
-    let xy = p.mul(&[sx, cy, te]);
-    let root = p.powq(xe, &cas::number::ratio(1, 2));
-    let inv = p.powi(ye, -3);
-    let minus = p.neg(inv);
-    let lin = p.add(&[xy, root, minus]);
-    let e = p.func(Func::Exp, lin);
-    let a2 = p.atan2(ye, xe);
-    let pw = p.pow(xe, ye);
-    let quotient = p.div(sx, ye);
-    let outputs = [lin, e, a2, pw, quotient, te];
+    let ([x, y, t], outputs) = assorted(&mut p);
     let program = lower(&p, &[x, y, t], &outputs).unwrap();
     let mut tape = Tape::new(program.clone());
     let mut batch = numeric::BatchTape::new(program);
@@ -162,7 +156,7 @@ fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
         .collect();
     let mut many = vec![0.0; points * outputs.len()];
     batch.eval_many(&inputs, &mut many);
-    let mut one = [0.0; 6];
+    let mut one = vec![0.0; outputs.len()];
     for (point, row) in inputs.chunks(3).zip(many.chunks(outputs.len())) {
         tape.eval(point, &mut one);
         for (a, b) in one.iter().zip(row) {
