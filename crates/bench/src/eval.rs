@@ -265,9 +265,23 @@ fn four_link_rhs() {
 fn many_points() {
     const POINTS: usize = 1024;
     outln!();
-    outln!("M and f at {POINTS} states, per state: the tape one state at a time, the batch tape");
-    outln!("({} states a register)", numeric::LANES);
-    outln!("{:>3} | {:>10} {:>10} | {:>7}", "n", "tape", "batch", "speedup");
+    outln!(
+        "At {POINTS} states, per state: M and f on the tape one state at a time and on the batch"
+    );
+    outln!(
+        "tape ({} states a register); the right-hand side by rhs and by rhs_many",
+        numeric::LANES
+    );
+    outln!(
+        "{:>3} | {:>10} {:>10} {:>7} | {:>10} {:>10} {:>7}",
+        "n",
+        "tape M,f",
+        "batch M,f",
+        "speedup",
+        "rhs",
+        "rhs_many",
+        "speedup"
+    );
     for n in SIZES {
         let scene = n_link(Family::Pendulum, n);
         let mut prepared =
@@ -295,14 +309,36 @@ fn many_points() {
                 tape.eval(black_box(point), black_box(row));
             }
         }) / POINTS as f64;
-        let mut batch = numeric::BatchTape::new(dynamics);
+        let mut batch = numeric::BatchTape::new(dynamics.clone());
         let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
             / POINTS as f64;
+        let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+        let mut mech = Mechanical::new(
+            prepared.layout,
+            Tape::new(dynamics),
+            Tape::new(observation),
+            vec![1.0, 1.0, 9.81],
+        );
+        let times = vec![0.0; POINTS];
+        let ys: Vec<f64> =
+            inputs.chunks(width).flat_map(|row| row[1..1 + 2 * n].to_vec()).collect();
+        let mut dys = vec![0.0; ys.len()];
+        let rhs = crate::per_call(|| {
+            for (y, dy) in ys.chunks(2 * n).zip(dys.chunks_mut(2 * n)) {
+                mech.rhs(0.0, black_box(y), black_box(dy)).expect("regular");
+            }
+        }) / POINTS as f64;
+        let rhs_many = crate::per_call(|| {
+            mech.rhs_many(&times, black_box(&ys), black_box(&mut dys)).expect("regular");
+        }) / POINTS as f64;
         outln!(
-            "{n:>3} | {:>10} {:>10} | {:>7.2}",
+            "{n:>3} | {:>10} {:>10} {:>7.2} | {:>10} {:>10} {:>7.2}",
             crate::seconds(one),
             crate::seconds(many),
-            one / many
+            one / many,
+            crate::seconds(rhs),
+            crate::seconds(rhs_many),
+            rhs / rhs_many
         );
     }
 }

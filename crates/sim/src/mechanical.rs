@@ -9,6 +9,7 @@ use crate::linalg::{self, Small, Square};
 use crate::{check_finite, FaultKind, Hold, Problem, Series};
 
 mod jacobian;
+mod many;
 
 /// How the slots of the programs are laid out. The dynamics program takes
 /// `[t, q (n), q̇ (n), parameters (k)]` and gives `M` (n×n, column-major), `f` (n), then per
@@ -95,6 +96,8 @@ pub struct Mechanical {
     signals: Vec<(usize, Series)>,
     /// Parameter slots that hold laws of the state sampled every period.
     hold: Option<Hold>,
+    /// The dynamics program over many states at once, made on the first [`Mechanical::rhs_many`].
+    many: Option<many::Many>,
 }
 
 impl Mechanical {
@@ -128,6 +131,7 @@ impl Mechanical {
             partials_out: Vec::new(),
             signals: Vec::new(),
             hold: None,
+            many: None,
         }
     }
 
@@ -224,8 +228,14 @@ impl Mechanical {
         if self.solved_at(t, y) {
             return Ok(());
         }
-        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         self.dynamics_at(t, y)?;
+        self.solve_dynamics()
+    }
+
+    /// Solves for q̈ and λ from the dynamics outputs in `self.dyn_out`; they are left in
+    /// `self.solution`.
+    fn solve_dynamics(&mut self) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         let out = &self.dyn_out;
         self.solution[..n].copy_from_slice(&out[n * n..n * n + n]);
         let a = self.baumgarte;
