@@ -437,8 +437,21 @@ impl Rhs {
         let mut out = Vec::with_capacity(rows * width);
         let mut state = vec![0.0; width];
         let sources = this.sources(u, Some(rows))?;
+        // Inputs that are the same at every row leave every row's numbers to one batch.
+        let same_inputs = sources.iter().all(|s| matches!(s, Source::Value(_)));
         this.with_parameters(p, |rhs| {
-            for (k, (row, t)) in y.rows().into_iter().zip(times).enumerate() {
+            if same_inputs {
+                rhs.set_inputs(py, &sources, 0.0, &state, 0)?;
+                let states: Vec<f64> = y.iter().copied().collect();
+                out.resize(states.len(), 0.0);
+                return rhs.mechanical.rhs_many(&times, &states, &mut out).map_err(
+                    |(row, kind)| {
+                        let at = times[row];
+                        numeric_error(format!("at t = {at}: {}", fault_text(&kind, &rhs.names)))
+                    },
+                );
+            }
+            for (k, (row, t)) in y.rows().into_iter().zip(times.iter().copied()).enumerate() {
                 for (slot, v) in state.iter_mut().zip(row.iter()) {
                     *slot = *v;
                 }

@@ -69,8 +69,14 @@ counter_rate = bench_module("threads").counting
 
 
 def test_python_threads_run_while_a_scene_integrates(pendulum):
-    long_run = lambda: pendulum.simulate(until=400.0, tolerance=1e-12, output="theta1")
-    long_run()  # compiled once, so that the timed call only integrates
+    run = lambda until: pendulum.simulate(until=until, tolerance=1e-12, output="theta1")
+    run(400.0)  # compiled once, so that the timed calls only integrate
+    # Long enough to measure on any machine: about half a second, however fast a run is.
+    start = time.perf_counter()
+    run(400.0)
+    took = time.perf_counter() - start
+    until = 400.0 * max(1.0, 0.5 / max(took, 1e-3))
+    long_run = lambda: run(until)
     alone, _ = counter_rate(0.3)
     during, elapsed = counter_rate(during=long_run)
     assert elapsed > 0.1, "the run is too short to measure anything"
