@@ -236,6 +236,17 @@ fn table(rows: &[Row]) {
     }
 }
 
+/// The n-link pendulum's problem with m = l = 1 and g = 9.81, observing nothing.
+fn unit_chain(prepared: &engine::numbers::Prepared, dynamics: numeric::Program) -> Mechanical {
+    let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
+    Mechanical::new(
+        prepared.layout,
+        Tape::new(dynamics),
+        Tape::new(observation),
+        vec![1.0, 1.0, 9.81],
+    )
+}
+
 /// The 4-link pendulum's right-hand side has its own target; measured on the tape too.
 fn four_link_rhs() {
     let scene = n_link(Family::Pendulum, 4);
@@ -243,13 +254,7 @@ fn four_link_rhs() {
         engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
     let exprs = prepared.dynamics_exprs();
     let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
-    let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
-    let mut mech = Mechanical::new(
-        prepared.layout,
-        Tape::new(dynamics),
-        Tape::new(observation),
-        vec![1.0, 1.0, 9.81],
-    );
+    let mut mech = unit_chain(&prepared, dynamics);
     let (theta, rate) = state(4);
     let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
     let t = rhs_per_call(&mut mech, &y);
@@ -312,13 +317,7 @@ fn many_points() {
         let mut batch = numeric::BatchTape::new(dynamics.clone());
         let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
             / POINTS as f64;
-        let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
-        let mut mech = Mechanical::new(
-            prepared.layout,
-            Tape::new(dynamics),
-            Tape::new(observation),
-            vec![1.0, 1.0, 9.81],
-        );
+        let mut mech = unit_chain(&prepared, dynamics);
         let times = vec![0.0; POINTS];
         let ys: Vec<f64> =
             inputs.chunks(width).flat_map(|row| row[1..1 + 2 * n].to_vec()).collect();
