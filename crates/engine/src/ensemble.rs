@@ -77,6 +77,8 @@ pub struct Ensemble {
     state_names: Vec<String>,
     constraint_names: Vec<String>,
     angle_oriented_bodies: Vec<String>,
+    /// Whether runs go side by side in lockstep ([`sim::Lockstep`]) where it serves them.
+    lockstep: bool,
 }
 
 /// A run's parameter values and initial state (q, q̇).
@@ -180,7 +182,15 @@ impl Ensemble {
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
             angle_oriented_bodies: simulate::angle_oriented_bodies(model),
+            lockstep: true,
         })
+    }
+
+    /// Whether runs go side by side in lockstep where the method and the problem allow it
+    /// (the default), or one at a time. Either gives the same bits; one at a time is there to
+    /// show it and to measure what the lockstep buys.
+    pub fn set_lockstep(&mut self, on: bool) {
+        self.lockstep = on;
     }
 
     /// How many runs the ensemble has.
@@ -244,6 +254,47 @@ impl Ensemble {
     ) -> Vec<(usize, Outcome)> {
         let mut integrand = self.integrand.clone();
         let mut results = Vec::new();
+        let lockstep = match &mut integrand {
+            Integrand::Mechanical(problem) if self.lockstep => {
+                sim::Lockstep::new(problem, &self.run_settings)
+            }
+            _ => None,
+        };
+        if let Some(mut lockstep) = lockstep {
+            // Runs end both where a start cannot be made and where a lane finishes one.
+            let report = std::cell::RefCell::new(report);
+            let mut jobs = || loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= runs.end || stop.load(Ordering::Relaxed) {
+                    return None;
+                }
+                match &self.starts[k] {
+                    Ok(start) => {
+                        let (parameters, state) = (start.parameters.clone(), start.state.clone());
+                        return Some(sim::Job { id: k, parameters, state });
+                    }
+                    Err(why) => {
+                        results.push((k, (vec![f64::NAN; self.recorded.len()], Some(why.clone()))));
+                        (report.borrow_mut())(done.fetch_add(1, Ordering::Relaxed) + 1);
+                    }
+                }
+            };
+            let mut ran = Vec::new();
+            let mut finished = |k: usize, run: sim::Run| {
+                ran.push((k, self.outcome(&run)));
+                (report.borrow_mut())(done.fetch_add(1, Ordering::Relaxed) + 1);
+            };
+            let mut go_on = || {
+                if stop.load(Ordering::Relaxed) {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            };
+            lockstep.run(&mut jobs, &self.watched, &mut finished, &mut go_on);
+            results.extend(ran);
+            return results;
+        }
         loop {
             let k = next.fetch_add(1, Ordering::Relaxed);
             if k >= runs.end || stop.load(Ordering::Relaxed) {
@@ -274,9 +325,14 @@ impl Ensemble {
             }
         };
         let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut go_on);
+        self.outcome(&run)
+    }
+
+    /// What a run gives: its recorded values, or NaN and why it failed.
+    fn outcome(&self, run: &sim::Run) -> Outcome {
         match &run.fault {
-            Some(fault) => failed(self.describe(fault)),
-            None => (self.recorded.iter().map(|r| r.value(&run)).collect(), None),
+            Some(fault) => (vec![f64::NAN; self.recorded.len()], Some(self.describe(fault))),
+            None => (self.recorded.iter().map(|r| r.value(run)).collect(), None),
         }
     }
 

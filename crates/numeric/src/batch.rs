@@ -65,6 +65,24 @@ impl BatchTape {
         }
     }
 
+    /// The input registers, each [`LANES`] wide (lane `l` of register `i` is input `i` of
+    /// point `l`): a caller that keeps its points lane by lane fills them in place, then
+    /// calls [`BatchTape::run_lanes`].
+    pub fn input_lanes_mut(&mut self) -> &mut [Lanes] {
+        &mut self.registers[..self.program.inputs]
+    }
+
+    /// Evaluates the program at the points in [`BatchTape::input_lanes_mut`]; output `o` of
+    /// each point is then in [`BatchTape::output_lanes`]`(o)`.
+    pub fn run_lanes(&mut self) {
+        self.run();
+    }
+
+    /// Output `o` of each point of the last [`BatchTape::run_lanes`], lane by lane.
+    pub fn output_lanes(&self, o: usize) -> &Lanes {
+        &self.registers[self.program.outputs[o] as usize]
+    }
+
     /// One pass of the code over the registers as they stand.
     fn run(&mut self) {
         let p = &self.program;

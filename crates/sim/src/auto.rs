@@ -14,7 +14,7 @@
 //! Each side keeps its own dense output; the one that took the last step interpolates inside
 //! it, so events, stop conditions and samples see one continuous solution across a switch.
 
-use crate::erk::{Adaptive, Pair, Stepper};
+use crate::erk::{Adaptive, Dense, Pair, Stepper};
 use crate::radau::Radau;
 use crate::{spectrum, Components, FaultKind, Problem};
 
@@ -121,6 +121,21 @@ impl Auto {
     }
 }
 
+impl Dense for Auto {
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        if self.last_by_radau {
+            self.radau.interpolate(p, t, out)
+        } else {
+            self.explicit.interpolate(p, t, out)
+        }
+    }
+
+    fn after_jump(&mut self) {
+        self.explicit.after_jump();
+        self.radau.after_jump();
+    }
+}
+
 impl Stepper for Auto {
     fn advance(
         &mut self,
@@ -133,14 +148,6 @@ impl Stepper for Auto {
             self.radau_step(p, t, y, t_end)
         } else {
             self.explicit_step(p, t, y, t_end)
-        }
-    }
-
-    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
-        if self.last_by_radau {
-            self.radau.interpolate(p, t, out)
-        } else {
-            self.explicit.interpolate(p, t, out)
         }
     }
 
@@ -162,11 +169,6 @@ impl Stepper for Auto {
 
     fn factorizations(&self) -> usize {
         self.radau.factorizations()
-    }
-
-    fn after_jump(&mut self) {
-        self.explicit.after_jump();
-        self.radau.after_jump();
     }
 
     fn switches(&self) -> &[f64] {

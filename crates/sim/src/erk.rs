@@ -8,11 +8,24 @@ use numeric::elementary::pow;
 
 use crate::{FaultKind, Problem};
 
+mod lanes;
 mod tableau;
+pub(crate) use lanes::{Lanes, Stages};
 pub use tableau::{dop853_tableau, Dop853Tableau};
 
+/// The dense output of the last accepted step: what a run asks of its method between steps
+/// (to locate events and record samples), apart from stepping.
+pub(crate) trait Dense {
+    /// The state at time `t` inside the last accepted step.
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
+    /// The right-hand side jumped where the last step ended (a held input was sampled): what
+    /// the method carries from step to step (a derivative, a dense output, predicted stages)
+    /// belongs to the old one and is dropped; the step size is kept.
+    fn after_jump(&mut self) {}
+}
+
 /// Advances one accepted step at a time and interpolates inside the last one.
-pub(crate) trait Stepper {
+pub(crate) trait Stepper: Dense {
     /// Advances from `t` (with `y` its state, updated in place) by one accepted step that does
     /// not pass `t_end`; returns the new time.
     fn advance(
@@ -22,8 +35,6 @@ pub(crate) trait Stepper {
         y: &mut [f64],
         t_end: f64,
     ) -> Result<f64, FaultKind>;
-    /// The state at time `t` inside the last accepted step.
-    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
     fn evaluations(&self) -> usize;
     /// Steps rejected by the error control (adaptive methods only).
     fn rejected(&self) -> usize {
@@ -46,10 +57,6 @@ pub(crate) trait Stepper {
     fn switches(&self) -> &[f64] {
         &[]
     }
-    /// The right-hand side jumped where the last step ended (a held input was sampled): what
-    /// the method carries from step to step (a derivative, a dense output, predicted stages)
-    /// belongs to the old one and is dropped; the step size is kept.
-    fn after_jump(&mut self) {}
 }
 
 /// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
@@ -134,6 +141,12 @@ impl Rk4 {
     }
 }
 
+impl Dense for Rk4 {
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        self.last.eval(p, t, out, &mut self.evals);
+    }
+}
+
 impl Stepper for Rk4 {
     fn advance(
         &mut self,
@@ -164,10 +177,6 @@ impl Stepper for Rk4 {
             y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
         Ok(self.last.end(t, h, t_end, y))
-    }
-
-    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
-        self.last.eval(p, t, out, &mut self.evals);
     }
 
     fn evaluations(&self) -> usize {
@@ -280,27 +289,6 @@ impl Adaptive {
         }
     }
 
-    fn stage_count(&self) -> usize {
-        match self.pair {
-            Pair::Dopri5 => 6,
-            Pair::Dop853 => 12,
-        }
-    }
-
-    fn a(&self, s: usize) -> &'static [f64] {
-        match self.pair {
-            Pair::Dopri5 => DP5_A[s],
-            Pair::Dop853 => DOP853_A[s],
-        }
-    }
-
-    fn c(&self, s: usize) -> f64 {
-        match self.pair {
-            Pair::Dopri5 => DP5_C[s],
-            Pair::Dop853 => DOP853_C[s],
-        }
-    }
-
     /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
     fn initial_step(
         &mut self,
@@ -335,9 +323,9 @@ impl Adaptive {
     /// norm (accept when ≤ 1).
     fn trial(&mut self, p: &mut dyn Problem, t: f64, y: &[f64], h: f64) -> Result<f64, FaultKind> {
         let d = y.len();
-        let stages = self.stage_count();
+        let stages = self.pair.stage_count();
         for s in 1..stages {
-            let a = self.a(s);
+            let a = self.pair.a(s);
             for i in 0..d {
                 let mut acc = 0.0;
                 for (j, aj) in a.iter().enumerate() {
@@ -345,14 +333,11 @@ impl Adaptive {
                 }
                 self.tmp[i] = y[i] + h * acc;
             }
-            let c = self.c(s);
+            let c = self.pair.c(s);
             p.rhs(t + c * h, &self.tmp, &mut self.k[s])?;
             self.evals += 1;
         }
-        let b = match self.pair {
-            Pair::Dopri5 => &DP5_B[..],
-            Pair::Dop853 => DOP853_A[12],
-        };
+        let b = self.pair.b();
         for i in 0..d {
             let mut acc = 0.0;
             for (j, bj) in b.iter().enumerate() {
@@ -402,7 +387,7 @@ impl Adaptive {
     /// Hairer's stiffness test on the step just tried (see [`Adaptive::stiff`]); `tmp` still
     /// holds the argument of the last stage.
     fn at_stability_limit(&self, h: f64) -> bool {
-        let last = self.stage_count();
+        let last = self.pair.stage_count();
         let (mut num, mut den) = (0.0, 0.0);
         for i in 0..self.tmp.len() {
             let (dk, dy) = (self.k[last][i] - self.k[last - 1][i], self.y_new[i] - self.tmp[i]);
@@ -410,6 +395,122 @@ impl Adaptive {
             den += dy * dy;
         }
         den > 0.0 && h.abs() * (num / den).sqrt() > self.pair.stiffness_bound()
+    }
+
+    /// Makes ready for a step from (t, y): the derivative there (first same as last after a
+    /// step) and, before the first step, the starting step.
+    pub(crate) fn prepare(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &[f64],
+        t_end: f64,
+    ) -> Result<(), FaultKind> {
+        if self.f.is_none() {
+            let mut f0 = vec![0.0; y.len()];
+            p.rhs(t, y, &mut f0)?;
+            self.evals += 1;
+            self.f = Some(f0);
+        }
+        if self.h == 0.0 {
+            let f0 = self.f.clone().expect("just set");
+            self.h = self.initial_step(p, t, y, &f0, t_end)?;
+        }
+        Ok(())
+    }
+
+    /// Counts `n` evaluations of the right-hand side made for this method elsewhere.
+    pub(crate) fn count_evaluations(&mut self, n: usize) {
+        self.evals += n;
+    }
+
+    /// The evaluations of the right-hand side counted so far.
+    pub(crate) fn evaluations_counted(&self) -> usize {
+        self.evals
+    }
+
+    /// The relative and the absolute tolerance.
+    pub(crate) fn tolerances(&self) -> (f64, f64) {
+        (self.rtol, self.atol)
+    }
+
+    /// The derivative at the point a step starts from (after [`Adaptive::prepare`]).
+    pub(crate) fn start_derivative(&self) -> &[f64] {
+        self.f.as_deref().expect("prepared")
+    }
+
+    /// The next trial from `t`: its step and where it ends, not past `t_end`; or the fault
+    /// when the step has shrunk below what floating point resolves at `t`.
+    pub(crate) fn trial_step(&self, t: f64, t_end: f64) -> Result<(f64, f64), FaultKind> {
+        if self.h < min_step(t) {
+            return Err(FaultKind::StepTooSmall { step: self.h });
+        }
+        let (mut h, mut t_new) = (self.h, t + self.h);
+        if t_new >= t_end {
+            t_new = t_end;
+            h = t_end - t;
+        }
+        Ok((h, t_new))
+    }
+
+    /// The step control's verdict on a trial of step `h` from `t` (its error norm, or the
+    /// fault an evaluation inside it met; `stiff`: whether it was at the stability limit):
+    /// accepted (true) or to be tried again with the smaller step it sets (false). A failed
+    /// evaluation inside the step (NaN, singular M) may be the step's fault: the step shrinks,
+    /// and the fault is reported only when it cannot shrink further. `rejected_here` says
+    /// whether this step was rejected before, which caps its growth once accepted.
+    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
+    // differ in the last bit, and a different step sequence moves every result.
+    pub(crate) fn judge(
+        &mut self,
+        trial: Result<f64, FaultKind>,
+        h: f64,
+        t: f64,
+        stiff: bool,
+        rejected_here: &mut bool,
+    ) -> Result<bool, FaultKind> {
+        let exponent = -1.0 / (self.order() + 1.0);
+        let err = match trial {
+            Ok(err) => err,
+            Err(FaultKind::NonFinite { .. })
+            | Err(FaultKind::SingularMass { .. })
+            | Err(FaultKind::SingularConstraints { .. })
+                if h > 1e3 * min_step(t) =>
+            {
+                self.h = h * MIN_FACTOR;
+                self.rejected += 1;
+                *rejected_here = true;
+                return Ok(false);
+            }
+            Err(fault) => return Err(fault),
+        };
+        if err <= 1.0 {
+            if stiff {
+                self.stiff += 1;
+            }
+            let mut factor =
+                if err == 0.0 { MAX_FACTOR } else { MAX_FACTOR.min(SAFETY * pow(err, exponent)) };
+            if *rejected_here {
+                factor = factor.min(1.0);
+            }
+            self.h = h * factor;
+            return Ok(true);
+        }
+        self.h = h * MIN_FACTOR.max(SAFETY * pow(err, exponent));
+        self.rejected += 1;
+        *rejected_here = true;
+        Ok(false)
+    }
+
+    /// Takes the accepted step of size `h` from (t, `y`), whose end is in `y_new` and whose
+    /// last stage holds the derivative there: the step's start is kept for the dense output.
+    pub(crate) fn accepted(&mut self, t: f64, h: f64, y: &[f64]) {
+        self.y_old.copy_from_slice(y);
+        self.t_old = t;
+        self.h_last = h;
+        let last = self.pair.stage_count();
+        self.f.as_mut().expect("prepared").copy_from_slice(&self.k[last]);
+        self.dense = None;
     }
 
     fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
@@ -464,6 +565,11 @@ impl Adaptive {
     }
 }
 
+/// The smallest step floating point resolves at `t`, with a margin.
+fn min_step(t: f64) -> f64 {
+    10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE)
+}
+
 /// The root mean square of the values.
 pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0usize);
@@ -478,85 +584,7 @@ pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-impl Stepper for Adaptive {
-    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
-    // differ in the last bit, and a different step sequence moves every result.
-    fn advance(
-        &mut self,
-        p: &mut dyn Problem,
-        t: f64,
-        y: &mut [f64],
-        t_end: f64,
-    ) -> Result<f64, FaultKind> {
-        let d = y.len();
-        if self.f.is_none() {
-            let mut f0 = vec![0.0; d];
-            p.rhs(t, y, &mut f0)?;
-            self.evals += 1;
-            self.f = Some(f0);
-        }
-        self.k[0].copy_from_slice(self.f.as_ref().expect("set"));
-        if self.h == 0.0 {
-            let f0 = self.k[0].clone();
-            self.h = self.initial_step(p, t, y, &f0, t_end)?;
-        }
-        let exponent = -1.0 / (self.order() + 1.0);
-        let mut rejected_here = false;
-        loop {
-            let min_step = 10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
-            if self.h < min_step {
-                return Err(FaultKind::StepTooSmall { step: self.h });
-            }
-            let mut h = self.h;
-            let mut t_new = t + h;
-            if t_new >= t_end {
-                t_new = t_end;
-                h = t_end - t;
-            }
-            let err = match self.trial(p, t, y, h) {
-                Ok(e) => e,
-                // A failed evaluation inside the step (NaN, singular M) may be the step's fault:
-                // shrink it, and only report when it cannot be shrunk further.
-                Err(FaultKind::NonFinite { .. })
-                | Err(FaultKind::SingularMass { .. })
-                | Err(FaultKind::SingularConstraints { .. })
-                    if h > 1e3 * min_step =>
-                {
-                    self.h = h * MIN_FACTOR;
-                    self.rejected += 1;
-                    rejected_here = true;
-                    continue;
-                }
-                Err(e) => return Err(e),
-            };
-            if err <= 1.0 {
-                if self.at_stability_limit(h) {
-                    self.stiff += 1;
-                }
-                let mut factor = if err == 0.0 {
-                    MAX_FACTOR
-                } else {
-                    MAX_FACTOR.min(SAFETY * pow(err, exponent))
-                };
-                if rejected_here {
-                    factor = factor.min(1.0);
-                }
-                self.h = h * factor;
-                self.y_old.copy_from_slice(y);
-                self.t_old = t;
-                self.h_last = h;
-                y.copy_from_slice(&self.y_new);
-                let last = self.stage_count();
-                self.f.as_mut().expect("set").copy_from_slice(&self.k[last]);
-                self.dense = None;
-                return Ok(t_new);
-            }
-            self.h = h * MIN_FACTOR.max(SAFETY * pow(err, exponent));
-            self.rejected += 1;
-            rejected_here = true;
-        }
-    }
-
+impl Dense for Adaptive {
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
         if self.dense.is_none() {
             self.dense = Some(self.dense_coefficients(p));
@@ -589,6 +617,36 @@ impl Stepper for Adaptive {
         }
     }
 
+    fn after_jump(&mut self) {
+        self.restart(self.h);
+    }
+}
+
+impl Stepper for Adaptive {
+    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
+    // differ in the last bit, and a different step sequence moves every result.
+    fn advance(
+        &mut self,
+        p: &mut dyn Problem,
+        t: f64,
+        y: &mut [f64],
+        t_end: f64,
+    ) -> Result<f64, FaultKind> {
+        self.prepare(p, t, y, t_end)?;
+        self.k[0].copy_from_slice(self.f.as_ref().expect("prepared"));
+        let mut rejected_here = false;
+        loop {
+            let (h, t_new) = self.trial_step(t, t_end)?;
+            let trial = self.trial(p, t, y, h);
+            let stiff = matches!(trial, Ok(err) if err <= 1.0) && self.at_stability_limit(h);
+            if self.judge(trial, h, t, stiff, &mut rejected_here)? {
+                self.accepted(t, h, y);
+                y.copy_from_slice(&self.y_new);
+                return Ok(t_new);
+            }
+        }
+    }
+
     fn evaluations(&self) -> usize {
         self.evals
     }
@@ -599,10 +657,6 @@ impl Stepper for Adaptive {
 
     fn stiff_steps(&self) -> usize {
         self.stiff
-    }
-
-    fn after_jump(&mut self) {
-        self.restart(self.h);
     }
 }
 

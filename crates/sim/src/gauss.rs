@@ -10,7 +10,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::erk::{fixed_step, Hermite, Stepper};
+use crate::erk::{fixed_step, Dense, Hermite, Stepper};
 use crate::{linalg, FaultKind, Problem};
 
 const SQRT3_6: f64 = 0.288_675_134_594_812_9; // √3/6
@@ -92,6 +92,12 @@ impl Gauss {
             yp[j] = y[j];
         }
         Ok(())
+    }
+}
+
+impl Dense for Gauss {
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        self.last.eval(p, t, out, &mut self.evals);
     }
 }
 
@@ -187,10 +193,6 @@ impl Stepper for Gauss {
             y[k] += h * acc;
         }
         Ok(self.last.end(t, h, t_end, y))
-    }
-
-    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
-        self.last.eval(p, t, out, &mut self.evals);
     }
 
     fn evaluations(&self) -> usize {

@@ -7,6 +7,7 @@
 use std::ops::{Index, IndexMut};
 
 use nalgebra::{ComplexField, DMatrix, Scalar};
+use numeric::LANES;
 
 use crate::FaultKind;
 
@@ -75,6 +76,9 @@ impl Square for Small {
 
 /// Past this estimated condition number the solution has no correct digits left worth
 /// integrating; a report beats silently wrong accelerations.
+/// Systems solved side by side, a value of each per lane.
+pub type Lanes = [f64; LANES];
+
 pub const CONDITION_LIMIT: f64 = 1e13;
 
 /// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factors and `b` with `x`.
@@ -162,6 +166,77 @@ fn ldl_solve<M: Square>(ldl: &M, b: &mut [f64]) {
         }
         b[i] = s;
     }
+}
+
+/// [`solve_symmetric`]'s LDLᵀ path for [`LANES`] systems at once, kept lane by lane: `a`
+/// holds the lower triangle row by row (entry (i, j), j ≤ i, at `i * n + j`) and is
+/// overwritten by the factors, `b` by the solutions. Each lane does the operations of
+/// [`ldl_in_place`], the condition test and [`ldl_solve`], in their order, so a lane whose
+/// flag comes back true holds the bits `solve_symmetric` gives it. A false flag (a pivot
+/// that is not positive, or too ill-conditioned) leaves that lane to `solve_symmetric`,
+/// which falls back to LU or names the fault.
+pub fn solve_symmetric_lanes(n: usize, a: &mut [Lanes], b: &mut [Lanes]) -> [bool; LANES] {
+    let mut ok = [true; LANES];
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            for l in 0..LANES {
+                d[l] -= a[j * n + k][l] * a[j * n + k][l] * a[k * n + k][l];
+            }
+        }
+        for l in 0..LANES {
+            ok[l] &= d[l] > 0.0 && d[l].is_finite();
+        }
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                for l in 0..LANES {
+                    s[l] -= a[i * n + k][l] * a[j * n + k][l] * a[k * n + k][l];
+                }
+            }
+            for l in 0..LANES {
+                a[i * n + j][l] = s[l] / d[l];
+            }
+        }
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; LANES], [0.0f64; LANES]);
+    for i in 0..n {
+        for l in 0..LANES {
+            lo[l] = lo[l].min(a[i * n + i][l]);
+            hi[l] = hi[l].max(a[i * n + i][l]);
+        }
+    }
+    for l in 0..LANES {
+        // NaN passes here as it does in `solve_symmetric`.
+        if hi[l] / lo[l] > CONDITION_LIMIT {
+            ok[l] = false;
+        }
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            for l in 0..LANES {
+                s[l] -= a[i * n + k][l] * b[k][l];
+            }
+        }
+        b[i] = s;
+    }
+    for i in 0..n {
+        for l in 0..LANES {
+            b[i][l] /= a[i * n + i][l];
+        }
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            for l in 0..LANES {
+                s[l] -= a[k * n + i][l] * b[k][l];
+            }
+        }
+        b[i] = s;
+    }
+    ok
 }
 
 /// LU with partial pivoting; `pivots[k]` is the row swapped into place k. A pivot that

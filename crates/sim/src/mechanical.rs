@@ -144,6 +144,11 @@ impl Mechanical {
     pub fn set_parameters(&mut self, values: &[f64]) {
         assert_eq!(values.len(), self.layout.parameters);
         self.parameters.copy_from_slice(values);
+        // The dynamics program's parameter inputs follow, for a caller that sets its state
+        // inputs alone (`rhs_from_outputs`).
+        let state = 1 + 2 * self.layout.coordinates;
+        self.dynamics.inputs_mut()[state..state + values.len()].copy_from_slice(values);
+        self.solved = None;
     }
 
     /// Gives the problem its exact Jacobian: `partials` is the partials program of the

@@ -14,7 +14,7 @@
 use nalgebra::{Complex, DMatrix};
 use numeric::elementary::pow;
 
-use crate::erk::{rms, Stepper};
+use crate::erk::{rms, Dense, Stepper};
 use crate::{linalg, Components, FaultKind, Problem};
 
 /// The nodes (4 ∓ √6)/10 and 1.
@@ -480,6 +480,24 @@ impl Radau {
     }
 }
 
+impl Dense for Radau {
+    /// The Jacobian and its factors are kept (Newton's iteration needs only an approximate
+    /// one, and asks for a fresh one if it fails); F and the predicted stages are not.
+    fn after_jump(&mut self) {
+        self.f0 = None;
+        self.last = None;
+        self.jac_fresh = false;
+    }
+
+    fn interpolate(&mut self, _p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        let Some(last) = &self.last else { return };
+        let s = (t - last.t0) / last.h;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = last.y0[i] + last.increment(s, i);
+        }
+    }
+}
+
 impl Stepper for Radau {
     fn advance(
         &mut self,
@@ -584,22 +602,6 @@ impl Stepper for Radau {
             }
             self.jac_wanted = !fast;
             return Ok(t_new);
-        }
-    }
-
-    /// The Jacobian and its factors are kept (Newton's iteration needs only an approximate
-    /// one, and asks for a fresh one if it fails); F and the predicted stages are not.
-    fn after_jump(&mut self) {
-        self.f0 = None;
-        self.last = None;
-        self.jac_fresh = false;
-    }
-
-    fn interpolate(&mut self, _p: &mut dyn Problem, t: f64, out: &mut [f64]) {
-        let Some(last) = &self.last else { return };
-        let s = (t - last.t0) / last.h;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = last.y0[i] + last.increment(s, i);
         }
     }
 

@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use crate::auto::Auto;
-use crate::erk::{stability_radius, tableau, Adaptive, Pair, Rk4, Stepper};
+use crate::erk::{stability_radius, tableau, Adaptive, Dense, Pair, Rk4, Stepper};
 use crate::gauss::Gauss;
 use crate::radau::Radau;
 use crate::{Fault, FaultKind, Problem};
@@ -203,124 +203,219 @@ pub fn integrate(
     events: &[Event],
     progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
 ) -> Run {
-    let d = problem.dim();
     let mut stepper = stepper_for(settings, problem);
-    let mut run = Run {
-        trajectory: Trajectory::default(),
-        steps: 0,
-        rejected: 0,
-        evaluations: 0,
-        stiff_steps: 0,
-        jacobians: 0,
-        factorizations: 0,
-        peaks: Vec::new(),
-        extremes: Vec::new(),
-        events: Vec::new(),
-        stopped_by: None,
-        fault: None,
-        final_state: Vec::new(),
-        final_time: settings.start,
-        segments: Vec::new(),
-        interrupted: false,
+    let mut course = match Course::begin(problem, y0, settings) {
+        Ok(course) => course,
+        Err(run) => return *run,
     };
-    let width = problem.observations();
-    let mut t = settings.start;
-    let mut y = y0.to_vec();
-    let mut row = vec![0.0; width];
-    // A held input's first sample is at the start.
-    let mut next_sample = problem.next_sample(t);
-    if let Err(kind) = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row)) {
-        run.fault = Some(fault(problem, kind, t, &y));
-        run.final_state = problem.physical(t, &y);
-        return run;
-    }
-    let mut previous_row = row.clone();
-    run.peaks = row.iter().map(|v| v.abs()).collect();
-    run.extremes = row.iter().map(|v| (*v, *v)).collect();
-    run.trajectory.times.push(t);
-    run.trajectory.rows.push(row.clone());
-    let mut sampler = Sampler::new(settings);
-
-    while t < settings.until {
-        if run.steps >= settings.max_steps {
-            run.fault =
-                Some(fault(problem, FaultKind::TooManySteps { limit: settings.max_steps }, t, &y));
+    while course.t < settings.until {
+        if course.run.steps >= settings.max_steps {
+            course.fail(problem, FaultKind::TooManySteps { limit: settings.max_steps });
             break;
         }
-        let t0 = t;
-        let t_end = next_sample.map_or(settings.until, |s| s.min(settings.until));
-        match stepper.advance(problem, t, &mut y, t_end) {
-            Ok(t1) => t = t1,
+        let t0 = course.t;
+        let t_end = course.step_end(settings);
+        match stepper.advance(problem, course.t, &mut course.y, t_end) {
+            Ok(t1) => course.t = t1,
             Err(kind) => {
-                run.fault = Some(fault(problem, kind, t, &y));
+                course.fail(problem, kind);
                 break;
             }
         }
-        run.steps += 1;
-        if let Err(kind) = problem.observe(t, &y, &mut row) {
-            run.fault = Some(fault(problem, kind, t, &y));
+        if course.after_step(problem, stepper.as_mut(), events, t0, progress).is_break() {
             break;
         }
-        for (peak, v) in run.peaks.iter_mut().zip(&row) {
+    }
+    let counts = Counts {
+        evaluations: stepper.evaluations(),
+        rejected: stepper.rejected(),
+        stiff_steps: stepper.stiff_steps(),
+        jacobians: stepper.jacobians(),
+        factorizations: stepper.factorizations(),
+    };
+    let segments = segments(settings, stepper.switches(), course.t);
+    course.finish(problem, counts, segments)
+}
+
+/// What a method counted over a run.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Counts {
+    pub evaluations: usize,
+    pub rejected: usize,
+    pub stiff_steps: usize,
+    pub jacobians: usize,
+    pub factorizations: usize,
+}
+
+/// A run under way: its time and state, and what it has recorded, between the steps of its
+/// method. [`integrate`] takes its steps one after another; the lockstep ensemble takes the
+/// steps of several runs at once and hands each of them here alike.
+pub(crate) struct Course {
+    pub run: Run,
+    pub t: f64,
+    pub y: Vec<f64>,
+    row: Vec<f64>,
+    previous_row: Vec<f64>,
+    next_sample: Option<f64>,
+    sampler: Sampler,
+    until: f64,
+    samples: usize,
+}
+
+impl Course {
+    /// Starts a run at `y0` (sampling a held input there): the start recorded, or the run
+    /// ended by the fault met there.
+    pub fn begin(
+        problem: &mut dyn Problem,
+        y0: &[f64],
+        settings: &Settings,
+    ) -> Result<Course, Box<Run>> {
+        let t = settings.start;
+        let mut run = Run {
+            trajectory: Trajectory::default(),
+            steps: 0,
+            rejected: 0,
+            evaluations: 0,
+            stiff_steps: 0,
+            jacobians: 0,
+            factorizations: 0,
+            peaks: Vec::new(),
+            extremes: Vec::new(),
+            events: Vec::new(),
+            stopped_by: None,
+            fault: None,
+            final_state: Vec::new(),
+            final_time: t,
+            segments: Vec::new(),
+            interrupted: false,
+        };
+        let mut y = y0.to_vec();
+        let mut row = vec![0.0; problem.observations()];
+        // A held input's first sample is at the start.
+        let next_sample = problem.next_sample(t);
+        if let Err(kind) = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row))
+        {
+            run.fault = Some(fault(problem, kind, t, &y));
+            run.final_state = problem.physical(t, &y);
+            return Err(Box::new(run));
+        }
+        run.peaks = row.iter().map(|v| v.abs()).collect();
+        run.extremes = row.iter().map(|v| (*v, *v)).collect();
+        run.trajectory.times.push(t);
+        run.trajectory.rows.push(row.clone());
+        Ok(Course {
+            run,
+            t,
+            y,
+            previous_row: row.clone(),
+            row,
+            next_sample,
+            sampler: Sampler::new(settings),
+            until: settings.until,
+            samples: settings.samples,
+        })
+    }
+
+    /// Where the next step must end at the latest: the end of the run or the next sample of
+    /// a held input.
+    pub fn step_end(&self, settings: &Settings) -> f64 {
+        self.next_sample.map_or(settings.until, |s| s.min(settings.until))
+    }
+
+    /// Ends the run with `kind` at the current time and state.
+    pub fn fail(&mut self, problem: &mut dyn Problem, kind: FaultKind) {
+        self.run.fault = Some(fault(problem, kind, self.t, &self.y));
+    }
+
+    /// Records the step just accepted from `t0` to the current time: observes there, locates
+    /// the events the step crossed on `dense` and records the samples it covers. Breaks when
+    /// the run ends here: at a stop, a fault, or when `progress` says so.
+    pub fn after_step(
+        &mut self,
+        problem: &mut dyn Problem,
+        dense: &mut dyn Dense,
+        events: &[Event],
+        t0: f64,
+        progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let run = &mut self.run;
+        run.steps += 1;
+        let t = self.t;
+        if let Err(kind) = problem.observe(t, &self.y, &mut self.row) {
+            self.fail(problem, kind);
+            return ControlFlow::Break(());
+        }
+        for (peak, v) in run.peaks.iter_mut().zip(&self.row) {
             *peak = peak.max(v.abs());
         }
-        let hits = crossings(problem, stepper.as_mut(), events, (t0, &previous_row), (t, &row));
+        let hits = crossings(problem, dense, events, (t0, &self.previous_row), (t, &self.row));
         // The evenly spaced times this step covers, up to a stop if one comes.
         let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
-        let held_from = next_sample.filter(|s| *s == end);
+        let held_from = self.next_sample.filter(|s| *s == end);
         // A recorded time within rounding of a sample is the sample's: it shows the new held
         // value, recorded after the jump (k·T and the evenly spaced times may differ by an ulp).
         let before = held_from.map_or(end, |s| s - 4.0 * f64::EPSILON * s.abs().max(1.0));
-        sampler.record(problem, stepper.as_mut(), before, &mut run.trajectory);
+        self.sampler.record(problem, dense, before, &mut run.trajectory);
         if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
             let hit = hits[stop];
             run.events.extend_from_slice(&hits[..=stop]);
-            let mut ys = vec![0.0; d];
-            stepper.interpolate(problem, hit.time, &mut ys);
-            y = ys;
-            t = hit.time;
-            if let Err(kind) = problem.observe(t, &y, &mut row) {
-                run.fault = Some(fault(problem, kind, t, &y));
-                break;
+            dense.interpolate(problem, hit.time, &mut self.y);
+            self.t = hit.time;
+            if let Err(kind) = problem.observe(self.t, &self.y, &mut self.row) {
+                self.fail(problem, kind);
+                return ControlFlow::Break(());
             }
-            widen(&mut run.extremes, &row);
-            run.trajectory.times.push(t);
-            run.trajectory.rows.push(row.clone());
+            widen(&mut run.extremes, &self.row);
+            run.trajectory.times.push(self.t);
+            run.trajectory.rows.push(self.row.clone());
             run.stopped_by = Some(hit.event);
-            break;
+            return ControlFlow::Break(());
         }
-        widen(&mut run.extremes, &row);
+        widen(&mut run.extremes, &self.row);
         run.events.extend(hits);
         // The step ended on a sample: the held values change, and so the right-hand side;
         // the row recorded here shows the new ones, as the hold gives them from now on.
         if held_from.is_some() {
-            let sampled = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row));
+            let sampled = problem
+                .sample(t, &mut self.y)
+                .and_then(|()| problem.observe(t, &self.y, &mut self.row));
             if let Err(kind) = sampled {
-                run.fault = Some(fault(problem, kind, t, &y));
-                break;
+                self.fail(problem, kind);
+                return ControlFlow::Break(());
             }
-            stepper.after_jump();
-            next_sample = problem.next_sample(t);
+            dense.after_jump();
+            self.next_sample = problem.next_sample(t);
         }
-        if settings.samples == 0 || t >= settings.until {
-            run.trajectory.times.push(t);
-            run.trajectory.rows.push(row.clone());
+        if self.samples == 0 || t >= self.until {
+            self.run.trajectory.times.push(t);
+            self.run.trajectory.rows.push(self.row.clone());
         }
-        std::mem::swap(&mut previous_row, &mut row);
+        std::mem::swap(&mut self.previous_row, &mut self.row);
         if progress(t).is_break() {
-            run.interrupted = true;
-            break;
+            self.run.interrupted = true;
+            return ControlFlow::Break(());
         }
+        ControlFlow::Continue(())
     }
-    run.evaluations = stepper.evaluations();
-    run.rejected = stepper.rejected();
-    run.stiff_steps = stepper.stiff_steps();
-    run.jacobians = stepper.jacobians();
-    run.factorizations = stepper.factorizations();
-    run.final_time = t;
-    run.final_state = problem.physical(t, &y);
-    run.segments = segments(settings, stepper.as_ref(), t);
-    run
+
+    /// The run as it ended, with what its method counted and the spans of its methods.
+    pub fn finish(
+        mut self,
+        problem: &mut dyn Problem,
+        counts: Counts,
+        segments: Vec<Segment>,
+    ) -> Run {
+        let run = &mut self.run;
+        run.evaluations = counts.evaluations;
+        run.rejected = counts.rejected;
+        run.stiff_steps = counts.stiff_steps;
+        run.jacobians = counts.jacobians;
+        run.factorizations = counts.factorizations;
+        run.final_time = self.t;
+        run.final_state = problem.physical(self.t, &self.y);
+        run.segments = segments;
+        self.run
+    }
 }
 
 /// Takes each observation's value in `row` into its least and greatest.
@@ -361,7 +456,7 @@ fn fault(problem: &mut dyn Problem, kind: FaultKind, t: f64, y: &[f64]) -> Fault
 /// its recorded row), located on the dense output, in time order.
 fn crossings(
     problem: &mut dyn Problem,
-    stepper: &mut dyn Stepper,
+    stepper: &mut dyn Dense,
     events: &[Event],
     before: (f64, &[f64]),
     after: (f64, &[f64]),
@@ -405,7 +500,7 @@ impl Sampler {
     fn record(
         &mut self,
         problem: &mut dyn Problem,
-        stepper: &mut dyn Stepper,
+        stepper: &mut dyn Dense,
         end: f64,
         trajectory: &mut Trajectory,
     ) {
@@ -429,7 +524,7 @@ impl Sampler {
 
 /// The spans each method integrated: the whole run for one method; for `auto`, the explicit
 /// side first and then the sides in turn at each switch.
-fn segments(settings: &Settings, stepper: &dyn Stepper, end: f64) -> Vec<Segment> {
+pub(crate) fn segments(settings: &Settings, switches: &[f64], end: f64) -> Vec<Segment> {
     if settings.method != Method::Auto {
         return vec![Segment { method: settings.method, start: settings.start, end }];
     }
@@ -440,11 +535,11 @@ fn segments(settings: &Settings, stepper: &dyn Stepper, end: f64) -> Vec<Segment
     let sides = [explicit, Method::Radau];
     let mut segments = Vec::new();
     let mut start = settings.start;
-    for (k, &switch) in stepper.switches().iter().enumerate() {
+    for (k, &switch) in switches.iter().enumerate() {
         segments.push(Segment { method: sides[k % 2], start, end: switch });
         start = switch;
     }
-    segments.push(Segment { method: sides[stepper.switches().len() % 2], start, end });
+    segments.push(Segment { method: sides[switches.len() % 2], start, end });
     segments
 }
 
@@ -452,7 +547,7 @@ fn segments(settings: &Settings, stepper: &dyn Stepper, end: f64) -> Vec<Segment
 /// regula falsi on the dense output, to a few ulps of time.
 fn locate(
     problem: &mut dyn Problem,
-    stepper: &mut dyn Stepper,
+    stepper: &mut dyn Dense,
     column: usize,
     (mut a, mut ga): (f64, f64),
     (mut b, mut gb): (f64, f64),

@@ -4,7 +4,7 @@
 //! and each state's accelerations are solved as [`Problem::rhs`] solves them, so the numbers
 //! are the same bits as one state at a time.
 
-use numeric::{BatchTape, LANES};
+use numeric::{BatchTape, Program, LANES};
 
 use super::Mechanical;
 use crate::{check_finite, FaultKind, Problem};
@@ -82,5 +82,69 @@ impl Mechanical {
             }
         }
         Ok(())
+    }
+}
+
+impl Mechanical {
+    /// The dynamics program, for a caller that evaluates it over many states itself.
+    pub(crate) fn dynamics_program(&self) -> &Program {
+        self.dynamics.program()
+    }
+
+    /// Whether a run's right-hand side is the dynamics program at fixed parameters alone: no
+    /// time series or held law changes a parameter slot during the run.
+    pub(crate) fn has_fixed_parameters(&self) -> bool {
+        self.signals.is_empty() && self.hold.is_none()
+    }
+
+    /// dy = (q̇, q̈) at (t, y) from `outputs`, the dynamics program's outputs there evaluated
+    /// elsewhere (a batch tape, at this problem's parameters): what [`Problem::rhs`] gives,
+    /// bit for bit. The state is kept as the last one solved, so that observing there solves
+    /// nothing again.
+    pub(crate) fn rhs_from_outputs(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        outputs: impl Iterator<Item = f64>,
+        dy: &mut [f64],
+    ) -> Result<(), FaultKind> {
+        let n = self.layout.coordinates;
+        self.solved = None;
+        let input = self.dynamics.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        for (slot, value) in self.dyn_out.iter_mut().zip(outputs) {
+            *slot = value;
+        }
+        check_finite(&self.dyn_out)?;
+        self.solve_dynamics()?;
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        dy[n..].copy_from_slice(&self.solution[..n]);
+        check_finite(dy)
+    }
+
+    /// Keeps (t, y) as the last state solved, with `outputs` the dynamics program's outputs
+    /// there and `accelerations` q̈ solved from them elsewhere (a system without kept
+    /// multipliers), as [`Mechanical::rhs_from_outputs`] would have left it: observing there
+    /// then solves nothing again.
+    pub(crate) fn keep_solved(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        outputs: impl Iterator<Item = f64>,
+        accelerations: impl Iterator<Item = f64>,
+    ) {
+        debug_assert_eq!(self.layout.multipliers, 0);
+        let n = self.layout.coordinates;
+        let input = self.dynamics.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        for (slot, value) in self.dyn_out.iter_mut().zip(outputs) {
+            *slot = value;
+        }
+        for (slot, value) in self.solution.iter_mut().zip(accelerations) {
+            *slot = value;
+        }
+        self.solved = Some(self.baumgarte.to_bits());
     }
 }

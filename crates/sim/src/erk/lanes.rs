@@ -1,0 +1,191 @@
+//! The stages of an adaptive pair for [`LANES`] runs at once, kept lane by lane (value `i` of
+//! stage `s` of every run side by side), so that one loop over the lanes forms every run's
+//! stage argument and the compiler makes vector instructions of it. Each lane does exactly the
+//! operations [`Adaptive`] does for its one run, in the same order, so a lane's step is the
+//! same bits as the run's step taken alone.
+
+use numeric::LANES;
+
+use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5, DP5_B, DP5_E};
+
+pub(crate) type Lanes = [f64; LANES];
+
+/// The stages of one trial step of every lane, and the state each started from.
+pub(crate) struct Stages {
+    pair: Pair,
+    dim: usize,
+    /// Value `i` of stage `s` at `s * dim + i`: 13 stages for DOP853 (12 and the derivative at
+    /// the end), 7 for the 5(4) pair.
+    k: Vec<Lanes>,
+    /// The state each lane's step starts from.
+    pub y: Vec<Lanes>,
+    /// The argument of the stage being evaluated, then of the last one.
+    pub tmp: Vec<Lanes>,
+    /// Each lane's end of the step.
+    pub y_new: Vec<Lanes>,
+}
+
+impl Stages {
+    pub fn new(pair: Pair, dim: usize) -> Stages {
+        let stages = pair.stage_count() + 1;
+        let zeros = |count| vec![[0.0; LANES]; count];
+        Stages {
+            pair,
+            dim,
+            k: zeros(stages * dim),
+            y: zeros(dim),
+            tmp: zeros(dim),
+            y_new: zeros(dim),
+        }
+    }
+
+    pub fn pair(&self) -> Pair {
+        self.pair
+    }
+
+    /// The arguments of the stage being evaluated (`tmp`, or `y_new` for the derivative at
+    /// the end of the step), and stage `s` to be written, value by value.
+    pub fn argument_and_stage(&mut self, s: usize, at_end: bool) -> (&[Lanes], &mut [Lanes]) {
+        let args = if at_end { &self.y_new } else { &self.tmp };
+        (args, &mut self.k[s * self.dim..(s + 1) * self.dim])
+    }
+
+    /// Starts lane `lane`'s step from the derivative at its start: the first stage.
+    pub fn set_first_stage(&mut self, lane: usize, f: &[f64]) {
+        for (k, v) in self.k[..self.dim].iter_mut().zip(f) {
+            k[lane] = *v;
+        }
+    }
+
+    /// After an accepted step, the next one starts where it ended: its last stage, the
+    /// derivative there, is the next step's first (first same as last).
+    pub fn carry_last_stage(&mut self, lane: usize) {
+        let last = self.pair.stage_count() * self.dim;
+        for i in 0..self.dim {
+            self.k[i][lane] = self.k[last + i][lane];
+        }
+    }
+
+    /// The argument of stage `s` (1 ≤ s < the stage count) of every lane into `tmp`:
+    /// y + h·Σⱼ aₛⱼ kⱼ, summed as [`Adaptive`] sums it.
+    pub fn argument(&mut self, s: usize, h: &Lanes) {
+        let a = self.pair.a(s);
+        combine(&self.k, self.dim, a, &self.y, h, &mut self.tmp);
+    }
+
+    /// Every lane's end of the step into `y_new`: y + h·Σⱼ bⱼ kⱼ.
+    pub fn end(&mut self, h: &Lanes) {
+        let b = self.pair.b();
+        combine(&self.k, self.dim, b, &self.y, h, &mut self.y_new);
+    }
+
+    /// Lane `lane`'s error norm of the step of size `h` just tried: [`Adaptive`]'s.
+    pub fn error(&self, lane: usize, h: f64, rtol: f64, atol: f64) -> f64 {
+        let (d, k) = (self.dim, &self.k);
+        let stage = |j: usize, i: usize| k[j * d + i][lane];
+        let scale = |i: usize| atol + self.y[i][lane].abs().max(self.y_new[i][lane].abs()) * rtol;
+        match self.pair {
+            Pair::Dopri5 => super::rms((0..d).map(|i| {
+                let mut acc = 0.0;
+                for (j, ej) in DP5_E.iter().enumerate() {
+                    acc += ej * stage(j, i);
+                }
+                h * acc / scale(i)
+            })),
+            Pair::Dop853 => {
+                let (mut e5, mut e3) = (0.0, 0.0);
+                for i in 0..d {
+                    let (mut a5, mut a3) = (0.0, 0.0);
+                    for j in 0..12 {
+                        a5 += DOP853_E5[j] * stage(j, i);
+                        a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * stage(j, i);
+                    }
+                    let (r5, r3) = (a5 / scale(i), a3 / scale(i));
+                    e5 += r5 * r5;
+                    e3 += r3 * r3;
+                }
+                let denom = e5 + 0.01 * e3;
+                if denom == 0.0 {
+                    0.0
+                } else {
+                    h.abs() * e5 / (denom * d as f64).sqrt()
+                }
+            }
+        }
+    }
+
+    /// Hairer's stiffness test on lane `lane`'s step just tried, as
+    /// [`Adaptive::at_stability_limit`] makes it.
+    pub fn at_stability_limit(&self, lane: usize, h: f64) -> bool {
+        let (d, last) = (self.dim, self.pair.stage_count());
+        let (mut num, mut den) = (0.0, 0.0);
+        for i in 0..d {
+            let dk = self.k[last * d + i][lane] - self.k[(last - 1) * d + i][lane];
+            let dy = self.y_new[i][lane] - self.tmp[i][lane];
+            num += dk * dk;
+            den += dy * dy;
+        }
+        den > 0.0 && h.abs() * (num / den).sqrt() > self.pair.stiffness_bound()
+    }
+
+    /// Gives `stepper` lane `lane`'s stages and end of the step it accepted, for its dense
+    /// output.
+    pub fn load_step(&self, lane: usize, stepper: &mut Adaptive) {
+        let d = self.dim;
+        for (s, stage) in stepper.k.iter_mut().take(self.pair.stage_count() + 1).enumerate() {
+            for (i, v) in stage.iter_mut().enumerate() {
+                *v = self.k[s * d + i][lane];
+            }
+        }
+        for (i, v) in stepper.y_new.iter_mut().enumerate() {
+            *v = self.y_new[i][lane];
+        }
+    }
+}
+
+/// out = y + h·Σⱼ wⱼ kⱼ, value by value and lane by lane, the sum from the first stage on.
+fn combine(k: &[Lanes], d: usize, w: &[f64], y: &[Lanes], h: &Lanes, out: &mut [Lanes]) {
+    for i in 0..d {
+        let mut acc = [0.0; LANES];
+        for (j, wj) in w.iter().enumerate() {
+            let kj = &k[j * d + i];
+            for l in 0..LANES {
+                acc[l] += wj * kj[l];
+            }
+        }
+        for l in 0..LANES {
+            out[i][l] = y[i][l] + h[l] * acc[l];
+        }
+    }
+}
+
+impl Pair {
+    pub(crate) fn stage_count(self) -> usize {
+        match self {
+            Pair::Dopri5 => 6,
+            Pair::Dop853 => 12,
+        }
+    }
+
+    pub(crate) fn a(self, s: usize) -> &'static [f64] {
+        match self {
+            Pair::Dopri5 => super::DP5_A[s],
+            Pair::Dop853 => DOP853_A[s],
+        }
+    }
+
+    pub(crate) fn c(self, s: usize) -> f64 {
+        match self {
+            Pair::Dopri5 => super::DP5_C[s],
+            Pair::Dop853 => super::DOP853_C[s],
+        }
+    }
+
+    /// The weights of the propagating method.
+    pub(crate) fn b(self) -> &'static [f64] {
+        match self {
+            Pair::Dopri5 => &DP5_B,
+            Pair::Dop853 => DOP853_A[12],
+        }
+    }
+}

@@ -1,0 +1,383 @@
+//! Many runs of one mechanical problem, [`LANES`] of them side by side: an ensemble's runs
+//! differ in their parameters and starts, not in their equations. Each lane is a run with its
+//! own time, step size and state; every trial step evaluates the stages of all lanes together,
+//! the dynamics program once for all of them on a batch tape and the stage arguments in loops
+//! over the lanes, where one run alone is a chain of dependent operations that keeps the
+//! processor waiting. A lane whose run ends takes the next one at once.
+//!
+//! **Same bits:** every lane does the operations [`integrate`](crate::integrate) does for its
+//! run, in the same order (the same step control, the same stage sums, the batch tape's bits
+//! are the tape's, the same solve), so a run gives the same [`Run`] in a lane as alone. What
+//! happens between steps (observing, locating events, recording) is the one-run code itself,
+//! on the lane's own copy of the problem.
+
+use std::ops::ControlFlow;
+
+use numeric::{BatchTape, LANES};
+
+use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
+use crate::linalg;
+use crate::mechanical::Layout;
+use crate::run::{segments, Counts, Course};
+use crate::{Event, FaultKind, Mechanical, Method, Problem, Run, Settings};
+
+/// A run for a lane: its parameters and its state at the start.
+pub struct Job {
+    /// The caller's name for the run, given back with its result.
+    pub id: usize,
+    pub parameters: Vec<f64>,
+    pub state: Vec<f64>,
+}
+
+/// Runs of one problem, [`LANES`] at a time.
+pub struct Lockstep {
+    settings: Settings,
+    layout: Layout,
+    tape: BatchTape,
+    stages: Stages,
+    lanes: Vec<Lane>,
+    /// Each lane's time at the start of its step, its step, and the end of the step.
+    t: Lanes,
+    h: Lanes,
+    t_new: Lanes,
+    /// Scratch: one lane's argument and derivative.
+    argument: Vec<f64>,
+    derivative: Vec<f64>,
+    /// Scratch of the solve side by side: M's lower triangle, then its factors; f, then q̈.
+    mass: Vec<Lanes>,
+    accelerations: Vec<Lanes>,
+}
+
+/// A lane: a run under way (or none), on its own copy of the problem.
+struct Lane {
+    problem: Mechanical,
+    /// The step control, and the dense output of the last step once asked for.
+    stepper: Adaptive,
+    course: Option<Course>,
+    id: usize,
+    /// Whether the lane's method has its first derivative and starting step.
+    prepared: bool,
+    /// Whether the next trial starts a step (rather than trying the last one again smaller).
+    fresh: bool,
+    rejected_here: bool,
+    /// In this trial: whether the lane takes part, and the fault one of its stages met.
+    active: bool,
+    fault: Option<FaultKind>,
+}
+
+impl Lockstep {
+    /// Runs of `problem` (its parameters set per run) by `settings`; `None` when the lockstep
+    /// does not serve them, and each run is better taken alone: a method other than the
+    /// adaptive explicit pairs, or parameters that follow a series or a held law.
+    pub fn new(problem: &Mechanical, settings: &Settings) -> Option<Lockstep> {
+        let pair = match settings.method {
+            Method::Dopri5 => Pair::Dopri5,
+            Method::Dop853 => Pair::Dop853,
+            _ => return None,
+        };
+        if !problem.has_fixed_parameters() {
+            return None;
+        }
+        let d = problem.dim();
+        let tol = settings.tolerance;
+        let lanes = (0..LANES)
+            .map(|_| Lane {
+                problem: problem.clone(),
+                stepper: Adaptive::new(pair, d, tol, tol),
+                course: None,
+                id: 0,
+                prepared: false,
+                fresh: true,
+                rejected_here: false,
+                active: false,
+                fault: None,
+            })
+            .collect();
+        Some(Lockstep {
+            settings: settings.clone(),
+            layout: problem.layout,
+            tape: BatchTape::new(problem.dynamics_program().clone()),
+            stages: Stages::new(pair, d),
+            lanes,
+            t: [0.0; LANES],
+            h: [0.0; LANES],
+            t_new: [0.0; LANES],
+            argument: vec![0.0; d],
+            derivative: vec![0.0; d],
+            mass: vec![[0.0; LANES]; problem.layout.coordinates.pow(2)],
+            accelerations: vec![[0.0; LANES]; problem.layout.coordinates],
+        })
+    }
+
+    /// Runs every job `jobs` gives until it gives none, telling `finished` each run's result
+    /// as it ends (in the order they end); `events` are watched in every run. `go_on` is asked
+    /// before every lockstep trial; when it breaks, the runs under way are dropped unfinished.
+    pub fn run(
+        &mut self,
+        jobs: &mut dyn FnMut() -> Option<Job>,
+        events: &[Event],
+        finished: &mut dyn FnMut(usize, Run),
+        go_on: &mut dyn FnMut() -> ControlFlow<()>,
+    ) {
+        loop {
+            for lane in 0..LANES {
+                while self.lanes[lane].course.is_none() {
+                    let Some(job) = jobs() else { break };
+                    self.start(lane, job, finished);
+                }
+            }
+            if self.lanes.iter().all(|l| l.course.is_none()) || go_on().is_break() {
+                for lane in &mut self.lanes {
+                    lane.course = None;
+                }
+                return;
+            }
+            for lane in 0..LANES {
+                self.begin_trial(lane, finished);
+            }
+            self.trial();
+            for lane in 0..LANES {
+                if self.lanes[lane].active {
+                    self.conclude(lane, events, finished);
+                }
+            }
+        }
+    }
+
+    /// Puts `job` on lane `lane`, or gives its result at once when it ends at its start.
+    fn start(&mut self, lane: usize, job: Job, finished: &mut dyn FnMut(usize, Run)) {
+        let k = self.layout.parameters;
+        let state = 1 + 2 * self.layout.coordinates;
+        for (slot, value) in job.parameters.iter().enumerate().take(k) {
+            self.tape.input_lanes_mut()[state + slot][lane] = *value;
+        }
+        let tol = self.settings.tolerance;
+        let l = &mut self.lanes[lane];
+        l.problem.set_parameters(&job.parameters);
+        l.stepper = Adaptive::new(self.stages.pair(), l.problem.dim(), tol, tol);
+        l.id = job.id;
+        (l.prepared, l.fresh, l.rejected_here) = (false, true, false);
+        match Course::begin(&mut l.problem, &job.state, &self.settings) {
+            Ok(course) if course.t < self.settings.until => l.course = Some(course),
+            Ok(course) => self.finish(lane, course, finished),
+            Err(run) => finished(job.id, *run),
+        }
+    }
+
+    /// Makes lane `lane` ready for this trial: a new step from where it is, or the last one
+    /// again with the smaller step its control chose. A lane whose run ends here (too many
+    /// steps, a step too small, a fault at its start) is finished instead.
+    fn begin_trial(&mut self, lane: usize, finished: &mut dyn FnMut(usize, Run)) {
+        let settings = &self.settings;
+        let l = &mut self.lanes[lane];
+        l.active = false;
+        let Some(course) = l.course.as_mut() else { return };
+        let ended = |l: &mut Lane, kind| {
+            let mut course = l.course.take().expect("under way");
+            course.fail(&mut l.problem, kind);
+            course
+        };
+        let t_end = course.step_end(settings);
+        if l.fresh {
+            if course.run.steps >= settings.max_steps {
+                let course = ended(l, FaultKind::TooManySteps { limit: settings.max_steps });
+                return self.finish(lane, course, finished);
+            }
+            if l.prepared {
+                self.stages.carry_last_stage(lane);
+            } else {
+                if let Err(kind) = l.stepper.prepare(&mut l.problem, course.t, &course.y, t_end) {
+                    let course = ended(l, kind);
+                    return self.finish(lane, course, finished);
+                }
+                self.stages.set_first_stage(lane, l.stepper.start_derivative());
+                l.prepared = true;
+            }
+            for (y, v) in self.stages.y.iter_mut().zip(&course.y) {
+                y[lane] = *v;
+            }
+        }
+        match l.stepper.trial_step(course.t, t_end) {
+            Ok((h, t_new)) => {
+                (self.t[lane], self.h[lane], self.t_new[lane]) = (course.t, h, t_new);
+                l.active = true;
+                l.fault = None;
+            }
+            Err(kind) => {
+                let course = ended(l, kind);
+                self.finish(lane, course, finished);
+            }
+        }
+    }
+
+    /// One trial step of every active lane: the stages, then the end of the step and the
+    /// derivative there.
+    fn trial(&mut self) {
+        let pair = self.stages.pair();
+        let stages = pair.stage_count();
+        for s in 1..stages {
+            self.stages.argument(s, &self.h);
+            let c = pair.c(s);
+            let times = std::array::from_fn(|l| self.t[l] + c * self.h[l]);
+            self.evaluate(s, &times, false);
+        }
+        self.stages.end(&self.h);
+        let times = std::array::from_fn(|l| self.t[l] + self.h[l]);
+        self.evaluate(stages, &times, true);
+    }
+
+    /// Stage `s` of every active lane at `times`, from the arguments in `tmp` (or, for the
+    /// derivative at the end, `y_new`): the dynamics program once on the batch tape, and
+    /// without kept multipliers M q̈ = f solved for every lane at once. A lane that solve does
+    /// not serve (M not positive definite, a value not finite) and a system with multipliers
+    /// are solved lane by lane as one run alone is. A lane whose evaluation fails takes no
+    /// further part in the trial.
+    fn evaluate(&mut self, s: usize, times: &Lanes, at_end: bool) {
+        let d = self.argument.len();
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        let (args, stage) = self.stages.argument_and_stage(s, at_end);
+        let inputs = self.tape.input_lanes_mut();
+        inputs[0] = *times;
+        for (slot, arg) in inputs[1..1 + d].iter_mut().zip(args) {
+            *slot = *arg;
+        }
+        self.tape.run_lanes();
+        let outputs = self.layout.dynamics_outputs();
+        let tape = &self.tape;
+        let solved = if m == 0 {
+            for i in 0..n {
+                for j in 0..=i {
+                    self.mass[i * n + j] = *tape.output_lanes(j * n + i);
+                }
+                self.accelerations[i] = *tape.output_lanes(n * n + i);
+            }
+            let mut ok = linalg::solve_symmetric_lanes(n, &mut self.mass, &mut self.accelerations);
+            for o in 0..outputs {
+                for (ok, v) in ok.iter_mut().zip(tape.output_lanes(o)) {
+                    *ok &= v.is_finite();
+                }
+            }
+            ok
+        } else {
+            [false; LANES]
+        };
+        for lane in 0..LANES {
+            let l = &mut self.lanes[lane];
+            if !l.active || l.fault.is_some() {
+                continue;
+            }
+            if solved[lane] {
+                let mut finite = true;
+                for i in 0..n {
+                    let (rate, acceleration) = (args[n + i][lane], self.accelerations[i][lane]);
+                    stage[i][lane] = rate;
+                    stage[n + i][lane] = acceleration;
+                    finite &= rate.is_finite() && acceleration.is_finite();
+                }
+                if finite {
+                    l.stepper.count_evaluations(1);
+                    if at_end {
+                        // Where the step ends, its observations are taken: keep the solve.
+                        for (a, arg) in self.argument.iter_mut().zip(args) {
+                            *a = arg[lane];
+                        }
+                        let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
+                        let solution = self.accelerations.iter().map(|a| a[lane]);
+                        l.problem.keep_solved(times[lane], &self.argument, values, solution);
+                    }
+                    continue;
+                }
+            }
+            for (a, arg) in self.argument.iter_mut().zip(args) {
+                *a = arg[lane];
+            }
+            let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
+            let solved = l.problem.rhs_from_outputs(
+                times[lane],
+                &self.argument,
+                values,
+                &mut self.derivative,
+            );
+            match solved {
+                Ok(()) => {
+                    // As one run alone counts them: a failed evaluation is not counted.
+                    l.stepper.count_evaluations(1);
+                    for (k, v) in stage.iter_mut().zip(&self.derivative) {
+                        k[lane] = *v;
+                    }
+                }
+                Err(kind) => l.fault = Some(kind),
+            }
+        }
+    }
+
+    /// The step control's verdict on lane `lane`'s trial, and on acceptance the step taken
+    /// into its run: observed, its events located, recorded.
+    fn conclude(&mut self, lane: usize, events: &[Event], finished: &mut dyn FnMut(usize, Run)) {
+        let (t, h, t_new) = (self.t[lane], self.h[lane], self.t_new[lane]);
+        let stages = &self.stages;
+        let l = &mut self.lanes[lane];
+        let (rtol, atol) = l.stepper.tolerances();
+        let trial = match l.fault.take() {
+            Some(kind) => Err(kind),
+            None => Ok(stages.error(lane, h, rtol, atol)),
+        };
+        let stiff = matches!(trial, Ok(err) if err <= 1.0) && stages.at_stability_limit(lane, h);
+        let course = l.course.as_mut().expect("an active lane has a run");
+        match l.stepper.judge(trial, h, t, stiff, &mut l.rejected_here) {
+            Ok(false) => l.fresh = false,
+            Ok(true) => {
+                l.stepper.accepted(t, h, &course.y);
+                for (y, v) in course.y.iter_mut().zip(&stages.y_new) {
+                    *y = v[lane];
+                }
+                course.t = t_new;
+                (l.fresh, l.rejected_here) = (true, false);
+                let mut dense = LaneDense { stages, lane, stepper: &mut l.stepper, loaded: false };
+                let flow = course.after_step(&mut l.problem, &mut dense, events, t, &mut |_| {
+                    ControlFlow::Continue(())
+                });
+                if flow.is_break() || course.t >= self.settings.until {
+                    let course = l.course.take().expect("under way");
+                    self.finish(lane, course, finished);
+                }
+            }
+            Err(kind) => {
+                let mut course = l.course.take().expect("under way");
+                course.fail(&mut l.problem, kind);
+                self.finish(lane, course, finished);
+            }
+        }
+    }
+
+    /// Gives the result of lane `lane`'s run, which ended in `course`.
+    fn finish(&mut self, lane: usize, course: Course, finished: &mut dyn FnMut(usize, Run)) {
+        let l = &mut self.lanes[lane];
+        let counts = Counts {
+            evaluations: l.stepper.evaluations_counted(),
+            rejected: l.stepper.rejected,
+            stiff_steps: l.stepper.stiff,
+            ..Counts::default()
+        };
+        let spans = segments(&self.settings, &[], course.t);
+        finished(l.id, course.finish(&mut l.problem, counts, spans));
+    }
+}
+
+/// A lane's dense output: its step's stages are handed to its stepper on first use.
+struct LaneDense<'a> {
+    stages: &'a Stages,
+    lane: usize,
+    stepper: &'a mut Adaptive,
+    loaded: bool,
+}
+
+impl Dense for LaneDense<'_> {
+    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
+        if !self.loaded {
+            self.stages.load_step(self.lane, self.stepper);
+            self.loaded = true;
+        }
+        self.stepper.interpolate(p, t, out);
+    }
+}
