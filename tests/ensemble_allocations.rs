@@ -1,5 +1,6 @@
 //! An ensemble's runs allocate nothing per step: with the explicit methods, a run ten times as
-//! long (ten times the steps) makes as many allocations as a short one. Counted by a global
+//! long (ten times the steps) makes as many allocations as a short one, alone or side by side
+//! in lockstep. Counted by a global
 //! allocator that counts per thread, on the thread that runs the ensemble (`--threads 1`),
 //! in a test binary of its own so that no other test pays for the counting.
 
@@ -9,9 +10,9 @@ use engine::simulate;
 
 const FLIP: &str = "classics/double_pendulum_flip.lag";
 
-/// The allocations and steps-worth of work of one run to `until` by `method`, from a start
-/// that does not flip (no stop is located).
-fn allocations(method: &str, until: f64) -> u64 {
+/// The allocations of `runs` runs to `until` by `method` (side by side in lockstep from four
+/// runs on), from starts that do not flip (no stop is located).
+fn allocations(method: &str, until: f64, runs: usize) -> u64 {
     let source = lagrange_tests::example(FLIP);
     let options = Options {
         simulate: simulate::Options {
@@ -20,23 +21,28 @@ fn allocations(method: &str, until: f64) -> u64 {
             step: Some(0.01),
             ..Default::default()
         },
-        vary: vec![Vary::parse("a1=0.3:0.4:2").expect("a grid axis")],
+        vary: vec![Vary::parse(&format!("a1=0.3:0.4:{}", runs.max(2))).expect("a grid axis")],
         record: vec!["t, theta1, max(theta2)".into()],
         ..Default::default()
     };
     let ensemble = Ensemble::new(&source, &options).expect("the ensemble loads");
     let info = allocation_counter::measure(|| {
-        let table = ensemble.run(0..1, 1, &mut ());
-        assert!(table.failures[0].is_none() && table.rows[0][1] == until);
+        let table = ensemble.run(0..runs, 1, &mut ());
+        for (row, failure) in table.rows.iter().zip(&table.failures) {
+            assert!(failure.is_none() && row[1] == until);
+        }
     });
     info.count_total
 }
 
 #[test]
 fn explicit_runs_allocate_nothing_per_step() {
-    for method in ["dop853", "dopri5", "rk4"] {
-        let (short, long) = (allocations(method, 1.0), allocations(method, 10.0));
-        assert_eq!(short, long, "{method}: {short} allocations to t = 1, {long} to t = 10");
+    for (method, runs) in [("dop853", 1), ("dop853", 9), ("dopri5", 1), ("dopri5", 9), ("rk4", 1)] {
+        let (short, long) = (allocations(method, 1.0, runs), allocations(method, 10.0, runs));
+        assert_eq!(
+            short, long,
+            "{method} ({runs} runs): {short} allocations to t = 1, {long} to t = 10"
+        );
         assert!(short > 0, "{method}: the counter counted nothing");
     }
 }

@@ -26,6 +26,9 @@ use crate::{Error, Piece, Setting};
 /// a hundred or two bytes each.
 pub const MAX_RUNS: usize = 10_000_000;
 
+/// The fewest runs per thread that go side by side in lockstep.
+const SIDE_BY_SIDE_FROM: usize = 4;
+
 /// What a front end asks for.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
@@ -204,16 +207,40 @@ impl Ensemble {
     /// every thread's run ends then, and the runs not finished are left out of the table.
     pub fn run(&self, runs: Range<usize>, threads: usize, progress: &mut dyn Progress) -> Table {
         let runs = runs.start.min(self.runs())..runs.end.min(self.runs());
-        let next = AtomicUsize::new(runs.start);
+        self.run_where(&Runs::Range(runs), threads, progress)
+    }
+
+    /// [`Ensemble::run`] on the runs numbered in `picked` (those past the ensemble's left
+    /// out), their rows in the order of their numbers: a sample of the ensemble.
+    pub fn run_picked(
+        &self,
+        picked: &[usize],
+        threads: usize,
+        progress: &mut dyn Progress,
+    ) -> Table {
+        let mut picked: Vec<usize> = picked.iter().copied().filter(|k| *k < self.runs()).collect();
+        picked.sort_unstable();
+        picked.dedup();
+        self.run_where(&Runs::Picked(picked), threads, progress)
+    }
+
+    fn run_where(&self, runs: &Runs, threads: usize, progress: &mut dyn Progress) -> Table {
+        let next = AtomicUsize::new(0);
         let done = AtomicUsize::new(0);
         let stop = AtomicBool::new(false);
         let helpers = threads.clamp(1, runs.len().max(1)) - 1;
+        // A lane alone still pays for all of them on the batch tape: side by side only where
+        // each thread has a few runs to fill its lanes with.
+        let side_by_side = self.lockstep && runs.len() >= SIDE_BY_SIDE_FROM * (helpers + 1);
         progress.start(runs.len() as f64);
         let mut results = std::thread::scope(|scope| {
             let workers: Vec<_> = (0..helpers)
-                .map(|_| scope.spawn(|| self.work(&runs, (&next, &done, &stop), &mut |_| {})))
+                .map(|_| {
+                    scope
+                        .spawn(|| self.work(runs, side_by_side, (&next, &done, &stop), &mut |_| {}))
+                })
                 .collect();
-            let mut mine = self.work(&runs, (&next, &done, &stop), &mut |n| {
+            let mut mine = self.work(runs, side_by_side, (&next, &done, &stop), &mut |n| {
                 progress.update(n as f64);
                 if progress.interrupted() {
                     stop.store(true, Ordering::Relaxed);
@@ -248,14 +275,15 @@ impl Ensemble {
     /// it failed, if it did, until `stop` is set. `report` hears how many runs are done in all.
     fn work(
         &self,
-        runs: &Range<usize>,
+        runs: &Runs,
+        side_by_side: bool,
         (next, done, stop): (&AtomicUsize, &AtomicUsize, &AtomicBool),
         report: &mut dyn FnMut(usize),
     ) -> Vec<(usize, Outcome)> {
         let mut integrand = self.integrand.clone();
         let mut results = Vec::new();
         let lockstep = match &mut integrand {
-            Integrand::Mechanical(problem) if self.lockstep => {
+            Integrand::Mechanical(problem) if side_by_side => {
                 sim::Lockstep::new(problem, &self.run_settings)
             }
             _ => None,
@@ -264,10 +292,8 @@ impl Ensemble {
             // Runs end both where a start cannot be made and where a lane finishes one.
             let report = std::cell::RefCell::new(report);
             let mut jobs = || loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                if k >= runs.end || stop.load(Ordering::Relaxed) {
-                    return None;
-                }
+                let k = runs.get(next.fetch_add(1, Ordering::Relaxed));
+                let Some(k) = k.filter(|_| !stop.load(Ordering::Relaxed)) else { return None };
                 match &self.starts[k] {
                     Ok(start) => {
                         let (parameters, state) = (start.parameters.clone(), start.state.clone());
@@ -296,10 +322,8 @@ impl Ensemble {
             return results;
         }
         loop {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            if k >= runs.end || stop.load(Ordering::Relaxed) {
-                return results;
-            }
+            let k = runs.get(next.fetch_add(1, Ordering::Relaxed));
+            let Some(k) = k.filter(|_| !stop.load(Ordering::Relaxed)) else { return results };
             let outcome = self.run_one(&mut integrand, k, stop);
             if stop.load(Ordering::Relaxed) {
                 return results;
@@ -346,6 +370,29 @@ impl Ensemble {
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)
+    }
+}
+
+/// The runs a call runs: a range of their numbers, or numbers picked.
+enum Runs {
+    Range(Range<usize>),
+    Picked(Vec<usize>),
+}
+
+impl Runs {
+    fn len(&self) -> usize {
+        match self {
+            Runs::Range(range) => range.len(),
+            Runs::Picked(picked) => picked.len(),
+        }
+    }
+
+    /// The number of the `i`th run, if there are that many.
+    fn get(&self, i: usize) -> Option<usize> {
+        match self {
+            Runs::Range(range) => Some(range.start + i).filter(|k| *k < range.end),
+            Runs::Picked(picked) => picked.get(i).copied(),
+        }
     }
 }
 

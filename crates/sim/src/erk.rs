@@ -429,11 +429,6 @@ impl Adaptive {
         self.evals
     }
 
-    /// The relative and the absolute tolerance.
-    pub(crate) fn tolerances(&self) -> (f64, f64) {
-        (self.rtol, self.atol)
-    }
-
     /// The derivative at the point a step starts from (after [`Adaptive::prepare`]).
     pub(crate) fn start_derivative(&self) -> &[f64] {
         self.f.as_deref().expect("prepared")

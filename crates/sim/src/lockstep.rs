@@ -43,6 +43,10 @@ pub struct Lockstep {
     /// Scratch: one lane's argument and derivative.
     argument: Vec<f64>,
     derivative: Vec<f64>,
+    /// The observation program over the lanes, for a problem without kept multipliers (whose
+    /// observations end with |Φ|, not the program's outputs), and a lane's row of it.
+    observation: Option<BatchTape>,
+    row: Vec<f64>,
     /// Scratch of the solve side by side: M's lower triangle, then its factors; f, then q̈.
     mass: Vec<Lanes>,
     accelerations: Vec<Lanes>,
@@ -104,6 +108,9 @@ impl Lockstep {
             t_new: [0.0; LANES],
             argument: vec![0.0; d],
             derivative: vec![0.0; d],
+            observation: (problem.layout.multipliers == 0)
+                .then(|| BatchTape::new(problem.observation_program().clone())),
+            row: vec![0.0; problem.observations()],
             mass: vec![[0.0; LANES]; problem.layout.coordinates.pow(2)],
             accelerations: vec![[0.0; LANES]; problem.layout.coordinates],
         })
@@ -136,9 +143,18 @@ impl Lockstep {
                 self.begin_trial(lane, finished);
             }
             self.trial();
+            let tol = self.settings.tolerance;
+            let errors = self.stages.errors(&self.h, tol, tol);
+            let mut accepted = [false; LANES];
             for lane in 0..LANES {
                 if self.lanes[lane].active {
-                    self.conclude(lane, events, finished);
+                    accepted[lane] = self.judge(lane, errors[lane], finished);
+                }
+            }
+            let observed = self.observe_accepted(&accepted);
+            for lane in 0..LANES {
+                if accepted[lane] {
+                    self.take_step(lane, observed[lane], events, finished);
                 }
             }
         }
@@ -150,6 +166,13 @@ impl Lockstep {
         let state = 1 + 2 * self.layout.coordinates;
         for (slot, value) in job.parameters.iter().enumerate().take(k) {
             self.tape.input_lanes_mut()[state + slot][lane] = *value;
+        }
+        if let Some(observation) = &mut self.observation {
+            // After t, y and q̈ (no multipliers where the lanes observe).
+            let first = state + self.layout.coordinates;
+            for (slot, value) in job.parameters.iter().enumerate().take(k) {
+                observation.input_lanes_mut()[first + slot][lane] = *value;
+            }
         }
         let tol = self.settings.tolerance;
         let l = &mut self.lanes[lane];
@@ -261,20 +284,25 @@ impl Lockstep {
         } else {
             [false; LANES]
         };
+        // dy = (q̇, q̈) in every lane; a lane solved one at a time below is written over.
+        let mut finite = solved;
+        if m == 0 {
+            for i in 0..n {
+                let (rates, accelerations) = (&args[n + i], &self.accelerations[i]);
+                for l in 0..LANES {
+                    finite[l] &= rates[l].is_finite() && accelerations[l].is_finite();
+                }
+                stage[i] = *rates;
+                stage[n + i] = *accelerations;
+            }
+        }
         for lane in 0..LANES {
             let l = &mut self.lanes[lane];
             if !l.active || l.fault.is_some() {
                 continue;
             }
             if solved[lane] {
-                let mut finite = true;
-                for i in 0..n {
-                    let (rate, acceleration) = (args[n + i][lane], self.accelerations[i][lane]);
-                    stage[i][lane] = rate;
-                    stage[n + i][lane] = acceleration;
-                    finite &= rate.is_finite() && acceleration.is_finite();
-                }
-                if finite {
+                if finite[lane] {
                     l.stepper.count_evaluations(1);
                     if at_end {
                         // Where the step ends, its observations are taken: keep the solve.
@@ -311,42 +339,93 @@ impl Lockstep {
         }
     }
 
-    /// The step control's verdict on lane `lane`'s trial, and on acceptance the step taken
-    /// into its run: observed, its events located, recorded.
-    fn conclude(&mut self, lane: usize, events: &[Event], finished: &mut dyn FnMut(usize, Run)) {
-        let (t, h, t_new) = (self.t[lane], self.h[lane], self.t_new[lane]);
-        let stages = &self.stages;
+    /// The step control's verdict on lane `lane`'s trial, whose error norm is `error` unless
+    /// an evaluation failed: accepted (true), to be tried again smaller, or the run's end at
+    /// a fault.
+    fn judge(&mut self, lane: usize, error: f64, finished: &mut dyn FnMut(usize, Run)) -> bool {
+        let (t, h) = (self.t[lane], self.h[lane]);
         let l = &mut self.lanes[lane];
-        let (rtol, atol) = l.stepper.tolerances();
         let trial = match l.fault.take() {
             Some(kind) => Err(kind),
-            None => Ok(stages.error(lane, h, rtol, atol)),
+            None => Ok(error),
         };
-        let stiff = matches!(trial, Ok(err) if err <= 1.0) && stages.at_stability_limit(lane, h);
-        let course = l.course.as_mut().expect("an active lane has a run");
+        let stiff =
+            matches!(trial, Ok(err) if err <= 1.0) && self.stages.at_stability_limit(lane, h);
         match l.stepper.judge(trial, h, t, stiff, &mut l.rejected_here) {
-            Ok(false) => l.fresh = false,
-            Ok(true) => {
-                l.stepper.accepted(t, h, &course.y);
-                for (y, v) in course.y.iter_mut().zip(&stages.y_new) {
-                    *y = v[lane];
-                }
-                course.t = t_new;
-                (l.fresh, l.rejected_here) = (true, false);
-                let mut dense = LaneDense { stages, lane, stepper: &mut l.stepper, loaded: false };
-                let flow = course.after_step(&mut l.problem, &mut dense, events, t, &mut |_| {
-                    ControlFlow::Continue(())
-                });
-                if flow.is_break() || course.t >= self.settings.until {
-                    let course = l.course.take().expect("under way");
-                    self.finish(lane, course, finished);
-                }
+            Ok(accepted) => {
+                l.fresh = accepted;
+                accepted
             }
             Err(kind) => {
                 let mut course = l.course.take().expect("under way");
                 course.fail(&mut l.problem, kind);
                 self.finish(lane, course, finished);
+                false
             }
+        }
+    }
+
+    /// The observations at the end of each accepted step, on the batch tape at once: where
+    /// the step's last stage was evaluated, so its accelerations are the ones there (a step
+    /// cut short to end on time may end a rounding away, and is observed alone). Which lanes
+    /// have theirs in the observation tape's outputs.
+    fn observe_accepted(&mut self, accepted: &[bool; LANES]) -> [bool; LANES] {
+        let Some(tape) = self.observation.as_mut() else { return [false; LANES] };
+        let mut observed = [false; LANES];
+        for l in 0..LANES {
+            observed[l] =
+                accepted[l] && self.t_new[l].to_bits() == (self.t[l] + self.h[l]).to_bits();
+        }
+        if !observed.contains(&true) {
+            return observed;
+        }
+        let (n, d) = (self.layout.coordinates, self.argument.len());
+        let last = self.stages.pair().stage_count();
+        let (y_new, end) = self.stages.argument_and_stage(last, true);
+        let inputs = tape.input_lanes_mut();
+        inputs[0] = self.t_new;
+        inputs[1..1 + d].copy_from_slice(y_new);
+        inputs[1 + d..1 + d + n].copy_from_slice(&end[n..d]);
+        tape.run_lanes();
+        observed
+    }
+
+    /// Lane `lane`'s accepted step taken into its run: observed (`observed`: on the batch
+    /// tape already), its events located, recorded; the run's end given when it ends here.
+    fn take_step(
+        &mut self,
+        lane: usize,
+        observed: bool,
+        events: &[Event],
+        finished: &mut dyn FnMut(usize, Run),
+    ) {
+        let (t, h, t_new) = (self.t[lane], self.h[lane], self.t_new[lane]);
+        let stages = &self.stages;
+        let l = &mut self.lanes[lane];
+        let course = l.course.as_mut().expect("an accepted lane has a run");
+        l.stepper.accepted(t, h, &course.y);
+        for (y, v) in course.y.iter_mut().zip(&stages.y_new) {
+            *y = v[lane];
+        }
+        course.t = t_new;
+        l.rejected_here = false;
+        let row = &mut self.row;
+        let given = match (&self.observation, observed) {
+            (Some(tape), true) => {
+                for (o, value) in row.iter_mut().enumerate() {
+                    *value = tape.output_lanes(o)[lane];
+                }
+                Some((t_new, &stages.y_new[..], lane))
+            }
+            _ => None,
+        };
+        let mut dense = LaneDense { stages, lane, stepper: &mut l.stepper, loaded: false };
+        let mut problem = Observed { problem: &mut l.problem, given, row };
+        let flow = course
+            .after_step(&mut problem, &mut dense, events, t, &mut |_| ControlFlow::Continue(()));
+        if flow.is_break() || course.t >= self.settings.until {
+            let course = l.course.take().expect("under way");
+            self.finish(lane, course, finished);
         }
     }
 
@@ -379,5 +458,56 @@ impl Dense for LaneDense<'_> {
             self.loaded = true;
         }
         self.stepper.interpolate(p, t, out);
+    }
+}
+
+/// A lane's problem with the observations at the end of its step given: taken on the batch
+/// tape, the bits [`Problem::observe`] would give there. Anything else is the problem's own.
+struct Observed<'a> {
+    problem: &'a mut Mechanical,
+    /// The time and state the row is of: a lane of the lanes' states.
+    given: Option<(f64, &'a [Lanes], usize)>,
+    row: &'a [f64],
+}
+
+impl Problem for Observed<'_> {
+    fn dim(&self) -> usize {
+        self.problem.dim()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
+        self.problem.rhs(t, y, dy)
+    }
+    fn observations(&self) -> usize {
+        self.problem.observations()
+    }
+    fn observe(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        let same = |state: &[Lanes], lane: usize| {
+            state.iter().zip(y).all(|(u, v)| u[lane].to_bits() == v.to_bits())
+        };
+        match self.given {
+            Some((at, state, lane)) if at.to_bits() == t.to_bits() && same(state, lane) => {
+                out.copy_from_slice(self.row);
+                Ok(())
+            }
+            _ => self.problem.observe(t, y, out),
+        }
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        self.problem.jacobian(t, y, jac)
+    }
+    fn components(&self) -> crate::Components {
+        self.problem.components()
+    }
+    fn explain_singular(&mut self, t: f64, y: &[f64]) -> Option<FaultKind> {
+        self.problem.explain_singular(t, y)
+    }
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.problem.next_sample(t)
+    }
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        self.problem.sample(t, y)
+    }
+    fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
+        self.problem.physical(t, y)
     }
 }

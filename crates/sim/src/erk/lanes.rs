@@ -79,37 +79,60 @@ impl Stages {
         combine(&self.k, self.dim, b, &self.y, h, &mut self.y_new);
     }
 
-    /// Lane `lane`'s error norm of the step of size `h` just tried: [`Adaptive`]'s.
-    pub fn error(&self, lane: usize, h: f64, rtol: f64, atol: f64) -> f64 {
+    /// Every lane's error norm of the step of size `h` it just tried: [`Adaptive`]'s, with
+    /// the sums over the stages in its order and then over the values.
+    pub fn errors(&self, h: &Lanes, rtol: f64, atol: f64) -> Lanes {
         let (d, k) = (self.dim, &self.k);
-        let stage = |j: usize, i: usize| k[j * d + i][lane];
-        let scale = |i: usize| atol + self.y[i][lane].abs().max(self.y_new[i][lane].abs()) * rtol;
+        let scale = |i: usize| -> Lanes {
+            let (y, y_new) = (&self.y[i], &self.y_new[i]);
+            std::array::from_fn(|l| atol + y[l].abs().max(y_new[l].abs()) * rtol)
+        };
         match self.pair {
-            Pair::Dopri5 => super::rms((0..d).map(|i| {
-                let mut acc = 0.0;
-                for (j, ej) in DP5_E.iter().enumerate() {
-                    acc += ej * stage(j, i);
-                }
-                h * acc / scale(i)
-            })),
-            Pair::Dop853 => {
-                let (mut e5, mut e3) = (0.0, 0.0);
+            Pair::Dopri5 => {
+                let mut sum = [0.0; LANES];
                 for i in 0..d {
-                    let (mut a5, mut a3) = (0.0, 0.0);
-                    for j in 0..12 {
-                        a5 += DOP853_E5[j] * stage(j, i);
-                        a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * stage(j, i);
+                    let mut acc = [0.0; LANES];
+                    for (j, ej) in DP5_E.iter().enumerate() {
+                        for l in 0..LANES {
+                            acc[l] += ej * k[j * d + i][l];
+                        }
                     }
-                    let (r5, r3) = (a5 / scale(i), a3 / scale(i));
-                    e5 += r5 * r5;
-                    e3 += r3 * r3;
+                    let scale = scale(i);
+                    for l in 0..LANES {
+                        let x = h[l] * acc[l] / scale[l];
+                        sum[l] += x * x;
+                    }
                 }
-                let denom = e5 + 0.01 * e3;
-                if denom == 0.0 {
-                    0.0
-                } else {
-                    h.abs() * e5 / (denom * d as f64).sqrt()
+                // `rms` of the d values, as `Adaptive` takes it.
+                std::array::from_fn(|l| if d == 0 { 0.0 } else { (sum[l] / d as f64).sqrt() })
+            }
+            Pair::Dop853 => {
+                let (mut e5, mut e3) = ([0.0; LANES], [0.0; LANES]);
+                for i in 0..d {
+                    let (mut a5, mut a3) = ([0.0; LANES], [0.0; LANES]);
+                    for j in 0..12 {
+                        let (w5, w3) = (DOP853_E5[j], DOP853_A[12][j] - DOP853_BHH[j]);
+                        let kj = &k[j * d + i];
+                        for l in 0..LANES {
+                            a5[l] += w5 * kj[l];
+                            a3[l] += w3 * kj[l];
+                        }
+                    }
+                    let scale = scale(i);
+                    for l in 0..LANES {
+                        let (r5, r3) = (a5[l] / scale[l], a3[l] / scale[l]);
+                        e5[l] += r5 * r5;
+                        e3[l] += r3 * r3;
+                    }
                 }
+                std::array::from_fn(|l| {
+                    let denom = e5[l] + 0.01 * e3[l];
+                    if denom == 0.0 {
+                        0.0
+                    } else {
+                        h[l].abs() * e5[l] / (denom * d as f64).sqrt()
+                    }
+                })
             }
         }
     }

@@ -91,6 +91,11 @@ impl Mechanical {
         self.dynamics.program()
     }
 
+    /// The observation program, for a caller that evaluates it over many states itself.
+    pub(crate) fn observation_program(&self) -> &Program {
+        self.observation.program()
+    }
+
     /// Whether a run's right-hand side is the dynamics program at fixed parameters alone: no
     /// time series or held law changes a parameter slot during the run.
     pub(crate) fn has_fixed_parameters(&self) -> bool {
