@@ -301,20 +301,19 @@ impl Lockstep {
             if !l.active || l.fault.is_some() {
                 continue;
             }
-            if solved[lane] {
-                if finite[lane] {
-                    l.stepper.count_evaluations(1);
-                    if at_end {
-                        // Where the step ends, its observations are taken: keep the solve.
-                        for (a, arg) in self.argument.iter_mut().zip(args) {
-                            *a = arg[lane];
-                        }
-                        let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
-                        let solution = self.accelerations.iter().map(|a| a[lane]);
-                        l.problem.keep_solved(times[lane], &self.argument, values, solution);
+            // Solved side by side, and every value finite.
+            if finite[lane] {
+                l.stepper.count_evaluations(1);
+                if at_end {
+                    // Where the step ends, its observations are taken: keep the solve.
+                    for (a, arg) in self.argument.iter_mut().zip(args) {
+                        *a = arg[lane];
                     }
-                    continue;
+                    let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
+                    let solution = self.accelerations.iter().map(|a| a[lane]);
+                    l.problem.keep_solved(times[lane], &self.argument, values, solution);
                 }
+                continue;
             }
             for (a, arg) in self.argument.iter_mut().zip(args) {
                 *a = arg[lane];
