@@ -293,7 +293,7 @@ impl Ensemble {
             let report = std::cell::RefCell::new(report);
             let mut jobs = || loop {
                 let k = runs.get(next.fetch_add(1, Ordering::Relaxed));
-                let Some(k) = k.filter(|_| !stop.load(Ordering::Relaxed)) else { return None };
+                let k = k.filter(|_| !stop.load(Ordering::Relaxed))?;
                 match &self.starts[k] {
                     Ok(start) => {
                         let (parameters, state) = (start.parameters.clone(), start.state.clone());
