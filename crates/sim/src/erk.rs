@@ -419,11 +419,6 @@ impl Adaptive {
         Ok(())
     }
 
-    /// Counts `n` evaluations of the right-hand side made for this method elsewhere.
-    pub(crate) fn count_evaluations(&mut self, n: usize) {
-        self.evals += n;
-    }
-
     /// The evaluations of the right-hand side counted so far.
     pub(crate) fn evaluations_counted(&self) -> usize {
         self.evals

@@ -40,6 +40,10 @@ pub struct Lockstep {
     t: Lanes,
     h: Lanes,
     t_new: Lanes,
+    /// The lanes whose trial is under way with no evaluation failed so far, and the
+    /// evaluations each lane's run made side by side (its stepper counts the rest).
+    live: [bool; LANES],
+    evaluations: [usize; LANES],
     /// Scratch: one lane's argument and derivative.
     argument: Vec<f64>,
     derivative: Vec<f64>,
@@ -106,6 +110,8 @@ impl Lockstep {
             t: [0.0; LANES],
             h: [0.0; LANES],
             t_new: [0.0; LANES],
+            live: [false; LANES],
+            evaluations: [0; LANES],
             argument: vec![0.0; d],
             derivative: vec![0.0; d],
             observation: (problem.layout.multipliers == 0)
@@ -179,6 +185,7 @@ impl Lockstep {
         l.problem.set_parameters(&job.parameters);
         l.stepper = Adaptive::new(self.stages.pair(), l.problem.dim(), tol, tol);
         l.id = job.id;
+        self.evaluations[lane] = 0;
         (l.prepared, l.fresh, l.rejected_here) = (false, true, false);
         match Course::begin(&mut l.problem, &job.state, &self.settings) {
             Ok(course) if course.t < self.settings.until => l.course = Some(course),
@@ -194,6 +201,7 @@ impl Lockstep {
         let settings = &self.settings;
         let l = &mut self.lanes[lane];
         l.active = false;
+        self.live[lane] = false;
         let Some(course) = l.course.as_mut() else { return };
         let ended = |l: &mut Lane, kind| {
             let mut course = l.course.take().expect("under way");
@@ -225,6 +233,7 @@ impl Lockstep {
                 (self.t[lane], self.h[lane], self.t_new[lane]) = (course.t, h, t_new);
                 l.active = true;
                 l.fault = None;
+                self.live[lane] = true;
             }
             Err(kind) => {
                 let course = ended(l, kind);
@@ -296,14 +305,15 @@ impl Lockstep {
                 stage[n + i] = *accelerations;
             }
         }
+        // As one run alone counts them: a failed evaluation is not counted.
+        for l in 0..LANES {
+            self.evaluations[l] += usize::from(self.live[l] && finite[l]);
+        }
         for lane in 0..LANES {
-            let l = &mut self.lanes[lane];
-            if !l.active || l.fault.is_some() {
+            if !self.live[lane] {
                 continue;
             }
-            // Solved side by side, and every value finite.
             if finite[lane] {
-                l.stepper.count_evaluations(1);
                 if at_end {
                     // Where the step ends, its observations are taken: keep the solve.
                     for (a, arg) in self.argument.iter_mut().zip(args) {
@@ -311,14 +321,17 @@ impl Lockstep {
                     }
                     let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
                     let solution = self.accelerations.iter().map(|a| a[lane]);
-                    l.problem.keep_solved(times[lane], &self.argument, values, solution);
+                    let problem = &mut self.lanes[lane].problem;
+                    problem.keep_solved(times[lane], &self.argument, values, solution);
                 }
                 continue;
             }
+            // Not solved side by side, or a value not finite: as one run alone.
             for (a, arg) in self.argument.iter_mut().zip(args) {
                 *a = arg[lane];
             }
             let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
+            let l = &mut self.lanes[lane];
             let solved = l.problem.rhs_from_outputs(
                 times[lane],
                 &self.argument,
@@ -327,13 +340,15 @@ impl Lockstep {
             );
             match solved {
                 Ok(()) => {
-                    // As one run alone counts them: a failed evaluation is not counted.
-                    l.stepper.count_evaluations(1);
+                    self.evaluations[lane] += 1;
                     for (k, v) in stage.iter_mut().zip(&self.derivative) {
                         k[lane] = *v;
                     }
                 }
-                Err(kind) => l.fault = Some(kind),
+                Err(kind) => {
+                    l.fault = Some(kind);
+                    self.live[lane] = false;
+                }
             }
         }
     }
@@ -432,7 +447,7 @@ impl Lockstep {
     fn finish(&mut self, lane: usize, course: Course, finished: &mut dyn FnMut(usize, Run)) {
         let l = &mut self.lanes[lane];
         let counts = Counts {
-            evaluations: l.stepper.evaluations_counted(),
+            evaluations: l.stepper.evaluations_counted() + self.evaluations[lane],
             rejected: l.stepper.rejected,
             stiff_steps: l.stepper.stiff,
             ..Counts::default()
