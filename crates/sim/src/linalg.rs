@@ -74,11 +74,11 @@ impl Square for Small {
     }
 }
 
-/// Past this estimated condition number the solution has no correct digits left worth
-/// integrating; a report beats silently wrong accelerations.
 /// Systems solved side by side, a value of each per lane.
 pub type Lanes = [f64; LANES];
 
+/// Past this estimated condition number the solution has no correct digits left worth
+/// integrating; a report beats silently wrong accelerations.
 pub const CONDITION_LIMIT: f64 = 1e13;
 
 /// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factors and `b` with `x`.

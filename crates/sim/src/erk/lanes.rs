@@ -8,7 +8,7 @@ use numeric::LANES;
 
 use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5, DP5_B, DP5_E};
 
-pub(crate) type Lanes = [f64; LANES];
+pub(crate) use crate::linalg::Lanes;
 
 /// The stages of one trial step of every lane, and the state each started from.
 pub(crate) struct Stages {
