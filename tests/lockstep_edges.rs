@@ -209,6 +209,7 @@ fn stops_events_and_samples_on_the_dense_output_are_as_alone() {
         .map(|k| {
             let (a1, a2) = (-3.0 + 0.29 * k as f64, 2.9 - 0.23 * k as f64);
             let mut parameters = base.clone();
+            parameters[4] *= 1.0 + 0.02 * (k % 3) as f64;
             parameters[5] *= 1.0 + 0.05 * (k % 5) as f64;
             Job { id: k, parameters, state: vec![a1, a2, 0.0, 0.0] }
         })
@@ -248,13 +249,15 @@ fn a_last_step_that_ends_a_rounding_away_from_t_plus_h_is_observed_alone() {
     // The motion is a polynomial of low degree: the steps grow tenfold each time, and the
     // last one, cut to end at `until`, starts before half of it, where t + (until − t) need
     // not be `until`.
-    let (problem, base, y0) = problem(DRIFT, &["x''", "y''", "x"]);
+    let (problem, base, y0) = problem(DRIFT, &["x''", "y''", "x", "t"]);
     let jobs: Vec<Job> = (0..24)
         .map(|k| {
             let nudge = 1.0 + 0.037 * k as f64;
-            let parameters = vec![base[0] * nudge, base[1] / nudge, base[2]];
-            let state = vec![y0[0], y0[1], 0.1 * nudge, 0.2 / nudge];
-            Job { id: k, parameters, state }
+            // Every fifth at rest with no push: its state is the same bits all along.
+            let push = if k % 5 == 0 { 0.0 } else { base[1] / nudge };
+            let parameters = vec![base[0] * nudge, push, base[2]];
+            let (u, v) = if k % 5 == 0 { (0.0, 0.0) } else { (0.1 * nudge, 0.2 / nudge) };
+            Job { id: k, parameters, state: vec![y0[0], y0[1], u, v] }
         })
         .collect();
     let mut cut_short = 0;
@@ -265,8 +268,44 @@ fn a_last_step_that_ends_a_rounding_away_from_t_plus_h_is_observed_alone() {
             let t = times[times.len() - 2];
             cut_short += usize::from(t + (settings.until - t) != settings.until);
         }
+        // Samples inside a step of a run at rest: the state there is the step's end, bit for
+        // bit, at another time.
+        let settings = Settings { samples: 7, ..settings };
+        let runs = same_as_alone(method.name(), &problem, &settings, &jobs, &[]);
+        assert!(runs.iter().all(|r| r.trajectory.times.len() == 7));
     }
     assert!(cut_short >= 4, "{cut_short} runs ended a rounding away from t + h");
+}
+
+/// A particle whose mass matrix grows ill-conditioned as it moves along x: diag(m, m·e^(−2x/L))
+/// at y = 0, past the condition limit once x > 15 L.
+const STRETCH: &str = "scene \"Stretch\"\n\
+    param m = 1 kg, L = 1 m\n\
+    coord x = 0, x' = 1 m/s, y = 0\n\
+    particle bob { mass m; position (x, y*exp(-x/L)) }\n";
+
+#[test]
+fn a_mass_matrix_ill_conditioned_on_the_way_is_the_lanes_own() {
+    let (problem, base, y0) = problem(STRETCH, &["x", "y''"]);
+    let jobs: Vec<Job> = (0..13)
+        .map(|k| {
+            let state = vec![y0[0], y0[1], 2.0 + 1.1 * k as f64, 0.0];
+            Job { id: k, parameters: base.clone(), state }
+        })
+        .collect();
+    let mut faulted = 0;
+    for method in [Method::Dop853, Method::Dopri5] {
+        let runs =
+            same_as_alone(method.name(), &problem, &settings(method, 2.0, 0, 20_000), &jobs, &[]);
+        for run in &runs {
+            if let Some(fault) = &run.fault {
+                assert!(matches!(fault.kind, FaultKind::SingularMass { .. }), "{fault:?}");
+                assert!(fault.time > 0.5, "{fault:?}");
+                faulted += 1;
+            }
+        }
+    }
+    assert!((4..=20).contains(&faulted), "{faulted} runs met the condition limit");
 }
 
 /// A pendulum whose rod is kept with a multiplier: every lane is solved alone, and |Φ| is
