@@ -6,7 +6,7 @@
 
 use numeric::LANES;
 
-use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5, DP5_B, DP5_E};
+use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5, DP5_E};
 
 pub(crate) use crate::linalg::Lanes;
 
@@ -178,37 +178,6 @@ fn combine(k: &[Lanes], d: usize, w: &[f64], y: &[Lanes], h: &Lanes, out: &mut [
         }
         for l in 0..LANES {
             out[i][l] = y[i][l] + h[l] * acc[l];
-        }
-    }
-}
-
-impl Pair {
-    pub(crate) fn stage_count(self) -> usize {
-        match self {
-            Pair::Dopri5 => 6,
-            Pair::Dop853 => 12,
-        }
-    }
-
-    pub(crate) fn a(self, s: usize) -> &'static [f64] {
-        match self {
-            Pair::Dopri5 => super::DP5_A[s],
-            Pair::Dop853 => DOP853_A[s],
-        }
-    }
-
-    pub(crate) fn c(self, s: usize) -> f64 {
-        match self {
-            Pair::Dopri5 => super::DP5_C[s],
-            Pair::Dop853 => super::DOP853_C[s],
-        }
-    }
-
-    /// The weights of the propagating method.
-    pub(crate) fn b(self) -> &'static [f64] {
-        match self {
-            Pair::Dopri5 => &DP5_B,
-            Pair::Dop853 => DOP853_A[12],
         }
     }
 }
