@@ -284,10 +284,15 @@ impl Lockstep {
                 self.accelerations[i] = *tape.output_lanes(n * n + i);
             }
             let mut ok = linalg::solve_symmetric_lanes(n, &mut self.mass, &mut self.accelerations);
+            // v − v is 0 for a finite v and NaN otherwise: a test the compiler vectorizes.
+            let mut excess = [0.0; LANES];
             for o in 0..outputs {
-                for (ok, v) in ok.iter_mut().zip(tape.output_lanes(o)) {
-                    *ok &= v.is_finite();
+                for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
+                    *e += v - v;
                 }
+            }
+            for (ok, e) in ok.iter_mut().zip(excess) {
+                *ok &= e == 0.0;
             }
             ok
         } else {
@@ -296,13 +301,17 @@ impl Lockstep {
         // dy = (q̇, q̈) in every lane; a lane solved one at a time below is written over.
         let mut finite = solved;
         if m == 0 {
+            let mut excess = [0.0; LANES];
             for i in 0..n {
                 let (rates, accelerations) = (&args[n + i], &self.accelerations[i]);
                 for l in 0..LANES {
-                    finite[l] &= rates[l].is_finite() && accelerations[l].is_finite();
+                    excess[l] += (rates[l] - rates[l]) + (accelerations[l] - accelerations[l]);
                 }
                 stage[i] = *rates;
                 stage[n + i] = *accelerations;
+            }
+            for (finite, e) in finite.iter_mut().zip(excess) {
+                *finite &= e == 0.0;
             }
         }
         // As one run alone counts them: a failed evaluation is not counted.
