@@ -284,11 +284,11 @@ impl Lockstep {
                 self.accelerations[i] = *tape.output_lanes(n * n + i);
             }
             let mut ok = linalg::solve_symmetric_lanes(n, &mut self.mass, &mut self.accelerations);
-            // v − v is 0 for a finite v and NaN otherwise: a test the compiler vectorizes.
+            // v·0 is ±0 for a finite v and NaN otherwise: a test the compiler vectorizes.
             let mut excess = [0.0; LANES];
             for o in 0..outputs {
                 for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
-                    *e += v - v;
+                    *e += v * 0.0;
                 }
             }
             for (ok, e) in ok.iter_mut().zip(excess) {
@@ -305,7 +305,7 @@ impl Lockstep {
             for i in 0..n {
                 let (rates, accelerations) = (&args[n + i], &self.accelerations[i]);
                 for l in 0..LANES {
-                    excess[l] += (rates[l] - rates[l]) + (accelerations[l] - accelerations[l]);
+                    excess[l] += rates[l] * 0.0 + accelerations[l] * 0.0;
                 }
                 stage[i] = *rates;
                 stage[n + i] = *accelerations;
