@@ -322,17 +322,9 @@ impl Lockstep {
             if !self.live[lane] {
                 continue;
             }
+            // The end of a step solved side by side is observed side by side too
+            // (`observe_accepted`), so no lane's problem needs to keep this solve.
             if finite[lane] {
-                if at_end {
-                    // Where the step ends, its observations are taken: keep the solve.
-                    for (a, arg) in self.argument.iter_mut().zip(args) {
-                        *a = arg[lane];
-                    }
-                    let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
-                    let solution = self.accelerations.iter().map(|a| a[lane]);
-                    let problem = &mut self.lanes[lane].problem;
-                    problem.keep_solved(times[lane], &self.argument, values, solution);
-                }
                 continue;
             }
             // Not solved side by side, or a value not finite: as one run alone.
