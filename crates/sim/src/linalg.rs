@@ -207,10 +207,19 @@ pub fn solve_symmetric_lanes(n: usize, a: &mut [Lanes], b: &mut [Lanes]) -> [boo
             hi[l] = hi[l].max(a[i * n + i][l]);
         }
     }
+    // Where hi ≤ lo·limit/2 the quotient cannot pass the limit (the product's rounding is far
+    // from closing a factor of two, and lo > 0 in a lane still solving): no lane then needs
+    // the division, the slowest operation here. Otherwise each lane divides as
+    // `solve_symmetric` does (NaN passing there as here).
+    let mut certain = true;
     for l in 0..LANES {
-        // NaN passes here as it does in `solve_symmetric`.
-        if hi[l] / lo[l] > CONDITION_LIMIT {
-            ok[l] = false;
+        certain &= !ok[l] || hi[l] <= lo[l] * (0.5 * CONDITION_LIMIT);
+    }
+    if !certain {
+        for l in 0..LANES {
+            if hi[l] / lo[l] > CONDITION_LIMIT {
+                ok[l] = false;
+            }
         }
     }
     for i in 0..n {
@@ -389,6 +398,84 @@ pub fn lu_factor_solve<T: ComplexField<RealField = f64> + Copy, M: Square<T>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Symmetric systems of orders 1 to 6, eight to a call: positive definite and well
+    /// conditioned, near the condition limit on either side, indefinite (LU's), singular and
+    /// with NaN. Each lane solved side by side must be the bits `solve_symmetric` gives by
+    /// LDLᵀ, and each lane it declines must be one `solve_symmetric` factors by LU or rejects.
+    #[test]
+    fn the_lanes_solve_as_solve_symmetric_does_or_decline() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (mut side_by_side, mut declined) = (0, 0);
+        for n in 1..=6 {
+            for round in 0..40 {
+                let mut systems = Vec::new();
+                for lane in 0..LANES {
+                    // A Gram matrix BᵀB plus a diagonal scaled towards the condition limit.
+                    let b = DMatrix::from_fn(n, n, |_, _| uniform());
+                    let spread = match (round + lane) % 8 {
+                        0 => 1e13 * 2.05,
+                        1 => 1e13 * 1.95,
+                        2 => 1e12,
+                        _ => 1.0,
+                    };
+                    let mut m = b.transpose() * &b;
+                    for i in 0..n {
+                        m[(i, i)] += if i == 0 { spread } else { 1.0 };
+                    }
+                    match (round * 8 + lane) % 13 {
+                        3 if n > 1 => m[(1, 1)] = -m[(1, 1)],
+                        5 => m[(0, 0)] = f64::NAN,
+                        7 if n > 1 => m.fill(1.0),
+                        _ => {}
+                    }
+                    let rhs: Vec<f64> = (0..n).map(|_| uniform()).collect();
+                    systems.push((m, rhs));
+                }
+                let mut a = vec![[0.0; LANES]; n * n];
+                let mut x = vec![[0.0; LANES]; n];
+                for (lane, (m, rhs)) in systems.iter().enumerate() {
+                    for i in 0..n {
+                        for j in 0..=i {
+                            a[i * n + j][lane] = m[(i, j)];
+                        }
+                        x[i][lane] = rhs[i];
+                    }
+                }
+                let ok = solve_symmetric_lanes(n, &mut a, &mut x);
+                for (lane, (m, rhs)) in systems.iter().enumerate() {
+                    let mut alone = m.clone();
+                    let mut solution = rhs.clone();
+                    let mut pivots = vec![0; n];
+                    let mut by_lu = false;
+                    let solved = solve_symmetric(&mut alone, &mut solution, &mut pivots, |a| {
+                        by_lu = true;
+                        a.copy_from(m);
+                    });
+                    if ok[lane] {
+                        side_by_side += 1;
+                        assert!(solved.is_ok() && !by_lu, "n = {n}: a lane LDLᵀ refused solved");
+                        for i in 0..n {
+                            assert_eq!(x[i][lane].to_bits(), solution[i].to_bits(), "n = {n}");
+                        }
+                    } else {
+                        declined += 1;
+                        assert!(by_lu || solved.is_err(), "n = {n}: a lane declined LDLᵀ takes");
+                    }
+                }
+            }
+        }
+        assert!(
+            side_by_side > 1000 && declined > 200,
+            "{side_by_side} solved, {declined} declined"
+        );
+    }
 
     #[test]
     fn ldl_and_lu_solve_the_same_system() {

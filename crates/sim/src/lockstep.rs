@@ -284,10 +284,15 @@ impl Lockstep {
                 self.accelerations[i] = *tape.output_lanes(n * n + i);
             }
             let mut ok = linalg::solve_symmetric_lanes(n, &mut self.mass, &mut self.accelerations);
+            // v·0 is ±0 for a finite v and NaN otherwise: a test the compiler vectorizes.
+            let mut excess = [0.0; LANES];
             for o in 0..outputs {
-                for (ok, v) in ok.iter_mut().zip(tape.output_lanes(o)) {
-                    *ok &= v.is_finite();
+                for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
+                    *e += v * 0.0;
                 }
+            }
+            for (ok, e) in ok.iter_mut().zip(excess) {
+                *ok &= e == 0.0;
             }
             ok
         } else {
@@ -296,13 +301,17 @@ impl Lockstep {
         // dy = (q̇, q̈) in every lane; a lane solved one at a time below is written over.
         let mut finite = solved;
         if m == 0 {
+            let mut excess = [0.0; LANES];
             for i in 0..n {
                 let (rates, accelerations) = (&args[n + i], &self.accelerations[i]);
                 for l in 0..LANES {
-                    finite[l] &= rates[l].is_finite() && accelerations[l].is_finite();
+                    excess[l] += rates[l] * 0.0 + accelerations[l] * 0.0;
                 }
                 stage[i] = *rates;
                 stage[n + i] = *accelerations;
+            }
+            for (finite, e) in finite.iter_mut().zip(excess) {
+                *finite &= e == 0.0;
             }
         }
         // As one run alone counts them: a failed evaluation is not counted.
@@ -313,17 +322,9 @@ impl Lockstep {
             if !self.live[lane] {
                 continue;
             }
+            // The end of a step solved side by side is observed side by side too
+            // (`observe_accepted`), so no lane's problem needs to keep this solve.
             if finite[lane] {
-                if at_end {
-                    // Where the step ends, its observations are taken: keep the solve.
-                    for (a, arg) in self.argument.iter_mut().zip(args) {
-                        *a = arg[lane];
-                    }
-                    let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
-                    let solution = self.accelerations.iter().map(|a| a[lane]);
-                    let problem = &mut self.lanes[lane].problem;
-                    problem.keep_solved(times[lane], &self.argument, values, solution);
-                }
                 continue;
             }
             // Not solved side by side, or a value not finite: as one run alone.

@@ -127,29 +127,4 @@ impl Mechanical {
         dy[n..].copy_from_slice(&self.solution[..n]);
         check_finite(dy)
     }
-
-    /// Keeps (t, y) as the last state solved, with `outputs` the dynamics program's outputs
-    /// there and `accelerations` q̈ solved from them elsewhere (a system without kept
-    /// multipliers), as [`Mechanical::rhs_from_outputs`] would have left it: observing there
-    /// then solves nothing again.
-    pub(crate) fn keep_solved(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        outputs: impl Iterator<Item = f64>,
-        accelerations: impl Iterator<Item = f64>,
-    ) {
-        debug_assert_eq!(self.layout.multipliers, 0);
-        let n = self.layout.coordinates;
-        let input = self.dynamics.inputs_mut();
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        for (slot, value) in self.dyn_out.iter_mut().zip(outputs) {
-            *slot = value;
-        }
-        for (slot, value) in self.solution.iter_mut().zip(accelerations) {
-            *slot = value;
-        }
-        self.solved = Some(self.baumgarte.to_bits());
-    }
 }
