@@ -8,9 +8,11 @@
 
 use std::ops::ControlFlow;
 
+use cas::Func;
 use engine::ensemble::{Ensemble, Options, Table};
 use engine::input::Vary;
 use engine::numbers::prepare;
+use numeric::elementary::{apply, sin_cos};
 use numeric::Tape;
 use sim::{integrate, Event, FaultKind, Job, Lockstep, Mechanical, Method, Run, Settings};
 
@@ -308,6 +310,38 @@ fn a_mass_matrix_ill_conditioned_on_the_way_is_the_lanes_own() {
     assert!((4..=20).contains(&faulted), "{faulted} runs met the condition limit");
 }
 
+/// A push that grows exponentially: past t = 709 c it is no longer a float.
+const GROWTH: &str = "scene \"Growth\"\n\
+    param m = 1 kg, F = 1 N, c = 1 s\n\
+    coord x = 0, x' = 0\n\
+    particle bob { mass m; position (x, 0) }\n\
+    force push on bob: (F*exp(t/c), 0)\n";
+
+#[test]
+fn accelerations_that_overflow_on_the_way_are_the_lanes_own() {
+    // With m < 1, q̈ = F·e^(t/c)/m (and q̇ with it) passes the largest float while M and f are
+    // still finite: the stage's own values must be found not finite.
+    let (problem, base, _) = problem(GROWTH, &["x''", "x"]);
+    let jobs: Vec<Job> = (0..11)
+        .map(|k| {
+            let (m, c) = (0.3 + 0.05 * k as f64, if k % 4 == 3 { 1.1 } else { 1.0 });
+            // On the solution x = c²·e^(t/c)/m at t = 700 s, not at rest: from rest the first
+            // step's estimate itself overflows.
+            let rate = c * apply(Func::Exp, 700.0 / c) / m;
+            Job { id: k, parameters: vec![m, base[1], c], state: vec![c * rate, rate] }
+        })
+        .collect();
+    for method in [Method::Dop853, Method::Dopri5] {
+        let settings = Settings { start: 700.0, ..settings(method, 712.0, 0, 20_000) };
+        let runs = same_as_alone(method.name(), &problem, &settings, &jobs, &[]);
+        let overflowed = runs.iter().filter(|r| {
+            let fault = r.fault.as_ref().map(|f| &f.kind);
+            r.final_time > 702.0 && matches!(fault, Some(FaultKind::NonFinite { .. }))
+        });
+        assert_eq!(overflowed.count(), 9, "{}", method.name());
+    }
+}
+
 /// A pendulum whose rod is kept with a multiplier: every lane is solved alone, and |Φ| is
 /// observed.
 const ROD: &str = "scene \"Rod\"\n\
@@ -325,7 +359,8 @@ fn kept_constraints_solved_lane_by_lane_are_as_alone() {
             let (a, l) = (0.25 * k as f64, if k == 5 { 0.0 } else { 1.0 + 0.1 * k as f64 });
             let mut parameters = base.clone();
             parameters[1] = l;
-            let (x, y) = (l * a.sin(), -l * a.cos());
+            let (sin, cos) = sin_cos(a);
+            let (x, y) = (l * sin, -l * cos);
             Job { id: k, parameters, state: vec![x, y, 0.3 * y, -0.3 * x] }
         })
         .collect();
