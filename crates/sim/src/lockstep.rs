@@ -7,9 +7,11 @@
 //!
 //! **Same bits:** every lane does the operations [`integrate`](crate::integrate) does for its
 //! run, in the same order (the same step control, the same stage sums, the batch tape's bits
-//! are the tape's, the same solve), so a run gives the same [`Run`] in a lane as alone. What
-//! happens between steps (observing, locating events, recording) is the one-run code itself,
-//! on the lane's own copy of the problem.
+//! are the tape's, the same solve), so a run gives the same [`Run`] in a lane as alone. The
+//! observations at the ends of the accepted steps are taken on a batch tape too; the rest of
+//! what happens between steps (locating events, recording samples, a step that ended a
+//! rounding away from its last stage) is the one-run code itself, on the lane's own copy of
+//! the problem.
 
 use std::ops::ControlFlow;
 
