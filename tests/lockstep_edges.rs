@@ -74,8 +74,14 @@ fn in_lockstep(
         state: j.state.clone(),
     });
     let mut runs: Vec<Option<Run>> = vec![None; jobs.len()];
+    let mut gave_none = false;
     lockstep.run(
-        &mut || queue.next(),
+        &mut || {
+            assert!(!gave_none, "jobs asked for again after it gave none");
+            let job = queue.next();
+            gave_none = job.is_none();
+            job
+        },
         events,
         &mut |id, run| {
             assert!(runs[id].is_none(), "run {id} given twice");

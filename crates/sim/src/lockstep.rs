@@ -124,9 +124,10 @@ impl Lockstep {
         })
     }
 
-    /// Runs every job `jobs` gives until it gives none, telling `finished` each run's result
-    /// as it ends (in the order they end); `events` are watched in every run. `go_on` is asked
-    /// before every lockstep trial; when it breaks, the runs under way are dropped unfinished.
+    /// Runs every job `jobs` gives until it first gives none (it is not asked again), telling
+    /// `finished` each run's result as it ends (in the order they end); `events` are watched
+    /// in every run. `go_on` is asked before every lockstep trial; when it breaks, the runs
+    /// under way are dropped unfinished.
     pub fn run(
         &mut self,
         jobs: &mut dyn FnMut() -> Option<Job>,
@@ -134,11 +135,16 @@ impl Lockstep {
         finished: &mut dyn FnMut(usize, Run),
         go_on: &mut dyn FnMut() -> ControlFlow<()>,
     ) {
+        // Once `jobs` gives none it is not asked again: an ensemble's idle lanes would each
+        // take a number from the threads' shared counter at every trial.
+        let mut exhausted = false;
         loop {
             for lane in 0..LANES {
-                while self.lanes[lane].course.is_none() {
-                    let Some(job) = jobs() else { break };
-                    self.start(lane, job, finished);
+                while !exhausted && self.lanes[lane].course.is_none() {
+                    match jobs() {
+                        Some(job) => self.start(lane, job, finished),
+                        None => exhausted = true,
+                    }
                 }
             }
             if self.lanes.iter().all(|l| l.course.is_none()) || go_on().is_break() {
