@@ -219,6 +219,10 @@ fn stops_events_and_samples_on_the_dense_output_are_as_alone() {
             let mut parameters = base.clone();
             parameters[4] *= 1.0 + 0.02 * (k % 3) as f64;
             parameters[5] *= 1.0 + 0.05 * (k % 5) as f64;
+            // A negative outer mass: M indefinite and full, solved by LU lane by lane.
+            if k % 7 == 6 {
+                parameters[1] = -0.4;
+            }
             Job { id: k, parameters, state: vec![a1, a2, 0.0, 0.0] }
         })
         .collect();
@@ -228,13 +232,15 @@ fn stops_events_and_samples_on_the_dense_output_are_as_alone() {
         Event { column: 1, stop: true },
         Event { column: 2, stop: false },
     ];
-    let (mut stopped, mut crossed, mut sampled) = (0, 0, 0);
+    let (mut stopped, mut crossed, mut sampled, mut indefinite) = (0, 0, 0, 0);
     for (method, samples) in
         [(Method::Dop853, 0), (Method::Dop853, 40), (Method::Dopri5, 0), (Method::Dopri5, 17)]
     {
         let settings = settings(method, 2.9, samples, 20_000);
         let what = format!("{} at {samples} samples", method.name());
-        for run in same_as_alone(&what, &problem, &settings, &jobs, &events) {
+        for (job, run) in jobs.iter().zip(same_as_alone(&what, &problem, &settings, &jobs, &events))
+        {
+            indefinite += usize::from(job.parameters[1] < 0.0 && run.steps > 10);
             stopped += usize::from(run.stopped_by.is_some());
             crossed += run.events.iter().filter(|e| e.event == 2).count();
             sampled += usize::from(samples > 0 && run.trajectory.times.len() > samples / 2);
@@ -243,6 +249,7 @@ fn stops_events_and_samples_on_the_dense_output_are_as_alone() {
     assert!(stopped >= 8, "{stopped} runs stopped");
     assert!(crossed >= 8, "{crossed} events crossed");
     assert!(sampled >= 8, "{sampled} runs recorded their samples");
+    assert!(indefinite >= 8, "{indefinite} runs with M indefinite went on");
 }
 
 /// A push that grows with time: one ulp of t moves the accelerations.
