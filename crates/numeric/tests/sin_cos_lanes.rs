@@ -142,10 +142,49 @@ fn special_values() -> Vec<f64> {
     args
 }
 
+/// Random floats in the high words of each threshold and its neighbours, and many in the first
+/// word of the large reduction: there libm's first round would almost always give the same
+/// bits as the multi-precision reduction, and only a dense sample tells them apart.
+fn within_threshold_words() -> Vec<f64> {
+    let mut numbers = Numbers(0x5EED_0005);
+    let mut args = Vec::new();
+    for high in THRESHOLDS {
+        let count = if high == 0x4139_21FB { 1 << 16 } else { 2048 };
+        for high in [high - 1, high, high + 1] {
+            for _ in 0..count {
+                let bits = (u64::from(high) << 32) | (numbers.next() >> 32);
+                args.push(f64::from_bits(bits | (numbers.next() << 63)));
+            }
+        }
+    }
+    args
+}
+
+/// Arguments whose first reduction round cancels about l bits of their exponent, l = 8 to 60,
+/// densely about 17 (where libm takes a second round, and the first would give other bits
+/// about once in 2^15): k·π/2 − d with |d| ≈ 2^-l·k·π/2 < π/4, so k is the nearest multiple.
+fn cancelling_by_degrees() -> Vec<f64> {
+    let mut numbers = Numbers(0x5EED_0006);
+    let mut args = Vec::new();
+    for l in 8..=60 {
+        let count = if (15..=19).contains(&l) { 1 << 17 } else { 2048 };
+        let largest_k = 1u64 << (l - 2).min(20);
+        for _ in 0..count {
+            let k = (numbers.next() % largest_k + 1) as f64;
+            let centre = k * std::f64::consts::FRAC_PI_2;
+            let d = centre * libm::pow(2.0, -(l as f64) - numbers.unit()) * 1.5;
+            args.push(if numbers.next() & 1 == 1 { -(centre + d) } else { centre - d });
+        }
+    }
+    args
+}
+
 #[test]
 fn libms_thresholds_and_special_values_give_its_bits() {
     check(&around_thresholds());
+    check(&within_threshold_words());
     check(&near_multiples_of_pio2());
+    check(&cancelling_by_degrees());
     check(&special_values());
 }
 
