@@ -73,6 +73,7 @@ pub fn run() {
     table(&rows);
     four_link_rhs();
     many_points();
+    sine_and_cosine();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -356,4 +357,96 @@ fn rhs_per_call(mech: &mut Mechanical, y: &[f64]) -> f64 {
         turn ^= 1;
         mech.rhs(0.0, black_box(states[turn]), black_box(&mut dy)).expect("regular");
     })
+}
+
+/// Eight sines and cosines by `libm::sincos` one lane at a time against
+/// `numeric::elementary::sin_cos_lanes` (the same bits: `numeric`'s tests hold them so), at
+/// angles |x| < 10; and the double pendulum's dynamics (M and f of
+/// `examples/classics/double_pendulum_flip.lag`) at many states on the batch tape, whose
+/// sines and cosines are computed eight at a time.
+fn sine_and_cosine() {
+    const ARGUMENTS: usize = 4096;
+    // Spread over (−10, 10) by the golden ratio's fractional parts: no two alike, no pattern
+    // a branch predictor could learn in eight lanes.
+    let angles: Vec<[f64; numeric::LANES]> = (0..ARGUMENTS / numeric::LANES)
+        .map(|chunk| {
+            std::array::from_fn(|lane| {
+                let k = (chunk * numeric::LANES + lane) as f64;
+                ((k * 0.618_033_988_749_895) % 1.0) * 20.0 - 10.0
+            })
+        })
+        .collect();
+    let mut sink = 0.0;
+    let one_at_a_time = crate::per_call(|| {
+        for x in &angles {
+            for v in black_box(x) {
+                let (s, c) = libm::sincos(*v);
+                sink += s + c;
+            }
+        }
+    }) / angles.len() as f64;
+    let lanes = crate::per_call(|| {
+        for x in &angles {
+            let (s, c) = numeric::elementary::sin_cos_lanes(black_box(x));
+            sink += s[0] + c[7];
+        }
+    }) / angles.len() as f64;
+    black_box(sink);
+    outln!();
+    outln!("Eight sines and cosines at |x| < 10: libm::sincos one lane at a time, sin_cos_lanes");
+    outln!(
+        "{:>10} {:>10} {:>7}",
+        crate::seconds(one_at_a_time),
+        crate::seconds(lanes),
+        format!("{:.2}", one_at_a_time / lanes)
+    );
+    double_pendulum_many();
+}
+
+/// M and f of the double pendulum at 1,024 states, per state: the tape one state at a time
+/// and the batch tape.
+fn double_pendulum_many() {
+    const POINTS: usize = 1024;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let scene = std::fs::read_to_string(root.join("examples/classics/double_pendulum_flip.lag"))
+        .expect("the scene");
+    let mut prepared =
+        engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+    let model = &prepared.derivation.model;
+    let parameters: Vec<f64> = model
+        .constants()
+        .iter()
+        .map(|(_, value)| value.map_or(1.0, |e| numeric::eval(&model.pool, e, &[])))
+        .collect();
+    let (width, outputs) = (dynamics.inputs, dynamics.outputs.len());
+    let inputs: Vec<f64> = (0..POINTS)
+        .flat_map(|i| {
+            let k = i as f64;
+            let turn = |a: f64| (k * a) % 1.0;
+            let mut row = vec![0.0, 6.0 * turn(0.618) - 3.0, 6.0 * turn(0.414) - 3.0];
+            row.extend([4.0 * turn(0.732) - 2.0, 4.0 * turn(0.236) - 2.0]);
+            row.extend(&parameters);
+            row
+        })
+        .collect();
+    assert_eq!(inputs.len(), POINTS * width, "the double pendulum's inputs");
+    let mut out = vec![0.0; POINTS * outputs];
+    let mut tape = Tape::new(dynamics.clone());
+    let one = crate::per_call(|| {
+        for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
+            tape.eval(black_box(point), black_box(row));
+        }
+    }) / POINTS as f64;
+    let mut batch = numeric::BatchTape::new(dynamics);
+    let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
+        / POINTS as f64;
+    outln!("The double pendulum's M and f at {POINTS} states, per state: tape, batch tape");
+    outln!(
+        "{:>10} {:>10} {:>7}",
+        crate::seconds(one),
+        crate::seconds(many),
+        format!("{:.2}", one / many)
+    );
 }

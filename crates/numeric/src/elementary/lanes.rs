@@ -37,123 +37,107 @@ const C4: f64 = f64::from_bits(0xBE92_7E4F_809C_52AD);
 const C5: f64 = f64::from_bits(0x3E21_EE9E_BDB4_B1C4);
 const C6: f64 = f64::from_bits(0xBDA8_FAE9_BE88_38D4);
 
-// libm's thresholds, on the high 32 bits of |x| (so each stands for a range of 2^32 floats;
-// the bits matter, not the value they round to).
-/// Below: 2^-27·√2, where sin x = x and cos x = 1 to the bit.
-const TINY: u32 = 0x3E46_A09E;
-/// Up to: π/4, the kernels' own interval.
-const PIO4: u32 = 0x3FE9_21FB;
-/// Up to: 3π/4, 5π/4, 7π/4 and 9π/4, the ranges reduced by a fixed multiple of π/2.
-const FIXED_MULTIPLE_ENDS: [u32; 4] = [0x4002_D97C, 0x400F_6A7A, 0x4015_FDBC, 0x401C_463B];
-/// Within the fixed ranges: π/2, π, 3π/2 and 2π, where the fixed reduction would cancel and
-/// libm reduces by the nearest multiple instead.
-const NEAR_MULTIPLES: [u32; 4] = [0x3FF9_21FB, 0x4009_21FB, 0x4012_D97C, 0x4019_21FB];
-/// From: 2^20·π/2, reduced in multiple precision.
-const LARGE: u32 = 0x4139_21FB;
-/// A first reduction round that loses more than this many bits of exponent takes a second.
-const CANCELLED: i32 = 16;
+// libm's thresholds compare the high 32 bits of |x|; each is written here as the float that
+// starts the range (a high word h ≤ H is |x| below the float whose high word is H + 1), so
+// that a lane is classified by float comparisons, which vectorize with every instruction set.
+/// Below: 2^-27·√2, where sin x = x and cos x = 1 to the bit (high word 0x3E46A09E).
+const TINY: f64 = f64::from_bits(0x3E46_A09E << 32);
+/// Below: π/4, the kernels' own interval (high words up to 0x3FE921FB).
+const PIO4: f64 = f64::from_bits(0x3FE9_21FC << 32);
+/// From: 3π/4, 5π/4 and 7π/4, where the fixed multiple of π/2 grows by one; below the last,
+/// 9π/4, the end of the ranges libm reduces by a fixed multiple (high words up to 0x4002D97C,
+/// 0x400F6A7A, 0x4015FDBC and 0x401C463B).
+const FIXED_STEPS: [f64; 3] = [
+    f64::from_bits(0x4002_D97D << 32),
+    f64::from_bits(0x400F_6A7B << 32),
+    f64::from_bits(0x4015_FDBD << 32),
+];
+const FIXED_END: f64 = f64::from_bits(0x401C_463C << 32);
+/// From: 2^20·π/2, reduced in multiple precision (high word 0x413921FB).
+const LARGE: f64 = f64::from_bits(0x4139_21FB << 32);
+/// libm takes a second round when the first leaves y0 more than 16 binades below x.
+const CANCELLED: u64 = 16 << 52;
+const EXPONENT: u64 = 0x7FF << 52;
 
 /// The sine and cosine of each lane of `x`: exactly `libm::sincos(x[i])` in lane `i`, for
 /// every argument, at a fraction of the cost of eight calls.
 pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
-    let reduction = Reduction::of(x);
     let mut sine = [0.0; LANES];
     let mut cosine = [0.0; LANES];
+    let mut elsewhere = [false; LANES];
     for i in 0..LANES {
-        let (s, c) = kernels(reduction.head[i], reduction.tail[i], reduction.kernel_alone[i]);
-        let (s, c) = rotate(s, c, reduction.quadrant[i]);
-        // Below 2^-27·√2 libm returns x and 1 without the kernels.
-        let tiny = reduction.tiny[i];
-        sine[i] = if tiny { x[i] } else { s };
-        cosine[i] = if tiny { 1.0 } else { c };
+        (sine[i], cosine[i], elsewhere[i]) = straight_line(x[i]);
     }
-    if reduction.elsewhere.iter().any(|e| *e) {
-        for i in (0..LANES).filter(|i| reduction.elsewhere[*i]) {
+    if elsewhere.iter().any(|e| *e) {
+        for i in (0..LANES).filter(|i| elsewhere[*i]) {
             (sine[i], cosine[i]) = libm::sincos(x[i]);
         }
     }
     (sine, cosine)
 }
 
-/// Each lane's argument less a multiple n of π/2 as libm's first round leaves it, head and
-/// tail, with n mod 4 and what the lane needs besides.
-struct Reduction {
-    head: Lanes,
-    tail: Lanes,
-    quadrant: [u64; LANES],
-    /// |x| ≲ π/4: n = 0, no tail, and the sine's kernel in its form without one.
-    kernel_alone: [bool; LANES],
-    /// |x| < 2^-27·√2.
-    tiny: [bool; LANES],
-    /// The lanes libm computes otherwise: a second round, the large reduction, NaN or ±∞.
-    elsewhere: [bool; LANES],
-}
-
-impl Reduction {
-    #[inline(always)]
-    fn of(x: &Lanes) -> Reduction {
-        let mut reduction = Reduction {
-            head: [0.0; LANES],
-            tail: [0.0; LANES],
-            quadrant: [0; LANES],
-            kernel_alone: [false; LANES],
-            tiny: [false; LANES],
-            elsewhere: [false; LANES],
-        };
-        for i in 0..LANES {
-            let high = high_word(x[i]);
-            let multiple = multiple_of_pio2(x[i], high);
-            let r = x[i] - multiple * PIO2_1;
-            let w = multiple * PIO2_1T;
-            let y0 = r - w;
-            reduction.head[i] = y0;
-            reduction.tail[i] = (r - y0) - w;
-            // n mod 4 from the low bits of n + 1.5·2^52 (exact: |n| < 2^20).
-            reduction.quadrant[i] = (multiple + TO_INT).to_bits() & 3;
-            reduction.kernel_alone[i] = high <= PIO4;
-            reduction.tiny[i] = high < TINY;
-            let by_nearest = high > FIXED_MULTIPLE_ENDS[3] || NEAR_MULTIPLES.contains(&high);
-            let lost = (high >> 20) as i32 - ((y0.to_bits() >> 52) & 0x7FF) as i32;
-            reduction.elsewhere[i] = high >= LARGE || (by_nearest && lost > CANCELLED);
-        }
-        reduction
-    }
-}
-
-/// The high 32 bits of |x|, which libm's thresholds compare.
+/// One lane's sine and cosine as libm computes them below 2^20·π/2 with one reduction round,
+/// and whether the lane is one it computes otherwise (a second round, the large reduction,
+/// NaN or ±∞), whose values here are then meaningless.
 #[inline(always)]
-fn high_word(x: f64) -> u32 {
-    (x.to_bits() >> 32) as u32 & 0x7FFF_FFFF
+fn straight_line(x: f64) -> (f64, f64, bool) {
+    let size = f64::from_bits(x.to_bits() & !(1 << 63));
+    let alone = mask(size < PIO4);
+    let multiple = multiple_of_pio2(x, size, alone);
+    // x − n·(π/2) in two floats, head and tail: libm's first round.
+    let r = x - multiple * PIO2_1;
+    let w = multiple * PIO2_1T;
+    let y0 = r - w;
+    let y1 = (r - y0) - w;
+    // libm's test for a second round is on the medium path only; here it is made on the fixed
+    // ranges too, which sends libm a few more lanes (those within 2^-16·|x| of a multiple of
+    // π/2) and among them every lane of the high words near π/2, π, 3π/2 and 2π that libm
+    // reduces by the nearest multiple (it is the fixed one there, and the first round cancels
+    // 20 binades or more).
+    let floor = f64::from_bits((size.to_bits() & EXPONENT).wrapping_sub(CANCELLED));
+    let cancelled = !alone & mask(f64::from_bits(y0.to_bits() & !(1 << 63)) < floor);
+    let (s, c) = kernels(y0, y1, alone);
+    let (s, c) = rotate(s, c, multiple);
+    // Below 2^-27·√2 libm returns x and 1 without the kernels.
+    let tiny = mask(size < TINY);
+    (pick(tiny, x, s), pick(tiny, 1.0, c), cancelled | !mask(size < LARGE) != 0)
 }
 
 /// The multiple of π/2 that libm subtracts from `x`, as a float: none up to π/4; a fixed one
-/// per range up to 9π/4 but near π/2, π, 3π/2 and 2π; beyond, and near those, the nearest,
-/// rounded by adding and subtracting 1.5·2^52.
+/// per range up to 9π/4; beyond, the nearest, rounded by adding and subtracting 1.5·2^52.
 #[inline(always)]
-fn multiple_of_pio2(x: f64, high: u32) -> f64 {
+fn multiple_of_pio2(x: f64, size: f64, alone: u64) -> f64 {
     let nearest = (x * INV_PIO2 + TO_INT) - TO_INT;
-    let fixed = 1.0 + FIXED_MULTIPLE_ENDS[..3].iter().filter(|end| high > **end).count() as f64;
-    let fixed = if x.is_sign_negative() { -fixed } else { fixed };
-    if high <= PIO4 {
-        0.0
-    } else if high <= FIXED_MULTIPLE_ENDS[3] && !NEAR_MULTIPLES.contains(&high) {
-        fixed
-    } else {
-        nearest
-    }
+    let steps = FIXED_STEPS.map(|step| f64::from_bits(mask(size >= step) & 1.0f64.to_bits()));
+    let fixed = ((1.0 + steps[0]) + steps[1]) + steps[2];
+    let fixed = f64::from_bits(fixed.to_bits() | (x.to_bits() & (1 << 63)));
+    pick(alone, 0.0, pick(mask(size < FIXED_END), fixed, nearest))
+}
+
+/// All ones where `b`, else zero: a lane's condition as a mask for [`pick`].
+#[inline(always)]
+fn mask(b: bool) -> u64 {
+    0u64.wrapping_sub(u64::from(b))
+}
+
+/// `a` where `mask` is all ones, `b` where it is zero, by bits: no branch to keep a loop over
+/// lanes from vectorizing.
+#[inline(always)]
+fn pick(mask: u64, a: f64, b: f64) -> f64 {
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 /// libm's kernels at y0 + y1, |y0| ≲ π/4: the sine's polynomial as `k_sin` evaluates it with
 /// a tail (`alone` false) or without one (true, y1 = 0), the cosine's as `k_cos` does.
 #[inline(always)]
-fn kernels(y0: f64, y1: f64, alone: bool) -> (f64, f64) {
+fn kernels(y0: f64, y1: f64, alone: u64) -> (f64, f64) {
     let z = y0 * y0;
     let w = z * z;
     let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
     let v = z * y0;
     let sine_alone = y0 + v * (S1 + z * r);
     let sine_with_tail = y0 - ((z * (0.5 * y1 - v * r) - y1) - v * S1);
-    let sine = if alone { sine_alone } else { sine_with_tail };
+    let sine = pick(alone, sine_alone, sine_with_tail);
     let r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
     let half = 0.5 * z;
     let w = 1.0 - half;
@@ -161,13 +145,17 @@ fn kernels(y0: f64, y1: f64, alone: bool) -> (f64, f64) {
     (sine, cosine)
 }
 
-/// sin and cos of y + n·π/2 from those of y, by n mod 4: (s, c), (c, −s), (−s, −c), (−c, s).
+/// sin and cos of y + n·π/2 from those of y, by n mod 4: (s, c), (c, −s), (−s, −c), (−c, s);
+/// n mod 4 is in the low bits of n + 1.5·2^52 (exact: |n| < 2^20), and the swap and the signs
+/// are bit operations, which need no comparison of 64-bit integers to vectorize.
 #[inline(always)]
-fn rotate(s: f64, c: f64, quadrant: u64) -> (f64, f64) {
-    let (s, c) = if quadrant & 1 == 1 { (c, s) } else { (s, c) };
-    let sine = if quadrant & 2 == 2 { -s } else { s };
-    let cosine = if quadrant == 1 || quadrant == 2 { -c } else { c };
-    (sine, cosine)
+fn rotate(s: f64, c: f64, multiple: f64) -> (f64, f64) {
+    let n = (multiple + TO_INT).to_bits();
+    let odd = 0u64.wrapping_sub(n & 1);
+    let (s, c) = (pick(odd, c, s).to_bits(), pick(odd, s, c).to_bits());
+    let sine = s ^ ((n & 2) << 62);
+    let cosine = c ^ ((n.wrapping_add(1) & 2) << 62);
+    (f64::from_bits(sine), f64::from_bits(cosine))
 }
 
 #[cfg(test)]
@@ -180,11 +168,8 @@ mod tests {
     fn one_call_mixes_the_straight_line_and_libm() {
         let near_pi = f64::from_bits(std::f64::consts::PI.to_bits() + 1);
         let x = [1e-10, 0.5, -2.0, 100.0, near_pi * 2.0, 1e7 * std::f64::consts::PI, 1e9, f64::NAN];
-        let reduction = Reduction::of(&x);
-        assert_eq!(reduction.tiny, [true, false, false, false, false, false, false, false]);
-        assert_eq!(reduction.kernel_alone[..3], [true, true, false]);
-        let elsewhere = [false, false, false, false, true, true, true, true];
-        assert_eq!(reduction.elsewhere, elsewhere);
+        let elsewhere = x.map(|x| straight_line(x).2);
+        assert_eq!(elsewhere, [false, false, false, false, true, true, true, true]);
         let (sine, cosine) = sin_cos_lanes(&x);
         for i in 0..LANES {
             let (s, c) = libm::sincos(x[i]);
