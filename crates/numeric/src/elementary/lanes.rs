@@ -8,9 +8,11 @@
 //! kernels, with the multiple of π/2 and the quadrant chosen per lane by masks, so the loops
 //! over lanes compile to vector instructions. Each floating-point operation is the one libm
 //! performs, in the same order, on the same constants (rounding to nearest, no fused
-//! multiply-add), so each lane gets libm's bits. A lane whose argument needs what the
-//! straight-line code does not do (a second reduction round, the large-argument reduction, a
-//! NaN or an infinity) is computed again by `libm::sincos` alone.
+//! multiply-add), so each lane gets libm's bits. Up to 9π/4 libm's fixed multiple is the
+//! nearest one, and its single round is the medium path's. A lane whose argument needs what
+//! the straight-line code does not do (a second reduction round, the large-argument reduction,
+//! a NaN or an infinity) or lies next to the end of a fixed range (where the fixed multiple
+//! may not be the nearest) is computed again by `libm::sincos` alone.
 
 use crate::batch::LANES;
 
@@ -44,15 +46,14 @@ const C6: f64 = f64::from_bits(0xBDA8_FAE9_BE88_38D4);
 const TINY: f64 = f64::from_bits(0x3E46_A09E << 32);
 /// Below: π/4, the kernels' own interval (high words up to 0x3FE921FB).
 const PIO4: f64 = f64::from_bits(0x3FE9_21FC << 32);
-/// From: 3π/4, 5π/4 and 7π/4, where the fixed multiple of π/2 grows by one; below the last,
-/// 9π/4, the end of the ranges libm reduces by a fixed multiple (high words up to 0x4002D97C,
-/// 0x400F6A7A, 0x4015FDBC and 0x401C463B).
-const FIXED_STEPS: [f64; 3] = [
-    f64::from_bits(0x4002_D97D << 32),
-    f64::from_bits(0x400F_6A7B << 32),
-    f64::from_bits(0x4015_FDBD << 32),
-];
+/// Below: 9π/4, the end of the ranges libm reduces by a fixed multiple of π/2 (1 up to 3π/4,
+/// then 2, 3 and 4 up to 5π/4, 7π/4 and 9π/4: high words up to 0x4002D97C, 0x400F6A7A,
+/// 0x4015FDBC and 0x401C463B), where the nearest is taken beyond.
 const FIXED_END: f64 = f64::from_bits(0x401C_463C << 32);
+/// How far from a half-integer x·2/π must be for the nearest multiple of π/2 to be the fixed
+/// one: the ends of the fixed ranges are the high words of (2k + 1)·π/4, and a high word spans
+/// less than 3·10^-6 of x·2/π below 9π/4.
+const SURELY_NEAREST: f64 = 0.5 - 1e-5;
 /// From: 2^20·π/2, reduced in multiple precision (high word 0x413921FB).
 const LARGE: f64 = f64::from_bits(0x4139_21FB << 32);
 /// libm takes a second round when the first leaves y0 more than 16 binades below x.
@@ -78,12 +79,13 @@ pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
 
 /// One lane's sine and cosine as libm computes them below 2^20·π/2 with one reduction round,
 /// and whether the lane is one it computes otherwise (a second round, the large reduction,
-/// NaN or ±∞), whose values here are then meaningless.
+/// NaN or ±∞) or may (next to the ends of its fixed ranges), whose values here are then
+/// meaningless.
 #[inline(always)]
 fn straight_line(x: f64) -> (f64, f64, bool) {
     let size = f64::from_bits(x.to_bits() & !(1 << 63));
     let alone = mask(size < PIO4);
-    let multiple = multiple_of_pio2(x, size, alone);
+    let (multiple, ambiguous) = multiple_of_pio2(x, size, alone);
     // x − n·(π/2) in two floats, head and tail: libm's first round.
     let r = x - multiple * PIO2_1;
     let w = multiple * PIO2_1T;
@@ -91,27 +93,28 @@ fn straight_line(x: f64) -> (f64, f64, bool) {
     let y1 = (r - y0) - w;
     // libm's test for a second round is on the medium path only; here it is made on the fixed
     // ranges too, which sends libm a few more lanes (those within 2^-16·|x| of a multiple of
-    // π/2) and among them every lane of the high words near π/2, π, 3π/2 and 2π that libm
-    // reduces by the nearest multiple (it is the fixed one there, and the first round cancels
-    // 20 binades or more).
+    // π/2), among them every lane of the high words near π/2, π, 3π/2 and 2π that libm
+    // reduces as the medium path does (the first round cancels 20 binades or more there).
     let floor = f64::from_bits((size.to_bits() & EXPONENT).wrapping_sub(CANCELLED));
     let cancelled = !alone & mask(f64::from_bits(y0.to_bits() & !(1 << 63)) < floor);
     let (s, c) = kernels(y0, y1, alone);
     let (s, c) = rotate(s, c, multiple);
     // Below 2^-27·√2 libm returns x and 1 without the kernels.
     let tiny = mask(size < TINY);
-    (pick(tiny, x, s), pick(tiny, 1.0, c), cancelled | !mask(size < LARGE) != 0)
+    (pick(tiny, x, s), pick(tiny, 1.0, c), cancelled | ambiguous | !mask(size < LARGE) != 0)
 }
 
-/// The multiple of π/2 that libm subtracts from `x`, as a float: none up to π/4; a fixed one
-/// per range up to 9π/4; beyond, the nearest, rounded by adding and subtracting 1.5·2^52.
+/// The multiple of π/2 that libm subtracts from `x`, as a float (none up to π/4, else the
+/// nearest, rounded by adding and subtracting 1.5·2^52), and whether the lane must go to libm
+/// because this may not be libm's multiple: up to 9π/4 libm takes a fixed one per range, which
+/// is the nearest unless x·2/π is within [`SURELY_NEAREST`] of a half-integer.
 #[inline(always)]
-fn multiple_of_pio2(x: f64, size: f64, alone: u64) -> f64 {
-    let nearest = (x * INV_PIO2 + TO_INT) - TO_INT;
-    let steps = FIXED_STEPS.map(|step| f64::from_bits(mask(size >= step) & 1.0f64.to_bits()));
-    let fixed = ((1.0 + steps[0]) + steps[1]) + steps[2];
-    let fixed = f64::from_bits(fixed.to_bits() | (x.to_bits() & (1 << 63)));
-    pick(alone, 0.0, pick(mask(size < FIXED_END), fixed, nearest))
+fn multiple_of_pio2(x: f64, size: f64, alone: u64) -> (f64, u64) {
+    let t = x * INV_PIO2;
+    let nearest = (t + TO_INT) - TO_INT;
+    let off_centre = f64::from_bits((t - nearest).to_bits() & !(1 << 63));
+    let ambiguous = mask(size < FIXED_END) & !mask(off_centre < SURELY_NEAREST);
+    (pick(alone, 0.0, nearest), ambiguous)
 }
 
 /// All ones where `b`, else zero: a lane's condition as a mask for [`pick`].
@@ -163,11 +166,21 @@ mod tests {
     use super::*;
 
     /// One call whose lanes take every path: the tiny early return, the kernels alone, a fixed
-    /// multiple, the nearest multiple in one round, a second round, the large reduction, NaN.
+    /// multiple, the nearest multiple in one round, a second round, the end of a fixed range
+    /// (just above 3π/4, where libm subtracts π/2 and not π), the large reduction, NaN.
     #[test]
     fn one_call_mixes_the_straight_line_and_libm() {
         let near_pi = f64::from_bits(std::f64::consts::PI.to_bits() + 1);
-        let x = [1e-10, 0.5, -2.0, 100.0, near_pi * 2.0, 1e7 * std::f64::consts::PI, 1e9, f64::NAN];
+        let x = [
+            1e-10,
+            0.5,
+            -2.0,
+            100.0,
+            near_pi * 2.0,
+            f64::from_bits(0x4002_D97C_FFFF_0000),
+            1e7,
+            f64::NAN,
+        ];
         let elsewhere = x.map(|x| straight_line(x).2);
         assert_eq!(elsewhere, [false, false, false, false, true, true, true, true]);
         let (sine, cosine) = sin_cos_lanes(&x);
