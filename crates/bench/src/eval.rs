@@ -376,29 +376,36 @@ fn sine_and_cosine() {
             })
         })
         .collect();
-    let mut sink = 0.0;
-    let one_at_a_time = crate::per_call(|| {
-        for x in &angles {
-            for v in black_box(x) {
-                let (s, c) = libm::sincos(*v);
-                sink += s + c;
+    // Each result stored, not summed: a running sum would be a chain of additions as long as
+    // the timed work.
+    type Pair = ([f64; numeric::LANES], [f64; numeric::LANES]);
+    let mut out: Pair = ([0.0; numeric::LANES], [0.0; numeric::LANES]);
+    let mut time = |f: &dyn Fn(&[f64; numeric::LANES], &mut Pair)| {
+        crate::per_call(|| {
+            for x in &angles {
+                f(black_box(x), &mut out);
+                black_box(&mut out);
             }
+        }) / angles.len() as f64
+    };
+    let sincos = time(&|x, (s, c)| {
+        for lane in 0..numeric::LANES {
+            (s[lane], c[lane]) = libm::sincos(x[lane]);
         }
-    }) / angles.len() as f64;
-    let lanes = crate::per_call(|| {
-        for x in &angles {
-            let (s, c) = numeric::elementary::sin_cos_lanes(black_box(x));
-            sink += s[0] + c[7];
-        }
-    }) / angles.len() as f64;
-    black_box(sink);
+    });
+    let sin = time(&|x, (s, _)| *s = x.map(libm::sin));
+    let cos = time(&|x, (_, c)| *c = x.map(libm::cos));
+    let lanes = time(&|x, out| *out = numeric::elementary::sin_cos_lanes(x));
     outln!();
-    outln!("Eight sines and cosines at |x| < 10: libm::sincos one lane at a time, sin_cos_lanes");
+    outln!("Eight arguments at |x| < 10, one lane at a time by libm and at once by sin_cos_lanes");
+    outln!("{:>10} {:>10} {:>10} | {:>10} {:>7}", "sincos", "sin", "cos", "lanes", "sincos/lanes");
     outln!(
-        "{:>10} {:>10} {:>7}",
-        crate::seconds(one_at_a_time),
+        "{:>10} {:>10} {:>10} | {:>10} {:>7.2}",
+        crate::seconds(sincos),
+        crate::seconds(sin),
+        crate::seconds(cos),
         crate::seconds(lanes),
-        format!("{:.2}", one_at_a_time / lanes)
+        sincos / lanes
     );
     double_pendulum_many();
 }
@@ -439,10 +446,13 @@ fn double_pendulum_many() {
             tape.eval(black_box(point), black_box(row));
         }
     }) / POINTS as f64;
+    let counts = dynamics.op_counts();
     let mut batch = numeric::BatchTape::new(dynamics);
     let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
         / POINTS as f64;
-    outln!("The double pendulum's M and f at {POINTS} states, per state: tape, batch tape");
+    outln!(
+        "The double pendulum's M and f ({counts}) at {POINTS} states, per state: tape, batch tape"
+    );
     outln!(
         "{:>10} {:>10} {:>7}",
         crate::seconds(one),
