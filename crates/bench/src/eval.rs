@@ -295,7 +295,6 @@ fn many_points() {
         let exprs = prepared.dynamics_exprs();
         let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
         let width = dynamics.inputs;
-        let outputs = dynamics.outputs.len();
         let (theta, rate) = state(n);
         let inputs: Vec<f64> = (0..POINTS)
             .flat_map(|i| {
@@ -308,16 +307,7 @@ fn many_points() {
             })
             .collect();
         assert_eq!(inputs.len(), POINTS * width, "the n-link's inputs");
-        let mut out = vec![0.0; POINTS * outputs];
-        let mut tape = Tape::new(dynamics.clone());
-        let one = crate::per_call(|| {
-            for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
-                tape.eval(black_box(point), black_box(row));
-            }
-        }) / POINTS as f64;
-        let mut batch = numeric::BatchTape::new(dynamics.clone());
-        let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
-            / POINTS as f64;
+        let (one, many) = tape_and_batch(&dynamics, &inputs);
         let mut mech = unit_chain(&prepared, dynamics);
         let times = vec![0.0; POINTS];
         let ys: Vec<f64> =
@@ -427,7 +417,7 @@ fn double_pendulum_many() {
         .iter()
         .map(|(_, value)| value.map_or(1.0, |e| numeric::eval(&model.pool, e, &[])))
         .collect();
-    let (width, outputs) = (dynamics.inputs, dynamics.outputs.len());
+    let width = dynamics.inputs;
     let inputs: Vec<f64> = (0..POINTS)
         .flat_map(|i| {
             let k = i as f64;
@@ -439,17 +429,8 @@ fn double_pendulum_many() {
         })
         .collect();
     assert_eq!(inputs.len(), POINTS * width, "the double pendulum's inputs");
-    let mut out = vec![0.0; POINTS * outputs];
-    let mut tape = Tape::new(dynamics.clone());
-    let one = crate::per_call(|| {
-        for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
-            tape.eval(black_box(point), black_box(row));
-        }
-    }) / POINTS as f64;
+    let (one, many) = tape_and_batch(&dynamics, &inputs);
     let counts = dynamics.op_counts();
-    let mut batch = numeric::BatchTape::new(dynamics);
-    let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
-        / POINTS as f64;
     outln!(
         "The double pendulum's M and f ({counts}) at {POINTS} states, per state: tape, batch tape"
     );
@@ -459,4 +440,22 @@ fn double_pendulum_many() {
         crate::seconds(many),
         format!("{:.2}", one / many)
     );
+}
+
+/// The time per point of `program` at every point of `inputs` (a row each): on the tape one
+/// point at a time, and on the batch tape.
+fn tape_and_batch(program: &numeric::Program, inputs: &[f64]) -> (f64, f64) {
+    let (width, outputs) = (program.inputs, program.outputs.len());
+    let points = inputs.len() / width;
+    let mut out = vec![0.0; points * outputs];
+    let mut tape = Tape::new(program.clone());
+    let one = crate::per_call(|| {
+        for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
+            tape.eval(black_box(point), black_box(row));
+        }
+    }) / points as f64;
+    let mut batch = numeric::BatchTape::new(program.clone());
+    let many =
+        crate::per_call(|| batch.eval_many(black_box(inputs), black_box(&mut out))) / points as f64;
+    (one, many)
 }
