@@ -5,8 +5,11 @@
 //! multiple of π/2 up to 9π/4, a reduction by the nearest multiple (one round, with a second
 //! and third when the first cancels too much) up to 2^20·π/2, and a multi-precision one
 //! beyond. Here every lane runs the same straight-line code, the one reduction round and both
-//! kernels, with the multiple of π/2 and the quadrant chosen per lane by masks, so the loops
-//! over lanes compile to vector instructions. Each floating-point operation is the one libm
+//! kernels, with the multiple of π/2 and the quadrant chosen per lane by masks. Each step is
+//! taken for all eight lanes before the next (an array a step), which the compiler turns into
+//! vector instructions with the eight lanes' chains of dependent operations side by side;
+//! one lane's whole computation after another's would leave the processor waiting on each
+//! chain's latency. Each floating-point operation is the one libm
 //! performs, in the same order, on the same constants (rounding to nearest, no fused
 //! multiply-add), so each lane gets libm's bits. Up to 9π/4 libm's fixed multiple is the
 //! nearest one, and its single round is the medium path's. A lane whose argument needs what
@@ -61,60 +64,96 @@ const CANCELLED: u64 = 16 << 52;
 const EXPONENT: u64 = 0x7FF << 52;
 
 /// The sine and cosine of each lane of `x`: exactly `libm::sincos(x[i])` in lane `i`, for
-/// every argument, at a fraction of the cost of eight calls.
+/// every argument.
 pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
-    let mut sine = [0.0; LANES];
-    let mut cosine = [0.0; LANES];
-    let mut elsewhere = [false; LANES];
-    for i in 0..LANES {
-        (sine[i], cosine[i], elsewhere[i]) = straight_line(x[i]);
-    }
-    if elsewhere.iter().any(|e| *e) {
-        for i in (0..LANES).filter(|i| elsewhere[*i]) {
+    let (multiple, y0, y1, alone, elsewhere) = reduce(x);
+    // libm's kernels at y0 + y1, |y0| ≲ π/4: the sine's polynomial as `k_sin` evaluates it with
+    // the tail or, where `alone`, without (the tail is 0 there), the cosine's as `k_cos` does.
+    let z = lanes(|i| y0[i] * y0[i]);
+    let w = lanes(|i| z[i] * z[i]);
+    let r = lanes(|i| S2 + z[i] * (S3 + z[i] * S4) + z[i] * w[i] * (S5 + z[i] * S6));
+    let v = lanes(|i| z[i] * y0[i]);
+    let sine_alone = lanes(|i| y0[i] + v[i] * (S1 + z[i] * r[i]));
+    let sine_with_tail =
+        lanes(|i| y0[i] - ((z[i] * (0.5 * y1[i] - v[i] * r[i]) - y1[i]) - v[i] * S1));
+    let s = lanes(|i| pick(alone[i], sine_alone[i], sine_with_tail[i]));
+    let r = lanes(|i| {
+        z[i] * (C1 + z[i] * (C2 + z[i] * C3)) + w[i] * w[i] * (C4 + z[i] * (C5 + z[i] * C6))
+    });
+    let half = lanes(|i| 0.5 * z[i]);
+    let w = lanes(|i| 1.0 - half[i]);
+    let c = lanes(|i| w[i] + (((1.0 - w[i]) - half[i]) + (z[i] * r[i] - y0[i] * y1[i])));
+    // sin and cos of y + n·π/2 from those of y by n mod 4: (s, c), (c, −s), (−s, −c), (−c, s).
+    // n mod 4 is in the low bits of n + 1.5·2^52 (exact: |n| < 2^20); the swap and the signs
+    // are bit operations, which need no comparison of 64-bit integers to vectorize.
+    let n = masks(|i| (multiple[i] + TO_INT).to_bits());
+    let odd = masks(|i| 0u64.wrapping_sub(n[i] & 1));
+    let flip = |v: f64, sign: u64| f64::from_bits(v.to_bits() ^ sign);
+    let mut sine = lanes(|i| flip(pick(odd[i], c[i], s[i]), (n[i] & 2) << 62));
+    let mut cosine = lanes(|i| flip(pick(odd[i], s[i], c[i]), (n[i].wrapping_add(1) & 2) << 62));
+    // Below 2^-27·√2 libm returns x and 1 without the kernels. The cosine's kernel gives 1
+    // there too (x²/2 is below half an ulp of 1), but the sine's would turn −0 into +0.
+    sine = lanes(|i| pick(mask(magnitude(x[i]) < TINY), x[i], sine[i]));
+    if elsewhere.iter().fold(0, |any, e| any | e) != 0 {
+        for i in (0..LANES).filter(|i| elsewhere[*i] != 0) {
             (sine[i], cosine[i]) = libm::sincos(x[i]);
         }
     }
     (sine, cosine)
 }
 
-/// One lane's sine and cosine as libm computes them below 2^20·π/2 with one reduction round,
-/// and whether the lane is one it computes otherwise (a second round, the large reduction,
-/// NaN or ±∞) or may (next to the ends of its fixed ranges), whose values here are then
-/// meaningless.
+/// Each lane's argument less a multiple n of π/2 as libm's first round leaves it: n as a
+/// float, the head y0 and the tail y1; where |x| ≲ π/4 (`alone`, all ones) n = 0 and the
+/// tail is 0; and all ones where libm computes otherwise (a second round, the large
+/// reduction, NaN or ±∞) or may (next to the ends of its fixed ranges), where the lane's
+/// values here are meaningless.
 #[inline(always)]
-fn straight_line(x: f64) -> (f64, f64, bool) {
-    let size = f64::from_bits(x.to_bits() & !(1 << 63));
-    let alone = mask(size < PIO4);
-    let (multiple, ambiguous) = multiple_of_pio2(x, size, alone);
-    // x − n·(π/2) in two floats, head and tail: libm's first round.
-    let r = x - multiple * PIO2_1;
-    let w = multiple * PIO2_1T;
-    let y0 = r - w;
-    let y1 = (r - y0) - w;
+fn reduce(x: &Lanes) -> (Lanes, Lanes, Lanes, Masks, Masks) {
+    let size = lanes(|i| magnitude(x[i]));
+    let alone = masks(|i| mask(size[i] < PIO4));
+    // The nearest multiple, rounded by adding and subtracting 1.5·2^52. Up to 9π/4 libm takes
+    // a fixed one per range instead, which is the nearest unless x·2/π is within
+    // [`SURELY_NEAREST`] of a half-integer.
+    let t = lanes(|i| x[i] * INV_PIO2);
+    let nearest = lanes(|i| (t[i] + TO_INT) - TO_INT);
+    let ambiguous =
+        masks(|i| mask(size[i] < FIXED_END) & !mask(magnitude(t[i] - nearest[i]) < SURELY_NEAREST));
+    let multiple = lanes(|i| pick(alone[i], 0.0, nearest[i]));
+    // x − n·(π/2) in two floats: libm's first round.
+    let r = lanes(|i| x[i] - multiple[i] * PIO2_1);
+    let w = lanes(|i| multiple[i] * PIO2_1T);
+    let y0 = lanes(|i| r[i] - w[i]);
+    let y1 = lanes(|i| (r[i] - y0[i]) - w[i]);
     // libm's test for a second round is on the medium path only; here it is made on the fixed
     // ranges too, which sends libm a few more lanes (those within 2^-16·|x| of a multiple of
-    // π/2), among them every lane of the high words near π/2, π, 3π/2 and 2π that libm
-    // reduces as the medium path does (the first round cancels 20 binades or more there).
-    let floor = f64::from_bits((size.to_bits() & EXPONENT).wrapping_sub(CANCELLED));
-    let cancelled = !alone & mask(f64::from_bits(y0.to_bits() & !(1 << 63)) < floor);
-    let (s, c) = kernels(y0, y1, alone);
-    let (s, c) = rotate(s, c, multiple);
-    // Below 2^-27·√2 libm returns x and 1 without the kernels.
-    let tiny = mask(size < TINY);
-    (pick(tiny, x, s), pick(tiny, 1.0, c), cancelled | ambiguous | !mask(size < LARGE) != 0)
+    // π/2), among them every lane of the high words near π/2, π, 3π/2 and 2π that libm reduces
+    // as the medium path does (the first round cancels 20 binades or more there).
+    let floor = lanes(|i| f64::from_bits((size[i].to_bits() & EXPONENT).wrapping_sub(CANCELLED)));
+    let elsewhere = masks(|i| {
+        let cancelled = !alone[i] & mask(magnitude(y0[i]) < floor[i]);
+        cancelled | ambiguous[i] | !mask(size[i] < LARGE)
+    });
+    (multiple, y0, y1, alone, elsewhere)
 }
 
-/// The multiple of π/2 that libm subtracts from `x`, as a float (none up to π/4, else the
-/// nearest, rounded by adding and subtracting 1.5·2^52), and whether the lane must go to libm
-/// because this may not be libm's multiple: up to 9π/4 libm takes a fixed one per range, which
-/// is the nearest unless x·2/π is within [`SURELY_NEAREST`] of a half-integer.
+type Masks = [u64; LANES];
+
+/// One step for every lane.
 #[inline(always)]
-fn multiple_of_pio2(x: f64, size: f64, alone: u64) -> (f64, u64) {
-    let t = x * INV_PIO2;
-    let nearest = (t + TO_INT) - TO_INT;
-    let off_centre = f64::from_bits((t - nearest).to_bits() & !(1 << 63));
-    let ambiguous = mask(size < FIXED_END) & !mask(off_centre < SURELY_NEAREST);
-    (pick(alone, 0.0, nearest), ambiguous)
+fn lanes(step: impl Fn(usize) -> f64) -> Lanes {
+    std::array::from_fn(step)
+}
+
+/// One step for every lane, of masks or bits.
+#[inline(always)]
+fn masks(step: impl Fn(usize) -> u64) -> Masks {
+    std::array::from_fn(step)
+}
+
+/// |v|, by clearing the sign bit.
+#[inline(always)]
+fn magnitude(v: f64) -> f64 {
+    f64::from_bits(v.to_bits() & !(1 << 63))
 }
 
 /// All ones where `b`, else zero: a lane's condition as a mask for [`pick`].
@@ -123,42 +162,11 @@ fn mask(b: bool) -> u64 {
     0u64.wrapping_sub(u64::from(b))
 }
 
-/// `a` where `mask` is all ones, `b` where it is zero, by bits: no branch to keep a loop over
-/// lanes from vectorizing.
+/// `a` where `mask` is all ones, `b` where it is zero, by bits: no branch to keep the lanes
+/// from vectorizing.
 #[inline(always)]
 fn pick(mask: u64, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
-}
-
-/// libm's kernels at y0 + y1, |y0| ≲ π/4: the sine's polynomial as `k_sin` evaluates it with
-/// a tail (`alone` false) or without one (true, y1 = 0), the cosine's as `k_cos` does.
-#[inline(always)]
-fn kernels(y0: f64, y1: f64, alone: u64) -> (f64, f64) {
-    let z = y0 * y0;
-    let w = z * z;
-    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
-    let v = z * y0;
-    let sine_alone = y0 + v * (S1 + z * r);
-    let sine_with_tail = y0 - ((z * (0.5 * y1 - v * r) - y1) - v * S1);
-    let sine = pick(alone, sine_alone, sine_with_tail);
-    let r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
-    let half = 0.5 * z;
-    let w = 1.0 - half;
-    let cosine = w + (((1.0 - w) - half) + (z * r - y0 * y1));
-    (sine, cosine)
-}
-
-/// sin and cos of y + n·π/2 from those of y, by n mod 4: (s, c), (c, −s), (−s, −c), (−c, s);
-/// n mod 4 is in the low bits of n + 1.5·2^52 (exact: |n| < 2^20), and the swap and the signs
-/// are bit operations, which need no comparison of 64-bit integers to vectorize.
-#[inline(always)]
-fn rotate(s: f64, c: f64, multiple: f64) -> (f64, f64) {
-    let n = (multiple + TO_INT).to_bits();
-    let odd = 0u64.wrapping_sub(n & 1);
-    let (s, c) = (pick(odd, c, s).to_bits(), pick(odd, s, c).to_bits());
-    let sine = s ^ ((n & 2) << 62);
-    let cosine = c ^ ((n.wrapping_add(1) & 2) << 62);
-    (f64::from_bits(sine), f64::from_bits(cosine))
 }
 
 #[cfg(test)]
@@ -181,7 +189,7 @@ mod tests {
             1e7,
             f64::NAN,
         ];
-        let elsewhere = x.map(|x| straight_line(x).2);
+        let elsewhere = reduce(&x).4.map(|e| e != 0);
         assert_eq!(elsewhere, [false, false, false, false, true, true, true, true]);
         let (sine, cosine) = sin_cos_lanes(&x);
         for i in 0..LANES {
