@@ -81,6 +81,7 @@ impl BatchTape {
 
     /// Evaluates the program at the points in [`BatchTape::input_lanes_mut`]; output `o` of
     /// each point is then in [`BatchTape::output_lanes`]`(o)`.
+    #[inline(always)]
     pub fn run_lanes(&mut self) {
         self.run();
     }
@@ -91,6 +92,7 @@ impl BatchTape {
     }
 
     /// One pass of the code over the registers as they stand.
+    #[inline(always)]
     fn run(&mut self) {
         let p = &self.program;
         let r = &mut self.registers;

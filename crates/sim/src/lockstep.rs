@@ -43,6 +43,8 @@ pub struct Lockstep {
     /// The lanes whose trial is under way with no evaluation failed so far, and the
     /// evaluations each lane's run made side by side (its stepper counts the rest).
     live: [bool; LANES],
+    /// The widest vector instructions the processor has, which the trials are compiled for.
+    arch: pulp::Arch,
     evaluations: [usize; LANES],
     /// Scratch: one lane's argument and derivative.
     argument: Vec<f64>,
@@ -111,6 +113,7 @@ impl Lockstep {
             h: [0.0; LANES],
             t_new: [0.0; LANES],
             live: [false; LANES],
+            arch: pulp::Arch::new(),
             evaluations: [0; LANES],
             argument: vec![0.0; d],
             derivative: vec![0.0; d],
@@ -120,6 +123,13 @@ impl Lockstep {
             mass: vec![[0.0; LANES]; problem.layout.coordinates.pow(2)],
             accelerations: vec![[0.0; LANES]; problem.layout.coordinates],
         })
+    }
+
+    /// Runs the trials on the baseline instructions, not compiled for wider vectors: the same
+    /// bits, which is what a test that compares the two shows.
+    pub fn on_baseline_instructions(mut self) -> Lockstep {
+        self.arch = pulp::Arch::Scalar;
+        self
     }
 
     /// Runs every job `jobs` gives until it gives none, telling `finished` each run's result
@@ -148,9 +158,7 @@ impl Lockstep {
             for lane in 0..LANES {
                 self.begin_trial(lane, finished);
             }
-            self.trial();
-            let tol = self.settings.tolerance;
-            let errors = self.stages.errors(&self.h, tol, tol);
+            let errors = self.arch.dispatch(Trial(self));
             let mut accepted = [false; LANES];
             for lane in 0..LANES {
                 if self.lanes[lane].active {
@@ -244,6 +252,7 @@ impl Lockstep {
 
     /// One trial step of every active lane: the stages, then the end of the step and the
     /// derivative there.
+    #[inline(always)]
     fn trial(&mut self) {
         let pair = self.stages.pair();
         let stages = pair.stage_count();
@@ -264,6 +273,7 @@ impl Lockstep {
     /// not serve (M not positive definite, a value not finite) and a system with multipliers
     /// are solved lane by lane as one run alone is. A lane whose evaluation fails takes no
     /// further part in the trial.
+    #[inline(always)]
     fn evaluate(&mut self, s: usize, times: &Lanes, at_end: bool) {
         let d = self.argument.len();
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
@@ -524,5 +534,21 @@ impl Problem for Observed<'_> {
     }
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         self.problem.physical(t, y)
+    }
+}
+
+/// A trial step of every lane and its error norms, compiled for the vector instructions at
+/// hand (the operations and their order are the same on every instruction set).
+struct Trial<'a>(&'a mut Lockstep);
+
+impl pulp::WithSimd for Trial<'_> {
+    type Output = Lanes;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Lanes {
+        let lockstep = self.0;
+        lockstep.trial();
+        let tol = lockstep.settings.tolerance;
+        lockstep.stages.errors(&lockstep.h, tol, tol)
     }
 }

@@ -65,6 +65,7 @@ const EXPONENT: u64 = 0x7FF << 52;
 
 /// The sine and cosine of each lane of `x`: exactly `libm::sincos(x[i])` in lane `i`, for
 /// every argument.
+#[inline(always)]
 pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
     let (multiple, y0, y1, alone, elsewhere) = reduce(x);
     // libm's kernels at y0 + y1, |y0| ≲ π/4: the sine's polynomial as `k_sin` evaluates it with
