@@ -15,7 +15,7 @@ use std::ops::ControlFlow;
 
 use numeric::{BatchTape, LANES};
 
-use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
+use crate::erk::{trial_power, Adaptive, Dense, Lanes, Pair, Stages};
 use crate::linalg;
 use crate::mechanical::Layout;
 use crate::run::{segments, Counts, Course};
@@ -158,14 +158,14 @@ impl Lockstep {
             for lane in 0..LANES {
                 self.begin_trial(lane, finished);
             }
-            let errors = self.arch.dispatch(Trial(self));
+            let (errors, powers) = self.arch.dispatch(Trial(self));
             let mut accepted = [false; LANES];
             for lane in 0..LANES {
                 if self.lanes[lane].active {
-                    accepted[lane] = self.judge(lane, errors[lane], finished);
+                    accepted[lane] = self.judge(lane, errors[lane], powers[lane], finished);
                 }
             }
-            let observed = self.observe_accepted(&accepted);
+            let observed = self.arch.dispatch(Observe { lockstep: self, accepted: &accepted });
             for lane in 0..LANES {
                 if accepted[lane] {
                     self.take_step(lane, observed[lane], events, finished);
@@ -367,7 +367,13 @@ impl Lockstep {
     /// The step control's verdict on lane `lane`'s trial, whose error norm is `error` unless
     /// an evaluation failed: accepted (true), to be tried again smaller, or the run's end at
     /// a fault.
-    fn judge(&mut self, lane: usize, error: f64, finished: &mut dyn FnMut(usize, Run)) -> bool {
+    fn judge(
+        &mut self,
+        lane: usize,
+        error: f64,
+        power: f64,
+        finished: &mut dyn FnMut(usize, Run),
+    ) -> bool {
         let (t, h) = (self.t[lane], self.h[lane]);
         let l = &mut self.lanes[lane];
         let trial = match l.fault.take() {
@@ -376,7 +382,7 @@ impl Lockstep {
         };
         let stiff =
             matches!(trial, Ok(err) if err <= 1.0) && self.stages.at_stability_limit(lane, h);
-        match l.stepper.judge(trial, h, t, stiff, &mut l.rejected_here) {
+        match l.stepper.judge_powered(trial, h, t, stiff, &mut l.rejected_here, || power) {
             Ok(accepted) => {
                 l.fresh = accepted;
                 accepted
@@ -394,6 +400,7 @@ impl Lockstep {
     /// the step's last stage was evaluated, so its accelerations are the ones there (a step
     /// cut short to end on time may end a rounding away, and is observed alone). Which lanes
     /// have theirs in the observation tape's outputs.
+    #[inline(always)]
     fn observe_accepted(&mut self, accepted: &[bool; LANES]) -> [bool; LANES] {
         let Some(tape) = self.observation.as_mut() else { return [false; LANES] };
         let mut observed = [false; LANES];
@@ -537,18 +544,36 @@ impl Problem for Observed<'_> {
     }
 }
 
-/// A trial step of every lane and its error norms, compiled for the vector instructions at
-/// hand (the operations and their order are the same on every instruction set).
+/// A trial step of every lane, its error norms and their powers for the step control,
+/// compiled for the vector instructions at hand (the operations and their order are the same
+/// on every instruction set).
 struct Trial<'a>(&'a mut Lockstep);
 
 impl pulp::WithSimd for Trial<'_> {
-    type Output = Lanes;
+    type Output = (Lanes, Lanes);
 
     #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) -> Lanes {
+    fn with_simd<S: pulp::Simd>(self, _: S) -> (Lanes, Lanes) {
         let lockstep = self.0;
         lockstep.trial();
         let tol = lockstep.settings.tolerance;
-        lockstep.stages.errors(&lockstep.h, tol, tol)
+        let errors = lockstep.stages.errors(&lockstep.h, tol, tol);
+        let exponent = lockstep.lanes[0].stepper.error_exponent();
+        (errors, std::array::from_fn(|l| trial_power(errors[l], exponent)))
+    }
+}
+
+/// The observations of the steps accepted, compiled as [`Trial`] is.
+struct Observe<'a> {
+    lockstep: &'a mut Lockstep,
+    accepted: &'a [bool; LANES],
+}
+
+impl pulp::WithSimd for Observe<'_> {
+    type Output = [bool; LANES];
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> [bool; LANES] {
+        self.lockstep.observe_accepted(self.accepted)
     }
 }
