@@ -73,6 +73,7 @@ pub fn run() {
     table(&rows);
     four_link_rhs();
     many_points();
+    sine_and_cosine();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -294,7 +295,6 @@ fn many_points() {
         let exprs = prepared.dynamics_exprs();
         let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
         let width = dynamics.inputs;
-        let outputs = dynamics.outputs.len();
         let (theta, rate) = state(n);
         let inputs: Vec<f64> = (0..POINTS)
             .flat_map(|i| {
@@ -307,16 +307,7 @@ fn many_points() {
             })
             .collect();
         assert_eq!(inputs.len(), POINTS * width, "the n-link's inputs");
-        let mut out = vec![0.0; POINTS * outputs];
-        let mut tape = Tape::new(dynamics.clone());
-        let one = crate::per_call(|| {
-            for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
-                tape.eval(black_box(point), black_box(row));
-            }
-        }) / POINTS as f64;
-        let mut batch = numeric::BatchTape::new(dynamics.clone());
-        let many = crate::per_call(|| batch.eval_many(black_box(&inputs), black_box(&mut out)))
-            / POINTS as f64;
+        let (one, many) = tape_and_batch(&dynamics, &inputs);
         let mut mech = unit_chain(&prepared, dynamics);
         let times = vec![0.0; POINTS];
         let ys: Vec<f64> =
@@ -356,4 +347,115 @@ fn rhs_per_call(mech: &mut Mechanical, y: &[f64]) -> f64 {
         turn ^= 1;
         mech.rhs(0.0, black_box(states[turn]), black_box(&mut dy)).expect("regular");
     })
+}
+
+/// Eight sines and cosines by `libm::sincos` one lane at a time against
+/// `numeric::elementary::sin_cos_lanes` (the same bits: `numeric`'s tests hold them so), at
+/// angles |x| < 10; and the double pendulum's dynamics (M and f of
+/// `examples/classics/double_pendulum_flip.lag`) at many states on the batch tape, whose
+/// sines and cosines are computed eight at a time.
+fn sine_and_cosine() {
+    const ARGUMENTS: usize = 4096;
+    // Spread over (−10, 10) by the golden ratio's fractional parts: no two alike, no pattern
+    // a branch predictor could learn in eight lanes.
+    let angles: Vec<[f64; numeric::LANES]> = (0..ARGUMENTS / numeric::LANES)
+        .map(|chunk| {
+            std::array::from_fn(|lane| {
+                let k = (chunk * numeric::LANES + lane) as f64;
+                ((k * 0.618_033_988_749_895) % 1.0) * 20.0 - 10.0
+            })
+        })
+        .collect();
+    // Each result stored, not summed: a running sum would be a chain of additions as long as
+    // the timed work.
+    type Pair = ([f64; numeric::LANES], [f64; numeric::LANES]);
+    let mut out: Pair = ([0.0; numeric::LANES], [0.0; numeric::LANES]);
+    let mut time = |f: &dyn Fn(&[f64; numeric::LANES], &mut Pair)| {
+        crate::per_call(|| {
+            for x in &angles {
+                f(black_box(x), &mut out);
+                black_box(&mut out);
+            }
+        }) / angles.len() as f64
+    };
+    let sincos = time(&|x, (s, c)| {
+        for lane in 0..numeric::LANES {
+            (s[lane], c[lane]) = libm::sincos(x[lane]);
+        }
+    });
+    let sin = time(&|x, (s, _)| *s = x.map(libm::sin));
+    let cos = time(&|x, (_, c)| *c = x.map(libm::cos));
+    let lanes = time(&|x, out| *out = numeric::elementary::sin_cos_lanes(x));
+    outln!();
+    outln!("Eight arguments at |x| < 10, one lane at a time by libm and at once by sin_cos_lanes");
+    outln!("{:>10} {:>10} {:>10} | {:>10} {:>7}", "sincos", "sin", "cos", "lanes", "sincos/lanes");
+    outln!(
+        "{:>10} {:>10} {:>10} | {:>10} {:>7.2}",
+        crate::seconds(sincos),
+        crate::seconds(sin),
+        crate::seconds(cos),
+        crate::seconds(lanes),
+        sincos / lanes
+    );
+    double_pendulum_many();
+}
+
+/// M and f of the double pendulum at 1,024 states, per state: the tape one state at a time
+/// and the batch tape.
+fn double_pendulum_many() {
+    const POINTS: usize = 1024;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let scene = std::fs::read_to_string(root.join("examples/classics/double_pendulum_flip.lag"))
+        .expect("the scene");
+    let mut prepared =
+        engine::numbers::prepare(&scene, &[], engine::Options::default()).expect("derives");
+    let exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+    let model = &prepared.derivation.model;
+    let parameters: Vec<f64> = model
+        .constants()
+        .iter()
+        .map(|(_, value)| value.map_or(1.0, |e| numeric::eval(&model.pool, e, &[])))
+        .collect();
+    let width = dynamics.inputs;
+    let inputs: Vec<f64> = (0..POINTS)
+        .flat_map(|i| {
+            let k = i as f64;
+            let turn = |a: f64| (k * a) % 1.0;
+            let mut row = vec![0.0, 6.0 * turn(0.618) - 3.0, 6.0 * turn(0.414) - 3.0];
+            row.extend([4.0 * turn(0.732) - 2.0, 4.0 * turn(0.236) - 2.0]);
+            row.extend(&parameters);
+            row
+        })
+        .collect();
+    assert_eq!(inputs.len(), POINTS * width, "the double pendulum's inputs");
+    let (one, many) = tape_and_batch(&dynamics, &inputs);
+    let counts = dynamics.op_counts();
+    outln!(
+        "The double pendulum's M and f ({counts}) at {POINTS} states, per state: tape, batch tape"
+    );
+    outln!(
+        "{:>10} {:>10} {:>7}",
+        crate::seconds(one),
+        crate::seconds(many),
+        format!("{:.2}", one / many)
+    );
+}
+
+/// The time per point of `program` at every point of `inputs` (a row each): on the tape one
+/// point at a time, and on the batch tape.
+fn tape_and_batch(program: &numeric::Program, inputs: &[f64]) -> (f64, f64) {
+    let (width, outputs) = (program.inputs, program.outputs.len());
+    let points = inputs.len() / width;
+    let mut out = vec![0.0; points * outputs];
+    let mut tape = Tape::new(program.clone());
+    let one = crate::per_call(|| {
+        for (point, row) in inputs.chunks(width).zip(out.chunks_mut(outputs)) {
+            tape.eval(black_box(point), black_box(row));
+        }
+    }) / points as f64;
+    let mut batch = numeric::BatchTape::new(program.clone());
+    let many =
+        crate::per_call(|| batch.eval_many(black_box(inputs), black_box(&mut out))) / points as f64;
+    (one, many)
 }

@@ -2,10 +2,13 @@
 //! point, so an instruction is decoded once for all of them and its arithmetic is a loop over
 //! lanes that the compiler turns into vector instructions. Every lane computes exactly what
 //! [`crate::Tape`] computes at its point (the same operations in the same order, the same
-//! elementary functions), so a batch gives the same bits as the points one at a time.
+//! elementary functions), so a batch gives the same bits as the points one at a time. As on
+//! the tape, the sine and cosine of one register are one op; here it computes eight lanes at
+//! once in vector instructions ([`sin_cos_lanes`], libm's bits).
 
-use crate::elementary::{apply, atan2, pow, pow_int};
+use crate::elementary::{apply, atan2, pow, pow_int, sin_cos_lanes};
 use crate::lower::{Instr, Program};
+use crate::tape::{fuse_sin_cos, Op};
 
 /// Points per register: eight doubles fill two AVX registers or four SSE ones, and a chunk
 /// this wide amortizes the instruction's dispatch over enough arithmetic to leave it cheap.
@@ -17,6 +20,9 @@ type Lanes = [f64; LANES];
 #[derive(Clone, Debug)]
 pub struct BatchTape {
     program: Program,
+    /// The program's code with sines and cosines fused, as the tape runs it: the k-th op
+    /// writes register `inputs + constants + k`.
+    ops: Vec<Op>,
     registers: Vec<Lanes>,
 }
 
@@ -26,7 +32,8 @@ impl BatchTape {
         for (slot, c) in registers[program.inputs..].iter_mut().zip(&program.constants) {
             *slot = [*c; LANES];
         }
-        BatchTape { program, registers }
+        let ops = fuse_sin_cos(&program.code, program.inputs + program.constants.len());
+        BatchTape { program, ops, registers }
     }
 
     pub fn program(&self) -> &Program {
@@ -74,6 +81,7 @@ impl BatchTape {
 
     /// Evaluates the program at the points in [`BatchTape::input_lanes_mut`]; output `o` of
     /// each point is then in [`BatchTape::output_lanes`]`(o)`.
+    #[inline(always)]
     pub fn run_lanes(&mut self) {
         self.run();
     }
@@ -84,12 +92,24 @@ impl BatchTape {
     }
 
     /// One pass of the code over the registers as they stand.
+    #[inline(always)]
     fn run(&mut self) {
         let p = &self.program;
         let r = &mut self.registers;
         let base = p.inputs + p.constants.len();
-        for (k, instr) in p.code.iter().enumerate() {
-            let v = match *instr {
+        for (k, op) in self.ops.iter().enumerate() {
+            let instr = match *op {
+                Op::Plain(instr) => instr,
+                Op::SinCos { arg, sine_here, other } => {
+                    let (sine, cosine) = sin_cos_lanes(&r[arg as usize]);
+                    let (here, there) = if sine_here { (sine, cosine) } else { (cosine, sine) };
+                    r[other as usize] = there;
+                    r[base + k] = here;
+                    continue;
+                }
+                Op::Written => continue,
+            };
+            let v = match instr {
                 Instr::Add(a, b) => zip(&r[a as usize], &r[b as usize], |x, y| x + y),
                 Instr::Sub(a, b) => zip(&r[a as usize], &r[b as usize], |x, y| x - y),
                 Instr::Mul(a, b) => zip(&r[a as usize], &r[b as usize], |x, y| x * y),

@@ -6,6 +6,10 @@
 use cas::number::{Rational, ToPrimitive};
 use cas::Func;
 
+mod lanes;
+
+pub use lanes::sin_cos_lanes;
+
 /// The float nearest a rational, or close to it: ratios of integers too large for a float are
 /// scaled down together first.
 pub fn to_f64(q: &Rational) -> f64 {
@@ -38,7 +42,8 @@ pub fn apply(f: Func, a: f64) -> f64 {
 }
 
 /// The sine and cosine of `a` at once: the same bits as [`apply`] gives for each, for about
-/// the cost of one (one argument reduction).
+/// the cost of one (one argument reduction). [`sin_cos_lanes`] gives the same bits at eight
+/// arguments at once.
 pub fn sin_cos(a: f64) -> (f64, f64) {
     libm::sincos(a)
 }

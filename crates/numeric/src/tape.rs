@@ -28,10 +28,10 @@ struct Fixed {
     varying: Vec<(Reg, Op)>,
 }
 
-/// An instruction of [`Program::code`] as the tape runs it: the k-th writes register
-/// `inputs + constants + k`.
+/// An instruction of [`Program::code`] as the tape (and the batch tape) runs it: the k-th
+/// writes register `inputs + constants + k`.
 #[derive(Clone, Copy, Debug)]
-enum Op {
+pub(crate) enum Op {
     Plain(Instr),
     /// The sine and cosine of `arg` at once (the same bits as each alone, at the cost of
     /// one): this op's register gets the one its instruction asked for, `other` the other.
@@ -46,7 +46,7 @@ enum Op {
 
 /// The program's code with each sine and cosine of the same register fused into the first
 /// of the two; `base` is the register the first instruction writes.
-fn fuse_sin_cos(code: &[Instr], base: usize) -> Vec<Op> {
+pub(crate) fn fuse_sin_cos(code: &[Instr], base: usize) -> Vec<Op> {
     let mut ops: Vec<Op> = code.iter().map(|i| Op::Plain(*i)).collect();
     let mut first: std::collections::HashMap<(Reg, bool), usize> = Default::default();
     for (k, instr) in code.iter().enumerate() {

@@ -164,3 +164,43 @@ fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
         }
     }
 }
+
+/// Sines and cosines of one register, which both tapes fuse (the batch tape computing eight
+/// lanes at once), beside a lone sine and a lone cosine, at angles, huge arguments, NaN and
+/// infinities mixed in every chunk: the batch gives the tape's bits.
+#[test]
+fn a_batch_with_fused_sines_and_cosines_gives_the_tapes_bits() {
+    let mut p = Pool::new();
+    let (x, y, z) = (p.coordinate("x"), p.coordinate("y"), p.coordinate("z"));
+    let (xe, ye, ze) = (p.sym(x), p.sym(y), p.sym(z));
+    let difference = p.sub(xe, ye);
+    let (sd, cd) = (p.sin(difference), p.cos(difference));
+    let (sx, cx) = (p.sin(xe), p.cos(xe));
+    let lone_sine = p.sin(ze);
+    let product = p.mul(&[sx, cx]);
+    let lone_cosine = p.cos(product);
+    let outputs = [sd, cd, product, lone_sine, lone_cosine, cx];
+    let program = lower(&p, &[x, y, z], &outputs).unwrap();
+    let fused_pairs =
+        program.code.iter().filter(|i| matches!(i, numeric::Instr::Func(Func::Sin, _))).count();
+    assert!(fused_pairs >= 2, "the program has the sines and cosines to fuse");
+    let mut tape = Tape::new(program.clone());
+    let mut batch = numeric::BatchTape::new(program);
+    let odd = [0.0, -0.0, 1e-9, 1e6, -3e8, 1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+    let points = 40 * numeric::LANES + 3;
+    let inputs: Vec<f64> = (0..points)
+        .flat_map(|i| {
+            let angle = |k: usize| ((k as f64 * 0.618_033_988_749_895) % 1.0) * 20.0 - 10.0;
+            let x = if i % 7 == 3 { odd[i % odd.len()] } else { angle(3 * i) };
+            [x, angle(3 * i + 1), if i % 5 == 1 { odd[i % odd.len()] } else { angle(3 * i + 2) }]
+        })
+        .collect();
+    let mut many = vec![0.0; points * outputs.len()];
+    batch.eval_many(&inputs, &mut many);
+    let mut one = vec![0.0; outputs.len()];
+    for (point, row) in inputs.chunks(3).zip(many.chunks(outputs.len())) {
+        tape.eval(point, &mut one);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(row), bits(&one), "at {point:?}");
+    }
+}

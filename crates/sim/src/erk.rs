@@ -453,8 +453,6 @@ impl Adaptive {
     /// evaluation inside the step (NaN, singular M) may be the step's fault: the step shrinks,
     /// and the fault is reported only when it cannot shrink further. `rejected_here` says
     /// whether this step was rejected before, which caps its growth once accepted.
-    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
-    // differ in the last bit, and a different step sequence moves every result.
     pub(crate) fn judge(
         &mut self,
         trial: Result<f64, FaultKind>,
@@ -463,7 +461,26 @@ impl Adaptive {
         stiff: bool,
         rejected_here: &mut bool,
     ) -> Result<bool, FaultKind> {
-        let exponent = -1.0 / (self.order() + 1.0);
+        let (err, exponent) = (trial_error(&trial), self.error_exponent());
+        self.judge_powered(trial, h, t, stiff, rejected_here, || trial_power(err, exponent))
+    }
+
+    /// The exponent of the error norm in the step-size factor, −1/(order + 1).
+    pub(crate) fn error_exponent(&self) -> f64 {
+        -1.0 / (self.order() + 1.0)
+    }
+
+    /// [`Adaptive::judge`] with the error norm raised to [`Adaptive::error_exponent`] given by
+    /// `power`, asked at most once: a caller that raised many norms at once hands each its own.
+    pub(crate) fn judge_powered(
+        &mut self,
+        trial: Result<f64, FaultKind>,
+        h: f64,
+        t: f64,
+        stiff: bool,
+        rejected_here: &mut bool,
+        power: impl FnOnce() -> f64,
+    ) -> Result<bool, FaultKind> {
         let err = match trial {
             Ok(err) => err,
             Err(FaultKind::NonFinite { .. })
@@ -482,15 +499,14 @@ impl Adaptive {
             if stiff {
                 self.stiff += 1;
             }
-            let mut factor =
-                if err == 0.0 { MAX_FACTOR } else { MAX_FACTOR.min(SAFETY * pow(err, exponent)) };
+            let mut factor = if err == 0.0 { MAX_FACTOR } else { MAX_FACTOR.min(SAFETY * power()) };
             if *rejected_here {
                 factor = factor.min(1.0);
             }
             self.h = h * factor;
             return Ok(true);
         }
-        self.h = h * MIN_FACTOR.max(SAFETY * pow(err, exponent));
+        self.h = h * MIN_FACTOR.max(SAFETY * power());
         self.rejected += 1;
         *rejected_here = true;
         Ok(false)
@@ -559,6 +575,18 @@ impl Adaptive {
     }
 }
 
+/// A trial's error norm, or NaN where an evaluation failed (its power is not asked for then).
+fn trial_error(trial: &Result<f64, FaultKind>) -> f64 {
+    trial.as_ref().map_or(f64::NAN, |err| *err)
+}
+
+/// The error norm raised to the step control's exponent: libm's `pow`, as the integrands use
+/// it (the platform's `powf` may differ in the last bit, and a different step sequence moves
+/// every result).
+pub(crate) fn trial_power(err: f64, exponent: f64) -> f64 {
+    pow(err, exponent)
+}
+
 /// The smallest step floating point resolves at `t`, with a margin.
 fn min_step(t: f64) -> f64 {
     10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE)
@@ -617,8 +645,6 @@ impl Dense for Adaptive {
 }
 
 impl Stepper for Adaptive {
-    // The step-size factor uses libm's `pow`, as the integrands do: the platform's `powf` may
-    // differ in the last bit, and a different step sequence moves every result.
     fn advance(
         &mut self,
         p: &mut dyn Problem,

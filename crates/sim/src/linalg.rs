@@ -175,6 +175,7 @@ fn ldl_solve<M: Square>(ldl: &M, b: &mut [f64]) {
 /// flag comes back true holds the bits `solve_symmetric` gives it. A false flag (a pivot
 /// that is not positive, or too ill-conditioned) leaves that lane to `solve_symmetric`,
 /// which falls back to LU or names the fault.
+#[inline(always)]
 pub fn solve_symmetric_lanes(n: usize, a: &mut [Lanes], b: &mut [Lanes]) -> [bool; LANES] {
     let mut ok = [true; LANES];
     for j in 0..n {

@@ -17,7 +17,7 @@ use std::ops::ControlFlow;
 
 use numeric::{BatchTape, LANES};
 
-use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
+use crate::erk::{trial_power, Adaptive, Dense, Lanes, Pair, Stages};
 use crate::linalg;
 use crate::mechanical::Layout;
 use crate::run::{segments, Counts, Course};
@@ -45,6 +45,8 @@ pub struct Lockstep {
     /// The lanes whose trial is under way with no evaluation failed so far, and the
     /// evaluations each lane's run made side by side (its stepper counts the rest).
     live: [bool; LANES],
+    /// The widest vector instructions the processor has, which the trials are compiled for.
+    arch: pulp::Arch,
     evaluations: [usize; LANES],
     /// Scratch: one lane's argument and derivative.
     argument: Vec<f64>,
@@ -113,6 +115,7 @@ impl Lockstep {
             h: [0.0; LANES],
             t_new: [0.0; LANES],
             live: [false; LANES],
+            arch: pulp::Arch::new(),
             evaluations: [0; LANES],
             argument: vec![0.0; d],
             derivative: vec![0.0; d],
@@ -122,6 +125,13 @@ impl Lockstep {
             mass: vec![[0.0; LANES]; problem.layout.coordinates.pow(2)],
             accelerations: vec![[0.0; LANES]; problem.layout.coordinates],
         })
+    }
+
+    /// Runs the trials on the baseline instructions, not compiled for wider vectors: the same
+    /// bits, which is what a test that compares the two shows.
+    pub fn on_baseline_instructions(mut self) -> Lockstep {
+        self.arch = pulp::Arch::Scalar;
+        self
     }
 
     /// Runs every job `jobs` gives until it first gives none (it is not asked again), telling
@@ -156,16 +166,14 @@ impl Lockstep {
             for lane in 0..LANES {
                 self.begin_trial(lane, finished);
             }
-            self.trial();
-            let tol = self.settings.tolerance;
-            let errors = self.stages.errors(&self.h, tol, tol);
+            let (errors, powers) = self.arch.dispatch(Trial(self));
             let mut accepted = [false; LANES];
             for lane in 0..LANES {
                 if self.lanes[lane].active {
-                    accepted[lane] = self.judge(lane, errors[lane], finished);
+                    accepted[lane] = self.judge(lane, errors[lane], powers[lane], finished);
                 }
             }
-            let observed = self.observe_accepted(&accepted);
+            let observed = self.arch.dispatch(Observe { lockstep: self, accepted: &accepted });
             for lane in 0..LANES {
                 if accepted[lane] {
                     self.take_step(lane, observed[lane], events, finished);
@@ -252,6 +260,7 @@ impl Lockstep {
 
     /// One trial step of every active lane: the stages, then the end of the step and the
     /// derivative there.
+    #[inline(always)]
     fn trial(&mut self) {
         let pair = self.stages.pair();
         let stages = pair.stage_count();
@@ -272,6 +281,7 @@ impl Lockstep {
     /// not serve (M not positive definite, a value not finite) and a system with multipliers
     /// are solved lane by lane as one run alone is. A lane whose evaluation fails takes no
     /// further part in the trial.
+    #[inline(always)]
     fn evaluate(&mut self, s: usize, times: &Lanes, at_end: bool) {
         let d = self.argument.len();
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
@@ -365,7 +375,13 @@ impl Lockstep {
     /// The step control's verdict on lane `lane`'s trial, whose error norm is `error` unless
     /// an evaluation failed: accepted (true), to be tried again smaller, or the run's end at
     /// a fault.
-    fn judge(&mut self, lane: usize, error: f64, finished: &mut dyn FnMut(usize, Run)) -> bool {
+    fn judge(
+        &mut self,
+        lane: usize,
+        error: f64,
+        power: f64,
+        finished: &mut dyn FnMut(usize, Run),
+    ) -> bool {
         let (t, h) = (self.t[lane], self.h[lane]);
         let l = &mut self.lanes[lane];
         let trial = match l.fault.take() {
@@ -374,7 +390,7 @@ impl Lockstep {
         };
         let stiff =
             matches!(trial, Ok(err) if err <= 1.0) && self.stages.at_stability_limit(lane, h);
-        match l.stepper.judge(trial, h, t, stiff, &mut l.rejected_here) {
+        match l.stepper.judge_powered(trial, h, t, stiff, &mut l.rejected_here, || power) {
             Ok(accepted) => {
                 l.fresh = accepted;
                 accepted
@@ -392,6 +408,7 @@ impl Lockstep {
     /// the step's last stage was evaluated, so its accelerations are the ones there (a step
     /// cut short to end on time may end a rounding away, and is observed alone). Which lanes
     /// have theirs in the observation tape's outputs.
+    #[inline(always)]
     fn observe_accepted(&mut self, accepted: &[bool; LANES]) -> [bool; LANES] {
         let Some(tape) = self.observation.as_mut() else { return [false; LANES] };
         let mut observed = [false; LANES];
@@ -532,5 +549,39 @@ impl Problem for Observed<'_> {
     }
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         self.problem.physical(t, y)
+    }
+}
+
+/// A trial step of every lane, its error norms and their powers for the step control,
+/// compiled for the vector instructions at hand (the operations and their order are the same
+/// on every instruction set).
+struct Trial<'a>(&'a mut Lockstep);
+
+impl pulp::WithSimd for Trial<'_> {
+    type Output = (Lanes, Lanes);
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> (Lanes, Lanes) {
+        let lockstep = self.0;
+        lockstep.trial();
+        let tol = lockstep.settings.tolerance;
+        let errors = lockstep.stages.errors(&lockstep.h, tol, tol);
+        let exponent = lockstep.lanes[0].stepper.error_exponent();
+        (errors, std::array::from_fn(|l| trial_power(errors[l], exponent)))
+    }
+}
+
+/// The observations of the steps accepted, compiled as [`Trial`] is.
+struct Observe<'a> {
+    lockstep: &'a mut Lockstep,
+    accepted: &'a [bool; LANES],
+}
+
+impl pulp::WithSimd for Observe<'_> {
+    type Output = [bool; LANES];
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> [bool; LANES] {
+        self.lockstep.observe_accepted(self.accepted)
     }
 }

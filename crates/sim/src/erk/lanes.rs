@@ -68,12 +68,14 @@ impl Stages {
 
     /// The argument of stage `s` (1 ≤ s < the stage count) of every lane into `tmp`:
     /// y + h·Σⱼ aₛⱼ kⱼ, summed as [`Adaptive`] sums it.
+    #[inline(always)]
     pub fn argument(&mut self, s: usize, h: &Lanes) {
         let a = self.pair.a(s);
         combine(&self.k, self.dim, a, &self.y, h, &mut self.tmp);
     }
 
     /// Every lane's end of the step into `y_new`: y + h·Σⱼ bⱼ kⱼ.
+    #[inline(always)]
     pub fn end(&mut self, h: &Lanes) {
         let b = self.pair.b();
         combine(&self.k, self.dim, b, &self.y, h, &mut self.y_new);
@@ -81,6 +83,7 @@ impl Stages {
 
     /// Every lane's error norm of the step of size `h` it just tried: [`Adaptive`]'s, with
     /// the sums over the stages in its order and then over the values.
+    #[inline(always)]
     pub fn errors(&self, h: &Lanes, rtol: f64, atol: f64) -> Lanes {
         let (d, k) = (self.dim, &self.k);
         let scale = |i: usize| -> Lanes {
@@ -167,6 +170,7 @@ impl Stages {
 }
 
 /// out = y + h·Σⱼ wⱼ kⱼ, value by value and lane by lane, the sum from the first stage on.
+#[inline(always)]
 fn combine(k: &[Lanes], d: usize, w: &[f64], y: &[Lanes], h: &Lanes, out: &mut [Lanes]) {
     for i in 0..d {
         let mut acc = [0.0; LANES];
