@@ -6,13 +6,9 @@
 //! the tape, the sine and cosine of one register are one op; here it computes eight lanes at
 //! once in vector instructions ([`sin_cos_lanes`], libm's bits).
 
-use crate::elementary::{apply, atan2, pow, pow_int, sin_cos_lanes};
+use crate::elementary::{apply, atan2, pow, pow_int, sin_cos_lanes, LANES};
 use crate::lower::{Instr, Program};
 use crate::tape::{fuse_sin_cos, Op};
-
-/// Points per register: eight doubles fill two AVX registers or four SSE ones, and a chunk
-/// this wide amortizes the instruction's dispatch over enough arithmetic to leave it cheap.
-pub const LANES: usize = 8;
 
 type Lanes = [f64; LANES];
 

@@ -17,7 +17,10 @@
 //! a NaN or an infinity) or lies next to the end of a fixed range (where the fixed multiple
 //! may not be the nearest) is computed again by `libm::sincos` alone.
 
-use crate::batch::LANES;
+/// Points per register of the batch tape, and arguments per call here: eight doubles fill two
+/// AVX registers or four SSE ones, and a chunk this wide amortizes an instruction's dispatch
+/// over enough arithmetic to leave it cheap.
+pub const LANES: usize = 8;
 
 type Lanes = [f64; LANES];
 
