@@ -9,13 +9,13 @@
 //! taken for all eight lanes before the next (an array a step), which the compiler turns into
 //! vector instructions with the eight lanes' chains of dependent operations side by side;
 //! one lane's whole computation after another's would leave the processor waiting on each
-//! chain's latency. Each floating-point operation is the one libm
-//! performs, in the same order, on the same constants (rounding to nearest, no fused
-//! multiply-add), so each lane gets libm's bits. Up to 9π/4 libm's fixed multiple is the
-//! nearest one, and its single round is the medium path's. A lane whose argument needs what
-//! the straight-line code does not do (a second reduction round, the large-argument reduction,
-//! a NaN or an infinity) or lies next to the end of a fixed range (where the fixed multiple
-//! may not be the nearest) is computed again by `libm::sincos` alone.
+//! chain's latency. Each floating-point operation is the one libm performs, in the same order,
+//! on the same constants (rounding to nearest, no fused multiply-add), so each lane gets libm's
+//! bits. Up to 9π/4 libm's fixed multiple is the nearest one, and its single round is the
+//! medium path's. A lane whose argument needs what the straight-line code does not do (a
+//! second reduction round, the large-argument reduction, a NaN or an infinity) or lies next to
+//! the end of a fixed range (where the fixed multiple may not be the nearest) is computed again
+//! by `libm::sincos` alone.
 
 /// Points per register of the batch tape, and arguments per call here: eight doubles fill two
 /// AVX registers or four SSE ones, and a chunk this wide amortizes an instruction's dispatch
