@@ -6,13 +6,9 @@
 //! the tape, the sine and cosine of one register are one op; here it computes eight lanes at
 //! once in vector instructions ([`sin_cos_lanes`], libm's bits).
 
-use crate::elementary::{apply, atan2, pow, pow_int, sin_cos_lanes};
+use crate::elementary::{apply, atan2, pow, pow_int, sin_cos_lanes, LANES};
 use crate::lower::{Instr, Program};
 use crate::tape::{fuse_sin_cos, Op};
-
-/// Points per register: eight doubles fill two AVX registers or four SSE ones, and a chunk
-/// this wide amortizes the instruction's dispatch over enough arithmetic to leave it cheap.
-pub const LANES: usize = 8;
 
 type Lanes = [f64; LANES];
 
@@ -101,10 +97,14 @@ impl BatchTape {
             let instr = match *op {
                 Op::Plain(instr) => instr,
                 Op::SinCos { arg, sine_here, other } => {
-                    let (sine, cosine) = sin_cos_lanes(&r[arg as usize]);
-                    let (here, there) = if sine_here { (sine, cosine) } else { (cosine, sine) };
-                    r[other as usize] = there;
-                    r[base + k] = here;
+                    // Written in place: `other` is the register of a later instruction, the
+                    // fused partner, so it lies past this op's.
+                    let x = r[arg as usize];
+                    let (before, after) = r.split_at_mut(base + k + 1);
+                    let here = &mut before[base + k];
+                    let there = &mut after[other as usize - base - k - 1];
+                    let (s, c) = if sine_here { (here, there) } else { (there, here) };
+                    sin_cos_lanes(&x, s, c);
                     continue;
                 }
                 Op::Written => continue,

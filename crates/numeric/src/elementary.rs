@@ -8,7 +8,7 @@ use cas::Func;
 
 mod lanes;
 
-pub use lanes::sin_cos_lanes;
+pub use lanes::{sin_cos_lanes, LANES};
 
 /// The float nearest a rational, or close to it: ratios of integers too large for a float are
 /// scaled down together first.

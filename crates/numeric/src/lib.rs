@@ -28,8 +28,8 @@ pub mod source;
 mod tape;
 mod zero_test;
 
-pub use batch::{BatchTape, LANES};
-pub use elementary::{pow_int, to_f64};
+pub use batch::BatchTape;
+pub use elementary::{pow_int, to_f64, LANES};
 pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program};
 pub use tape::Tape;

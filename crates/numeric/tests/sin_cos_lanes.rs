@@ -30,7 +30,8 @@ fn check(args: &[f64]) {
     for chunk in args.chunks(LANES) {
         let mut x = [chunk[0]; LANES];
         x[..chunk.len()].copy_from_slice(chunk);
-        let (sine, cosine) = sin_cos_lanes(&x);
+        let (mut sine, mut cosine) = ([0.0; LANES], [0.0; LANES]);
+        sin_cos_lanes(&x, &mut sine, &mut cosine);
         for (lane, &a) in x.iter().enumerate() {
             let (s, c) = libm::sincos(a);
             let want = [s, c, libm::sin(a), libm::cos(a)].map(f64::to_bits);

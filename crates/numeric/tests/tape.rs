@@ -144,8 +144,6 @@ fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
     let mut p = Pool::new();
     let ([x, y, t], outputs) = assorted(&mut p);
     let program = lower(&p, &[x, y, t], &outputs).unwrap();
-    let mut tape = Tape::new(program.clone());
-    let mut batch = numeric::BatchTape::new(program);
     // Two whole chunks and a part of one; x < 0 makes NaN roots, y = 0 infinite powers.
     let points = 2 * numeric::LANES + 5;
     let inputs: Vec<f64> = (0..points)
@@ -154,15 +152,27 @@ fn a_batch_gives_the_bits_of_the_points_one_at_a_time() {
             [(i * 0.37 % 4.0) - 2.0, (i * 0.61 % 3.0) * (i % 5.0), i * 0.25 - 1.0]
         })
         .collect();
-    let mut many = vec![0.0; points * outputs.len()];
-    batch.eval_many(&inputs, &mut many);
-    let mut one = vec![0.0; outputs.len()];
-    for (point, row) in inputs.chunks(3).zip(many.chunks(outputs.len())) {
-        tape.eval(point, &mut one);
-        for (a, b) in one.iter().zip(row) {
+    for (_, one, many) in tape_and_batch(program, &inputs) {
+        for (a, b) in one.iter().zip(&many) {
             assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{a} vs {b}");
         }
     }
+}
+
+/// Each point of `inputs` (a row each) with the program's outputs there on the tape and on
+/// the batch tape.
+fn tape_and_batch(program: numeric::Program, inputs: &[f64]) -> Vec<(&[f64], Vec<f64>, Vec<f64>)> {
+    let (width, outputs) = (program.inputs, program.outputs.len());
+    let mut tape = Tape::new(program.clone());
+    let mut many = vec![0.0; inputs.len() / width * outputs];
+    numeric::BatchTape::new(program).eval_many(inputs, &mut many);
+    let rows = inputs.chunks(width).zip(many.chunks(outputs));
+    rows.map(|(point, batch)| {
+        let mut one = vec![0.0; outputs];
+        tape.eval(point, &mut one);
+        (point, one, batch.to_vec())
+    })
+    .collect()
 }
 
 /// Sines and cosines of one register, which both tapes fuse (the batch tape computing eight
@@ -181,11 +191,10 @@ fn a_batch_with_fused_sines_and_cosines_gives_the_tapes_bits() {
     let lone_cosine = p.cos(product);
     let outputs = [sd, cd, product, lone_sine, lone_cosine, cx];
     let program = lower(&p, &[x, y, z], &outputs).unwrap();
-    let fused_pairs =
-        program.code.iter().filter(|i| matches!(i, numeric::Instr::Func(Func::Sin, _))).count();
-    assert!(fused_pairs >= 2, "the program has the sines and cosines to fuse");
-    let mut tape = Tape::new(program.clone());
-    let mut batch = numeric::BatchTape::new(program);
+    // sin x, cos x, sin y and cos y (the angle difference's by the angle-sum formulas) and the
+    // lone sin z: two pairs to fuse.
+    let sines = program.code.iter().filter(|i| matches!(i, numeric::Instr::Func(Func::Sin, _)));
+    assert_eq!(sines.count(), 3, "the program's sines");
     let odd = [0.0, -0.0, 1e-9, 1e6, -3e8, 1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
     let points = 40 * numeric::LANES + 3;
     let inputs: Vec<f64> = (0..points)
@@ -195,12 +204,8 @@ fn a_batch_with_fused_sines_and_cosines_gives_the_tapes_bits() {
             [x, angle(3 * i + 1), if i % 5 == 1 { odd[i % odd.len()] } else { angle(3 * i + 2) }]
         })
         .collect();
-    let mut many = vec![0.0; points * outputs.len()];
-    batch.eval_many(&inputs, &mut many);
-    let mut one = vec![0.0; outputs.len()];
-    for (point, row) in inputs.chunks(3).zip(many.chunks(outputs.len())) {
-        tape.eval(point, &mut one);
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(row), bits(&one), "at {point:?}");
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (point, one, many) in tape_and_batch(program, &inputs) {
+        assert_eq!(bits(&many), bits(&one), "at {point:?}");
     }
 }

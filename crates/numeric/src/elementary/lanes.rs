@@ -9,15 +9,18 @@
 //! taken for all eight lanes before the next (an array a step), which the compiler turns into
 //! vector instructions with the eight lanes' chains of dependent operations side by side;
 //! one lane's whole computation after another's would leave the processor waiting on each
-//! chain's latency. Each floating-point operation is the one libm
-//! performs, in the same order, on the same constants (rounding to nearest, no fused
-//! multiply-add), so each lane gets libm's bits. Up to 9π/4 libm's fixed multiple is the
-//! nearest one, and its single round is the medium path's. A lane whose argument needs what
-//! the straight-line code does not do (a second reduction round, the large-argument reduction,
-//! a NaN or an infinity) or lies next to the end of a fixed range (where the fixed multiple
-//! may not be the nearest) is computed again by `libm::sincos` alone.
+//! chain's latency. Each floating-point operation is the one libm performs, in the same order,
+//! on the same constants (rounding to nearest, no fused multiply-add), so each lane gets libm's
+//! bits. Up to 9π/4 libm's fixed multiple is the nearest one, and its single round is the
+//! medium path's. A lane whose argument needs what the straight-line code does not do (a
+//! second reduction round, the large-argument reduction, a NaN or an infinity) or lies next to
+//! the end of a fixed range (where the fixed multiple may not be the nearest) is computed again
+//! by `libm::sincos` alone.
 
-use crate::batch::LANES;
+/// Points per register of the batch tape, and arguments per call here: eight doubles fill two
+/// AVX registers or four SSE ones, and a chunk this wide amortizes an instruction's dispatch
+/// over enough arithmetic to leave it cheap.
+pub const LANES: usize = 8;
 
 type Lanes = [f64; LANES];
 
@@ -63,10 +66,12 @@ const LARGE: f64 = f64::from_bits(0x4139_21FB << 32);
 const CANCELLED: u64 = 16 << 52;
 const EXPONENT: u64 = 0x7FF << 52;
 
-/// The sine and cosine of each lane of `x`: exactly `libm::sincos(x[i])` in lane `i`, for
-/// every argument.
+/// The sine and cosine of each lane of `x`, written into `sine_out` and `cosine_out`: exactly
+/// `libm::sincos(x[i])` in lane `i`, for every argument. Written into the caller's arrays
+/// rather than returned: the batch tape, copying a returned pair into its registers, ran a
+/// program of two sines and cosines and thirty products a tenth slower.
 #[inline(always)]
-pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
+pub fn sin_cos_lanes(x: &Lanes, sine_out: &mut Lanes, cosine_out: &mut Lanes) {
     let (multiple, y0, y1, alone, elsewhere) = reduce(x);
     // libm's kernels at y0 + y1, |y0| ≲ π/4: the sine's polynomial as `k_sin` evaluates it with
     // the tail or, where `alone`, without (the tail is 0 there), the cosine's as `k_cos` does.
@@ -100,7 +105,8 @@ pub fn sin_cos_lanes(x: &Lanes) -> (Lanes, Lanes) {
             (sine[i], cosine[i]) = libm::sincos(x[i]);
         }
     }
-    (sine, cosine)
+    *sine_out = sine;
+    *cosine_out = cosine;
 }
 
 /// Each lane's argument less a multiple n of π/2 as libm's first round leaves it: n as a
@@ -192,7 +198,8 @@ mod tests {
         ];
         let elsewhere = reduce(&x).4.map(|e| e != 0);
         assert_eq!(elsewhere, [false, false, false, false, true, true, true, true]);
-        let (sine, cosine) = sin_cos_lanes(&x);
+        let (mut sine, mut cosine) = ([0.0; LANES], [0.0; LANES]);
+        sin_cos_lanes(&x, &mut sine, &mut cosine);
         for i in 0..LANES {
             let (s, c) = libm::sincos(x[i]);
             assert_eq!((sine[i].to_bits(), cosine[i].to_bits()), (s.to_bits(), c.to_bits()));
