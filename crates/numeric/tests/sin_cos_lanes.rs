@@ -2,26 +2,11 @@
 //! scene meets and every decade up to 1e300, the bits on either side of each threshold in
 //! libm's code, and calls whose lanes take different paths.
 
+mod common;
+
+use common::Numbers;
 use numeric::elementary::sin_cos_lanes;
 use numeric::LANES;
-
-/// A fixed-seed generator (SplitMix64), so every run checks the same arguments.
-struct Numbers(u64);
-
-impl Numbers {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Every argument, eight a call, against `libm::sincos`, `libm::sin` and `libm::cos`; the
 /// last call's spare lanes repeat its first argument. Panics with the first few mismatches.
