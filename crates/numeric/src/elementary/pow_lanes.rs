@@ -14,7 +14,8 @@
 //! nearest, no fused multiply-add), so each lane gets libm's bits. A lane outside that path
 //! (a base that is not positive, normal and finite, or a result beyond 2^±1021, short of
 //! where libm's overflow, underflow and subnormal branches begin) is computed again by
-//! `libm::pow` alone; a base of exactly 1 is libm's early 1. An exponent of 1/2 is a square
+//! `libm::pow` alone. A base of exactly 1, for which libm returns 1 early, gives 1 on the
+//! straight line too (every term of its logarithm is a zero). An exponent of 1/2 is a square
 //! root in libm, and here, lane by lane; any other special exponent sends every lane to libm.
 
 use super::lanes::{lanes, magnitude, mask, masks, pick, Lanes, Masks, TO_INT};
@@ -110,7 +111,6 @@ fn main_path(x: &Lanes, y: f64) -> (Lanes, Masks) {
     let p_h = lanes(|i| y1 * t1[i]);
     let z = lanes(|i| p_l[i] + p_h[i]);
     let power = exp2(&p_h, &p_l, &z);
-    let power = lanes(|i| pick(mask(x[i] == 1.0), 1.0, power[i]));
     let elsewhere = masks(|i| {
         let normal = mask(x[i] >= f64::MIN_POSITIVE) & mask(x[i] < f64::INFINITY);
         !(normal & mask(magnitude(z[i]) < NORMAL_RESULT))
@@ -218,6 +218,20 @@ fn head(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bases a step-size control meets, and most others, take the straight line rather
+    /// than libm: otherwise the tests against libm would hold libm to itself.
+    #[test]
+    fn error_norms_take_the_straight_line() {
+        for y in [-1.0 / 8.0, -1.0 / 5.0, 1.0 / 3.0, -37.1, 1e-3] {
+            for call in 0..1000 {
+                let x = std::array::from_fn(|lane| {
+                    libm::pow(10.0, -6.0 + 12.0 * (call * LANES + lane) as f64 / 8000.0)
+                });
+                assert!(main_path(&x, y).1.iter().all(|e| *e == 0), "{x:?} ^ {y}");
+            }
+        }
+    }
 
     /// One call whose lanes take every way: the series about 1 and about 1.5, a halved
     /// mantissa, no integer split off, a base of 1, a subnormal, a negative base, a result past
