@@ -403,7 +403,7 @@ fn sine_and_cosine() {
 /// (the same bits: `numeric`'s tests hold them so), at the step-size controls' exponents
 /// (DOP853's −1/8, dopri5's −1/5) and bases spread over the error norms they meet, 1e-6 to
 /// 1e6: as the lanes are compiled here (the baseline instructions) and as the integrator
-/// compiles them (the widest vectors the processor has, through pulp).
+/// compiles them (through pulp, for the widest vectors its features reach on the processor).
 fn powers() {
     const BASES: usize = 4096;
     // Spread in logarithm by the golden ratio's fractional parts, as the angles above.
