@@ -351,21 +351,26 @@ fn rhs_per_call(mech: &mut Mechanical, y: &[f64]) -> f64 {
     })
 }
 
+/// 4,096 arguments, eight a group, `at` the fractional parts of the multiples of the golden
+/// ratio: spread evenly over [0, 1) with no two alike and no pattern a branch predictor could
+/// learn in eight lanes.
+fn spread(at: impl Fn(f64) -> f64) -> Vec<[f64; numeric::LANES]> {
+    const ARGUMENTS: usize = 4096;
+    (0..ARGUMENTS / numeric::LANES)
+        .map(|group| {
+            std::array::from_fn(|lane| {
+                let k = (group * numeric::LANES + lane) as f64;
+                at((k * 0.618_033_988_749_895) % 1.0)
+            })
+        })
+        .collect()
+}
+
 /// Eight sines and cosines by `libm::sincos` one lane at a time against
 /// `numeric::elementary::sin_cos_lanes` (the same bits: `numeric`'s tests hold them so), at
 /// angles |x| < 10.
 fn sine_and_cosine() {
-    const ARGUMENTS: usize = 4096;
-    // Spread over (−10, 10) by the golden ratio's fractional parts: no two alike, no pattern
-    // a branch predictor could learn in eight lanes.
-    let angles: Vec<[f64; numeric::LANES]> = (0..ARGUMENTS / numeric::LANES)
-        .map(|chunk| {
-            std::array::from_fn(|lane| {
-                let k = (chunk * numeric::LANES + lane) as f64;
-                ((k * 0.618_033_988_749_895) % 1.0) * 20.0 - 10.0
-            })
-        })
-        .collect();
+    let angles = spread(|u| u * 20.0 - 10.0);
     // Each result stored, not summed: a running sum would be a chain of additions as long as
     // the timed work.
     type Pair = ([f64; numeric::LANES], [f64; numeric::LANES]);
@@ -405,16 +410,7 @@ fn sine_and_cosine() {
 /// 1e6: as the lanes are compiled here (the baseline instructions) and as the integrator
 /// compiles them (through pulp, for the widest vectors its features reach on the processor).
 fn powers() {
-    const BASES: usize = 4096;
-    // Spread in logarithm by the golden ratio's fractional parts, as the angles above.
-    let bases: Vec<[f64; numeric::LANES]> = (0..BASES / numeric::LANES)
-        .map(|chunk| {
-            std::array::from_fn(|lane| {
-                let k = (chunk * numeric::LANES + lane) as f64;
-                libm::pow(10.0, ((k * 0.618_033_988_749_895) % 1.0) * 12.0 - 6.0)
-            })
-        })
-        .collect();
+    let bases = spread(|u| libm::pow(10.0, u * 12.0 - 6.0));
     let arch = pulp::Arch::new();
     outln!();
     outln!("Eight bases in [1e-6, 1e6] to one power, one lane at a time by libm and at once by pow_lanes");

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::Numbers;
+use common::{special_values, Numbers};
 use numeric::elementary::pow_lanes;
 use numeric::LANES;
 
@@ -176,14 +176,11 @@ fn powers_of_two() -> Vec<f64> {
     (-1074..1024).map(|e| libm::pow(2.0, f64::from(e))).collect()
 }
 
-/// Zeros, subnormals, the smallest normal, the largest floats, ±1, negatives, infinities and
-/// NaNs (quiet, negative, signalling, with a payload).
-fn special_values() -> Vec<f64> {
-    let nans = [0x7FF8_0000_0000_0000, 0xFFF8_0000_0000_0000, 0x7FF0_0000_0000_0001];
-    let mut bases = vec![0.0, -0.0, 5e-324, -5e-324, 1e-310, -2.2e-308, f64::MIN_POSITIVE];
-    bases.extend([f64::MAX, f64::MIN, 1.0, -1.0, -0.5, -2.0, -1e300, -3.0]);
-    bases.extend([f64::INFINITY, f64::NEG_INFINITY]);
-    bases.extend(nans.iter().chain(&[0x7FFC_0000_DEAD_BEEF]).map(|b| f64::from_bits(*b)));
+/// The special floats (zeros, subnormals, the ends of the normal floats, infinities, NaNs),
+/// ±1 and negatives.
+fn special_bases() -> Vec<f64> {
+    let mut bases = special_values();
+    bases.extend([1.0, -1.0, -0.5, -2.0, -1e300, -3.0]);
     bases
 }
 
@@ -205,7 +202,7 @@ fn libms_thresholds_and_special_values_give_its_bits() {
     check_every_exponent(&around_thresholds());
     check_every_exponent(&within_threshold_words());
     check_every_exponent(&powers_of_two());
-    check_every_exponent(&special_values());
+    check_every_exponent(&special_bases());
     for y in EXPONENTS {
         check(&where_the_product_is(y, &product_targets()), y);
     }
@@ -214,7 +211,7 @@ fn libms_thresholds_and_special_values_give_its_bits() {
 #[test]
 fn special_exponents_give_libms_bits() {
     let mut numbers = Numbers(0x9017_0004);
-    let mut bases = special_values();
+    let mut bases = special_bases();
     bases.extend(near_one());
     bases.extend(log_uniform(&mut numbers, 4096, -300.0, 300.0));
     bases.extend(log_uniform(&mut numbers, 4096, -6.0, 6.0));
@@ -229,7 +226,7 @@ fn special_exponents_give_libms_bits() {
 fn calls_that_mix_paths_give_libms_bits() {
     let mut numbers = Numbers(0x9017_0005);
     let norms = log_uniform(&mut numbers, 4096, -6.0, 6.0);
-    let kinds = [special_values(), near_one(), around_thresholds(), powers_of_two(), norms];
+    let kinds = [special_bases(), near_one(), around_thresholds(), powers_of_two(), norms];
     let mut mixed = Vec::new();
     for call in 0..20_000 {
         for lane in 0..LANES {

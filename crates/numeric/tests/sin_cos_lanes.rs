@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::Numbers;
+use common::{special_values, Numbers};
 use numeric::elementary::sin_cos_lanes;
 use numeric::LANES;
 
@@ -114,16 +114,6 @@ fn near_multiples_of_pio2() -> Vec<f64> {
             args.extend([f64::from_bits(bits), -f64::from_bits(bits)]);
         }
     }
-    args
-}
-
-/// Zeros, subnormals, the smallest normal, the largest floats, infinities and NaNs (quiet,
-/// negative, signalling, with a payload).
-fn special_values() -> Vec<f64> {
-    let nans = [0x7FF8_0000_0000_0000, 0xFFF8_0000_0000_0000, 0x7FF0_0000_0000_0001];
-    let mut args = vec![0.0, -0.0, 5e-324, -5e-324, 1e-310, -2.2e-308, f64::MIN_POSITIVE];
-    args.extend([f64::MAX, f64::MIN, f64::INFINITY, f64::NEG_INFINITY]);
-    args.extend(nans.iter().chain(&[0x7FFC_0000_DEAD_BEEF]).map(|b| f64::from_bits(*b)));
     args
 }
 

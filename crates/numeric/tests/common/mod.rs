@@ -1,4 +1,5 @@
-//! What the tests of the lane functions share: a generator of the same arguments every run.
+//! What the tests of the lane functions share: a generator of the same arguments every run,
+//! and the special floats.
 
 /// A fixed-seed generator (SplitMix64), so every run checks the same arguments.
 pub struct Numbers(pub u64);
@@ -16,4 +17,14 @@ impl Numbers {
     pub fn unit(&mut self) -> f64 {
         (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
+}
+
+/// Zeros, subnormals, the smallest normal, the largest floats, infinities and NaNs (quiet,
+/// negative, signalling, with a payload).
+pub fn special_values() -> Vec<f64> {
+    let nans = [0x7FF8_0000_0000_0000, 0xFFF8_0000_0000_0000, 0x7FF0_0000_0000_0001];
+    let mut values = vec![0.0, -0.0, 5e-324, -5e-324, 1e-310, -2.2e-308, f64::MIN_POSITIVE];
+    values.extend([f64::MAX, f64::MIN, f64::INFINITY, f64::NEG_INFINITY]);
+    values.extend(nans.iter().chain(&[0x7FFC_0000_DEAD_BEEF]).map(|b| f64::from_bits(*b)));
+    values
 }
