@@ -17,7 +17,7 @@
 //! a NaN or an infinity) or lies next to the end of a fixed range (where the fixed multiple
 //! may not be the nearest) is computed again by `libm::sincos` alone.
 
-use crate::batch::LANES;
+use crate::LANES;
 
 pub(super) type Lanes = [f64; LANES];
 

@@ -19,7 +19,7 @@
 //! root in libm, and here, lane by lane; any other special exponent sends every lane to libm.
 
 use super::lanes::{lanes, magnitude, mask, masks, pick, Lanes, Masks, TO_INT};
-use crate::batch::LANES;
+use crate::LANES;
 
 // log2 x's constants, libm's bits: the series' coefficients, 2/(3·ln 2) whole and as a 24-bit
 // head and its tail, and log2 1.5 as a head and tail (added where the mantissa is near 1.5).
