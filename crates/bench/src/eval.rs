@@ -74,6 +74,8 @@ pub fn run() {
     four_link_rhs();
     many_points();
     sine_and_cosine();
+    powers();
+    double_pendulum_many();
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -349,23 +351,26 @@ fn rhs_per_call(mech: &mut Mechanical, y: &[f64]) -> f64 {
     })
 }
 
-/// Eight sines and cosines by `libm::sincos` one lane at a time against
-/// `numeric::elementary::sin_cos_lanes` (the same bits: `numeric`'s tests hold them so), at
-/// angles |x| < 10; and the double pendulum's dynamics (M and f of
-/// `examples/classics/double_pendulum_flip.lag`) at many states on the batch tape, whose
-/// sines and cosines are computed eight at a time.
-fn sine_and_cosine() {
+/// 4,096 arguments, eight a group, `at` the fractional parts of the multiples of the golden
+/// ratio: spread evenly over [0, 1) with no two alike and no pattern a branch predictor could
+/// learn in eight lanes.
+fn spread(at: impl Fn(f64) -> f64) -> Vec<[f64; numeric::LANES]> {
     const ARGUMENTS: usize = 4096;
-    // Spread over (−10, 10) by the golden ratio's fractional parts: no two alike, no pattern
-    // a branch predictor could learn in eight lanes.
-    let angles: Vec<[f64; numeric::LANES]> = (0..ARGUMENTS / numeric::LANES)
-        .map(|chunk| {
+    (0..ARGUMENTS / numeric::LANES)
+        .map(|group| {
             std::array::from_fn(|lane| {
-                let k = (chunk * numeric::LANES + lane) as f64;
-                ((k * 0.618_033_988_749_895) % 1.0) * 20.0 - 10.0
+                let k = (group * numeric::LANES + lane) as f64;
+                at((k * 0.618_033_988_749_895) % 1.0)
             })
         })
-        .collect();
+        .collect()
+}
+
+/// Eight sines and cosines by `libm::sincos` one lane at a time against
+/// `numeric::elementary::sin_cos_lanes` (the same bits: `numeric`'s tests hold them so), at
+/// angles |x| < 10.
+fn sine_and_cosine() {
+    let angles = spread(|u| u * 20.0 - 10.0);
     // Each result stored, not summed: a running sum would be a chain of additions as long as
     // the timed work.
     type Pair = ([f64; numeric::LANES], [f64; numeric::LANES]);
@@ -397,11 +402,73 @@ fn sine_and_cosine() {
         crate::seconds(lanes),
         sincos / lanes
     );
-    double_pendulum_many();
 }
 
-/// M and f of the double pendulum at 1,024 states, per state: the tape one state at a time
-/// and the batch tape.
+/// Eight powers by `libm::pow` one lane at a time against `numeric::elementary::pow_lanes`
+/// (the same bits: `numeric`'s tests hold them so), at the step-size controls' exponents
+/// (DOP853's −1/8, dopri5's −1/5) and bases spread over the error norms they meet, 1e-6 to
+/// 1e6: as the lanes are compiled here (the baseline instructions) and as the integrator
+/// compiles them (through pulp, for the widest vectors its features reach on the processor).
+fn powers() {
+    let bases = spread(|u| libm::pow(10.0, u * 12.0 - 6.0));
+    let arch = pulp::Arch::new();
+    outln!();
+    outln!("Eight bases in [1e-6, 1e6] to one power, one lane at a time by libm and at once by pow_lanes");
+    outln!(
+        "{:>8} {:>10} | {:>10} {:>7} | {:>10} {:>7}",
+        "y",
+        "pow",
+        "lanes",
+        "ratio",
+        "widest",
+        "ratio"
+    );
+    for y in [-1.0 / 8.0, -1.0 / 5.0] {
+        let mut out = [0.0; numeric::LANES];
+        let mut time = |f: &dyn Fn(&[f64; numeric::LANES]) -> [f64; numeric::LANES]| {
+            crate::per_call(|| {
+                for x in &bases {
+                    out = f(black_box(x));
+                    black_box(&mut out);
+                }
+            }) / bases.len() as f64
+        };
+        let libm = time(&|x| x.map(|base| libm::pow(base, y)));
+        let lanes = time(&|x| numeric::elementary::pow_lanes(x, y));
+        let widest =
+            crate::per_call(|| arch.dispatch(Powers { bases: &bases, y })) / bases.len() as f64;
+        outln!(
+            "{:>8.3} {:>10} | {:>10} {:>7.2} | {:>10} {:>7.2}",
+            y,
+            crate::seconds(libm),
+            crate::seconds(lanes),
+            libm / lanes,
+            crate::seconds(widest),
+            libm / widest
+        );
+    }
+}
+
+/// `pow_lanes` over every group of bases, compiled for the vector instructions at hand.
+struct Powers<'a> {
+    bases: &'a [[f64; numeric::LANES]],
+    y: f64,
+}
+
+impl pulp::WithSimd for Powers<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        for x in self.bases {
+            black_box(numeric::elementary::pow_lanes(black_box(x), self.y));
+        }
+    }
+}
+
+/// M and f of the double pendulum (`examples/classics/double_pendulum_flip.lag`) at 1,024
+/// states, per state: the tape one state at a time and the batch tape, whose sines and cosines
+/// are computed eight at a time.
 fn double_pendulum_many() {
     const POINTS: usize = 1024;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");

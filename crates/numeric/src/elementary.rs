@@ -7,8 +7,10 @@ use cas::number::{Rational, ToPrimitive};
 use cas::Func;
 
 mod lanes;
+mod pow_lanes;
 
 pub use lanes::{sin_cos_lanes, LANES};
+pub use pow_lanes::pow_lanes;
 
 /// The float nearest a rational, or close to it: ratios of integers too large for a float are
 /// scaled down together first.
@@ -63,7 +65,7 @@ pub fn atan2(y: f64, x: f64) -> f64 {
     libm::atan2(y, x)
 }
 
-/// A real power `base^exponent`.
+/// A real power `base^exponent`. [`pow_lanes`] gives the same bits at eight bases at once.
 pub fn pow(base: f64, exponent: f64) -> f64 {
     libm::pow(base, exponent)
 }

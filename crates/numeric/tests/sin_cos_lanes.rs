@@ -2,26 +2,11 @@
 //! scene meets and every decade up to 1e300, the bits on either side of each threshold in
 //! libm's code, and calls whose lanes take different paths.
 
+mod common;
+
+use common::{special_values, Numbers};
 use numeric::elementary::sin_cos_lanes;
 use numeric::LANES;
-
-/// A fixed-seed generator (SplitMix64), so every run checks the same arguments.
-struct Numbers(u64);
-
-impl Numbers {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Every argument, eight a call, against `libm::sincos`, `libm::sin` and `libm::cos`; the
 /// last call's spare lanes repeat its first argument. Panics with the first few mismatches.
@@ -130,16 +115,6 @@ fn near_multiples_of_pio2() -> Vec<f64> {
             args.extend([f64::from_bits(bits), -f64::from_bits(bits)]);
         }
     }
-    args
-}
-
-/// Zeros, subnormals, the smallest normal, the largest floats, infinities and NaNs (quiet,
-/// negative, signalling, with a payload).
-fn special_values() -> Vec<f64> {
-    let nans = [0x7FF8_0000_0000_0000, 0xFFF8_0000_0000_0000, 0x7FF0_0000_0000_0001];
-    let mut args = vec![0.0, -0.0, 5e-324, -5e-324, 1e-310, -2.2e-308, f64::MIN_POSITIVE];
-    args.extend([f64::MAX, f64::MIN, f64::INFINITY, f64::NEG_INFINITY]);
-    args.extend(nans.iter().chain(&[0x7FFC_0000_DEAD_BEEF]).map(|b| f64::from_bits(*b)));
     args
 }
 

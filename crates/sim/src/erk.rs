@@ -583,7 +583,7 @@ fn trial_error(trial: &Result<f64, FaultKind>) -> f64 {
 /// The error norm raised to the step control's exponent: libm's `pow`, as the integrands use
 /// it (the platform's `powf` may differ in the last bit, and a different step sequence moves
 /// every result).
-pub(crate) fn trial_power(err: f64, exponent: f64) -> f64 {
+fn trial_power(err: f64, exponent: f64) -> f64 {
     pow(err, exponent)
 }
 

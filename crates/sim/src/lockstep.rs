@@ -17,7 +17,7 @@ use std::ops::ControlFlow;
 
 use numeric::{BatchTape, LANES};
 
-use crate::erk::{trial_power, Adaptive, Dense, Lanes, Pair, Stages};
+use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
 use crate::linalg;
 use crate::mechanical::Layout;
 use crate::run::{segments, Counts, Course};
@@ -566,8 +566,9 @@ impl pulp::WithSimd for Trial<'_> {
         lockstep.trial();
         let tol = lockstep.settings.tolerance;
         let errors = lockstep.stages.errors(&lockstep.h, tol, tol);
+        // libm's `pow` of each lane's norm, eight at once (the bits of `trial_power`).
         let exponent = lockstep.lanes[0].stepper.error_exponent();
-        (errors, std::array::from_fn(|l| trial_power(errors[l], exponent)))
+        (errors, numeric::elementary::pow_lanes(&errors, exponent))
     }
 }
 

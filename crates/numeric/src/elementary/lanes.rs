@@ -22,14 +22,14 @@
 /// over enough arithmetic to leave it cheap.
 pub const LANES: usize = 8;
 
-type Lanes = [f64; LANES];
+pub(super) type Lanes = [f64; LANES];
 
 // The reduction's constants, bit for bit libm's: 2/π to 53 bits, π/2 split as a 33-bit head
 // and the tail π/2 − head, and 1.5·2^52, whose addition rounds a float to an integer.
 const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
 const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
 const PIO2_1T: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
-const TO_INT: f64 = 1.5 / f64::EPSILON;
+pub(super) const TO_INT: f64 = 1.5 / f64::EPSILON;
 
 // The kernels' minimax coefficients on [−π/4, π/4], libm's bits.
 const S1: f64 = f64::from_bits(0xBFC5_5555_5555_5549);
@@ -143,36 +143,36 @@ fn reduce(x: &Lanes) -> (Lanes, Lanes, Lanes, Masks, Masks) {
     (multiple, y0, y1, alone, elsewhere)
 }
 
-type Masks = [u64; LANES];
+pub(super) type Masks = [u64; LANES];
 
 /// One step for every lane.
 #[inline(always)]
-fn lanes(step: impl Fn(usize) -> f64) -> Lanes {
+pub(super) fn lanes(step: impl Fn(usize) -> f64) -> Lanes {
     std::array::from_fn(step)
 }
 
 /// One step for every lane, of masks or bits.
 #[inline(always)]
-fn masks(step: impl Fn(usize) -> u64) -> Masks {
+pub(super) fn masks(step: impl Fn(usize) -> u64) -> Masks {
     std::array::from_fn(step)
 }
 
 /// |v|, by clearing the sign bit.
 #[inline(always)]
-fn magnitude(v: f64) -> f64 {
+pub(super) fn magnitude(v: f64) -> f64 {
     f64::from_bits(v.to_bits() & !(1 << 63))
 }
 
 /// All ones where `b`, else zero: a lane's condition as a mask for [`pick`].
 #[inline(always)]
-fn mask(b: bool) -> u64 {
+pub(super) fn mask(b: bool) -> u64 {
     0u64.wrapping_sub(u64::from(b))
 }
 
 /// `a` where `mask` is all ones, `b` where it is zero, by bits: no branch to keep the lanes
 /// from vectorizing.
 #[inline(always)]
-fn pick(mask: u64, a: f64, b: f64) -> f64 {
+pub(super) fn pick(mask: u64, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
