@@ -310,14 +310,7 @@ impl Ensemble {
                 ran.push((k, self.outcome(&run)));
                 (report.borrow_mut())(done.fetch_add(1, Ordering::Relaxed) + 1);
             };
-            let mut go_on = || {
-                if stop.load(Ordering::Relaxed) {
-                    ControlFlow::Break(())
-                } else {
-                    ControlFlow::Continue(())
-                }
-            };
-            lockstep.run(&mut jobs, &self.watched, &mut finished, &mut go_on);
+            lockstep.run(&mut jobs, &self.watched, &mut finished, &mut || unless_stopped(stop));
             results.extend(ran);
             return results;
         }
@@ -341,13 +334,7 @@ impl Ensemble {
             Err(why) => return failed(why.clone()),
         };
         integrand.mechanical().set_parameters(&start.parameters);
-        let mut go_on = |_| {
-            if stop.load(Ordering::Relaxed) {
-                ControlFlow::Break(())
-            } else {
-                ControlFlow::Continue(())
-            }
-        };
+        let mut go_on = |_| unless_stopped(stop);
         let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut go_on);
         self.outcome(&run)
     }
@@ -370,6 +357,15 @@ impl Ensemble {
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)
+    }
+}
+
+/// Whether a run goes on: not once the ensemble was told to stop.
+fn unless_stopped(stop: &AtomicBool) -> ControlFlow<()> {
+    if stop.load(Ordering::Relaxed) {
+        ControlFlow::Break(())
+    } else {
+        ControlFlow::Continue(())
     }
 }
 

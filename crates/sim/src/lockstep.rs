@@ -184,17 +184,17 @@ impl Lockstep {
 
     /// Puts `job` on lane `lane`, or gives its result at once when it ends at its start.
     fn start(&mut self, lane: usize, job: Job, finished: &mut dyn FnMut(usize, Run)) {
-        let k = self.layout.parameters;
-        let state = 1 + 2 * self.layout.coordinates;
-        for (slot, value) in job.parameters.iter().enumerate().take(k) {
-            self.tape.input_lanes_mut()[state + slot][lane] = *value;
-        }
+        let (k, state) = (self.layout.parameters, 1 + 2 * self.layout.coordinates);
+        let into = |tape: &mut BatchTape, first: usize| {
+            let slots = &mut tape.input_lanes_mut()[first..first + k];
+            for (slot, value) in slots.iter_mut().zip(&job.parameters) {
+                slot[lane] = *value;
+            }
+        };
+        into(&mut self.tape, state);
         if let Some(observation) = &mut self.observation {
             // After t, y and q̈ (no multipliers where the lanes observe).
-            let first = state + self.layout.coordinates;
-            for (slot, value) in job.parameters.iter().enumerate().take(k) {
-                observation.input_lanes_mut()[first + slot][lane] = *value;
-            }
+            into(observation, state + self.layout.coordinates);
         }
         let tol = self.settings.tolerance;
         let l = &mut self.lanes[lane];
