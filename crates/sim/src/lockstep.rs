@@ -18,8 +18,7 @@ use std::ops::ControlFlow;
 use numeric::{BatchTape, LANES};
 
 use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
-use crate::linalg;
-use crate::mechanical::Layout;
+use crate::mechanical::{solve_lanes, Layout};
 use crate::run::{segments, Counts, Course};
 use crate::{Event, FaultKind, Mechanical, Method, Problem, Run, Settings};
 
@@ -295,24 +294,7 @@ impl Lockstep {
         let outputs = self.layout.dynamics_outputs();
         let tape = &self.tape;
         let solved = if m == 0 {
-            for i in 0..n {
-                for j in 0..=i {
-                    self.mass[i * n + j] = *tape.output_lanes(j * n + i);
-                }
-                self.accelerations[i] = *tape.output_lanes(n * n + i);
-            }
-            let mut ok = linalg::solve_symmetric_lanes(n, &mut self.mass, &mut self.accelerations);
-            // v·0 is ±0 for a finite v and NaN otherwise: a test the compiler vectorizes.
-            let mut excess = [0.0; LANES];
-            for o in 0..outputs {
-                for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
-                    *e += v * 0.0;
-                }
-            }
-            for (ok, e) in ok.iter_mut().zip(excess) {
-                *ok &= e == 0.0;
-            }
-            ok
+            solve_lanes(self.layout, tape, &mut self.mass, &mut self.accelerations)
         } else {
             [false; LANES]
         };

@@ -1,20 +1,24 @@
 //! Right-hand sides at many states at once, for callers that evaluate a field of states
 //! rather than follow one trajectory (a phase portrait, a batch from Python, a test of many
 //! starts): M and f come from the batch tape, eight states a pass of the dynamics program,
-//! and each state's accelerations are solved as [`Problem::rhs`] solves them, so the numbers
-//! are the same bits as one state at a time.
+//! and the eight systems are solved side by side by the operations [`Problem::rhs`] does for
+//! one (or alone, where that solve does not serve), so the numbers are the same bits as one
+//! state at a time. The lockstep ensemble's solve is the same (`solve_lanes`).
 
 use numeric::{BatchTape, Program, LANES};
+
+use crate::linalg::{self, Lanes};
 
 use super::Mechanical;
 use crate::{check_finite, FaultKind, Problem};
 
-/// The batch tape of the dynamics program and its input and output rows, [`LANES`] states.
+/// The batch tape of the dynamics program, [`LANES`] states a pass, and the lanes of the solve
+/// side by side.
 #[derive(Clone)]
 pub(super) struct Many {
     tape: BatchTape,
-    inputs: Vec<f64>,
-    outputs: Vec<f64>,
+    mass: Vec<Lanes>,
+    accelerations: Vec<Lanes>,
 }
 
 impl Mechanical {
@@ -34,19 +38,25 @@ impl Mechanical {
         let width = self.dim();
         assert_eq!(states.len(), times.len() * width, "rhs_many: a state a time");
         assert_eq!(dys.len(), states.len(), "rhs_many: a derivative a state");
-        let (inputs, outputs) = (self.layout.dynamics_inputs(), self.layout.dynamics_outputs());
+        let n = self.layout.coordinates;
         let mut many = self.many.take().unwrap_or_else(|| Many {
             tape: BatchTape::new(self.dynamics.program().clone()),
-            inputs: vec![0.0; LANES * inputs],
-            outputs: vec![0.0; LANES * outputs],
+            mass: vec![[0.0; LANES]; n * n],
+            accelerations: vec![[0.0; LANES]; n],
         });
-        let solved = self.rhs_chunks(&mut many, times, states, dys);
+        // Compiled for the widest vectors at hand, as the lockstep's trials are.
+        let chunks = Chunks { problem: self, many: &mut many, times, states, dys };
+        let solved = pulp::Arch::new().dispatch(chunks);
         self.many = Some(many);
         // `dyn_out` no longer holds the outputs at the dynamics program's inputs.
         self.solved = None;
         solved
     }
 
+    /// [`Mechanical::rhs_many`] a pass of [`LANES`] states at a time: the dynamics program on
+    /// the batch tape, M q̈ = f solved side by side where there are no kept multipliers, and
+    /// a state that solve does not serve solved alone.
+    #[inline(always)]
     fn rhs_chunks(
         &mut self,
         many: &mut Many,
@@ -55,33 +65,67 @@ impl Mechanical {
         dys: &mut [f64],
     ) -> Result<(), (usize, FaultKind)> {
         let (n, width) = (self.layout.coordinates, self.dim());
-        let (inputs, outputs) = (self.layout.dynamics_inputs(), self.layout.dynamics_outputs());
+        let outputs = self.layout.dynamics_outputs();
         for first in (0..times.len()).step_by(LANES) {
             let count = LANES.min(times.len() - first);
-            for lane in 0..count {
-                let (row, t) = (first + lane, times[first + lane]);
+            for lane in 0..LANES {
+                // Spare lanes repeat the last state; their results are dropped.
+                let row = first + lane.min(count - 1);
                 // A parameter that follows a time series takes its value at this state's time.
-                self.follow_signals(t);
-                let input = &mut many.inputs[lane * inputs..(lane + 1) * inputs];
-                input[0] = t;
-                input[1..1 + width].copy_from_slice(&states[row * width..(row + 1) * width]);
-                input[1 + width..].copy_from_slice(&self.parameters);
+                self.follow_signals(times[row]);
+                let inputs = many.tape.input_lanes_mut();
+                inputs[0][lane] = times[row];
+                let values = states[row * width..(row + 1) * width].iter().chain(&self.parameters);
+                for (slot, value) in inputs[1..].iter_mut().zip(values) {
+                    slot[lane] = *value;
+                }
             }
-            many.tape
-                .eval_many(&many.inputs[..count * inputs], &mut many.outputs[..count * outputs]);
+            many.tape.run_lanes();
+            let solved = if self.layout.multipliers == 0 {
+                solve_lanes(self.layout, &many.tape, &mut many.mass, &mut many.accelerations)
+            } else {
+                [false; LANES]
+            };
             for lane in 0..count {
                 let row = first + lane;
                 let fail = |fault| (row, fault);
-                self.dyn_out.copy_from_slice(&many.outputs[lane * outputs..(lane + 1) * outputs]);
-                check_finite(&self.dyn_out).map_err(fail)?;
-                self.solve_dynamics().map_err(fail)?;
                 let (y, dy) = (&states[row * width..], &mut dys[row * width..(row + 1) * width]);
                 dy[..n].copy_from_slice(&y[n..width]);
-                dy[n..].copy_from_slice(&self.solution[..n]);
+                if solved[lane] {
+                    for (d, a) in dy[n..].iter_mut().zip(&many.accelerations) {
+                        *d = a[lane];
+                    }
+                } else {
+                    for (o, out) in self.dyn_out.iter_mut().enumerate().take(outputs) {
+                        *out = many.tape.output_lanes(o)[lane];
+                    }
+                    check_finite(&self.dyn_out).map_err(fail)?;
+                    self.solve_dynamics().map_err(fail)?;
+                    dy[n..].copy_from_slice(&self.solution[..n]);
+                }
                 check_finite(dy).map_err(fail)?;
             }
         }
         Ok(())
+    }
+}
+
+/// [`Mechanical::rhs_many`]'s passes, for `pulp` to compile for the vector instructions at
+/// hand.
+struct Chunks<'a> {
+    problem: &'a mut Mechanical,
+    many: &'a mut Many,
+    times: &'a [f64],
+    states: &'a [f64],
+    dys: &'a mut [f64],
+}
+
+impl pulp::WithSimd for Chunks<'_> {
+    type Output = Result<(), (usize, FaultKind)>;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
+        self.problem.rhs_chunks(self.many, self.times, self.states, self.dys)
     }
 }
 
@@ -127,4 +171,38 @@ impl Mechanical {
         dy[n..].copy_from_slice(&self.solution[..n]);
         check_finite(dy)
     }
+}
+
+/// M q̈ = f of a system without kept multipliers at each lane of `tape`'s last run: M's lower
+/// triangle and f gathered into `mass` and `accelerations`, solved side by side, q̈ left in
+/// `accelerations`. A lane whose flag is false (a dynamics output not finite, or a system the
+/// LDLᵀ in lanes declines) is to be solved alone, as [`Problem::rhs`] solves it; a lane whose
+/// flag is true holds its bits.
+#[inline(always)]
+pub(crate) fn solve_lanes(
+    layout: super::Layout,
+    tape: &BatchTape,
+    mass: &mut [Lanes],
+    accelerations: &mut [Lanes],
+) -> [bool; LANES] {
+    let n = layout.coordinates;
+    debug_assert_eq!(layout.multipliers, 0);
+    for i in 0..n {
+        for j in 0..=i {
+            mass[i * n + j] = *tape.output_lanes(j * n + i);
+        }
+        accelerations[i] = *tape.output_lanes(n * n + i);
+    }
+    let mut ok = linalg::solve_symmetric_lanes(n, mass, accelerations);
+    // v·0 is ±0 for a finite v and NaN otherwise: a test the compiler vectorizes.
+    let mut excess = [0.0; LANES];
+    for o in 0..layout.dynamics_outputs() {
+        for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
+            *e += v * 0.0;
+        }
+    }
+    for (ok, e) in ok.iter_mut().zip(excess) {
+        *ok &= e == 0.0;
+    }
+    ok
 }
