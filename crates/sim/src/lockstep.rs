@@ -18,7 +18,7 @@ use std::ops::ControlFlow;
 use numeric::{BatchTape, LANES};
 
 use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
-use crate::mechanical::{solve_lanes, Layout};
+use crate::mechanical::{finite_lanes, solve_lanes, Layout};
 use crate::run::{segments, Counts, Course};
 use crate::{Event, FaultKind, Mechanical, Method, Problem, Run, Settings};
 
@@ -41,11 +41,11 @@ pub struct Lockstep {
     t: Lanes,
     h: Lanes,
     t_new: Lanes,
+    /// The widest vector instructions the processor has, which the trials are compiled for.
+    arch: pulp::Arch,
     /// The lanes whose trial is under way with no evaluation failed so far, and the
     /// evaluations each lane's run made side by side (its stepper counts the rest).
     live: [bool; LANES],
-    /// The widest vector instructions the processor has, which the trials are compiled for.
-    arch: pulp::Arch,
     evaluations: [usize; LANES],
     /// Scratch: one lane's argument and derivative.
     argument: Vec<f64>,
@@ -301,18 +301,10 @@ impl Lockstep {
         // dy = (q̇, q̈) in every lane; a lane solved one at a time below is written over.
         let mut finite = solved;
         if m == 0 {
-            let mut excess = [0.0; LANES];
-            for i in 0..n {
-                let (rates, accelerations) = (&args[n + i], &self.accelerations[i]);
-                for l in 0..LANES {
-                    excess[l] += rates[l] * 0.0 + accelerations[l] * 0.0;
-                }
-                stage[i] = *rates;
-                stage[n + i] = *accelerations;
-            }
-            for (finite, e) in finite.iter_mut().zip(excess) {
-                *finite &= e == 0.0;
-            }
+            stage[..n].copy_from_slice(&args[n..d]);
+            stage[n..].copy_from_slice(&self.accelerations);
+            let values = finite_lanes(stage.iter());
+            finite = std::array::from_fn(|l| solved[l] && values[l]);
         }
         // As one run alone counts them: a failed evaluation is not counted.
         for l in 0..LANES {

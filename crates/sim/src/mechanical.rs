@@ -11,7 +11,7 @@ use crate::{check_finite, FaultKind, Hold, Problem, Series};
 mod jacobian;
 mod many;
 
-pub(crate) use many::solve_lanes;
+pub(crate) use many::{finite_lanes, solve_lanes};
 
 /// How the slots of the programs are laid out. The dynamics program takes
 /// `[t, q (n), q̇ (n), parameters (k)]` and gives `M` (n×n, column-major), `f` (n), then per

@@ -193,16 +193,20 @@ pub(crate) fn solve_lanes(
         }
         accelerations[i] = *tape.output_lanes(n * n + i);
     }
-    let mut ok = linalg::solve_symmetric_lanes(n, mass, accelerations);
-    // v·0 is ±0 for a finite v and NaN otherwise: a test the compiler vectorizes.
+    let ok = linalg::solve_symmetric_lanes(n, mass, accelerations);
+    let finite = finite_lanes((0..layout.dynamics_outputs()).map(|o| tape.output_lanes(o)));
+    std::array::from_fn(|l| ok[l] && finite[l])
+}
+
+/// Whether each lane's values are all finite: v·0 is ±0 for a finite v and NaN otherwise, so
+/// the sum of those is 0 exactly when they all are, a test the compiler vectorizes.
+#[inline(always)]
+pub(crate) fn finite_lanes<'a>(values: impl Iterator<Item = &'a Lanes>) -> [bool; LANES] {
     let mut excess = [0.0; LANES];
-    for o in 0..layout.dynamics_outputs() {
-        for (e, v) in excess.iter_mut().zip(tape.output_lanes(o)) {
-            *e += v * 0.0;
+    for v in values {
+        for l in 0..LANES {
+            excess[l] += v[l] * 0.0;
         }
     }
-    for (ok, e) in ok.iter_mut().zip(excess) {
-        *ok &= e == 0.0;
-    }
-    ok
+    std::array::from_fn(|l| excess[l] == 0.0)
 }
