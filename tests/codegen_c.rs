@@ -43,6 +43,9 @@ impl Random {
 struct Point {
     t: f64,
     y: Vec<f64>,
+    /// The free parameters' values, the fields of the C struct.
+    free: Vec<f64>,
+    /// Every parameter's value: the free ones, and the derived ones following them.
     parameters: Vec<f64>,
     inputs: Vec<f64>,
     accelerations: Vec<f64>,
@@ -57,11 +60,15 @@ fn points(e: &Equations, seed: usize) -> Vec<Point> {
             // The scene's parameters first, then values moved by up to a fifth; the inputs
             // away from their declared values (often 0), so that they count.
             let mut moved = |v: f64| if i == 0 { v } else { v * random.next(0.8, 1.2) };
-            let parameters: Vec<f64> = e.values[..k].iter().map(|v| moved(*v)).collect();
+            // The derived parameters follow the free ones, in the C as in every run.
+            let free: Vec<f64> = e.free.iter().map(|i| moved(e.values[*i])).collect();
+            let mut plan = e.prepared.parameter_plan.clone();
+            let parameters = plan.from_free(&free).expect("parameter values")[..k].to_vec();
             let inputs: Vec<f64> = e.values[k..].iter().map(|v| moved(*v + 0.5)).collect();
             Point {
                 t: random.next(0.0, 2.0),
                 y: (0..2 * n).map(|_| random.next(-1.0, 1.0)).collect(),
+                free,
                 parameters,
                 inputs,
                 accelerations: (0..n).map(|_| random.next(-1.0, 1.0)).collect(),
@@ -111,12 +118,19 @@ fn expected_at(e: &Equations, point: &Point, at: usize, expected: &mut Expected)
         }
         b[i] = f[i];
     }
+    let kinds = e.prepared.stabilisation();
+    let alpha = sim::BAUMGARTE_RATE;
     for c in 0..m {
         for j in 0..n {
             a[(n + c, j)] = rows[c * (n + 3) + j];
             a[(j, n + c)] = -rows[c * (n + 3) + j];
         }
-        b[n + c] = rows[c * (n + 3) + n];
+        // γ stabilised as a run stabilises it: −2α·Φ̇ − α²·Φ, or −α·Φ for a velocity row.
+        let [gamma, phi, phi_rate] = [0, 1, 2].map(|k| rows[c * (n + 3) + n + k]);
+        b[n + c] = match kinds[c] {
+            sim::Stabilisation::Position => gamma - 2.0 * alpha * phi_rate - alpha * alpha * phi,
+            sim::Stabilisation::Velocity => gamma - alpha * phi,
+        };
     }
     let lu = a.clone().lu();
     let Some(solved) = lu.solve(&b) else { return };
@@ -133,7 +147,21 @@ fn expected_at(e: &Equations, point: &Point, at: usize, expected: &mut Expected)
         jac[i * width + n + i] = 1.0;
     }
     for col in 0..width {
-        let rhs = DVector::from_iterator(size, (0..size).map(|i| -d[i * width + col]));
+        // The rows' partials with those of the stabilisation, as the right-hand side has it.
+        let row = |block: usize, c: usize| d[(n + block * m + c) * width + col];
+        let stabilised = |i: usize| {
+            if i < n {
+                return d[i * width + col];
+            }
+            let c = i - n;
+            match kinds[c] {
+                sim::Stabilisation::Position => {
+                    row(0, c) + 2.0 * alpha * row(2, c) + alpha * alpha * row(1, c)
+                }
+                sim::Stabilisation::Velocity => row(0, c) + alpha * row(1, c),
+            }
+        };
+        let rhs = DVector::from_iterator(size, (0..size).map(|i| -stabilised(i)));
         let x = lu.solve(&rhs).expect("regular");
         for i in 0..n {
             jac[(n + i) * width + col] = x[i];
@@ -189,7 +217,8 @@ fn driver(module: &CModule, points: &[Point]) -> String {
             writeln!(s, "        const double qdd[] = {{ {} }};", literal(&point.accelerations));
         let _ = writeln!(s, "        const double t = {};", numeric::c::literal(point.t));
         let _ = writeln!(s, "        p = {name}_default_parameters;");
-        for (field, v) in fields.iter().zip(&point.parameters) {
+        assert_eq!(fields.len(), point.free.len(), "a field per free parameter");
+        for (field, v) in fields.iter().zip(&point.free) {
             let _ = writeln!(s, "        p.{field} = {};", numeric::c::literal(*v));
         }
         let _ = writeln!(s, "        {name}_initial_state(&p, out);");

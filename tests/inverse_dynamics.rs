@@ -101,9 +101,8 @@ impl Driven {
         let mut prepared = prepare(source, &[], engine::Options::default()).unwrap();
         let exprs = prepared.dynamics_exprs();
         let program = prepared.lower(&prepared.dynamics_inputs(), &exprs).unwrap();
-        let mut inverse = without_motors(source);
-        let parameters = inverse.parameters().to_vec();
-        inverse.set_parameters(&parameters).unwrap();
+        let inverse = without_motors(source);
+        let parameters = inverse.slots().to_vec();
         let (n, m) = (prepared.layout.coordinates, prepared.layout.multipliers);
         Driven {
             n,

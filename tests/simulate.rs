@@ -238,3 +238,61 @@ fn a_stop_condition_with_abs_and_a_force_that_flips_sign() {
     let x = outcome.run.trajectory.rows.last().expect("rows")[0];
     assert!((outcome.run.final_time - 4.0).abs() < 1e-12 && (x - 1.0).abs() < 1e-8, "x(4) = {x}");
 }
+
+/// L = 2*a and I = m*L^2/12 are derived parameters: `--set a=2` moves them, and setting one
+/// of them is refused, naming what it follows.
+const DERIVED: &str = include_str!("scenes/derived_length_pendulum.lag");
+
+#[test]
+fn derived_parameters_follow_set_and_cannot_be_set_themselves() {
+    let first = |set: &str| -> f64 {
+        let options = Options {
+            set: vec![set.parse().expect("name=value")],
+            output: vec!["theta''".into()],
+            until: Some(1e-3),
+            samples: 2,
+            ..Options::default()
+        };
+        let outcome = simulate(DERIVED, &options).unwrap_or_else(|e| panic!("{e}"));
+        outcome.run.trajectory.rows[0][0]
+    };
+    // θ̈ = −3/2·g·sin θ/L for a rod of length L hung from its end, with L = 2a.
+    for a in [1.0f64, 2.0, 0.25] {
+        let exact = -1.5 * 9.81 * 0.5f64.sin() / (2.0 * a);
+        let got = first(&format!("a={a}"));
+        assert!((got - exact).abs() < 1e-14 * exact.abs(), "a = {a}: {got} against {exact}");
+    }
+    // The inverse dynamics at a = 2 needs no torque for the scene's own acceleration there.
+    let set = vec!["a=2".parse().expect("name=value")];
+    let options = engine::inverse::Options { set, no_units: false };
+    let mut inverse = engine::inverse::inverse_dynamics(DERIVED, &options).unwrap();
+    assert_eq!(inverse.parameter_names(), ["a", "m", "g"]);
+    assert_eq!(inverse.derived_parameter_names(), ["L", "I"]);
+    assert_eq!(inverse.derived_parameters(), [4.0, 4.0 / 3.0]);
+    let mut tau = [0.0];
+    inverse.torques(0.0, &[0.5], &[0.0], &[first("a=2")], &mut tau).unwrap();
+    assert!(tau[0].abs() < 1e-13, "{tau:?}");
+    inverse.set_parameters(&[1.0, 1.0, 9.81]).unwrap();
+    assert_eq!(inverse.derived_parameters(), [2.0, 1.0 / 3.0]);
+    // Setting a derived parameter, in a run, a linearization or an ensemble.
+    let expected = "parameter `L` is derived from `a`; set `a` instead";
+    let set = vec!["L=3".parse().expect("name=value")];
+    let e = simulate(DERIVED, &Options { set, ..Options::default() }).err().unwrap();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains(expected), "{e}");
+    let options = engine::linearize::Options {
+        about: Some("theta=0".into()),
+        sweep: Some("L=1:2:3".into()),
+        ..Default::default()
+    };
+    let e = engine::linearize::linearize(DERIVED, &options).err().unwrap();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains(expected), "{e}");
+    let e = engine::inverse::inverse_dynamics(
+        DERIVED,
+        &engine::inverse::Options { set: vec!["I=3".parse().unwrap()], no_units: false },
+    )
+    .err()
+    .unwrap();
+    assert!(e.to_string().contains("`I` is derived from `m` and `L`"), "{e}");
+}

@@ -87,12 +87,17 @@ def check(lagrange, scene, until, folder):
     names = compared(fmu)
     variables = read_model_description(fmu).modelVariables
     inputs = [v.name for v in variables if v.causality == "input"]
-    last = [v for v in variables if v.causality == "parameter"][-1]
+    parameters = [v for v in variables if v.causality == "parameter"]
+    first, last = parameters[0], parameters[-1]
     ok = True
     # As declared; with the last parameter 5% larger (where the start depends on it, the
-    # FMU's start follows); and with each input held at a value of its own. The FMU takes
-    # them as start values, `simulate` with --set and --input.
+    # FMU's start follows), and the first (where derived parameters follow it, as in
+    # tests/scenes/derived_length_pendulum.lag, the FMU's follow); and with each input held
+    # at a value of its own. The FMU takes them as start values, `simulate` with --set and
+    # --input.
     cases = [({}, {}), ({}, {last.name: 1.05 * float(last.start)})]
+    if first.name != last.name:
+        cases.append(({}, {first.name: 1.05 * float(first.start)}))
     if inputs:
         cases.append(({name: 0.5 + i for i, name in enumerate(inputs)}, {}))
     for held, parameters in cases:

@@ -414,6 +414,13 @@ fn varied_parameters(
             return Err(Error::given(Setting::Vary, name, ": varied twice; give it once"));
         }
         if let Some(i) = model.params.iter().position(|p| p.name == *name) {
+            if prepared.parameter_plan.is_derived(i) {
+                return Err(crate::numbers::derived_error(
+                    &prepared.parameter_plan,
+                    Setting::Vary,
+                    i,
+                ));
+            }
             found.push(i);
             continue;
         }

@@ -136,11 +136,13 @@ fn interface(
     let mut y0 = vec![0.0; 2 * equations.sizes.coordinates];
     let slots: Vec<f64> = std::iter::once(0.0).chain(values.iter().copied()).collect();
     tape.eval(&slots, &mut y0);
-    let parameters: Vec<_> = model
-        .params
+    // The tunable parameters are the free ones; the derived ones follow them inside the
+    // generated C, as they do in every run.
+    let parameters: Vec<_> = equations
+        .free
         .iter()
-        .zip(values)
-        .map(|(p, v)| (p.name.clone(), si_unit(&p.unit), *v))
+        .map(|i| (&model.params[*i], values[*i]))
+        .map(|(p, v)| (p.name.clone(), si_unit(&p.unit), v))
         .collect();
     let inputs: Vec<_> = model
         .inputs

@@ -30,8 +30,15 @@ pub struct Options {
 /// The inverse dynamics of a loaded scene, at its parameters' values unless told others.
 pub struct InverseDynamics {
     coordinates: Vec<String>,
+    /// The one way to the parameters' values: the free ones set, the derived ones following.
+    plan: model::ParameterValues,
+    /// The free parameters' names, in declaration order: the ones a caller sets.
     parameter_names: Vec<String>,
-    parameters: Vec<f64>,
+    /// The derived parameters' names, in declaration order.
+    derived_names: Vec<String>,
+    input_names: Vec<String>,
+    /// The program's parameter slots: every parameter, then the inputs.
+    slots: Vec<f64>,
     /// Names of the constraints kept with multipliers: τ is the least in τᵀ·M⁻¹·τ.
     kept: Vec<String>,
     /// `[t, q, q̇, parameters]` → M (column-major), f, then per kept constraint J, γ, Φ, Φ̇.
@@ -61,17 +68,15 @@ pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynami
     let program = prepared.lower(&inputs, &dynamics)?;
     let d = &prepared.derivation;
     let kept = d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone());
+    let plan = prepared.parameter_plan.clone();
+    let name = |i: usize| d.model.params[i].name.clone();
     Ok(InverseDynamics {
         coordinates: prepared.coordinate_names(),
-        // The slots of `parameters`: the parameters, then the inputs at their values.
-        parameter_names: d
-            .model
-            .params
-            .iter()
-            .map(|p| p.name.clone())
-            .chain(d.model.inputs.iter().map(|u| u.name.clone()))
-            .collect(),
-        parameters,
+        parameter_names: plan.free().into_iter().map(name).collect(),
+        derived_names: plan.derived().into_iter().map(name).collect(),
+        input_names: d.model.inputs.iter().map(|u| u.name.clone()).collect(),
+        plan,
+        slots: parameters,
         kept: kept.collect(),
         tape: Tape::new(program),
         input: vec![0.0; inputs.len()],
@@ -85,28 +90,74 @@ impl InverseDynamics {
         &self.coordinates
     }
 
-    /// The parameters' names, in declaration order, then the scene's inputs' (held at the
-    /// values given to them).
+    /// The free parameters' names, in declaration order: the ones [`Self::set_parameters`]
+    /// takes. The derived ones follow them, and the inputs are set apart.
     pub fn parameter_names(&self) -> &[String] {
         &self.parameter_names
     }
 
-    /// The parameters' values in use, in declaration order.
-    pub fn parameters(&self) -> &[f64] {
-        &self.parameters
+    /// The derived parameters' names, in declaration order: each follows the free ones its
+    /// value names.
+    pub fn derived_parameter_names(&self) -> &[String] {
+        &self.derived_names
     }
 
-    /// Uses these parameter values (in declaration order) from now on.
+    /// The scene's one way to its parameters' values, which this one follows.
+    pub fn parameter_plan(&self) -> &model::ParameterValues {
+        &self.plan
+    }
+
+    /// The inputs' names, in declaration order.
+    pub fn input_names(&self) -> &[String] {
+        &self.input_names
+    }
+
+    /// The free parameters' values in use, in the order of [`Self::parameter_names`].
+    pub fn parameters(&self) -> Vec<f64> {
+        self.plan.free().into_iter().map(|i| self.slots[i]).collect()
+    }
+
+    /// The derived parameters' values in use, in the order of
+    /// [`Self::derived_parameter_names`].
+    pub fn derived_parameters(&self) -> Vec<f64> {
+        self.plan.derived().into_iter().map(|i| self.slots[i]).collect()
+    }
+
+    /// Every parameter's value in use in declaration order, then the inputs': the slots the
+    /// lowered programs read.
+    pub fn slots(&self) -> &[f64] {
+        &self.slots
+    }
+
+    /// Uses these values of the free parameters (in the order of [`Self::parameter_names`])
+    /// from now on; the derived ones follow them.
     pub fn set_parameters(&mut self, values: &[f64]) -> Result<(), Error> {
-        if values.len() != self.parameters.len() {
+        if values.len() != self.parameter_names.len() {
             return Err(Error::Input(format!(
                 "{} parameter values given for the {} parameters ({})",
                 values.len(),
-                self.parameters.len(),
+                self.parameter_names.len(),
                 self.parameter_names.join(", ")
             )));
         }
-        self.parameters.copy_from_slice(values);
+        let all = self.plan.from_free(values).map_err(|e| Error::Input(e.to_string()))?;
+        let k = self.plan.len();
+        self.slots[..k].copy_from_slice(&all[..k]);
+        Ok(())
+    }
+
+    /// Holds the inputs at these values (in the order of [`Self::input_names`]) from now on.
+    pub fn set_inputs(&mut self, values: &[f64]) -> Result<(), Error> {
+        if values.len() != self.input_names.len() {
+            return Err(Error::Input(format!(
+                "{} input values given for the {} inputs ({})",
+                values.len(),
+                self.input_names.len(),
+                self.input_names.join(", ")
+            )));
+        }
+        let k = self.plan.len();
+        self.slots[k..].copy_from_slice(values);
         Ok(())
     }
 
@@ -140,7 +191,7 @@ impl InverseDynamics {
         self.input[0] = t;
         self.input[1..1 + n].copy_from_slice(q);
         self.input[1 + n..1 + 2 * n].copy_from_slice(rates);
-        self.input[1 + 2 * n..].copy_from_slice(&self.parameters);
+        self.input[1 + 2 * n..].copy_from_slice(&self.slots);
         self.tape.eval(&self.input, &mut self.output);
         let (mass, forcing) = self.output.split_at(n * n);
         for (i, out) in tau.iter_mut().enumerate() {

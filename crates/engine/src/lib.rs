@@ -77,6 +77,16 @@ pub(crate) fn resolve_with(
     resolve_checked(source, model::Checks { units: options.units, inputs_in_constraints: false })
 }
 
+/// The scene resolved as a run takes it, with inputs let stand in constraints (a run puts
+/// their laws in place before deriving): a front end that holds a scene for runs as well as
+/// derivations accepts such a scene, and refuses only what needs the input as a symbol.
+pub fn resolve_for_runs(
+    source: &str,
+    options: Options,
+) -> Result<(model::Model, Vec<Diagnostic>), Error> {
+    resolve_checked(source, model::Checks { units: options.units, inputs_in_constraints: true })
+}
+
 /// [`resolve_with`] with the model's checks given as they are.
 pub(crate) fn resolve_checked(
     source: &str,

@@ -260,11 +260,15 @@ fn overrides(
 /// The index of the parameter `name`, or an error for `setting` listing those there are.
 fn parameter_index(prepared: &Prepared, name: &str, setting: Setting) -> Result<usize, Error> {
     let params = &prepared.derivation.model.params;
-    params.iter().position(|p| p.name == name).ok_or_else(|| {
+    let i = params.iter().position(|p| p.name == name).ok_or_else(|| {
         let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
         let rest = format!(": no parameter of that name; one of {}", known.join(", "));
         Error::given(setting, name, rest)
-    })
+    })?;
+    if prepared.parameter_plan.is_derived(i) {
+        return Err(crate::numbers::derived_error(&prepared.parameter_plan, setting, i));
+    }
+    Ok(i)
 }
 
 /// A linearization being analysed at one set of parameter values after another.

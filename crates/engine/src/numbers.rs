@@ -12,6 +12,12 @@ use crate::{Error, Options, Piece, Setting};
 
 mod partials;
 
+/// The error for a value `setting` gives the derived parameter `i`.
+pub(crate) fn derived_error(plan: &model::ParameterValues, setting: Setting, i: usize) -> Error {
+    let name = plan.names().nth(i).unwrap_or_default().to_string();
+    Error::given(setting, name, format!(": {}", plan.derived_error(i)))
+}
+
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
 pub struct Prepared {
@@ -26,6 +32,8 @@ pub struct Prepared {
     /// The partials program of the equations in (q, q̇), once a run has lowered it: a scene
     /// compiled for many runs lowers it once (`simulate::Compiled`).
     pub partials_program: Option<Program>,
+    /// The one way to the parameters' values: free ones set, derived ones following.
+    pub parameter_plan: model::ParameterValues,
 }
 
 /// Loads `source` with `extra` expressions resolved against it as the scene's `show` items
@@ -70,7 +78,9 @@ pub(crate) fn prepare_resolved(
         multipliers: derivation.multipliers.len(),
         parameters: parameters.len(),
     };
+    let parameter_plan = model::ParameterValues::new(&derivation.model);
     Ok(Prepared {
+        parameter_plan,
         derivation,
         extra: exprs,
         parameters,
@@ -186,46 +196,36 @@ impl Prepared {
 
     /// [`Prepared::parameter_values`] with numbers `given` to some parameters (by index), in
     /// place of their expressions: an ensemble's run. Later parameters defined through them
-    /// follow.
+    /// follow. A derived parameter cannot be given a value (`--set` names it; `--vary` a
+    /// given number's).
     pub fn parameter_values_given(
         &self,
         overrides: &[(usize, ExprId)],
         given: &[(usize, f64)],
     ) -> Result<Vec<f64>, Error> {
-        let pool = &self.derivation.model.pool;
-        let mut values = vec![f64::NAN; pool.symbol_count()];
-        let mut out = Vec::new();
-        for (i, p) in self.derivation.model.params.iter().enumerate() {
-            if let Some((_, v)) = given.iter().rev().find(|(k, _)| *k == i) {
-                values[p.sym.index()] = *v;
-                out.push(*v);
-                continue;
+        let model = &self.derivation.model;
+        let plan = &self.parameter_plan;
+        for (settings, i) in overrides
+            .iter()
+            .map(|(i, _)| (Setting::Set, *i))
+            .chain(given.iter().map(|(i, _)| (Setting::Vary, *i)))
+        {
+            if plan.is_derived(i) {
+                return Err(derived_error(plan, settings, i));
             }
-            let expr = overrides.iter().rev().find(|(k, _)| *k == i).map(|(_, e)| *e).or(p.value);
-            let Some(expr) = expr else {
-                return Err(Error::Setting(vec![
-                    Piece::Text(format!(
-                        "parameter `{}` has no value; give one in the scene or with ",
-                        p.name
-                    )),
-                    Piece::Given(Setting::Set, p.name.clone()),
-                ]));
-            };
-            let v = numeric::eval(pool, expr, &values);
-            if !v.is_finite() {
-                return Err(Error::Input(format!("parameter `{}` evaluates to {v}", p.name)));
-            }
-            values[p.sym.index()] = v;
-            out.push(v);
         }
-        for u in &self.derivation.model.inputs {
-            let v = numeric::eval(pool, u.value, &values);
-            if !v.is_finite() {
-                return Err(Error::Input(format!("input `{}` evaluates to {v}", u.name)));
-            }
-            out.push(v);
-        }
-        Ok(out)
+        let mut values: Vec<(usize, model::Given)> =
+            overrides.iter().map(|(i, e)| (*i, model::Given::expression(model, *e))).collect();
+        values.extend(given.iter().map(|(i, v)| (*i, model::Given::Number(*v))));
+        self.parameter_plan.clone().values(values).map_err(|e| match e {
+            model::ParameterError::Missing { name } => Error::Setting(vec![
+                Piece::Text(format!(
+                    "parameter `{name}` has no value; give one in the scene or with "
+                )),
+                Piece::Given(Setting::Set, name),
+            ]),
+            other => Error::Input(other.to_string()),
+        })
     }
 
     /// The initial state (q, then q̇, of the remaining coordinates) at the given parameter

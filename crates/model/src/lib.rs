@@ -6,10 +6,12 @@
 //! knows what a scene says; deriving equations from it is the job of `mechanics`.
 
 pub mod kinematics;
+mod parameters;
 mod resolve;
 pub mod units;
 mod value;
 
+pub use parameters::{Given, ParameterError, ParameterValues};
 pub use resolve::{closest, dimension_errors, resolve, resolve_with, Scope};
 pub use value::Value;
 

@@ -29,6 +29,11 @@ impl Evaluator {
         }
     }
 
+    /// The symbols the expressions read.
+    pub fn symbols(&self) -> &[SymId] {
+        &self.symbols
+    }
+
     /// The value of each expression, in order, with `values[s.index()]` the value of symbol
     /// `s`. A symbol past the end of `values` is NaN, which propagates.
     pub fn eval(&mut self, values: &[f64]) -> &[f64] {

@@ -13,17 +13,10 @@ use verify::ShownAtStart;
 use crate::sympy::ToSympy;
 
 /// Parameter values in declaration order, `None` where a parameter has none (or it is not a
-/// finite number).
+/// finite number), by the scene's one way to them (`model::ParameterValues`).
 pub fn parameter_values(d: &Derivation) -> Vec<(String, Option<f64>)> {
-    let pool = &d.model.pool;
-    let mut values = vec![f64::NAN; pool.symbol_count()];
-    let mut out = Vec::new();
-    for p in &d.model.params {
-        let v = p.value.map(|e| numeric::eval(pool, e, &values)).filter(|v| v.is_finite());
-        values[p.sym.index()] = v.unwrap_or(f64::NAN);
-        out.push((p.name.clone(), v));
-    }
-    out
+    let values = model::ParameterValues::new(&d.model).scene_values();
+    d.model.params.iter().zip(values).map(|(p, v)| (p.name.clone(), v)).collect()
 }
 
 /// Everything `derive` shows, as a dict of SymPy objects.
@@ -58,6 +51,13 @@ pub fn derive<'py>(py: Python<'py>, d: &mut Derivation) -> PyResult<Bound<'py, P
         parameters.set_item(name, value)?;
     }
     out.set_item("parameters", parameters)?;
+    // Each derived parameter with the parameters its value names: they are the ones to set.
+    let plan = model::ParameterValues::new(&d.model);
+    let follows = PyDict::new(py);
+    for i in plan.derived() {
+        follows.set_item(&d.model.params[i].name, plan.sources(i))?;
+    }
+    out.set_item("derived_parameters", follows)?;
 
     // Every name of the scene, as it spells it, to the SymPy object that stands for it.
     let symbols = PyDict::new(py);

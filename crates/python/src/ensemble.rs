@@ -5,6 +5,7 @@
 
 use engine::ensemble::{Ensemble, Table};
 use numpy::PyArray1;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -30,12 +31,23 @@ pub fn ensemble<'py>(
     path: &str,
     request: Request,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if request.threads == Some(0) {
+        return Err(PyValueError::new_err("`threads` must be a positive whole number, not 0"));
+    }
     let mut check = SignalCheck::new();
     let built = py.detach(|| {
         let ensemble = Ensemble::new(source, &request.options)?;
         let total = ensemble.runs();
         let threads = request.threads.unwrap_or_else(engine::ensemble::cores);
         let to = request.to.unwrap_or(total);
+        // A range past the ensemble's end, or backwards, would give a table with no rows that
+        // reads as if every run had been done.
+        if request.from > to || to > total {
+            return Err(engine::Error::Input(format!(
+                "runs {}..{to} are not a range of this ensemble's {total} runs (0..{total})",
+                request.from
+            )));
+        }
         Ok::<_, engine::Error>((ensemble.run(request.from..to, threads, &mut check), total))
     });
     if let Some(raised) = check.raised {

@@ -35,7 +35,12 @@ struct NativeScene {
     /// The scene's `simulate` block, read into each run's settings.
     simulation: model::Simulation,
     title: Option<String>,
-    scene: Mutex<engine::Scene>,
+    /// The scene's warnings, rendered as the `lagrange` command prints them.
+    warnings: String,
+    /// The derivation, or why there is none: a scene whose input stands in a constraint is
+    /// derived only in a run, with the input's law in its place, so `derive` and `check`
+    /// raise what the engine says while `simulate` runs it.
+    scene: Mutex<Result<engine::Scene, engine::Error>>,
     runs: runs::Store,
 }
 
@@ -44,13 +49,28 @@ struct NativeScene {
 #[pyfunction]
 #[pyo3(signature = (text, path = "<string>".to_string(), units = true))]
 fn loads(py: Python<'_>, text: String, path: String, units: bool) -> PyResult<NativeScene> {
-    let scene = py
-        .detach(|| engine::load_with(&text, engine::Options { units }))
-        .map_err(|e| engine_error(&e, &path))?;
-    let model = &scene.derivation.model;
+    let options = engine::Options { units };
+    let loaded = py.detach(|| match engine::load_with(&text, options) {
+        Ok(scene) => {
+            let model = &scene.derivation.model;
+            let (simulation, title) = (model.simulation.clone(), model.title.clone());
+            let warnings = lang::render::render(&path, &text, &scene.warnings);
+            Ok((Ok(scene), simulation, title, warnings))
+        }
+        // Only runs can take it: each puts its input's law in place first.
+        Err(refused) => match engine::resolve_for_runs(&text, options) {
+            Ok((model, warnings)) => {
+                let warnings = lang::render::render(&path, &text, &warnings);
+                Ok((Err(refused), model.simulation, model.title, warnings))
+            }
+            Err(_) => Err(refused),
+        },
+    });
+    let (scene, simulation, title, warnings) = loaded.map_err(|e| engine_error(&e, &path))?;
     Ok(NativeScene {
-        simulation: model.simulation.clone(),
-        title: model.title.clone(),
+        simulation,
+        title,
+        warnings,
         source: text,
         path,
         units,
@@ -63,8 +83,16 @@ impl NativeScene {
     /// The loaded scene, for one thread at a time. A thread that panicked while holding it
     /// cannot have left it half changed in a way that matters: what `derive` and `check` add
     /// to the pool are memoised forms, each complete or absent.
-    fn scene(&self) -> MutexGuard<'_, engine::Scene> {
+    fn scene(&self) -> MutexGuard<'_, Result<engine::Scene, engine::Error>> {
         self.scene.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// `body` on the derived scene, or the engine's reason there is none, raised.
+    fn with_scene<T>(&self, body: impl FnOnce(&mut engine::Scene) -> PyResult<T>) -> PyResult<T> {
+        match &mut *self.scene() {
+            Ok(scene) => body(scene),
+            Err(refused) => Err(engine_error(refused, &self.path)),
+        }
     }
 
     /// The settings of a run: the scene's `simulate` block, then `options`.
@@ -81,7 +109,7 @@ impl NativeScene {
 impl NativeScene {
     /// The forms a `derive` report shows, as a dict of SymPy objects.
     fn derive<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        derive::derive(py, &mut self.scene().derivation)
+        self.with_scene(|scene| derive::derive(py, &mut scene.derivation))
     }
 
     /// y' = F(t, y) for `solve_ivp`.
@@ -292,7 +320,10 @@ impl NativeScene {
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let mut scene = self.scene();
-        let d = &mut scene.derivation;
+        let d = match &mut *scene {
+            Ok(scene) => &mut scene.derivation,
+            Err(refused) => return Err(engine_error(refused, &self.path)),
+        };
         let verdicts = py.detach(|| verify::check_all(d));
         let mut s = sympy::ToSympy::new(py)?;
         let out = PyList::empty(py);
@@ -321,7 +352,7 @@ impl NativeScene {
     /// The scene's warnings, rendered as the `lagrange` command prints them ("" if none).
     #[getter]
     fn warnings(&self) -> String {
-        lang::render::render(&self.path, &self.source, &self.scene().warnings)
+        self.warnings.clone()
     }
 
     #[getter]

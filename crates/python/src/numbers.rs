@@ -10,7 +10,9 @@
 use engine::numbers::{prepare, Prepared};
 use numeric::Tape;
 use numpy::ndarray::ArrayView2;
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayMethods};
+use numpy::{
+    AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyArrayLikeDyn, PyArrayMethods,
+};
 use pyo3::exceptions::PyKeyError;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -64,10 +66,14 @@ pub struct Rhs {
     /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
     #[pyo3(get)]
     names: Vec<String>,
-    /// The parameters' names in declaration order, the order of their values. The inputs are
-    /// not among them.
+    /// The free parameters' names in declaration order, the order of their values: the ones
+    /// `p=` sets. The derived ones and the inputs are not among them.
     #[pyo3(get)]
     parameter_names: Vec<String>,
+    /// The derived parameters' names in declaration order: each follows the free ones its
+    /// value names, and none can be set.
+    #[pyo3(get)]
+    derived_parameter_names: Vec<String>,
     /// The inputs' names in declaration order, the order of `u=` as an array.
     #[pyo3(get)]
     input_names: Vec<String>,
@@ -87,7 +93,8 @@ impl Rhs {
         let inner = RhsInner::new(source, path, units)?;
         Ok(Rhs {
             names: inner.names.clone(),
-            parameter_names: inner.parameter_names.clone(),
+            parameter_names: inner.tunable.names.clone(),
+            derived_parameter_names: inner.tunable.derived_names.clone(),
             input_names: inner.input_names.clone(),
             y0: inner.y0.clone(),
             source: source.to_string(),
@@ -116,7 +123,8 @@ impl Rhs {
                 rhs.parameter_names.join(", ")
             )));
         }
-        all[..parameters.len()].copy_from_slice(parameters);
+        let values = inner.tunable.from_free(parameters)?;
+        all[..values.len()].copy_from_slice(&values);
         inner.mechanical.set_parameters(&all);
         drop(inner);
         Ok(rhs)
@@ -172,6 +180,22 @@ impl Drop for Held<'_> {
     }
 }
 
+/// A state given to a call of one state, as its values: a 2-D array is refused with a
+/// pointer to `batch` rather than NumPy's words about dimensions.
+fn one_state(y: &PyArrayLikeDyn<'_, f64, AllowTypeChange>, names: &[String]) -> PyResult<Vec<f64>> {
+    let y = y.as_array();
+    if y.ndim() != 1 {
+        return Err(PyValueError::new_err(format!(
+            "y is one state, a 1-D array of {} entries ({}), not an array of shape {:?}; \
+             f.batch(Y) takes many states, a row each",
+            names.len(),
+            names.join(", "),
+            y.shape()
+        )));
+    }
+    Ok(y.iter().copied().collect())
+}
+
 /// The programs of an [`Rhs`], their buffers and what a call reads: what one call at a
 /// time uses.
 struct RhsInner {
@@ -179,9 +203,8 @@ struct RhsInner {
     /// Names of the state's slots: coordinates, then rates (`x`, `theta`, `x'`, `theta'`).
     names: Vec<String>,
     y0: Vec<f64>,
-    /// The parameters' names in declaration order, the order of their values. The inputs are
-    /// not among them.
-    parameter_names: Vec<String>,
+    /// The parameters a call sets, and the derived ones that follow them.
+    tunable: Tunable,
     /// The inputs' names in declaration order, the order of `u=` as an array.
     input_names: Vec<String>,
     /// The inputs' declared values, which they take where `u=` does not name them.
@@ -208,9 +231,9 @@ impl RhsInner {
         let names = prepared.state_names();
         // The slots of `parameters`: the parameters, then the inputs at their values.
         let model = &prepared.derivation.model;
-        let parameter_names: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
+        let tunable = Tunable::new(prepared.parameter_plan.clone());
         let input_names: Vec<String> = model.inputs.iter().map(|u| u.name.clone()).collect();
-        let declared_inputs = parameters[parameter_names.len()..].to_vec();
+        let declared_inputs = parameters[tunable.slots()..].to_vec();
         let mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),
@@ -223,7 +246,7 @@ impl RhsInner {
             mechanical,
             names,
             y0,
-            parameter_names,
+            tunable,
             input_names,
             declared_inputs,
             dy: vec![0.0; dim],
@@ -242,9 +265,9 @@ impl RhsInner {
     ) -> PyResult<T> {
         let Some(p) = p else { return body(self) };
         let kept = self.mechanical.parameters().to_vec();
-        let k = self.parameter_names.len();
         let mut given = kept.clone();
-        given[..k].copy_from_slice(&parameter_values(&self.parameter_names, &kept[..k], p)?);
+        let values = self.tunable.given(&kept, p)?;
+        given[..values.len()].copy_from_slice(&values);
         self.mechanical.set_parameters(&given);
         let result = body(self);
         self.mechanical.set_parameters(&kept);
@@ -266,7 +289,7 @@ impl RhsInner {
     /// What drives each input in a call: `u` read against the inputs (see
     /// [`inputs::sources`]); `rows` for a batch.
     fn sources(&self, u: Option<&Bound<'_, PyAny>>, rows: Option<usize>) -> PyResult<Vec<Source>> {
-        let (names, parameters) = (&self.input_names, &self.parameter_names);
+        let (names, parameters) = (&self.input_names, &self.tunable.all_names);
         inputs::sources(names, &self.declared_inputs, parameters, u, rows)
     }
 
@@ -284,7 +307,7 @@ impl RhsInner {
         }
         let values = inputs::values(py, &self.input_names, sources, t, y, row)?;
         let mut all = self.mechanical.parameters().to_vec();
-        all[self.parameter_names.len()..].copy_from_slice(&values);
+        all[self.tunable.slots()..].copy_from_slice(&values);
         self.mechanical.set_parameters(&all);
         Ok(())
     }
@@ -323,7 +346,7 @@ impl RhsInner {
         self.set_inputs(py, sources, t, y, 0)?;
         self.exact_jacobian(t, y)?;
         let d = self.dy.len();
-        let k = self.parameter_names.len();
+        let k = self.tunable.slots();
         for (j, source) in sources.iter().enumerate() {
             let Source::Law(law) = source else { continue };
             let gradient = inputs::law_gradient(py, law, t, y)?;
@@ -381,12 +404,11 @@ impl Rhs {
         &self,
         py: Python<'py>,
         t: f64,
-        y: PyArrayLike1<'py, f64, AllowTypeChange>,
+        y: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let y = y.as_array();
-        let y: Vec<f64> = y.iter().copied().collect();
+        let y = one_state(&y, &self.names)?;
         let mut this = self.inner(py)?;
         let sources = this.sources(u, None)?;
         this.with_parameters(p, |rhs| rhs.eval(py, t, &y, &sources, 0))?;
@@ -476,11 +498,11 @@ impl Rhs {
         &self,
         py: Python<'py>,
         t: f64,
-        y: PyArrayLike1<'py, f64, AllowTypeChange>,
+        y: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         p: Option<&Bound<'py, PyAny>>,
         u: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let y: Vec<f64> = y.as_array().iter().copied().collect();
+        let y = one_state(&y, &self.names)?;
         let mut this = self.inner(py)?;
         let sources = this.sources(u, None)?;
         this.with_parameters(p, |rhs| rhs.eval_jacobian(py, t, &y, &sources))?;
@@ -498,30 +520,39 @@ impl Rhs {
     /// assigning to `parameters`, never lost in a copy.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let k = self.parameter_names.len();
-        let values = self.inner(py)?.mechanical.parameters()[..k].to_vec();
+        let this = self.inner(py)?;
+        let values = this.tunable.free_values(this.mechanical.parameters());
         read_only(py, &self.parameter_names, &values)
     }
 
-    /// Uses these parameter values from now on: a dict replaces the values it names, an
-    /// array gives them all (see [`parameter_values`]).
+    /// Uses these values of the free parameters from now on: a dict replaces the values it
+    /// names, an array gives them all (see [`Tunable::given`]); the derived ones follow.
     #[setter]
     fn set_parameters(&self, p: &Bound<'_, PyAny>) -> PyResult<()> {
         let mut this = self.inner(p.py())?;
         let mut all = this.mechanical.parameters().to_vec();
-        let k = self.parameter_names.len();
-        let values = parameter_values(&self.parameter_names, &all[..k], p)?;
-        all[..k].copy_from_slice(&values);
+        let values = this.tunable.given(&all, p)?;
+        all[..values.len()].copy_from_slice(&values);
         this.mechanical.set_parameters(&all);
         Ok(())
+    }
+
+    /// The derived parameters' values in use, name to value, read-only: each follows the
+    /// free parameters its value names.
+    #[getter]
+    fn derived_parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let this = self.inner(py)?;
+        let values = this.tunable.derived_values(this.mechanical.parameters());
+        read_only(py, &self.derived_parameter_names, &values)
     }
 
     /// Pickles as what it is made from: the scene's text and settings, and the parameter
     /// values in use; unpickling derives and lowers the scene again.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let rebuild = py.import("lagrange._native")?.getattr("_rhs_from")?;
-        let k = self.parameter_names.len();
-        let parameters = self.inner(py)?.mechanical.parameters()[..k].to_vec();
+        let this = self.inner(py)?;
+        let parameters = this.tunable.free_values(this.mechanical.parameters());
+        drop(this);
         let arguments = (self.source.clone(), self.path.clone(), self.units, parameters);
         (rebuild, arguments).into_pyobject(py).map(|t| t.into_any())
     }
@@ -539,13 +570,89 @@ impl Rhs {
     }
 }
 
-/// Parameter values from `given`: a mapping of name to value replaces the values it names in
-/// `current`; anything else is read as an array of every value in the order of `names`. Each
-/// value is finite. A parameter the scene defines from others is a value like any other here:
-/// it is not recomputed when they change.
-pub fn parameter_values(
+/// The parameters a caller of a compiled scene sets: the free ones, by name or in order; the
+/// derived ones (`param L = 2*a`) follow them through the scene's one way to parameter values
+/// (`model::ParameterValues`), as `simulate --set` has them follow.
+#[derive(Clone, Debug)]
+pub struct Tunable {
+    plan: model::ParameterValues,
+    /// The free parameters' names, in declaration order: what `p=` takes.
+    names: Vec<String>,
+    derived_names: Vec<String>,
+    free: Vec<usize>,
+    derived: Vec<usize>,
+    /// Every parameter's name, for messages about a name that is not a free one.
+    all_names: Vec<String>,
+}
+
+impl Tunable {
+    pub fn new(plan: model::ParameterValues) -> Tunable {
+        let all_names: Vec<String> = plan.names().map(str::to_string).collect();
+        let (free, derived) = (plan.free(), plan.derived());
+        Tunable {
+            names: free.iter().map(|i| all_names[*i].clone()).collect(),
+            derived_names: derived.iter().map(|i| all_names[*i].clone()).collect(),
+            free,
+            derived,
+            all_names,
+            plan,
+        }
+    }
+
+    /// How many parameter slots the programs read before the inputs'.
+    pub fn slots(&self) -> usize {
+        self.plan.len()
+    }
+
+    /// The free parameters' values among the slots `values`.
+    pub fn free_values(&self, values: &[f64]) -> Vec<f64> {
+        self.free.iter().map(|i| values[*i]).collect()
+    }
+
+    /// The derived parameters' values among the slots `values`.
+    pub fn derived_values(&self, values: &[f64]) -> Vec<f64> {
+        self.derived.iter().map(|i| values[*i]).collect()
+    }
+
+    /// Every parameter's slot value from `given` (see [`free_given`]), the free ones in use
+    /// read from `current`, every parameter's slot.
+    pub fn given(&mut self, current: &[f64], given: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let free = free_given(&self.names, &self.free_values(current), &self.not_free(), given)?;
+        self.from_free(&free)
+    }
+
+    /// Every parameter's slot value with these values of the free ones.
+    pub fn from_free(&mut self, free: &[f64]) -> PyResult<Vec<f64>> {
+        let mut all =
+            self.plan.from_free(free).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        all.truncate(self.plan.len());
+        Ok(all)
+    }
+
+    /// The error for a name that is not a free parameter: a derived one says what it
+    /// follows, anything else lists the free ones.
+    fn not_free(&self) -> NotFree {
+        let derived = self.derived.iter().map(|i| {
+            let message = self.plan.derived_error(*i).to_string();
+            (self.all_names[*i].clone(), message)
+        });
+        NotFree { derived: derived.collect() }
+    }
+}
+
+/// Why a name given to `p=` is refused: the derived parameters', with their messages.
+pub struct NotFree {
+    derived: Vec<(String, String)>,
+}
+
+/// The free parameters' values from `given`: a mapping of name to value replaces the values it
+/// names in `current` (in the order of `names`); anything else is read as an array of every
+/// free parameter's value in that order. Each value is finite; a derived parameter named
+/// raises, naming what it is derived from.
+pub fn free_given(
     names: &[String],
     current: &[f64],
+    refused: &NotFree,
     given: &Bound<'_, PyAny>,
 ) -> PyResult<Vec<f64>> {
     if let Ok(mapping) = given.cast::<PyMapping>() {
@@ -553,6 +660,9 @@ pub fn parameter_values(
         for item in mapping.items()?.iter() {
             let (name, value): (String, f64) = item.extract()?;
             let Some(k) = names.iter().position(|n| *n == name) else {
+                if let Some((_, message)) = refused.derived.iter().find(|(n, _)| *n == name) {
+                    return Err(PyValueError::new_err(message.clone()));
+                }
                 return Err(PyKeyError::new_err(format!(
                     "no parameter `{name}`; the parameters are {}",
                     names.join(", ")
@@ -592,12 +702,17 @@ pub struct InverseDynamics {
     /// The coordinates, in the order of q and of τ.
     #[pyo3(get)]
     names: Vec<String>,
-    /// The parameters' names, in the order of their values; the inputs are not among them.
+    /// The free parameters' names, in the order of their values: the ones `p=` sets. The
+    /// derived ones and the inputs are not among them.
     #[pyo3(get)]
     parameter_names: Vec<String>,
+    /// The derived parameters' names: each follows the free ones its value names.
+    #[pyo3(get)]
+    derived_parameter_names: Vec<String>,
     /// The inputs' names, in the order of `u=` as an array.
     #[pyo3(get)]
     input_names: Vec<String>,
+    tunable: Tunable,
     /// The constraints kept with multipliers.
     #[pyo3(get)]
     kept_constraints: Vec<String>,
@@ -608,15 +723,12 @@ impl InverseDynamics {
         let options = engine::inverse::Options { set: Vec::new(), no_units: !units };
         let inner = engine::inverse::inverse_dynamics(source, &options)
             .map_err(|e| engine_error(&e, path))?;
-        // The engine's slots: the parameters, then the inputs.
-        let inputs = prepared(source, units).map_err(|e| engine_error(&e, path))?.0;
-        let input_names: Vec<String> =
-            inputs.derivation.model.inputs.iter().map(|u| u.name.clone()).collect();
-        let all = inner.parameter_names();
         Ok(InverseDynamics {
             names: inner.coordinates().to_vec(),
-            parameter_names: all[..all.len() - input_names.len()].to_vec(),
-            input_names,
+            parameter_names: inner.parameter_names().to_vec(),
+            derived_parameter_names: inner.derived_parameter_names().to_vec(),
+            input_names: inner.input_names().to_vec(),
+            tunable: Tunable::new(inner.parameter_plan().clone()),
             kept_constraints: inner.kept_constraints().to_vec(),
             inner,
         })
@@ -635,15 +747,12 @@ impl InverseDynamics {
         let mut out = Vec::with_capacity(t.len() * n);
         let mut tau = vec![0.0; n];
         let row = |m: &ArrayView2<'_, f64>, k: usize| -> Vec<f64> { m.row(k).to_vec() };
-        let k = self.parameter_names.len();
         for (r, t) in t.iter().enumerate() {
             let [q, rates, accelerations] = motion.map(|m| row(m, r));
             if !sources.is_empty() {
                 let state = [&q[..], &rates[..]].concat();
                 let values = inputs::values(py, &self.input_names, sources, *t, &state, r)?;
-                let mut all = self.inner.parameters().to_vec();
-                all[k..].copy_from_slice(&values);
-                self.inner.set_parameters(&all).map_err(|e| engine_error(&e, "<inputs>"))?;
+                self.inner.set_inputs(&values).map_err(|e| engine_error(&e, "<inputs>"))?;
             }
             self.inner
                 .torques(*t, &q, &rates, &accelerations, &mut tau)
@@ -685,18 +794,19 @@ impl InverseDynamics {
                 )));
             }
         }
-        let kept = self.inner.parameters().to_vec();
-        let k = self.parameter_names.len();
+        let kept = self.inner.slots().to_vec();
+        let k = self.tunable.slots();
         let declared = &kept[k..];
-        let sources =
-            inputs::sources(&self.input_names, declared, &self.parameter_names, u, Some(t.len()))?;
+        let all_names = &self.tunable.all_names;
+        let sources = inputs::sources(&self.input_names, declared, all_names, u, Some(t.len()))?;
+        let free = self.inner.parameters();
         if let Some(p) = p {
-            let mut given = kept.clone();
-            given[..k].copy_from_slice(&parameter_values(&self.parameter_names, &kept[..k], p)?);
+            let given = free_given(&self.parameter_names, &free, &self.tunable.not_free(), p)?;
             self.inner.set_parameters(&given).map_err(|e| engine_error(&e, "<parameters>"))?;
         }
         let result = self.rows(py, &t, [&q, &qd, &qdd], &sources);
-        self.inner.set_parameters(&kept).map_err(|e| engine_error(&e, "<parameters>"))?;
+        self.inner.set_parameters(&free).map_err(|e| engine_error(&e, "<parameters>"))?;
+        self.inner.set_inputs(declared).map_err(|e| engine_error(&e, "<inputs>"))?;
         let flat = PyArray1::from_vec(py, result?);
         flat.reshape([t.len(), n])
     }
@@ -705,19 +815,22 @@ impl InverseDynamics {
     /// change them.
     #[getter]
     fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let k = self.parameter_names.len();
-        read_only(py, &self.parameter_names, &self.inner.parameters()[..k])
+        read_only(py, &self.parameter_names, &self.inner.parameters())
     }
 
-    /// Uses these parameter values from now on: a dict replaces those it names, an array gives
-    /// them all.
+    /// The derived parameters' values in use, name to value, read-only.
+    #[getter]
+    fn derived_parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        read_only(py, &self.derived_parameter_names, &self.inner.derived_parameters())
+    }
+
+    /// Uses these values of the free parameters from now on: a dict replaces those it names,
+    /// an array gives them all; the derived ones follow.
     #[setter]
     fn set_parameters(&mut self, p: &Bound<'_, PyAny>) -> PyResult<()> {
-        let mut all = self.inner.parameters().to_vec();
-        let k = self.parameter_names.len();
-        let values = parameter_values(&self.parameter_names, &all[..k], p)?;
-        all[..k].copy_from_slice(&values);
-        self.inner.set_parameters(&all).map_err(|e| engine_error(&e, "<parameters>"))
+        let free = self.inner.parameters();
+        let values = free_given(&self.parameter_names, &free, &self.tunable.not_free(), p)?;
+        self.inner.set_parameters(&values).map_err(|e| engine_error(&e, "<parameters>"))
     }
 
     fn __repr__(&self) -> String {
@@ -787,6 +900,16 @@ impl MassMatrix {
         }
         self.input[1 + 2 * n..].copy_from_slice(&self.parameters);
         self.tape.eval(&self.input, &mut self.output);
+        // As `rhs` raises where its numbers are not finite, so does M.
+        if let Some(k) = self.output.iter().position(|v| !v.is_finite()) {
+            return Err(numeric_error(format!(
+                "at t = {t}, M[{}, {}] is {} (q = {:?})",
+                k % n,
+                k / n,
+                self.output[k],
+                q.iter().take(n).collect::<Vec<_>>()
+            )));
+        }
         let flat = PyArray1::from_slice(py, &self.output);
         flat.reshape([n, n])
     }

@@ -120,3 +120,77 @@ def test_jac_takes_the_values_solve_ivp_hands_to_f(pendulum):
     f.parameters = {"g": 1.62}
     again = solve_ivp(f, (0.0, 1.0), f.y0, method="DOP853", rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(moon.y[:, -1], again.y[:, -1], atol=1e-7)
+
+
+# L = 2*a and I = m*L^2/12: derived parameters, which follow a and m.
+DERIVED = ROOT / "tests" / "scenes" / "derived_length_pendulum.lag"
+
+
+def test_derived_parameters_follow_the_free_ones_as_simulate_set_has_them():
+    scene = lagrange.load(DERIVED)
+    f = scene.rhs()
+    assert f.parameter_names == ["a", "m", "g"]
+    assert f.derived_parameter_names == ["L", "I"]
+    assert dict(f.derived_parameters) == {"L": 2.0, "I": pytest.approx(1 / 3, rel=1e-15)}
+    y = f.y0
+    # simulate's `set` goes the command line's way (`simulate --set a=2`).
+    run = scene.simulate(until=1e-3, samples=2, set={"a": 2}, output=["theta''"])
+    by_hand = -1.5 * 9.81 * np.sin(0.5) / 4.0
+    assert run["theta''"][0] == pytest.approx(by_hand, rel=1e-14)
+    assert f(0.0, y, p={"a": 2})[1] == run["theta''"][0]
+    assert f(0.0, y, p=[2.0, 1.0, 9.81])[1] == run["theta''"][0]
+    Y = np.array([y, [0.1, 0.3]])
+    batch = f.batch(Y, p={"a": 2})
+    np.testing.assert_array_equal(batch[0], f(0.0, y, p={"a": 2}))
+    np.testing.assert_array_equal(batch[1], f(0.0, Y[1], p={"a": 2}))
+    # The Jacobian at a = 2 against central differences of f at a = 2.
+    jac = f.jac(0.0, y, p={"a": 2})
+    h = 1e-6
+    column = (f(0.0, y + [h, 0.0], p={"a": 2}) - f(0.0, y - [h, 0.0], p={"a": 2})) / (2 * h)
+    np.testing.assert_allclose(jac[:, 0], column, rtol=1e-8)
+    # From then on, and back.
+    f.parameters = {"a": 2}
+    assert f.derived_parameters["L"] == 4.0
+    assert f(0.0, y)[1] == run["theta''"][0]
+    f.parameters = {"a": 1}
+    assert f(0.0, y)[1] == pytest.approx(-1.5 * 9.81 * np.sin(0.5) / 2.0, rel=1e-14)
+
+
+def test_a_derived_parameter_cannot_be_set_and_names_what_it_follows():
+    scene = lagrange.load(DERIVED)
+    f = scene.rhs()
+    with pytest.raises(ValueError, match=r"`L` is derived from `a`; set `a` instead"):
+        f(0.0, f.y0, p={"L": 3})
+    with pytest.raises(ValueError, match=r"`I` is derived from `m` and `L`"):
+        f.parameters = {"I": 3}
+    with pytest.raises(KeyError, match="no parameter `b`"):
+        f(0.0, f.y0, p={"b": 3})
+    with pytest.raises(ValueError, match=r"5 parameter values for the 3 parameters \(a, m, g\)"):
+        f(0.0, f.y0, p=[2.0, 1.0, 9.81, 4.0, 1.0])
+    inverse = scene.inverse_dynamics
+    with pytest.raises(ValueError, match=r"`L` is derived from `a`"):
+        inverse(0.0, [0.5], [0.0], [0.0], p={"L": 3})
+    with pytest.raises(ValueError, match=r"`L` is derived from `a`"):
+        scene.simulate(until=0.1, set={"L": 3})
+
+
+def test_inverse_dynamics_follows_derived_parameters():
+    scene = lagrange.load(DERIVED)
+    f = scene.rhs()
+    y = f.y0
+    accel = f(0.0, y, p={"a": 2})[1]
+    # The scene moves on its own: no force is needed for its own acceleration at a = 2.
+    tau = scene.inverse_dynamics(0.0, [0.5], [0.0], [accel], p={"a": 2})
+    assert abs(tau[0]) < 1e-14
+    tau = scene.inverse_dynamics(0.0, [0.5], [0.0], [accel])
+    assert abs(tau[0]) > 1.0
+    native = scene._native.inverse_dynamics()
+    assert native.parameter_names == ["a", "m", "g"]
+    assert native.derived_parameter_names == ["L", "I"]
+    assert native.input_names == []
+
+
+def test_derivation_names_what_each_derived_parameter_follows():
+    d = lagrange.load(DERIVED).derive()
+    assert d.derived_parameters == {"L": ["a"], "I": ["m", "L"]}
+    assert d.parameters["I"] == pytest.approx(1 / 3, rel=1e-15)

@@ -59,6 +59,10 @@ pub enum Stabilisation {
     Velocity,
 }
 
+/// The rate α = β (1/s) at which Baumgarte stabilisation pulls kept constraints back, in every
+/// run and in the generated code, so that both integrate the same right-hand side.
+pub const BAUMGARTE_RATE: f64 = 10.0;
+
 /// The equations of motion M q̈ − Jᵀλ = f, J q̈ = γ as y' = F(t, y) with y = (q, q̇).
 ///
 /// Constraints kept with multipliers drift at the position and velocity level, because only
@@ -119,7 +123,7 @@ impl Mechanical {
             dynamics,
             observation,
             parameters,
-            baumgarte: 10.0,
+            baumgarte: BAUMGARTE_RATE,
             stabilisation: vec![Stabilisation::Position; layout.multipliers],
             dyn_out: vec![0.0; layout.dynamics_outputs()],
             obs_input: vec![0.0; layout.observation_inputs()],

@@ -18,28 +18,18 @@ pub struct NumericStart {
     pub digits: u32,
 }
 
-/// The scene's parameter values (then its inputs' when undriven), as numbers; `Err` names the parameters without one.
+/// The scene's parameter values (then its inputs' when undriven), as numbers (NaN where one is
+/// not a finite number); `Err` names the parameters without one.
 pub fn parameter_values(d: &Derivation) -> Result<Vec<(SymId, f64)>, Vec<String>> {
-    let pool = &d.model.pool;
-    let mut values = vec![f64::NAN; pool.symbol_count()];
-    let mut out = Vec::new();
-    let mut missing = Vec::new();
-    // The inputs follow, at their values when nothing drives them.
-    for (sym, value) in d.model.constants() {
-        match value {
-            Some(v) => {
-                let x = numeric::eval(pool, v, &values);
-                values[sym.index()] = x;
-                out.push((sym, x));
-            }
-            None => missing.push(pool.symbol(sym).name.clone()),
-        }
+    let model = &d.model;
+    let missing: Vec<String> =
+        model.params.iter().filter(|p| p.value.is_none()).map(|p| p.name.clone()).collect();
+    if !missing.is_empty() {
+        return Err(missing);
     }
-    if missing.is_empty() {
-        Ok(out)
-    } else {
-        Err(missing)
-    }
+    let values = model::ParameterValues::new(model).scene_values();
+    let symbols = model.params.iter().map(|p| p.sym).chain(model.inputs.iter().map(|u| u.sym));
+    Ok(symbols.zip(values).map(|(s, v)| (s, v.unwrap_or(f64::NAN))).collect())
 }
 
 /// The start in floating point at the given parameter values: the initial state, then the

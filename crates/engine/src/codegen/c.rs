@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use numeric::c::{comment, function, helpers, literal};
 
-use super::{Equations, Sizes};
+use super::Equations;
 use crate::{Error, Options};
 
 mod functions;
@@ -155,7 +155,9 @@ impl Names {
         let unit = |u: &Option<lang::Unit>| {
             u.as_ref().and_then(|u| model::units::si_text(u).ok()).unwrap_or_default()
         };
-        let parameters: Vec<String> = model.params.iter().map(|p| p.name.clone()).collect();
+        // A caller sets the free parameters; the derived ones follow them in `gather`.
+        let parameters: Vec<String> =
+            e.free.iter().map(|i| model.params[*i].name.clone()).collect();
         let mut fields: Vec<String> = Vec::new();
         for p in &parameters {
             let mut field = identifier(p);
@@ -167,7 +169,7 @@ impl Names {
         Names {
             parameters,
             fields,
-            parameter_units: model.params.iter().map(|p| unit(&p.unit)).collect(),
+            parameter_units: e.free.iter().map(|i| unit(&model.params[*i].unit)).collect(),
             states: e.prepared.state_names(),
             inputs: model.inputs.iter().map(|u| u.name.clone()).collect(),
             input_units: model.inputs.iter().map(|u| unit(&u.unit)).collect(),
@@ -203,7 +205,11 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
              u may be NULL when {name}_INPUTS is 0.",
             ascii(&e.title),
             ascii(&names.states[..n].join(", ")),
-            if m > 0 { " + J^T lambda, J qddot = gamma" } else { "" },
+            if m > 0 {
+                " + J^T lambda, J qddot = gamma,\nwith gamma Baumgarte-stabilised (rate 10/s) as lagrange simulate holds kept constraints"
+            } else {
+                ""
+            },
         ),
         "",
     );
@@ -213,7 +219,7 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
         ("COORDINATES", n, "q"),
         ("STATES", 2 * n, "y = (q, qdot)"),
         ("CONSTRAINTS", m, "kept with multipliers"),
-        ("PARAMETERS", sizes.parameters, "fields of the parameters"),
+        ("PARAMETERS", sizes.free_parameters, "fields of the parameters"),
         ("INPUTS", sizes.inputs, "u"),
         ("OUTPUTS", e.outputs.len(), "the scene's `output` lines"),
         ("REACTIONS", e.reactions.len(), "the reactions the scene names"),
@@ -222,7 +228,18 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
         let _ = writeln!(s, "#define {name}_{what} {count} /* {doc} */");
     }
     s.push('\n');
-    s.push_str(&comment("The scene's parameters, in SI units.", ""));
+    let derived = &e.prepared.derivation.model.params;
+    let derived: Vec<String> = e.derived.iter().map(|(i, _)| derived[*i].name.clone()).collect();
+    let about = if derived.is_empty() {
+        "The scene's parameters, in SI units.".to_string()
+    } else {
+        format!(
+            "The scene's free parameters, in SI units. The derived ones ({}) are not\n\
+             fields: every function computes them from these, as the scene defines them.",
+            ascii(&derived.join(", "))
+        )
+    };
+    s.push_str(&comment(&about, ""));
     s.push_str("typedef struct {\n");
     if names.fields.is_empty() {
         s.push_str("    char none; /* the scene has no parameters; C has no empty struct */\n");
@@ -353,8 +370,13 @@ fn implementation(e: &Equations, name: &str, path: &str, names: &Names) -> Strin
     let mut s = comment(&ascii_lines(&doc), "");
     let _ = writeln!(s, "#include <math.h>\n#include <stddef.h>\n\n#include \"{name}.h\"\n");
     s.push_str(&data(e, name, names));
-    let programs: Vec<&numeric::Program> =
-        e.programs.iter().map(|(_, p)| p).chain([&e.start]).collect();
+    let programs: Vec<&numeric::Program> = e
+        .programs
+        .iter()
+        .map(|(_, p)| p)
+        .chain([&e.start])
+        .chain(e.derived.iter().map(|(_, p)| p))
+        .collect();
     s.push_str(&helpers(&programs));
     for (program, p) in &e.programs {
         s.push('\n');
@@ -363,7 +385,13 @@ fn implementation(e: &Equations, name: &str, path: &str, names: &Names) -> Strin
     s.push('\n');
     s.push_str(&function(&e.start, "eval_start", "The start from [t, parameters, inputs]."));
     s.push('\n');
-    s.push_str(&gather(e.sizes, name, names));
+    let params = &e.prepared.derivation.model.params;
+    for (i, program) in &e.derived {
+        let doc = format!("The derived parameter {} from [parameters, inputs].", params[*i].name);
+        s.push_str(&function(program, &format!("eval_derived_{i}"), &ascii(&doc)));
+        s.push('\n');
+    }
+    s.push_str(&gather(e, name, names));
     s.push_str(&functions::all(e, name));
     s
 }
@@ -392,13 +420,15 @@ fn program_doc(program: &str) -> String {
 /// The definitions of the exported data.
 fn data(e: &Equations, name: &str, names: &Names) -> String {
     let k = e.sizes.parameters;
+    let free = e.free.len();
     let mut s = format!("const {name}_parameters {name}_default_parameters = {{\n");
-    if k == 0 {
+    if free == 0 {
         s.push_str("    0\n");
     }
-    for (i, (value, scene)) in e.values[..k].iter().zip(&names.parameters).enumerate() {
-        let comma = if i + 1 < k { "," } else { "" };
-        let _ = writeln!(s, "    {}{comma} /* {} = {value:?} */", literal(*value), ascii(scene));
+    let values = e.free.iter().map(|i| e.values[*i]);
+    for (i, (value, scene)) in values.zip(&names.parameters).enumerate() {
+        let comma = if i + 1 < free { "," } else { "" };
+        let _ = writeln!(s, "    {}{comma} /* {} = {value:?} */", literal(value), ascii(scene));
     }
     s.push_str("};\n\n");
     let lists = [
@@ -423,7 +453,8 @@ fn data(e: &Equations, name: &str, names: &Names) -> String {
 }
 
 /// `gather`: the slot vector [t, q, qdot, parameters, inputs] the programs read.
-fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
+fn gather(e: &Equations, name: &str, names: &Names) -> String {
+    let sizes = e.sizes;
     let n = sizes.coordinates;
     let mut s = comment("[t, q, qdot, parameters, inputs], the slots the programs read.", "");
     let _ = writeln!(
@@ -433,7 +464,7 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
     );
     s.push_str("    int i;\n");
     // Without parameters or inputs, `-Wextra` would warn of the argument not read.
-    if sizes.parameters == 0 {
+    if sizes.free_parameters == 0 {
         s.push_str("    (void)p;\n");
     }
     if sizes.inputs == 0 {
@@ -445,11 +476,16 @@ fn gather(sizes: Sizes, name: &str, names: &Names) -> String {
         "    for (i = 0; i < {n}; i++) {{\n        input[1 + i] = q[i];\n        input[{} + i] = qd[i];\n    }}",
         1 + n
     );
-    for (i, field) in names.fields.iter().enumerate() {
+    for (i, field) in e.free.iter().zip(&names.fields) {
         let _ = writeln!(s, "    input[{}] = p->{field};", 1 + 2 * n + i);
     }
     for i in 0..sizes.inputs {
         let _ = writeln!(s, "    input[{}] = u[{i}];", 1 + 2 * n + sizes.parameters + i);
+    }
+    // Each derived parameter from the slots before it, in declaration order.
+    for (i, _) in &e.derived {
+        let slot = 1 + 2 * n;
+        let _ = writeln!(s, "    eval_derived_{i}(input + {slot}, input + {});", slot + i);
     }
     s.push_str("}\n\n");
     s

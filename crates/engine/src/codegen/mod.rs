@@ -23,8 +23,10 @@ pub struct Sizes {
     pub coordinates: usize,
     /// Constraints kept with multipliers, m.
     pub constraints: usize,
-    /// The scene's parameters (without the inputs).
+    /// The scene's parameters (without the inputs): the slots the programs read.
     pub parameters: usize,
+    /// The free parameters, the ones a caller gives; the derived ones follow them.
+    pub free_parameters: usize,
     pub inputs: usize,
 }
 
@@ -54,6 +56,12 @@ pub struct Equations {
     pub start: numeric::Program,
     /// The scene's title, or the path when it has none.
     pub title: String,
+    /// The free parameters' indices, in declaration order: the fields a caller sets.
+    pub free: Vec<usize>,
+    /// Each derived parameter's index with its value as a program of `[parameters, inputs]`
+    /// (one output), in declaration order: computed from the slots before it, as
+    /// `model::ParameterValues` computes it, so the generated code has its bits.
+    pub derived: Vec<(usize, numeric::Program)>,
 }
 
 impl Equations {
@@ -77,6 +85,7 @@ impl Equations {
             coordinates: prepared.layout.coordinates,
             constraints: prepared.layout.multipliers,
             parameters: d.model.params.len(),
+            free_parameters: prepared.parameter_plan.free().len(),
             inputs: d.model.inputs.len(),
         };
         let (n, m) = (sizes.coordinates, sizes.constraints);
@@ -94,12 +103,12 @@ impl Equations {
                 prepared.lower(&dyn_inputs, &dynamics[n * n + n..])?,
             ));
         }
-        // ∂(r, c)/∂(q, q̇) of the rows the right-hand side solves: it is not stabilised, so the
-        // partials of Φ and Φ̇ that follow them in the partials layout are left out.
+        // ∂(r, c, Φ, Φ̇)/∂(q, q̇): the right-hand side solves c stabilised by Φ and Φ̇, as a run
+        // does, so its Jacobian needs their partials too.
         let partials = prepared.partials_exprs();
         programs.push((
             "partials".to_string(),
-            prepared.lower(&obs_inputs, &partials[..(n + m) * 2 * n])?,
+            prepared.lower(&obs_inputs, &partials[..(n + 3 * m) * 2 * n])?,
         ));
         programs.push(("energies".to_string(), prepared.lower(&dyn_inputs, &prepared.extra[..2])?));
         if !reaction_exprs.is_empty() {
@@ -110,7 +119,24 @@ impl Equations {
         }
         let start = start_program(&prepared)?;
         let title = prepared.derivation.model.title.clone().unwrap_or_else(|| path.to_string());
-        Ok(Equations { prepared, values, sizes, programs, reactions, outputs, start, title })
+        let free = prepared.parameter_plan.free();
+        let mut derived = Vec::new();
+        for i in prepared.parameter_plan.derived() {
+            let Some(value) = prepared.derivation.model.params[i].value else { continue };
+            derived.push((i, prepared.lower(&prepared.parameters, &[value])?));
+        }
+        Ok(Equations {
+            prepared,
+            values,
+            sizes,
+            programs,
+            reactions,
+            outputs,
+            start,
+            title,
+            free,
+            derived,
+        })
     }
 
     /// The program named `name`, if the scene has it.

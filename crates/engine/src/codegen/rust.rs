@@ -99,8 +99,8 @@ fn module(e: &Equations, path: &str) -> String {
                 "Per kept constraint: its Jacobian row J (N values), then γ, Φ, Φ̇.".to_string()
             }
             "partials" => "With q̈ and λ held fixed, the partials of r = M·q̈ − Jᵀλ − f (N rows), \
-                           then of\nc = J·q̈ − γ (a row per kept constraint), each row ∂/∂q (N \
-                           values) then ∂/∂q̇ (N)."
+                           then of\nc = J·q̈ − γ, Φ and Φ̇ (a row each per kept constraint), each \
+                           row ∂/∂q (N values)\nthen ∂/∂q̇ (N)."
                 .to_string(),
             "energies" => "Kinetic and potential energy.".to_string(),
             "outputs" => format!("The scene's outputs ({}).", e.outputs.join(", ")),
@@ -112,9 +112,14 @@ fn module(e: &Equations, path: &str) -> String {
         s.push_str(&function(p, name, &doc));
         s.push('\n');
     }
-    for wrapper in [augmented_function, rhs_function, jacobian_function, inverse_dynamics_function]
-    {
-        s.push_str(&wrapper(sizes));
+    let kinds = e.prepared.stabilisation();
+    for wrapper in [
+        augmented_function(sizes, &kinds),
+        rhs_function(sizes),
+        jacobian_function(sizes, &kinds),
+        inverse_dynamics_function(sizes),
+    ] {
+        s.push_str(&wrapper);
         s.push('\n');
     }
     s.push_str(HELPERS);
@@ -123,13 +128,14 @@ fn module(e: &Equations, path: &str) -> String {
 
 /// `augmented(input, a, b)`: the matrix [M −Jᵀ; J 0] (row-major) and the right-hand side
 /// (f, γ) that `rhs` and `jacobian` solve, without stabilisation.
-fn augmented_function(sizes: Sizes) -> String {
+fn augmented_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let size = n + m;
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "/// [M −Jᵀ; J 0] (row-major) and (f, γ) at `input`, as `rhs` and `jacobian` solve them."
+        "/// [M −Jᵀ; J 0] (row-major) and (f, γ) at `input`, as `rhs` and `jacobian` solve them;\n\
+         /// γ Baumgarte-stabilised as `lagrange simulate` holds kept constraints."
     );
     let _ = writeln!(
         s,
@@ -146,13 +152,36 @@ fn augmented_function(sizes: Sizes) -> String {
         let _ = writeln!(s, "    let mut rows = [0.0; {}];", m * (n + 3));
         let _ = writeln!(s, "    constraints(input, &mut rows);");
         let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n        b[{n} + c] = rows[c * {} + {n}];\n    }}", n + 3, n + 3);
+        let alpha = sim::BAUMGARTE_RATE;
+        for (c, kind) in kinds.iter().enumerate() {
+            let base = c * (n + 3) + n;
+            // The run's operations in its order: (γ − 2α·Φ̇) − α²·Φ.
+            let _ = match kind {
+                sim::Stabilisation::Position => writeln!(
+                    s,
+                    "    b[{}] = rows[{base}] - {:?} * rows[{}] - {:?} * rows[{}];",
+                    n + c,
+                    2.0 * alpha,
+                    base + 2,
+                    alpha * alpha,
+                    base + 1
+                ),
+                sim::Stabilisation::Velocity => writeln!(
+                    s,
+                    "    b[{}] = rows[{base}] - {:?} * rows[{}];",
+                    n + c,
+                    alpha,
+                    base + 1
+                ),
+            };
+        }
     }
     s.push_str("}\n");
     s
 }
 
 /// `rhs(t, y, parameters, inputs, dy)`: y = (q, q̇), dy = (q̇, q̈), solving M q̈ = f (with multipliers,
-/// the augmented system, without stabilisation). False when the system is singular.
+/// the augmented system, stabilised as a run stabilises it). False when the system is singular.
 fn rhs_function(sizes: Sizes) -> String {
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let size = n + m;
@@ -186,7 +215,7 @@ fn rhs_function(sizes: Sizes) -> String {
 /// `jacobian(t, y, parameters, inputs, jac)`: ∂(q̇, q̈)/∂(q, q̇) of `rhs`, row-major. Differentiating
 /// r = 0 and c = 0 along the state with q̈ and λ free gives
 /// [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c): one solve per state component.
-fn jacobian_function(sizes: Sizes) -> String {
+fn jacobian_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let (size, width) = (n + m, 2 * n);
     let mut s = String::new();
@@ -216,8 +245,32 @@ fn jacobian_function(sizes: Sizes) -> String {
     let _ = writeln!(s, "    held[..{}].copy_from_slice(&input[..{}]);", 1 + 2 * n, 1 + 2 * n);
     let _ = writeln!(s, "    held[{}..{}].copy_from_slice(&b);", 1 + 2 * n, 1 + 3 * n + m);
     let _ = writeln!(s, "    held[{}..].copy_from_slice(&input[{}..]);", 1 + 3 * n + m, 1 + 2 * n);
-    let _ = writeln!(s, "    let mut d = [0.0; {}];", size * width);
+    let _ = writeln!(s, "    let mut d = [0.0; {}];", (n + 3 * m) * width);
     let _ = writeln!(s, "    partials(&held, &mut d);");
+    // The constraint rows' partials as `augmented` stabilises them: with Φ's and Φ̇'s.
+    let alpha = sim::BAUMGARTE_RATE;
+    if m > 0 {
+        let _ = writeln!(s, "    for col in 0..{width} {{");
+        for (c, kind) in kinds.iter().enumerate() {
+            let row = |block: usize| format!("d[{} + col]", (n + block * m + c) * width);
+            let _ = match kind {
+                sim::Stabilisation::Position => writeln!(
+                    s,
+                    "        {} = {} + {:?} * {} + {:?} * {};",
+                    row(0),
+                    row(0),
+                    2.0 * alpha,
+                    row(2),
+                    alpha * alpha,
+                    row(1)
+                ),
+                sim::Stabilisation::Velocity => {
+                    writeln!(s, "        {} = {} + {:?} * {};", row(0), row(0), alpha, row(1))
+                }
+            };
+        }
+        let _ = writeln!(s, "    }}");
+    }
     let _ = writeln!(s, "    jac.fill(0.0);");
     let _ =
         writeln!(s, "    for i in 0..{n} {{\n        jac[i * {width} + {n} + i] = 1.0;\n    }}");

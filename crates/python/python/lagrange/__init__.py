@@ -115,19 +115,39 @@ def _run_options(
         raise ValueError(f"`samples` must be 0 (every step) or a positive count, not {samples}")
     laws, series = _inputs(input)
     return dict(
-        until=None if until is None else float(until),
+        until=_number("until", until),
         method=method,
-        tolerance=None if tolerance is None else float(tolerance),
-        step=None if step is None else float(step),
+        tolerance=_number("tolerance", tolerance),
+        step=_number("step", step),
         output=_listed(output),
         set=_assignments(set),
         input=laws,
         input_series=series,
-        hold=None if hold is None else float(hold),
+        hold=_number("hold", hold),
         stop_when=_listed(stop_when),
         events=_listed(events),
         samples=int(samples),
     )
+
+
+def _number(name, value):
+    """A setting's number, or ``None`` left as it is: a bool is refused rather than read as 0
+    or 1 (``until=True`` is a mistake, not a run to t = 1)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"`{name}` must be a number, not {value!r}")
+    return float(value)
+
+
+def _count(name, value):
+    """A whole number of values (a grid axis's, a sweep's): 3.0 is 3, 2.9 is refused rather than
+    cut to 2."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"`{name}` must be a whole number of values, not {value!r}")
+    if not float(value).is_integer():
+        raise ValueError(f"`{name}` must be a whole number of values, not {value!r}")
+    return int(value)
 
 
 def _assignments(set):
@@ -166,7 +186,7 @@ def _sweep_text(sweep):
         raise ValueError(f"a sweep takes one parameter, not {len(sweep)}")
     ((name, ends),) = sweep.items()
     a, b, n = ends
-    return f"{name}={float(a)!r}:{float(b)!r}:{int(n)}"
+    return f"{name}={float(a)!r}:{float(b)!r}:{_count(name, n)}"
 
 
 def _value_text(value):
@@ -200,7 +220,7 @@ def _vary_texts(vary):
             texts.append(f"{name}={spread}")
         else:
             a, b, n = spread
-            texts.append(f"{name}={float(a)!r}:{float(b)!r}:{int(n)}")
+            texts.append(f"{name}={float(a)!r}:{float(b)!r}:{_count(name, n)}")
     return texts
 
 
@@ -309,8 +329,11 @@ class Scene:
         ``f.parameters = {"g": 1.62}`` (or an array) changes them for every later call.
         ``f.parameters`` itself is a read-only mapping: assigning to an item of it raises
         ``TypeError`` rather than changing a copy that nothing reads. A parameter the scene
-        defines from others (``I = m*L^2/12``) is a value like any other here: give it too
-        when they change.
+        defines from others (``param I = m*L^2/12``) is derived: ``f.parameter_names`` and
+        ``f.parameters`` leave it out, ``f.derived_parameter_names`` and the read-only
+        ``f.derived_parameters`` list it, it follows the parameters it names whenever they
+        change (as ``simulate(set=…)`` has it follow), and giving it a value raises
+        ``ValueError`` naming them.
         """
         return self._native.rhs()
 
@@ -618,7 +641,9 @@ class Derivation:
       coordinates (those constraints did not eliminate) and their derivatives;
       ``multipliers``: the reactions of constraints kept with multipliers.
     - ``parameters``: dict of parameter name to its value as a float (``None`` if it has
-      none); ``symbols``: dict of every scene name (``"theta''"`` included) to its SymPy object.
+      none); ``derived_parameters``: dict of each derived parameter's name (one whose value
+      names others, ``param L = 2*a``) to the names of the parameters it follows, which are
+      the ones to set; ``symbols``: dict of every scene name (``"theta''"`` included) to its SymPy object.
     - ``mass_matrix`` (n×n) and ``forcing`` (n×1): ``sympy.Matrix`` with M·q̈ = f.
     - ``equations``: the equations of motion as ``sympy.Eq``, as the report writes them.
     - ``kinetic``, ``potential``, ``lagrangian``: T, V and L.
@@ -645,6 +670,7 @@ class Derivation:
         self.accelerations = raw["accelerations"]
         self.multipliers = raw["multipliers"]
         self.parameters = raw["parameters"]
+        self.derived_parameters = raw["derived_parameters"]
         self.symbols = raw["symbols"]
         self.mass_matrix = raw["mass_matrix"]
         self.forcing = raw["forcing"]

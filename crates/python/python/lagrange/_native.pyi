@@ -65,6 +65,7 @@ class Rhs:
 
     names: list[str]
     parameter_names: list[str]
+    derived_parameter_names: list[str]
     input_names: list[str]
     @property
     def y0(self) -> npt.NDArray[np.float64]: ...
@@ -74,6 +75,8 @@ class Rhs:
     def parameters(self) -> Mapping[str, float]: ...
     @parameters.setter
     def parameters(self, p: Parameters) -> None: ...
+    @property
+    def derived_parameters(self) -> Mapping[str, float]: ...
     def __call__(
         self,
         t: float,
@@ -101,12 +104,15 @@ class InverseDynamics:
 
     names: list[str]
     parameter_names: list[str]
+    derived_parameter_names: list[str]
     input_names: list[str]
     kept_constraints: list[str]
     @property
     def parameters(self) -> Mapping[str, float]: ...
     @parameters.setter
     def parameters(self, p: Parameters) -> None: ...
+    @property
+    def derived_parameters(self) -> Mapping[str, float]: ...
     def batch(
         self,
         t: npt.ArrayLike,

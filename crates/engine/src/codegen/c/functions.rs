@@ -4,6 +4,8 @@
 
 use std::fmt::Write;
 
+use numeric::c::literal;
+
 use super::of_state;
 use crate::codegen::Equations;
 
@@ -28,12 +30,16 @@ pub(super) fn all(e: &Equations, name: &str) -> String {
     s
 }
 
-/// `static void augmented(input, a, b)`: [M −Jᵀ; J 0] (row-major) and (f, γ).
+/// `static void augmented(input, a, b)`: [M −Jᵀ; J 0] (row-major) and (f, γ), γ stabilised
+/// as `sim::Mechanical` stabilises it (Baumgarte, at `sim::BAUMGARTE_RATE`), with its bits:
+/// an importer's solver then holds the constraints as `simulate` does rather than let them
+/// drift.
 fn augmented(e: &Equations) -> String {
     let (n, m) = (e.sizes.coordinates, e.sizes.constraints);
     let size = n + m;
     let mut s = String::from(
-        "/* [M -J^T; J 0] (row-major) and (f, gamma) at the slots input, unstabilised. */\n\
+        "/* [M -J^T; J 0] (row-major) and (f, gamma) at the slots input, gamma Baumgarte-\n \
+         * stabilised as lagrange simulate holds kept constraints. */\n\
          static void augmented(const double *input, double *a, double *b)\n{\n",
     );
     let _ = writeln!(s, "    double mass[{}];\n    double f[{n}];\n    int i, j;", n * n);
@@ -56,6 +62,29 @@ fn augmented(e: &Equations) -> String {
              for (j = 0; j < {m}; j++) {{\n            a[({n} + c) * {size} + {n} + j] = 0.0;\n        }}\n        \
              b[{n} + c] = rows[c * {width} + {n}];\n    }}"
         );
+        let alpha = sim::BAUMGARTE_RATE;
+        for (c, kind) in e.prepared.stabilisation().iter().enumerate() {
+            let base = c * width + n;
+            // The same operations in the same order as the run's: (γ − 2α·Φ̇) − α²·Φ.
+            let _ = match kind {
+                sim::Stabilisation::Position => writeln!(
+                    s,
+                    "    b[{}] = rows[{base}] - {} * rows[{}] - {} * rows[{}];",
+                    n + c,
+                    literal(2.0 * alpha),
+                    base + 2,
+                    literal(alpha * alpha),
+                    base + 1
+                ),
+                sim::Stabilisation::Velocity => writeln!(
+                    s,
+                    "    b[{}] = rows[{base}] - {} * rows[{}];",
+                    n + c,
+                    literal(alpha),
+                    base + 1
+                ),
+            };
+        }
     }
     s.push_str("}\n\n");
     s
@@ -166,7 +195,8 @@ fn rhs(e: &Equations, name: &str) -> String {
 }
 
 /// ∂(q̇, q̈)/∂(q, q̇): differentiating r = 0 and c = 0 along the state with q̈ and λ free
-/// gives [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c), one solve per state component.
+/// gives [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c), one solve per state component; c is the
+/// stabilised row `augmented` solves, so its partials take those of Φ and Φ̇ with it.
 fn jacobian(e: &Equations, name: &str) -> String {
     let (n, m) = (e.sizes.coordinates, e.sizes.constraints);
     let (size, width) = (n + m, 2 * n);
@@ -179,11 +209,41 @@ fn jacobian(e: &Equations, name: &str) -> String {
         size * size,
         size * size,
         e.sizes.dynamics_inputs() + size,
-        size * width
+        (n + 3 * m) * width
     );
     let _ = writeln!(s, "    gather(t, y, y + {n}, p, u, input);");
     s.push_str("    if (solved(input, matrix, held)) {\n        return 1;\n    }\n");
     s.push_str("    eval_partials(held, d);\n");
+    // The rows' partials, stabilised as `augmented` stabilises γ: ∂c + 2α·∂Φ̇ + α²·∂Φ (a
+    // position constraint) or ∂c + α·∂Φ (a velocity one), with `sim`'s operations.
+    let alpha = sim::BAUMGARTE_RATE;
+    if m > 0 {
+        let _ = writeln!(s, "    for (col = 0; col < {width}; col++) {{");
+        for (c, kind) in e.prepared.stabilisation().iter().enumerate() {
+            let row = |block: usize| format!("d[{} + col]", (n + block * m + c) * width);
+            let _ = match kind {
+                sim::Stabilisation::Position => writeln!(
+                    s,
+                    "        {} = {} + {} * {} + {} * {};",
+                    row(0),
+                    row(0),
+                    literal(2.0 * alpha),
+                    row(2),
+                    literal(alpha * alpha),
+                    row(1)
+                ),
+                sim::Stabilisation::Velocity => writeln!(
+                    s,
+                    "        {} = {} + {} * {};",
+                    row(0),
+                    row(0),
+                    literal(alpha),
+                    row(1)
+                ),
+            };
+        }
+        s.push_str("    }\n");
+    }
     let _ = writeln!(
         s,
         "    for (i = 0; i < {}; i++) {{\n        jac[i] = 0.0;\n    }}",
