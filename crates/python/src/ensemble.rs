@@ -39,10 +39,11 @@ pub fn ensemble<'py>(
         let ensemble = Ensemble::new(source, &request.options)?;
         let total = ensemble.runs();
         let threads = request.threads.unwrap_or_else(engine::ensemble::cores);
-        let to = request.to.unwrap_or(total);
-        // A range past the ensemble's end, or backwards, would give a table with no rows that
-        // reads as if every run had been done.
-        if request.from > to || to > total {
+        // A chunk's end past the last run ends at it, as a slice does (a front end spreads
+        // chunks of a fixed size); a start past it, or a range backwards, would give a table
+        // with no rows that reads as if every run had been done.
+        let to = request.to.unwrap_or(total).min(total);
+        if request.from > to || (request.from == total && total > 0) {
             return Err(engine::Error::Input(format!(
                 "runs {}..{to} are not a range of this ensemble's {total} runs (0..{total})",
                 request.from

@@ -43,8 +43,10 @@ def test_an_ensemble_range_and_thread_count_must_make_sense():
     scene = lagrange.load(PENDULUM)
     with pytest.raises(ValueError, match=r"runs 5\.\.3 are not a range of this ensemble's 3 runs"):
         scene.ensemble({"g": (1, 2, 3)}, start=5)
-    with pytest.raises(ValueError, match=r"runs 0\.\.4"):
-        scene.ensemble({"g": (1, 2, 3)}, stop=4)
+    with pytest.raises(ValueError, match=r"runs 3\.\.3"):
+        scene.ensemble({"g": (1, 2, 3)}, start=3)
+    # A chunk's end past the last run ends there, as a slice does.
+    assert len(scene.ensemble({"g": (1, 2, 3)}, start=2, stop=10)["g"]) == 1
     with pytest.raises(ValueError, match="`threads` must be a positive whole number, not 0"):
         scene.ensemble({"g": (1, 2, 3)}, threads=0)
     assert len(scene.ensemble({"g": (1, 2, 3)}, start=1, stop=3)["g"]) == 2

@@ -486,7 +486,8 @@ class Scene:
           default the scene's ``output`` quantities at the end, else the coordinates.
         - ``start``, ``stop``: run only these runs of the ensemble (in its order), for a front
           end that spreads chunks over processes or machines; joined in order, the chunks
-          give the whole table.
+          give the whole table. A ``stop`` past the last run ends there, as a slice does; a
+          ``start`` at or past it, or after ``stop``, raises ``ValueError``.
         - ``settings``: :meth:`simulate`'s keyword arguments but ``output`` and ``samples``.
 
         The scene is derived and lowered once per call; the table is the same whatever the
