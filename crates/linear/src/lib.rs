@@ -290,10 +290,10 @@ pub struct Numbers {
     /// (re, im), by real part from the largest down (those within their bound of zero as
     /// zero), then by imaginary part.
     pub eigenvalues: Vec<(f64, f64)>,
-    /// How far rounding may have moved each eigenvalue (in the same order): the backward
-    /// error of the eigenvalue solver, eps·‖A‖ with a margin, times the eigenvalue's condition
-    /// (that of its group where rounding cannot tell the group apart), plus the group's spread.
-    /// The verdict compares each real part with its own bound.
+    /// How far rounding may have moved each eigenvalue (in the same order): eps·‖A‖ with a
+    /// margin (the rounding of A's entries, and the iteration's own in A balanced) times the
+    /// eigenvalue's condition (that of its group where rounding cannot tell the group apart),
+    /// plus the group's spread. The verdict compares each real part with its own bound.
     pub bounds: Vec<f64>,
     pub stability: Stability,
     /// The largest of the bounds.

@@ -53,12 +53,13 @@ impl Spectrum {
     /// All the eigenvalues of A, the verdict on all of them; `None` if A is not finite or the
     /// iteration does not converge.
     pub fn of(a: &DMatrix<f64>) -> Option<Spectrum> {
-        Some(Spectrum::from_values(eigen::eigenvalues(a)?, 0))
+        Some(Spectrum::from_values(eigen::eigenvalues(a)?, 0, a.trace()))
     }
 
-    fn from_values(mut values: Vec<Eigenvalue>, first_integrals: usize) -> Spectrum {
+    /// The spectrum of eigenvalues `values` of a matrix of trace `trace`.
+    fn from_values(mut values: Vec<Eigenvalue>, first_integrals: usize, trace: f64) -> Spectrum {
         sort(&mut values);
-        let stability = stability_apart(&values, first_integrals);
+        let stability = stability_apart(&values, first_integrals, trace);
         let tolerance = values.iter().map(|z| z.bound).fold(0.0, f64::max);
         Spectrum {
             eigenvalues: values.iter().map(|z| (z.re, z.im)).collect(),
@@ -91,7 +92,8 @@ impl Spectrum {
     /// verdict apart from their zeros.
     pub fn deflated(a: &DMatrix<f64>) -> Option<Spectrum> {
         let (values, first_integrals) = deflated_eigenvalues(a)?;
-        Some(Spectrum::from_values(values, first_integrals))
+        // The first integrals' part of A (Lᵀ·A = 0) adds nothing to its trace.
+        Some(Spectrum::from_values(values, first_integrals, a.trace()))
     }
 }
 
@@ -136,11 +138,15 @@ fn deflated_eigenvalues(a: &DMatrix<f64>) -> Option<(Vec<Eigenvalue>, usize)> {
 /// The verdict on the eigenvalues apart from `first_integrals` of their exact zeros (each
 /// first integral's direction leads to a neighbouring steady motion, not away from this one:
 /// the bicycle's forward speed, the sleigh's), each real part against its own bound.
-fn stability_apart(values: &[Eigenvalue], first_integrals: usize) -> Stability {
+///
+/// The real parts add up to A's trace, `trace`: a conservative system's spectrum is symmetric
+/// about the imaginary axis (λ with −λ̄), its trace 0 (no damping puts nothing on A's
+/// diagonal), and it cannot be stable whatever rounding does to its real parts.
+fn stability_apart(values: &[Eigenvalue], first_integrals: usize, trace: f64) -> Stability {
     let rest = apart_from_first_integrals(values, first_integrals);
     if rest.iter().any(|z| z.re > z.bound) {
         Stability::Unstable
-    } else if !rest.is_empty() && rest.iter().all(|z| z.re < -z.bound) {
+    } else if !rest.is_empty() && rest.iter().all(|z| z.re < -z.bound) && trace < 0.0 {
         Stability::Stable
     } else {
         Stability::MarginallyStable
@@ -184,7 +190,8 @@ mod tests {
     fn verdict(values: &[(f64, f64, f64)]) -> Stability {
         let values: Vec<Eigenvalue> =
             values.iter().map(|&(re, im, bound)| Eigenvalue { re, im, bound }).collect();
-        stability_apart(&values, 0)
+        let trace = values.iter().map(|z| z.re).sum();
+        stability_apart(&values, 0, trace)
     }
 
     #[test]
@@ -197,6 +204,13 @@ mod tests {
         assert_eq!(verdict(&[(0.0, 0.0, 0.0)]), Stability::MarginallyStable);
         // A slow root is judged on its own bound, not on the fast root's size.
         assert_eq!(verdict(&[(-1.0, 0.0, 1e-6), (-1e9, 0.0, 1e-6)]), Stability::Stable);
+        // Real parts that rounding pushed below their bounds, in a spectrum whose trace is 0:
+        // symmetric, so not stable.
+        let pushed: Vec<Eigenvalue> = [(-1e-3, 1.0), (-1e-3, -1.0)]
+            .iter()
+            .map(|&(re, im)| Eigenvalue { re, im, bound: 1e-6 })
+            .collect();
+        assert_eq!(stability_apart(&pushed, 0, 0.0), Stability::MarginallyStable);
     }
 
     #[test]
