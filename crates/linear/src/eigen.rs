@@ -449,6 +449,53 @@ mod tests {
     }
 
     #[test]
+    fn the_roots_agree_with_an_independent_iteration_where_it_converges() {
+        // Matrices of order 1 to 12 with entries spread over six orders of magnitude, from a
+        // fixed sequence: the roots match nalgebra's Schur form (where it converges) as
+        // multisets, within their bounds, and add up to the trace.
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut compared = 0;
+        for n in 1..=12 {
+            for _ in 0..5 {
+                let matrix = DMatrix::from_fn(n, n, |_, _| {
+                    let magnitude = [1e-3, 1.0, 1e3][(next() * 3.0) as usize % 3];
+                    (next() - 0.5) * magnitude
+                });
+                let found = eigenvalues(&matrix).expect("converges");
+                let trace: f64 = found.iter().map(|z| z.re).sum();
+                let scale = matrix.norm();
+                assert!((trace - matrix.trace()).abs() <= 1e-12 * scale, "{matrix}");
+                let Some(schur) = nalgebra::Schur::try_new(matrix.clone(), f64::EPSILON, 10_000)
+                else {
+                    continue;
+                };
+                let mut theirs: Vec<Complex<f64>> =
+                    schur.complex_eigenvalues().iter().copied().collect();
+                for z in &found {
+                    let here = Complex::new(z.re, z.im);
+                    let nearest = (0..theirs.len())
+                        .min_by(|&a, &b| {
+                            modulus(theirs[a] - here).total_cmp(&modulus(theirs[b] - here))
+                        })
+                        .expect("as many roots");
+                    // Both are within rounding of the true root: the two bounds' worth.
+                    let apart = modulus(theirs[nearest] - here);
+                    assert!(apart <= 1e-9 * scale && apart <= 2.0 * z.bound, "{matrix}: {z:?}");
+                    theirs.remove(nearest);
+                }
+                compared += 1;
+            }
+        }
+        assert!(compared > 40, "{compared}");
+    }
+
+    #[test]
     fn balancing_keeps_the_eigenvalues() {
         let matrix = DMatrix::from_row_slice(2, 2, &[1.0, 1e6, 1e-6, 2.0]);
         let balanced = balance(matrix.clone());
