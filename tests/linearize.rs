@@ -515,6 +515,15 @@ fn the_reference_is_judged_at_the_parameters_in_force() {
         .rows
         .iter()
         .all(|r| r.stability == Stability::MarginallyStable));
+    // A parameter defined through the one set changes with it.
+    let through = source.replace("w = 4 rad/s", "w = 4 rad/s, turn = w");
+    let options = Options {
+        set: vec!["w=6".into()],
+        about: Some("theta = acos(g*b/(turn^2*a^2))".into()),
+        ..Default::default()
+    };
+    let l = linearize(&through, &options).unwrap_or_else(|e| panic!("through w: {e}"));
+    assert!(close(l.at.eigenvalues[0].1, omega, 1e-10), "{:?}", l.at.eigenvalues);
     // --set leaves the scene's value, and the scene's check of it, where it does not reach.
     let options = Options { about: Some(rest.into()), ..Default::default() };
     let err = linearize(&source, &options).err().expect("no rest at the scene's w = 4");

@@ -121,12 +121,17 @@ impl About {
         varying: &[&str],
     ) -> Result<(), Error> {
         let shift = |s: lang::Span| lang::Span::new(s.start + self.start, s.end + self.start);
-        let varying: Vec<cas::SymId> = model
-            .params
-            .iter()
-            .filter(|p| varying.contains(&p.name.as_str()))
-            .map(|p| p.sym)
-            .collect();
+        // A parameter defined through one that changes changes with it (`w2 = 2*w`).
+        let mut changing: Vec<cas::SymId> = Vec::new();
+        for p in &model.params {
+            let through = p
+                .value
+                .is_some_and(|v| model.pool.free_symbols(v).iter().any(|s| changing.contains(s)));
+            if through || varying.contains(&p.name.as_str()) {
+                changing.push(p.sym);
+            }
+        }
+        let varying = changing;
         if let Err(mut diagnostics) = model.resolve_about_varying(&self.text, &varying) {
             for d in &mut diagnostics {
                 d.span = shift(d.span);
