@@ -434,3 +434,160 @@ linearize about theta = 0, x' = v, u = 0, w = -L
         .expect("refused");
     assert!(error.to_string().contains("follows from the kept constraints"), "{error}");
 }
+
+/// A scene of `tests/scenes`.
+fn test_scene(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn the_sliding_top_linearizes_at_every_spin_and_wakes_at_its_critical_spin() {
+    // Its tip slides, so it tilts about its centre of mass: A·s² − i·C·w·s − m·g·l = 0, roots
+    // on the imaginary axis above w = 2·sqrt(A·m·g·l)/C (A about the centre of mass).
+    let source = test_scene("sliding_top.lag");
+    let (m, g, l_, a, c) = (0.5_f64, 9.81_f64, 0.04_f64, 0.0004_f64, 0.0006_f64);
+    let critical = 2.0 * (a * m * g * l_).sqrt() / c;
+    for w in [25.0, 29.6, 59.0] {
+        let options = Options { set: vec![format!("w={w}")], ..Default::default() };
+        let l = linearize(&source, &options).unwrap_or_else(|e| panic!("at w = {w}: {e}"));
+        let expected = if w < critical { Stability::Unstable } else { Stability::MarginallyStable };
+        assert_eq!(l.at.stability, expected, "at w = {w}: {:?}", l.at.eigenvalues);
+        // The tilting roots: s = i·C·w/(2·A) ± sqrt(m·g·l/A − (C·w/(2·A))²).
+        let half = c * w / (2.0 * a);
+        let square = m * g * l_ / a - half * half;
+        let largest_re = l.at.eigenvalues.iter().map(|z| z.0).fold(f64::NEG_INFINITY, f64::max);
+        let expected_re = square.max(0.0).sqrt();
+        assert!((largest_re - expected_re).abs() <= 1e-9 * half, "at w = {w}: {largest_re}");
+    }
+    let options = Options { sweep: Some("w=0:60:7".into()), ..Default::default() };
+    let l = linearize(&source, &options).expect("the sweep goes through");
+    let sweep = l.sweep.expect("a sweep");
+    assert_eq!(sweep.rows.len(), 7);
+    assert_eq!(sweep.changes.len(), 1, "{:?}", sweep.changes);
+    assert!(close(sweep.changes[0].value, critical, 1e-8), "{:?}", sweep.changes);
+    let checked = cli::check::check_file("sliding_top.lag", &source);
+    assert_eq!((checked.failed, checked.exit_code), (0, 0), "{}", checked.report);
+}
+
+#[test]
+fn the_reference_is_judged_at_the_parameters_in_force() {
+    // The scene turns the ellipse at w = 4, where the bead's off-bottom rest does not exist
+    // (acos of 109/80); at w = 6 it does, and --set says so.
+    let source = test_scene("bead_on_turning_ellipse.lag");
+    let rest = "theta = acos(g*b/(w^2*a^2))";
+    let options =
+        Options { set: vec!["w=6".into()], about: Some(rest.into()), ..Default::default() };
+    let l = linearize(&source, &options).unwrap_or_else(|e| panic!("at w = 6: {e}"));
+    assert_eq!(l.at.stability, Stability::MarginallyStable);
+    // M = m·(a²·c² + b²·(1 − c²)), K = m·a²·w²·(1 − c²), c = cos θ = g·b/(w²·a²).
+    let (g, a, b, w) = (9.81_f64, 0.3_f64, 0.2_f64, 6.0_f64);
+    let cos = g * b / (w * w * a * a);
+    let omega = (a * a * w * w * (1.0 - cos * cos)
+        / (a * a * cos * cos + b * b * (1.0 - cos * cos)))
+        .sqrt();
+    assert!(close(l.at.eigenvalues[0].1, omega, 1e-10), "{:?} against {omega}", l.at.eigenvalues);
+
+    // Swept, it is judged at each value (and at the values of the report above the sweep,
+    // w = 6 here): where the rest does not exist, the error says so at the item, with the
+    // value.
+    let options = Options {
+        set: vec!["w=6".into()],
+        sweep: Some("w=3:6:4".into()),
+        about: Some(rest.into()),
+        ..Default::default()
+    };
+    let err = linearize(&source, &options).err().expect("no rest at w = 3");
+    assert_eq!(err.exit_code(), 2);
+    let text = cli::diagnostics::error("bead.lag", &err);
+    assert!(text.contains("this reference is not a real number (at w = 3)"), "{text}");
+    assert!(text.contains("(from --about)") && text.contains('^'), "{text}");
+    let options = Options {
+        set: vec!["w=6".into()],
+        sweep: Some("w=5:7:3".into()),
+        about: Some(rest.into()),
+        ..Default::default()
+    };
+    let l = linearize(&source, &options).expect("a rest at every value");
+    assert!(l
+        .sweep
+        .expect("a sweep")
+        .rows
+        .iter()
+        .all(|r| r.stability == Stability::MarginallyStable));
+    // A parameter defined through the one set changes with it.
+    let through = source.replace("w = 4 rad/s", "w = 4 rad/s, turn = w");
+    let options = Options {
+        set: vec!["w=6".into()],
+        about: Some("theta = acos(g*b/(turn^2*a^2))".into()),
+        ..Default::default()
+    };
+    let l = linearize(&through, &options).unwrap_or_else(|e| panic!("through w: {e}"));
+    assert!(close(l.at.eigenvalues[0].1, omega, 1e-10), "{:?}", l.at.eigenvalues);
+    // --set leaves the scene's value, and the scene's check of it, where it does not reach.
+    let options = Options { about: Some(rest.into()), ..Default::default() };
+    let err = linearize(&source, &options).err().expect("no rest at the scene's w = 4");
+    assert!(err.to_string().contains("acos"), "{err}");
+}
+
+#[test]
+fn a_stiff_stable_system_is_stable_and_a_stiff_undamped_one_marginally_stable() {
+    // Roots −1 and −1e9: the slow one is judged on its own rounding.
+    let stiff =
+        linearize(&test_scene("stiff_damper.lag"), &Options::default()).expect("linearizes");
+    assert_eq!(stiff.at.stability, Stability::Stable, "{:?}", stiff.at.eigenvalues);
+    let slow = stiff.at.eigenvalues.iter().map(|z| z.0).fold(f64::NEG_INFINITY, f64::max);
+    assert!((slow + 1.0).abs() < 1e-6, "{slow}");
+    let checked = cli::check::check_file("stiff_damper.lag", &test_scene("stiff_damper.lag"));
+    assert_eq!((checked.failed, checked.exit_code), (0, 0), "{}", checked.report);
+
+    // Stiffnesses 1 and 1e8, no damping: both modes on the imaginary axis, within their bounds.
+    let chain = test_scene("stiff_undamped_chain.lag");
+    let l = linearize(&chain, &Options::default()).expect("linearizes");
+    assert_eq!(l.at.stability, Stability::MarginallyStable, "{:?}", l.at.eigenvalues);
+    for (z, bound) in l.at.eigenvalues.iter().zip(&l.at.bounds) {
+        assert!(z.0.abs() <= *bound && *bound < 1e-3 * z.1.abs(), "{z:?} within {bound}");
+    }
+    let checked = cli::check::check_file("chain.lag", &chain);
+    assert_eq!((checked.failed, checked.exit_code), (0, 0), "{}", checked.report);
+}
+
+#[test]
+fn check_refuses_a_reference_that_is_not_an_equilibrium_as_linearize_does() {
+    let source = example("classics/simple_pendulum.lag");
+    let scene = format!("{source}\nlinearize about theta = pi/2\nexpect linearized: unstable\n");
+    let err = linearize(&scene, &Options::default()).err().expect("not an equilibrium");
+    assert_eq!(err.exit_code(), 2);
+    let checked = cli::check::check_file("pendulum.lag", &scene);
+    assert_eq!(checked.exit_code, 2, "{}", checked.report);
+    assert!(
+        checked.report.contains("is not an equilibrium or a steady motion"),
+        "{}",
+        checked.report
+    );
+    let line = scene.lines().position(|l| l.starts_with("linearize about")).expect("line") + 1;
+    assert!(checked.report.contains(&format!("pendulum.lag:{line}:1")), "{}", checked.report);
+}
+
+#[test]
+fn a_misspelt_critical_parameter_gets_a_did_you_mean() {
+    let source = example("space/sleeping_top.lag").replace("critical w =", "critical ww =");
+    let err = engine::load(&source).err().expect("not a parameter");
+    let text = cli::diagnostics::error("top.lag", &err);
+    assert!(text.contains("`ww` is not a parameter"), "{text}");
+    assert!(text.contains("did you mean `w`?"), "{text}");
+    let source = example("space/sleeping_top.lag").replace("critical w =", "critical spin =");
+    let text = cli::diagnostics::error("top.lag", &engine::load(&source).err().expect("refused"));
+    assert!(text.contains("the parameters are m, g, l, A, C, w"), "{text}");
+}
+
+#[test]
+fn a_complex_eigenvalue_is_written_with_a_minus_sign() {
+    let source = example("classics/simple_pendulum.lag");
+    let scene =
+        format!("{source}\nlinearize about theta = 0\nexpect linearized: eigenvalue = (0, -5)\n");
+    let checked = cli::check::check_file("pendulum.lag", &scene);
+    assert_eq!(checked.exit_code, 1, "{}", checked.report);
+    assert!(checked.report.contains("the nearest eigenvalue is 0 − 3.13"), "{}", checked.report);
+    assert!(!checked.report.contains("+ -"), "{}", checked.report);
+}

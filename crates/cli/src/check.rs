@@ -43,9 +43,14 @@ pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck 
         }
     };
     let mut tally = check_derivation(path, source, &mut d);
+    // A scene that does not linearize about its own reference is bad input, as `linearize`
+    // says: exit 2 with its diagnostic, after what the other expectations gave.
+    let mut refused = None;
     if !d.model.linear_expects.is_empty() {
-        let verdicts = engine::expect_linearized::check_linearized(source, options.units);
-        check_linearized(&mut tally, (path, source), &d, &verdicts);
+        match engine::expect_linearized::check_linearized(source, options.units) {
+            Ok(verdicts) => check_linearized(&mut tally, (path, source), &d, &verdicts),
+            Err(e) => refused = Some(crate::diagnostics::error(path, &e)),
+        }
     }
     let mut report = tally.lines.join("\n");
     if !report.is_empty() {
@@ -54,9 +59,17 @@ pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck 
     if !tally.failures.is_empty() {
         report.push_str(&render(path, source, &tally.failures));
     }
+    let exit_code = match (&refused, tally.failed) {
+        (Some(error), _) => {
+            report.push_str(error);
+            2
+        }
+        (None, 0) => 0,
+        (None, _) => 1,
+    };
     FileCheck {
         report,
-        exit_code: if tally.failed > 0 { 1 } else { 0 },
+        exit_code,
         held: tally.held,
         failed: tally.failed,
         warnings: render(path, source, &warnings),

@@ -4,7 +4,7 @@
 //! [`crate::plot::sweep`].
 
 use cas::{ExprId, Pool, Style, SymId};
-use engine::linearize::{CaseNumbers, Linearized, Numbers, Sweep, RELATIVE_TOLERANCE};
+use engine::linearize::{CaseNumbers, Linearized, Numbers, Sweep};
 use serde_json::{json, Map, Value as Json};
 
 use crate::report::{bracketed, json_number, significant, value_text, width};
@@ -60,20 +60,20 @@ fn reference_text(pool: &Pool, reference: &[(SymId, bool, ExprId)], style: Style
 }
 
 fn verdict_text(numbers: &Numbers) -> String {
-    let tolerance = format!(
-        "{} ({} × the largest |λ|)",
-        significant(numbers.tolerance, 2, Style::Unicode),
-        significant(RELATIVE_TOLERANCE, 1, Style::Unicode)
+    // Each real part is judged against its own bound on rounding; the largest is given.
+    let bound = format!(
+        "its own bound on rounding (the largest {})",
+        significant(numbers.tolerance, 2, Style::Unicode)
     );
     let verdict = match numbers.stability {
         engine::linearize::Stability::Stable => {
-            format!("Stable: every real part is below −{tolerance}")
+            format!("Stable: every real part is below minus {bound}")
         }
         engine::linearize::Stability::MarginallyStable => format!(
-            "Marginally stable: no real part is above {tolerance}, and some are within it of zero"
+            "Marginally stable: no real part is above {bound}, and some are within it of zero"
         ),
         engine::linearize::Stability::Unstable => {
-            format!("Unstable: some real part is above {tolerance}")
+            format!("Unstable: some real part is above {bound}")
         }
     };
     let verdict = match numbers.first_integrals {
@@ -298,10 +298,10 @@ fn first_order_lines(l: &Linearized) -> Vec<String> {
     out.extend(rank_line("Controllable", "[B, AB, …]", space.controllability));
     out.extend(rank_line("Observable", "[C; CA; …]", space.observability));
     out.push("Eigenvalues of A".into());
-    // A part within the verdict's tolerance of zero is rounding: it prints as 0.
-    let clean = |x: f64| if x.abs() <= l.at.tolerance { 0.0 } else { x };
-    for (re, im) in &l.at.eigenvalues {
-        out.push(format!("  {}", complex(clean(*re), clean(*im), DIGITS)));
+    // A part within the eigenvalue's bound of zero is rounding: it prints as 0.
+    for (&(re, im), &bound) in l.at.eigenvalues.iter().zip(&l.at.bounds) {
+        let clean = |x: f64| if x.abs() <= bound { 0.0 } else { x };
+        out.push(format!("  {}", complex(clean(re), clean(im), DIGITS)));
     }
     out.push(verdict_text(&l.at));
     out
@@ -395,12 +395,11 @@ fn sweep_lines(pool: &Pool, sweep: &Sweep) -> Vec<String> {
         .iter()
         .map(|r| {
             let mut cells = vec![number(r.value), r.stability.name().to_string()];
-            // The verdict's tolerance at this value: parts within it of zero print as 0.
-            let largest =
-                r.eigenvalues.iter().map(|(re, im)| (re * re + im * im).sqrt()).fold(0.0, f64::max);
-            let tolerance = engine::linearize::RELATIVE_TOLERANCE * largest;
-            let clean = |x: f64| if x.abs() <= tolerance { 0.0 } else { x };
-            cells.extend(r.eigenvalues.iter().map(|(re, im)| complex(clean(*re), clean(*im), 6)));
+            // Parts within their eigenvalue's bound of zero print as 0.
+            cells.extend(r.eigenvalues.iter().zip(&r.bounds).map(|(&(re, im), &bound)| {
+                let clean = |x: f64| if x.abs() <= bound { 0.0 } else { x };
+                complex(clean(re), clean(im), 6)
+            }));
             cells
         })
         .collect();
@@ -455,6 +454,10 @@ fn exact_json(pool: &Pool, m: &[Vec<ExprId>]) -> Json {
             .map(|r| Json::Array(r.iter().map(|e| json!(pool.print(*e, Style::Ascii))).collect()))
             .collect(),
     )
+}
+
+fn numbers_json(values: &[f64]) -> Json {
+    Json::Array(values.iter().map(|v| json_number(*v)).collect())
 }
 
 fn eigenvalues_json(eigenvalues: &[(f64, f64)]) -> Json {
@@ -535,6 +538,7 @@ pub fn json(l: &Linearized) -> String {
     out.insert("cyclic_zeros".into(), json!(l.at.cyclic_zeros));
     out.insert("first_integrals".into(), json!(l.at.first_integrals));
     out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
+    out.insert("bounds".into(), numbers_json(&l.at.bounds));
     out.insert("stability".into(), json!(l.at.stability.name()));
     out.insert("tolerance".into(), json_number(l.at.tolerance));
     if let Some(sweep) = &l.sweep {
@@ -597,6 +601,7 @@ fn sweep_json(sweep: &engine::linearize::Sweep, out: &mut Map<String, Json>) {
             json!({
                 "value": json_number(r.value),
                 "eigenvalues": eigenvalues_json(&r.eigenvalues),
+                "bounds": numbers_json(&r.bounds),
                 "stability": r.stability.name(),
             })
         })

@@ -5,7 +5,7 @@
 
 use model::{ExpectedStability, LinearExpectation};
 
-use crate::linearize::{linearize, Linearized, Options, Stability};
+use crate::linearize::{linearize, Linearized, Options, Stability, RELATIVE_TOLERANCE};
 use crate::Error;
 
 /// How far about an expected critical value the sweep looks, relatively.
@@ -32,22 +32,23 @@ impl LinearVerdict {
     }
 }
 
-/// Each `expect linearized:` line of `source`, decided (none without such lines).
-pub fn check_linearized(source: &str, units: bool) -> Vec<LinearVerdict> {
+/// Each `expect linearized:` line of `source`, decided (none without such lines); or why the
+/// scene does not linearize about its own reference at its own values, which is bad input as
+/// it is for `linearize` (a reference that is not an equilibrium, say), not an expectation
+/// left undecided.
+pub fn check_linearized(source: &str, units: bool) -> Result<Vec<LinearVerdict>, Error> {
     let options = Options { no_units: !units, ..Default::default() };
-    let l = match linearize(source, &options) {
-        Ok(l) => l,
-        Err(e) => {
-            let why = format!("the scene does not linearize: {}", first_line(&e));
-            let count = match crate::resolve_with(source, crate::Options { units }) {
-                Ok((model, _)) => model.linear_expects.len(),
-                Err(_) => 0,
-            };
-            return vec![LinearVerdict::Undecided(why); count];
-        }
-    };
+    let l = linearize(source, &options)?;
     let expectations = l.derivation.model.linear_expects.clone();
-    expectations.iter().map(|e| decide(source, &l, &e.expectation, units)).collect()
+    Ok(expectations.iter().map(|e| decide(source, &l, &e.expectation, units)).collect())
+}
+
+/// `re ± |im|i` with true minus signs, as the text reports write numbers (`1.5 − 2.2i`, not
+/// `1.5 + -2.2i`).
+fn complex_text(re: f64, im: f64) -> String {
+    let minus = |x: f64| format!("{x}").replace('-', "−");
+    let sign = if im.is_sign_negative() { "−" } else { "+" };
+    format!("{} {sign} {}i", minus(re), minus(im.abs()))
 }
 
 fn first_line(e: &Error) -> String {
@@ -89,9 +90,15 @@ fn decide(source: &str, l: &Linearized, e: &LinearExpectation, units: bool) -> L
             let Some(nearest) = nearest else {
                 return LinearVerdict::Fails("A has no eigenvalues".into());
             };
-            // The verdict's tolerance, or rounding's where every eigenvalue is zero.
-            let tolerance = l.at.tolerance.max(1e-12);
-            let text = format!("{} + {}i", nearest.0, nearest.1);
+            // The eigenvalue's own bound, or the relative tolerance of a value computed
+            // through A's entries where that is larger, or rounding's where every eigenvalue
+            // is zero.
+            let index = l.at.eigenvalues.iter().position(|z| z == nearest).unwrap_or(0);
+            let own = l.at.bounds.get(index).copied().unwrap_or(0.0);
+            let modulus = |z: &(f64, f64)| (z.0 * z.0 + z.1 * z.1).sqrt();
+            let largest = l.at.eigenvalues.iter().map(modulus).fold(0.0, f64::max);
+            let tolerance = own.max(RELATIVE_TOLERANCE * largest).max(1e-12);
+            let text = complex_text(nearest.0, nearest.1);
             match distance(nearest) <= tolerance {
                 true => LinearVerdict::Holds(format!("an eigenvalue is {text}, within {tolerance:.1e}")),
                 false => LinearVerdict::Fails(format!(

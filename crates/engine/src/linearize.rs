@@ -111,10 +111,28 @@ impl About {
         Ok(About { text: text.to_string(), start: lang::render::argument_start(source) })
     }
 
-    /// Resolves the items into `model`; a mistake in them points into the argument.
-    fn resolve(&self, model: &mut model::Model, source: &str) -> Result<(), Error> {
+    /// Resolves the items into `model`, the parameters named in `varying` (those `--set` or
+    /// the sweep changes) left to be checked at their values in force; a mistake in the items
+    /// points into the argument.
+    fn resolve(
+        &self,
+        model: &mut model::Model,
+        source: &str,
+        varying: &[&str],
+    ) -> Result<(), Error> {
         let shift = |s: lang::Span| lang::Span::new(s.start + self.start, s.end + self.start);
-        if let Err(mut diagnostics) = model.resolve_about(&self.text) {
+        // A parameter defined through one that changes changes with it (`w2 = 2*w`).
+        let mut changing: Vec<cas::SymId> = Vec::new();
+        for p in &model.params {
+            let through = p
+                .value
+                .is_some_and(|v| model.pool.free_symbols(v).iter().any(|s| changing.contains(s)));
+            if through || varying.contains(&p.name.as_str()) {
+                changing.push(p.sym);
+            }
+        }
+        let varying = changing;
+        if let Err(mut diagnostics) = model.resolve_about_varying(&self.text, &varying) {
             for d in &mut diagnostics {
                 d.span = shift(d.span);
                 d.related.iter_mut().for_each(|(s, _)| *s = shift(*s));
@@ -165,7 +183,9 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let (mut model, warnings) =
         crate::resolve_with(source, crate::Options { units: !options.no_units })?;
     if let Some(about) = &about {
-        about.resolve(&mut model, source)?;
+        let mut varying: Vec<&str> = sets.iter().map(|(name, _)| name.as_str()).collect();
+        varying.extend(sweep.iter().map(|(name, ..)| name.as_str()));
+        about.resolve(&mut model, source, &varying)?;
     }
     let extra: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
@@ -297,17 +317,54 @@ impl Session<'_> {
             // The scene's masses were checked with its own values; these may change their sign.
             self.prepared.masses_at(&parameters)?;
         }
+        let model = &self.prepared.derivation.model;
+        let at = match (self.swept, value) {
+            (Some(i), Some(v)) => format!(" (at {} = {v})", model.params[i].name),
+            _ => String::new(),
+        };
+        if let Some(d) = reference_outside_domain(model, &parameters, &at) {
+            return Err(scene_error(self.source, self.about.as_ref(), vec![d]));
+        }
         self.analysis.at(&parameters).map_err(|fault| {
-            let model = &self.prepared.derivation.model;
-            let at = match (self.swept, value) {
-                (Some(i), Some(v)) => format!(" (at {} = {v})", model.params[i].name),
-                _ => String::new(),
-            };
             let span = self.analysis.linearization().span;
             let diagnostics = vec![fault.diagnostic(&self.prepared.derivation, span, &at)];
             scene_error(self.source, self.about.as_ref(), diagnostics)
         })
     }
+}
+
+/// The first item of the reference (the later lines' overriding the earlier) that is not a
+/// real number at the parameters' values in force, as a diagnostic at the item: its domain
+/// was checked at the scene's values only where those stay in force.
+fn reference_outside_domain(
+    model: &model::Model,
+    parameters: &[f64],
+    at: &str,
+) -> Option<Diagnostic> {
+    let pool = &model.pool;
+    let mut values = vec![f64::NAN; pool.symbol_count()];
+    for (p, v) in model.params.iter().zip(parameters) {
+        values[p.sym.index()] = *v;
+    }
+    let items: Vec<&model::About> = model.linearize.iter().flat_map(|l| &l.items).collect();
+    let in_force = |i: usize| {
+        let (item, later) = (items[i], &items[i + 1..]);
+        !later.iter().any(|o| o.coord == item.coord && o.rate == item.rate)
+    };
+    let (item, value) = (0..items.len()).filter(|&i| in_force(i)).find_map(|i| {
+        let value = numeric::eval(pool, items[i].value, &values);
+        (!value.is_finite()).then_some((items[i], value))
+    })?;
+    let name = pool.symbol_text(item.coord, cas::Style::Unicode);
+    let what = if item.rate { format!("{name}'") } else { name };
+    Some(
+        Diagnostic::error(item.span, format!("this reference is not a real number{at}"))
+            .with_label(format!("{what} = {value} at the parameters' values in force"))
+            .with_hint(
+                "a function outside its domain (acos of more than 1, say) or a division by \
+                 zero at these values: choose values where the reference exists",
+            ),
+    )
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::fault::Fault;
 
-/// Iterations the Schur and SVD decompositions may take: a count, never a time.
+/// Iterations the eigenvalue iteration and the SVD may take: a count, never a time.
 pub(crate) const MAX_ITERATIONS: usize = 10_000;
 
 /// One pivot column per row of `m` (rows that are combinations of earlier ones get none):

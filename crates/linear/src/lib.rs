@@ -43,6 +43,7 @@ pub mod kept;
 
 mod analysis;
 mod dense;
+mod eigen;
 mod evaluation;
 mod exact;
 mod fault;
@@ -286,11 +287,16 @@ pub struct Numbers {
     pub accelerations: Vec<f64>,
     /// ẋ = A·x.
     pub first_order: StateSpace,
-    /// (re, im), by real part from the largest down (within the tolerance of zero as zero),
-    /// then by imaginary part.
+    /// (re, im), by real part from the largest down (those within their bound of zero as
+    /// zero), then by imaginary part.
     pub eigenvalues: Vec<(f64, f64)>,
+    /// How far rounding may have moved each eigenvalue (in the same order): eps·‖A‖ with a
+    /// margin (the rounding of A's entries, and the iteration's own in A balanced) times the
+    /// eigenvalue's condition (that of its group where rounding cannot tell the group apart),
+    /// plus the group's spread. The verdict compares each real part with its own bound.
+    pub bounds: Vec<f64>,
     pub stability: Stability,
-    /// The absolute tolerance on real parts: [`RELATIVE_TOLERANCE`] × the largest |eigenvalue|.
+    /// The largest of the bounds.
     pub tolerance: f64,
     /// How many of the zero eigenvalues are first integrals' (conserved combinations of the
     /// state, which the verdict leaves aside: they lead to neighbouring steady motions).
@@ -320,6 +326,7 @@ impl Numbers {
             accelerations,
             first_order,
             eigenvalues: spectrum.eigenvalues,
+            bounds: spectrum.bounds,
             stability: spectrum.stability,
             tolerance: spectrum.tolerance,
             first_integrals: spectrum.first_integrals,

@@ -12,6 +12,8 @@ const SWEEP_PRECISION: f64 = 1e-10;
 pub struct Row {
     pub value: f64,
     pub eigenvalues: Vec<(f64, f64)>,
+    /// Each eigenvalue's bound on rounding, as [`Numbers`] has them.
+    pub bounds: Vec<f64>,
     pub stability: Stability,
     /// M, C and K at this value, as [`Numbers`] has them.
     pub mass: Vec<Vec<f64>>,
@@ -53,6 +55,7 @@ pub fn sweep<E>(
         rows.push(Row {
             value,
             eigenvalues: numbers.eigenvalues,
+            bounds: numbers.bounds,
             stability: numbers.stability,
             mass: numbers.mass,
             damping: numbers.damping,

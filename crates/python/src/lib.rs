@@ -288,6 +288,7 @@ impl NativeScene {
             out.set_item(key, item)?;
         }
         out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
+        out.set_item("bounds", l.at.bounds.clone())?;
         out.set_item("stability", l.at.stability.name())?;
         out.set_item("tolerance", l.at.tolerance)?;
         if let Some(sweep) = &l.sweep {
@@ -296,6 +297,7 @@ impl NativeScene {
                 let item = PyDict::new(py);
                 item.set_item("value", row.value)?;
                 item.set_item("eigenvalues", complex(&row.eigenvalues)?)?;
+                item.set_item("bounds", row.bounds.clone())?;
                 item.set_item("stability", row.stability.name())?;
                 rows.append(item)?;
             }

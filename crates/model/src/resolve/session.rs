@@ -59,6 +59,23 @@ impl Model {
         })
     }
 
+    /// [`Model::resolve_about`] with the values of the `varying` parameters unknown to its
+    /// checks: a front end that changes them (`--set`, a sweep) has the reference checked in
+    /// numbers at the values in force, where the scene's values would judge a domain wrongly
+    /// (`acos(g*b/(w^2*a^2))` beyond 1 at the scene's w, inside at the one set).
+    pub fn resolve_about_varying(
+        &mut self,
+        text: &str,
+        varying: &[SymId],
+    ) -> Result<(), Vec<Diagnostic>> {
+        let values = &mut self.scope.param_values;
+        let held: Vec<(SymId, ExprId)> =
+            varying.iter().filter_map(|s| values.remove(s).map(|v| (*s, v))).collect();
+        let resolved = self.resolve_about(text);
+        self.scope.param_values.extend(held);
+        resolved
+    }
+
     /// Runs `resolve` on a resolver with the model's state and its scope, `text` the source
     /// its spans point into; the model takes back what it added, or the errors if any.
     fn resolving<T>(

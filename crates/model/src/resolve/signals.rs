@@ -227,15 +227,32 @@ impl Resolver<'_> {
                 };
                 self.scope.used.insert(normalize(&parameter.name));
                 if index.is_none() {
+                    let params: Vec<&str> =
+                        self.model.params.iter().map(|p| p.name.as_str()).collect();
+                    let name = normalize(&parameter.name);
+                    let why = "a critical value is one of a parameter, where the verdict changes";
+                    // Among a scene's few parameters, a short name one edit from exactly one
+                    // of them is a slip of that one (`kk` for `k`), which `closest` leaves out
+                    // among all names.
+                    let one_edit: Vec<&str> = params
+                        .iter()
+                        .copied()
+                        .filter(|p| strsim::levenshtein(&name, p) == 1)
+                        .collect();
+                    let near = super::closest(&name, params.iter().copied())
+                        .or(if let [only] = one_edit[..] { Some(only) } else { None });
+                    let hint = match (near, &params[..]) {
+                        (_, []) => format!("{why}; the scene declares no parameter"),
+                        (Some(near), _) => format!("did you mean `{near}`?"),
+                        (None, _) => format!("{why}; the parameters are {}", params.join(", ")),
+                    };
                     self.error(
                         Diagnostic::error(
                             parameter.span,
                             format!("`{}` is not a parameter", parameter.name),
                         )
                         .with_label("not a parameter")
-                        .with_hint(
-                            "a critical value is one of a parameter, where the verdict changes",
-                        ),
+                        .with_hint(hint),
                     );
                 }
                 let value = self.constant(value).map(|(v, _)| v);
