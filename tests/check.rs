@@ -62,3 +62,17 @@ fn a_failure_shows_the_residual_and_a_state() {
     assert!(result.report.contains("drop.lag:5:1"), "{}", result.report);
     assert!(result.report.contains("at g = "), "{}", result.report);
 }
+
+/// A derived parameter (`w0 = sqrt(k/m)`) is sampled as its definition gives it from the
+/// parameters it names, as every run sets it: drawn on its own it made a true line fail.
+#[test]
+fn an_expectation_with_a_derived_parameter_is_judged_where_it_means_what_the_scene_says() {
+    let scene = "param m = 2 kg, k = 8 N/m\nparam w0 = sqrt(k/m)\ncoord x = 1 m\n\
+        particle p { mass m; position (x, 0) }\npotential k/2*x^2\n";
+    let holds = format!("{scene}expect x'' = -w0^2*x\nexpect at start: x'' = -w0^2*x\n");
+    let result = cli::check::check_file("osc.lag", &holds);
+    assert_eq!(result.exit_code, 0, "{}", result.report);
+    let wrong = format!("{scene}expect x'' = -2*w0^2*x\n");
+    let result = cli::check::check_file("osc.lag", &wrong);
+    assert_eq!(result.exit_code, 1, "{}", result.report);
+}

@@ -34,7 +34,8 @@ pub(crate) fn state_symbols(d: &Derivation) -> Vec<SymId> {
 }
 
 /// A state drawn at random, ignoring the constraints: parameters in [0.5, 2), t in [0, 1),
-/// coordinates in [−1.2, 1.2), rates in [−1, 1). Everything else is NaN.
+/// coordinates in [−1.2, 1.2), rates in [−1, 1), derived parameters then following the ones
+/// they name ([`tie_derived`]). Everything else is NaN.
 pub(crate) fn random_state(d: &Derivation, rng: &mut ChaCha8Rng) -> Vec<f64> {
     let pool = &d.model.pool;
     let mut values = vec![f64::NAN; pool.symbol_count()];
@@ -46,7 +47,31 @@ pub(crate) fn random_state(d: &Derivation, rng: &mut ChaCha8Rng) -> Vec<f64> {
             SymbolKind::Coordinate { .. } => rng.gen_range(-1.0..1.0),
         };
     }
+    tie_derived(d, &mut values);
     values
+}
+
+/// Each derived parameter (`param w0 = sqrt(k/m)`) set from the values `values` (indexed by
+/// symbol) gives the parameters it names, in declaration order, as every run sets it: drawn
+/// apart from them, `expect x'' = -w0^2*x` would be judged where `w0` is not what the scene
+/// says it is, and fail though it holds. A derived value that is not a real number there is
+/// NaN, which the sample's test turns down.
+pub(crate) fn tie_derived(d: &Derivation, values: &mut [f64]) {
+    let params = &d.model.params;
+    let mut plan = model::ParameterValues::new(&d.model);
+    let derived = plan.derived();
+    if derived.is_empty() {
+        return;
+    }
+    let given: Vec<(usize, model::Given)> = plan
+        .free()
+        .into_iter()
+        .map(|i| (i, model::Given::Number(values[params[i].sym.index()])))
+        .collect();
+    let all = plan.values(given).ok();
+    for i in derived {
+        values[params[i].sym.index()] = all.as_ref().map_or(f64::NAN, |v| v[i]);
+    }
 }
 
 /// Up to `count` random admissible states, each a value per symbol of the derivation's pool

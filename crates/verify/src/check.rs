@@ -214,7 +214,14 @@ fn sample_at_start(d: &mut Derivation, residual: ExprId, unknowns: usize) -> Ver
         }
         let values: Vec<(SymId, f64)> = match &at_values {
             Some(values) => values.clone(),
-            None => params.iter().map(|p| (*p, rng.gen_range(0.5..2.0))).collect(),
+            None => {
+                let mut drawn = vec![f64::NAN; d.model.pool.symbol_count()];
+                for p in &params {
+                    drawn[p.index()] = rng.gen_range(0.5..2.0);
+                }
+                crate::admissible::tie_derived(d, &mut drawn);
+                params.iter().map(|p| (*p, drawn[p.index()])).collect()
+            }
         };
         let Some(start) = solver.solve(d, &values) else { continue };
         let (value, scale) = measure.eval(&start.values)[0];
