@@ -279,6 +279,13 @@ struct RunArgs {
 }
 
 impl RunArgs {
+    /// The files a run reads: the scene, and the time series of `--input`.
+    fn inputs<'a>(&'a self, scene: &'a std::path::Path) -> Vec<(&'a str, &'a std::path::Path)> {
+        let mut inputs = vec![("", scene)];
+        inputs.extend(self.input.iter().filter(|i| cli::series::is_series(i)).map(series_file));
+        inputs
+    }
+
     /// The engine's options of a run, the inputs' time series read from their files; `None`
     /// after saying on stderr which file could not be read.
     fn options(self) -> Option<engine::simulate::Options> {
@@ -357,6 +364,35 @@ enum FormatArg {
     Json,
 }
 
+/// Says on stderr, and is `true`, when an output (a flag and its path) is one of the files the
+/// command reads (each a flag, or the scene's empty name, and its path): writing it would
+/// replace what was read.
+fn writes_over_input(
+    inputs: &[(&str, &std::path::Path)],
+    outputs: &[(&str, Option<&std::path::Path>)],
+) -> bool {
+    for (flag, output) in outputs {
+        let Some(output) = output else { continue };
+        for (what, input) in inputs {
+            if cli::same_file(input, output) {
+                let read = if what.is_empty() {
+                    "the scene file".to_string()
+                } else {
+                    format!("the {what} file")
+                };
+                eprintln!(
+                    "error: {flag} {} would replace {read} {} that the command reads: write \
+                     the output elsewhere",
+                    output.display(),
+                    input.display()
+                );
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// The file's text, or `None` after saying on stderr why it could not be read.
 fn read_or_report(path: &std::path::Path) -> Option<String> {
     cli::read_scene(path).map_err(|e| eprint!("{e}")).ok()
@@ -366,6 +402,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units, full } => {
+            if writes_over_input(&[("", &file)], &[("--out", out.as_deref())]) {
+                return ExitCode::from(2);
+            }
             derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
@@ -375,6 +414,14 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Simulate { file, run, output, out, plot, animate, samples } => {
+            let outputs = [
+                ("--out", out.as_deref()),
+                ("--plot", plot.as_deref()),
+                ("--animate", animate.as_deref()),
+            ];
+            if writes_over_input(&run.inputs(&file), &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some(options) = run.options() else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
@@ -388,6 +435,10 @@ fn main() -> ExitCode {
             simulate(&file, &source, &options, out, Figures { plot, animate })
         }
         Command::Ensemble { file, vary, runs, seed, record, run, out, plot, threads } => {
+            let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
+            if writes_over_input(&run.inputs(&file), &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some(simulate) = run.options() else { return ExitCode::from(2) };
             let mut varied = Vec::new();
@@ -414,6 +465,10 @@ fn main() -> ExitCode {
             out,
             no_units,
         } => {
+            let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
+            if writes_over_input(&[("", &file)], &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             // Typed here, read as text there; the same parser reads it back.
             let set = set.iter().map(Assignment::to_string).collect();
@@ -422,11 +477,19 @@ fn main() -> ExitCode {
             linearize(&file, &source, &options, format, out, plot)
         }
         Command::Export { file, fmu, tolerance, until, no_units } => {
+            if writes_over_input(&[("", &file)], &[("--fmu", Some(&fmu))]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options = engine::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
         Command::Codegen { file, lang, out, no_units } => {
+            if matches!(lang, LangArg::Rust)
+                && writes_over_input(&[("", &file)], &[("--out", out.as_deref())])
+            {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
             let options = engine::Options { units: !no_units };
@@ -439,11 +502,20 @@ fn main() -> ExitCode {
             }
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {
+            let inputs = [("", file.as_path()), ("--trajectory", trajectory.as_path())];
+            if writes_over_input(&inputs, &[("--out", out.as_deref())]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options = engine::inverse::Options { set, no_units };
             inverse_dynamics(&file, &source, &trajectory, out, &options)
         }
         Command::Bench { file, until, set, stop_when, input, hold, repeats, plot, no_units } => {
+            let mut inputs = vec![("", file.as_path())];
+            inputs.extend(input.iter().filter(|i| cli::series::is_series(i)).map(series_file));
+            if writes_over_input(&inputs, &[("--plot", plot.as_deref())]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some((input, input_series)) = drives(input) else {
                 return ExitCode::from(2);
@@ -462,6 +534,11 @@ fn main() -> ExitCode {
         }
         Command::Check { files, no_units } => check(&files, no_units),
     }
+}
+
+/// The file of an input given as a time series, as [`writes_over_input`] names it.
+fn series_file(input: &Assignment) -> (&str, &std::path::Path) {
+    ("--input", std::path::Path::new(&input.value))
 }
 
 /// An input given as a time series, by name.
