@@ -163,10 +163,11 @@ enum Command {
         /// sets none; default: the scene's `simulate { tolerance … }`, else 1e-10.
         #[arg(long)]
         tolerance: Option<f64>,
-        /// The stop time of the FMU's default experiment (s); default: the scene's
-        /// `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
+        /// The stop time of the FMU's default experiment, as the scene writes it (`10`,
+        /// `1/4 min`; seconds without a unit); default: the scene's `simulate { until … }`,
+        /// else 10.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        until: Option<String>,
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
@@ -209,9 +210,9 @@ enum Command {
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
         file: PathBuf,
-        /// End time (s); default: the scene's `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
+        /// End time, as for simulate; default: the scene's `simulate { until … }`, else 10.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        until: Option<String>,
         /// Override a parameter or an initial value, as for simulate.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
@@ -222,9 +223,9 @@ enum Command {
         /// included, is of the driven scene.
         #[arg(long = "input", value_name = "NAME=EXPR")]
         input: Vec<Assignment>,
-        /// Hold the laws of `--input` between samples PERIOD seconds apart, as for simulate.
-        #[arg(long, value_name = "PERIOD")]
-        hold: Option<f64>,
+        /// Hold the laws of `--input` between samples PERIOD apart, as for simulate.
+        #[arg(long, value_name = "PERIOD", allow_hyphen_values = true)]
+        hold: Option<String>,
         /// Time each run this many times and report the median.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
@@ -240,9 +241,10 @@ enum Command {
 /// The settings of a run, shared by `simulate` and `ensemble`.
 #[derive(Args)]
 struct RunArgs {
-    /// End time (s); default: the scene's `simulate { until … }`, else 10.
-    #[arg(long)]
-    until: Option<f64>,
+    /// End time, as the scene writes it (`10`, `2*pi`, `1/4 min`; seconds without a unit);
+    /// default: the scene's `simulate { until … }`, else 10.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    until: Option<String>,
     /// The integrator (default dop853).
     #[arg(long)]
     method: Option<MethodArg>,
@@ -250,9 +252,10 @@ struct RunArgs {
     /// auto (default 1e-10).
     #[arg(long)]
     tolerance: Option<f64>,
-    /// Step of rk4, midpoint and gauss (default: until/1000).
-    #[arg(long)]
-    step: Option<f64>,
+    /// Step of rk4, midpoint and gauss, as the scene writes it (`1e-3`, `5 ms`); default:
+    /// until/1000.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    step: Option<String>,
     /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<Assignment>,
@@ -264,9 +267,10 @@ struct RunArgs {
     input: Vec<Assignment>,
     /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
     /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
-    /// them continuously. Default: the scene's `simulate { hold … }`, else none.
-    #[arg(long, value_name = "PERIOD")]
-    hold: Option<f64>,
+    /// them continuously. As the scene writes it (`0.02`, `20 ms`). Default: the scene's
+    /// `simulate { hold … }`, else none.
+    #[arg(long, value_name = "PERIOD", allow_hyphen_values = true)]
+    hold: Option<String>,
     /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
     #[arg(long = "stop-when", value_name = "EXPR")]
     stop_when: Vec<String>,
@@ -291,15 +295,15 @@ impl RunArgs {
     fn options(self) -> Option<engine::simulate::Options> {
         let (input, input_series) = drives(self.input)?;
         Some(engine::simulate::Options {
-            until: self.until,
+            until: time_option(engine::Setting::Until, self.until.as_deref())?,
             // The engine's options are shared with Python, which names the method.
             method: self.method.map(|m| sim::Method::from(m).name().to_string()),
             tolerance: self.tolerance,
-            step: self.step,
+            step: time_option(engine::Setting::Step, self.step.as_deref())?,
             set: self.set,
             input,
             input_series,
-            hold: self.hold,
+            hold: time_option(engine::Setting::Hold, self.hold.as_deref())?,
             stop_when: self.stop_when,
             events: self.event,
             no_units: self.no_units,
@@ -481,6 +485,9 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let Some(until) = time_option(engine::Setting::Until, until.as_deref()) else {
+                return ExitCode::from(2);
+            };
             let options = engine::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
@@ -520,6 +527,12 @@ fn main() -> ExitCode {
             let Some((input, input_series)) = drives(input) else {
                 return ExitCode::from(2);
             };
+            let (Some(until), Some(hold)) = (
+                time_option(engine::Setting::Until, until.as_deref()),
+                time_option(engine::Setting::Hold, hold.as_deref()),
+            ) else {
+                return ExitCode::from(2);
+            };
             let options = engine::simulate::Options {
                 until,
                 set,
@@ -533,6 +546,20 @@ fn main() -> ExitCode {
             bench(&file, &source, &options, repeats, plot)
         }
         Command::Check { files, no_units } => check(&files, no_units),
+    }
+}
+
+/// A time given for `setting` (`--until 1/4 min`), in seconds, or `None` after rendering on
+/// stderr what is wrong with it, a caret under the culprit.
+fn time_option(setting: engine::Setting, text: Option<&str>) -> Option<Option<f64>> {
+    let Some(text) = text else { return Some(None) };
+    match engine::input::time(setting, text) {
+        Ok(seconds) => Some(Some(seconds)),
+        Err(diagnostics) => {
+            let flag = format!("--{}", setting.name());
+            eprint!("{}", cli::diagnostics::render(&flag, text, &diagnostics));
+            None
+        }
     }
 }
 

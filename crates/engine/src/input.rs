@@ -84,6 +84,18 @@ pub fn assignments_of<S: AsRef<str>>(
     texts.iter().map(read).collect()
 }
 
+/// A time a front end was given as text for `setting` (`until`, `hold`, `step`), as the scene's
+/// `simulate` block writes it: `10`, `1/4`, `2*pi`, `20 ms`, `1/4 min`; in seconds. A plain
+/// decimal is read as Rust reads it, so `10` has the bits it always had, and its sign is
+/// checked with the other settings; anything else as the block reads its value (positive).
+/// On failure, the diagnostics, with spans into `text`.
+pub fn time(setting: Setting, text: &str) -> Result<f64, Vec<lang::Diagnostic>> {
+    match text.trim().parse::<f64>() {
+        Ok(seconds) => Ok(seconds),
+        Err(_) => model::time_setting(setting.name(), text),
+    }
+}
+
 /// `p=a:b:n`: n evenly spaced values of parameter p from a to b, both included.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepRange {
@@ -336,6 +348,30 @@ mod tests {
         assert_eq!(assignments(&["g=1.62"]).map(|a| a.len()), Ok(1));
         let error = assignments(&["g=1", "h"]).expect_err("`h` has no value");
         assert_eq!(error.to_string(), "error: `set` `h`: not of the form name=value (like g=1.62)");
+    }
+
+    #[test]
+    fn times_are_read_as_the_scene_writes_them() {
+        let read = |text: &str| time(Setting::Until, text);
+        assert_eq!(read("10").map(f64::to_bits), Ok(10f64.to_bits()));
+        assert_eq!(read("0.1").map(f64::to_bits), Ok(0.1f64.to_bits()));
+        assert_eq!(read("1/4"), Ok(0.25));
+        assert_eq!(read("2*pi"), Ok(2.0 * std::f64::consts::PI));
+        assert_eq!(read("20 ms"), Ok(0.02));
+        assert_eq!(read("1/4 min"), Ok(15.0));
+        for (text, message, culprit) in [
+            ("2 m", "`until` is a time, not in m", "m"),
+            ("-1 ms", "`until` must be positive", "-1"),
+            ("g", "unknown name `g`", "g"),
+            ("1/", "expected", ""),
+        ] {
+            let errors = read(text).expect_err(text);
+            assert!(errors[0].message.contains(message), "{text}: {:?}", errors[0].message);
+            let span = errors[0].span;
+            if !culprit.is_empty() {
+                assert_eq!(&text[span.start..span.end], culprit, "{text}");
+            }
+        }
     }
 
     #[test]

@@ -31,6 +31,35 @@ impl Measure {
     }
 }
 
+/// A time given on its own, as a front end's setting is (`--until 1/4 min`, `--hold "20 ms"`):
+/// read as the `simulate` block's setting `key` reads its value (a value that names nothing,
+/// with an optional time unit), in seconds and positive. On failure, the diagnostics, with
+/// spans into `text`.
+pub fn time_setting(key: &str, text: &str) -> Result<f64, Vec<Diagnostic>> {
+    let (value, unit) = lang::parse_quantity(text)?;
+    let key = Ident { name: key.to_string(), span: lang::Span::new(0, text.len()) };
+    let setting = Setting { key, target: None, values: vec![value], unit };
+    let mut r = Resolver::new(text);
+    let number = r.setting_number(&setting, Measure::Time);
+    let mut errors = std::mem::take(&mut r.diagnostics.errors);
+    // Nothing is declared here: the scene's hint to declare the name would mislead.
+    for d in errors.iter_mut().filter(|d| d.message.starts_with("unknown name")) {
+        d.hint = Some(format!(
+            "a setting's time names no parameter: a number with a unit, like `{}`",
+            Measure::Time.example(&setting.key.name).trim_matches('`')
+        ));
+    }
+    match number {
+        Some(number) if errors.is_empty() => Ok(number.value),
+        _ => {
+            if errors.is_empty() {
+                errors.push(Diagnostic::error(setting.key.span, "cannot be read as a time"));
+            }
+            Err(errors)
+        }
+    }
+}
+
 impl Resolver<'_> {
     /// A `simulate { … }` block: its settings added to those of earlier blocks.
     pub(super) fn simulate_statement(&mut self, settings: &[Setting]) {

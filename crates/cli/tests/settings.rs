@@ -1,0 +1,86 @@
+//! The settings of a run on the command line as the scene writes them: times with units and
+//! expressions, refusals with a caret under the culprit, and no setting silently ignored.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn lagrange(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lagrange")).args(args).output().expect("the binary runs")
+}
+
+fn example(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The table of a run that must succeed.
+fn table(args: &[&str]) -> String {
+    let out = lagrange(args);
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    stdout(&out)
+}
+
+fn last_time(table: &str) -> String {
+    let last = table.lines().last().expect("a row");
+    last.split(',').next().expect("a time").to_string()
+}
+
+#[test]
+fn times_take_expressions_and_units() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["simulate", &pendulum, "--samples", "5"];
+        args.extend(extra);
+        table(&args)
+    };
+    assert_eq!(last_time(&run(&["--until", "1/4"])), "0.25");
+    assert_eq!(last_time(&run(&["--until", "2*pi"])), std::f64::consts::TAU.to_string());
+    assert_eq!(run(&["--until", "1/4 min"]), run(&["--until", "15"]));
+    // A plain number keeps its bits: the scene's own `until 10 s`.
+    assert_eq!(run(&["--until", "10"]), run(&[]));
+    let fixed = |step: &str| run(&["--method", "rk4", "--step", step]);
+    assert_eq!(fixed("5 ms"), fixed("0.005"));
+
+    let cart = example("control/cart_pole.lag");
+    let held = |hold: &str| {
+        table(&["simulate", &cart, "--input", "F=-M*g*x/L", "--hold", hold, "--samples", "5"])
+    };
+    assert_eq!(held("20 ms"), held("0.02"));
+
+    let bench = lagrange(&["bench", &pendulum, "--until", "1/10 s", "--repeats", "1"]);
+    assert!(bench.status.success(), "{}", stderr(&bench));
+}
+
+#[test]
+fn a_bad_time_is_shown_with_a_caret() {
+    let cart = example("control/cart_pole.lag");
+    for (args, message, under) in [
+        (vec!["--input", "F=-M*g*x/L", "--hold", "-1 ms"], "`hold` must be positive", "^^"),
+        (vec!["--until", "2 m"], "`until` is a time, not in m", "  ^"),
+        (vec!["--step", "x"], "unknown name `x`", "^"),
+        (vec!["--until", "1/"], "expected an expression", "  ^"),
+    ] {
+        let mut all = vec!["simulate", &cart];
+        all.extend(&args);
+        let out = lagrange(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        let message_text = stderr(&out);
+        assert!(message_text.contains(message), "{args:?}: {message_text}");
+        // The bad value is the last one given, after its flag.
+        let flag = args[args.len() - 2];
+        assert!(message_text.contains(&format!("┌─ {flag}:1:")), "{args:?}: {message_text}");
+        assert!(message_text.contains(&format!("│ {under}")), "{args:?}: {message_text}");
+        assert!(!message_text.contains("unexpected argument"), "{args:?}: {message_text}");
+    }
+}
