@@ -84,3 +84,77 @@ fn a_bad_time_is_shown_with_a_caret() {
         assert!(!message_text.contains("unexpected argument"), "{args:?}: {message_text}");
     }
 }
+
+/// A scene file in a scratch folder of its own, removed when dropped.
+struct Scene(std::path::PathBuf);
+
+impl Scene {
+    fn new(test: &str, text: &str) -> Scene {
+        let dir =
+            std::env::temp_dir().join(format!("lagrange-settings-{}-{test}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let file = dir.join("scene.lag");
+        std::fs::write(&file, text).expect("write");
+        Scene(file)
+    }
+
+    fn path(&self) -> &str {
+        self.0.to_str().expect("a UTF-8 path")
+    }
+}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(self.0.parent().expect("its folder"));
+    }
+}
+
+const OSCILLATOR: &str = "param m = 1 kg, k = 4 N/m\ncoord x = 1\n\
+                          particle p { mass m; position (x, 0) }\npotential k*x^2/2\n";
+
+#[test]
+fn a_setting_the_method_does_not_use_is_refused() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    for (args, message) in [
+        (vec!["--method", "rk4", "--tolerance", "1e-12"], "--tolerance is not used by rk4"),
+        (vec!["--method", "gauss", "--tolerance", "1e-12"], "--tolerance is not used by gauss"),
+        (vec!["--method", "dop853", "--step", "0.5"], "--step is not used by dop853"),
+        (vec!["--method", "auto", "--step", "0.5"], "--step is not used by auto"),
+        (vec!["--step", "0.01", "--tolerance", "1e-9"], "--step is not used by dop853"),
+        (vec!["--method", "rk4", "--step", "0.01", "--tolerance", "1e-9"], "--tolerance"),
+    ] {
+        let mut all = vec!["simulate", &pendulum];
+        all.extend(&args);
+        let out = lagrange(&all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(message), "{args:?}: {}", stderr(&out));
+    }
+    let ensemble = lagrange(&[
+        "ensemble",
+        &pendulum,
+        "--vary",
+        "L=1:2:2",
+        "--method",
+        "rk4",
+        "--tolerance",
+        "1e-9",
+    ]);
+    assert_eq!(ensemble.status.code(), Some(2), "{}", stderr(&ensemble));
+    assert!(stderr(&ensemble).contains("--tolerance is not used by rk4"), "{}", stderr(&ensemble));
+    // What each method takes still runs.
+    table(&["simulate", &pendulum, "--method", "rk4", "--step", "0.01", "--samples", "2"]);
+    table(&["simulate", &pendulum, "--method", "radau", "--tolerance", "1e-8", "--samples", "2"]);
+
+    for (block, under) in [
+        ("simulate { method rk4; tolerance 1e-8 }", "`tolerance` is not used by `rk4`"),
+        ("simulate { method dopri5; step 1 ms }", "step` is not used by `dopri5`"),
+        ("simulate { until 2 s; step 1 ms }", "is not used by `dop853` (the default)"),
+    ] {
+        let scene = Scene::new("block", &format!("{OSCILLATOR}{block}\n"));
+        let out = lagrange(&["check", scene.path()]);
+        assert_eq!(out.status.code(), Some(2), "{block}: {}", stderr(&out));
+        let message = stderr(&out);
+        assert!(message.contains(under), "{block}: {message}");
+        assert!(message.contains(":5:"), "the block's line: {block}: {message}");
+    }
+}

@@ -24,7 +24,7 @@ use crate::input::Assignment;
 use crate::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
 
-use crate::{Error, Setting};
+use crate::{Error, Piece, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
 #[derive(Clone, Debug, Default)]
@@ -198,6 +198,61 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
     })
 }
 
+/// The methods as the settings they take: the adaptive ones a tolerance, the fixed-step ones
+/// a step.
+fn methods_taking(adaptive: bool) -> String {
+    let names: Vec<&str> = Method::NAMES
+        .iter()
+        .copied()
+        .filter(|n| Method::from_name(n).is_some_and(|m| m.is_adaptive() == adaptive))
+        .collect();
+    names.join(", ")
+}
+
+/// Refuses a front end's tolerance for a fixed-step method and its step for an adaptive one:
+/// the run would not use it, and would give the same bits as without it.
+fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
+    let (unused, used) = match (method.is_adaptive(), options.step, options.tolerance) {
+        (true, Some(_), _) => (Setting::Step, Setting::Tolerance),
+        (false, _, Some(_)) => (Setting::Tolerance, Setting::Step),
+        _ => return Ok(()),
+    };
+    let kind = if method.is_adaptive() { "an adaptive" } else { "a fixed-step" };
+    Err(Error::Setting(vec![
+        Piece::Setting(unused),
+        Piece::Text(format!(" is not used by {}, {kind} method: it takes ", method.name())),
+        Piece::Setting(used),
+        Piece::Text(format!(
+            " (the adaptive methods {} take a tolerance, the fixed-step {} a step)",
+            methods_taking(true),
+            methods_taking(false)
+        )),
+    ]))
+}
+
+/// The diagnostic of a `simulate` block that names a method and a `step` or `tolerance` that
+/// method does not use (a block without a method runs the default, dop853).
+pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(), Diagnostic> {
+    let method = scene_method(simulation)?.unwrap_or(Method::Dop853);
+    let (unused, key, takes) = match (method.is_adaptive(), simulation.step, simulation.tolerance) {
+        (true, Some(step), _) => (step, "step", "tolerance"),
+        (false, _, Some(tolerance)) => (tolerance, "tolerance", "step"),
+        _ => return Ok(()),
+    };
+    let kind = if method.is_adaptive() { "an adaptive" } else { "a fixed-step" };
+    let named = match &simulation.method {
+        Some(_) => format!("`{}`", method.name()),
+        None => format!("`{}` (the default)", method.name()),
+    };
+    Err(Diagnostic::error(unused.span, format!("`{key}` is not used by {named}, {kind} method"))
+        .with_label(format!("{} takes `{takes}`", method.name()))
+        .with_hint(format!(
+            "the adaptive methods ({}) take `tolerance`, the fixed-step ones ({}) `step`",
+            methods_taking(true),
+            methods_taking(false)
+        )))
+}
+
 /// The settings of a run of `source`: its `simulate` block, as its model has read it (before
 /// the scene is derived; a scene that does not resolve has none, and loading it reports why),
 /// then the options.
@@ -236,6 +291,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
             bad(format!("unknown method `{name}`; one of {}", Method::NAMES.join(", ")))
         })?;
     }
+    check_applies(method, options)?;
     if let Some(t) = options.tolerance {
         tolerance = t;
     }
