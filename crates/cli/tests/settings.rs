@@ -158,3 +158,34 @@ fn a_setting_the_method_does_not_use_is_refused() {
         assert!(message.contains(":5:"), "the block's line: {block}: {message}");
     }
 }
+
+#[test]
+fn counts_past_memory_are_refused_and_a_run_at_every_step_is_bounded() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = lagrange(&["simulate", &pendulum, "--samples", "1000000000000"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--samples 1000000000000 would record more than 1 GiB"));
+    assert!(out.stdout.is_empty());
+
+    // Wide rows make the memory's cap on the steps small enough to meet here: a run that
+    // cannot end, recording every step, ends in a fault that names what lifts it.
+    let source = std::fs::read_to_string(&pendulum).expect("the example");
+    let options = engine::simulate::Options {
+        until: Some(1e300),
+        method: Some("rk4".into()),
+        step: Some(0.5),
+        output: vec![vec!["theta"; 4000].join(",")],
+        samples: 0,
+        ..Default::default()
+    };
+    let outcome = engine::simulate::simulate(&source, &options).expect("runs");
+    let fault = outcome.run.fault.as_ref().expect("the cap ends the run");
+    let sim::FaultKind::TooManySteps { limit } = fault.kind else { panic!("{fault:?}") };
+    let width = outcome.run.trajectory.rows[0].len();
+    assert_eq!(limit, engine::simulate::most_rows(width));
+    assert!(limit * (8 * (width + 1)) <= engine::simulate::MAX_RECORDED_BYTES, "{limit}");
+    assert_eq!(outcome.run.trajectory.rows.len(), limit + 1, "the start and a row a step");
+    let message = outcome.describe_fault(fault);
+    assert!(message.contains(&format!("more than {limit} steps, each recorded")), "{message}");
+    assert!(message.contains("give `samples`"), "{message}");
+}

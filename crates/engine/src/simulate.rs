@@ -566,7 +566,22 @@ fn integrate_scene(
     progress: &mut dyn Progress,
 ) -> Result<(Run, f64, Option<FastestMode>), Error> {
     let Settings { until, method, step, .. } = *settings;
-    let run_settings = integrand::run_settings(settings, settings.samples);
+    let mut run_settings = integrand::run_settings(settings, settings.samples);
+    let most = most_rows(sim::Problem::observations(&mechanical));
+    if settings.samples > most {
+        return Err(Error::given(
+            Setting::Samples,
+            settings.samples.to_string(),
+            format!(
+                " would record more than {} GiB of rows; this run records at most {most}",
+                MAX_RECORDED_BYTES >> 30
+            ),
+        ));
+    }
+    if settings.samples == 0 {
+        // A row per step: the steps' cap keeps the rows within the memory allowed.
+        run_settings.max_steps = run_settings.max_steps.min(most);
+    }
     let watched = integrand::watched(columns);
     progress.start(until);
     let started = Instant::now();
@@ -594,6 +609,18 @@ fn integrate_scene(
     };
     progress.finish();
     Ok((run, started.elapsed().as_secs_f64(), fastest_mode))
+}
+
+/// The most memory the rows a run records may take. Past it, a count of samples is refused
+/// before the run, and a run recording every step ends in a fault naming `samples`, rather
+/// than the process aborting when an allocation fails.
+pub const MAX_RECORDED_BYTES: usize = 1 << 30;
+
+/// The most rows of `observations` quantities a run records within [`MAX_RECORDED_BYTES`]: a
+/// row is its numbers and the time, and a vector's header and the allocator's bookkeeping.
+pub fn most_rows(observations: usize) -> usize {
+    let row = 8 * (observations + 1) + 40;
+    MAX_RECORDED_BYTES / row
 }
 
 /// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
@@ -825,6 +852,15 @@ impl FaultNames<'_> {
             FaultKind::NewtonStalled { step, contraction, singular, exact_jacobian } => {
                 fault::newton_stalled(*step, *contraction, *singular, *exact_jacobian)
             }
+            FaultKind::TooManySteps { limit } if *limit < integrand::MAX_STEPS => (
+                format!("more than {limit} steps, each recorded"),
+                format!(
+                    "a row a step would take more than {} GiB: give `samples` to record evenly \
+                     spaced times instead (the run may then take {} steps)",
+                    MAX_RECORDED_BYTES >> 30,
+                    integrand::MAX_STEPS
+                ),
+            ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
