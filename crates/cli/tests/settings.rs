@@ -189,3 +189,46 @@ fn counts_past_memory_are_refused_and_a_run_at_every_step_is_bounded() {
     assert!(message.contains(&format!("more than {limit} steps, each recorded")), "{message}");
     assert!(message.contains("give `samples`"), "{message}");
 }
+
+#[test]
+fn a_hold_with_no_law_is_refused_at_the_block() {
+    let scene = Scene::new("hold", &format!("{OSCILLATOR}simulate {{ hold 20 ms }}\n"));
+    let out = lagrange(&["check", scene.path()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(message.contains("`hold` with no law to hold"), "{message}");
+    assert!(message.contains("scene.lag:5:"), "{message}");
+
+    // The block's law replaced by a time series: the block's hold is named at its line, not
+    // as --hold.
+    let driven = "param m = 1 kg, k = 4 N/m\ninput F = 0 N\ncoord x = 1\n\
+                  particle p { mass m; position (x, 0) }\npotential k*x^2/2\n\
+                  force push on p: (F, 0)\nsimulate { input F = -k*x; hold 20 ms }\n";
+    let scene = Scene::new("hold-series", driven);
+    let series = scene.0.with_file_name("push.csv");
+    std::fs::write(&series, "t,F\n0,0\n20,1\n").expect("write");
+    let held = lagrange(&["simulate", scene.path(), "--samples", "3"]);
+    assert!(held.status.success(), "{}", stderr(&held));
+    let input = format!("F={}", series.display());
+    let out = lagrange(&["simulate", scene.path(), "--input", &input, "--samples", "3"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(message.contains("`hold` with no law left to hold"), "{message}");
+    assert!(message.contains("scene.lag:7:"), "{message}");
+    assert!(!message.contains("--hold"), "{message}");
+}
+
+#[test]
+fn a_series_value_that_is_not_finite_is_shown_at_its_column() {
+    let cart = example("control/cart_pole.lag");
+    let scene = Scene::new("nan", "unused");
+    let series = scene.0.with_file_name("push.csv");
+    std::fs::write(&series, "t,F\n0,0\n1,NaN\n").expect("write");
+    let out = lagrange(&["simulate", &cart, "--input", &format!("F={}", series.display())]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("push.csv:3:3: `NaN` is not a finite number"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -259,7 +259,25 @@ pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(),
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
     let loaded = crate::resolve_checked(source, checks);
-    settings_of(loaded.map(|(model, _)| model.simulation).unwrap_or_default(), options)
+    let simulation = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    if let (None, Some(hold)) = (options.hold, simulation.hold) {
+        // The block's laws all replaced by time series: the block's hold has nothing left to
+        // hold, and it is the block's line that says so.
+        let kept = simulation.drives.iter().any(|d| {
+            !options.input_series.iter().any(|(name, _)| *name == d.input)
+                || options.input.iter().any(|a| a.name == d.input)
+        });
+        if !kept && options.input.is_empty() {
+            let d = Diagnostic::error(hold.span, "`hold` with no law left to hold")
+                .with_label("holds nothing in this run")
+                .with_hint(
+                    "the time series given replace every law the block holds; a series is \
+                     not sampled by `hold`",
+                );
+            return Err(Error::Scene { diagnostics: vec![d], source: source.to_string() });
+        }
+    }
+    settings_of(simulation, options)
 }
 
 /// The settings of a run of a scene whose `simulate` block is `scene` (a loaded scene's

@@ -104,6 +104,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         r.statement(stmt);
     }
     r.require_a_coordinate(file);
+    r.hold_needs_a_law();
     r
 }
 

@@ -122,6 +122,24 @@ impl Resolver<'_> {
         }
     }
 
+    /// A `hold` of the `simulate` blocks samples the laws their `input` lines give: with none,
+    /// it would hold nothing (the run refuses it), so the scene is refused where it stands.
+    pub(super) fn hold_needs_a_law(&mut self) {
+        let simulation = &self.model.simulation;
+        let Some(hold) = simulation.hold else { return };
+        if !simulation.drives.is_empty() {
+            return;
+        }
+        self.error(
+            Diagnostic::error(hold.span, "`hold` with no law to hold")
+                .with_label("holds nothing")
+                .with_hint(
+                    "`hold` samples the laws that drive inputs: add one to the block \
+                     (`input F = -k*x`), or give the hold with the law to the run",
+                ),
+        );
+    }
+
     /// The one number of an `until`, `step` or `tolerance` setting, in SI and positive.
     fn setting_number(&mut self, setting: &Setting, measure: Measure) -> Option<Number> {
         let key = &setting.key.name;
@@ -324,6 +342,7 @@ mod tests {
             ("simulate { tolerance 1 s }", "`tolerance` takes no unit"),
             ("simulate { step m }", "`step` must be a number"),
             ("simulate { method 4 }", "a method is a name"),
+            ("simulate { hold 20 ms }", "`hold` with no law to hold"),
         ] {
             assert_eq!(simulation(block).err(), Some(vec![message.to_string()]), "{block}");
         }
