@@ -241,3 +241,19 @@ fn an_fmu_takes_a_tolerance_whatever_the_scene_runs_with() {
     let fmu = engine::fmu::export("scene.lag", &source, &options).expect("exports");
     assert!(fmu.model_description.contains("tolerance=\"1e-8\""), "{}", fmu.model_description);
 }
+
+#[test]
+fn set_takes_values_with_units_of_the_right_dimension() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let run = |set: &str| table(&["simulate", &pendulum, "--set", set, "--samples", "5"]);
+    assert_eq!(run("L=20 cm"), run("L=0.2"));
+    assert_eq!(run("theta=30 deg"), run("theta=pi/6"));
+    assert_eq!(run("theta'=60 deg/s"), run("theta'=pi/3"));
+    let out = lagrange(&["simulate", &pendulum, "--set", "L=20 s"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("in this value of `L`: m here, s there"), "{}", stderr(&out));
+
+    let cart = example("control/cart_pole.lag");
+    let linearized = |set: &str| table(&["linearize", &cart, "--set", set]);
+    assert_eq!(linearized("L=50 cm"), linearized("L=0.5"));
+}

@@ -471,7 +471,7 @@ pub(crate) fn set_expressions(
         let value = prepared
             .derivation
             .model
-            .resolve_expression(text)
+            .resolve_value_for(&set.name, text)
             .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
         let model::Value::Scalar(e) = value else {
             return Err(Error::Input(format!(
