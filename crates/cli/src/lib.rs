@@ -103,7 +103,12 @@ pub fn read_scene(path: &std::path::Path) -> Result<String, String> {
 /// UTF-8.
 pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
     let error = match String::from_utf8(bytes) {
-        Ok(text) => return Ok(text),
+        // A byte-order mark is no part of the scene: left in, it would count as a column of
+        // the first line and show as nothing in a message that quotes it.
+        Ok(text) => match text.strip_prefix('\u{FEFF}') {
+            Some(rest) => return Ok(rest.to_string()),
+            None => return Ok(text),
+        },
         Err(e) => e,
     };
     let at = error.utf8_error().valid_up_to();

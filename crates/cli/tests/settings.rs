@@ -257,3 +257,21 @@ fn set_takes_values_with_units_of_the_right_dimension() {
     let linearized = |set: &str| table(&["linearize", &cart, "--set", set]);
     assert_eq!(linearized("L=50 cm"), linearized("L=0.5"));
 }
+
+#[test]
+fn a_byte_order_mark_is_no_part_of_the_scene() {
+    let text = format!("\u{FEFF}{OSCILLATOR}");
+    // The parser skips it, for a front end that hands it the file's text as it is...
+    assert!(lang::parse(&text).is_ok());
+    assert!(lang::parse("param m\n\u{FEFF}coord x\n").is_err(), "only at the start");
+    // ...and the command reads the file without it, so that columns are an editor's.
+    assert_eq!(cli::decode("s.lag", text.clone().into_bytes()).as_deref(), Ok(OSCILLATOR));
+    let (_, rest) = OSCILLATOR.split_once('\n').expect("lines");
+    let scene = Scene::new("bom", &format!("\u{FEFF}param m = 1 kq, k = 4 N/m\n{rest}"));
+    let out = lagrange(&["check", scene.path()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert!(message.contains("scene.lag:1:13"), "{message}");
+    assert!(message.contains("1 │ param m = 1 kq, k = 4 N/m\n"), "{message}");
+    assert!(!message.contains('\u{FEFF}'), "{message}");
+}
