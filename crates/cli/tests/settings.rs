@@ -275,3 +275,17 @@ fn a_byte_order_mark_is_no_part_of_the_scene() {
     assert!(message.contains("1 │ param m = 1 kq, k = 4 N/m\n"), "{message}");
     assert!(!message.contains('\u{FEFF}'), "{message}");
 }
+
+#[test]
+fn a_stop_condition_that_names_nothing_that_changes_is_refused() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    for stop in ["0", "theta=theta", "L - 1", "sin(theta)^2 + cos(theta)^2 - 1"] {
+        let out = lagrange(&["simulate", &pendulum, "--stop-when", stop]);
+        assert_eq!(out.status.code(), Some(2), "{stop}: {}", stderr(&out));
+        assert!(stderr(&out).contains("names nothing that changes"), "{stop}: {}", stderr(&out));
+    }
+    for stop in ["theta", "t - 1", "theta' = 0"] {
+        let out = lagrange(&["simulate", &pendulum, "--stop-when", stop, "--samples", "2"]);
+        assert!(out.status.success(), "{stop}: {}", stderr(&out));
+    }
+}

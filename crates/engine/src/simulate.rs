@@ -430,6 +430,11 @@ pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let laws = drive::laws(&mut model, &settings.drives)?;
     drive::into_constraints(source, &mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
+    let stops = outputs.len()..outputs.len() + settings.stops.len();
+    let stop_exprs = prepared.extra[stops].to_vec();
+    for (text, &stop) in settings.stops.iter().zip(&stop_exprs) {
+        refuse_constant_stop(&mut prepared, text, stop)?;
+    }
     // Held laws keep their inputs' slots; the others take their inputs' places.
     let (held, lagrangian_driven) = if settings.hold.is_some() {
         (laws, false)
@@ -447,6 +452,31 @@ pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
         prepared.extra.splice(0..0, exprs);
     }
     Ok(Loaded { prepared, outputs, held, lagrangian_driven })
+}
+
+/// Refuses a stop condition that names nothing a run changes (`--stop-when 0`, `x = x`): it
+/// is one value throughout, so it either stops the run at once or never, whatever the scene
+/// does, which is not what anyone writing it meant.
+fn refuse_constant_stop(
+    prepared: &mut Prepared,
+    text: &str,
+    stop: cas::ExprId,
+) -> Result<(), Error> {
+    let d = &prepared.derivation;
+    let mut changing: Vec<cas::SymId> = vec![d.model.time];
+    changing.extend(d.coords.iter().chain(&d.rates).chain(&d.accels));
+    changing.extend(d.multipliers.iter().map(|m| m.lambda));
+    changing.extend(d.model.inputs.iter().map(|u| u.sym));
+    let pool = &mut prepared.derivation.model.pool;
+    let simplified = pool.simplify(stop);
+    if pool.free_symbols(simplified).iter().any(|s| changing.contains(s)) {
+        return Ok(());
+    }
+    Err(bad(format!(
+        "the stop condition `{text}` names nothing that changes during a run (no coordinate, \
+         rate, input or t), so it would stop the run at once or never: name what should \
+         reach zero, such as `theta = pi/2`"
+    )))
 }
 
 /// The `--set` values resolved as expressions of the derived scene's parameters: after the
