@@ -289,3 +289,36 @@ fn a_stop_condition_that_names_nothing_that_changes_is_refused() {
         assert!(out.status.success(), "{stop}: {}", stderr(&out));
     }
 }
+
+#[test]
+fn tiny_and_huge_times_are_written_short_and_exact() {
+    use cli::simulate::number;
+    for (x, written) in [
+        (0.25, "0.25"),
+        (std::f64::consts::TAU, "6.283185307179586"),
+        (10.0, "10"),
+        (1e-300, "1e-300"),
+        (1e300, "1e300"),
+        (-1.5e-20, "-0.000000000000000000015"),
+        (-1.5e-30, "-1.5e-30"),
+        (0.0, "0"),
+    ] {
+        assert_eq!(number(x), written);
+        assert_eq!(number(x).parse::<f64>().map(f64::to_bits), Ok(x.to_bits()));
+    }
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = table(&[
+        "simulate",
+        &pendulum,
+        "--method",
+        "rk4",
+        "--step",
+        "1e-300",
+        "--until",
+        "1e-297",
+        "--samples",
+        "3",
+    ]);
+    assert!(out.lines().all(|l| l.len() < 80), "{out}");
+    assert_eq!(last_time(&out), "1e-297");
+}
