@@ -322,3 +322,17 @@ fn tiny_and_huge_times_are_written_short_and_exact() {
     assert!(out.lines().all(|l| l.len() < 80), "{out}");
     assert_eq!(last_time(&out), "1e-297");
 }
+
+#[test]
+fn vary_takes_bounds_as_the_scene_writes_values() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let run = |vary: &str| table(&["ensemble", &pendulum, "--vary", vary, "--threads", "1"]);
+    assert_eq!(run("L=50 cm:1 m:3"), run("L=0.5:1:3"));
+    assert_eq!(run("g=pi:2*pi:3"), run("g=3.141592653589793:6.283185307179586:3"));
+    let out = lagrange(&["ensemble", &pendulum, "--vary", "L=50 s:1:3"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("in this value of `L`: m here, s there"), "{}", stderr(&out));
+    let out = lagrange(&["ensemble", &pendulum, "--vary", "L=5 qq:1:2"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("^^^^ unknown unit `qq`"), "{}", stderr(&out));
+}

@@ -10,7 +10,9 @@ mod resolve;
 pub mod units;
 mod value;
 
-pub use resolve::{closest, dimension_errors, resolve, resolve_with, time_setting, Scope};
+pub use resolve::{
+    closest, constant_value, dimension_errors, resolve, resolve_with, time_setting, Scope,
+};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};

@@ -20,7 +20,7 @@ use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Ident, SceneFile, Span, StmtKind};
 
 pub use self::session::Scope;
-pub use self::simulation::time_setting;
+pub use self::simulation::{constant_value, time_setting};
 use crate::units::Form;
 use crate::{
     Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,

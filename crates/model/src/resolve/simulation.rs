@@ -60,6 +60,41 @@ pub fn time_setting(key: &str, text: &str) -> Result<f64, Vec<Diagnostic>> {
     }
 }
 
+/// A value given on its own that names nothing (an ensemble's bound, `--vary "L=10 cm:1 m:5"`):
+/// an expression of numbers and constants with an optional unit, in SI, and whether it had a
+/// unit (whose dimension the caller checks against what the value is for). On failure, the
+/// diagnostics, with spans into `text`.
+pub fn constant_value(text: &str) -> Result<(f64, bool), Vec<Diagnostic>> {
+    let (value, unit) = lang::parse_quantity(text)?;
+    let mut r = Resolver::new(text);
+    let si = r.scalar(&value).and_then(|(written, _)| {
+        if !r.model.pool.free_symbols(written).is_empty() {
+            r.error(
+                Diagnostic::error(value.span, "a bound must be a number")
+                    .with_label("names a symbol")
+                    .with_hint("write a number, with a unit if you like: `0.1`, `pi/2`, `10 cm`"),
+            );
+            return None;
+        }
+        r.in_si(written, unit.as_ref())
+    });
+    let mut errors = std::mem::take(&mut r.diagnostics.errors);
+    for d in errors.iter_mut().filter(|d| d.message.starts_with("unknown name")) {
+        d.hint = Some("a bound names no parameter: a number with a unit, like `10 cm`".into());
+    }
+    match si {
+        Some(si) if errors.is_empty() => {
+            Ok((numeric::eval(&r.model.pool, si, &[]), unit.is_some()))
+        }
+        _ => {
+            if errors.is_empty() {
+                errors.push(Diagnostic::error(value.span, "cannot be read as a number"));
+            }
+            Err(errors)
+        }
+    }
+}
+
 impl Resolver<'_> {
     /// A `simulate { … }` block: its settings added to those of earlier blocks.
     pub(super) fn simulate_statement(&mut self, settings: &[Setting]) {
