@@ -161,8 +161,8 @@ enum Command {
         fmu: PathBuf,
         /// The Co-Simulation integrator's tolerance (relative and absolute) when the importer
         /// sets none; default: the scene's `simulate { tolerance … }`, else 1e-10.
-        #[arg(long)]
-        tolerance: Option<f64>,
+        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+        tolerance: Option<String>,
         /// The stop time of the FMU's default experiment, as the scene writes it (`10`,
         /// `1/4 min`; seconds without a unit); default: the scene's `simulate { until … }`,
         /// else 10.
@@ -250,8 +250,8 @@ struct RunArgs {
     method: Option<MethodArg>,
     /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
     /// auto (default 1e-10).
-    #[arg(long)]
-    tolerance: Option<f64>,
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    tolerance: Option<String>,
     /// Step of rk4, midpoint and gauss, as the scene writes it (`1e-3`, `5 ms`); default:
     /// until/1000.
     #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
@@ -298,7 +298,7 @@ impl RunArgs {
             until: time_option(engine::Setting::Until, self.until.as_deref())?,
             // The engine's options are shared with Python, which names the method.
             method: self.method.map(|m| sim::Method::from(m).name().to_string()),
-            tolerance: self.tolerance,
+            tolerance: ratio_option(engine::Setting::Tolerance, self.tolerance.as_deref())?,
             step: time_option(engine::Setting::Step, self.step.as_deref())?,
             set: self.set,
             input,
@@ -488,6 +488,10 @@ fn main() -> ExitCode {
             let Some(until) = time_option(engine::Setting::Until, until.as_deref()) else {
                 return ExitCode::from(2);
             };
+            let Some(tolerance) = ratio_option(engine::Setting::Tolerance, tolerance.as_deref())
+            else {
+                return ExitCode::from(2);
+            };
             let options = engine::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
@@ -555,6 +559,20 @@ fn time_option(setting: engine::Setting, text: Option<&str>) -> Option<Option<f6
     let Some(text) = text else { return Some(None) };
     match engine::input::time(setting, text) {
         Ok(seconds) => Some(Some(seconds)),
+        Err(diagnostics) => {
+            let flag = format!("--{}", setting.name());
+            eprint!("{}", cli::diagnostics::render(&flag, text, &diagnostics));
+            None
+        }
+    }
+}
+
+/// A pure number given for `setting` (`--tolerance 10^-12`), or `None` after rendering on
+/// stderr what is wrong with it.
+fn ratio_option(setting: engine::Setting, text: Option<&str>) -> Option<Option<f64>> {
+    let Some(text) = text else { return Some(None) };
+    match engine::input::ratio(setting, text) {
+        Ok(value) => Some(Some(value)),
         Err(diagnostics) => {
             let flag = format!("--{}", setting.name());
             eprint!("{}", cli::diagnostics::render(&flag, text, &diagnostics));

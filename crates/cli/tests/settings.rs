@@ -336,3 +336,16 @@ fn vary_takes_bounds_as_the_scene_writes_values() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("^^^^ unknown unit `qq`"), "{}", stderr(&out));
 }
+
+#[test]
+fn tolerance_takes_an_expression_and_no_unit() {
+    let pendulum = example("classics/simple_pendulum.lag");
+    let run = |tolerance: &str| {
+        table(&["simulate", &pendulum, "--tolerance", tolerance, "--samples", "3"])
+    };
+    assert_eq!(run("10^-12"), run("1e-12"));
+    let out = lagrange(&["simulate", &pendulum, "--tolerance", "1e-9 s"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("`tolerance` takes no unit"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("┌─ --tolerance:1:1"), "{}", stderr(&out));
+}

@@ -96,6 +96,28 @@ pub fn time(setting: Setting, text: &str) -> Result<f64, Vec<lang::Diagnostic>> 
     }
 }
 
+/// A pure number a front end was given as text for `setting` (`tolerance`), as the scene
+/// writes one: `1e-10`, `10^-12`; a plain decimal read as Rust reads it. A unit is refused.
+/// On failure, the diagnostics, with spans into `text`.
+pub fn ratio(setting: Setting, text: &str) -> Result<f64, Vec<lang::Diagnostic>> {
+    if let Ok(value) = text.trim().parse::<f64>() {
+        return Ok(value);
+    }
+    match model::constant_value(text)? {
+        (value, false) => Ok(value),
+        (_, true) => {
+            let key = setting.name();
+            let d = lang::Diagnostic::error(
+                lang::Span::new(0, text.len()),
+                format!("`{key}` takes no unit"),
+            )
+            .with_label("a unit")
+            .with_hint(format!("`{key}` is a pure number, such as 1e-10"));
+            Err(vec![d])
+        }
+    }
+}
+
 /// `p=a:b:n`: n evenly spaced values of parameter p from a to b, both included.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepRange {
@@ -408,6 +430,16 @@ mod tests {
                 assert_eq!(&text[span.start..span.end], culprit, "{text}");
             }
         }
+    }
+
+    #[test]
+    fn ratios_are_read_as_the_scene_writes_them() {
+        let read = |text: &str| ratio(Setting::Tolerance, text);
+        assert_eq!(read("1e-10").map(f64::to_bits), Ok(1e-10f64.to_bits()));
+        assert_eq!(read("10^-12"), Ok(1e-12));
+        let errors = read("1e-9 s").expect_err("a unit");
+        assert_eq!(errors[0].message, "`tolerance` takes no unit");
+        assert!(read("x").is_err());
     }
 
     #[test]
