@@ -197,7 +197,11 @@ fn a_hold_with_no_law_is_refused_at_the_block() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     let message = stderr(&out);
     assert!(message.contains("`hold` with no law to hold"), "{message}");
-    assert!(message.contains("scene.lag:5:"), "{message}");
+    assert!(message.contains("scene.lag:5:12"), "{message}");
+    assert!(
+        message.contains("│            ^^^^^^^^^^ holds nothing"),
+        "under `hold 20 ms`: {message}"
+    );
 
     // The block's law replaced by a time series: the block's hold is named at its line, not
     // as --hold.

@@ -387,7 +387,7 @@ pub struct Simulation {
     /// Inputs driven in a run (`input F = -k*x`), each named once, the last line winning.
     pub drives: Vec<Drive>,
     /// The period at which the laws of `drives` are sampled and held (`hold 10 ms`); none:
-    /// they act continuously.
+    /// they act continuously. Its span is the whole setting, `hold` included.
     pub hold: Option<Number>,
 }
 

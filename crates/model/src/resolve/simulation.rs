@@ -124,7 +124,12 @@ impl Resolver<'_> {
                 }
             }
             "hold" => {
-                if let Some(n) = self.setting_number(setting, Measure::Time) {
+                if let Some(mut n) = self.setting_number(setting, Measure::Time) {
+                    // The whole setting, `hold 20 ms`: what a diagnostic about the hold
+                    // itself (not its value) points at.
+                    let value = setting.values.first().map_or(n.span, |v| v.span);
+                    let end = setting.unit.as_ref().map_or(value, |u| u.span);
+                    n.span = setting.key.span.join(value).join(end);
                     self.model.simulation.hold = Some(n);
                 }
             }
