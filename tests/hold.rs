@@ -22,13 +22,18 @@ const KP: f64 = 20.0;
 const KD: f64 = 5.0;
 const LAW: &str = "F=-kp*x - kd*x'";
 
+fn adaptive(method: &str) -> bool {
+    sim::Method::from_name(method).expect("a method").is_adaptive()
+}
+
 fn run(method: &str, hold: Option<f64>, until: f64, samples: usize) -> Outcome {
     let options = Options {
         input: vec![LAW.parse().expect("an assignment")],
         hold,
         method: Some(method.into()),
-        tolerance: Some(1e-12),
-        step: Some(1e-3),
+        // Each method is given the setting it uses; the other would be refused.
+        tolerance: adaptive(method).then_some(1e-12),
+        step: (!adaptive(method)).then_some(1e-3),
         until: Some(until),
         output: vec!["x, x', F".into()],
         samples,

@@ -17,7 +17,9 @@ pub fn csv(table: &Table) -> String {
     let header = table.columns.iter().map(String::as_str).chain(["fault"]);
     out.write_record(header).expect("writing to memory");
     for (row, failure) in table.rows.iter().zip(&table.failures) {
-        let cells = row.iter().map(|v| if v.is_nan() { String::new() } else { v.to_string() });
+        let cells =
+            row.iter()
+                .map(|v| if v.is_nan() { String::new() } else { crate::simulate::number(*v) });
         let fault = failure.clone().unwrap_or_default();
         out.write_record(cells.chain([fault])).expect("writing to memory");
     }

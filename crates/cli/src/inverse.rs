@@ -103,7 +103,7 @@ pub fn torques_csv(
             &mut tau,
         )?;
         let numbers = std::iter::once(t).chain(&tau);
-        out.write_record(numbers.map(f64::to_string)).expect("writing to memory");
+        out.write_record(numbers.map(|x| crate::simulate::number(*x))).expect("writing to memory");
     }
     let bytes = out.into_inner().expect("writing to memory");
     Ok(String::from_utf8(bytes).expect("UTF-8 in, UTF-8 out"))

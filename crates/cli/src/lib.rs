@@ -103,7 +103,12 @@ pub fn read_scene(path: &std::path::Path) -> Result<String, String> {
 /// UTF-8.
 pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
     let error = match String::from_utf8(bytes) {
-        Ok(text) => return Ok(text),
+        // A byte-order mark is no part of the scene: left in, it would count as a column of
+        // the first line and show as nothing in a message that quotes it.
+        Ok(text) => match text.strip_prefix('\u{FEFF}') {
+            Some(rest) => return Ok(rest.to_string()),
+            None => return Ok(text),
+        },
         Err(e) => e,
     };
     let at = error.utf8_error().valid_up_to();
@@ -127,6 +132,9 @@ pub fn decode(path: &str, bytes: Vec<u8>) -> Result<String, String> {
 }
 
 /// Writes a file whole or not at all: to a temporary file beside it, then renamed over it.
+/// What it replaces is respected as an editor's save respects it: a read-only file is refused,
+/// a symbolic link is written through (its target replaced, the link kept), a replaced file
+/// keeps its mode, and a new one gets 0666 less the umask.
 pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Result<()> {
     write_bytes_atomically(path, contents.as_bytes())
 }
@@ -134,41 +142,133 @@ pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Resu
 /// [`write_atomically`] of bytes.
 pub fn write_bytes_atomically(path: &std::path::Path, contents: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
-    let dir =
-        path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-    let name =
-        path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let target = Target::of(path)?;
+    let name = target
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
     // Dropped on an error, the temporary file is removed.
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(without_path)?;
+    let mut tmp = target.temporary(&format!(".{name}."), ".tmp")?;
     tmp.as_file_mut().write_all(contents)?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    target.replace_by(tmp)
 }
 
 /// Writes a file whole or not at all by `write`, which writes to the path it is given: a
 /// temporary file beside the target with the target's extension (a writer may choose its
-/// format by it), renamed over the target once `write` succeeds.
+/// format by it), renamed over the target once `write` succeeds; what it replaces is respected
+/// as [`write_atomically`] respects it.
 pub fn write_atomically_by(
     path: &std::path::Path,
     write: impl FnOnce(&std::path::Path) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
-    let dir =
-        path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-    let stem =
-        path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{stem}."))
-        .suffix(&format!(".tmp.{ext}"))
-        .tempfile_in(dir)
-        .map_err(without_path)?;
+    let target = Target::of(path)?;
+    let stem = target
+        .path
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let ext = target.path.extension().map(|e| e.to_string_lossy().into_owned());
+    let tmp =
+        target.temporary(&format!(".{stem}."), &format!(".tmp.{}", ext.unwrap_or_default()))?;
     write(tmp.path())?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    target.replace_by(tmp)
+}
+
+/// Whether `output` is the file `input` (a path to it by another name, `./s.lag` or a symbolic
+/// link, included): a command must not write over what it reads. An output not there yet is
+/// no file read.
+pub fn same_file(input: &std::path::Path, output: &std::path::Path) -> bool {
+    let (Ok(read), Ok(written)) = (std::fs::metadata(input), std::fs::metadata(output)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        (read.dev(), read.ino()) == (written.dev(), written.ino())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (read, written);
+        std::fs::canonicalize(input).ok() == std::fs::canonicalize(output).ok()
+    }
+}
+
+/// The file an atomic write replaces: the path with its symbolic links followed (a rename
+/// over the link would put a regular file in its place and leave its target as it was), and
+/// the mode of the file there, if there is one.
+struct Target {
+    path: std::path::PathBuf,
+    existing: Option<std::fs::Permissions>,
+}
+
+/// More links than this in a row is a loop (Linux's own limit).
+const MAX_LINKS: usize = 40;
+
+impl Target {
+    fn of(path: &std::path::Path) -> std::io::Result<Target> {
+        let mut path = path.to_path_buf();
+        for _ in 0..MAX_LINKS {
+            let metadata = match std::fs::symlink_metadata(&path) {
+                Ok(metadata) => metadata,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    return Ok(Target { path, existing: None });
+                }
+                Err(e) => return Err(e),
+            };
+            if metadata.file_type().is_symlink() {
+                let link = std::fs::read_link(&path)?;
+                // A relative link is relative to the folder the link is in.
+                path = match path.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+                continue;
+            }
+            if metadata.is_dir() {
+                return Err(std::io::Error::other("it is a directory"));
+            }
+            // Renaming over the file would replace it even so (the rename needs only the
+            // folder's write bit); as root even writing to it would.
+            if metadata.permissions().readonly() {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::PermissionDenied,
+                    "the file is read-only: make it writable or write elsewhere",
+                ));
+            }
+            return Ok(Target { path, existing: Some(metadata.permissions()) });
+        }
+        Err(std::io::Error::other(format!("more than {MAX_LINKS} symbolic links in a row")))
+    }
+
+    /// An empty temporary file in the target's folder, made as the target will be: with the
+    /// replaced file's mode, or 0666 less the umask (the mode `open` applies the umask to).
+    fn temporary(&self, prefix: &str, suffix: &str) -> std::io::Result<tempfile::NamedTempFile> {
+        let dir = self
+            .path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(prefix).suffix(suffix);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = builder.tempfile_in(dir).map_err(without_path)?;
+        if let Some(permissions) = &self.existing {
+            // Set after creation: the umask would have narrowed it through `open`.
+            tmp.as_file().set_permissions(permissions.clone())?;
+        }
+        Ok(tmp)
+    }
+
+    /// Renames the written temporary file over the target.
+    fn replace_by(self, tmp: tempfile::NamedTempFile) -> std::io::Result<()> {
+        tmp.persist(&self.path).map_err(|e| e.error)?;
+        Ok(())
+    }
 }
 
 /// The operating system's error without the temporary path `tempfile` appends to its message

@@ -161,12 +161,13 @@ enum Command {
         fmu: PathBuf,
         /// The Co-Simulation integrator's tolerance (relative and absolute) when the importer
         /// sets none; default: the scene's `simulate { tolerance … }`, else 1e-10.
-        #[arg(long)]
-        tolerance: Option<f64>,
-        /// The stop time of the FMU's default experiment (s); default: the scene's
-        /// `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
+        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+        tolerance: Option<String>,
+        /// The stop time of the FMU's default experiment, as the scene writes it (`10`,
+        /// `1/4 min`; seconds without a unit); default: the scene's `simulate { until … }`,
+        /// else 10.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        until: Option<String>,
         /// Do not check that terms added or equated have one dimension.
         #[arg(long)]
         no_units: bool,
@@ -209,9 +210,9 @@ enum Command {
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
         file: PathBuf,
-        /// End time (s); default: the scene's `simulate { until … }`, else 10.
-        #[arg(long)]
-        until: Option<f64>,
+        /// End time, as for simulate; default: the scene's `simulate { until … }`, else 10.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        until: Option<String>,
         /// Override a parameter or an initial value, as for simulate.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
@@ -222,9 +223,9 @@ enum Command {
         /// included, is of the driven scene.
         #[arg(long = "input", value_name = "NAME=EXPR")]
         input: Vec<Assignment>,
-        /// Hold the laws of `--input` between samples PERIOD seconds apart, as for simulate.
-        #[arg(long, value_name = "PERIOD")]
-        hold: Option<f64>,
+        /// Hold the laws of `--input` between samples PERIOD apart, as for simulate.
+        #[arg(long, value_name = "PERIOD", allow_hyphen_values = true)]
+        hold: Option<String>,
         /// Time each run this many times and report the median.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
@@ -240,19 +241,21 @@ enum Command {
 /// The settings of a run, shared by `simulate` and `ensemble`.
 #[derive(Args)]
 struct RunArgs {
-    /// End time (s); default: the scene's `simulate { until … }`, else 10.
-    #[arg(long)]
-    until: Option<f64>,
+    /// End time, as the scene writes it (`10`, `2*pi`, `1/4 min`; seconds without a unit);
+    /// default: the scene's `simulate { until … }`, else 10.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    until: Option<String>,
     /// The integrator (default dop853).
     #[arg(long)]
     method: Option<MethodArg>,
     /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
     /// auto (default 1e-10).
-    #[arg(long)]
-    tolerance: Option<f64>,
-    /// Step of rk4, midpoint and gauss (default: until/1000).
-    #[arg(long)]
-    step: Option<f64>,
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    tolerance: Option<String>,
+    /// Step of rk4, midpoint and gauss, as the scene writes it (`1e-3`, `5 ms`); default:
+    /// until/1000.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    step: Option<String>,
     /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<Assignment>,
@@ -264,9 +267,10 @@ struct RunArgs {
     input: Vec<Assignment>,
     /// Sample the laws of `--input` every PERIOD seconds and hold each value until the
     /// next sample (a zero-order hold, as a discrete controller acts), rather than apply
-    /// them continuously. Default: the scene's `simulate { hold … }`, else none.
-    #[arg(long, value_name = "PERIOD")]
-    hold: Option<f64>,
+    /// them continuously. As the scene writes it (`0.02`, `20 ms`). Default: the scene's
+    /// `simulate { hold … }`, else none.
+    #[arg(long, value_name = "PERIOD", allow_hyphen_values = true)]
+    hold: Option<String>,
     /// Stop when this expression reaches zero, or `lhs = rhs` holds: `--stop-when 'theta = pi/2'`.
     #[arg(long = "stop-when", value_name = "EXPR")]
     stop_when: Vec<String>,
@@ -279,20 +283,27 @@ struct RunArgs {
 }
 
 impl RunArgs {
+    /// The files a run reads: the scene, and the time series of `--input`.
+    fn inputs<'a>(&'a self, scene: &'a std::path::Path) -> Vec<(&'a str, &'a std::path::Path)> {
+        let mut inputs = vec![("", scene)];
+        inputs.extend(self.input.iter().filter(|i| cli::series::is_series(i)).map(series_file));
+        inputs
+    }
+
     /// The engine's options of a run, the inputs' time series read from their files; `None`
     /// after saying on stderr which file could not be read.
     fn options(self) -> Option<engine::simulate::Options> {
         let (input, input_series) = drives(self.input)?;
         Some(engine::simulate::Options {
-            until: self.until,
+            until: time_option(engine::Setting::Until, self.until.as_deref())?,
             // The engine's options are shared with Python, which names the method.
             method: self.method.map(|m| sim::Method::from(m).name().to_string()),
-            tolerance: self.tolerance,
-            step: self.step,
+            tolerance: ratio_option(engine::Setting::Tolerance, self.tolerance.as_deref())?,
+            step: time_option(engine::Setting::Step, self.step.as_deref())?,
             set: self.set,
             input,
             input_series,
-            hold: self.hold,
+            hold: time_option(engine::Setting::Hold, self.hold.as_deref())?,
             stop_when: self.stop_when,
             events: self.event,
             no_units: self.no_units,
@@ -357,6 +368,35 @@ enum FormatArg {
     Json,
 }
 
+/// Says on stderr, and is `true`, when an output (a flag and its path) is one of the files the
+/// command reads (each a flag, or the scene's empty name, and its path): writing it would
+/// replace what was read.
+fn writes_over_input(
+    inputs: &[(&str, &std::path::Path)],
+    outputs: &[(&str, Option<&std::path::Path>)],
+) -> bool {
+    for (flag, output) in outputs {
+        let Some(output) = output else { continue };
+        for (what, input) in inputs {
+            if cli::same_file(input, output) {
+                let read = if what.is_empty() {
+                    "the scene file".to_string()
+                } else {
+                    format!("the {what} file")
+                };
+                eprintln!(
+                    "error: {flag} {} would replace {read} {} that the command reads: write \
+                     the output elsewhere",
+                    output.display(),
+                    input.display()
+                );
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// The file's text, or `None` after saying on stderr why it could not be read.
 fn read_or_report(path: &std::path::Path) -> Option<String> {
     cli::read_scene(path).map_err(|e| eprint!("{e}")).ok()
@@ -366,6 +406,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Derive { file, format, out, no_units, full } => {
+            if writes_over_input(&[("", &file)], &[("--out", out.as_deref())]) {
+                return ExitCode::from(2);
+            }
             derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
@@ -375,6 +418,14 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Simulate { file, run, output, out, plot, animate, samples } => {
+            let outputs = [
+                ("--out", out.as_deref()),
+                ("--plot", plot.as_deref()),
+                ("--animate", animate.as_deref()),
+            ];
+            if writes_over_input(&run.inputs(&file), &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some(options) = run.options() else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
@@ -388,6 +439,10 @@ fn main() -> ExitCode {
             simulate(&file, &source, &options, out, Figures { plot, animate })
         }
         Command::Ensemble { file, vary, runs, seed, record, run, out, plot, threads } => {
+            let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
+            if writes_over_input(&run.inputs(&file), &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some(simulate) = run.options() else { return ExitCode::from(2) };
             let mut varied = Vec::new();
@@ -414,6 +469,10 @@ fn main() -> ExitCode {
             out,
             no_units,
         } => {
+            let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
+            if writes_over_input(&[("", &file)], &outputs) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             // Typed here, read as text there; the same parser reads it back.
             let set = set.iter().map(Assignment::to_string).collect();
@@ -422,11 +481,26 @@ fn main() -> ExitCode {
             linearize(&file, &source, &options, format, out, plot)
         }
         Command::Export { file, fmu, tolerance, until, no_units } => {
+            if writes_over_input(&[("", &file)], &[("--fmu", Some(&fmu))]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let Some(until) = time_option(engine::Setting::Until, until.as_deref()) else {
+                return ExitCode::from(2);
+            };
+            let Some(tolerance) = ratio_option(engine::Setting::Tolerance, tolerance.as_deref())
+            else {
+                return ExitCode::from(2);
+            };
             let options = engine::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
         Command::Codegen { file, lang, out, no_units } => {
+            if matches!(lang, LangArg::Rust)
+                && writes_over_input(&[("", &file)], &[("--out", out.as_deref())])
+            {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let path = file.display().to_string();
             let options = engine::Options { units: !no_units };
@@ -439,13 +513,28 @@ fn main() -> ExitCode {
             }
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {
+            let inputs = [("", file.as_path()), ("--trajectory", trajectory.as_path())];
+            if writes_over_input(&inputs, &[("--out", out.as_deref())]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let options = engine::inverse::Options { set, no_units };
             inverse_dynamics(&file, &source, &trajectory, out, &options)
         }
         Command::Bench { file, until, set, stop_when, input, hold, repeats, plot, no_units } => {
+            let mut inputs = vec![("", file.as_path())];
+            inputs.extend(input.iter().filter(|i| cli::series::is_series(i)).map(series_file));
+            if writes_over_input(&inputs, &[("--plot", plot.as_deref())]) {
+                return ExitCode::from(2);
+            }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
             let Some((input, input_series)) = drives(input) else {
+                return ExitCode::from(2);
+            };
+            let (Some(until), Some(hold)) = (
+                time_option(engine::Setting::Until, until.as_deref()),
+                time_option(engine::Setting::Hold, hold.as_deref()),
+            ) else {
                 return ExitCode::from(2);
             };
             let options = engine::simulate::Options {
@@ -462,6 +551,39 @@ fn main() -> ExitCode {
         }
         Command::Check { files, no_units } => check(&files, no_units),
     }
+}
+
+/// A time given for `setting` (`--until 1/4 min`), in seconds, or `None` after rendering on
+/// stderr what is wrong with it, a caret under the culprit.
+fn time_option(setting: engine::Setting, text: Option<&str>) -> Option<Option<f64>> {
+    let Some(text) = text else { return Some(None) };
+    match engine::input::time(setting, text) {
+        Ok(seconds) => Some(Some(seconds)),
+        Err(diagnostics) => {
+            let flag = format!("--{}", setting.name());
+            eprint!("{}", cli::diagnostics::render(&flag, text, &diagnostics));
+            None
+        }
+    }
+}
+
+/// A pure number given for `setting` (`--tolerance 10^-12`), or `None` after rendering on
+/// stderr what is wrong with it.
+fn ratio_option(setting: engine::Setting, text: Option<&str>) -> Option<Option<f64>> {
+    let Some(text) = text else { return Some(None) };
+    match engine::input::ratio(setting, text) {
+        Ok(value) => Some(Some(value)),
+        Err(diagnostics) => {
+            let flag = format!("--{}", setting.name());
+            eprint!("{}", cli::diagnostics::render(&flag, text, &diagnostics));
+            None
+        }
+    }
+}
+
+/// The file of an input given as a time series, as [`writes_over_input`] names it.
+fn series_file(input: &Assignment) -> (&str, &std::path::Path) {
+    ("--input", std::path::Path::new(&input.value))
 }
 
 /// An input given as a time series, by name.

@@ -43,8 +43,14 @@ pub fn parse(text: &str) -> Result<sim::Series, (usize, usize, String)> {
             return Err((index + 1, 1, message));
         }
         for ((column, cell), number) in cells.iter().zip(&numbers) {
-            if number.is_none() {
-                return Err((index + 1, *column, format!("`{cell}` is not a number")));
+            match number {
+                None => return Err((index + 1, *column, format!("`{cell}` is not a number"))),
+                // Caught here, where the cell's column is known (the series' own check
+                // knows only the row).
+                Some(n) if !n.is_finite() => {
+                    return Err((index + 1, *column, format!("`{cell}` is not a finite number")))
+                }
+                Some(_) => {}
             }
         }
         times.push(numbers[0].unwrap_or_default());
@@ -82,5 +88,8 @@ mod tests {
         );
         assert_eq!(at("t,F\n0,1\n0,2\n").map(|e| e.0), Some(3));
         assert_eq!(at("t,F\n0,1\n").map(|e| e.2), Some("a series needs at least two rows".into()));
+        // A value that reads as a number but is not finite, at its own column.
+        assert_eq!(at("t,F\n0,1\n1, NaN\n"), Some((3, 4, "`NaN` is not a finite number".into())));
+        assert_eq!(at("t,F\n0,1\ninf,2\n"), Some((3, 1, "`inf` is not a finite number".into())));
     }
 }

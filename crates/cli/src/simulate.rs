@@ -18,10 +18,25 @@ pub fn csv(outcome: &Outcome) -> String {
     out.write_record(header).expect("writing to memory");
     for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
         let numbers = std::iter::once(t).chain(&row[..outcome.shown]);
-        out.write_record(numbers.map(f64::to_string)).expect("writing to memory");
+        out.write_record(numbers.copied().map(number)).expect("writing to memory");
     }
     let bytes = out.into_inner().expect("writing to memory");
     String::from_utf8(bytes).expect("UTF-8 in, UTF-8 out")
+}
+
+/// The longest a number is written in full; past it, in exponent form.
+const PLAIN_UP_TO: usize = 24;
+
+/// A number as a table or summary writes it: the shortest digits that read back to the same
+/// bits, in full (`0.25`, `6.283185307179586`) unless that takes more than [`PLAIN_UP_TO`]
+/// characters, as 1e-300 or 1e300 would (hundreds of zeros), then in exponent form (`1e-300`).
+pub fn number(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() <= PLAIN_UP_TO {
+        plain
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// The recorded outputs, the events and the summary as JSON.
@@ -132,15 +147,20 @@ pub fn summary(outcome: &Outcome) -> String {
     }
     for e in &r.events {
         let kind = if e.event < outcome.stop_names { "stop" } else { "event" };
-        s.push_str(&format!("{kind}: {} = 0 at t = {}\n", outcome.event_names[e.event], e.time));
+        s.push_str(&format!(
+            "{kind}: {} = 0 at t = {}\n",
+            outcome.event_names[e.event],
+            number(e.time)
+        ));
     }
     match (&r.fault, r.stopped_by) {
         (Some(f), _) => s.push_str(&format!("{}\n", outcome.describe_fault(f))),
         (None, Some(k)) => s.push_str(&format!(
             "stopped at t = {} by `{}` (before --until)\n",
-            r.final_time, outcome.event_names[k]
+            number(r.final_time),
+            outcome.event_names[k]
         )),
-        (None, None) => s.push_str(&format!("reached t = {}\n", r.final_time)),
+        (None, None) => s.push_str(&format!("reached t = {}\n", number(r.final_time))),
     }
     s
 }

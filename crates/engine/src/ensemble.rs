@@ -129,7 +129,7 @@ impl Ensemble {
             simulate::load(source, &settings)?;
         let set_exprs = simulate::set_expressions(&mut prepared, &settings.sets)?;
         let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
-        let given = varied_parameters(&prepared, &options.vary)?;
+        let given = varied_parameters(&mut prepared, &options.vary)?;
         let sets = simulate::overrides(&prepared, &settings.sets, &set_exprs)?;
         let columns = Columns {
             outputs: outputs.len(),
@@ -403,17 +403,16 @@ fn run_words(piece: &Piece) -> String {
 
 /// The index of each varied parameter among the model's, or why one is not a parameter.
 fn varied_parameters(
-    prepared: &crate::numbers::Prepared,
+    prepared: &mut crate::numbers::Prepared,
     vary: &[Vary],
 ) -> Result<Vec<usize>, Error> {
-    let model = &prepared.derivation.model;
     let mut found = Vec::new();
     for (k, v) in vary.iter().enumerate() {
         let name = &v.parameter;
         if vary[..k].iter().any(|earlier| earlier.parameter == *name) {
             return Err(Error::given(Setting::Vary, name, ": varied twice; give it once"));
         }
-        if let Some(i) = model.params.iter().position(|p| p.name == *name) {
+        if let Some(i) = prepared.derivation.model.params.iter().position(|p| p.name == *name) {
             if prepared.parameter_plan.is_derived(i) {
                 return Err(crate::numbers::derived_error(
                     &prepared.parameter_plan,
@@ -421,9 +420,18 @@ fn varied_parameters(
                     i,
                 ));
             }
+            // A number written with a unit is the parameter's value: the unit must fit it.
+            for text in &v.with_units {
+                prepared
+                    .derivation
+                    .model
+                    .resolve_value_for(name, text)
+                    .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
+            }
             found.push(i);
             continue;
         }
+        let model = &prepared.derivation.model;
         let params: Vec<&str> = model.params.iter().map(|p| p.name.as_str()).collect();
         let mut rest = format!(": no parameter of that name; one of {}", params.join(", "));
         if let Some(c) = model.coords.iter().find(|c| c.name == *name) {

@@ -120,6 +120,8 @@ pub enum Setting {
     Vary,
     /// The number of an ensemble's random draws.
     Runs,
+    /// The number of evenly spaced times a run records.
+    Samples,
 }
 
 impl Setting {
@@ -136,6 +138,7 @@ impl Setting {
             Setting::Hold => "hold",
             Setting::Vary => "vary",
             Setting::Runs => "runs",
+            Setting::Samples => "samples",
         }
     }
 }

@@ -125,6 +125,9 @@ fn interface(
         source,
         &crate::simulate::Options {
             until: options.until,
+            // The FMU integrates with its own DOP853 whatever the scene's method, so its
+            // tolerance applies even to a scene run by a fixed-step method.
+            method: Some(sim::Method::Dop853.name().to_string()),
             tolerance: options.tolerance,
             no_units: options.no_units,
             ..Default::default()

@@ -84,6 +84,40 @@ pub fn assignments_of<S: AsRef<str>>(
     texts.iter().map(read).collect()
 }
 
+/// A time a front end was given as text for `setting` (`until`, `hold`, `step`), as the scene's
+/// `simulate` block writes it: `10`, `1/4`, `2*pi`, `20 ms`, `1/4 min`; in seconds. A plain
+/// decimal is read as Rust reads it, so `10` has the bits it always had, and its sign is
+/// checked with the other settings; anything else as the block reads its value (positive).
+/// On failure, the diagnostics, with spans into `text`.
+pub fn time(setting: Setting, text: &str) -> Result<f64, Vec<lang::Diagnostic>> {
+    match text.trim().parse::<f64>() {
+        Ok(seconds) => Ok(seconds),
+        Err(_) => model::time_setting(setting.name(), text),
+    }
+}
+
+/// A pure number a front end was given as text for `setting` (`tolerance`), as the scene
+/// writes one: `1e-10`, `10^-12`; a plain decimal read as Rust reads it. A unit is refused.
+/// On failure, the diagnostics, with spans into `text`.
+pub fn ratio(setting: Setting, text: &str) -> Result<f64, Vec<lang::Diagnostic>> {
+    if let Ok(value) = text.trim().parse::<f64>() {
+        return Ok(value);
+    }
+    match model::constant_value(text)? {
+        (value, false) => Ok(value),
+        (_, true) => {
+            let key = setting.name();
+            let d = lang::Diagnostic::error(
+                lang::Span::new(0, text.len()),
+                format!("`{key}` takes no unit"),
+            )
+            .with_label("a unit")
+            .with_hint(format!("`{key}` is a pure number, such as 1e-10"));
+            Err(vec![d])
+        }
+    }
+}
+
 /// `p=a:b:n`: n evenly spaced values of parameter p from a to b, both included.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepRange {
@@ -134,6 +168,9 @@ impl fmt::Display for SweepRange {
 pub struct Vary {
     pub parameter: String,
     pub spread: Spread,
+    /// The numbers of the spread written with a unit (`10 cm`), as written: converted to SI
+    /// in `spread`, their dimension checked against the parameter's when the scene is loaded.
+    pub with_units: Vec<String>,
 }
 
 /// The values a varied parameter takes.
@@ -176,12 +213,13 @@ impl Vary {
         }
         let spec_start = equals + 1;
         let spec = &text[spec_start..];
+        let mut with_units = Vec::new();
         let spread = if let Some(open) = spec.find('(') {
-            distribution(text, spec_start, open, &at)?
+            distribution(text, spec_start, open, &at, &mut with_units)?
         } else {
-            grid(text, spec_start, &at)?
+            grid(text, spec_start, &at, &mut with_units)?
         };
-        Ok(Vary { parameter: parameter.to_string(), spread })
+        Ok(Vary { parameter: parameter.to_string(), spread, with_units })
     }
 }
 
@@ -208,23 +246,53 @@ fn trimmed(text: &str, start: usize, end: usize) -> (usize, usize, &str) {
 
 type Located<'a> = &'a dyn Fn(usize, usize, &str, &str) -> lang::Diagnostic;
 
-/// A number of the spec: a plain decimal, finite.
-fn number(piece: (usize, usize, &str), what: &str, at: Located) -> Result<f64, lang::Diagnostic> {
+/// A number of the spec, finite: a plain decimal, or as the scene writes a value, an
+/// expression of numbers with an optional unit (`pi/2`, `10 cm`), in SI; a number written
+/// with a unit is added to `with_units`.
+fn number(
+    piece: (usize, usize, &str),
+    what: &str,
+    at: Located,
+    with_units: &mut Vec<String>,
+) -> Result<f64, lang::Diagnostic> {
     let (start, end, body) = piece;
+    if body.is_empty() {
+        return Err(at(start, end, &format!("no {what}"), "a number goes here"));
+    }
+    let not_a_number = |label: &str| at(start, end, &format!("the {what} is not a number"), label);
     match body.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        _ if body.is_empty() => Err(at(start, end, &format!("no {what}"), "a number goes here")),
-        _ => Err(at(start, end, &format!("the {what} is not a number"), "not a plain number")),
+        Ok(v) if v.is_finite() => return Ok(v),
+        Ok(_) => return Err(not_a_number("not finite")),
+        Err(_) => {}
+    }
+    match model::constant_value(body) {
+        Ok((v, with_unit)) if v.is_finite() => {
+            if with_unit {
+                with_units.push(body.to_string());
+            }
+            Ok(v)
+        }
+        Ok(_) => Err(not_a_number("not finite")),
+        Err(diagnostics) => {
+            let why = diagnostics.first().map_or("not a number", |d| d.message.as_str());
+            Err(not_a_number(why))
+        }
     }
 }
 
-fn grid(text: &str, start: usize, at: Located) -> Result<Spread, lang::Diagnostic> {
+fn grid(
+    text: &str,
+    start: usize,
+    at: Located,
+    with_units: &mut Vec<String>,
+) -> Result<Spread, lang::Diagnostic> {
     let parts = pieces(text, start, text.len(), ':');
     let [a, b, n] = parts[..] else {
         let label = format!("{} part(s), where a grid has three, A:B:N", parts.len());
         return Err(at(start, text.len(), "not a grid axis A:B:N nor a distribution", &label));
     };
-    let (from, to) = (number(a, "first value", at)?, number(b, "last value", at)?);
+    let from = number(a, "first value", at, with_units)?;
+    let to = number(b, "last value", at, with_units)?;
     let values = match n.2.parse::<usize>() {
         Ok(values) if (2..=MAX_SWEEP_VALUES).contains(&values) => values,
         _ => {
@@ -243,6 +311,7 @@ fn distribution(
     start: usize,
     open: usize,
     at: Located,
+    with_units: &mut Vec<String>,
 ) -> Result<Spread, lang::Diagnostic> {
     let (name_start, name_end, name) = trimmed(text, start, start + open);
     let args_start = start + open + 1;
@@ -259,8 +328,8 @@ fn distribution(
     };
     match name {
         "normal" => {
-            let mean = number(first, "mean", at)?;
-            let deviation = number(second, "standard deviation", at)?;
+            let mean = number(first, "mean", at, with_units)?;
+            let deviation = number(second, "standard deviation", at, with_units)?;
             if deviation <= 0.0 {
                 let (s, e, _) = second;
                 return Err(at(s, e, "the standard deviation must be positive", "not positive"));
@@ -268,7 +337,8 @@ fn distribution(
             Ok(Spread::Normal { mean, deviation })
         }
         "uniform" => {
-            let (low, high) = (number(first, "low end", at)?, number(second, "high end", at)?);
+            let low = number(first, "low end", at, with_units)?;
+            let high = number(second, "high end", at, with_units)?;
             if low >= high {
                 return Err(at(first.0, second.1, "uniform(A, B) needs A < B", "A is not below B"));
             }
@@ -339,6 +409,40 @@ mod tests {
     }
 
     #[test]
+    fn times_are_read_as_the_scene_writes_them() {
+        let read = |text: &str| time(Setting::Until, text);
+        assert_eq!(read("10").map(f64::to_bits), Ok(10f64.to_bits()));
+        assert_eq!(read("0.1").map(f64::to_bits), Ok(0.1f64.to_bits()));
+        assert_eq!(read("1/4"), Ok(0.25));
+        assert_eq!(read("2*pi"), Ok(2.0 * std::f64::consts::PI));
+        assert_eq!(read("20 ms"), Ok(0.02));
+        assert_eq!(read("1/4 min"), Ok(15.0));
+        for (text, message, culprit) in [
+            ("2 m", "`until` is a time, not in m", "m"),
+            ("-1 ms", "`until` must be positive", "-1"),
+            ("g", "unknown name `g`", "g"),
+            ("1/", "expected", ""),
+        ] {
+            let errors = read(text).expect_err(text);
+            assert!(errors[0].message.contains(message), "{text}: {:?}", errors[0].message);
+            let span = errors[0].span;
+            if !culprit.is_empty() {
+                assert_eq!(&text[span.start..span.end], culprit, "{text}");
+            }
+        }
+    }
+
+    #[test]
+    fn ratios_are_read_as_the_scene_writes_them() {
+        let read = |text: &str| ratio(Setting::Tolerance, text);
+        assert_eq!(read("1e-10").map(f64::to_bits), Ok(1e-10f64.to_bits()));
+        assert_eq!(read("10^-12"), Ok(1e-12));
+        let errors = read("1e-9 s").expect_err("a unit");
+        assert_eq!(errors[0].message, "`tolerance` takes no unit");
+        assert!(read("x").is_err());
+    }
+
+    #[test]
     fn sweeps_are_read_checked_and_written_back() {
         let s: SweepRange = "w=0:100:11".parse().expect("a sweep");
         assert_eq!(s, SweepRange { parameter: "w".into(), from: 0.0, to: 100.0, values: 11 });
@@ -362,6 +466,16 @@ mod tests {
         assert_eq!(grid.parameter, "a");
         assert_eq!(grid.spread, Spread::Grid { from: -3.0, to: 3.0, values: 60 });
         assert!(Vary::parse("m=normal(1, 0.1)").expect("normal").spread.is_random());
+        // As the scene writes values: expressions, and units converted to SI.
+        let written = Vary::parse("L=10 cm:pi/2:3").expect("a grid");
+        assert_eq!(
+            written.spread,
+            Spread::Grid { from: 0.1, to: std::f64::consts::FRAC_PI_2, values: 3 }
+        );
+        assert_eq!(written.with_units, ["10 cm"]);
+        let drawn = Vary::parse("L=normal(1 m, 5 cm)").expect("a draw");
+        assert_eq!(drawn.spread, Spread::Normal { mean: 1.0, deviation: 0.05 });
+        assert_eq!(drawn.with_units, ["1 m", "5 cm"]);
     }
 
     #[test]
@@ -371,6 +485,7 @@ mod tests {
             ("=1:2:3", "no parameter named before `=`", "="),
             ("a=1:2", "not a grid axis A:B:N nor a distribution", "1:2"),
             ("a=1:x:3", "the last value is not a number", "x"),
+            ("a=1:2 qq:3", "the last value is not a number", "2 qq"),
             ("a=1:2:1", "the number of values is not a count", "1"),
             ("a=2:2:5", "a grid axis from a value to itself", "2:2"),
             ("m=normal(1, -2)", "the standard deviation must be positive", "-2"),

@@ -15,7 +15,6 @@
 use numeric::Tape;
 
 use crate::input::Assignment;
-use crate::numbers::prepare;
 use crate::{Error, Setting};
 
 /// What a front end asks for.
@@ -50,8 +49,11 @@ pub struct InverseDynamics {
 /// Loads `source` and lowers what its inverse dynamics needs, at the parameters' values with
 /// the `set` ones in place of the scene's.
 pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynamics, Error> {
-    let values: Vec<String> = options.set.iter().map(|a| a.value.clone()).collect();
-    let mut prepared = prepare(source, &values, crate::Options { units: !options.no_units })?;
+    let values: Vec<(Option<&str>, String)> =
+        options.set.iter().map(|a| (Some(a.name.as_str()), a.value.clone())).collect();
+    let (model, warnings) =
+        crate::resolve_with(source, crate::Options { units: !options.no_units })?;
+    let mut prepared = crate::numbers::prepare_resolved_for(source, model, warnings, &values)?;
     let params = &prepared.derivation.model.params;
     let mut overrides = Vec::new();
     for (Assignment { name, .. }, expr) in options.set.iter().zip(&prepared.extra) {

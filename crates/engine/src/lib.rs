@@ -97,6 +97,7 @@ pub(crate) fn resolve_checked(
     let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
     // The integrator's names are `sim`'s, which `model` does not know.
     simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
+    simulate::scene_settings_apply(&model.simulation).map_err(|d| scene(vec![d]))?;
     Ok((model, warnings))
 }
 

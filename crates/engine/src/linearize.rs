@@ -8,7 +8,7 @@ use cas::{ExprId, Rational};
 use lang::Diagnostic;
 use mechanics::Derivation;
 
-use crate::numbers::{prepare_resolved, Prepared};
+use crate::numbers::{prepare_resolved_for, Prepared};
 use crate::{Error, Piece, Setting};
 
 pub use linear::{
@@ -187,8 +187,9 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         varying.extend(sweep.iter().map(|(name, ..)| name.as_str()));
         about.resolve(&mut model, source, &varying)?;
     }
-    let extra: Vec<String> = sets.iter().map(|(_, v)| v.clone()).collect();
-    let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
+    let extra: Vec<(Option<&str>, String)> =
+        sets.iter().map(|(name, v)| (Some(name.as_str()), v.clone())).collect();
+    let mut prepared = prepare_resolved_for(source, model, warnings, &extra)?;
     if prepared.derivation.model.linearize.is_empty() {
         return Err(Error::Setting(vec![
             Piece::Text(

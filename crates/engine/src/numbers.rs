@@ -48,17 +48,35 @@ pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepa
 /// `linearize --about` extends it), with its warnings.
 pub(crate) fn prepare_resolved(
     source: &str,
-    mut model: model::Model,
+    model: model::Model,
     warnings: Vec<lang::Diagnostic>,
     extra: &[String],
 ) -> Result<Prepared, Error> {
+    let unnamed: Vec<(Option<&str>, String)> = extra.iter().map(|t| (None, t.clone())).collect();
+    prepare_resolved_for(source, model, warnings, &unnamed)
+}
+
+/// [`prepare_resolved`] with some extra expressions given as values for a name (`--set
+/// L=20 cm`): those take a unit, checked against the name's dimension
+/// ([`model::Model::resolve_value_for`]).
+pub(crate) fn prepare_resolved_for(
+    source: &str,
+    mut model: model::Model,
+    warnings: Vec<lang::Diagnostic>,
+    extra: &[(Option<&str>, String)],
+) -> Result<Prepared, Error> {
     let mut values = Vec::new();
-    for text in extra {
-        let value = model
-            .resolve_expression(text)
-            .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
+    for (name, text) in extra {
+        let value = match name {
+            Some(name) => model.resolve_value_for(name, text),
+            None => model.resolve_expression(text),
+        };
+        let value =
+            value.map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
         values.push(value);
     }
+    let extra: Vec<String> = extra.iter().map(|(_, text)| text.clone()).collect();
+    let extra = &extra;
     let mut derivation = crate::derive_resolved(source, model, warnings)?.derivation;
     let mut exprs = Vec::new();
     for (value, text) in values.iter().zip(extra) {

@@ -24,7 +24,7 @@ use crate::input::Assignment;
 use crate::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
 
-use crate::{Error, Setting};
+use crate::{Error, Piece, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
 #[derive(Clone, Debug, Default)]
@@ -198,13 +198,86 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
     })
 }
 
+/// The methods as the settings they take: the adaptive ones a tolerance, the fixed-step ones
+/// a step.
+fn methods_taking(adaptive: bool) -> String {
+    let names: Vec<&str> = Method::NAMES
+        .iter()
+        .copied()
+        .filter(|n| Method::from_name(n).is_some_and(|m| m.is_adaptive() == adaptive))
+        .collect();
+    names.join(", ")
+}
+
+/// Refuses a front end's tolerance for a fixed-step method and its step for an adaptive one:
+/// the run would not use it, and would give the same bits as without it.
+fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
+    let (unused, used) = match (method.is_adaptive(), options.step, options.tolerance) {
+        (true, Some(_), _) => (Setting::Step, Setting::Tolerance),
+        (false, _, Some(_)) => (Setting::Tolerance, Setting::Step),
+        _ => return Ok(()),
+    };
+    let kind = if method.is_adaptive() { "an adaptive" } else { "a fixed-step" };
+    Err(Error::Setting(vec![
+        Piece::Setting(unused),
+        Piece::Text(format!(" is not used by {}, {kind} method: it takes ", method.name())),
+        Piece::Setting(used),
+        Piece::Text(format!(
+            " (the adaptive methods {} take a tolerance, the fixed-step {} a step)",
+            methods_taking(true),
+            methods_taking(false)
+        )),
+    ]))
+}
+
+/// The diagnostic of a `simulate` block that names a method and a `step` or `tolerance` that
+/// method does not use (a block without a method runs the default, dop853).
+pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(), Diagnostic> {
+    let method = scene_method(simulation)?.unwrap_or(Method::Dop853);
+    let (unused, key, takes) = match (method.is_adaptive(), simulation.step, simulation.tolerance) {
+        (true, Some(step), _) => (step, "step", "tolerance"),
+        (false, _, Some(tolerance)) => (tolerance, "tolerance", "step"),
+        _ => return Ok(()),
+    };
+    let kind = if method.is_adaptive() { "an adaptive" } else { "a fixed-step" };
+    let named = match &simulation.method {
+        Some(_) => format!("`{}`", method.name()),
+        None => format!("`{}` (the default)", method.name()),
+    };
+    Err(Diagnostic::error(unused.span, format!("`{key}` is not used by {named}, {kind} method"))
+        .with_label(format!("{} takes `{takes}`", method.name()))
+        .with_hint(format!(
+            "the adaptive methods ({}) take `tolerance`, the fixed-step ones ({}) `step`",
+            methods_taking(true),
+            methods_taking(false)
+        )))
+}
+
 /// The settings of a run of `source`: its `simulate` block, as its model has read it (before
 /// the scene is derived; a scene that does not resolve has none, and loading it reports why),
 /// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
     let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
     let loaded = crate::resolve_checked(source, checks);
-    settings_of(loaded.map(|(model, _)| model.simulation).unwrap_or_default(), options)
+    let simulation = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    if let (None, Some(hold)) = (options.hold, simulation.hold) {
+        // The block's laws all replaced by time series: the block's hold has nothing left to
+        // hold, and it is the block's line that says so.
+        let kept = simulation.drives.iter().any(|d| {
+            !options.input_series.iter().any(|(name, _)| *name == d.input)
+                || options.input.iter().any(|a| a.name == d.input)
+        });
+        if !kept && options.input.is_empty() {
+            let d = Diagnostic::error(hold.span, "`hold` with no law left to hold")
+                .with_label("holds nothing in this run")
+                .with_hint(
+                    "the time series given replace every law the block holds; a series is \
+                     not sampled by `hold`",
+                );
+            return Err(Error::Scene { diagnostics: vec![d], source: source.to_string() });
+        }
+    }
+    settings_of(simulation, options)
 }
 
 /// The settings of a run of a scene whose `simulate` block is `scene` (a loaded scene's
@@ -236,6 +309,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
             bad(format!("unknown method `{name}`; one of {}", Method::NAMES.join(", ")))
         })?;
     }
+    check_applies(method, options)?;
     if let Some(t) = options.tolerance {
         tolerance = t;
     }
@@ -356,6 +430,11 @@ pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let laws = drive::laws(&mut model, &settings.drives)?;
     drive::into_constraints(source, &mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;
+    let stops = outputs.len()..outputs.len() + settings.stops.len();
+    let stop_exprs = prepared.extra[stops].to_vec();
+    for (text, &stop) in settings.stops.iter().zip(&stop_exprs) {
+        refuse_constant_stop(&mut prepared, text, stop)?;
+    }
     // Held laws keep their inputs' slots; the others take their inputs' places.
     let (held, lagrangian_driven) = if settings.hold.is_some() {
         (laws, false)
@@ -373,6 +452,31 @@ pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
         prepared.extra.splice(0..0, exprs);
     }
     Ok(Loaded { prepared, outputs, held, lagrangian_driven })
+}
+
+/// Refuses a stop condition that names nothing a run changes (`--stop-when 0`, `x = x`): it
+/// is one value throughout, so it either stops the run at once or never, whatever the scene
+/// does, which is not what anyone writing it meant.
+fn refuse_constant_stop(
+    prepared: &mut Prepared,
+    text: &str,
+    stop: cas::ExprId,
+) -> Result<(), Error> {
+    let d = &prepared.derivation;
+    let mut changing: Vec<cas::SymId> = vec![d.model.time];
+    changing.extend(d.coords.iter().chain(&d.rates).chain(&d.accels));
+    changing.extend(d.multipliers.iter().map(|m| m.lambda));
+    changing.extend(d.model.inputs.iter().map(|u| u.sym));
+    let pool = &mut prepared.derivation.model.pool;
+    let simplified = pool.simplify(stop);
+    if pool.free_symbols(simplified).iter().any(|s| changing.contains(s)) {
+        return Ok(());
+    }
+    Err(bad(format!(
+        "the stop condition `{text}` names nothing that changes during a run (no coordinate, \
+         rate, input or t), so it would stop the run at once or never: name what should \
+         reach zero, such as `theta = pi/2`"
+    )))
 }
 
 /// The `--set` values resolved as expressions of the derived scene's parameters: after the
@@ -397,7 +501,7 @@ pub(crate) fn set_expressions(
         let value = prepared
             .derivation
             .model
-            .resolve_expression(text)
+            .resolve_value_for(&set.name, text)
             .map_err(|diagnostics| Error::Expression { diagnostics, text: text.clone() })?;
         let model::Value::Scalar(e) = value else {
             return Err(Error::Input(format!(
@@ -510,7 +614,22 @@ fn integrate_scene(
     progress: &mut dyn Progress,
 ) -> Result<(Run, f64, Option<FastestMode>), Error> {
     let Settings { until, method, step, .. } = *settings;
-    let run_settings = integrand::run_settings(settings, settings.samples);
+    let mut run_settings = integrand::run_settings(settings, settings.samples);
+    let most = most_rows(sim::Problem::observations(&mechanical));
+    if settings.samples > most {
+        return Err(Error::given(
+            Setting::Samples,
+            settings.samples.to_string(),
+            format!(
+                " would record more than {} GiB of rows; this run records at most {most}",
+                MAX_RECORDED_BYTES >> 30
+            ),
+        ));
+    }
+    if settings.samples == 0 {
+        // A row per step: the steps' cap keeps the rows within the memory allowed.
+        run_settings.max_steps = run_settings.max_steps.min(most);
+    }
     let watched = integrand::watched(columns);
     progress.start(until);
     let started = Instant::now();
@@ -538,6 +657,18 @@ fn integrate_scene(
     };
     progress.finish();
     Ok((run, started.elapsed().as_secs_f64(), fastest_mode))
+}
+
+/// The most memory the rows a run records may take. Past it, a count of samples is refused
+/// before the run, and a run recording every step ends in a fault naming `samples`, rather
+/// than the process aborting when an allocation fails.
+pub const MAX_RECORDED_BYTES: usize = 1 << 30;
+
+/// The most rows of `observations` quantities a run records within [`MAX_RECORDED_BYTES`]: a
+/// row is its numbers and the time, and a vector's header and the allocator's bookkeeping.
+pub fn most_rows(observations: usize) -> usize {
+    let row = 8 * (observations + 1) + 40;
+    MAX_RECORDED_BYTES / row
 }
 
 /// The problem in (q, q̇) with the partials its exact Jacobian is made of, lowered only for
@@ -769,6 +900,15 @@ impl FaultNames<'_> {
             FaultKind::NewtonStalled { step, contraction, singular, exact_jacobian } => {
                 fault::newton_stalled(*step, *contraction, *singular, *exact_jacobian)
             }
+            FaultKind::TooManySteps { limit } if *limit < integrand::MAX_STEPS => (
+                format!("more than {limit} steps, each recorded"),
+                format!(
+                    "a row a step would take more than {} GiB: give `samples` to record evenly \
+                     spaced times instead (the run may then take {} steps)",
+                    MAX_RECORDED_BYTES >> 30,
+                    integrand::MAX_STEPS
+                ),
+            ),
             FaultKind::TooManySteps { limit } => (
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),

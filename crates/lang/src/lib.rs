@@ -12,4 +12,4 @@ pub mod render;
 
 pub use ast::*;
 pub use diag::{Diagnostic, Severity};
-pub use parser::{parse, parse_about, parse_expression};
+pub use parser::{parse, parse_about, parse_expression, parse_quantity};

@@ -111,6 +111,21 @@ pub fn parse_expression(text: &str) -> Result<Expr, Vec<Diagnostic>> {
     })
 }
 
+/// Parses a value with an optional unit on its own, as a scene writes a setting's value
+/// (`20 ms`, `2*pi`, `1/4 min`): a front end's time or value; spans point into `text`.
+pub fn parse_quantity(text: &str) -> Result<(Expr, Option<Unit>), Vec<Diagnostic>> {
+    parse_lone(text, Rule::lone_quantity, |builder, pair| {
+        let mut parts =
+            pair.into_inner().filter(|p| matches!(p.as_rule(), Rule::expr | Rule::unit));
+        let Some(value) = parts.next() else {
+            return Err(Diagnostic::error(Span::default(), "expected a value"));
+        };
+        let value = builder.expr(value)?;
+        let unit = parts.next().map(|p| builder.unit(p)).transpose()?;
+        Ok((value, unit))
+    })
+}
+
 /// Parses the items of a reference on their own (`--about "theta = 0, phi' = 2"`), as a
 /// `linearize about` line has them; spans point into `text`.
 pub fn parse_about(text: &str) -> Result<Vec<AboutItem>, Vec<Diagnostic>> {

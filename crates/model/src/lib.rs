@@ -12,7 +12,9 @@ pub mod units;
 mod value;
 
 pub use parameters::{Given, ParameterError, ParameterValues};
-pub use resolve::{closest, dimension_errors, resolve, resolve_with, Scope};
+pub use resolve::{
+    closest, constant_value, dimension_errors, resolve, resolve_with, time_setting, Scope,
+};
 pub use value::Value;
 
 use cas::{ExprId, Pool, SymId};
@@ -387,7 +389,7 @@ pub struct Simulation {
     /// Inputs driven in a run (`input F = -k*x`), each named once, the last line winning.
     pub drives: Vec<Drive>,
     /// The period at which the laws of `drives` are sampled and held (`hold 10 ms`); none:
-    /// they act continuously.
+    /// they act continuously. Its span is the whole setting, `hold` included.
     pub hold: Option<Number>,
 }
 

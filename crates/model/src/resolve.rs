@@ -20,6 +20,7 @@ use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Ident, SceneFile, Span, StmtKind};
 
 pub use self::session::Scope;
+pub use self::simulation::{constant_value, time_setting};
 use crate::units::Form;
 use crate::{
     Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
@@ -103,6 +104,7 @@ fn walk<'a>(file: &SceneFile, source: &'a str) -> Resolver<'a> {
         r.statement(stmt);
     }
     r.require_a_coordinate(file);
+    r.hold_needs_a_law();
     r
 }
 

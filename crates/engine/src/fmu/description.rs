@@ -46,6 +46,12 @@ fn escape(text: &str) -> String {
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
+            // Kept through attribute-value normalisation, which would make them spaces.
+            '\t' | '\n' | '\r' => {
+                let _ = std::fmt::Write::write_fmt(&mut out, format_args!("&#{};", c as u32));
+            }
+            // No other control character may stand in XML 1.0, even as a reference.
+            c if c.is_control() && (c as u32) < 0x20 => out.push('\u{FFFD}'),
             _ => out.push(c),
         }
     }

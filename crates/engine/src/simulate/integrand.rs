@@ -90,6 +90,9 @@ impl Integrand {
     }
 }
 
+/// The most steps a run takes: a run that cannot end (`until 1e300`) ends in a fault.
+pub(crate) const MAX_STEPS: usize = 20_000_000;
+
 /// The integrator's settings of a run recording `samples` evenly spaced times.
 pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
     sim::Settings {
@@ -98,7 +101,7 @@ pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings
         until: settings.until,
         tolerance: settings.tolerance,
         step: settings.step,
-        max_steps: 20_000_000,
+        max_steps: MAX_STEPS,
         samples,
     }
 }

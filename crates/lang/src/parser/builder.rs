@@ -481,7 +481,7 @@ impl Builder<'_> {
         Ok(Setting { key, target, values, unit })
     }
 
-    fn unit(&self, pair: Pair<'_, Rule>) -> Built<Unit> {
+    pub(super) fn unit(&self, pair: Pair<'_, Rule>) -> Built<Unit> {
         let span = self.span(&pair);
         let mut factors = Vec::new();
         let mut sign = 1;

@@ -39,6 +39,37 @@ impl Model {
         self.resolving(text, |r| r.value(&expr).map(|(v, _)| v))
     }
 
+    /// Resolves `text`, a value given for `name` in place of the scene's (`--set L=20 cm`,
+    /// `--set theta=30 deg`), as the scene writes a value: an expression with an optional
+    /// unit, converted to SI. With a unit, the value must have the dimension of the parameter
+    /// or coordinate (or rate, `theta'`) it replaces; without one it is read as
+    /// [`Model::resolve_expression`] reads it. On failure, the diagnostics, with spans into
+    /// `text`.
+    pub fn resolve_value_for(&mut self, name: &str, text: &str) -> Result<Value, Vec<Diagnostic>> {
+        let (expr, unit) = lang::parse_quantity(text)?;
+        let Some(unit) = unit else {
+            return self.resolving(text, |r| r.value(&expr).map(|(v, _)| v));
+        };
+        let base = name.trim_end_matches('\'');
+        let primes = (name.len() - base.len()) as u8;
+        let target = super::normalize(base);
+        self.resolving(text, |r| {
+            let (value, dims) = r.value(&expr)?;
+            let Value::Scalar(e) = value else { return Some(value) };
+            // A name the scene does not have is the caller's to report, naming its options.
+            if matches!(r.scope.names.get(&target), Some(Binding::Param(_) | Binding::Coord(_))) {
+                let whole = Span::new(0, text.len());
+                if let Some((_, expected)) = r.name(base, primes, whole) {
+                    let written = r.with_unit(Some(dims), Some(&unit));
+                    let expected = r.form(expected);
+                    let what = format!("in this value of `{name}`");
+                    r.scope.units.same(&expected, &written, unit.span, expr.span, &what);
+                }
+            }
+            r.in_si(e, Some(&unit)).map(Value::Scalar)
+        })
+    }
+
     /// Resolves `text`, what drives the input of index `input` in a run (a feedback law such
     /// as `-20*x - 5*x'`), against the scene as an expression after it: of `t`, the state and
     /// the parameters, with the input's dimension. On failure, the diagnostics, with spans

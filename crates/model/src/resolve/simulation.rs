@@ -31,6 +31,70 @@ impl Measure {
     }
 }
 
+/// A time given on its own, as a front end's setting is (`--until 1/4 min`, `--hold "20 ms"`):
+/// read as the `simulate` block's setting `key` reads its value (a value that names nothing,
+/// with an optional time unit), in seconds and positive. On failure, the diagnostics, with
+/// spans into `text`.
+pub fn time_setting(key: &str, text: &str) -> Result<f64, Vec<Diagnostic>> {
+    let (value, unit) = lang::parse_quantity(text)?;
+    let key = Ident { name: key.to_string(), span: lang::Span::new(0, text.len()) };
+    let setting = Setting { key, target: None, values: vec![value], unit };
+    let mut r = Resolver::new(text);
+    let number = r.setting_number(&setting, Measure::Time);
+    let mut errors = std::mem::take(&mut r.diagnostics.errors);
+    // Nothing is declared here: the scene's hint to declare the name would mislead.
+    for d in errors.iter_mut().filter(|d| d.message.starts_with("unknown name")) {
+        d.hint = Some(format!(
+            "a setting's time names no parameter: a number with a unit, like `{}`",
+            Measure::Time.example(&setting.key.name).trim_matches('`')
+        ));
+    }
+    match number {
+        Some(number) if errors.is_empty() => Ok(number.value),
+        _ => {
+            if errors.is_empty() {
+                errors.push(Diagnostic::error(setting.key.span, "cannot be read as a time"));
+            }
+            Err(errors)
+        }
+    }
+}
+
+/// A value given on its own that names nothing (an ensemble's bound, `--vary "L=10 cm:1 m:5"`):
+/// an expression of numbers and constants with an optional unit, in SI, and whether it had a
+/// unit (whose dimension the caller checks against what the value is for). On failure, the
+/// diagnostics, with spans into `text`.
+pub fn constant_value(text: &str) -> Result<(f64, bool), Vec<Diagnostic>> {
+    let (value, unit) = lang::parse_quantity(text)?;
+    let mut r = Resolver::new(text);
+    let si = r.scalar(&value).and_then(|(written, _)| {
+        if !r.model.pool.free_symbols(written).is_empty() {
+            r.error(
+                Diagnostic::error(value.span, "a bound must be a number")
+                    .with_label("names a symbol")
+                    .with_hint("write a number, with a unit if you like: `0.1`, `pi/2`, `10 cm`"),
+            );
+            return None;
+        }
+        r.in_si(written, unit.as_ref())
+    });
+    let mut errors = std::mem::take(&mut r.diagnostics.errors);
+    for d in errors.iter_mut().filter(|d| d.message.starts_with("unknown name")) {
+        d.hint = Some("a bound names no parameter: a number with a unit, like `10 cm`".into());
+    }
+    match si {
+        Some(si) if errors.is_empty() => {
+            Ok((numeric::eval(&r.model.pool, si, &[]), unit.is_some()))
+        }
+        _ => {
+            if errors.is_empty() {
+                errors.push(Diagnostic::error(value.span, "cannot be read as a number"));
+            }
+            Err(errors)
+        }
+    }
+}
+
 impl Resolver<'_> {
     /// A `simulate { … }` block: its settings added to those of earlier blocks.
     pub(super) fn simulate_statement(&mut self, settings: &[Setting]) {
@@ -60,7 +124,12 @@ impl Resolver<'_> {
                 }
             }
             "hold" => {
-                if let Some(n) = self.setting_number(setting, Measure::Time) {
+                if let Some(mut n) = self.setting_number(setting, Measure::Time) {
+                    // The whole setting, `hold 20 ms`: what a diagnostic about the hold
+                    // itself (not its value) points at.
+                    let value = setting.values.first().map_or(n.span, |v| v.span);
+                    let end = setting.unit.as_ref().map_or(value, |u| u.span);
+                    n.span = setting.key.span.join(value).join(end);
                     self.model.simulation.hold = Some(n);
                 }
             }
@@ -91,6 +160,24 @@ impl Resolver<'_> {
                 });
             }
         }
+    }
+
+    /// A `hold` of the `simulate` blocks samples the laws their `input` lines give: with none,
+    /// it would hold nothing (the run refuses it), so the scene is refused where it stands.
+    pub(super) fn hold_needs_a_law(&mut self) {
+        let simulation = &self.model.simulation;
+        let Some(hold) = simulation.hold else { return };
+        if !simulation.drives.is_empty() {
+            return;
+        }
+        self.error(
+            Diagnostic::error(hold.span, "`hold` with no law to hold")
+                .with_label("holds nothing")
+                .with_hint(
+                    "`hold` samples the laws that drive inputs: add one to the block \
+                     (`input F = -k*x`), or give the hold with the law to the run",
+                ),
+        );
     }
 
     /// The one number of an `until`, `step` or `tolerance` setting, in SI and positive.
@@ -295,6 +382,7 @@ mod tests {
             ("simulate { tolerance 1 s }", "`tolerance` takes no unit"),
             ("simulate { step m }", "`step` must be a number"),
             ("simulate { method 4 }", "a method is a name"),
+            ("simulate { hold 20 ms }", "`hold` with no law to hold"),
         ] {
             assert_eq!(simulation(block).err(), Some(vec![message.to_string()]), "{block}");
         }
