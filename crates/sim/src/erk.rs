@@ -213,6 +213,19 @@ impl Pair {
             Pair::Dop853 => 6.1,
         }
     }
+
+    /// The level the pair holds its local error estimate to (weighted by atol + rtol·|y|) for
+    /// a run's `tolerance`, so that a tolerance means one accuracy whichever method runs (see
+    /// docs/simulating.md): dop853's final errors come out near the tolerance as it is, while
+    /// dopri5's, whose steps are more numerous and each less accurate than its estimate says,
+    /// come out several times above it; a tenth of the tolerance brings them to dop853's
+    /// (`lagrange-bench tolerance`).
+    pub fn error_target(self, tolerance: f64) -> f64 {
+        match self {
+            Pair::Dopri5 => tolerance / 10.0,
+            Pair::Dop853 => tolerance,
+        }
+    }
 }
 
 /// An adaptive explicit pair with local extrapolation (the higher order propagates).
@@ -249,7 +262,11 @@ const MIN_FACTOR: f64 = 0.2;
 const MAX_FACTOR: f64 = 10.0;
 
 impl Adaptive {
-    pub fn new(pair: Pair, dim: usize, rtol: f64, atol: f64) -> Self {
+    /// The pair for a run at `tolerance`, relative and absolute, held at its
+    /// [`Pair::error_target`].
+    pub fn for_tolerance(pair: Pair, dim: usize, tolerance: f64) -> Self {
+        let rtol = pair.error_target(tolerance);
+        let atol = rtol;
         let stages = match pair {
             Pair::Dopri5 => 7,
             Pair::Dop853 => 16,

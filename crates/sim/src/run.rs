@@ -116,7 +116,9 @@ pub struct Settings {
     pub method: Method,
     pub start: f64,
     pub until: f64,
-    /// Relative and absolute tolerance of the adaptive methods.
+    /// Relative and absolute tolerance of the adaptive methods: one accuracy whichever of
+    /// them runs, each holding its local error estimate to the level that makes its final
+    /// error follow the tolerance alike ([`Radau::new`], `Pair::error_target`).
     pub tolerance: f64,
     /// The step of the fixed-step methods.
     pub step: f64,
@@ -438,11 +440,11 @@ fn stepper_for(settings: &Settings, problem: &dyn Problem) -> Box<dyn Stepper> {
     );
     match settings.method {
         Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
-        Method::Dopri5 => Box::new(Adaptive::new(Pair::Dopri5, d, tol, tol)),
-        Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
+        Method::Dopri5 => Box::new(Adaptive::for_tolerance(Pair::Dopri5, d, tol)),
+        Method::Dop853 => Box::new(Adaptive::for_tolerance(Pair::Dop853, d, tol)),
         Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
         Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
-        Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
+        Method::Radau => Box::new(Radau::new(problem.components(), tol)),
         Method::Auto => Box::new(Auto::new(d, tol)),
     }
 }
