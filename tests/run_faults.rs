@@ -5,6 +5,7 @@
 use engine::ensemble::{Ensemble, Options as EnsembleOptions};
 use engine::input::Vary;
 use engine::simulate::{simulate, Options};
+use sim::FaultKind;
 
 /// x'' = −(k/m)·x from x = 1 at rest: x = cos(√(k/m)·t).
 const OSCILLATOR: &str = "scene \"Oscillator\"\nparam m = 1, k = 1\ncoord x = 1\n\
@@ -75,4 +76,72 @@ fn an_ensemble_stops_through_nan_in_lockstep_and_alone() {
             assert!((t - root(k)).abs() < 1e-9, "k = {k}: stopped at {t}, root at {}", root(k));
         }
     }
+}
+
+/// m·ẍ = −k·x + F, F an input.
+const PUSHED: &str = "scene \"A pushed block\"\nparam m = 2 kg, k = 8 N/m\ninput F = 0 N\n\
+                      coord x = 0.1\nparticle block { mass m; position (x, 0) }\n\
+                      potential k/2*x^2\nforce push on block: (F, 0)\n";
+
+/// A push F = e^(t + 700) (in N, t in s), already at e^700 ≈ 1e304 N at the start: the rates'
+/// weighted norm overflowed, the first step came out 0, and the run faulted at once with "the
+/// step size fell to 0". Every step's error is weighed in that norm, so no step can be
+/// controlled: the fault now names the rate that overflows it and why.
+#[test]
+fn a_push_beyond_the_step_controls_range_is_named() {
+    for method in ["dop853", "dopri5", "radau", "auto"] {
+        let options = Options {
+            until: Some(1.0),
+            method: Some(method.into()),
+            input: vec!["F=exp(t + 700)".parse().expect("an assignment")],
+            no_units: true,
+            ..Options::default()
+        };
+        let outcome = simulate(PUSHED, &options).unwrap_or_else(|e| panic!("{e}"));
+        let fault = outcome.run.fault.as_ref().unwrap_or_else(|| panic!("{method}: no fault"));
+        let FaultKind::RatesOverflow { component, rate } = fault.kind else {
+            panic!("{method}: {fault:?}");
+        };
+        // x'' = (F − k·x)/m at x = 0.1.
+        assert_eq!(component, 1, "{method}");
+        assert!((rate / ((exp(700.0) - 0.8) / 2.0) - 1.0).abs() < 1e-12, "{method}: {rate:e}");
+        let summary = cli::simulate::summary(&outcome);
+        assert!(
+            summary.contains("the rate of `x'` is 5.1e303: too large for the step control"),
+            "{method}: {summary}"
+        );
+    }
+    // The norm squares its terms, so at tolerance 1e-10 rates past about 1e144 overflow it;
+    // below, the push is integrated: e^300 N.
+    let options = Options {
+        until: Some(1.0),
+        input: vec!["F=exp(t + 300)".parse().expect("an assignment")],
+        output: vec!["x, x'".into()],
+        no_units: true,
+        samples: 2,
+        ..Options::default()
+    };
+    let outcome = simulate(PUSHED, &options).unwrap_or_else(|e| panic!("{e}"));
+    assert!(outcome.run.fault.is_none(), "{:?}", outcome.run.fault);
+    let rate = outcome.run.trajectory.rows.last().expect("rows")[1];
+    // ẍ = F/2 − 4x: x = A·(eᵗ − cos 2t − sin(2t)/2) with A = e^300/10 (the start's x = 0.1 is
+    // lost against it), so ẋ(1) = A·(e + 2 sin 2 − cos 2).
+    let exact = exp(300.0) / 10.0 * (exp(1.0) + 2.0 * sin(2.0) - cos(2.0));
+    assert!((rate / exact - 1.0).abs() < 1e-8, "x' = {rate:e}, not {exact:e}");
+}
+
+// References whose last bits show nowhere.
+#[allow(clippy::disallowed_methods)]
+fn exp(x: f64) -> f64 {
+    x.exp()
+}
+
+#[allow(clippy::disallowed_methods)]
+fn sin(x: f64) -> f64 {
+    x.sin()
+}
+
+#[allow(clippy::disallowed_methods)]
+fn cos(x: f64) -> f64 {
+    x.cos()
 }

@@ -759,6 +759,16 @@ impl FaultNames<'_> {
                 format!("a value became NaN or infinite (component {component})"),
                 "a division by zero or a function outside its domain; or the motion blew up".into(),
             ),
+            FaultKind::RatesOverflow { component, rate } => (
+                format!(
+                    "the rate of {} is {rate:.1e}: too large for the step control to weigh \
+                     against the tolerance",
+                    self.state.get(*component).map_or("the state".into(), |s| format!("`{s}`"))
+                ),
+                "a force or an input beyond floating point's range (an exponential of a large \
+                 argument?), or units far from the scene's scale"
+                    .into(),
+            ),
             FaultKind::StepTooSmall { step } => (
                 format!("the step size fell to {step:.1e}"),
                 "a singularity ahead (the solution blows up) or a very stiff system".into(),

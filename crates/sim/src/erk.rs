@@ -322,6 +322,9 @@ impl Adaptive {
         let scale: Vec<f64> = y.iter().map(|v| self.atol + v.abs() * self.rtol).collect();
         let norm = |v: &[f64]| rms(v.iter().zip(&scale).map(|(a, s)| a / s));
         let (d0, d1) = (norm(y), norm(f0));
+        if !d1.is_finite() {
+            return Err(rates_overflow(f0, &scale));
+        }
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min((t_end - t).abs());
         for i in 0..y.len() {
@@ -607,6 +610,15 @@ fn trial_power(err: f64, exponent: f64) -> f64 {
 /// The smallest step floating point resolves at `t`, with a margin.
 fn min_step(t: f64) -> f64 {
     10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE)
+}
+
+/// The fault of rates `f` whose norm weighted by `scale` overflows: the component that
+/// weighs the most. Every step's error is measured in that norm, so it would overflow too, and
+/// the step shrink to nothing: the run stops here and says why.
+pub(crate) fn rates_overflow(f: &[f64], scale: &[f64]) -> FaultKind {
+    let weighed = |i: usize| f[i].abs() / scale[i];
+    let component = (0..f.len()).max_by(|&a, &b| weighed(a).total_cmp(&weighed(b))).unwrap_or(0);
+    FaultKind::RatesOverflow { component, rate: f.get(component).copied().unwrap_or(f64::NAN) }
 }
 
 /// The root mean square of the values.

@@ -58,6 +58,10 @@ pub enum FaultKind {
     NonFinite { component: usize },
     /// The adaptive step fell below what floating point can resolve at this time.
     StepTooSmall { step: f64 },
+    /// The rates at the start of the run (or of a restart) are too large for the step control
+    /// to weigh against the tolerance (their weighted norm overflows); the rate of state
+    /// `component` is `rate`, the largest weighed.
+    RatesOverflow { component: usize, rate: f64 },
     /// Newton's iteration of a fixed-step implicit method (gauss, midpoint) did not converge
     /// at its `step`; `contraction` is the last ratio of successive Newton updates (≥ 1:
     /// diverging), `exact_jacobian` whether the iteration had the problem's exact Jacobian

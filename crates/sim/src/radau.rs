@@ -14,7 +14,7 @@
 use nalgebra::{Complex, DMatrix};
 use numeric::elementary::pow;
 
-use crate::erk::{rms, Dense, Stepper};
+use crate::erk::{rates_overflow, rms, Dense, Stepper};
 use crate::{linalg, Components, FaultKind, Problem};
 
 /// The nodes (4 ∓ √6)/10 and 1.
@@ -242,14 +242,17 @@ impl Radau {
     }
 
     /// A first step from the sizes of the differential components and their rates; errors of
-    /// the first steps shrink it tenfold.
-    fn initial_step(&self, t: f64, y: &[f64], f0: &[f64], t_end: f64) -> f64 {
+    /// the first steps shrink it tenfold. Rates too large to weigh are a fault.
+    fn initial_step(&self, t: f64, y: &[f64], f0: &[f64], t_end: f64) -> Result<f64, FaultKind> {
         let k = self.components.differential;
-        let weight = |i: usize| self.atol + self.rtol * y[i].abs();
-        let norm = |v: &[f64]| rms((0..k).map(|i| v[i] / weight(i)));
+        let scale: Vec<f64> = y[..k].iter().map(|v| self.atol + self.rtol * v.abs()).collect();
+        let norm = |v: &[f64]| rms(v[..k].iter().zip(&scale).map(|(a, s)| a / s));
         let (d0, d1) = (norm(y), norm(f0));
+        if !d1.is_finite() {
+            return Err(rates_overflow(&f0[..k], &scale));
+        }
         let h = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        h.min(t_end - t)
+        Ok(h.min(t_end - t))
     }
 
     /// ∂F/∂y at (t, y): the problem's own, or forward differences of F.
@@ -518,7 +521,7 @@ impl Stepper for Radau {
             p.rhs(t, y, &mut f0)?;
             self.evals += 1;
             if self.h == 0.0 {
-                self.h = self.initial_step(t, y, &f0, t_end);
+                self.h = self.initial_step(t, y, &f0, t_end)?;
             }
             self.f0 = Some(f0);
         }
