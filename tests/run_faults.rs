@@ -5,7 +5,7 @@
 use engine::ensemble::{Ensemble, Options as EnsembleOptions};
 use engine::input::Vary;
 use engine::simulate::{simulate, Options};
-use sim::FaultKind;
+use sim::{FaultKind, NonFiniteAt};
 
 /// x'' = −(k/m)·x from x = 1 at rest: x = cos(√(k/m)·t).
 const OSCILLATOR: &str = "scene \"Oscillator\"\nparam m = 1, k = 1\ncoord x = 1\n\
@@ -144,4 +144,45 @@ fn sin(x: f64) -> f64 {
 #[allow(clippy::disallowed_methods)]
 fn cos(x: f64) -> f64 {
     x.cos()
+}
+
+/// A held law that gives NaN once the block passes x = 0.05 (√ of a negative): the fault used to
+/// say "component 6", an index past the state into the parameter slots; it names the input.
+#[test]
+fn a_held_law_that_gives_nan_names_its_input() {
+    let options = Options {
+        until: Some(3.0),
+        input: vec!["F=sqrt(x - 0.05)".parse().expect("an assignment")],
+        hold: Some(0.1),
+        no_units: true,
+        ..Options::default()
+    };
+    let outcome = simulate(PUSHED, &options).unwrap_or_else(|e| panic!("{e}"));
+    let fault = outcome.run.fault.as_ref().expect("the law's NaN stops the run");
+    assert!(
+        matches!(fault.kind, FaultKind::NonFinite { at: NonFiniteAt::HeldLaw { .. } }),
+        "{fault:?}"
+    );
+    let summary = cli::simulate::summary(&outcome);
+    assert!(summary.contains("the held law driving `F` gave NaN or infinity"), "{summary}");
+    // Sampled at a multiple of the period, where x had just passed 0.05.
+    let periods = fault.time / 0.1;
+    assert!((periods - periods.round()).abs() < 1e-9 && fault.state[0] < 0.05, "{fault:?}");
+}
+
+/// The same law applied continuously: the NaN is in f, the force side of x's equation, and the
+/// fault says so rather than "component 2".
+#[test]
+fn a_law_that_gives_nan_names_the_equation_it_enters() {
+    let options = Options {
+        until: Some(3.0),
+        input: vec!["F=sqrt(x - 0.05)".parse().expect("an assignment")],
+        no_units: true,
+        ..Options::default()
+    };
+    let outcome = simulate(PUSHED, &options).unwrap_or_else(|e| panic!("{e}"));
+    let fault = outcome.run.fault.as_ref().expect("the law's NaN stops the run");
+    assert_eq!(fault.kind, FaultKind::NonFinite { at: NonFiniteAt::Force { coordinate: 0 } });
+    let summary = cli::simulate::summary(&outcome);
+    assert!(summary.contains("the force side f of `x`'s equation (M·q̈ = f)"), "{summary}");
 }
