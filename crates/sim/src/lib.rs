@@ -142,8 +142,8 @@ pub trait Problem {
         None
     }
     /// The first time after `t` at which the right-hand side jumps (a held input takes its
-    /// next sample), if any: a run ends its step there and restarts its method after
-    /// [`Problem::sample`].
+    /// next sample) or its slope does (a series input passes a knot), if any: a run ends its
+    /// step there and restarts its method after [`Problem::sample`].
     fn next_sample(&self, t: f64) -> Option<f64> {
         let _ = t;
         None

@@ -343,12 +343,25 @@ impl Problem for Mechanical {
         self.observation.outputs() + self.layout.multipliers
     }
 
+    /// The next sample of a held law, or the next knot of a series: the right-hand side jumps
+    /// at the one and its slope at the other (a series is linear between its samples), and a
+    /// step across either would lose the method's order.
     fn next_sample(&self, t: f64) -> Option<f64> {
-        self.hold.as_ref().map(|h| h.next_after(t))
+        let held = self.hold.as_ref().map(|h| h.next_after(t));
+        let knot = self.signals.iter().filter_map(|(_, s)| s.next_knot_after(t)).reduce(f64::min);
+        match (held, knot) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
         let Some(hold) = &mut self.hold else { return Ok(()) };
+        // A series' knot that falls between samples changes nothing held (the start, where
+        // the first sample is, is t = 0 = 0·T).
+        if !hold.is_sample_time(t) {
+            return Ok(());
+        }
         let n = self.layout.coordinates;
         hold.sample(t, &y[..2 * n], &mut self.parameters)
             .map_err(|slot| FaultKind::NonFinite { at: NonFiniteAt::HeldLaw { slot } })
