@@ -12,6 +12,8 @@
 //! - `stiff [--largest K] [--peer]`: the stiffness ladder, dop853 and radau on a pendulum hung
 //!   from a spring stiff up to k = 1e12 (dop853 only up to K, 1e12 by default: it takes
 //!   minutes there), with `--peer` SciPy's Radau and BDF in the same run;
+//! - `tolerance`: the final error of every adaptive method at tolerances 1e-6 … 1e-12, and
+//!   their spread at each tolerance (one tolerance should mean one accuracy);
 //! - `ensemble [--peer]`: the double pendulum's 60×60 flip-time map on one thread and on two,
 //!   with `--peer` SciPy's DOP853 on a lambdified SymPy right-hand side on a sample of it;
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
@@ -48,6 +50,7 @@ mod progress;
 mod scaling;
 mod space;
 mod stiff;
+mod tolerance;
 
 use std::time::Instant;
 
@@ -90,6 +93,9 @@ enum Benchmark {
         #[arg(long)]
         peer: bool,
     },
+    /// The final error of every adaptive method at tolerances 1e-6 … 1e-12, and their
+    /// spread at each tolerance.
+    Tolerance,
     /// The double pendulum's 60×60 flip-time map on one thread and on two.
     Ensemble {
         /// Also run SciPy's DOP853 on a lambdified SymPy right-hand side
@@ -147,6 +153,7 @@ fn main() {
         Benchmark::Space => space::run(),
         Benchmark::Bicycle => bicycle::run(),
         Benchmark::Stiff { largest, peer } => stiff::run(largest, peer),
+        Benchmark::Tolerance => tolerance::run(),
         Benchmark::Ensemble { peer, sample, repeats } => ensemble::run(peer, sample, repeats),
         Benchmark::Scaling(Limits { budget, max }) => scaling::run(budget, max),
         Benchmark::Eval => eval::run(),

@@ -79,6 +79,7 @@ pub struct Ensemble {
     random: bool,
     state_names: Vec<String>,
     constraint_names: Vec<String>,
+    parameter_names: Vec<String>,
     angle_oriented_bodies: Vec<String>,
     /// Whether runs go side by side in lockstep ([`sim::Lockstep`]) where it serves them.
     lockstep: bool,
@@ -184,6 +185,7 @@ impl Ensemble {
             random: design.is_random(),
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
+            parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: simulate::angle_oriented_bodies(model),
             lockstep: true,
         })
@@ -353,6 +355,7 @@ impl Ensemble {
             method: self.run_settings.method,
             state: &self.state_names,
             constraints: &self.constraint_names,
+            parameters: &self.parameter_names,
             angle_oriented_bodies: &self.angle_oriented_bodies,
         };
         let (what, _) = names.words(&fault.kind);

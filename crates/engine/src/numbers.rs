@@ -121,6 +121,12 @@ impl Prepared {
         d.coords.iter().chain(&d.rates).map(|s| pool.symbol(*s).name.clone()).collect()
     }
 
+    /// Names of the parameter slots, the inputs' after the parameters', in slot order.
+    pub fn parameter_slot_names(&self) -> Vec<String> {
+        let pool = &self.derivation.model.pool;
+        self.parameters.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
     /// The constraints kept with multipliers, by name, in the order of their slots.
     pub fn kept_constraint_names(&self) -> Vec<String> {
         let d = &self.derivation;

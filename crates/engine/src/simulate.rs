@@ -6,7 +6,7 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use sim::{integrate, FaultKind, Mechanical, Method, Run};
+use sim::{integrate, FaultKind, Mechanical, Method, NonFiniteAt, Run};
 
 mod compiled;
 mod drive;
@@ -123,6 +123,9 @@ pub struct Outcome {
     pub state_names: Vec<String>,
     /// The constraints kept with multipliers, in the order of the numbers' slots.
     pub constraint_names: Vec<String>,
+    /// The parameter slots' names (the inputs' after the parameters'), for a fault in a held
+    /// law.
+    pub parameter_names: Vec<String>,
     /// Bodies in space oriented by angles (not Euler parameters), whose angle sets have
     /// singular configurations where the mass matrix loses rank.
     pub angle_oriented_bodies: Vec<String>,
@@ -787,6 +790,7 @@ impl Outcome {
             method: self.method,
             state: &self.state_names,
             constraints: &self.constraint_names,
+            parameters: &self.parameter_names,
             angle_oriented_bodies: &self.angle_oriented_bodies,
         };
         let (what, cause) = names.words(&f.kind);
@@ -808,10 +812,51 @@ pub(crate) struct FaultNames<'a> {
     pub method: Method,
     pub state: &'a [String],
     pub constraints: &'a [String],
+    pub parameters: &'a [String],
     pub angle_oriented_bodies: &'a [String],
 }
 
 impl FaultNames<'_> {
+    /// The value that came out NaN or infinite, in words.
+    fn non_finite(&self, at: &NonFiniteAt) -> String {
+        let coordinate =
+            |i: usize| self.state.get(i).map_or(format!("coordinate {i}"), |s| format!("`{s}`"));
+        match *at {
+            NonFiniteAt::Mass { row, column } => {
+                format!("the mass matrix's entry ({}, {})", coordinate(row), coordinate(column))
+            }
+            NonFiniteAt::Force { coordinate: c } => {
+                format!("the force side f of {}'s equation (M·q̈ = f)", coordinate(c))
+            }
+            NonFiniteAt::Momentum { coordinate: c } => {
+                format!("the momentum conjugate to {}", coordinate(c))
+            }
+            NonFiniteAt::Constraint { constraint } => format!(
+                "the kept constraint {}'s Jacobian or drift",
+                self.constraints
+                    .get(constraint)
+                    .map_or(format!("{constraint}"), |s| format!("`{s}`"))
+            ),
+            NonFiniteAt::Rate { component } => match self.state.get(component) {
+                Some(name) => format!("the rate `{name}'`"),
+                None => format!("the rate of state component {component}"),
+            },
+            NonFiniteAt::MomentumRate { coordinate: c } => {
+                format!("the rate of the momentum conjugate to {}", coordinate(c))
+            }
+            NonFiniteAt::Residual { coordinate: c } => {
+                format!("the residual of {}'s equation", coordinate(c))
+            }
+            NonFiniteAt::HeldLaw { slot } => format!(
+                "the held law of {}",
+                self.parameters.get(slot).map_or("an input".into(), |s| format!("`{s}`"))
+            ),
+            NonFiniteAt::Partials => "a partial derivative of the equations".into(),
+            NonFiniteAt::Jacobian => "the Jacobian of the equations".into(),
+            NonFiniteAt::System => "the matrix the accelerations are solved with".into(),
+        }
+    }
+
     /// What went wrong, and its likely cause.
     pub fn words(&self, kind: &FaultKind) -> (String, String) {
         let coords = |idx: &[usize]| -> String {
@@ -886,9 +931,30 @@ impl FaultNames<'_> {
                     },
                 )
             }
-            FaultKind::NonFinite { component } => (
-                format!("a value became NaN or infinite (component {component})"),
+            FaultKind::NonFinite { at: NonFiniteAt::HeldLaw { slot } } => {
+                let input =
+                    self.parameters.get(*slot).map_or("an input".into(), |s| format!("`{s}`"));
+                (
+                    format!("the held law driving {input} gave NaN or infinity"),
+                    format!(
+                        "the law of {input} is undefined at the state sampled (a division by \
+                         zero or a function outside its domain), or the motion blew up"
+                    ),
+                )
+            }
+            FaultKind::NonFinite { at } => (
+                format!("{} became NaN or infinite", self.non_finite(at)),
                 "a division by zero or a function outside its domain; or the motion blew up".into(),
+            ),
+            FaultKind::RatesOverflow { component, rate } => (
+                format!(
+                    "the rate of {} is {rate:.1e}: too large for the step control to weigh \
+                     against the tolerance",
+                    self.state.get(*component).map_or("the state".into(), |s| format!("`{s}`"))
+                ),
+                "a force or an input beyond floating point's range (an exponential of a large \
+                 argument?), or units far from the scene's scale"
+                    .into(),
             ),
             FaultKind::StepTooSmall { step } => (
                 format!("the step size fell to {step:.1e}"),

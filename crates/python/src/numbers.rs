@@ -50,9 +50,7 @@ fn fault_text(kind: &FaultKind, names: &[String]) -> String {
         FaultKind::SingularConstraints { .. } => {
             "the constraints' Jacobian lost rank here".to_string()
         }
-        FaultKind::NonFinite { component } => {
-            format!("a value became NaN or infinite (component {component})")
-        }
+        FaultKind::NonFinite { at } => format!("a value became NaN or infinite ({at:?})"),
         other => format!("{other:?}"),
     }
 }

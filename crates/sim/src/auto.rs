@@ -46,8 +46,8 @@ pub(crate) struct Auto {
 impl Auto {
     pub fn new(dim: usize, tolerance: f64) -> Self {
         Auto {
-            explicit: Adaptive::new(EXPLICIT_PAIR, dim, tolerance, tolerance),
-            radau: Radau::new(Components::ordinary(dim), tolerance, tolerance),
+            explicit: Adaptive::for_tolerance(EXPLICIT_PAIR, dim, tolerance),
+            radau: Radau::new(Components::ordinary(dim), tolerance),
             on_radau: false,
             last_by_radau: false,
             stiff_count: 0,

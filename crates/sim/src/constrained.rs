@@ -3,7 +3,7 @@
 //! that an implicit method integrates with no stabilisation.
 
 use crate::mechanical::{Layout, Mechanical, Stabilisation};
-use crate::{Components, FaultKind, Problem};
+use crate::{Components, FaultKind, NonFiniteAt, Problem};
 
 /// y = (q, v, a, λ) with
 ///
@@ -81,7 +81,12 @@ impl Problem for Constrained {
             // Φ for a position constraint, A·q̇ + b for a velocity constraint.
             out[3 * n + c] = dynamics[rows + c * (n + 3) + n + 1];
         }
-        crate::check_finite(out)
+        // (q̇, q̈) = (v, a), then each coordinate's equation, then each constraint.
+        crate::check_finite(out, |i| match i {
+            i if i < 2 * n => crate::rate(i),
+            i if i < 3 * n => NonFiniteAt::Residual { coordinate: i - 2 * n },
+            i => NonFiniteAt::Constraint { constraint: i - 3 * n },
+        })
     }
 
     fn components(&self) -> Components {

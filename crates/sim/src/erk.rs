@@ -213,6 +213,19 @@ impl Pair {
             Pair::Dop853 => 6.1,
         }
     }
+
+    /// The level the pair holds its local error estimate to (weighted by atol + rtol·|y|) for
+    /// a run's `tolerance`, so that a tolerance means one accuracy whichever method runs (see
+    /// docs/simulating.md): dop853's final errors come out near the tolerance as it is, while
+    /// dopri5's, whose steps are more numerous and each less accurate than its estimate says,
+    /// come out several times above it; a tenth of the tolerance brings them to dop853's
+    /// (`lagrange-bench tolerance`).
+    pub fn error_target(self, tolerance: f64) -> f64 {
+        match self {
+            Pair::Dopri5 => tolerance / 10.0,
+            Pair::Dop853 => tolerance,
+        }
+    }
 }
 
 /// An adaptive explicit pair with local extrapolation (the higher order propagates).
@@ -249,7 +262,11 @@ const MIN_FACTOR: f64 = 0.2;
 const MAX_FACTOR: f64 = 10.0;
 
 impl Adaptive {
-    pub fn new(pair: Pair, dim: usize, rtol: f64, atol: f64) -> Self {
+    /// The pair for a run at `tolerance`, relative and absolute, held at its
+    /// [`Pair::error_target`].
+    pub fn for_tolerance(pair: Pair, dim: usize, tolerance: f64) -> Self {
+        let rtol = pair.error_target(tolerance);
+        let atol = rtol;
         let stages = match pair {
             Pair::Dopri5 => 7,
             Pair::Dop853 => 16,
@@ -305,6 +322,9 @@ impl Adaptive {
         let scale: Vec<f64> = y.iter().map(|v| self.atol + v.abs() * self.rtol).collect();
         let norm = |v: &[f64]| rms(v.iter().zip(&scale).map(|(a, s)| a / s));
         let (d0, d1) = (norm(y), norm(f0));
+        if !d1.is_finite() {
+            return Err(rates_overflow(f0, &scale));
+        }
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min((t_end - t).abs());
         for i in 0..y.len() {
@@ -590,6 +610,15 @@ fn trial_power(err: f64, exponent: f64) -> f64 {
 /// The smallest step floating point resolves at `t`, with a margin.
 fn min_step(t: f64) -> f64 {
     10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE)
+}
+
+/// The fault of rates `f` whose norm weighted by `scale` overflows: the component that
+/// weighs the most. Every step's error is measured in that norm, so it would overflow too, and
+/// the step shrink to nothing: the run stops here and says why.
+pub(crate) fn rates_overflow(f: &[f64], scale: &[f64]) -> FaultKind {
+    let weighed = |i: usize| f[i].abs() / scale[i];
+    let component = (0..f.len()).max_by(|&a, &b| weighed(a).total_cmp(&weighed(b))).unwrap_or(0);
+    FaultKind::RatesOverflow { component, rate: f.get(component).copied().unwrap_or(f64::NAN) }
 }
 
 /// The root mean square of the values.

@@ -41,6 +41,12 @@ impl Hold {
         next_sample(self.period, t)
     }
 
+    /// Whether `t` is a sample time k·T, as [`Hold::next_after`] computes them (a run also
+    /// stops at the knots of a series, where nothing is sampled).
+    pub fn is_sample_time(&self, t: f64) -> bool {
+        (t / self.period).round() * self.period == t
+    }
+
     /// Samples the laws at (t, q, q̇) with the parameters as they are, and holds the values in
     /// their slots. Every law is evaluated before any slot changes: a law reads no input.
     pub(crate) fn sample(

@@ -54,10 +54,14 @@ pub enum FaultKind {
     /// the multipliers are not determined. `constraints` are the ones that depend on earlier
     /// ones.
     SingularConstraints { constraints: Vec<usize> },
-    /// A right-hand side or observation came out NaN or infinite at this component.
-    NonFinite { component: usize },
+    /// A value came out NaN or infinite; `at` says which.
+    NonFinite { at: NonFiniteAt },
     /// The adaptive step fell below what floating point can resolve at this time.
     StepTooSmall { step: f64 },
+    /// The rates at the start of the run (or of a restart) are too large for the step control
+    /// to weigh against the tolerance (their weighted norm overflows); the rate of state
+    /// `component` is `rate`, the largest weighed.
+    RatesOverflow { component: usize, rate: f64 },
     /// Newton's iteration of a fixed-step implicit method (gauss, midpoint) did not converge
     /// at its `step`; `contraction` is the last ratio of successive Newton updates (≥ 1:
     /// diverging), `exact_jacobian` whether the iteration had the problem's exact Jacobian
@@ -70,6 +74,35 @@ pub enum FaultKind {
     NewtonStalled { step: f64, contraction: f64, singular: bool, exact_jacobian: bool },
     /// The run took more steps than allowed.
     TooManySteps { limit: usize },
+}
+
+/// Which value came out NaN or infinite: each names the array it indexes, so that a front end
+/// can name the thing (a coordinate, an entry of M, a constraint, an input).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NonFiniteAt {
+    /// The mass matrix's entry in the rows of coordinate `row` and the column of `column`.
+    Mass { row: usize, column: usize },
+    /// f's entry for `coordinate` (M·q̈ = f; ∂L/∂q + Q in canonical variables).
+    Force { coordinate: usize },
+    /// The canonical momentum p = ∂L/∂q̇ of `coordinate`.
+    Momentum { coordinate: usize },
+    /// A kept constraint's Jacobian row, γ, or its drift Φ and Φ̇.
+    Constraint { constraint: usize },
+    /// The rate of state `component` (q then q̇: the rate of q̇ is q̈).
+    Rate { component: usize },
+    /// The rate of the canonical momentum of `coordinate`.
+    MomentumRate { coordinate: usize },
+    /// The residual M·q̈ − f − Jᵀλ of `coordinate`'s equation (the differential–algebraic
+    /// system).
+    Residual { coordinate: usize },
+    /// The value a held law gave for parameter slot `slot` (an input's).
+    HeldLaw { slot: usize },
+    /// The lowered partials the exact Jacobian is made of.
+    Partials,
+    /// The Jacobian of the right-hand side.
+    Jacobian,
+    /// The matrix the accelerations (and multipliers) are solved with.
+    System,
 }
 
 /// A numeric fault, at the time and state where it happened.
@@ -109,8 +142,8 @@ pub trait Problem {
         None
     }
     /// The first time after `t` at which the right-hand side jumps (a held input takes its
-    /// next sample), if any: a run ends its step there and restarts its method after
-    /// [`Problem::sample`].
+    /// next sample) or its slope does (a series input passes a knot), if any: a run ends its
+    /// step there and restarts its method after [`Problem::sample`].
     fn next_sample(&self, t: f64) -> Option<f64> {
         let _ = t;
         None
@@ -158,9 +191,18 @@ impl Components {
     }
 }
 
-pub(crate) fn check_finite(v: &[f64]) -> Result<(), FaultKind> {
+/// `Err` at the first entry of `v` that is NaN or infinite, named by `at` from its index.
+pub(crate) fn check_finite(
+    v: &[f64],
+    at: impl FnOnce(usize) -> NonFiniteAt,
+) -> Result<(), FaultKind> {
     match v.iter().position(|x| !x.is_finite()) {
-        Some(component) => Err(FaultKind::NonFinite { component }),
+        Some(index) => Err(FaultKind::NonFinite { at: at(index) }),
         None => Ok(()),
     }
+}
+
+/// The index of the state y = (q, q̇) as the rate it is.
+pub(crate) fn rate(component: usize) -> NonFiniteAt {
+    NonFiniteAt::Rate { component }
 }

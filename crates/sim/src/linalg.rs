@@ -260,7 +260,7 @@ pub fn lu_in_place<M: Square>(a: &mut M, pivots: &mut [usize]) -> Result<(), Fau
         }
     }
     if !scale.is_finite() {
-        return Err(FaultKind::NonFinite { component: 0 });
+        return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::System });
     }
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     let mut vanished = Vec::new();

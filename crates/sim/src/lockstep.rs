@@ -94,7 +94,7 @@ impl Lockstep {
         let lanes = (0..LANES)
             .map(|_| Lane {
                 problem: problem.clone(),
-                stepper: Adaptive::new(pair, d, tol, tol),
+                stepper: Adaptive::for_tolerance(pair, d, tol),
                 course: None,
                 id: 0,
                 prepared: false,
@@ -198,7 +198,7 @@ impl Lockstep {
         let tol = self.settings.tolerance;
         let l = &mut self.lanes[lane];
         l.problem.set_parameters(&job.parameters);
-        l.stepper = Adaptive::new(self.stages.pair(), l.problem.dim(), tol, tol);
+        l.stepper = Adaptive::for_tolerance(self.stages.pair(), l.problem.dim(), tol);
         l.id = job.id;
         self.evaluations[lane] = 0;
         (l.prepared, l.fresh, l.rejected_here) = (false, true, false);
@@ -538,7 +538,7 @@ impl pulp::WithSimd for Trial<'_> {
     fn with_simd<S: pulp::Simd>(self, _: S) -> (Lanes, Lanes) {
         let lockstep = self.0;
         lockstep.trial();
-        let tol = lockstep.settings.tolerance;
+        let tol = lockstep.stages.pair().error_target(lockstep.settings.tolerance);
         let errors = lockstep.stages.errors(&lockstep.h, tol, tol);
         // libm's `pow` of each lane's norm, eight at once (the bits of `trial_power`).
         let exponent = lockstep.lanes[0].stepper.error_exponent();

@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use numeric::Tape;
 
 use crate::linalg::{self, Small, Square};
-use crate::{check_finite, FaultKind, Hold, Problem, Series};
+use crate::{check_finite, rate, FaultKind, Hold, NonFiniteAt, Problem, Series};
 
 mod jacobian;
 mod many;
@@ -32,6 +32,18 @@ impl Layout {
     pub fn dynamics_outputs(&self) -> usize {
         let (n, m) = (self.coordinates, self.multipliers);
         n * n + n + m * (n + 3)
+    }
+
+    /// What the dynamics program's output `index` is: an entry of M, of f, or a constraint's.
+    pub fn dynamics_entry(&self, index: usize) -> NonFiniteAt {
+        let n = self.coordinates;
+        if index < n * n {
+            NonFiniteAt::Mass { row: index % n, column: index / n }
+        } else if index < n * n + n {
+            NonFiniteAt::Force { coordinate: index - n * n }
+        } else {
+            NonFiniteAt::Constraint { constraint: (index - n * n - n) / (n + 3) }
+        }
     }
 
     pub fn dynamics_inputs(&self) -> usize {
@@ -212,7 +224,8 @@ impl Mechanical {
         input[1..1 + 2 * n].copy_from_slice(y);
         input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
         self.dynamics.run(&mut self.dyn_out);
-        check_finite(&self.dyn_out)?;
+        let layout = self.layout;
+        check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         Ok(&self.dyn_out)
     }
 
@@ -322,7 +335,7 @@ impl Problem for Mechanical {
         self.accelerations(t, y)?;
         dy[..n].copy_from_slice(&y[n..2 * n]);
         dy[n..].copy_from_slice(&self.solution[..n]);
-        check_finite(dy)
+        check_finite(dy, rate)
     }
 
     /// ∂(q̇, q̈)/∂(q, q̇) from the partials and the augmented matrix, when they were lowered.
@@ -334,15 +347,28 @@ impl Problem for Mechanical {
         self.observation.outputs() + self.layout.multipliers
     }
 
+    /// The next sample of a held law, or the next knot of a series: the right-hand side jumps
+    /// at the one and its slope at the other (a series is linear between its samples), and a
+    /// step across either would lose the method's order.
     fn next_sample(&self, t: f64) -> Option<f64> {
-        self.hold.as_ref().map(|h| h.next_after(t))
+        let held = self.hold.as_ref().map(|h| h.next_after(t));
+        let knot = self.signals.iter().filter_map(|(_, s)| s.next_knot_after(t)).reduce(f64::min);
+        match (held, knot) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
         let Some(hold) = &mut self.hold else { return Ok(()) };
+        // A series' knot that falls between samples changes nothing held (the start, where
+        // the first sample is, is t = 0 = 0·T).
+        if !hold.is_sample_time(t) {
+            return Ok(());
+        }
         let n = self.layout.coordinates;
         hold.sample(t, &y[..2 * n], &mut self.parameters)
-            .map_err(|slot| FaultKind::NonFinite { component: 2 * n + slot })
+            .map_err(|slot| FaultKind::NonFinite { at: NonFiniteAt::HeldLaw { slot } })
     }
 
     /// The observation program's outputs, then |Φ| of each kept constraint.
@@ -439,7 +465,12 @@ impl Canonical {
         let n = self.inner.layout.coordinates;
         self.set_input(t, &y[..n], None);
         self.momentum.eval(&self.input, &mut self.out);
-        check_finite(&self.out)?;
+        // M (n×n), p (n), ∂L/∂q + Q (n).
+        check_finite(&self.out, |i| match i {
+            i if i < n * n => NonFiniteAt::Mass { row: i % n, column: i / n },
+            i if i < n * n + n => NonFiniteAt::Momentum { coordinate: i - n * n },
+            i => NonFiniteAt::Force { coordinate: i - n * n - n },
+        })?;
         let sys = &mut self.inner.system;
         for j in 0..n {
             for i in 0..n {
@@ -479,7 +510,10 @@ impl Problem for Canonical {
         dy[..n].copy_from_slice(&rates);
         dy[n..].copy_from_slice(&self.out[n * n + n..]);
         self.rates = rates;
-        check_finite(dy)
+        check_finite(dy, |i| match i {
+            i if i < n => rate(i),
+            i => NonFiniteAt::MomentumRate { coordinate: i - n },
+        })
     }
 
     /// ∂(q̇, ṗ)/∂(q, p) from the canonical partials and M, when they were lowered.

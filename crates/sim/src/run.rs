@@ -116,7 +116,9 @@ pub struct Settings {
     pub method: Method,
     pub start: f64,
     pub until: f64,
-    /// Relative and absolute tolerance of the adaptive methods.
+    /// Relative and absolute tolerance of the adaptive methods: one accuracy whichever of
+    /// them runs, each holding its local error estimate to the level that makes its final
+    /// error follow the tolerance alike ([`Radau::new`], `Pair::error_target`).
     pub tolerance: f64,
     /// The step of the fixed-step methods.
     pub step: f64,
@@ -438,11 +440,11 @@ fn stepper_for(settings: &Settings, problem: &dyn Problem) -> Box<dyn Stepper> {
     );
     match settings.method {
         Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
-        Method::Dopri5 => Box::new(Adaptive::new(Pair::Dopri5, d, tol, tol)),
-        Method::Dop853 => Box::new(Adaptive::new(Pair::Dop853, d, tol, tol)),
+        Method::Dopri5 => Box::new(Adaptive::for_tolerance(Pair::Dopri5, d, tol)),
+        Method::Dop853 => Box::new(Adaptive::for_tolerance(Pair::Dop853, d, tol)),
         Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
         Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
-        Method::Radau => Box::new(Radau::new(problem.components(), tol, tol)),
+        Method::Radau => Box::new(Radau::new(problem.components(), tol)),
         Method::Auto => Box::new(Auto::new(d, tol)),
     }
 }
@@ -464,9 +466,18 @@ fn crossings(
     let width = problem.observations();
     let mut hits: Vec<EventHit> = Vec::new();
     for (k, e) in events.iter().enumerate() {
-        let (g0, g1) = (before.1[e.column], after.1[e.column]);
+        let (mut start, mut end) = ((before.0, before.1[e.column]), (after.0, after.1[e.column]));
+        // A function that leaves its domain within the step (√ of a negative) has no sign at
+        // one end; it may have crossed zero before it did. The sign change is looked for up
+        // to where it is still finite, as it would have been seen by a step ending there.
+        match (start.1.is_finite(), end.1.is_finite()) {
+            (true, false) => end = finite_edge(problem, stepper, e.column, start, end.0, width),
+            (false, true) => start = finite_edge(problem, stepper, e.column, end, start.0, width),
+            _ => {}
+        }
+        let (g0, g1) = (start.1, end.1);
         if g0 != 0.0 && g0 * g1 <= 0.0 {
-            let time = locate(problem, stepper, e.column, (before.0, g0), (after.0, g1), width);
+            let time = locate(problem, stepper, e.column, start, end, width);
             hits.push(EventHit { event: k, time });
         }
     }
@@ -541,6 +552,34 @@ pub(crate) fn segments(settings: &Settings, switches: &[f64], end: f64) -> Vec<S
     }
     segments.push(Segment { method: sides[switches.len() % 2], start, end });
     segments
+}
+
+/// The time nearest `other` on the dense output at which observation `column` is still
+/// finite, with its value there, by bisection from `finite` (a time where it is finite) to
+/// `other` (where it is not) to a few ulps of time.
+fn finite_edge(
+    problem: &mut dyn Problem,
+    stepper: &mut dyn Dense,
+    column: usize,
+    mut finite: (f64, f64),
+    mut other: f64,
+    width: usize,
+) -> (f64, f64) {
+    let mut y = vec![0.0; problem.dim()];
+    let mut row = vec![0.0; width];
+    for _ in 0..200 {
+        if (other - finite.0).abs() <= 4.0 * f64::EPSILON * finite.0.abs().max(other.abs()).max(1.0)
+        {
+            break;
+        }
+        let m = 0.5 * (finite.0 + other);
+        stepper.interpolate(problem, m, &mut y);
+        match problem.observe(m, &y, &mut row) {
+            Ok(()) if row[column].is_finite() => finite = (m, row[column]),
+            _ => other = m,
+        }
+    }
+    finite
 }
 
 /// The time in [t0, t1] where observation `column` crosses zero, by the Illinois variant of

@@ -26,6 +26,12 @@ impl Series {
         Ok(Series { times, values })
     }
 
+    /// The first sample time after `t`: a knot, where the series' slope jumps.
+    pub fn next_knot_after(&self, t: f64) -> Option<f64> {
+        let k = self.times.partition_point(|s| *s <= t);
+        self.times.get(k).copied()
+    }
+
     /// The first and last times.
     pub fn span(&self) -> (f64, f64) {
         (self.times[0], self.times[self.times.len() - 1])

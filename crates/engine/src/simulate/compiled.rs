@@ -141,6 +141,7 @@ impl Compiled {
             wall_seconds,
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
+            parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: angle_oriented_bodies(model),
             conservative,
             animation: None,

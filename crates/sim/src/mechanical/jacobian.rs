@@ -5,7 +5,7 @@
 //! ∂q̈/∂(q, q̇) with no step size to choose.
 
 use super::{Canonical, Layout, Mechanical, Stabilisation};
-use crate::{check_finite, linalg, FaultKind};
+use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
@@ -36,7 +36,7 @@ impl Mechanical {
         input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(unknowns);
         input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         tape.eval(input, &mut self.partials_out);
-        check_finite(&self.partials_out)?;
+        check_finite(&self.partials_out, |_| NonFiniteAt::Partials)?;
         Ok(Some(&self.partials_out))
     }
 
@@ -94,7 +94,7 @@ impl Mechanical {
             }
         }
         self.solution = column;
-        check_finite(jac)?;
+        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
     }
 }
@@ -121,7 +121,7 @@ impl Canonical {
         if let Some(tape) = self.partials.as_mut() {
             tape.eval(&self.input, &mut self.partials_out);
         }
-        check_finite(&self.partials_out)?;
+        check_finite(&self.partials_out, |_| NonFiniteAt::Partials)?;
         let inner = &mut self.inner;
         inner.system.copy_from(&inner.backup);
         linalg::lu_in_place(&mut inner.system, &mut inner.pivots)?;
@@ -152,7 +152,7 @@ impl Canonical {
                 jac[(n + i) * width + k] = acc;
             }
         }
-        check_finite(jac)?;
+        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
     }
 }

@@ -10,7 +10,7 @@ use numeric::{BatchTape, Program, LANES};
 use crate::linalg::{self, Lanes};
 
 use super::Mechanical;
-use crate::{check_finite, FaultKind, Problem};
+use crate::{check_finite, rate, FaultKind, Problem};
 
 /// The batch tape of the dynamics program, [`LANES`] states a pass, and the lanes of the solve
 /// side by side.
@@ -99,11 +99,11 @@ impl Mechanical {
                     for (o, out) in self.dyn_out.iter_mut().enumerate().take(outputs) {
                         *out = many.tape.output_lanes(o)[lane];
                     }
-                    check_finite(&self.dyn_out).map_err(fail)?;
+                    check_finite(&self.dyn_out, |i| self.layout.dynamics_entry(i)).map_err(fail)?;
                     self.solve_dynamics().map_err(fail)?;
                     dy[n..].copy_from_slice(&self.solution[..n]);
                 }
-                check_finite(dy).map_err(fail)?;
+                check_finite(dy, rate).map_err(fail)?;
             }
         }
         Ok(())
@@ -165,11 +165,12 @@ impl Mechanical {
         for (slot, value) in self.dyn_out.iter_mut().zip(outputs) {
             *slot = value;
         }
-        check_finite(&self.dyn_out)?;
+        let layout = self.layout;
+        check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         self.solve_dynamics()?;
         dy[..n].copy_from_slice(&y[n..2 * n]);
         dy[n..].copy_from_slice(&self.solution[..n]);
-        check_finite(dy)
+        check_finite(dy, rate)
     }
 }
 
