@@ -159,6 +159,64 @@ impl Equations {
     }
 }
 
+/// Each kept constraint's γ as the run stabilises it (Baumgarte at `sim::BAUMGARTE_RATE`), an
+/// expression of `rows`, the constraints program's outputs (J, γ, Φ, Φ̇ per constraint), with
+/// the run's operations in its order, (γ − 2α·Φ̇) − α²·Φ, so that the generated code has its
+/// bits; `literal` writes a number in the language.
+pub(crate) fn stabilised_gamma(e: &Equations, literal: &dyn Fn(f64) -> String) -> Vec<String> {
+    let (n, alpha) = (e.sizes.coordinates, sim::BAUMGARTE_RATE);
+    let kinds = e.prepared.stabilisation();
+    kinds
+        .iter()
+        .enumerate()
+        .map(|(c, kind)| {
+            let base = c * (n + 3) + n;
+            match kind {
+                sim::Stabilisation::Position => format!(
+                    "rows[{base}] - {} * rows[{}] - {} * rows[{}]",
+                    literal(2.0 * alpha),
+                    base + 2,
+                    literal(alpha * alpha),
+                    base + 1
+                ),
+                sim::Stabilisation::Velocity => {
+                    format!("rows[{base}] - {} * rows[{}]", literal(alpha), base + 1)
+                }
+            }
+        })
+        .collect()
+}
+
+/// The statements that turn each kept constraint's row of partials `d` (column `col`) into
+/// those of the stabilised row [`stabilised_gamma`] solves: ∂c + 2α·∂Φ̇ + α²·∂Φ, or ∂c + α·∂Φ
+/// for a velocity constraint, as `sim`'s exact Jacobian forms them.
+pub(crate) fn stabilised_partials(e: &Equations, literal: &dyn Fn(f64) -> String) -> Vec<String> {
+    let (n, m, alpha) = (e.sizes.coordinates, e.sizes.constraints, sim::BAUMGARTE_RATE);
+    let width = 2 * n;
+    let kinds = e.prepared.stabilisation();
+    kinds
+        .iter()
+        .enumerate()
+        .map(|(c, kind)| {
+            let row = |block: usize| format!("d[{} + col]", (n + block * m + c) * width);
+            match kind {
+                sim::Stabilisation::Position => format!(
+                    "{} = {} + {} * {} + {} * {};",
+                    row(0),
+                    row(0),
+                    literal(2.0 * alpha),
+                    row(2),
+                    literal(alpha * alpha),
+                    row(1)
+                ),
+                sim::Stabilisation::Velocity => {
+                    format!("{} = {} + {} * {};", row(0), row(0), literal(alpha), row(1))
+                }
+            }
+        })
+        .collect()
+}
+
 /// The start (q, then q̇, of the remaining coordinates) as a program of `[t, parameters,
 /// inputs]`: the scene's initial values are expressions of the parameters.
 fn start_program(prepared: &Prepared) -> Result<numeric::Program, Error> {

@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use numeric::rust::{function, literal, HELPERS};
 
-use super::{Equations, Sizes};
+use super::{stabilised_gamma, stabilised_partials, Equations, Sizes};
 use crate::numbers::Prepared;
 use crate::{Error, Options};
 
@@ -120,11 +120,10 @@ fn module(e: &Equations, path: &str) -> String {
         s.push_str(&function(p, name, &doc));
         s.push('\n');
     }
-    let kinds = e.prepared.stabilisation();
     for wrapper in [
-        augmented_function(sizes, &kinds),
+        augmented_function(e),
         rhs_function(sizes),
-        jacobian_function(sizes, &kinds),
+        jacobian_function(e),
         inverse_dynamics_function(sizes),
     ] {
         s.push_str(&wrapper);
@@ -136,7 +135,8 @@ fn module(e: &Equations, path: &str) -> String {
 
 /// `augmented(input, a, b)`: the matrix [M −Jᵀ; J 0] (row-major) and the right-hand side
 /// (f, γ) that `rhs` and `jacobian` solve, without stabilisation.
-fn augmented_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
+fn augmented_function(e: &Equations) -> String {
+    let sizes = e.sizes;
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let size = n + m;
     let mut s = String::new();
@@ -160,28 +160,8 @@ fn augmented_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
         let _ = writeln!(s, "    let mut rows = [0.0; {}];", m * (n + 3));
         let _ = writeln!(s, "    constraints(input, &mut rows);");
         let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n        b[{n} + c] = rows[c * {} + {n}];\n    }}", n + 3, n + 3);
-        let alpha = sim::BAUMGARTE_RATE;
-        for (c, kind) in kinds.iter().enumerate() {
-            let base = c * (n + 3) + n;
-            // The run's operations in its order: (γ − 2α·Φ̇) − α²·Φ.
-            let _ = match kind {
-                sim::Stabilisation::Position => writeln!(
-                    s,
-                    "    b[{}] = rows[{base}] - {:?} * rows[{}] - {:?} * rows[{}];",
-                    n + c,
-                    2.0 * alpha,
-                    base + 2,
-                    alpha * alpha,
-                    base + 1
-                ),
-                sim::Stabilisation::Velocity => writeln!(
-                    s,
-                    "    b[{}] = rows[{base}] - {:?} * rows[{}];",
-                    n + c,
-                    alpha,
-                    base + 1
-                ),
-            };
+        for (c, gamma) in stabilised_gamma(e, &literal).iter().enumerate() {
+            let _ = writeln!(s, "    b[{}] = {gamma};", n + c);
         }
     }
     s.push_str("}\n");
@@ -223,7 +203,8 @@ fn rhs_function(sizes: Sizes) -> String {
 /// `jacobian(t, y, parameters, inputs, jac)`: ∂(q̇, q̈)/∂(q, q̇) of `rhs`, row-major. Differentiating
 /// r = 0 and c = 0 along the state with q̈ and λ free gives
 /// [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c): one solve per state component.
-fn jacobian_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
+fn jacobian_function(e: &Equations) -> String {
+    let sizes = e.sizes;
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let (size, width) = (n + m, 2 * n);
     let mut s = String::new();
@@ -256,26 +237,10 @@ fn jacobian_function(sizes: Sizes, kinds: &[sim::Stabilisation]) -> String {
     let _ = writeln!(s, "    let mut d = [0.0; {}];", (n + 3 * m) * width);
     let _ = writeln!(s, "    partials(&held, &mut d);");
     // The constraint rows' partials as `augmented` stabilises them: with Φ's and Φ̇'s.
-    let alpha = sim::BAUMGARTE_RATE;
     if m > 0 {
         let _ = writeln!(s, "    for col in 0..{width} {{");
-        for (c, kind) in kinds.iter().enumerate() {
-            let row = |block: usize| format!("d[{} + col]", (n + block * m + c) * width);
-            let _ = match kind {
-                sim::Stabilisation::Position => writeln!(
-                    s,
-                    "        {} = {} + {:?} * {} + {:?} * {};",
-                    row(0),
-                    row(0),
-                    2.0 * alpha,
-                    row(2),
-                    alpha * alpha,
-                    row(1)
-                ),
-                sim::Stabilisation::Velocity => {
-                    writeln!(s, "        {} = {} + {:?} * {};", row(0), row(0), alpha, row(1))
-                }
-            };
+        for line in stabilised_partials(e, &literal) {
+            let _ = writeln!(s, "        {line}");
         }
         let _ = writeln!(s, "    }}");
     }

@@ -7,7 +7,7 @@ use std::fmt::Write;
 use numeric::c::literal;
 
 use super::of_state;
-use crate::codegen::Equations;
+use crate::codegen::{stabilised_gamma, stabilised_partials, Equations};
 
 /// Every exported function, with the static ones they share.
 pub(super) fn all(e: &Equations, name: &str) -> String {
@@ -62,28 +62,8 @@ fn augmented(e: &Equations) -> String {
              for (j = 0; j < {m}; j++) {{\n            a[({n} + c) * {size} + {n} + j] = 0.0;\n        }}\n        \
              b[{n} + c] = rows[c * {width} + {n}];\n    }}"
         );
-        let alpha = sim::BAUMGARTE_RATE;
-        for (c, kind) in e.prepared.stabilisation().iter().enumerate() {
-            let base = c * width + n;
-            // The same operations in the same order as the run's: (γ − 2α·Φ̇) − α²·Φ.
-            let _ = match kind {
-                sim::Stabilisation::Position => writeln!(
-                    s,
-                    "    b[{}] = rows[{base}] - {} * rows[{}] - {} * rows[{}];",
-                    n + c,
-                    literal(2.0 * alpha),
-                    base + 2,
-                    literal(alpha * alpha),
-                    base + 1
-                ),
-                sim::Stabilisation::Velocity => writeln!(
-                    s,
-                    "    b[{}] = rows[{base}] - {} * rows[{}];",
-                    n + c,
-                    literal(alpha),
-                    base + 1
-                ),
-            };
+        for (c, gamma) in stabilised_gamma(e, &literal).iter().enumerate() {
+            let _ = writeln!(s, "    b[{}] = {gamma};", n + c);
         }
     }
     s.push_str("}\n\n");
@@ -214,33 +194,11 @@ fn jacobian(e: &Equations, name: &str) -> String {
     let _ = writeln!(s, "    gather(t, y, y + {n}, p, u, input);");
     s.push_str("    if (solved(input, matrix, held)) {\n        return 1;\n    }\n");
     s.push_str("    eval_partials(held, d);\n");
-    // The rows' partials, stabilised as `augmented` stabilises γ: ∂c + 2α·∂Φ̇ + α²·∂Φ (a
-    // position constraint) or ∂c + α·∂Φ (a velocity one), with `sim`'s operations.
-    let alpha = sim::BAUMGARTE_RATE;
+    // The rows' partials, stabilised as `augmented` stabilises γ.
     if m > 0 {
         let _ = writeln!(s, "    for (col = 0; col < {width}; col++) {{");
-        for (c, kind) in e.prepared.stabilisation().iter().enumerate() {
-            let row = |block: usize| format!("d[{} + col]", (n + block * m + c) * width);
-            let _ = match kind {
-                sim::Stabilisation::Position => writeln!(
-                    s,
-                    "        {} = {} + {} * {} + {} * {};",
-                    row(0),
-                    row(0),
-                    literal(2.0 * alpha),
-                    row(2),
-                    literal(alpha * alpha),
-                    row(1)
-                ),
-                sim::Stabilisation::Velocity => writeln!(
-                    s,
-                    "        {} = {} + {} * {};",
-                    row(0),
-                    row(0),
-                    literal(alpha),
-                    row(1)
-                ),
-            };
+        for line in stabilised_partials(e, &literal) {
+            let _ = writeln!(s, "        {line}");
         }
         s.push_str("    }\n");
     }
