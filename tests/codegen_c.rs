@@ -63,7 +63,7 @@ fn points(e: &Equations, seed: usize) -> Vec<Point> {
             // The derived parameters follow the free ones, in the C as in every run.
             let free: Vec<f64> = e.free.iter().map(|i| moved(e.values[*i])).collect();
             let mut plan = e.prepared.parameter_plan.clone();
-            let parameters = plan.from_free(&free).expect("parameter values")[..k].to_vec();
+            let parameters = plan.values_of_free(&free).expect("parameter values")[..k].to_vec();
             let inputs: Vec<f64> = e.values[k..].iter().map(|v| moved(*v + 0.5)).collect();
             Point {
                 t: random.next(0.0, 2.0),

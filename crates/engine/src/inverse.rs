@@ -142,7 +142,7 @@ impl InverseDynamics {
                 self.parameter_names.join(", ")
             )));
         }
-        let all = self.plan.from_free(values).map_err(|e| Error::Input(e.to_string()))?;
+        let all = self.plan.values_of_free(values).map_err(|e| Error::Input(e.to_string()))?;
         let k = self.plan.len();
         self.slots[..k].copy_from_slice(&all[..k]);
         Ok(())

@@ -210,7 +210,7 @@ impl ParameterValues {
 
     /// The values with numbers for the free parameters alone, in the order of [`Self::free`]:
     /// what a compiled scene is handed per call.
-    pub fn from_free(&mut self, free: &[f64]) -> Result<Vec<f64>, ParameterError> {
+    pub fn values_of_free(&mut self, free: &[f64]) -> Result<Vec<f64>, ParameterError> {
         let given: Vec<(usize, Given)> =
             self.free().into_iter().zip(free).map(|(i, v)| (i, Given::Number(*v))).collect();
         self.values(given)
@@ -241,7 +241,7 @@ mod tests {
         assert_eq!(plan.sources(4), ["m", "L"]);
         // b has no value: it must be given.
         assert_eq!(plan.values(vec![]), Err(ParameterError::Missing { name: "b".into() }));
-        let values = plan.from_free(&[2.0, 3.0, 5.0]).expect("values");
+        let values = plan.values_of_free(&[2.0, 3.0, 5.0]).expect("values");
         // L = 4, I = 3·16/12, and the input F = L/4 after them.
         assert_eq!(values, [2.0, 3.0, 5.0, 4.0, 4.0, 1.0]);
         let scene = plan.scene_values();

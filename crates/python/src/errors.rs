@@ -125,6 +125,10 @@ fn keyword(piece: &engine::Piece) -> String {
         engine::Piece::Text(text) => text.clone(),
         engine::Piece::Setting(s) => format!("`{}`", s.name()),
         engine::Piece::Given(engine::Setting::Set, name) => format!("`set={{{name:?}: …}}`"),
+        // A number as Python writes it, anything else (a sweep's text) as a string.
+        engine::Piece::Given(s, given) if given.parse::<f64>().is_ok() => {
+            format!("`{}={given}`", s.name())
+        }
         engine::Piece::Given(s, given) => format!("`{}={given:?}`", s.name()),
     }
 }

@@ -121,7 +121,7 @@ impl Rhs {
                 rhs.parameter_names.join(", ")
             )));
         }
-        let values = inner.tunable.from_free(parameters)?;
+        let values = inner.tunable.values_of_free(parameters)?;
         all[..values.len()].copy_from_slice(&values);
         inner.mechanical.set_parameters(&all);
         drop(inner);
@@ -616,13 +616,13 @@ impl Tunable {
     /// read from `current`, every parameter's slot.
     pub fn given(&mut self, current: &[f64], given: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
         let free = free_given(&self.names, &self.free_values(current), &self.not_free(), given)?;
-        self.from_free(&free)
+        self.values_of_free(&free)
     }
 
     /// Every parameter's slot value with these values of the free ones.
-    pub fn from_free(&mut self, free: &[f64]) -> PyResult<Vec<f64>> {
+    pub fn values_of_free(&mut self, free: &[f64]) -> PyResult<Vec<f64>> {
         let mut all =
-            self.plan.from_free(free).map_err(|e| PyValueError::new_err(e.to_string()))?;
+            self.plan.values_of_free(free).map_err(|e| PyValueError::new_err(e.to_string()))?;
         all.truncate(self.plan.len());
         Ok(all)
     }

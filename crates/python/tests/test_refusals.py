@@ -85,3 +85,9 @@ def test_an_input_that_drives_a_constraint_runs_as_the_command_runs_it():
         with pytest.raises(lagrange.SceneError, match="a constraint cannot depend on the input `s`"):
             call()
     assert "parameter `A` is never used" in scene.warnings
+
+
+def test_counts_past_memory_are_refused_in_python_words():
+    scene = lagrange.load(PENDULUM)
+    with pytest.raises(ValueError, match=r"`samples=1000000000` would record more than 1 GiB"):
+        scene.simulate(samples=10**9)
