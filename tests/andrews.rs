@@ -200,10 +200,10 @@ fn radau_on_the_index_three_system_reaches_the_published_solution() {
     assert!(outcome.run.fault.is_none(), "{:?}", outcome.run.fault);
     assert_eq!(outcome.run.final_time, 0.03);
     let last = outcome.run.trajectory.rows.last().expect("rows");
-    // At the scene's tolerance, 1e-12, the angles are 5e-9 off relative to β (which has
-    // turned to 15.8 rad), and tighter tolerances gain nothing: 750 steps of 4e-5 s each add
-    // the round-off of an index-3 iteration matrix, whose condition grows as h⁻³. dop853 on
-    // the stabilised form gets within 2e-9 (above).
+    // At the scene's tolerance, 1e-12, the angles are within 1.7e-12 of dop853's at 1e-14,
+    // relative to each angle where it exceeds 1 (lagrange-bench tolerance); against the
+    // published solution, itself 1e-9 off in β and Θ (above), within 1e-8 relative to β
+    // (which has turned to 15.8 rad).
     let scale = AT_003[0].abs();
     for (k, want) in AT_003.iter().enumerate() {
         let off = (last[k] - want).abs() / scale;

@@ -155,6 +155,13 @@ pub trait Problem {
         let _ = (t, y);
         Ok(())
     }
+    /// Moves the state of an accepted step back onto the constraints it should satisfy and
+    /// that the method's equations do not hold it to (a differential–algebraic system's hidden
+    /// constraints); nothing by default.
+    fn project(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let _ = (t, y);
+        Ok(())
+    }
     /// The state in the physical variables (q, q̇), for reports of a fault or a run's end.
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {
         let _ = t;

@@ -304,6 +304,34 @@ impl Mechanical {
             && same(&input[state..], &self.parameters)
     }
 
+    /// Moves the velocities q̇ = y[n..2n] onto the constraints' velocity level at q = y[..n]:
+    /// by the least change in M's metric, Δq̇ = M⁻¹Jᵀμ with J·(q̇ + Δq̇) = −∂Φ/∂t (a velocity
+    /// constraint: A·(q̇ + Δq̇) + b = 0), the augmented system [M −Jᵀ; J 0]·(Δq̇, μ) =
+    /// (0, −Φ̇) solved once. A velocity error of that form is the kind a multiplier's error
+    /// leaves (v' = M⁻¹(f + Jᵀλ)), and the kind the index-3 system controls worst.
+    pub(crate) fn project_velocities(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.dynamics_at(t, y)?;
+        let out = &self.dyn_out;
+        let mut change = vec![0.0; n + m];
+        for c in 0..m {
+            let base = n * n + n + c * (n + 3);
+            change[n + c] = -match self.stabilisation[c] {
+                Stabilisation::Position => out[base + n + 2],
+                Stabilisation::Velocity => out[base + n + 1],
+            };
+        }
+        let pivots = &mut self.pivots;
+        match self.small.as_mut() {
+            Some(small) => solve_system(out, self.layout, small, &mut change, pivots)?,
+            None => solve_system(out, self.layout, &mut self.system, &mut change, pivots)?,
+        }
+        for (v, d) in y[n..2 * n].iter_mut().zip(&change[..n]) {
+            *v += d;
+        }
+        Ok(())
+    }
+
     /// After the augmented system [M −Jᵀ; J 0] failed: whether M itself or the constraint
     /// Jacobian J lost rank, the two faults a user fixes in different places.
     fn which_lost_rank(&self) -> FaultKind {

@@ -47,6 +47,17 @@ const E: [f64; 3] = [-10.048_809_399_827_415_562, 1.382_142_733_160_748_895_8, -
 
 /// Newton iterations allowed per step.
 const MAX_NEWTON: usize = 7;
+/// Once its iterate meets the tolerance, Newton contracting slower than this has reached
+/// rounding noise (or converges more slowly than is worth waiting for): the iterate is kept.
+const STALLED: f64 = 0.8;
+/// On a differential–algebraic system Newton aims this far below its tolerance, and stops
+/// short of it only where its updates stall (`STALLED`). Its tolerance is measured in the
+/// norm that weighs index-2 and index-3 components by h and h²: an iterate that just meets it
+/// may leave the velocities 1/h times the tolerance from the collocation solution, and that
+/// error, not the method's, was what the run kept (Andrews' mechanism at tolerance 1e-8:
+/// 5.3e-5 stopping at the tolerance, 3.5e-7 at a thousandth of it, where dop853 ends 3.3e-7
+/// off; and the error followed the target, not the tolerance).
+const DAE_NEWTON_TARGET: f64 = 1e-5;
 /// Newton converging faster than this (the ratio of successive updates) keeps the Jacobian
 /// for the next step.
 const KEEP_JACOBIAN: f64 = 0.001;
@@ -100,6 +111,9 @@ pub(crate) struct Radau {
     atol: f64,
     /// Newton stops when its predicted remaining error is below this, in tolerance units.
     newton_tolerance: f64,
+    /// What Newton aims for while it converges fast: `newton_tolerance` for an ordinary
+    /// equation, `DAE_NEWTON_TARGET` times it for a differential–algebraic one.
+    newton_target: f64,
     components: Components,
     /// The step to try next; 0 until the first is chosen.
     h: f64,
@@ -156,20 +170,26 @@ impl Radau {
     /// ordinary differential equation proportional to the tolerance, near dop853's at the same
     /// one (RADAU5's 0.1·tol^(2/3) gives tol^(5/6): near dop853's error at 1e-10, five to a
     /// hundred times above it at 1e-12). A differential–algebraic system's velocities and
-    /// accelerations converge at a lower order and are weighed by h and h² in the estimate,
-    /// and its final error follows the estimate about one to one: it is held to a third of
-    /// the tolerance (`lagrange-bench tolerance` measures both against dop853).
+    /// accelerations are weighed by h and h² in the estimate, and its final error, once
+    /// Newton's iteration is not what limits it (`DAE_NEWTON_TARGET`), falls a little faster
+    /// than the estimate's bound: it is held to the tolerance itself (`lagrange-bench
+    /// tolerance` measures both against dop853; a third of it, which the Newton-limited error
+    /// wanted, left radau twenty to seventy times more accurate than dop853 on the car axis
+    /// at 1e-10 and 1e-12, at the cost of as many more steps).
     pub fn new(components: Components, tolerance: f64) -> Self {
         let n: usize = components.by_index.iter().sum();
         let algebraic = components.differential < n;
-        let rtol = if algebraic { tolerance / 3.0 } else { pow(tolerance, 0.8) };
+        let rtol = if algebraic { tolerance } else { pow(tolerance, 0.8) };
         let atol = rtol;
         let newton_tolerance = (10.0 * f64::EPSILON / rtol).max(0.03f64.min(rtol.sqrt()));
         let zeros = || std::array::from_fn(|_| vec![0.0; n]);
+        let newton_target =
+            if algebraic { DAE_NEWTON_TARGET * newton_tolerance } else { newton_tolerance };
         Radau {
             rtol,
             atol,
             newton_tolerance,
+            newton_target,
             components,
             h: 0.0,
             jac: vec![0.0; n * n],
@@ -351,6 +371,7 @@ impl Radau {
         let n = y.len();
         self.eta = pow(self.eta.max(f64::EPSILON), 0.8);
         let mut previous = 0.0;
+        let mut last_estimate = f64::INFINITY;
         for k in 0..MAX_NEWTON {
             for s in 0..3 {
                 for i in 0..n {
@@ -390,6 +411,12 @@ impl Radau {
             if k > 0 {
                 let theta = norm / previous;
                 self.theta = theta;
+                // Updates that stop shrinking fast once the last iterate met the tolerance
+                // are rounding noise, or a slow convergence the tolerance does not need:
+                // that iterate is kept.
+                if theta > STALLED && last_estimate <= self.newton_tolerance {
+                    return Newton::Converged { iterations: k };
+                }
                 if theta >= 0.99 {
                     return Newton::Failed { factor: 0.5 };
                 }
@@ -414,7 +441,11 @@ impl Radau {
                         T[r][0] * self.w[0][i] + T[r][1] * self.w[1][i] + T[r][2] * self.w[2][i];
                 }
             }
-            if self.eta * norm <= self.newton_tolerance {
+            last_estimate = self.eta * norm;
+            let stalling = (k > 0 && self.theta > STALLED) || k + 1 == MAX_NEWTON;
+            if last_estimate <= self.newton_target
+                || (last_estimate <= self.newton_tolerance && stalling)
+            {
                 return Newton::Converged { iterations: k + 1 };
             }
         }
@@ -579,7 +610,8 @@ impl Stepper for Radau {
                 self.tmp[i] = y[i] + self.z[2][i];
             }
             self.evals += 1;
-            if let Err(fault) = p.rhs(t_new, &self.tmp, &mut self.column) {
+            let projected = p.project(t_new, &mut self.tmp);
+            if let Err(fault) = projected.and_then(|()| p.rhs(t_new, &self.tmp, &mut self.column)) {
                 self.pending = Some(fault);
                 self.h = 0.5 * h;
                 self.rejected += 1;
