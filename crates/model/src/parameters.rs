@@ -36,9 +36,9 @@ impl Given {
 pub enum ParameterError {
     /// A parameter the scene gives no value and nothing else did.
     Missing { name: String },
-    /// A derived parameter was given a value: it follows from `sources`, which are the ones
-    /// to set.
-    Derived { name: String, sources: Vec<String> },
+    /// A derived parameter was given a value: its value names `sources`, and it follows the
+    /// free parameters `roots` through them, which are the ones to set.
+    Derived { name: String, sources: Vec<String>, roots: Vec<String> },
     /// A parameter (or an input's declared value) that is not a finite number.
     NotFinite { name: String, value: f64, input: bool },
     /// A value given to something that is not a parameter index of the scene.
@@ -49,10 +49,12 @@ impl fmt::Display for ParameterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ParameterError::Missing { name } => write!(f, "parameter `{name}` has no value"),
-            ParameterError::Derived { name, sources } => {
-                let named: Vec<String> = sources.iter().map(|s| format!("`{s}`")).collect();
-                let named = list(&named);
-                write!(f, "parameter `{name}` is derived from {named}; set {named} instead")
+            ParameterError::Derived { name, sources, roots } => {
+                let quoted = |names: &[String]| {
+                    list(&names.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>())
+                };
+                let (named, free) = (quoted(sources), quoted(roots));
+                write!(f, "parameter `{name}` is derived from {named}; set {free} instead")
             }
             ParameterError::NotFinite { name, value, input } => {
                 let what = if *input { "input" } else { "parameter" };
@@ -149,7 +151,27 @@ impl ParameterValues {
 
     /// The error for a value given to the derived parameter `i`.
     pub fn derived_error(&self, i: usize) -> ParameterError {
-        ParameterError::Derived { name: self.parameters[i].name.clone(), sources: self.sources(i) }
+        ParameterError::Derived {
+            name: self.parameters[i].name.clone(),
+            sources: self.sources(i),
+            roots: self.roots(i).into_iter().map(|k| self.parameters[k].name.clone()).collect(),
+        }
+    }
+
+    /// The free parameters `i` follows, through derived ones (`J = M*r^2/4` with `M = m1 + m2`
+    /// follows m1, m2 and r), in declaration order: the ones a user sets to move it.
+    pub fn roots(&self, i: usize) -> Vec<usize> {
+        let mut found = Vec::new();
+        let mut pending = self.parameters[i].sources.clone();
+        while let Some(k) = pending.pop() {
+            if self.is_derived(k) {
+                pending.extend(&self.parameters[k].sources);
+            } else if !found.contains(&k) {
+                found.push(k);
+            }
+        }
+        found.sort_unstable();
+        found
     }
 
     /// The parameters' values in declaration order, then the inputs' declared values: the
@@ -259,7 +281,7 @@ mod tests {
         );
         assert_eq!(
             plan.derived_error(4).to_string(),
-            "parameter `I` is derived from `m` and `L`; set `m` and `L` instead"
+            "parameter `I` is derived from `m` and `L`; set `a` and `m` instead"
         );
         // b = 2*m, the last value given for an index winning.
         let mut pool_model = model;
