@@ -1,4 +1,6 @@
-//! The `lagrange` binary end to end: output, exit codes, and files written whole.
+//! The `lagrange` binary end to end: output, exit codes, and files written whole; the
+//! settings of a run as the scene writes them (`cli/settings.rs`) and what written files
+//! replace (`cli/writes.rs`), one test binary with the helpers they share.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -15,18 +17,37 @@ fn example(name: &str) -> String {
         .into_owned()
 }
 
-/// A temporary folder for one test, removed when the test ends.
+#[path = "cli/settings.rs"]
+mod settings;
+#[path = "cli/writes.rs"]
+mod writes;
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// A temporary folder for one test, removed when the test ends (and emptied when it starts, in
+/// case an earlier run of the same process id left it).
 struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(test: &str) -> Scratch {
         let dir = std::env::temp_dir().join(format!("lagrange-cli-{}-{test}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("temp dir");
         Scratch(dir)
     }
 
     fn file(&self, name: &str) -> PathBuf {
         self.0.join(name)
+    }
+
+    fn path(&self, name: &str) -> String {
+        self.file(name).to_string_lossy().into_owned()
     }
 }
 

@@ -46,6 +46,19 @@ pub struct InverseDynamics {
     output: Vec<f64>,
 }
 
+/// That `values` has one value for each of `names` (`what`s), or the error saying how many.
+fn one_each(values: &[f64], names: &[String], what: &str) -> Result<(), Error> {
+    if values.len() == names.len() {
+        return Ok(());
+    }
+    Err(Error::Input(format!(
+        "{} {what} values given for the {} {what}s ({})",
+        values.len(),
+        names.len(),
+        names.join(", ")
+    )))
+}
+
 /// Loads `source` and lowers what its inverse dynamics needs, at the parameters' values with
 /// the `set` ones in place of the scene's.
 pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynamics, Error> {
@@ -134,14 +147,7 @@ impl InverseDynamics {
     /// Uses these values of the free parameters (in the order of [`Self::parameter_names`])
     /// from now on; the derived ones follow them.
     pub fn set_parameters(&mut self, values: &[f64]) -> Result<(), Error> {
-        if values.len() != self.parameter_names.len() {
-            return Err(Error::Input(format!(
-                "{} parameter values given for the {} parameters ({})",
-                values.len(),
-                self.parameter_names.len(),
-                self.parameter_names.join(", ")
-            )));
-        }
+        one_each(values, &self.parameter_names, "parameter")?;
         let all = self.plan.values_of_free(values).map_err(|e| Error::Input(e.to_string()))?;
         let k = self.plan.len();
         self.slots[..k].copy_from_slice(&all[..k]);
@@ -150,14 +156,7 @@ impl InverseDynamics {
 
     /// Holds the inputs at these values (in the order of [`Self::input_names`]) from now on.
     pub fn set_inputs(&mut self, values: &[f64]) -> Result<(), Error> {
-        if values.len() != self.input_names.len() {
-            return Err(Error::Input(format!(
-                "{} input values given for the {} inputs ({})",
-                values.len(),
-                self.input_names.len(),
-                self.input_names.join(", ")
-            )));
-        }
+        one_each(values, &self.input_names, "input")?;
         let k = self.plan.len();
         self.slots[k..].copy_from_slice(values);
         Ok(())

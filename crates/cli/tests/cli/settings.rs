@@ -1,28 +1,7 @@
 //! The settings of a run on the command line as the scene writes them: times with units and
 //! expressions, refusals with a caret under the culprit, and no setting silently ignored.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn lagrange(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lagrange")).args(args).output().expect("the binary runs")
-}
-
-fn example(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-        .to_string_lossy()
-        .into_owned()
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use super::{example, lagrange, stderr, stdout};
 
 /// The table of a run that must succeed.
 fn table(args: &[&str]) -> String {
