@@ -2,7 +2,7 @@
 //! scene meets and every decade up to 1e300, the bits on either side of each threshold in
 //! libm's code, and calls whose lanes take different paths.
 
-mod common;
+use crate::common;
 
 use common::{special_values, Numbers};
 use numeric::elementary::sin_cos_lanes;

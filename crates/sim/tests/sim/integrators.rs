@@ -7,9 +7,7 @@
 use sim::{integrate, Event, Method, Settings};
 use std::ops::ControlFlow;
 
-mod oscillator;
-
-use oscillator::Oscillator;
+use crate::oscillator::Oscillator;
 
 fn settings(method: Method, tolerance: f64, step: f64) -> Settings {
     Settings { method, start: 0.0, until: 10.0, tolerance, step, max_steps: 10_000_000, samples: 0 }

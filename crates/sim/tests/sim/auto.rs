@@ -6,9 +6,7 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
-mod oscillator;
-
-use oscillator::Oscillator;
+use crate::oscillator::Oscillator;
 use sim::{integrate, Event, FaultKind, Method, Problem, Run, Segment, Settings};
 use std::ops::ControlFlow;
 

@@ -5,7 +5,7 @@
 //! falls on halves), zeros, subnormals, negatives, infinities and NaNs, each at a dozen
 //! exponents and the special ones, and calls whose lanes take different paths.
 
-mod common;
+use crate::common;
 
 use common::{special_values, Numbers};
 use numeric::elementary::pow_lanes;
