@@ -20,7 +20,7 @@ const TIME: f64 = 0.25;
 /// (q̇, q̈) and ∂(q̇, q̈)/∂(q, q̇) of the module's scene at `y` by `sim::Mechanical`, as a run
 /// has them; `None` where the system is singular there.
 fn mechanical_rhs_and_jacobian(
-    module: &mut engine::codegen::Module,
+    module: &mut export::codegen::Module,
     y: &[f64],
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let mut mechanical = lagrange_tests::mechanical(&mut module.prepared, &module.parameters);
@@ -72,7 +72,7 @@ fn generated_code_compiles_and_matches_the_tape() {
     let mut jacobians = 0;
     for (k, (rel, source)) in lagrange_tests::examples().into_iter().enumerate() {
         let mut module =
-            engine::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
+            export::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
         std::fs::write(dir.join(format!("m{k}.rs")), &module.source).unwrap();
         let _ = writeln!(modules, "#[path = \"m{k}.rs\"]\nmod m{k};");
         for (name, program) in &module.programs {

@@ -13,7 +13,7 @@ use std::process::Command;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use engine::codegen::{CModule, Equations};
+use export::codegen::{CModule, Equations};
 use nalgebra::{DMatrix, DVector};
 use numeric::Tape;
 
@@ -202,7 +202,7 @@ fn driver(module: &CModule, points: &[Point]) -> String {
     let _ = writeln!(s, "    double out[{}];", longest.iter().max().copied().unwrap_or(1));
     let _ = writeln!(s, "    {name}_parameters p;");
     let literal = |v: &[f64]| {
-        let items: Vec<String> = v.iter().map(|x| numeric::c::literal(*x)).collect();
+        let items: Vec<String> = v.iter().map(|x| export::source::c::literal(*x)).collect();
         if items.is_empty() {
             "0.0".to_string()
         } else {
@@ -215,11 +215,11 @@ fn driver(module: &CModule, points: &[Point]) -> String {
         let _ = writeln!(s, "        const double u[] = {{ {} }};", literal(&point.inputs));
         let _ =
             writeln!(s, "        const double qdd[] = {{ {} }};", literal(&point.accelerations));
-        let _ = writeln!(s, "        const double t = {};", numeric::c::literal(point.t));
+        let _ = writeln!(s, "        const double t = {};", export::source::c::literal(point.t));
         let _ = writeln!(s, "        p = {name}_default_parameters;");
         assert_eq!(fields.len(), point.free.len(), "a field per free parameter");
         for (field, v) in fields.iter().zip(&point.free) {
-            let _ = writeln!(s, "        p.{field} = {};", numeric::c::literal(*v));
+            let _ = writeln!(s, "        p.{field} = {};", export::source::c::literal(*v));
         }
         let _ = writeln!(s, "        {name}_initial_state(&p, out);");
         let _ = writeln!(s, "        show(\"initial_state\", {at}, out, {width});");
@@ -358,7 +358,7 @@ fn check_scene(
     (rel, source, options): (&str, &str, engine::Options),
     compilers: &[String],
 ) -> (Vec<String>, usize) {
-    let module = engine::codegen::c(rel, source, options).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    let module = export::codegen::c(rel, source, options).unwrap_or_else(|e| panic!("{rel}: {e}"));
     let dir = root.join(&module.name);
     std::fs::create_dir_all(&dir).unwrap();
     let points = points(&module.equations, seed);
@@ -472,7 +472,7 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
     let shown = blocks(&page, "text").pop().expect("the line it prints");
     let rel = "examples/classics/inverted_pendulum_on_cart.lag";
     let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
-    let module = engine::codegen::c(rel, &source, Default::default()).expect("generates");
+    let module = export::codegen::c(rel, &source, Default::default()).expect("generates");
     let dir = std::env::temp_dir().join(format!("lagrange-c-page-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join(format!("{}.h", module.name)), &module.header).unwrap();
@@ -521,7 +521,7 @@ fn a_start_solved_in_numbers_is_fixed_and_said_so() {
     let source = lagrange_tests::example("classics/andrews_squeezer.lag");
     let guessed = lagrange_tests::andrews_with_guesses(&source);
     let module =
-        engine::codegen::c("andrews.lag", &guessed, Default::default()).expect("generates");
+        export::codegen::c("andrews.lag", &guessed, Default::default()).expect("generates");
     let e = &module.equations;
     assert_eq!(e.fixed_start().len(), 6);
     assert!(

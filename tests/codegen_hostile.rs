@@ -89,7 +89,7 @@ fn hostile_titles_and_paths_compile_as_c() {
     for (k, title) in TITLES.iter().enumerate() {
         for path in PATHS {
             let source = scene(title);
-            let module = engine::codegen::c(path, &source, engine::Options::default())
+            let module = export::codegen::c(path, &source, engine::Options::default())
                 .expect("the scene generates C");
             let dir = scratch.0.join(format!("c{k}-{}", module.name));
             std::fs::create_dir_all(&dir).expect("dir");
@@ -109,10 +109,10 @@ fn hostile_titles_and_paths_compile_as_c() {
 fn hostile_titles_make_an_fmu_whose_sources_compile_and_whose_xml_escapes_them() {
     let Some(cc) = compiler() else { return };
     let scratch = Scratch::new("fmu");
-    let options = engine::fmu::ExportOptions::default();
+    let options = export::fmu::ExportOptions::default();
     for (k, title) in TITLES.iter().enumerate() {
         let source = scene(title);
-        let fmu = engine::fmu::export(PATHS[0], &source, &options).expect("exports");
+        let fmu = export::fmu::export(PATHS[0], &source, &options).expect("exports");
         let dir = scratch.0.join(format!("fmu{k}"));
         std::fs::create_dir_all(&dir).expect("dir");
         if let Some(complaint) = compile(&cc, &dir, &fmu.sources) {
@@ -147,7 +147,7 @@ fn hostile_titles_and_paths_compile_as_rust() {
     for (k, title) in TITLES.iter().enumerate() {
         for (j, path) in PATHS.iter().enumerate() {
             let source = scene(title);
-            let module = engine::codegen::codegen(path, &source).expect("the scene generates Rust");
+            let module = export::codegen::codegen(path, &source).expect("the scene generates Rust");
             // A module's `//!` lines document the file it is in: each goes into a file of its
             // own, as a user would put it.
             let name = format!("m{k}_{j}");

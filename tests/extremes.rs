@@ -7,11 +7,11 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
+use bench::reference::{elliptic_k, gauss_legendre};
 use cli::simulate::summary;
 use engine::numbers::prepare;
 use engine::simulate::{simulate, Options, Outcome};
 use numeric::Tape;
-use sim::reference::{elliptic_k, gauss_legendre};
 use sim::{FaultKind, Mechanical, Problem};
 
 fn example(rel: &str) -> String {

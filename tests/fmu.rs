@@ -4,7 +4,7 @@
 
 use std::io::Read;
 
-use engine::fmu::{ExportOptions, Fmu};
+use export::fmu::{ExportOptions, Fmu};
 
 fn scene(path: &str) -> String {
     std::fs::read_to_string(format!("{}/../{path}", env!("CARGO_MANIFEST_DIR"))).expect("reads")
@@ -12,7 +12,7 @@ fn scene(path: &str) -> String {
 
 /// The FMU of an example, as `lagrange export` makes it.
 fn export(path: &str) -> Fmu {
-    engine::fmu::export(path, &scene(path), &ExportOptions::default()).expect("exports")
+    export::fmu::export(path, &scene(path), &ExportOptions::default()).expect("exports")
 }
 
 const PENDULUM: &str = "examples/classics/double_pendulum.lag";
@@ -102,7 +102,7 @@ fn corner_scenes_compile_without_a_warning() {
     let dir = tempfile_dir();
     for (path, source) in CORNERS {
         let options = ExportOptions { no_units: true, ..Default::default() };
-        let fmu = engine::fmu::export(path, source, &options).expect("exports");
+        let fmu = export::fmu::export(path, source, &options).expect("exports");
         let strict = format!("{} -Wall -Wextra -Werror -pedantic", cli::export::compiler());
         let out = dir.join(path).with_extension("fmu");
         cli::export::export(&fmu, &strict, &out).unwrap_or_else(|e| panic!("{path}: {e}"));
@@ -118,7 +118,7 @@ fn an_output_named_as_another_variable_is_refused() {
              gravity g\noutput {name}: x\n"
         );
         let Err(engine::Error::Input(message)) =
-            engine::fmu::export("scene.lag", &source, &ExportOptions::default())
+            export::fmu::export("scene.lag", &source, &ExportOptions::default())
         else {
             panic!("an output named as {other} is refused");
         };

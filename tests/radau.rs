@@ -8,9 +8,9 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
+use bench::reference::elliptic_k;
 use cli::simulate::summary;
 use engine::simulate::{simulate, Options, Outcome};
-use sim::reference::elliptic_k;
 
 fn scene(path: &str) -> String {
     let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);

@@ -5,9 +5,9 @@
 // platform's functions serve.
 #![allow(clippy::disallowed_methods)]
 
+use bench::reference::{elliptic_k, gauss_legendre};
 use cli::simulate::summary;
 use engine::simulate::{simulate, Options, Outcome};
-use sim::reference::{elliptic_k, gauss_legendre};
 
 fn run(rel: &str, options: Options) -> Outcome {
     let path = lagrange_tests::examples_dir().join(rel);

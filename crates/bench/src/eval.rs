@@ -124,7 +124,7 @@ fn on_the_tape(n: usize, dir: &std::path::Path, main: &mut String, body: &mut St
     let y: Vec<f64> = theta.iter().chain(&rate).copied().collect();
     let tape_rhs = rhs_per_call(&mut mech, &y);
 
-    let module = engine::codegen::codegen("generated.lag", &scene).expect("codegen");
+    let module = export::codegen::codegen("generated.lag", &scene).expect("codegen");
     std::fs::write(dir.join(format!("m{n}.rs")), &module.source).expect("write");
     let _ = writeln!(main, "#[path = \"m{n}.rs\"]\nmod m{n};");
     body.push_str(&timing_block(n, &input, &y, (m, l, g)));

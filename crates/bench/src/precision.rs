@@ -7,7 +7,7 @@ use engine::bench::{final_state_error, options_for, work_precision, Setting, Tri
 use engine::simulate::{simulate_with, Options, Outcome};
 
 use crate::progress::Bar;
-use sim::reference::{elliptic_k, gauss_legendre};
+use bench::reference::{elliptic_k, gauss_legendre};
 use sim::Method;
 
 pub const METHODS: [Method; 6] =

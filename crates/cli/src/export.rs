@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 
-use engine::fmu::Fmu;
+use export::fmu::Fmu;
 
 /// Why an export failed, in words for the command line.
 #[derive(Debug)]

@@ -492,7 +492,7 @@ fn main() -> ExitCode {
             else {
                 return ExitCode::from(2);
             };
-            let options = engine::fmu::ExportOptions { tolerance, until, no_units };
+            let options = export::fmu::ExportOptions { tolerance, until, no_units };
             export(&file, &source, &options, &fmu)
         }
         Command::Codegen { file, lang, out, no_units } => {
@@ -505,7 +505,7 @@ fn main() -> ExitCode {
             let path = file.display().to_string();
             let options = engine::Options { units: !no_units };
             match lang {
-                LangArg::Rust => match engine::codegen::codegen_with(&path, &source, options) {
+                LangArg::Rust => match export::codegen::codegen_with(&path, &source, options) {
                     Ok(module) => write_or_print(out.as_ref(), &module.source),
                     Err(e) => fail(&path, &e),
                 },
@@ -693,7 +693,7 @@ fn codegen_c(
         eprintln!("error: `codegen --lang c` writes two files: give the directory with --out DIR");
         return ExitCode::from(2);
     };
-    let module = match engine::codegen::c(path, source, options) {
+    let module = match export::codegen::c(path, source, options) {
         Ok(module) => module,
         Err(e) => return fail(path, &e),
     };
@@ -729,11 +729,11 @@ fn emit(text: &str) {
 fn export(
     file: &std::path::Path,
     source: &str,
-    options: &engine::fmu::ExportOptions,
+    options: &export::fmu::ExportOptions,
     out: &std::path::Path,
 ) -> ExitCode {
     let path = file.display().to_string();
-    let fmu = match engine::fmu::export(&path, source, options) {
+    let fmu = match export::fmu::export(&path, source, options) {
         Ok(fmu) => fmu,
         Err(e) => return fail(&path, &e),
     };

@@ -3,15 +3,13 @@
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
 //! `simulate` settings and runs them ([`simulate`]), runs a scene many times over a grid or
 //! random draws of its parameters on all cores ([`ensemble`]), with the options' values typed
-//! ([`input`]), with the scene's figures frame by frame
-//! for an animation ([`animate`]), measures integrators against a reference
-//! ([`mod@bench`]), builds a Rust module or C99 of the equations ([`codegen`]), says what an
-//! FMU of the scene holds ([`fmu`]) and generates scenes of
-//! any size ([`generate`]), runs the `linear` stage on small motions about a reference,
-//! the command line's reference resolved against the scene ([`linearize`]), decides the
-//! scene's `expect linearized:` lines ([`expect_linearized`]), and gives the generalized
-//! forces that make a given motion happen ([`inverse`]).
-//! What goes wrong comes back as an [`Error`].
+//! ([`input`]), with the scene's figures frame by frame for an animation ([`animate`]),
+//! measures integrators against a reference ([`mod@bench`]), generates scenes of any size
+//! ([`generate`]), runs the `linear` stage on small motions about a reference, the command
+//! line's reference resolved against the scene ([`linearize`]), decides the scene's `expect
+//! linearized:` lines ([`expect_linearized`]), and gives the generalized forces that make a
+//! given motion happen ([`inverse`]). What goes wrong comes back as an [`Error`]. Printing
+//! the equations as source, and an FMU of them, is the `export` stage's, above this one.
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
@@ -19,12 +17,10 @@
 
 pub mod animate;
 pub mod bench;
-pub mod codegen;
 pub mod derived;
 pub mod ensemble;
 mod error;
 pub mod expect_linearized;
-pub mod fmu;
 pub mod generate;
 pub mod input;
 pub mod inverse;

@@ -1,5 +1,5 @@
 //! From a derivation to numbers: parameter values, the initial state, and the lowered
-//! programs that `simulate` runs and `codegen` prints. This is the glue between symbols
+//! programs that `simulate` runs and `export` prints. This is the glue between symbols
 //! (`mechanics`) and slots (`numeric`, `sim`); it gathers exactly the expressions a command
 //! needs and nothing more.
 

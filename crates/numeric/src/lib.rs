@@ -7,10 +7,9 @@
 //! instructions are numbered once more so that products like `2·x` shared by several sums are
 //! computed once. A program runs on the [`Tape`] evaluator (no allocation per call; it writes
 //! into any `&mut [f64]`, such as the storage of an `nalgebra` matrix), on the [`BatchTape`] at
-//! many points at once (the same bits, a vector of points per register), or is printed as Rust
-//! source by [`rust`] or as C99 by [`c`], one walk over the program ([`source`]) spelled by
-//! each language. It takes expression ids and a symbol → input-slot mapping and knows
-//! nothing of how the expressions were derived: no mechanics, no names, no files.
+//! many points at once (the same bits, a vector of points per register); the `export` stage
+//! prints it as source. It takes expression ids and a symbol → input-slot mapping and knows
+//! nothing of how the expressions were derived: no mechanics, no names, no files, no text.
 //!
 //! It is also the only float evaluator of expressions: [`Evaluator`] (and [`eval`],
 //! [`value_and_scale`]) lower and run the same tape for parameter values, initial states,
@@ -19,18 +18,15 @@
 //! the same bits wherever and on whatever machine it is computed.
 
 mod batch;
-pub mod c;
 pub mod elementary;
 mod eval;
 mod lower;
-pub mod rust;
-pub mod source;
 mod tape;
 mod zero_test;
 
 pub use batch::BatchTape;
 pub use elementary::{pow_int, to_f64, LANES};
 pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
-pub use lower::{lower, Instr, LowerError, OpCounts, Program};
+pub use lower::{lower, Instr, LowerError, OpCounts, Program, Reg};
 pub use tape::Tape;
 pub use zero_test::{GenericPoints, GENERIC_POINTS};

@@ -29,7 +29,6 @@ pub mod linalg;
 mod lockstep;
 mod mechanical;
 mod radau;
-pub mod reference;
 mod run;
 mod series;
 mod spectrum;

@@ -220,8 +220,8 @@ fn a_series_value_that_is_not_finite_is_shown_at_its_column() {
 fn an_fmu_takes_a_tolerance_whatever_the_scene_runs_with() {
     // The FMU's Co-Simulation integrator is its own DOP853: a scene run by rk4 still takes one.
     let source = format!("{OSCILLATOR}simulate {{ method rk4; step 1 ms }}\n");
-    let options = engine::fmu::ExportOptions { tolerance: Some(1e-8), ..Default::default() };
-    let fmu = engine::fmu::export("scene.lag", &source, &options).expect("exports");
+    let options = export::fmu::ExportOptions { tolerance: Some(1e-8), ..Default::default() };
+    let fmu = export::fmu::export("scene.lag", &source, &options).expect("exports");
     assert!(fmu.model_description.contains("tolerance=\"1e-8\""), "{}", fmu.model_description);
 }
 

@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::fmt::Write;
 
 use super::{Interface, SiUnit};
-use crate::Error;
+use engine::Error;
 
 /// SI base units in the order of `model::units`' exponents, as FMI's `BaseUnit` names them.
 const BASES: [&str; 5] = ["kg", "m", "s", "A", "K"];

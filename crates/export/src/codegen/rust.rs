@@ -5,11 +5,11 @@
 
 use std::fmt::Write;
 
-use numeric::rust::{function, literal, HELPERS};
+use crate::source::rust::{function, literal, HELPERS};
 
 use super::{stabilised_gamma, stabilised_partials, Equations, Sizes};
-use crate::numbers::Prepared;
-use crate::{Error, Options};
+use engine::numbers::Prepared;
+use engine::{Error, Options};
 
 /// The functions of a generated module, with the programs they were printed from (the tests
 /// run the same programs on the tape).

@@ -7,10 +7,10 @@
 
 use std::fmt::Write;
 
-use numeric::c::{comment, function, helpers, literal};
+use crate::source::c::{comment, function, helpers, literal};
 
 use super::Equations;
-use crate::{Error, Options};
+use engine::{Error, Options};
 
 mod functions;
 

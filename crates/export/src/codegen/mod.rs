@@ -7,8 +7,8 @@
 
 use cas::ExprId;
 
-use crate::numbers::{prepare, Prepared};
-use crate::{Error, Options};
+use engine::numbers::{prepare, Prepared};
+use engine::{Error, Options};
 
 mod c;
 mod rust;

@@ -3,9 +3,11 @@
 //! operation and a literal. The printed function computes the program's outputs from its
 //! inputs with the same operations, in the same order, as the tape.
 
-use cas::Func;
+pub mod c;
+pub mod rust;
 
-use crate::lower::{Instr, Program, Reg};
+use cas::Func;
+use numeric::{Instr, Program, Reg};
 
 /// How one language spells the pieces of a straight-line function.
 pub trait Dialect {

@@ -6,7 +6,7 @@
 
 use std::fmt::Write;
 
-use crate::{Error, Options};
+use engine::{Error, Options};
 
 mod description;
 
@@ -121,9 +121,9 @@ fn interface(
     let equations = &module.equations;
     let prepared = &equations.prepared;
     let model = &prepared.derivation.model;
-    let settings = crate::simulate::settings(
+    let settings = engine::simulate::settings(
         source,
-        &crate::simulate::Options {
+        &engine::simulate::Options {
             until: options.until,
             // The FMU integrates with its own DOP853 whatever the scene's method, so its
             // tolerance applies even to a scene run by a fixed-step method.

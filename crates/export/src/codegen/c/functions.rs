@@ -4,7 +4,7 @@
 
 use std::fmt::Write;
 
-use numeric::c::literal;
+use crate::source::c::literal;
 
 use super::of_state;
 use crate::codegen::{stabilised_gamma, stabilised_partials, Equations};

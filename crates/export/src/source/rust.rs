@@ -5,8 +5,8 @@ use std::fmt::Write;
 
 use cas::Func;
 
-use crate::lower::Program;
 use crate::source::{self, Call, Dialect};
+use numeric::Program;
 
 /// A literal that reads back as exactly `v`.
 pub fn literal(v: f64) -> String {

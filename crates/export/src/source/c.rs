@@ -6,8 +6,8 @@ use std::fmt::Write;
 
 use cas::Func;
 
-use crate::lower::{Instr, Program};
 use crate::source::{self, Call, Dialect};
+use numeric::{Instr, Program};
 
 /// A C99 literal that reads back as exactly `v`: a hexadecimal float such as `0x1.8p+1`
 /// (3), in parentheses when negative; `NAN` and `INFINITY` from `<math.h>` otherwise.
