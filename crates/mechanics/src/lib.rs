@@ -24,7 +24,9 @@ pub use independent::{IndependentForm, DEPENDENT_LIMIT};
 pub use present::collect_by_motion;
 
 pub use check::Decision;
-pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
+pub use derive::{
+    derive, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
+};
 pub use partials::{Partials, StatePartials};
 pub use present::{Equation, NumericStart, StartShows};
 pub use start_solution::StartSolution;

@@ -186,9 +186,9 @@ impl Text<'_> {
         self.out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
         for m in multipliers {
             let name = self.sym(m.lambda);
-            let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
+            let row = cells(pool, std::slice::from_ref(&m.rows.jacobian), full);
             self.out.extend(bracketed(&row, &format!("  J({name}) = ")));
-            self.out.push(format!("  γ({name}) = {}", self.print(m.bias)));
+            self.out.push(format!("  γ({name}) = {}", self.print(m.rows.bias)));
         }
     }
 
