@@ -1,8 +1,9 @@
 //! What each kind of constraint means to a derivation, in one place: what elimination may
 //! solve of it, the direction of its reaction, and, where it is kept, its rows at every level
 //! with the way a run holds it against drift. Everything after this reads the rows
-//! ([`ConstraintRows`]) rather than the kind, so that a new kind is a constructor here and a
-//! line in each of the three dispatches below.
+//! ([`ConstraintRows`]) rather than the kind, so that a new kind is a constructor here and an
+//! arm in each of the matches on the kind: `ConstraintRows::of`, `restrains_positions`,
+//! `eliminable` and `reaction_direction`.
 
 use std::collections::HashMap;
 
