@@ -173,11 +173,11 @@ impl Prepared {
 
     /// How the integrator stabilises each kept constraint, in slot order.
     pub fn stabilisation(&self) -> Vec<sim::Stabilisation> {
-        let kind = |m: &mechanics::Multiplier| match m.rows.stabilisation {
+        let of = |m: &mechanics::Multiplier| match m.rows.stabilisation {
             mechanics::Stabilisation::Position => sim::Stabilisation::Position,
             mechanics::Stabilisation::Velocity => sim::Stabilisation::Velocity,
         };
-        self.derivation.multipliers.iter().map(kind).collect()
+        self.derivation.multipliers.iter().map(of).collect()
     }
 
     /// M, p = ∂L/∂q̇ and ∂L/∂q + Q: the layout of [`sim::Canonical`].

@@ -211,3 +211,42 @@ fn integrate(pool: &mut Pool, model: &Model, phi: ExprId) -> Option<ExprId> {
     let sum = pool.add(&terms);
     Some(pool.simplify(sum))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{ascii, derived};
+
+    /// A rod turning at a rate w in the plane: its Φ moves in time, so that its velocity row
+    /// has a part without rates (∂Φ/∂t), and its drift rate is that row.
+    #[test]
+    fn a_moving_position_constraint_has_every_level() {
+        let mut d = derived(
+            "param m, w\ncoord x = 1\ncoord y = 0\nparticle p { mass m; position (x, y) }\nconstraint spin: x*sin(w*t) = y*cos(w*t)",
+        );
+        let (time, rates) = (d.model.time, d.rates.clone());
+        let rows = d.multipliers[0].rows.clone();
+        let pool = d.pool();
+        assert_eq!(rows.position, Some(rows.phi()));
+        assert_eq!(rows.drift_rate(pool), rows.velocity);
+        assert_eq!(rows.stabilisation, super::Stabilisation::Position);
+        let rate_free = rows.rate_free(pool, time, &rates);
+        assert_eq!(ascii(pool, rate_free), "w*sin(w*t)*y + w*cos(w*t)*x");
+    }
+
+    /// A blade that cannot slide sideways restrains rates alone: its lowest level is its
+    /// velocity row, which has nothing to drift at beside it.
+    #[test]
+    fn a_velocity_constraint_has_no_position_level() {
+        let mut d = derived(
+            "param m, I\ncoord x\ncoord y\ncoord theta\nbody blade { mass m; inertia I; position (x, y); angle theta }\nconstraint edge: y'*cos(theta) = x'*sin(theta)",
+        );
+        let (time, rates) = (d.model.time, d.rates.clone());
+        let rows = d.multipliers[0].rows.clone();
+        let pool = d.pool();
+        assert_eq!((rows.position, rows.phi()), (None, rows.velocity));
+        assert!(pool.is_zero(rows.drift_rate(pool)));
+        assert_eq!(rows.stabilisation, super::Stabilisation::Velocity);
+        let rate_free = rows.rate_free(pool, time, &rates);
+        assert!(pool.is_zero(rate_free));
+    }
+}
