@@ -161,23 +161,23 @@ impl Prepared {
         let d = &mut self.derivation;
         let mut v = mass_matrix_by_columns(d);
         v.extend(&d.forcing);
-        for m in d.multipliers.clone() {
-            v.extend(&m.jacobian);
-            v.push(m.bias);
-            v.push(m.phi);
+        for m in &d.multipliers {
+            v.extend(&m.rows.jacobian);
+            v.push(m.rows.bias);
+            v.push(m.rows.phi());
             // A velocity constraint is stabilised on its residual alone.
-            v.push(m.drift_rate(&mut d.model.pool));
+            v.push(m.rows.drift_rate(&d.model.pool));
         }
         v
     }
 
     /// How the integrator stabilises each kept constraint, in slot order.
     pub fn stabilisation(&self) -> Vec<sim::Stabilisation> {
-        let kind = |m: &mechanics::Multiplier| match m.kind {
-            model::ConstraintKind::Position => sim::Stabilisation::Position,
-            model::ConstraintKind::Velocity => sim::Stabilisation::Velocity,
+        let of = |m: &mechanics::Multiplier| match m.rows.stabilisation {
+            mechanics::Stabilisation::Position => sim::Stabilisation::Position,
+            mechanics::Stabilisation::Velocity => sim::Stabilisation::Velocity,
         };
-        self.derivation.multipliers.iter().map(kind).collect()
+        self.derivation.multipliers.iter().map(of).collect()
     }
 
     /// M, p = ∂L/∂q̇ and ∂L/∂q + Q: the layout of [`sim::Canonical`].
@@ -366,10 +366,10 @@ impl Prepared {
         let broken = |d: &mechanics::Derivation, values: &[f64]| {
             d.multipliers
                 .iter()
-                .filter(|m| m.kind == model::ConstraintKind::Position)
-                .map(|m| {
-                    let (v, size) = numeric::value_and_magnitude(&d.model.pool, m.phi, values);
-                    (m.constraint, v, size)
+                .filter_map(|m| m.rows.position.map(|phi| (m.constraint, phi)))
+                .map(|(constraint, phi)| {
+                    let (v, size) = numeric::value_and_magnitude(&d.model.pool, phi, values);
+                    (constraint, v, size)
                 })
                 .find(|(_, v, size)| !verify::within_rounding(*v, *size))
         };

@@ -75,11 +75,11 @@ pub(crate) fn linearize(
         .iter()
         .map(|m| LinearConstraint {
             constraint: m.constraint,
-            kind: m.kind,
+            positional: m.rows.position.is_some(),
             lambda: m.lambda,
-            jacobian: m.jacobian.iter().map(|e| at(pool, *e)).collect(),
-            phi: at(pool, m.phi),
-            bias: at(pool, m.bias),
+            jacobian: m.rows.jacobian.iter().map(|e| at(pool, *e)).collect(),
+            phi: at(pool, m.rows.phi()),
+            bias: at(pool, m.rows.bias),
         })
         .collect();
 

@@ -56,7 +56,6 @@ mod sweep;
 use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Span};
 use mechanics::Derivation;
-use model::ConstraintKind;
 
 pub use analysis::Analysis;
 pub use exact::{exact_state_space, ExactStateSpace};
@@ -128,7 +127,8 @@ pub enum Case {
 pub struct LinearConstraint {
     /// Its index among the model's constraints.
     pub constraint: usize,
-    pub kind: ConstraintKind,
+    /// Whether it restrains positions (Φ(q, t) = 0), rather than rates alone (A·q̇ + b = 0).
+    pub positional: bool,
     /// The multiplier's symbol (`rod.force`), which appears in K and in the residual.
     pub lambda: SymId,
     /// ∂Φ/∂q for a position constraint, ∂Φ/∂q̇ for a velocity constraint: its row of
@@ -379,8 +379,8 @@ fn linearize_case(d: &mut Derivation) -> Result<Linearization, Vec<Diagnostic>> 
     };
     let items = reference::items(d);
     let errors = reference::eliminated(d, &items);
-    let velocity = d.multipliers.iter().any(|m| m.kind == ConstraintKind::Velocity);
-    let position = d.multipliers.iter().any(|m| m.kind == ConstraintKind::Position);
+    let velocity = d.multipliers.iter().any(|m| m.rows.position.is_none());
+    let position = d.multipliers.iter().any(|m| m.rows.position.is_some());
     if !velocity {
         // The holonomic case goes on to report what else is wrong with the items.
         return holonomic::linearize(d, span, &items, errors);

@@ -59,7 +59,7 @@ pub(crate) fn is_cyclic(d: &mut Derivation, q: SymId) -> bool {
     let pool = &mut d.model.pool;
     let mut exprs: Vec<ExprId> = d.mass_matrix.iter().flatten().copied().collect();
     exprs.extend(&d.forcing);
-    exprs.extend(d.multipliers.iter().map(|m| m.phi));
+    exprs.extend(d.multipliers.iter().map(|m| m.rows.phi()));
     !exprs.iter().any(|e| {
         pool.depends_on(*e, q) && {
             let d = pool.diff(*e, q);
@@ -213,7 +213,7 @@ pub(crate) fn at_reference(
     for m in &d.multipliers {
         let lambda = pool.sym(m.lambda);
         for (j, g) in residual.iter_mut().enumerate() {
-            let force = pool.mul2(m.jacobian[j], lambda);
+            let force = pool.mul2(m.rows.jacobian[j], lambda);
             *g = pool.add2(*g, force);
         }
     }

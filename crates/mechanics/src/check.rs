@@ -113,10 +113,8 @@ impl Derivation {
         let mut branches: Vec<ExprId> = vec![pool.together(r)];
         let mut used = false;
         for m in self.multipliers.clone() {
-            if m.kind != model::ConstraintKind::Position {
-                continue;
-            }
-            let Some((q, root)) = square_in_one_coordinate(pool, m.phi, &self.coords) else {
+            let Some(phi) = m.rows.position else { continue };
+            let Some((q, root)) = square_in_one_coordinate(pool, phi, &self.coords) else {
                 continue;
             };
             used = true;

@@ -6,6 +6,7 @@ mod energies;
 mod equations;
 mod multipliers;
 mod reactions;
+mod rows;
 mod start_positions;
 mod start_rates;
 mod structural;
@@ -24,6 +25,8 @@ use equations::{coordinates_without_inertia, euler_lagrange_rows};
 use multipliers::kept_constraints;
 use reactions::eliminated_reactions;
 
+pub use rows::{ConstraintRows, Stabilisation};
+
 /// A constraint solved for one coordinate, which then leaves the equations.
 #[derive(Clone, Debug)]
 pub struct Elimination {
@@ -37,19 +40,13 @@ pub struct Elimination {
 }
 
 /// A constraint kept in the equations through its multiplier λ (its reaction), with
-/// generalized force λ·∂Φ/∂q, and its acceleration-level row J·q̈ = γ.
+/// generalized force λ·Jᵀ, and its rows at every level.
 #[derive(Clone, Debug)]
 pub struct Multiplier {
     pub constraint: usize,
-    /// Of positions or of velocities: how the row is formed and how it is stabilised.
-    pub kind: model::ConstraintKind,
     pub lambda: SymId,
-    /// Φ in the remaining coordinates (for a velocity constraint, linear in their rates).
-    pub phi: ExprId,
-    /// The coefficients of q̈ in the row: ∂Φ/∂q (∂Φ/∂q̇ for a velocity constraint).
-    pub jacobian: Vec<ExprId>,
-    /// γ = −(J̇·q̇ + ∂²Φ/∂t² + …): what J·q̈ must equal.
-    pub bias: ExprId,
+    /// Φ, the velocity row, J and γ, as the constraint's kind builds them.
+    pub rows: ConstraintRows,
 }
 
 /// The reaction of an eliminated constraint, from the Euler–Lagrange equation of the
@@ -122,32 +119,25 @@ impl Derivation {
         for i in 0..n {
             let mut row = self.mass_matrix[i].clone();
             for m in &self.multipliers {
-                let j = m.jacobian[i];
+                let j = m.rows.jacobian[i];
                 row.push(self.model.pool.neg(j));
             }
             rows.push(row);
             rhs.push(self.forcing[i]);
         }
         for m in &self.multipliers {
-            let mut row = m.jacobian.clone();
+            let mut row = m.rows.jacobian.clone();
             row.extend(std::iter::repeat_n(self.model.pool.zero(), self.multipliers.len()));
             rows.push(row);
-            rhs.push(m.bias);
+            rhs.push(m.rows.bias);
         }
         (rows, rhs)
     }
 
-    /// Each kept constraint at the velocity level, in the multipliers' order: Φ of a velocity
-    /// constraint, Φ̇ of a position one (linear in the rates either way).
-    pub fn velocity_rows(&mut self) -> Vec<ExprId> {
-        let pool = &mut self.model.pool;
-        self.multipliers
-            .iter()
-            .map(|m| match m.kind {
-                model::ConstraintKind::Velocity => m.phi,
-                model::ConstraintKind::Position => pool.time_derivative(m.phi),
-            })
-            .collect()
+    /// Each kept constraint at the velocity level, in the multipliers' order: Φ̇ of a position
+    /// constraint, Φ of a velocity one (linear in the rates either way).
+    pub fn velocity_rows(&self) -> Vec<ExprId> {
+        self.multipliers.iter().map(|m| m.rows.velocity).collect()
     }
 
     /// Replaces KE, PE and reactions by what they are, and eliminated coordinates by their

@@ -7,7 +7,6 @@
 use std::collections::HashMap;
 
 use cas::{linear_system, ExprId, SymId};
-use model::ConstraintKind;
 
 use crate::derive::Derivation;
 use crate::present::collect_by_motion;
@@ -32,7 +31,7 @@ impl Derivation {
     /// constraint's reaction is asked for, and the dependent rates solve exactly within a
     /// small system; `None` otherwise.
     pub fn independent_form(&mut self) -> Option<IndependentForm> {
-        if !self.multipliers.iter().any(|m| m.kind == ConstraintKind::Velocity)
+        if self.multipliers.iter().all(|m| m.rows.position.is_some())
             || self.multipliers.len() > DEPENDENT_LIMIT
             || self.multipliers.iter().any(|m| self.model.constraints[m.constraint].force_requested)
         {

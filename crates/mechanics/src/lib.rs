@@ -3,7 +3,8 @@
 //! This crate owns the physics: kinetic and potential energy of particles and rigid bodies
 //! (planar, and spatial with ω from the orientation), constraints (a holonomic one eliminated
 //! when it can be solved for one coordinate, kept with a multiplier otherwise; a velocity
-//! constraint integrated when its coefficients are constant, kept otherwise), generalized
+//! constraint integrated when its coefficients are constant, kept otherwise; a kept one with
+//! its rows at every level, built once by its kind), generalized
 //! forces by virtual work, the Euler–Lagrange equations as M(q, t)·q̈ = f(q, q̇, t), the same
 //! in the independent rates where velocity constraints are kept, reactions where a scene asks
 //! for them, the algebraic side of checking `expect` lines, and the equations' exact partials
@@ -24,7 +25,9 @@ pub use independent::{IndependentForm, DEPENDENT_LIMIT};
 pub use present::collect_by_motion;
 
 pub use check::Decision;
-pub use derive::{derive, Derivation, Elimination, Multiplier, Reaction};
+pub use derive::{
+    derive, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
+};
 pub use partials::{Partials, StatePartials};
 pub use present::{Equation, NumericStart, StartShows};
 pub use start_solution::StartSolution;

@@ -9,10 +9,9 @@
 //! r = 0, c = 0 along the state gives [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c). About a reference
 //! where q̈ = 0, ∂r/∂q is K and ∂r/∂q̇ is C of M·δq̈ + C·δq̇ + K·δq = Jᵀ·δλ.
 
-use cas::{ExprId, Pool, SymId};
-use model::ConstraintKind;
+use cas::{ExprId, SymId};
 
-use crate::derive::{Derivation, Multiplier};
+use crate::derive::Derivation;
 
 /// ∂/∂q and ∂/∂q̇ of one family of rows: `positions[i][k]` is ∂(row i)/∂q_k and
 /// `rates[i][k]` is ∂(row i)/∂q̇_k, over the remaining coordinates in the derivation's order.
@@ -31,21 +30,11 @@ pub struct Partials {
     pub residual: StatePartials,
     /// Of c = J·q̈ − γ, one row per kept constraint.
     pub constraint: StatePartials,
-    /// Of Φ of each kept constraint (a velocity constraint's residual A·q̇ + b).
+    /// Of Φ of each kept constraint ([`crate::ConstraintRows::phi`]: a velocity constraint's
+    /// residual A·q̇ + b).
     pub phi: StatePartials,
-    /// Of each kept constraint's [`Multiplier::drift_rate`].
+    /// Of each kept constraint's [`crate::ConstraintRows::drift_rate`].
     pub drift_rate: StatePartials,
-}
-
-impl Multiplier {
-    /// The rate at which the constraint drifts, which a stabilisation damps beside Φ: Φ̇ for
-    /// a position constraint; zero for a velocity constraint, whose Φ is a rate already.
-    pub fn drift_rate(&self, pool: &mut Pool) -> ExprId {
-        match self.kind {
-            ConstraintKind::Position => pool.time_derivative(self.phi),
-            ConstraintKind::Velocity => pool.zero(),
-        }
-    }
 }
 
 impl Derivation {
@@ -57,7 +46,7 @@ impl Derivation {
         let pool = &mut self.model.pool;
         let mut terms = Vec::with_capacity(self.multipliers.len() + 1);
         for m in &self.multipliers {
-            let dj = pool.diff(m.jacobian[i], s);
+            let dj = pool.diff(m.rows.jacobian[i], s);
             let lambda = pool.sym(m.lambda);
             let term = pool.mul2(dj, lambda);
             terms.push(pool.neg(term));
@@ -96,11 +85,12 @@ impl Derivation {
 
         let (mut constraint, mut phi, mut drift_rate) = (Vec::new(), Vec::new(), Vec::new());
         for m in &multipliers {
-            let drift = m.drift_rate(pool);
+            let drift = m.rows.drift_rate(pool);
             let row: Vec<ExprId> = state
                 .iter()
                 .map(|&s| {
                     let mut terms: Vec<ExprId> = m
+                        .rows
                         .jacobian
                         .iter()
                         .zip(&accels)
@@ -109,13 +99,13 @@ impl Derivation {
                             pool.mul2(dj, *accel)
                         })
                         .collect();
-                    let dgamma = pool.diff(m.bias, s);
+                    let dgamma = pool.diff(m.rows.bias, s);
                     terms.push(pool.neg(dgamma));
                     pool.add(&terms)
                 })
                 .collect();
             constraint.push(row);
-            phi.push(state.iter().map(|&s| pool.diff(m.phi, s)).collect());
+            phi.push(state.iter().map(|&s| pool.diff(m.rows.phi(), s)).collect());
             drift_rate.push(state.iter().map(|&s| pool.diff(drift, s)).collect());
         }
         Partials {

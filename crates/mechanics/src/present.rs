@@ -66,12 +66,13 @@ impl Derivation {
         }
         for m in self.multipliers.clone() {
             let pool = &mut self.model.pool;
-            if !m.jacobian.iter().chain([&m.bias]).all(|e| pool.prints_in_full(*e)) {
-                let lhs = times_accelerations(pool, &m.jacobian, &self.accels);
-                out.push(Equation { lhs, rhs: m.bias });
+            let (jacobian, bias) = (&m.rows.jacobian, m.rows.bias);
+            if !jacobian.iter().chain([&bias]).all(|e| pool.prints_in_full(*e)) {
+                let lhs = times_accelerations(pool, jacobian, &self.accels);
+                out.push(Equation { lhs, rhs: bias });
                 continue;
             }
-            let row: Vec<ExprId> = m.jacobian.iter().map(|e| pool.simplify(*e)).collect();
+            let row: Vec<ExprId> = jacobian.iter().map(|e| pool.simplify(*e)).collect();
             let (content, _) = pool.common_content(&row);
             let inverse = pool.powi(content, -1);
             let mut terms = Vec::new();
@@ -81,7 +82,7 @@ impl Derivation {
                 let c = pool.factor_content(c);
                 terms.push(pool.mul2(c, a));
             }
-            let rhs = pool.mul2(m.bias, inverse);
+            let rhs = pool.mul2(bias, inverse);
             let rhs = pool.simplify(rhs);
             let (moving, still) = self.split_by_rates(rhs);
             let pool = &mut self.model.pool;
@@ -99,7 +100,7 @@ impl Derivation {
         let mut parts = vec![self.forcing[i]];
         for m in &self.multipliers {
             let lambda = pool.sym(m.lambda);
-            parts.push(pool.mul2(m.jacobian[i], lambda));
+            parts.push(pool.mul2(m.rows.jacobian[i], lambda));
         }
         pool.add(&parts)
     }

@@ -164,16 +164,28 @@ impl Body {
 }
 
 /// What a constraint restrains, which decides how it is differentiated and how the integrator
-/// keeps it from drifting.
+/// keeps it from drifting. `mechanics` reads it where it decides what elimination may solve
+/// and where it builds a kept constraint's rows (`mechanics::ConstraintRows`); later stages
+/// read the rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ConstraintKind {
     /// Φ(q, t) = 0: holonomic. Differentiated twice for the acceleration row; stabilised on
     /// both Φ and Φ̇.
     Position,
     /// A(q, t)·q̇ + b(q, t) = 0: a velocity (nonholonomic) constraint such as rolling without
-    /// slipping. Differentiated once; stabilised on the residual itself. The language does not
-    /// yet write one.
+    /// slipping, written with rates on either side (`y'*cos(theta) = x'*sin(theta)`).
+    /// Differentiated once; stabilised on the residual itself.
     Velocity,
+}
+
+impl ConstraintKind {
+    /// The kind as reports and the Python package name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConstraintKind::Position => "position",
+            ConstraintKind::Velocity => "velocity",
+        }
+    }
 }
 
 /// A constraint `lhs = rhs`, kept as Φ = lhs − rhs: of positions (Φ(q, t)), or of velocities

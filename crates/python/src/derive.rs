@@ -5,7 +5,7 @@
 use cas::{ExprId, Pool, Style};
 use engine::derived::{collect, Derived};
 use mechanics::Derivation;
-use model::{ConstraintKind, Value};
+use model::Value;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use verify::ShownAtStart;
@@ -185,11 +185,7 @@ fn constraints<'py>(
     for (k, c) in d.model.constraints.iter().enumerate() {
         let item = PyDict::new(py);
         item.set_item("name", &c.name)?;
-        let kind = match c.kind {
-            ConstraintKind::Position => "position",
-            ConstraintKind::Velocity => "velocity",
-        };
-        item.set_item("kind", kind)?;
+        item.set_item("kind", c.kind.name())?;
         item.set_item("equation", s.equation(pool, c.lhs, c.rhs)?)?;
         item.set_item("phi", s.expr(pool, c.phi)?)?;
         item.set_item("reaction", s.symbol(pool, c.force_symbol)?)?;

@@ -3,12 +3,9 @@
 //! checks sample only where a hand derivation that uses the constraints is entitled to hold,
 //! and the rank of the constraint Jacobian there, which tells a repeated constraint.
 
-use std::collections::HashMap;
-
-use cas::{ExprId, SymId, SymbolKind};
+use cas::{SymId, SymbolKind};
 use lang::Diagnostic;
 use mechanics::Derivation;
-use model::ConstraintKind;
 use nalgebra::{DMatrix, DVector};
 use numeric::{Evaluator, ScaledEvaluator};
 use rand::{Rng, SeedableRng};
@@ -128,18 +125,13 @@ impl ConstraintSet {
         let time = d.model.time;
         let (mut phi, mut jacobian, mut phi_t) = (Vec::new(), Vec::new(), Vec::new());
         let mut positional = Vec::new();
-        let still: HashMap<SymId, ExprId> =
-            d.rates.iter().map(|r| (*r, d.model.pool.zero())).collect();
         for (i, m) in d.multipliers.iter().take(count).enumerate() {
-            phi.push(m.phi);
-            jacobian.extend(m.jacobian.iter().copied());
-            match m.kind {
-                ConstraintKind::Position => {
-                    positional.push(i);
-                    phi_t.push(d.model.pool.diff(m.phi, time));
-                }
-                ConstraintKind::Velocity => phi_t.push(d.model.pool.subst(m.phi, &still)),
+            phi.push(m.rows.phi());
+            jacobian.extend(m.rows.jacobian.iter().copied());
+            if m.rows.position.is_some() {
+                positional.push(i);
             }
+            phi_t.push(m.rows.rate_free(&mut d.model.pool, time, &d.rates));
         }
         let pool = &d.model.pool;
         ConstraintSet {

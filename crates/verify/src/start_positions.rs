@@ -44,7 +44,8 @@ pub fn settle_start_positions(d: &mut Derivation) -> Result<(), Vec<Diagnostic>>
             let asks = d.model.shows.iter().any(|s| s.at_start)
                 || d.model.expects.iter().any(|e| e.at_start);
             let all_free = broken.iter().all(|(c, _)| {
-                let phi = d.multipliers.iter().find(|m| m.constraint == *c).map(|m| m.phi);
+                let phi =
+                    d.multipliers.iter().find(|m| m.constraint == *c).and_then(|m| m.rows.position);
                 free.iter().any(|q| phi.is_some_and(|phi| d.model.pool.depends_on(phi, *q)))
             });
             if all_free && !asks {
@@ -127,7 +128,7 @@ fn off_the_constraint(
             d.model.pool.print(r, cas::Style::Ascii)
         }
     };
-    let phi = d.multipliers.iter().find(|m| m.constraint == c).map(|m| m.phi);
+    let phi = d.multipliers.iter().find(|m| m.constraint == c).and_then(|m| m.rows.position);
     let pool = &mut d.model.pool;
     let restrained: Vec<SymId> = d
         .coords

@@ -197,8 +197,8 @@ fn json_constraints(d: &Derivation, constraints: &[model::Constraint]) -> Json {
                         "equation": equation,
                         "treatment": "multiplier",
                         "multiplier": name(c.force_symbol),
-                        "jacobian": m.map(|m| m.jacobian.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
-                        "bias": m.map(|m| pool.print(m.bias, A)),
+                        "jacobian": m.map(|m| m.rows.jacobian.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
+                        "bias": m.map(|m| pool.print(m.rows.bias, A)),
                     })
                 }
             })
@@ -284,8 +284,9 @@ fn model_json(d: &Derivation) -> Json {
             let mut o = Map::new();
             o.insert("name".into(), json!(c.name));
             o.insert("phi".into(), json!(print(c.phi)));
-            if c.kind == model::ConstraintKind::Velocity {
-                o.insert("kind".into(), json!("velocity"));
+            // A position constraint, the most common, goes without saying.
+            if c.kind != model::ConstraintKind::Position {
+                o.insert("kind".into(), json!(c.kind.name()));
             }
             o.insert("reaction".into(), json!(name(c.force_symbol)));
             if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {

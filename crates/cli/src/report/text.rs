@@ -146,7 +146,9 @@ impl Text<'_> {
             let (lhs, rhs) = sides[i];
             self.out.push(format!("  {}: {} = {}", c.name, self.print(lhs), self.print(rhs)));
             let force = self.sym(c.force_symbol);
-            if let Some(e) = self.d.eliminated.iter().find(|e| e.constraint == i) {
+            let d = self.d;
+            let kept = d.multipliers.iter().find(|m| m.constraint == i);
+            if let Some(e) = d.eliminated.iter().find(|e| e.constraint == i) {
                 let what = if c.force_requested {
                     format!("; its reaction {force} is derived below")
                 } else {
@@ -158,7 +160,7 @@ impl Text<'_> {
                 self.out.push(format!("    solved for {}{what}", self.sym(e.coord)));
             } else if let Some(why) = &left_out[i] {
                 self.out.push(format!("    left out, as it restrains nothing more: {why}"));
-            } else if c.kind == model::ConstraintKind::Velocity {
+            } else if kept.is_some_and(|m| m.rows.position.is_none()) {
                 self.out.push(format!(
                     "    a velocity constraint, kept with the multiplier {force} (generalized force {force}·∂Φ/∂q̇)"
                 ));
@@ -186,9 +188,9 @@ impl Text<'_> {
         self.out.extend(bracketed(&cells(pool, &f_rows, full), "  f = "));
         for m in multipliers {
             let name = self.sym(m.lambda);
-            let row = cells(pool, std::slice::from_ref(&m.jacobian), full);
+            let row = cells(pool, std::slice::from_ref(&m.rows.jacobian), full);
             self.out.extend(bracketed(&row, &format!("  J({name}) = ")));
-            self.out.push(format!("  γ({name}) = {}", self.print(m.bias)));
+            self.out.push(format!("  γ({name}) = {}", self.print(m.rows.bias)));
         }
     }
 

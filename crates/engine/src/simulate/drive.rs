@@ -191,7 +191,7 @@ fn unknown_input(model: &model::Model, given: &str) -> String {
 
 impl Prepared {
     /// Puts each law in place of its input in the equations (M, f, the generalized forces and
-    /// each kept constraint's J, γ and Φ) and in the recorded expressions, whose partials then
+    /// each kept constraint's rows) and in the recorded expressions, whose partials then
     /// follow by the chain rule.
     pub(super) fn drive(&mut self, laws: &[(SymId, ExprId)]) {
         if laws.is_empty() {
@@ -206,9 +206,7 @@ impl Prepared {
         d.forcing.iter_mut().for_each(&mut driven);
         d.generalized_forces.iter_mut().for_each(&mut driven);
         for m in &mut d.multipliers {
-            m.jacobian.iter_mut().for_each(&mut driven);
-            driven(&mut m.bias);
-            driven(&mut m.phi);
+            m.rows.exprs_mut().for_each(&mut driven);
         }
         self.extra.iter_mut().for_each(&mut driven);
         self.driven = map;

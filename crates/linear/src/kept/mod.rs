@@ -12,7 +12,6 @@ use std::collections::HashMap;
 use cas::{ExprId, Pool, SymId};
 use lang::{Diagnostic, Span};
 use mechanics::Derivation;
-use model::ConstraintKind;
 
 use crate::reference::{self, Items, Placed};
 use crate::signals;
@@ -103,30 +102,32 @@ pub(crate) fn linearize(
     for (m, row) in d.multipliers.iter().zip(&rows) {
         let rate = at(pool, *row);
         let rate = pool.subst(rate, &zero_dependent);
-        let positions = match m.kind {
-            ConstraintKind::Velocity => (0..n)
+        // A row of rates alone restrains the positions through its coefficients (B); a
+        // position constraint's J·δq = 0 holds them instead.
+        let positions = match m.rows.position {
+            None => (0..n)
                 .map(|i| match cyclic[i] {
                     true => pool.zero(),
                     false => {
-                        let d = pool.diff(m.phi, d.coords[i]);
+                        let d = pool.diff(m.rows.velocity, d.coords[i]);
                         at(pool, d)
                     }
                 })
                 .collect(),
-            ConstraintKind::Position => Vec::new(),
+            Some(_) => Vec::new(),
         };
-        let phi = at(pool, m.phi);
-        let phi = match m.kind {
-            ConstraintKind::Velocity => pool.subst(phi, &zero_dependent),
-            ConstraintKind::Position => phi,
+        let phi = at(pool, m.rows.phi());
+        let phi = match m.rows.position {
+            None => pool.subst(phi, &zero_dependent),
+            Some(_) => phi,
         };
         constraints.push(LinearConstraint {
             constraint: m.constraint,
-            kind: m.kind,
+            positional: m.rows.position.is_some(),
             lambda: m.lambda,
-            jacobian: m.jacobian.iter().map(|e| at(pool, *e)).collect(),
+            jacobian: m.rows.jacobian.iter().map(|e| at(pool, *e)).collect(),
             phi,
-            bias: at(pool, m.bias),
+            bias: at(pool, m.rows.bias),
         });
         velocity_rows.push(VelocityRow { rate, positions });
     }
@@ -196,7 +197,6 @@ fn substitution(
 mod tests {
     use crate::testing::derived;
     use crate::{Analysis, Component};
-    use model::ConstraintKind;
 
     /// A sleigh on its blade and, apart from it, a pendulum on its rod: a velocity and a
     /// position constraint kept together.
@@ -219,8 +219,8 @@ linearize about theta = 0, x' = v, u = 0, w = -L
         let mut d = derived(TWO);
         let lin = crate::linearize(&mut d, true).expect("linearizes");
         let kept = lin.kept().expect("kept together");
-        let kinds: Vec<ConstraintKind> = kept.constraints.iter().map(|c| c.kind).collect();
-        assert_eq!(kinds, [ConstraintKind::Velocity, ConstraintKind::Position]);
+        let positional: Vec<bool> = kept.constraints.iter().map(|c| c.positional).collect();
+        assert_eq!(positional, [false, true]);
         // B of the blade's A·δq̇ + B·δq = 0 over the five coordinates; none for the rod.
         let widths: Vec<usize> = kept.rows.iter().map(|r| r.positions.len()).collect();
         assert_eq!(widths, [5, 0]);

@@ -12,8 +12,6 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use model::ConstraintKind;
-
 use super::{Kept, Reduced};
 use crate::dense::{
     accelerations_and_multipliers, least_squares, least_squares_matrix, pivots, regular, rows_of,
@@ -48,7 +46,7 @@ impl Blocks {
             bias.push(outputs.value(c.bias));
             rates.push(outputs.value(row.rate));
             let b = outputs.column(&row.positions);
-            positions.push((c.kind == ConstraintKind::Velocity).then_some(b));
+            positions.push((!c.positional).then_some(b));
         }
         let constraints = ConstraintRows { jacobian, bias };
         let signals = SignalBlocks::place(outputs, lin);
@@ -89,7 +87,7 @@ pub(crate) fn at(
     // On each kept position constraint.
     for (c, (phi, size)) in e.phi(parameters, &vec![0.0; k + nd]).into_iter().enumerate() {
         let constraint = &kept.constraints[c];
-        if constraint.kind != ConstraintKind::Position {
+        if !constraint.positional {
             continue;
         }
         if phi.abs() > EQUILIBRIUM_TOLERANCE * size || !phi.is_finite() {
@@ -101,11 +99,11 @@ pub(crate) fn at(
 
     // δq = N·δz along the position constraints, δż = T·δu + S·δz along the velocity ones.
     let preferred = |i: usize| kept.dependent.contains(&i);
-    let kinds = |kind: ConstraintKind| -> Vec<usize> {
-        (0..k).filter(|&c| kept.constraints[c].kind == kind).collect()
+    let rows = |positional: bool| -> Vec<usize> {
+        (0..k).filter(|&c| kept.constraints[c].positional == positional).collect()
     };
-    let position_rows = kinds(ConstraintKind::Position);
-    let velocity_rows = kinds(ConstraintKind::Velocity);
+    let position_rows = rows(true);
+    let velocity_rows = rows(false);
     let p_rows =
         DMatrix::from_fn(position_rows.len(), n, |row, i| r.jacobian[(position_rows[row], i)]);
     let (basis, z) = along_positions(&p_rows, &preferred)?;

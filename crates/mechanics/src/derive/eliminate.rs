@@ -5,8 +5,9 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId, SymbolKind};
 use lang::Diagnostic;
-use model::{ConstraintKind, Model};
+use model::Model;
 
+use super::rows::eliminable;
 use super::{Derivation, Elimination};
 
 /// How the constraints were used.
@@ -40,19 +41,12 @@ pub(super) fn eliminate_constraints(pool: &mut Pool, model: &Model) -> Eliminate
     let mut kept: Vec<usize> = Vec::new();
     let mut errors = Vec::new();
     for (ci, c) in model.constraints.iter().enumerate() {
-        // A velocity constraint restrains rates only, unless it integrates to a position
-        // constraint: with constant coefficients A·q̇ + b = 0 is A·(q − q₀) + b·t = 0.
-        let integrated = match c.kind {
-            ConstraintKind::Velocity => match integrate(pool, model, c.phi) {
-                Some(phi) => Some(phi),
-                None => {
-                    kept.push(ci);
-                    continue;
-                }
-            },
-            ConstraintKind::Position => None,
+        let Some((written, integrated)) = eliminable(pool, model, c) else {
+            kept.push(ci);
+            continue;
         };
-        let phi = pool.subst(integrated.unwrap_or(c.phi), &solved);
+        let integrated = integrated.then_some(written);
+        let phi = pool.subst(written, &solved);
         let phi = pool.expand(phi);
         if pool.is_identically_zero(phi) {
             errors.push(
@@ -98,43 +92,6 @@ pub(super) fn eliminate_constraints(pool: &mut Pool, model: &Model) -> Eliminate
         e.solution = solved[&e.coord];
     }
     Eliminated { eliminated, kept, errors }
-}
-
-/// The position constraint a velocity constraint A·q̇ + b = 0 integrates to when A and b are
-/// constants (parameters only): A·(q − q₀) + b·t = 0, with q₀ the coordinates' initial values.
-/// `None` for one whose coefficients move, which stays a velocity constraint.
-fn integrate(pool: &mut Pool, model: &Model, phi: ExprId) -> Option<ExprId> {
-    let mut terms = Vec::new();
-    let mut rest = phi;
-    for c in &model.coords {
-        let rate = pool.rate(c.sym).expect("coordinate");
-        let a = pool.diff(phi, rate);
-        if pool.is_zero(a) {
-            continue;
-        }
-        let constant = |pool: &mut Pool, e: ExprId| {
-            pool.free_symbols(e).iter().all(|s| matches!(pool.symbol(*s).kind, SymbolKind::Param))
-        };
-        if !constant(pool, a) {
-            return None;
-        }
-        let q = pool.sym(c.sym);
-        let displacement = pool.sub(q, c.initial);
-        terms.push(pool.mul2(a, displacement));
-        let v = pool.sym(rate);
-        let av = pool.mul2(a, v);
-        rest = pool.sub(rest, av);
-    }
-    let rest = pool.simplify(rest);
-    let b_constant =
-        pool.free_symbols(rest).iter().all(|s| matches!(pool.symbol(*s).kind, SymbolKind::Param));
-    if !b_constant {
-        return None;
-    }
-    let t = pool.sym(model.time);
-    terms.push(pool.mul2(rest, t));
-    let sum = pool.add(&terms);
-    Some(pool.simplify(sum))
 }
 
 /// The first candidate that Φ = 0 can be solved for, with its solution: Φ must be linear in

@@ -5,13 +5,14 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Pool, SymId};
 use lang::Diagnostic;
-use model::{ConstraintKind, Model};
+use model::Model;
 
 use super::eliminate::Coordinates;
+use super::rows::{restrains_positions, ConstraintRows};
 use super::Multiplier;
 
-/// Φ of each kept constraint in the remaining coordinates, its Jacobian, and γ: Φ̈ = J·q̈ − γ,
-/// so that Φ̈ = 0 is J·q̈ = γ.
+/// The rows of each kept constraint in the remaining coordinates ([`ConstraintRows`], by
+/// kind), with its multiplier.
 /// Velocity constraints that restrain nothing the position constraints do not: each with a
 /// warning that says so (the vertical component of a wheel's rolling, the time derivative of
 /// its touching the ground). They are left out of the equations, whose rows they would make
@@ -26,7 +27,7 @@ pub(super) fn kept_constraints(
     let mut warnings = Vec::new();
     let position_rows: Vec<(usize, ExprId)> = kept
         .iter()
-        .filter(|&&ci| model.constraints[ci].kind == ConstraintKind::Position)
+        .filter(|&&ci| restrains_positions(model.constraints[ci].kind))
         .map(|&ci| {
             let phi = pool.subst(model.constraints[ci].phi, &coordinates.elimination_map);
             (ci, pool.time_derivative(phi))
@@ -35,7 +36,7 @@ pub(super) fn kept_constraints(
     for &ci in kept {
         let c = &model.constraints[ci];
         let phi = pool.subst(c.phi, &coordinates.elimination_map);
-        if c.kind == ConstraintKind::Velocity && !c.force_requested {
+        if !restrains_positions(c.kind) && !c.force_requested {
             let rows: Vec<ExprId> = position_rows.iter().map(|(_, r)| *r).collect();
             if let Some(by) = implied_by(pool, phi, &rows, &coordinates.rates) {
                 let names: Vec<String> = by
@@ -58,39 +59,9 @@ pub(super) fn kept_constraints(
                 continue;
             }
         }
-        // Simplified, a row and its Jacobian print as a hand derivation writes them (a rolling
-        // coin's −r·cos ψ, not −r·sin²θ·cos ψ − r·cos ψ·cos²θ); past simplify's own size
-        // limit it stays as built. A row too large to print is kept as built too: multiplying
-        // it out loses what its parts share (a bicycle's front wheel rolling: 1,324 lowered
-        // operations as built, 6,367 expanded, its bias 7 times that).
-        let phi = if pool.prints_in_full(phi) { pool.simplify(phi) } else { phi };
-        // The row is the first derivative of Φ that has accelerations: Φ̈ for a position
-        // constraint, Φ̇ for a velocity constraint. Its coefficients of q̈ are the Jacobian.
-        let (jacobian, acceleration) = match c.kind {
-            ConstraintKind::Position => {
-                let jacobian: Vec<ExprId> =
-                    coordinates.coords.iter().map(|q| pool.diff(phi, *q)).collect();
-                let velocity = pool.time_derivative(phi);
-                (jacobian, pool.time_derivative(velocity))
-            }
-            ConstraintKind::Velocity => {
-                let jacobian: Vec<ExprId> =
-                    coordinates.rates.iter().map(|v| pool.diff(phi, *v)).collect();
-                (jacobian, pool.time_derivative(phi))
-            }
-        };
-        let zeros: HashMap<SymId, ExprId> =
-            coordinates.accels.iter().map(|a| (*a, pool.zero())).collect();
-        let rest = pool.subst(acceleration, &zeros);
-        let bias = pool.neg(rest);
-        multipliers.push(Multiplier {
-            constraint: ci,
-            kind: c.kind,
-            lambda: c.force_symbol,
-            phi,
-            jacobian,
-            bias,
-        });
+        let Coordinates { coords, rates, accels, .. } = coordinates;
+        let rows = ConstraintRows::of(pool, c.kind, phi, (coords, rates, accels));
+        multipliers.push(Multiplier { constraint: ci, lambda: c.force_symbol, rows });
     }
     (multipliers, warnings)
 }
@@ -117,24 +88,13 @@ fn implied_by(
     pool.combination_at_generic_points(&target, &basis)
 }
 
-/// The generalized force per unit multiplier of a constraint along coordinate q: ∂Φ/∂q for a
-/// position constraint, ∂Φ/∂q̇ for a velocity constraint (the same direction, since
-/// ∂Φ̇/∂q̇ = ∂Φ/∂q).
-pub(super) fn constraint_gradient(pool: &mut Pool, c: &model::Constraint, q: SymId) -> ExprId {
-    match c.kind {
-        ConstraintKind::Position => pool.diff(c.phi, q),
-        ConstraintKind::Velocity => {
-            let rate = pool.rate(q).expect("coordinate");
-            pool.diff(c.phi, rate)
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::eliminate::{eliminate_constraints, remaining_coordinates};
+    use super::super::rows::reaction_direction;
     use super::super::testing::{ascii, derived, scene, CARTESIAN_PENDULUM};
     use super::*;
+    use model::ConstraintKind;
 
     fn multipliers_of(source: &str) -> (Pool, Model, Vec<Multiplier>) {
         let (mut pool, model) = scene(source);
@@ -150,16 +110,15 @@ mod tests {
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
         assert_eq!(m.constraint, 0);
         assert_eq!(m.lambda, model.constraints[0].force_symbol);
-        assert_eq!(ascii(&pool, m.phi), "-L^2 + x^2 + y^2");
-        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(ascii(&pool, m.rows.phi()), "-L^2 + x^2 + y^2");
+        let jacobian: Vec<String> = m.rows.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(jacobian, ["2*x", "2*y"]);
-        assert_eq!(ascii(&pool, m.bias), "-2*x'^2 - 2*y'^2");
+        assert_eq!(ascii(&pool, m.rows.bias), "-2*x'^2 - 2*y'^2");
     }
 
-    /// A velocity constraint, set in the model directly (the language does not write one yet):
-    /// a knife edge at angle theta that cannot slide sideways, sin(theta)·ẋ − cos(theta)·ẏ = 0.
-    /// It is kept, never eliminated, its row is Φ̇ with the rates' coefficients as Jacobian,
-    /// and its force on theta is nil.
+    /// A velocity constraint, set in the model directly: a knife edge at angle theta that
+    /// cannot slide sideways, sin(theta)·ẋ − cos(theta)·ẏ = 0. It is kept, never eliminated,
+    /// its row is Φ̇ with the rates' coefficients as Jacobian, and its force on theta is nil.
     #[test]
     fn a_velocity_constraint_gets_its_row_from_one_derivative() {
         let (mut pool, mut model) = scene(
@@ -183,12 +142,13 @@ mod tests {
         let coordinates = remaining_coordinates(&mut pool, &model, &out.eliminated);
         let (multipliers, _) = kept_constraints(&mut pool, &model, &out.kept, &coordinates);
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
-        assert_eq!(m.kind, ConstraintKind::Velocity);
-        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!((m.rows.position, m.rows.velocity), (None, m.rows.phi()));
+        assert_eq!(m.rows.stabilisation, super::super::Stabilisation::Velocity);
+        let jacobian: Vec<String> = m.rows.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(jacobian, ["sin(theta)", "-cos(theta)", "0"]);
-        assert_eq!(ascii(&pool, m.bias), "-(cos(theta)*x' + sin(theta)*y')*theta'");
+        assert_eq!(ascii(&pool, m.rows.bias), "-(cos(theta)*x' + sin(theta)*y')*theta'");
         let along_theta = coordinates.coords[2];
-        let gradient = constraint_gradient(&mut pool, &model.constraints[0], along_theta);
+        let gradient = reaction_direction(&mut pool, &model.constraints[0], along_theta);
         assert!(pool.is_zero(gradient));
     }
 
@@ -200,11 +160,11 @@ mod tests {
         );
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
         assert_eq!(m.constraint, 1);
-        assert_eq!(ascii(&pool, m.phi), "-L^2*sin(theta)^2 + x^2");
-        let jacobian: Vec<String> = m.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
+        assert_eq!(ascii(&pool, m.rows.phi()), "-L^2*sin(theta)^2 + x^2");
+        let jacobian: Vec<String> = m.rows.jacobian.iter().map(|e| ascii(&pool, *e)).collect();
         assert_eq!(jacobian, ["2*x", "-2*L^2*sin(theta)*cos(theta)"]);
         assert_eq!(
-            ascii(&pool, m.bias),
+            ascii(&pool, m.rows.bias),
             "-2*x'^2 - (2*L^2*sin(theta)^2*theta' - 2*L^2*cos(theta)^2*theta')*theta'"
         );
     }
@@ -216,7 +176,7 @@ mod tests {
         );
         let [m] = &multipliers[..] else { panic!("{multipliers:?}") };
         assert_eq!(
-            ascii(&pool, m.bias),
+            ascii(&pool, m.rows.bias),
             "-2*w*cos(w*t)*x' - 2*w*sin(w*t)*y' + w^2*sin(w*t)*x - w^2*cos(w*t)*y"
         );
     }

@@ -11,7 +11,7 @@ use model::Model;
 use super::eliminate::Coordinates;
 use super::energies::Energies;
 use super::equations::generalized_force;
-use super::multipliers::constraint_gradient;
+use super::rows::reaction_direction;
 use super::{Derivation, Elimination, Multiplier, Reaction, SYMBOLIC_SOLVE_LIMIT};
 
 /// The reactions of the eliminated constraints that the scene asks for, from energies in all
@@ -47,7 +47,7 @@ pub(super) fn eliminated_reactions(
         let mut lhs = pool.sub(lhs, q_force);
         for m in multipliers {
             let c = &model.constraints[m.constraint];
-            let dphi = constraint_gradient(pool, c, e.coord);
+            let dphi = reaction_direction(pool, c, e.coord);
             let lam = pool.sym(m.lambda);
             let t = pool.mul2(dphi, lam);
             lhs = pool.sub(lhs, t);
@@ -55,7 +55,7 @@ pub(super) fn eliminated_reactions(
         let lhs = pool.subst(lhs, elimination_map);
         b.push(pool.simplify(lhs));
         for (col, f) in eliminated.iter().enumerate() {
-            let dphi = constraint_gradient(pool, &model.constraints[f.constraint], e.coord);
+            let dphi = reaction_direction(pool, &model.constraints[f.constraint], e.coord);
             a[row][col] = pool.subst(dphi, elimination_map);
         }
     }

@@ -9,7 +9,6 @@ use std::collections::HashMap;
 
 use cas::{ExprId, Rational, SymId};
 use lang::Diagnostic;
-use model::ConstraintKind;
 
 use super::Derivation;
 
@@ -49,10 +48,8 @@ impl Derivation {
         let state = self.initial_state();
         let mut out = Vec::new();
         for m in self.multipliers.clone() {
-            if m.kind != ConstraintKind::Position {
-                continue;
-            }
-            let at_start = self.model.pool.subst(m.phi, &state);
+            let Some(phi) = m.rows.position else { continue };
+            let at_start = self.model.pool.subst(phi, &state);
             if !self.zero_at_parameter_values(at_start) {
                 out.push((m.constraint, at_start));
             }
@@ -62,11 +59,7 @@ impl Derivation {
 
     /// Φ of each position constraint kept with a multiplier, in the multipliers' order.
     pub fn kept_position_constraints(&self) -> Vec<ExprId> {
-        self.multipliers
-            .iter()
-            .filter(|m| m.kind == ConstraintKind::Position)
-            .map(|m| m.phi)
-            .collect()
+        self.multipliers.iter().filter_map(|m| m.rows.position).collect()
     }
 
     /// The coordinates whose start positions the kept position constraints may solve for:

@@ -6,7 +6,6 @@ use std::collections::HashMap;
 
 use cas::{linear_system, ExprId, SymId};
 use lang::Diagnostic;
-use model::ConstraintKind;
 
 use super::Derivation;
 
@@ -14,14 +13,13 @@ impl Derivation {
     /// Whether a kept velocity constraint A·q̇ + b = 0 has b ≠ 0: a moving surface (a turntable)
     /// that does work on the system, so that its energy is not conserved.
     pub fn drives_through_velocity_constraints(&mut self) -> bool {
-        let rates = self.rates.clone();
+        let (rates, time) = (self.rates.clone(), self.model.time);
         for m in self.multipliers.clone() {
-            if m.kind != ConstraintKind::Velocity {
+            if m.rows.position.is_some() {
                 continue;
             }
             let pool = &mut self.model.pool;
-            let still: HashMap<SymId, ExprId> = rates.iter().map(|r| (*r, pool.zero())).collect();
-            let b = pool.subst(m.phi, &still);
+            let b = m.rows.rate_free(pool, time, &rates);
             if !pool.is_identically_zero(b) {
                 return true;
             }
