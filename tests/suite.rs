@@ -35,6 +35,7 @@ mod many;
 mod radau;
 mod random_scenes;
 mod rates;
+mod resolutions;
 mod run_faults;
 mod simulate;
 mod space;

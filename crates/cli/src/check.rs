@@ -47,8 +47,8 @@ pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck 
     // says: exit 2 with its diagnostic, after what the other expectations gave.
     let mut refused = None;
     if !d.model.linear_expects.is_empty() {
-        match engine::expect_linearized::check_linearized(source, options.units) {
-            Ok(verdicts) => check_linearized(&mut tally, (path, source), &d, &verdicts),
+        match engine::expect_linearized::check_linearized(source, d) {
+            Ok((verdicts, d)) => check_linearized(&mut tally, (path, source), &d, &verdicts),
             Err(e) => refused = Some(crate::diagnostics::error(path, &e)),
         }
     }

@@ -121,13 +121,13 @@ impl Ensemble {
     pub fn new(source: &str, options: &Options) -> Result<Ensemble, Error> {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);
-        let mut settings = simulate::settings(source, &options.simulate)?;
+        let resolved = simulate::Resolved::new(source, &options.simulate);
+        let mut settings = resolved.settings(&options.simulate)?;
         // Nothing asked for: the scene's `output` quantities, else the coordinates, at the end.
         if !recorded.is_empty() {
             settings.outputs = record::expressions(&recorded);
         }
-        let simulate::Loaded { mut prepared, outputs, held, .. } =
-            simulate::load(source, &settings)?;
+        let simulate::Loaded { mut prepared, outputs, held, .. } = resolved.load(&settings)?;
         let set_exprs = simulate::set_expressions(&mut prepared, &settings.sets)?;
         let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
         let given = varied_parameters(&mut prepared, &options.vary)?;

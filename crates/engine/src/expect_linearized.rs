@@ -5,7 +5,9 @@
 
 use model::{ExpectedStability, LinearExpectation};
 
-use crate::linearize::{linearize, Linearized, Options, Stability, RELATIVE_TOLERANCE};
+use mechanics::Derivation;
+
+use crate::linearize::{linearize_derived, Linearized, Stability, RELATIVE_TOLERANCE};
 use crate::Error;
 
 /// How far about an expected critical value the sweep looks, relatively.
@@ -32,15 +34,52 @@ impl LinearVerdict {
     }
 }
 
-/// Each `expect linearized:` line of `source`, decided (none without such lines); or why the
-/// scene does not linearize about its own reference at its own values, which is bad input as
-/// it is for `linearize` (a reference that is not an equilibrium, say), not an expectation
-/// left undecided.
-pub fn check_linearized(source: &str, units: bool) -> Result<Vec<LinearVerdict>, Error> {
-    let options = Options { no_units: !units, ..Default::default() };
-    let l = linearize(source, &options)?;
-    let expectations = l.derivation.model.linear_expects.clone();
-    Ok(expectations.iter().map(|e| decide(source, &l, &e.expectation, units)).collect())
+/// Each `expect linearized:` line of `source`, decided (none without such lines), from its
+/// derivation, which comes back with the verdicts; or why the scene does not linearize about
+/// its own reference at its own values, which is bad input as it is for `linearize` (a
+/// reference that is not an equilibrium, say), not an expectation left undecided. A critical
+/// value's sweep is made on the same linearization: the scene is not resolved again.
+pub fn check_linearized(
+    source: &str,
+    derivation: Derivation,
+) -> Result<(Vec<LinearVerdict>, Derivation), Error> {
+    let expectations: Vec<LinearExpectation> =
+        derivation.model.linear_expects.iter().map(|e| e.expectation.clone()).collect();
+    // Each critical value's sweep, about the value at the scene's parameters.
+    let mut sweeps = Vec::new();
+    let mut windows = Vec::new();
+    for e in &expectations {
+        if let LinearExpectation::Critical { parameter, value } = e {
+            let name = derivation.model.params[*parameter].name.clone();
+            let value = value_of(&derivation, *value);
+            let half = CRITICAL_WINDOW * value.abs().max(1.0);
+            if value.is_finite() {
+                sweeps.push((name.clone(), value - half, value + half, 3));
+            }
+            windows.push((name, value, half));
+        }
+    }
+    let (l, mut swept) = linearize_derived(source, derivation, &sweeps)?;
+    let mut swept = swept.drain(..);
+    let mut windows = windows.into_iter();
+    let verdicts = expectations
+        .iter()
+        .map(|e| match e {
+            LinearExpectation::Critical { .. } => {
+                let (name, value, half) = windows.next().expect("a window per critical line");
+                if !value.is_finite() {
+                    return LinearVerdict::Undecided(format!(
+                        "the critical value of `{name}` is {value}"
+                    ));
+                }
+                let sweep = swept.next().expect("a sweep per finite critical value");
+                critical(&name, value, half, sweep)
+            }
+            _ => decide(&l, e),
+        })
+        .collect();
+    drop(swept);
+    Ok((verdicts, l.derivation))
 }
 
 /// `re ± |im|i` with true minus signs, as the text reports write numbers (`1.5 − 2.2i`, not
@@ -55,6 +94,19 @@ fn first_line(e: &Error) -> String {
     e.to_string().lines().next().unwrap_or("").to_string()
 }
 
+/// A constant of the parameters at the scene's values.
+fn value_of(d: &Derivation, e: cas::ExprId) -> f64 {
+    let Ok(parameters) = model::ParameterValues::new(&d.model).values(Vec::new()) else {
+        return f64::NAN;
+    };
+    let pool = &d.model.pool;
+    let mut values = vec![f64::NAN; pool.symbol_count()];
+    for (p, v) in d.model.params.iter().zip(parameters) {
+        values[p.sym.index()] = v;
+    }
+    numeric::eval(pool, e, &values)
+}
+
 /// A constant of the parameters at the values the linearization used.
 fn value_at(l: &Linearized, e: cas::ExprId) -> f64 {
     let pool = &l.derivation.model.pool;
@@ -65,7 +117,7 @@ fn value_at(l: &Linearized, e: cas::ExprId) -> f64 {
     numeric::eval(pool, e, &values)
 }
 
-fn decide(source: &str, l: &Linearized, e: &LinearExpectation, units: bool) -> LinearVerdict {
+fn decide(l: &Linearized, e: &LinearExpectation) -> LinearVerdict {
     match e {
         LinearExpectation::Stability(expected) => {
             let expected = match expected {
@@ -107,27 +159,25 @@ fn decide(source: &str, l: &Linearized, e: &LinearExpectation, units: bool) -> L
                 )),
             }
         }
-        LinearExpectation::Critical { parameter, value } => {
-            let name = l.derivation.model.params[*parameter].name.clone();
-            critical(source, &name, value_at(l, *value), units)
+        LinearExpectation::Critical { .. } => {
+            unreachable!("a critical value is decided by its sweep")
         }
     }
 }
 
 /// Whether the verdict changes within [`CRITICAL_TOLERANCE`] of `value`, by a sweep of the
 /// parameter across a window about it, bisected where the verdict changes.
-fn critical(source: &str, name: &str, value: f64, units: bool) -> LinearVerdict {
-    if !value.is_finite() {
-        return LinearVerdict::Undecided(format!("the critical value of `{name}` is {value}"));
-    }
-    let half = CRITICAL_WINDOW * value.abs().max(1.0);
-    let sweep = format!("{name}={}:{}:3", value - half, value + half);
-    let options = Options { sweep: Some(sweep), no_units: !units, ..Default::default() };
-    let l = match linearize(source, &options) {
-        Ok(l) => l,
+fn critical(
+    name: &str,
+    value: f64,
+    half: f64,
+    sweep: Result<linear::Sweep, Error>,
+) -> LinearVerdict {
+    let sweep = match sweep {
+        Ok(sweep) => sweep,
         Err(e) => return LinearVerdict::Undecided(first_line(&e)),
     };
-    let changes = l.sweep.map(|s| s.changes).unwrap_or_default();
+    let changes = sweep.changes;
     let scale = value.abs().max(f64::MIN_POSITIVE);
     let near = changes.iter().find(|c| (c.value - value).abs() <= CRITICAL_TOLERANCE * scale);
     match (near, changes.first()) {

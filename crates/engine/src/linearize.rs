@@ -189,7 +189,41 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     }
     let extra: Vec<(Option<&str>, String)> =
         sets.iter().map(|(name, v)| (Some(name.as_str()), v.clone())).collect();
-    let mut prepared = prepare_resolved_for(source, model, warnings, &extra)?;
+    let prepared = prepare_resolved_for(source, model, warnings, &extra)?;
+    let asked = Asked { about, sets, sweep, drop_cyclic: options.drop_cyclic };
+    Ok(linearize_prepared(source, prepared, asked, &[])?.0)
+}
+
+/// A scene's own linearization (its `linearize about` lines at its parameters' values) from
+/// its derivation, with `sweeps` of its parameters about it, each a sweep's result or why it
+/// could not be made: what `check` needs of its `expect linearized:` lines, from the
+/// derivation it has already made rather than the scene resolved and derived again.
+pub fn linearize_derived(
+    source: &str,
+    derivation: Derivation,
+    sweeps: &[(String, f64, f64, usize)],
+) -> Result<(Linearized, Vec<Result<linear::Sweep, Error>>), Error> {
+    let prepared = Prepared::from_derivation(derivation, Vec::new());
+    let asked = Asked { about: None, sets: Vec::new(), sweep: None, drop_cyclic: false };
+    linearize_prepared(source, prepared, asked, sweeps)
+}
+
+/// What a linearization is asked for besides the scene: the command line's reference, `--set`
+/// values, a sweep, and whether cyclic coordinates are dropped.
+struct Asked {
+    about: Option<About>,
+    sets: Vec<(String, String)>,
+    sweep: Option<(String, f64, f64, usize)>,
+    drop_cyclic: bool,
+}
+
+fn linearize_prepared(
+    source: &str,
+    mut prepared: Prepared,
+    asked: Asked,
+    more_sweeps: &[(String, f64, f64, usize)],
+) -> Result<(Linearized, Vec<Result<linear::Sweep, Error>>), Error> {
+    let Asked { about, sets, sweep, drop_cyclic } = asked;
     if prepared.derivation.model.linearize.is_empty() {
         return Err(Error::Setting(vec![
             Piece::Text(
@@ -199,7 +233,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
             Piece::Given(Setting::About, "theta=0".into()),
         ]));
     }
-    let linearization = linear::linearize(&mut prepared.derivation, !options.drop_cyclic)
+    let linearization = linear::linearize(&mut prepared.derivation, !drop_cyclic)
         .map_err(|diagnostics| scene_error(source, about.as_ref(), diagnostics))?;
     if linearization.coords.is_empty() {
         return Err(bad("the constraints fix every coordinate: nothing is left to linearize"));
@@ -220,6 +254,13 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         }
         None => None,
     };
+    let more = more_sweeps
+        .iter()
+        .map(|(name, a, b, n)| {
+            session.swept = Some(parameter_index(&session.prepared, name, Setting::Sweep)?);
+            linear::sweep(name.clone(), (*a, *b, *n), |v| session.analyse(Some(v)))
+        })
+        .collect();
 
     let Session { mut prepared, analysis, .. } = session;
     let linearization = analysis.into_linearization();
@@ -238,7 +279,7 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
     let model = &prepared.derivation.model;
     let inputs = model.inputs.iter().map(|u| u.name.clone()).collect();
     let outputs = model.outputs.iter().map(|o| o.name.clone()).collect();
-    Ok(Linearized {
+    let linearized = Linearized {
         exact,
         inputs,
         outputs,
@@ -251,7 +292,8 @@ pub fn linearize(source: &str, options: &Options) -> Result<Linearized, Error> {
         state,
         at,
         sweep,
-    })
+    };
+    Ok((linearized, more))
 }
 
 /// The `--set` values by parameter index, each resolved against the scene (`prepared.extra`).

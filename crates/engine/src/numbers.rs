@@ -88,24 +88,32 @@ pub(crate) fn prepare_resolved_for(
         };
         exprs.push(derivation.expand_quantities(*e, false));
     }
-    // The inputs' slots follow the parameters', filled with their values when nothing drives
-    // them.
-    let parameters: Vec<SymId> = derivation.model.constants().iter().map(|(s, _)| *s).collect();
-    let layout = Layout {
-        coordinates: derivation.coords.len(),
-        multipliers: derivation.multipliers.len(),
-        parameters: parameters.len(),
-    };
-    let parameter_plan = model::ParameterValues::new(&derivation.model);
-    Ok(Prepared {
-        parameter_plan,
-        derivation,
-        extra: exprs,
-        parameters,
-        layout,
-        driven: Default::default(),
-        partials_program: None,
-    })
+    Ok(Prepared::from_derivation(derivation, exprs))
+}
+
+impl Prepared {
+    /// A derived scene laid out for numbers, with `extra` expressions of it to observe.
+    pub fn from_derivation(derivation: Derivation, extra: Vec<ExprId>) -> Prepared {
+        let exprs = extra;
+        // The inputs' slots follow the parameters', filled with their values when nothing
+        // drives them.
+        let parameters: Vec<SymId> = derivation.model.constants().iter().map(|(s, _)| *s).collect();
+        let layout = Layout {
+            coordinates: derivation.coords.len(),
+            multipliers: derivation.multipliers.len(),
+            parameters: parameters.len(),
+        };
+        let parameter_plan = model::ParameterValues::new(&derivation.model);
+        Prepared {
+            parameter_plan,
+            derivation,
+            extra: exprs,
+            parameters,
+            layout,
+            driven: Default::default(),
+            partials_program: None,
+        }
+    }
 }
 
 impl Prepared {

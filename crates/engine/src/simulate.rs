@@ -260,9 +260,48 @@ pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(),
 /// the scene is derived; a scene that does not resolve has none, and loading it reports why),
 /// then the options.
 pub fn settings(source: &str, options: &Options) -> Result<Settings, Error> {
-    let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
-    let loaded = crate::resolve_checked(source, checks);
-    let simulation = loaded.map(|(model, _)| model.simulation).unwrap_or_default();
+    Resolved::new(source, options).settings(options)
+}
+
+/// A scene resolved once for a run: its settings are read from it and then it is loaded, so
+/// that a command resolves its scene one time (a resolution is most of a short run's
+/// set-up, and two could disagree). A scene that does not resolve keeps its error for the
+/// load to report, and has the default settings meanwhile.
+pub struct Resolved<'a> {
+    source: &'a str,
+    model: Result<(model::Model, Vec<Diagnostic>), Error>,
+}
+
+impl<'a> Resolved<'a> {
+    /// Resolves `source` as a run takes it (inputs may stand in constraints, the laws are put
+    /// in place before deriving), with the options' unit check.
+    pub fn new(source: &'a str, options: &Options) -> Resolved<'a> {
+        let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
+        Resolved { source, model: crate::resolve_checked(source, checks) }
+    }
+
+    /// The scene's `simulate` block overridden by the options (see [`settings`]).
+    pub fn settings(&self, options: &Options) -> Result<Settings, Error> {
+        let simulation = match &self.model {
+            Ok((model, _)) => model.simulation.clone(),
+            Err(_) => model::Simulation::default(),
+        };
+        settings_from_block(self.source, simulation, options)
+    }
+
+    /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
+    pub(crate) fn load(self, settings: &Settings) -> Result<Loaded, Error> {
+        let (model, warnings) = self.model?;
+        load_model(self.source, model, warnings, settings)
+    }
+}
+
+/// [`settings`] of a resolved scene's `simulate` block.
+fn settings_from_block(
+    source: &str,
+    simulation: model::Simulation,
+    options: &Options,
+) -> Result<Settings, Error> {
     if let (None, Some(hold)) = (options.hold, simulation.hold) {
         // The block's laws all replaced by time series: the block's hold has nothing left to
         // hold, and it is the block's line that says so.
@@ -371,7 +410,9 @@ pub fn simulate_with(
     options: &Options,
     progress: &mut dyn Progress,
 ) -> Result<Outcome, Error> {
-    run(source, &settings(source, options)?, progress)
+    let resolved = Resolved::new(source, options);
+    let settings = resolved.settings(options)?;
+    Compiled::from_resolved(resolved, &settings)?.run(&settings, progress)
 }
 
 /// Loads `source` with the settings' outputs, stops, events and `--set` values resolved as
@@ -420,6 +461,19 @@ pub(crate) struct Loaded {
 
 /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
 pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
+    // An input in a constraint takes its law (or value) before anything is derived.
+    let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
+    let (model, warnings) = crate::resolve_checked(source, checks)?;
+    load_model(source, model, warnings, settings)
+}
+
+/// [`load`] of a scene already resolved as a run takes it.
+fn load_model(
+    source: &str,
+    mut model: model::Model,
+    warnings: Vec<Diagnostic>,
+    settings: &Settings,
+) -> Result<Loaded, Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -427,9 +481,6 @@ pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     extra.extend(settings.events.iter().cloned());
     extra.push("KE".into());
     extra.push("PE".into());
-    // An input in a constraint takes its law (or value) before anything is derived.
-    let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
-    let (mut model, warnings) = crate::resolve_checked(source, checks)?;
     let laws = drive::laws(&mut model, &settings.drives)?;
     drive::into_constraints(source, &mut model, &laws, settings)?;
     let mut prepared = prepare_resolved(source, model, warnings, &extra)?;

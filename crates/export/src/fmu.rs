@@ -63,7 +63,7 @@ pub(crate) struct Interface {
 /// the generated C).
 pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, Error> {
     let module = crate::codegen::c(path, source, Options { units: !options.no_units })?;
-    let mut interface = interface(&module, source, options)?;
+    let mut interface = interface(&module, options)?;
     interface.guid = guid(&[source, &module.header, &module.source]);
     let fields = crate::codegen::parameter_fields(&module.equations);
     let name = &module.name;
@@ -115,14 +115,14 @@ impl Fmu {
 
 fn interface(
     module: &crate::codegen::CModule,
-    source: &str,
     options: &ExportOptions,
 ) -> Result<Interface, Error> {
     let equations = &module.equations;
     let prepared = &equations.prepared;
     let model = &prepared.derivation.model;
-    let settings = engine::simulate::settings(
-        source,
+    // The block as the scene's one resolution read it, not the text resolved again.
+    let settings = engine::simulate::settings_of(
+        model.simulation.clone(),
         &engine::simulate::Options {
             until: options.until,
             // The FMU integrates with its own DOP853 whatever the scene's method, so its

@@ -13,7 +13,8 @@ mod value;
 
 pub use parameters::{Given, ParameterError, ParameterValues};
 pub use resolve::{
-    closest, constant_value, dimension_errors, resolve, resolve_with, time_setting, Scope,
+    closest, constant_value, dimension_errors, resolutions_on_this_thread, resolve, resolve_with,
+    time_setting, Scope,
 };
 pub use value::Value;
 

@@ -69,7 +69,20 @@ pub fn resolve_with(
     source: &str,
     checks: Checks,
 ) -> Result<(Model, Vec<Diagnostic>), Vec<Diagnostic>> {
+    RESOLUTIONS.with(|n| n.set(n.get() + 1));
     walk(file, source).finish(checks)
+}
+
+thread_local! {
+    static RESOLUTIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// How many scenes this thread has resolved so far. A command should resolve its scene once
+/// (a second resolution costs a short run's set-up again, and may read the text differently
+/// from the first); the workspace's tests count each command's resolutions with it. Per
+/// thread, so that tests running side by side do not count each other's.
+pub fn resolutions_on_this_thread() -> usize {
+    RESOLUTIONS.with(|n| n.get())
 }
 
 /// Checks that every term of the scene has one dimension. Returns the mismatches found, from

@@ -10,7 +10,7 @@ use sim::Mechanical;
 
 use super::{
     angle_oriented_bodies, conserves_energy, drive, integrate_scene, load, overrides,
-    set_expressions, start, Columns, Loaded, Outcome, Progress, Settings,
+    set_expressions, start, Columns, Loaded, Outcome, Progress, Resolved, Settings,
 };
 use crate::animate::{Animation, Plan};
 use crate::numbers::Prepared;
@@ -38,7 +38,19 @@ pub struct Compiled {
 impl Compiled {
     /// Loads and derives `source` with the settings' expressions and lowers its programs.
     pub fn new(source: &str, settings: &Settings) -> Result<Compiled, Error> {
-        let Loaded { mut prepared, outputs, held, lagrangian_driven } = load(source, settings)?;
+        Compiled::from_loaded(load(source, settings)?, settings)
+    }
+
+    /// [`Compiled::new`] of a scene whose settings were read from it already resolved.
+    pub(crate) fn from_resolved(
+        resolved: Resolved<'_>,
+        settings: &Settings,
+    ) -> Result<Compiled, Error> {
+        Compiled::from_loaded(resolved.load(settings)?, settings)
+    }
+
+    fn from_loaded(loaded: Loaded, settings: &Settings) -> Result<Compiled, Error> {
+        let Loaded { mut prepared, outputs, held, lagrangian_driven } = loaded;
         let columns = Columns {
             outputs: outputs.len(),
             stops: settings.stops.len(),
