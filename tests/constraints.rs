@@ -193,8 +193,8 @@ fn thirteen_unknowns_at_the_start_are_solved_numerically() {
 /// pendulum at distinct angles, moving.
 #[test]
 fn the_numeric_start_agrees_with_the_exact_one() {
-    let family = engine::generate::Family::from_name("n-link-pendulum").expect("a family");
-    let mut source = engine::generate::n_link(family, 4);
+    let family = lang::generate::Family::from_name("n-link-pendulum").expect("a family");
+    let mut source = lang::generate::n_link(family, 4);
     for k in 1..=4 {
         source = source.replace(
             &format!("coord theta{k} = 1/10"),

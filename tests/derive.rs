@@ -143,3 +143,17 @@ fn printed_forms_are_folded() {
     }
     assert!(!report.contains("π/2 + asin") && !report.contains("√2"), "{report}");
 }
+
+#[test]
+fn generated_scenes_derive() {
+    use lang::generate::{n_link, Family};
+    for family in [Family::Pendulum, Family::PendulumOnCart] {
+        for n in 1..=3 {
+            let scene = n_link(family, n);
+            let d = engine::load(&scene).unwrap_or_else(|e| panic!("{scene}\n{e}")).derivation;
+            let dof = n + usize::from(family == Family::PendulumOnCart);
+            assert_eq!(d.coords.len(), dof);
+            assert_eq!(d.mass_matrix.len(), dof);
+        }
+    }
+}

@@ -7,7 +7,7 @@ use std::fmt::Write;
 use std::hint::black_box;
 use std::process::Command;
 
-use engine::generate::{n_link, Family};
+use lang::generate::{n_link, Family};
 use numeric::Tape;
 use sim::{Mechanical, Problem};
 

@@ -55,7 +55,7 @@ mod tolerance;
 use std::time::Instant;
 
 use clap::{Args, Parser, Subcommand};
-use engine::generate::Family;
+use lang::generate::Family;
 
 /// The benchmarks of the speed/accuracy issue, printed as tables.
 #[derive(Parser)]

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use engine::generate::{n_link, Family};
+use lang::generate::{n_link, Family};
 
 pub const SIZES: [usize; 9] = [1, 2, 4, 8, 12, 16, 24, 32, 50];
 

@@ -48,7 +48,7 @@ enum Command {
     /// Write the scene of a family of systems of any size to standard output.
     Generate {
         /// n-link-pendulum or n-link-pendulum-on-cart
-        #[arg(value_parser = clap::builder::PossibleValuesParser::new(engine::generate::Family::NAMES))]
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(lang::generate::Family::NAMES))]
         family: String,
         /// The number of links.
         #[arg(value_parser = clap::value_parser!(u16).range(1..=500))]
@@ -412,9 +412,8 @@ fn main() -> ExitCode {
             derive(&file, format, out, no_units, full)
         }
         Command::Generate { family, n } => {
-            let family =
-                engine::generate::Family::from_name(&family).expect("clap checked the name");
-            emit(&engine::generate::n_link(family, n as usize));
+            let family = lang::generate::Family::from_name(&family).expect("clap checked the name");
+            emit(&lang::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
         Command::Simulate { file, run, output, out, plot, animate, samples } => {

@@ -4,8 +4,7 @@
 //! `simulate` settings and runs them ([`simulate`]), runs a scene many times over a grid or
 //! random draws of its parameters on all cores ([`ensemble`]), with the options' values typed
 //! ([`input`]), with the scene's figures frame by frame for an animation ([`animate`]),
-//! measures integrators against a reference ([`mod@bench`]), generates scenes of any size
-//! ([`generate`]), runs the `linear` stage on small motions about a reference, the command
+//! measures integrators against a reference ([`mod@bench`]), runs the `linear` stage on small motions about a reference, the command
 //! line's reference resolved against the scene ([`linearize`]), decides the scene's `expect
 //! linearized:` lines ([`expect_linearized`]), and gives the generalized forces that make a
 //! given motion happen ([`inverse`]). What goes wrong comes back as an [`Error`]. Printing
@@ -21,7 +20,6 @@ pub mod derived;
 pub mod ensemble;
 mod error;
 pub mod expect_linearized;
-pub mod generate;
 pub mod input;
 pub mod inverse;
 pub mod linearize;

@@ -1,5 +1,7 @@
 //! Scene generators for families of systems: the n-link planar pendulum and the n-link
-//! pendulum on a cart, for any n. Tests use small n; benchmarks use large n.
+//! pendulum on a cart, for any n, as scene text (`lagrange generate`). Tests use small n;
+//! benchmarks use large n. The scenes' derivation is tested where derivations are
+//! (tests/derive.rs).
 
 use std::fmt::Write;
 
@@ -58,22 +60,4 @@ pub fn n_link(family: Family, n: usize) -> String {
     }
     let _ = writeln!(s, "gravity g");
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn generated_scenes_derive() {
-        for family in [Family::Pendulum, Family::PendulumOnCart] {
-            for n in 1..=3 {
-                let scene = n_link(family, n);
-                let d = crate::load(&scene).unwrap_or_else(|e| panic!("{scene}\n{e}")).derivation;
-                let dof = n + usize::from(family == Family::PendulumOnCart);
-                assert_eq!(d.coords.len(), dof);
-                assert_eq!(d.mass_matrix.len(), dof);
-            }
-        }
-    }
 }
