@@ -204,11 +204,8 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
 /// The methods as the settings they take: the adaptive ones a tolerance, the fixed-step ones
 /// a step.
 fn methods_taking(adaptive: bool) -> String {
-    let names: Vec<&str> = Method::NAMES
-        .iter()
-        .copied()
-        .filter(|n| Method::from_name(n).is_some_and(|m| m.is_adaptive() == adaptive))
-        .collect();
+    let names: Vec<&str> =
+        Method::all().filter(|m| m.is_adaptive() == adaptive).map(Method::name).collect();
     names.join(", ")
 }
 
@@ -646,7 +643,7 @@ fn integrate_scene(
                 ControlFlow::Continue(())
             }
         };
-        if method == Method::Auto {
+        if method.jacobian() == sim::Jacobian::OnSwitch {
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
             integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
         } else {

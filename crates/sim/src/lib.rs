@@ -28,18 +28,21 @@ mod hold;
 pub mod linalg;
 mod lockstep;
 mod mechanical;
+pub mod methods;
 mod radau;
 pub mod reference;
 mod run;
 mod series;
 mod spectrum;
+mod stepper;
 
 pub use constrained::Constrained;
 pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, BAUMGARTE_RATE};
-pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use methods::{Form, Jacobian, Method};
+pub use run::{integrate, Event, EventHit, Run, Segment, Settings, Trajectory};
 pub use series::{Series, SeriesError};
 pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
