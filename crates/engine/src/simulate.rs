@@ -233,7 +233,7 @@ fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
 /// The diagnostic of a `simulate` block that names a method and a `step` or `tolerance` that
 /// method does not use (a block without a method runs the default, dop853).
 pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(), Diagnostic> {
-    let method = scene_method(simulation)?.unwrap_or(Method::Dop853);
+    let method = scene_method(simulation)?.unwrap_or(Method::DEFAULT);
     let (unused, key, takes) = match (method.is_adaptive(), simulation.step, simulation.tolerance) {
         (true, Some(step), _) => (step, "step", "tolerance"),
         (false, _, Some(tolerance)) => (tolerance, "tolerance", "step"),
@@ -287,7 +287,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
     let number = |n: Option<model::Number>| n.map(|n| n.value);
     let mut until = number(scene.until).unwrap_or(10.0);
     // `resolve_with` has checked the name.
-    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
+    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::DEFAULT);
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
     let hold = options.hold.or(number(scene.hold));

@@ -134,7 +134,7 @@ pub trait Problem {
         Ok(false)
     }
     /// How the components of y enter the problem: all differential, index 1, unless the
-    /// problem is differential–algebraic (only [`Method::Radau`] integrates those).
+    /// problem is differential–algebraic (only a method of [`Form::Algebraic`] integrates those).
     fn components(&self) -> Components {
         Components::ordinary(self.dim())
     }

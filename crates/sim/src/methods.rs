@@ -207,6 +207,9 @@ const fn names() -> [&'static str; TABLE.len()] {
 impl Method {
     pub const NAMES: [&'static str; TABLE.len()] = names();
 
+    /// The method a run takes when neither the scene nor the front end names one.
+    pub const DEFAULT: Method = Method::Dop853;
+
     /// Every method, in the order of the table.
     pub fn all() -> impl Iterator<Item = Method> {
         TABLE.iter().map(|e| e.method)
@@ -304,7 +307,7 @@ impl Method {
 
     /// The methods it runs by turns, switching at each of its stepper's switches; empty for a
     /// method that runs alone.
-    pub(crate) fn sides(self) -> &'static [Method] {
+    pub fn sides(self) -> &'static [Method] {
         self.entry().sides
     }
 }
