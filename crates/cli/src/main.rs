@@ -246,16 +246,20 @@ struct RunArgs {
     /// default: the scene's `simulate { until … }`, else 10.
     #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
     until: Option<String>,
-    /// The integrator (default dop853).
-    #[arg(long, value_parser = method_parser())]
+    // The help of the method and of the two settings after it names the methods of `sim`'s
+    // table.
+    #[arg(long, value_parser = method_parser(),
+          help = format!("The integrator (default {})", sim::Method::DEFAULT.name()))]
     method: Option<sim::Method>,
-    /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
-    /// auto (default 1e-10).
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true, help = format!(
+        "Relative and absolute tolerance of the adaptive methods: {} (default 1e-10)",
+        methods_taking(true)
+    ))]
     tolerance: Option<String>,
-    /// Step of rk4, midpoint and gauss, as the scene writes it (`1e-3`, `5 ms`); default:
-    /// until/1000.
-    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true, help = format!(
+        "Step of {}, as the scene writes it (`1e-3`, `5 ms`); default: until/1000",
+        methods_taking(false)
+    ))]
     step: Option<String>,
     /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -334,6 +338,17 @@ fn method_parser() -> impl TypedValueParser<Value = sim::Method> {
     });
     PossibleValuesParser::new(values)
         .map(|name| sim::Method::from_name(&name).expect("a name of the table's"))
+}
+
+/// The adaptive methods (which take a tolerance) or the fixed-step ones (a step), as a list in
+/// words: `rk4, midpoint and gauss`.
+fn methods_taking(adaptive: bool) -> String {
+    let names: Vec<&str> =
+        sim::Method::all().filter(|m| m.is_adaptive() == adaptive).map(|m| m.name()).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => names.concat(),
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
