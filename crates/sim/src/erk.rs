@@ -12,9 +12,8 @@ use crate::{FaultKind, Problem};
 mod coefficients;
 mod lanes;
 mod tableau;
-use coefficients::{
-    DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5, DP5_A, DP5_B, DP5_E, DP5_P,
-};
+pub(crate) use coefficients::Pair;
+use coefficients::{DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5, DP5_A, DP5_B};
 pub(crate) use lanes::{Lanes, Stages};
 pub use tableau::{dop853_tableau, Dop853Tableau};
 
@@ -82,36 +81,6 @@ impl Stepper for Rk4 {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Pair {
-    Dopri5,
-    Dop853,
-}
-
-impl Pair {
-    /// The h·|λ| past which [`Adaptive::stiff`] counts a step as limited by stability: the
-    /// stability boundary on the negative real axis, rounded up a little.
-    pub fn stiffness_bound(self) -> f64 {
-        match self {
-            Pair::Dopri5 => 3.25,
-            Pair::Dop853 => 6.1,
-        }
-    }
-
-    /// The level the pair holds its local error estimate to (weighted by atol + rtol·|y|) for
-    /// a run's `tolerance`, so that a tolerance means one accuracy whichever method runs (see
-    /// docs/simulating.md): dop853's final errors come out near the tolerance as it is, while
-    /// dopri5's, whose steps are more numerous and each less accurate than its estimate says,
-    /// come out several times above it; a tenth of the tolerance brings them to dop853's
-    /// (`lagrange-bench tolerance`).
-    pub fn error_target(self, tolerance: f64) -> f64 {
-        match self {
-            Pair::Dopri5 => tolerance / 10.0,
-            Pair::Dop853 => tolerance,
-        }
-    }
-}
-
 /// An adaptive explicit pair with local extrapolation (the higher order propagates).
 pub(crate) struct Adaptive {
     pair: Pair,
@@ -151,10 +120,7 @@ impl Adaptive {
     pub fn for_tolerance(pair: Pair, dim: usize, tolerance: f64) -> Self {
         let rtol = pair.error_target(tolerance);
         let atol = rtol;
-        let stages = match pair {
-            Pair::Dopri5 => 7,
-            Pair::Dop853 => 16,
-        };
+        let stages = pair.kept_stages();
         Adaptive {
             pair,
             rtol,
@@ -188,10 +154,7 @@ impl Adaptive {
     }
 
     fn order(&self) -> f64 {
-        match self.pair {
-            Pair::Dopri5 => 4.0,
-            Pair::Dop853 => 7.0,
-        }
+        self.pair.estimate_order()
     }
 
     /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
@@ -257,18 +220,18 @@ impl Adaptive {
         self.evals += 1;
         let k = &self.k;
         let scale = |i: usize| self.atol + y[i].abs().max(self.y_new[i].abs()) * self.rtol;
-        Ok(match self.pair {
-            Pair::Dopri5 => {
+        Ok(match self.pair.error_weights() {
+            Some(weights) => {
                 let e = (0..d).map(|i| {
                     let mut acc = 0.0;
-                    for (j, ej) in DP5_E.iter().enumerate() {
+                    for (j, ej) in weights.iter().enumerate() {
                         acc += ej * k[j][i];
                     }
                     h * acc / scale(i)
                 });
                 rms(e)
             }
-            Pair::Dop853 => {
+            None => {
                 let (mut e5, mut e3) = (0.0, 0.0);
                 for i in 0..d {
                     let (mut a5, mut a3) = (0.0, 0.0);
@@ -430,13 +393,13 @@ impl Adaptive {
     fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
         let d = self.y_old.len();
         let h = self.h_last;
-        match self.pair {
-            Pair::Dopri5 => (0..4)
+        match self.pair.dense_weights() {
+            Some(weights) => (0..weights[0].len())
                 .map(|power| {
                     (0..d)
                         .map(|i| {
                             let mut acc = 0.0;
-                            for (j, row) in DP5_P.iter().enumerate() {
+                            for (j, row) in weights.iter().enumerate() {
                                 acc += row[power] * self.k[j][i];
                             }
                             h * acc
@@ -444,7 +407,7 @@ impl Adaptive {
                         .collect()
                 })
                 .collect(),
-            Pair::Dop853 => {
+            None => {
                 for s in 13..16 {
                     let a = DOP853_A[s];
                     for i in 0..d {
@@ -504,8 +467,8 @@ impl Dense for Adaptive {
         let coef = self.dense.as_ref().expect("set");
         let x = (t - self.t_old) / self.h_last;
         let d = out.len();
-        match self.pair {
-            Pair::Dopri5 => {
+        match self.pair.dense_weights() {
+            Some(_) => {
                 for i in 0..d {
                     let mut acc = 0.0;
                     let mut xp = 1.0;
@@ -516,7 +479,7 @@ impl Dense for Adaptive {
                     out[i] = self.y_old[i] + acc;
                 }
             }
-            Pair::Dop853 => {
+            None => {
                 for i in 0..d {
                     let mut acc = 0.0;
                     for (r, row) in coef.iter().rev().enumerate() {
