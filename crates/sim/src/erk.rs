@@ -1,7 +1,8 @@
-//! Explicit Runge–Kutta methods: fixed-step RK4, and the adaptive Dormand–Prince pairs 5(4)
-//! and 8(5,3) (DOP853) with error control and dense output. Coefficients are those of Hairer,
-//! Nørsett and Wanner, "Solving Ordinary Differential Equations I", and Shampine (1986) for the
-//! quartic dense output of the 5(4) pair.
+//! Explicit Runge–Kutta methods: fixed-step RK4, and the adaptive pairs (Bogacki–Shampine 3(2),
+//! Dormand–Prince 5(4) and 8(5,3), DOP853) with error control and dense output, whose
+//! coefficients and step-control facts are in `coefficients`. The Dormand–Prince coefficients
+//! are those of Hairer, Nørsett and Wanner, "Solving Ordinary Differential Equations I", and
+//! Shampine (1986) for the quartic dense output of the 5(4) pair.
 
 use nalgebra::Complex;
 use numeric::elementary::pow;
@@ -13,7 +14,7 @@ mod coefficients;
 mod lanes;
 mod tableau;
 pub(crate) use coefficients::Pair;
-use coefficients::{DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5, DP5_A, DP5_B};
+use coefficients::{DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5};
 pub(crate) use lanes::{Lanes, Stages};
 pub use tableau::{dop853_tableau, Dop853Tableau};
 
@@ -540,16 +541,6 @@ pub(crate) type Tableau = (&'static [&'static [f64]], &'static [f64]);
 pub(crate) const RK4_TABLEAU: Tableau =
     (&[&[], &[0.5], &[0.0, 0.5], &[0.0, 0.0, 1.0]], &[1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0]);
 
-impl Pair {
-    /// The tableau of the pair's propagating (higher-order) method.
-    pub(crate) fn tableau(self) -> Tableau {
-        match self {
-            Pair::Dopri5 => (&DP5_A, &DP5_B),
-            Pair::Dop853 => (&DOP853_A[..12], DOP853_A[12]),
-        }
-    }
-}
-
 /// The stability function R(z) of an explicit tableau: one step from y₀ = 1 of y' = λ·y with
 /// z = h·λ, whose stages are g = z·(1 + A·g).
 fn stability_function(a: &[&[f64]], b: &[f64], z: Complex<f64>) -> Complex<f64> {
@@ -600,6 +591,12 @@ mod tests {
             "{}",
             radius(Pair::Dopri5.tableau())
         );
+        // Bogacki–Shampine's third-order polynomial, 1 + z + z²/2 + z³/6, near −2.5127.
+        assert!(
+            (radius(Pair::Bs3.tableau()) - 2.512_7).abs() < 1e-3,
+            "{}",
+            radius(Pair::Bs3.tableau())
+        );
         // DOP853's reaches a little past the 6.1 its stiffness test counts from.
         assert!(
             (radius(Pair::Dop853.tableau()) - 6.394).abs() < 1e-3,
@@ -610,13 +607,16 @@ mod tests {
 
     #[test]
     fn the_stability_functions_agree_with_the_exponential_to_their_order() {
-        // At z = −0.1, R(z) − e^z is of the size z^(p+1)/(p+1)!: 8e-8 for order 4, 1e-9 for
-        // order 5, 3e-15 for order 8.
+        // At z = −0.1, R(z) − e^z is of the size z^(p+1)/(p+1)!: 4e-6 for order 3, 8e-8 for
+        // order 4, 1e-9 for order 5, 3e-15 for order 8.
         let z = Complex::new(-0.1, 0.0);
         let exact = numeric::elementary::pow(std::f64::consts::E, -0.1);
-        for ((a, b), bound) in
-            [(RK4_TABLEAU, 1e-7), (Pair::Dopri5.tableau(), 1e-8), (Pair::Dop853.tableau(), 1e-14)]
-        {
+        for ((a, b), bound) in [
+            (Pair::Bs3.tableau(), 1e-5),
+            (RK4_TABLEAU, 1e-7),
+            (Pair::Dopri5.tableau(), 1e-8),
+            (Pair::Dop853.tableau(), 1e-14),
+        ] {
             let error = (stability_function(a, b, z) - exact).norm();
             assert!(error < bound, "{error}");
         }

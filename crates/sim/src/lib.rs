@@ -5,8 +5,9 @@
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
 //! keep multipliers, or those constraints as they are, the differential–algebraic system of
 //! index 3) and the exact Jacobians of those problems from the lowered partials of their
-//! equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
-//! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
+//! equations, the integrators and their table (`methods`: each one's names, the form of problem
+//! it integrates, its capabilities and its stepper; fixed-step RK4, the adaptive explicit pairs
+//! with dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
 //! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems, and
 //! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,

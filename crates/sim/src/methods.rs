@@ -17,6 +17,7 @@ use crate::{Components, Problem};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     Rk4,
+    Bs3,
     Dopri5,
     Dop853,
     Midpoint,
@@ -90,7 +91,7 @@ pub struct Entry {
 }
 
 /// Every method, in the order of the enum.
-pub static TABLE: [Entry; 7] = [
+pub static TABLE: [Entry; 8] = [
     Entry {
         method: Method::Rk4,
         name: "rk4",
@@ -104,6 +105,20 @@ pub static TABLE: [Entry; 7] = [
         explicit: Some(Explicit::Fixed(RK4_TABLEAU)),
         sides: &[],
         stepper: |s, p| Box::new(Rk4::new(p.dim(), s.step)),
+    },
+    Entry {
+        method: Method::Bs3,
+        name: "bs3",
+        aliases: &["rk23"],
+        summary: "Bogacki–Shampine 3(2), adaptive",
+        form: Form::Physical,
+        adaptive: true,
+        symplectic: false,
+        jacobian: Jacobian::Unused,
+        dense_output: true,
+        explicit: Some(Explicit::Pair(Pair::Bs3)),
+        sides: &[],
+        stepper: |s, p| Box::new(Adaptive::for_tolerance(Pair::Bs3, p.dim(), s.tolerance)),
     },
     Entry {
         method: Method::Dopri5,
