@@ -591,6 +591,59 @@ fn c_page() {
     assert_honest(PAGES[12]);
 }
 
+/// Which methods a list on a page names, in the table's order.
+type Listed = fn(sim::Method) -> bool;
+
+/// The lists of methods the pages (and the Python package's docstrings) write out, each
+/// against `sim`'s method table: the file, the words the list follows, the words that end it,
+/// and which methods it names.
+const METHOD_LISTS: [(&str, &str, &str, Listed); 8] = [
+    ("docs/commands.md", "[--method ", "]", |_| true),
+    ("docs/commands.md", "the adaptive methods (", ")", sim::Method::is_adaptive),
+    ("docs/commands.md", "the fixed-step ones (", ")", |m| !m.is_adaptive()),
+    ("docs/simulating.md", "The methods: ", "The implicit methods", |_| true),
+    (
+        "docs/simulating.md",
+        "with a multiplier are taken by ",
+        ":",
+        sim::Method::handles_multipliers,
+    ),
+    ("docs/simulating.md", "whichever adaptive method takes it: ", ".", sim::Method::is_adaptive),
+    ("docs/ensembles.md", "with the explicit methods (", ")", sim::Method::is_explicit),
+    ("crates/python/python/lagrange/__init__.py", "``method``: one of ", ";", |_| true),
+];
+
+/// The methods `text` names between the first `from` and the next `to` after it, each once,
+/// where it is first named (an alias counts as its method); whitespace runs are one space.
+fn methods_named(text: &str, from: &str, to: &str) -> Result<Vec<sim::Method>, String> {
+    let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    let start = text.find(from).ok_or(format!("no `{from}`"))? + from.len();
+    let end = text[start..].find(to).ok_or(format!("no `{to}` after `{from}`"))? + start;
+    let mut named = Vec::new();
+    for word in text[start..end].split(|c: char| !c.is_ascii_alphanumeric()) {
+        match sim::Method::from_name(word) {
+            Some(m) if !named.contains(&m) => named.push(m),
+            _ => {}
+        }
+    }
+    Ok(named)
+}
+
+#[test]
+fn the_lists_of_methods_are_the_tables() {
+    for (file, from, to, listed) in METHOD_LISTS {
+        let text = read(file).expect(file);
+        let named = methods_named(&text, from, to).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let names =
+            |methods: &[sim::Method]| -> Vec<&str> { methods.iter().map(|m| m.name()).collect() };
+        let table: Vec<sim::Method> = sim::Method::all().filter(|m| listed(*m)).collect();
+        assert_eq!(names(&named), names(&table), "{file}, the list after `{from}`");
+    }
+    // The check sees a list that lost a method.
+    let short = methods_named("[--method rk4|rk45|dop853]", "[--method ", "]");
+    assert_eq!(short, Ok(vec![sim::Method::Rk4, sim::Method::Dopri5, sim::Method::Dop853]));
+}
+
 /// The tests' own helpers: elided output, shell words, and that a wrong page is caught.
 #[test]
 fn the_checks_catch_what_they_should() {

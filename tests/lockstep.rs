@@ -62,7 +62,7 @@ fn every_example_runs_the_same_bits_in_lockstep_as_alone() {
         let events: Vec<Event> = (0..sim::Problem::observations(&problem))
             .map(|column| Event { column, stop: false })
             .collect();
-        for (method, samples) in [(Method::Dop853, 0), (Method::Dopri5, 7)] {
+        for (method, samples) in [(Method::Dop853, 0), (Method::Dopri5, 7), (Method::Bs3, 5)] {
             let settings = Settings {
                 method,
                 start: 0.0,

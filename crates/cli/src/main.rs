@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use engine::input::{Assignment, SweepRange};
 
@@ -245,16 +246,20 @@ struct RunArgs {
     /// default: the scene's `simulate { until … }`, else 10.
     #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
     until: Option<String>,
-    /// The integrator (default dop853).
-    #[arg(long)]
-    method: Option<MethodArg>,
-    /// Relative and absolute tolerance of the adaptive methods: dopri5, dop853, radau and
-    /// auto (default 1e-10).
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    // The help of the method and of the two settings after it names the methods of `sim`'s
+    // table.
+    #[arg(long, value_parser = method_parser(),
+          help = format!("The integrator (default {})", sim::Method::DEFAULT.name()))]
+    method: Option<sim::Method>,
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true, help = format!(
+        "Relative and absolute tolerance of the adaptive methods: {} (default 1e-10)",
+        methods_taking(true)
+    ))]
     tolerance: Option<String>,
-    /// Step of rk4, midpoint and gauss, as the scene writes it (`1e-3`, `5 ms`); default:
-    /// until/1000.
-    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true, help = format!(
+        "Step of {}, as the scene writes it (`1e-3`, `5 ms`); default: until/1000",
+        methods_taking(false)
+    ))]
     step: Option<String>,
     /// Override a parameter or an initial value: `--set g=1.62`, `--set theta=pi/3`.
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -297,7 +302,7 @@ impl RunArgs {
         Some(engine::simulate::Options {
             until: time_option(engine::Setting::Until, self.until.as_deref())?,
             // The engine's options are shared with Python, which names the method.
-            method: self.method.map(|m| sim::Method::from(m).name().to_string()),
+            method: self.method.map(|m| m.name().to_string()),
             tolerance: ratio_option(engine::Setting::Tolerance, self.tolerance.as_deref())?,
             step: time_option(engine::Setting::Step, self.step.as_deref())?,
             set: self.set,
@@ -324,40 +329,25 @@ enum LinearizeFormat {
     Json,
 }
 
-/// `--method`: the integrators of `sim::Method`, checked by clap (a typo is told the possible
-/// values and the nearest one), with the same other names the scene's `method` accepts.
-#[derive(Clone, Copy, ValueEnum)]
-enum MethodArg {
-    /// Classic Runge–Kutta, fixed step.
-    Rk4,
-    /// Dormand–Prince 5(4), adaptive.
-    #[value(alias = "rk45")]
-    Dopri5,
-    /// Dormand–Prince 8(5,3), adaptive.
-    Dop853,
-    /// Implicit midpoint rule, fixed step, symplectic.
-    Midpoint,
-    /// Two-stage Gauss–Legendre (order 4), fixed step, symplectic.
-    #[value(alias = "gauss4")]
-    Gauss,
-    /// Radau IIA (order 5), adaptive and implicit: stiff scenes, and kept constraints as they are.
-    #[value(alias = "radau5")]
-    Radau,
-    /// DOP853 while the scene is not stiff, radau while it is, switching as it changes.
-    Auto,
+/// `--method`: the integrators of `sim`'s method table, each with its line of help, checked by
+/// clap (a typo is told the possible values and the nearest one), with the same other names the
+/// scene's `method` accepts.
+fn method_parser() -> impl TypedValueParser<Value = sim::Method> {
+    let values = sim::methods::TABLE.iter().map(|entry| {
+        PossibleValue::new(entry.name).help(entry.summary).aliases(entry.aliases.iter().copied())
+    });
+    PossibleValuesParser::new(values)
+        .map(|name| sim::Method::from_name(&name).expect("a name of the table's"))
 }
 
-impl From<MethodArg> for sim::Method {
-    fn from(method: MethodArg) -> Self {
-        match method {
-            MethodArg::Rk4 => sim::Method::Rk4,
-            MethodArg::Dopri5 => sim::Method::Dopri5,
-            MethodArg::Dop853 => sim::Method::Dop853,
-            MethodArg::Midpoint => sim::Method::Midpoint,
-            MethodArg::Gauss => sim::Method::Gauss,
-            MethodArg::Radau => sim::Method::Radau,
-            MethodArg::Auto => sim::Method::Auto,
-        }
+/// The adaptive methods (which take a tolerance) or the fixed-step ones (a step), as a list in
+/// words: `rk4, midpoint and gauss`.
+fn methods_taking(adaptive: bool) -> String {
+    let names: Vec<&str> =
+        sim::Method::all().filter(|m| m.is_adaptive() == adaptive).map(|m| m.name()).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => names.concat(),
     }
 }
 

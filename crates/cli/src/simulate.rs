@@ -113,7 +113,7 @@ pub fn summary(outcome: &Outcome) -> String {
         r.evaluations,
         outcome.wall_seconds
     );
-    if outcome.method == sim::Method::Auto {
+    if !outcome.method.sides().is_empty() {
         s.push_str(&format!("{}\n", segments(&r.segments)));
     }
     let (drift, relative) = outcome.energy_drift();

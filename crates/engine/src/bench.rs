@@ -204,7 +204,7 @@ pub fn bench(
     let multipliers = !reference.constraint_columns.is_empty();
     let mut methods = Vec::new();
     let mut inapplicable = Vec::new();
-    for method in Method::NAMES.iter().filter_map(|n| Method::from_name(n)) {
+    for method in Method::all() {
         if multipliers && !method.handles_multipliers() {
             inapplicable.push(Inapplicable { method, reason: NO_MULTIPLIERS });
         } else if reference.lagrangian_driven && method.is_symplectic() {

@@ -204,11 +204,8 @@ pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Meth
 /// The methods as the settings they take: the adaptive ones a tolerance, the fixed-step ones
 /// a step.
 fn methods_taking(adaptive: bool) -> String {
-    let names: Vec<&str> = Method::NAMES
-        .iter()
-        .copied()
-        .filter(|n| Method::from_name(n).is_some_and(|m| m.is_adaptive() == adaptive))
-        .collect();
+    let names: Vec<&str> =
+        Method::all().filter(|m| m.is_adaptive() == adaptive).map(Method::name).collect();
     names.join(", ")
 }
 
@@ -236,7 +233,7 @@ fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
 /// The diagnostic of a `simulate` block that names a method and a `step` or `tolerance` that
 /// method does not use (a block without a method runs the default, dop853).
 pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(), Diagnostic> {
-    let method = scene_method(simulation)?.unwrap_or(Method::Dop853);
+    let method = scene_method(simulation)?.unwrap_or(Method::DEFAULT);
     let (unused, key, takes) = match (method.is_adaptive(), simulation.step, simulation.tolerance) {
         (true, Some(step), _) => (step, "step", "tolerance"),
         (false, _, Some(tolerance)) => (tolerance, "tolerance", "step"),
@@ -329,7 +326,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
     let number = |n: Option<model::Number>| n.map(|n| n.value);
     let mut until = number(scene.until).unwrap_or(10.0);
     // `resolve_with` has checked the name.
-    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::Dop853);
+    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::DEFAULT);
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
     let hold = options.hold.or(number(scene.hold));
@@ -697,7 +694,7 @@ fn integrate_scene(
                 ControlFlow::Continue(())
             }
         };
-        if method == Method::Auto {
+        if method.jacobian() == sim::Jacobian::OnSwitch {
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
             integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
         } else {

@@ -14,12 +14,15 @@
 //! Each side keeps its own dense output; the one that took the last step interpolates inside
 //! it, so events, stop conditions and samples see one continuous solution across a switch.
 
-use crate::erk::{Adaptive, Dense, Pair, Stepper};
+use crate::erk::{Adaptive, Pair};
 use crate::radau::Radau;
-use crate::{spectrum, Components, FaultKind, Problem};
+use crate::stepper::{Dense, Stepper};
+use crate::{spectrum, Components, FaultKind, Method, Problem};
 
 /// The explicit side.
 pub(crate) const EXPLICIT_PAIR: Pair = Pair::Dop853;
+/// The methods of the two sides, explicit first, as a run's segments name them.
+pub(crate) const SIDES: [Method; 2] = [Method::Dop853, Method::Radau];
 /// Steps limited by stability that make the explicit side stiff (Hairer's DOP853 uses 15).
 const STIFF_STEPS: usize = 15;
 /// Steps in a row not limited by stability that clear that count.

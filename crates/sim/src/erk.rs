@@ -1,128 +1,22 @@
-//! Explicit Runge–Kutta methods: fixed-step RK4, and the adaptive Dormand–Prince pairs 5(4)
-//! and 8(5,3) (DOP853) with error control and dense output. Coefficients are those of Hairer,
-//! Nørsett and Wanner, "Solving Ordinary Differential Equations I", and Shampine (1986) for the
-//! quartic dense output of the 5(4) pair.
+//! Explicit Runge–Kutta methods: fixed-step RK4, and the adaptive pairs (Bogacki–Shampine 3(2),
+//! Dormand–Prince 5(4) and 8(5,3), DOP853) with error control and dense output, whose
+//! coefficients and step-control facts are in `coefficients`. The Dormand–Prince coefficients
+//! are those of Hairer, Nørsett and Wanner, "Solving Ordinary Differential Equations I", and
+//! Shampine (1986) for the quartic dense output of the 5(4) pair.
 
 use nalgebra::Complex;
 use numeric::elementary::pow;
 
+use crate::stepper::{fixed_step, rates_overflow, rms, Dense, Hermite, Stepper};
 use crate::{FaultKind, Problem};
 
 mod coefficients;
 mod lanes;
 mod tableau;
-use coefficients::{
-    DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5, DP5_A, DP5_B, DP5_E, DP5_P,
-};
+pub(crate) use coefficients::Pair;
+use coefficients::{DOP853_A, DOP853_BHH, DOP853_C, DOP853_D, DOP853_E5};
 pub(crate) use lanes::{Lanes, Stages};
 pub use tableau::{dop853_tableau, Dop853Tableau};
-
-/// The dense output of the last accepted step: what a run asks of its method between steps
-/// (to locate events and record samples), apart from stepping.
-pub(crate) trait Dense {
-    /// The state at time `t` inside the last accepted step.
-    fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
-    /// The right-hand side jumped where the last step ended (a held input was sampled): what
-    /// the method carries from step to step (a derivative, a dense output, predicted stages)
-    /// belongs to the old one and is dropped; the step size is kept.
-    fn after_jump(&mut self) {}
-}
-
-/// Advances one accepted step at a time and interpolates inside the last one.
-pub(crate) trait Stepper: Dense {
-    /// Advances from `t` (with `y` its state, updated in place) by one accepted step that does
-    /// not pass `t_end`; returns the new time.
-    fn advance(
-        &mut self,
-        p: &mut dyn Problem,
-        t: f64,
-        y: &mut [f64],
-        t_end: f64,
-    ) -> Result<f64, FaultKind>;
-    fn evaluations(&self) -> usize;
-    /// Steps rejected by the error control (adaptive methods only).
-    fn rejected(&self) -> usize {
-        0
-    }
-    /// Accepted steps whose size was set by stability rather than accuracy (adaptive methods
-    /// only): see [`Adaptive::stiff`].
-    fn stiff_steps(&self) -> usize {
-        0
-    }
-    /// Jacobians evaluated (adaptive implicit methods only).
-    fn jacobians(&self) -> usize {
-        0
-    }
-    /// LU factorizations of the iteration matrices (adaptive implicit methods only).
-    fn factorizations(&self) -> usize {
-        0
-    }
-    /// The times at which the method switched sides (`auto` only).
-    fn switches(&self) -> &[f64] {
-        &[]
-    }
-}
-
-/// The cubic Hermite interpolant from the end values and derivatives of a step: third order,
-/// enough to locate events of fixed-step methods. Its buffers are reused from step to step.
-#[derive(Default)]
-pub(crate) struct Hermite {
-    pub t0: f64,
-    pub t1: f64,
-    pub y0: Vec<f64>,
-    pub y1: Vec<f64>,
-    pub f0: Vec<f64>,
-    pub f1: Vec<f64>,
-    /// Whether `f1` holds the derivative at the end of the current step.
-    f1_known: bool,
-}
-
-impl Hermite {
-    /// Records the start of a step: the state and its derivative there.
-    pub fn begin(&mut self, t: f64, y: &[f64], f: &[f64]) {
-        self.t0 = t;
-        refill(&mut self.y0, y);
-        refill(&mut self.f0, f);
-    }
-
-    /// Records the end of a step of size `h` from `t` and returns its time, landing exactly on
-    /// `t_end` when within rounding of it; the end derivative is computed only if needed.
-    pub fn end(&mut self, t: f64, h: f64, t_end: f64, y: &[f64]) -> f64 {
-        let t1 = if t_end - (t + h) <= 1e-12 * h.abs() { t_end } else { t + h };
-        self.t1 = t1;
-        refill(&mut self.y1, y);
-        self.f1_known = false;
-        t1
-    }
-
-    /// Evaluates, computing the end derivative on demand (counted in `evals`).
-    pub fn eval(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64], evals: &mut usize) {
-        let d = self.y0.len();
-        if !self.f1_known {
-            self.f1.resize(d, 0.0);
-            // A fault here already showed up when the step was taken.
-            let _ = p.rhs(self.t1, &self.y1, &mut self.f1);
-            *evals += 1;
-            self.f1_known = true;
-        }
-        let h = self.t1 - self.t0;
-        let s = (t - self.t0) / h;
-        let (f0, f1) = (&self.f0, &self.f1);
-        let h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s);
-        let h10 = s * (1.0 - s) * (1.0 - s);
-        let h01 = s * s * (3.0 - 2.0 * s);
-        let h11 = s * s * (s - 1.0);
-        for i in 0..d {
-            out[i] = h00 * self.y0[i] + h10 * h * f0[i] + h01 * self.y1[i] + h11 * h * f1[i];
-        }
-    }
-}
-
-/// Makes `buffer` a copy of `values`, in the memory it already has once it is large enough.
-fn refill(buffer: &mut Vec<f64>, values: &[f64]) {
-    buffer.clear();
-    buffer.extend_from_slice(values);
-}
 
 /// The classic fourth-order Runge–Kutta method with a fixed step.
 pub(crate) struct Rk4 {
@@ -188,46 +82,6 @@ impl Stepper for Rk4 {
     }
 }
 
-/// A fixed step that lands exactly on `t_end` instead of leaving a sliver before it.
-pub(crate) fn fixed_step(step: f64, t: f64, t_end: f64) -> f64 {
-    let left = t_end - t;
-    if left <= step * (1.0 + 1e-9) {
-        left
-    } else {
-        step
-    }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Pair {
-    Dopri5,
-    Dop853,
-}
-
-impl Pair {
-    /// The h·|λ| past which [`Adaptive::stiff`] counts a step as limited by stability: the
-    /// stability boundary on the negative real axis, rounded up a little.
-    pub fn stiffness_bound(self) -> f64 {
-        match self {
-            Pair::Dopri5 => 3.25,
-            Pair::Dop853 => 6.1,
-        }
-    }
-
-    /// The level the pair holds its local error estimate to (weighted by atol + rtol·|y|) for
-    /// a run's `tolerance`, so that a tolerance means one accuracy whichever method runs (see
-    /// docs/simulating.md): dop853's final errors come out near the tolerance as it is, while
-    /// dopri5's, whose steps are more numerous and each less accurate than its estimate says,
-    /// come out several times above it; a tenth of the tolerance brings them to dop853's
-    /// (`lagrange-bench tolerance`).
-    pub fn error_target(self, tolerance: f64) -> f64 {
-        match self {
-            Pair::Dopri5 => tolerance / 10.0,
-            Pair::Dop853 => tolerance,
-        }
-    }
-}
-
 /// An adaptive explicit pair with local extrapolation (the higher order propagates).
 pub(crate) struct Adaptive {
     pair: Pair,
@@ -267,10 +121,7 @@ impl Adaptive {
     pub fn for_tolerance(pair: Pair, dim: usize, tolerance: f64) -> Self {
         let rtol = pair.error_target(tolerance);
         let atol = rtol;
-        let stages = match pair {
-            Pair::Dopri5 => 7,
-            Pair::Dop853 => 16,
-        };
+        let stages = pair.kept_stages();
         Adaptive {
             pair,
             rtol,
@@ -304,10 +155,7 @@ impl Adaptive {
     }
 
     fn order(&self) -> f64 {
-        match self.pair {
-            Pair::Dopri5 => 4.0,
-            Pair::Dop853 => 7.0,
-        }
+        self.pair.estimate_order()
     }
 
     /// Hairer's starting step: from the sizes of y, F and a trial Euler step.
@@ -373,18 +221,18 @@ impl Adaptive {
         self.evals += 1;
         let k = &self.k;
         let scale = |i: usize| self.atol + y[i].abs().max(self.y_new[i].abs()) * self.rtol;
-        Ok(match self.pair {
-            Pair::Dopri5 => {
+        Ok(match self.pair.error_weights() {
+            Some(weights) => {
                 let e = (0..d).map(|i| {
                     let mut acc = 0.0;
-                    for (j, ej) in DP5_E.iter().enumerate() {
+                    for (j, ej) in weights.iter().enumerate() {
                         acc += ej * k[j][i];
                     }
                     h * acc / scale(i)
                 });
                 rms(e)
             }
-            Pair::Dop853 => {
+            None => {
                 let (mut e5, mut e3) = (0.0, 0.0);
                 for i in 0..d {
                     let (mut a5, mut a3) = (0.0, 0.0);
@@ -546,13 +394,13 @@ impl Adaptive {
     fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
         let d = self.y_old.len();
         let h = self.h_last;
-        match self.pair {
-            Pair::Dopri5 => (0..4)
+        match self.pair.dense_weights() {
+            Some(weights) => (0..weights[0].len())
                 .map(|power| {
                     (0..d)
                         .map(|i| {
                             let mut acc = 0.0;
-                            for (j, row) in DP5_P.iter().enumerate() {
+                            for (j, row) in weights.iter().enumerate() {
                                 acc += row[power] * self.k[j][i];
                             }
                             h * acc
@@ -560,7 +408,7 @@ impl Adaptive {
                         .collect()
                 })
                 .collect(),
-            Pair::Dop853 => {
+            None => {
                 for s in 13..16 {
                     let a = DOP853_A[s];
                     for i in 0..d {
@@ -612,29 +460,6 @@ fn min_step(t: f64) -> f64 {
     10.0 * (t.abs() * f64::EPSILON).max(f64::MIN_POSITIVE)
 }
 
-/// The fault of rates `f` whose norm weighted by `scale` overflows: the component that
-/// weighs the most. Every step's error is measured in that norm, so it would overflow too, and
-/// the step shrink to nothing: the run stops here and says why.
-pub(crate) fn rates_overflow(f: &[f64], scale: &[f64]) -> FaultKind {
-    let weighed = |i: usize| f[i].abs() / scale[i];
-    let component = (0..f.len()).max_by(|&a, &b| weighed(a).total_cmp(&weighed(b))).unwrap_or(0);
-    FaultKind::RatesOverflow { component, rate: f.get(component).copied().unwrap_or(f64::NAN) }
-}
-
-/// The root mean square of the values.
-pub(crate) fn rms(v: impl Iterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for x in v {
-        s += x * x;
-        n += 1;
-    }
-    if n == 0 {
-        0.0
-    } else {
-        (s / n as f64).sqrt()
-    }
-}
-
 impl Dense for Adaptive {
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
         if self.dense.is_none() {
@@ -643,8 +468,8 @@ impl Dense for Adaptive {
         let coef = self.dense.as_ref().expect("set");
         let x = (t - self.t_old) / self.h_last;
         let d = out.len();
-        match self.pair {
-            Pair::Dopri5 => {
+        match self.pair.dense_weights() {
+            Some(_) => {
                 for i in 0..d {
                     let mut acc = 0.0;
                     let mut xp = 1.0;
@@ -655,7 +480,7 @@ impl Dense for Adaptive {
                     out[i] = self.y_old[i] + acc;
                 }
             }
-            Pair::Dop853 => {
+            None => {
                 for i in 0..d {
                     let mut acc = 0.0;
                     for (r, row) in coef.iter().rev().enumerate() {
@@ -709,19 +534,12 @@ impl Stepper for Adaptive {
     }
 }
 
-/// The tableau (A's rows, the weights b) of classic RK4, for its stability region.
-const RK4_A: [&[f64]; 4] = [&[], &[0.5], &[0.0, 0.5], &[0.0, 0.0, 1.0]];
-const RK4_B: [f64; 4] = [1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0];
+/// An explicit tableau as its stability region is read from: A's rows and the weights b.
+pub(crate) type Tableau = (&'static [&'static [f64]], &'static [f64]);
 
-/// The tableau of an explicit method, for its stability region: RK4's for `None`, else the
-/// pair's propagating (higher-order) method.
-pub(crate) fn tableau(pair: Option<Pair>) -> (&'static [&'static [f64]], &'static [f64]) {
-    match pair {
-        None => (&RK4_A, &RK4_B),
-        Some(Pair::Dopri5) => (&DP5_A, &DP5_B),
-        Some(Pair::Dop853) => (&DOP853_A[..12], DOP853_A[12]),
-    }
-}
+/// Classic RK4's tableau.
+pub(crate) const RK4_TABLEAU: Tableau =
+    (&[&[], &[0.5], &[0.0, 0.5], &[0.0, 0.0, 1.0]], &[1.0 / 6.0, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 6.0]);
 
 /// The stability function R(z) of an explicit tableau: one step from y₀ = 1 of y' = λ·y with
 /// z = h·λ, whose stages are g = z·(1 + A·g).
@@ -765,27 +583,40 @@ mod tests {
 
     #[test]
     fn the_stability_intervals_on_the_negative_real_axis() {
-        let radius = |pair| stability_radius(tableau(pair), Complex::new(-1.0, 0.0));
+        let radius = |tableau| stability_radius(tableau, Complex::new(-1.0, 0.0));
         // RK4: the real root of 1 + z + z²/2 + z³/6 + z⁴/24 = 1, near −2.7853.
-        assert!((radius(None) - 2.785_3).abs() < 1e-3, "{}", radius(None));
-        assert!((radius(Some(Pair::Dopri5)) - 3.31).abs() < 0.01, "{}", radius(Some(Pair::Dopri5)));
+        assert!((radius(RK4_TABLEAU) - 2.785_3).abs() < 1e-3, "{}", radius(RK4_TABLEAU));
+        assert!(
+            (radius(Pair::Dopri5.tableau()) - 3.31).abs() < 0.01,
+            "{}",
+            radius(Pair::Dopri5.tableau())
+        );
+        // Bogacki–Shampine's third-order polynomial, 1 + z + z²/2 + z³/6, near −2.5127.
+        assert!(
+            (radius(Pair::Bs3.tableau()) - 2.512_7).abs() < 1e-3,
+            "{}",
+            radius(Pair::Bs3.tableau())
+        );
         // DOP853's reaches a little past the 6.1 its stiffness test counts from.
         assert!(
-            (radius(Some(Pair::Dop853)) - 6.394).abs() < 1e-3,
+            (radius(Pair::Dop853.tableau()) - 6.394).abs() < 1e-3,
             "{}",
-            radius(Some(Pair::Dop853))
+            radius(Pair::Dop853.tableau())
         );
     }
 
     #[test]
     fn the_stability_functions_agree_with_the_exponential_to_their_order() {
-        // At z = −0.1, R(z) − e^z is of the size z^(p+1)/(p+1)!: 8e-8 for order 4, 1e-9 for
-        // order 5, 3e-15 for order 8.
+        // At z = −0.1, R(z) − e^z is of the size z^(p+1)/(p+1)!: 4e-6 for order 3, 8e-8 for
+        // order 4, 1e-9 for order 5, 3e-15 for order 8.
         let z = Complex::new(-0.1, 0.0);
         let exact = numeric::elementary::pow(std::f64::consts::E, -0.1);
-        for (pair, bound) in [(None, 1e-7), (Some(Pair::Dopri5), 1e-8), (Some(Pair::Dop853), 1e-14)]
-        {
-            let (a, b) = tableau(pair);
+        for ((a, b), bound) in [
+            (Pair::Bs3.tableau(), 1e-5),
+            (RK4_TABLEAU, 1e-7),
+            (Pair::Dopri5.tableau(), 1e-8),
+            (Pair::Dop853.tableau(), 1e-14),
+        ] {
             let error = (stability_function(a, b, z) - exact).norm();
             assert!(error < bound, "{error}");
         }
@@ -793,7 +624,7 @@ mod tests {
 
     #[test]
     fn rk4_is_stable_on_the_imaginary_axis_up_to_twice_root_two() {
-        let radius = stability_radius(tableau(None), Complex::new(0.0, 1.0));
+        let radius = stability_radius(RK4_TABLEAU, Complex::new(0.0, 1.0));
         assert!((radius - 2.0 * std::f64::consts::SQRT_2).abs() < 1e-6, "{radius}");
     }
 }

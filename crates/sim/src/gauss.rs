@@ -10,7 +10,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::erk::{fixed_step, Dense, Hermite, Stepper};
+use crate::stepper::{fixed_step, Dense, Hermite, Stepper};
 use crate::{linalg, FaultKind, Problem};
 
 const SQRT3_6: f64 = 0.288_675_134_594_812_9; // √3/6

@@ -5,8 +5,9 @@
 //! pivoting otherwise, the augmented system with Baumgarte stabilisation when constraints
 //! keep multipliers, or those constraints as they are, the differential–algebraic system of
 //! index 3) and the exact Jacobians of those problems from the lowered partials of their
-//! equations, the integrators (fixed-step RK4, adaptive Dormand–Prince 5(4) and DOP853 with
-//! dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
+//! equations, the integrators and their table (`methods`: each one's names, the form of problem
+//! it integrates, its capabilities and its stepper; fixed-step RK4, the adaptive explicit pairs
+//! with dense output, implicit Gauss–Legendre collocation that is symplectic in canonical
 //! variables, adaptive implicit Radau IIA for stiff and differential–algebraic systems, and
 //! `auto`, which switches between DOP853 and Radau IIA as the problem turns stiff and back),
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
@@ -28,17 +29,20 @@ mod hold;
 pub mod linalg;
 mod lockstep;
 mod mechanical;
+pub mod methods;
 mod radau;
 mod run;
 mod series;
 mod spectrum;
+mod stepper;
 
 pub use constrained::Constrained;
 pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, BAUMGARTE_RATE};
-pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use methods::{Form, Jacobian, Method};
+pub use run::{integrate, Event, EventHit, Run, Segment, Settings, Trajectory};
 pub use series::{Series, SeriesError};
 pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
@@ -130,7 +134,7 @@ pub trait Problem {
         Ok(false)
     }
     /// How the components of y enter the problem: all differential, index 1, unless the
-    /// problem is differential–algebraic (only [`Method::Radau`] integrates those).
+    /// problem is differential–algebraic (only a method of [`Form::Algebraic`] integrates those).
     fn components(&self) -> Components {
         Components::ordinary(self.dim())
     }

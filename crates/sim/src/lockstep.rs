@@ -17,10 +17,11 @@ use std::ops::ControlFlow;
 
 use numeric::{BatchTape, LANES};
 
-use crate::erk::{Adaptive, Dense, Lanes, Pair, Stages};
+use crate::erk::{Adaptive, Lanes, Stages};
 use crate::mechanical::{finite_lanes, solve_lanes, Layout};
 use crate::run::{segments, Counts, Course};
-use crate::{Event, FaultKind, Mechanical, Method, Problem, Run, Settings};
+use crate::stepper::Dense;
+use crate::{Event, FaultKind, Mechanical, Problem, Run, Settings};
 
 /// A run for a lane: its parameters and its state at the start.
 pub struct Job {
@@ -81,11 +82,7 @@ impl Lockstep {
     /// does not serve them, and each run is better taken alone: a method other than the
     /// adaptive explicit pairs, or parameters that follow a series or a held law.
     pub fn new(problem: &Mechanical, settings: &Settings) -> Option<Lockstep> {
-        let pair = match settings.method {
-            Method::Dopri5 => Pair::Dopri5,
-            Method::Dop853 => Pair::Dop853,
-            _ => return None,
-        };
+        let pair = settings.method.lockstep_pair()?;
         if !problem.has_fixed_parameters() {
             return None;
         }

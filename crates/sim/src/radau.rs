@@ -14,7 +14,7 @@
 use nalgebra::{Complex, DMatrix};
 use numeric::elementary::pow;
 
-use crate::erk::{rates_overflow, rms, Dense, Stepper};
+use crate::stepper::{rates_overflow, rms, Dense, Stepper};
 use crate::{linalg, Components, FaultKind, Problem};
 
 /// The nodes (4 ∓ √6)/10 and 1.

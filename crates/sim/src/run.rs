@@ -3,113 +3,8 @@
 
 use std::ops::ControlFlow;
 
-use crate::auto::Auto;
-use crate::erk::{stability_radius, tableau, Adaptive, Dense, Pair, Rk4, Stepper};
-use crate::gauss::Gauss;
-use crate::radau::Radau;
-use crate::{Fault, FaultKind, Problem};
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// Classic Runge–Kutta, fixed step.
-    Rk4,
-    /// Dormand–Prince 5(4), adaptive.
-    Dopri5,
-    /// Dormand–Prince 8(5,3), adaptive.
-    Dop853,
-    /// Implicit midpoint rule (one-stage Gauss–Legendre), fixed step, symplectic.
-    Midpoint,
-    /// Two-stage Gauss–Legendre collocation (order 4), fixed step, symplectic.
-    Gauss,
-    /// Radau IIA (order 5), adaptive and implicit, L-stable: for stiff systems, and for
-    /// constraints kept with multipliers integrated as the differential–algebraic system.
-    Radau,
-    /// DOP853 while the scene is not stiff, radau while it is: switched by DOP853's stiffness
-    /// test and back by radau's step against DOP853's stability limit (see `crate::auto`).
-    Auto,
-}
-
-impl Method {
-    pub const NAMES: [&'static str; 7] =
-        ["rk4", "dopri5", "dop853", "midpoint", "gauss", "radau", "auto"];
-
-    pub fn from_name(name: &str) -> Option<Method> {
-        Some(match name {
-            "rk4" => Method::Rk4,
-            "dopri5" | "rk45" => Method::Dopri5,
-            "dop853" => Method::Dop853,
-            "midpoint" => Method::Midpoint,
-            "gauss" | "gauss4" => Method::Gauss,
-            "radau" | "radau5" => Method::Radau,
-            "auto" => Method::Auto,
-            _ => return None,
-        })
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Rk4 => "rk4",
-            Method::Dopri5 => "dopri5",
-            Method::Dop853 => "dop853",
-            Method::Midpoint => "midpoint",
-            Method::Gauss => "gauss",
-            Method::Radau => "radau",
-            Method::Auto => "auto",
-        }
-    }
-
-    pub fn is_adaptive(self) -> bool {
-        matches!(self, Method::Dopri5 | Method::Dop853 | Method::Radau | Method::Auto)
-    }
-
-    /// Whether the method is symplectic, and so wants canonical variables.
-    pub fn is_symplectic(self) -> bool {
-        matches!(self, Method::Midpoint | Method::Gauss)
-    }
-
-    /// Whether the method solves implicit equations with the Jacobian of the right-hand side,
-    /// so that lowering the partials for the exact one pays.
-    pub fn uses_jacobian(self) -> bool {
-        matches!(self, Method::Midpoint | Method::Gauss | Method::Radau | Method::Auto)
-    }
-
-    /// Whether the method is explicit, and so has a stability limit on its step.
-    pub fn is_explicit(self) -> bool {
-        matches!(self, Method::Rk4 | Method::Dopri5 | Method::Dop853)
-    }
-
-    /// The largest step an explicit method stays stable at for a mode of eigenvalue λ: the
-    /// radius of its stability region along λ's direction over |λ| (on the negative real axis
-    /// 2.785 for rk4, 3.31 for dopri5, 6.0 for dop853). `None` for implicit methods, which
-    /// `auto` is on the stiff side.
-    pub fn stable_step(self, eigenvalue: nalgebra::Complex<f64>) -> Option<f64> {
-        let pair = match self {
-            Method::Rk4 => None,
-            Method::Dopri5 => Some(Pair::Dopri5),
-            Method::Dop853 => Some(Pair::Dop853),
-            _ => return None,
-        };
-        let size = eigenvalue.norm();
-        if !(size > 0.0 && size.is_finite()) {
-            return Some(f64::INFINITY);
-        }
-        Some(stability_radius(tableau(pair), eigenvalue / size) / size)
-    }
-
-    /// Whether the method can integrate constraints kept with multipliers. Those are solved
-    /// with the augmented system on (q, q̇), which the symplectic methods, working in canonical
-    /// variables (q, p), do not have.
-    pub fn handles_multipliers(self) -> bool {
-        !self.is_symplectic()
-    }
-
-    /// Whether the method integrates differential–algebraic problems (see
-    /// [`crate::Components`]); it then takes constraints kept with multipliers as they are,
-    /// with no stabilisation.
-    pub fn handles_algebraic(self) -> bool {
-        self == Method::Radau
-    }
-}
+use crate::stepper::Dense;
+use crate::{Fault, FaultKind, Method, Problem};
 
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -205,7 +100,7 @@ pub fn integrate(
     events: &[Event],
     progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
 ) -> Run {
-    let mut stepper = stepper_for(settings, problem);
+    let mut stepper = settings.method.stepper(settings, problem);
     let mut course = match Course::begin(problem, y0, settings) {
         Ok(course) => course,
         Err(run) => return *run,
@@ -428,27 +323,6 @@ fn widen(extremes: &mut [(f64, f64)], row: &[f64]) {
     }
 }
 
-/// The method's stepper for a problem of this size and structure.
-fn stepper_for(settings: &Settings, problem: &dyn Problem) -> Box<dyn Stepper> {
-    let d = problem.dim();
-    let tol = settings.tolerance;
-    assert!(
-        settings.method.handles_algebraic()
-            || problem.components() == crate::Components::ordinary(d),
-        "{} integrates ordinary differential equations only",
-        settings.method.name()
-    );
-    match settings.method {
-        Method::Rk4 => Box::new(Rk4::new(d, settings.step)),
-        Method::Dopri5 => Box::new(Adaptive::for_tolerance(Pair::Dopri5, d, tol)),
-        Method::Dop853 => Box::new(Adaptive::for_tolerance(Pair::Dop853, d, tol)),
-        Method::Midpoint => Box::new(Gauss::new(1, d, settings.step)),
-        Method::Gauss => Box::new(Gauss::new(2, d, settings.step)),
-        Method::Radau => Box::new(Radau::new(problem.components(), tol)),
-        Method::Auto => Box::new(Auto::new(d, tol)),
-    }
-}
-
 /// A fault at (t, y), with the state in the physical variables.
 fn fault(problem: &mut dyn Problem, kind: FaultKind, t: f64, y: &[f64]) -> Fault {
     Fault { kind, time: t, state: problem.physical(t, y) }
@@ -533,24 +407,20 @@ impl Sampler {
     }
 }
 
-/// The spans each method integrated: the whole run for one method; for `auto`, the explicit
-/// side first and then the sides in turn at each switch.
+/// The spans each method integrated: the whole run for one method; for one that switches
+/// (`auto`), its first side and then its sides in turn at each switch.
 pub(crate) fn segments(settings: &Settings, switches: &[f64], end: f64) -> Vec<Segment> {
-    if settings.method != Method::Auto {
+    let sides = settings.method.sides();
+    if sides.is_empty() {
         return vec![Segment { method: settings.method, start: settings.start, end }];
     }
-    let explicit = match crate::auto::EXPLICIT_PAIR {
-        Pair::Dopri5 => Method::Dopri5,
-        Pair::Dop853 => Method::Dop853,
-    };
-    let sides = [explicit, Method::Radau];
     let mut segments = Vec::new();
     let mut start = settings.start;
     for (k, &switch) in switches.iter().enumerate() {
-        segments.push(Segment { method: sides[k % 2], start, end: switch });
+        segments.push(Segment { method: sides[k % sides.len()], start, end: switch });
         start = switch;
     }
-    segments.push(Segment { method: sides[switches.len() % 2], start, end });
+    segments.push(Segment { method: sides[switches.len() % sides.len()], start, end });
     segments
 }
 

@@ -332,3 +332,24 @@ fn tolerance_takes_an_expression_and_no_unit() {
     assert!(stderr(&out).contains("`tolerance` takes no unit"), "{}", stderr(&out));
     assert!(stderr(&out).contains("┌─ --tolerance:1:1"), "{}", stderr(&out));
 }
+
+#[test]
+fn the_help_lists_the_methods_of_the_table_and_what_each_takes() {
+    let help = table(&["simulate", "--help"]);
+    let help = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    for method in sim::Method::all() {
+        let line = format!("- {}: {}", method.name(), method.entry().summary);
+        let line = line.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(help.contains(&line), "{line}\n{help}");
+    }
+    // The lines of --tolerance and --step name the methods that take each, in the table's order.
+    let named = |from: &str, to: &str| {
+        let start = help.find(from).expect(from) + from.len();
+        let end = help[start..].find(to).expect(to) + start;
+        let words = help[start..end].split(|c: char| !c.is_ascii_alphanumeric());
+        words.filter_map(sim::Method::from_name).collect::<Vec<_>>()
+    };
+    let taking = |adaptive: bool| sim::Method::all().filter(move |m| m.is_adaptive() == adaptive);
+    assert!(named("tolerance of the adaptive methods:", "(default").into_iter().eq(taking(true)));
+    assert!(named("Step of", ", as the scene").into_iter().eq(taking(false)));
+}

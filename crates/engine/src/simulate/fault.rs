@@ -78,13 +78,15 @@ pub(crate) fn fastest_mode(
     );
     let (time, mode) = modes.next()?;
     let stable_step = method.stable_step(mode.eigenvalue)?;
-    let step = match (method, &fault.kind) {
-        (Method::Rk4, _) => Some(step),
-        (_, FaultKind::StepTooSmall { step }) => Some(*step),
-        _ => None,
+    // A fixed step is known; an adaptive one only where it fell to nothing.
+    let adaptive = method.is_adaptive();
+    let step = match (adaptive, &fault.kind) {
+        (false, _) => Some(step),
+        (true, FaultKind::StepTooSmall { step }) => Some(*step),
+        (true, _) => None,
     };
-    let limited = match (method, step) {
-        (Method::Rk4, Some(h)) => h > stable_step,
+    let limited = match (adaptive, step) {
+        (false, Some(h)) => h > stable_step,
         _ => mostly_stiff(run),
     };
     if !limited {
@@ -137,7 +139,7 @@ pub(crate) fn stiffness_cause(mode: &FastestMode, method: Method, names: &[Strin
     let name = method.name();
     let stable = mode.stable_step;
     let against = match mode.step {
-        Some(h) if method == Method::Rk4 => {
+        Some(h) if !method.is_adaptive() => {
             let ratio = h / stable;
             let ratio = if ratio < 100.0 { format!("{ratio:.1}") } else { format!("{ratio:.1e}") };
             format!(", and its step was {h:.1e} s, {ratio} times that")
@@ -145,7 +147,7 @@ pub(crate) fn stiffness_cause(mode: &FastestMode, method: Method, names: &[Strin
         Some(h) => format!(", and its step fell to {h:.1e} s"),
         None => String::new(),
     };
-    let or_step = if method == Method::Rk4 { ", or --step below that limit" } else { "" };
+    let or_step = if method.is_adaptive() { "" } else { ", or --step below that limit" };
     format!(
         "the step, past {name}'s stability limit: the fastest mode at t = {time} has eigenvalue \
          λ ≈ {eigenvalue} (time scale {:.1e} s){made_of}; {name} is stable along it for steps \

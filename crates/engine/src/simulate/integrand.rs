@@ -6,7 +6,7 @@
 use std::ops::ControlFlow;
 
 use numeric::Tape;
-use sim::{integrate, Canonical, Constrained, Event, Mechanical, Method, Problem, Run};
+use sim::{integrate, Canonical, Constrained, Event, Form, Mechanical, Method, Problem, Run};
 
 use super::{with_partials, Columns, Settings, NO_MULTIPLIERS};
 use crate::numbers::Prepared;
@@ -37,7 +37,8 @@ impl Integrand {
                 method.name()
             )));
         }
-        if method.is_symplectic() {
+        let form = method.form();
+        if form == Form::Canonical {
             let momentum_exprs = prepared.momentum_exprs();
             let momentum = prepared.lower(&prepared.dynamics_inputs(), &momentum_exprs)?;
             let mut canonical = Canonical::new(mechanical, Tape::new(momentum));
@@ -49,7 +50,7 @@ impl Integrand {
             return Ok(Integrand::Canonical(Box::new(canonical)));
         }
         let mechanical = with_partials(prepared, method, mechanical)?;
-        if method.handles_algebraic() && prepared.layout.multipliers > 0 {
+        if form == Form::Algebraic && prepared.layout.multipliers > 0 {
             return Ok(Integrand::Constrained(Constrained::new(mechanical)));
         }
         Ok(Integrand::Mechanical(mechanical))

@@ -393,7 +393,7 @@ class Scene:
 
         Arguments left ``None`` take the scene's ``simulate`` block or the defaults.
 
-        - ``until``: the end time in seconds; ``method``: one of rk4, dopri5, dop853,
+        - ``until``: the end time in seconds; ``method``: one of rk4, bs3, dopri5, dop853,
           midpoint, gauss, radau, auto; ``tolerance`` of the adaptive methods; ``step`` of
           the fixed-step ones.
         - ``output``: scene expressions to record (a string or a list), e.g.

@@ -1,12 +1,102 @@
-//! The coefficients of the Dormand–Prince pairs: the 5(4) pair with Shampine's dense output,
-//! and DOP853 with its error estimators and dense output, as Hairer, Nørsett and Wanner give
-//! them; and each pair's tableau as the stepping code reads it.
+//! The adaptive explicit pairs: the Bogacki–Shampine 3(2) pair (Bogacki and Shampine, 1989)
+//! with its cubic Hermite dense output, the Dormand–Prince 5(4) pair with Shampine's dense
+//! output, and DOP853 with its error estimators and dense output, as Hairer, Nørsett and Wanner
+//! give them;
+//! each pair's coefficients and the facts of its step control, as the stepping code reads them.
+//! A pair with one error estimate and a polynomial dense output over its stages is added here
+//! alone: the stepping code reads it through these functions.
 
-use super::Pair;
+use super::Tableau;
+
+/// An adaptive explicit pair with local extrapolation (the higher order propagates).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Pair {
+    Bs3,
+    Dopri5,
+    Dop853,
+}
 
 impl Pair {
+    /// The h·|λ| past which [`super::Adaptive::stiff`] counts a step as limited by stability: the
+    /// stability boundary on the negative real axis, rounded up a little.
+    pub fn stiffness_bound(self) -> f64 {
+        match self {
+            // Its stage before the end is at t + 3h/4, not at the end's time as the test
+            // needs: no step is counted as limited by stability.
+            Pair::Bs3 => f64::INFINITY,
+            Pair::Dopri5 => 3.25,
+            Pair::Dop853 => 6.1,
+        }
+    }
+
+    /// The level the pair holds its local error estimate to (weighted by atol + rtol·|y|) for
+    /// a run's `tolerance`, so that a tolerance means one accuracy whichever method runs (see
+    /// docs/simulating.md): dop853's final errors come out near the tolerance as it is, while
+    /// dopri5's, whose steps are more numerous and each less accurate than its estimate says,
+    /// come out several times above it; a tenth of the tolerance brings them to dop853's
+    /// (`lagrange-bench tolerance`). bs3's, of a second-order estimate, come out 17 to 70 times
+    /// above dop853's (the oscillator, the simple and the double pendulum at 1e-5 … 1e-9): a
+    /// thirtieth brings them within a factor of 3.
+    pub fn error_target(self, tolerance: f64) -> f64 {
+        match self {
+            Pair::Bs3 => tolerance / 30.0,
+            Pair::Dopri5 => tolerance / 10.0,
+            Pair::Dop853 => tolerance,
+        }
+    }
+
+    /// The tableau of the pair's propagating (higher-order) method, whose stability region
+    /// limits its step.
+    pub(crate) fn tableau(self) -> Tableau {
+        match self {
+            Pair::Bs3 => (&BS3_A, &BS3_B),
+            Pair::Dopri5 => (&DP5_A, &DP5_B),
+            Pair::Dop853 => (&DOP853_A[..12], DOP853_A[12]),
+        }
+    }
+
+    /// The order of the error estimate: the step control's exponent is −1/(order + 1).
+    pub(crate) fn estimate_order(self) -> f64 {
+        match self {
+            Pair::Bs3 => 2.0,
+            Pair::Dopri5 => 4.0,
+            Pair::Dop853 => 7.0,
+        }
+    }
+
+    /// The stages an [`super::Adaptive`] keeps: those of a step, the derivative at its end,
+    /// and those its dense output evaluates.
+    pub(crate) fn kept_stages(self) -> usize {
+        match self {
+            Pair::Bs3 => 4,
+            Pair::Dopri5 => 7,
+            Pair::Dop853 => 16,
+        }
+    }
+
+    /// The weights of a pair's one error estimate, h·Σⱼ eⱼ·kⱼ over its stages and the
+    /// derivative at the end of the step; `None` for DOP853, which weighs two estimates.
+    pub(crate) fn error_weights(self) -> Option<&'static [f64]> {
+        match self {
+            Pair::Bs3 => Some(&BS3_E),
+            Pair::Dopri5 => Some(&DP5_E),
+            Pair::Dop853 => None,
+        }
+    }
+
+    /// The dense output as a polynomial over the stages (and the derivative at the end):
+    /// y(t₀ + θ·h) = y₀ + h·Σₖ kₖ·Σⱼ P[k][j]·θ^(j+1); `None` for DOP853, which evaluates three
+    /// stages more for its own.
+    pub(crate) fn dense_weights(self) -> Option<&'static [&'static [f64]]> {
+        match self {
+            Pair::Bs3 => Some(&BS3_P),
+            Pair::Dopri5 => Some(&DP5_P),
+            Pair::Dop853 => None,
+        }
+    }
     pub(crate) fn stage_count(self) -> usize {
         match self {
+            Pair::Bs3 => 3,
             Pair::Dopri5 => 6,
             Pair::Dop853 => 12,
         }
@@ -14,6 +104,7 @@ impl Pair {
 
     pub(crate) fn a(self, s: usize) -> &'static [f64] {
         match self {
+            Pair::Bs3 => BS3_A[s],
             Pair::Dopri5 => DP5_A[s],
             Pair::Dop853 => DOP853_A[s],
         }
@@ -21,6 +112,7 @@ impl Pair {
 
     pub(crate) fn c(self, s: usize) -> f64 {
         match self {
+            Pair::Bs3 => BS3_C[s],
             Pair::Dopri5 => DP5_C[s],
             Pair::Dop853 => DOP853_C[s],
         }
@@ -29,11 +121,27 @@ impl Pair {
     /// The weights of the propagating method.
     pub(crate) fn b(self) -> &'static [f64] {
         match self {
+            Pair::Bs3 => &BS3_B,
             Pair::Dopri5 => &DP5_B,
             Pair::Dop853 => DOP853_A[12],
         }
     }
 }
+
+pub(super) const BS3_C: [f64; 3] = [0.0, 1.0 / 2.0, 3.0 / 4.0];
+pub(super) const BS3_A: [&[f64]; 3] = [&[], &[1.0 / 2.0], &[0.0, 3.0 / 4.0]];
+pub(super) const BS3_B: [f64; 3] = [2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0];
+/// The third-order weights less the second-order ones (7/24, 1/4, 1/3, 1/8), over the three
+/// stages and the derivative at the end.
+pub(super) const BS3_E: [f64; 4] = [2.0 / 9.0 - 7.0 / 24.0, 1.0 / 12.0, 1.0 / 9.0, -1.0 / 8.0];
+/// The cubic Hermite interpolant of the step's ends, written over the stages: the derivative
+/// at the start is the first stage and the one at the end the last, and y₁ − y₀ = h·Σ bⱼ kⱼ.
+pub(super) const BS3_P: [&[f64]; 4] = [
+    &[1.0, 3.0 * BS3_B[0] - 2.0, 1.0 - 2.0 * BS3_B[0]],
+    &[0.0, 3.0 * BS3_B[1], -2.0 * BS3_B[1]],
+    &[0.0, 3.0 * BS3_B[2], -2.0 * BS3_B[2]],
+    &[0.0, -1.0, 1.0],
+];
 
 pub(super) const DP5_C: [f64; 6] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0];
 pub(super) const DP5_A: [&[f64]; 6] = [
@@ -57,29 +165,34 @@ pub(super) const DP5_E: [f64; 7] = [
     1.0 / 40.0,
 ];
 /// Shampine's quartic dense output: y(t0 + x h) = y0 + h Σ_k K_k Σ_j P[k][j] x^(j+1).
-pub(super) const DP5_P: [[f64; 4]; 7] = [
-    [
+pub(super) const DP5_P: [&[f64]; 7] = [
+    &[
         1.0,
         -8048581381.0 / 2820520608.0,
         8663915743.0 / 2820520608.0,
         -12715105075.0 / 11282082432.0,
     ],
-    [0.0, 0.0, 0.0, 0.0],
-    [
+    &[0.0, 0.0, 0.0, 0.0],
+    &[
         0.0,
         131558114200.0 / 32700410799.0,
         -68118460800.0 / 10900136933.0,
         87487479700.0 / 32700410799.0,
     ],
-    [0.0, -1754552775.0 / 470086768.0, 14199869525.0 / 1410260304.0, -10690763975.0 / 1880347072.0],
-    [
+    &[
+        0.0,
+        -1754552775.0 / 470086768.0,
+        14199869525.0 / 1410260304.0,
+        -10690763975.0 / 1880347072.0,
+    ],
+    &[
         0.0,
         127303824393.0 / 49829197408.0,
         -318862633887.0 / 49829197408.0,
         701980252875.0 / 199316789632.0,
     ],
-    [0.0, -282668133.0 / 205662961.0, 2019193451.0 / 616988883.0, -1453857185.0 / 822651844.0],
-    [0.0, 40617522.0 / 29380423.0, -110615467.0 / 29380423.0, 69997945.0 / 29380423.0],
+    &[0.0, -282668133.0 / 205662961.0, 2019193451.0 / 616988883.0, -1453857185.0 / 822651844.0],
+    &[0.0, 40617522.0 / 29380423.0, -110615467.0 / 29380423.0, 69997945.0 / 29380423.0],
 ];
 
 #[allow(clippy::excessive_precision)]

@@ -6,7 +6,7 @@
 
 use numeric::LANES;
 
-use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5, DP5_E};
+use super::{Adaptive, Pair, DOP853_A, DOP853_BHH, DOP853_E5};
 
 pub(crate) use crate::linalg::Lanes;
 
@@ -90,12 +90,12 @@ impl Stages {
             let (y, y_new) = (&self.y[i], &self.y_new[i]);
             std::array::from_fn(|l| atol + y[l].abs().max(y_new[l].abs()) * rtol)
         };
-        match self.pair {
-            Pair::Dopri5 => {
+        match self.pair.error_weights() {
+            Some(weights) => {
                 let mut sum = [0.0; LANES];
                 for i in 0..d {
                     let mut acc = [0.0; LANES];
-                    for (j, ej) in DP5_E.iter().enumerate() {
+                    for (j, ej) in weights.iter().enumerate() {
                         for l in 0..LANES {
                             acc[l] += ej * k[j * d + i][l];
                         }
@@ -109,7 +109,7 @@ impl Stages {
                 // `rms` of the d values, as `Adaptive` takes it.
                 std::array::from_fn(|l| if d == 0 { 0.0 } else { (sum[l] / d as f64).sqrt() })
             }
-            Pair::Dop853 => {
+            None => {
                 let (mut e5, mut e3) = ([0.0; LANES], [0.0; LANES]);
                 for i in 0..d {
                     let (mut a5, mut a3) = ([0.0; LANES], [0.0; LANES]);

@@ -117,3 +117,29 @@ fn progress_that_breaks_interrupts_the_run_where_it_is() {
     assert!(!whole.interrupted);
     assert_eq!(whole.final_time, 10.0);
 }
+
+#[test]
+fn bs3_converges_at_third_order_and_meets_its_tolerance() {
+    // The pair propagates its third-order solution with steps set by the second-order
+    // estimate: a final error of the order of N⁻³ for N steps, whatever the tolerance that set N.
+    let at = |tolerance: f64| {
+        let run = integrate(
+            &mut Oscillator,
+            &[1.0, 0.0],
+            &settings(Method::Bs3, tolerance, 0.0),
+            &[],
+            &mut |_| ControlFlow::Continue(()),
+        );
+        (run.steps as f64, final_error(Method::Bs3, tolerance, 0.0))
+    };
+    let ((n1, e1), (n2, e2)) = (at(1e-6), at(1e-9));
+    let order = (e1 / e2).ln() / (n2 / n1).ln();
+    eprintln!("bs3: {n1} steps, error {e1:e}; {n2} steps, error {e2:e}: order {order}");
+    assert!((order - 3.0).abs() < 0.3, "order {order}");
+    for tol in [1e-4, 1e-6, 1e-9] {
+        let e = final_error(Method::Bs3, tol, 0.0);
+        let reference = final_error(Method::Dop853, tol, 0.0);
+        eprintln!("tolerance {tol:e}: bs3 {e:e}, dop853 {reference:e}");
+        assert!(e < 100.0 * tol, "bs3 at {tol}: error {e}");
+    }
+}
