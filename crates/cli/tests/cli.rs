@@ -405,3 +405,37 @@ fn auto_says_where_each_method_ran_and_a_stiff_rk4_run_says_why_it_failed() {
         "{errors}"
     );
 }
+
+#[test]
+fn ensemble_pictures_are_written_as_svg_and_png() {
+    let scratch = Scratch::new("ensemble-plot");
+    let scene = example("classics/simple_pendulum.lag");
+    for (name, grid) in [
+        ("line", vec!["--vary", "L=0.5:2:4"]),
+        ("heat", vec!["--vary", "L=0.5:2:3", "--vary", "m=1:2:2"]),
+    ] {
+        for ext in ["svg", "png"] {
+            let plot = scratch.file(&format!("{name}.{ext}"));
+            let mut args =
+                vec!["ensemble", &scene, "--until", "1", "--plot", plot.to_str().expect("path")];
+            args.extend(grid.iter().copied());
+            let out = lagrange(&args);
+            assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+            let bytes = std::fs::read(&plot).expect("the picture is written");
+            if ext == "svg" {
+                let svg = String::from_utf8(bytes).expect("text");
+                assert!(svg.starts_with("<svg") && svg.contains("</svg>"), "{svg}");
+                continue;
+            }
+            let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+            let mut reader = decoder.read_info().expect("a PNG");
+            let mut pixels = vec![0; reader.output_buffer_size()];
+            let frame = reader.next_frame(&mut pixels).expect("its pixels");
+            assert_eq!((frame.width, frame.height), (760, 600));
+            assert_eq!(frame.color_type, png::ColorType::Rgb);
+            // Drawn on, not blank: white, black text and axes, and the plot's colours.
+            let colours: std::collections::HashSet<&[u8]> = pixels.chunks(3).collect();
+            assert!(colours.len() > 20, "{name}: {} colours", colours.len());
+        }
+    }
+}

@@ -47,14 +47,33 @@ pub fn ensemble(table: &Table, title: &str, path: &Path) -> Result<(), String> {
             );
             drawn.and_then(|()| crate::write_atomically(path, &svg).map_err(Into::into))
         }
-        "png" => crate::write_atomically_by(path, |tmp| {
-            let root = BitMapBackend::new(tmp, SIZE).into_drawing_area();
-            draw(root, &kind, table, title).map_err(|e| std::io::Error::other(e.to_string()))
-        })
-        .map_err(Into::into),
+        "png" => {
+            // Drawn into pixels here and encoded by the png crate: plotters' own encoder goes
+            // through the `image` crate and its JPEG decoder, most of a fresh build's
+            // dependencies for the one format written.
+            let mut rgb = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
+            let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
+            draw(root, &kind, table, title).and_then(|()| {
+                let png = png_of(&rgb, SIZE)?;
+                crate::write_atomically_by(path, |tmp| std::fs::write(tmp, &png))
+                    .map_err(Into::into)
+            })
+        }
         _ => return Err(format!("cannot tell the format of {}: use .svg or .png", path.display())),
     };
     drawn.map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+/// Eight-bit RGB pixels, row by row, as a PNG file's bytes.
+fn png_of(rgb: &[u8], (width, height): (u32, u32)) -> Result<Vec<u8>, Box<dyn Error>> {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb)?;
+    writer.finish()?;
+    Ok(bytes)
 }
 
 /// Whether an ensemble varied so has a picture, before it is run.
