@@ -358,7 +358,7 @@ fn linearize(rest: &[String]) -> Result<String, String> {
 }
 
 /// The `lagrange` command of a shell line, if it is one that is run: `lagrange derive …` or
-/// `cargo run --release -- derive …`.
+/// `cargo run -- derive …` (with `--release` or not).
 fn command(line: &str) -> Option<Vec<String>> {
     let words = words(line);
     let rest = match words.first().map(String::as_str) {
@@ -669,6 +669,7 @@ fn the_checks_catch_what_they_should() {
         ["lagrange", "linearize", "f.lag", "--about", "theta=0", "--set", "phi'=5"]
     );
     assert!(command("cargo test --workspace").is_none());
+    assert!(command("cargo run -- derive examples/ps5/falling_rod.lag").is_some());
     assert!(command("cargo run --release -- derive examples/ps5/falling_rod.lag").is_some());
     assert!(run(&words("simulate examples/ps5/falling_rod.lag --nonsense 1")).is_err());
     assert!(run(&words("derive examples/ps5/no_such_scene.lag")).is_err());
