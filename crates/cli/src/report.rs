@@ -2,12 +2,11 @@
 
 use cas::number::Signed;
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use engine::derived::Derived;
+use engine::derived::{Derived, NumericValue, ShownAtStart};
 use mechanics::{Derivation, Equation};
 use model::Value;
 use results::Data;
 use serde_json::{json, Map, Value as Json};
-use verify::{NumericValue, ShownAtStart};
 
 mod json;
 mod latex;
@@ -67,7 +66,7 @@ fn start_value_text(d: &Derivation, s: cas::SymId, e: ExprId, style: Style) -> S
     let rate = pool.symbol(s).order() > 0;
     let numeric = d.solved_start_positions.contains(&s)
         || (rate && !d.solved_start_positions.is_empty() && pool.as_num(e).is_none());
-    let values = if numeric { verify::parameter_values(d).ok() } else { None };
+    let values = if numeric { engine::derived::parameter_values(d).ok() } else { None };
     match values {
         Some(params) => {
             let mut at = vec![f64::NAN; pool.symbol_count()];
