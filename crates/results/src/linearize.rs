@@ -160,18 +160,19 @@ pub fn python(l: &Linearized) -> Data {
     let pool = &l.derivation.model.pool;
     let space = &l.at.first_order;
     let mut out = MapBuilder::default();
-    out.put("state", Data::texts(&l.state));
-    out.put("M", exact(pool, &l.mass));
-    out.put("C", exact(pool, &l.damping));
-    out.put("K", exact(pool, &l.stiffness));
-    out.put("exact_reference", Data::Bool(l.exact_reference));
     // An empty list has no shape for NumPy: each matrix carries its columns.
     let size = space.state.len();
     let inputs = l.inputs.len();
     let shaped = |rows: &[Vec<f64>], columns: usize| Data::Matrix { rows: rows.to_vec(), columns };
+    out.put("state", Data::texts(&l.state));
+    out.put("M", exact(pool, &l.mass));
+    // `C` is the output matrix's key in this dict, where it follows M as the damping's would:
+    // the damping is not handed to Python.
+    out.put("C", shaped(&space.c, size));
+    out.put("K", exact(pool, &l.stiffness));
+    out.put("exact_reference", Data::Bool(l.exact_reference));
     out.put("A", shaped(&space.a, size));
     out.put("B", shaped(&space.b, inputs));
-    out.put("C", shaped(&space.c, size));
     out.put("D", shaped(&space.d, inputs));
     out.put("inputs", Data::texts(&l.inputs));
     out.put("outputs", Data::texts(&l.outputs));
