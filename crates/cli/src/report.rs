@@ -2,8 +2,7 @@
 
 use cas::number::Signed;
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use engine::derived::{Derived, NumericValue, ShownAtStart};
-use mechanics::{Derivation, Equation};
+use engine::derived::{Derivation, Derived, Equation, NumericValue, ShownAtStart};
 use model::Value;
 use results::Data;
 use serde_json::{json, Map, Value as Json};
@@ -242,9 +241,9 @@ enum Section<'a> {
     MassMatrix {
         mass: &'a [Vec<ExprId>],
         forcing: &'a [ExprId],
-        multipliers: &'a [mechanics::Multiplier],
+        multipliers: &'a [engine::derived::Multiplier],
     },
-    Independent(&'a mechanics::IndependentForm),
+    Independent(&'a engine::derived::IndependentForm),
     /// With the accelerations solved for, and as functions of the state.
     Reactions {
         reactions: &'a [(SymId, ExprId)],

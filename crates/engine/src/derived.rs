@@ -5,11 +5,10 @@
 
 use cas::number::{One, Signed, Zero};
 use cas::{ExprId, Pool, SymId};
-use mechanics::Equation;
 use model::Value;
 
 // The types a derive report is read from, for front ends that reach the core through `engine`.
-pub use mechanics::{Derivation, IndependentForm};
+pub use mechanics::{Derivation, Equation, IndependentForm, Multiplier};
 pub use verify::{parameter_values, NumericValue, ShownAtStart};
 
 /// Everything `derive` prints, computed once and shared by the formats.
