@@ -205,3 +205,66 @@ pub fn python(l: &Linearized) -> Data {
     }
     out.done()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn keys(data: &Data) -> Vec<&str> {
+        match data {
+            Data::Map(entries) => entries.iter().map(|(k, _)| k.as_str()).collect(),
+            _ => panic!("not a map: {data:?}"),
+        }
+    }
+
+    fn pendulum() -> Linearized {
+        let source = include_str!("../../../examples/classics/simple_pendulum.lag");
+        let options =
+            engine::linearize::Options { about: Some("theta = 0".into()), ..Default::default() };
+        engine::linearize::linearize(source, &options).expect("the pendulum linearizes")
+    }
+
+    #[test]
+    fn each_key_appears_once_in_either_shape() {
+        let l = pendulum();
+        let python = python(&l);
+        let mut seen = keys(&python);
+        assert_eq!(&seen[..4], ["state", "M", "C", "K"]);
+        seen.sort_unstable();
+        let before = seen.len();
+        seen.dedup();
+        assert_eq!(seen.len(), before, "a key twice in {seen:?}");
+        let Data::Map(report) = report(&l) else { panic!("the report is a map") };
+        assert_eq!(report[0].0, "linearization");
+        assert_eq!(keys(&report[0].1)[..3], ["coordinates", "cyclic", "about"]);
+    }
+
+    #[test]
+    fn an_exact_stiffness_names_its_parameters_without_the_pool() {
+        let l = pendulum();
+        let Data::ExactMatrix(k) = &keys_value(&python(&l), "K") else { panic!("K is exact") };
+        fn constants(t: &crate::Term, out: &mut Vec<String>) {
+            match t {
+                crate::Term::Constant(name) => out.push(name.clone()),
+                crate::Term::Add(_, parts) | crate::Term::Mul(_, parts) => {
+                    parts.iter().for_each(|(t, _)| constants(t, out))
+                }
+                crate::Term::Pow(a, b) | crate::Term::Atan2(a, b) => {
+                    constants(a, out);
+                    constants(b, out);
+                }
+                crate::Term::Func(_, a) => constants(a, out),
+                _ => {}
+            }
+        }
+        let mut names = Vec::new();
+        constants(&k[0][0].term, &mut names);
+        names.sort_unstable();
+        assert_eq!(names, ["L", "g", "m"], "K = {}", k[0][0].text);
+    }
+
+    fn keys_value(data: &Data, key: &str) -> Data {
+        let Data::Map(entries) = data else { panic!("not a map") };
+        entries.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone()).expect("the key")
+    }
+}
