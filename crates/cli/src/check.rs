@@ -1,13 +1,9 @@
 //! The `check` report: every `expect` line with its verdict, and for a failure the residual and
-//! a state where it is not zero.
+//! a state where it is not zero, rendered from `results::check`.
 
-use cas::Style;
+use engine::Options;
 use lang::Diagnostic;
-use mechanics::Derivation;
-use verify::Verdict;
-
-use engine::expect_linearized::LinearVerdict;
-use engine::{line_col, Options};
+use results::check::Checked;
 
 use crate::diagnostics::render;
 
@@ -42,13 +38,14 @@ pub fn check_file_with(path: &str, source: &str, options: Options) -> FileCheck 
             };
         }
     };
-    let mut tally = check_derivation(path, source, &mut d);
+    let mut tally = Tally::default();
+    tally.add(path, results::check::expectations(source, &mut d));
     // A scene that does not linearize about its own reference is bad input, as `linearize`
     // says: exit 2 with its diagnostic, after what the other expectations gave.
     let mut refused = None;
     if !d.model.linear_expects.is_empty() {
         match engine::expect_linearized::check_linearized(source, d) {
-            Ok((verdicts, d)) => check_linearized(&mut tally, (path, source), &d, &verdicts),
+            Ok((verdicts, d)) => tally.add(path, results::check::linearized(source, &d, &verdicts)),
             Err(e) => refused = Some(crate::diagnostics::error(path, &e)),
         }
     }
@@ -85,78 +82,17 @@ struct Tally {
     failed: usize,
 }
 
-/// The `expect linearized:` lines' verdicts, added to the report.
-fn check_linearized(
-    tally: &mut Tally,
-    (path, source): (&str, &str),
-    d: &Derivation,
-    verdicts: &[LinearVerdict],
-) {
-    for (expect, verdict) in d.model.linear_expects.iter().zip(verdicts) {
-        let (line, _) = line_col(source, expect.span.start);
-        let (mark, how) = match verdict {
-            LinearVerdict::Holds(how) => ("ok  ", how.clone()),
-            LinearVerdict::Fails(what) => ("FAIL", what.clone()),
-            LinearVerdict::Undecided(why) => ("FAIL", why.clone()),
-        };
-        tally.lines.push(format!("{mark} {path}:{line}  {}  — {how}", expect.text));
-        if verdict.holds() {
-            tally.held += 1;
-            continue;
-        }
-        tally.failed += 1;
-        let message = match verdict {
-            LinearVerdict::Undecided(_) => "this expectation could not be decided",
-            _ => "this expectation does not hold",
-        };
-        tally.failures.push(Diagnostic::error(expect.span, message).with_label(how));
-    }
-}
-
-fn check_derivation(path: &str, source: &str, d: &mut Derivation) -> Tally {
-    let verdicts = verify::check_all(d);
-    let mut lines = Vec::new();
-    let mut failures = Vec::new();
-    let (mut held, mut failed) = (0, 0);
-    for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
-        let (line, _) = line_col(source, expect.span.start);
-        let how = verdict.how();
-        let mark = if verdict.holds() { "ok  " } else { "FAIL" };
-        lines.push(format!("{mark} {path}:{line}  {}  — {how}", expect.text));
-        if verdict.holds() {
-            held += 1;
-        } else {
-            failed += 1;
-        }
-        let pool = &d.model.pool;
-        match verdict {
-            Verdict::Fails(f) => {
-                let which = f.component.map(|k| format!(" (entry {})", k + 1)).unwrap_or_default();
-                let state: Vec<String> = f
-                    .state
-                    .iter()
-                    .map(|(s, v)| format!("{} = {v:.6}", pool.symbol_text(*s, Style::Unicode)))
-                    .collect();
-                let mut diag = Diagnostic::error(
-                    expect.span,
-                    format!("this expectation does not hold{which}"),
-                )
-                .with_label(format!("lhs − rhs = {}", pool.print(f.residual, Style::Unicode)));
-                diag.hint = Some(if state.is_empty() {
-                    format!("the residual is {:.6}, not 0", f.value)
-                } else {
-                    format!("at {}, lhs − rhs = {:.6}", state.join(", "), f.value)
-                });
-                failures.push(diag);
+impl Tally {
+    fn add(&mut self, path: &str, checked: Vec<Checked>) {
+        for c in checked {
+            let mark = if c.held { "ok  " } else { "FAIL" };
+            self.lines.push(format!("{mark} {path}:{}  {}  — {}", c.line, c.text, c.how));
+            if c.held {
+                self.held += 1;
+            } else {
+                self.failed += 1;
             }
-            Verdict::Undecided { reason } => {
-                failures.push(
-                    Diagnostic::error(expect.span, "this expectation could not be decided")
-                        .with_label(reason.clone()),
-                );
-            }
-            _ => {}
+            self.failures.extend(c.diagnostic);
         }
     }
-    Tally { lines, failures, held, failed }
 }

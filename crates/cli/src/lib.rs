@@ -80,7 +80,7 @@ pub fn derive_keeping(
     format: Format,
     options: Options,
     full: bool,
-) -> Result<(String, String, mechanics::Derivation), String> {
+) -> Result<(String, String, engine::derived::Derivation), String> {
     let engine::Scene { derivation: mut d, warnings } =
         engine::load_with(source, options).map_err(|e| diagnostics::error(path, &e))?;
     let report = match format {

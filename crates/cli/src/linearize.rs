@@ -1,13 +1,12 @@
 //! The `linearize` report: M, C, K exactly and at the parameters' values, the first-order
 //! matrix, the eigenvalues and the verdict, a sweep's table and its changes of stability, as
-//! text or JSON. The sweep's figure is
+//! text, or as JSON rendered from `results::linearize`. The sweep's figure is
 //! [`crate::plot::sweep`].
 
 use cas::{ExprId, Pool, Style, SymId};
 use engine::linearize::{CaseNumbers, Linearized, Numbers, Sweep};
-use serde_json::{json, Map, Value as Json};
 
-use crate::report::{bracketed, json_number, significant, value_text, width};
+use crate::report::{bracketed, data_json, significant, value_text, width};
 
 /// Digits of the numbers in the text report.
 const DIGITS: u32 = 10;
@@ -442,182 +441,11 @@ fn sweep_lines(pool: &Pool, sweep: &Sweep) -> Vec<String> {
     out
 }
 
-fn matrix_json(m: &[Vec<f64>]) -> Json {
-    Json::Array(
-        m.iter().map(|r| Json::Array(r.iter().map(|v| json_number(*v)).collect())).collect(),
-    )
-}
-
-fn exact_json(pool: &Pool, m: &[Vec<ExprId>]) -> Json {
-    Json::Array(
-        m.iter()
-            .map(|r| Json::Array(r.iter().map(|e| json!(pool.print(*e, Style::Ascii))).collect()))
-            .collect(),
-    )
-}
-
-fn numbers_json(values: &[f64]) -> Json {
-    Json::Array(values.iter().map(|v| json_number(*v)).collect())
-}
-
-fn eigenvalues_json(eigenvalues: &[(f64, f64)]) -> Json {
-    Json::Array(
-        eigenvalues.iter().map(|(re, im)| json!([json_number(*re), json_number(*im)])).collect(),
-    )
-}
-
 /// The report as JSON: one `linearization` object; expressions are strings in the scene
-/// syntax, numbers are numbers.
+/// syntax, numbers are numbers. Its shape is `results::linearize::report`'s.
 pub fn json(l: &Linearized) -> String {
-    let d = &l.derivation;
-    let pool = &d.model.pool;
-    let lin = &l.linearization;
-    let a = Style::Ascii;
-    let name = |s: SymId| pool.symbol(s).name.clone();
-    let mut about = Map::new();
-    for (q, rate, value) in lin.reference() {
-        let key = if rate { format!("{}'", name(q)) } else { name(q) };
-        about.insert(key, json!(pool.print(value, a)));
-    }
-    let mut parameters = Map::new();
-    for (p, v) in d.model.params.iter().zip(&l.at.parameters) {
-        parameters.insert(p.name.clone(), json_number(*v));
-    }
-    let matrix = |exact: &[Vec<ExprId>], value: &[Vec<f64>]| json!({ "exact": exact_json(pool, exact), "value": matrix_json(value) });
-    let constraints: Vec<Json> = lin
-        .constraints()
-        .iter()
-        .zip(&l.at.multipliers)
-        .map(|(c, v)| {
-            json!({
-                "name": d.model.constraints[c.constraint].name,
-                "multiplier": name(c.lambda),
-                "multiplier_value": json_number(*v),
-                "jacobian": c.jacobian.iter().map(|e| pool.print(*e, a)).collect::<Vec<_>>(),
-            })
-        })
-        .collect();
-    let mut out = Map::new();
-    out.insert(
-        "coordinates".into(),
-        json!(lin.coords.iter().map(|q| name(*q)).collect::<Vec<_>>()),
-    );
-    let cyclic: Vec<String> =
-        lin.coords.iter().zip(&lin.cyclic).filter(|(_, c)| **c).map(|(q, _)| name(*q)).collect();
-    out.insert("cyclic".into(), json!(cyclic));
-    out.insert("about".into(), Json::Object(about));
-    out.insert("exact_reference".into(), json!(l.exact_reference));
-    out.insert("parameters".into(), Json::Object(parameters));
-    out.insert(
-        "accelerations".into(),
-        Json::Array(l.at.accelerations.iter().map(|v| json_number(*v)).collect()),
-    );
-    out.insert("M".into(), matrix(&l.mass, &l.at.mass));
-    out.insert("C".into(), matrix(&l.damping, &l.at.damping));
-    out.insert("K".into(), matrix(&l.stiffness, &l.at.stiffness));
-    if !constraints.is_empty() {
-        out.insert("constraints".into(), Json::Array(constraints));
-    }
-    if let CaseNumbers::Holonomic { basis: Some(basis) } = &l.at.case {
-        out.insert("basis".into(), matrix_json(basis));
-    }
-    if let (Some(r), CaseNumbers::InRates { kinematics: g }) = (lin.in_rates(), &l.at.case) {
-        out.insert(
-            "independent_rates".into(),
-            json!(r.rates.iter().map(|s| name(*s)).collect::<Vec<_>>()),
-        );
-        out.insert(
-            "positions_kept".into(),
-            json!(r.kept.iter().map(|&i| name(lin.coords[i])).collect::<Vec<_>>()),
-        );
-        out.insert("G".into(), matrix(&r.kinematics, g));
-    }
-    out.insert("state".into(), json!(l.state));
-    out.insert("A".into(), matrix_json(&l.at.first_order.a));
-    out.insert("first_order".into(), first_order_json(l));
-    out.insert("cyclic_zeros".into(), json!(l.at.cyclic_zeros));
-    out.insert("first_integrals".into(), json!(l.at.first_integrals));
-    out.insert("eigenvalues".into(), eigenvalues_json(&l.at.eigenvalues));
-    out.insert("bounds".into(), numbers_json(&l.at.bounds));
-    out.insert("stability".into(), json!(l.at.stability.name()));
-    out.insert("tolerance".into(), json_number(l.at.tolerance));
-    if let Some(sweep) = &l.sweep {
-        sweep_json(sweep, &mut out);
-    }
-    let report = json!({ "linearization": Json::Object(out) });
-    let mut text = serde_json::to_string_pretty(&report).unwrap_or_default();
+    let mut text = serde_json::to_string_pretty(&data_json(&results::linearize::report(l)))
+        .unwrap_or_default();
     text.push('\n');
     text
-}
-
-/// The state space, an object of its own: at the top level `C` is the damping's, so A, B, C
-/// and D sit here with their rows named by `state` (the top-level `state` and `A` stay for
-/// readers of both).
-fn first_order_json(l: &Linearized) -> Json {
-    let pool = &l.derivation.model.pool;
-    let lin = &l.linearization;
-    let space = &l.at.first_order;
-    let mut first_order = Map::new();
-    first_order.insert("state".into(), json!(l.state));
-    first_order.insert("inputs".into(), json!(l.inputs));
-    first_order.insert("outputs".into(), json!(l.outputs));
-    first_order.insert("A".into(), matrix_json(&space.a));
-    first_order.insert("B".into(), matrix_json(&space.b));
-    first_order.insert("C".into(), matrix_json(&space.c));
-    first_order.insert("D".into(), matrix_json(&space.d));
-    if let Some(exact) = &l.exact {
-        let names: Vec<String> = exact.state.iter().map(|c| c.name(pool, &lin.coords)).collect();
-        let exact = json!({
-            "state": names,
-            "A": exact_json(pool, &exact.a),
-            "B": exact_json(pool, &exact.b),
-        });
-        first_order.insert("exact".into(), exact);
-    }
-    let rank = |r: Option<engine::linearize::Rank>| {
-        r.map(|r| {
-            json!({
-                "rank": r.rank,
-                "of": r.full,
-                "tolerance": json_number(r.tolerance),
-                "smallest_counted": json_number(r.smallest_counted),
-                "largest_left_out": json_number(r.largest_left_out),
-                "doubtful": r.doubtful(),
-            })
-        })
-    };
-    first_order.insert("controllability".into(), json!(rank(space.controllability)));
-    first_order.insert("observability".into(), json!(rank(space.observability)));
-    Json::Object(first_order)
-}
-
-/// The sweep's rows and the values where its verdict changes.
-fn sweep_json(sweep: &engine::linearize::Sweep, out: &mut Map<String, Json>) {
-    out.insert("sweep_parameter".into(), json!(sweep.parameter));
-    let rows: Vec<Json> = sweep
-        .rows
-        .iter()
-        .map(|r| {
-            json!({
-                "value": json_number(r.value),
-                "eigenvalues": eigenvalues_json(&r.eigenvalues),
-                "bounds": numbers_json(&r.bounds),
-                "stability": r.stability.name(),
-            })
-        })
-        .collect();
-    out.insert("sweep".into(), Json::Array(rows));
-    let changes: Vec<Json> = sweep
-        .changes
-        .iter()
-        .map(|c| {
-            json!({
-                "value": json_number(c.value),
-                "from": c.from.name(),
-                "to": c.to.name(),
-                "bracket": [json_number(c.bracket.0), json_number(c.bracket.1)],
-            })
-        })
-        .collect();
-    out.insert("changes".into(), Json::Array(changes));
 }

@@ -2,11 +2,10 @@
 
 use cas::number::Signed;
 use cas::{ExprId, Pool, Rational, Style, SymId};
-use engine::derived::Derived;
-use mechanics::{Derivation, Equation};
+use engine::derived::{Derivation, Derived, Equation, NumericValue, ShownAtStart};
 use model::Value;
+use results::Data;
 use serde_json::{json, Map, Value as Json};
-use verify::{NumericValue, ShownAtStart};
 
 mod json;
 mod latex;
@@ -66,7 +65,7 @@ fn start_value_text(d: &Derivation, s: cas::SymId, e: ExprId, style: Style) -> S
     let rate = pool.symbol(s).order() > 0;
     let numeric = d.solved_start_positions.contains(&s)
         || (rate && !d.solved_start_positions.is_empty() && pool.as_num(e).is_none());
-    let values = if numeric { verify::parameter_values(d).ok() } else { None };
+    let values = if numeric { engine::derived::parameter_values(d).ok() } else { None };
     match values {
         Some(params) => {
             let mut at = vec![f64::NAN; pool.symbol_count()];
@@ -242,9 +241,9 @@ enum Section<'a> {
     MassMatrix {
         mass: &'a [Vec<ExprId>],
         forcing: &'a [ExprId],
-        multipliers: &'a [mechanics::Multiplier],
+        multipliers: &'a [engine::derived::Multiplier],
     },
-    Independent(&'a mechanics::IndependentForm),
+    Independent(&'a engine::derived::IndependentForm),
     /// With the accelerations solved for, and as functions of the state.
     Reactions {
         reactions: &'a [(SymId, ExprId)],
@@ -375,6 +374,34 @@ fn numeric_json(v: &NumericValue) -> Json {
 
 pub(crate) fn json_number(v: f64) -> Json {
     serde_json::Number::from_f64(v).map(Json::Number).unwrap_or(Json::Null)
+}
+
+/// A result's data as JSON: a complex number as `[re, im]`, a matrix as its rows, an exact
+/// expression as its scene-syntax text; a number that is not finite as null.
+pub(crate) fn data_json(data: &Data) -> Json {
+    let rows = |rows: &[Vec<f64>]| {
+        let row = |r: &Vec<f64>| Json::Array(r.iter().map(|v| json_number(*v)).collect());
+        Json::Array(rows.iter().map(row).collect())
+    };
+    match data {
+        Data::Null => Json::Null,
+        Data::Bool(b) => json!(b),
+        Data::Int(n) => json!(n),
+        Data::Float(v) => json_number(*v),
+        Data::Text(s) => json!(s),
+        Data::List(items) | Data::Array(items) => {
+            Json::Array(items.iter().map(data_json).collect())
+        }
+        Data::Map(entries) => {
+            Json::Object(entries.iter().map(|(k, v)| (k.clone(), data_json(v))).collect())
+        }
+        Data::Complex(re, im) => json!([json_number(*re), json_number(*im)]),
+        Data::Matrix { rows: values, .. } => rows(values),
+        Data::Exact(e) => json!(e.text),
+        Data::ExactMatrix(m) => Json::Array(
+            m.iter().map(|r| Json::Array(r.iter().map(|e| json!(e.text)).collect())).collect(),
+        ),
+    }
 }
 
 fn value_json(pool: &Pool, v: &Value) -> Json {

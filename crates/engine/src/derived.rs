@@ -5,9 +5,11 @@
 
 use cas::number::{One, Signed, Zero};
 use cas::{ExprId, Pool, SymId};
-use mechanics::{Derivation, Equation};
 use model::Value;
-use verify::ShownAtStart;
+
+// The types a derive report is read from, for front ends that reach the core through `engine`.
+pub use mechanics::{Derivation, Equation, IndependentForm, Multiplier};
+pub use verify::{parameter_values, NumericValue, ShownAtStart};
 
 /// Everything `derive` prints, computed once and shared by the formats.
 pub struct Derived {

@@ -3,12 +3,10 @@
 //! of the equations for notebooks.
 
 use cas::{ExprId, Pool, Style};
-use engine::derived::{collect, Derived};
-use mechanics::Derivation;
+use engine::derived::{collect, Derivation, Derived, NumericValue, ShownAtStart};
 use model::Value;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use verify::ShownAtStart;
 
 use crate::sympy::ToSympy;
 
@@ -132,8 +130,8 @@ fn at_start<'py>(
         ShownAtStart::Numeric { items, unknowns, digits, .. } => {
             for (show, value) in items {
                 let v = match value {
-                    verify::NumericValue::Scalar(x) => s.float(*x)?,
-                    verify::NumericValue::Vector(xs) => {
+                    NumericValue::Scalar(x) => s.float(*x)?,
+                    NumericValue::Vector(xs) => {
                         let entries: Vec<_> =
                             xs.iter().map(|x| s.float(*x)).collect::<PyResult<_>>()?;
                         let rows: Vec<_> = entries
@@ -142,7 +140,7 @@ fn at_start<'py>(
                             .collect::<PyResult<_>>()?;
                         py.import("sympy")?.getattr("Matrix")?.call1((PyList::new(py, rows)?,))?
                     }
-                    verify::NumericValue::Matrix(m) => {
+                    NumericValue::Matrix(m) => {
                         let rows: Vec<_> = m
                             .iter()
                             .map(|r| {
@@ -209,7 +207,7 @@ fn independent<'py>(
     py: Python<'py>,
     s: &mut ToSympy<'py>,
     pool: &Pool,
-    form: &mechanics::IndependentForm,
+    form: &engine::derived::IndependentForm,
 ) -> PyResult<Bound<'py, PyDict>> {
     let list = |s: &mut ToSympy<'py>, syms: &[cas::SymId]| -> PyResult<Bound<'py, PyList>> {
         let items: Vec<_> = syms.iter().map(|q| s.symbol(pool, *q)).collect::<PyResult<_>>()?;

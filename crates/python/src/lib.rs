@@ -7,6 +7,7 @@
 //! Everything goes through `engine`, as in the `lagrange` command; every error comes back as
 //! a Python exception ([`errors`]), never as a panic across the boundary.
 
+mod data;
 mod derive;
 mod ensemble;
 mod errors;
@@ -225,7 +226,7 @@ impl NativeScene {
         set: Vec<String>,
         sweep: Option<String>,
         keep_cyclic: bool,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let options = engine::linearize::Options {
             about,
             set,
@@ -234,121 +235,24 @@ impl NativeScene {
             drop_cyclic: !keep_cyclic,
         };
         let l = py
-            .detach(|| engine::linearize::linearize(&self.source, &options))
+            .detach(|| {
+                engine::linearize::linearize(&self.source, &options)
+                    .map(|l| results::linearize::python(&l))
+            })
             .map_err(|e| engine_error(&e, &self.path))?;
-        let mut s = sympy::ToSympy::new(py)?;
-        let pool = &l.derivation.model.pool;
-        let out = PyDict::new(py);
-        out.set_item("state", &l.state)?;
-        out.set_item("M", s.matrix(pool, &l.mass)?)?;
-        out.set_item("C", s.matrix(pool, &l.damping)?)?;
-        out.set_item("K", s.matrix(pool, &l.stiffness)?)?;
-        out.set_item("exact_reference", l.exact_reference)?;
-        let numpy = py.import("numpy")?;
-        let complex = |values: &[(f64, f64)]| -> PyResult<Bound<'py, PyAny>> {
-            let list = PyList::empty(py);
-            for (re, im) in values {
-                list.append(pyo3::types::PyComplex::from_doubles(py, *re, *im))?;
-            }
-            numpy.call_method1("array", (list,))
-        };
-        let space = &l.at.first_order;
-        // An empty list has no shape for NumPy: give it its columns.
-        let array = |rows: &[Vec<f64>], columns: usize| -> PyResult<Bound<'py, PyAny>> {
-            let a = numpy.call_method1("array", (rows.to_vec(),))?;
-            a.call_method1("reshape", (rows.len(), columns))
-        };
-        let size = space.state.len();
-        out.set_item("A", array(&space.a, size)?)?;
-        out.set_item("B", array(&space.b, l.inputs.len())?)?;
-        out.set_item("C", array(&space.c, size)?)?;
-        out.set_item("D", array(&space.d, l.inputs.len())?)?;
-        out.set_item("inputs", &l.inputs)?;
-        out.set_item("outputs", &l.outputs)?;
-        out.set_item("cyclic_zeros", l.at.cyclic_zeros)?;
-        if let Some(exact) = &l.exact {
-            let exact_matrices = PyDict::new(py);
-            exact_matrices.set_item("A", s.matrix(pool, &exact.a)?)?;
-            exact_matrices.set_item("B", s.matrix(pool, &exact.b)?)?;
-            exact_matrices.set_item("C", s.matrix(pool, &exact.c)?)?;
-            exact_matrices.set_item("D", s.matrix(pool, &exact.d)?)?;
-            out.set_item("exact", exact_matrices)?;
-        }
-        for (key, rank) in
-            [("controllability", space.controllability), ("observability", space.observability)]
-        {
-            let Some(rank) = rank else { continue };
-            let item = PyDict::new(py);
-            item.set_item("rank", rank.rank)?;
-            item.set_item("of", rank.full)?;
-            item.set_item("tolerance", rank.tolerance)?;
-            item.set_item("smallest_counted", rank.smallest_counted)?;
-            item.set_item("largest_left_out", rank.largest_left_out)?;
-            item.set_item("doubtful", rank.doubtful())?;
-            out.set_item(key, item)?;
-        }
-        out.set_item("eigenvalues", complex(&l.at.eigenvalues)?)?;
-        out.set_item("bounds", l.at.bounds.clone())?;
-        out.set_item("stability", l.at.stability.name())?;
-        out.set_item("tolerance", l.at.tolerance)?;
-        if let Some(sweep) = &l.sweep {
-            let rows = PyList::empty(py);
-            for row in &sweep.rows {
-                let item = PyDict::new(py);
-                item.set_item("value", row.value)?;
-                item.set_item("eigenvalues", complex(&row.eigenvalues)?)?;
-                item.set_item("bounds", row.bounds.clone())?;
-                item.set_item("stability", row.stability.name())?;
-                rows.append(item)?;
-            }
-            let changes = PyList::empty(py);
-            for c in &sweep.changes {
-                let item = PyDict::new(py);
-                item.set_item("value", c.value)?;
-                item.set_item("from", c.from.name())?;
-                item.set_item("to", c.to.name())?;
-                changes.append(item)?;
-            }
-            let item = PyDict::new(py);
-            item.set_item("parameter", &sweep.parameter)?;
-            item.set_item("rows", rows)?;
-            item.set_item("changes", changes)?;
-            out.set_item("sweep", item)?;
-        }
-        Ok(out)
+        data::to_python(py, &l)
     }
 
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
-    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let mut scene = self.scene();
         let d = match &mut *scene {
             Ok(scene) => &mut scene.derivation,
             Err(refused) => return Err(engine_error(refused, &self.path)),
         };
-        let verdicts = py.detach(|| verify::check_all(d));
-        let mut s = sympy::ToSympy::new(py)?;
-        let out = PyList::empty(py);
-        for (expect, verdict) in d.model.expects.iter().zip(&verdicts) {
-            let item = PyDict::new(py);
-            let (line, _) = engine::line_col(&self.source, expect.span.start);
-            item.set_item("line", line)?;
-            item.set_item("text", &expect.text)?;
-            item.set_item("held", verdict.holds())?;
-            item.set_item("how", verdict.how())?;
-            if let verify::Verdict::Fails(f) = verdict {
-                let pool = &d.model.pool;
-                item.set_item("residual", s.expr(pool, f.residual)?)?;
-                let state = PyDict::new(py);
-                for (sym, v) in &f.state {
-                    state.set_item(&pool.symbol(*sym).name, *v)?;
-                }
-                item.set_item("state", state)?;
-                item.set_item("component", f.component)?;
-            }
-            out.append(item)?;
-        }
-        Ok(out)
+        let checked = py.detach(|| results::check::expectations(&self.source, d));
+        data::to_python(py, &results::check::python(&checked))
     }
 
     /// The scene's warnings, rendered as the `lagrange` command prints them ("" if none).

@@ -8,6 +8,7 @@ use cas::{ExprId, Func, Node, Pool, SymId, SymbolKind};
 use model::Value;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
+use results::{Exact, Term};
 
 /// Builds SymPy expressions from one pool's expressions, each node once.
 pub struct ToSympy<'py> {
@@ -55,24 +56,73 @@ impl<'py> ToSympy<'py> {
             }
             SymbolKind::Time => self.t.clone(),
             SymbolKind::Coordinate { base, order } => {
-                let name = pool.symbol(base).base_name().to_string();
-                let function =
-                    self.call("Function", vec![name.into_pyobject(self.py)?.into_any()])?;
-                let q = function.call1((self.t.clone(),))?;
-                if order == 0 {
-                    q
-                } else {
-                    let wrt = PyTuple::new(
-                        self.py,
-                        [self.t.clone(), (order as i64).into_pyobject(self.py)?.into_any()],
-                    )?
-                    .into_any();
-                    self.call("Derivative", vec![q, wrt])?
-                }
+                self.coordinate(pool.symbol(base).base_name(), order)?
             }
         };
         self.symbols.insert(s, value.clone());
         Ok(value)
+    }
+
+    /// `Function(name)(t)`, or its `order`-th `Derivative`.
+    fn coordinate(&self, name: &str, order: u8) -> PyResult<Bound<'py, PyAny>> {
+        let function = self.call("Function", vec![name.into_pyobject(self.py)?.into_any()])?;
+        let q = function.call1((self.t.clone(),))?;
+        if order == 0 {
+            return Ok(q);
+        }
+        let order = (order as i64).into_pyobject(self.py)?.into_any();
+        let wrt = PyTuple::new(self.py, [self.t.clone(), order])?.into_any();
+        self.call("Derivative", vec![q, wrt])
+    }
+
+    /// An exact expression handed over as data, built as [`ToSympy::expr`] builds a pool's.
+    pub fn term(&mut self, term: &Term) -> PyResult<Bound<'py, PyAny>> {
+        let mut parts = |constant: &cas::Rational, parts: &[(Term, cas::Rational)], add: bool| {
+            let mut args = vec![self.rational(constant)?];
+            for (t, k) in parts {
+                let t = self.term(t)?;
+                args.push(match add {
+                    true => self.call("Mul", vec![self.rational(k)?, t])?,
+                    false => self.call("Pow", vec![t, self.rational(k)?])?,
+                });
+            }
+            self.call(if add { "Add" } else { "Mul" }, args)
+        };
+        match term {
+            Term::Add(c, terms) => parts(c, terms, true),
+            Term::Mul(c, factors) => parts(c, factors, false),
+            Term::Number(q) => self.rational(q),
+            Term::Constant(name) => {
+                self.call("Symbol", vec![name.clone().into_pyobject(self.py)?.into_any()])
+            }
+            Term::Time => Ok(self.t.clone()),
+            Term::Coordinate { name, order } => self.coordinate(name, *order),
+            Term::Pi => self.sympy.getattr("pi"),
+            Term::Pow(base, exponent) => {
+                let (base, exponent) = (self.term(base)?, self.term(exponent)?);
+                self.call("Pow", vec![base, exponent])
+            }
+            Term::Func(f, argument) => {
+                let argument = self.term(argument)?;
+                self.call(function_name(*f), vec![argument])
+            }
+            Term::Atan2(y, x) => {
+                let (y, x) = (self.term(y)?, self.term(x)?);
+                self.call("atan2", vec![y, x])
+            }
+        }
+    }
+
+    /// A `sympy.Matrix` of rows of exact expressions handed over as data.
+    pub fn terms(&mut self, rows: &[Vec<Exact>]) -> PyResult<Bound<'py, PyAny>> {
+        let mut out = Vec::new();
+        for row in rows {
+            let entries: Vec<Bound<'py, PyAny>> =
+                row.iter().map(|e| self.term(&e.term)).collect::<PyResult<_>>()?;
+            out.push(PyList::new(self.py, entries)?.into_any());
+        }
+        let rows = PyList::new(self.py, out)?.into_any();
+        self.call("Matrix", vec![rows])
     }
 
     /// An expression, walked node by node.

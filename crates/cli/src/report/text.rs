@@ -176,7 +176,7 @@ impl Text<'_> {
         &mut self,
         mass: &[Vec<ExprId>],
         forcing: &[ExprId],
-        multipliers: &[mechanics::Multiplier],
+        multipliers: &[engine::derived::Multiplier],
     ) {
         let (pool, full) = (self.pool, self.full);
         let q: Vec<String> = self.d.coords.iter().map(|s| self.sym(*s)).collect();
@@ -194,7 +194,7 @@ impl Text<'_> {
         }
     }
 
-    fn independent(&mut self, form: &mechanics::IndependentForm) {
+    fn independent(&mut self, form: &engine::derived::IndependentForm) {
         let names = |s: &[SymId]| s.iter().map(|r| self.sym(*r)).collect::<Vec<_>>();
         let dependent: Vec<SymId> = form.dependent.iter().map(|(d, _)| *d).collect();
         let heading = format!(
