@@ -2,7 +2,7 @@
 //! what `simulate --set` gives for the same values, grids crossed in order, runs that fail
 //! recorded with their reason, and a bad `--vary` pointed at.
 
-use engine::ensemble::{ensemble, Options, Table};
+use ::ensemble::{ensemble, Options, Table};
 use engine::input::{Assignment, Vary};
 use engine::simulate::{self, simulate};
 
@@ -140,7 +140,7 @@ fn without_record_a_row_holds_the_scenes_outputs_else_the_coordinates() {
 #[test]
 fn an_ensemble_and_its_table_go_between_threads() {
     fn shared<T: Send + Sync>() {}
-    shared::<engine::ensemble::Ensemble>();
+    shared::<::ensemble::Ensemble>();
     shared::<Table>();
     shared::<Options>();
 }

@@ -1,12 +1,12 @@
 //! `lagrange ensemble`'s outputs: the table as CSV, a row per run, and the summary on stderr.
 //! The runs themselves are `engine::ensemble`'s; the progress bar is drawn while they run.
 
-use engine::ensemble::{Options, Table};
+use ::ensemble::{Options, Table};
 use engine::Error;
 
 /// Runs the ensemble with a progress bar of its runs on a terminal.
 pub fn ensemble(source: &str, options: &Options, threads: Option<usize>) -> Result<Table, Error> {
-    engine::ensemble::ensemble_with(source, options, threads, &mut crate::progress::Bar::runs())
+    ::ensemble::ensemble_with(source, options, threads, &mut crate::progress::Bar::runs())
 }
 
 /// The table as CSV: the varied parameters, the recorded quantities, then `fault`, why a run

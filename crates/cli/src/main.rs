@@ -455,7 +455,7 @@ fn main() -> ExitCode {
                     }
                 }
             }
-            let options = engine::ensemble::Options { simulate, vary: varied, runs, seed, record };
+            let options = ::ensemble::Options { simulate, vary: varied, runs, seed, record };
             ensemble(&file, &source, &options, threads.map(usize::from), out, plot)
         }
         Command::Linearize {
@@ -834,7 +834,7 @@ fn simulate(
 fn ensemble(
     file: &std::path::Path,
     source: &str,
-    options: &engine::ensemble::Options,
+    options: &::ensemble::Options,
     threads: Option<usize>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
@@ -854,7 +854,7 @@ fn ensemble(
         eprintln!("error: {e}");
         return ExitCode::from(2);
     }
-    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    let threads = threads.unwrap_or_else(::ensemble::cores);
     let started = std::time::Instant::now();
     let table = match cli::ensemble::ensemble(source, options, Some(threads)) {
         Ok(table) => table,

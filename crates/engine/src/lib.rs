@@ -1,9 +1,8 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), runs a scene many times over a grid or
-//! random draws of its parameters on all cores ([`ensemble`]), with the options' values typed
-//! ([`input`]), with the scene's figures frame by frame
+//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
+//! ([`input`], the `ensemble` crate's `--vary` among them), with the scene's figures frame by frame
 //! for an animation ([`animate`]), measures integrators against a reference
 //! ([`mod@bench`]), builds a Rust module or C99 of the equations ([`codegen`]), says what an
 //! FMU of the scene holds ([`fmu`]) and generates scenes of
@@ -21,7 +20,6 @@ pub mod animate;
 pub mod bench;
 pub mod codegen;
 pub mod derived;
-pub mod ensemble;
 mod error;
 pub mod expect_linearized;
 pub mod fmu;

@@ -15,9 +15,9 @@ mod integrand;
 mod on_demand;
 
 pub use compiled::Compiled;
-pub(crate) use drive::{hold as drive_hold, signals as drive_signals};
+pub use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
-pub(crate) use integrand::{run_settings, watched, Integrand};
+pub use integrand::{run_settings, watched, Integrand};
 
 use crate::animate::Animation;
 use crate::input::Assignment;
@@ -387,7 +387,7 @@ pub fn run(
 
 /// Where a run's quantities sit among the observed columns: the outputs, the stops, the
 /// events, KE and PE, then the figures of an animation and the constraints' residuals.
-pub(crate) struct Columns {
+pub struct Columns {
     pub outputs: usize,
     pub stops: usize,
     pub events: usize,
@@ -406,7 +406,7 @@ impl Columns {
 }
 
 /// A scene loaded for runs.
-pub(crate) struct Loaded {
+pub struct Loaded {
     /// With the run's expressions resolved in its scope, in [`Columns`] order, and the inputs
     /// driven continuously replaced by their laws.
     pub prepared: Prepared,
@@ -419,7 +419,7 @@ pub(crate) struct Loaded {
 }
 
 /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
-pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
+pub fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     let mut outputs = settings.outputs.clone();
     let mut extra: Vec<String> = Vec::new();
     extra.extend(outputs.iter().cloned());
@@ -484,7 +484,7 @@ fn refuse_constant_stop(
 
 /// The `--set` values resolved as expressions of the derived scene's parameters: after the
 /// derivation, so that a scene derived once runs with value after value.
-pub(crate) fn set_expressions(
+pub fn set_expressions(
     prepared: &mut Prepared,
     sets: &[Assignment],
 ) -> Result<Vec<cas::ExprId>, Error> {
@@ -519,13 +519,13 @@ pub(crate) fn set_expressions(
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by
 /// theirs with whether the rate is set.
-pub(crate) struct Overrides {
+pub struct Overrides {
     pub params: Vec<(usize, cas::ExprId)>,
     pub coords: Vec<(usize, bool, cas::ExprId)>,
 }
 
 /// Which parameter or coordinate each `--set` value replaces, or why it replaces none.
-pub(crate) fn overrides(
+pub fn overrides(
     prepared: &Prepared,
     sets: &[Assignment],
     exprs: &[cas::ExprId],
@@ -569,7 +569,7 @@ pub(crate) fn overrides(
 /// The parameters' values and the initial state, with the `--set` values and the `given`
 /// parameters' numbers (by index) in place and the start settled again on the kept
 /// constraints where they moved it.
-pub(crate) fn start(
+pub fn start(
     prepared: &mut Prepared,
     values: &Overrides,
     given: &[(usize, f64)],
@@ -688,7 +688,7 @@ pub(crate) fn with_partials(
 }
 
 /// Bodies in space oriented by angles (not Euler parameters).
-pub(crate) fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
+pub fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
     let by_angles = |b: &&model::Body| {
         matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
     };
@@ -808,7 +808,7 @@ impl Outcome {
 
 /// What a fault's words name: the method, the state's and the kept constraints' names, and
 /// the bodies oriented by angles.
-pub(crate) struct FaultNames<'a> {
+pub struct FaultNames<'a> {
     pub method: Method,
     pub state: &'a [String],
     pub constraints: &'a [String],

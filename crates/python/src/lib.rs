@@ -207,7 +207,7 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let simulate = options.engine(self)?;
         let vary = engine::input::varies(&vary).map_err(|e| engine_error(&e, &self.path))?;
-        let options = engine::ensemble::Options { simulate, vary, runs, seed, record };
+        let options = ::ensemble::Options { simulate, vary, runs, seed, record };
         let request = ensemble::Request { options, threads, from: start, to: stop };
         ensemble::ensemble(py, &self.source, &self.path, request)
     }

@@ -7,7 +7,7 @@
 use std::error::Error;
 use std::path::Path;
 
-use engine::ensemble::Table;
+use ::ensemble::Table;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;

@@ -14,7 +14,7 @@ use crate::Error;
 
 /// The equations of a run in the form its method integrates.
 #[derive(Clone)]
-pub(crate) enum Integrand {
+pub enum Integrand {
     /// y = (q, q̇), with the partials of the exact Jacobian for the methods that use one.
     Mechanical(Mechanical),
     /// y = (q, p), for the symplectic methods (boxed: it holds the problem in (q, q̇) too).
@@ -94,7 +94,7 @@ impl Integrand {
 pub(crate) const MAX_STEPS: usize = 20_000_000;
 
 /// The integrator's settings of a run recording `samples` evenly spaced times.
-pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
+pub fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
     sim::Settings {
         method: settings.method,
         start: 0.0,
@@ -107,7 +107,7 @@ pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings
 }
 
 /// The stops and events watched, by their observation columns.
-pub(crate) fn watched(columns: &Columns) -> Vec<Event> {
+pub fn watched(columns: &Columns) -> Vec<Event> {
     let Columns { outputs, stops, events } = *columns;
     (0..stops)
         .map(|k| Event { column: outputs + k, stop: true })

@@ -18,9 +18,9 @@ mod record;
 
 pub use record::{Extreme, Recorded};
 
-use crate::input::{Spread, Vary};
-use crate::simulate::{self, Columns, FaultNames, Integrand, Progress};
-use crate::{Error, Piece, Setting};
+use engine::input::Vary;
+use engine::simulate::{self, Columns, FaultNames, Integrand, Progress};
+use engine::{Error, Piece, Setting};
 
 /// The most runs an ensemble may have: every run's start is made before the first runs, at
 /// a hundred or two bytes each.
@@ -406,7 +406,7 @@ fn run_words(piece: &Piece) -> String {
 
 /// The index of each varied parameter among the model's, or why one is not a parameter.
 fn varied_parameters(
-    prepared: &mut crate::numbers::Prepared,
+    prepared: &mut engine::numbers::Prepared,
     vary: &[Vary],
 ) -> Result<Vec<usize>, Error> {
     let mut found = Vec::new();
@@ -417,7 +417,7 @@ fn varied_parameters(
         }
         if let Some(i) = prepared.derivation.model.params.iter().position(|p| p.name == *name) {
             if prepared.parameter_plan.is_derived(i) {
-                return Err(crate::numbers::derived_error(
+                return Err(engine::numbers::derived_error(
                     &prepared.parameter_plan,
                     Setting::Vary,
                     i,
@@ -451,17 +451,4 @@ fn varied_parameters(
         return Err(Error::given(Setting::Vary, name, rest));
     }
     Ok(found)
-}
-
-impl Spread {
-    /// The `k`th of a grid axis's values, the last exactly its end.
-    pub fn grid_value(&self, k: usize) -> f64 {
-        match *self {
-            Spread::Grid { to, values, .. } if k + 1 == values => to,
-            Spread::Grid { from, to, values } => {
-                from + (to - from) * k as f64 / (values - 1) as f64
-            }
-            _ => f64::NAN,
-        }
-    }
 }

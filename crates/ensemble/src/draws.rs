@@ -7,8 +7,8 @@ use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 
 use super::MAX_RUNS;
-use crate::input::{Spread, Vary};
-use crate::{Error, Setting};
+use engine::input::{Spread, Vary};
+use engine::{Error, Setting};
 
 /// The grid and the draws of an ensemble, checked.
 pub(super) struct Design {
