@@ -790,14 +790,16 @@ fn simulate(
             return ExitCode::from(2);
         }
     }
+    let json = out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) == Some("json");
+    if plot.is_none() && animate.is_none() {
+        return simulate_streamed(&path, source, options, out.as_ref(), json);
+    }
+    // The plot draws every row, and the animation plays every frame: the rows are kept.
     let outcome = match cli::simulate::simulate(source, options) {
         Ok(o) => o,
         Err(e) => return fail(&path, &e),
     };
-    let table = match out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) {
-        Some("json") => cli::simulate::json(&outcome),
-        _ => cli::simulate::csv(&outcome),
-    };
+    let table = if json { cli::simulate::json(&outcome) } else { cli::simulate::csv(&outcome) };
     let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
     if write_or_print(out.as_ref(), &table) != ExitCode::SUCCESS {
         code = ExitCode::from(2);
@@ -829,6 +831,80 @@ fn simulate(
     }
     eprint!("{}", cli::simulate::summary(&outcome));
     code
+}
+
+/// `lagrange simulate` with no picture: the table written as the rows are made, to a file put
+/// in place once the run is over (or not at all, where the run is refused) or to standard
+/// output, so that no row is kept.
+fn simulate_streamed(
+    path: &str,
+    source: &str,
+    options: &engine::simulate::Options,
+    out: Option<&PathBuf>,
+    json: bool,
+) -> ExitCode {
+    let destination = match out.map(|o| cli::AtomicFile::create(o)) {
+        Some(Ok(file)) => Destination::File(file),
+        // Said after the run, as a table that cannot be written always was.
+        Some(Err(e)) => Destination::Unwritable(e),
+        None => Destination::Stdout(std::io::BufWriter::new(std::io::stdout())),
+    };
+    let mut table = cli::simulate::Table::new(json, destination);
+    let outcome = match cli::simulate::simulate_into(source, options, &mut table) {
+        Ok(o) => o,
+        Err(e) => return fail(path, &e),
+    };
+    let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
+    match (table.finish(&outcome).and_then(Destination::finish), out) {
+        (Ok(()), _) => {}
+        (Err(e), Some(out)) => {
+            eprintln!("error: cannot write {}: {e}", out.display());
+            code = ExitCode::from(2);
+        }
+        // A reader that stops reading (`| head`) is not an error, as for `emit`.
+        (Err(e), None) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
+        (Err(e), None) => eprintln!("error: cannot write the output: {e}"),
+    }
+    eprint!("{}", cli::simulate::summary(&outcome));
+    code
+}
+
+/// Where a streamed table goes.
+enum Destination {
+    /// A file, put in place whole when the table is done.
+    File(cli::AtomicFile),
+    Stdout(std::io::BufWriter<std::io::Stdout>),
+    /// A file that cannot be written: the rows are dropped, and the error said at the end.
+    Unwritable(std::io::Error),
+}
+
+impl Destination {
+    fn finish(self) -> std::io::Result<()> {
+        use std::io::Write;
+        match self {
+            Destination::File(file) => file.finish(),
+            Destination::Stdout(mut out) => out.flush(),
+            Destination::Unwritable(e) => Err(e),
+        }
+    }
+}
+
+impl std::io::Write for Destination {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Destination::File(file) => file.write(bytes),
+            Destination::Stdout(out) => out.write(bytes),
+            Destination::Unwritable(_) => Ok(bytes.len()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Destination::File(file) => file.flush(),
+            Destination::Stdout(out) => out.flush(),
+            Destination::Unwritable(_) => Ok(()),
+        }
+    }
 }
 
 fn ensemble(

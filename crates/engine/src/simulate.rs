@@ -13,11 +13,13 @@ mod drive;
 mod fault;
 mod integrand;
 mod on_demand;
+mod rows;
 
 pub use compiled::Compiled;
 pub use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
 pub use integrand::{run_settings, watched, Integrand};
+pub use rows::{Sink, Totals};
 
 use crate::animate::Animation;
 use crate::input::Assignment;
@@ -110,7 +112,10 @@ impl Progress for () {}
 /// A finished (or faulted) simulation, ready to be written.
 pub struct Outcome {
     pub columns: Vec<String>,
+    /// The run; its trajectory is empty where the rows went to a [`Sink`] as they were made.
     pub run: Run,
+    /// The figures of every row the summary gives, whether the rows were kept or not.
+    pub totals: Totals,
     /// Which trajectory columns are the recorded outputs (the rest are internal).
     pub shown: usize,
     /// Trajectory columns of KE and PE.
@@ -374,6 +379,19 @@ pub fn simulate_with(
     run(source, &settings(source, options)?, progress)
 }
 
+/// [`simulate_with`], handing the rows to `sink` as they are made rather than keeping them:
+/// the outcome's trajectory is empty, and its summary the same. An animation's figures need
+/// every row: with `animate` the rows are kept, and handed to `sink` after the run.
+pub fn simulate_into(
+    source: &str,
+    options: &Options,
+    progress: &mut dyn Progress,
+    sink: &mut dyn Sink,
+) -> Result<Outcome, Error> {
+    let settings = settings(source, options)?;
+    Compiled::new(source, &settings)?.run_into(&settings, progress, sink)
+}
+
 /// Loads `source` with the settings' outputs, stops, events and `--set` values resolved as
 /// its expressions, and integrates it. A run that faults is an [`Outcome`] with its fault, and
 /// what was computed before it.
@@ -615,6 +633,7 @@ fn integrate_scene(
     settings: &Settings,
     columns: &Columns,
     progress: &mut dyn Progress,
+    rows: Option<&mut dyn sim::Rows>,
 ) -> Result<(Run, f64, Option<FastestMode>), Error> {
     let Settings { until, method, step, .. } = *settings;
     let mut run_settings = integrand::run_settings(settings, settings.samples);
@@ -648,10 +667,15 @@ fn integrate_scene(
         };
         if method == Method::Auto {
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
-            integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
+            match rows {
+                Some(rows) => {
+                    sim::integrate_into(&mut lazy, y0, &run_settings, &watched, &mut update, rows)
+                }
+                None => integrate(&mut lazy, y0, &run_settings, &watched, &mut update),
+            }
         } else {
             let mut integrand = Integrand::new(prepared, mechanical, method)?;
-            let run = integrand.integrate(y0, &run_settings, &watched, &mut update);
+            let run = integrand.integrate_to(y0, &run_settings, &watched, &mut update, rows);
             if let Integrand::Mechanical(m) = &mut integrand {
                 fastest_mode = fault::fastest_mode(m, prepared, (method, step), y0, &run);
             }
@@ -738,33 +762,12 @@ impl Outcome {
 
     /// The largest |E(t) − E(0)|, and that relative to the energy scale.
     pub fn energy_drift(&self) -> (f64, f64) {
-        let e = self.energy();
-        let e0 = e.first().copied().unwrap_or(0.0);
-        let (k, p) = self.energy_columns;
-        let scale = self
-            .run
-            .trajectory
-            .rows
-            .iter()
-            .map(|r| r[k].abs().max(r[p].abs()))
-            .fold(e0.abs(), f64::max)
-            .max(f64::MIN_POSITIVE);
-        let drift = e.iter().map(|v| (v - e0).abs()).fold(0.0, f64::max);
-        (drift, drift / scale)
+        self.totals.energy_drift()
     }
 
+    /// The largest residual of a kept constraint over the recorded rows, where one is kept.
     pub fn constraint_drift(&self) -> Option<f64> {
-        if self.constraint_columns.is_empty() {
-            return None;
-        }
-        Some(
-            self.run
-                .trajectory
-                .rows
-                .iter()
-                .flat_map(|r| self.constraint_columns.iter().map(move |&c| r[c]))
-                .fold(0.0, f64::max),
-        )
+        (!self.constraint_columns.is_empty()).then(|| self.totals.constraint_drift())
     }
 
     /// The largest |Φ| at the integrator's own steps, leaving out the samples interpolated

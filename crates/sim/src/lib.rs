@@ -39,7 +39,9 @@ pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, BAUMGARTE_RATE};
-pub use run::{integrate, Event, EventHit, Method, Run, Segment, Settings, Trajectory};
+pub use run::{
+    integrate, integrate_into, Event, EventHit, Method, Rows, Run, Segment, Settings, Trajectory,
+};
 pub use series::{Series, SeriesError};
 pub use spectrum::{fastest_mode, spectral_radius, Mode};
 
