@@ -843,27 +843,16 @@ fn simulate_streamed(
     out: Option<&PathBuf>,
     json: bool,
 ) -> ExitCode {
-    let destination = match out.map(|o| cli::AtomicFile::create(o)) {
-        Some(Ok(file)) => Destination::File(file),
-        // Said after the run, as a table that cannot be written always was.
-        Some(Err(e)) => Destination::Unwritable(e),
-        None => Destination::Stdout(std::io::BufWriter::new(std::io::stdout())),
-    };
-    let mut table = cli::simulate::Table::new(json, destination);
+    let mut table = cli::simulate::Table::new(json, Destination::to(out));
     let outcome = match cli::simulate::simulate_into(source, options, &mut table) {
         Ok(o) => o,
         Err(e) => return fail(path, &e),
     };
     let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
-    match (table.finish(&outcome).and_then(Destination::finish), out) {
-        (Ok(()), _) => {}
-        (Err(e), Some(out)) => {
-            eprintln!("error: cannot write {}: {e}", out.display());
-            code = ExitCode::from(2);
-        }
-        // A reader that stops reading (`| head`) is not an error, as for `emit`.
-        (Err(e), None) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
-        (Err(e), None) => eprintln!("error: cannot write the output: {e}"),
+    if Destination::report(table.finish(&outcome).and_then(Destination::finish), out)
+        != ExitCode::SUCCESS
+    {
+        code = ExitCode::from(2);
     }
     eprint!("{}", cli::simulate::summary(&outcome));
     code
@@ -879,6 +868,33 @@ enum Destination {
 }
 
 impl Destination {
+    /// A file at `out`, put in place when the table is done, or standard output.
+    fn to(out: Option<&PathBuf>) -> Destination {
+        match out.map(|o| cli::AtomicFile::create(o)) {
+            Some(Ok(file)) => Destination::File(file),
+            // Said after the run, as a table that cannot be written always was.
+            Some(Err(e)) => Destination::Unwritable(e),
+            None => Destination::Stdout(std::io::BufWriter::new(std::io::stdout())),
+        }
+    }
+
+    /// Says why the table could not be written, as [`write_or_print`] says it; its exit code.
+    fn report(written: std::io::Result<()>, out: Option<&PathBuf>) -> ExitCode {
+        match (written, out) {
+            (Ok(()), _) => ExitCode::SUCCESS,
+            (Err(e), Some(out)) => {
+                eprintln!("error: cannot write {}: {e}", out.display());
+                ExitCode::from(2)
+            }
+            // A reader that stops reading (`| head`) is not an error, as for `emit`.
+            (Err(e), None) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+            (Err(e), None) => {
+                eprintln!("error: cannot write the output: {e}");
+                ExitCode::SUCCESS
+            }
+        }
+    }
+
     fn finish(self) -> std::io::Result<()> {
         use std::io::Write;
         match self {
@@ -932,20 +948,29 @@ fn ensemble(
     }
     let threads = threads.unwrap_or_else(::ensemble::cores);
     let started = std::time::Instant::now();
-    let table = match cli::ensemble::ensemble(source, options, Some(threads)) {
-        Ok(table) => table,
+    let ensemble = match ::ensemble::Ensemble::new(source, options) {
+        Ok(ensemble) => ensemble,
         Err(e) => return fail(&path, &e),
     };
+    // The rows are written as they come, chunk by chunk, and not kept.
+    let header = ensemble.table();
+    let mut outputs = cli::ensemble::Outputs {
+        csv: cli::ensemble::Csv::new(&header, Destination::to(out.as_ref())),
+        tally: cli::ensemble::Tally::default(),
+        picture: plot.as_ref().map(|_| cli::plot::ensemble::Picture::new(&header)),
+    };
+    cli::ensemble::stream(&ensemble, threads, &mut outputs);
     let wall_seconds = started.elapsed().as_secs_f64();
-    let mut code = write_or_print(out.as_ref(), &cli::ensemble::csv(&table));
-    if let Some(plot) = plot {
-        let title = format!("{path}: {}", table.columns.get(table.varied).map_or("", |c| c));
-        if let Err(e) = cli::plot::ensemble::ensemble(&table, &title, &plot) {
+    let cli::ensemble::Outputs { csv, tally, picture } = outputs;
+    let mut code = Destination::report(csv.finish().and_then(Destination::finish), out.as_ref());
+    if let (Some(plot), Some(picture)) = (plot, picture) {
+        let title = format!("{path}: {}", header.columns.get(header.varied).map_or("", |c| c));
+        if let Err(e) = cli::plot::ensemble::ensemble(&picture, &title, &plot) {
             eprintln!("error: {e}");
             code = ExitCode::from(2);
         }
     }
-    eprint!("{}", cli::ensemble::summary(&table, wall_seconds, threads));
+    eprint!("{}", cli::ensemble::summary_of(&tally, wall_seconds, threads));
     code
 }
 
