@@ -125,6 +125,9 @@ struct Start {
     state: Vec<f64>,
 }
 
+/// A run's start, or why it could not be made.
+type Made = Result<Start, String>;
+
 /// What every run's start is made from.
 struct Maker {
     prepared: Prepared,
@@ -361,8 +364,7 @@ impl Ensemble {
     }
 
     /// The varied values and the start of each run numbered in `part`.
-    #[allow(clippy::type_complexity)]
-    fn starts(&self, part: &[usize]) -> (Vec<Vec<f64>>, Vec<Result<Start, String>>) {
+    fn starts(&self, part: &[usize]) -> (Vec<Vec<f64>>, Vec<Made>) {
         // A poisoned lock is a panic of ours while making a start; the maker is whole even so.
         let mut maker = self.maker.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         let values: Vec<Vec<f64>> = part.iter().map(|k| self.design.run(self.seed, *k)).collect();
@@ -427,12 +429,7 @@ impl Ensemble {
     }
 
     /// A run from `start` on `integrand`: its recorded values, and why it failed.
-    fn run_one(
-        &self,
-        integrand: &mut Integrand,
-        start: &Result<Start, String>,
-        stop: &AtomicBool,
-    ) -> Outcome {
+    fn run_one(&self, integrand: &mut Integrand, start: &Made, stop: &AtomicBool) -> Outcome {
         let failed = |why: String| (vec![f64::NAN; self.recorded.len()], Some(why));
         let start = match start {
             Ok(start) => start,
@@ -478,7 +475,7 @@ fn unless_stopped(stop: &AtomicBool) -> ControlFlow<()> {
 /// A chunk's runs, taken one after another by the threads: each by its place in the chunk.
 #[derive(Clone, Copy)]
 struct Jobs<'a> {
-    starts: &'a [Result<Start, String>],
+    starts: &'a [Made],
     next: &'a AtomicUsize,
 }
 
