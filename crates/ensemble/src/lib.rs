@@ -173,7 +173,7 @@ pub fn cores() -> usize {
 }
 
 impl Ensemble {
-    /// Loads, derives and lowers `source` once, and makes every run's start.
+    /// Loads, derives and lowers `source` once; each run's start is made when its chunk runs.
     pub fn new(source: &str, options: &Options) -> Result<Ensemble, Error> {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);

@@ -1,4 +1,4 @@
-//! `Scene.ensemble(...)`: `lagrange ensemble` from Python (`engine::ensemble`), its table as
+//! `Scene.ensemble(...)`: `lagrange ensemble` from Python (the `ensemble` crate), its table as
 //! NumPy columns. The scene is derived and lowered once per call, the runs go on the
 //! ensemble's own threads with the GIL released, and Ctrl-C stops them between the calling
 //! thread's runs.
