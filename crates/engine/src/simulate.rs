@@ -754,7 +754,7 @@ fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> 
 }
 
 impl Outcome {
-    /// The total energy at each recorded time.
+    /// The total energy at each recorded time, of a run that kept its rows.
     pub fn energy(&self) -> Vec<f64> {
         let (k, p) = self.energy_columns;
         self.run.trajectory.rows.iter().map(|r| r[k] + r[p]).collect()
