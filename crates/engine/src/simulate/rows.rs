@@ -113,3 +113,49 @@ impl sim::Rows for Tee<'_> {
         self.sink.row(t, &row[..self.watched.outputs]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The figures folded row by row are those of the folds over the kept rows that the
+    /// summary made before the rows streamed, bit for bit (NaN, a residual's sign and no rows
+    /// at all included).
+    #[test]
+    fn totals_fold_as_the_kept_rows_did() {
+        let watched = Watched { outputs: 1, energies: (1, 2), constraints: vec![3, 4] };
+        let cases: [&[[f64; 5]]; 4] = [
+            &[],
+            &[[0.0, 1.5, -9.0, 1e-9, 2e-12]],
+            &[
+                [0.0, 0.1, -3.0, 0.0, 0.0],
+                [0.5, 0.7, -3.6000000000000005, 3e-10, -1e-9],
+                [1.0, f64::NAN, -2.0, f64::NAN, 4e-10],
+                [1.5, 1.3, -4.2, 2e-10, 1e-11],
+            ],
+            &[[0.0, 1e300, 1e300, 0.0, 0.0], [1.0, -1e300, 0.5, 0.0, 0.0]],
+        ];
+        for rows in cases {
+            let rows: Vec<Vec<f64>> = rows.iter().map(|r| r.to_vec()).collect();
+            let totals = Totals::of(&watched, &rows);
+            // The summary's folds as they were written over the kept rows.
+            let (k, p) = watched.energies;
+            let e: Vec<f64> = rows.iter().map(|r| r[k] + r[p]).collect();
+            let e0 = e.first().copied().unwrap_or(0.0);
+            let scale = rows
+                .iter()
+                .map(|r| r[k].abs().max(r[p].abs()))
+                .fold(e0.abs(), f64::max)
+                .max(f64::MIN_POSITIVE);
+            let drift = e.iter().map(|v| (v - e0).abs()).fold(0.0, f64::max);
+            let constraint = rows
+                .iter()
+                .flat_map(|r| watched.constraints.iter().map(move |&c| r[c]))
+                .fold(0.0, f64::max);
+            let (got, relative) = totals.energy_drift();
+            assert_eq!(got.to_bits(), drift.to_bits(), "{rows:?}");
+            assert_eq!(relative.to_bits(), (drift / scale).to_bits(), "{rows:?}");
+            assert_eq!(totals.constraint_drift().to_bits(), constraint.to_bits(), "{rows:?}");
+        }
+    }
+}
