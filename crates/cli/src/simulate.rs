@@ -60,10 +60,10 @@ impl<W: Write> Sink for Table<W> {
         }
     }
 
-    fn row(&mut self, t: f64, outputs: &[f64]) {
+    fn row(&mut self, t: f64, outputs: &[f64], energy: f64) {
         match self {
-            Table::Csv(csv) => csv.row(t, outputs),
-            Table::Json(json) => json.row(t, outputs),
+            Table::Csv(csv) => csv.row(t, outputs, energy),
+            Table::Json(json) => json.row(t, outputs, energy),
         }
     }
 }
@@ -103,7 +103,7 @@ impl<W: Write> Sink for Csv<W> {
         self.write(std::iter::once("t").chain(names.iter().map(String::as_str)));
     }
 
-    fn row(&mut self, t: f64, outputs: &[f64]) {
+    fn row(&mut self, t: f64, outputs: &[f64], _energy: f64) {
         self.write(std::iter::once(t).chain(outputs.iter().copied()).map(number));
     }
 }
@@ -119,8 +119,9 @@ fn io_error(e: csv::Error) -> std::io::Error {
 /// Hands a run's kept rows to `sink`, as a streamed run hands them.
 fn replay(outcome: &Outcome, sink: &mut dyn Sink) {
     sink.columns(&outcome.columns[..outcome.shown]);
-    for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
-        sink.row(*t, &row[..outcome.shown]);
+    let trajectory = &outcome.run.trajectory;
+    for ((t, row), energy) in trajectory.times.iter().zip(&trajectory.rows).zip(outcome.energy()) {
+        sink.row(*t, &row[..outcome.shown], energy);
     }
 }
 
@@ -206,7 +207,7 @@ impl<W: Write> Sink for Json<W> {
         self.write(&format!("{{\n  \"columns\": {columns},\n  \"rows\": ["));
     }
 
-    fn row(&mut self, t: f64, outputs: &[f64]) {
+    fn row(&mut self, t: f64, outputs: &[f64], _energy: f64) {
         let mut text = String::from(if self.rows == 0 { "\n    [" } else { ",\n    [" });
         for (k, x) in std::iter::once(t).chain(outputs.iter().copied()).enumerate() {
             text.push_str(if k == 0 { "\n      " } else { ",\n      " });

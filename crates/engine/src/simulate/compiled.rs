@@ -161,7 +161,7 @@ impl Compiled {
         if let Some(sink) = after {
             sink.columns(&self.outputs);
             for (t, row) in run.trajectory.times.iter().zip(&run.trajectory.rows) {
-                sink.row(*t, &row[..columns.outputs]);
+                sink.row(*t, &row[..columns.outputs], watched.energy(row));
             }
         }
 

@@ -10,8 +10,9 @@ use super::Columns;
 pub trait Sink {
     /// The outputs' names, once, before the first row (`t` is not among them).
     fn columns(&mut self, names: &[String]);
-    /// The outputs recorded at `t`, in the order of their names.
-    fn row(&mut self, t: f64, outputs: &[f64]);
+    /// The outputs recorded at `t`, in the order of their names, and the energy T + V there
+    /// (for a front end that shows its drift row by row).
+    fn row(&mut self, t: f64, outputs: &[f64], energy: f64);
 }
 
 /// What the summary says of every row, folded as the rows pass: the energy's drift from its
@@ -46,13 +47,18 @@ impl Watched {
         let energies = (columns.energies(), columns.energies() + 1);
         Watched { outputs: columns.outputs, energies, constraints }
     }
+
+    /// T + V in a row of observations, as [`super::Outcome::energy`] gives it.
+    pub fn energy(&self, row: &[f64]) -> f64 {
+        row[self.energies.0] + row[self.energies.1]
+    }
 }
 
 impl Totals {
     /// Takes one more row of observations into the figures.
     pub(super) fn add(&mut self, watched: &Watched, row: &[f64]) {
         let (k, p) = watched.energies;
-        let e = row[k] + row[p];
+        let e = watched.energy(row);
         let e0 = *self.first_energy.get_or_insert_with(|| {
             self.energy_scale = e.abs();
             e
@@ -110,7 +116,8 @@ impl sim::Rows for Tee<'_> {
     fn row(&mut self, t: f64, row: &[f64]) {
         self.begin();
         self.totals.add(self.watched, row);
-        self.sink.row(t, &row[..self.watched.outputs]);
+        let energy = self.watched.energy(row);
+        self.sink.row(t, &row[..self.watched.outputs], energy);
     }
 }
 
