@@ -311,7 +311,7 @@ fn ensemble(rest: &[String]) -> Result<String, String> {
     if args.has("plot") {
         cli::plot::ensemble::check(&vary)?;
     }
-    let options = engine::ensemble::Options {
+    let options = ::ensemble::Options {
         simulate: run_settings(&args)?,
         vary,
         runs: args.number("runs")?,
@@ -322,7 +322,7 @@ fn ensemble(rest: &[String]) -> Result<String, String> {
     let table = cli::ensemble::ensemble(&read(file)?, &options, threads)
         .map_err(|e| cli::diagnostics::error(file, &e))?;
     let shown = if args.has("out") { String::new() } else { cli::ensemble::csv(&table) };
-    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    let threads = threads.unwrap_or_else(::ensemble::cores);
     Ok(shown + &cli::ensemble::summary(&table, 0.0, threads))
 }
 

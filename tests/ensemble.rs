@@ -2,7 +2,7 @@
 //! what `simulate --set` gives for the same values, grids crossed in order, runs that fail
 //! recorded with their reason, and a bad `--vary` pointed at.
 
-use engine::ensemble::{ensemble, Options, Table};
+use ::ensemble::{ensemble, Options, Table};
 use engine::input::{Assignment, Vary};
 use engine::simulate::{self, simulate};
 
@@ -140,7 +140,7 @@ fn without_record_a_row_holds_the_scenes_outputs_else_the_coordinates() {
 #[test]
 fn an_ensemble_and_its_table_go_between_threads() {
     fn shared<T: Send + Sync>() {}
-    shared::<engine::ensemble::Ensemble>();
+    shared::<::ensemble::Ensemble>();
     shared::<Table>();
     shared::<Options>();
 }
@@ -167,5 +167,55 @@ fn a_bad_vary_points_at_its_mistake() {
         let shown = cli::diagnostics::error("flip.lag", &error);
         assert!(shown.starts_with(&format!("error: {expected}")), "{shown}");
         assert_eq!(error.exit_code(), 2);
+    }
+}
+
+/// The rows streamed chunk by chunk are the table run in one chunk (every start made before
+/// the first run, as the ensemble ran before it streamed), byte for byte and in run order,
+/// whatever the chunks and threads: on a grid with starts that cannot be made and runs that
+/// fault, and on random draws side by side in lockstep; a range alone is the same rows too.
+#[test]
+fn streamed_chunks_give_the_table_of_one_chunk() {
+    let flip = lagrange_tests::example(FLIP);
+    let cases = [
+        (PENDULUM.to_string(), options(&["m=-1:1:5", "l=0:1:7"], None, "theta, max(theta)", 1.0)),
+        (flip, options(&["a1=uniform(-3, 3)", "m2=normal(1, 0.1)"], Some(61), "t, theta2", 2.0)),
+    ];
+    for (source, options) in &cases {
+        let mut ensemble = ::ensemble::Ensemble::new(source, options).expect("loads");
+        let runs = ensemble.runs();
+        ensemble.set_chunk(runs);
+        let whole = cli::ensemble::csv(&ensemble.run(0..runs, 1, &mut ()));
+        assert!(whole.lines().count() == runs + 1 && runs > 30, "{whole}");
+        for (chunk, threads) in [(1, 1), (3, 2), (7, 1), (16, 2), (runs, 2)] {
+            ensemble.set_chunk(chunk);
+            let header = ensemble.table();
+            let mut csv = cli::ensemble::Csv::new(&header, Vec::new());
+            let mut tally = cli::ensemble::Tally::default();
+            let mut both = Both(&mut csv, &mut tally);
+            ensemble.stream(0..runs, threads, &mut (), &mut both);
+            let streamed = String::from_utf8(csv.finish().expect("memory")).expect("UTF-8");
+            assert_eq!(streamed, whole, "chunks of {chunk} on {threads} threads");
+            let table = ensemble.run(0..runs, threads, &mut ());
+            assert_eq!(
+                cli::ensemble::summary_of(&tally, 0.5, 2),
+                cli::ensemble::summary(&table, 0.5, 2)
+            );
+            // A range alone: its starts made without the runs before it.
+            let part = ensemble.run(5..runs - 3, threads, &mut ());
+            let lines: Vec<&str> = whole.lines().collect();
+            let expected = [&lines[..1], &lines[6..runs - 2]].concat().join("\n") + "\n";
+            assert_eq!(cli::ensemble::csv(&part), expected, "chunks of {chunk}");
+        }
+    }
+}
+
+/// Two sinks fed the same rows.
+struct Both<'a, A, B>(&'a mut A, &'a mut B);
+
+impl<A: ::ensemble::Sink, B: ::ensemble::Sink> ::ensemble::Sink for Both<'_, A, B> {
+    fn row(&mut self, run: usize, row: &[f64], failure: Option<&str>) {
+        self.0.row(run, row, failure);
+        self.1.row(run, row, failure);
     }
 }

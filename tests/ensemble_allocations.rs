@@ -4,7 +4,7 @@
 //! allocator that counts per thread, on the thread that runs the ensemble (`--threads 1`),
 //! in a test binary of its own so that no other test pays for the counting.
 
-use engine::ensemble::{Ensemble, Options};
+use ::ensemble::{Ensemble, Options};
 use engine::input::Vary;
 use engine::simulate;
 

@@ -7,7 +7,7 @@
 
 use std::ops::ControlFlow;
 
-use engine::ensemble::{Ensemble, Options};
+use ::ensemble::{Ensemble, Options};
 use engine::input::Vary;
 use engine::numbers::prepare;
 use sim::{integrate, Event, Job, Lockstep, Method, Run, Settings};

@@ -8,8 +8,8 @@
 
 use std::ops::ControlFlow;
 
+use ::ensemble::{Ensemble, Options, Table};
 use cas::Func;
-use engine::ensemble::{Ensemble, Options, Table};
 use engine::input::Vary;
 use engine::numbers::prepare;
 use numeric::elementary::{apply, sin_cos};

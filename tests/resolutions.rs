@@ -43,7 +43,7 @@ fn a_run_resolves_once() {
     assert_eq!(ran, 1, "simulate");
 
     let vary = engine::input::varies(&["m1=1:2:3"]).expect("a grid");
-    let options = engine::ensemble::Options {
+    let options = ensemble::Options {
         simulate: engine::simulate::Options { until: Some(0.2), ..Default::default() },
         vary,
         runs: None,
@@ -51,7 +51,7 @@ fn a_run_resolves_once() {
         record: Vec::new(),
     };
     let ensemble = resolutions(|| {
-        engine::ensemble::ensemble_with(&pendulum, &options, Some(1), &mut ()).expect("runs")
+        ensemble::ensemble_with(&pendulum, &options, Some(1), &mut ()).expect("runs")
     });
     assert_eq!(ensemble, 1, "ensemble");
 }

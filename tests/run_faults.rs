@@ -2,7 +2,7 @@
 //! whose expression leaves its domain (NaN) within a step, alone and in the lockstep of an
 //! ensemble.
 
-use engine::ensemble::{Ensemble, Options as EnsembleOptions};
+use ::ensemble::{Ensemble, Options as EnsembleOptions};
 use engine::input::Vary;
 use engine::simulate::{simulate, Options};
 use sim::{FaultKind, NonFiniteAt};

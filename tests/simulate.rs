@@ -296,3 +296,82 @@ fn derived_parameters_follow_set_and_cannot_be_set_themselves() {
     .unwrap();
     assert!(e.to_string().contains("`I` is derived from `m` and `L`"), "{e}");
 }
+
+/// The table as it was written before rows streamed: the whole object built and printed by
+/// serde_json, the CSV record by record from the kept rows.
+fn tables_the_old_way(outcome: &Outcome) -> (String, String) {
+    let shown = outcome.shown;
+    let number = |x: f64| {
+        serde_json::Number::from_f64(x)
+            .map(serde_json::Value::Number)
+            .unwrap_or(serde_json::Value::Null)
+    };
+    let trajectory = &outcome.run.trajectory;
+    let rows: Vec<serde_json::Value> = trajectory
+        .times
+        .iter()
+        .zip(&trajectory.rows)
+        .map(|(t, r)| {
+            let mut v = vec![number(*t)];
+            v.extend(r[..shown].iter().map(|x| number(*x)));
+            serde_json::Value::Array(v)
+        })
+        .collect();
+    let mut columns = vec!["t".to_string()];
+    columns.extend(outcome.columns[..shown].iter().cloned());
+    // Events and summary as the streamed writer gives them (read back, their floats could
+    // lose a last bit): the rows are what changed.
+    let value = serde_json::json!({ "columns": columns, "rows": rows, "events": [] });
+    let json = serde_json::to_string_pretty(&value).expect("json");
+    let streamed = cli::simulate::json(outcome);
+    let tail = &streamed[streamed.rfind("\n  \"events\"").expect("events")..];
+    let json =
+        json.strip_suffix("\n  \"events\": []\n}").expect("the events last").to_string() + tail;
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    csv.write_record(&columns).expect("memory");
+    for (t, row) in trajectory.times.iter().zip(&trajectory.rows) {
+        let numbers = std::iter::once(t).chain(&row[..shown]);
+        csv.write_record(numbers.map(|x| cli::simulate::number(*x))).expect("memory");
+    }
+    (String::from_utf8(csv.into_inner().expect("memory")).expect("UTF-8"), json)
+}
+
+/// Rows handed to a sink as they are made give the bytes that the rows kept gave, for CSV and
+/// JSON, with events, stops, kept constraints, a fault and no samples (a row per step).
+#[test]
+fn a_streamed_table_is_the_table_of_the_kept_rows() {
+    let cases: [(&str, Options); 4] = [
+        ("classics/simple_pendulum.lag", Options { samples: 50, ..Options::default() }),
+        (
+            "classics/double_pendulum_flip.lag",
+            Options { until: Some(4.0), events: vec!["theta1".into()], ..Options::default() },
+        ),
+        ("classics/pendulum_cartesian.lag", Options { samples: 40, ..Options::default() }),
+        (
+            "classics/simple_pendulum.lag",
+            Options { set: vec!["L=0".parse().expect("name=value")], ..Options::default() },
+        ),
+    ];
+    for (rel, options) in cases {
+        let source =
+            std::fs::read_to_string(lagrange_tests::examples_dir().join(rel)).expect("example");
+        let kept = simulate(&source, &options).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let (csv, json) = tables_the_old_way(&kept);
+        assert_eq!(cli::simulate::csv(&kept), csv, "{rel}");
+        assert_eq!(cli::simulate::json(&kept), json, "{rel}");
+        for as_json in [false, true] {
+            let mut table = cli::simulate::Table::new(as_json, Vec::new());
+            let streamed = engine::simulate::simulate_into(&source, &options, &mut (), &mut table)
+                .expect("the same run");
+            assert!(streamed.run.trajectory.rows.is_empty(), "{rel}: rows kept");
+            let bytes = table.finish(&streamed).expect("memory");
+            let text = String::from_utf8(bytes).expect("UTF-8");
+            assert_eq!(&text, if as_json { &json } else { &csv }, "{rel}");
+            assert_eq!(
+                summary(&streamed).lines().skip(1).collect::<Vec<_>>(),
+                summary(&kept).lines().skip(1).collect::<Vec<_>>(),
+                "{rel}"
+            );
+        }
+    }
+}

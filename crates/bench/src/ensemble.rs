@@ -12,7 +12,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use engine::ensemble::{Ensemble, Options, Table};
+use ::ensemble::{Ensemble, Options, Table};
 use engine::input::Vary;
 
 use crate::{median, seconds};

@@ -16,6 +16,9 @@
 //!   their spread at each tolerance (one tolerance should mean one accuracy);
 //! - `ensemble [--peer]`: the double pendulum's 60×60 flip-time map on one thread and on two,
 //!   with `--peer` SciPy's DOP853 on a lambdified SymPy right-hand side on a sample of it;
+//! - `memory [--largest N]`: the peak memory of `lagrange simulate` and `lagrange ensemble`
+//!   processes at 1e5, 1e6 … N samples and runs (1e7 by default), their tables streamed to a
+//!   file (Linux: read from /proc);
 //! - `derive FAMILY N`: one scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
 //!
 //! Benchmarks measure; the tests assert. Every timing is a median of repeats, and the
@@ -111,6 +114,13 @@ enum Benchmark {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
+    /// The peak memory of `lagrange simulate` and `lagrange ensemble` as their tables grow
+    /// (Linux).
+    Memory {
+        /// The most samples and runs (from 1e5, tenfold each time).
+        #[arg(long, default_value_t = 10_000_000)]
+        largest: usize,
+    },
     /// One scaling measurement as JSON, for `tests/sympy/sympy_compare.py`.
     Derive {
         #[arg(value_parser = family)]
@@ -161,6 +171,7 @@ fn main() {
             precision::run();
         }
         Benchmark::Model => model::run(),
+        Benchmark::Memory { largest } => memory::run(largest),
         Benchmark::Derive { family, n } => scaling::json(family, n),
     }
 }

@@ -142,16 +142,52 @@ pub fn write_atomically(path: &std::path::Path, contents: &str) -> std::io::Resu
 /// [`write_atomically`] of bytes.
 pub fn write_bytes_atomically(path: &std::path::Path, contents: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
-    let target = Target::of(path)?;
-    let name = target
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    // Dropped on an error, the temporary file is removed.
-    let mut tmp = target.temporary(&format!(".{name}."), ".tmp")?;
-    tmp.as_file_mut().write_all(contents)?;
-    target.replace_by(tmp)
+    let mut file = AtomicFile::create(path)?;
+    file.write_all(contents)?;
+    file.finish()
+}
+
+/// A file written as it is made and put in place whole, as [`write_atomically`] puts one: the
+/// bytes go to a temporary file beside the target, renamed over it by
+/// [`AtomicFile::finish`]. Dropped unfinished (an error, a run refused), the temporary file is
+/// removed and the target is as it was: a half-written table is never at its path.
+pub struct AtomicFile {
+    target: Target,
+    out: std::io::BufWriter<tempfile::NamedTempFile>,
+}
+
+impl AtomicFile {
+    /// The temporary file for `path`, empty.
+    pub fn create(path: &std::path::Path) -> std::io::Result<AtomicFile> {
+        let target = Target::of(path)?;
+        let name = target
+            .path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let tmp = target.temporary(&format!(".{name}."), ".tmp")?;
+        Ok(AtomicFile { target, out: std::io::BufWriter::new(tmp) })
+    }
+
+    /// Puts what was written in place of the target.
+    pub fn finish(self) -> std::io::Result<()> {
+        let tmp = self.out.into_inner().map_err(std::io::IntoInnerError::into_error)?;
+        self.target.replace_by(tmp)
+    }
+}
+
+impl std::io::Write for AtomicFile {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        self.out.write(bytes)
+    }
+
+    fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.out.write_all(bytes)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
 }
 
 /// Writes a file whole or not at all by `write`, which writes to the path it is given: a

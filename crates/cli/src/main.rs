@@ -444,7 +444,7 @@ fn main() -> ExitCode {
                     }
                 }
             }
-            let options = engine::ensemble::Options { simulate, vary: varied, runs, seed, record };
+            let options = ::ensemble::Options { simulate, vary: varied, runs, seed, record };
             ensemble(&file, &source, &options, threads.map(usize::from), out, plot)
         }
         Command::Linearize {
@@ -779,14 +779,16 @@ fn simulate(
             return ExitCode::from(2);
         }
     }
+    let json = out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) == Some("json");
+    if plot.is_none() && animate.is_none() {
+        return simulate_streamed(&path, source, options, out.as_ref(), json);
+    }
+    // The plot draws every row, and the animation plays every frame: the rows are kept.
     let outcome = match cli::simulate::simulate(source, options) {
         Ok(o) => o,
         Err(e) => return fail(&path, &e),
     };
-    let table = match out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) {
-        Some("json") => cli::simulate::json(&outcome),
-        _ => cli::simulate::csv(&outcome),
-    };
+    let table = if json { cli::simulate::json(&outcome) } else { cli::simulate::csv(&outcome) };
     let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
     if write_or_print(out.as_ref(), &table) != ExitCode::SUCCESS {
         code = ExitCode::from(2);
@@ -820,10 +822,100 @@ fn simulate(
     code
 }
 
+/// `lagrange simulate` with no picture: the table written as the rows are made, to a file put
+/// in place once the run is over (or not at all, where the run is refused) or to standard
+/// output, so that no row is kept.
+fn simulate_streamed(
+    path: &str,
+    source: &str,
+    options: &engine::simulate::Options,
+    out: Option<&PathBuf>,
+    json: bool,
+) -> ExitCode {
+    let mut table = cli::simulate::Table::new(json, Destination::to(out));
+    let outcome = match cli::simulate::simulate_into(source, options, &mut table) {
+        Ok(o) => o,
+        Err(e) => return fail(path, &e),
+    };
+    let mut code = if outcome.run.fault.is_some() { ExitCode::from(1) } else { ExitCode::SUCCESS };
+    if Destination::report(table.finish(&outcome).and_then(Destination::finish), out)
+        != ExitCode::SUCCESS
+    {
+        code = ExitCode::from(2);
+    }
+    eprint!("{}", cli::simulate::summary(&outcome));
+    code
+}
+
+/// Where a streamed table goes.
+enum Destination {
+    /// A file, put in place whole when the table is done.
+    File(cli::AtomicFile),
+    Stdout(std::io::BufWriter<std::io::Stdout>),
+    /// A file that cannot be written: the rows are dropped, and the error said at the end.
+    Unwritable(std::io::Error),
+}
+
+impl Destination {
+    /// A file at `out`, put in place when the table is done, or standard output.
+    fn to(out: Option<&PathBuf>) -> Destination {
+        match out.map(|o| cli::AtomicFile::create(o)) {
+            Some(Ok(file)) => Destination::File(file),
+            // Said after the run, as a table that cannot be written always was.
+            Some(Err(e)) => Destination::Unwritable(e),
+            None => Destination::Stdout(std::io::BufWriter::new(std::io::stdout())),
+        }
+    }
+
+    /// Says why the table could not be written, as [`write_or_print`] says it; its exit code.
+    fn report(written: std::io::Result<()>, out: Option<&PathBuf>) -> ExitCode {
+        match (written, out) {
+            (Ok(()), _) => ExitCode::SUCCESS,
+            (Err(e), Some(out)) => {
+                eprintln!("error: cannot write {}: {e}", out.display());
+                ExitCode::from(2)
+            }
+            // A reader that stops reading (`| head`) is not an error, as for `emit`.
+            (Err(e), None) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+            (Err(e), None) => {
+                eprintln!("error: cannot write the output: {e}");
+                ExitCode::SUCCESS
+            }
+        }
+    }
+
+    fn finish(self) -> std::io::Result<()> {
+        use std::io::Write;
+        match self {
+            Destination::File(file) => file.finish(),
+            Destination::Stdout(mut out) => out.flush(),
+            Destination::Unwritable(e) => Err(e),
+        }
+    }
+}
+
+impl std::io::Write for Destination {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        match self {
+            Destination::File(file) => file.write(bytes),
+            Destination::Stdout(out) => out.write(bytes),
+            Destination::Unwritable(_) => Ok(bytes.len()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self {
+            Destination::File(file) => file.flush(),
+            Destination::Stdout(out) => out.flush(),
+            Destination::Unwritable(_) => Ok(()),
+        }
+    }
+}
+
 fn ensemble(
     file: &std::path::Path,
     source: &str,
-    options: &engine::ensemble::Options,
+    options: &::ensemble::Options,
     threads: Option<usize>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
@@ -843,22 +935,31 @@ fn ensemble(
         eprintln!("error: {e}");
         return ExitCode::from(2);
     }
-    let threads = threads.unwrap_or_else(engine::ensemble::cores);
+    let threads = threads.unwrap_or_else(::ensemble::cores);
     let started = std::time::Instant::now();
-    let table = match cli::ensemble::ensemble(source, options, Some(threads)) {
-        Ok(table) => table,
+    let ensemble = match ::ensemble::Ensemble::new(source, options) {
+        Ok(ensemble) => ensemble,
         Err(e) => return fail(&path, &e),
     };
+    // The rows are written as they come, chunk by chunk, and not kept.
+    let header = ensemble.table();
+    let mut outputs = cli::ensemble::Outputs {
+        csv: cli::ensemble::Csv::new(&header, Destination::to(out.as_ref())),
+        tally: cli::ensemble::Tally::default(),
+        picture: plot.as_ref().map(|_| cli::plot::ensemble::Picture::new(&header)),
+    };
+    cli::ensemble::stream(&ensemble, threads, &mut outputs);
     let wall_seconds = started.elapsed().as_secs_f64();
-    let mut code = write_or_print(out.as_ref(), &cli::ensemble::csv(&table));
-    if let Some(plot) = plot {
-        let title = format!("{path}: {}", table.columns.get(table.varied).map_or("", |c| c));
-        if let Err(e) = cli::plot::ensemble::ensemble(&table, &title, &plot) {
+    let cli::ensemble::Outputs { csv, tally, picture } = outputs;
+    let mut code = Destination::report(csv.finish().and_then(Destination::finish), out.as_ref());
+    if let (Some(plot), Some(picture)) = (plot, picture) {
+        let title = format!("{path}: {}", header.columns.get(header.varied).map_or("", |c| c));
+        if let Err(e) = cli::plot::ensemble::ensemble(&picture, &title, &plot) {
             eprintln!("error: {e}");
             code = ExitCode::from(2);
         }
     }
-    eprint!("{}", cli::ensemble::summary(&table, wall_seconds, threads));
+    eprint!("{}", cli::ensemble::summary_of(&tally, wall_seconds, threads));
     code
 }
 

@@ -1,27 +1,135 @@
 //! `lagrange simulate`'s outputs: the recorded quantities as CSV or JSON, and the summary of
 //! a run. The run itself is `engine::simulate`'s; the progress bar is drawn while it runs.
+//! The table is written as the rows are made ([`Table`], an `engine::simulate::Sink`), so a
+//! run holds none of them; from a run that kept its rows ([`csv`], [`json`]) the same writers
+//! give the same bytes.
 
-use engine::simulate::{Options, Outcome};
+use std::io::Write;
+
+use engine::simulate::{Options, Outcome, Sink};
 use engine::Error;
 
-/// Runs the scene with a progress bar on a terminal.
+/// Runs the scene with a progress bar on a terminal, keeping its rows.
 pub fn simulate(source: &str, options: &Options) -> Result<Outcome, Error> {
     engine::simulate::simulate_with(source, options, &mut crate::progress::Bar::new())
 }
 
-/// The recorded outputs as CSV: a header, then a row per recorded time. Numbers are written as
-/// Rust's shortest round-trip decimals (`{}`), which never need quoting.
-pub fn csv(outcome: &Outcome) -> String {
-    let mut out = csv::Writer::from_writer(Vec::new());
-    let header =
-        std::iter::once("t").chain(outcome.columns[..outcome.shown].iter().map(String::as_str));
-    out.write_record(header).expect("writing to memory");
-    for (t, row) in outcome.run.trajectory.times.iter().zip(&outcome.run.trajectory.rows) {
-        let numbers = std::iter::once(t).chain(&row[..outcome.shown]);
-        out.write_record(numbers.copied().map(number)).expect("writing to memory");
+/// Runs the scene with a progress bar on a terminal, its rows handed to `sink` as they are
+/// made and not kept.
+pub fn simulate_into(
+    source: &str,
+    options: &Options,
+    sink: &mut dyn Sink,
+) -> Result<Outcome, Error> {
+    engine::simulate::simulate_into(source, options, &mut crate::progress::Bar::new(), sink)
+}
+
+/// A run's table written as its rows come, as CSV or JSON.
+// One table a run: the CSV writer's buffer beside JSON's is not worth a box.
+#[allow(clippy::large_enum_variant)]
+pub enum Table<W: Write> {
+    Csv(Csv<W>),
+    Json(Json<W>),
+}
+
+impl<W: Write> Table<W> {
+    /// A table to `out`, as JSON or else as CSV.
+    pub fn new(json: bool, out: W) -> Table<W> {
+        if json {
+            Table::Json(Json::new(out))
+        } else {
+            Table::Csv(Csv::new(out))
+        }
     }
-    let bytes = out.into_inner().expect("writing to memory");
-    String::from_utf8(bytes).expect("UTF-8 in, UTF-8 out")
+
+    /// Ends the table with what only the end of the run knows (JSON's events and summary),
+    /// and gives the writer back, or the first error met writing.
+    pub fn finish(self, outcome: &Outcome) -> std::io::Result<W> {
+        match self {
+            Table::Csv(csv) => csv.finish(),
+            Table::Json(json) => json.finish(outcome),
+        }
+    }
+}
+
+impl<W: Write> Sink for Table<W> {
+    fn columns(&mut self, names: &[String]) {
+        match self {
+            Table::Csv(csv) => csv.columns(names),
+            Table::Json(json) => json.columns(names),
+        }
+    }
+
+    fn row(&mut self, t: f64, outputs: &[f64], energy: f64) {
+        match self {
+            Table::Csv(csv) => csv.row(t, outputs, energy),
+            Table::Json(json) => json.row(t, outputs, energy),
+        }
+    }
+}
+
+/// The recorded outputs as CSV: a header, then a row per recorded time. Numbers are written as
+/// Rust's shortest round-trip decimals (`{}`), which never need quoting. After a write fails,
+/// nothing more is written and [`Csv::finish`] gives the error.
+pub struct Csv<W: Write> {
+    out: csv::Writer<W>,
+    error: Option<std::io::Error>,
+}
+
+impl<W: Write> Csv<W> {
+    pub fn new(out: W) -> Csv<W> {
+        Csv { out: csv::Writer::from_writer(out), error: None }
+    }
+
+    fn write<I: AsRef<[u8]>>(&mut self, record: impl IntoIterator<Item = I>) {
+        if self.error.is_none() {
+            if let Err(e) = self.out.write_record(record) {
+                self.error = Some(io_error(e));
+            }
+        }
+    }
+
+    /// The writer, flushed, or the first error met writing.
+    pub fn finish(self) -> std::io::Result<W> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        self.out.into_inner().map_err(|e| std::io::Error::new(e.error().kind(), e.to_string()))
+    }
+}
+
+impl<W: Write> Sink for Csv<W> {
+    fn columns(&mut self, names: &[String]) {
+        self.write(std::iter::once("t").chain(names.iter().map(String::as_str)));
+    }
+
+    fn row(&mut self, t: f64, outputs: &[f64], _energy: f64) {
+        self.write(std::iter::once(t).chain(outputs.iter().copied()).map(number));
+    }
+}
+
+/// A CSV writer's error as the IO error it is (or wraps).
+fn io_error(e: csv::Error) -> std::io::Error {
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        other => std::io::Error::other(format!("{other:?}")),
+    }
+}
+
+/// Hands a run's kept rows to `sink`, as a streamed run hands them.
+fn replay(outcome: &Outcome, sink: &mut dyn Sink) {
+    sink.columns(&outcome.columns[..outcome.shown]);
+    let trajectory = &outcome.run.trajectory;
+    for ((t, row), energy) in trajectory.times.iter().zip(&trajectory.rows).zip(outcome.energy()) {
+        sink.row(*t, &row[..outcome.shown], energy);
+    }
+}
+
+/// The recorded outputs of a run that kept its rows, as CSV (see [`Csv`]).
+pub fn csv(outcome: &Outcome) -> String {
+    let mut csv = Csv::new(Vec::new());
+    replay(outcome, &mut csv);
+    String::from_utf8(csv.finish().expect("writing to memory")).expect("UTF-8 in, UTF-8 out")
 }
 
 /// The longest a number is written in full; past it, in exponent form.
@@ -39,37 +147,81 @@ pub fn number(x: f64) -> String {
     }
 }
 
-/// The recorded outputs, the events and the summary as JSON.
+/// The recorded outputs of a run that kept its rows, the events and the summary as JSON (see
+/// [`Json`]).
 pub fn json(outcome: &Outcome) -> String {
-    let rows: Vec<serde_json::Value> = outcome
-        .run
-        .trajectory
-        .times
-        .iter()
-        .zip(&outcome.run.trajectory.rows)
-        .map(|(t, r)| {
-            let mut v = vec![json_number(*t)];
-            v.extend(r[..outcome.shown].iter().map(|x| json_number(*x)));
-            serde_json::Value::Array(v)
-        })
-        .collect();
-    let mut columns = vec!["t".to_string()];
-    columns.extend(outcome.columns[..outcome.shown].iter().cloned());
-    let events: Vec<serde_json::Value> = outcome
-        .run
-        .events
-        .iter()
-        .map(|e| serde_json::json!({"event": outcome.event_names[e.event], "t": e.time}))
-        .collect();
-    let value = serde_json::json!({
-        "columns": columns,
-        "rows": rows,
-        "events": events,
-        "summary": summary_json(outcome),
-    });
-    let mut s = serde_json::to_string_pretty(&value).expect("json");
-    s.push('\n');
-    s
+    let mut json = Json::new(Vec::new());
+    replay(outcome, &mut json);
+    let bytes = json.finish(outcome).expect("writing to memory");
+    String::from_utf8(bytes).expect("UTF-8 in, UTF-8 out")
+}
+
+/// The recorded outputs, the events and the summary as one JSON object, written as the rows
+/// come: `columns`, `rows` (an array of `[t, outputs…]`), then, once the run is over,
+/// `events` and `summary`. It is laid out as serde_json's pretty printer lays out the whole
+/// object (two spaces a level), which writes each value alone; the rows are written one by one
+/// in that layout.
+pub struct Json<W: Write> {
+    out: W,
+    rows: usize,
+    error: Option<std::io::Error>,
+}
+
+impl<W: Write> Json<W> {
+    pub fn new(out: W) -> Json<W> {
+        Json { out, rows: 0, error: None }
+    }
+
+    fn write(&mut self, text: &str) {
+        if self.error.is_none() {
+            if let Err(e) = self.out.write_all(text.as_bytes()) {
+                self.error = Some(e);
+            }
+        }
+    }
+
+    /// Closes the rows and writes the events and the summary; the writer, or the first
+    /// error met writing.
+    pub fn finish(mut self, outcome: &Outcome) -> std::io::Result<W> {
+        self.write(if self.rows > 0 { "\n  ]" } else { "]" });
+        let events: Vec<serde_json::Value> = outcome
+            .run
+            .events
+            .iter()
+            .map(|e| serde_json::json!({"event": outcome.event_names[e.event], "t": e.time}))
+            .collect();
+        let (events, summary) = (pretty(&events.into()), pretty(&summary_json(outcome)));
+        self.write(&format!(",\n  \"events\": {events},\n  \"summary\": {summary}\n}}\n"));
+        match self.error {
+            Some(e) => Err(e),
+            None => self.out.flush().map(|()| self.out),
+        }
+    }
+}
+
+impl<W: Write> Sink for Json<W> {
+    fn columns(&mut self, names: &[String]) {
+        let mut columns = vec!["t".to_string()];
+        columns.extend(names.iter().cloned());
+        let columns = pretty(&columns.into());
+        self.write(&format!("{{\n  \"columns\": {columns},\n  \"rows\": ["));
+    }
+
+    fn row(&mut self, t: f64, outputs: &[f64], _energy: f64) {
+        let mut text = String::from(if self.rows == 0 { "\n    [" } else { ",\n    [" });
+        for (k, x) in std::iter::once(t).chain(outputs.iter().copied()).enumerate() {
+            text.push_str(if k == 0 { "\n      " } else { ",\n      " });
+            text.push_str(&json_number(x).to_string());
+        }
+        text.push_str("\n    ]");
+        self.rows += 1;
+        self.write(&text);
+    }
+}
+
+/// A value as serde_json's pretty printer writes it one level into an object.
+fn pretty(value: &serde_json::Value) -> String {
+    serde_json::to_string_pretty(value).expect("json").replace('\n', "\n  ")
 }
 
 fn summary_json(outcome: &Outcome) -> serde_json::Value {

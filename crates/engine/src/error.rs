@@ -167,16 +167,12 @@ impl Piece {
 
 impl Error {
     /// `setting` followed by `rest`: "`until` must be positive".
-    pub(crate) fn setting(setting: Setting, rest: impl Into<String>) -> Error {
+    pub fn setting(setting: Setting, rest: impl Into<String>) -> Error {
         Error::Setting(vec![Piece::Setting(setting), Piece::Text(rest.into())])
     }
 
     /// `setting` with what it was given, then `rest`: "`set` gg: no parameter …".
-    pub(crate) fn given(
-        setting: Setting,
-        given: impl Into<String>,
-        rest: impl Into<String>,
-    ) -> Error {
+    pub fn given(setting: Setting, given: impl Into<String>, rest: impl Into<String>) -> Error {
         Error::Setting(vec![Piece::Given(setting, given.into()), Piece::Text(rest.into())])
     }
 

@@ -185,6 +185,17 @@ pub enum Spread {
 }
 
 impl Spread {
+    /// The `k`th of a grid axis's values, the last exactly its end.
+    pub fn grid_value(&self, k: usize) -> f64 {
+        match *self {
+            Spread::Grid { to, values, .. } if k + 1 == values => to,
+            Spread::Grid { from, to, values } => {
+                from + (to - from) * k as f64 / (values - 1) as f64
+            }
+            _ => f64::NAN,
+        }
+    }
+
     /// Whether the values are random draws rather than a grid axis.
     pub fn is_random(&self) -> bool {
         !matches!(self, Spread::Grid { .. })

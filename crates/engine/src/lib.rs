@@ -1,14 +1,15 @@
 //! The library under every front end: it strings the stages together. It loads a scene
 //! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
 //! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), runs a scene many times over a grid or
-//! random draws of its parameters on all cores ([`ensemble`]), with the options' values typed
-//! ([`input`]), with the scene's figures frame by frame for an animation ([`animate`]),
-//! measures integrators against a reference ([`mod@bench`]), runs the `linear` stage on small motions about a reference, the command
+//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
+//! ([`input`], the `ensemble` crate's `--vary` among them), with the scene's figures frame by
+//! frame for an animation ([`animate`]), measures integrators against a reference
+//! ([`mod@bench`]), runs the `linear` stage on small motions about a reference, the command
 //! line's reference resolved against the scene ([`linearize`]), decides the scene's `expect
 //! linearized:` lines ([`expect_linearized`]), and gives the generalized forces that make a
 //! given motion happen ([`inverse`]). What goes wrong comes back as an [`Error`]. Printing
-//! the equations as source, and an FMU of them, is the `export` stage's, above this one.
+//! the equations as source, and an FMU of them, is the `export` stage's, above this one; an
+//! ensemble of runs is the `ensemble` crate's.
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
@@ -17,7 +18,6 @@
 pub mod animate;
 pub mod bench;
 pub mod derived;
-pub mod ensemble;
 mod error;
 pub mod expect_linearized;
 pub mod input;

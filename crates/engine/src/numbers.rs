@@ -13,7 +13,7 @@ use crate::{Error, Options, Piece, Setting};
 mod partials;
 
 /// The error for a value `setting` gives the derived parameter `i`.
-pub(crate) fn derived_error(plan: &model::ParameterValues, setting: Setting, i: usize) -> Error {
+pub fn derived_error(plan: &model::ParameterValues, setting: Setting, i: usize) -> Error {
     let name = plan.names().nth(i).unwrap_or_default().to_string();
     Error::given(setting, name, format!(": {}", plan.derived_error(i)))
 }

@@ -13,11 +13,13 @@ mod drive;
 mod fault;
 mod integrand;
 mod on_demand;
+mod rows;
 
 pub use compiled::Compiled;
-pub(crate) use drive::{hold as drive_hold, signals as drive_signals};
+pub use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
-pub(crate) use integrand::{run_settings, watched, Integrand};
+pub use integrand::{run_settings, watched, Integrand};
+pub use rows::{Sink, Totals};
 
 use crate::animate::Animation;
 use crate::input::Assignment;
@@ -110,7 +112,10 @@ impl Progress for () {}
 /// A finished (or faulted) simulation, ready to be written.
 pub struct Outcome {
     pub columns: Vec<String>,
+    /// The run; its trajectory is empty where the rows went to a [`Sink`] as they were made.
     pub run: Run,
+    /// The figures of every row the summary gives, whether the rows were kept or not.
+    pub totals: Totals,
     /// Which trajectory columns are the recorded outputs (the rest are internal).
     pub shown: usize,
     /// Trajectory columns of KE and PE.
@@ -287,7 +292,7 @@ impl<'a> Resolved<'a> {
     }
 
     /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
-    pub(crate) fn load(self, settings: &Settings) -> Result<Loaded, Error> {
+    pub fn load(self, settings: &Settings) -> Result<Loaded, Error> {
         let (model, warnings) = self.model?;
         load_model(self.source, model, warnings, settings)
     }
@@ -412,6 +417,19 @@ pub fn simulate_with(
     Compiled::from_resolved(resolved, &settings)?.run(&settings, progress)
 }
 
+/// [`simulate_with`], handing the rows to `sink` as they are made rather than keeping them:
+/// the outcome's trajectory is empty, and its summary the same. An animation's figures need
+/// every row: with `animate` the rows are kept, and handed to `sink` after the run.
+pub fn simulate_into(
+    source: &str,
+    options: &Options,
+    progress: &mut dyn Progress,
+    sink: &mut dyn Sink,
+) -> Result<Outcome, Error> {
+    let settings = settings(source, options)?;
+    Compiled::new(source, &settings)?.run_into(&settings, progress, sink)
+}
+
 /// Loads `source` with the settings' outputs, stops, events and `--set` values resolved as
 /// its expressions, and integrates it. A run that faults is an [`Outcome`] with its fault, and
 /// what was computed before it.
@@ -425,7 +443,7 @@ pub fn run(
 
 /// Where a run's quantities sit among the observed columns: the outputs, the stops, the
 /// events, KE and PE, then the figures of an animation and the constraints' residuals.
-pub(crate) struct Columns {
+pub struct Columns {
     pub outputs: usize,
     pub stops: usize,
     pub events: usize,
@@ -444,7 +462,7 @@ impl Columns {
 }
 
 /// A scene loaded for runs.
-pub(crate) struct Loaded {
+pub struct Loaded {
     /// With the run's expressions resolved in its scope, in [`Columns`] order, and the inputs
     /// driven continuously replaced by their laws.
     pub prepared: Prepared,
@@ -457,7 +475,7 @@ pub(crate) struct Loaded {
 }
 
 /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
-pub(crate) fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
+pub fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     // An input in a constraint takes its law (or value) before anything is derived.
     let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
     let (model, warnings) = crate::resolve_checked(source, checks)?;
@@ -532,7 +550,7 @@ fn refuse_constant_stop(
 
 /// The `--set` values resolved as expressions of the derived scene's parameters: after the
 /// derivation, so that a scene derived once runs with value after value.
-pub(crate) fn set_expressions(
+pub fn set_expressions(
     prepared: &mut Prepared,
     sets: &[Assignment],
 ) -> Result<Vec<cas::ExprId>, Error> {
@@ -567,13 +585,13 @@ pub(crate) fn set_expressions(
 
 /// The `--set` values in place of the scene's: parameters by their index, and coordinates by
 /// theirs with whether the rate is set.
-pub(crate) struct Overrides {
+pub struct Overrides {
     pub params: Vec<(usize, cas::ExprId)>,
     pub coords: Vec<(usize, bool, cas::ExprId)>,
 }
 
 /// Which parameter or coordinate each `--set` value replaces, or why it replaces none.
-pub(crate) fn overrides(
+pub fn overrides(
     prepared: &Prepared,
     sets: &[Assignment],
     exprs: &[cas::ExprId],
@@ -617,7 +635,7 @@ pub(crate) fn overrides(
 /// The parameters' values and the initial state, with the `--set` values and the `given`
 /// parameters' numbers (by index) in place and the start settled again on the kept
 /// constraints where they moved it.
-pub(crate) fn start(
+pub fn start(
     prepared: &mut Prepared,
     values: &Overrides,
     given: &[(usize, f64)],
@@ -663,6 +681,7 @@ fn integrate_scene(
     settings: &Settings,
     columns: &Columns,
     progress: &mut dyn Progress,
+    rows: Option<&mut dyn sim::Rows>,
 ) -> Result<(Run, f64, Option<FastestMode>), Error> {
     let Settings { until, method, step, .. } = *settings;
     let mut run_settings = integrand::run_settings(settings, settings.samples);
@@ -696,10 +715,15 @@ fn integrate_scene(
         };
         if method.jacobian() == sim::Jacobian::OnSwitch {
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
-            integrate(&mut lazy, y0, &run_settings, &watched, &mut update)
+            match rows {
+                Some(rows) => {
+                    sim::integrate_into(&mut lazy, y0, &run_settings, &watched, &mut update, rows)
+                }
+                None => integrate(&mut lazy, y0, &run_settings, &watched, &mut update),
+            }
         } else {
             let mut integrand = Integrand::new(prepared, mechanical, method)?;
-            let run = integrand.integrate(y0, &run_settings, &watched, &mut update);
+            let run = integrand.integrate_to(y0, &run_settings, &watched, &mut update, rows);
             if let Integrand::Mechanical(m) = &mut integrand {
                 fastest_mode = fault::fastest_mode(m, prepared, (method, step), y0, &run);
             }
@@ -736,7 +760,7 @@ pub(crate) fn with_partials(
 }
 
 /// Bodies in space oriented by angles (not Euler parameters).
-pub(crate) fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
+pub fn angle_oriented_bodies(model: &model::Model) -> Vec<String> {
     let by_angles = |b: &&model::Body| {
         matches!(b.rotation, Some(model::Rotation::Spatial { euler_parameters: None, .. }))
     };
@@ -778,7 +802,7 @@ fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> 
 }
 
 impl Outcome {
-    /// The total energy at each recorded time.
+    /// The total energy at each recorded time, of a run that kept its rows.
     pub fn energy(&self) -> Vec<f64> {
         let (k, p) = self.energy_columns;
         self.run.trajectory.rows.iter().map(|r| r[k] + r[p]).collect()
@@ -786,33 +810,12 @@ impl Outcome {
 
     /// The largest |E(t) − E(0)|, and that relative to the energy scale.
     pub fn energy_drift(&self) -> (f64, f64) {
-        let e = self.energy();
-        let e0 = e.first().copied().unwrap_or(0.0);
-        let (k, p) = self.energy_columns;
-        let scale = self
-            .run
-            .trajectory
-            .rows
-            .iter()
-            .map(|r| r[k].abs().max(r[p].abs()))
-            .fold(e0.abs(), f64::max)
-            .max(f64::MIN_POSITIVE);
-        let drift = e.iter().map(|v| (v - e0).abs()).fold(0.0, f64::max);
-        (drift, drift / scale)
+        self.totals.energy_drift()
     }
 
+    /// The largest residual of a kept constraint over the recorded rows, where one is kept.
     pub fn constraint_drift(&self) -> Option<f64> {
-        if self.constraint_columns.is_empty() {
-            return None;
-        }
-        Some(
-            self.run
-                .trajectory
-                .rows
-                .iter()
-                .flat_map(|r| self.constraint_columns.iter().map(move |&c| r[c]))
-                .fold(0.0, f64::max),
-        )
+        (!self.constraint_columns.is_empty()).then(|| self.totals.constraint_drift())
     }
 
     /// The largest |Φ| at the integrator's own steps, leaving out the samples interpolated
@@ -856,7 +859,7 @@ impl Outcome {
 
 /// What a fault's words name: the method, the state's and the kept constraints' names, and
 /// the bodies oriented by angles.
-pub(crate) struct FaultNames<'a> {
+pub struct FaultNames<'a> {
     pub method: Method,
     pub state: &'a [String],
     pub constraints: &'a [String],

@@ -1,9 +1,9 @@
-//! `Scene.ensemble(...)`: `lagrange ensemble` from Python (`engine::ensemble`), its table as
+//! `Scene.ensemble(...)`: `lagrange ensemble` from Python (the `ensemble` crate), its table as
 //! NumPy columns. The scene is derived and lowered once per call, the runs go on the
 //! ensemble's own threads with the GIL released, and Ctrl-C stops them between the calling
 //! thread's runs.
 
-use engine::ensemble::{Ensemble, Table};
+use ::ensemble::{Ensemble, Table};
 use numpy::PyArray1;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -15,7 +15,7 @@ use crate::runs::SignalCheck;
 /// What to run: the ensemble's options, the threads (`None`: one per core) and the range of
 /// its runs (`None` at the end: to the last), for a front end that spreads chunks itself.
 pub struct Request {
-    pub options: engine::ensemble::Options,
+    pub options: ::ensemble::Options,
     pub threads: Option<usize>,
     pub from: usize,
     pub to: Option<usize>,
@@ -38,7 +38,7 @@ pub fn ensemble<'py>(
     let built = py.detach(|| {
         let ensemble = Ensemble::new(source, &request.options)?;
         let total = ensemble.runs();
-        let threads = request.threads.unwrap_or_else(engine::ensemble::cores);
+        let threads = request.threads.unwrap_or_else(::ensemble::cores);
         // A chunk's end past the last run ends at it, as a slice does (a front end spreads
         // chunks of a fixed size); a start past it, or a range backwards, would give a table
         // with no rows that reads as if every run had been done.

@@ -143,12 +143,15 @@ impl NativeScene {
     fn simulate<'py>(&self, py: Python<'py>, options: RunOptions) -> PyResult<Bound<'py, PyDict>> {
         let settings = self.settings(&options.engine(self)?)?;
         let mut check = runs::SignalCheck::new();
-        let outcome = py.detach(|| self.runs.run(&self.source, &settings, &mut check));
+        // The arrays are filled as the rows are made: no row is kept besides them.
+        let mut arrays = Arrays::default();
+        let outcome =
+            py.detach(|| self.runs.run_into(&self.source, &settings, &mut check, &mut arrays));
         if let Some(raised) = check.raised {
             return Err(raised);
         }
         let outcome = outcome.map_err(|e| engine_error(&e, &self.path))?;
-        outcome_dict(py, &outcome)
+        outcome_dict(py, &outcome, arrays)
     }
 
     /// Runs the scene once per row of `values`, the values of `names` (parameters,
@@ -208,7 +211,7 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let simulate = options.engine(self)?;
         let vary = engine::input::varies(&vary).map_err(|e| engine_error(&e, &self.path))?;
-        let options = engine::ensemble::Options { simulate, vary, runs, seed, record };
+        let options = ::ensemble::Options { simulate, vary, runs, seed, record };
         let request = ensemble::Request { options, threads, from: start, to: stop };
         ensemble::ensemble(py, &self.source, &self.path, request)
     }
@@ -334,21 +337,42 @@ impl RunOptions {
     }
 }
 
-/// A run's outcome as the dict the Python `Results` wraps.
+/// A run's arrays, filled as its rows are made: the times, each output, and the energy.
+#[derive(Default)]
+struct Arrays {
+    times: Vec<f64>,
+    outputs: Vec<Vec<f64>>,
+    energy: Vec<f64>,
+}
+
+impl engine::simulate::Sink for Arrays {
+    fn columns(&mut self, names: &[String]) {
+        self.outputs = vec![Vec::new(); names.len()];
+    }
+
+    fn row(&mut self, t: f64, outputs: &[f64], energy: f64) {
+        self.times.push(t);
+        for (column, value) in self.outputs.iter_mut().zip(outputs) {
+            column.push(*value);
+        }
+        self.energy.push(energy);
+    }
+}
+
+/// A run's outcome as the dict the Python `Results` wraps, with its arrays.
 fn outcome_dict<'py>(
     py: Python<'py>,
     outcome: &engine::simulate::Outcome,
+    arrays: Arrays,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let trajectory = &outcome.run.trajectory;
     let out = PyDict::new(py);
-    out.set_item("t", PyArray1::from_slice(py, &trajectory.times))?;
+    out.set_item("t", PyArray1::from_vec(py, arrays.times))?;
     let columns = PyDict::new(py);
-    for (k, name) in outcome.columns.iter().enumerate().take(outcome.shown) {
-        let values: Vec<f64> = trajectory.rows.iter().map(|r| r[k]).collect();
+    for (name, values) in outcome.columns.iter().zip(arrays.outputs) {
         columns.set_item(name, PyArray1::from_vec(py, values))?;
     }
     out.set_item("columns", columns)?;
-    out.set_item("energy", PyArray1::from_vec(py, outcome.energy()))?;
+    out.set_item("energy", PyArray1::from_vec(py, arrays.energy))?;
     let hits = PyList::empty(py);
     for hit in &outcome.run.events {
         hits.append((outcome.event_names.get(hit.event).cloned(), hit.time))?;

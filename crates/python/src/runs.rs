@@ -33,15 +33,17 @@ pub struct Store {
 }
 
 impl Store {
-    /// Runs `source` with `settings` on a compiled scene that fits them, from the store or new.
-    pub fn run(
+    /// Runs `source` with `settings` on a compiled scene that fits them, from the store or new,
+    /// its rows handed to `sink` as they are made rather than kept.
+    pub fn run_into(
         &self,
         source: &str,
         settings: &Settings,
         progress: &mut dyn Progress,
+        sink: &mut dyn engine::simulate::Sink,
     ) -> Result<Outcome, engine::Error> {
         let mut compiled = self.take(source, settings)?;
-        let outcome = compiled.run(settings, progress);
+        let outcome = compiled.run_into(settings, progress, sink);
         self.give_back(compiled);
         outcome
     }

@@ -42,7 +42,9 @@ pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
 pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, BAUMGARTE_RATE};
 pub use methods::{Form, Jacobian, Method};
-pub use run::{integrate, Event, EventHit, Run, Segment, Settings, Trajectory};
+pub use run::{
+    integrate, integrate_into, Event, EventHit, Rows, Run, Segment, Settings, Trajectory,
+};
 pub use series::{Series, SeriesError};
 pub use spectrum::{fastest_mode, spectral_radius, Mode};
 

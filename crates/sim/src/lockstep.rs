@@ -65,7 +65,7 @@ struct Lane {
     problem: Mechanical,
     /// The step control, and the dense output of the last step once asked for.
     stepper: Adaptive,
-    course: Option<Course>,
+    course: Option<Course<'static>>,
     id: usize,
     /// Whether the lane's method has its first derivative and starting step.
     prepared: bool,
@@ -441,7 +441,12 @@ impl Lockstep {
     }
 
     /// Gives the result of lane `lane`'s run, which ended in `course`.
-    fn finish(&mut self, lane: usize, course: Course, finished: &mut dyn FnMut(usize, Run)) {
+    fn finish(
+        &mut self,
+        lane: usize,
+        course: Course<'static>,
+        finished: &mut dyn FnMut(usize, Run),
+    ) {
         let l = &mut self.lanes[lane];
         let counts = Counts {
             evaluations: l.stepper.evaluations_counted() + self.evaluations[lane],

@@ -45,6 +45,21 @@ pub struct Trajectory {
     pub rows: Vec<Vec<f64>>,
 }
 
+/// Where a run's recorded rows go, each as it is made, in time order: a run that hands them
+/// on ([`integrate_into`]) keeps none, so its memory does not grow with the samples.
+pub trait Rows {
+    /// The observations `row` recorded at time `t`.
+    fn row(&mut self, t: f64, row: &[f64]);
+}
+
+/// The rows kept: what [`integrate`] records.
+impl Rows for Trajectory {
+    fn row(&mut self, t: f64, row: &[f64]) {
+        self.times.push(t);
+        self.rows.push(row.to_vec());
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Run {
     pub trajectory: Trajectory,
@@ -100,11 +115,37 @@ pub fn integrate(
     events: &[Event],
     progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
 ) -> Run {
+    integrate_to(problem, y0, settings, events, progress, None)
+}
+
+/// [`integrate`], handing each recorded row to `rows` as it is made rather than keeping it:
+/// the run's [`Trajectory`] is left empty, and the rows are the ones [`integrate`] would
+/// have kept, in the same order, with the same bits.
+pub fn integrate_into(
+    problem: &mut dyn Problem,
+    y0: &[f64],
+    settings: &Settings,
+    events: &[Event],
+    progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+    rows: &mut dyn Rows,
+) -> Run {
+    integrate_to(problem, y0, settings, events, progress, Some(rows))
+}
+
+fn integrate_to(
+    problem: &mut dyn Problem,
+    y0: &[f64],
+    settings: &Settings,
+    events: &[Event],
+    progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+    rows: Option<&mut dyn Rows>,
+) -> Run {
     let mut stepper = settings.method.stepper(settings, problem);
     let mut course = match Course::begin(problem, y0, settings) {
         Ok(course) => course,
         Err(run) => return *run,
     };
+    course.send_to(rows);
     while course.t < settings.until {
         if course.run.steps >= settings.max_steps {
             course.fail(problem, FaultKind::TooManySteps { limit: settings.max_steps });
@@ -147,8 +188,10 @@ pub(crate) struct Counts {
 /// A run under way: its time and state, and what it has recorded, between the steps of its
 /// method. [`integrate`] takes its steps one after another; the lockstep ensemble takes the
 /// steps of several runs at once and hands each of them here alike.
-pub(crate) struct Course {
+pub(crate) struct Course<'r> {
     pub run: Run,
+    /// Where the rows go when they are not kept in the run's trajectory.
+    sink: Option<&'r mut dyn Rows>,
     pub t: f64,
     pub y: Vec<f64>,
     row: Vec<f64>,
@@ -159,14 +202,14 @@ pub(crate) struct Course {
     samples: usize,
 }
 
-impl Course {
+impl<'r> Course<'r> {
     /// Starts a run at `y0` (sampling a held input there): the start recorded, or the run
     /// ended by the fault met there.
     pub fn begin(
         problem: &mut dyn Problem,
         y0: &[f64],
         settings: &Settings,
-    ) -> Result<Course, Box<Run>> {
+    ) -> Result<Course<'r>, Box<Run>> {
         let t = settings.start;
         let mut run = Run {
             trajectory: Trajectory::default(),
@@ -202,6 +245,7 @@ impl Course {
         run.trajectory.rows.push(row.clone());
         Ok(Course {
             run,
+            sink: None,
             t,
             y,
             previous_row: row.clone(),
@@ -211,6 +255,18 @@ impl Course {
             until: settings.until,
             samples: settings.samples,
         })
+    }
+
+    /// Hands the rows recorded so far (the start's) and every later one to `rows`, where
+    /// given, rather than keeping them.
+    fn send_to(&mut self, rows: Option<&'r mut dyn Rows>) {
+        if let Some(rows) = rows {
+            let kept = std::mem::take(&mut self.run.trajectory);
+            for (t, row) in kept.times.iter().zip(&kept.rows) {
+                rows.row(*t, row);
+            }
+            self.sink = Some(rows);
+        }
     }
 
     /// Where the next step must end at the latest: the end of the run or the next sample of
@@ -252,7 +308,8 @@ impl Course {
         // A recorded time within rounding of a sample is the sample's: it shows the new held
         // value, recorded after the jump (k·T and the evenly spaced times may differ by an ulp).
         let before = held_from.map_or(end, |s| s - 4.0 * f64::EPSILON * s.abs().max(1.0));
-        self.sampler.record(problem, dense, before, &mut run.trajectory);
+        let rows = rows_of(&mut self.sink, &mut run.trajectory);
+        self.sampler.record(problem, dense, before, rows);
         if let Some(stop) = hits.iter().position(|h| events[h.event].stop) {
             let hit = hits[stop];
             run.events.extend_from_slice(&hits[..=stop]);
@@ -263,8 +320,7 @@ impl Course {
                 return ControlFlow::Break(());
             }
             widen(&mut run.extremes, &self.row);
-            run.trajectory.times.push(self.t);
-            run.trajectory.rows.push(self.row.clone());
+            rows_of(&mut self.sink, &mut run.trajectory).row(self.t, &self.row);
             run.stopped_by = Some(hit.event);
             return ControlFlow::Break(());
         }
@@ -284,8 +340,7 @@ impl Course {
             self.next_sample = problem.next_sample(t);
         }
         if self.samples == 0 || t >= self.until {
-            self.run.trajectory.times.push(t);
-            self.run.trajectory.rows.push(self.row.clone());
+            rows_of(&mut self.sink, &mut self.run.trajectory).row(t, &self.row);
         }
         std::mem::swap(&mut self.previous_row, &mut self.row);
         if progress(t).is_break() {
@@ -312,6 +367,14 @@ impl Course {
         run.final_state = problem.physical(self.t, &self.y);
         run.segments = segments;
         self.run
+    }
+}
+
+/// Where a run's rows go: its sink, else its own trajectory.
+fn rows_of<'a>(sink: &'a mut Option<&mut dyn Rows>, kept: &'a mut Trajectory) -> &'a mut dyn Rows {
+    match sink {
+        Some(rows) => &mut **rows,
+        None => kept,
     }
 }
 
@@ -387,7 +450,7 @@ impl Sampler {
         problem: &mut dyn Problem,
         stepper: &mut dyn Dense,
         end: f64,
-        trajectory: &mut Trajectory,
+        rows: &mut dyn Rows,
     ) {
         // Most steps cover no sample: they allocate nothing.
         if self.next > self.intervals || self.time(self.next) >= end {
@@ -399,8 +462,7 @@ impl Sampler {
             let s = self.time(self.next);
             stepper.interpolate(problem, s, &mut ys);
             if problem.observe(s, &ys, &mut row).is_ok() {
-                trajectory.times.push(s);
-                trajectory.rows.push(row.clone());
+                rows.row(s, &row);
             }
             self.next += 1;
         }

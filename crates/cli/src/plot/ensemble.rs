@@ -3,11 +3,15 @@
 //! a histogram. Unlike the hand-written figures beside it, it has a colour scale and a raster
 //! form; plotters draws both from one description. A PNG's text is set in the DejaVu Sans the
 //! binary carries, so it looks the same on every machine.
+//!
+//! It draws from a [`Picture`]: the first recorded quantity of every run, a number a run,
+//! taken as the rows come; a histogram's bins follow from the range of all of them, and a
+//! heat map has a cell a run, so every value is kept (8 bytes a run).
 
 use std::error::Error;
 use std::path::Path;
 
-use engine::ensemble::Table;
+use ::ensemble::{Sink, Table};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
@@ -30,9 +34,49 @@ enum Kind {
     Histogram,
 }
 
+/// What the picture of an ensemble draws: the first recorded quantity's name and its value
+/// in each run, in run order, with the grid's axes.
+#[derive(Clone, Debug)]
+pub struct Picture {
+    name: String,
+    /// The column of the first recorded quantity.
+    column: usize,
+    values: Vec<f64>,
+    axes: Vec<(String, Vec<f64>)>,
+    random: bool,
+}
+
+impl Picture {
+    /// The picture of a table with `header`'s columns and axes, with no run yet.
+    pub fn new(header: &Table) -> Picture {
+        Picture {
+            name: header.columns.get(header.varied).cloned().unwrap_or_default(),
+            column: header.varied,
+            values: Vec::new(),
+            axes: header.axes.clone(),
+            random: header.random,
+        }
+    }
+
+    /// The picture of a table kept whole.
+    pub fn of(table: &Table) -> Picture {
+        let mut picture = Picture::new(table);
+        for (row, failure) in table.rows.iter().zip(&table.failures) {
+            picture.row(0, row, failure.as_deref());
+        }
+        picture
+    }
+}
+
+impl Sink for Picture {
+    fn row(&mut self, _run: usize, row: &[f64], _failure: Option<&str>) {
+        self.values.push(row[self.column]);
+    }
+}
+
 /// Writes the ensemble's picture to `path` (whole or not at all), as SVG or PNG by its
 /// extension; an ensemble with more than two grid axes has none.
-pub fn ensemble(table: &Table, title: &str, path: &Path) -> Result<(), String> {
+pub fn ensemble(table: &Picture, title: &str, path: &Path) -> Result<(), String> {
     let kind = kind(table.random, table.axes.len())?;
     register_font()?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
@@ -98,7 +142,7 @@ fn kind(random: bool, axes: usize) -> Result<Kind, String> {
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     kind: &Kind,
-    table: &Table,
+    table: &Picture,
     title: &str,
 ) -> Drawn
 where
@@ -118,11 +162,6 @@ where
 fn register_font() -> Result<(), String> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular())
         .map_err(|_| "the embedded font could not be read".to_string())
-}
-
-/// The first recorded column: what the picture shows.
-fn shown(table: &Table) -> (usize, &str) {
-    (table.varied, table.columns.get(table.varied).map_or("", String::as_str))
 }
 
 /// The least and greatest finite values, widened when they coincide.
@@ -145,16 +184,20 @@ fn spacing(values: &[f64]) -> f64 {
     }
 }
 
-fn heat_map<DB: DrawingBackend>(table: &Table, title: &str, root: &DrawingArea<DB, Shift>) -> Drawn
+fn heat_map<DB: DrawingBackend>(
+    table: &Picture,
+    title: &str,
+    root: &DrawingArea<DB, Shift>,
+) -> Drawn
 where
     DB::ErrorType: 'static,
 {
-    let (column, name) = shown(table);
+    let name = table.name.as_str();
     let (xs, ys) = (&table.axes[0], &table.axes[1]);
     let (dx, dy) = (spacing(&xs.1), spacing(&ys.1));
     let x = range(xs.1.iter().copied()).unwrap_or((0.0, 1.0));
     let y = range(ys.1.iter().copied()).unwrap_or((0.0, 1.0));
-    let z = range(table.rows.iter().map(|r| r[column])).unwrap_or((0.0, 1.0));
+    let z = range(table.values.iter().copied()).unwrap_or((0.0, 1.0));
     let (chart_area, bar_area) = root.split_horizontally(SIZE.0 - BAR_WIDTH);
     let mut chart = ChartBuilder::on(&chart_area)
         .caption(title, ("sans-serif", 18))
@@ -175,9 +218,9 @@ where
         .draw()?;
     // Runs are in grid order, the second axis fastest: row k is cell (k / ny, k % ny).
     let ny = ys.1.len();
-    chart.draw_series(table.rows.iter().enumerate().map(|(k, row)| {
+    chart.draw_series(table.values.iter().enumerate().map(|(k, v)| {
         let (cx, cy) = (xs.1[k / ny], ys.1[k % ny]);
-        let v = row[column];
+        let v = *v;
         let colour =
             if v.is_finite() { ViridisRGB::get_color_normalized(v, z.0, z.1) } else { FAILED };
         Rectangle::new(
@@ -217,14 +260,14 @@ where
     Ok(())
 }
 
-fn line<DB: DrawingBackend>(table: &Table, title: &str, root: &DrawingArea<DB, Shift>) -> Drawn
+fn line<DB: DrawingBackend>(table: &Picture, title: &str, root: &DrawingArea<DB, Shift>) -> Drawn
 where
     DB::ErrorType: 'static,
 {
-    let (column, name) = shown(table);
+    let name = table.name.as_str();
     let axis = &table.axes[0];
     let x = range(axis.1.iter().copied()).unwrap_or((0.0, 1.0));
-    let y = range(table.rows.iter().map(|r| r[column])).unwrap_or((0.0, 1.0));
+    let y = range(table.values.iter().copied()).unwrap_or((0.0, 1.0));
     let mut chart = ChartBuilder::on(root)
         .caption(title, ("sans-serif", 18))
         .margin(12)
@@ -239,8 +282,7 @@ where
         .y_desc(name)
         .draw()?;
     // A failed run breaks the line rather than joining its neighbours across it.
-    let points: Vec<(f64, f64)> =
-        axis.1.iter().zip(&table.rows).map(|(x, r)| (*x, r[column])).collect();
+    let points: Vec<(f64, f64)> = axis.1.iter().zip(&table.values).map(|(x, v)| (*x, *v)).collect();
     for piece in points.split(|(_, v)| !v.is_finite()).filter(|p| !p.is_empty()) {
         chart.draw_series(LineSeries::new(piece.iter().copied(), BLUE.stroke_width(2)))?;
         chart.draw_series(piece.iter().map(|p| Circle::new(*p, 2, BLUE.filled())))?;
@@ -248,12 +290,16 @@ where
     Ok(())
 }
 
-fn histogram<DB: DrawingBackend>(table: &Table, title: &str, root: &DrawingArea<DB, Shift>) -> Drawn
+fn histogram<DB: DrawingBackend>(
+    table: &Picture,
+    title: &str,
+    root: &DrawingArea<DB, Shift>,
+) -> Drawn
 where
     DB::ErrorType: 'static,
 {
-    let (column, name) = shown(table);
-    let values: Vec<f64> = table.rows.iter().map(|r| r[column]).filter(|v| v.is_finite()).collect();
+    let name = table.name.as_str();
+    let values: Vec<f64> = table.values.iter().copied().filter(|v| v.is_finite()).collect();
     let x = range(values.iter().copied()).unwrap_or((0.0, 1.0));
     // About √n bins, between 5 and 60: enough to show a shape, few enough to fill each.
     let bins = ((values.len() as f64).sqrt().round() as usize).clamp(5, 60);

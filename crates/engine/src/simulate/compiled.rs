@@ -8,6 +8,7 @@
 use numeric::{Program, Tape};
 use sim::Mechanical;
 
+use super::rows::{Sink, Tee, Totals, Watched};
 use super::{
     angle_oriented_bodies, conserves_energy, drive, integrate_scene, load, overrides,
     set_expressions, start, Columns, Loaded, Outcome, Progress, Resolved, Settings,
@@ -93,6 +94,27 @@ impl Compiled {
         settings: &Settings,
         progress: &mut dyn Progress,
     ) -> Result<Outcome, Error> {
+        self.run_to(settings, progress, None)
+    }
+
+    /// [`Compiled::run`], handing the rows to `sink` as they are made rather than keeping
+    /// them (the outcome's trajectory left empty); with an animation, whose figures need
+    /// every row, they are kept and handed to `sink` after the run.
+    pub fn run_into(
+        &mut self,
+        settings: &Settings,
+        progress: &mut dyn Progress,
+        sink: &mut dyn Sink,
+    ) -> Result<Outcome, Error> {
+        self.run_to(settings, progress, Some(sink))
+    }
+
+    fn run_to(
+        &mut self,
+        settings: &Settings,
+        progress: &mut dyn Progress,
+        sink: Option<&mut dyn Sink>,
+    ) -> Result<Outcome, Error> {
         let prepared = &mut self.prepared;
         let columns = &self.columns;
         let set_exprs = set_expressions(prepared, &settings.sets)?;
@@ -127,8 +149,33 @@ impl Compiled {
         if let Some(hold) = hold {
             mechanical = mechanical.with_hold(hold);
         }
+        let constraint_columns: Vec<usize> =
+            (0..prepared.layout.multipliers).map(|c| columns.figures() + n_drawn + c).collect();
+        let watched = Watched::new(columns, constraint_columns.clone());
+        let (streamed, after) = if plan.is_none() { (sink, None) } else { (None, sink) };
+        let mut tee = streamed.map(|sink| Tee {
+            sink,
+            names: Some(&self.outputs),
+            watched: &watched,
+            totals: Totals::default(),
+        });
+        let rows = tee.as_mut().map(|tee| tee as &mut dyn sim::Rows);
         let (run, wall_seconds, fastest_mode) =
-            integrate_scene(prepared, mechanical, &y0, settings, columns, progress)?;
+            integrate_scene(prepared, mechanical, &y0, settings, columns, progress, rows)?;
+        let totals = match tee {
+            Some(mut tee) => {
+                // A run that ended at its start recorded no row: its table is the names.
+                tee.begin();
+                tee.totals
+            }
+            None => Totals::of(&watched, &run.trajectory.rows),
+        };
+        if let Some(sink) = after {
+            sink.columns(&self.outputs);
+            for (t, row) in run.trajectory.times.iter().zip(&run.trajectory.rows) {
+                sink.row(*t, &row[..columns.outputs], watched.energy(row));
+            }
+        }
 
         let conservative = self.conservative;
         let figures = plan.map(|p| p.figures(&run.trajectory.rows, columns.figures()));
@@ -142,11 +189,10 @@ impl Compiled {
             ]
             .concat(),
             run,
+            totals,
             shown: columns.outputs,
             energy_columns: (columns.energies(), columns.energies() + 1),
-            constraint_columns: (0..prepared.layout.multipliers)
-                .map(|c| columns.figures() + n_drawn + c)
-                .collect(),
+            constraint_columns,
             event_names: [&settings.stops[..], &settings.events].concat(),
             stop_names: columns.stops,
             method: settings.method,

@@ -99,7 +99,7 @@ pub(super) fn into_constraints(
 
 /// The parameter slots of the inputs the settings give as time series, each with its series;
 /// refused where a series does not cover the run, or its input is also driven by a law.
-pub(crate) fn signals(
+pub fn signals(
     prepared: &Prepared,
     settings: &super::Settings,
 ) -> Result<Vec<(usize, sim::Series)>, Error> {
@@ -156,7 +156,7 @@ pub(super) fn check_hold(hold: Option<f64>, drives: &[Assignment]) -> Result<(),
 
 /// The zero-order hold of the laws `held`, sampled every `period`: each law lowered from the
 /// dynamics program's inputs into its input's parameter slot.
-pub(crate) fn hold(
+pub fn hold(
     prepared: &mut Prepared,
     held: &[(SymId, ExprId)],
     period: Option<f64>,

@@ -6,7 +6,7 @@
 use std::ops::ControlFlow;
 
 use numeric::Tape;
-use sim::{integrate, Canonical, Constrained, Event, Form, Mechanical, Method, Problem, Run};
+use sim::{Canonical, Constrained, Event, Form, Mechanical, Method, Problem, Rows, Run};
 
 use super::{with_partials, Columns, Settings, NO_MULTIPLIERS};
 use crate::numbers::Prepared;
@@ -14,7 +14,7 @@ use crate::Error;
 
 /// The equations of a run in the form its method integrates.
 #[derive(Clone)]
-pub(crate) enum Integrand {
+pub enum Integrand {
     /// y = (q, q̇), with the partials of the exact Jacobian for the methods that use one.
     Mechanical(Mechanical),
     /// y = (q, p), for the symplectic methods (boxed: it holds the problem in (q, q̇) too).
@@ -73,19 +73,37 @@ impl Integrand {
         watched: &[Event],
         progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
     ) -> Run {
+        self.integrate_to(y0, settings, watched, progress, None)
+    }
+
+    /// [`Integrand::integrate`], its rows handed to `rows` (where given) rather than kept
+    /// ([`sim::integrate_into`]).
+    pub fn integrate_to(
+        &mut self,
+        y0: &[f64],
+        settings: &sim::Settings,
+        watched: &[Event],
+        progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+        rows: Option<&mut dyn Rows>,
+    ) -> Run {
+        let integrate = |problem: &mut dyn Problem,
+                         y0: &[f64],
+                         progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+                         rows: Option<&mut dyn Rows>| match rows {
+            Some(rows) => sim::integrate_into(problem, y0, settings, watched, progress, rows),
+            None => sim::integrate(problem, y0, settings, watched, progress),
+        };
         match self {
-            Integrand::Mechanical(m) => integrate(m, y0, settings, watched, progress),
+            Integrand::Mechanical(m) => integrate(m, y0, progress, rows),
             Integrand::Canonical(c) => {
                 let z0 = c.from_physical(0.0, y0);
-                integrate(&mut **c, &z0, settings, watched, progress)
+                integrate(&mut **c, &z0, progress, rows)
             }
             Integrand::Constrained(c) => match c.consistent_state(0.0, y0) {
-                Ok(z0) => integrate(c, &z0, settings, watched, progress),
+                Ok(z0) => integrate(c, &z0, progress, rows),
                 // No consistent accelerations at the start: the stabilised form reports why
                 // (which of the mass matrix and the constraints lost rank) as its first fault.
-                Err(_) => {
-                    integrate(c.inner_mut() as &mut dyn Problem, y0, settings, watched, progress)
-                }
+                Err(_) => integrate(c.inner_mut() as &mut dyn Problem, y0, progress, rows),
             },
         }
     }
@@ -95,7 +113,7 @@ impl Integrand {
 pub(crate) const MAX_STEPS: usize = 20_000_000;
 
 /// The integrator's settings of a run recording `samples` evenly spaced times.
-pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
+pub fn run_settings(settings: &Settings, samples: usize) -> sim::Settings {
     sim::Settings {
         method: settings.method,
         start: 0.0,
@@ -108,7 +126,7 @@ pub(crate) fn run_settings(settings: &Settings, samples: usize) -> sim::Settings
 }
 
 /// The stops and events watched, by their observation columns.
-pub(crate) fn watched(columns: &Columns) -> Vec<Event> {
+pub fn watched(columns: &Columns) -> Vec<Event> {
     let Columns { outputs, stops, events } = *columns;
     (0..stops)
         .map(|k| Event { column: outputs + k, stop: true })

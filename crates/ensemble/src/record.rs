@@ -4,7 +4,7 @@
 
 use sim::Run;
 
-use crate::simulate::split_list;
+use engine::simulate::split_list;
 
 /// Which value of an expression a column records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,7 +41,7 @@ impl Recorded {
 
 /// The recorded columns of the lists given, each expression observed once however often it
 /// is recorded.
-pub(super) fn parse(lists: &[String]) -> Vec<Recorded> {
+pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
     let mut expressions: Vec<String> = Vec::new();
     let mut recorded = Vec::new();
     for item in lists.iter().flat_map(|list| split_list(list)) {

@@ -7,11 +7,11 @@ use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 
 use super::MAX_RUNS;
-use crate::input::{Spread, Vary};
-use crate::{Error, Setting};
+use engine::input::{Spread, Vary};
+use engine::{Error, Setting};
 
 /// The grid and the draws of an ensemble, checked.
-pub(super) struct Design {
+pub(crate) struct Design {
     spreads: Vec<(String, Spread)>,
     /// Random draws per grid point (1 with no random spread).
     draws: usize,
@@ -74,13 +74,25 @@ impl Design {
         self.spreads.iter().filter_map(axis).collect()
     }
 
+    /// How many runs the design has.
+    pub fn runs(&self) -> usize {
+        self.runs
+    }
+
+    /// How many parameters are varied.
+    pub fn parameters(&self) -> usize {
+        self.spreads.len()
+    }
+
     /// Every run's values, in the order the parameters were given.
+    #[cfg(test)]
     pub fn values(&self, seed: u64) -> Vec<Vec<f64>> {
         (0..self.runs).map(|k| self.run(seed, k)).collect()
     }
 
-    /// Run `k`'s values: its grid point's, and its draws.
-    fn run(&self, seed: u64, k: usize) -> Vec<f64> {
+    /// Run `k`'s values, in the order the parameters were given: its grid point's, and its
+    /// draws.
+    pub fn run(&self, seed: u64, k: usize) -> Vec<f64> {
         let mut point = k / self.draws;
         let mut values = vec![0.0; self.spreads.len()];
         // The last axis varies fastest: peel the point's index from the back.

@@ -1,15 +1,23 @@
-//! An ensemble: one scene run many times, its parameters varied over a grid (axes crossed)
-//! or drawn at random, a row of recorded values per run. The scene is derived and lowered
-//! once; each thread clones the lowered problem and runs one start after another, taking the
-//! next run's index as it is free, and the rows are put back in run order, so the table is
-//! the same whatever the number of threads. A run that faults, or whose start cannot be
-//! made, is a row with its reason rather than the end of the ensemble.
+//! This crate owns the ensemble: one scene run many times, its parameters varied over a
+//! grid (axes crossed) or drawn at random, a row of recorded values per run. It sits above
+//! `engine`, whose loaded and lowered scene and whose model's names it takes: the scene is
+//! derived and lowered once; each thread clones the lowered problem and runs one start after
+//! another, taking the next run's index as it is free, and the rows are put back in run
+//! order, so the table is the same whatever the number of threads. A run that faults, or
+//! whose start cannot be made, is a row with its reason rather than the end of the ensemble.
+//!
+//! The runs go in chunks: a chunk's starts are drawn and made (`draws`: each run's draws
+//! from its own stream of the seed), its runs run, its rows handed to a [`Sink`] in run order
+//! and dropped, and the next chunk comes; so memory stays the same whatever the number of
+//! runs, and the rows are those of the whole ensemble run at once.
 //!
 //! [`Ensemble`] is built once and can run any range of its runs from any thread, which is
-//! what a front end that spreads the work itself (in chunks, over processes) needs.
+//! what a front end that spreads the work itself (in chunks, over processes) needs. It reads
+//! no files and prints nothing.
 
 use std::ops::{ControlFlow, Range};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use sim::Event;
 
@@ -18,16 +26,37 @@ mod record;
 
 pub use record::{Extreme, Recorded};
 
-use crate::input::{Spread, Vary};
-use crate::simulate::{self, Columns, FaultNames, Integrand, Progress};
-use crate::{Error, Piece, Setting};
+use engine::input::Vary;
+use engine::numbers::Prepared;
+use engine::simulate::{self, Columns, FaultNames, Integrand, Overrides, Progress};
+use engine::{Error, Piece, Setting};
 
-/// The most runs an ensemble may have: every run's start is made before the first runs, at
-/// a hundred or two bytes each.
-pub const MAX_RUNS: usize = 10_000_000;
+/// The most runs an ensemble may have. Its memory does not grow with them (the runs go in
+/// chunks); a table kept whole ([`Ensemble::run`], Python's columns) does, by its rows.
+pub const MAX_RUNS: usize = 1_000_000_000;
 
 /// The fewest runs per thread that go side by side in lockstep.
 const SIDE_BY_SIDE_FROM: usize = 4;
+
+/// The runs each thread is given in a chunk: enough that the threads seldom wait for each
+/// other at a chunk's end, few enough that a chunk's starts and rows take a megabyte or so.
+const CHUNK_PER_THREAD: usize = 2048;
+
+/// Where a front end takes an ensemble's rows as they are made, in run order: a CSV writer,
+/// the summary's count, the picture's values, or a whole [`Table`].
+pub trait Sink {
+    /// Run `run`'s row: the varied values, then the recorded ones (NaN where the run failed),
+    /// and why it failed.
+    fn row(&mut self, run: usize, row: &[f64], failure: Option<&str>);
+}
+
+/// A table kept whole takes each row.
+impl Sink for Table {
+    fn row(&mut self, _run: usize, row: &[f64], failure: Option<&str>) {
+        self.rows.push(row.to_vec());
+        self.failures.push(failure.map(str::to_string));
+    }
+}
 
 /// What a front end asks for.
 #[derive(Clone, Debug, Default)]
@@ -64,16 +93,21 @@ pub struct Table {
     pub random: bool,
 }
 
-/// A scene lowered once, with every run's start made: ready to run any of its runs.
+/// A scene lowered once: ready to run any of its runs, each run's start made as its chunk
+/// comes.
 pub struct Ensemble {
     integrand: Integrand,
     run_settings: sim::Settings,
     watched: Vec<Event>,
     recorded: Vec<Recorded>,
-    /// The varied values of each run, in the order of [`Options::vary`].
-    values: Vec<Vec<f64>>,
-    /// Each run's start, or why it could not be made.
-    starts: Vec<Result<Start, String>>,
+    /// The grid and the draws, from which any run's varied values come.
+    design: draws::Design,
+    seed: u64,
+    /// What a run's start is made from: the scene (whose pool making one may grow), the
+    /// `--set` values, and the varied parameters' indices.
+    maker: Mutex<Maker>,
+    /// The runs each thread is given in a chunk.
+    chunk: usize,
     columns: Vec<String>,
     axes: Vec<(String, Vec<f64>)>,
     random: bool,
@@ -89,6 +123,28 @@ pub struct Ensemble {
 struct Start {
     parameters: Vec<f64>,
     state: Vec<f64>,
+}
+
+/// A run's start, or why it could not be made.
+type Made = Result<Start, String>;
+
+/// What every run's start is made from.
+struct Maker {
+    prepared: Prepared,
+    sets: Overrides,
+    /// The index of each varied parameter among the model's.
+    given: Vec<usize>,
+}
+
+impl Maker {
+    /// The start of a run with these varied values, or why it cannot be made.
+    fn start(&mut self, values: &[f64]) -> Result<Start, String> {
+        let numbers: Vec<(usize, f64)> =
+            self.given.iter().copied().zip(values.iter().copied()).collect();
+        simulate::start(&mut self.prepared, &self.sets, &numbers)
+            .map(|(parameters, state)| Start { parameters, state })
+            .map_err(|e| e.worded(run_words))
+    }
 }
 
 /// What a run gives: its recorded values (NaN where it failed), and why it failed.
@@ -117,7 +173,7 @@ pub fn cores() -> usize {
 }
 
 impl Ensemble {
-    /// Loads, derives and lowers `source` once, and makes every run's start.
+    /// Loads, derives and lowers `source` once; each run's start is made when its chunk runs.
     pub fn new(source: &str, options: &Options) -> Result<Ensemble, Error> {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);
@@ -158,17 +214,6 @@ impl Ensemble {
         }
         let integrand = Integrand::new(&mut prepared, mechanical, settings.method)?;
 
-        let values = design.values(options.seed);
-        let starts = values
-            .iter()
-            .map(|run| {
-                let numbers: Vec<(usize, f64)> =
-                    given.iter().copied().zip(run.iter().copied()).collect();
-                simulate::start(&mut prepared, &sets, &numbers)
-                    .map(|(parameters, state)| Start { parameters, state })
-                    .map_err(|e| e.worded(run_words))
-            })
-            .collect();
         let mut names: Vec<String> = options.vary.iter().map(|v| v.parameter.clone()).collect();
         names.extend(recorded.iter().map(|r| r.name.clone()));
         let model = &prepared.derivation.model;
@@ -178,17 +223,38 @@ impl Ensemble {
             run_settings: simulate::run_settings(&settings, 1),
             watched: simulate::watched(&columns),
             recorded,
-            values,
-            starts,
-            columns: names,
             axes: design.axes(),
             random: design.is_random(),
+            design,
+            seed: options.seed,
+            columns: names,
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
             parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: simulate::angle_oriented_bodies(model),
             lockstep: true,
+            chunk: CHUNK_PER_THREAD,
+            maker: Mutex::new(Maker { prepared, sets, given }),
         })
+    }
+
+    /// Gives each thread `runs` runs (at least one) in a chunk, rather than the default: the
+    /// rows are the same whatever the chunks, which a test shows.
+    pub fn set_chunk(&mut self, runs: usize) {
+        self.chunk = runs.max(1);
+    }
+
+    /// The table's columns, axes and kind, with no rows yet: what a front end writes before
+    /// the rows it is handed ([`Ensemble::stream`]).
+    pub fn table(&self) -> Table {
+        Table {
+            columns: self.columns.clone(),
+            varied: if self.runs() == 0 { 0 } else { self.design.parameters() },
+            rows: Vec::new(),
+            failures: Vec::new(),
+            axes: self.axes.clone(),
+            random: self.random,
+        }
     }
 
     /// Whether runs go side by side in lockstep where the method and the problem allow it
@@ -200,7 +266,7 @@ impl Ensemble {
 
     /// How many runs the ensemble has.
     pub fn runs(&self) -> usize {
-        self.values.len()
+        self.design.runs()
     }
 
     /// The runs in `runs` (clipped to the ensemble's) on `threads` threads, the calling one
@@ -208,8 +274,22 @@ impl Ensemble {
     /// ensemble when it says it is interrupted (asked between the calling thread's runs):
     /// every thread's run ends then, and the runs not finished are left out of the table.
     pub fn run(&self, runs: Range<usize>, threads: usize, progress: &mut dyn Progress) -> Table {
+        let mut table = self.table();
+        self.stream(runs, threads, progress, &mut table);
+        table
+    }
+
+    /// [`Ensemble::run`], each row handed to `sink` in run order as its chunk is done rather
+    /// than kept.
+    pub fn stream(
+        &self,
+        runs: Range<usize>,
+        threads: usize,
+        progress: &mut dyn Progress,
+        sink: &mut dyn Sink,
+    ) {
         let runs = runs.start.min(self.runs())..runs.end.min(self.runs());
-        self.run_where(&Runs::Range(runs), threads, progress)
+        self.run_where(&Runs::Range(runs), threads, progress, sink);
     }
 
     /// [`Ensemble::run`] on the runs numbered in `picked` (those past the ensemble's left
@@ -223,63 +303,83 @@ impl Ensemble {
         let mut picked: Vec<usize> = picked.iter().copied().filter(|k| *k < self.runs()).collect();
         picked.sort_unstable();
         picked.dedup();
-        self.run_where(&Runs::Picked(picked), threads, progress)
+        let mut table = self.table();
+        self.run_where(&Runs::Picked(picked), threads, progress, &mut table);
+        table
     }
 
-    fn run_where(&self, runs: &Runs, threads: usize, progress: &mut dyn Progress) -> Table {
-        let next = AtomicUsize::new(0);
+    /// Runs `runs` chunk by chunk, handing each chunk's rows to `sink` in run order.
+    fn run_where(
+        &self,
+        runs: &Runs,
+        threads: usize,
+        progress: &mut dyn Progress,
+        sink: &mut dyn Sink,
+    ) {
         let done = AtomicUsize::new(0);
         let stop = AtomicBool::new(false);
         let helpers = threads.clamp(1, runs.len().max(1)) - 1;
         // A lane alone still pays for all of them on the batch tape: side by side only where
         // each thread has a few runs to fill its lanes with.
         let side_by_side = self.lockstep && runs.len() >= SIDE_BY_SIDE_FROM * (helpers + 1);
+        let chunk = self.chunk * (helpers + 1);
         progress.start(runs.len() as f64);
-        let mut results = std::thread::scope(|scope| {
-            let workers: Vec<_> = (0..helpers)
-                .map(|_| {
-                    scope
-                        .spawn(|| self.work(runs, side_by_side, (&next, &done, &stop), &mut |_| {}))
-                })
-                .collect();
-            let mut mine = self.work(runs, side_by_side, (&next, &done, &stop), &mut |n| {
-                progress.update(n as f64);
-                if progress.interrupted() {
-                    stop.store(true, Ordering::Relaxed);
+        let mut first = 0;
+        let mut row = Vec::new();
+        while first < runs.len() && !stop.load(Ordering::Relaxed) {
+            let part: Vec<usize> =
+                (first..runs.len().min(first + chunk)).filter_map(|i| runs.get(i)).collect();
+            first += chunk;
+            let (values, starts) = self.starts(&part);
+            let next = AtomicUsize::new(0);
+            let jobs = Jobs { starts: &starts, next: &next };
+            let mut results = std::thread::scope(|scope| {
+                let workers: Vec<_> = (0..helpers)
+                    .map(|_| {
+                        let shared = (&done, &stop);
+                        scope.spawn(move || self.work(&jobs, side_by_side, shared, &mut |_| {}))
+                    })
+                    .collect();
+                let mut mine = self.work(&jobs, side_by_side, (&done, &stop), &mut |n| {
+                    progress.update(n as f64);
+                    if progress.interrupted() {
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                });
+                for worker in workers {
+                    // A worker's panic is a bug of ours; it is not input's to cause.
+                    mine.extend(worker.join().expect("an ensemble's worker panicked"));
                 }
+                mine
             });
-            for worker in workers {
-                // A worker's panic is a bug of ours; it is not input's to cause.
-                mine.extend(worker.join().expect("an ensemble's worker panicked"));
+            results.sort_by_key(|(i, _)| *i);
+            for (i, (recorded, failure)) in results {
+                row.clear();
+                row.extend_from_slice(&values[i]);
+                row.extend(recorded);
+                sink.row(part[i], &row, failure.as_deref());
             }
-            mine
-        });
-        progress.finish();
-        results.sort_by_key(|(k, _)| *k);
-        let mut table = Table {
-            columns: self.columns.clone(),
-            varied: self.values.first().map_or(0, Vec::len),
-            rows: Vec::with_capacity(results.len()),
-            failures: Vec::with_capacity(results.len()),
-            axes: self.axes.clone(),
-            random: self.random,
-        };
-        for (k, (recorded, failure)) in results {
-            let mut row = self.values[k].clone();
-            row.extend(recorded);
-            table.rows.push(row);
-            table.failures.push(failure);
         }
-        table
+        progress.finish();
     }
 
-    /// Takes run after run until none is left: each run's index, its recorded values and why
-    /// it failed, if it did, until `stop` is set. `report` hears how many runs are done in all.
+    /// The varied values and the start of each run numbered in `part`.
+    fn starts(&self, part: &[usize]) -> (Vec<Vec<f64>>, Vec<Made>) {
+        // A poisoned lock is a panic of ours while making a start; the maker is whole even so.
+        let mut maker = self.maker.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let values: Vec<Vec<f64>> = part.iter().map(|k| self.design.run(self.seed, *k)).collect();
+        let starts = values.iter().map(|v| maker.start(v)).collect();
+        (values, starts)
+    }
+
+    /// Takes run after run of a chunk until none is left: each run's place in the chunk, its
+    /// recorded values and why it failed, if it did, until `stop` is set. `report` hears how
+    /// many runs are done in all.
     fn work(
         &self,
-        runs: &Runs,
+        jobs: &Jobs,
         side_by_side: bool,
-        (next, done, stop): (&AtomicUsize, &AtomicUsize, &AtomicBool),
+        (done, stop): (&AtomicUsize, &AtomicBool),
         report: &mut dyn FnMut(usize),
     ) -> Vec<(usize, Outcome)> {
         let mut integrand = self.integrand.clone();
@@ -293,10 +393,9 @@ impl Ensemble {
         if let Some(mut lockstep) = lockstep {
             // Runs end both where a start cannot be made and where a lane finishes one.
             let report = std::cell::RefCell::new(report);
-            let mut jobs = || loop {
-                let k = runs.get(next.fetch_add(1, Ordering::Relaxed));
-                let k = k.filter(|_| !stop.load(Ordering::Relaxed))?;
-                match &self.starts[k] {
+            let mut next = || loop {
+                let k = jobs.take().filter(|_| !stop.load(Ordering::Relaxed))?;
+                match &jobs.starts[k] {
                     Ok(start) => {
                         let (parameters, state) = (start.parameters.clone(), start.state.clone());
                         return Some(sim::Job { id: k, parameters, state });
@@ -312,14 +411,15 @@ impl Ensemble {
                 ran.push((k, self.outcome(&run)));
                 (report.borrow_mut())(done.fetch_add(1, Ordering::Relaxed) + 1);
             };
-            lockstep.run(&mut jobs, &self.watched, &mut finished, &mut || unless_stopped(stop));
+            lockstep.run(&mut next, &self.watched, &mut finished, &mut || unless_stopped(stop));
             results.extend(ran);
             return results;
         }
         loop {
-            let k = runs.get(next.fetch_add(1, Ordering::Relaxed));
-            let Some(k) = k.filter(|_| !stop.load(Ordering::Relaxed)) else { return results };
-            let outcome = self.run_one(&mut integrand, k, stop);
+            let Some(k) = jobs.take().filter(|_| !stop.load(Ordering::Relaxed)) else {
+                return results;
+            };
+            let outcome = self.run_one(&mut integrand, &jobs.starts[k], stop);
             if stop.load(Ordering::Relaxed) {
                 return results;
             }
@@ -328,10 +428,10 @@ impl Ensemble {
         }
     }
 
-    /// Run `k` on `integrand`: its recorded values, and why it failed.
-    fn run_one(&self, integrand: &mut Integrand, k: usize, stop: &AtomicBool) -> Outcome {
+    /// A run from `start` on `integrand`: its recorded values, and why it failed.
+    fn run_one(&self, integrand: &mut Integrand, start: &Made, stop: &AtomicBool) -> Outcome {
         let failed = |why: String| (vec![f64::NAN; self.recorded.len()], Some(why));
-        let start = match &self.starts[k] {
+        let start = match start {
             Ok(start) => start,
             Err(why) => return failed(why.clone()),
         };
@@ -372,6 +472,20 @@ fn unless_stopped(stop: &AtomicBool) -> ControlFlow<()> {
     }
 }
 
+/// A chunk's runs, taken one after another by the threads: each by its place in the chunk.
+#[derive(Clone, Copy)]
+struct Jobs<'a> {
+    starts: &'a [Made],
+    next: &'a AtomicUsize,
+}
+
+impl Jobs<'_> {
+    /// The place of the next run not yet taken, if one is left.
+    fn take(&self) -> Option<usize> {
+        Some(self.next.fetch_add(1, Ordering::Relaxed)).filter(|i| *i < self.starts.len())
+    }
+}
+
 /// The runs a call runs: a range of their numbers, or numbers picked.
 enum Runs {
     Range(Range<usize>),
@@ -406,7 +520,7 @@ fn run_words(piece: &Piece) -> String {
 
 /// The index of each varied parameter among the model's, or why one is not a parameter.
 fn varied_parameters(
-    prepared: &mut crate::numbers::Prepared,
+    prepared: &mut engine::numbers::Prepared,
     vary: &[Vary],
 ) -> Result<Vec<usize>, Error> {
     let mut found = Vec::new();
@@ -417,7 +531,7 @@ fn varied_parameters(
         }
         if let Some(i) = prepared.derivation.model.params.iter().position(|p| p.name == *name) {
             if prepared.parameter_plan.is_derived(i) {
-                return Err(crate::numbers::derived_error(
+                return Err(engine::numbers::derived_error(
                     &prepared.parameter_plan,
                     Setting::Vary,
                     i,
@@ -451,17 +565,4 @@ fn varied_parameters(
         return Err(Error::given(Setting::Vary, name, rest));
     }
     Ok(found)
-}
-
-impl Spread {
-    /// The `k`th of a grid axis's values, the last exactly its end.
-    pub fn grid_value(&self, k: usize) -> f64 {
-        match *self {
-            Spread::Grid { to, values, .. } if k + 1 == values => to,
-            Spread::Grid { from, to, values } => {
-                from + (to - from) * k as f64 / (values - 1) as f64
-            }
-            _ => f64::NAN,
-        }
-    }
 }
