@@ -12,7 +12,7 @@
 //! g, row for row (`loop_b.x`, `loop_b.y`, `loop_a.x`, …), so each multiplier here is minus the
 //! test set's, in the same order.
 
-use engine::simulate::{simulate, Options};
+use simulation::{simulate, Options};
 
 const SCENE: &str = "classics/andrews_squeezer.lag";
 

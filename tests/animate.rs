@@ -11,21 +11,21 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use engine::animate::{Animation, FigureKind};
+use simulation::animate::{Animation, FigureKind};
 
 fn example(rel: &str) -> String {
     std::fs::read_to_string(lagrange_tests::examples_dir().join(rel)).expect("readable example")
 }
 
 fn animation(rel: &str) -> Animation {
-    let options = engine::simulate::Options { animate: true, samples: 300, ..Default::default() };
-    let outcome = engine::simulate::simulate(&example(rel), &options)
+    let options = simulation::Options { animate: true, samples: 300, ..Default::default() };
+    let outcome = simulation::simulate(&example(rel), &options)
         .unwrap_or_else(|e| panic!("{rel} does not simulate: {e:?}"));
     assert!(outcome.run.fault.is_none(), "{rel} faulted");
     outcome.animation.expect("an animation was asked for")
 }
 
-fn figure<'a>(animation: &'a Animation, label: &str) -> &'a engine::animate::Figure {
+fn figure<'a>(animation: &'a Animation, label: &str) -> &'a simulation::animate::Figure {
     animation
         .figures
         .iter()

@@ -179,9 +179,9 @@ fn a_general_start_is_shown_and_checked_in_numbers() {
     assert!(report.contains("θ   (from θ ≈ 0.0157640711752"), "{report}");
     let shown = shown_at_start(&report, &["ψ\u{308}", "φ\u{308}", "δ\u{308}"]);
 
-    let outcome = engine::simulate::simulate(
+    let outcome = simulation::simulate(
         &general,
-        &engine::simulate::Options {
+        &simulation::Options {
             until: Some(0.001),
             output: vec!["psi'', phi'', delta''".into()],
             ..Default::default()

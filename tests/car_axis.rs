@@ -7,7 +7,7 @@
 //! (xl − xr)² + (yl − yr)² − L²), lagrange M·q̈ = f + Jᵀ·λ with Φ = lhs − rhs; the scene writes
 //! the constraints as the test set's g, so the multipliers are the test set's, sign and all.
 
-use engine::simulate::{simulate, Options};
+use simulation::{simulate, Options};
 
 const SCENE: &str = "classics/car_axis.lag";
 

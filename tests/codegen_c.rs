@@ -487,7 +487,7 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
         rest.split(' ').next().unwrap().parse().expect("a number")
     };
     let (x, theta) = (number("x = "), number("theta = "));
-    let options = engine::simulate::Options {
+    let options = simulation::Options {
         input: vec!["F=10.7*x + 129.6*theta + 16.26*x' + 38.26*theta'".parse().unwrap()],
         method: Some("rk4".into()),
         step: Some(1e-3),
@@ -496,7 +496,7 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
         no_units: true,
         ..Default::default()
     };
-    let outcome = engine::simulate::simulate(&source, &options).expect("runs");
+    let outcome = simulation::simulate(&source, &options).expect("runs");
     let last = outcome.run.trajectory.rows.last().expect("rows");
     assert_eq!(*outcome.run.trajectory.times.last().unwrap(), 10.0);
     // Balanced, the state is small at the end: the agreement is relative.

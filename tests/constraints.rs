@@ -220,8 +220,8 @@ fn the_numeric_start_agrees_with_the_exact_one() {
 fn simulate_names_a_constraint_that_lost_its_gradient() {
     let source = "param m = 1, g = 9.81\ncoord x = 0\ncoord y = 0\n\
                   particle bead { mass m; position (x, y) }\nconstraint line: x^3 = y^3\ngravity g\n";
-    let options = engine::simulate::Options { until: Some(1.0), ..Default::default() };
-    let outcome = engine::simulate::simulate(source, &options).unwrap_or_else(|e| panic!("{e}"));
+    let options = simulation::Options { until: Some(1.0), ..Default::default() };
+    let outcome = simulation::simulate(source, &options).unwrap_or_else(|e| panic!("{e}"));
     let fault = outcome.run.fault.as_ref().expect("a fault");
     assert!(matches!(fault.kind, sim::FaultKind::SingularConstraints { .. }), "{fault:?}");
     let text = outcome.describe_fault(fault);

@@ -235,9 +235,9 @@ fn a_run_uses_an_input_s_value_when_nothing_drives_it() {
     // horizontal momentum (M + m)·ẋ + m·L·cos θ·θ̇ grows as F·t, whatever the rod does.
     let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag")
         .replace("coord theta = 0.05", "coord theta = 0");
-    let options = engine::simulate::Options { until: Some(1.0), ..Default::default() };
+    let options = simulation::Options { until: Some(1.0), ..Default::default() };
     let run = |source: &str| {
-        let outcome = engine::simulate::simulate(source, &options).expect("runs");
+        let outcome = simulation::simulate(source, &options).expect("runs");
         outcome.run.final_state.clone()
     };
     let still = run(&source);

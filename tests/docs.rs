@@ -250,8 +250,8 @@ const RUN_FLAGS: [&str; 10] = [
 ];
 
 /// The settings of a run that `simulate` and `ensemble` share.
-fn run_settings(args: &Args) -> Result<engine::simulate::Options, String> {
-    Ok(engine::simulate::Options {
+fn run_settings(args: &Args) -> Result<simulation::Options, String> {
+    Ok(simulation::Options {
         until: args.number("until")?,
         method: args.last("method"),
         tolerance: args.number("tolerance")?,
@@ -273,7 +273,7 @@ fn simulate(rest: &[String]) -> Result<String, String> {
     let [file] = &args.positional[..] else { return Err("one file".into()) };
     formats(&args, &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"])])?;
     let animate = args.has("animate");
-    let options = engine::simulate::Options {
+    let options = simulation::Options {
         output: args.all("output"),
         samples: args.number("samples")?.unwrap_or(if animate { 1000 } else { 200 }),
         animate,

@@ -4,9 +4,9 @@
 //! input, the wrong dimension).
 
 use engine::linearize::{linearize, Options as LinearizeOptions};
-use engine::simulate::{simulate, Options, Outcome};
 use engine::Error;
 use numeric::elementary::{apply, pow_int};
+use simulation::{simulate, Options, Outcome};
 
 fn sin(a: f64) -> f64 {
     apply(cas::Func::Sin, a)
@@ -327,10 +327,10 @@ fn bench_measures_the_driven_scene_and_leaves_out_the_methods_that_refuse_it() {
         until: Some(0.1),
         ..Options::default()
     };
-    let report = engine::bench::bench(scene, &base, 1, &mut ()).expect("benchmarks");
+    let report = simulation::bench::bench(scene, &base, 1, &mut ()).expect("benchmarks");
     let left_out: Vec<(&str, &str)> =
         report.inapplicable.iter().map(|m| (m.method.name(), m.reason)).collect();
-    let reason = engine::simulate::DRIVEN_IN_LAGRANGIAN;
+    let reason = simulation::DRIVEN_IN_LAGRANGIAN;
     assert_eq!(left_out, [("midpoint", reason), ("gauss", reason)]);
     assert!(report.trials.iter().all(|t| !t.method.is_symplectic()));
     // Undriven, x would stay at 1 and be 5e-3 from the reference's 1.005.
@@ -338,7 +338,7 @@ fn bench_measures_the_driven_scene_and_leaves_out_the_methods_that_refuse_it() {
     assert!(worst < 1e-6, "the largest error is {worst:e}");
     // Held, the input is a constant between samples, which the symplectic methods take.
     let held = Options { hold: Some(0.05), ..base };
-    let report = engine::bench::bench(scene, &held, 1, &mut ()).expect("benchmarks");
+    let report = simulation::bench::bench(scene, &held, 1, &mut ()).expect("benchmarks");
     assert!(report.inapplicable.is_empty());
 }
 

@@ -4,7 +4,7 @@
 
 use ::ensemble::{ensemble, Options, Table};
 use engine::input::{Assignment, Vary};
-use engine::simulate::{self, simulate};
+use simulation::simulate;
 
 const FLIP: &str = "classics/double_pendulum_flip.lag";
 
@@ -22,7 +22,7 @@ fn vary(texts: &[&str]) -> Vec<Vary> {
 
 fn options(texts: &[&str], runs: Option<usize>, record: &str, until: f64) -> Options {
     Options {
-        simulate: simulate::Options { until: Some(until), ..Default::default() },
+        simulate: simulation::Options { until: Some(until), ..Default::default() },
         vary: vary(texts),
         runs,
         seed: 27,
@@ -61,7 +61,7 @@ fn random_rows_are_what_simulate_gives_for_their_values() {
             Assignment { name: "a1".into(), value: row[0].to_string() },
             Assignment { name: "m2".into(), value: row[1].to_string() },
         ];
-        let alone = simulate::Options {
+        let alone = simulation::Options {
             until: Some(3.0),
             set,
             output: vec!["theta1, theta2".into()],
@@ -124,7 +124,7 @@ fn failed_runs_are_rows_with_their_reason() {
 #[test]
 fn without_record_a_row_holds_the_scenes_outputs_else_the_coordinates() {
     let unrecorded = |texts: &[&str]| Options {
-        simulate: simulate::Options { until: Some(0.5), ..Default::default() },
+        simulate: simulation::Options { until: Some(0.5), ..Default::default() },
         vary: vary(texts),
         ..Default::default()
     };

@@ -6,7 +6,7 @@
 
 use ::ensemble::{Ensemble, Options};
 use engine::input::Vary;
-use engine::simulate;
+use simulation as simulate;
 
 const FLIP: &str = "classics/double_pendulum_flip.lag";
 

@@ -10,9 +10,9 @@
 use bench::reference::{elliptic_k, gauss_legendre};
 use cli::simulate::summary;
 use engine::numbers::prepare;
-use engine::simulate::{simulate, Options, Outcome};
 use numeric::Tape;
 use sim::{FaultKind, Mechanical, Problem};
+use simulation::{simulate, Options, Outcome};
 
 fn example(rel: &str) -> String {
     std::fs::read_to_string(lagrange_tests::examples_dir().join(rel)).expect("example")

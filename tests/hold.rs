@@ -4,8 +4,8 @@
 //! held; a short period approaching the continuous law; the hold refused where it holds
 //! nothing.
 
-use engine::simulate::{simulate, Options, Outcome};
 use numeric::elementary::apply;
+use simulation::{simulate, Options, Outcome};
 
 /// m·ẍ = −k·x + F, with F = −kp·x − kd·ẋ sampled and held.
 const BLOCK: &str = "scene \"A block on a spring, pushed by a held feedback\"

@@ -11,9 +11,9 @@
 
 use engine::inverse::{inverse_dynamics, InverseDynamics};
 use engine::numbers::prepare;
-use engine::simulate::{simulate, Options};
 use numeric::Tape;
 use sim::{FaultKind, Problem};
+use simulation::{simulate, Options};
 
 /// Two links on hinges, each angle from the downward vertical: a shoulder motor between the
 /// ground and the upper link, an elbow motor between the links, both functions of time.
@@ -272,7 +272,7 @@ fn arm_motion(t: f64) -> [Vec<f64>; 3] {
     ]
 }
 
-fn arm_run(set: &[&str]) -> engine::simulate::Outcome {
+fn arm_run(set: &[&str]) -> simulation::Outcome {
     let options = Options {
         tolerance: Some(1e-12),
         output: vec!["q1, q2, q1', q2', tau1, tau2".into()],

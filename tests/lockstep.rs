@@ -161,7 +161,7 @@ fn an_ensemble_in_lockstep_is_the_table_of_its_runs_one_at_a_time() {
     ];
     for (source, vary, record, method) in cases {
         let options = Options {
-            simulate: engine::simulate::Options {
+            simulate: simulation::Options {
                 until: Some(3.0),
                 method: Some(method.to_string()),
                 ..Default::default()

@@ -458,7 +458,7 @@ struct InterruptAfter {
     done: f64,
 }
 
-impl engine::simulate::Progress for InterruptAfter {
+impl simulation::Progress for InterruptAfter {
     fn update(&mut self, done: f64) {
         self.done = done;
     }
@@ -469,7 +469,7 @@ impl engine::simulate::Progress for InterruptAfter {
 
 fn options(method: &str, vary: &[&str], record: &str, input: &[&str]) -> Options {
     Options {
-        simulate: engine::simulate::Options {
+        simulate: simulation::Options {
             until: Some(2.5),
             method: Some(method.to_string()),
             input: input.iter().map(|i| i.parse().expect("an input law")).collect(),

@@ -10,7 +10,7 @@
 
 use bench::reference::elliptic_k;
 use cli::simulate::summary;
-use engine::simulate::{simulate, Options, Outcome};
+use simulation::{simulate, Options, Outcome};
 
 fn scene(path: &str) -> String {
     let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);

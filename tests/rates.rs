@@ -5,7 +5,7 @@
 // The finite-difference reference is plain arithmetic on the recorded columns.
 #![allow(clippy::disallowed_methods)]
 
-use engine::simulate::{simulate, Options};
+use simulation::{simulate, Options};
 
 /// A block on a spring, pushed by a constant force: T = ½·m·x\u{307}², V = ½·k·x², and the power
 /// balance d(T + V)/dt = F·x\u{307}.

@@ -34,17 +34,17 @@ fn derive_and_check_resolve_once() {
 #[test]
 fn a_run_resolves_once() {
     let pendulum = example("classics/double_pendulum.lag");
-    let options = engine::simulate::Options {
+    let options = simulation::Options {
         until: Some(0.5),
         set: engine::input::assignments(&["m1=2"]).expect("an assignment"),
         ..Default::default()
     };
-    let ran = resolutions(|| engine::simulate::simulate(&pendulum, &options).expect("runs"));
+    let ran = resolutions(|| simulation::simulate(&pendulum, &options).expect("runs"));
     assert_eq!(ran, 1, "simulate");
 
     let vary = engine::input::varies(&["m1=1:2:3"]).expect("a grid");
     let options = ensemble::Options {
-        simulate: engine::simulate::Options { until: Some(0.2), ..Default::default() },
+        simulate: simulation::Options { until: Some(0.2), ..Default::default() },
         vary,
         runs: None,
         seed: 1,

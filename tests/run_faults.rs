@@ -4,8 +4,8 @@
 
 use ::ensemble::{Ensemble, Options as EnsembleOptions};
 use engine::input::Vary;
-use engine::simulate::{simulate, Options};
 use sim::{FaultKind, NonFiniteAt};
+use simulation::{simulate, Options};
 
 /// x'' = −(k/m)·x from x = 1 at rest: x = cos(√(k/m)·t).
 const OSCILLATOR: &str = "scene \"Oscillator\"\nparam m = 1, k = 1\ncoord x = 1\n\

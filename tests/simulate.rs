@@ -7,7 +7,7 @@
 
 use bench::reference::{elliptic_k, gauss_legendre};
 use cli::simulate::summary;
-use engine::simulate::{simulate, Options, Outcome};
+use simulation::{simulate, Options, Outcome};
 
 fn run(rel: &str, options: Options) -> Outcome {
     let path = lagrange_tests::examples_dir().join(rel);
@@ -361,7 +361,7 @@ fn a_streamed_table_is_the_table_of_the_kept_rows() {
         assert_eq!(cli::simulate::json(&kept), json, "{rel}");
         for as_json in [false, true] {
             let mut table = cli::simulate::Table::new(as_json, Vec::new());
-            let streamed = engine::simulate::simulate_into(&source, &options, &mut (), &mut table)
+            let streamed = simulation::simulate_into(&source, &options, &mut (), &mut table)
                 .expect("the same run");
             assert!(streamed.run.trajectory.rows.is_empty(), "{rel}: rows kept");
             let bytes = table.finish(&streamed).expect("memory");

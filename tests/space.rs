@@ -4,7 +4,7 @@
 //! through its flips.
 
 use cli::simulate::summary;
-use engine::simulate::{simulate, Options, Outcome};
+use simulation::{simulate, Options, Outcome};
 
 fn scene(rel: &str) -> (String, String) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);

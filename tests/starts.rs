@@ -6,7 +6,7 @@
 // The references are plain arithmetic (square roots of the closed forms).
 #![allow(clippy::disallowed_methods)]
 
-use engine::simulate::{simulate, Options};
+use simulation::{simulate, Options};
 
 const PENDULUM: &str = "scene \"Cartesian pendulum\"
 param m = 1 kg, L = 1 m, g = 9.81 m/s^2

@@ -4,8 +4,8 @@
 //! mode it could not follow, gauss told what its Newton iteration reached.
 
 use cli::simulate::summary;
-use engine::simulate::{simulate, Options, Outcome};
 use sim::Method;
+use simulation::{simulate, Options, Outcome};
 
 fn scene(path: &str) -> String {
     let full = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(path);

@@ -4,7 +4,7 @@
 //! table (docs/benchmarks.md); these are its rows that must hold.
 
 use engine::input::Assignment;
-use engine::simulate::{simulate, Options};
+use simulation::{simulate, Options};
 
 const ADAPTIVE: [&str; 4] = ["dopri5", "dop853", "radau", "auto"];
 

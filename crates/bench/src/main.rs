@@ -178,7 +178,7 @@ fn main() {
 
 /// The median of `v`.
 pub fn median(v: &mut [f64]) -> f64 {
-    engine::bench::median(v)
+    simulation::bench::median(v)
 }
 
 /// Seconds per call of `f`: batches sized to last about 20 ms, seven of them, the median.
@@ -210,7 +210,7 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
 }
 
 /// A duration with a unit that keeps three significant digits readable.
-pub use engine::bench::seconds;
+pub use simulation::bench::seconds;
 
 /// Writes to standard output for [`out!`] and [`outln!`].
 fn emit(args: std::fmt::Arguments) {

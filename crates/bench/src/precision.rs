@@ -3,8 +3,8 @@
 //! energy integral) and the simple pendulum (its exact period from the arithmetic–geometric
 //! mean: after one period the state is the initial one again).
 
-use engine::bench::{final_state_error, options_for, work_precision, Setting, Trial};
-use engine::simulate::{simulate_with, Options, Outcome};
+use simulation::bench::{final_state_error, options_for, work_precision, Setting, Trial};
+use simulation::{simulate_with, Options, Outcome};
 
 use crate::progress::Bar;
 use bench::reference::{elliptic_k, gauss_legendre};
@@ -42,7 +42,7 @@ pub fn rod_landing_time(theta0: f64) -> f64 {
 
 fn section(title: &str, note: &str, trials: &[Trial]) {
     outln!("{title}\n{note}");
-    out!("{}", engine::bench::table(trials, &[]));
+    out!("{}", simulation::bench::table(trials, &[]));
     outln!();
 }
 

@@ -10,7 +10,7 @@ use std::time::Duration;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// A line naming the work under way, with its elapsed time; for an integration (through
-/// [`engine::simulate::Progress`]) also a bar of t against the end time and a count of runs.
+/// [`simulation::Progress`]) also a bar of t against the end time and a count of runs.
 /// It clears itself when dropped, before the caller prints the row it measured.
 pub struct Bar {
     bar: ProgressBar,
@@ -57,7 +57,7 @@ impl Drop for Bar {
 /// integer.
 const STEPS: u64 = 1000;
 
-impl engine::simulate::Progress for Bar {
+impl simulation::Progress for Bar {
     fn start(&mut self, until: f64) {
         self.runs += 1;
         self.until = until;
@@ -79,7 +79,7 @@ impl engine::simulate::Progress for Bar {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use engine::simulate::Progress;
+    use simulation::Progress;
     use std::io;
     use std::sync::{Arc, Mutex};
 

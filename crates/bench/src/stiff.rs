@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Command;
 
 use engine::input::Assignment;
-use engine::simulate::{simulate, Options, Outcome};
+use simulation::{simulate, Options, Outcome};
 
 use crate::{median, seconds};
 

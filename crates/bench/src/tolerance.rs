@@ -8,8 +8,8 @@
 //! with atol = rtol = tol that every method holds its local error to.
 
 use engine::input::Assignment;
-use engine::simulate::{simulate_with, Options, Outcome};
 use sim::Method;
+use simulation::{simulate_with, Options, Outcome};
 
 use crate::precision::read;
 use crate::progress::Bar;

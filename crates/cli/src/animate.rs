@@ -1,13 +1,13 @@
 //! `simulate --animate`'s page: one self-contained HTML file that plays the motion. The
-//! figures' numbers come from `engine::animate`; here they are written into the page's template
+//! figures' numbers come from `simulation::animate`; here they are written into the page's template
 //! (`animate.html`: a canvas, a little JavaScript, no network) as JSON.
 //!
 //! The same run gives the same bytes: numbers are rounded to a fixed number of significant
 //! digits and printed by Rust's shortest round-trip formatting, and nothing of the machine or
 //! the clock is written.
 
-use engine::animate::{Animation, FigureKind};
 use serde_json::{json, Value};
+use simulation::animate::{Animation, FigureKind};
 
 /// The page, with its `{{TITLE}}` and `{{DATA}}` places.
 const TEMPLATE: &str = include_str!("animate.html");
@@ -109,7 +109,7 @@ mod tests {
             times: vec![0.0, 1.0],
             energy_error: vec![0.0, 1e-12],
             conservative: true,
-            figures: vec![engine::animate::Figure {
+            figures: vec![simulation::animate::Figure {
                 kind: FigureKind::Line,
                 label: "draw line from (0, 0) to </script>".into(),
                 frames: vec![vec![0.0, 0.0, 1.0, 1.0], vec![0.0, 0.0, 1.0, 2.0]],

@@ -297,9 +297,9 @@ impl RunArgs {
 
     /// The engine's options of a run, the inputs' time series read from their files; `None`
     /// after saying on stderr which file could not be read.
-    fn options(self) -> Option<engine::simulate::Options> {
+    fn options(self) -> Option<simulation::Options> {
         let (input, input_series) = drives(self.input)?;
-        Some(engine::simulate::Options {
+        Some(simulation::Options {
             until: time_option(engine::Setting::Until, self.until.as_deref())?,
             // The engine's options are shared with Python, which names the method.
             method: self.method.map(|m| m.name().to_string()),
@@ -419,7 +419,7 @@ fn main() -> ExitCode {
             let Some(options) = run.options() else { return ExitCode::from(2) };
             // An animation wants frames close enough to play smoothly.
             let default_samples = if animate.is_some() { 1000 } else { 200 };
-            let options = engine::simulate::Options {
+            let options = simulation::Options {
                 output,
                 samples: samples.unwrap_or(default_samples),
                 animate: animate.is_some(),
@@ -526,7 +526,7 @@ fn main() -> ExitCode {
             ) else {
                 return ExitCode::from(2);
             };
-            let options = engine::simulate::Options {
+            let options = simulation::Options {
                 until,
                 set,
                 stop_when,
@@ -755,7 +755,7 @@ struct Figures {
 fn simulate(
     file: &std::path::Path,
     source: &str,
-    options: &engine::simulate::Options,
+    options: &simulation::Options,
     out: Option<PathBuf>,
     figures: Figures,
 ) -> ExitCode {
@@ -828,7 +828,7 @@ fn simulate(
 fn simulate_streamed(
     path: &str,
     source: &str,
-    options: &engine::simulate::Options,
+    options: &simulation::Options,
     out: Option<&PathBuf>,
     json: bool,
 ) -> ExitCode {
@@ -1049,7 +1049,7 @@ fn inverse_dynamics(
 fn bench(
     file: &std::path::Path,
     source: &str,
-    options: &engine::simulate::Options,
+    options: &simulation::Options,
     repeats: usize,
     plot: Option<PathBuf>,
 ) -> ExitCode {
@@ -1058,18 +1058,18 @@ fn bench(
         return ExitCode::from(2);
     }
     let report =
-        match engine::bench::bench(source, options, repeats, &mut cli::progress::Bar::new()) {
+        match simulation::bench::bench(source, options, repeats, &mut cli::progress::Bar::new()) {
             Ok(r) => r,
             Err(e) => return fail(&path, &e),
         };
     emit(&format!(
         "{path}: error = largest difference of the final state from DOP853 at tol {:.0e} \
          (which differs from tol {:.0e} by {:.1e}); time: median of {repeats}, integration only\n",
-        engine::bench::REFERENCE_TOLERANCE,
-        10.0 * engine::bench::REFERENCE_TOLERANCE,
+        simulation::bench::REFERENCE_TOLERANCE,
+        10.0 * simulation::bench::REFERENCE_TOLERANCE,
         report.reference_check
     ));
-    emit(&engine::bench::table(&report.trials, &report.inapplicable));
+    emit(&simulation::bench::table(&report.trials, &report.inapplicable));
     for t in report.trials.iter().filter(|t| t.fault.is_some()) {
         eprintln!(
             "{} {}: {}",

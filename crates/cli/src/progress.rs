@@ -37,7 +37,7 @@ impl Default for Bar {
     }
 }
 
-impl engine::simulate::Progress for Bar {
+impl simulation::Progress for Bar {
     fn start(&mut self, until: f64) {
         self.until = until;
         self.started = Instant::now();

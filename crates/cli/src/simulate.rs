@@ -1,17 +1,17 @@
 //! `lagrange simulate`'s outputs: the recorded quantities as CSV or JSON, and the summary of
-//! a run. The run itself is `engine::simulate`'s; the progress bar is drawn while it runs.
-//! The table is written as the rows are made ([`Table`], an `engine::simulate::Sink`), so a
+//! a run. The run itself is `simulation`'s; the progress bar is drawn while it runs.
+//! The table is written as the rows are made ([`Table`], an `simulation::Sink`), so a
 //! run holds none of them; from a run that kept its rows ([`csv`], [`json`]) the same writers
 //! give the same bytes.
 
 use std::io::Write;
 
-use engine::simulate::{Options, Outcome, Sink};
 use engine::Error;
+use simulation::{Options, Outcome, Sink};
 
 /// Runs the scene with a progress bar on a terminal, keeping its rows.
 pub fn simulate(source: &str, options: &Options) -> Result<Outcome, Error> {
-    engine::simulate::simulate_with(source, options, &mut crate::progress::Bar::new())
+    simulation::simulate_with(source, options, &mut crate::progress::Bar::new())
 }
 
 /// Runs the scene with a progress bar on a terminal, its rows handed to `sink` as they are
@@ -21,7 +21,7 @@ pub fn simulate_into(
     options: &Options,
     sink: &mut dyn Sink,
 ) -> Result<Outcome, Error> {
-    engine::simulate::simulate_into(source, options, &mut crate::progress::Bar::new(), sink)
+    simulation::simulate_into(source, options, &mut crate::progress::Bar::new(), sink)
 }
 
 /// A run's table written as its rows come, as CSV or JSON.

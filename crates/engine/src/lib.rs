@@ -1,22 +1,19 @@
-//! The library under every front end: it strings the stages together. It loads a scene
-//! (parse, resolve, derive, diagnose) into a [`Scene`], picks the forms a report shows
-//! ([`derived`]), lays out slots and lowers what a command needs ([`numbers`]), reads the
-//! `simulate` settings and runs them ([`simulate`]), with the options' values typed
-//! ([`input`], the `ensemble` crate's `--vary` among them), with the scene's figures frame by
-//! frame for an animation ([`animate`]), measures integrators against a reference
-//! ([`mod@bench`]), runs the `linear` stage on small motions about a reference, the command
-//! line's reference resolved against the scene ([`linearize`]), decides the scene's `expect
-//! linearized:` lines ([`expect_linearized`]), and gives the generalized forces that make a
-//! given motion happen ([`inverse`]). What goes wrong comes back as an [`Error`]. Printing
-//! the equations as source, and an FMU of them, is the `export` stage's, above this one; an
-//! ensemble of runs is the `ensemble` crate's.
+//! The prepared scene every front end and later stage starts from. It loads a scene (parse,
+//! resolve once, derive, diagnose) into a [`Scene`], checks its `simulate` block's integrator
+//! settings ([`block`]), picks the forms a report shows ([`derived`]), lays out slots, lowers
+//! what a command needs and holds the one way to the parameters' values ([`numbers`]), types
+//! the options' values ([`input`]), runs the `linear` stage on small motions about a
+//! reference, the command line's reference resolved against the scene ([`linearize`]),
+//! decides the scene's `expect linearized:` lines ([`expect_linearized`]), and gives the
+//! generalized forces that make a given motion happen ([`inverse`]). What goes wrong comes
+//! back as an [`Error`]. Above it: runs (`simulation`), ensembles of runs (`ensemble`),
+//! generated code and FMUs (`export`), and results as plain data (`results`).
 //!
 //! It reads no files, writes nothing to a terminal and renders nothing: diagnostics come back
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
 //! command, the benchmarks) shows them.
 
-pub mod animate;
-pub mod bench;
+pub mod block;
 pub mod derived;
 mod error;
 pub mod expect_linearized;
@@ -24,7 +21,6 @@ pub mod input;
 pub mod inverse;
 pub mod linearize;
 pub mod numbers;
-pub mod simulate;
 
 pub use error::{line_col, Error, Piece, Setting};
 
@@ -64,7 +60,7 @@ pub fn load_with(source: &str, options: Options) -> Result<Scene, Error> {
 
 /// Parses and resolves one scene: its model, for more expressions to be resolved against
 /// ([`model::Model::resolve_expression`]) before it is derived, and its warnings.
-pub(crate) fn resolve_with(
+pub fn resolve_with(
     source: &str,
     options: Options,
 ) -> Result<(model::Model, Vec<Diagnostic>), Error> {
@@ -82,7 +78,7 @@ pub fn resolve_for_runs(
 }
 
 /// [`resolve_with`] with the model's checks given as they are.
-pub(crate) fn resolve_checked(
+pub fn resolve_checked(
     source: &str,
     checks: model::Checks,
 ) -> Result<(model::Model, Vec<Diagnostic>), Error> {
@@ -90,13 +86,13 @@ pub(crate) fn resolve_checked(
     let ast = lang::parse(source).map_err(scene)?;
     let (model, warnings) = model::resolve_with(&ast, source, checks).map_err(scene)?;
     // The integrator's names are `sim`'s, which `model` does not know.
-    simulate::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
-    simulate::scene_settings_apply(&model.simulation).map_err(|d| scene(vec![d]))?;
+    block::scene_method(&model.simulation).map_err(|d| scene(vec![d]))?;
+    block::scene_settings_apply(&model.simulation).map_err(|d| scene(vec![d]))?;
     Ok((model, warnings))
 }
 
 /// Derives and diagnoses a model resolved from `source`.
-pub(crate) fn derive_resolved(
+pub fn derive_resolved(
     source: &str,
     model: model::Model,
     mut warnings: Vec<Diagnostic>,

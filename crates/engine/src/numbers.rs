@@ -46,7 +46,7 @@ pub fn prepare(source: &str, extra: &[String], options: Options) -> Result<Prepa
 
 /// [`prepare`] of a model already resolved from `source` (and extended through its scope, as
 /// `linearize --about` extends it), with its warnings.
-pub(crate) fn prepare_resolved(
+pub fn prepare_resolved(
     source: &str,
     model: model::Model,
     warnings: Vec<lang::Diagnostic>,
@@ -59,7 +59,7 @@ pub(crate) fn prepare_resolved(
 /// [`prepare_resolved`] with some extra expressions given as values for a name (`--set
 /// L=20 cm`): those take a unit, checked against the name's dimension
 /// ([`model::Model::resolve_value_for`]).
-pub(crate) fn prepare_resolved_for(
+pub fn prepare_resolved_for(
     source: &str,
     mut model: model::Model,
     warnings: Vec<lang::Diagnostic>,
@@ -478,5 +478,34 @@ impl Prepared {
             y0[n + *k] = b[j];
         }
         Ok(())
+    }
+}
+
+impl Prepared {
+    /// Puts each law in place of its input in the equations (M, f, the generalized forces and
+    /// each kept constraint's rows) and in the recorded expressions, whose partials then
+    /// follow by the chain rule.
+    pub fn drive(&mut self, laws: &[(SymId, ExprId)]) {
+        if laws.is_empty() {
+            return;
+        }
+        let d = &mut self.derivation;
+        let map: std::collections::HashMap<SymId, ExprId> =
+            laws.iter().map(|(s, law)| (*s, d.expand_quantities(*law, false))).collect();
+        let pool = &mut d.model.pool;
+        let mut driven = |e: &mut ExprId| *e = pool.subst(*e, &map);
+        d.mass_matrix.iter_mut().flatten().for_each(&mut driven);
+        d.forcing.iter_mut().for_each(&mut driven);
+        d.generalized_forces.iter_mut().for_each(&mut driven);
+        for m in &mut d.multipliers {
+            m.rows.exprs_mut().for_each(&mut driven);
+        }
+        self.extra.iter_mut().for_each(&mut driven);
+        self.driven = map;
+    }
+
+    /// `e` with the driven inputs' laws in place of their symbols.
+    pub fn with_laws(&mut self, e: ExprId) -> ExprId {
+        self.derivation.model.pool.subst(e, &self.driven)
     }
 }

@@ -28,8 +28,8 @@ pub use record::{Extreme, Recorded};
 
 use engine::input::Vary;
 use engine::numbers::Prepared;
-use engine::simulate::{self, Columns, FaultNames, Integrand, Overrides, Progress};
 use engine::{Error, Piece, Setting};
+use simulation::{Columns, FaultNames, Integrand, Overrides, Progress};
 
 /// The most runs an ensemble may have. Its memory does not grow with them (the runs go in
 /// chunks); a table kept whole ([`Ensemble::run`], Python's columns) does, by its rows.
@@ -62,7 +62,7 @@ impl Sink for Table {
 #[derive(Clone, Debug, Default)]
 pub struct Options {
     /// The settings of each run, as `simulate` takes them (its outputs and samples unused).
-    pub simulate: simulate::Options,
+    pub simulate: simulation::Options,
     /// The parameters varied, in order: grid axes are crossed, the first varying slowest;
     /// random ones are drawn [`Options::runs`] times at each grid point.
     pub vary: Vec<Vary>,
@@ -141,7 +141,7 @@ impl Maker {
     fn start(&mut self, values: &[f64]) -> Result<Start, String> {
         let numbers: Vec<(usize, f64)> =
             self.given.iter().copied().zip(values.iter().copied()).collect();
-        simulate::start(&mut self.prepared, &self.sets, &numbers)
+        simulation::start(&mut self.prepared, &self.sets, &numbers)
             .map(|(parameters, state)| Start { parameters, state })
             .map_err(|e| e.worded(run_words))
     }
@@ -177,30 +177,30 @@ impl Ensemble {
     pub fn new(source: &str, options: &Options) -> Result<Ensemble, Error> {
         let design = draws::Design::new(&options.vary, options.runs)?;
         let recorded = record::parse(&options.record);
-        let resolved = simulate::Resolved::new(source, &options.simulate);
+        let resolved = simulation::Resolved::new(source, &options.simulate);
         let mut settings = resolved.settings(&options.simulate)?;
         // Nothing asked for: the scene's `output` quantities, else the coordinates, at the end.
         if !recorded.is_empty() {
             settings.outputs = record::expressions(&recorded);
         }
-        let simulate::Loaded { mut prepared, outputs, held, .. } = resolved.load(&settings)?;
-        let set_exprs = simulate::set_expressions(&mut prepared, &settings.sets)?;
+        let simulation::Loaded { mut prepared, outputs, held, .. } = resolved.load(&settings)?;
+        let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
         let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
         let given = varied_parameters(&mut prepared, &options.vary)?;
-        let sets = simulate::overrides(&prepared, &settings.sets, &set_exprs)?;
+        let sets = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
         let columns = Columns {
             outputs: outputs.len(),
             stops: settings.stops.len(),
             events: settings.events.len(),
         };
         // The scene's own values fill the parameters' slots until each run sets its own.
-        let (parameters, _) = simulate::start(&mut prepared, &sets, &[])?;
+        let (parameters, _) = simulation::start(&mut prepared, &sets, &[])?;
         let dynamics_exprs = prepared.dynamics_exprs();
         let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
         let observed = prepared.extra[..columns.figures()].to_vec();
         let observation = prepared.lower(&prepared.observation_inputs(), &observed)?;
-        let signals = simulate::drive_signals(&prepared, &settings)?;
-        let hold = simulate::drive_hold(&mut prepared, &held, settings.hold)?;
+        let signals = simulation::drive_signals(&prepared, &settings)?;
+        let hold = simulation::drive_hold(&mut prepared, &held, settings.hold)?;
         let mut mechanical = sim::Mechanical::new(
             prepared.layout,
             numeric::Tape::new(dynamics),
@@ -220,8 +220,8 @@ impl Ensemble {
         Ok(Ensemble {
             integrand,
             // One sample: the start; the end (or the stop) is recorded anyway.
-            run_settings: simulate::run_settings(&settings, 1),
-            watched: simulate::watched(&columns),
+            run_settings: simulation::run_settings(&settings, 1),
+            watched: simulation::watched(&columns),
             recorded,
             axes: design.axes(),
             random: design.is_random(),
@@ -231,7 +231,7 @@ impl Ensemble {
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
             parameter_names: prepared.parameter_slot_names(),
-            angle_oriented_bodies: simulate::angle_oriented_bodies(model),
+            angle_oriented_bodies: simulation::angle_oriented_bodies(model),
             lockstep: true,
             chunk: CHUNK_PER_THREAD,
             maker: Mutex::new(Maker { prepared, sets, given }),

@@ -4,7 +4,7 @@
 
 use sim::Run;
 
-use engine::simulate::split_list;
+use simulation::split_list;
 
 /// Which value of an expression a column records.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

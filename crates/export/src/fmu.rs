@@ -121,9 +121,9 @@ fn interface(
     let prepared = &equations.prepared;
     let model = &prepared.derivation.model;
     // The block as the scene's one resolution read it, not the text resolved again.
-    let settings = engine::simulate::settings_of(
+    let settings = simulation::settings_of(
         model.simulation.clone(),
-        &engine::simulate::Options {
+        &simulation::Options {
             until: options.until,
             // The FMU integrates with its own DOP853 whatever the scene's method, so its
             // tolerance applies even to a scene run by a fixed-step method.

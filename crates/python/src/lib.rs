@@ -99,9 +99,9 @@ impl NativeScene {
     /// The settings of a run: the scene's `simulate` block, then `options`.
     fn settings(
         &self,
-        options: &engine::simulate::Options,
-    ) -> PyResult<engine::simulate::Settings> {
-        engine::simulate::settings_of(self.simulation.clone(), options)
+        options: &simulation::Options,
+    ) -> PyResult<simulation::Settings> {
+        simulation::settings_of(self.simulation.clone(), options)
             .map_err(|e| engine_error(&e, &self.path))
     }
 }
@@ -307,7 +307,7 @@ struct RunOptions {
 
 impl RunOptions {
     /// The engine's options: the texts read into values, the time series checked.
-    fn engine(self, scene: &NativeScene) -> PyResult<engine::simulate::Options> {
+    fn engine(self, scene: &NativeScene) -> PyResult<simulation::Options> {
         let path = &scene.path;
         let set = engine::input::assignments(&self.set).map_err(|e| engine_error(&e, path))?;
         let input = engine::input::assignments_of(engine::Setting::Input, &self.input)
@@ -318,7 +318,7 @@ impl RunOptions {
                 .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
             series.push((name, samples));
         }
-        Ok(engine::simulate::Options {
+        Ok(simulation::Options {
             until: self.until,
             method: self.method,
             tolerance: self.tolerance,
@@ -345,7 +345,7 @@ struct Arrays {
     energy: Vec<f64>,
 }
 
-impl engine::simulate::Sink for Arrays {
+impl simulation::Sink for Arrays {
     fn columns(&mut self, names: &[String]) {
         self.outputs = vec![Vec::new(); names.len()];
     }
@@ -362,7 +362,7 @@ impl engine::simulate::Sink for Arrays {
 /// A run's outcome as the dict the Python `Results` wraps, with its arrays.
 fn outcome_dict<'py>(
     py: Python<'py>,
-    outcome: &engine::simulate::Outcome,
+    outcome: &simulation::Outcome,
     arrays: Arrays,
 ) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);

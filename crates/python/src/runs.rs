@@ -10,7 +10,7 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use engine::input::Assignment;
-use engine::simulate::{Compiled, Outcome, Progress, Settings};
+use simulation::{Compiled, Outcome, Progress, Settings};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -40,7 +40,7 @@ impl Store {
         source: &str,
         settings: &Settings,
         progress: &mut dyn Progress,
-        sink: &mut dyn engine::simulate::Sink,
+        sink: &mut dyn simulation::Sink,
     ) -> Result<Outcome, engine::Error> {
         let mut compiled = self.take(source, settings)?;
         let outcome = compiled.run_into(settings, progress, sink);

@@ -3,8 +3,8 @@
 
 use std::fmt::Write;
 
-use engine::bench::{Inapplicable, Trial};
 use sim::Method;
+use simulation::bench::{Inapplicable, Trial};
 
 use super::{escape, outline, page, Axis};
 
@@ -125,8 +125,8 @@ pub fn work_precision(title: &str, trials: &[Trial], inapplicable: &[Inapplicabl
 #[cfg(test)]
 mod tests {
     use super::*;
-    use engine::bench::Setting;
-    use engine::simulate::NO_MULTIPLIERS;
+    use simulation::bench::Setting;
+    use simulation::NO_MULTIPLIERS;
 
     #[test]
     fn the_diagram_has_a_line_per_method_and_skips_faults() {
@@ -167,7 +167,7 @@ mod tests {
             Inapplicable { method: Method::Midpoint, reason: NO_MULTIPLIERS },
             Inapplicable { method: Method::Gauss, reason: NO_MULTIPLIERS },
         ];
-        let text = engine::bench::table(&trials, &out);
+        let text = simulation::bench::table(&trials, &out);
         assert!(text.contains("rk4"), "{text}");
         assert!(text.contains(&format!("midpoint  not applicable: {NO_MULTIPLIERS}")), "{text}");
         assert!(text.contains(&format!("gauss     not applicable: {NO_MULTIPLIERS}")), "{text}");

@@ -149,7 +149,7 @@ fn counts_past_memory_are_refused_and_a_run_at_every_step_is_bounded() {
     // Wide rows make the memory's cap on the steps small enough to meet here: a run that
     // cannot end, recording every step, ends in a fault that names what lifts it.
     let source = std::fs::read_to_string(&pendulum).expect("the example");
-    let options = engine::simulate::Options {
+    let options = simulation::Options {
         until: Some(1e300),
         method: Some("rk4".into()),
         step: Some(0.5),
@@ -157,12 +157,12 @@ fn counts_past_memory_are_refused_and_a_run_at_every_step_is_bounded() {
         samples: 0,
         ..Default::default()
     };
-    let outcome = engine::simulate::simulate(&source, &options).expect("runs");
+    let outcome = simulation::simulate(&source, &options).expect("runs");
     let fault = outcome.run.fault.as_ref().expect("the cap ends the run");
     let sim::FaultKind::TooManySteps { limit } = fault.kind else { panic!("{fault:?}") };
     let width = outcome.run.trajectory.rows[0].len();
-    assert_eq!(limit, engine::simulate::most_rows(width));
-    assert!(limit * (8 * (width + 1)) <= engine::simulate::MAX_RECORDED_BYTES, "{limit}");
+    assert_eq!(limit, simulation::most_rows(width));
+    assert!(limit * (8 * (width + 1)) <= simulation::MAX_RECORDED_BYTES, "{limit}");
     assert_eq!(outcome.run.trajectory.rows.len(), limit + 1, "the start and a row a step");
     let message = outcome.describe_fault(fault);
     assert!(message.contains(&format!("more than {limit} steps, each recorded")), "{message}");

@@ -1,13 +1,20 @@
-//! A simulation: settings from the scene's `simulate { … }` block and the front end's
-//! options, read into typed [`Settings`] and checked; the outputs, stop conditions, events and
-//! `--set` values resolved as expressions in the scene's scope; the initial state, the lowered
-//! programs and the run. Writing the results is the front end's.
+//! Runs of a scene, above `engine`'s prepared scene: settings from the scene's `simulate { … }`
+//! block and the front end's options, read into typed [`Settings`] and checked, from the one
+//! resolution the scene is loaded from ([`Resolved`]); the outputs, stop conditions, events and
+//! `--set` values resolved as expressions in the scene's scope; the inputs' laws put in place
+//! ([`drive`](drive_signals)); the problem a method integrates ([`Integrand`]), lowered once
+//! for run after run ([`Compiled`]); the run, its rows handed to a front end's [`Sink`] as they
+//! are made; the words of a fault; the figures of an animation ([`animate`]); and the
+//! measurement of integrators against a reference that `lagrange bench` prints ([`bench`]).
+//! Writing the results is the front end's.
 
 use std::ops::ControlFlow;
 use std::time::Instant;
 
 use sim::{integrate, FaultKind, Mechanical, Method, NonFiniteAt, Run};
 
+pub mod animate;
+pub mod bench;
 mod compiled;
 mod drive;
 mod fault;
@@ -22,11 +29,11 @@ pub use integrand::{run_settings, watched, Integrand};
 pub use rows::{Sink, Totals};
 
 use crate::animate::Animation;
-use crate::input::Assignment;
-use crate::numbers::{prepare_resolved, Prepared};
+use engine::input::Assignment;
+use engine::numbers::{prepare_resolved, Prepared};
 use lang::Diagnostic;
 
-use crate::{Error, Piece, Setting};
+use engine::{Error, Piece, Setting};
 
 /// What a front end asks for; `None` leaves the scene's setting or the default.
 #[derive(Clone, Debug, Default)]
@@ -191,29 +198,6 @@ fn zero_of(text: &str) -> String {
     }
 }
 
-/// The method a scene's `simulate` block names, or why the integrator has none of that name.
-pub(crate) fn scene_method(simulation: &model::Simulation) -> Result<Option<Method>, Diagnostic> {
-    let Some(name) = &simulation.method else { return Ok(None) };
-    let method = Method::from_name(&name.name);
-    method.map(Some).ok_or_else(|| {
-        let d = Diagnostic::error(name.span, format!("unknown method `{}`", name.name))
-            .with_label("not a method");
-        let known = Method::NAMES.join(", ");
-        match model::closest(&name.name, Method::NAMES) {
-            Some(near) => d.with_hint(format!("did you mean `{near}`? (known: {known})")),
-            None => d.with_hint(format!("the methods are {known}")),
-        }
-    })
-}
-
-/// The methods as the settings they take: the adaptive ones a tolerance, the fixed-step ones
-/// a step.
-fn methods_taking(adaptive: bool) -> String {
-    let names: Vec<&str> =
-        Method::all().filter(|m| m.is_adaptive() == adaptive).map(Method::name).collect();
-    names.join(", ")
-}
-
 /// Refuses a front end's tolerance for a fixed-step method and its step for an adaptive one:
 /// the run would not use it, and would give the same bits as without it.
 fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
@@ -229,33 +213,10 @@ fn check_applies(method: Method, options: &Options) -> Result<(), Error> {
         Piece::Setting(used),
         Piece::Text(format!(
             " (the adaptive methods {} take a tolerance, the fixed-step {} a step)",
-            methods_taking(true),
-            methods_taking(false)
+            engine::block::methods_taking(true),
+            engine::block::methods_taking(false)
         )),
     ]))
-}
-
-/// The diagnostic of a `simulate` block that names a method and a `step` or `tolerance` that
-/// method does not use (a block without a method runs the default, dop853).
-pub(crate) fn scene_settings_apply(simulation: &model::Simulation) -> Result<(), Diagnostic> {
-    let method = scene_method(simulation)?.unwrap_or(Method::DEFAULT);
-    let (unused, key, takes) = match (method.is_adaptive(), simulation.step, simulation.tolerance) {
-        (true, Some(step), _) => (step, "step", "tolerance"),
-        (false, _, Some(tolerance)) => (tolerance, "tolerance", "step"),
-        _ => return Ok(()),
-    };
-    let kind = if method.is_adaptive() { "an adaptive" } else { "a fixed-step" };
-    let named = match &simulation.method {
-        Some(_) => format!("`{}`", method.name()),
-        None => format!("`{}` (the default)", method.name()),
-    };
-    Err(Diagnostic::error(unused.span, format!("`{key}` is not used by {named}, {kind} method"))
-        .with_label(format!("{} takes `{takes}`", method.name()))
-        .with_hint(format!(
-            "the adaptive methods ({}) take `tolerance`, the fixed-step ones ({}) `step`",
-            methods_taking(true),
-            methods_taking(false)
-        )))
 }
 
 /// The settings of a run of `source`: its `simulate` block, as its model has read it (before
@@ -279,7 +240,7 @@ impl<'a> Resolved<'a> {
     /// in place before deriving), with the options' unit check.
     pub fn new(source: &'a str, options: &Options) -> Resolved<'a> {
         let checks = model::Checks { units: !options.no_units, inputs_in_constraints: true };
-        Resolved { source, model: crate::resolve_checked(source, checks) }
+        Resolved { source, model: engine::resolve_checked(source, checks) }
     }
 
     /// The scene's `simulate` block overridden by the options (see [`settings`]).
@@ -331,7 +292,7 @@ pub fn settings_of(scene: model::Simulation, options: &Options) -> Result<Settin
     let number = |n: Option<model::Number>| n.map(|n| n.value);
     let mut until = number(scene.until).unwrap_or(10.0);
     // `resolve_with` has checked the name.
-    let mut method = scene_method(&scene).ok().flatten().unwrap_or(Method::DEFAULT);
+    let mut method = engine::block::scene_method(&scene).ok().flatten().unwrap_or(Method::DEFAULT);
     let mut tolerance = number(scene.tolerance).unwrap_or(1e-10);
     let mut step = number(scene.step);
     let hold = options.hold.or(number(scene.hold));
@@ -478,7 +439,7 @@ pub struct Loaded {
 pub fn load(source: &str, settings: &Settings) -> Result<Loaded, Error> {
     // An input in a constraint takes its law (or value) before anything is derived.
     let checks = model::Checks { units: settings.units, inputs_in_constraints: true };
-    let (model, warnings) = crate::resolve_checked(source, checks)?;
+    let (model, warnings) = engine::resolve_checked(source, checks)?;
     load_model(source, model, warnings, settings)
 }
 

@@ -9,7 +9,7 @@
 use cas::{ExprId, SymbolKind};
 use model::{Figure as Drawn, LinkKind, Rotation};
 
-use crate::numbers::Prepared;
+use engine::numbers::Prepared;
 
 /// The figures of a run, frame by frame.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,9 +8,9 @@ use std::collections::HashMap;
 use cas::{ExprId, SymId};
 use sim::Method;
 
-use crate::input::Assignment;
-use crate::numbers::Prepared;
-use crate::{Error, Setting};
+use engine::input::Assignment;
+use engine::numbers::Prepared;
+use engine::{Error, Setting};
 
 /// The inputs `drives` names, each with its law resolved in the scene's scope; an input not
 /// driven keeps the value it is declared with.
@@ -186,35 +186,6 @@ fn unknown_input(model: &model::Model, given: &str) -> String {
     match model::closest(given, names.iter().copied()) {
         Some(near) => format!(": no input of that name; did you mean `{near}`? (inputs: {known})"),
         None => format!(": no input of that name; the inputs are {known}"),
-    }
-}
-
-impl Prepared {
-    /// Puts each law in place of its input in the equations (M, f, the generalized forces and
-    /// each kept constraint's rows) and in the recorded expressions, whose partials then
-    /// follow by the chain rule.
-    pub(super) fn drive(&mut self, laws: &[(SymId, ExprId)]) {
-        if laws.is_empty() {
-            return;
-        }
-        let d = &mut self.derivation;
-        let map: HashMap<SymId, ExprId> =
-            laws.iter().map(|(s, law)| (*s, d.expand_quantities(*law, false))).collect();
-        let pool = &mut d.model.pool;
-        let mut driven = |e: &mut ExprId| *e = pool.subst(*e, &map);
-        d.mass_matrix.iter_mut().flatten().for_each(&mut driven);
-        d.forcing.iter_mut().for_each(&mut driven);
-        d.generalized_forces.iter_mut().for_each(&mut driven);
-        for m in &mut d.multipliers {
-            m.rows.exprs_mut().for_each(&mut driven);
-        }
-        self.extra.iter_mut().for_each(&mut driven);
-        self.driven = map;
-    }
-
-    /// `e` with the driven inputs' laws in place of their symbols.
-    pub(super) fn with_laws(&mut self, e: ExprId) -> ExprId {
-        self.derivation.model.pool.subst(e, &self.driven)
     }
 }
 

@@ -6,7 +6,7 @@
 use sim::{Fault, FaultKind, Mechanical, Method, Problem, Run};
 
 use super::on_demand::lower_partials;
-use crate::numbers::Prepared;
+use engine::numbers::Prepared;
 
 /// The fastest mode of the scene at the last good state of a run that failed, when it is
 /// what held the explicit method's step down: an eigenvalue of ∂(q̇, q̈)/∂(q, q̇).

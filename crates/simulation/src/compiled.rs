@@ -14,8 +14,8 @@ use super::{
     set_expressions, start, Columns, Loaded, Outcome, Progress, Resolved, Settings,
 };
 use crate::animate::{Animation, Plan};
-use crate::numbers::Prepared;
-use crate::Error;
+use engine::numbers::Prepared;
+use engine::Error;
 
 /// A scene loaded with a run's expressions (outputs, stops, events, driven inputs) and its
 /// dynamics and observation programs lowered.
@@ -239,8 +239,8 @@ fn shape(settings: &Settings) -> Settings {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::Assignment;
-    use crate::simulate::{settings, Options};
+    use crate::{settings, Options};
+    use engine::input::Assignment;
 
     const PENDULUM: &str = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2\n\
         coord theta = 0.5\n\

@@ -5,8 +5,8 @@
 use numeric::Tape;
 use sim::{Components, FaultKind, Mechanical, Problem};
 
-use crate::numbers::Prepared;
-use crate::Error;
+use engine::numbers::Prepared;
+use engine::Error;
 
 /// A [`Mechanical`] problem whose partials program is lowered from `prepared` on the first
 /// call of [`Problem::jacobian`].

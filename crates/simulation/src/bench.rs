@@ -10,10 +10,8 @@ use std::fmt::Write;
 
 use sim::Method;
 
-use crate::simulate::{
-    simulate_with, Options, Outcome, Progress, DRIVEN_IN_LAGRANGIAN, NO_MULTIPLIERS,
-};
-use crate::Error;
+use crate::{simulate_with, Options, Outcome, Progress, DRIVEN_IN_LAGRANGIAN, NO_MULTIPLIERS};
+use engine::Error;
 
 /// What one rung of a ladder sets: a tolerance, or a number of fixed steps over the span.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,8 +9,8 @@ use numeric::Tape;
 use sim::{Canonical, Constrained, Event, Form, Mechanical, Method, Problem, Rows, Run};
 
 use super::{with_partials, Columns, Settings, NO_MULTIPLIERS};
-use crate::numbers::Prepared;
-use crate::Error;
+use engine::numbers::Prepared;
+use engine::Error;
 
 /// The equations of a run in the form its method integrates.
 #[derive(Clone)]
