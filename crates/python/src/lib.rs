@@ -97,10 +97,7 @@ impl NativeScene {
     }
 
     /// The settings of a run: the scene's `simulate` block, then `options`.
-    fn settings(
-        &self,
-        options: &simulation::Options,
-    ) -> PyResult<simulation::Settings> {
+    fn settings(&self, options: &simulation::Options) -> PyResult<simulation::Settings> {
         simulation::settings_of(self.simulation.clone(), options)
             .map_err(|e| engine_error(&e, &self.path))
     }

@@ -10,11 +10,11 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use engine::input::Assignment;
-use simulation::{Compiled, Outcome, Progress, Settings};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use simulation::{Compiled, Outcome, Progress, Settings};
 
 use crate::errors::engine_error;
 
