@@ -59,8 +59,8 @@ pub fn check_linearized(
             windows.push((name, value, half));
         }
     }
-    let (l, mut swept) = linearize_derived(source, derivation, &sweeps)?;
-    let mut swept = swept.drain(..);
+    let (l, swept) = linearize_derived(source, derivation, &sweeps)?;
+    let mut swept = swept.into_iter();
     let mut windows = windows.into_iter();
     let verdicts = expectations
         .iter()
@@ -78,7 +78,6 @@ pub fn check_linearized(
             _ => decide(&l, e),
         })
         .collect();
-    drop(swept);
     Ok((verdicts, l.derivation))
 }
 
@@ -96,22 +95,22 @@ fn first_line(e: &Error) -> String {
 
 /// A constant of the parameters at the scene's values.
 fn value_of(d: &Derivation, e: cas::ExprId) -> f64 {
-    let Ok(parameters) = model::ParameterValues::new(&d.model).values(Vec::new()) else {
-        return f64::NAN;
-    };
-    let pool = &d.model.pool;
-    let mut values = vec![f64::NAN; pool.symbol_count()];
-    for (p, v) in d.model.params.iter().zip(parameters) {
-        values[p.sym.index()] = v;
+    match model::ParameterValues::new(&d.model).values(Vec::new()) {
+        Ok(parameters) => value_with(&d.model, &parameters, e),
+        Err(_) => f64::NAN,
     }
-    numeric::eval(pool, e, &values)
 }
 
 /// A constant of the parameters at the values the linearization used.
 fn value_at(l: &Linearized, e: cas::ExprId) -> f64 {
-    let pool = &l.derivation.model.pool;
+    value_with(&l.derivation.model, &l.at.parameters, e)
+}
+
+/// A constant of the parameters at `parameters`, in the model's order.
+fn value_with(model: &model::Model, parameters: &[f64], e: cas::ExprId) -> f64 {
+    let pool = &model.pool;
     let mut values = vec![f64::NAN; pool.symbol_count()];
-    for (p, v) in l.derivation.model.params.iter().zip(&l.at.parameters) {
+    for (p, v) in model.params.iter().zip(parameters) {
         values[p.sym.index()] = *v;
     }
     numeric::eval(pool, e, &values)
