@@ -232,6 +232,8 @@ enum Section<'a> {
         sides: &'a [(ExprId, ExprId)],
         left_out: &'a [Option<String>],
     },
+    /// Each contact: its gap and law, its two modes, its impact law.
+    Contacts(&'a [engine::derived::DerivedContact]),
     Energies {
         kinetic: ExprId,
         potential: ExprId,
@@ -269,6 +271,7 @@ fn sections<'a>(d: &'a Derivation, derived: &'a Derived) -> Vec<Section<'a>> {
             sides: &derived.constraint_sides,
             left_out: &derived.left_out,
         },
+        Section::Contacts(&derived.contacts),
         Section::Energies {
             kinetic: derived.kinetic,
             potential: derived.potential,

@@ -32,13 +32,72 @@ pub struct Derived {
     /// constraint, which is its simplified Φ = 0 (the sum of a velocity and a cross product
     /// as written is pages long).
     pub constraint_sides: Vec<(ExprId, ExprId)>,
+    /// Each contact as a report shows it, in the order written.
+    pub contacts: Vec<DerivedContact>,
     /// Why each constraint that is neither eliminated nor kept was left out (a velocity
     /// constraint the position constraints already imply); `None` for the others.
     pub left_out: Vec<Option<String>>,
 }
 
+/// A contact as a report shows it: its gap, its law, its modes and its impact law.
+pub struct DerivedContact {
+    pub name: String,
+    /// g(q, t) ≥ 0.
+    pub gap: ExprId,
+    pub restitution: ExprId,
+    /// The tangential rate its grip holds at zero while it is closed.
+    pub grip: Option<ExprId>,
+    /// Its reaction's symbol, and its grip's.
+    pub force: SymId,
+    pub grip_force: Option<SymId>,
+    /// The generalized force per unit reaction, ∂g/∂q (and the grip's, ∂v/∂q̇), per remaining
+    /// coordinate: what the reaction adds to the equations while the contact is closed.
+    pub direction: Vec<ExprId>,
+    pub grip_direction: Option<Vec<ExprId>>,
+    /// The acceleration row it imposes while closed, J·q̈ = γ: γ.
+    pub bias: ExprId,
+    pub closed_at_start: bool,
+    /// Its impact law landing alone, where the system is small enough to solve exactly.
+    pub impact: Option<mechanics::ImpactLaw>,
+}
+
+/// Each contact of a derivation as a report shows it.
+fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
+    let mut out = Vec::new();
+    for k in 0..d.contacts.len() {
+        let rows = d.contacts[k].clone();
+        let contact = d.model.contacts[rows.contact].clone();
+        let impact = d.impact_law(k);
+        let pool = &mut d.model.pool;
+        // Λ = −(1 + e)·m·ẏ reads better than its expansion.
+        let impact = impact.map(|mut law| {
+            law.impulse = compact(pool, law.impulse);
+            law.tangential_impulse = law.tangential_impulse.map(|t| compact(pool, t));
+            law
+        });
+        let gap = pool.simplify(rows.normal.rows.phi());
+        let grip = rows.grip.as_ref().map(|g| pool.simplify(g.rows.velocity));
+        let bias = pool.simplify(rows.normal.rows.bias);
+        out.push(DerivedContact {
+            name: contact.name,
+            gap,
+            restitution: contact.restitution,
+            grip,
+            force: rows.normal.lambda,
+            grip_force: rows.grip.as_ref().map(|g| g.lambda),
+            direction: rows.normal.rows.jacobian.clone(),
+            grip_direction: rows.grip.as_ref().map(|g| g.rows.jacobian.clone()),
+            bias,
+            closed_at_start: rows.closed_at_start,
+            impact,
+        });
+    }
+    out
+}
+
 /// The forms of a derivation that a report shows.
 pub fn collect(d: &mut Derivation) -> Derived {
+    let contacts = contacts(d);
     let equations = d.equations();
     let independent = d.independent_form();
     let constraint_sides = d
@@ -143,6 +202,7 @@ pub fn collect(d: &mut Derivation) -> Derived {
         start_state,
         independent,
         constraint_sides,
+        contacts,
         left_out,
     }
 }

@@ -168,6 +168,10 @@ pub enum StmtKind {
     Body { name: Ident, props: Vec<Property> },
     /// `constraint floor: y = L/2*cos(theta)` (the name is optional)
     Constraint { name: Option<Ident>, lhs: Expr, rhs: Expr },
+    /// `contact floor: y >= 0 { restitution 4/5 }`: a one-sided constraint on the gap
+    /// lhs − rhs (`at_least`, written `>=`) or rhs − lhs (`<=`), with its laws (`restitution`,
+    /// `grip`) as written.
+    Contact { name: Ident, lhs: Expr, rhs: Expr, at_least: bool, laws: Vec<Property> },
     /// `gravity g` or `gravity g along (0, -1)`
     Gravity { strength: Expr, direction: Option<Expr> },
     /// `potential k/2*(x - l0)^2`

@@ -41,7 +41,7 @@ const PRATT_OPERATORS: [Rule; 6] =
     [Rule::add_op, Rule::sub_op, Rule::mul_op, Rule::div_op, Rule::pow_op, Rule::neg_op];
 
 /// The statement keywords, in the order they are listed to the user.
-pub(crate) const STATEMENT_KEYWORDS: [&str; 22] = [
+pub(crate) const STATEMENT_KEYWORDS: [&str; 23] = [
     "scene",
     "param",
     "let",
@@ -51,6 +51,7 @@ pub(crate) const STATEMENT_KEYWORDS: [&str; 22] = [
     "particle",
     "body",
     "constraint",
+    "contact",
     "gravity",
     "potential",
     "force",

@@ -67,6 +67,9 @@ pub struct Derivation {
     pub accels: Vec<SymId>,
     pub eliminated: Vec<Elimination>,
     pub multipliers: Vec<Multiplier>,
+    /// Every contact's rows, open or closed at the start (those closed are among the
+    /// multipliers too).
+    pub contacts: Vec<crate::ContactRows>,
     /// q, q̇ and q̈ of each eliminated coordinate, as expressions of the remaining ones.
     pub elimination_map: HashMap<SymId, ExprId>,
     pub kinetic: ExprId,
@@ -80,7 +83,7 @@ pub struct Derivation {
     pub reactions: Vec<Reaction>,
     pub warnings: Vec<Diagnostic>,
     /// q̈ and λ solved symbolically, for small systems; computed on first use.
-    solved: Option<Option<HashMap<SymId, ExprId>>>,
+    pub(crate) solved: Option<Option<HashMap<SymId, ExprId>>>,
     /// The unknowns at the start; computed on first use.
     pub(crate) start: Option<StartSolution>,
     /// The start breaks a kept position constraint exactly: the `verify` crate decides in
@@ -303,6 +306,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         accels,
         eliminated,
         multipliers,
+        contacts: Vec::new(),
         elimination_map,
         kinetic: reduced.kinetic,
         potential: reduced.potential,
@@ -319,6 +323,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         start_rates_error: None,
         start_at_values_only: false,
     };
+    derivation.separate_contacts()?;
     derivation.solve_multiplier_reactions();
     derivation.warn_about_overridden_initial_values();
     derivation.reaction_rates_exist()?;

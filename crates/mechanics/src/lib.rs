@@ -14,6 +14,7 @@
 //! knows nothing of parsing or of files: it starts from a [`model::Model`].
 
 mod check;
+mod contact;
 mod derive;
 mod independent;
 mod partials;
@@ -25,6 +26,7 @@ pub use independent::{IndependentForm, DEPENDENT_LIMIT};
 pub use present::collect_by_motion;
 
 pub use check::Decision;
+pub use contact::{ContactRows, ContactSlots, ImpactLaw, IMPACT_LAW_LIMIT};
 pub use derive::{
     derive, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
 };

@@ -177,6 +177,13 @@ pub enum ConstraintKind {
     /// slipping, written with rates on either side (`y'*cos(theta) = x'*sin(theta)`).
     /// Differentiated once; stabilised on the residual itself.
     Velocity,
+    /// g(q, t) ≥ 0: a one-sided contact (`contact floor: y >= 0`), Φ = g. While closed it is
+    /// kept as a position constraint whose multiplier, its reaction, is never negative; while
+    /// open it is absent. Never eliminated: its coordinates stay free.
+    Contact,
+    /// The tangential rate of a gripping contact, A(q, t)·q̇ + b (`grip x'`): held at zero with
+    /// a free multiplier while its contact is closed, absent while it is open.
+    Grip,
 }
 
 impl ConstraintKind {
@@ -185,8 +192,31 @@ impl ConstraintKind {
         match self {
             ConstraintKind::Position => "position",
             ConstraintKind::Velocity => "velocity",
+            ConstraintKind::Contact => "contact",
+            ConstraintKind::Grip => "grip",
         }
     }
+
+    /// Whether a constraint of this kind belongs to a contact, which holds only while closed.
+    pub fn is_unilateral(self) -> bool {
+        matches!(self, ConstraintKind::Contact | ConstraintKind::Grip)
+    }
+}
+
+/// A `contact` line: a one-sided constraint on a gap, its rows among the model's constraints
+/// (the normal row of kind [`ConstraintKind::Contact`], and its grip's of kind
+/// [`ConstraintKind::Grip`]), and its impact law.
+#[derive(Clone, Debug)]
+pub struct Contact {
+    pub name: String,
+    /// The index of its normal row in [`Model::constraints`]: Φ is the gap.
+    pub normal: usize,
+    /// The index of its grip's row, if it grips.
+    pub grip: Option<usize>,
+    /// Newton's coefficient of restitution e on the normal rate, in [0, 1] at the parameters'
+    /// values (0 when not written: a plastic landing).
+    pub restitution: ExprId,
+    pub span: Span,
 }
 
 /// A constraint `lhs = rhs`, kept as Φ = lhs − rhs: of positions (Φ(q, t)), or of velocities
@@ -429,6 +459,8 @@ pub struct Model {
     pub coords: Vec<Coord>,
     pub bodies: Vec<Body>,
     pub constraints: Vec<Constraint>,
+    /// The `contact` lines, in the order written; their rows are among `constraints`.
+    pub contacts: Vec<Contact>,
     pub gravity: Option<Gravity>,
     pub potentials: Vec<Term>,
     pub forces: Vec<Load>,

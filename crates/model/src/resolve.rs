@@ -23,7 +23,7 @@ pub use self::session::Scope;
 pub use self::simulation::{constant_value, time_setting};
 use crate::units::Form;
 use crate::{
-    Body, Checks, Constraint, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
+    Body, Checks, Constraint, Contact, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
     Link, Load, Model, Output, Param, Placeholder, Show, Simulation, Term, Value,
 };
 
@@ -185,6 +185,7 @@ struct Draft {
     coords: Vec<Coord>,
     bodies: Vec<Body>,
     constraints: Vec<Constraint>,
+    contacts: Vec<Contact>,
     gravity: Option<Gravity>,
     potentials: Vec<Term>,
     forces: Vec<Load>,
@@ -222,6 +223,7 @@ impl Draft {
             coords: Vec::new(),
             bodies: Vec::new(),
             constraints: Vec::new(),
+            contacts: Vec::new(),
             gravity: None,
             potentials: Vec::new(),
             forces: Vec::new(),
@@ -254,6 +256,7 @@ impl Draft {
             coords: std::mem::take(&mut model.coords),
             bodies: std::mem::take(&mut model.bodies),
             constraints: std::mem::take(&mut model.constraints),
+            contacts: std::mem::take(&mut model.contacts),
             gravity: model.gravity.take(),
             potentials: std::mem::take(&mut model.potentials),
             forces: std::mem::take(&mut model.forces),
@@ -284,6 +287,7 @@ impl Draft {
             coords: self.coords,
             bodies: self.bodies,
             constraints: self.constraints,
+            contacts: self.contacts,
             gravity: self.gravity,
             potentials: self.potentials,
             forces: self.forces,
@@ -347,6 +351,7 @@ impl<'a> Resolver<'a> {
                 StmtKind::Let { name, .. } => add(name, "name"),
                 StmtKind::Particle { name, .. } | StmtKind::Body { name, .. } => add(name, "body"),
                 StmtKind::Constraint { name: Some(name), .. } => add(name, "constraint"),
+                StmtKind::Contact { name, .. } => add(name, "contact"),
                 _ => {}
             }
         }

@@ -71,6 +71,40 @@ impl Renderer for JsonReport<'_> {
             Section::Constraints { constraints, .. } => {
                 set("constraints", json_constraints(d, constraints))
             }
+            // Only a scene with contacts has this key.
+            Section::Contacts(contacts) if contacts.is_empty() => {}
+            Section::Contacts(contacts) => {
+                let rates: Vec<String> = d.rates.iter().map(|s| name(*s)).collect();
+                let list: Vec<Json> = contacts
+                    .iter()
+                    .map(|c| {
+                        let impact = c.impact.as_ref().map(|law| {
+                            let after: Map<String, Json> = rates
+                                .iter()
+                                .zip(&law.rates_after)
+                                .map(|(r, e)| (r.clone(), json!(pool.print(*e, A))))
+                                .collect();
+                            json!({
+                                "normal_rate": pool.print(law.normal_rate, A),
+                                "impulse": pool.print(law.impulse, A),
+                                "tangential_impulse": law.tangential_impulse.map(|t| pool.print(t, A)),
+                                "rates_after": after,
+                            })
+                        });
+                        json!({
+                            "name": c.name,
+                            "gap": pool.print(c.gap, A),
+                            "restitution": pool.print(c.restitution, A),
+                            "grip": c.grip.map(|g| pool.print(g, A)),
+                            "closed_at_start": c.closed_at_start,
+                            "direction": prints(&c.direction),
+                            "bias": pool.print(c.bias, A),
+                            "impact": impact,
+                        })
+                    })
+                    .collect();
+                set("contacts", Json::Array(list));
+            }
             Section::Energies { kinetic, potential, .. } => {
                 set("kinetic_energy", json!(pool.print(*kinetic, A)));
                 set("potential_energy", json!(pool.print(*potential, A)));

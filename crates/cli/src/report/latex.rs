@@ -29,6 +29,17 @@ impl Renderer for Latex<'_> {
             | Section::Coordinates { .. }
             | Section::Constraints { .. }
             | Section::Model => {}
+            Section::Contacts(contacts) => {
+                let rates: Vec<String> = d.rates.iter().map(|s| sym_text(pool, *s, L)).collect();
+                for c in *contacts {
+                    let Some(law) = &c.impact else { continue };
+                    let mut lines = vec![format!("  \\Lambda &= {}", pool.print(law.impulse, L))];
+                    for (r, after) in rates.iter().zip(&law.rates_after) {
+                        lines.push(format!("  {r}^+ &= {}", pool.print(*after, L)));
+                    }
+                    self.align(&format!("Impact at {}", c.name), lines);
+                }
+            }
             Section::Energies { kinetic, potential, lagrangian } => {
                 let mut lines = vec![
                     format!("  T &= {}", pool.print(*kinetic, L)),

@@ -32,6 +32,7 @@ impl Renderer for Text<'_> {
             Section::Constraints { constraints, sides, left_out } => {
                 self.constraints(constraints, sides, left_out)
             }
+            Section::Contacts(contacts) => self.contacts(contacts),
             Section::Energies { kinetic, potential, lagrangian } => {
                 self.out.push("Energies".into());
                 self.out.push(format!("  T = {}", self.print(*kinetic)));
@@ -141,8 +142,15 @@ impl Text<'_> {
         if constraints.is_empty() {
             return;
         }
+        // A contact's rows are listed with the contact, under Contacts.
+        if constraints.iter().all(|c| c.kind.is_unilateral()) {
+            return;
+        }
         self.out.push("Constraints".into());
         for (i, c) in constraints.iter().enumerate() {
+            if c.kind.is_unilateral() {
+                continue;
+            }
             let (lhs, rhs) = sides[i];
             self.out.push(format!("  {}: {} = {}", c.name, self.print(lhs), self.print(rhs)));
             let force = self.sym(c.force_symbol);
@@ -169,6 +177,87 @@ impl Text<'_> {
                     "    kept with the multiplier {force} (generalized force {force}·∂Φ/∂q)"
                 ));
             }
+        }
+    }
+
+    /// Each contact: its gap and law, what it adds while closed, and its impact law.
+    fn contacts(&mut self, contacts: &[engine::derived::DerivedContact]) {
+        if contacts.is_empty() {
+            return;
+        }
+        let q: Vec<String> = self.d.coords.iter().map(|s| self.sym(*s)).collect();
+        let rates: Vec<String> = self.d.rates.iter().map(|s| self.sym(*s)).collect();
+        self.out.push("Contacts".into());
+        for c in contacts {
+            let force = self.sym(c.force);
+            self.out.push(format!(
+                "  {}: {} ≥ 0   (restitution {})",
+                c.name,
+                self.print(c.gap),
+                self.print(c.restitution)
+            ));
+            if let Some(grip) = c.grip {
+                self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)));
+            }
+            let start = if c.closed_at_start { "closed" } else { "open" };
+            self.out.push(format!("    {start} at the start"));
+            let direction: Vec<String> = c.direction.iter().map(|e| self.print(*e)).collect();
+            self.out.push(format!(
+                "    closed: {force} ≥ 0 adds {force}·({}) to the forces along ({}), and {} = {}",
+                direction.join(", "),
+                q.join(", "),
+                self.row_text(&c.direction),
+                self.print(c.bias)
+            ));
+            if let (Some(gf), Some(gd)) = (c.grip_force, &c.grip_direction) {
+                let gf = self.sym(gf);
+                let gd: Vec<String> = gd.iter().map(|e| self.print(*e)).collect();
+                self.out.push(format!("            and {gf}·({}), any sign", gd.join(", ")));
+            }
+            self.out.push(format!("    open: {force} = 0, the equations without it"));
+            match &c.impact {
+                Some(law) => {
+                    self.out.push(format!(
+                        "    impact (rates before it on the right; landing at γ⁻ = {} < 0):",
+                        self.print(law.normal_rate)
+                    ));
+                    self.out.push(format!("      Λ = {}", self.print(law.impulse)));
+                    if let Some(t) = law.tangential_impulse {
+                        self.out.push(format!("      Λ_T = {}", self.print(t)));
+                    }
+                    for (r, after) in rates.iter().zip(&law.rates_after) {
+                        self.out.push(format!("      {r}⁺ = {}", self.print(*after)));
+                    }
+                }
+                None => self.out.push(
+                    "    impact: too large to solve exactly; a run solves it in numbers".into(),
+                ),
+            }
+        }
+        if contacts.len() > 1 {
+            self.out.push(
+                "  Contacts that land together, with those closed, solve one complementarity \
+                 problem: Λ ≥ 0, γ⁺ + e·γ⁻ ≥ 0, Λ·(γ⁺ + e·γ⁻) = 0, γ⁺ = γ⁻ + W·M⁻¹·Wᵀ·Λ"
+                    .into(),
+            );
+        }
+    }
+
+    /// J·q̈ of a row of coefficients of the accelerations.
+    fn row_text(&self, row: &[ExprId]) -> String {
+        let pool = self.pool;
+        let mut terms = Vec::new();
+        for (j, a) in row.iter().zip(&self.d.accels) {
+            if pool.is_zero(*j) {
+                continue;
+            }
+            let acc = self.sym(*a);
+            terms.push(if *j == pool.one() { acc } else { format!("({})·{acc}", self.print(*j)) });
+        }
+        if terms.is_empty() {
+            "0".into()
+        } else {
+            terms.join(" + ")
         }
     }
 

@@ -137,6 +137,7 @@ impl Builder<'_> {
             }
             Rule::particle_stmt | Rule::body_stmt => self.body_stmt(rule, &mut items)?,
             Rule::constraint_stmt => self.constraint_stmt(&mut items)?,
+            Rule::contact_stmt => self.contact_stmt(&mut items)?,
             Rule::gravity_stmt => {
                 let strength = self.expr(next()?)?;
                 let direction = match next() {
@@ -229,6 +230,27 @@ impl Builder<'_> {
             return Err(Diagnostic::error(Span::default(), "internal error: constraint"));
         };
         Ok(StmtKind::Constraint { name, lhs: self.expr(lhs)?, rhs: self.expr(rhs)? })
+    }
+
+    /// A contact: its name, its two sides and which one is the greater, and its laws.
+    fn contact_stmt<'i>(
+        &mut self,
+        items: &mut impl Iterator<Item = Pair<'i, Rule>>,
+    ) -> Built<StmtKind> {
+        let mut next = || next_part(items);
+        let name = self.ident(&next()?);
+        let lhs = self.expr(next()?)?;
+        let at_least = next()?.as_rule() == Rule::at_least;
+        let rhs = self.expr(next()?)?;
+        let mut laws = Vec::new();
+        while let Ok(law) = next() {
+            let mut kv = parts(law);
+            let (Some(key), Some(value)) = (kv.next(), kv.next()) else {
+                continue;
+            };
+            laws.push(Property { key: self.ident(&key), value: self.expr(value)? });
+        }
+        Ok(StmtKind::Contact { name, lhs, rhs, at_least, laws })
     }
 
     /// A `spring` or `damper`: its name, its two ends and its coefficient (and a spring's rest length).

@@ -52,7 +52,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     use Rule::*;
     Some(match rule {
         kw_scene | kw_param | kw_input | kw_output | kw_let | kw_coord | kw_particle | kw_body
-        | kw_constraint | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring
+        | kw_constraint | kw_contact | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring
         | kw_damper | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate
         | kw_linearize | kw_draw => (0, "a statement"),
         kw_line | kw_circle | kw_polyline => (2, "a shape (`line`, `circle` or `polyline`)"),
@@ -83,6 +83,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
         eq => (6, "`=`"),
+        at_least | at_most => (6, "`>=` or `<=`"),
         near => (6, "`~`"),
         colon => (6, "`:`"),
         lparen => (6, "`(`"),
@@ -114,6 +115,7 @@ fn is_statement_start(rule: Rule) -> bool {
                 | particle_stmt
                 | body_stmt
                 | constraint_stmt
+                | contact_stmt
                 | gravity_stmt
                 | potential_stmt
                 | force_stmt
@@ -141,6 +143,7 @@ pub(super) fn is_statement_keyword(rule: Rule) -> bool {
             | kw_particle
             | kw_body
             | kw_constraint
+            | kw_contact
             | kw_spring
             | kw_damper
             | kw_gravity

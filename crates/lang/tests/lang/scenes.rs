@@ -40,6 +40,10 @@ fn exprs_of(kind: &StmtKind) -> Vec<&Expr> {
         StmtKind::Constraint { lhs, rhs, .. } | StmtKind::Expect { lhs, rhs, .. } => {
             out.extend([lhs, rhs])
         }
+        StmtKind::Contact { lhs, rhs, laws, .. } => {
+            out.extend([lhs, rhs]);
+            out.extend(laws.iter().map(|p| &p.value));
+        }
         StmtKind::Gravity { strength, direction } => {
             out.push(strength);
             out.extend(direction.iter());

@@ -8,7 +8,7 @@ use lang::Diagnostic;
 use model::Model;
 
 use super::eliminate::Coordinates;
-use super::rows::{restrains_positions, ConstraintRows};
+use super::rows::{may_be_implied, restrains_positions, ConstraintRows};
 use super::Multiplier;
 
 /// The rows of each kept constraint in the remaining coordinates ([`ConstraintRows`], by
@@ -36,7 +36,7 @@ pub(super) fn kept_constraints(
     for &ci in kept {
         let c = &model.constraints[ci];
         let phi = pool.subst(c.phi, &coordinates.elimination_map);
-        if !restrains_positions(c.kind) && !c.force_requested {
+        if may_be_implied(c.kind) && !c.force_requested {
             let rows: Vec<ExprId> = position_rows.iter().map(|(_, r)| *r).collect();
             if let Some(by) = implied_by(pool, phi, &rows, &coordinates.rates) {
                 let names: Vec<String> = by

@@ -58,8 +58,14 @@ impl ConstraintRows {
     ) -> ConstraintRows {
         let phi = if pool.prints_in_full(phi) { pool.simplify(phi) } else { phi };
         match kind {
-            ConstraintKind::Position => ConstraintRows::of_positions(pool, phi, coords, accels),
-            ConstraintKind::Velocity => ConstraintRows::of_rates(pool, phi, rates, accels),
+            // A contact, while closed, is a position constraint on its gap; its grip a velocity
+            // row: what a run does with them while open is the run's (it drops their rows).
+            ConstraintKind::Position | ConstraintKind::Contact => {
+                ConstraintRows::of_positions(pool, phi, coords, accels)
+            }
+            ConstraintKind::Velocity | ConstraintKind::Grip => {
+                ConstraintRows::of_rates(pool, phi, rates, accels)
+            }
         }
     }
 
@@ -141,13 +147,20 @@ fn bias(pool: &mut Pool, acceleration: ExprId, accels: &[SymId]) -> ExprId {
     pool.neg(rest)
 }
 
-/// Whether a constraint of `kind` restrains positions, so that its time derivative is a
-/// velocity row a velocity constraint may repeat.
+/// Whether a constraint of `kind` restrains positions throughout a run, so that its time
+/// derivative is a velocity row a velocity constraint may repeat. A contact restrains them
+/// only while closed: a velocity constraint it would repeat is still needed while it is open.
 pub(super) fn restrains_positions(kind: ConstraintKind) -> bool {
     match kind {
         ConstraintKind::Position => true,
-        ConstraintKind::Velocity => false,
+        ConstraintKind::Velocity | ConstraintKind::Contact | ConstraintKind::Grip => false,
     }
+}
+
+/// Whether a kept constraint of `kind` may be left out as implied by the position constraints:
+/// a velocity constraint may; a grip, which holds only while its contact is closed, may not.
+pub(super) fn may_be_implied(kind: ConstraintKind) -> bool {
+    matches!(kind, ConstraintKind::Velocity)
 }
 
 /// What elimination may solve for a coordinate: Φ(q, t) of a position constraint as written;
@@ -159,6 +172,8 @@ pub(super) fn eliminable(pool: &mut Pool, model: &Model, c: &Constraint) -> Opti
         // A velocity constraint restrains rates only, unless it integrates to a position
         // constraint: with constant coefficients A·q̇ + b = 0 is A·(q − q₀) + b·t = 0.
         ConstraintKind::Velocity => integrate(pool, model, c.phi).map(|phi| (phi, true)),
+        // A contact opens and closes: its coordinates stay free, and its rows are kept.
+        ConstraintKind::Contact | ConstraintKind::Grip => None,
     }
 }
 
@@ -167,8 +182,8 @@ pub(super) fn eliminable(pool: &mut Pool, model: &Model, c: &Constraint) -> Opti
 /// (the same direction, since ∂Φ̇/∂q̇ = ∂Φ/∂q).
 pub(super) fn reaction_direction(pool: &mut Pool, c: &Constraint, q: SymId) -> ExprId {
     match c.kind {
-        ConstraintKind::Position => pool.diff(c.phi, q),
-        ConstraintKind::Velocity => {
+        ConstraintKind::Position | ConstraintKind::Contact => pool.diff(c.phi, q),
+        ConstraintKind::Velocity | ConstraintKind::Grip => {
             let rate = pool.rate(q).expect("coordinate");
             pool.diff(c.phi, rate)
         }

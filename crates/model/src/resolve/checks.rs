@@ -177,6 +177,30 @@ pub(super) const OUTPUT: Role = Role {
     instead_of_input: "",
 };
 
+/// A contact's gap: a position, whose sign says open or penetrating.
+pub(super) const GAP: Role = Role {
+    what: "a contact's gap",
+    max_order: 0,
+    hint: "a contact restrains positions, `contact floor: y >= 0`; a tangential rate held at \
+           zero while it is closed goes in its block, `{ grip x' }`",
+    differentiated: true,
+    inputs: false,
+    instead_of_input: "a contact's gap is differentiated in time, which only a run could do for \
+                       an input: write the moving surface as an expression of `t`",
+};
+
+/// A gripping contact's tangential rate: linear in the rates, held at zero while closed.
+pub(super) const GRIP: Role = Role {
+    what: "a grip",
+    max_order: 1,
+    hint: "a grip is a tangential velocity, linear in the rates (`x'`, `x' + r*theta'`), held \
+           at zero while the contact is closed",
+    differentiated: true,
+    inputs: false,
+    instead_of_input: "a grip is differentiated in time, which only a run could do for an \
+                       input: write it with the coordinates' rates",
+};
+
 /// Not a role an expression is refused in, but one whose kinks matter: a constraint's
 /// gradient is its derivative.
 pub(super) const CONSTRAINT: Role = Role {

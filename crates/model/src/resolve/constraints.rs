@@ -1,11 +1,18 @@
 //! `constraint` statements: the equation resolved and classified as holonomic or a velocity
-//! constraint.
+//! constraint; and `contact` statements: the gap, checked to be a position, with its laws
+//! (a restitution in [0, 1], a grip that is a velocity), as rows among the constraints.
 
-use cas::{ExprId, SymId, SymbolKind};
-use lang::{Diagnostic, Expr, Ident, Span};
+use cas::number::{One, Signed};
+use cas::{ExprId, Rational, SymId, SymbolKind};
+use lang::{Diagnostic, Expr, Ident, Property, Span};
 
-use super::{checks, normalize, space, Binding, Resolver};
-use crate::{Constraint, ConstraintKind, Placeholder, Value};
+use super::checks::{self, GAP, GRIP};
+use super::{normalize, space, Binding, Resolver};
+use crate::{Constraint, Contact, ConstraintKind, Placeholder, Value};
+
+/// The laws a `contact` block may give, as a hint names them.
+const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1) \
+                            and `grip V` (a tangential rate held at zero while it is closed)";
 
 impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
@@ -61,33 +68,7 @@ impl Resolver<'_> {
             let cname =
                 if vector { format!("{base}.{}", ["x", "y", "z"][k.min(2)]) } else { base.clone() };
             let Some(kind) = self.constraint_kind(phi, span) else { return };
-            let index = self.model.constraints.len();
-            let force_symbol = self.model.pool.param(&format!("{cname}.force"));
-            let lhs_free = self.model.pool.free_symbols(l);
-            let lhs_coords = lhs_free
-                .iter()
-                .copied()
-                .filter(|s| {
-                    matches!(
-                        self.model.pool.symbol(*s).kind,
-                        SymbolKind::Coordinate { order: 0, .. }
-                    )
-                })
-                .collect();
-            self.model.placeholders.push((force_symbol, Placeholder::Reaction(index)));
-            self.model.constraints.push(Constraint {
-                name: cname,
-                kind,
-                lhs: l,
-                rhs: r,
-                phi,
-                force_symbol,
-                force_requested: false,
-                lhs_coords,
-                quaternion: None,
-                span,
-            });
-            indices.push(Some(index));
+            indices.push(Some(self.push_constraint(cname, kind, (l, r), phi, span)));
         }
         if indices.iter().all(Option::is_none) {
             self.error(
@@ -99,6 +80,166 @@ impl Resolver<'_> {
         }
         if let Some(id) = name {
             self.bind(id, Binding::Constraint(indices));
+        }
+    }
+
+    /// Adds a constraint row Φ = l − r of `kind` with its reaction's symbol `NAME.force`;
+    /// returns its index.
+    fn push_constraint(
+        &mut self,
+        name: String,
+        kind: ConstraintKind,
+        (l, r): (ExprId, ExprId),
+        phi: ExprId,
+        span: Span,
+    ) -> usize {
+        let index = self.model.constraints.len();
+        let force_symbol = self.model.pool.param(&format!("{name}.force"));
+        let lhs_free = self.model.pool.free_symbols(l);
+        let lhs_coords = lhs_free
+            .iter()
+            .copied()
+            .filter(|s| {
+                matches!(self.model.pool.symbol(*s).kind, SymbolKind::Coordinate { order: 0, .. })
+            })
+            .collect();
+        self.model.placeholders.push((force_symbol, Placeholder::Reaction(index)));
+        self.model.constraints.push(Constraint {
+            name,
+            kind,
+            lhs: l,
+            rhs: r,
+            phi,
+            force_symbol,
+            force_requested: false,
+            lhs_coords,
+            quaternion: None,
+            span,
+        });
+        index
+    }
+
+    /// `contact NAME: lhs >= rhs { laws }`: the gap lhs − rhs (rhs − lhs for `<=`), a position,
+    /// kept as a row of kind [`ConstraintKind::Contact`]; a grip as a row of kind
+    /// [`ConstraintKind::Grip`] after it.
+    pub(super) fn contact(
+        &mut self,
+        name: &Ident,
+        (lhs, rhs): (&Expr, &Expr),
+        at_least: bool,
+        laws: &[Property],
+        span: Span,
+    ) {
+        let l = self.scalar_in_role(lhs, &GAP);
+        let r = self.scalar_in_role(rhs, &GAP);
+        let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
+        let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
+        for (a, b) in lf.iter().zip(&rf) {
+            self.scope.units.same(a, b, lhs.span, rhs.span, "between the sides of this contact");
+        }
+        let gap = if at_least { self.model.pool.sub(l, r) } else { self.model.pool.sub(r, l) };
+        let free = self.model.pool.free_symbols(gap);
+        if !free
+            .iter()
+            .any(|s| matches!(self.model.pool.symbol(*s).kind, SymbolKind::Coordinate { .. }))
+        {
+            self.error(
+                Diagnostic::error(span, "this contact's gap involves no coordinate")
+                    .with_label("nothing here can move")
+                    .with_hint("a contact's gap is a distance between moving things, `y >= 0`"),
+            );
+            return;
+        }
+        let mut restitution: Option<ExprId> = None;
+        let mut grip: Option<(ExprId, Span)> = None;
+        let mut seen: Vec<&Ident> = Vec::new();
+        for law in laws {
+            if let Some(first) = seen.iter().find(|k| k.name == law.key.name) {
+                self.error(
+                    Diagnostic::error(law.key.span, format!("`{}` is given twice", law.key.name))
+                        .with_label("again here")
+                        .with_related(first.span, "first given here"),
+                );
+                continue;
+            }
+            seen.push(&law.key);
+            match law.key.name.as_str() {
+                "restitution" => restitution = self.restitution(&law.value),
+                "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                other => self.error(
+                    Diagnostic::error(law.key.span, format!("a contact has no law `{other}`"))
+                        .with_label("unknown law")
+                        .with_hint(CONTACT_LAWS),
+                ),
+            }
+        }
+        let cname = normalize(&name.name);
+        let zero = self.model.pool.zero();
+        let normal = self.push_constraint(cname.clone(), ConstraintKind::Contact, (gap, zero), gap, span);
+        let grip = grip.map(|(g, gspan)| {
+            let name = format!("{cname}.grip");
+            self.push_constraint(name, ConstraintKind::Grip, (g, zero), g, gspan)
+        });
+        let restitution = restitution.unwrap_or(zero);
+        self.model.contacts.push(Contact { name: cname, normal, grip, restitution, span });
+        self.bind(name, Binding::Constraint(vec![Some(normal)]));
+    }
+
+    /// A contact's `restitution`: a dimensionless constant, in [0, 1] at the parameters' values.
+    fn restitution(&mut self, written: &Expr) -> Option<ExprId> {
+        let (e, dims) = self.scalar(written)?;
+        for f in self.operand(dims).forms() {
+            self.scope.units.dimensionless(&f, written.span, "a coefficient of restitution");
+        }
+        let free = self.model.pool.free_symbols(e);
+        if let Some(s) = free.iter().find(|s| !matches!(self.model.pool.symbol(**s).kind, SymbolKind::Param)) {
+            let name = self.model.pool.symbol(*s).name.clone();
+            self.error(
+                Diagnostic::error(written.span, "a coefficient of restitution is a constant")
+                    .with_label(format!("depends on `{name}`"))
+                    .with_hint("write a number or an expression of parameters, `4/5` or `e`"),
+            );
+            return None;
+        }
+        let known = self.known(e)?;
+        let outside = match self.model.pool.as_num(known) {
+            Some(q) => q.is_negative() || *q > Rational::one(),
+            None => {
+                let x = numeric::eval(&self.model.pool, known, &[]);
+                !(-1e-12..=1.0 + 1e-12).contains(&x)
+            }
+        };
+        if outside {
+            let value = numeric::eval(&self.model.pool, known, &[]);
+            self.error(
+                Diagnostic::error(written.span, "a coefficient of restitution lies between 0 and 1")
+                    .with_label(format!("is {value} here"))
+                    .with_hint(
+                        "0 is a plastic landing (the contact closes), 1 an elastic one (the \
+                         normal rate reverses in full)",
+                    ),
+            );
+            return None;
+        }
+        Some(e)
+    }
+
+    /// A contact's `grip`: a tangential velocity, linear in the rates.
+    fn grip(&mut self, written: &Expr) -> Option<ExprId> {
+        let (g, _) = self.scalar_in_role(written, &GRIP)?;
+        match self.constraint_kind(g, written.span)? {
+            ConstraintKind::Velocity => Some(g),
+            _ => {
+                self.error(
+                    Diagnostic::error(written.span, "a grip is a velocity")
+                        .with_label("no rate here")
+                        .with_hint(
+                            "a grip holds a tangential rate at zero while the contact is closed: \
+                             write the rate, `x'` or `x' + r*theta'`",
+                        ),
+                );
+                None
+            }
         }
     }
 

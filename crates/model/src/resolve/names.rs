@@ -264,7 +264,16 @@ impl Resolver<'_> {
         field: &Ident,
         span: Span,
     ) -> Option<Value> {
-        if field.name != "force" {
+        // A gripping contact's tangential reaction is `NAME.grip`, beside its normal `NAME.force`.
+        let grip = components.first().copied().flatten().and_then(|normal| {
+            self.model.contacts.iter().find(|c| c.normal == normal).and_then(|c| c.grip)
+        });
+        let components: Vec<Option<usize>> = match (field.name.as_str(), grip) {
+            ("grip", Some(g)) => vec![Some(g)],
+            _ => components.to_vec(),
+        };
+        let components = &components[..];
+        if field.name != "force" && !(field.name == "grip" && grip.is_some()) {
             self.error(
                 Diagnostic::error(field.span, format!("a constraint has no `{}`", field.name))
                     .with_label("expected `force`")

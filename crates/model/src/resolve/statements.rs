@@ -29,6 +29,9 @@ impl Resolver<'_> {
             StmtKind::Constraint { name, lhs, rhs } => {
                 self.constraint(name.as_ref(), lhs, rhs, stmt.span)
             }
+            StmtKind::Contact { name, lhs, rhs, at_least, laws } => {
+                self.contact(name, (lhs, rhs), *at_least, laws, stmt.span)
+            }
             StmtKind::Gravity { strength: written, direction } => {
                 self.gravity_statement(written, direction.as_ref(), stmt.span)
             }
