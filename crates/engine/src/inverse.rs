@@ -67,6 +67,7 @@ pub fn inverse_dynamics(source: &str, options: &Options) -> Result<InverseDynami
     let (model, warnings) =
         crate::resolve_with(source, crate::Options { units: !options.no_units })?;
     let mut prepared = crate::numbers::prepare_resolved_for(source, model, warnings, &values)?;
+    prepared.refuse_contacts("inverse dynamics")?;
     let params = &prepared.derivation.model.params;
     let mut overrides = Vec::new();
     for (Assignment { name, .. }, expr) in options.set.iter().zip(&prepared.extra) {

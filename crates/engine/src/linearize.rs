@@ -223,6 +223,9 @@ fn linearize_prepared(
     asked: Asked,
     more_sweeps: &[(String, f64, f64, usize)],
 ) -> Result<(Linearized, Vec<Result<linear::Sweep, Error>>), Error> {
+    // Small motions about a reference of a scene whose contacts open and close are not one
+    // linear system.
+    prepared.refuse_contacts("linearize")?;
     let Asked { about, sets, sweep, drop_cyclic } = asked;
     if prepared.derivation.model.linearize.is_empty() {
         return Err(Error::Setting(vec![

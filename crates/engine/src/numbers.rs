@@ -32,6 +32,8 @@ pub struct Prepared {
     /// The partials program of the equations in (q, q̇), once a run has lowered it: a scene
     /// compiled for many runs lowers it once (`simulate::Compiled`).
     pub partials_program: Option<Program>,
+    /// Where each contact's rows are among the multipliers, in the order written.
+    pub contacts: Vec<mechanics::ContactSlots>,
     /// The one way to the parameters' values: free ones set, derived ones following.
     pub parameter_plan: model::ParameterValues,
 }
@@ -93,8 +95,10 @@ pub fn prepare_resolved_for(
 
 impl Prepared {
     /// A derived scene laid out for numbers, with `extra` expressions of it to observe.
-    pub fn from_derivation(derivation: Derivation, extra: Vec<ExprId>) -> Prepared {
+    pub fn from_derivation(mut derivation: Derivation, extra: Vec<ExprId>) -> Prepared {
         let exprs = extra;
+        // A run integrates every contact, open or closed, among its multipliers.
+        let contacts = derivation.with_every_contact();
         // The inputs' slots follow the parameters', filled with their values when nothing
         // drives them.
         let parameters: Vec<SymId> = derivation.model.constants().iter().map(|(s, _)| *s).collect();
@@ -112,6 +116,7 @@ impl Prepared {
             layout,
             driven: Default::default(),
             partials_program: None,
+            contacts,
         }
     }
 }
@@ -133,6 +138,33 @@ impl Prepared {
     pub fn parameter_slot_names(&self) -> Vec<String> {
         let pool = &self.derivation.model.pool;
         self.parameters.iter().map(|s| pool.symbol(*s).name.clone()).collect()
+    }
+
+    /// An error naming the scene's contacts, for a stage that does not take them yet
+    /// (`what` says which); `Ok` for a scene without any.
+    pub fn refuse_contacts(&self, what: &str) -> Result<(), Error> {
+        let d = &self.derivation;
+        if d.contacts.is_empty() {
+            return Ok(());
+        }
+        let names: Vec<String> =
+            d.contacts.iter().map(|c| format!("`{}`", d.model.contacts[c.contact].name)).collect();
+        Err(Error::Input(format!(
+            "{what} does not take contacts yet, and this scene has {}: run it with `lagrange \
+             simulate`, or make the contact a `constraint` if it never opens",
+            names.join(", ")
+        )))
+    }
+
+    /// Newton's coefficient of each contact at the parameters' values `parameters` (in slot
+    /// order), in the order written.
+    pub fn restitutions(&self, parameters: &[f64]) -> Vec<f64> {
+        let d = &self.derivation;
+        let mut values = vec![0.0; d.model.pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        d.contacts.iter().map(|c| numeric::eval(&d.model.pool, c.restitution, &values)).collect()
     }
 
     /// The constraints kept with multipliers, by name, in the order of their slots.
@@ -372,8 +404,10 @@ impl Prepared {
         let values = self.start_values(y0, parameters);
         let d = &mut self.derivation;
         let broken = |d: &mechanics::Derivation, values: &[f64]| {
+            // A contact may start open: only the two-sided constraints hold the start.
             d.multipliers
                 .iter()
+                .filter(|m| !d.model.constraints[m.constraint].kind.is_unilateral())
                 .filter_map(|m| m.rows.position.map(|phi| (m.constraint, phi)))
                 .map(|(constraint, phi)| {
                     let (v, size) = numeric::value_and_magnitude(&d.model.pool, phi, values);
@@ -425,7 +459,16 @@ impl Prepared {
             return Ok(());
         }
         let n = d.coords.len();
-        let rows = d.velocity_rows();
+        let two_sided: Vec<mechanics::Multiplier> = d
+            .multipliers
+            .iter()
+            .filter(|m| !d.model.constraints[m.constraint].kind.is_unilateral())
+            .cloned()
+            .collect();
+        if two_sided.is_empty() {
+            return Ok(());
+        }
+        let rows: Vec<ExprId> = two_sided.iter().map(|m| m.rows.velocity).collect();
         let pool = &mut d.model.pool;
         let free: Vec<usize> = (0..n)
             .filter(|k| {
@@ -439,7 +482,7 @@ impl Prepared {
         if free.len() != rows.len() {
             // Nothing to solve for: the rates must satisfy the rows as they are, or the run
             // would start off the constraints and be dragged back by the stabilisation.
-            for (m, row) in d.multipliers.iter().zip(&rows) {
+            for (m, row) in two_sided.iter().zip(&rows) {
                 let (v, size) = numeric::value_and_magnitude(pool, *row, &values);
                 if !verify::within_rounding(v, size) {
                     let name = &d.model.constraints[m.constraint].name;

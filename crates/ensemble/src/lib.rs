@@ -184,6 +184,7 @@ impl Ensemble {
             settings.outputs = record::expressions(&recorded);
         }
         let simulation::Loaded { mut prepared, outputs, held, .. } = resolved.load(&settings)?;
+        prepared.refuse_contacts("an ensemble")?;
         let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
         let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
         let given = varied_parameters(&mut prepared, &options.vary)?;

@@ -68,7 +68,9 @@ impl Derivation {
         let state = self.initial_state();
         let mut contacts = Vec::new();
         for (k, contact) in self.model.contacts.clone().into_iter().enumerate() {
-            let find = |d: &Derivation, c: usize| d.multipliers.iter().find(|m| m.constraint == c).cloned();
+            let find = |d: &Derivation, c: usize| {
+                d.multipliers.iter().find(|m| m.constraint == c).cloned()
+            };
             let Some(normal) = find(self, contact.normal) else { continue };
             let grip = contact.grip.and_then(|g| find(self, g));
             let gap = self.model.pool.subst(normal.rows.phi(), &state);
@@ -84,7 +86,9 @@ impl Derivation {
                             format!("the scene starts inside `{}`", contact.name),
                         )
                         .with_label(format!("its gap is {g} at the start, not at least 0"))
-                        .with_hint("give start positions on the open side of the contact, or touching it"),
+                        .with_hint(
+                            "give start positions on the open side of the contact, or touching it",
+                        ),
                     );
                 }
             }
@@ -101,7 +105,9 @@ impl Derivation {
         let open: Vec<usize> = contacts
             .iter()
             .filter(|c| !c.closed_at_start)
-            .flat_map(|c| std::iter::once(c.normal.constraint).chain(c.grip.iter().map(|g| g.constraint)))
+            .flat_map(|c| {
+                std::iter::once(c.normal.constraint).chain(c.grip.iter().map(|g| g.constraint))
+            })
             .collect();
         self.multipliers.retain(|m| !open.contains(&m.constraint));
         self.contacts = contacts;

@@ -23,8 +23,8 @@ pub use self::session::Scope;
 pub use self::simulation::{constant_value, time_setting};
 use crate::units::Form;
 use crate::{
-    Body, Checks, Constraint, Contact, Coord, Drawing, Expect, Gravity, Input, LinearExpect, Linearize,
-    Link, Load, Model, Output, Param, Placeholder, Show, Simulation, Term, Value,
+    Body, Checks, Constraint, Contact, Coord, Drawing, Expect, Gravity, Input, LinearExpect,
+    Linearize, Link, Load, Model, Output, Param, Placeholder, Show, Simulation, Term, Value,
 };
 
 /// Two attachment points of a spring or damper, and what lies between them.

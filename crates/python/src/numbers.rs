@@ -28,6 +28,7 @@ use crate::inputs::{self, Source};
 /// Loads `source` for numbers, with its parameter values and initial state.
 fn prepared(source: &str, units: bool) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
     let prepared = prepare(source, &[], engine::Options { units })?;
+    prepared.refuse_contacts("the Python package")?;
     let parameters = prepared.parameter_values(&[])?;
     let y0 = prepared.initial_state(&parameters, &[])?;
     Ok((prepared, parameters, y0))

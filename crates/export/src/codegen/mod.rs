@@ -70,6 +70,8 @@ impl Equations {
         // Reactions the scene derives are part of the module; asking for KE and PE changes
         // nothing.
         let mut prepared = prepare(source, &["KE".into(), "PE".into()], options)?;
+        // The generated code would hold every contact closed, as a two-sided constraint.
+        prepared.refuse_contacts("code generation")?;
         let values = prepared.parameter_values(&[])?;
         let d = &mut prepared.derivation;
         let mut reactions = Vec::new();

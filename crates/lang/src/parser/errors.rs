@@ -52,9 +52,9 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
     use Rule::*;
     Some(match rule {
         kw_scene | kw_param | kw_input | kw_output | kw_let | kw_coord | kw_particle | kw_body
-        | kw_constraint | kw_contact | kw_gravity | kw_potential | kw_force | kw_torque | kw_spring
-        | kw_damper | kw_dissipation | kw_lagrangian | kw_show | kw_expect | kw_simulate
-        | kw_linearize | kw_draw => (0, "a statement"),
+        | kw_constraint | kw_contact | kw_gravity | kw_potential | kw_force | kw_torque
+        | kw_spring | kw_damper | kw_dissipation | kw_lagrangian | kw_show | kw_expect
+        | kw_simulate | kw_linearize | kw_draw => (0, "a statement"),
         kw_line | kw_circle | kw_polyline => (2, "a shape (`line`, `circle` or `polyline`)"),
         expr | number | call | func | member | name | paren | matrix | matrix_row | neg_op => {
             (1, "an expression")

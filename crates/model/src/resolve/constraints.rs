@@ -8,7 +8,7 @@ use lang::{Diagnostic, Expr, Ident, Property, Span};
 
 use super::checks::{self, GAP, GRIP};
 use super::{normalize, space, Binding, Resolver};
-use crate::{Constraint, Contact, ConstraintKind, Placeholder, Value};
+use crate::{Constraint, ConstraintKind, Contact, Placeholder, Value};
 
 /// The laws a `contact` block may give, as a hint names them.
 const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1) \
@@ -175,7 +175,8 @@ impl Resolver<'_> {
         }
         let cname = normalize(&name.name);
         let zero = self.model.pool.zero();
-        let normal = self.push_constraint(cname.clone(), ConstraintKind::Contact, (gap, zero), gap, span);
+        let normal =
+            self.push_constraint(cname.clone(), ConstraintKind::Contact, (gap, zero), gap, span);
         let grip = grip.map(|(g, gspan)| {
             let name = format!("{cname}.grip");
             self.push_constraint(name, ConstraintKind::Grip, (g, zero), g, gspan)
@@ -192,7 +193,9 @@ impl Resolver<'_> {
             self.scope.units.dimensionless(&f, written.span, "a coefficient of restitution");
         }
         let free = self.model.pool.free_symbols(e);
-        if let Some(s) = free.iter().find(|s| !matches!(self.model.pool.symbol(**s).kind, SymbolKind::Param)) {
+        if let Some(s) =
+            free.iter().find(|s| !matches!(self.model.pool.symbol(**s).kind, SymbolKind::Param))
+        {
             let name = self.model.pool.symbol(*s).name.clone();
             self.error(
                 Diagnostic::error(written.span, "a coefficient of restitution is a constant")
@@ -212,12 +215,15 @@ impl Resolver<'_> {
         if outside {
             let value = numeric::eval(&self.model.pool, known, &[]);
             self.error(
-                Diagnostic::error(written.span, "a coefficient of restitution lies between 0 and 1")
-                    .with_label(format!("is {value} here"))
-                    .with_hint(
-                        "0 is a plastic landing (the contact closes), 1 an elastic one (the \
+                Diagnostic::error(
+                    written.span,
+                    "a coefficient of restitution lies between 0 and 1",
+                )
+                .with_label(format!("is {value} here"))
+                .with_hint(
+                    "0 is a plastic landing (the contact closes), 1 an elastic one (the \
                          normal rate reverses in full)",
-                    ),
+                ),
             );
             return None;
         }
