@@ -191,7 +191,9 @@ pub enum StmtKind {
     /// `show KE, disk.omega` or `show at start: theta''`
     Show { at_start: bool, items: Vec<Expr> },
     /// `expect lhs = rhs` or `expect at start: lhs = rhs`
-    Expect { at_start: bool, lhs: Expr, rhs: Expr },
+    /// `expect impact floor: y' = -e*y'`: the left side after an impact at `floor`, alone,
+    /// the right side before it.
+    Expect { at_start: bool, impact: Option<Ident>, lhs: Expr, rhs: Expr },
     /// `expect linearized: unstable`: what `linearize` finds at the scene's reference
     ExpectLinearized(LinearExpectation),
     /// `simulate { until 2 s; method dop853 }`

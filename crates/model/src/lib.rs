@@ -294,6 +294,9 @@ pub struct Show {
 #[derive(Clone, Debug)]
 pub struct Expect {
     pub at_start: bool,
+    /// `expect impact NAME:`: the contact (its index in [`Model::contacts`]) at whose impact,
+    /// alone, the left side's rates are taken after and the right side's before.
+    pub impact: Option<usize>,
     pub text: String,
     pub lhs: Value,
     pub rhs: Value,

@@ -92,6 +92,9 @@ pub fn check_all(d: &mut Derivation) -> Vec<Verdict> {
 
 /// Checks one `expect` line.
 pub fn check(d: &mut Derivation, index: usize) -> Verdict {
+    if let Some(contact) = d.model.expects[index].impact {
+        return check_impact(d, index, contact);
+    }
     let at_start = d.model.expects[index].at_start;
     let (lhs, rhs) = d.expect_sides(index);
     let many = lhs.len() > 1;
@@ -138,6 +141,52 @@ pub fn check(d: &mut Derivation, index: usize) -> Verdict {
     match numeric {
         Some((samples, sampling)) => Verdict::Numeric { samples, sampling },
         None if on_constraints => Verdict::ExactOnConstraints,
+        None => Verdict::Exact,
+    }
+}
+
+/// `expect impact NAME: lhs = rhs`: the left side with the rates after an impact at the
+/// contact alone (its exact impact law), the right side with those before; decided as an
+/// identity in the state, exactly where the algebra can, else at random states.
+fn check_impact(d: &mut Derivation, index: usize, contact: usize) -> Verdict {
+    let Some(k) = d.contacts.iter().position(|c| c.contact == contact) else {
+        return Verdict::Undecided { reason: "the contact keeps no rows in the equations".into() };
+    };
+    let Some(law) = d.impact_law(k) else {
+        return Verdict::Undecided {
+            reason: "the impact law is too large to derive exactly; a run solves it in numbers"
+                .into(),
+        };
+    };
+    let after: std::collections::HashMap<cas::SymId, ExprId> =
+        d.rates.iter().copied().zip(law.rates_after.iter().copied()).collect();
+    let (lhs, rhs) = d.expect_sides(index);
+    let many = lhs.len() > 1;
+    let mut numeric: Option<(usize, Sampling)> = None;
+    for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
+        let l = d.model.pool.subst(l, &after);
+        let residual = d.model.pool.sub(l, r);
+        let verdict = match d.decide_everywhere(residual) {
+            Decision::Exact | Decision::ExactOnConstraints => Verdict::Exact,
+            Decision::Sample { residual, .. } => sample(d, residual, false),
+            _ => Verdict::Undecided { reason: "the impact law could not be decided".into() },
+        };
+        match verdict {
+            Verdict::Exact => {}
+            Verdict::Numeric { samples, sampling } => {
+                numeric = Some(
+                    numeric.map_or((samples, sampling), |(n, s)| (n.min(samples), s.max(sampling))),
+                )
+            }
+            Verdict::Fails(mut f) => {
+                f.component = many.then_some(k);
+                return Verdict::Fails(f);
+            }
+            undecided => return undecided,
+        }
+    }
+    match numeric {
+        Some((samples, sampling)) => Verdict::Numeric { samples, sampling },
         None => Verdict::Exact,
     }
 }

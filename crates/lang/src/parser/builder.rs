@@ -100,8 +100,15 @@ impl Builder<'_> {
     fn stmt(&mut self, pair: Pair<'_, Rule>) -> Built<StmtKind> {
         let rule = pair.as_rule();
         let at_start = pair.clone().into_inner().any(|p| p.as_rule() == Rule::at_start);
+        let impact = pair
+            .clone()
+            .into_inner()
+            .find(|p| p.as_rule() == Rule::at_impact)
+            .and_then(|p| parts(p).find(|q| q.as_rule() == Rule::ident))
+            .map(|name| self.ident(&name));
         let linearized = pair.clone().into_inner().any(|p| p.as_rule() == Rule::kw_linearized);
-        let mut items = parts(pair).filter(|p| p.as_rule() != Rule::at_start);
+        let mut items =
+            parts(pair).filter(|p| !matches!(p.as_rule(), Rule::at_start | Rule::at_impact));
         let mut next = || next_part(&mut items);
         Ok(match rule {
             Rule::scene_stmt => {
@@ -165,7 +172,7 @@ impl Builder<'_> {
             Rule::expect_stmt => {
                 let lhs = self.expr(next()?)?;
                 let rhs = self.expr(next()?)?;
-                StmtKind::Expect { at_start, lhs, rhs }
+                StmtKind::Expect { at_start, impact, lhs, rhs }
             }
             Rule::simulate_stmt => {
                 let mut settings = Vec::new();

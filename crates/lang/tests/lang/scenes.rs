@@ -145,7 +145,8 @@ fn disk_scene_has_a_multiline_body_and_a_named_constraint() {
 #[test]
 fn incline_scene_has_the_matrix_expectation() {
     let file = parse_ok(INCLINE);
-    let Some(StmtKind::Expect { lhs, rhs, at_start: false }) = file.stmts.last().map(|s| &s.kind)
+    let Some(StmtKind::Expect { lhs, rhs, at_start: false, .. }) =
+        file.stmts.last().map(|s| &s.kind)
     else {
         panic!("last statement is not an expect")
     };

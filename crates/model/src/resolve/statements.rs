@@ -51,8 +51,8 @@ impl Resolver<'_> {
                 self.load(name, body, None, value, stmt.span, true)
             }
             StmtKind::Show { at_start, items } => self.show_statement(*at_start, items),
-            StmtKind::Expect { at_start, lhs, rhs } => {
-                self.expect_statement(*at_start, lhs, rhs, stmt.span)
+            StmtKind::Expect { at_start, impact, lhs, rhs } => {
+                self.expect_statement((*at_start, impact.as_ref()), lhs, rhs, stmt.span)
             }
             StmtKind::ExpectLinearized(expectation) => {
                 self.expect_linearized(expectation, stmt.span)
@@ -344,7 +344,35 @@ impl Resolver<'_> {
     }
 
     /// An `expect` line: two values of the same shape and dimensions, to compare.
-    fn expect_statement(&mut self, at_start: bool, lhs: &lang::Expr, rhs: &lang::Expr, span: Span) {
+    fn expect_statement(
+        &mut self,
+        (at_start, impact): (bool, Option<&lang::Ident>),
+        lhs: &lang::Expr,
+        rhs: &lang::Expr,
+        span: Span,
+    ) {
+        let impact = match impact {
+            None => None,
+            Some(name) => {
+                let found =
+                    self.model.contacts.iter().position(|c| c.name == normalize(&name.name));
+                if found.is_none() {
+                    let mut d =
+                        Diagnostic::error(name.span, format!("no contact named `{}`", name.name))
+                            .with_label("not a contact");
+                    let names: Vec<&str> =
+                        self.model.contacts.iter().map(|c| c.name.as_str()).collect();
+                    d = d.with_hint(if names.is_empty() {
+                        "`expect impact NAME:` names a contact declared above with `contact NAME: gap >= 0`".to_string()
+                    } else {
+                        format!("the contacts are {}", names.join(", "))
+                    });
+                    self.error(d);
+                    return;
+                }
+                found
+            }
+        };
         let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
         let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
@@ -364,6 +392,7 @@ impl Resolver<'_> {
         let text = self.text(span);
         self.model.expects.push(Expect {
             at_start,
+            impact,
             text,
             lhs: l,
             rhs: r,
