@@ -193,7 +193,8 @@ pub enum StmtKind {
     /// `expect lhs = rhs` or `expect at start: lhs = rhs`
     /// `expect impact floor: y' = -e*y'`: the left side after an impact at `floor`, alone,
     /// the right side before it.
-    Expect { at_start: bool, impact: Option<Ident>, lhs: Expr, rhs: Expr },
+    /// With `where q = …, q' = …` after it, at that state before the impact.
+    Expect { at_start: bool, impact: Option<Ident>, lhs: Expr, rhs: Expr, before: Vec<AboutItem> },
     /// `expect linearized: unstable`: what `linearize` finds at the scene's reference
     ExpectLinearized(LinearExpectation),
     /// `simulate { until 2 s; method dop853 }`

@@ -50,6 +50,8 @@ pub struct ImpactLaw {
     pub tangential_impulse: Option<ExprId>,
     /// q̇⁺ of each remaining coordinate, in the derivation's order.
     pub rates_after: Vec<ExprId>,
+    /// D = W·U: the inverse inertia the contact's rows meet (1/m for a ball on a floor).
+    pub delassus: Vec<Vec<ExprId>>,
 }
 
 /// Past this many unknowns (coordinates and two-sided multipliers) the impact law is left to
@@ -193,7 +195,7 @@ impl Derivation {
                         let terms: Vec<ExprId> =
                             (0..n).map(|i| pool.mul2(r.rows.jacobian[i], u[i])).collect();
                         let d = pool.add(&terms);
-                        pool.simplify(d)
+                        tidy(pool, d)
                     })
                     .collect()
             })
@@ -222,11 +224,31 @@ impl Derivation {
             impulse: impulses[0],
             tangential_impulse: impulses.get(1).copied(),
             rates_after,
+            delassus,
         })
     }
 }
 
-/// A rational expression as a hand derivation leaves it: simplified.
+/// A rational expression as a hand derivation leaves it: over one denominator, its monomial
+/// factors cancelled, the numerator simplified, and each side's common factor taken out
+/// (−m·(1 + e)·ẏ, and (b² + h²) rather than m·b² + m·h² under a fraction bar).
 fn tidy(pool: &mut cas::Pool, e: ExprId) -> ExprId {
-    pool.simplify(e)
+    let one = pool.one();
+    let q = linear_system::quotient(pool, e, one);
+    let (coefficient, factors) = pool.factors(q);
+    let (mut above, mut below) = (Vec::new(), Vec::new());
+    for (base, exponent) in factors {
+        if exponent.is_negative() {
+            below.push((base, -exponent));
+        } else {
+            above.push((base, exponent));
+        }
+    }
+    let numerator = pool.product(&coefficient, &above);
+    let numerator = pool.simplify(numerator);
+    let numerator = pool.factor_content(numerator);
+    let unit = cas::Rational::from_integer(1.into());
+    let denominator = pool.product(&unit, &below);
+    let denominator = pool.factor_content(denominator);
+    pool.div(numerator, denominator)
 }

@@ -297,6 +297,9 @@ pub struct Expect {
     /// `expect impact NAME:`: the contact (its index in [`Model::contacts`]) at whose impact,
     /// alone, the left side's rates are taken after and the right side's before.
     pub impact: Option<usize>,
+    /// `where q = …, q' = …` of an `expect impact` line: the state before the impact (the rest
+    /// of it left general).
+    pub before: Vec<About>,
     pub text: String,
     pub lhs: Value,
     pub rhs: Value,
@@ -390,7 +393,8 @@ pub struct About {
     pub coord: SymId,
     /// The rate (`psi' = w`) rather than the position.
     pub rate: bool,
-    /// A constant: numbers and parameters, in SI.
+    /// A constant: numbers and parameters, in SI (of a state before an impact, possibly in
+    /// terms of the other positions and rates).
     pub value: ExprId,
     /// The item as written (`psi' = w`).
     pub span: Span,

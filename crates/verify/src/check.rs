@@ -160,12 +160,19 @@ fn check_impact(d: &mut Derivation, index: usize, contact: usize) -> Verdict {
     };
     let after: std::collections::HashMap<cas::SymId, ExprId> =
         d.rates.iter().copied().zip(law.rates_after.iter().copied()).collect();
+    // The state before the impact, where the line gives it.
+    let mut before: std::collections::HashMap<cas::SymId, ExprId> = Default::default();
+    for item in d.model.expects[index].before.clone() {
+        let sym = if item.rate { d.model.pool.rate(item.coord) } else { Some(item.coord) };
+        before.extend(sym.map(|s| (s, item.value)));
+    }
     let (lhs, rhs) = d.expect_sides(index);
     let many = lhs.len() > 1;
     let mut numeric: Option<(usize, Sampling)> = None;
     for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
         let l = d.model.pool.subst(l, &after);
         let residual = d.model.pool.sub(l, r);
+        let residual = d.model.pool.subst(residual, &before);
         let verdict = match d.decide_everywhere(residual) {
             Decision::Exact | Decision::ExactOnConstraints => Verdict::Exact,
             Decision::Sample { residual, .. } => sample(d, residual, false),

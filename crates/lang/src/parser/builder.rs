@@ -40,6 +40,8 @@ fn is_noise(rule: Rule) -> bool {
                 | kw_critical
                 | kw_at
                 | kw_start
+                | kw_impact
+                | kw_where
                 | eq
                 | colon
                 | comma
@@ -172,7 +174,11 @@ impl Builder<'_> {
             Rule::expect_stmt => {
                 let lhs = self.expr(next()?)?;
                 let rhs = self.expr(next()?)?;
-                StmtKind::Expect { at_start, impact, lhs, rhs }
+                let mut before = Vec::new();
+                while let Ok(item) = next() {
+                    before.push(self.about_item(item)?);
+                }
+                StmtKind::Expect { at_start, impact, lhs, rhs, before }
             }
             Rule::simulate_stmt => {
                 let mut settings = Vec::new();

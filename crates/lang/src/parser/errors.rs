@@ -81,6 +81,7 @@ fn friendly(rule: Rule) -> Option<(u8, &'static str)> {
         kw_radius => (4, "`radius`"),
         at_start | kw_at => (4, "`at start:`"),
         at_impact | kw_impact => (4, "`impact NAME:`"),
+        kw_where => (4, "`where`"),
         kw_start => (4, "`start`"),
         add_op | sub_op | mul_op | div_op | pow_op => (5, "an operator"),
         eq => (6, "`=`"),

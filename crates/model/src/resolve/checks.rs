@@ -201,6 +201,17 @@ pub(super) const GRIP: Role = Role {
                        input: write it with the coordinates' rates",
 };
 
+/// A value of the state before an impact (`expect impact … where x' = -h*theta'`).
+pub(super) const BEFORE_IMPACT: Role = Role {
+    what: "the state before an impact",
+    max_order: 1,
+    hint: "the state before an impact gives positions and rates, as constants or in terms of \
+           the others (`theta = 0, x' = -h*theta'`)",
+    differentiated: false,
+    inputs: false,
+    instead_of_input: "",
+};
+
 /// Not a role an expression is refused in, but one whose kinks matter: a constraint's
 /// gradient is its derivative.
 pub(super) const CONSTRAINT: Role = Role {

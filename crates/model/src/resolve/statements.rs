@@ -5,7 +5,9 @@ use cas::number::One;
 use cas::Rational;
 use lang::{Diagnostic, Span, Stmt, StmtKind};
 
-use super::checks::{ATTACHMENT, DAMPER, DISSIPATION, GRAVITY, LAGRANGIAN, POTENTIAL, SPRING};
+use super::checks::{
+    ATTACHMENT, BEFORE_IMPACT, DAMPER, DISSIPATION, GRAVITY, LAGRANGIAN, POTENTIAL, SPRING,
+};
 use super::dims::{Dims, NameDims};
 use super::{normalize, Binding, Resolver, Separation};
 use crate::units::Shape;
@@ -51,8 +53,8 @@ impl Resolver<'_> {
                 self.load(name, body, None, value, stmt.span, true)
             }
             StmtKind::Show { at_start, items } => self.show_statement(*at_start, items),
-            StmtKind::Expect { at_start, impact, lhs, rhs } => {
-                self.expect_statement((*at_start, impact.as_ref()), lhs, rhs, stmt.span)
+            StmtKind::Expect { at_start, impact, lhs, rhs, before } => {
+                self.expect_statement((*at_start, impact.as_ref(), before), lhs, rhs, stmt.span)
             }
             StmtKind::ExpectLinearized(expectation) => {
                 self.expect_linearized(expectation, stmt.span)
@@ -346,7 +348,7 @@ impl Resolver<'_> {
     /// An `expect` line: two values of the same shape and dimensions, to compare.
     fn expect_statement(
         &mut self,
-        (at_start, impact): (bool, Option<&lang::Ident>),
+        (at_start, impact, before): (bool, Option<&lang::Ident>, &[lang::AboutItem]),
         lhs: &lang::Expr,
         rhs: &lang::Expr,
         span: Span,
@@ -373,6 +375,11 @@ impl Resolver<'_> {
                 found
             }
         };
+        let before = self.about_items(
+            before,
+            "the state before an impact gives coordinates and their rates: `where theta = 0, theta' = w`",
+            false,
+        );
         let (l, r) = (self.value(lhs), self.value(rhs));
         let (Some((l, l_dims)), Some((r, r_dims))) = (l, r) else { return };
         let (lf, rf) = (self.operand(l_dims).forms(), self.operand(r_dims).forms());
@@ -393,6 +400,7 @@ impl Resolver<'_> {
         self.model.expects.push(Expect {
             at_start,
             impact,
+            before,
             text,
             lhs: l,
             rhs: r,
@@ -405,6 +413,16 @@ impl Resolver<'_> {
     /// A `linearize about` line: each item names a coordinate (or its rate) and gives it a
     /// constant of the coordinate's dimension (or its rate's).
     pub(super) fn linearize(&mut self, items: &[lang::AboutItem], span: Span) {
+        let hint = "a reference gives coordinates and their rates: `linearize about theta = 0, theta' = 0`";
+        let out = self.about_items(items, hint, true);
+        self.model.linearize.push(Linearize { items: out, span });
+    }
+
+    /// Items `q = value` and `q' = value`, each a coordinate or its rate given a value of its
+    /// dimension: a reference (`constant`), or the state before an impact, whose values may
+    /// be in terms of the state's other positions and rates. `hint` says what they are for
+    /// where one names something else.
+    fn about_items(&mut self, items: &[lang::AboutItem], hint: &str, constant: bool) -> Vec<About> {
         let mut out: Vec<About> = Vec::new();
         for item in items {
             let raw = &item.name.name;
@@ -427,10 +445,7 @@ impl Resolver<'_> {
                     self.error(
                         Diagnostic::error(item.name.span, format!("`{raw}` is not a coordinate"))
                             .with_label(what)
-                            .with_hint(
-                                "a reference gives coordinates and their rates: \
-                                 `linearize about theta = 0, theta' = 0`",
-                            ),
+                            .with_hint(hint),
                     );
                     continue;
                 }
@@ -438,7 +453,11 @@ impl Resolver<'_> {
             // The primes follow the name with nothing between them.
             let primed = Span::new(item.name.span.start, item.name.span.end + item.primes as usize);
             let Some((_, coord_dims)) = self.name(raw, item.primes, primed) else { continue };
-            let Some((value, dims)) = self.constant(&item.value) else { continue };
+            let resolved = match constant {
+                true => self.constant(&item.value),
+                false => self.scalar_in_role(&item.value, &BEFORE_IMPACT),
+            };
+            let Some((value, dims)) = resolved else { continue };
             let written = self.with_unit(Some(dims), item.unit.as_ref());
             let expected = self.form(coord_dims);
             let what = "in this reference value";
@@ -457,6 +476,6 @@ impl Resolver<'_> {
             }
             out.push(About { coord, rate, value, span: item.span });
         }
-        self.model.linearize.push(Linearize { items: out, span });
+        out
     }
 }
