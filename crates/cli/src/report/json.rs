@@ -72,7 +72,7 @@ impl Renderer for JsonReport<'_> {
                 set("constraints", json_constraints(d, constraints))
             }
             // Only a scene with contacts has this key.
-            Section::Contacts(contacts) if contacts.is_empty() => {}
+            Section::Contacts([]) => {}
             Section::Contacts(contacts) => {
                 let rates: Vec<String> = d.rates.iter().map(|s| name(*s)).collect();
                 let list: Vec<Json> = contacts
