@@ -1,0 +1,536 @@
+//! The contact problems' solver: the mixed linear complementarity problem w = A·x + c that an
+//! impact (x the impulses, w = γ⁺ + e·γ⁻) and the accelerations of touching contacts (x the
+//! forces, w = g̈) pose, with normal rows (x ≥ 0, w ≥ 0, x·w = 0) and the tangential rows of
+//! gripping contacts (w = 0 while their contact is active, x = 0 while it is not).
+//!
+//! This module owns the solve only: it knows nothing of how A and c were built, of contacts'
+//! names or of events. [`solve`] enumerates the active sets of the normal rows when there are at
+//! most [`ENUMERATION_LIMIT`] of them, and pivots with Lemke's method beyond that (problems of
+//! normal rows only). Either way it ends with the same polish: the equalities of an active set
+//! solved least-norm, on the widest active set whose least-norm solution keeps its signs, so
+//! that the two methods give the same x wherever both apply.
+//!
+//! **Errors.** `solve` returns [`Unsolved`], of which [`Unsolved::Inconsistent`] (holding the
+//! [`Inconsistent`] struct, with the rows that cannot be satisfied together) is the only one a
+//! well-posed scene reaches. The others say that the input was malformed or non-finite, that a
+//! problem with gripping contacts was too large to enumerate, or that rounding stalled Lemke's
+//! pivoting.
+
+use nalgebra::{DMatrix, DVector};
+
+/// What a row of a contact problem is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Row {
+    /// A contact's normal row: x ≥ 0, w ≥ 0, x·w = 0.
+    Normal,
+    /// A gripping contact's tangential row, belonging to normal row `normal`: while that
+    /// normal row is active (in the chosen active set), w = 0 with x free; otherwise x = 0 and w
+    /// is unconstrained.
+    Tangent { normal: usize },
+}
+
+/// The solution: x (impulses or forces per row), w = A·x + c, and which rows are active (one
+/// entry per row: a normal row in the active set, or a tangent row whose normal row is).
+///
+/// The conditions hold to the tolerance the problem was solved with: an active normal row's x
+/// may be as low as −tolerance, an inactive one's w too, and an active row's w is within
+/// ±tolerance of 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    pub x: Vec<f64>,
+    pub w: Vec<f64>,
+    pub active: Vec<bool>,
+}
+
+/// No x satisfies the conditions: the rows (indices) that could not be satisfied together.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inconsistent {
+    pub rows: Vec<usize>,
+}
+
+/// Why [`solve`] gave no solution.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Unsolved {
+    /// No x satisfies the conditions. The rows named are a set of contacts (each normal row with
+    /// its tangent rows) that cannot be satisfied together, found by dropping the contacts whose
+    /// removal leaves the problem still unsolvable: none of them can be dropped.
+    Inconsistent(Inconsistent),
+    /// A, c or the tolerance is NaN or infinite; `rows` are the rows holding such a value (empty
+    /// when only the tolerance is).
+    NonFinite { rows: Vec<usize> },
+    /// The shapes disagree (A not k×k for k rows and k values of c), a tangent row names a row
+    /// that is not a normal row, or the tolerance is negative.
+    Malformed { reason: &'static str },
+    /// More than [`ENUMERATION_LIMIT`] normal rows with gripping contacts among them: Lemke's
+    /// method does not apply to tangent rows (their conditions switch with another row's), and
+    /// enumerating 2^`normals` active sets was judged too slow.
+    TooLarge { normals: usize },
+    /// Lemke's pivoting used its budget of `pivots`, or ended on a basis whose solution does not
+    /// hold to the tolerance: rounding on a badly conditioned or degenerate problem.
+    Stalled { pivots: usize },
+}
+
+impl From<Inconsistent> for Unsolved {
+    fn from(inconsistent: Inconsistent) -> Self {
+        Unsolved::Inconsistent(inconsistent)
+    }
+}
+
+/// The most normal rows whose active sets [`solve`] enumerates. 2^10 = 1024 least-squares
+/// solves of at most a few dozen rows is a few milliseconds in the worst case (the answer needs
+/// all rows active), and typical answers come much sooner, since the order tries the fewest
+/// active rows first. Ten covers a block's eight corners with room to spare, and scenes with
+/// gripping contacts, which only enumeration solves.
+pub const ENUMERATION_LIMIT: usize = 10;
+
+/// Singular values below this fraction of the largest count as zero in the least-norm solves.
+/// A Delassus operator's redundant rows leave singular values at rounding (1e-16 of the largest);
+/// one just above this threshold would be a condition number of 1e10, past which the solve's
+/// error on w would exceed the 1e-10-relative tolerance callers pass.
+const RELATIVE_RANK: f64 = 1e-10;
+
+/// Below this, an entry of Lemke's pivot column (of the scaled problem, whose A has a unit
+/// diagonal) counts as zero, not as a pivot.
+const PIVOT_FLOOR: f64 = 1e-11;
+
+/// Two ratios of Lemke's test within this fraction of each other tie, and the lexicographic
+/// rule decides between them.
+const RATIO_TIE: f64 = 1e-9;
+
+/// Solves the mixed complementarity problem w = A·x + c with the conditions of `rows`.
+/// `a` is k×k symmetric positive semidefinite (a Delassus operator W·M⁻¹·Wᵀ condensed over kept
+/// equality constraints), possibly singular (redundant rows are normal: two gripping corners of
+/// a planar block give 4 rows on 3 degrees of freedom). `tolerance` is absolute on w and x, in
+/// the units of c (the caller passes something like 1e-10 × the scale of c). Among the x valid
+/// for the active set found, returns the least-norm one.
+///
+/// With at most [`ENUMERATION_LIMIT`] normal rows it enumerates active sets ([`enumerate`]);
+/// beyond, it pivots ([`lemke`]), which needs normal rows only ([`Unsolved::TooLarge`]
+/// otherwise). Where several active sets are valid (a block landing flat on more corners than it
+/// has degrees of freedom), the answer is the same from both: the active set widened to every
+/// normal row with w = 0 whose least-norm x keeps its signs, which shares the impulse evenly
+/// between symmetric corners, and otherwise the fewest rows active (enumeration) or Lemke's
+/// basis.
+pub fn solve(
+    a: &DMatrix<f64>,
+    c: &[f64],
+    rows: &[Row],
+    tolerance: f64,
+) -> Result<Solution, Unsolved> {
+    let problem = Problem::new(a, c, rows, tolerance)?;
+    if problem.normals.len() <= ENUMERATION_LIMIT {
+        problem.enumerate()
+    } else if problem.normals.len() < rows.len() {
+        Err(Unsolved::TooLarge { normals: problem.normals.len() })
+    } else {
+        problem.lemke()
+    }
+}
+
+/// Solves the problem by enumerating the active sets of its normal rows, whatever their number
+/// (2^normals solves in the worst case): fewest active first, then in lexicographic order of
+/// their indices. The first valid one is widened as [`solve`] says.
+pub fn enumerate(
+    a: &DMatrix<f64>,
+    c: &[f64],
+    rows: &[Row],
+    tolerance: f64,
+) -> Result<Solution, Unsolved> {
+    Problem::new(a, c, rows, tolerance)?.enumerate()
+}
+
+/// Solves a problem of normal rows only (an LCP) by Lemke's complementary pivoting, with the
+/// covering vector of ones on the problem scaled to a unit diagonal, and the lexicographic
+/// minimum-ratio rule so that it cannot cycle. For a positive semidefinite A it finds a solution
+/// whenever there is one, and otherwise ends on a secondary ray: [`Unsolved::Inconsistent`]. The
+/// basis it ends on is then polished as [`solve`] says.
+pub fn lemke(a: &DMatrix<f64>, c: &[f64], tolerance: f64) -> Result<Solution, Unsolved> {
+    let rows = vec![Row::Normal; c.len()];
+    Problem::new(a, c, &rows, tolerance)?.lemke()
+}
+
+/// A checked problem and the structure of its rows.
+struct Problem<'a> {
+    a: &'a DMatrix<f64>,
+    c: &'a [f64],
+    rows: &'a [Row],
+    tolerance: f64,
+    /// The indices of the normal rows, in order.
+    normals: Vec<usize>,
+}
+
+/// How a pivoting run ended.
+enum Pivoting {
+    /// A complementary basis: x, and the rows whose x is basic.
+    Solved { x: Vec<f64>, basic: Vec<bool> },
+    /// A secondary ray: no solution.
+    Ray,
+    /// The budget of pivots ran out.
+    Budget { pivots: usize },
+}
+
+impl<'a> Problem<'a> {
+    fn new(
+        a: &'a DMatrix<f64>,
+        c: &'a [f64],
+        rows: &'a [Row],
+        tolerance: f64,
+    ) -> Result<Self, Unsolved> {
+        let k = rows.len();
+        if a.nrows() != k || a.ncols() != k || c.len() != k {
+            return Err(Unsolved::Malformed {
+                reason: "A must be k×k and c of length k for k rows",
+            });
+        }
+        for row in rows {
+            if let Row::Tangent { normal } = *row {
+                if !matches!(rows.get(normal), Some(Row::Normal)) {
+                    return Err(Unsolved::Malformed {
+                        reason: "a tangent row must name a normal row",
+                    });
+                }
+            }
+        }
+        let non_finite: Vec<usize> = (0..k)
+            .filter(|&i| !c[i].is_finite() || a.row(i).iter().any(|v| !v.is_finite()))
+            .collect();
+        if !non_finite.is_empty() || !tolerance.is_finite() {
+            return Err(Unsolved::NonFinite { rows: non_finite });
+        }
+        if tolerance < 0.0 {
+            return Err(Unsolved::Malformed { reason: "the tolerance must not be negative" });
+        }
+        let normals = (0..k).filter(|&i| rows[i] == Row::Normal).collect();
+        Ok(Problem { a, c, rows, tolerance, normals })
+    }
+
+    /// Whether row `i` is in the equalities when the normal rows `active` are.
+    fn in_equalities(&self, active: &[bool], i: usize) -> bool {
+        match self.rows[i] {
+            Row::Normal => active[i],
+            Row::Tangent { normal } => active[normal],
+        }
+    }
+
+    /// The least-norm solution of the active set `active` (indexed by row, read at the normal
+    /// rows), if it satisfies the conditions.
+    fn attempt(&self, active: &[bool]) -> Option<Solution> {
+        let k = self.rows.len();
+        let equalities: Vec<usize> = (0..k).filter(|&i| self.in_equalities(active, i)).collect();
+        let mut x = vec![0.0; k];
+        if !equalities.is_empty() {
+            let m = equalities.len();
+            let block = DMatrix::from_fn(m, m, |r, s| self.a[(equalities[r], equalities[s])]);
+            let rhs = DVector::from_iterator(m, equalities.iter().map(|&i| -self.c[i]));
+            let solved = least_norm(block, &rhs)?;
+            for (r, &i) in equalities.iter().enumerate() {
+                x[i] = solved[r];
+            }
+        }
+        let w = self.residual(&x);
+        let tol = self.tolerance;
+        let holds = (0..k).all(|i| match self.rows[i] {
+            Row::Normal if active[i] => w[i].abs() <= tol && x[i] >= -tol,
+            Row::Normal => w[i] >= -tol,
+            Row::Tangent { normal } => !active[normal] || w[i].abs() <= tol,
+        });
+        holds.then(|| Solution { x, w, active: (0..k).map(|i| self.in_equalities(active, i)).collect() })
+    }
+
+    /// w = A·x + c.
+    fn residual(&self, x: &[f64]) -> Vec<f64> {
+        let k = self.rows.len();
+        (0..k).map(|i| self.c[i] + (0..k).map(|j| self.a[(i, j)] * x[j]).sum::<f64>()).collect()
+    }
+
+    /// The widest active set's solution: every normal row whose w is zero (to the tolerance)
+    /// in `found`, if its least-norm x keeps its signs, and `found` otherwise. The solutions of
+    /// a positive semidefinite LCP share w, and those with the rows Z (where w = 0) active are
+    /// the least-norm x of Z's equalities plus the null space of A restricted to Z: when that
+    /// least-norm x keeps its signs it is the least-norm solution of the whole problem, the
+    /// same whichever active set was found first.
+    fn widen(&self, found: Solution) -> Solution {
+        let wide: Vec<bool> = (0..self.rows.len())
+            .map(|i| self.rows[i] == Row::Normal && found.w[i].abs() <= self.tolerance)
+            .collect();
+        let same = self.normals.iter().all(|&i| wide[i] == found.active[i]);
+        if same {
+            return found;
+        }
+        self.attempt(&wide).unwrap_or(found)
+    }
+
+    fn enumerate(&self) -> Result<Solution, Unsolved> {
+        match self.first_valid() {
+            Some(found) => Ok(self.widen(found)),
+            None => Err(self.inconsistent().into()),
+        }
+    }
+
+    /// The first valid active set, fewest active first, then lexicographic.
+    fn first_valid(&self) -> Option<Solution> {
+        let n = self.normals.len();
+        let mut active = vec![false; self.rows.len()];
+        for size in 0..=n {
+            // The chosen positions among the normal rows, increasing: the first combination.
+            let mut chosen: Vec<usize> = (0..size).collect();
+            loop {
+                active.iter_mut().for_each(|a| *a = false);
+                for &p in &chosen {
+                    active[self.normals[p]] = true;
+                }
+                if let Some(solution) = self.attempt(&active) {
+                    return Some(solution);
+                }
+                if !next_combination(&mut chosen, n) {
+                    break;
+                }
+            }
+        }
+        None
+    }
+
+    fn lemke(&self) -> Result<Solution, Unsolved> {
+        debug_assert_eq!(self.normals.len(), self.rows.len());
+        match self.pivot() {
+            Pivoting::Solved { x, basic } => {
+                let w = self.residual(&x);
+                let tol = self.tolerance;
+                // Lemke's basis, then the rows whose x came out positive: the first whose
+                // least-norm solve holds gives the polished answer.
+                let positive: Vec<bool> = x.iter().map(|&v| v > tol).collect();
+                for active in [&basic, &positive] {
+                    if let Some(found) = self.attempt(active) {
+                        return Ok(self.widen(found));
+                    }
+                }
+                // Lemke's own x, if it holds as it is.
+                let holds = (0..x.len()).all(|i| {
+                    x[i] >= -tol && w[i] >= -tol && (x[i] <= tol || w[i].abs() <= tol)
+                });
+                if holds {
+                    let active = x.iter().map(|&v| v > tol).collect();
+                    Ok(self.widen(Solution { x, w, active }))
+                } else {
+                    Err(Unsolved::Stalled { pivots: self.pivot_budget() })
+                }
+            }
+            Pivoting::Ray => Err(self.inconsistent().into()),
+            Pivoting::Budget { pivots } => Err(Unsolved::Stalled { pivots }),
+        }
+    }
+
+    /// Lemke's pivots allowed: far more than the few per row that problems take.
+    fn pivot_budget(&self) -> usize {
+        50 * (self.rows.len() + 1)
+    }
+
+    /// Lemke's complementary pivoting on the tableau [I, −Ā, −d, c̄] of the problem scaled by
+    /// D = diag(1/√A_ii) (Ā = D·A·D, c̄ = D·c, x = D·x̄), with d = 1. Basic variables are numbered
+    /// w_i = i, x_i = n + i and the artificial z₀ = 2n.
+    fn pivot(&self) -> Pivoting {
+        let n = self.rows.len();
+        let scale: Vec<f64> = (0..n)
+            .map(|i| {
+                let d = self.a[(i, i)];
+                if d > 0.0 {
+                    1.0 / d.sqrt()
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let c_scaled: Vec<f64> = (0..n).map(|i| scale[i] * self.c[i]).collect();
+        if c_scaled.iter().all(|&v| v >= 0.0) {
+            return Pivoting::Solved { x: vec![0.0; n], basic: vec![false; n] };
+        }
+        let z0 = 2 * n;
+        let rhs = 2 * n + 1;
+        let mut tableau = DMatrix::zeros(n, 2 * n + 2);
+        for i in 0..n {
+            tableau[(i, i)] = 1.0;
+            for j in 0..n {
+                tableau[(i, n + j)] = -scale[i] * self.a[(i, j)] * scale[j];
+            }
+            tableau[(i, z0)] = -1.0;
+            tableau[(i, rhs)] = c_scaled[i];
+        }
+        let mut basis: Vec<usize> = (0..n).collect();
+        // Ties in the right-hand side are judged on the tolerance, scaled as c is.
+        let max_scale = scale.iter().fold(0.0f64, |m, &s| m.max(s));
+        let rhs_tie = self.tolerance * max_scale;
+
+        // z₀ enters where the right-hand side is most negative (per unit of d): the
+        // lexicographic minimum of the rows (c̄_i, B⁻¹_i) / d_i, with d = 1.
+        let all: Vec<usize> = (0..n).collect();
+        let first = lexicographic_minimum(&tableau, &all, &vec![1.0; n], rhs_tie);
+        let mut entering = z0;
+        let mut row = first;
+        let budget = self.pivot_budget();
+        for _ in 0..budget {
+            let leaving = basis[row];
+            pivot_on(&mut tableau, row, entering);
+            basis[row] = entering;
+            if leaving == z0 {
+                let mut x = vec![0.0; n];
+                let mut basic = vec![false; n];
+                for (r, &var) in basis.iter().enumerate() {
+                    if (n..2 * n).contains(&var) {
+                        let j = var - n;
+                        x[j] = scale[j] * tableau[(r, rhs)];
+                        basic[j] = true;
+                    }
+                }
+                return Pivoting::Solved { x, basic };
+            }
+            // The complement of the variable that left enters next.
+            entering = if leaving < n { leaving + n } else { leaving - n };
+            let column: Vec<f64> = (0..n).map(|r| tableau[(r, entering)]).collect();
+            let candidates: Vec<usize> = (0..n).filter(|&r| column[r] > PIVOT_FLOOR).collect();
+            if candidates.is_empty() {
+                return Pivoting::Ray;
+            }
+            row = lexicographic_minimum(&tableau, &candidates, &column, rhs_tie);
+            // When z₀ ties for leaving, let it leave: that ends the run on a solution.
+            if let Some(r) = candidates.iter().copied().find(|&r| basis[r] == z0) {
+                let ratio = |r: usize| tableau[(r, rhs)] / column[r];
+                if ties(ratio(r), ratio(row), rhs_tie) {
+                    row = r;
+                }
+            }
+        }
+        Pivoting::Budget { pivots: budget }
+    }
+
+    /// The rows of a set of contacts that cannot be satisfied together: starting from all of
+    /// them, each contact (a normal row with its tangent rows) is dropped in turn if the rest
+    /// is still unsolvable.
+    fn inconsistent(&self) -> Inconsistent {
+        let k = self.rows.len();
+        let mut kept = vec![true; k];
+        for &n in &self.normals {
+            let mut trial = kept.clone();
+            for i in 0..k {
+                if i == n || self.rows[i] == (Row::Tangent { normal: n }) {
+                    trial[i] = false;
+                }
+            }
+            if !self.subproblem_solvable(&trial) {
+                kept = trial;
+            }
+        }
+        Inconsistent { rows: (0..k).filter(|&i| kept[i]).collect() }
+    }
+
+    /// Whether the problem restricted to the rows `kept` has a solution (by the same method
+    /// [`solve`] would use on it).
+    fn subproblem_solvable(&self, kept: &[bool]) -> bool {
+        let index: Vec<usize> = (0..self.rows.len()).filter(|&i| kept[i]).collect();
+        let position = |i: usize| index.iter().position(|&j| j == i);
+        let m = index.len();
+        let a = DMatrix::from_fn(m, m, |r, s| self.a[(index[r], index[s])]);
+        let c: Vec<f64> = index.iter().map(|&i| self.c[i]).collect();
+        let rows: Vec<Row> = index
+            .iter()
+            .map(|&i| match self.rows[i] {
+                Row::Normal => Row::Normal,
+                // A kept tangent row's normal row is kept with it.
+                Row::Tangent { normal } => Row::Tangent { normal: position(normal).unwrap_or(0) },
+            })
+            .collect();
+        let normals = (0..m).filter(|&i| rows[i] == Row::Normal).collect::<Vec<_>>();
+        let sub = Problem { a: &a, c: &c, rows: &rows, tolerance: self.tolerance, normals };
+        if sub.normals.len() <= ENUMERATION_LIMIT {
+            sub.first_valid().is_some()
+        } else {
+            // Only problems of normal rows get here (solve refused the others as too large).
+            !matches!(sub.pivot(), Pivoting::Ray)
+        }
+    }
+}
+
+/// Advances `chosen` (increasing positions below `n`) to the next combination of its size in
+/// lexicographic order; false after the last.
+fn next_combination(chosen: &mut [usize], n: usize) -> bool {
+    let size = chosen.len();
+    for p in (0..size).rev() {
+        if chosen[p] < n - size + p {
+            chosen[p] += 1;
+            for q in p + 1..size {
+                chosen[q] = chosen[q - 1] + 1;
+            }
+            return true;
+        }
+    }
+    false
+}
+
+/// The least-norm least-squares solution of m·y = rhs, by the singular value decomposition
+/// with singular values below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the
+/// decomposition did not converge.
+fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+    // A generous iteration cap: convergence takes a few sweeps per singular value.
+    let iterations = 1000 * (m.nrows() + 1);
+    let svd = m.try_svd(true, true, f64::EPSILON, iterations)?;
+    let largest = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
+    svd.solve(rhs, RELATIVE_RANK * largest).ok()
+}
+
+/// Whether two ratios of Lemke's test tie: equal to [`RATIO_TIE`] of their size, or within
+/// `absolute` (the tolerance, for right-hand sides near zero).
+fn ties(u: f64, v: f64, absolute: f64) -> bool {
+    (u - v).abs() <= RATIO_TIE * u.abs().max(v.abs()) + absolute
+}
+
+/// The lexicographic minimum-ratio row among `candidates`: the least right-hand side over
+/// the pivot column's entry, ties broken by the rows of B⁻¹ (the tableau's first n columns)
+/// over the same entry. The rows of B⁻¹ are independent, so two rows never tie all through,
+/// and no basis repeats: Lemke's method cannot cycle.
+fn lexicographic_minimum(
+    tableau: &DMatrix<f64>,
+    candidates: &[usize],
+    column: &[f64],
+    rhs_tie: f64,
+) -> usize {
+    let n = tableau.nrows();
+    let rhs = 2 * n + 1;
+    let key = |r: usize, j: usize| {
+        let value = if j == 0 { tableau[(r, rhs)] } else { tableau[(r, j - 1)] };
+        value / column[r]
+    };
+    let mut best = candidates[0];
+    for &r in &candidates[1..] {
+        for j in 0..=n {
+            let absolute = if j == 0 { rhs_tie / column[r].min(column[best]) } else { 0.0 };
+            let (u, v) = (key(r, j), key(best, j));
+            if ties(u, v, absolute) {
+                continue;
+            }
+            if u < v {
+                best = r;
+            }
+            break;
+        }
+    }
+    best
+}
+
+/// Gauss–Jordan pivot of the tableau on (row, column).
+fn pivot_on(tableau: &mut DMatrix<f64>, row: usize, column: usize) {
+    let width = tableau.ncols();
+    let p = tableau[(row, column)];
+    for j in 0..width {
+        tableau[(row, j)] /= p;
+    }
+    for r in 0..tableau.nrows() {
+        if r == row {
+            continue;
+        }
+        let f = tableau[(r, column)];
+        if f != 0.0 {
+            for j in 0..width {
+                tableau[(r, j)] -= f * tableau[(row, j)];
+            }
+        }
+    }
+}
