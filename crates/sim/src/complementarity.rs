@@ -212,8 +212,11 @@ impl<'a> Problem<'a> {
         }
     }
 
-    /// The least-norm solution of the active set `active` (indexed by row, read at the normal
-    /// rows), if it satisfies the conditions.
+    /// The least-norm x of the active set `active` (indexed by row, read at the normal rows),
+    /// if it satisfies the conditions. The x solving the set's equalities are the least-norm
+    /// one, x₀, plus the null space of their block of A, which leaves w unchanged (A is
+    /// positive semidefinite: zᵀ·A·z = 0 makes A·z = 0). If x₀ pushes with a negative x on an
+    /// active normal row, the least-norm x that does not is sought along that null space.
     fn attempt(&self, active: &[bool]) -> Option<Solution> {
         let k = self.rows.len();
         let equalities: Vec<usize> = (0..k).filter(|&i| self.in_equalities(active, i)).collect();
@@ -222,7 +225,15 @@ impl<'a> Problem<'a> {
             let m = equalities.len();
             let block = DMatrix::from_fn(m, m, |r, s| self.a[(equalities[r], equalities[s])]);
             let rhs = DVector::from_iterator(m, equalities.iter().map(|&i| -self.c[i]));
-            let solved = least_norm(block, &rhs)?;
+            let (least, null) = least_norm(block, &rhs)?;
+            let signed: Vec<usize> =
+                (0..m).filter(|&r| self.rows[equalities[r]] == Row::Normal).collect();
+            let pushes_back = signed.iter().any(|&r| least[r] < -self.tolerance);
+            let solved = if pushes_back && null.ncols() > 0 {
+                self.least_norm_nonnegative(&least, &null, &signed)?
+            } else {
+                least
+            };
             for (r, &i) in equalities.iter().enumerate() {
                 x[i] = solved[r];
             }
@@ -234,7 +245,38 @@ impl<'a> Problem<'a> {
             Row::Normal => w[i] >= -tol,
             Row::Tangent { normal } => !active[normal] || w[i].abs() <= tol,
         });
-        holds.then(|| Solution { x, w, active: (0..k).map(|i| self.in_equalities(active, i)).collect() })
+        holds.then(|| Solution {
+            x,
+            w,
+            active: (0..k).map(|i| self.in_equalities(active, i)).collect(),
+        })
+    }
+
+    /// The least-norm y = x₀ + N·t with y ≥ 0 at the positions `signed`, where x₀ is orthogonal
+    /// to the orthonormal columns of N, so that |y|² = |x₀|² + |t|². The least |t| with
+    /// G·t ≥ −x₀ (G the rows `signed` of N) has t = Gᵀ·μ for the μ solving the complementarity
+    /// problem G·Gᵀ·μ + x₀ ≥ 0, μ ≥ 0 (its conditions of optimality), of normal rows and
+    /// positive semidefinite; `None` if it has no solution (no such y).
+    fn least_norm_nonnegative(
+        &self,
+        least: &DVector<f64>,
+        null: &DMatrix<f64>,
+        signed: &[usize],
+    ) -> Option<DVector<f64>> {
+        let g = DMatrix::from_fn(signed.len(), null.ncols(), |r, s| null[(signed[r], s)]);
+        let gram = &g * g.transpose();
+        let offset: Vec<f64> = signed.iter().map(|&r| least[r]).collect();
+        let rows = vec![Row::Normal; signed.len()];
+        let normals = (0..signed.len()).collect();
+        let dual =
+            Problem { a: &gram, c: &offset, rows: &rows, tolerance: self.tolerance, normals };
+        match dual.pivot() {
+            Pivoting::Solved { x: mu, .. } => {
+                let t = g.transpose() * DVector::from_vec(mu);
+                Some(least + null * t)
+            }
+            Pivoting::Ray | Pivoting::Budget { .. } => None,
+        }
     }
 
     /// w = A·x + c.
@@ -244,11 +286,12 @@ impl<'a> Problem<'a> {
     }
 
     /// The widest active set's solution: every normal row whose w is zero (to the tolerance)
-    /// in `found`, if its least-norm x keeps its signs, and `found` otherwise. The solutions of
-    /// a positive semidefinite LCP share w, and those with the rows Z (where w = 0) active are
-    /// the least-norm x of Z's equalities plus the null space of A restricted to Z: when that
-    /// least-norm x keeps its signs it is the least-norm solution of the whole problem, the
-    /// same whichever active set was found first.
+    /// in `found` made active, if its least-norm x keeps the conditions and w, and `found`
+    /// otherwise. The solutions of a positive semidefinite LCP share w, and those with the rows
+    /// Z (where w = 0) active are all of them: the least-norm x of Z is the least-norm solution
+    /// of the whole problem, the same whichever active set was found first. (With tangent rows
+    /// the problem has no such structure; requiring the same w keeps a grazing contact from
+    /// gripping when the solution found has it open.)
     fn widen(&self, found: Solution) -> Solution {
         let wide: Vec<bool> = (0..self.rows.len())
             .map(|i| self.rows[i] == Row::Normal && found.w[i].abs() <= self.tolerance)
@@ -257,7 +300,15 @@ impl<'a> Problem<'a> {
         if same {
             return found;
         }
-        self.attempt(&wide).unwrap_or(found)
+        match self.attempt(&wide) {
+            Some(widened)
+                if (0..self.rows.len())
+                    .all(|i| (widened.w[i] - found.w[i]).abs() <= self.tolerance) =>
+            {
+                widened
+            }
+            _ => found,
+        }
     }
 
     fn enumerate(&self) -> Result<Solution, Unsolved> {
@@ -305,9 +356,8 @@ impl<'a> Problem<'a> {
                     }
                 }
                 // Lemke's own x, if it holds as it is.
-                let holds = (0..x.len()).all(|i| {
-                    x[i] >= -tol && w[i] >= -tol && (x[i] <= tol || w[i].abs() <= tol)
-                });
+                let holds = (0..x.len())
+                    .all(|i| x[i] >= -tol && w[i] >= -tol && (x[i] <= tol || w[i].abs() <= tol));
                 if holds {
                     let active = x.iter().map(|&v| v > tol).collect();
                     Ok(self.widen(Solution { x, w, active }))
@@ -465,15 +515,22 @@ fn next_combination(chosen: &mut [usize], n: usize) -> bool {
     false
 }
 
-/// The least-norm least-squares solution of m·y = rhs, by the singular value decomposition
-/// with singular values below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the
-/// decomposition did not converge.
-fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> Option<DVector<f64>> {
+/// The least-norm least-squares solution of the square system m·y = rhs, and an orthonormal
+/// basis of m's null space (as columns), by the singular value decomposition with singular
+/// values below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the decomposition did
+/// not converge.
+fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
     // A generous iteration cap: convergence takes a few sweeps per singular value.
     let iterations = 1000 * (m.nrows() + 1);
     let svd = m.try_svd(true, true, f64::EPSILON, iterations)?;
     let largest = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
-    svd.solve(rhs, RELATIVE_RANK * largest).ok()
+    let threshold = RELATIVE_RANK * largest;
+    let solution = svd.solve(rhs, threshold).ok()?;
+    let v_t = svd.v_t.as_ref()?;
+    let null: Vec<usize> =
+        (0..svd.singular_values.len()).filter(|&r| svd.singular_values[r] <= threshold).collect();
+    let basis = DMatrix::from_fn(v_t.ncols(), null.len(), |i, s| v_t[(null[s], i)]);
+    Some((solution, basis))
 }
 
 /// Whether two ratios of Lemke's test tie: equal to [`RATIO_TIE`] of their size, or within

@@ -2,6 +2,7 @@
 //! closed-form oscillator they share.
 
 mod auto;
+mod complementarity;
 mod integrators;
 mod oscillator;
 mod radau;
