@@ -120,8 +120,6 @@ pub fn solve(
     let problem = Problem::new(a, c, rows, tolerance)?;
     if problem.normals.len() <= ENUMERATION_LIMIT {
         problem.enumerate()
-    } else if problem.normals.len() < rows.len() {
-        Err(Unsolved::TooLarge { normals: problem.normals.len() })
     } else {
         problem.lemke()
     }
@@ -149,6 +147,26 @@ pub fn lemke(a: &DMatrix<f64>, c: &[f64], tolerance: f64) -> Result<Solution, Un
     Problem::new(a, c, &rows, tolerance)?.lemke()
 }
 
+/// Solves a problem with gripping contacts by enumerating the active sets of the gripping
+/// contacts' normal rows only (at most [`ENUMERATION_LIMIT`] of them; fewest active first,
+/// then lexicographic) and pivoting with Lemke's method for the other normal rows. For each
+/// choice G, the rows of the gripping contacts outside G are dropped (x = 0 there), the tangent
+/// rows of those in G are equalities with x free, eliminated by a least-norm solve (their
+/// Schur complement in A is positive semidefinite again), and Lemke's method solves the
+/// remaining LCP of the normal rows. The choice is valid if G's normal rows come out active
+/// and the dropped normal rows' w ≥ 0. This finds a solution whenever there is one: a solution
+/// with gripping contacts G active solves G's reduced LCP, whose w every solution shares, and
+/// so do the dropped rows' w (A·z = 0 for the difference z of two solutions). Without gripping
+/// contacts it is Lemke's method alone.
+pub fn lemke_with_grips(
+    a: &DMatrix<f64>,
+    c: &[f64],
+    rows: &[Row],
+    tolerance: f64,
+) -> Result<Solution, Unsolved> {
+    Problem::new(a, c, rows, tolerance)?.lemke()
+}
+
 /// A checked problem and the structure of its rows.
 struct Problem<'a> {
     a: &'a DMatrix<f64>,
@@ -161,8 +179,8 @@ struct Problem<'a> {
 
 /// How a pivoting run ended.
 enum Pivoting {
-    /// A complementary basis: x, and the rows whose x is basic.
-    Solved { x: Vec<f64>, basic: Vec<bool> },
+    /// A complementary basis: x, the rows whose x is basic, and the pivots it took.
+    Solved { x: Vec<f64>, basic: Vec<bool>, pivots: usize },
     /// A secondary ray: no solution.
     Ray,
     /// The budget of pivots ran out.
@@ -238,12 +256,20 @@ impl<'a> Problem<'a> {
                 x[i] = solved[r];
             }
         }
+        self.check(active, x)
+    }
+
+    /// x as the solution of the active set `active`, if it satisfies the conditions: the rows
+    /// outside the set's equalities must have x = 0 (as attempts make them).
+    fn check(&self, active: &[bool], x: Vec<f64>) -> Option<Solution> {
+        let k = self.rows.len();
         let w = self.residual(&x);
         let tol = self.tolerance;
         let holds = (0..k).all(|i| match self.rows[i] {
             Row::Normal if active[i] => w[i].abs() <= tol && x[i] >= -tol,
-            Row::Normal => w[i] >= -tol,
-            Row::Tangent { normal } => !active[normal] || w[i].abs() <= tol,
+            Row::Normal => w[i] >= -tol && x[i] == 0.0,
+            Row::Tangent { normal } if active[normal] => w[i].abs() <= tol,
+            Row::Tangent { .. } => x[i] == 0.0,
         });
         holds.then(|| Solution {
             x,
@@ -320,53 +346,146 @@ impl<'a> Problem<'a> {
 
     /// The first valid active set, fewest active first, then lexicographic.
     fn first_valid(&self) -> Option<Solution> {
-        let n = self.normals.len();
         let mut active = vec![false; self.rows.len()];
-        for size in 0..=n {
-            // The chosen positions among the normal rows, increasing: the first combination.
-            let mut chosen: Vec<usize> = (0..size).collect();
-            loop {
-                active.iter_mut().for_each(|a| *a = false);
-                for &p in &chosen {
-                    active[self.normals[p]] = true;
-                }
-                if let Some(solution) = self.attempt(&active) {
-                    return Some(solution);
-                }
-                if !next_combination(&mut chosen, n) {
-                    break;
-                }
+        combinations(self.normals.len(), |chosen| {
+            active.iter_mut().for_each(|a| *a = false);
+            for &p in chosen {
+                active[self.normals[p]] = true;
             }
-        }
-        None
+            self.attempt(&active)
+        })
     }
 
     fn lemke(&self) -> Result<Solution, Unsolved> {
-        debug_assert_eq!(self.normals.len(), self.rows.len());
-        match self.pivot() {
-            Pivoting::Solved { x, basic } => {
-                let w = self.residual(&x);
-                let tol = self.tolerance;
-                // Lemke's basis, then the rows whose x came out positive: the first whose
-                // least-norm solve holds gives the polished answer.
-                let positive: Vec<bool> = x.iter().map(|&v| v > tol).collect();
-                for active in [&basic, &positive] {
-                    if let Some(found) = self.attempt(active) {
-                        return Ok(self.widen(found));
-                    }
-                }
-                // Lemke's own x, if it holds as it is.
-                let holds = (0..x.len())
-                    .all(|i| x[i] >= -tol && w[i] >= -tol && (x[i] <= tol || w[i].abs() <= tol));
-                if holds {
-                    let active = x.iter().map(|&v| v > tol).collect();
-                    Ok(self.widen(Solution { x, w, active }))
-                } else {
-                    Err(Unsolved::Stalled { pivots: self.pivot_budget() })
+        match self.search_gripping()? {
+            Some(found) => Ok(self.widen(found)),
+            None => Err(self.inconsistent().into()),
+        }
+    }
+
+    /// The normal rows that have tangent rows.
+    fn gripping(&self) -> Vec<usize> {
+        let mut gripping: Vec<usize> = self
+            .rows
+            .iter()
+            .filter_map(|row| match *row {
+                Row::Tangent { normal } => Some(normal),
+                Row::Normal => None,
+            })
+            .collect();
+        gripping.sort_unstable();
+        gripping.dedup();
+        gripping
+    }
+
+    /// The first valid choice of active gripping contacts, each solved by Lemke's method for
+    /// the other normal rows (see [`lemke_with_grips`]); `None` if no choice is valid.
+    fn search_gripping(&self) -> Result<Option<Solution>, Unsolved> {
+        let gripping = self.gripping();
+        if gripping.len() > ENUMERATION_LIMIT {
+            return Err(Unsolved::TooLarge { normals: self.normals.len() });
+        }
+        let mut stalled = None;
+        let mut chosen_rows = vec![false; self.rows.len()];
+        let found = combinations(gripping.len(), |chosen| {
+            chosen_rows.iter_mut().for_each(|g| *g = false);
+            for &p in chosen {
+                chosen_rows[gripping[p]] = true;
+            }
+            match self.with_grips(&gripping, &chosen_rows) {
+                Ok(Some(solution)) => Some(solution),
+                Ok(None) => None,
+                Err(pivots) => {
+                    stalled = Some(pivots);
+                    None
                 }
             }
-            Pivoting::Ray => Err(self.inconsistent().into()),
-            Pivoting::Budget { pivots } => Err(Unsolved::Stalled { pivots }),
+        });
+        match (found, stalled) {
+            (Some(solution), _) => Ok(Some(solution)),
+            (None, Some(pivots)) => Err(Unsolved::Stalled { pivots }),
+            (None, None) => Ok(None),
+        }
+    }
+
+    /// The solution with the gripping contacts `chosen` (indexed by row) active and the other
+    /// ones of `gripping` open, if there is one; `Err` with the pivots made if Lemke's method
+    /// stalled.
+    fn with_grips(&self, gripping: &[usize], chosen: &[bool]) -> Result<Option<Solution>, usize> {
+        let k = self.rows.len();
+        let tol = self.tolerance;
+        let dropped = |i: usize| match self.rows[i] {
+            Row::Normal => gripping.contains(&i) && !chosen[i],
+            Row::Tangent { normal } => !chosen[normal],
+        };
+        let tangents: Vec<usize> =
+            (0..k).filter(|&i| !dropped(i) && self.rows[i] != Row::Normal).collect();
+        let normals: Vec<usize> = self.normals.iter().copied().filter(|&i| !dropped(i)).collect();
+        let (t, n) = (tangents.len(), normals.len());
+        let block = |r: &[usize], s: &[usize]| {
+            DMatrix::from_fn(r.len(), s.len(), |p, q| self.a[(r[p], s[q])])
+        };
+        // x_T = −A_TT⁺·(c_T + A_TN·x_N) = −(y₀ + Y·x_N).
+        let (reduced, offset, through): (DMatrix<f64>, Vec<f64>, _) = if t == 0 {
+            (block(&normals, &normals), normals.iter().map(|&i| self.c[i]).collect(), None)
+        } else {
+            let a_tt = block(&tangents, &tangents);
+            let a_tn = block(&tangents, &normals);
+            let mut rhs = DMatrix::zeros(t, n + 1);
+            for p in 0..t {
+                rhs[(p, 0)] = self.c[tangents[p]];
+            }
+            rhs.columns_mut(1, n).copy_from(&a_tn);
+            let Some(y) = pseudo_solve(a_tt.clone(), &rhs) else { return Ok(None) };
+            // The tangent rows must be solvable at all: c_T in the range of A_TT.
+            let misfit = &a_tt * y.column(0) - rhs.column(0);
+            if misfit.amax() > tol {
+                return Ok(None);
+            }
+            let y_n = y.columns(1, n).into_owned();
+            let a_nt = a_tn.transpose();
+            let schur = block(&normals, &normals) - &a_nt * &y_n;
+            // Symmetric in exact arithmetic; kept so against rounding.
+            let schur = (&schur + schur.transpose()) * 0.5;
+            let shifted =
+                DVector::from_iterator(n, normals.iter().map(|&i| self.c[i])) - &a_nt * y.column(0);
+            (schur, shifted.iter().copied().collect(), Some(y))
+        };
+        let (x_n, basic, pivots) = match pivot_lcp(&reduced, &offset, tol) {
+            Pivoting::Solved { x, basic, pivots } => (x, basic, pivots),
+            Pivoting::Ray => return Ok(None),
+            Pivoting::Budget { pivots } => return Err(pivots),
+        };
+        // Lemke's basis, then the rows whose x came out positive (the chosen grips active
+        // throughout): the first whose least-norm solve holds.
+        let mut by_basis = vec![false; k];
+        let mut by_sign = vec![false; k];
+        for (p, &i) in normals.iter().enumerate() {
+            by_basis[i] = basic[p] || chosen[i];
+            by_sign[i] = x_n[p] > tol || chosen[i];
+        }
+        for active in [&by_basis, &by_sign] {
+            if let Some(found) = self.attempt(active) {
+                return Ok(Some(found));
+            }
+        }
+        // Lemke's own x, if it holds as it is.
+        let mut x = vec![0.0; k];
+        for (p, &i) in normals.iter().enumerate() {
+            x[i] = x_n[p];
+        }
+        if let Some(y) = through {
+            let x_t = -(y.column(0) + y.columns(1, n) * DVector::from_vec(x_n));
+            for (p, &i) in tangents.iter().enumerate() {
+                x[i] = x_t[p];
+            }
+        }
+        match self.check(&by_basis, x) {
+            Some(found) => Ok(Some(found)),
+            // Without gripping contacts Lemke's answer is the answer: rounding spoilt it.
+            None if gripping.is_empty() => Err(pivots),
+            // With them, the choice may just be wrong (a dropped contact's w < 0).
+            None => Ok(None),
         }
     }
 
@@ -392,7 +511,7 @@ impl<'a> Problem<'a> {
             .collect();
         let c_scaled: Vec<f64> = (0..n).map(|i| scale[i] * self.c[i]).collect();
         if c_scaled.iter().all(|&v| v >= 0.0) {
-            return Pivoting::Solved { x: vec![0.0; n], basic: vec![false; n] };
+            return Pivoting::Solved { x: vec![0.0; n], basic: vec![false; n], pivots: 0 };
         }
         let z0 = 2 * n;
         let rhs = 2 * n + 1;
@@ -417,7 +536,7 @@ impl<'a> Problem<'a> {
         let mut entering = z0;
         let mut row = first;
         let budget = self.pivot_budget();
-        for _ in 0..budget {
+        for made in 0..budget {
             let leaving = basis[row];
             pivot_on(&mut tableau, row, entering);
             basis[row] = entering;
@@ -431,7 +550,7 @@ impl<'a> Problem<'a> {
                         basic[j] = true;
                     }
                 }
-                return Pivoting::Solved { x, basic };
+                return Pivoting::Solved { x, basic, pivots: made + 1 };
             }
             // The complement of the variable that left enters next.
             entering = if leaving < n { leaving + n } else { leaving - n };
@@ -493,26 +612,48 @@ impl<'a> Problem<'a> {
         if sub.normals.len() <= ENUMERATION_LIMIT {
             sub.first_valid().is_some()
         } else {
-            // Only problems of normal rows get here (solve refused the others as too large).
-            !matches!(sub.pivot(), Pivoting::Ray)
+            // A search that stalled proves nothing: the contact is kept as if it mattered.
+            !matches!(sub.search_gripping(), Ok(None))
         }
     }
 }
 
-/// Advances `chosen` (increasing positions below `n`) to the next combination of its size in
-/// lexicographic order; false after the last.
-fn next_combination(chosen: &mut [usize], n: usize) -> bool {
-    let size = chosen.len();
-    for p in (0..size).rev() {
-        if chosen[p] < n - size + p {
+/// Calls `visit` with the combinations of positions 0..n (increasing), fewest first, then in
+/// lexicographic order, until it returns something.
+fn combinations<T>(n: usize, mut visit: impl FnMut(&[usize]) -> Option<T>) -> Option<T> {
+    for size in 0..=n {
+        let mut chosen: Vec<usize> = (0..size).collect();
+        loop {
+            if let Some(found) = visit(&chosen) {
+                return Some(found);
+            }
+            // The next combination: the last position that can advance does, and those after
+            // it follow it closely.
+            let Some(p) = (0..size).rev().find(|&p| chosen[p] < n - size + p) else { break };
             chosen[p] += 1;
             for q in p + 1..size {
                 chosen[q] = chosen[q - 1] + 1;
             }
-            return true;
         }
     }
-    false
+    None
+}
+
+/// Lemke's method on an LCP of normal rows only.
+fn pivot_lcp(a: &DMatrix<f64>, c: &[f64], tolerance: f64) -> Pivoting {
+    let rows = vec![Row::Normal; c.len()];
+    let normals = (0..c.len()).collect();
+    Problem { a, c, rows: &rows, tolerance, normals }.pivot()
+}
+
+/// The least-norm least-squares solutions of m·Y = rhs, column by column, with singular values
+/// below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the decomposition did not
+/// converge.
+fn pseudo_solve(m: DMatrix<f64>, rhs: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let iterations = 1000 * (m.nrows() + 1);
+    let svd = m.try_svd(true, true, f64::EPSILON, iterations)?;
+    let largest = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
+    svd.solve(rhs, RELATIVE_RANK * largest).ok()
 }
 
 /// The least-norm least-squares solution of the square system m·y = rhs, and an orthonormal

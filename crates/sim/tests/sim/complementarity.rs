@@ -272,6 +272,120 @@ fn gripping_corners_on_redundant_rows() {
     assert_close(&s.w[..2], &[0.0, 0.0], 1e-12);
 }
 
+/// Asserts the conditions of a mixed problem, to `tol`, and that w = A·x + c.
+fn assert_conditions(a: &DMatrix<f64>, c: &[f64], rows: &[Row], s: &Solution, tol: f64) {
+    for i in 0..c.len() {
+        let w: f64 = c[i] + (0..c.len()).map(|j| a[(i, j)] * s.x[j]).sum::<f64>();
+        assert!((w - s.w[i]).abs() <= tol, "row {i}: w = {} but A·x + c = {w}", s.w[i]);
+        match rows[i] {
+            Row::Normal if s.active[i] => {
+                assert!(s.x[i] >= -tol && s.w[i].abs() <= tol, "{i}: {s:?}")
+            }
+            Row::Normal => assert!(s.x[i] == 0.0 && s.w[i] >= -tol, "{i}: {s:?}"),
+            Row::Tangent { normal } => {
+                assert_eq!(s.active[i], s.active[normal]);
+                if s.active[i] {
+                    assert!(s.w[i].abs() <= tol, "{i}: {s:?}");
+                } else {
+                    assert!(s.x[i] == 0.0, "{i}: {s:?}");
+                }
+            }
+        }
+    }
+}
+
+/// The gripping block beside `others` independent frictionless contacts of unit mass (A's
+/// identity block), closing at 1 + o/10 or opening at 1/2 in turn.
+fn gripping_block_among_others(v: [f64; 3], others: usize) -> (DMatrix<f64>, Vec<f64>, Vec<Row>) {
+    let (block, mut c, mut rows) = gripping_block(v);
+    let k = 4 + others;
+    let a = DMatrix::from_fn(k, k, |i, j| {
+        if i < 4 && j < 4 {
+            block[(i, j)]
+        } else if i == j {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    c.extend((0..others).map(|o| if o % 2 == 0 { -1.0 - o as f64 / 10.0 } else { 0.5 }));
+    rows.extend(std::iter::repeat(Row::Normal).take(others));
+    (a, c, rows)
+}
+
+#[test]
+fn gripping_contacts_past_the_enumeration_limit() {
+    // Two gripping corners and ten other contacts: twelve normal rows, so solve pivots, with
+    // the gripping contacts' active sets enumerated. Enumeration over all twelve agrees.
+    for v in [[0.5, -1.0, 0.0], [0.0, -0.2, 1.0], [0.3, 0.4, 0.0]] {
+        let (a, c, rows) = gripping_block_among_others(v, 10);
+        let tol = tolerance(&c);
+        let pivoted = complementarity::solve(&a, &c, &rows, tol).expect("solvable");
+        let by_grips = complementarity::lemke_with_grips(&a, &c, &rows, tol).expect("solvable");
+        let enumerated = complementarity::enumerate(&a, &c, &rows, tol).expect("solvable");
+        assert_eq!(pivoted, by_grips);
+        assert_conditions(&a, &c, &rows, &pivoted, tol);
+        assert_close(&pivoted.x, &enumerated.x, 1e-12);
+        assert_close(&pivoted.w, &enumerated.w, 1e-12);
+        assert_eq!(pivoted.active, enumerated.active);
+        // The other contacts: those closing at 1 + o/10 take that impulse, the others none.
+        for o in 0..10 {
+            let x = if o % 2 == 0 { 1.0 + o as f64 / 10.0 } else { 0.0 };
+            assert!((pivoted.x[4 + o] - x).abs() < 1e-12, "{pivoted:?}");
+        }
+    }
+    // Eleven gripping contacts are more than the enumeration takes.
+    let k = 22;
+    let a = DMatrix::identity(k, k);
+    let rows: Vec<Row> = (0..k)
+        .map(|i| if i % 2 == 0 { Row::Normal } else { Row::Tangent { normal: i - 1 } })
+        .collect();
+    assert_eq!(
+        complementarity::solve(&a, &vec![-1.0; k], &rows, 1e-10),
+        Err(Unsolved::TooLarge { normals: 11 })
+    );
+}
+
+#[test]
+fn random_gripping_problems_are_solved_alike_by_both_searches() {
+    // With tangent rows the problem is no LCP and its w need not be unique, so the two searches
+    // (fewest rows active; fewest gripping contacts active, Lemke for the rest) may pick
+    // different solutions; both must be valid, and they must agree on whether one exists.
+    let mut random = Lcg(7);
+    let (mut solved, mut inconsistent) = (0, 0);
+    for _ in 0..60 {
+        let normals = random.between(1, 5);
+        let tangents = random.between(1, 4);
+        let n = normals + tangents;
+        let r = random.between(1, n);
+        let b = DMatrix::from_fn(n, r, |_, _| random.next());
+        let a = &b * b.transpose();
+        let c: Vec<f64> = (0..n).map(|_| random.next()).collect();
+        let rows: Vec<Row> = (0..n)
+            .map(|i| {
+                if i < normals {
+                    Row::Normal
+                } else {
+                    Row::Tangent { normal: random.between(0, normals - 1) }
+                }
+            })
+            .collect();
+        let tol = tolerance(&c);
+        let by_grips = complementarity::lemke_with_grips(&a, &c, &rows, tol);
+        let enumerated = complementarity::enumerate(&a, &c, &rows, tol);
+        match (by_grips, enumerated) {
+            (Ok(g), Ok(e)) => {
+                assert_conditions(&a, &c, &rows, &g, 1e-9);
+                assert_conditions(&a, &c, &rows, &e, 1e-9);
+                solved += 1;
+            }
+            (Err(Unsolved::Inconsistent(_)), Err(Unsolved::Inconsistent(_))) => inconsistent += 1,
+            (g, e) => panic!("{rows:?}, rank {r}: by grips {g:?}, enumeration {e:?}"),
+        }
+    }
+    assert!(solved >= 10 && inconsistent >= 1, "{solved} solved, {inconsistent} inconsistent");
+}
+
 #[test]
 fn duplicated_contacts_share_the_impulse() {
     // Two (or twelve) identical rows: any split is valid; the least-norm one is even, from both
