@@ -224,6 +224,36 @@ fn random_semidefinite_problems_agree_between_enumeration_and_lemke() {
     assert!(solved >= 10 && inconsistent >= 1, "{solved} solved, {inconsistent} inconsistent");
 }
 
+#[test]
+fn lemke_finds_planted_solutions_of_large_problems() {
+    // Problems of 11 to 40 rows built around a solution: x* ≥ 0 and w* ≥ 0 complementary,
+    // some rows with both zero (degenerate), c = w* − A·x*. A positive semidefinite LCP's w is
+    // unique, so Lemke's must be w*.
+    let mut random = Lcg(1843);
+    for trial in 0..30 {
+        let n = random.between(11, 40);
+        let r = if trial % 3 == 0 { n } else { random.between(n / 3, n) };
+        let b = DMatrix::from_fn(n, r, |_, _| random.next());
+        let a = &b * b.transpose();
+        let mut x = vec![0.0; n];
+        let mut w = vec![0.0; n];
+        for i in 0..n {
+            match random.between(0, 2) {
+                0 => x[i] = 1.0 + random.next(),
+                1 => w[i] = 1.0 + random.next(),
+                _ => {}
+            }
+        }
+        let c: Vec<f64> =
+            (0..n).map(|i| w[i] - (0..n).map(|j| a[(i, j)] * x[j]).sum::<f64>()).collect();
+        let tol = tolerance(&c);
+        let s = complementarity::solve(&a, &c, &vec![Row::Normal; n], tol)
+            .unwrap_or_else(|e| panic!("trial {trial}, n = {n}, rank {r}: {e:?}"));
+        assert_complementary(&a, &c, &s, 1e-8);
+        assert_close(&s.w, &w, 1e-11);
+    }
+}
+
 /// A planar block (half-width 1, half-height 1/2, mass 2, inertia 1) landing flat on two
 /// gripping corners with velocity (v_x, v_y, ω): rows normal, tangent, normal, tangent, on 3
 /// degrees of freedom. A corner at (x, −h) has normal rate v_y + ω·x and tangential rate
