@@ -5,16 +5,20 @@
 //!
 //! This module owns the solve only: it knows nothing of how A and c were built, of contacts'
 //! names or of events. [`solve`] enumerates the active sets of the normal rows when there are at
-//! most [`ENUMERATION_LIMIT`] of them, and pivots with Lemke's method beyond that (problems of
-//! normal rows only). Either way it ends with the same polish: the equalities of an active set
-//! solved least-norm, on the widest active set whose least-norm solution keeps its signs, so
-//! that the two methods give the same x wherever both apply.
+//! most [`ENUMERATION_LIMIT`] of them, and pivots with Lemke's method beyond that, enumerating
+//! only the gripping contacts' active sets ([`lemke_with_grips`]). Either way an active set's
+//! equalities are solved least-norm (by the singular value decomposition, so redundant rows are
+//! fine), and the answer is widened to every normal row with w = 0 where that keeps w: for an
+//! LCP (normal rows only) this is the least-norm x of all solutions whenever its signs allow,
+//! so the two methods give the same x wherever both apply.
 //!
-//! **Errors.** `solve` returns [`Unsolved`], of which [`Unsolved::Inconsistent`] (holding the
-//! [`Inconsistent`] struct, with the rows that cannot be satisfied together) is the only one a
-//! well-posed scene reaches. The others say that the input was malformed or non-finite, that a
-//! problem with gripping contacts was too large to enumerate, or that rounding stalled Lemke's
-//! pivoting.
+//! **Errors.** `solve` returns `Result<Solution, Unsolved>`: the error is the enum [`Unsolved`],
+//! not [`Inconsistent`] itself, which is held by [`Unsolved::Inconsistent`] (the rows that
+//! cannot be satisfied together) and is the only variant a well-posed scene reaches. The others
+//! say that the input was malformed or non-finite, that more than [`ENUMERATION_LIMIT`]
+//! gripping contacts came with more than as many normal rows, or that rounding stalled Lemke's
+//! pivoting. `From<Inconsistent>` is implemented, and a caller only interested in
+//! inconsistency can match `Err(Unsolved::Inconsistent(Inconsistent { rows }))`.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -61,9 +65,10 @@ pub enum Unsolved {
     /// The shapes disagree (A not k×k for k rows and k values of c), a tangent row names a row
     /// that is not a normal row, or the tolerance is negative.
     Malformed { reason: &'static str },
-    /// More than [`ENUMERATION_LIMIT`] normal rows with gripping contacts among them: Lemke's
-    /// method does not apply to tangent rows (their conditions switch with another row's), and
-    /// enumerating 2^`normals` active sets was judged too slow.
+    /// More than [`ENUMERATION_LIMIT`] normal rows (`normals` of them), of which more than
+    /// [`ENUMERATION_LIMIT`] belong to gripping contacts: Lemke's method does not apply to
+    /// tangent rows (their conditions switch with another row's), and enumerating the gripping
+    /// contacts' 2^11 or more active sets was judged too slow.
     TooLarge { normals: usize },
     /// Lemke's pivoting used its budget of `pivots`, or ended on a basis whose solution does not
     /// hold to the tolerance: rounding on a badly conditioned or degenerate problem.
@@ -76,11 +81,12 @@ impl From<Inconsistent> for Unsolved {
     }
 }
 
-/// The most normal rows whose active sets [`solve`] enumerates. 2^10 = 1024 least-squares
-/// solves of at most a few dozen rows is a few milliseconds in the worst case (the answer needs
-/// all rows active), and typical answers come much sooner, since the order tries the fewest
-/// active rows first. Ten covers a block's eight corners with room to spare, and scenes with
-/// gripping contacts, which only enumeration solves.
+/// The most normal rows whose active sets [`solve`] enumerates, and the most gripping contacts
+/// whose active sets it enumerates past that. 2^10 = 1024 least-squares solves is the worst
+/// case (the answer needs every row active): 7 ms for ten normal rows, 60 ms with two tangent
+/// rows each, in an unoptimized build; typical answers come much sooner, since the order tries
+/// the fewest active rows first. Ten covers a block's eight corners with room to spare. Past it
+/// Lemke's method takes a few pivots per row.
 pub const ENUMERATION_LIMIT: usize = 10;
 
 /// Singular values below this fraction of the largest count as zero in the least-norm solves.
@@ -105,12 +111,15 @@ const RATIO_TIE: f64 = 1e-9;
 /// for the active set found, returns the least-norm one.
 ///
 /// With at most [`ENUMERATION_LIMIT`] normal rows it enumerates active sets ([`enumerate`]);
-/// beyond, it pivots ([`lemke`]), which needs normal rows only ([`Unsolved::TooLarge`]
-/// otherwise). Where several active sets are valid (a block landing flat on more corners than it
-/// has degrees of freedom), the answer is the same from both: the active set widened to every
-/// normal row with w = 0 whose least-norm x keeps its signs, which shares the impulse evenly
-/// between symmetric corners, and otherwise the fewest rows active (enumeration) or Lemke's
-/// basis.
+/// beyond, it pivots ([`lemke_with_grips`], which is [`lemke`] without gripping contacts, and
+/// [`Unsolved::TooLarge`] past [`ENUMERATION_LIMIT`] gripping contacts). An active set's x is
+/// the least-norm one that keeps the active normal rows' x ≥ 0 (the least-norm solution of its
+/// equalities when that does). Where several active sets are valid (a block landing flat on
+/// more corners than it has degrees of freedom), the answer is the same from both methods: the
+/// set is widened to every normal row of a frictionless contact with w = 0 if that keeps the
+/// conditions and w, which shares the impulse evenly between symmetric corners; otherwise it is
+/// the fewest rows active (enumeration) or Lemke's basis. Widening may report a row with x = 0
+/// and w = 0 (grazing) as active.
 pub fn solve(
     a: &DMatrix<f64>,
     c: &[f64],
@@ -311,16 +320,21 @@ impl<'a> Problem<'a> {
         (0..k).map(|i| self.c[i] + (0..k).map(|j| self.a[(i, j)] * x[j]).sum::<f64>()).collect()
     }
 
-    /// The widest active set's solution: every normal row whose w is zero (to the tolerance)
-    /// in `found` made active, if its least-norm x keeps the conditions and w, and `found`
+    /// The widest active set's solution: every frictionless normal row whose w is zero (to the
+    /// tolerance) in `found` made active, if its x keeps the conditions and w, and `found`
     /// otherwise. The solutions of a positive semidefinite LCP share w, and those with the rows
     /// Z (where w = 0) active are all of them: the least-norm x of Z is the least-norm solution
     /// of the whole problem, the same whichever active set was found first. (With tangent rows
-    /// the problem has no such structure; requiring the same w keeps a grazing contact from
-    /// gripping when the solution found has it open.)
+    /// the problem has no such structure: a gripping contact is not widened, as closing it would
+    /// make a grazing contact grip that the solution found left open.)
     fn widen(&self, found: Solution) -> Solution {
+        let gripping = self.gripping();
         let wide: Vec<bool> = (0..self.rows.len())
-            .map(|i| self.rows[i] == Row::Normal && found.w[i].abs() <= self.tolerance)
+            .map(|i| {
+                self.rows[i] == Row::Normal
+                    && (found.active[i]
+                        || (found.w[i].abs() <= self.tolerance && !gripping.contains(&i)))
+            })
             .collect();
         let same = self.normals.iter().all(|&i| wide[i] == found.active[i]);
         if same {

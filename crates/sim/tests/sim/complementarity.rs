@@ -339,7 +339,7 @@ fn gripping_block_among_others(v: [f64; 3], others: usize) -> (DMatrix<f64>, Vec
         }
     });
     c.extend((0..others).map(|o| if o % 2 == 0 { -1.0 - o as f64 / 10.0 } else { 0.5 }));
-    rows.extend(std::iter::repeat(Row::Normal).take(others));
+    rows.resize(k, Row::Normal);
     (a, c, rows)
 }
 
