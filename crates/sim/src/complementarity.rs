@@ -301,11 +301,7 @@ impl<'a> Problem<'a> {
         let g = DMatrix::from_fn(signed.len(), null.ncols(), |r, s| null[(signed[r], s)]);
         let gram = &g * g.transpose();
         let offset: Vec<f64> = signed.iter().map(|&r| least[r]).collect();
-        let rows = vec![Row::Normal; signed.len()];
-        let normals = (0..signed.len()).collect();
-        let dual =
-            Problem { a: &gram, c: &offset, rows: &rows, tolerance: self.tolerance, normals };
-        match dual.pivot() {
+        match pivot_lcp(&gram, &offset, self.tolerance) {
             Pivoting::Solved { x: mu, .. } => {
                 let t = g.transpose() * DVector::from_vec(mu);
                 Some(least + null * t)
@@ -577,7 +573,7 @@ impl<'a> Problem<'a> {
             // When z₀ ties for leaving, let it leave: that ends the run on a solution.
             if let Some(r) = candidates.iter().copied().find(|&r| basis[r] == z0) {
                 let ratio = |r: usize| tableau[(r, rhs)] / column[r];
-                if ties(ratio(r), ratio(row), rhs_tie) {
+                if ties(ratio(r), ratio(row), rhs_tie / column[r].min(column[row])) {
                     row = r;
                 }
             }
