@@ -7,10 +7,10 @@
 //! names or of events. [`solve`] enumerates the active sets of the normal rows when there are at
 //! most [`ENUMERATION_LIMIT`] of them, and pivots with Lemke's method beyond that, enumerating
 //! only the gripping contacts' active sets ([`lemke_with_grips`]). Either way an active set's
-//! equalities are solved least-norm (by the singular value decomposition, so redundant rows are
-//! fine), and the answer is widened to every normal row with w = 0 where that keeps w: for an
-//! LCP (normal rows only) this is the least-norm x of all solutions whenever its signs allow,
-//! so the two methods give the same x wherever both apply.
+//! equalities are solved least-norm (by an eigendecomposition of their symmetric block, so
+//! redundant rows are fine), keeping the active normal rows' x ≥ 0, and the answer is widened
+//! to every frictionless normal row with w = 0 where that keeps w: for an LCP (normal rows
+//! only) this is the least-norm x of all its solutions, so the two methods give the same x.
 //!
 //! **Errors.** `solve` returns `Result<Solution, Unsolved>`: the error is the enum [`Unsolved`],
 //! not [`Inconsistent`] itself, which is held by [`Unsolved::Inconsistent`] (the rows that
@@ -89,10 +89,11 @@ impl From<Inconsistent> for Unsolved {
 /// Lemke's method takes a few pivots per row.
 pub const ENUMERATION_LIMIT: usize = 10;
 
-/// Singular values below this fraction of the largest count as zero in the least-norm solves.
-/// A Delassus operator's redundant rows leave singular values at rounding (1e-16 of the largest);
-/// one just above this threshold would be a condition number of 1e10, past which the solve's
-/// error on w would exceed the 1e-10-relative tolerance callers pass.
+/// Eigenvalues below this fraction of the largest count as zero in the least-norm solves (of
+/// symmetric blocks of A, whose eigenvalues are their singular values). A Delassus operator's
+/// redundant rows leave eigenvalues at rounding (1e-16 of the largest); one just above this
+/// threshold would be a condition number of 1e10, past which the solve's error on w would exceed
+/// the 1e-10-relative tolerance callers pass.
 const RELATIVE_RANK: f64 = 1e-10;
 
 /// Below this, an entry of Lemke's pivot column (of the scaled problem, whose A has a unit
@@ -252,7 +253,7 @@ impl<'a> Problem<'a> {
             let m = equalities.len();
             let block = DMatrix::from_fn(m, m, |r, s| self.a[(equalities[r], equalities[s])]);
             let rhs = DVector::from_iterator(m, equalities.iter().map(|&i| -self.c[i]));
-            let (least, null) = least_norm(block, &rhs)?;
+            let (least, null) = least_norm(block, &rhs);
             let signed: Vec<usize> =
                 (0..m).filter(|&r| self.rows[equalities[r]] == Row::Normal).collect();
             let pushes_back = signed.iter().any(|&r| least[r] < -self.tolerance);
@@ -446,7 +447,7 @@ impl<'a> Problem<'a> {
                 rhs[(p, 0)] = self.c[tangents[p]];
             }
             rhs.columns_mut(1, n).copy_from(&a_tn);
-            let Some(y) = pseudo_solve(a_tt.clone(), &rhs) else { return Ok(None) };
+            let y = pseudo_solve(a_tt.clone(), &rhs);
             // The tangent rows must be solvable at all: c_T in the range of A_TT.
             let misfit = &a_tt * y.column(0) - rhs.column(0);
             if misfit.amax() > tol {
@@ -509,10 +510,13 @@ impl<'a> Problem<'a> {
     /// w_i = i, x_i = n + i and the artificial z₀ = 2n.
     fn pivot(&self) -> Pivoting {
         let n = self.rows.len();
+        // A diagonal at rounding's level (a row that is zero but for rounding) is not scaled
+        // up: its entries would swamp the rest.
+        let largest_diagonal = (0..n).fold(0.0f64, |m, i| m.max(self.a[(i, i)]));
         let scale: Vec<f64> = (0..n)
             .map(|i| {
                 let d = self.a[(i, i)];
-                if d > 0.0 {
+                if d > RELATIVE_RANK * largest_diagonal {
                     1.0 / d.sqrt()
                 } else {
                     1.0
@@ -656,32 +660,111 @@ fn pivot_lcp(a: &DMatrix<f64>, c: &[f64], tolerance: f64) -> Pivoting {
     Problem { a, c, rows: &rows, tolerance, normals }.pivot()
 }
 
-/// The least-norm least-squares solutions of m·Y = rhs, column by column, with singular values
-/// below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the decomposition did not
-/// converge.
-fn pseudo_solve(m: DMatrix<f64>, rhs: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let iterations = 1000 * (m.nrows() + 1);
-    let svd = m.try_svd(true, true, f64::EPSILON, iterations)?;
-    let largest = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
-    svd.solve(rhs, RELATIVE_RANK * largest).ok()
+/// The least-norm least-squares solutions of the symmetric system m·Y = rhs, column by column,
+/// with eigenvalues below [`RELATIVE_RANK`] of the largest (in size) taken as zero.
+fn pseudo_solve(m: DMatrix<f64>, rhs: &DMatrix<f64>) -> DMatrix<f64> {
+    let (values, vectors) = symmetric_eigen(m);
+    let kept = range_of(&values);
+    // Y = Σ v·(vᵀ·rhs)/λ over the kept eigenpairs.
+    let mut y = DMatrix::zeros(vectors.nrows(), rhs.ncols());
+    for &e in &kept {
+        let v = vectors.column(e);
+        let projected = v.transpose() * rhs / values[e];
+        y += v * projected;
+    }
+    y
 }
 
-/// The least-norm least-squares solution of the square system m·y = rhs, and an orthonormal
-/// basis of m's null space (as columns), by the singular value decomposition with singular
-/// values below [`RELATIVE_RANK`] of the largest taken as zero; `None` if the decomposition did
-/// not converge.
-fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    // A generous iteration cap: convergence takes a few sweeps per singular value.
-    let iterations = 1000 * (m.nrows() + 1);
-    let svd = m.try_svd(true, true, f64::EPSILON, iterations)?;
-    let largest = svd.singular_values.iter().fold(0.0f64, |a, &s| a.max(s));
+/// The least-norm least-squares solution of the symmetric system m·y = rhs, and an orthonormal
+/// basis of m's null space (as columns), with eigenvalues below [`RELATIVE_RANK`] of the
+/// largest (in size) taken as zero.
+fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+    let (values, vectors) = symmetric_eigen(m);
+    let kept = range_of(&values);
+    let mut y = DVector::zeros(vectors.nrows());
+    for &e in &kept {
+        let v = vectors.column(e);
+        y += v * (v.dot(rhs) / values[e]);
+    }
+    let null: Vec<usize> = (0..values.len()).filter(|e| !kept.contains(e)).collect();
+    let basis = DMatrix::from_fn(vectors.nrows(), null.len(), |i, s| vectors[(i, null[s])]);
+    (y, basis)
+}
+
+/// The eigenpairs that span the range: eigenvalues above [`RELATIVE_RANK`] of the largest in
+/// size.
+fn range_of(values: &[f64]) -> Vec<usize> {
+    let largest = values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let threshold = RELATIVE_RANK * largest;
-    let solution = svd.solve(rhs, threshold).ok()?;
-    let v_t = svd.v_t.as_ref()?;
-    let null: Vec<usize> =
-        (0..svd.singular_values.len()).filter(|&r| svd.singular_values[r] <= threshold).collect();
-    let basis = DMatrix::from_fn(v_t.ncols(), null.len(), |i, s| v_t[(null[s], i)]);
-    Some((solution, basis))
+    (0..values.len()).filter(|&e| values[e].abs() > threshold).collect()
+}
+
+/// The most sweeps of Jacobi's method: it converges quadratically, in some ten sweeps for the
+/// orders met here, so this cap is only reached by a matrix that is not finite.
+const JACOBI_SWEEPS: usize = 100;
+
+/// The eigenvalues and orthonormal eigenvectors (as columns) of the symmetric matrix m (its
+/// mean with its transpose), by cyclic Jacobi rotations. Written here rather than taken from
+/// nalgebra: its SVD, with a tight convergence threshold, returned factors that do not multiply
+/// back to the matrix for a block with a zero row ([[2,0,0,2],[0,0,0,0],[0,0,2,0],[2,0,0,2]]),
+/// and Jacobi's method is simple, accurate for symmetric matrices and its result orthogonal to
+/// rounding.
+fn symmetric_eigen(m: DMatrix<f64>) -> (Vec<f64>, DMatrix<f64>) {
+    let n = m.nrows();
+    let mut a = (&m + m.transpose()) * 0.5;
+    let mut v = DMatrix::identity(n, n);
+    // Off-diagonal entries below this are rounding, left alone: a hundredth of a unit in the
+    // last place of the matrix's norm.
+    let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let negligible = 1e-2 * f64::EPSILON * norm;
+    for _ in 0..JACOBI_SWEEPS {
+        let mut largest_off: f64 = 0.0;
+        for p in 0..n {
+            for q in p + 1..n {
+                largest_off = largest_off.max(a[(p, q)].abs());
+            }
+        }
+        if largest_off <= negligible || !largest_off.is_finite() {
+            break;
+        }
+        for p in 0..n {
+            for q in p + 1..n {
+                let apq = a[(p, q)];
+                if apq.abs() <= negligible {
+                    continue;
+                }
+                // The rotation that zeroes a_pq (Numerical Recipes' form, stable for any θ).
+                let theta = (a[(q, q)] - a[(p, p)]) / (2.0 * apq);
+                let t = if theta.abs() > 1e150 {
+                    0.5 / theta
+                } else {
+                    let sign = if theta >= 0.0 { 1.0 } else { -1.0 };
+                    sign / (theta.abs() + (theta * theta + 1.0).sqrt())
+                };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..n {
+                    let (akp, akq) = (a[(k, p)], a[(k, q)]);
+                    a[(k, p)] = c * akp - s * akq;
+                    a[(k, q)] = s * akp + c * akq;
+                }
+                for k in 0..n {
+                    let (apk, aqk) = (a[(p, k)], a[(q, k)]);
+                    a[(p, k)] = c * apk - s * aqk;
+                    a[(q, k)] = s * apk + c * aqk;
+                }
+                // Zero by construction; set so, rather than left at rounding.
+                a[(p, q)] = 0.0;
+                a[(q, p)] = 0.0;
+                for k in 0..n {
+                    let (vkp, vkq) = (v[(k, p)], v[(k, q)]);
+                    v[(k, p)] = c * vkp - s * vkq;
+                    v[(k, q)] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    ((0..n).map(|i| a[(i, i)]).collect(), v)
 }
 
 /// Whether two ratios of Lemke's test tie: equal to [`RATIO_TIE`] of their size, or within
