@@ -825,3 +825,39 @@ fn pivot_on(tableau: &mut DMatrix<f64>, row: usize, column: usize) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// V·diag(λ)·Vᵀ against m, and Vᵀ·V against the identity.
+    fn assert_decomposes(m: &DMatrix<f64>) {
+        let (values, vectors) = symmetric_eigen(m.clone());
+        let n = m.nrows();
+        let back =
+            &vectors * DMatrix::from_diagonal(&DVector::from_vec(values)) * vectors.transpose();
+        let scale = m.amax().max(1.0);
+        assert!((back - m).amax() <= 1e-14 * scale, "{m}");
+        assert!((vectors.transpose() * &vectors - DMatrix::identity(n, n)).amax() <= 1e-14);
+    }
+
+    #[test]
+    fn jacobi_decomposes_where_nalgebras_svd_did_not() {
+        // The block with a zero row on which nalgebra's SVD (with ε = f64::EPSILON) returned
+        // factors that multiply back to something else.
+        let m = DMatrix::from_row_slice(
+            4,
+            4,
+            &[2.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 2.0, 0.0, 0.0, 2.0],
+        );
+        assert_decomposes(&m);
+        let (least, null) = least_norm(m, &DVector::from_vec(vec![1.0, 0.0, 1.0, 1.0]));
+        assert!((least - DVector::from_vec(vec![0.25, 0.0, 0.5, 0.25])).amax() < 1e-15);
+        assert_eq!(null.ncols(), 2);
+        // Equal eigenvalues, a zero matrix, one entry, and a full symmetric one.
+        assert_decomposes(&DMatrix::identity(5, 5));
+        assert_decomposes(&DMatrix::zeros(3, 3));
+        assert_decomposes(&DMatrix::from_element(1, 1, -3.0));
+        assert_decomposes(&DMatrix::from_fn(6, 6, |i, j| 1.0 / (1.0 + i as f64 + j as f64)));
+    }
+}

@@ -212,6 +212,8 @@ fn random_semidefinite_problems_agree_between_enumeration_and_lemke() {
                 assert_complementary(&a, &c, &l, 1e-9);
                 assert_complementary(&a, &c, &e, 1e-9);
                 assert_close(&l.w, &e.w, 1e-9);
+                // Both answers are the least-norm x of all solutions.
+                assert_close(&l.x, &e.x, 1e-9);
                 solved += 1;
             }
             (Err(Unsolved::Inconsistent(l)), Err(Unsolved::Inconsistent(e))) => {
@@ -222,6 +224,38 @@ fn random_semidefinite_problems_agree_between_enumeration_and_lemke() {
         }
     }
     assert!(solved >= 10 && inconsistent >= 1, "{solved} solved, {inconsistent} inconsistent");
+}
+
+#[test]
+fn degenerate_integer_problems_agree_between_enumeration_and_lemke() {
+    // Entries of B in {−1, 0, 1} and c in {−2, …, 2}: ties in every ratio test, repeated and
+    // zero rows, many solutions x for one w. Both methods must give the least-norm one.
+    let mut random = Lcg(99);
+    let (mut solved, mut inconsistent) = (0, 0);
+    for _ in 0..300 {
+        let n = random.between(2, 10);
+        let r = random.between(1, n);
+        let b = DMatrix::from_fn(n, r, |_, _| random.between(0, 2) as f64 - 1.0);
+        let a = &b * b.transpose();
+        let c: Vec<f64> = (0..n).map(|_| random.between(0, 4) as f64 - 2.0).collect();
+        let tol = tolerance(&c);
+        let by_lemke = complementarity::lemke(&a, &c, tol);
+        let by_enumeration = complementarity::enumerate(&a, &c, &vec![Row::Normal; n], tol);
+        match (by_lemke, by_enumeration) {
+            (Ok(l), Ok(e)) => {
+                assert_complementary(&a, &c, &l, 1e-9);
+                assert_close(&l.w, &e.w, 1e-9);
+                assert_close(&l.x, &e.x, 1e-9);
+                solved += 1;
+            }
+            (Err(Unsolved::Inconsistent(l)), Err(Unsolved::Inconsistent(e))) => {
+                assert_eq!(l, e);
+                inconsistent += 1;
+            }
+            (l, e) => panic!("{a} c = {c:?}: Lemke {l:?}, enumeration {e:?}"),
+        }
+    }
+    assert!(solved >= 100 && inconsistent >= 50, "{solved} solved, {inconsistent} inconsistent");
 }
 
 #[test]
