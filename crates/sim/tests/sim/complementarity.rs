@@ -1,7 +1,8 @@
 //! The contact problems' solver on problems with known answers: one contact in closed form, a
 //! chain of balls, a block landing flat on eight feet, a planar block's two gripping corners
-//! (redundant rows), random positive semidefinite problems on which enumeration and Lemke's
-//! method must agree, and inconsistent and malformed input.
+//! (redundant rows), alone and among ten other contacts (past the enumeration limit), random
+//! and degenerate positive semidefinite problems on which enumeration and Lemke's method must
+//! agree, large ones built around a known solution, and inconsistent and malformed input.
 
 use nalgebra::DMatrix;
 use sim::complementarity::{self, Inconsistent, Row, Solution, Unsolved, ENUMERATION_LIMIT};

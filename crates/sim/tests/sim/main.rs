@@ -1,5 +1,5 @@
-//! The integrators' tests in one binary (one link instead of three), a module each, with the
-//! closed-form oscillator they share.
+//! The integrators' tests and the contact problems' solver's in one binary (one link instead of
+//! four), a module each, with the closed-form oscillator the integrators share.
 
 mod auto;
 mod complementarity;
