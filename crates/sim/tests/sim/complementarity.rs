@@ -122,6 +122,13 @@ fn cradle_chain_agrees_between_enumeration_and_lemke() {
     let (a, c, _, _) = cradle(2, 2.0, 1.0);
     let s = complementarity::solve(&a, &c, &[Row::Normal], tolerance(&c)).expect("solvable");
     assert_close(&s.x, &[2.0], 1e-14);
+    // Three balls, e = 1: both contacts active, with A = [[2, −1], [−1, 2]] and c = (−4, 0):
+    // x = (8/3, 4/3), and the balls leave at (−2/3, 4/3, 4/3), whose squares sum to 2², as the
+    // speeds' did before: (4 + 16 + 16)/9 = 4.
+    let (a, c, _, _) = cradle(3, 2.0, 1.0);
+    let s = complementarity::solve(&a, &c, &[Row::Normal; 2], tolerance(&c)).expect("solvable");
+    assert_close(&s.x, &[8.0 / 3.0, 4.0 / 3.0], 1e-14);
+    assert_close(&s.w, &[0.0, 0.0], 1e-14);
 }
 
 /// A block (half-sides 1, 0.6, 0.4, mass 2) on eight feet, its four bottom corners and the
