@@ -13,15 +13,17 @@
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, signals given as time series put into their parameter
 //! slots before each evaluation, laws of the state held between samples (a zero-order hold, at
-//! whose samples a run stops and restarts its method), and the measurements of a run (steps, evaluations,
-//! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
-//! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
-//! were derived.
+//! whose samples a run stops and restarts its method), the measurements of a run (steps, evaluations,
+//! Jacobians, factorizations, energy and constraint drift), and the complementarity problems of
+//! contacts (`complementarity`: the impulses of an impact, the forces of touching contacts). It
+//! works on numbered slots and [`numeric::Tape`]s: it knows no symbols, names or files, and
+//! nothing of how the equations were derived.
 
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
 
 mod auto;
+pub mod complementarity;
 mod constrained;
 mod erk;
 mod gauss;

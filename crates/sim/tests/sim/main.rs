@@ -1,7 +1,8 @@
-//! The integrators' tests in one binary (one link instead of three), a module each, with the
-//! closed-form oscillator they share.
+//! The integrators' tests and the contact problems' solver's in one binary (one link instead of
+//! four), a module each, with the closed-form oscillator the integrators share.
 
 mod auto;
+mod complementarity;
 mod integrators;
 mod oscillator;
 mod radau;
