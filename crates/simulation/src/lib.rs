@@ -991,6 +991,19 @@ impl FaultNames<'_> {
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
+            FaultKind::Penetrating { contact, gap } => (
+                format!("contact {contact} starts penetrating (its gap is {gap:.3e})"),
+                "start with every contact's gap ≥ 0".into(),
+            ),
+            FaultKind::ContactsInconsistent { contacts, impact } => (
+                format!(
+                    "the {} of contacts {contacts:?} has no solution",
+                    if *impact { "impact" } else { "reactions" }
+                ),
+                "the contacts' gradients conflict with each other or with the two-sided \
+                 constraints here"
+                    .into(),
+            ),
         }
     }
 }
