@@ -10,7 +10,7 @@
 //! - **touching** (g ≈ 0): g ≤ tol·L, with L the larger of |g| at the start and the size of
 //!   the contact's gradient times that of q at the start (‖J‖₁·‖q‖∞). At the start a gap
 //!   below −tol·L is a fault ([`FaultKind::Penetrating`]).
-//! - **at rest** (γ ≈ 0): |γ| ≤ tol·V for a contact that was closed or just took an impulse,
+//! - **at rest** (γ ≈ 0): |γ| ≤ tol·V for a contact that was closed (and did not land),
 //!   and |γ| ≤ tol·V/100 for one that was open (the hysteresis that keeps a contact from
 //!   chattering between the two), with V the larger of the largest |γ⁻| of its impacts and
 //!   ‖J‖₁·‖q̇‖∞ at the start and at each jump. A touching contact with γ below the band lands.
@@ -357,10 +357,7 @@ impl Mechanical {
         let resting: Vec<usize> = touching
             .iter()
             .copied()
-            .filter(|&k| {
-                self.normal_rate(k).abs()
-                    <= band(&self.modes, k, before[k] || struck[k] || landed[k])
-            })
+            .filter(|&k| self.normal_rate(k).abs() <= band(&self.modes, k, before[k] && !landed[k]))
             .collect();
         let mut closed = vec![false; count];
         if !resting.is_empty() {

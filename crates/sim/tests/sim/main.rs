@@ -2,6 +2,7 @@
 //! closed-form oscillator they share.
 
 mod auto;
+mod contacts;
 mod integrators;
 mod oscillator;
 mod radau;

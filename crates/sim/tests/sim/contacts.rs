@@ -1,0 +1,319 @@
+//! Runs through one-sided contacts, each against its closed form: the bouncing ball's impacts
+//! and their accumulation, the ladder leaving the wall, a stack at rest, and a rocking block.
+//! The programs are built here from `cas` expressions lowered by `numeric`, as `engine` does.
+
+use std::ops::ControlFlow;
+
+use cas::{ExprId, Pool, SymId};
+use numeric::{lower, Tape};
+use sim::{
+    integrate, Contact, Layout, Mechanical, Method, ModeChange, Run, Settings, Stabilisation,
+};
+
+/// A kept row of a scene: a gap g(q) ≥ 0 or a velocity row A(q)·q̇ held at zero.
+enum Kept {
+    Position(ExprId),
+    Velocity(ExprId),
+}
+
+/// A scene of `n` coordinates, built as expressions and lowered into a [`Mechanical`] whose
+/// observations are q, q̇ and λ.
+struct Scene {
+    pool: Pool,
+    time: SymId,
+    q: Vec<SymId>,
+    v: Vec<SymId>,
+}
+
+impl Scene {
+    fn new(names: &[&str]) -> Scene {
+        let mut pool = Pool::new();
+        let time = pool.time();
+        let q: Vec<SymId> = names.iter().map(|s| pool.coordinate(s)).collect();
+        let v = q.iter().map(|&s| pool.rate(s).expect("a coordinate's rate")).collect();
+        Scene { pool, time, q, v }
+    }
+
+    fn q(&mut self, i: usize) -> ExprId {
+        self.pool.sym(self.q[i])
+    }
+
+    fn num(&mut self, x: f64) -> ExprId {
+        // The tests' values are dyadic or short decimals: exact as a ratio over 2^20·10^6.
+        let scale = 1_048_576_000_000i64;
+        self.pool.ratio((x * scale as f64).round() as i64, scale)
+    }
+
+    /// ∂e/∂q̇ of a row linear in the rates, or ∂e/∂q.
+    fn gradient(&mut self, e: ExprId, of: &[SymId]) -> Vec<ExprId> {
+        of.iter().map(|&s| self.pool.diff(e, s)).collect()
+    }
+
+    /// Σ ∂e/∂q_i·q̇_i.
+    fn along_rates(&mut self, e: ExprId) -> ExprId {
+        let terms: Vec<ExprId> = (0..self.q.len())
+            .map(|i| {
+                let d = self.pool.diff(e, self.q[i]);
+                let v = self.pool.sym(self.v[i]);
+                self.pool.mul(&[d, v])
+            })
+            .collect();
+        self.pool.add(&terms)
+    }
+
+    /// The problem of mass matrix `mass` (row-major), forces `force` and kept rows `kept`.
+    fn mechanical(mut self, mass: &[ExprId], force: &[ExprId], kept: &[Kept]) -> Mechanical {
+        let n = self.q.len();
+        let m = kept.len();
+        let mut outputs = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                outputs.push(mass[i * n + j]);
+            }
+        }
+        outputs.extend_from_slice(force);
+        let mut kinds = Vec::new();
+        for row in kept {
+            match *row {
+                Kept::Position(g) => {
+                    let q = self.q.clone();
+                    outputs.extend(self.gradient(g, &q));
+                    let rate = self.along_rates(g);
+                    let second = self.along_rates(rate);
+                    let gamma = self.pool.neg(second);
+                    outputs.extend([gamma, g, rate]);
+                    kinds.push(Stabilisation::Position);
+                }
+                Kept::Velocity(r) => {
+                    let v = self.v.clone();
+                    outputs.extend(self.gradient(r, &v));
+                    let second = self.along_rates(r);
+                    let gamma = self.pool.neg(second);
+                    let zero = self.pool.zero();
+                    outputs.extend([gamma, r, zero]);
+                    kinds.push(Stabilisation::Velocity);
+                }
+            }
+        }
+        let mut inputs = vec![self.time];
+        inputs.extend(&self.q);
+        inputs.extend(&self.v);
+        let dynamics = lower(&self.pool, &inputs, &outputs).expect("lowered");
+        let accelerations: Vec<SymId> = (0..n).map(|i| self.pool.param(&format!("a{i}"))).collect();
+        let multipliers: Vec<SymId> = (0..m).map(|c| self.pool.param(&format!("l{c}"))).collect();
+        inputs.extend(&accelerations);
+        inputs.extend(&multipliers);
+        let shown: Vec<ExprId> =
+            self.q.iter().chain(&self.v).chain(&multipliers).map(|&s| self.pool.sym(s)).collect();
+        let observation = lower(&self.pool, &inputs, &shown).expect("lowered");
+        let layout = Layout { coordinates: n, multipliers: m, parameters: 0 };
+        Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), Vec::new())
+            .with_kinds(kinds)
+    }
+}
+
+fn settings(method: Method, until: f64, tolerance: f64) -> Settings {
+    Settings { method, start: 0.0, until, tolerance, step: 1e-3, max_steps: 100_000, samples: 0 }
+}
+
+fn run(problem: &mut Mechanical, y0: &[f64], settings: &Settings) -> Run {
+    integrate(problem, y0, settings, &[], &mut |_| ControlFlow::Continue(()))
+}
+
+const GRAVITY: f64 = 9.81;
+
+/// A ball of mass `mass` over a floor y ≥ 0.
+fn ball(mass: f64, restitution: f64) -> Mechanical {
+    let mut scene = Scene::new(&["y"]);
+    let m = scene.num(mass);
+    let weight = scene.num(-mass * GRAVITY);
+    let y = scene.q(0);
+    scene.mechanical(&[m], &[weight], &[Kept::Position(y)]).with_contacts(vec![Contact {
+        normal: 0,
+        grip: None,
+        restitution,
+    }])
+}
+
+#[test]
+fn a_bouncing_ball_lands_at_the_closed_form_times_and_settles_at_their_accumulation() {
+    let (mass, e, h0) = (2.0, 0.8, 1.0);
+    let mut problem = ball(mass, e);
+    let run = run(&mut problem, &[h0, 0.0], &settings(Method::Dop853, 12.0, 1e-9));
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    assert_eq!(run.final_time, 12.0);
+    let t1 = (2.0 * h0 / GRAVITY).sqrt();
+    let impacts: Vec<f64> =
+        run.modes.iter().filter(|m| m.kind == ModeChange::Impact).map(|m| m.time).collect();
+    assert!(impacts.len() > 50, "{} impacts", impacts.len());
+    let mut expected = t1;
+    let mut worst: f64 = 0.0;
+    for (k, &t) in impacts.iter().enumerate() {
+        worst = worst.max((t - expected).abs() / expected);
+        expected += 2.0 * t1 * e.powi(k as i32 + 1);
+    }
+    assert!(worst < 1e-8, "impact times off by {worst:e}");
+    let settled: Vec<_> = run.modes.iter().filter(|m| m.kind == ModeChange::Settled).collect();
+    assert_eq!(settled.len(), 1, "{:?}", run.modes.last());
+    let accumulation = t1 * (1.0 + e) / (1.0 - e);
+    let off = (settled[0].time - accumulation).abs() / accumulation;
+    assert!(off < 1e-8, "settled at {} for {accumulation}: {off:e}", settled[0].time);
+    assert!(settled[0].closed);
+    // Each impact takes Λ = (1 + e)·m·v and loses (1 − e²)·½mv².
+    let first = &run.modes[0];
+    let v = GRAVITY * t1;
+    assert!((first.impulse - (1.0 + e) * mass * v).abs() < 1e-8 * mass * v);
+    let lost = (1.0 - e * e) * 0.5 * mass * v * v;
+    assert!((first.energy_change + lost).abs() < 1e-8 * lost, "{}", first.energy_change);
+    assert!(run.modes.iter().all(|m| !m.energy_rise));
+    // At rest on the floor after: λ = m·g, y = 0.
+    let last = run.trajectory.rows.last().expect("rows");
+    assert!((last[2] - mass * GRAVITY).abs() < 1e-9 * mass * GRAVITY, "λ = {}", last[2]);
+    assert!(last[0].abs() < 1e-9 && last[1].abs() < 1e-9, "{last:?}");
+    assert!(run.steps < 1000, "{} steps", run.steps);
+    println!(
+        "ball: {} impacts, settled at {} (closed form {accumulation}), {} steps, worst {worst:e}",
+        impacts.len(),
+        settled[0].time,
+        run.steps
+    );
+}
+
+#[test]
+fn the_ball_bounces_and_settles_under_each_explicit_adaptive_method() {
+    for method in [Method::Bs3, Method::Dopri5] {
+        assert!(method.handles_contacts());
+        let mut problem = ball(1.0, 0.5);
+        let run = run(&mut problem, &[1.0, 0.0], &settings(method, 3.0, 1e-9));
+        assert!(run.fault.is_none(), "{method:?}: {:?}", run.fault);
+        let settled = run.modes.iter().find(|m| m.kind == ModeChange::Settled).expect("settled");
+        let accumulation = (2.0 / GRAVITY).sqrt() * 3.0;
+        assert!((settled.time - accumulation).abs() < 1e-8 * accumulation, "{method:?}");
+    }
+    assert!(!Method::Radau.handles_contacts() && !Method::Gauss.handles_contacts());
+}
+
+#[test]
+fn a_start_below_the_floor_is_a_fault_naming_the_contact() {
+    let mut problem = ball(1.0, 0.5);
+    let run = run(&mut problem, &[-0.1, 0.0], &settings(Method::Dop853, 1.0, 1e-9));
+    let fault = run.fault.expect("a fault");
+    assert_eq!(fault.kind, sim::FaultKind::Penetrating { contact: 0, gap: -0.1 });
+}
+
+#[test]
+fn a_ball_landing_at_the_start_is_an_impact_there() {
+    let mut problem = ball(1.0, 0.5);
+    let run = run(&mut problem, &[0.0, -2.0], &settings(Method::Dop853, 0.1, 1e-9));
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let first = run.modes[0];
+    assert_eq!((first.time, first.kind), (0.0, ModeChange::Impact));
+    assert!((first.impulse - 3.0).abs() < 1e-12, "{}", first.impulse);
+    // The start's two rows: before the impact and after it.
+    assert_eq!(&run.trajectory.times[..2], &[0.0, 0.0]);
+    assert_eq!(run.trajectory.rows[0][1], -2.0);
+    assert!((run.trajectory.rows[1][1] - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn a_ladder_leaves_the_wall_where_cos_theta_is_two_thirds_of_its_start() {
+    // The centre (x, y), θ from the wall; the wall at x = 0 on the left, the floor at y = 0.
+    let (mass, length, theta0): (f64, f64, f64) = (3.0, 2.0, 0.3);
+    let (sin0, cos0) = numeric::elementary::sin_cos(theta0);
+    let mut scene = Scene::new(&["x", "y", "theta"]);
+    let (x, y, theta) = (scene.q(0), scene.q(1), scene.q(2));
+    let half = scene.num(length / 2.0);
+    let (sin, cos) = (scene.pool.sin(theta), scene.pool.cos(theta));
+    let top_x = {
+        let arm = scene.pool.mul(&[half, sin]);
+        scene.pool.sub(x, arm)
+    };
+    let foot_y = {
+        let arm = scene.pool.mul(&[half, cos]);
+        scene.pool.sub(y, arm)
+    };
+    let m = scene.num(mass);
+    let inertia = scene.num(mass * length * length / 12.0);
+    let zero = scene.pool.zero();
+    let weight = scene.num(-mass * GRAVITY);
+    let mass_matrix = [m, zero, zero, zero, m, zero, zero, zero, inertia];
+    let mut problem = scene
+        .mechanical(
+            &mass_matrix,
+            &[zero, weight, zero],
+            &[Kept::Position(top_x), Kept::Position(foot_y)],
+        )
+        .with_contacts(vec![
+            Contact { normal: 0, grip: None, restitution: 0.0 },
+            Contact { normal: 1, grip: None, restitution: 0.0 },
+        ]);
+    let y0 = [0.5 * length * sin0, 0.5 * length * cos0, theta0, 0.0, 0.0, 0.0];
+    let run = run(&mut problem, &y0, &settings(Method::Dop853, 0.75, 1e-10));
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let closed: Vec<_> = run.modes.iter().filter(|m| m.kind == ModeChange::Closed).collect();
+    assert_eq!(closed.len(), 2, "{:?}", run.modes);
+    let lift: Vec<_> = run.modes.iter().filter(|m| m.kind == ModeChange::LiftOff).collect();
+    assert_eq!(lift.len(), 1, "{:?}", run.modes);
+    assert_eq!(lift[0].contact, 0);
+    let at = run.trajectory.times.iter().position(|&t| t == lift[0].time).expect("its rows");
+    let theta = run.trajectory.rows[at][2];
+    let cos = numeric::elementary::sin_cos(theta).1;
+    let off = (cos - 2.0 / 3.0 * cos0).abs();
+    assert!(off < 1e-8, "left at cos θ = {cos}, off by {off:e}");
+    // Free of the wall, the centre's x' is constant and the wall pushes no more.
+    let after = &run.trajectory.rows[at + 1..];
+    let rate = after[0][3];
+    assert!(rate > 0.0);
+    for row in after {
+        assert!((row[3] - rate).abs() < 1e-9 * rate, "x' {} from {rate}", row[3]);
+        assert_eq!(row[6], 0.0);
+    }
+    let last = run.final_state[2];
+    assert!(last < std::f64::consts::FRAC_PI_2, "θ = {last} at the end");
+    let floor = run.trajectory.rows.iter().map(|r| r[7]).fold(f64::INFINITY, f64::min);
+    assert!(floor >= -1e-9 * mass * GRAVITY, "the floor pulled: {floor}");
+    println!("ladder: left the wall at t = {}, cos θ off by {off:e}", lift[0].time);
+}
+
+#[test]
+fn a_stack_of_eight_balls_rests_with_each_contact_bearing_the_weight_above_it() {
+    let (count, mass, radius) = (8, 0.5, 0.5);
+    let names: Vec<String> = (0..count).map(|k| format!("y{k}")).collect();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    let mut scene = Scene::new(&names);
+    let m = scene.num(mass);
+    let zero = scene.pool.zero();
+    let weight = scene.num(-mass * GRAVITY);
+    let mut mass_matrix = vec![zero; count * count];
+    for k in 0..count {
+        mass_matrix[k * count + k] = m;
+    }
+    let mut kept = Vec::new();
+    for k in 0..count {
+        let above = scene.q(k);
+        let below = if k == 0 { zero } else { scene.q(k - 1) };
+        let gap = scene.num(if k == 0 { radius } else { 2.0 * radius });
+        let (centres, sum) = (scene.pool.sub(above, below), gap);
+        kept.push(Kept::Position(scene.pool.sub(centres, sum)));
+    }
+    let contacts =
+        (0..count).map(|k| Contact { normal: k, grip: None, restitution: 0.5 }).collect();
+    let mut problem =
+        scene.mechanical(&mass_matrix, &vec![weight; count], &kept).with_contacts(contacts);
+    let mut y0 = vec![0.0; 2 * count];
+    for k in 0..count {
+        y0[k] = radius + 2.0 * radius * k as f64;
+    }
+    let run = run(&mut problem, &y0, &settings(Method::Dop853, 10.0, 1e-9));
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    assert!(run.modes.iter().all(|m| m.kind == ModeChange::Closed && m.time == 0.0));
+    assert_eq!(run.modes.len(), count);
+    for row in &run.trajectory.rows {
+        for k in 0..count {
+            let expected = (count - k) as f64 * mass * GRAVITY;
+            assert!((row[2 * count + k] - expected).abs() < 1e-9 * expected, "λ{k} {row:?}");
+            assert!((row[k] - y0[k]).abs() < 1e-12 && row[count + k].abs() < 1e-12, "{row:?}");
+        }
+    }
+    assert_eq!(run.final_time, 10.0);
+}
