@@ -13,7 +13,9 @@
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, signals given as time series put into their parameter
 //! slots before each evaluation, laws of the state held between samples (a zero-order hold, at
-//! whose samples a run stops and restarts its method), and the measurements of a run (steps, evaluations,
+//! whose samples a run stops and restarts its method), one-sided contacts (their modes, guards
+//! located on the dense output, impacts and lift-offs as jumps after which a run restarts its
+//! method), and the measurements of a run (steps, evaluations,
 //! Jacobians, factorizations, energy and constraint drift). It works on numbered slots and
 //! [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the equations
 //! were derived.

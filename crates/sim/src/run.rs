@@ -241,16 +241,19 @@ impl<'r> Course<'r> {
         let mut guards = vec![0.0; problem.guards()];
         // A held input's first sample is at the start.
         let next_sample = problem.next_sample(t);
-        // The modes are decided at the start: a contact closing there with an impulse is an
-        // impact at the start, recorded with a row before it (every contact open) and after.
+        // The modes are decided at the start: an impulse there (a contact landing at the
+        // start) is an impact at the start, recorded with a row before it (the given state, in
+        // the mode decided) and one after.
         let mut before = None;
         let started = problem.sample(t, &mut y).and_then(|()| {
             if !guards.is_empty() {
-                let mut open = vec![0.0; row.len()];
-                problem.observe(t, &y, &mut open)?;
                 let given = y.clone();
                 run.modes = problem.begin_modes(t, &mut y, settings.tolerance)?;
-                before = (given != y).then_some(open);
+                if given != y {
+                    let mut open = vec![0.0; row.len()];
+                    problem.observe(t, &given, &mut open)?;
+                    before = Some(open);
+                }
                 problem.guard_values(t, &y, &mut guards)?;
             }
             problem.observe(t, &y, &mut row)

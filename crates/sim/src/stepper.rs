@@ -9,7 +9,8 @@ use crate::{FaultKind, Problem};
 pub(crate) trait Dense {
     /// The state at time `t` inside the last accepted step.
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
-    /// The right-hand side jumped where the last step ended (a held input was sampled): what
+    /// The right-hand side jumped where the last step ended (a held input was sampled, or the
+    /// problem's mode jumped, its state with it, where a run cut the step): what
     /// the method carries from step to step (a derivative, a dense output, predicted stages)
     /// belongs to the old one and is dropped; the step size is kept.
     fn after_jump(&mut self) {}

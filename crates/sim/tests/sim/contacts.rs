@@ -181,8 +181,8 @@ fn a_bouncing_ball_lands_at_the_closed_form_times_and_settles_at_their_accumulat
 }
 
 #[test]
-fn the_ball_bounces_and_settles_under_each_explicit_adaptive_method() {
-    for method in [Method::Bs3, Method::Dopri5] {
+fn the_ball_bounces_and_settles_under_each_explicit_method() {
+    for method in [Method::Rk4, Method::Bs3, Method::Dopri5] {
         assert!(method.handles_contacts());
         let mut problem = ball(1.0, 0.5);
         let run = run(&mut problem, &[1.0, 0.0], &settings(method, 3.0, 1e-9));
