@@ -28,6 +28,10 @@ pub struct Inconsistent {
     pub rows: Vec<usize>,
 }
 
+/// The most normal rows the stand-in enumerates the active sets of; a larger problem is
+/// reported as unsolved, with all its normal rows.
+const ENUMERATED: usize = 16;
+
 /// Solves the problem of a symmetric positive semi-definite `a` (possibly singular), with the
 /// least-norm x for the active set found; `tolerance` is absolute, in c's units.
 pub fn solve(
@@ -42,7 +46,9 @@ pub fn solve(
     // x's tolerance, from c's through A's scale.
     let x_tolerance = if diagonal > 0.0 { tolerance / diagonal } else { tolerance };
     let count = normals.len();
-    assert!(count < 24, "enumeration of {count} normal rows");
+    if count > ENUMERATED {
+        return Err(Inconsistent { rows: normals });
+    }
     let mut sets: Vec<u32> = (0..1u32 << count).collect();
     sets.sort_by_key(|s| s.count_ones());
     for set in sets {

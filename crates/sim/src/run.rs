@@ -460,6 +460,11 @@ impl<'r> Course<'r> {
             self.note_row();
             let modes = problem.jump(at, &mut self.y, fired)?;
             self.run.modes.extend(modes);
+            // A held input's sample due at the same time is taken after the jump.
+            if self.next_sample == Some(at) {
+                problem.sample(at, &mut self.y)?;
+                self.next_sample = problem.next_sample(at);
+            }
             problem.observe(at, &self.y, &mut self.row)?;
             self.note_row();
             problem.guard_values(at, &self.y, &mut self.guards)

@@ -195,6 +195,29 @@ fn the_ball_bounces_and_settles_under_each_explicit_method() {
 }
 
 #[test]
+fn a_run_that_samples_records_each_jump_before_and_after_at_its_time() {
+    let mut problem = ball(1.0, 0.5);
+    let mut settings = settings(Method::Dop853, 1.0, 1e-9);
+    settings.samples = 11;
+    let run = run(&mut problem, &[1.0, 0.0], &settings);
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let times = &run.trajectory.times;
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "{times:?}");
+    let t1 = (2.0 / GRAVITY).sqrt();
+    let landing = run.modes[0];
+    assert!((landing.time - t1).abs() < 1e-12);
+    let at = times.iter().position(|&t| t == landing.time).expect("the jump's rows");
+    assert_eq!(times[at + 1], landing.time);
+    let (before, after) = (&run.trajectory.rows[at], &run.trajectory.rows[at + 1]);
+    assert!(
+        (before[1] + GRAVITY * t1).abs() < 1e-9 && (after[1] - 0.5 * GRAVITY * t1).abs() < 1e-9
+    );
+    // The evenly spaced times, each once, around the jumps' rows.
+    let spaced = times.iter().filter(|&&t| run.modes.iter().all(|m| m.time != t)).count();
+    assert_eq!(spaced, 11, "{times:?}");
+}
+
+#[test]
 fn a_start_below_the_floor_is_a_fault_naming_the_contact() {
     let mut problem = ball(1.0, 0.5);
     let run = run(&mut problem, &[-0.1, 0.0], &settings(Method::Dop853, 1.0, 1e-9));
