@@ -82,8 +82,10 @@ pub struct Entry {
     /// otherwise by the cubic Hermite of the step's ends.
     pub dense_output: bool,
     /// Whether a run of it carries on through the jumps of one-sided contacts (guards located
-    /// on its dense output, the mode switched, the method restarted): the explicit methods of
-    /// the physical form. The differential–algebraic form does not switch the rows it holds
+    /// on its dense output, the mode switched, the method restarted): the methods of the
+    /// physical form, `auto` with them (its radau side steps the same physical problem, and
+    /// forgets its stages and derivative at a jump as both sides do). Radau alone integrates
+    /// the differential–algebraic form, which does not switch the rows it holds
     /// (`Constrained` integrates every kept row as two-sided), and the canonical form keeps no
     /// multipliers.
     pub contacts: bool,
@@ -215,7 +217,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::OnSwitch,
         dense_output: true,
-        contacts: false,
+        contacts: true,
         explicit: None,
         sides: &crate::auto::SIDES,
         stepper: |s, p| Box::new(Auto::new(p.dim(), s.tolerance)),

@@ -10,10 +10,12 @@
 //! - **touching** (g ≈ 0): g ≤ tol·L, with L the larger of |g| at the start and the size of
 //!   the contact's gradient times that of q at the start (‖J‖₁·‖q‖∞). At the start a gap
 //!   below −tol·L is a fault ([`FaultKind::Penetrating`]).
-//! - **at rest** (γ ≈ 0): |γ| ≤ tol·V for a contact that was closed (and did not land),
-//!   and |γ| ≤ tol·V/100 for one that was open (the hysteresis that keeps a contact from
-//!   chattering between the two), with V the larger of the largest |γ⁻| of its impacts and
-//!   ‖J‖₁·‖q̇‖∞ at the start and at each jump. A touching contact with γ below the band lands.
+//! - **at rest** (γ ≈ 0): |γ| ≤ 100·tol·V for a contact that was closed, whose γ is the
+//!   drift the integration and the stabilisation leave, and |γ| ≤ tol·V/100 for one that was
+//!   open or just landed (the hysteresis that keeps a contact from chattering between the
+//!   two), with V the larger of the largest |γ⁻| of its impacts and ‖J‖₁·‖q̇‖∞ at the start
+//!   and at each jump. An open touching contact with γ below −tol·V/100 lands; a closed one
+//!   never does (its γ is drift), but takes part in the impact of those that land, with e = 0.
 //! - **pushing** (λ > 0): the complementarity problem of the reactions is solved to tol times
 //!   the largest |g̈| of its contacts with every contact open, and a contact whose reaction
 //!   fell to zero (the lift-off its guard located) has that much added to its g̈ there, so
@@ -32,9 +34,11 @@ use super::{Layout, Mechanical, Stabilisation};
 use crate::complementarity::{self, Row};
 use crate::{linalg, Contact, FaultKind, ModeChange, ModeEvent};
 
-/// The band of γ at which an open contact counts as at rest, against a closed one's (the
-/// hysteresis of the modes).
+/// The band of γ, in tol·V, within which an open contact counts as at rest (below it, it
+/// lands).
 const OPEN_BAND: f64 = 1e-2;
+/// The band of γ, in tol·V, within which a closed contact counts as at rest: its drift.
+const CLOSED_BAND: f64 = 1e2;
 
 /// The modes of the contacts, and the scales of their tolerances.
 #[derive(Clone, Debug, Default)]
@@ -279,7 +283,7 @@ impl Mechanical {
             .filter(|&k| before[k] || self.gap(k) <= tol * self.modes.length[k])
             .collect();
         let band = |modes: &Modes, k: usize, held: bool| {
-            tol * modes.speed[k] * if held { 1.0 } else { OPEN_BAND }
+            tol * modes.speed[k] * if held { CLOSED_BAND } else { OPEN_BAND }
         };
         let mut struck = vec![false; count];
         let mut settled = vec![false; count];
@@ -289,7 +293,9 @@ impl Mechanical {
             self.contacts.iter().map(|c| c.grip.map(|_| 0.0)).collect();
         let mut energy = vec![0.0; count];
         let mut rise = false;
-        let lands = |this: &Self, k: usize| this.normal_rate(k) < -band(&this.modes, k, before[k]);
+        let lands = |this: &Self, k: usize| {
+            !before[k] && this.normal_rate(k) < -band(&this.modes, k, false)
+        };
         if touching.iter().any(|&k| lands(self, k)) {
             let rows = self.rows_of(&touching);
             let (x, a) = self.condensed(&rows.multipliers)?;
@@ -299,11 +305,12 @@ impl Mechanical {
                 let rate = self.row_rate(mult);
                 c[r] = match rows.kinds[r] {
                     Row::Normal => {
-                        let mut e = self.contacts[k].restitution;
+                        // A closed contact's γ is drift: absorbed plastically.
+                        let mut e = if before[k] { 0.0 } else { self.contacts[k].restitution };
                         if lands(self, k) {
                             landed[k] = true;
                             // Accumulating impacts: far slower than the contact's own earlier ones.
-                            if !before[k] && -rate < tol * self.modes.impacts[k] {
+                            if -rate < tol * self.modes.impacts[k] {
                                 settled[k] = true;
                                 e = 0.0;
                             }

@@ -182,7 +182,7 @@ fn a_bouncing_ball_lands_at_the_closed_form_times_and_settles_at_their_accumulat
 
 #[test]
 fn the_ball_bounces_and_settles_under_each_explicit_method() {
-    for method in [Method::Rk4, Method::Bs3, Method::Dopri5] {
+    for method in [Method::Rk4, Method::Bs3, Method::Dopri5, Method::Auto] {
         assert!(method.handles_contacts());
         let mut problem = ball(1.0, 0.5);
         let run = run(&mut problem, &[1.0, 0.0], &settings(method, 3.0, 1e-9));
@@ -192,6 +192,7 @@ fn the_ball_bounces_and_settles_under_each_explicit_method() {
         assert!((settled.time - accumulation).abs() < 1e-8 * accumulation, "{method:?}");
     }
     assert!(!Method::Radau.handles_contacts() && !Method::Gauss.handles_contacts());
+    assert!(Method::Auto.handles_contacts() && Method::Dop853.handles_contacts());
 }
 
 #[test]
@@ -241,6 +242,12 @@ fn a_ball_landing_at_the_start_is_an_impact_there() {
 
 #[test]
 fn a_ladder_leaves_the_wall_where_cos_theta_is_two_thirds_of_its_start() {
+    ladder(Method::Dop853);
+    // Radau on the physical form, as `auto` runs it once the scene turns stiff.
+    ladder(Method::Radau);
+}
+
+fn ladder(method: Method) {
     // The centre (x, y), θ from the wall; the wall at x = 0 on the left, the floor at y = 0.
     let (mass, length, theta0): (f64, f64, f64) = (3.0, 2.0, 0.3);
     let (sin0, cos0) = numeric::elementary::sin_cos(theta0);
@@ -272,7 +279,7 @@ fn a_ladder_leaves_the_wall_where_cos_theta_is_two_thirds_of_its_start() {
             Contact { normal: 1, grip: None, restitution: 0.0 },
         ]);
     let y0 = [0.5 * length * sin0, 0.5 * length * cos0, theta0, 0.0, 0.0, 0.0];
-    let run = run(&mut problem, &y0, &settings(Method::Dop853, 0.75, 1e-10));
+    let run = run(&mut problem, &y0, &settings(method, 0.75, 1e-10));
     assert!(run.fault.is_none(), "{:?}", run.fault);
     let closed: Vec<_> = run.modes.iter().filter(|m| m.kind == ModeChange::Closed).collect();
     assert_eq!(closed.len(), 2, "{:?}", run.modes);
@@ -296,7 +303,7 @@ fn a_ladder_leaves_the_wall_where_cos_theta_is_two_thirds_of_its_start() {
     assert!(last < std::f64::consts::FRAC_PI_2, "θ = {last} at the end");
     let floor = run.trajectory.rows.iter().map(|r| r[7]).fold(f64::INFINITY, f64::min);
     assert!(floor >= -1e-9 * mass * GRAVITY, "the floor pulled: {floor}");
-    println!("ladder: left the wall at t = {}, cos θ off by {off:e}", lift[0].time);
+    println!("ladder ({method:?}): left the wall at t = {}, cos θ off by {off:e}", lift[0].time);
 }
 
 #[test]
@@ -405,4 +412,15 @@ fn a_rocking_block_loses_its_rate_at_each_impact_by_housners_ratio() {
         seen += 1;
     }
     println!("block: {seen} impacts at ω⁺/ω⁻ = {ratio}");
+}
+
+#[test]
+fn radau_on_the_physical_form_takes_the_jumps_as_auto_may_switch_to_it() {
+    let mut problem = ball(1.0, 0.5);
+    let run = run(&mut problem, &[1.0, 0.0], &settings(Method::Radau, 3.0, 1e-9));
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let settled = run.modes.iter().find(|m| m.kind == ModeChange::Settled).expect("settled");
+    let accumulation = (2.0 / GRAVITY).sqrt() * 3.0;
+    println!("radau: settled at {} for {accumulation}, {} steps", settled.time, run.steps);
+    assert!((settled.time - accumulation).abs() < 1e-8 * accumulation);
 }
