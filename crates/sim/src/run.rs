@@ -108,7 +108,10 @@ pub struct Segment {
 /// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
 /// observations at every accepted step (and at located events). A problem that samples held
 /// inputs ([`Problem::next_sample`]) is sampled at the start and at each sample time, where a
-/// step ends and the method restarts. A fault ends the run early: what was computed up to it
+/// step ends and the method restarts. A problem with guards ([`Problem::guards`]: one-sided
+/// contacts) decides its mode at the start ([`Problem::begin_modes`]); where a guard reaches
+/// zero inside a step, the step is cut there, the rows before and after the jump
+/// ([`Problem::jump`]) are recorded at its time, and the method restarts ([`Run::modes`]). A fault ends the run early: what was computed up to it
 /// is kept, and the fault says when and where. `progress` is told the time after every
 /// accepted step and may end the run there ([`Run::interrupted`]); it is the one hook a front
 /// end has into the loop, so a check it makes should be cheap or throttled.

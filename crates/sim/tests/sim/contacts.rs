@@ -219,6 +219,20 @@ fn a_run_that_samples_records_each_jump_before_and_after_at_its_time() {
 }
 
 #[test]
+fn the_lockstep_leaves_a_problem_with_contacts_to_runs_alone() {
+    let problem = ball(1.0, 0.5);
+    assert!(sim::Lockstep::new(&problem, &settings(Method::Dop853, 1.0, 1e-9)).is_none());
+    let mut free = ball(1.0, 0.5).with_contacts(Vec::new());
+    assert_eq!(sim::Problem::guards(&free), 0);
+    assert!(sim::Lockstep::new(&free, &settings(Method::Dop853, 1.0, 1e-9)).is_some());
+    // Without its contact the row y = 0 is two-sided: it holds the ball at rest there.
+    let run = run(&mut free, &[0.0, 0.0], &settings(Method::Dop853, 1.0, 1e-9));
+    assert!(run.modes.is_empty() && run.final_state[0].abs() < 1e-12);
+    let last = run.trajectory.rows.last().expect("rows");
+    assert!((last[2] - GRAVITY).abs() < 1e-12, "λ = {}", last[2]);
+}
+
+#[test]
 fn a_start_below_the_floor_is_a_fault_naming_the_contact() {
     let mut problem = ball(1.0, 0.5);
     let run = run(&mut problem, &[-0.1, 0.0], &settings(Method::Dop853, 1.0, 1e-9));
