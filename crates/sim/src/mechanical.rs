@@ -246,6 +246,20 @@ impl Mechanical {
         &self.stabilisation
     }
 
+    /// Whether each multiplier's row is kept now (an open contact's is not).
+    pub(crate) fn kept(&self) -> &[bool] {
+        &self.kept
+    }
+
+    /// `run` on the problem with no Baumgarte stabilisation: the constraints' second
+    /// derivatives as they are, as the differential–algebraic form holds them.
+    pub(crate) fn unstabilised<T>(&mut self, run: impl FnOnce(&mut Self) -> T) -> T {
+        let rate = std::mem::replace(&mut self.baumgarte, 0.0);
+        let result = run(self);
+        self.baumgarte = rate;
+        result
+    }
+
     /// q̈ and λ at (t, q, q̇) from the constraints' second derivatives alone, J q̈ = γ, with no
     /// stabilisation: the consistent start of the differential–algebraic form.
     pub(crate) fn unstabilised_accelerations(

@@ -82,12 +82,11 @@ pub struct Entry {
     /// otherwise by the cubic Hermite of the step's ends.
     pub dense_output: bool,
     /// Whether a run of it carries on through the jumps of one-sided contacts (guards located
-    /// on its dense output, the mode switched, the method restarted): the methods of the
-    /// physical form, `auto` with them (its radau side steps the same physical problem, and
-    /// forgets its stages and derivative at a jump as both sides do). Radau alone integrates
-    /// the differential–algebraic form, which does not switch the rows it holds
-    /// (`Constrained` integrates every kept row as two-sided), and the canonical form keeps no
-    /// multipliers.
+    /// on its dense output, the mode switched, the method restarted with
+    /// `Dense::after_switch`): the methods of the physical form, `auto` with them, and radau
+    /// on the differential–algebraic form (`Constrained`, whose open contacts' rows are
+    /// 0 = λ, its accelerations and multipliers solved anew after each jump). The canonical
+    /// form keeps no multipliers.
     pub contacts: bool,
     /// For an explicit method, what limits its step's stability; `None` for implicit ones.
     pub(crate) explicit: Option<Explicit>,
@@ -201,7 +200,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Newton,
         dense_output: true,
-        contacts: false,
+        contacts: true,
         explicit: None,
         sides: &[],
         stepper: |s, p| Box::new(Radau::new(p.components(), s.tolerance)),
@@ -383,8 +382,8 @@ mod tests {
                 assert!(entry.adaptive, "{}", entry.name);
             }
             assert!(!(m.is_explicit() && m.uses_jacobian()), "{}", entry.name);
-            // Contacts are kept multipliers whose modes jump, in the physical form.
-            assert!(!entry.contacts || entry.form == Form::Physical, "{}", entry.name);
+            // Contacts are kept multipliers whose modes jump: never in canonical variables.
+            assert!(!entry.contacts || m.handles_multipliers(), "{}", entry.name);
             // A switching method runs each of its sides in the form it integrates.
             for side in entry.sides {
                 assert!(side.sides().is_empty() && side.handles_multipliers(), "{}", entry.name);

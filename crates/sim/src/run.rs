@@ -252,7 +252,9 @@ impl<'r> Course<'r> {
             if !guards.is_empty() {
                 let given = y.clone();
                 run.modes = problem.begin_modes(t, &mut y, settings.tolerance)?;
-                if given != y {
+                let struck =
+                    |m: &ModeEvent| m.impulse != 0.0 || m.tangential.is_some_and(|l| l != 0.0);
+                if run.modes.iter().any(struck) {
                     let mut open = vec![0.0; row.len()];
                     problem.observe(t, &given, &mut open)?;
                     before = Some(open);
@@ -476,7 +478,7 @@ impl<'r> Course<'r> {
             self.fail(problem, kind);
             return ControlFlow::Break(());
         }
-        dense.after_jump();
+        dense.after_switch();
         self.previous_row.clone_from(&self.row);
         if progress(at).is_break() {
             self.run.interrupted = true;

@@ -14,6 +14,12 @@ pub(crate) trait Dense {
     /// the method carries from step to step (a derivative, a dense output, predicted stages)
     /// belongs to the old one and is dropped; the step size is kept.
     fn after_jump(&mut self) {}
+    /// The problem's mode jumped where a run cut the last step (a contact opened, closed or
+    /// landed): as [`Dense::after_jump`], and what depends on the equations themselves (an
+    /// implicit method's Jacobian and factors) is dropped too, since the mode changed them.
+    fn after_switch(&mut self) {
+        self.after_jump();
+    }
 }
 
 /// Advances one accepted step at a time and interpolates inside the last one.
