@@ -36,9 +36,11 @@ pub enum ModeChange {
 /// A change of mode, as a run records it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModeEvent {
+    /// When it happened: a jump's time, or the start's.
     pub time: f64,
     /// The index of the contact in the problem's list.
     pub contact: usize,
+    /// What happened to it.
     pub kind: ModeChange,
     /// Whether the contact is closed after the event.
     pub closed: bool,

@@ -474,3 +474,52 @@ fn radau_takes_the_contacts_in_the_differential_algebraic_form() {
     let last = run.trajectory.rows.last().expect("rows");
     assert!((last[2] - GRAVITY).abs() < 1e-9 * GRAVITY, "λ = {}", last[2]);
 }
+
+#[test]
+fn a_rod_landing_flat_lands_on_both_ends_at_once() {
+    // The centre (x, y) and the angle φ of a rod of half-length l, dropped flat from h.
+    let (mass, half, h, e): (f64, f64, f64, f64) = (2.0, 0.5, 1.0, 0.6);
+    let mut scene = Scene::new(&["x", "y", "phi"]);
+    let (y, phi) = (scene.q(1), scene.q(2));
+    let sin = scene.pool.sin(phi);
+    let arm = {
+        let l = scene.num(half);
+        scene.pool.mul(&[l, sin])
+    };
+    let left = scene.pool.sub(y, arm);
+    let right = scene.pool.add(&[y, arm]);
+    let m = scene.num(mass);
+    let inertia = scene.num(mass * half * half / 3.0);
+    let zero = scene.pool.zero();
+    let weight = scene.num(-mass * GRAVITY);
+    let mass_matrix = [m, zero, zero, zero, m, zero, zero, zero, inertia];
+    let mut problem = scene
+        .mechanical(
+            &mass_matrix,
+            &[zero, weight, zero],
+            &[Kept::Position(left), Kept::Position(right)],
+        )
+        .with_contacts(vec![
+            Contact { normal: 0, grip: None, restitution: e },
+            Contact { normal: 1, grip: None, restitution: e },
+        ]);
+    let t1 = (2.0 * h / GRAVITY).sqrt();
+    let run = run(
+        &mut problem,
+        &[0.0, h, 0.0, 0.0, 0.0, 0.0],
+        &settings(Method::Dop853, 1.5 * t1, 1e-10),
+    );
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    assert_eq!(run.modes.len(), 2, "{:?}", run.modes);
+    let v = GRAVITY * t1;
+    for (k, event) in run.modes.iter().enumerate() {
+        assert_eq!((event.contact, event.kind, event.closed), (k, ModeChange::Impact, false));
+        assert!((event.time - t1).abs() < 1e-12 * t1);
+        let expected = (1.0 + e) * mass * v / 2.0;
+        assert!((event.impulse - expected).abs() < 1e-9 * expected, "{}", event.impulse);
+    }
+    let end = &run.final_state;
+    assert!(end[2].abs() < 1e-12 && end[5].abs() < 1e-12, "it turned: {end:?}");
+    // Up at e·v, decelerating: at 1.5·t1 its rate is e·v − g·t1/2.
+    assert!((end[4] - (e * v - 0.5 * GRAVITY * t1)).abs() < 1e-9 * v, "{end:?}");
+}
