@@ -87,6 +87,9 @@ pub enum FaultKind {
     /// At the start, `contact`'s gap is `gap` < 0 beyond the touching tolerance: the start
     /// penetrates it.
     Penetrating { contact: usize, gap: f64 },
+    /// The problem's mode jumped `jumps` times in a row at the same time, the `guards` firing
+    /// again after each: its modes chatter there instead of settling on one.
+    ModesChatter { guards: Vec<usize>, jumps: usize },
     /// The complementarity problem of these contacts' impact (`impact`) or reactions has no
     /// solution: their gradients conflict with each other or the two-sided constraints.
     ContactsInconsistent { contacts: Vec<usize>, impact: bool },

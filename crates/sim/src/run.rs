@@ -209,7 +209,12 @@ pub(crate) struct Course<'r> {
     samples: usize,
     /// The problem's guards at the current time and state ([`Problem::guards`]).
     guards: Vec<f64>,
+    /// The time of the last jump, and how many jumps in a row were at that time.
+    jumped: (f64, usize),
 }
+
+/// The most jumps in a row at one time before a run says its modes chatter there.
+const CHATTER: usize = 64;
 
 impl<'r> Course<'r> {
     /// Starts a run at `y0` (sampling a held input there): the start recorded, or the run
@@ -292,6 +297,7 @@ impl<'r> Course<'r> {
             until: settings.until,
             samples: settings.samples,
             guards,
+            jumped: (f64::NAN, 0),
         })
     }
 
@@ -459,6 +465,12 @@ impl<'r> Course<'r> {
         fired: &[usize],
         progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
+        self.jumped = if self.jumped.0 == at { (at, self.jumped.1 + 1) } else { (at, 1) };
+        if self.jumped.1 > CHATTER {
+            let kind = FaultKind::ModesChatter { guards: fired.to_vec(), jumps: self.jumped.1 - 1 };
+            self.fail(problem, kind);
+            return ControlFlow::Break(());
+        }
         dense.interpolate(problem, at, &mut self.y);
         self.t = at;
         let jumped = problem.observe(at, &self.y, &mut self.row).and_then(|()| {

@@ -991,6 +991,12 @@ impl FaultNames<'_> {
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
+            FaultKind::ModesChatter { guards, jumps } => (
+                format!("contacts {guards:?} switched {jumps} times at the same instant"),
+                "a contact at the edge of opening and closing (a reaction that stays at zero): \
+                 a smaller tolerance, or a scene that decides it"
+                    .into(),
+            ),
             FaultKind::Penetrating { contact, gap } => (
                 format!("contact {contact} starts penetrating (its gap is {gap:.3e})"),
                 "start with every contact's gap ≥ 0".into(),

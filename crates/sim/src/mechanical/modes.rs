@@ -17,7 +17,8 @@
 //!   and at each jump. An open touching contact with γ below −tol·V/100 lands; a closed one
 //!   never does (its γ is drift), but takes part in the impact of those that land, with e = 0.
 //! - **pushing** (λ > 0): the complementarity problem of the reactions is solved to tol times
-//!   the largest |g̈| of its contacts with every contact open, and a contact whose reaction
+//!   the scale of g̈ with every contact open (the largest of its terms J·q̈ and γ, since g̈
+//!   itself passes through zero where a reaction vanishes), and a contact whose reaction
 //!   fell to zero (the lift-off its guard located) has that much added to its g̈ there, so
 //!   that it opens rather than closing again at the same instant.
 //! - **settling**: a contact that lands at |γ⁻| < tol·S, with S the largest |γ⁻| of its
@@ -378,15 +379,21 @@ impl Mechanical {
             solved?;
             self.solved = None;
             let free = self.solution[..n].to_vec();
+            // g̈ = J·q̈ − (γ, stabilised) with every contact open; the scale of its tolerance
+            // is that of its terms, since g̈ itself passes through zero where a reaction
+            // vanishes (at a lift-off).
+            let mut scale: f64 = 0.0;
             let mut b: Vec<f64> = rows
                 .multipliers
                 .iter()
                 .map(|&c| {
                     let row = self.jacobian_row(c);
-                    (0..n).map(|i| row[i] * free[i]).sum::<f64>() - self.stabilised(c)
+                    let (driven, imposed) =
+                        ((0..n).map(|i| row[i] * free[i]).sum::<f64>(), self.stabilised(c));
+                    scale = scale.max(driven.abs()).max(imposed.abs());
+                    driven - imposed
                 })
                 .collect();
-            let scale = b.iter().fold(0.0, |s: f64, v| s.max(v.abs()));
             for (r, kind) in rows.kinds.iter().enumerate() {
                 let k = rows.owners[r];
                 if *kind == Row::Normal && before[k] && fired.contains(&k) {

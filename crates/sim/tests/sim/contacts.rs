@@ -523,3 +523,47 @@ fn a_rod_landing_flat_lands_on_both_ends_at_once() {
     // Up at e·v, decelerating: at 1.5·t1 its rate is e·v − g·t1/2.
     assert!((end[4] - (e * v - 0.5 * GRAVITY * t1)).abs() < 1e-9 * v, "{end:?}");
 }
+
+#[test]
+fn a_particle_leaves_a_smooth_hemisphere_where_the_closed_form_says() {
+    // The particle at (x, y) outside the sphere x² + y² ≥ R², from θ0 off the top at v0.
+    let (mass, radius): (f64, f64) = (0.5, 2.0);
+    let leaves = |theta0: f64, v0: f64| {
+        let mut scene = Scene::new(&["x", "y"]);
+        let (x, y) = (scene.q(0), scene.q(1));
+        let two = scene.pool.int(2);
+        let (xx, yy) = (scene.pool.pow(x, two), scene.pool.pow(y, two));
+        let r2 = scene.num(radius * radius);
+        let sum = scene.pool.add(&[xx, yy]);
+        let gap = scene.pool.sub(sum, r2);
+        let m = scene.num(mass);
+        let zero = scene.pool.zero();
+        let weight = scene.num(-mass * GRAVITY);
+        let mut problem = scene
+            .mechanical(&[m, zero, zero, m], &[zero, weight], &[Kept::Position(gap)])
+            .with_contacts(vec![Contact { normal: 0, grip: None, restitution: 0.0 }]);
+        let (s, c) = numeric::elementary::sin_cos(theta0);
+        let y0 = [radius * s, radius * c, v0 * c, -v0 * s];
+        let run = run(&mut problem, &y0, &settings(Method::Dop853, 2.0, 1e-10));
+        assert!(run.fault.is_none(), "{:?} {:?}", run.fault, &run.modes[..run.modes.len().min(12)]);
+        (run.modes, run.trajectory)
+    };
+    for (theta0, v0) in [(0.1, 0.0), (0.3, 1.5), (0.0, 2.0)] {
+        let (modes, trajectory) = leaves(theta0, v0);
+        let lift = modes.iter().find(|m| m.kind == ModeChange::LiftOff).expect("it leaves");
+        let at = trajectory.times.iter().position(|&t| t == lift.time).expect("its rows");
+        let row = &trajectory.rows[at];
+        let cos = row[1] / (row[0] * row[0] + row[1] * row[1]).sqrt();
+        let expected =
+            2.0 / 3.0 * numeric::elementary::sin_cos(theta0).1 + v0 * v0 / (3.0 * GRAVITY * radius);
+        assert!((cos - expected).abs() < 1e-8, "θ0 {theta0}, v0 {v0}: cos θ {cos} for {expected}");
+        // Free, it flies as a projectile: x' constant, no reaction.
+        let after = &trajectory.rows[at + 1..];
+        assert!(after.iter().all(|r| (r[2] - after[0][2]).abs() < 1e-9 && r[4] == 0.0));
+    }
+    // From rest at the very top it never moves: an equilibrium.
+    let (modes, trajectory) = leaves(0.0, 0.0);
+    assert!(modes.iter().all(|m| m.kind == ModeChange::Closed), "{modes:?}");
+    let last = trajectory.rows.last().expect("rows");
+    assert!(last[0].abs() < 1e-12 && (last[4] * 2.0 * radius - mass * GRAVITY).abs() < 1e-9);
+}
