@@ -334,8 +334,9 @@ fn a_stack_of_eight_balls_rests_with_each_contact_bearing_the_weight_above_it() 
     stack(Method::Radau);
 }
 
-fn stack(method: Method) {
-    let (count, mass, radius) = (8, 0.5, 0.5);
+/// A column of `count` balls of `mass` and `radius` over a floor, each contact of
+/// restitution `restitution`.
+fn column(count: usize, mass: f64, radius: f64, restitution: f64) -> Mechanical {
     let names: Vec<String> = (0..count).map(|k| format!("y{k}")).collect();
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
     let mut scene = Scene::new(&names);
@@ -354,10 +355,13 @@ fn stack(method: Method) {
         let (centres, sum) = (scene.pool.sub(above, below), gap);
         kept.push(Kept::Position(scene.pool.sub(centres, sum)));
     }
-    let contacts =
-        (0..count).map(|k| Contact { normal: k, grip: None, restitution: 0.5 }).collect();
-    let mut problem =
-        scene.mechanical(&mass_matrix, &vec![weight; count], &kept).with_contacts(contacts);
+    let contacts = (0..count).map(|k| Contact { normal: k, grip: None, restitution }).collect();
+    scene.mechanical(&mass_matrix, &vec![weight; count], &kept).with_contacts(contacts)
+}
+
+fn stack(method: Method) {
+    let (count, mass, radius) = (8, 0.5, 0.5);
+    let mut problem = column(count, mass, radius, 0.5);
     let mut y0 = vec![0.0; 2 * count];
     for (k, centre) in y0[..count].iter_mut().enumerate() {
         *centre = radius + 2.0 * radius * k as f64;
@@ -566,4 +570,36 @@ fn a_particle_leaves_a_smooth_hemisphere_where_the_closed_form_says() {
     assert!(modes.iter().all(|m| m.kind == ModeChange::Closed), "{modes:?}");
     let last = trajectory.rows.last().expect("rows");
     assert!(last[0].abs() < 1e-12 && (last[4] * 2.0 * radius - mass * GRAVITY).abs() < 1e-9);
+}
+
+#[test]
+fn a_ball_dropped_plastically_on_a_resting_stack_strikes_every_contact_below() {
+    let (mass, radius, h) = (0.5, 0.5, 0.5);
+    let mut problem = column(3, mass, radius, 0.0);
+    let run = run(
+        &mut problem,
+        &[0.5, 1.5, 2.5 + h, 0.0, 0.0, 0.0],
+        &settings(Method::Dop853, 1.0, 1e-10),
+    );
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let t1 = (2.0 * h / GRAVITY).sqrt();
+    let momentum = mass * GRAVITY * t1;
+    let landing: Vec<_> = run.modes.iter().filter(|m| m.time > 0.0).collect();
+    assert_eq!(landing.len(), 3, "{landing:?}");
+    for (k, event) in landing.iter().enumerate() {
+        let kind = if k == 2 { ModeChange::Impact } else { ModeChange::Struck };
+        assert_eq!((event.contact, event.kind, event.closed), (k, kind, true));
+        assert!((event.time - t1).abs() < 1e-12);
+        // The floor stops the column at once: each contact passes the top ball's momentum.
+        assert!((event.impulse - momentum).abs() < 1e-9 * momentum, "{event:?}");
+    }
+    // The energy lost is the top ball's, taken at its own contact.
+    let lost = 0.5 * mass * (GRAVITY * t1) * (GRAVITY * t1);
+    assert!((landing[2].energy_change + lost).abs() < 1e-9 * lost);
+    assert!(landing[0].energy_change.abs() < 1e-9 * lost);
+    let last = run.trajectory.rows.last().expect("rows");
+    for k in 0..3 {
+        let expected = (3 - k) as f64 * mass * GRAVITY;
+        assert!((last[6 + k] - expected).abs() < 1e-9 * expected, "λ{k} {last:?}");
+    }
 }
