@@ -603,3 +603,73 @@ fn a_ball_dropped_plastically_on_a_resting_stack_strikes_every_contact_below() {
         assert!((last[6 + k] - expected).abs() < 1e-9 * expected, "λ{k} {last:?}");
     }
 }
+
+#[test]
+fn a_rimless_wheel_walks_down_a_slope_at_mcgeers_steady_rate() {
+    // Eight spokes of length l, 2α = π/4 apart, on a slope γ; in the slope's frame (x down it,
+    // y off it) the hub (x, y) and φ, spoke k at φ + 2αk from the slope's normal, its tip at
+    // (x + l·sin, y − l·cos), gripping and landing plastically.
+    let (mass, inertia, l, slope): (f64, f64, f64, f64) = (1.0, 0.1, 1.0, 0.1);
+    let spokes = 8;
+    let alpha = std::f64::consts::PI / spokes as f64;
+    let mut scene = Scene::new(&["x", "y", "phi"]);
+    let (x, y, phi) = (scene.q(0), scene.q(1), scene.q(2));
+    let length = scene.num(l);
+    let mut kept = Vec::new();
+    for k in 0..spokes {
+        let pi = scene.pool.pi();
+        let turn = scene.pool.ratio(2 * k as i64, spokes as i64);
+        let offset = scene.pool.mul(&[turn, pi]);
+        let angle = scene.pool.add(&[phi, offset]);
+        let (sin, cos) = (scene.pool.sin(angle), scene.pool.cos(angle));
+        let along = {
+            let arm = scene.pool.mul(&[length, sin]);
+            scene.pool.add(&[x, arm])
+        };
+        let height = {
+            let arm = scene.pool.mul(&[length, cos]);
+            scene.pool.sub(y, arm)
+        };
+        let slip = scene.along_rates(along);
+        kept.push(Kept::Position(height));
+        kept.push(Kept::Velocity(slip));
+    }
+    let m = scene.num(mass);
+    let i = scene.num(inertia);
+    let zero = scene.pool.zero();
+    let (s, c) = numeric::elementary::sin_cos(slope);
+    let down = scene.num(mass * GRAVITY * s);
+    let into = scene.num(-mass * GRAVITY * c);
+    let contacts = (0..spokes)
+        .map(|k| Contact { normal: 2 * k, grip: Some(2 * k + 1), restitution: 0.0 })
+        .collect();
+    let mut problem = scene
+        .mechanical(&[m, zero, zero, zero, m, zero, zero, zero, i], &[down, into, zero], &kept)
+        .with_contacts(contacts);
+    let whole = inertia + mass * l * l;
+    let (sin_a, cos_a) = numeric::elementary::sin_cos(alpha);
+    let ratio = (inertia + mass * l * l * (cos_a * cos_a - sin_a * sin_a)) / whole;
+    let lift = 4.0 * mass * GRAVITY * l * sin_a * s / whole;
+    let steady = ratio * lift.sqrt() / (1.0 - ratio * ratio).sqrt();
+    // Just after a landing on spoke 0 at φ = α, rolling downhill (φ decreasing) 10% fast.
+    let phi0 = alpha * (1.0 - 1e-6);
+    let (sp, cp) = numeric::elementary::sin_cos(phi0);
+    let omega = 1.1 * steady;
+    let y0 = [-l * sp, l * cp, phi0, l * cp * omega, l * sp * omega, -omega];
+    let mut settings = settings(Method::Dop853, 30.0, 1e-10);
+    settings.samples = 301;
+    let run = run(&mut problem, &y0, &settings);
+    assert!(run.fault.is_none(), "{:?}", run.fault);
+    let landings: Vec<_> = run.modes.iter().filter(|m| m.kind == ModeChange::Impact).collect();
+    assert!(landings.len() > 40, "{} landings", landings.len());
+    let mut rates = Vec::new();
+    for landing in &landings {
+        let at = run.trajectory.times.iter().position(|&t| t == landing.time).expect("rows");
+        let (before, after) = (run.trajectory.rows[at][5], run.trajectory.rows[at + 1][5]);
+        assert!((after / before - ratio).abs() < 1e-8, "ω⁺/ω⁻ {} for {ratio}", after / before);
+        rates.push(-after);
+    }
+    let last = *rates.last().expect("a landing");
+    println!("rimless wheel: {} landings, ω⁺ → {last} for {steady}", landings.len());
+    assert!((last - steady).abs() < 1e-8 * steady, "ω⁺ {last} for {steady}");
+}
