@@ -1,6 +1,9 @@
 //! Runs through one-sided contacts, each against its closed form: the bouncing ball's impacts
-//! and their accumulation, the ladder leaving the wall, a stack at rest, and a rocking block.
-//! The programs are built here from `cas` expressions lowered by `numeric`, as `engine` does.
+//! and their accumulation, the ladder leaving the wall, a particle leaving a hemisphere, a
+//! stack at rest and a ball dropped on one, a rod landing flat on both ends, a rocking block
+//! (Housner) and a rimless wheel (McGeer), under the explicit methods and under radau on the
+//! differential–algebraic form. The programs are built here from `cas` expressions lowered by
+//! `numeric`, as `engine` does.
 
 use std::ops::ControlFlow;
 
