@@ -360,6 +360,34 @@ impl Mechanical {
         Ok(())
     }
 
+    /// Moves the positions q = y[..n] onto the kept position constraints, Φ = 0, by the least
+    /// change in M's metric: one Newton step, [M −Jᵀ; J 0]·(Δq, μ) = (0, −Φ), enough for the
+    /// drift the stabilisation leaves. A jump of the contacts' modes puts the state on the new
+    /// mode's constraints with it, so that the stabilisation does not push a contact that just
+    /// closed below its surface back out (at the rate of the rocking it disturbs).
+    pub(crate) fn project_positions(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.dynamics_at(t, y)?;
+        let out = &self.dyn_out;
+        let mut change = vec![0.0; n + m];
+        for c in 0..m {
+            let base = n * n + n + c * (n + 3);
+            if self.kept[c] && self.stabilisation[c] == Stabilisation::Position {
+                change[n + c] = -out[base + n + 1];
+            }
+        }
+        let (pivots, kept) = (&mut self.pivots, &self.kept);
+        match self.small.as_mut() {
+            Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
+            None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
+        }
+        for (q, d) in y[..n].iter_mut().zip(&change[..n]) {
+            *q += d;
+        }
+        self.solved = None;
+        Ok(())
+    }
+
     /// After the augmented system [M −Jᵀ; J 0] failed: whether M itself or the constraint
     /// Jacobian J lost rank, the two faults a user fixes in different places.
     fn which_lost_rank(&self) -> FaultKind {

@@ -16,11 +16,19 @@
 //!   two), with V the larger of the largest |γ⁻| of its impacts and ‖J‖₁·‖q̇‖∞ at the start
 //!   and at each jump. An open touching contact with γ below −tol·V/100 lands; a closed one
 //!   never does (its γ is drift), but takes part in the impact of those that land, with e = 0.
+//!   A closed contact that such an impact separates stays closed below the larger of its band
+//!   and √(2·a·δ), the rate gained at its acceleration a (with every contact open) through
+//!   δ = 64 ulps of the positions times its gradient: below it the flights are rounding (a
+//!   rocking block's accumulating impacts otherwise end in a cycle that floating point keeps
+//!   up, at about 5·10⁻⁸ m/s for a 1 m block).
 //! - **pushing** (λ > 0): the complementarity problem of the reactions is solved to tol times
 //!   the scale of g̈ with every contact open (the largest of its terms J·q̈ and γ, since g̈
 //!   itself passes through zero where a reaction vanishes), and a contact whose reaction
 //!   fell to zero (the lift-off its guard located) has that much added to its g̈ there, so
 //!   that it opens rather than closing again at the same instant.
+//! - **guards**: a closed contact's is its reaction λ, an open one's its gap g, offset by a
+//!   little more than −g where it opened at g ≤ 0 (from a closed contact's drift), so that it
+//!   starts positive and a landing within the next step is seen, at the depth it left.
 //! - **settling**: a contact that lands at |γ⁻| < tol·S, with S the largest |γ⁻| of its
 //!   impacts so far, lands plastically (e = 0) and closes ([`ModeChange::Settled`]). For a
 //!   ball of restitution e landing at v, the impacts it would still have had take
@@ -40,6 +48,10 @@ use crate::{linalg, Contact, FaultKind, ModeChange, ModeEvent};
 const OPEN_BAND: f64 = 1e-2;
 /// The band of γ, in tol·V, within which a closed contact counts as at rest: its drift.
 const CLOSED_BAND: f64 = 1e2;
+/// The depth, in ulps of the positions (times the gap's gradient), that rounding moves a
+/// contact by: the floor of the rates a closed contact separates at and still counts as at
+/// rest.
+const ROUNDING: f64 = 64.0;
 
 /// The modes of the contacts, and the scales of their tolerances.
 #[derive(Clone, Debug, Default)]
@@ -54,6 +66,11 @@ pub(super) struct Modes {
     impacts: Vec<f64>,
     /// Each contact's rate scale V.
     speed: Vec<f64>,
+    /// Each open contact's guard is g + this: 0 for one that opened at g > 0, else a little
+    /// more than −g there, so that the guard starts positive and the contact lands again at
+    /// the depth it left (not deeper: a rocking block's corners would sink further at every
+    /// landing).
+    offset: Vec<f64>,
 }
 
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
@@ -80,6 +97,7 @@ impl Mechanical {
             length: vec![0.0; count],
             impacts: vec![0.0; count],
             speed: vec![0.0; count],
+            offset: vec![0.0; count],
         };
         self.contacts = contacts;
         self.update_kept();
@@ -103,6 +121,43 @@ impl Mechanical {
             self.kept[contact.normal] = closed;
             if let Some(grip) = contact.grip {
                 self.kept[grip] = closed;
+            }
+        }
+        self.solved = None;
+    }
+
+    /// Keeps out the grip rows of closed contacts that depend on the rows kept before them
+    /// (the two-sided ones, then each contact's normal and grip in turn), at the positions of
+    /// the last evaluation: two gripping corners of a block resting flat give four rows on
+    /// three degrees of freedom, and the augmented system would be singular. A grip row is a
+    /// velocity row, so one that depends on the others is held by them; its multiplier is 0.
+    fn drop_redundant_grips(&mut self) {
+        let m = self.layout.multipliers;
+        let two_sided = self.two_sided();
+        let mut order: Vec<usize> = (0..m).filter(|&c| two_sided[c]).collect();
+        for contact in &self.contacts {
+            order.push(contact.normal);
+            order.extend(contact.grip);
+        }
+        let grips: Vec<usize> = self.contacts.iter().filter_map(|c| c.grip).collect();
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        for c in order {
+            if !self.kept[c] {
+                continue;
+            }
+            let mut r = self.jacobian_row(c).to_vec();
+            let size = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            for b in &basis {
+                let dot: f64 = r.iter().zip(b).map(|(x, y)| x * y).sum();
+                for (x, y) in r.iter_mut().zip(b) {
+                    *x -= dot * y;
+                }
+            }
+            let rest = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if rest <= 1e-8 * size && grips.contains(&c) {
+                self.kept[c] = false;
+            } else if rest > 0.0 {
+                basis.push(r.iter().map(|x| x / rest).collect());
             }
         }
         self.solved = None;
@@ -226,7 +281,7 @@ impl Mechanical {
             out[k] = if self.modes.closed[k] {
                 self.solution[n + self.contacts[k].normal]
             } else {
-                self.gap(k)
+                self.gap(k) + self.modes.offset[k]
             };
         }
         Ok(())
@@ -361,24 +416,44 @@ impl Mechanical {
             rise = total > 1e3 * f64::EPSILON * kinetic.max(f64::MIN_POSITIVE);
             self.dynamics_at(t, y)?;
         }
-        // The touching contacts at rest: closed where their reactions push.
-        let resting: Vec<usize> = touching
-            .iter()
-            .copied()
-            .filter(|&k| self.normal_rate(k).abs() <= band(&self.modes, k, before[k] && !landed[k]))
-            .collect();
-        let mut closed = vec![false; count];
-        if !resting.is_empty() {
-            let rows = self.rows_of(&resting);
-            let (_, a) = self.condensed(&rows.multipliers)?;
-            // The accelerations with every contact open.
+        // The accelerations with every contact open.
+        let free = if touching.is_empty() {
+            Vec::new()
+        } else {
             let two_sided = self.two_sided();
             let kept = std::mem::replace(&mut self.kept, two_sided);
             let solved = self.solve_dynamics();
             self.kept = kept;
             solved?;
             self.solved = None;
-            let free = self.solution[..n].to_vec();
+            self.solution[..n].to_vec()
+        };
+        let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+        // The touching contacts at rest: closed where their reactions push. A closed one that
+        // an impact separates slower than the floating point of the positions can resolve
+        // (the rate gained falling through a few ulps of them, at its acceleration with every
+        // contact open) stays: below that, its flights are rounding, not motion.
+        let resting: Vec<usize> = touching
+            .iter()
+            .copied()
+            .filter(|&k| {
+                let rate = self.normal_rate(k).abs();
+                if !before[k] || landed[k] {
+                    return rate <= band(&self.modes, k, false);
+                }
+                let c = self.contacts[k].normal;
+                let row = self.jacobian_row(c);
+                let falling =
+                    (0..n).map(|i| row[i] * free[i]).sum::<f64>().abs() + self.stabilised(c).abs();
+                let gradient: f64 = row.iter().map(|v| v.abs()).sum();
+                let depth = ROUNDING * f64::EPSILON * gradient * size;
+                rate <= band(&self.modes, k, true).max((2.0 * falling * depth).sqrt())
+            })
+            .collect();
+        let mut closed = vec![false; count];
+        if !resting.is_empty() {
+            let rows = self.rows_of(&resting);
+            let (_, a) = self.condensed(&rows.multipliers)?;
             // g̈ = J·q̈ − (γ, stabilised) with every contact open; the scale of its tolerance
             // is that of its terms, since g̈ itself passes through zero where a reaction
             // vanishes (at a lift-off).
@@ -412,6 +487,24 @@ impl Mechanical {
         }
         self.modes.closed = closed.clone();
         self.update_kept();
+        self.drop_redundant_grips();
+        // The state onto the new mode's constraints: the closed contacts' gaps and rates (and
+        // the two-sided constraints') to zero, from the drift they had.
+        if self.kept.iter().any(|&k| k) {
+            self.project_positions(t, y)?;
+            self.project_velocities(t, y)?;
+            self.dynamics_at(t, y)?;
+        }
+        // An open contact's guard must start positive to see it land: one that opened at
+        // g ≤ 0 (a closed contact's drift) could otherwise fall back within a step unseen.
+        for k in 0..count {
+            let gap = self.gap(k);
+            self.modes.offset[k] = if gap > 0.0 || closed[k] {
+                0.0
+            } else {
+                -gap * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+            };
+        }
         let mut events = Vec::new();
         for k in 0..count {
             let kind = if landed[k] && !before[k] {

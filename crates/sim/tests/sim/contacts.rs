@@ -430,6 +430,9 @@ fn rocking(method: Method) {
     let (s0, c0) = numeric::elementary::sin_cos(phi0);
     let y0 = [-c0 * b - s0 * h, -s0 * b + c0 * h, phi0, 0.0, 0.0, 0.0];
     let run = run(&mut problem, &y0, &settings(method, 1.5, 1e-10));
+    // Radau's continuous extension, the collocation polynomial, is of order 3: the state it
+    // gives at an impact inside a step is less accurate than its steps' ends.
+    let accuracy = if method == Method::Radau { 1e-7 } else { 1e-8 };
     assert!(run.fault.is_none(), "{:?}", run.fault);
     // sin²α with α = atan(b/h).
     let ratio = 1.0 - 1.5 * b * b / (b * b + h * h);
@@ -440,7 +443,7 @@ fn rocking(method: Method) {
         let at = run.trajectory.times.iter().position(|&t| t == impact.time).expect("rows");
         let (before, after) = (run.trajectory.rows[at][5], run.trajectory.rows[at + 1][5]);
         let off = (after / before - ratio).abs();
-        assert!(off < 1e-8, "ω⁺/ω⁻ = {} for {ratio}: {off:e}", after / before);
+        assert!(off < accuracy, "ω⁺/ω⁻ = {} for {ratio}: {off:e}", after / before);
         // The corner left behind lifts off at the same instant, by complementarity.
         let other = 1 - impact.contact;
         assert!(run
@@ -451,6 +454,15 @@ fn rocking(method: Method) {
         seen += 1;
     }
     println!("block ({method:?}): {seen} impacts at ω⁺/ω⁻ = {ratio}");
+    // Its rocking accumulates too: it comes to rest on both corners.
+    let long = self::run(&mut problem, &y0, &settings(method, 10.0, 1e-10));
+    assert!(long.fault.is_none(), "{:?}", long.fault);
+    let last = long.trajectory.rows.last().expect("rows");
+    println!("block ({method:?}) at rest after {} steps, {} events", long.steps, long.modes.len());
+    assert!(long.steps < 1000);
+    let half = 0.5 * mass * GRAVITY;
+    assert!((last[6] - half).abs() < 1e-6 * half && (last[8] - half).abs() < 1e-6 * half);
+    assert!(last[2].abs() < 1e-9 && last[3..6].iter().all(|v| v.abs() < 1e-9), "{last:?}");
 }
 
 #[test]
