@@ -3,6 +3,20 @@
 //! Newton's law, the reactions' complementarity problem that says which touching contacts
 //! close, lift-offs, and the settling of accumulating impacts.
 //!
+//! # A jump
+//!
+//! 1. The touching contacts (the closed ones, and the open ones at g ≈ 0) are found. If an
+//!    open one lands (γ < 0), all of them and the two-sided constraints take one impulse:
+//!    the complementarity problem of the Delassus operator A = W·S·Wᵀ (S the mass block of
+//!    the inverse of the augmented system that keeps the two-sided rows alone) with
+//!    c = (1 + e)·γ⁻ per normal row (e = 0 for a contact that was closed, whose γ is drift),
+//!    c = γ_T⁻ per grip row; then q̇⁺ = q̇⁻ + S·Wᵀ·Λ.
+//! 2. Of the touching contacts at rest (γ ≈ 0) after it, the reactions' complementarity
+//!    problem g̈ = A·λ + b closes those that push and opens the rest; the others open.
+//! 3. The state is projected onto the new mode's constraints, positions then rates (the
+//!    drift the stabilisation would otherwise push back out, adding energy), and a closed
+//!    contact's grip row that depends on the rows kept before it is left out of the solves.
+//!
 //! # Tolerances
 //!
 //! Each is the run's tolerance `tol` (relative) times a scale of the contact's own, so that
