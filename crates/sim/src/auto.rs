@@ -133,6 +133,11 @@ impl Dense for Auto {
         }
     }
 
+    fn after_switch(&mut self) {
+        self.explicit.after_switch();
+        self.radau.after_switch();
+    }
+
     fn after_jump(&mut self) {
         self.explicit.after_jump();
         self.radau.after_jump();

@@ -3,7 +3,7 @@
 //! that an implicit method integrates with no stabilisation.
 
 use crate::mechanical::{Layout, Mechanical, Stabilisation};
-use crate::{Components, FaultKind, NonFiniteAt, Problem};
+use crate::{Components, FaultKind, ModeEvent, NonFiniteAt, Problem};
 
 /// y = (q, v, a, λ) with
 ///
@@ -15,7 +15,9 @@ use crate::{Components, FaultKind, NonFiniteAt, Problem};
 ///        0  = A(q)·v + b    for each kept velocity constraint
 /// ```
 ///
-/// a mass matrix diag(I, I, 0, 0). The constraints hold at the position (or velocity) level
+/// a mass matrix diag(I, I, 0, 0). An open contact's rows ([`Mechanical::with_contacts`]) are
+/// 0 = λ instead, and its multipliers leave the residual; its modes jump as the stabilised
+/// form's do, the accelerations and multipliers solved anew after each jump. The constraints hold at the position (or velocity) level
 /// itself, so they do not drift as the second-derivative form J·a = γ lets them; q, v, a and λ
 /// are indices 1, 2, 3, 3 (velocity constraints alone: 1, 1, 2, 2), which the method's error
 /// control and Newton's iteration weigh by powers of the step.
@@ -64,6 +66,7 @@ impl Problem for Constrained {
         let (a, lambda) = (&y[2 * n..3 * n], &y[3 * n..]);
         out[..n].copy_from_slice(&y[n..2 * n]);
         out[n..2 * n].copy_from_slice(a);
+        let kept = self.inner.kept().to_vec();
         let dynamics = self.inner.dynamics_at(t, &y[..2 * n])?;
         // M is stored by columns, then f, then per constraint its J row, γ, Φ and Φ̇.
         let rows = n * n + n;
@@ -73,13 +76,16 @@ impl Problem for Constrained {
                 r += dynamics[j * n + i] * a[j];
             }
             for (c, l) in lambda.iter().enumerate() {
-                r -= dynamics[rows + c * (n + 3) + i] * l;
+                if kept[c] {
+                    r -= dynamics[rows + c * (n + 3) + i] * l;
+                }
             }
             out[2 * n + i] = r;
         }
         for c in 0..m {
-            // Φ for a position constraint, A·q̇ + b for a velocity constraint.
-            out[3 * n + c] = dynamics[rows + c * (n + 3) + n + 1];
+            // Φ for a position constraint, A·q̇ + b for a velocity constraint; λ for an open
+            // contact's row.
+            out[3 * n + c] = if kept[c] { dynamics[rows + c * (n + 3) + n + 1] } else { lambda[c] };
         }
         // (q̇, q̈) = (v, a), then each coordinate's equation, then each constraint.
         crate::check_finite(out, |i| match i {
@@ -113,6 +119,7 @@ impl Problem for Constrained {
             jac[i * d + n + i] = 1.0;
             jac[(n + i) * d + 2 * n + i] = 1.0;
         }
+        let kept = self.inner.kept().to_vec();
         let dynamics = self.inner.dynamics_at(t, &y[..2 * n])?;
         let rows = n * n + n;
         for i in 0..n {
@@ -121,9 +128,13 @@ impl Problem for Constrained {
                 // M is stored by columns.
                 jac[row + 2 * n + j] = dynamics[j * n + i];
             }
-            for c in 0..m {
+            for c in (0..m).filter(|&c| kept[c]) {
                 jac[row + 3 * n + c] = -dynamics[rows + c * (n + 3) + i];
             }
+        }
+        // An open contact's row is 0 = λ.
+        for c in (0..m).filter(|&c| !kept[c]) {
+            jac[(3 * n + c) * d + 3 * n + c] = 1.0;
         }
         let Some(partials) = self.inner.partials_at(t, &y[..2 * n], &y[2 * n..])? else {
             return Ok(false);
@@ -133,7 +144,7 @@ impl Problem for Constrained {
             let row = (2 * n + i) * d;
             jac[row..row + 2 * n].copy_from_slice(&partials[i * 2 * n..(i + 1) * 2 * n]);
         }
-        for c in 0..m {
+        for c in (0..m).filter(|&c| kept[c]) {
             let row = (3 * n + c) * d;
             let phi = (n + m + c) * 2 * n;
             jac[row..row + 2 * n].copy_from_slice(&partials[phi..phi + 2 * n]);
@@ -192,6 +203,46 @@ impl Problem for Constrained {
         }
         let n = self.layout().coordinates;
         self.inner.project_velocities(t, &mut y[..2 * n])
+    }
+
+    fn guards(&self) -> usize {
+        self.inner.guards()
+    }
+
+    /// The stabilised form's guards, with the reactions as the constraints themselves give
+    /// them (no stabilisation).
+    fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        let n = self.layout().coordinates;
+        self.inner.unstabilised(|inner| inner.guard_values(t, &y[..2 * n], out))
+    }
+
+    /// The stabilised form's start, then the accelerations and multipliers of the mode there.
+    fn begin_modes(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let n = self.layout().coordinates;
+        let events =
+            self.inner.unstabilised(|inner| inner.begin_modes(t, &mut y[..2 * n], tolerance))?;
+        let solved = self.inner.unstabilised_accelerations(t, &y[..2 * n])?;
+        y[2 * n..].copy_from_slice(&solved);
+        Ok(events)
+    }
+
+    /// The stabilised form's jump, then the accelerations and multipliers of the new mode.
+    fn jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        fired: &[usize],
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let n = self.layout().coordinates;
+        let events = self.inner.unstabilised(|inner| inner.jump(t, &mut y[..2 * n], fired))?;
+        let solved = self.inner.unstabilised_accelerations(t, &y[..2 * n])?;
+        y[2 * n..].copy_from_slice(&solved);
+        Ok(events)
     }
 
     fn physical(&mut self, _t: f64, y: &[f64]) -> Vec<f64> {

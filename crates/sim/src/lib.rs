@@ -13,11 +13,13 @@
 //! the fastest mode of a Jacobian and the step an explicit method is stable at for it,
 //! events located on the dense output, signals given as time series put into their parameter
 //! slots before each evaluation, laws of the state held between samples (a zero-order hold, at
-//! whose samples a run stops and restarts its method), the measurements of a run (steps, evaluations,
-//! Jacobians, factorizations, energy and constraint drift), and the complementarity problems of
-//! contacts (`complementarity`: the impulses of an impact, the forces of touching contacts). It
-//! works on numbered slots and [`numeric::Tape`]s: it knows no symbols, names or files, and
-//! nothing of how the equations were derived.
+//! whose samples a run stops and restarts its method), one-sided contacts (their modes, guards
+//! located on the dense output, impacts and lift-offs as jumps after which a run restarts its
+//! method) with the complementarity problems they pose (`complementarity`: the impulses of an
+//! impact, the forces of touching contacts), and the measurements of a run (steps,
+//! evaluations, Jacobians, factorizations, energy and constraint drift). It works on numbered
+//! slots and [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the
+//! equations were derived.
 
 // Numeric kernels index several arrays in step; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
@@ -25,6 +27,7 @@
 mod auto;
 pub mod complementarity;
 mod constrained;
+mod contact;
 mod erk;
 mod gauss;
 mod hold;
@@ -39,6 +42,7 @@ mod spectrum;
 mod stepper;
 
 pub use constrained::Constrained;
+pub use contact::{Contact, ModeChange, ModeEvent};
 pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
@@ -81,6 +85,18 @@ pub enum FaultKind {
     NewtonStalled { step: f64, contraction: f64, singular: bool, exact_jacobian: bool },
     /// The run took more steps than allowed.
     TooManySteps { limit: usize },
+    /// At the start, `contact`'s gap is `gap` < 0 beyond the touching tolerance: the start
+    /// penetrates it.
+    Penetrating { contact: usize, gap: f64 },
+    /// The problem's mode jumped `jumps` times in a row at the same time, the `guards` firing
+    /// again after each: its modes chatter there instead of settling on one.
+    ModesChatter { guards: Vec<usize>, jumps: usize },
+    /// The complementarity problem of these contacts' impact (`impact`) or reactions has no
+    /// solution: their gradients conflict with each other or the two-sided constraints.
+    ContactsInconsistent { contacts: Vec<usize>, impact: bool },
+    /// The complementarity problem of these contacts' impact (`impact`) or reactions could not
+    /// be solved, though it may have a solution: `why` says what stopped the solver.
+    ContactsUnsolved { contacts: Vec<usize>, impact: bool, why: &'static str },
 }
 
 /// Which value came out NaN or infinite: each names the array it indexes, so that a front end
@@ -168,6 +184,40 @@ pub trait Problem {
     fn project(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
         let _ = (t, y);
         Ok(())
+    }
+    /// The number of guards: functions of (t, y) positive while the problem's current mode
+    /// (which contacts are closed, say) holds. None by default.
+    fn guards(&self) -> usize {
+        0
+    }
+    /// Writes the guards' values at (t, y) to `out`. A run watches each that goes from > 0 to
+    /// ≤ 0 over a step, locates the earliest such crossing and calls [`Problem::jump`] there.
+    fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        let _ = (t, y, out);
+        Ok(())
+    }
+    /// Decides the mode at the start of a run of tolerance `tolerance` at (t, y), changing `y`
+    /// in place where that takes an impulse (a contact closing at the start), and says what
+    /// happened.
+    fn begin_modes(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let _ = (t, y, tolerance);
+        Ok(Vec::new())
+    }
+    /// Jumps at (t, y), where the guards `fired` reached zero: changes the mode and the state
+    /// in place and says what happened. The run restarts its method after it.
+    fn jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        fired: &[usize],
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let _ = (t, y, fired);
+        Ok(Vec::new())
     }
     /// The state in the physical variables (q, q̇), for reports of a fault or a run's end.
     fn physical(&mut self, t: f64, y: &[f64]) -> Vec<f64> {

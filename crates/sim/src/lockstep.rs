@@ -80,10 +80,11 @@ struct Lane {
 impl Lockstep {
     /// Runs of `problem` (its parameters set per run) by `settings`; `None` when the lockstep
     /// does not serve them, and each run is better taken alone: a method other than the
-    /// adaptive explicit pairs, or parameters that follow a series or a held law.
+    /// adaptive explicit pairs, parameters that follow a series or a held law, or a problem
+    /// with guards (one-sided contacts), whose jumps the lockstep does not take.
     pub fn new(problem: &Mechanical, settings: &Settings) -> Option<Lockstep> {
         let pair = settings.method.lockstep_pair()?;
-        if !problem.has_fixed_parameters() {
+        if !problem.has_fixed_parameters() || problem.guards() > 0 {
             return None;
         }
         let d = problem.dim();

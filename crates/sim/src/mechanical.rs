@@ -6,10 +6,11 @@ use nalgebra::DMatrix;
 use numeric::Tape;
 
 use crate::linalg::{self, Small, Square};
-use crate::{check_finite, rate, FaultKind, Hold, NonFiniteAt, Problem, Series};
+use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, Series};
 
 mod jacobian;
 mod many;
+mod modes;
 
 pub(crate) use many::{finite_lanes, solve_lanes};
 
@@ -116,6 +117,14 @@ pub struct Mechanical {
     hold: Option<Hold>,
     /// The dynamics program over many states at once, made on the first [`Mechanical::rhs_many`].
     many: Option<many::Many>,
+    /// The one-sided contacts among the kept constraints ([`Mechanical::with_contacts`]).
+    contacts: Vec<Contact>,
+    /// Whether each multiplier's row is kept now: a two-sided one always, a contact's while it
+    /// is closed. A row not kept gives λ = 0: its row and column of the augmented system are
+    /// the identity's, its right-hand side 0.
+    kept: Vec<bool>,
+    /// The contacts' modes and the scales their tolerances are measured against.
+    modes: modes::Modes,
 }
 
 impl Mechanical {
@@ -150,6 +159,9 @@ impl Mechanical {
             signals: Vec::new(),
             hold: None,
             many: None,
+            contacts: Vec::new(),
+            kept: vec![true; layout.multipliers],
+            modes: modes::Modes::default(),
         }
     }
 
@@ -234,6 +246,20 @@ impl Mechanical {
         &self.stabilisation
     }
 
+    /// Whether each multiplier's row is kept now (an open contact's is not).
+    pub(crate) fn kept(&self) -> &[bool] {
+        &self.kept
+    }
+
+    /// `run` on the problem with no Baumgarte stabilisation: the constraints' second
+    /// derivatives as they are, as the differential–algebraic form holds them.
+    pub(crate) fn unstabilised<T>(&mut self, run: impl FnOnce(&mut Self) -> T) -> T {
+        let rate = std::mem::replace(&mut self.baumgarte, 0.0);
+        let result = run(self);
+        self.baumgarte = rate;
+        result
+    }
+
     /// q̈ and λ at (t, q, q̇) from the constraints' second derivatives alone, J q̈ = γ, with no
     /// stabilisation: the consistent start of the differential–algebraic form.
     pub(crate) fn unstabilised_accelerations(
@@ -267,14 +293,15 @@ impl Mechanical {
             let base = n * n + n + c * (n + 3);
             let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
             self.solution[n + c] = match self.stabilisation[c] {
+                _ if !self.kept[c] => 0.0,
                 Stabilisation::Position => gamma - 2.0 * a * phi_rate - a * a * phi,
                 Stabilisation::Velocity => gamma - a * phi,
             };
         }
-        let (solution, pivots) = (&mut self.solution, &mut self.pivots);
+        let (solution, pivots, kept) = (&mut self.solution, &mut self.pivots, &self.kept);
         let solved = match self.small.as_mut() {
-            Some(small) => solve_system(out, self.layout, small, solution, pivots),
-            None => solve_system(out, self.layout, &mut self.system, solution, pivots),
+            Some(small) => solve_system(out, self.layout, kept, small, solution, pivots),
+            None => solve_system(out, self.layout, kept, &mut self.system, solution, pivots),
         };
         match solved {
             Ok(()) => {
@@ -317,18 +344,47 @@ impl Mechanical {
         for c in 0..m {
             let base = n * n + n + c * (n + 3);
             change[n + c] = -match self.stabilisation[c] {
+                _ if !self.kept[c] => 0.0,
                 Stabilisation::Position => out[base + n + 2],
                 Stabilisation::Velocity => out[base + n + 1],
             };
         }
-        let pivots = &mut self.pivots;
+        let (pivots, kept) = (&mut self.pivots, &self.kept);
         match self.small.as_mut() {
-            Some(small) => solve_system(out, self.layout, small, &mut change, pivots)?,
-            None => solve_system(out, self.layout, &mut self.system, &mut change, pivots)?,
+            Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
+            None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
         }
         for (v, d) in y[n..2 * n].iter_mut().zip(&change[..n]) {
             *v += d;
         }
+        Ok(())
+    }
+
+    /// Moves the positions q = y[..n] onto the kept position constraints, Φ = 0, by the least
+    /// change in M's metric: one Newton step, [M −Jᵀ; J 0]·(Δq, μ) = (0, −Φ), enough for the
+    /// drift the stabilisation leaves. A jump of the contacts' modes puts the state on the new
+    /// mode's constraints with it, so that the stabilisation does not push a contact that just
+    /// closed below its surface back out (at the rate of the rocking it disturbs).
+    pub(crate) fn project_positions(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        self.dynamics_at(t, y)?;
+        let out = &self.dyn_out;
+        let mut change = vec![0.0; n + m];
+        for c in 0..m {
+            let base = n * n + n + c * (n + 3);
+            if self.kept[c] && self.stabilisation[c] == Stabilisation::Position {
+                change[n + c] = -out[base + n + 1];
+            }
+        }
+        let (pivots, kept) = (&mut self.pivots, &self.kept);
+        match self.small.as_mut() {
+            Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
+            None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
+        }
+        for (q, d) in y[..n].iter_mut().zip(&change[..n]) {
+            *q += d;
+        }
+        self.solved = None;
         Ok(())
     }
 
@@ -342,14 +398,27 @@ impl Mechanical {
         if let Err(fault) = linalg::lu_in_place(&mut mass, &mut pivots) {
             return fault;
         }
-        let jacobian = DMatrix::from_fn(m, n, |c, j| out[n * n + n + c * (n + 3) + j]);
-        FaultKind::SingularConstraints { constraints: linalg::dependent_rows(&jacobian) }
+        // The rows kept now: an open contact's is no constraint.
+        let rows: Vec<usize> = (0..m).filter(|&c| self.kept[c]).collect();
+        let jacobian =
+            DMatrix::from_fn(rows.len(), n, |r, j| out[n * n + n + rows[r] * (n + 3) + j]);
+        let dependent = linalg::dependent_rows(&jacobian);
+        FaultKind::SingularConstraints { constraints: dependent.iter().map(|&r| rows[r]).collect() }
     }
 
-    /// |Φ| of each kept constraint at the last evaluation.
+    /// Φ of each kept constraint at the last evaluation (0 for an open contact's rows, which
+    /// are no constraints while open).
     pub fn constraint_values(&self) -> impl Iterator<Item = f64> + '_ {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
-        (0..m).map(move |c| self.dyn_out[n * n + n + c * (n + 3) + n + 1])
+        (0..m).map(
+            move |c| {
+                if self.kept[c] {
+                    self.dyn_out[n * n + n + c * (n + 3) + n + 1]
+                } else {
+                    0.0
+                }
+            },
+        )
     }
 }
 
@@ -406,6 +475,36 @@ impl Problem for Mechanical {
         self.observe_given(t, y, &solution, out);
         self.solution = solution;
         Ok(())
+    }
+
+    /// One per contact: its reaction λ while closed, its gap g while open.
+    fn guards(&self) -> usize {
+        self.contacts.len()
+    }
+
+    fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        self.contact_guards(t, y, out)
+    }
+
+    fn begin_modes(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<crate::ModeEvent>, FaultKind> {
+        if self.contacts.is_empty() {
+            return Ok(Vec::new());
+        }
+        self.begin_contacts(t, y, tolerance)
+    }
+
+    fn jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        fired: &[usize],
+    ) -> Result<Vec<crate::ModeEvent>, FaultKind> {
+        self.contact_jump(t, y, fired)
     }
 }
 
@@ -586,8 +685,9 @@ impl Canonical {
     }
 }
 
-/// Writes the augmented matrix [M −Jᵀ; J 0] of the dynamics outputs `out` into `a`.
-fn load_system(out: &[f64], layout: Layout, a: &mut impl Square) {
+/// Writes the augmented matrix [M −Jᵀ; J 0] of the dynamics outputs `out` into `a`, with the
+/// identity's row and column for each multiplier not `kept`.
+fn load_system(out: &[f64], layout: Layout, kept: &[bool], a: &mut impl Square) {
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     for j in 0..n {
         for i in 0..n {
@@ -597,12 +697,12 @@ fn load_system(out: &[f64], layout: Layout, a: &mut impl Square) {
     for c in 0..m {
         let base = n * n + n + c * (n + 3);
         for j in 0..n {
-            let jac = out[base + j];
+            let jac = if kept[c] { out[base + j] } else { 0.0 };
             a[(n + c, j)] = jac;
             a[(j, n + c)] = -jac;
         }
         for d in 0..m {
-            a[(n + c, n + d)] = 0.0;
+            a[(n + c, n + d)] = if !kept[c] && c == d { 1.0 } else { 0.0 };
         }
     }
 }
@@ -612,13 +712,14 @@ fn load_system(out: &[f64], layout: Layout, a: &mut impl Square) {
 fn solve_system<M: Square>(
     out: &[f64],
     layout: Layout,
+    kept: &[bool],
     a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
 ) -> Result<(), FaultKind> {
-    load_system(out, layout, a);
+    load_system(out, layout, kept, a);
     if layout.multipliers == 0 {
-        linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, a))
+        linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, kept, a))
     } else {
         linalg::solve_general(a, b, pivots)
     }

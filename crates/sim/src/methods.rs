@@ -81,6 +81,13 @@ pub struct Entry {
     /// Whether it interpolates inside a step by a continuous extension of its own order;
     /// otherwise by the cubic Hermite of the step's ends.
     pub dense_output: bool,
+    /// Whether a run of it carries on through the jumps of one-sided contacts (guards located
+    /// on its dense output, the mode switched, the method restarted with
+    /// `Dense::after_switch`): the methods of the physical form, `auto` with them, and radau
+    /// on the differential–algebraic form (`Constrained`, whose open contacts' rows are
+    /// 0 = λ, its accelerations and multipliers solved anew after each jump). The canonical
+    /// form keeps no multipliers.
+    pub contacts: bool,
     /// For an explicit method, what limits its step's stability; `None` for implicit ones.
     pub(crate) explicit: Option<Explicit>,
     /// The methods a switching method runs by turns, starting with the first and changing at
@@ -102,6 +109,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Unused,
         dense_output: false,
+        contacts: true,
         explicit: Some(Explicit::Fixed(RK4_TABLEAU)),
         sides: &[],
         stepper: |s, p| Box::new(Rk4::new(p.dim(), s.step)),
@@ -116,6 +124,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Unused,
         dense_output: true,
+        contacts: true,
         explicit: Some(Explicit::Pair(Pair::Bs3)),
         sides: &[],
         stepper: |s, p| Box::new(Adaptive::for_tolerance(Pair::Bs3, p.dim(), s.tolerance)),
@@ -130,6 +139,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Unused,
         dense_output: true,
+        contacts: true,
         explicit: Some(Explicit::Pair(Pair::Dopri5)),
         sides: &[],
         stepper: |s, p| Box::new(Adaptive::for_tolerance(Pair::Dopri5, p.dim(), s.tolerance)),
@@ -144,6 +154,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Unused,
         dense_output: true,
+        contacts: true,
         explicit: Some(Explicit::Pair(Pair::Dop853)),
         sides: &[],
         stepper: |s, p| Box::new(Adaptive::for_tolerance(Pair::Dop853, p.dim(), s.tolerance)),
@@ -158,6 +169,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: true,
         jacobian: Jacobian::Newton,
         dense_output: false,
+        contacts: false,
         explicit: None,
         sides: &[],
         stepper: |s, p| Box::new(Gauss::new(1, p.dim(), s.step)),
@@ -172,6 +184,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: true,
         jacobian: Jacobian::Newton,
         dense_output: false,
+        contacts: false,
         explicit: None,
         sides: &[],
         stepper: |s, p| Box::new(Gauss::new(2, p.dim(), s.step)),
@@ -187,6 +200,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::Newton,
         dense_output: true,
+        contacts: true,
         explicit: None,
         sides: &[],
         stepper: |s, p| Box::new(Radau::new(p.components(), s.tolerance)),
@@ -202,6 +216,7 @@ pub static TABLE: [Entry; 8] = [
         symplectic: false,
         jacobian: Jacobian::OnSwitch,
         dense_output: true,
+        contacts: true,
         explicit: None,
         sides: &crate::auto::SIDES,
         stepper: |s, p| Box::new(Auto::new(p.dim(), s.tolerance)),
@@ -295,6 +310,12 @@ impl Method {
         self.form() != Form::Canonical
     }
 
+    /// Whether a run of the method carries on through contacts opening, closing and landing
+    /// (see [`Entry::contacts`]).
+    pub fn handles_contacts(self) -> bool {
+        self.entry().contacts
+    }
+
     /// Whether the method integrates differential–algebraic problems (see
     /// [`crate::Components`]); it then takes constraints kept with multipliers as they are,
     /// with no stabilisation.
@@ -361,6 +382,8 @@ mod tests {
                 assert!(entry.adaptive, "{}", entry.name);
             }
             assert!(!(m.is_explicit() && m.uses_jacobian()), "{}", entry.name);
+            // Contacts are kept multipliers whose modes jump: never in canonical variables.
+            assert!(!entry.contacts || m.handles_multipliers(), "{}", entry.name);
             // A switching method runs each of its sides in the form it integrates.
             for side in entry.sides {
                 assert!(side.sides().is_empty() && side.handles_multipliers(), "{}", entry.name);

@@ -529,6 +529,13 @@ impl Dense for Radau {
         self.jac_fresh = false;
     }
 
+    /// A new mode has other equations: a fresh Jacobian and factors for the next step.
+    fn after_switch(&mut self) {
+        self.after_jump();
+        self.jac_wanted = true;
+        self.factored = 0.0;
+    }
+
     fn interpolate(&mut self, _p: &mut dyn Problem, t: f64, out: &mut [f64]) {
         let Some(last) = &self.last else { return };
         let s = (t - last.t0) / last.h;

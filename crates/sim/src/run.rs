@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use crate::stepper::Dense;
-use crate::{Fault, FaultKind, Method, Problem};
+use crate::{Fault, FaultKind, Method, ModeEvent, Problem};
 
 #[derive(Clone, Debug)]
 pub struct Settings {
@@ -79,6 +79,10 @@ pub struct Run {
     /// accepted steps before the end, and the end (a stop's point, not the step past it).
     pub extremes: Vec<(f64, f64)>,
     pub events: Vec<EventHit>,
+    /// The jumps of the problem's modes, in time order: contacts landing, settling, closing
+    /// and lifting off ([`Problem::jump`]). A jump's time has two recorded rows, the one
+    /// before it and the one after.
+    pub modes: Vec<ModeEvent>,
     /// The stop event that ended the run, if one did.
     pub stopped_by: Option<usize>,
     pub fault: Option<Fault>,
@@ -104,7 +108,10 @@ pub struct Segment {
 /// Integrates `problem` from `y0` at `settings.start` to `settings.until`, recording the
 /// observations at every accepted step (and at located events). A problem that samples held
 /// inputs ([`Problem::next_sample`]) is sampled at the start and at each sample time, where a
-/// step ends and the method restarts. A fault ends the run early: what was computed up to it
+/// step ends and the method restarts. A problem with guards ([`Problem::guards`]: one-sided
+/// contacts) decides its mode at the start ([`Problem::begin_modes`]); where a guard reaches
+/// zero inside a step, the step is cut there, the rows before and after the jump
+/// ([`Problem::jump`]) are recorded at its time, and the method restarts ([`Run::modes`]). A fault ends the run early: what was computed up to it
 /// is kept, and the fault says when and where. `progress` is told the time after every
 /// accepted step and may end the run there ([`Run::interrupted`]); it is the one hook a front
 /// end has into the loop, so a check it makes should be cheap or throttled.
@@ -200,7 +207,14 @@ pub(crate) struct Course<'r> {
     sampler: Sampler,
     until: f64,
     samples: usize,
+    /// The problem's guards at the current time and state ([`Problem::guards`]).
+    guards: Vec<f64>,
+    /// The time of the last jump, and how many jumps in a row were at that time.
+    jumped: (f64, usize),
 }
+
+/// The most jumps in a row at one time before a run says its modes chatter there.
+const CHATTER: usize = 64;
 
 impl<'r> Course<'r> {
     /// Starts a run at `y0` (sampling a held input there): the start recorded, or the run
@@ -222,6 +236,7 @@ impl<'r> Course<'r> {
             peaks: Vec::new(),
             extremes: Vec::new(),
             events: Vec::new(),
+            modes: Vec::new(),
             stopped_by: None,
             fault: None,
             final_state: Vec::new(),
@@ -231,16 +246,43 @@ impl<'r> Course<'r> {
         };
         let mut y = y0.to_vec();
         let mut row = vec![0.0; problem.observations()];
+        let mut guards = vec![0.0; problem.guards()];
         // A held input's first sample is at the start.
         let next_sample = problem.next_sample(t);
-        if let Err(kind) = problem.sample(t, &mut y).and_then(|()| problem.observe(t, &y, &mut row))
-        {
+        // The modes are decided at the start: an impulse there (a contact landing at the
+        // start) is an impact at the start, recorded with a row before it (the given state, in
+        // the mode decided) and one after.
+        let mut before = None;
+        let started = problem.sample(t, &mut y).and_then(|()| {
+            if !guards.is_empty() {
+                let given = y.clone();
+                run.modes = problem.begin_modes(t, &mut y, settings.tolerance)?;
+                let struck =
+                    |m: &ModeEvent| m.impulse != 0.0 || m.tangential.is_some_and(|l| l != 0.0);
+                if run.modes.iter().any(struck) {
+                    let mut open = vec![0.0; row.len()];
+                    problem.observe(t, &given, &mut open)?;
+                    before = Some(open);
+                }
+                problem.guard_values(t, &y, &mut guards)?;
+            }
+            problem.observe(t, &y, &mut row)
+        });
+        if let Err(kind) = started {
             run.fault = Some(fault(problem, kind, t, &y));
             run.final_state = problem.physical(t, &y);
             return Err(Box::new(run));
         }
         run.peaks = row.iter().map(|v| v.abs()).collect();
         run.extremes = row.iter().map(|v| (*v, *v)).collect();
+        if let Some(open) = before {
+            widen(&mut run.extremes, &open);
+            for (peak, v) in run.peaks.iter_mut().zip(&open) {
+                *peak = peak.max(v.abs());
+            }
+            run.trajectory.times.push(t);
+            run.trajectory.rows.push(open);
+        }
         run.trajectory.times.push(t);
         run.trajectory.rows.push(row.clone());
         Ok(Course {
@@ -254,6 +296,8 @@ impl<'r> Course<'r> {
             sampler: Sampler::new(settings),
             until: settings.until,
             samples: settings.samples,
+            guards,
+            jumped: (f64::NAN, 0),
         })
     }
 
@@ -298,12 +342,27 @@ impl<'r> Course<'r> {
             self.fail(problem, kind);
             return ControlFlow::Break(());
         }
-        for (peak, v) in run.peaks.iter_mut().zip(&self.row) {
-            *peak = peak.max(v.abs());
+        // A guard that reached zero: the step is cut at the first, where the mode jumps.
+        let jump = match self.guard_crossing(problem, dense, t0) {
+            Ok(jump) => jump,
+            Err(kind) => {
+                self.fail(problem, kind);
+                return ControlFlow::Break(());
+            }
+        };
+        let run = &mut self.run;
+        let mut hits = crossings(problem, dense, events, (t0, &self.previous_row), (t, &self.row));
+        match &jump {
+            Some((at, _)) => hits.retain(|h| h.time <= *at),
+            None => {
+                for (peak, v) in run.peaks.iter_mut().zip(&self.row) {
+                    *peak = peak.max(v.abs());
+                }
+            }
         }
-        let hits = crossings(problem, dense, events, (t0, &self.previous_row), (t, &self.row));
-        // The evenly spaced times this step covers, up to a stop if one comes.
-        let end = hits.iter().find(|h| events[h.event].stop).map_or(t, |h| h.time);
+        // The evenly spaced times this step covers, up to a stop or a jump if one comes.
+        let cut = jump.as_ref().map_or(t, |(at, _)| *at);
+        let end = hits.iter().find(|h| events[h.event].stop).map_or(cut, |h| h.time);
         let held_from = self.next_sample.filter(|s| *s == end);
         // A recorded time within rounding of a sample is the sample's: it shows the new held
         // value, recorded after the jump (k·T and the evenly spaced times may differ by an ulp).
@@ -323,6 +382,10 @@ impl<'r> Course<'r> {
             rows_of(&mut self.sink, &mut run.trajectory).row(self.t, &self.row);
             run.stopped_by = Some(hit.event);
             return ControlFlow::Break(());
+        }
+        if let Some((at, fired)) = jump {
+            run.events.extend(hits);
+            return self.jump(problem, dense, at, &fired, progress);
         }
         widen(&mut run.extremes, &self.row);
         run.events.extend(hits);
@@ -348,6 +411,103 @@ impl<'r> Course<'r> {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
+    }
+
+    /// The guards that went from > 0 to ≤ 0 over the step from `t0` to the current time, if
+    /// any: the first time one reached zero, located on the dense output, with every guard
+    /// that reached zero within rounding of it (they fire together). The time is the last
+    /// one located at which the guard was still positive, so that after the jump the guards
+    /// of the new mode start from where they hold. Without a jump the guards are kept at the
+    /// step's end.
+    fn guard_crossing(
+        &mut self,
+        problem: &mut dyn Problem,
+        dense: &mut dyn Dense,
+        t0: f64,
+    ) -> Result<Option<(f64, Vec<usize>)>, FaultKind> {
+        let count = self.guards.len();
+        if count == 0 {
+            return Ok(None);
+        }
+        let mut now = vec![0.0; count];
+        problem.guard_values(self.t, &self.y, &mut now)?;
+        let mut found: Vec<(usize, f64)> = Vec::new();
+        let mut values = vec![0.0; count];
+        let mut y = vec![0.0; problem.dim()];
+        for k in 0..count {
+            if self.guards[k] > 0.0 && now[k] <= 0.0 {
+                let mut guard = |p: &mut dyn Problem, d: &mut dyn Dense, s: f64| {
+                    d.interpolate(p, s, &mut y);
+                    p.guard_values(s, &y, &mut values).ok().map(|()| values[k])
+                };
+                let ((a, _), _) =
+                    bracket(problem, dense, &mut guard, (t0, self.guards[k]), (self.t, now[k]));
+                found.push((k, a));
+            }
+        }
+        let Some(first) = found.iter().map(|f| f.1).reduce(f64::min) else {
+            self.guards = now;
+            return Ok(None);
+        };
+        let window = 16.0 * f64::EPSILON * first.abs().max(1.0);
+        let fired = found.iter().filter(|f| f.1 <= first + window).map(|f| f.0).collect();
+        Ok(Some((first, fired)))
+    }
+
+    /// Jumps at `at`, where the guards `fired` reached zero inside the last step: moves the
+    /// state there, records the row before the jump, jumps, records the row after it (at the
+    /// same time), and restarts the method.
+    fn jump(
+        &mut self,
+        problem: &mut dyn Problem,
+        dense: &mut dyn Dense,
+        at: f64,
+        fired: &[usize],
+        progress: &mut dyn FnMut(f64) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        self.jumped = if self.jumped.0 == at { (at, self.jumped.1 + 1) } else { (at, 1) };
+        if self.jumped.1 > CHATTER {
+            let kind = FaultKind::ModesChatter { guards: fired.to_vec(), jumps: self.jumped.1 - 1 };
+            self.fail(problem, kind);
+            return ControlFlow::Break(());
+        }
+        dense.interpolate(problem, at, &mut self.y);
+        self.t = at;
+        let jumped = problem.observe(at, &self.y, &mut self.row).and_then(|()| {
+            self.note_row();
+            let modes = problem.jump(at, &mut self.y, fired)?;
+            self.run.modes.extend(modes);
+            // A held input's sample due at the same time is taken after the jump.
+            if self.next_sample == Some(at) {
+                problem.sample(at, &mut self.y)?;
+                self.next_sample = problem.next_sample(at);
+            }
+            problem.observe(at, &self.y, &mut self.row)?;
+            self.note_row();
+            problem.guard_values(at, &self.y, &mut self.guards)
+        });
+        if let Err(kind) = jumped {
+            self.fail(problem, kind);
+            return ControlFlow::Break(());
+        }
+        dense.after_switch();
+        self.previous_row.clone_from(&self.row);
+        if progress(at).is_break() {
+            self.run.interrupted = true;
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// Records the current row, always (a jump's rows are recorded whether or not the run
+    /// samples), with its peaks and extremes.
+    fn note_row(&mut self) {
+        let run = &mut self.run;
+        for (peak, v) in run.peaks.iter_mut().zip(&self.row) {
+            *peak = peak.max(v.abs());
+        }
+        widen(&mut run.extremes, &self.row);
+        rows_of(&mut self.sink, &mut run.trajectory).row(self.t, &self.row);
     }
 
     /// The run as it ended, with what its method counted and the spans of its methods.
@@ -414,7 +574,14 @@ fn crossings(
         }
         let (g0, g1) = (start.1, end.1);
         if g0 != 0.0 && g0 * g1 <= 0.0 {
-            let time = locate(problem, stepper, e.column, start, end, width);
+            let mut y = vec![0.0; problem.dim()];
+            let mut row = vec![0.0; width];
+            let mut value = |p: &mut dyn Problem, d: &mut dyn Dense, s: f64| {
+                d.interpolate(p, s, &mut y);
+                p.observe(s, &y, &mut row).ok().map(|()| row[e.column])
+            };
+            let ((a, ga), (b, gb)) = bracket(problem, stepper, &mut value, start, end);
+            let time = if gb == 0.0 || ga.abs() >= gb.abs() { b } else { a };
             hits.push(EventHit { event: k, time });
         }
     }
@@ -514,23 +681,24 @@ fn finite_edge(
     finite
 }
 
-/// The time in [t0, t1] where observation `column` crosses zero, by the Illinois variant of
-/// regula falsi on the dense output, to a few ulps of time.
-fn locate(
+/// A value of the dense output at a time, or `None` where the problem could not give it.
+type Value<'a> = dyn FnMut(&mut dyn Problem, &mut dyn Dense, f64) -> Option<f64> + 'a;
+
+/// Narrows [a, b], over which `value` changes sign (or reaches zero at b), to a few ulps of
+/// time by the Illinois variant of regula falsi on the dense output: the ends and their values
+/// as it left them, a on the side of the value at the first a given, b of the other side (or
+/// b where the value is zero).
+fn bracket(
     problem: &mut dyn Problem,
     stepper: &mut dyn Dense,
-    column: usize,
+    value: &mut Value<'_>,
     (mut a, mut ga): (f64, f64),
     (mut b, mut gb): (f64, f64),
-    width: usize,
-) -> f64 {
-    let d = problem.dim();
-    let mut y = vec![0.0; d];
-    let mut row = vec![0.0; width];
+) -> ((f64, f64), (f64, f64)) {
     let mut side = 0i8;
     for _ in 0..200 {
         if gb == 0.0 {
-            return b;
+            break;
         }
         if (b - a).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs()).max(1.0) {
             break;
@@ -539,15 +707,15 @@ fn locate(
         if !(m > a.min(b) && m < a.max(b)) {
             m = 0.5 * (a + b);
         }
-        stepper.interpolate(problem, m, &mut y);
-        if problem.observe(m, &y, &mut row).is_err() {
+        let Some(gm) = value(problem, stepper, m) else {
             // Bisect towards the start, where the state was fine.
             b = m;
             continue;
-        }
-        let gm = row[column];
+        };
         if gm == 0.0 {
-            return m;
+            b = m;
+            gb = gm;
+            break;
         }
         if (gm > 0.0) == (ga > 0.0) {
             a = m;
@@ -565,9 +733,5 @@ fn locate(
             side = 1;
         }
     }
-    if ga.abs() < gb.abs() {
-        a
-    } else {
-        b
-    }
+    ((a, ga), (b, gb))
 }

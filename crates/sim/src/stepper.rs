@@ -9,10 +9,17 @@ use crate::{FaultKind, Problem};
 pub(crate) trait Dense {
     /// The state at time `t` inside the last accepted step.
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]);
-    /// The right-hand side jumped where the last step ended (a held input was sampled): what
+    /// The right-hand side jumped where the last step ended (a held input was sampled, or the
+    /// problem's mode jumped, its state with it, where a run cut the step): what
     /// the method carries from step to step (a derivative, a dense output, predicted stages)
     /// belongs to the old one and is dropped; the step size is kept.
     fn after_jump(&mut self) {}
+    /// The problem's mode jumped where a run cut the last step (a contact opened, closed or
+    /// landed): as [`Dense::after_jump`], and what depends on the equations themselves (an
+    /// implicit method's Jacobian and factors) is dropped too, since the mode changed them.
+    fn after_switch(&mut self) {
+        self.after_jump();
+    }
 }
 
 /// Advances one accepted step at a time and interpolates inside the last one.

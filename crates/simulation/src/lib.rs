@@ -991,6 +991,32 @@ impl FaultNames<'_> {
                 format!("more than {limit} steps"),
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
+            FaultKind::ModesChatter { guards, jumps } => (
+                format!("contacts {guards:?} switched {jumps} times at the same instant"),
+                "a contact at the edge of opening and closing (a reaction that stays at zero): \
+                 a smaller tolerance, or a scene that decides it"
+                    .into(),
+            ),
+            FaultKind::Penetrating { contact, gap } => (
+                format!("contact {contact} starts penetrating (its gap is {gap:.3e})"),
+                "start with every contact's gap ≥ 0".into(),
+            ),
+            FaultKind::ContactsUnsolved { contacts, impact, why } => (
+                format!(
+                    "the {} of contacts {contacts:?} could not be solved: {why}",
+                    if *impact { "impact" } else { "reactions" }
+                ),
+                "a smaller tolerance, or fewer contacts touching at once".into(),
+            ),
+            FaultKind::ContactsInconsistent { contacts, impact } => (
+                format!(
+                    "the {} of contacts {contacts:?} has no solution",
+                    if *impact { "impact" } else { "reactions" }
+                ),
+                "the contacts' gradients conflict with each other or with the two-sided \
+                 constraints here"
+                    .into(),
+            ),
         }
     }
 }

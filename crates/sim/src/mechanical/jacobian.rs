@@ -61,7 +61,7 @@ impl Mechanical {
             return Err(fault);
         }
         // The accelerations may have been solved by LDLᵀ; one LU serves every column.
-        super::load_system(&self.dyn_out, self.layout, &mut self.system);
+        super::load_system(&self.dyn_out, self.layout, &self.kept, &mut self.system);
         if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
             self.solution = column;
             return Err(fault);
@@ -81,6 +81,7 @@ impl Mechanical {
                 let row = |block: usize| out[(n + block * m + c) * width + k];
                 // The partials of the row the accelerations satisfy, stabilisation included.
                 let stabilised = match self.stabilisation[c] {
+                    _ if !self.kept[c] => 0.0,
                     Stabilisation::Position => {
                         row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
                     }

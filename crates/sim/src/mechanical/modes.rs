@@ -1,0 +1,579 @@
+//! The modes of one-sided contacts: which are closed (their rows kept, their reactions
+//! pushing), the guards a run watches to leave a mode, and the jumps between modes: impacts by
+//! Newton's law, the reactions' complementarity problem that says which touching contacts
+//! close, lift-offs, and the settling of accumulating impacts.
+//!
+//! # A jump
+//!
+//! 1. The touching contacts (the closed ones, and the open ones at g ≈ 0) are found. If an
+//!    open one lands (γ < 0), all of them and the two-sided constraints take one impulse:
+//!    the complementarity problem of the Delassus operator A = W·S·Wᵀ (S the mass block of
+//!    the inverse of the augmented system that keeps the two-sided rows alone) with
+//!    c = (1 + e)·γ⁻ per normal row (e = 0 for a contact that was closed, whose γ is drift),
+//!    c = γ_T⁻ per grip row; then q̇⁺ = q̇⁻ + S·Wᵀ·Λ.
+//! 2. Of the touching contacts at rest (γ ≈ 0) after it, the reactions' complementarity
+//!    problem g̈ = A·λ + b closes those that push and opens the rest; the others open.
+//! 3. The state is projected onto the new mode's constraints, positions then rates (the
+//!    drift the stabilisation would otherwise push back out, adding energy), and a closed
+//!    contact's grip row that depends on the rows kept before it is left out of the solves.
+//!
+//! # Tolerances
+//!
+//! Each is the run's tolerance `tol` (relative) times a scale of the contact's own, so that
+//! they follow the scene's units:
+//! - **touching** (g ≈ 0): g ≤ tol·L, with L the larger of |g| at the start and the size of
+//!   the contact's gradient times that of q at the start (‖J‖₁·‖q‖∞). At the start a gap
+//!   below −tol·L is a fault ([`FaultKind::Penetrating`]).
+//! - **at rest** (γ ≈ 0): |γ| ≤ 100·tol·V for a contact that was closed, whose γ is the
+//!   drift the integration and the stabilisation leave, and |γ| ≤ tol·V/100 for one that was
+//!   open or just landed (the hysteresis that keeps a contact from chattering between the
+//!   two), with V the larger of the largest |γ⁻| of its impacts and ‖J‖₁·‖q̇‖∞ at the start
+//!   and at each jump. An open touching contact with γ below −tol·V/100 lands; a closed one
+//!   never does (its γ is drift), but takes part in the impact of those that land, with e = 0.
+//!   A closed contact that such an impact separates stays closed below the larger of its band
+//!   and √(2·a·δ), the rate gained at its acceleration a (with every contact open) through
+//!   δ = 64 ulps of the positions times its gradient: below it the flights are rounding (a
+//!   rocking block's accumulating impacts otherwise end in a cycle that floating point keeps
+//!   up, at about 5·10⁻⁸ m/s for a 1 m block).
+//! - **pushing** (λ > 0): the complementarity problem of the reactions is solved to tol times
+//!   the scale of g̈ with every contact open (the largest of its terms J·q̈ and γ, since g̈
+//!   itself passes through zero where a reaction vanishes), and a contact whose reaction
+//!   fell to zero (the lift-off its guard located) has that much added to its g̈ there, so
+//!   that it opens rather than closing again at the same instant.
+//! - **guards**: a closed contact's is its reaction λ, an open one's its gap g, offset by a
+//!   little more than −g where it opened at g ≤ 0 (from a closed contact's drift), so that it
+//!   starts positive and a landing within the next step is seen, at the depth it left.
+//! - **settling**: a contact that lands at |γ⁻| < tol·S, with S the largest |γ⁻| of its
+//!   impacts so far, lands plastically (e = 0) and closes ([`ModeChange::Settled`]). For a
+//!   ball of restitution e landing at v, the impacts it would still have had take
+//!   2ev/(g(1−e)) (the sum of 2eᵏv/g over k ≥ 1), and their accumulation point from the first
+//!   impact at v₀ is at t₁ + 2ev₀/(g(1−e)) with t₁ = v₀/g, in all t∞ = v₀(1+e)/(g(1−e)). Cut
+//!   at v < tol·v₀, the time lost is below 2e·tol·v₀/(g(1−e)), a fraction 2e/(1+e)·tol < tol
+//!   of t∞; the ball gets there in ln(tol)/ln(e) impacts (93 at e = 0.8, tol = 1e-9).
+
+use nalgebra::DMatrix;
+
+use super::{Layout, Mechanical, Stabilisation};
+use crate::complementarity::{self, Row};
+use crate::{linalg, Contact, FaultKind, ModeChange, ModeEvent};
+
+/// The band of γ, in tol·V, within which an open contact counts as at rest (below it, it
+/// lands).
+const OPEN_BAND: f64 = 1e-2;
+/// The band of γ, in tol·V, within which a closed contact counts as at rest: its drift.
+const CLOSED_BAND: f64 = 1e2;
+/// The depth, in ulps of the positions (times the gap's gradient), that rounding moves a
+/// contact by: the floor of the rates a closed contact separates at and still counts as at
+/// rest.
+const ROUNDING: f64 = 64.0;
+
+/// The modes of the contacts, and the scales of their tolerances.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Modes {
+    /// Whether each contact is closed.
+    closed: Vec<bool>,
+    /// The run's tolerance, relative.
+    tolerance: f64,
+    /// Each contact's length scale L.
+    length: Vec<f64>,
+    /// Each contact's largest |γ⁻| at its impacts so far, S.
+    impacts: Vec<f64>,
+    /// Each contact's rate scale V.
+    speed: Vec<f64>,
+    /// Each open contact's guard is g + this: 0 for one that opened at g > 0, else a little
+    /// more than −g there, so that the guard starts positive and the contact lands again at
+    /// the depth it left (not deeper: a rocking block's corners would sink further at every
+    /// landing).
+    offset: Vec<f64>,
+}
+
+/// The rows of a complementarity problem: each row's multiplier, kind and contact.
+struct Rows {
+    multipliers: Vec<usize>,
+    kinds: Vec<Row>,
+    owners: Vec<usize>,
+}
+
+impl Mechanical {
+    /// Makes the kept multipliers named by `contacts` one-sided: each contact's rows are kept
+    /// only while it is closed. Which are closed is decided at the start of a run
+    /// ([`crate::Problem::begin_modes`]); until then all are open.
+    pub fn with_contacts(mut self, contacts: Vec<Contact>) -> Self {
+        let m = self.layout.multipliers;
+        for c in &contacts {
+            assert!(c.normal < m && c.grip.is_none_or(|g| g < m), "a contact's multiplier");
+            assert!((0.0..=1.0).contains(&c.restitution), "restitution in [0, 1]");
+        }
+        let count = contacts.len();
+        self.modes = Modes {
+            closed: vec![false; count],
+            tolerance: 0.0,
+            length: vec![0.0; count],
+            impacts: vec![0.0; count],
+            speed: vec![0.0; count],
+            offset: vec![0.0; count],
+        };
+        self.contacts = contacts;
+        self.update_kept();
+        self
+    }
+
+    /// The one-sided contacts.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Whether each contact is closed now.
+    pub fn closed(&self) -> &[bool] {
+        &self.modes.closed
+    }
+
+    /// The multipliers of the two-sided constraints and of the closed contacts are kept.
+    fn update_kept(&mut self) {
+        self.kept.fill(true);
+        for (contact, &closed) in self.contacts.iter().zip(&self.modes.closed) {
+            self.kept[contact.normal] = closed;
+            if let Some(grip) = contact.grip {
+                self.kept[grip] = closed;
+            }
+        }
+        self.solved = None;
+    }
+
+    /// Keeps out the grip rows of closed contacts that depend on the rows kept before them
+    /// (the two-sided ones, then each contact's normal and grip in turn), at the positions of
+    /// the last evaluation: two gripping corners of a block resting flat give four rows on
+    /// three degrees of freedom, and the augmented system would be singular. A grip row is a
+    /// velocity row, so one that depends on the others is held by them; its multiplier is 0.
+    fn drop_redundant_grips(&mut self) {
+        let m = self.layout.multipliers;
+        let two_sided = self.two_sided();
+        let mut order: Vec<usize> = (0..m).filter(|&c| two_sided[c]).collect();
+        for contact in &self.contacts {
+            order.push(contact.normal);
+            order.extend(contact.grip);
+        }
+        let grips: Vec<usize> = self.contacts.iter().filter_map(|c| c.grip).collect();
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        for c in order {
+            if !self.kept[c] {
+                continue;
+            }
+            let mut r = self.jacobian_row(c).to_vec();
+            let size = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            for b in &basis {
+                let dot: f64 = r.iter().zip(b).map(|(x, y)| x * y).sum();
+                for (x, y) in r.iter_mut().zip(b) {
+                    *x -= dot * y;
+                }
+            }
+            let rest = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if rest <= 1e-8 * size && grips.contains(&c) {
+                self.kept[c] = false;
+            } else if rest > 0.0 {
+                basis.push(r.iter().map(|x| x / rest).collect());
+            }
+        }
+        self.solved = None;
+    }
+
+    /// Where multiplier `c`'s values start in the dynamics outputs.
+    fn base(&self, c: usize) -> usize {
+        let n = self.layout.coordinates;
+        n * n + n + c * (n + 3)
+    }
+
+    fn jacobian_row(&self, c: usize) -> &[f64] {
+        let (b, n) = (self.base(c), self.layout.coordinates);
+        &self.dyn_out[b..b + n]
+    }
+
+    fn gap(&self, k: usize) -> f64 {
+        let n = self.layout.coordinates;
+        self.dyn_out[self.base(self.contacts[k].normal) + n + 1]
+    }
+
+    /// The rate of multiplier `c`'s row: ġ of a position row, the residual of a velocity row.
+    fn row_rate(&self, c: usize) -> f64 {
+        let (b, n) = (self.base(c), self.layout.coordinates);
+        match self.stabilisation[c] {
+            Stabilisation::Position => self.dyn_out[b + n + 2],
+            Stabilisation::Velocity => self.dyn_out[b + n + 1],
+        }
+    }
+
+    /// The right-hand side row `c` imposes on J·q̈ while kept, stabilisation included.
+    fn stabilised(&self, c: usize) -> f64 {
+        let (b, n, a) = (self.base(c), self.layout.coordinates, self.baumgarte);
+        let out = &self.dyn_out;
+        match self.stabilisation[c] {
+            Stabilisation::Position => {
+                out[b + n] - 2.0 * a * out[b + n + 2] - a * a * out[b + n + 1]
+            }
+            Stabilisation::Velocity => out[b + n] - a * out[b + n + 1],
+        }
+    }
+
+    fn normal_rate(&self, k: usize) -> f64 {
+        self.row_rate(self.contacts[k].normal)
+    }
+
+    /// The rows of the contacts `set`: each normal, then its grip.
+    fn rows_of(&self, set: &[usize]) -> Rows {
+        let mut rows = Rows { multipliers: Vec::new(), kinds: Vec::new(), owners: Vec::new() };
+        for &k in set {
+            let normal = rows.kinds.len();
+            rows.multipliers.push(self.contacts[k].normal);
+            rows.kinds.push(Row::Normal);
+            rows.owners.push(k);
+            if let Some(grip) = self.contacts[k].grip {
+                rows.multipliers.push(grip);
+                rows.kinds.push(Row::Tangent { normal });
+                rows.owners.push(k);
+            }
+        }
+        rows
+    }
+
+    /// The contacts' rows condensed through M and the two-sided constraints: X = S·Wᵀ (n × r)
+    /// with S the mass block of the inverse of the augmented system that keeps only the
+    /// two-sided rows, and the Delassus operator A = W·X (r × r, symmetric).
+    fn condensed(
+        &mut self,
+        multipliers: &[usize],
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        let two_sided = self.two_sided();
+        let mut system = DMatrix::zeros(n + m, n + m);
+        super::load_system(&self.dyn_out, self.layout, &two_sided, &mut system);
+        let mut pivots = vec![0; n + m];
+        linalg::lu_in_place(&mut system, &mut pivots)?;
+        let r = multipliers.len();
+        let mut x = DMatrix::zeros(n, r);
+        let mut column = vec![0.0; n + m];
+        for (j, &c) in multipliers.iter().enumerate() {
+            column.fill(0.0);
+            column[..n].copy_from_slice(self.jacobian_row(c));
+            linalg::lu_solve(&system, &pivots, &mut column);
+            for i in 0..n {
+                x[(i, j)] = column[i];
+            }
+        }
+        let mut a = DMatrix::zeros(r, r);
+        for i in 0..r {
+            let row = self.jacobian_row(multipliers[i]);
+            for j in 0..r {
+                a[(i, j)] = (0..n).map(|l| row[l] * x[(l, j)]).sum::<f64>();
+            }
+        }
+        let a = (&a + a.transpose()) * 0.5;
+        Ok((x, a))
+    }
+
+    /// The mask that keeps the two-sided rows alone.
+    fn two_sided(&self) -> Vec<bool> {
+        let mut kept = vec![true; self.layout.multipliers];
+        for contact in &self.contacts {
+            kept[contact.normal] = false;
+            if let Some(grip) = contact.grip {
+                kept[grip] = false;
+            }
+        }
+        kept
+    }
+
+    /// The guards: a closed contact's reaction λ, an open one's gap g.
+    pub(super) fn contact_guards(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), FaultKind> {
+        self.accelerations(t, y)?;
+        let n = self.layout.coordinates;
+        for k in 0..self.contacts.len() {
+            out[k] = if self.modes.closed[k] {
+                self.solution[n + self.contacts[k].normal]
+            } else {
+                self.gap(k) + self.modes.offset[k]
+            };
+        }
+        Ok(())
+    }
+
+    /// Decides the modes at the start of a run of tolerance `tolerance`.
+    pub(super) fn begin_contacts(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let n = self.layout.coordinates;
+        let count = self.contacts.len();
+        self.modes.tolerance = tolerance;
+        self.modes.closed = vec![false; count];
+        self.modes.impacts = vec![0.0; count];
+        self.modes.speed = vec![0.0; count];
+        self.update_kept();
+        self.dynamics_at(t, y)?;
+        let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+        for k in 0..count {
+            let gradient: f64 =
+                self.jacobian_row(self.contacts[k].normal).iter().map(|v| v.abs()).sum();
+            let length = self.gap(k).abs().max(gradient * size);
+            self.modes.length[k] = length;
+            if self.gap(k) < -tolerance * length {
+                return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
+            }
+        }
+        self.contact_jump(t, y, &[])
+    }
+
+    /// The jump at (t, y), where the guards `fired` reached zero: the landing contacts' impact,
+    /// then the touching contacts at rest closed or opened by their reactions.
+    pub(super) fn contact_jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        fired: &[usize],
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        let n = self.layout.coordinates;
+        let count = self.contacts.len();
+        let tol = self.modes.tolerance;
+        self.dynamics_at(t, y)?;
+        let speed = y[n..].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+        for k in 0..count {
+            let gradient: f64 =
+                self.jacobian_row(self.contacts[k].normal).iter().map(|v| v.abs()).sum();
+            let scale = self.modes.speed[k].max(gradient * speed).max(self.modes.impacts[k]);
+            self.modes.speed[k] = scale;
+        }
+        let before = self.modes.closed.clone();
+        let touching: Vec<usize> = (0..count)
+            .filter(|&k| before[k] || self.gap(k) <= tol * self.modes.length[k])
+            .collect();
+        let band = |modes: &Modes, k: usize, held: bool| {
+            tol * modes.speed[k] * if held { CLOSED_BAND } else { OPEN_BAND }
+        };
+        let mut struck = vec![false; count];
+        let mut settled = vec![false; count];
+        let mut landed = vec![false; count];
+        let mut impulses = vec![0.0; count];
+        let mut tangential: Vec<Option<f64>> =
+            self.contacts.iter().map(|c| c.grip.map(|_| 0.0)).collect();
+        let mut energy = vec![0.0; count];
+        let mut rise = false;
+        let lands = |this: &Self, k: usize| {
+            !before[k] && this.normal_rate(k) < -band(&this.modes, k, false)
+        };
+        if touching.iter().any(|&k| lands(self, k)) {
+            let rows = self.rows_of(&touching);
+            let (x, a) = self.condensed(&rows.multipliers)?;
+            let mut c = vec![0.0; rows.kinds.len()];
+            for (r, &mult) in rows.multipliers.iter().enumerate() {
+                let k = rows.owners[r];
+                let rate = self.row_rate(mult);
+                c[r] = match rows.kinds[r] {
+                    Row::Normal => {
+                        // A closed contact's γ is drift: absorbed plastically.
+                        let mut e = if before[k] { 0.0 } else { self.contacts[k].restitution };
+                        if lands(self, k) {
+                            landed[k] = true;
+                            // Accumulating impacts: far slower than the contact's own earlier ones.
+                            if -rate < tol * self.modes.impacts[k] {
+                                settled[k] = true;
+                                e = 0.0;
+                            }
+                            self.modes.impacts[k] = self.modes.impacts[k].max(-rate);
+                            self.modes.speed[k] = self.modes.speed[k].max(-rate);
+                        }
+                        (1.0 + e) * rate
+                    }
+                    Row::Tangent { .. } => rate,
+                };
+            }
+            let scale = c.iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+            let solution = complementarity::solve(&a, &c, &rows.kinds, tol * scale)
+                .map_err(|e| unsolved(e, &rows.owners, true))?;
+            let before_rates = y[n..].to_vec();
+            let mut kinetic = 0.0;
+            {
+                // ½q̇ᵀMq̇ before the impact, M column-major in the outputs.
+                let out = &self.dyn_out;
+                for i in 0..n {
+                    for j in 0..n {
+                        kinetic += 0.5 * before_rates[i] * out[j * n + i] * before_rates[j];
+                    }
+                }
+            }
+            for i in 0..n {
+                y[n + i] += (0..rows.kinds.len()).map(|r| x[(i, r)] * solution.x[r]).sum::<f64>();
+            }
+            let mut total = 0.0;
+            for (r, &mult) in rows.multipliers.iter().enumerate() {
+                let k = rows.owners[r];
+                let row = self.jacobian_row(mult);
+                let mean: f64 = (0..n).map(|i| row[i] * (before_rates[i] + y[n + i])).sum();
+                let work = 0.5 * solution.x[r] * mean;
+                energy[k] += work;
+                total += work;
+                match rows.kinds[r] {
+                    Row::Normal => impulses[k] = solution.x[r],
+                    Row::Tangent { .. } => tangential[k] = Some(solution.x[r]),
+                }
+                if solution.x[r] != 0.0 {
+                    struck[k] = true;
+                }
+            }
+            rise = total > 1e3 * f64::EPSILON * kinetic.max(f64::MIN_POSITIVE);
+            self.dynamics_at(t, y)?;
+        }
+        // The accelerations with every contact open.
+        let free = if touching.is_empty() {
+            Vec::new()
+        } else {
+            let two_sided = self.two_sided();
+            let kept = std::mem::replace(&mut self.kept, two_sided);
+            let solved = self.solve_dynamics();
+            self.kept = kept;
+            solved?;
+            self.solved = None;
+            self.solution[..n].to_vec()
+        };
+        let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+        // The touching contacts at rest: closed where their reactions push. A closed one that
+        // an impact separates slower than the floating point of the positions can resolve
+        // (the rate gained falling through a few ulps of them, at its acceleration with every
+        // contact open) stays: below that, its flights are rounding, not motion.
+        let resting: Vec<usize> = touching
+            .iter()
+            .copied()
+            .filter(|&k| {
+                let rate = self.normal_rate(k).abs();
+                if !before[k] || landed[k] {
+                    return rate <= band(&self.modes, k, false);
+                }
+                let c = self.contacts[k].normal;
+                let row = self.jacobian_row(c);
+                let falling =
+                    (0..n).map(|i| row[i] * free[i]).sum::<f64>().abs() + self.stabilised(c).abs();
+                let gradient: f64 = row.iter().map(|v| v.abs()).sum();
+                let depth = ROUNDING * f64::EPSILON * gradient * size;
+                rate <= band(&self.modes, k, true).max((2.0 * falling * depth).sqrt())
+            })
+            .collect();
+        let mut closed = vec![false; count];
+        if !resting.is_empty() {
+            let rows = self.rows_of(&resting);
+            let (_, a) = self.condensed(&rows.multipliers)?;
+            // g̈ = J·q̈ − (γ, stabilised) with every contact open; the scale of its tolerance
+            // is that of its terms, since g̈ itself passes through zero where a reaction
+            // vanishes (at a lift-off).
+            let mut scale: f64 = 0.0;
+            let mut b: Vec<f64> = rows
+                .multipliers
+                .iter()
+                .map(|&c| {
+                    let row = self.jacobian_row(c);
+                    let (driven, imposed) =
+                        ((0..n).map(|i| row[i] * free[i]).sum::<f64>(), self.stabilised(c));
+                    scale = scale.max(driven.abs()).max(imposed.abs());
+                    driven - imposed
+                })
+                .collect();
+            for (r, kind) in rows.kinds.iter().enumerate() {
+                let k = rows.owners[r];
+                // Twice the solver's tolerance: a row whose w is within it counts as grazing,
+                // which the solver may take into the active set again.
+                if *kind == Row::Normal && before[k] && fired.contains(&k) {
+                    b[r] += 2.0 * tol * scale;
+                }
+            }
+            let solution = complementarity::solve(&a, &b, &rows.kinds, tol * scale)
+                .map_err(|e| unsolved(e, &rows.owners, false))?;
+            for (r, kind) in rows.kinds.iter().enumerate() {
+                if *kind == Row::Normal && solution.active[r] {
+                    closed[rows.owners[r]] = true;
+                }
+            }
+        }
+        self.modes.closed = closed.clone();
+        self.update_kept();
+        self.drop_redundant_grips();
+        // The state onto the new mode's constraints: the closed contacts' gaps and rates (and
+        // the two-sided constraints') to zero, from the drift they had.
+        if self.kept.iter().any(|&k| k) {
+            self.project_positions(t, y)?;
+            self.project_velocities(t, y)?;
+            self.dynamics_at(t, y)?;
+        }
+        // An open contact's guard must start positive to see it land: one that opened at
+        // g ≤ 0 (a closed contact's drift) could otherwise fall back within a step unseen.
+        for k in 0..count {
+            let gap = self.gap(k);
+            self.modes.offset[k] = if gap > 0.0 || closed[k] {
+                0.0
+            } else {
+                -gap * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+            };
+        }
+        let mut events = Vec::new();
+        for k in 0..count {
+            let kind = if landed[k] && !before[k] {
+                if settled[k] {
+                    ModeChange::Settled
+                } else {
+                    ModeChange::Impact
+                }
+            } else if before[k] && !closed[k] {
+                ModeChange::LiftOff
+            } else if !before[k] && closed[k] {
+                ModeChange::Closed
+            } else if struck[k] {
+                ModeChange::Struck
+            } else {
+                continue;
+            };
+            events.push(ModeEvent {
+                time: t,
+                contact: k,
+                kind,
+                closed: closed[k],
+                impulse: impulses[k],
+                tangential: tangential[k],
+                energy_change: energy[k],
+                energy_rise: rise && (struck[k] || landed[k]),
+            });
+        }
+        Ok(events)
+    }
+}
+
+/// The fault of a complementarity problem left unsolved, its rows named by the contacts that
+/// own them (`owners`).
+fn unsolved(e: complementarity::Unsolved, owners: &[usize], impact: bool) -> FaultKind {
+    use complementarity::Unsolved;
+    let why = match e {
+        Unsolved::Inconsistent(i) => {
+            return inconsistent(i.rows.iter().map(|&r| owners[r]).collect(), impact)
+        }
+        Unsolved::NonFinite { .. } => {
+            return FaultKind::NonFinite { at: crate::NonFiniteAt::System };
+        }
+        Unsolved::Malformed { reason } => reason,
+        Unsolved::TooLarge { .. } => "more than ten gripping contacts touch at once",
+        Unsolved::Stalled { .. } => {
+            "Lemke's pivoting stalled on a badly conditioned or degenerate problem"
+        }
+    };
+    let mut contacts = owners.to_vec();
+    contacts.sort_unstable();
+    contacts.dedup();
+    FaultKind::ContactsUnsolved { contacts, impact, why }
+}
+
+fn inconsistent(mut contacts: Vec<usize>, impact: bool) -> FaultKind {
+    contacts.sort_unstable();
+    contacts.dedup();
+    FaultKind::ContactsInconsistent { contacts, impact }
+}
