@@ -76,6 +76,10 @@ enum Command {
         /// and `draw` shapes, with the energy error beside them.
         #[arg(long, value_name = "OUT.html")]
         animate: Option<PathBuf>,
+        /// Write the run's contact events here as CSV (.csv): each impact, lift-off and
+        /// settling, with its time, contact, impulses and the energy it changed.
+        #[arg(long, value_name = "OUT.csv")]
+        events: Option<PathBuf>,
         /// Record at this many evenly spaced times (the start and the end included), from the
         /// integrator's dense output; 0 records at every accepted step instead. Events and the
         /// end are always recorded.
@@ -406,7 +410,7 @@ fn main() -> ExitCode {
             emit(&lang::generate::n_link(family, n as usize));
             ExitCode::SUCCESS
         }
-        Command::Simulate { file, run, output, out, plot, animate, samples } => {
+        Command::Simulate { file, run, output, out, plot, animate, events, samples } => {
             let outputs = [
                 ("--out", out.as_deref()),
                 ("--plot", plot.as_deref()),
@@ -425,7 +429,7 @@ fn main() -> ExitCode {
                 animate: animate.is_some(),
                 ..options
             };
-            simulate(&file, &source, &options, out, Figures { plot, animate })
+            simulate(&file, &source, &options, out, Figures { plot, animate, events })
         }
         Command::Ensemble { file, vary, runs, seed, record, run, out, plot, threads } => {
             let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
@@ -750,6 +754,8 @@ struct Figures {
     plot: Option<PathBuf>,
     /// The motion, as an HTML page that plays it.
     animate: Option<PathBuf>,
+    /// The contact events, as CSV.
+    events: Option<PathBuf>,
 }
 
 fn simulate(
@@ -759,12 +765,14 @@ fn simulate(
     out: Option<PathBuf>,
     figures: Figures,
 ) -> ExitCode {
-    let Figures { plot, animate } = figures;
+    let Figures { plot, animate, events } = figures;
     let path = file.display().to_string();
-    for target in out.iter().chain(plot.iter()).chain(animate.iter()) {
+    for target in out.iter().chain(plot.iter()).chain(animate.iter()).chain(events.iter()) {
         let ext = target.extension().and_then(|e| e.to_str()).unwrap_or("");
         let allowed: &[&str] = if Some(target) == animate.as_ref() {
             &["html"]
+        } else if Some(target) == events.as_ref() {
+            &["csv"]
         } else if Some(target) == plot.as_ref() {
             &["svg"]
         } else {
@@ -781,7 +789,7 @@ fn simulate(
     }
     let json = out.as_ref().and_then(|o| o.extension()).and_then(|e| e.to_str()) == Some("json");
     if plot.is_none() && animate.is_none() {
-        return simulate_streamed(&path, source, options, out.as_ref(), json);
+        return simulate_streamed(&path, source, options, out.as_ref(), json, events.as_ref());
     }
     // The plot draws every row, and the animation plays every frame: the rows are kept.
     let outcome = match cli::simulate::simulate(source, options) {
@@ -812,6 +820,9 @@ fn simulate(
             code = ExitCode::from(2);
         }
     }
+    if write_events(events.as_ref(), &outcome) != ExitCode::SUCCESS {
+        code = ExitCode::from(2);
+    }
     if let (Some(target), Some(animation)) = (animate, &outcome.animation) {
         if let Err(e) = cli::write_atomically(&target, &cli::animate::page(animation, &path)) {
             eprintln!("error: cannot write {}: {e}", target.display());
@@ -831,6 +842,7 @@ fn simulate_streamed(
     options: &simulation::Options,
     out: Option<&PathBuf>,
     json: bool,
+    events: Option<&PathBuf>,
 ) -> ExitCode {
     let mut table = cli::simulate::Table::new(json, Destination::to(out));
     let outcome = match cli::simulate::simulate_into(source, options, &mut table) {
@@ -843,8 +855,23 @@ fn simulate_streamed(
     {
         code = ExitCode::from(2);
     }
+    if write_events(events, &outcome) != ExitCode::SUCCESS {
+        code = ExitCode::from(2);
+    }
     eprint!("{}", cli::simulate::summary(&outcome));
     code
+}
+
+/// Writes a run's contact events to `target` as CSV, where asked.
+fn write_events(target: Option<&PathBuf>, outcome: &simulation::Outcome) -> ExitCode {
+    let Some(target) = target else { return ExitCode::SUCCESS };
+    match cli::write_atomically(target, &cli::simulate::contact_events_csv(outcome)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: cannot write {}: {e}", target.display());
+            ExitCode::from(2)
+        }
+    }
 }
 
 /// Where a streamed table goes.

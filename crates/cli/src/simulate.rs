@@ -245,7 +245,111 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
         "constraint_drift": outcome.constraint_drift().map(json_number),
         "constraint_drift_at_steps": outcome.constraint_drift_at_steps().map(json_number),
         "fault": outcome.run.fault.as_ref().map(|f| outcome.describe_fault(f)),
+        "energy_changed_by_impacts": json_number(outcome.totals.energy_jumps()),
+        "contact_events": outcome.run.modes.iter().map(|m| serde_json::json!({
+            "t": json_number(m.time),
+            "contact": contact_name(outcome, m.contact),
+            "kind": mode_word(m.kind),
+            "closed": m.closed,
+            "impulse": json_number(m.impulse),
+            "tangential_impulse": m.tangential.map(json_number),
+            "energy_change": json_number(m.energy_change),
+        })).collect::<Vec<_>>(),
     })
+}
+
+/// A contact's name, by its index in a run's mode events.
+fn contact_name(outcome: &Outcome, k: usize) -> String {
+    outcome.contact_names.get(k).cloned().unwrap_or_else(|| format!("contact {k}"))
+}
+
+/// What happened to a contact, in one word, as the events table and the summary name it.
+pub fn mode_word(kind: sim::ModeChange) -> &'static str {
+    match kind {
+        sim::ModeChange::Impact => "impact",
+        sim::ModeChange::Settled => "settled",
+        sim::ModeChange::Closed => "closed",
+        sim::ModeChange::LiftOff => "lift-off",
+        sim::ModeChange::Struck => "struck",
+    }
+}
+
+/// A run's contact events as CSV, one row each: when, which contact, what happened, whether it
+/// is closed after, its normal and tangential impulses and the kinetic energy they changed.
+pub fn contact_events_csv(outcome: &Outcome) -> String {
+    let mut s = String::from("t,contact,kind,closed,impulse,tangential_impulse,energy_change\n");
+    for m in &outcome.run.modes {
+        let tangential = m.tangential.map_or(String::new(), |t| t.to_string());
+        s.push_str(&format!(
+            "{},{},{},{},{},{tangential},{}\n",
+            m.time,
+            contact_name(outcome, m.contact),
+            mode_word(m.kind),
+            m.closed,
+            m.impulse,
+            m.energy_change
+        ));
+    }
+    s
+}
+
+/// The summary's lines on contacts: how many impacts, lift-offs and settlings, the first few
+/// events, and where impacts raised the energy.
+fn contacts_summary(outcome: &Outcome) -> String {
+    let modes = &outcome.run.modes;
+    if outcome.contact_names.is_empty() {
+        return String::new();
+    }
+    let count = |kind: sim::ModeChange| modes.iter().filter(|m| m.kind == kind).count();
+    let (impacts, lift_offs) = (count(sim::ModeChange::Impact), count(sim::ModeChange::LiftOff));
+    let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
+    let mut s = format!(
+        "contacts: {}, {}, {} removed by impacts\n",
+        plural(impacts, "impact"),
+        plural(lift_offs, "lift-off"),
+        figure(0.0 - outcome.totals.energy_jumps()),
+    );
+    for m in modes.iter().filter(|m| m.kind == sim::ModeChange::Settled) {
+        s.push_str(&format!(
+            "settled: `{}` at t = {}, where its impacts accumulate (closed from then on)\n",
+            contact_name(outcome, m.contact),
+            figure(m.time)
+        ));
+    }
+    const SHOWN: usize = 8;
+    for m in modes.iter().take(SHOWN) {
+        let mut line = format!(
+            "  t = {}  {} {}",
+            figure(m.time),
+            contact_name(outcome, m.contact),
+            mode_word(m.kind)
+        );
+        let struck = matches!(
+            m.kind,
+            sim::ModeChange::Impact | sim::ModeChange::Settled | sim::ModeChange::Struck
+        );
+        if struck || m.impulse != 0.0 {
+            line.push_str(&format!(", impulse {}", figure(m.impulse)));
+            if let Some(t) = m.tangential {
+                line.push_str(&format!(" (tangential {})", figure(t)));
+            }
+            line.push_str(&format!(", ΔE = {}", figure(m.energy_change)));
+        }
+        if m.energy_rise {
+            line.push_str(
+                " (this impact raised the energy: Newton's law with unequal restitutions can)",
+            );
+        }
+        s.push_str(&line);
+        s.push('\n');
+    }
+    if modes.len() > SHOWN {
+        s.push_str(&format!(
+            "  … and {} more (`--events FILE.csv` writes them all)\n",
+            modes.len() - SHOWN
+        ));
+    }
+    s
 }
 
 /// The summary printed on stderr after a run.
@@ -274,9 +378,18 @@ pub fn summary(outcome: &Outcome) -> String {
     } else {
         " (not conserved: forces, time or a moving constraint act)"
     };
-    s.push_str(&format!(
-        "energy drift: max |E − E(0)| = {drift:.3e} ({relative:.3e} relative){note}\n"
-    ));
+    if outcome.contact_names.is_empty() {
+        s.push_str(&format!(
+            "energy drift: max |E − E(0)| = {drift:.3e} ({relative:.3e} relative){note}\n"
+        ));
+    } else {
+        // What the impacts changed is accounted for, not drift.
+        s.push_str(&format!(
+            "energy drift: max |E − E(0) − ΔE(impacts)| = {drift:.3e} ({relative:.3e} \
+             relative){note}\n"
+        ));
+    }
+    s.push_str(&contacts_summary(outcome));
     // Hairer's stiffness test flagged a good part of the steps: their size was set by the
     // stability of the explicit method, not by the tolerance.
     if r.stiff_steps >= 15 && 10 * r.stiff_steps >= r.steps {
@@ -315,6 +428,16 @@ pub fn summary(outcome: &Outcome) -> String {
         (None, None) => s.push_str(&format!("reached t = {}\n", number(r.final_time))),
     }
     s
+}
+
+/// A figure in a summary line, to six significant digits and no more characters than those
+/// need.
+fn figure(x: f64) -> String {
+    match format!("{x:.5e}").parse::<f64>() {
+        Ok(v) if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) => format!("{v:e}"),
+        Ok(v) => v.to_string(),
+        Err(_) => x.to_string(),
+    }
 }
 
 /// Which method ran where in an `auto` run: `auto: dop853 0–0.12 s, radau 0.12–10 s (1 switch)`.

@@ -168,6 +168,12 @@ impl Prepared {
     }
 
     /// The constraints kept with multipliers, by name, in the order of their slots.
+    /// The contacts' names, in the order written (a run's mode events index them).
+    pub fn contact_names(&self) -> Vec<String> {
+        let d = &self.derivation;
+        d.contacts.iter().map(|c| d.model.contacts[c.contact].name.clone()).collect()
+    }
+
     pub fn kept_constraint_names(&self) -> Vec<String> {
         let d = &self.derivation;
         d.multipliers.iter().map(|m| d.model.constraints[m.constraint].name.clone()).collect()

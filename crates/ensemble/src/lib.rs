@@ -458,6 +458,8 @@ impl Ensemble {
             constraints: &self.constraint_names,
             parameters: &self.parameter_names,
             angle_oriented_bodies: &self.angle_oriented_bodies,
+            // An ensemble refuses a scene with contacts.
+            contacts: &[],
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)

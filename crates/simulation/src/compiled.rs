@@ -168,7 +168,7 @@ impl Compiled {
                 tee.begin();
                 tee.totals
             }
-            None => Totals::of(&watched, &run.trajectory.rows),
+            None => Totals::of(&watched, &run.trajectory.times, &run.trajectory.rows),
         };
         if let Some(sink) = after {
             sink.columns(&self.outputs);
@@ -199,6 +199,7 @@ impl Compiled {
             wall_seconds,
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
+            contact_names: prepared.contact_names(),
             parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: angle_oriented_bodies(model),
             conservative,

@@ -37,6 +37,7 @@ impl Integrand {
                 method.name()
             )));
         }
+        let mechanical = with_contacts(prepared, mechanical, method)?;
         let form = method.form();
         if form == Form::Canonical {
             let momentum_exprs = prepared.momentum_exprs();
@@ -132,4 +133,38 @@ pub fn watched(columns: &Columns) -> Vec<Event> {
         .map(|k| Event { column: outputs + k, stop: true })
         .chain((0..events).map(|k| Event { column: outputs + stops + k, stop: false }))
         .collect()
+}
+
+/// The scene's contacts given to the problem, each with its restitution at the run's
+/// parameter values; a method that cannot take them refuses the run, naming them.
+fn with_contacts(
+    prepared: &Prepared,
+    mechanical: Mechanical,
+    method: Method,
+) -> Result<Mechanical, Error> {
+    if prepared.contacts.is_empty() {
+        return Ok(mechanical);
+    }
+    if !method.handles_contacts() {
+        let d = &prepared.derivation;
+        let names: Vec<String> =
+            d.contacts.iter().map(|c| format!("`{}`", d.model.contacts[c.contact].name)).collect();
+        return Err(Error::Input(format!(
+            "{} does not take contacts, and this scene has {}: use dop853, radau or auto",
+            method.name(),
+            names.join(", ")
+        )));
+    }
+    let restitutions = prepared.restitutions(mechanical.parameters());
+    let contacts = prepared
+        .contacts
+        .iter()
+        .zip(restitutions)
+        .map(|(slots, restitution)| sim::Contact {
+            normal: slots.normal,
+            grip: slots.grip,
+            restitution,
+        })
+        .collect();
+    Ok(mechanical.with_contacts(contacts))
 }

@@ -135,6 +135,9 @@ pub struct Outcome {
     pub state_names: Vec<String>,
     /// The constraints kept with multipliers, in the order of the numbers' slots.
     pub constraint_names: Vec<String>,
+    /// The contacts, in the order written: the run's mode events ([`sim::Run::modes`]) index
+    /// them.
+    pub contact_names: Vec<String>,
     /// The parameter slots' names (the inputs' after the parameters'), for a fault in a held
     /// law.
     pub parameter_names: Vec<String>,
@@ -804,6 +807,7 @@ impl Outcome {
             constraints: &self.constraint_names,
             parameters: &self.parameter_names,
             angle_oriented_bodies: &self.angle_oriented_bodies,
+            contacts: &self.contact_names,
         };
         let (what, cause) = names.words(&f.kind);
         let cause = match &self.fastest_mode {
@@ -826,9 +830,20 @@ pub struct FaultNames<'a> {
     pub constraints: &'a [String],
     pub parameters: &'a [String],
     pub angle_oriented_bodies: &'a [String],
+    /// The contacts, in the order written.
+    pub contacts: &'a [String],
 }
 
 impl FaultNames<'_> {
+    /// Contacts by index, in words: "`floor`, `wall`".
+    fn contacts(&self, indices: &[usize]) -> String {
+        let named: Vec<String> = indices
+            .iter()
+            .map(|&k| self.contacts.get(k).map_or(format!("contact {k}"), |n| format!("`{n}`")))
+            .collect();
+        named.join(", ")
+    }
+
     /// The value that came out NaN or infinite, in words.
     fn non_finite(&self, at: &NonFiniteAt) -> String {
         let coordinate =
@@ -992,26 +1007,28 @@ impl FaultNames<'_> {
                 "the tolerance is too tight or the step too small for the time span".into(),
             ),
             FaultKind::ModesChatter { guards, jumps } => (
-                format!("contacts {guards:?} switched {jumps} times at the same instant"),
+                format!("{} switched {jumps} times at the same instant", self.contacts(guards)),
                 "a contact at the edge of opening and closing (a reaction that stays at zero): \
                  a smaller tolerance, or a scene that decides it"
                     .into(),
             ),
             FaultKind::Penetrating { contact, gap } => (
-                format!("contact {contact} starts penetrating (its gap is {gap:.3e})"),
+                format!("{} starts penetrating (its gap is {gap:.3e})", self.contacts(&[*contact])),
                 "start with every contact's gap ≥ 0".into(),
             ),
             FaultKind::ContactsUnsolved { contacts, impact, why } => (
                 format!(
-                    "the {} of contacts {contacts:?} could not be solved: {why}",
-                    if *impact { "impact" } else { "reactions" }
+                    "the {} of {} could not be solved: {why}",
+                    if *impact { "impact" } else { "reactions" },
+                    self.contacts(contacts)
                 ),
                 "a smaller tolerance, or fewer contacts touching at once".into(),
             ),
             FaultKind::ContactsInconsistent { contacts, impact } => (
                 format!(
-                    "the {} of contacts {contacts:?} has no solution",
-                    if *impact { "impact" } else { "reactions" }
+                    "the {} of {} has no solution",
+                    if *impact { "impact" } else { "reactions" },
+                    self.contacts(contacts)
                 ),
                 "the contacts' gradients conflict with each other or with the two-sided \
                  constraints here"

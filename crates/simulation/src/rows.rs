@@ -23,7 +23,12 @@ pub trait Sink {
 pub struct Totals {
     /// E at the first row.
     first_energy: Option<f64>,
-    /// The largest |E − E(0)|.
+    /// The time and E of the last row.
+    last: Option<(f64, f64)>,
+    /// What the jumps so far changed E by: an impact's loss, recorded as two rows at one time,
+    /// before and after it.
+    jumps: f64,
+    /// The largest |E − E(0) − what the jumps changed|.
     energy_drift: f64,
     /// The largest of |E(0)|, |KE| and |PE|.
     energy_scale: f64,
@@ -55,31 +60,45 @@ impl Watched {
 }
 
 impl Totals {
-    /// Takes one more row of observations into the figures.
-    pub(super) fn add(&mut self, watched: &Watched, row: &[f64]) {
+    /// Takes one more row of observations, recorded at `t`, into the figures. A row at the
+    /// time of the one before it is the state after a jump (an impact): what E changed by
+    /// there is the jump's, not drift.
+    pub(super) fn add(&mut self, watched: &Watched, t: f64, row: &[f64]) {
         let (k, p) = watched.energies;
         let e = watched.energy(row);
         let e0 = *self.first_energy.get_or_insert_with(|| {
             self.energy_scale = e.abs();
             e
         });
+        if let Some((before, e_before)) = self.last {
+            if before == t {
+                self.jumps += e - e_before;
+            }
+        }
+        self.last = Some((t, e));
         self.energy_scale = self.energy_scale.max(row[k].abs().max(row[p].abs()));
-        self.energy_drift = self.energy_drift.max((e - e0).abs());
+        self.energy_drift = self.energy_drift.max((e - e0 - self.jumps).abs());
         for &c in &watched.constraints {
             self.constraint_drift = self.constraint_drift.max(row[c]);
         }
     }
 
-    /// The figures of rows kept: each taken in turn.
-    pub(super) fn of(watched: &Watched, rows: &[Vec<f64>]) -> Totals {
+    /// The figures of rows kept, recorded at `times`: each taken in turn.
+    pub(super) fn of(watched: &Watched, times: &[f64], rows: &[Vec<f64>]) -> Totals {
         let mut totals = Totals::default();
-        for row in rows {
-            totals.add(watched, row);
+        for (t, row) in times.iter().zip(rows) {
+            totals.add(watched, *t, row);
         }
         totals
     }
 
-    /// The largest |E(t) − E(0)|, and that relative to the energy scale.
+    /// What the run's jumps (impacts) changed the energy by, in all.
+    pub fn energy_jumps(&self) -> f64 {
+        self.jumps
+    }
+
+    /// The largest |E(t) − E(0)| less what the jumps up to t changed it by (none without
+    /// contacts), and that relative to the energy scale.
     pub fn energy_drift(&self) -> (f64, f64) {
         let scale = self.energy_scale.max(f64::MIN_POSITIVE);
         (self.energy_drift, self.energy_drift / scale)
@@ -115,7 +134,7 @@ impl Tee<'_> {
 impl sim::Rows for Tee<'_> {
     fn row(&mut self, t: f64, row: &[f64]) {
         self.begin();
-        self.totals.add(self.watched, row);
+        self.totals.add(self.watched, t, row);
         let energy = self.watched.energy(row);
         self.sink.row(t, &row[..self.watched.outputs], energy);
     }
@@ -144,7 +163,8 @@ mod tests {
         ];
         for rows in cases {
             let rows: Vec<Vec<f64>> = rows.iter().map(|r| r.to_vec()).collect();
-            let totals = Totals::of(&watched, &rows);
+            let times: Vec<f64> = (0..rows.len()).map(|k| k as f64).collect();
+            let totals = Totals::of(&watched, &times, &rows);
             // The summary's folds as they were written over the kept rows.
             let (k, p) = watched.energies;
             let e: Vec<f64> = rows.iter().map(|r| r[k] + r[p]).collect();
@@ -164,5 +184,27 @@ mod tests {
             assert_eq!(relative.to_bits(), (drift / scale).to_bits(), "{rows:?}");
             assert_eq!(totals.constraint_drift().to_bits(), constraint.to_bits(), "{rows:?}");
         }
+    }
+
+    /// Two rows at one time are the state before and after a jump: what E changed by between
+    /// them is the jump's, and E's drift is measured from E(0) less it.
+    #[test]
+    fn a_jump_is_not_drift() {
+        let watched = Watched { outputs: 1, energies: (1, 2), constraints: vec![] };
+        let times = [0.0, 0.5, 1.0, 1.0, 2.0];
+        let rows: Vec<Vec<f64>> = [
+            [0.0, 1.0, 2.0],
+            [0.0, 1.5, 1.5],
+            [0.0, 2.0, 1.0],
+            [0.0, 0.5, 1.0],
+            [0.0, 0.25, 1.0 + 1e-9],
+        ]
+        .iter()
+        .map(|r| r.to_vec())
+        .collect();
+        let totals = Totals::of(&watched, &times, &rows);
+        assert_eq!(totals.energy_jumps(), -1.5);
+        let (drift, _) = totals.energy_drift();
+        assert!((drift - 0.25).abs() < 1e-8, "{drift}");
     }
 }

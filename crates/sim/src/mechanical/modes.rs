@@ -468,7 +468,10 @@ impl Mechanical {
             let (_, a) = self.condensed(&rows.multipliers)?;
             // g̈ = J·q̈ − (γ, stabilised) with every contact open; the scale of its tolerance
             // is that of its terms, since g̈ itself passes through zero where a reaction
-            // vanishes (at a lift-off).
+            // vanishes (at a lift-off). Where the terms meet inside f (a particle on a sphere
+            // in polar coordinates: r̈ = r·φ̇² − g·cos φ is one entry), J·q̈ is that small sum
+            // too: the accelerations' own size, through J, stands for the terms then.
+            let fastest = free.iter().fold(0.0, |m: f64, a| m.max(a.abs()));
             let mut scale: f64 = 0.0;
             let mut b: Vec<f64> = rows
                 .multipliers
@@ -477,7 +480,8 @@ impl Mechanical {
                     let row = self.jacobian_row(c);
                     let (driven, imposed) =
                         ((0..n).map(|i| row[i] * free[i]).sum::<f64>(), self.stabilised(c));
-                    scale = scale.max(driven.abs()).max(imposed.abs());
+                    let through: f64 = row.iter().map(|v| v.abs()).sum::<f64>() * fastest;
+                    scale = scale.max(driven.abs()).max(imposed.abs()).max(through);
                     driven - imposed
                 })
                 .collect();
