@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 15] = [
+const PAGES: [&str; 16] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -24,6 +24,7 @@ const PAGES: [&str; 15] = [
     "docs/control.md",
     "docs/ensembles.md",
     "docs/c.md",
+    "docs/contacts.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -269,9 +270,12 @@ fn run_settings(args: &Args) -> Result<simulation::Options, String> {
 /// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
 fn simulate(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units"]);
-    args.only(&[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate"]].concat())?;
+    args.only(&[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate", "events"]].concat())?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
-    formats(&args, &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"])])?;
+    formats(
+        &args,
+        &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"]), ("events", &["csv"])],
+    )?;
     let animate = args.has("animate");
     let options = simulation::Options {
         output: args.all("output"),
@@ -551,6 +555,11 @@ fn commands() {
 #[test]
 fn ensembles() {
     assert_honest("docs/ensembles.md");
+}
+
+#[test]
+fn contacts() {
+    assert_honest("docs/contacts.md");
 }
 
 #[test]

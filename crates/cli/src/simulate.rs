@@ -303,11 +303,15 @@ fn contacts_summary(outcome: &Outcome) -> String {
     let count = |kind: sim::ModeChange| modes.iter().filter(|m| m.kind == kind).count();
     let (impacts, lift_offs) = (count(sim::ModeChange::Impact), count(sim::ModeChange::LiftOff));
     let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
+    // Without an impact the jumps change E only by the projection's rounding.
+    let removed = match impacts + count(sim::ModeChange::Settled) {
+        0 => String::new(),
+        _ => format!(", {} removed by impacts", figure(0.0 - outcome.totals.energy_jumps())),
+    };
     let mut s = format!(
-        "contacts: {}, {}, {} removed by impacts\n",
+        "contacts: {}, {}{removed}\n",
         plural(impacts, "impact"),
         plural(lift_offs, "lift-off"),
-        figure(0.0 - outcome.totals.energy_jumps()),
     );
     for m in modes.iter().filter(|m| m.kind == sim::ModeChange::Settled) {
         s.push_str(&format!(
