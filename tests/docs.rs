@@ -270,11 +270,18 @@ fn run_settings(args: &Args) -> Result<simulation::Options, String> {
 /// `lagrange simulate`: the CSV (unless `--out`) and the summary; the files it would write made in memory.
 fn simulate(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units"]);
-    args.only(&[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate", "events"]].concat())?;
+    args.only(
+        &[&RUN_FLAGS[..], &["output", "samples", "out", "plot", "animate", "events"]].concat(),
+    )?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
     formats(
         &args,
-        &[("out", &["csv", "json"]), ("plot", &["svg"]), ("animate", &["html"]), ("events", &["csv"])],
+        &[
+            ("out", &["csv", "json"]),
+            ("plot", &["svg"]),
+            ("animate", &["html"]),
+            ("events", &["csv"]),
+        ],
     )?;
     let animate = args.has("animate");
     let options = simulation::Options {

@@ -54,7 +54,8 @@ pub struct DerivedContact {
     /// coordinate: what the reaction adds to the equations while the contact is closed.
     pub direction: Vec<ExprId>,
     pub grip_direction: Option<Vec<ExprId>>,
-    /// The acceleration row it imposes while closed, J·q̈ = γ: γ.
+    /// The acceleration row it imposes while closed, J·q̈ = γ: J·q̈, and γ.
+    pub acceleration: ExprId,
     pub bias: ExprId,
     pub closed_at_start: bool,
     /// Its impact law landing alone, where the system is small enough to solve exactly.
@@ -78,6 +79,18 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
         let gap = pool.simplify(rows.normal.rows.phi());
         let grip = rows.grip.as_ref().map(|g| pool.simplify(g.rows.velocity));
         let bias = pool.simplify(rows.normal.rows.bias);
+        let terms: Vec<ExprId> = rows
+            .normal
+            .rows
+            .jacobian
+            .iter()
+            .zip(&d.accels)
+            .map(|(j, a)| {
+                let a = pool.sym(*a);
+                pool.mul2(*j, a)
+            })
+            .collect();
+        let acceleration = pool.add(&terms);
         out.push(DerivedContact {
             name: contact.name,
             gap,
@@ -87,6 +100,7 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
             grip_force: rows.grip.as_ref().map(|g| g.lambda),
             direction: rows.normal.rows.jacobian.clone(),
             grip_direction: rows.grip.as_ref().map(|g| g.rows.jacobian.clone()),
+            acceleration,
             bias,
             closed_at_start: rows.closed_at_start,
             impact,

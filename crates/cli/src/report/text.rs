@@ -206,7 +206,7 @@ impl Text<'_> {
                 "    closed: {force} ≥ 0 adds {force}·({}) to the forces along ({}), and {} = {}",
                 direction.join(", "),
                 q.join(", "),
-                self.row_text(&c.direction),
+                self.print(c.acceleration),
                 self.print(c.bias)
             ));
             if let (Some(gf), Some(gd)) = (c.grip_force, &c.grip_direction) {
@@ -240,24 +240,6 @@ impl Text<'_> {
                  problem: Λ ≥ 0, γ⁺ + e·γ⁻ ≥ 0, Λ·(γ⁺ + e·γ⁻) = 0, γ⁺ = γ⁻ + W·M⁻¹·Wᵀ·Λ"
                     .into(),
             );
-        }
-    }
-
-    /// J·q̈ of a row of coefficients of the accelerations.
-    fn row_text(&self, row: &[ExprId]) -> String {
-        let pool = self.pool;
-        let mut terms = Vec::new();
-        for (j, a) in row.iter().zip(&self.d.accels) {
-            if pool.is_zero(*j) {
-                continue;
-            }
-            let acc = self.sym(*a);
-            terms.push(if *j == pool.one() { acc } else { format!("({})·{acc}", self.print(*j)) });
-        }
-        if terms.is_empty() {
-            "0".into()
-        } else {
-            terms.join(" + ")
         }
     }
 

@@ -48,6 +48,9 @@ impl Derivation {
         let state = self.initial_state();
         let mut out = Vec::new();
         for m in self.multipliers.clone() {
+            if self.model.constraints[m.constraint].kind.is_unilateral() {
+                continue;
+            }
             let Some(phi) = m.rows.position else { continue };
             let at_start = self.model.pool.subst(phi, &state);
             if !self.zero_at_parameter_values(at_start) {
@@ -57,9 +60,14 @@ impl Derivation {
         out
     }
 
-    /// Φ of each position constraint kept with a multiplier, in the multipliers' order.
+    /// Φ of each two-sided position constraint kept with a multiplier, in the multipliers'
+    /// order: what places the start (a contact does not: its gap is an inequality).
     pub fn kept_position_constraints(&self) -> Vec<ExprId> {
-        self.multipliers.iter().filter_map(|m| m.rows.position).collect()
+        self.multipliers
+            .iter()
+            .filter(|m| !self.model.constraints[m.constraint].kind.is_unilateral())
+            .filter_map(|m| m.rows.position)
+            .collect()
     }
 
     /// The coordinates whose start positions the kept position constraints may solve for:
