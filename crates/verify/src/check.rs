@@ -97,14 +97,10 @@ pub fn check(d: &mut Derivation, index: usize) -> Verdict {
     }
     let at_start = d.model.expects[index].at_start;
     let (lhs, rhs) = d.expect_sides(index);
-    let many = lhs.len() > 1;
-    let mut numeric: Option<(usize, Sampling)> = None;
-    let mut on_constraints = false;
-    for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
-        let residual = d.model.pool.sub(l, r);
+    each_component(d, lhs, rhs, |d, residual| {
         let decision =
             if at_start { d.decide_at_start(residual) } else { d.decide_everywhere(residual) };
-        let verdict = match decision {
+        match decision {
             Decision::Exact => Verdict::Exact,
             Decision::ExactOnConstraints => Verdict::ExactOnConstraints,
             Decision::Sample { residual, solve } => sample(d, residual, solve),
@@ -122,8 +118,26 @@ pub fn check(d: &mut Derivation, index: usize) -> Verdict {
                     verdict => verdict,
                 }
             }
-        };
-        match verdict {
+        }
+    })
+}
+
+/// The verdict of an expectation from each component's residual lhs − rhs, decided by
+/// `decide`: the first failure (naming its component where there are several) or undecided
+/// one, else the weakest of the others (numbers over exact, on the constraints over
+/// everywhere).
+fn each_component(
+    d: &mut Derivation,
+    lhs: Vec<ExprId>,
+    rhs: Vec<ExprId>,
+    mut decide: impl FnMut(&mut Derivation, ExprId) -> Verdict,
+) -> Verdict {
+    let many = lhs.len() > 1;
+    let mut numeric: Option<(usize, Sampling)> = None;
+    let mut on_constraints = false;
+    for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
+        let residual = d.model.pool.sub(l, r);
+        match decide(d, residual) {
             Verdict::Exact => {}
             Verdict::ExactOnConstraints => on_constraints = true,
             Verdict::Numeric { samples, sampling } => {
@@ -146,8 +160,9 @@ pub fn check(d: &mut Derivation, index: usize) -> Verdict {
 }
 
 /// `expect impact NAME: lhs = rhs`: the left side with the rates after an impact at the
-/// contact alone (its exact impact law), the right side with those before; decided as an
-/// identity in the state, exactly where the algebra can, else at random states.
+/// contact alone (its exact impact law), the right side with those before, both at the state
+/// before it that the line's `where` list gives; decided as an identity in the rest of the
+/// state, exactly where the algebra can, else at random states.
 fn check_impact(d: &mut Derivation, index: usize, contact: usize) -> Verdict {
     let Some(k) = d.contacts.iter().position(|c| c.contact == contact) else {
         return Verdict::Undecided { reason: "the contact keeps no rows in the equations".into() };
@@ -160,42 +175,21 @@ fn check_impact(d: &mut Derivation, index: usize, contact: usize) -> Verdict {
     };
     let after: std::collections::HashMap<cas::SymId, ExprId> =
         d.rates.iter().copied().zip(law.rates_after.iter().copied()).collect();
-    // The state before the impact, where the line gives it.
     let mut before: std::collections::HashMap<cas::SymId, ExprId> = Default::default();
     for item in d.model.expects[index].before.clone() {
         let sym = if item.rate { d.model.pool.rate(item.coord) } else { Some(item.coord) };
         before.extend(sym.map(|s| (s, item.value)));
     }
     let (lhs, rhs) = d.expect_sides(index);
-    let many = lhs.len() > 1;
-    let mut numeric: Option<(usize, Sampling)> = None;
-    for (k, (l, r)) in lhs.into_iter().zip(rhs).enumerate() {
-        let l = d.model.pool.subst(l, &after);
-        let residual = d.model.pool.sub(l, r);
+    let lhs: Vec<ExprId> = lhs.into_iter().map(|l| d.model.pool.subst(l, &after)).collect();
+    each_component(d, lhs, rhs, |d, residual| {
         let residual = d.model.pool.subst(residual, &before);
-        let verdict = match d.decide_everywhere(residual) {
+        match d.decide_everywhere(residual) {
             Decision::Exact | Decision::ExactOnConstraints => Verdict::Exact,
             Decision::Sample { residual, .. } => sample(d, residual, false),
             _ => Verdict::Undecided { reason: "the impact law could not be decided".into() },
-        };
-        match verdict {
-            Verdict::Exact => {}
-            Verdict::Numeric { samples, sampling } => {
-                numeric = Some(
-                    numeric.map_or((samples, sampling), |(n, s)| (n.min(samples), s.max(sampling))),
-                )
-            }
-            Verdict::Fails(mut f) => {
-                f.component = many.then_some(k);
-                return Verdict::Fails(f);
-            }
-            undecided => return undecided,
         }
-    }
-    match numeric {
-        Some((samples, sampling)) => Verdict::Numeric { samples, sampling },
-        None => Verdict::Exact,
-    }
+    })
 }
 
 /// A residual the algebra left undecided, compared with zero at random states (on the
