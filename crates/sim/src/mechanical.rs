@@ -337,27 +337,12 @@ impl Mechanical {
     /// (0, −Φ̇) solved once. A velocity error of that form is the kind a multiplier's error
     /// leaves (v' = M⁻¹(f + Jᵀλ)), and the kind the index-3 system controls worst.
     pub(crate) fn project_velocities(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
-        self.dynamics_at(t, y)?;
-        let out = &self.dyn_out;
-        let mut change = vec![0.0; n + m];
-        for c in 0..m {
-            let base = n * n + n + c * (n + 3);
-            change[n + c] = -match self.stabilisation[c] {
-                _ if !self.kept[c] => 0.0,
-                Stabilisation::Position => out[base + n + 2],
-                Stabilisation::Velocity => out[base + n + 1],
-            };
-        }
-        let (pivots, kept) = (&mut self.pivots, &self.kept);
-        match self.small.as_mut() {
-            Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
-            None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
-        }
-        for (v, d) in y[n..2 * n].iter_mut().zip(&change[..n]) {
-            *v += d;
-        }
-        Ok(())
+        let n = self.layout.coordinates;
+        // −Φ̇ of a position row, −(A·q̇ + b) of a velocity row: the residual at the rate level.
+        self.least_change(t, y, n, |kind, slots| match kind {
+            Stabilisation::Position => -slots[2],
+            Stabilisation::Velocity => -slots[1],
+        })
     }
 
     /// Moves the positions q = y[..n] onto the kept position constraints, Φ = 0, by the least
@@ -366,14 +351,33 @@ impl Mechanical {
     /// mode's constraints with it, so that the stabilisation does not push a contact that just
     /// closed below its surface back out (at the rate of the rocking it disturbs).
     pub(crate) fn project_positions(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        self.least_change(t, y, 0, |kind, slots| match kind {
+            Stabilisation::Position => -slots[1],
+            Stabilisation::Velocity => 0.0,
+        })?;
+        self.solved = None;
+        Ok(())
+    }
+
+    /// The least change in M's metric that puts the kept rows' residuals at zero: the augmented
+    /// system [M −Jᵀ; J 0]·(Δ, μ) = (0, r) solved once at (t, y), each kept row's r given by
+    /// `residual` from its kind and its slots (γ, Φ, Φ̇) of the dynamics outputs (an open
+    /// contact's rows none), and Δ added to the n components of `y` from `at`.
+    fn least_change(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        at: usize,
+        residual: impl Fn(Stabilisation, &[f64]) -> f64,
+    ) -> Result<(), FaultKind> {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         self.dynamics_at(t, y)?;
         let out = &self.dyn_out;
         let mut change = vec![0.0; n + m];
         for c in 0..m {
             let base = n * n + n + c * (n + 3);
-            if self.kept[c] && self.stabilisation[c] == Stabilisation::Position {
-                change[n + c] = -out[base + n + 1];
+            if self.kept[c] {
+                change[n + c] = residual(self.stabilisation[c], &out[base + n..base + n + 3]);
             }
         }
         let (pivots, kept) = (&mut self.pivots, &self.kept);
@@ -381,10 +385,9 @@ impl Mechanical {
             Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
             None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
         }
-        for (q, d) in y[..n].iter_mut().zip(&change[..n]) {
-            *q += d;
+        for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
+            *v += d;
         }
-        self.solved = None;
         Ok(())
     }
 
