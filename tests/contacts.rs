@@ -457,6 +457,27 @@ fn derive_prints_each_contacts_modes_and_impact_law() {
     }
 }
 
+/// `derive`'s JSON report lists each contact, with its name and gap, in the order written.
+#[test]
+fn derive_json_carries_the_contacts() {
+    let cases = [
+        ("bouncing_ball.lag", vec![("floor", "y")]),
+        ("ladder.lag", vec![("wall", "x - 1/2*L*sin(theta)"), ("floor", "y - 1/2*L*cos(theta)")]),
+        ("newtons_cradle.lag", vec![("first", "-2*a - x1 + x2"), ("second", "-2*a - x2 + x3")]),
+    ];
+    for (name, expected) in cases {
+        let report = cli::derive(name, &source(name), cli::Format::Json)
+            .unwrap_or_else(|d| panic!("{name} does not derive:\n{d}"));
+        let json: serde_json::Value = serde_json::from_str(&report).expect("valid JSON");
+        let contacts = json["contacts"].as_array().unwrap_or_else(|| panic!("{report}"));
+        let got: Vec<(&str, &str)> = contacts
+            .iter()
+            .map(|c| (c["name"].as_str().expect("name"), c["gap"].as_str().expect("gap")))
+            .collect();
+        assert_eq!(got, expected, "{name}");
+    }
+}
+
 /// The ball and the ladder under the other methods that take contacts, to a looser tolerance
 /// (radau and auto at their tolerance 1e-10, rk4 at a step of 1e-4 s), and the symplectic
 /// methods refusing, naming the contacts.

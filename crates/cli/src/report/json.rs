@@ -8,13 +8,14 @@ pub fn json(d: &mut Derivation) -> String {
 }
 
 /// The JSON report's keys, in the order it prints them.
-const JSON_KEYS: [&str; 18] = [
+const JSON_KEYS: [&str; 19] = [
     "scene",
     "coordinates",
     "parameters",
     "inputs",
     "outputs",
     "constraints",
+    "contacts",
     "kinetic_energy",
     "potential_energy",
     "equations",
