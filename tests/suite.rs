@@ -16,6 +16,7 @@ mod codegen;
 mod codegen_c;
 mod codegen_hostile;
 mod constraints;
+mod contacts;
 mod control;
 mod derive;
 mod docs;

@@ -80,6 +80,11 @@ pub fn prepare_resolved_for(
     let extra: Vec<String> = extra.iter().map(|(_, text)| text.clone()).collect();
     let extra = &extra;
     let mut derivation = crate::derive_resolved(source, model, warnings)?.derivation;
+    // A run gives every contact a multiplier of its own, open or closed, and records it (0
+    // while open): the reaction the derivation solved for in the mode at the start holds only
+    // while that mode does (a bead's push off a sphere would be recorded pulling once it flew).
+    let constraints = &derivation.model.constraints;
+    derivation.reactions.retain(|r| !constraints[r.constraint].kind.is_unilateral());
     let mut exprs = Vec::new();
     for (value, text) in values.iter().zip(extra) {
         let model::Value::Scalar(e) = value else {

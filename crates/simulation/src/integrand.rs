@@ -31,13 +31,14 @@ impl Integrand {
         mechanical: Mechanical,
         method: Method,
     ) -> Result<Integrand, Error> {
+        // The contacts first: their rows are multipliers too, and a refusal should name them.
+        let mechanical = with_contacts(prepared, mechanical, method)?;
         if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
             return Err(Error::Input(format!(
                 "{} {NO_MULTIPLIERS}; use dop853 or radau",
                 method.name()
             )));
         }
-        let mechanical = with_contacts(prepared, mechanical, method)?;
         let form = method.form();
         if form == Form::Canonical {
             let momentum_exprs = prepared.momentum_exprs();
@@ -137,7 +138,7 @@ pub fn watched(columns: &Columns) -> Vec<Event> {
 
 /// The scene's contacts given to the problem, each with its restitution at the run's
 /// parameter values; a method that cannot take them refuses the run, naming them.
-fn with_contacts(
+pub(crate) fn with_contacts(
     prepared: &Prepared,
     mechanical: Mechanical,
     method: Method,

@@ -678,6 +678,8 @@ fn integrate_scene(
             }
         };
         if method.jacobian() == sim::Jacobian::OnSwitch {
+            // Not through `Integrand::new`: the contacts are given here.
+            let mechanical = integrand::with_contacts(prepared, mechanical, method)?;
             let mut lazy = on_demand::OnDemand::new(mechanical, prepared);
             match rows {
                 Some(rows) => {

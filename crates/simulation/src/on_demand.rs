@@ -3,7 +3,7 @@
 //! lowering (a noticeable share of a short run on a large scene) are paid only on a switch.
 
 use numeric::Tape;
-use sim::{Components, FaultKind, Mechanical, Problem};
+use sim::{Components, FaultKind, Mechanical, ModeEvent, Problem};
 
 use engine::numbers::Prepared;
 use engine::Error;
@@ -72,5 +72,29 @@ impl Problem for OnDemand<'_> {
     }
     fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
         self.mechanical.sample(t, y)
+    }
+    // The contacts' modes: without these the trait's defaults (no guards) would run a scene
+    // with contacts as if it had none, its bodies passing through each other.
+    fn guards(&self) -> usize {
+        self.mechanical.guards()
+    }
+    fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
+        self.mechanical.guard_values(t, y, out)
+    }
+    fn begin_modes(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        self.mechanical.begin_modes(t, y, tolerance)
+    }
+    fn jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        fired: &[usize],
+    ) -> Result<Vec<ModeEvent>, FaultKind> {
+        self.mechanical.jump(t, y, fired)
     }
 }
