@@ -418,6 +418,9 @@ class Scene:
           accepted step instead); events, and the end of a run that stops early, come in
           addition.
 
+        A scene with contacts runs through its impacts, lift-offs and settling as the command
+        runs it; the results' ``contact_events`` are a :class:`ContactEvents` table.
+
         A run that faults raises :class:`NumericError` whose ``results`` hold what was
         computed before the fault.
 
@@ -483,7 +486,8 @@ class Scene:
           texts as ``--vary`` takes them (``"a1=-3:3:60"``). A start that a parameter gives
           (``coord theta = a``) follows it.
         - ``record``: scene expressions at the end of each run (or where a stop ended it;
-          ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run; by
+          ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run,
+          ``impacts(NAME)`` and ``settled(NAME)`` of a contact (NaN where it did not settle); by
           default the scene's ``output`` quantities at the end, else the coordinates.
         - ``start``, ``stop``: run only these runs of the ensemble (in its order), for a front
           end that spreads chunks over processes or machines; joined in order, the chunks
