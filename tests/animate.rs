@@ -145,7 +145,9 @@ fn the_page_carries_each_contacts_mode_and_its_events() {
     let closed: Vec<String> = floor.closed.iter().map(|&c| u8::from(c).to_string()).collect();
     let expected = format!(r#""contacts":[{{"name":"floor","closed":[{}]}}]"#, closed.join(","));
     assert!(page.contains(&expected), "the modes are not in the page");
-    assert!(page.contains(r#""contact_events":[{"t":0.451524,"contact":0,"kind":"impact","closed":false}"#));
+    assert!(page.contains(
+        r#""contact_events":[{"t":0.451524,"contact":0,"kind":"impact","closed":false}"#
+    ));
     assert_eq!(page.matches(r#""kind":"impact""#).count(), impacts);
     assert_eq!(page.matches(r#""kind":"settled""#).count(), 1);
     // The page shows them: a badge per contact, a flash at impacts, marks on the time axis.

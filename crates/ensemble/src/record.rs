@@ -62,9 +62,9 @@ impl Recorded {
                     ContactRecord::Impacts => {
                         events.filter(|m| m.kind == ModeChange::Impact).count() as f64
                     }
-                    ContactRecord::Settled => events
-                        .find(|m| m.kind == ModeChange::Settled)
-                        .map_or(f64::NAN, |m| m.time),
+                    ContactRecord::Settled => {
+                        events.find(|m| m.kind == ModeChange::Settled).map_or(f64::NAN, |m| m.time)
+                    }
                 }
             }
         }
@@ -73,7 +73,10 @@ impl Recorded {
 
 /// Gives each contact column its contact's index among `contacts` (the scene's, in the order
 /// written), or an error naming a contact the scene does not have.
-pub(super) fn resolve_contacts(recorded: &mut [Recorded], contacts: &[String]) -> Result<(), Error> {
+pub(super) fn resolve_contacts(
+    recorded: &mut [Recorded],
+    contacts: &[String],
+) -> Result<(), Error> {
     for r in recorded {
         if let Source::Contact { contact, index, .. } = &mut r.source {
             *index = contacts.iter().position(|c| c == contact).ok_or_else(|| {
@@ -100,7 +103,8 @@ pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
     let mut recorded = Vec::new();
     for item in lists.iter().flat_map(|list| split_list(list)) {
         if let Some((of, contact)) = contact_of(&item) {
-            recorded.push(Recorded { name: item, source: Source::Contact { of, contact, index: 0 } });
+            recorded
+                .push(Recorded { name: item, source: Source::Contact { of, contact, index: 0 } });
             continue;
         }
         let (extreme, expression) = extreme_of(&item);
@@ -111,7 +115,10 @@ pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
                 expressions.len() - 1
             }
         };
-        recorded.push(Recorded { name: item, source: Source::Expression { extreme, expression, column } });
+        recorded.push(Recorded {
+            name: item,
+            source: Source::Expression { extreme, expression, column },
+        });
     }
     recorded
 }

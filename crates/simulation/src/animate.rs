@@ -47,7 +47,10 @@ impl ContactTrack {
         let mut closed = vec![false; names.len()];
         let mut tracks: Vec<ContactTrack> = names
             .iter()
-            .map(|name| ContactTrack { name: name.clone(), closed: Vec::with_capacity(times.len()) })
+            .map(|name| ContactTrack {
+                name: name.clone(),
+                closed: Vec::with_capacity(times.len()),
+            })
             .collect();
         let mut next = 0;
         for (i, &t) in times.iter().enumerate() {

@@ -31,13 +31,14 @@ impl Integrand {
         mechanical: Mechanical,
         method: Method,
     ) -> Result<Integrand, Error> {
+        // A contact is kept with a multiplier too: a method that cannot take contacts names them.
+        let mechanical = with_contacts(prepared, mechanical, method)?;
         if prepared.layout.multipliers > 0 && !method.handles_multipliers() {
             return Err(Error::Input(format!(
                 "{} {NO_MULTIPLIERS}; use dop853 or radau",
                 method.name()
             )));
         }
-        let mechanical = with_contacts(prepared, mechanical, method)?;
         let form = method.form();
         if form == Form::Canonical {
             let momentum_exprs = prepared.momentum_exprs();
