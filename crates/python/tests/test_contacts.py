@@ -74,3 +74,28 @@ def test_what_would_hold_every_contact_closed_refuses_naming_it():
     # The symplectic methods cannot take contacts, and say so.
     with pytest.raises(ValueError, match=r"does not take contacts.*`floor`"):
         scene.simulate(method="midpoint")
+
+
+def test_an_ensemble_records_each_runs_settling_and_impacts():
+    table = lagrange.load(BALL).ensemble(
+        {"e": (0.5, 0.9, 5)},
+        record=["settled(floor)", "impacts(floor)", "y"],
+        until=10,
+        tolerance=1e-10,
+        threads=2,
+    )
+    assert table.recorded == ["settled(floor)", "impacts(floor)", "y"]
+    assert all(f is None for f in table.failures)
+    e = table["e"]
+    np.testing.assert_allclose(table["settled(floor)"], T1 * (1 + e) / (1 - e), rtol=1e-8)
+    assert np.all(np.diff(table["impacts(floor)"]) > 0) and np.all(np.abs(table["y"]) < 1e-9)
+    # Each run is what `simulate` gives at its restitution.
+    run = lagrange.load(BALL).simulate(until=10, tolerance=1e-10, set={"e": float(e[2])})
+    assert table["settled(floor)"][2] == run.contact_events.settled("floor")
+    assert table["impacts(floor)"][2] == len(run.contact_events.of("impact"))
+    # A restitution past 1 is a run that fails with its reason; a contact the scene does not
+    # have is refused.
+    past = lagrange.load(BALL).ensemble({"e": (0.9, 1.1, 2)}, record="settled(floor)", until=10)
+    assert past.failures[0] is None and "restitution of contact `floor`" in past.failures[1]
+    with pytest.raises(ValueError, match="no contact `wall`"):
+        lagrange.load(BALL).ensemble({"e": (0.5, 0.9, 2)}, record="settled(wall)")
