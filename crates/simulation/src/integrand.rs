@@ -174,6 +174,10 @@ fn with_contacts(
 /// to lie in [0, 1]: a run's `--set` or an ensemble's draw may take it out, which the scene's
 /// own values could not.
 pub fn restitutions(prepared: &Prepared, parameters: &[f64]) -> Result<Vec<f64>, Error> {
+    if prepared.contacts.is_empty() {
+        // Nothing to evaluate, and nothing allocated: an ensemble asks once a run.
+        return Ok(Vec::new());
+    }
     let values = prepared.restitutions(parameters);
     for (name, e) in prepared.contact_names().iter().zip(&values) {
         if !(0.0..=1.0).contains(e) {
