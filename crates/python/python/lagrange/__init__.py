@@ -718,7 +718,8 @@ class Derivation:
 @dataclass
 class Constraint:
     """A constraint of the scene: ``equation`` as written (``sympy.Eq``), ``phi`` = lhs − rhs,
-    ``kind`` (``"position"`` or ``"velocity"``), ``reaction`` (its ``NAME.force`` symbol) and
+    ``kind`` (``"position"``, ``"velocity"`` or ``"contact"``, a one-sided
+    contact whose gap is ``phi``, which a run opens and closes), ``reaction`` (its ``NAME.force`` symbol) and
     ``handling``: ``"eliminated"`` (then ``solved_for`` is the coordinate it removed and
     ``solution`` its value), ``"kept"`` with a multiplier, or ``"dropped"`` (always holds)."""
 
