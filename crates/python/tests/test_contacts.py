@@ -44,6 +44,10 @@ def test_the_ball_lands_at_the_closed_form_times_and_settles_where_they_accumula
     assert run.energy_changed_by_impacts == pytest.approx(-M * G * H0, rel=1e-6)
     assert abs(run["y"][-1]) < 1e-9 and run["floor.force"][-1] == pytest.approx(M * G, rel=1e-9)
     assert events.count == len(events["t"]) and "impact" in repr(events)
+    pandas = pytest.importorskip("pandas")
+    frame = events.to_pandas()
+    assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == list(events)
+    assert len(frame) == events.count and frame["contact"].iloc[0] == "floor"
 
 
 def test_a_scene_without_contacts_has_an_empty_table():
