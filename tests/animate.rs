@@ -2,7 +2,8 @@
 //! body's axes stay unit vectors, springs know their fixed ends), a `draw` line leaves the
 //! derivation alone, the page is the same bytes on every run and names nothing on a network,
 //! and, in a real browser, it plays: stepping the slider changes the picture and the console
-//! stays free of errors.
+//! stays free of errors; a scene with contacts carries each one's mode per frame and its
+//! events into the page.
 //!
 //! The browser part needs Chromium and python3 (`tests/browser/check_page.py` drives it). Where
 //! either is missing, it says so and passes, unless `LAGRANGE_BROWSER_TEST=required` (as
@@ -110,10 +111,59 @@ fn a_drawing_leaves_the_derivation_alone() {
     }
 }
 
+/// A ball bouncing on its floor: the page carries the contact's mode at every frame (closed
+/// from where it settles, open before, and at each impact's two frames open on both sides),
+/// the events with their times, and the energy error less what the impacts took.
+#[test]
+fn the_page_carries_each_contacts_mode_and_its_events() {
+    let a = animation("contacts/bouncing_ball.lag");
+    assert_eq!(a.contacts.len(), 1);
+    let floor = &a.contacts[0];
+    assert_eq!((floor.name.as_str(), floor.closed.len()), ("floor", a.times.len()));
+    let settled = a
+        .contact_events
+        .iter()
+        .find(|m| m.kind == sim::ModeChange::Settled)
+        .expect("the ball settles within the run")
+        .time;
+    let (h0, g, e) = (1.0, 9.81, 0.8);
+    let accumulation = f64::sqrt(2.0 * h0 / g) * (1.0 + e) / (1.0 - e);
+    assert!((settled - accumulation).abs() < 1e-6 * accumulation, "settled at {settled}");
+    for (k, (&t, &closed)) in a.times.iter().zip(&floor.closed).enumerate() {
+        // The frame before the settling jump is still open; the one after, closed.
+        let after = t > settled || (t == settled && a.times[k - 1] == t);
+        assert_eq!(closed, after, "frame {k} at t = {t}");
+    }
+    let impacts = a.contact_events.iter().filter(|m| m.kind == sim::ModeChange::Impact).count();
+    assert!(impacts > 10, "{impacts} impacts");
+    // An impact is two frames at one time; the energy error leaves out what it took.
+    let jumps = a.times.windows(2).filter(|w| w[0] == w[1]).count();
+    assert_eq!(jumps, impacts + 1, "a frame pair at each impact and at the settling");
+    assert!(a.energy_error.iter().all(|e| e.abs() < 1e-5), "{:?}", a.energy_error);
+
+    let page = cli::animate::page(&a, "ball");
+    let closed: Vec<String> = floor.closed.iter().map(|&c| u8::from(c).to_string()).collect();
+    let expected = format!(r#""contacts":[{{"name":"floor","closed":[{}]}}]"#, closed.join(","));
+    assert!(page.contains(&expected), "the modes are not in the page");
+    assert!(page.contains(
+        r#""contact_events":[{"t":0.451524,"contact":0,"kind":"impact","closed":false}"#
+    ));
+    assert_eq!(page.matches(r#""kind":"impact""#).count(), impacts);
+    assert_eq!(page.matches(r#""kind":"settled""#).count(), 1);
+    // The page shows them: a badge per contact, a flash at impacts, marks on the time axis.
+    for script in ["showContacts(now)", "drawFlash(now)", "contactEvents"] {
+        assert!(page.contains(script), "no `{script}` in the page");
+    }
+}
+
 /// The pages the browser opens: a scene in the plane with a body, one with particles, one in
-/// space.
-const PAGES: [&str; 3] =
-    ["ps5/falling_rod.lag", "classics/double_pendulum.lag", "space/double_pendulum_3d.lag"];
+/// space, and a ball bouncing on its floor (a contact opening and closing).
+const PAGES: [&str; 4] = [
+    "ps5/falling_rod.lag",
+    "classics/double_pendulum.lag",
+    "space/double_pendulum_3d.lag",
+    "contacts/bouncing_ball.lag",
+];
 
 fn page(rel: &str) -> String {
     cli::animate::page(&animation(rel), rel)

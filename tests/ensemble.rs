@@ -219,3 +219,63 @@ impl<A: ::ensemble::Sink, B: ::ensemble::Sink> ::ensemble::Sink for Both<'_, A, 
         self.1.row(run, row, failure);
     }
 }
+
+/// A bouncing ball's restitution varied: each run goes one at a time (the lockstep takes no
+/// contacts), lands and settles as the closed form says for its own e (so each run's contacts
+/// take the run's restitution, not the scene's), records what `simulate --set` gives, streams
+/// in chunks as it runs whole, and a restitution past 1 is a row with its reason.
+#[test]
+fn an_ensemble_of_bouncing_balls_settles_each_at_its_closed_form_time() {
+    let source = lagrange_tests::example("contacts/bouncing_ball.lag");
+    let (h0, g) = (1.0, 9.81);
+    let t1 = f64::sqrt(2.0 * h0 / g);
+    let mut options = options(&["e=0.5:0.9:5"], None, "settled(floor), impacts(floor), y", 10.0);
+    options.simulate.tolerance = Some(1e-10);
+    let mut ensemble = ::ensemble::Ensemble::new(&source, &options).expect("loads");
+    let table = ensemble.run(0..5, 2, &mut ());
+    assert_eq!(table.columns, ["e", "settled(floor)", "impacts(floor)", "y"]);
+    assert!(table.failures.iter().all(Option::is_none), "{:?}", table.failures);
+    for row in &table.rows {
+        let (e, settled, impacts, y) = (row[0], row[1], row[2], row[3]);
+        let accumulation = t1 * (1.0 + e) / (1.0 - e);
+        assert!((settled - accumulation).abs() < 1e-8 * accumulation, "{row:?}: {accumulation}");
+        assert!(y.abs() < 1e-9, "{row:?}");
+        let alone = simulation::Options {
+            until: Some(10.0),
+            tolerance: Some(1e-10),
+            set: vec![Assignment { name: "e".into(), value: e.to_string() }],
+            output: vec!["y".into()],
+            ..Default::default()
+        };
+        let outcome = simulate(&source, &alone).expect("simulates");
+        let landed = outcome.run.modes.iter().filter(|m| m.kind == sim::ModeChange::Impact);
+        assert_eq!(impacts, landed.count() as f64, "{row:?}");
+        assert_eq!(y, outcome.run.trajectory.rows.last().expect("a row")[0], "{row:?}");
+    }
+    // More impacts before settling the livelier the ball.
+    assert!(table.rows.windows(2).all(|w| w[1][2] > w[0][2]), "{:?}", table.rows);
+    let whole = cli::ensemble::csv(&table);
+    ensemble.set_chunk(1);
+    let mut csv = cli::ensemble::Csv::new(&ensemble.table(), Vec::new());
+    ensemble.stream(0..5, 2, &mut (), &mut csv);
+    assert_eq!(String::from_utf8(csv.finish().expect("memory")).expect("UTF-8"), whole);
+
+    let table = run(&source, &options_of(&["e=0.9:1.3:3"], "settled(floor)"), 1);
+    let lines = cli::ensemble::csv(&table);
+    let lines: Vec<&str> = lines.lines().collect();
+    assert!(lines[1].starts_with("0.9,") && lines[1].ends_with(','), "{lines:?}");
+    assert!(lines[2].starts_with("1.1,,") && lines[2].contains("restitution of contact `floor`"));
+    let bad = ensemble_error(&source, &options_of(&["e=0.5:0.9:2"], "settled(wall)"));
+    assert!(bad.contains("no contact `wall` (its contacts: `floor`)"), "{bad}");
+}
+
+fn options_of(texts: &[&str], record: &str) -> Options {
+    options(texts, None, record, 10.0)
+}
+
+fn ensemble_error(source: &str, options: &Options) -> String {
+    match ::ensemble::Ensemble::new(source, options) {
+        Ok(_) => panic!("the ensemble loaded"),
+        Err(e) => e.to_string(),
+    }
+}

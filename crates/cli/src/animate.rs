@@ -70,12 +70,35 @@ fn data(animation: &Animation) -> Value {
             value
         })
         .collect();
+    // Each contact's mode at each frame, 1 closed and 0 open; its events with their times.
+    let contacts: Vec<Value> = animation
+        .contacts
+        .iter()
+        .map(|c| {
+            let closed: Vec<u8> = c.closed.iter().map(|&c| u8::from(c)).collect();
+            json!({"name": c.name, "closed": closed})
+        })
+        .collect();
+    let events: Vec<Value> = animation
+        .contact_events
+        .iter()
+        .map(|m| {
+            json!({
+                "t": number(m.time),
+                "contact": m.contact,
+                "kind": simulation::mode_word(m.kind),
+                "closed": m.closed,
+            })
+        })
+        .collect();
     json!({
         "dimension": animation.dimension,
         "times": numbers(&animation.times),
         "energy_error": numbers(&animation.energy_error),
         "conservative": animation.conservative,
         "figures": figures,
+        "contacts": contacts,
+        "contact_events": events,
     })
 }
 
@@ -114,6 +137,8 @@ mod tests {
                 label: "draw line from (0, 0) to </script>".into(),
                 frames: vec![vec![0.0, 0.0, 1.0, 1.0], vec![0.0, 0.0, 1.0, 2.0]],
             }],
+            contacts: Vec::new(),
+            contact_events: Vec::new(),
         };
         let page = page(&animation, "unused");
         assert!(page.contains("<title>a &lt;b&gt; {{DATA}} &quot;c&quot;</title>"));

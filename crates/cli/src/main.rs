@@ -105,7 +105,8 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// What to record per run, comma-separated: scene expressions at the end or at the
-        /// stop (`t` is the stop's time), `max(EXPR)` and `min(EXPR)` over the run.
+        /// stop (`t` is the stop's time), `max(EXPR)` and `min(EXPR)` over the run;
+        /// `impacts(CONTACT)` and `settled(CONTACT)` (its impacts, when it settled).
         /// Default: the scene's `output`, else the coordinates, at the end.
         #[arg(long, value_name = "EXPRS")]
         record: Vec<String>,

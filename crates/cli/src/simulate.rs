@@ -258,20 +258,12 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
     })
 }
 
+/// What happened to a contact, in one word, as the events table and the summary name it.
+pub use simulation::mode_word;
+
 /// A contact's name, by its index in a run's mode events.
 fn contact_name(outcome: &Outcome, k: usize) -> String {
-    outcome.contact_names.get(k).cloned().unwrap_or_else(|| format!("contact {k}"))
-}
-
-/// What happened to a contact, in one word, as the events table and the summary name it.
-pub fn mode_word(kind: sim::ModeChange) -> &'static str {
-    match kind {
-        sim::ModeChange::Impact => "impact",
-        sim::ModeChange::Settled => "settled",
-        sim::ModeChange::Closed => "closed",
-        sim::ModeChange::LiftOff => "lift-off",
-        sim::ModeChange::Struck => "struck",
-    }
+    outcome.contact_name(k)
 }
 
 /// A run's contact events as CSV, one row each: when, which contact, what happened, whether it

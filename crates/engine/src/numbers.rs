@@ -155,8 +155,9 @@ impl Prepared {
         let names: Vec<String> =
             d.contacts.iter().map(|c| format!("`{}`", d.model.contacts[c.contact].name)).collect();
         Err(Error::Input(format!(
-            "{what} does not take contacts yet, and this scene has {}: run it with `lagrange \
-             simulate`, or make the contact a `constraint` if it never opens",
+            "{what} does not take contacts yet, and this scene has {}: runs take them \
+             (`lagrange simulate`, `Scene.simulate` in Python), or make the contact a \
+             `constraint` if it never opens",
             names.join(", ")
         )))
     }

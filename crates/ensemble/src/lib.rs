@@ -24,7 +24,7 @@ use sim::Event;
 mod draws;
 mod record;
 
-pub use record::{Extreme, Recorded};
+pub use record::{ContactRecord, Extreme, Recorded, Source};
 
 use engine::input::Vary;
 use engine::numbers::Prepared;
@@ -113,16 +113,20 @@ pub struct Ensemble {
     random: bool,
     state_names: Vec<String>,
     constraint_names: Vec<String>,
+    /// The contacts, in the order written (a fault names them by their index).
+    contact_names: Vec<String>,
     parameter_names: Vec<String>,
     angle_oriented_bodies: Vec<String>,
     /// Whether runs go side by side in lockstep ([`sim::Lockstep`]) where it serves them.
     lockstep: bool,
 }
 
-/// A run's parameter values and initial state (q, q̇).
+/// A run's parameter values, initial state (q, q̇) and its contacts' restitutions at those
+/// values.
 struct Start {
     parameters: Vec<f64>,
     state: Vec<f64>,
+    restitutions: Vec<f64>,
 }
 
 /// A run's start, or why it could not be made.
@@ -141,9 +145,12 @@ impl Maker {
     fn start(&mut self, values: &[f64]) -> Result<Start, String> {
         let numbers: Vec<(usize, f64)> =
             self.given.iter().copied().zip(values.iter().copied()).collect();
-        simulation::start(&mut self.prepared, &self.sets, &numbers)
-            .map(|(parameters, state)| Start { parameters, state })
-            .map_err(|e| e.worded(run_words))
+        let (parameters, state) = simulation::start(&mut self.prepared, &self.sets, &numbers)
+            .map_err(|e| e.worded(run_words))?;
+        // Each run's own: a varied parameter may be a restitution, or one it names.
+        let restitutions = simulation::restitutions(&self.prepared, &parameters)
+            .map_err(|e| e.worded(run_words))?;
+        Ok(Start { parameters, state, restitutions })
     }
 }
 
@@ -184,9 +191,9 @@ impl Ensemble {
             settings.outputs = record::expressions(&recorded);
         }
         let simulation::Loaded { mut prepared, outputs, held, .. } = resolved.load(&settings)?;
-        prepared.refuse_contacts("an ensemble")?;
         let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
-        let recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
+        let mut recorded = if recorded.is_empty() { record::finals(&outputs) } else { recorded };
+        record::resolve_contacts(&mut recorded, &prepared.contact_names())?;
         let given = varied_parameters(&mut prepared, &options.vary)?;
         let sets = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
         let columns = Columns {
@@ -231,6 +238,7 @@ impl Ensemble {
             columns: names,
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
+            contact_names: prepared.contact_names(),
             parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: simulation::angle_oriented_bodies(model),
             lockstep: true,
@@ -437,6 +445,7 @@ impl Ensemble {
             Err(why) => return failed(why.clone()),
         };
         integrand.mechanical().set_parameters(&start.parameters);
+        integrand.mechanical().set_restitutions(&start.restitutions);
         let mut go_on = |_| unless_stopped(stop);
         let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut go_on);
         self.outcome(&run)
@@ -458,8 +467,7 @@ impl Ensemble {
             constraints: &self.constraint_names,
             parameters: &self.parameter_names,
             angle_oriented_bodies: &self.angle_oriented_bodies,
-            // An ensemble refuses a scene with contacts.
-            contacts: &[],
+            contacts: &self.contact_names,
         };
         let (what, _) = names.words(&fault.kind);
         format!("numeric fault at t = {}: {what}", fault.time)

@@ -1,8 +1,11 @@
 //! What an ensemble records per run: a scene expression at the end (or at the stop, where `t`
 //! is the stop's time), or its least or greatest value over the run, `min(EXPR)` and
-//! `max(EXPR)` (a one-argument call; with two arguments `min` and `max` are the scene's own).
+//! `max(EXPR)` (a one-argument call; with two arguments `min` and `max` are the scene's own);
+//! or of a contact, `impacts(NAME)` (how many times it landed with an impact) and
+//! `settled(NAME)` (when its impacts accumulated and it closed for good; NaN if they did not).
 
-use sim::Run;
+use engine::Error;
+use sim::{ModeChange, Run};
 
 use simulation::split_list;
 
@@ -17,26 +20,80 @@ pub enum Extreme {
     Greatest,
 }
 
-/// A recorded column: its name as written, which value, and its expression's observation.
+/// A recorded column: its name as written, and what it records.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Recorded {
     pub name: String,
-    pub extreme: Extreme,
-    /// The expression, as resolved in the scene's scope.
-    pub expression: String,
-    /// Its observation column.
-    column: usize,
+    pub source: Source,
+}
+
+/// What a recorded column is of.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Source {
+    /// A value of a scene expression (as resolved in the scene's scope), observed in
+    /// `column`.
+    Expression { extreme: Extreme, expression: String, column: usize },
+    /// Of a contact (named as written; its index among the scene's contacts once resolved,
+    /// [`resolve_contacts`]).
+    Contact { of: ContactRecord, contact: String, index: usize },
+}
+
+/// What a column records of a contact.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactRecord {
+    /// How many impacts it took (landings by Newton's law, the settling one left out).
+    Impacts,
+    /// When it settled, NaN if it did not.
+    Settled,
 }
 
 impl Recorded {
     /// The value this column records of a finished run.
     pub(super) fn value(&self, run: &Run) -> f64 {
-        match self.extreme {
-            Extreme::Final => run.trajectory.rows.last().map_or(f64::NAN, |row| row[self.column]),
-            Extreme::Least => run.extremes.get(self.column).map_or(f64::NAN, |e| e.0),
-            Extreme::Greatest => run.extremes.get(self.column).map_or(f64::NAN, |e| e.1),
+        match &self.source {
+            Source::Expression { extreme, column, .. } => match extreme {
+                Extreme::Final => run.trajectory.rows.last().map_or(f64::NAN, |row| row[*column]),
+                Extreme::Least => run.extremes.get(*column).map_or(f64::NAN, |e| e.0),
+                Extreme::Greatest => run.extremes.get(*column).map_or(f64::NAN, |e| e.1),
+            },
+            Source::Contact { of, index, .. } => {
+                let mut events = run.modes.iter().filter(|m| m.contact == *index);
+                match of {
+                    ContactRecord::Impacts => {
+                        events.filter(|m| m.kind == ModeChange::Impact).count() as f64
+                    }
+                    ContactRecord::Settled => {
+                        events.find(|m| m.kind == ModeChange::Settled).map_or(f64::NAN, |m| m.time)
+                    }
+                }
+            }
         }
     }
+}
+
+/// Gives each contact column its contact's index among `contacts` (the scene's, in the order
+/// written), or an error naming a contact the scene does not have.
+pub(super) fn resolve_contacts(
+    recorded: &mut [Recorded],
+    contacts: &[String],
+) -> Result<(), Error> {
+    for r in recorded {
+        if let Source::Contact { contact, index, .. } = &mut r.source {
+            *index = contacts.iter().position(|c| c == contact).ok_or_else(|| {
+                let known: Vec<String> = contacts.iter().map(|c| format!("`{c}`")).collect();
+                Error::Input(format!(
+                    "--record {}: the scene has no contact `{contact}` ({})",
+                    r.name,
+                    if known.is_empty() {
+                        "it has no contacts".to_string()
+                    } else {
+                        format!("its contacts: {}", known.join(", "))
+                    }
+                ))
+            })?;
+        }
+    }
+    Ok(())
 }
 
 /// The recorded columns of the lists given, each expression observed once however often it
@@ -45,6 +102,11 @@ pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
     let mut expressions: Vec<String> = Vec::new();
     let mut recorded = Vec::new();
     for item in lists.iter().flat_map(|list| split_list(list)) {
+        if let Some((of, contact)) = contact_of(&item) {
+            recorded
+                .push(Recorded { name: item, source: Source::Contact { of, contact, index: 0 } });
+            continue;
+        }
         let (extreme, expression) = extreme_of(&item);
         let column = match expressions.iter().position(|e| *e == expression) {
             Some(c) => c,
@@ -53,7 +115,10 @@ pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
                 expressions.len() - 1
             }
         };
-        recorded.push(Recorded { name: item, extreme, expression, column });
+        recorded.push(Recorded {
+            name: item,
+            source: Source::Expression { extreme, expression, column },
+        });
     }
     recorded
 }
@@ -62,8 +127,10 @@ pub(crate) fn parse(lists: &[String]) -> Vec<Recorded> {
 pub(super) fn expressions(recorded: &[Recorded]) -> Vec<String> {
     let mut seen: Vec<String> = Vec::new();
     for r in recorded {
-        if r.column == seen.len() {
-            seen.push(r.expression.clone());
+        if let Source::Expression { expression, column, .. } = &r.source {
+            if *column == seen.len() {
+                seen.push(expression.clone());
+            }
         }
     }
     seen
@@ -73,11 +140,24 @@ pub(super) fn expressions(recorded: &[Recorded]) -> Vec<String> {
 pub(super) fn finals(outputs: &[String]) -> Vec<Recorded> {
     let final_of = |(column, name): (usize, &String)| Recorded {
         name: name.clone(),
-        extreme: Extreme::Final,
-        expression: name.clone(),
-        column,
+        source: Source::Expression { extreme: Extreme::Final, expression: name.clone(), column },
     };
     outputs.iter().enumerate().map(final_of).collect()
+}
+
+/// `impacts(NAME)` and `settled(NAME)` of a contact named by a plain name, if `item` is one.
+fn contact_of(item: &str) -> Option<(ContactRecord, String)> {
+    for (name, of) in [("impacts", ContactRecord::Impacts), ("settled", ContactRecord::Settled)] {
+        let Some(inner) = item.trim().strip_prefix(name).map(str::trim_start) else { continue };
+        let Some(inner) = inner.strip_prefix('(').and_then(|i| i.strip_suffix(')')) else {
+            continue;
+        };
+        let inner = inner.trim();
+        if !inner.is_empty() && inner.chars().all(|c| c.is_alphanumeric() || c == '_') {
+            return Some((of, inner.to_string()));
+        }
+    }
+    None
 }
 
 /// `max(EXPR)` and `min(EXPR)` as the extreme of EXPR; anything else as its final value.
@@ -117,8 +197,15 @@ mod tests {
     #[test]
     fn extremes_take_one_argument_and_share_columns() {
         let recorded = parse(&["t, max(theta1), min(theta1)".into(), "max(a, b)".into()]);
-        let kinds: Vec<(Extreme, &str, usize)> =
-            recorded.iter().map(|r| (r.extreme, r.expression.as_str(), r.column)).collect();
+        let kinds: Vec<(Extreme, &str, usize)> = recorded
+            .iter()
+            .filter_map(|r| match &r.source {
+                Source::Expression { extreme, expression, column } => {
+                    Some((*extreme, expression.as_str(), *column))
+                }
+                Source::Contact { .. } => None,
+            })
+            .collect();
         assert_eq!(
             kinds,
             [
@@ -130,5 +217,24 @@ mod tests {
         );
         assert_eq!(expressions(&recorded), ["t", "theta1", "max(a, b)"]);
         assert_eq!(extreme_of("max(x) + max(y)").0, Extreme::Final);
+    }
+
+    #[test]
+    fn a_contact_is_recorded_by_its_name_and_takes_no_column() {
+        let mut recorded = parse(&["settled(floor), y, impacts( floor )".into()]);
+        assert_eq!(expressions(&recorded), ["y"]);
+        resolve_contacts(&mut recorded, &["wall".into(), "floor".into()]).unwrap();
+        let of: Vec<_> = recorded
+            .iter()
+            .filter_map(|r| match &r.source {
+                Source::Contact { of, index, .. } => Some((*of, *index)),
+                Source::Expression { .. } => None,
+            })
+            .collect();
+        assert_eq!(of, [(ContactRecord::Settled, 1), (ContactRecord::Impacts, 1)]);
+        let e = resolve_contacts(&mut recorded, &[]).unwrap_err().to_string();
+        assert!(e.contains("no contact `floor` (it has no contacts)"), "{e}");
+        // A call of something else is an expression.
+        assert!(matches!(parse(&["settled(a + b)".into()])[0].source, Source::Expression { .. }));
     }
 }

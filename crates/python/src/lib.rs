@@ -394,6 +394,33 @@ fn outcome_dict<'py>(
     out.set_item("constraint_drift", outcome.constraint_drift())?;
     out.set_item("constraint_drift_at_steps", outcome.constraint_drift_at_steps())?;
     out.set_item("wall_seconds", outcome.wall_seconds)?;
+    out.set_item("contacts", PyList::new(py, &outcome.contact_names)?)?;
+    out.set_item("contact_events", contact_events(py, outcome)?)?;
+    out.set_item("energy_changed_by_impacts", outcome.totals.energy_jumps())?;
+    Ok(out)
+}
+
+/// A run's contact events as columns, an entry an event in the order they happened (as
+/// `lagrange simulate --events` writes them): `t`, `contact` (its name), `kind`
+/// (`simulation::mode_word`), `closed` (after it), `impulse`, `tangential_impulse` (NaN for a
+/// contact without grip) and `energy_change`.
+fn contact_events<'py>(
+    py: Python<'py>,
+    outcome: &simulation::Outcome,
+) -> PyResult<Bound<'py, PyDict>> {
+    let modes = &outcome.run.modes;
+    let out = PyDict::new(py);
+    out.set_item("t", PyArray1::from_iter(py, modes.iter().map(|m| m.time)))?;
+    let names = modes.iter().map(|m| outcome.contact_name(m.contact));
+    out.set_item("contact", PyList::new(py, names)?)?;
+    let kinds = modes.iter().map(|m| simulation::mode_word(m.kind));
+    out.set_item("kind", PyList::new(py, kinds)?)?;
+    out.set_item("closed", PyArray1::from_iter(py, modes.iter().map(|m| m.closed)))?;
+    out.set_item("impulse", PyArray1::from_iter(py, modes.iter().map(|m| m.impulse)))?;
+    let tangential = modes.iter().map(|m| m.tangential.unwrap_or(f64::NAN));
+    out.set_item("tangential_impulse", PyArray1::from_iter(py, tangential))?;
+    let energy = modes.iter().map(|m| m.energy_change);
+    out.set_item("energy_change", PyArray1::from_iter(py, energy))?;
     Ok(out)
 }
 

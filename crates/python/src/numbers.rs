@@ -25,10 +25,18 @@ use std::sync::{Mutex, MutexGuard};
 use crate::errors::{engine_error, numeric_error};
 use crate::inputs::{self, Source};
 
-/// Loads `source` for numbers, with its parameter values and initial state.
-fn prepared(source: &str, units: bool) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
+/// Loads `source` for numbers, with its parameter values and initial state. `refused`, where
+/// given, names what cannot take a scene with contacts (it would hold every contact closed,
+/// as a two-sided constraint), which then raises naming them.
+fn prepared(
+    source: &str,
+    units: bool,
+    refused: Option<&str>,
+) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
     let prepared = prepare(source, &[], engine::Options { units })?;
-    prepared.refuse_contacts("the Python package")?;
+    if let Some(what) = refused {
+        prepared.refuse_contacts(what)?;
+    }
     let parameters = prepared.parameter_values(&[])?;
     let y0 = prepared.initial_state(&parameters, &[])?;
     Ok((prepared, parameters, y0))
@@ -218,8 +226,10 @@ struct RhsInner {
 
 impl RhsInner {
     pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        // Its evaluations would hold every contact closed: a two-sided constraint it is not.
+        let refused = "`Scene.rhs()` (f, f.batch and f.jac, which would hold every contact closed)";
         let (mut prepared, parameters, y0) =
-            prepared(source, units).map_err(|e| engine_error(&e, path))?;
+            prepared(source, units, Some(refused)).map_err(|e| engine_error(&e, path))?;
         let dynamics_exprs = prepared.dynamics_exprs();
         let inputs = prepared.dynamics_inputs();
         let dynamics =
@@ -852,8 +862,9 @@ pub struct MassMatrix {
 
 impl MassMatrix {
     pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+        // M(q) is the same whichever contacts are closed.
         let (prepared, parameters, _) =
-            prepared(source, units).map_err(|e| engine_error(&e, path))?;
+            prepared(source, units, None).map_err(|e| engine_error(&e, path))?;
         let d = &prepared.derivation;
         let n = d.coords.len();
         let entries: Vec<cas::ExprId> =

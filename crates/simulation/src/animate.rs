@@ -25,6 +25,53 @@ pub struct Animation {
     /// Whether the energy should be conserved (no forces, dissipation or explicit time).
     pub conservative: bool,
     pub figures: Vec<Figure>,
+    /// The scene's contacts, each with whether it is closed at each frame.
+    pub contacts: Vec<ContactTrack>,
+    /// The run's contact events (impacts, lift-offs, settlings), in the order they happened.
+    pub contact_events: Vec<sim::ModeEvent>,
+}
+
+/// A contact through a run: its name, and whether it is closed at each frame. At a jump the
+/// run records two frames at one time, the one before it (the contact's mode before) and the
+/// one after.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactTrack {
+    pub name: String,
+    pub closed: Vec<bool>,
+}
+
+impl ContactTrack {
+    /// The contacts named `names` through frames recorded at `times`, from the run's events
+    /// (each event's `closed` says the mode after it; a contact is open until one closes it).
+    pub fn of(names: &[String], times: &[f64], events: &[sim::ModeEvent]) -> Vec<ContactTrack> {
+        let mut closed = vec![false; names.len()];
+        let mut tracks: Vec<ContactTrack> = names
+            .iter()
+            .map(|name| ContactTrack {
+                name: name.clone(),
+                closed: Vec::with_capacity(times.len()),
+            })
+            .collect();
+        let mut next = 0;
+        for (i, &t) in times.iter().enumerate() {
+            // The frame before a jump (the next frame at its time) has the modes before it.
+            let before_jump = times.get(i + 1) == Some(&t);
+            while let Some(event) = events.get(next) {
+                if event.time < t || (event.time == t && !before_jump) {
+                    if let Some(c) = closed.get_mut(event.contact) {
+                        *c = event.closed;
+                    }
+                    next += 1;
+                } else {
+                    break;
+                }
+            }
+            for (track, &c) in tracks.iter_mut().zip(&closed) {
+                track.closed.push(c);
+            }
+        }
+        tracks
+    }
 }
 
 /// One figure: what it is, and its numbers at each frame (the layout [`FigureKind`] gives).
@@ -193,5 +240,42 @@ fn axis_length(inertia_per_mass: f64) -> f64 {
         2.0 * inertia_per_mass.sqrt()
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod contact_tests {
+    use super::ContactTrack;
+    use sim::{ModeChange, ModeEvent};
+
+    fn event(time: f64, contact: usize, kind: ModeChange, closed: bool) -> ModeEvent {
+        ModeEvent {
+            time,
+            contact,
+            kind,
+            closed,
+            impulse: 0.0,
+            tangential: None,
+            energy_change: 0.0,
+            energy_rise: false,
+        }
+    }
+
+    /// A contact closed at the start, lifting off, landing (two frames at the jump's time,
+    /// before and after) and settling: each frame has the mode in force there.
+    #[test]
+    fn each_frame_has_the_modes_in_force_and_a_jump_two() {
+        let names = ["floor".to_string(), "wall".to_string()];
+        let times = [0.0, 0.5, 1.0, 1.0, 1.5, 2.0, 2.0];
+        let events = [
+            event(0.0, 1, ModeChange::Closed, true),
+            event(0.7, 1, ModeChange::LiftOff, false),
+            event(1.0, 0, ModeChange::Impact, false),
+            event(2.0, 0, ModeChange::Settled, true),
+        ];
+        let tracks = ContactTrack::of(&names, &times, &events);
+        assert_eq!(tracks[0].closed, [false, false, false, false, false, false, true]);
+        assert_eq!(tracks[1].closed, [true, true, false, false, false, false, false]);
+        assert_eq!(tracks[1].name, "wall");
     }
 }

@@ -13,7 +13,7 @@ use super::{
     angle_oriented_bodies, conserves_energy, drive, integrate_scene, load, overrides,
     set_expressions, start, Columns, Loaded, Outcome, Progress, Resolved, Settings,
 };
-use crate::animate::{Animation, Plan};
+use crate::animate::{Animation, ContactTrack, Plan};
 use engine::numbers::Prepared;
 use engine::Error;
 
@@ -209,18 +209,36 @@ impl Compiled {
         };
         if let Some(figures) = figures {
             let energy = outcome.energy();
-            let e0 = energy.first().copied().unwrap_or(0.0);
+            let times = &outcome.run.trajectory.times;
             outcome.animation = Some(Animation {
                 title: model.title.clone(),
                 dimension: model.dimension(),
-                times: outcome.run.trajectory.times.clone(),
-                energy_error: energy.iter().map(|e| e - e0).collect(),
+                times: times.clone(),
+                energy_error: energy_error(times, &energy),
                 conservative,
                 figures,
+                contacts: ContactTrack::of(&outcome.contact_names, times, &outcome.run.modes),
+                contact_events: outcome.run.modes.clone(),
             });
         }
         Ok(outcome)
     }
+}
+
+/// E(t) − E(0) at each recorded time, less what the jumps before it changed E by: two rows at
+/// one time are the states before and after an impact, whose change is the impact's, not the
+/// integrator's error (as the summary measures the drift, [`Totals`]).
+fn energy_error(times: &[f64], energy: &[f64]) -> Vec<f64> {
+    let e0 = energy.first().copied().unwrap_or(0.0);
+    let mut jumps = 0.0;
+    let mut out = Vec::with_capacity(energy.len());
+    for (k, (&t, &e)) in times.iter().zip(energy).enumerate() {
+        if k > 0 && times[k - 1] == t {
+            jumps += e - energy[k - 1];
+        }
+        out.push(e - e0 - jumps);
+    }
+    out
 }
 
 /// The settings that shape the programs: those a run reads alone put back to their

@@ -156,7 +156,7 @@ pub(crate) fn with_contacts(
             names.join(", ")
         )));
     }
-    let restitutions = prepared.restitutions(mechanical.parameters());
+    let restitutions = restitutions(prepared, mechanical.parameters())?;
     let contacts = prepared
         .contacts
         .iter()
@@ -168,4 +168,24 @@ pub(crate) fn with_contacts(
         })
         .collect();
     Ok(mechanical.with_contacts(contacts))
+}
+
+/// Each contact's restitution at the parameter values `parameters` (in slot order), checked
+/// to lie in [0, 1]: a run's `--set` or an ensemble's draw may take it out, which the scene's
+/// own values could not.
+pub fn restitutions(prepared: &Prepared, parameters: &[f64]) -> Result<Vec<f64>, Error> {
+    if prepared.contacts.is_empty() {
+        // Nothing to evaluate, and nothing allocated: an ensemble asks once a run.
+        return Ok(Vec::new());
+    }
+    let values = prepared.restitutions(parameters);
+    for (name, e) in prepared.contact_names().iter().zip(&values) {
+        if !(0.0..=1.0).contains(e) {
+            return Err(Error::Input(format!(
+                "the restitution of contact `{name}` is {e} at this run's values: Newton's \
+                 coefficient lies between 0 and 1"
+            )));
+        }
+    }
+    Ok(values)
 }

@@ -25,7 +25,7 @@ mod rows;
 pub use compiled::Compiled;
 pub use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
-pub use integrand::{run_settings, watched, Integrand};
+pub use integrand::{restitutions, run_settings, watched, Integrand};
 pub use rows::{Sink, Totals};
 
 use crate::animate::Animation;
@@ -153,6 +153,18 @@ pub struct Outcome {
     /// An input driven continuously by a law is in the Lagrangian: the symplectic methods
     /// refuse the run ([`DRIVEN_IN_LAGRANGIAN`]).
     pub lagrangian_driven: bool,
+}
+
+/// What happened to a contact, in one word, as every front end names it (the summary, the
+/// events table, Python's `contact_events`, the animation's page).
+pub fn mode_word(kind: sim::ModeChange) -> &'static str {
+    match kind {
+        sim::ModeChange::Impact => "impact",
+        sim::ModeChange::Settled => "settled",
+        sim::ModeChange::Closed => "closed",
+        sim::ModeChange::LiftOff => "lift-off",
+        sim::ModeChange::Struck => "struck",
+    }
 }
 
 /// Why a method that [`Method::handles_multipliers`] says no to cannot run a scene with such
@@ -768,6 +780,11 @@ fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> 
 }
 
 impl Outcome {
+    /// A contact's name, by its index in the run's mode events.
+    pub fn contact_name(&self, k: usize) -> String {
+        self.contact_names.get(k).cloned().unwrap_or_else(|| format!("contact {k}"))
+    }
+
     /// The total energy at each recorded time, of a run that kept its rows.
     pub fn energy(&self) -> Vec<f64> {
         let (k, p) = self.energy_columns;

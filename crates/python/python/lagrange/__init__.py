@@ -46,6 +46,7 @@ __all__ = [
     "Expectation",
     "Linearization",
     "Results",
+    "ContactEvents",
     "Batch",
     "EnsembleTable",
     "Rhs",
@@ -417,6 +418,9 @@ class Scene:
           accepted step instead); events, and the end of a run that stops early, come in
           addition.
 
+        A scene with contacts runs through its impacts, lift-offs and settling as the command
+        runs it; the results' ``contact_events`` are a :class:`ContactEvents` table.
+
         A run that faults raises :class:`NumericError` whose ``results`` hold what was
         computed before the fault.
 
@@ -482,7 +486,8 @@ class Scene:
           texts as ``--vary`` takes them (``"a1=-3:3:60"``). A start that a parameter gives
           (``coord theta = a``) follows it.
         - ``record``: scene expressions at the end of each run (or where a stop ended it;
-          ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run; by
+          ``t`` is then the stop's time), ``max(EXPR)`` and ``min(EXPR)`` over the run,
+          ``impacts(NAME)`` and ``settled(NAME)`` of a contact (NaN where it did not settle); by
           default the scene's ``output`` quantities at the end, else the coordinates.
         - ``start``, ``stop``: run only these runs of the ensemble (in its order), for a front
           end that spreads chunks over processes or machines; joined in order, the chunks
@@ -713,7 +718,8 @@ class Derivation:
 @dataclass
 class Constraint:
     """A constraint of the scene: ``equation`` as written (``sympy.Eq``), ``phi`` = lhs − rhs,
-    ``kind`` (``"position"`` or ``"velocity"``), ``reaction`` (its ``NAME.force`` symbol) and
+    ``kind`` (``"position"``, ``"velocity"`` or ``"contact"``, a one-sided
+    contact whose gap is ``phi``, which a run opens and closes), ``reaction`` (its ``NAME.force`` symbol) and
     ``handling``: ``"eliminated"`` (then ``solved_for`` is the coordinate it removed and
     ``solution`` its value), ``"kept"`` with a multiplier, or ``"dropped"`` (always holds)."""
 
@@ -778,6 +784,12 @@ class Results(_Columns):
     ``energy_drift`` (largest absolute and relative change of T + V), ``conservative`` (whether the scene should keep its energy),
     ``constraint_drift`` (over the recorded times; ``constraint_drift_at_steps`` at the
     integrator's own steps), ``wall_seconds`` and ``fault`` (``None`` for a finished run).
+
+    With contacts: ``contacts`` (their names, as written), ``contact_events`` (a
+    :class:`ContactEvents` table of the impacts, lift-offs and settlings) and
+    ``energy_changed_by_impacts`` (what the impacts changed T + V by in all; ``energy_drift``
+    is measured less it). A run's rows hold the state before and after each impact at the
+    same time.
     """
 
     def __init__(self, raw):
@@ -799,6 +811,9 @@ class Results(_Columns):
         self.constraint_drift = raw["constraint_drift"]
         self.constraint_drift_at_steps = raw["constraint_drift_at_steps"]
         self.wall_seconds = raw["wall_seconds"]
+        self.contacts = raw["contacts"]
+        self.contact_events = ContactEvents(raw["contact_events"])
+        self.energy_changed_by_impacts = raw["energy_changed_by_impacts"]
 
     def to_pandas(self):
         """The columns as a ``pandas.DataFrame`` indexed by ``t`` (needs pandas)."""
@@ -809,6 +824,68 @@ class Results(_Columns):
     def __repr__(self):
         names = ", ".join(k for k in self._columns if k != "t")
         return f"<lagrange.Results {len(self.t)} times of ({names}), {self.method}>"
+
+
+class ContactEvents(_Columns):
+    """The contact events of a run, in the order they happened: a mapping of each column's
+    name to a NumPy array with an entry an event, as ``lagrange simulate --events`` writes
+    them.
+
+    - ``t``: when;
+    - ``contact``: the contact's name (strings);
+    - ``kind``: ``"impact"`` (it landed and took an impulse by Newton's law),
+      ``"settled"`` (its impacts accumulate: the last one made plastic, the contact closed),
+      ``"closed"`` (it closed touching at rest), ``"lift-off"`` (its reaction fell to zero),
+      ``"struck"`` (another contact's impact gave it an impulse while it stayed closed);
+    - ``closed``: whether the contact is closed after it (bools);
+    - ``impulse``: the normal impulse it took (0 without an impact);
+    - ``tangential_impulse``: its grip's impulse (NaN for a contact without grip);
+    - ``energy_change``: the kinetic energy its impulses changed.
+
+    ``len(events)`` is the number of columns, as for any mapping; ``events.count`` the number
+    of events. ``events.of(kind)`` is the times of one kind, ``events.settled(name)`` the
+    time a contact settled (``None`` if it did not).
+    """
+
+    def __init__(self, raw):
+        self._columns = {
+            "t": raw["t"],
+            "contact": numpy.array(raw["contact"], dtype=str).reshape(-1),
+            "kind": numpy.array(raw["kind"], dtype=str).reshape(-1),
+            "closed": raw["closed"],
+            "impulse": raw["impulse"],
+            "tangential_impulse": raw["tangential_impulse"],
+            "energy_change": raw["energy_change"],
+        }
+
+    @property
+    def count(self):
+        """The number of events."""
+        return len(self._columns["t"])
+
+    def of(self, kind, contact=None):
+        """The times of the events of ``kind`` (of ``contact`` alone, if named)."""
+        picked = self._columns["kind"] == kind
+        if contact is not None:
+            picked &= self._columns["contact"] == contact
+        return self._columns["t"][picked]
+
+    def settled(self, contact=None):
+        """When ``contact`` (any, if ``None``) settled, or ``None`` if it did not."""
+        times = self.of("settled", contact)
+        return float(times[0]) if len(times) else None
+
+    def to_pandas(self):
+        """A ``pandas.DataFrame`` with a row an event (needs pandas)."""
+        pandas = self._pandas("ContactEvents.to_pandas")
+        return pandas.DataFrame(self._columns)
+
+    def __repr__(self):
+        kinds = ", ".join(
+            f"{int((self._columns['kind'] == k).sum())} {k}"
+            for k in dict.fromkeys(self._columns["kind"].tolist())
+        )
+        return f"<lagrange.ContactEvents {self.count} events{': ' + kinds if kinds else ''}>"
 
 
 class Batch(_Columns):

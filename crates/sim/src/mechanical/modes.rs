@@ -118,6 +118,16 @@ impl Mechanical {
         self
     }
 
+    /// Sets each contact's restitution, in the order of [`Mechanical::contacts`]: a run at
+    /// other parameter values than the problem was made with (an ensemble's) gives them here.
+    pub fn set_restitutions(&mut self, restitutions: &[f64]) {
+        assert_eq!(restitutions.len(), self.contacts.len(), "a restitution per contact");
+        for (c, &e) in self.contacts.iter_mut().zip(restitutions) {
+            assert!((0.0..=1.0).contains(&e), "restitution in [0, 1]");
+            c.restitution = e;
+        }
+    }
+
     /// The one-sided contacts.
     pub fn contacts(&self) -> &[Contact] {
         &self.contacts
