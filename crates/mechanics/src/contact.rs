@@ -52,6 +52,10 @@ pub struct ImpactLaw {
     pub rates_after: Vec<ExprId>,
     /// D = W·U: the inverse inertia the contact's rows meet (1/m for a ball on a floor).
     pub delassus: Vec<Vec<ExprId>>,
+    /// The symbols Λ (and Λ_T) standing for the impulses, and q̇⁺ = q̇⁻ + U·Λ in them: how a
+    /// hand derivation writes the rates after when the impulses put in make them long.
+    pub impulse_symbols: Vec<cas::SymId>,
+    pub rates_in_impulses: Vec<ExprId>,
 }
 
 /// Past this many unknowns (coordinates and two-sided multipliers) the impact law is left to
@@ -210,14 +214,24 @@ impl Derivation {
         let negated: Vec<ExprId> = target.iter().map(|t| pool.neg(*t)).collect();
         let impulses = linear_system::solve(pool, &delassus, &negated)?;
         let impulses: Vec<ExprId> = impulses.into_iter().map(|x| tidy(pool, x)).collect();
+        let impulse_symbols: Vec<cas::SymId> =
+            ["Λ", "Λ_T"].iter().take(impulses.len()).map(|name| pool.param(name)).collect();
+        let symbols: Vec<ExprId> = impulse_symbols.iter().map(|s| pool.sym(*s)).collect();
         let mut rates_after = Vec::with_capacity(n);
+        let mut rates_in_impulses = Vec::with_capacity(n);
         for i in 0..n {
-            let mut terms = vec![pool.sym(self.rates[i])];
-            for (u, l) in response.iter().zip(&impulses) {
-                terms.push(pool.mul2(u[i], *l));
+            let rate = pool.sym(self.rates[i]);
+            let mut exact = vec![rate];
+            let mut named = vec![rate];
+            for ((u, l), s) in response.iter().zip(&impulses).zip(&symbols) {
+                exact.push(pool.mul2(u[i], *l));
+                // Each response on its own, so that the sum reads q̇ + U·Λ term by term.
+                let scaled = tidy(pool, u[i]);
+                named.push(pool.mul2(scaled, *s));
             }
-            let sum = pool.add(&terms);
-            rates_after.push(tidy(pool, sum));
+            let exact = pool.add(&exact);
+            rates_after.push(tidy(pool, exact));
+            rates_in_impulses.push(pool.add(&named));
         }
         Some(ImpactLaw {
             normal_rate,
@@ -225,6 +239,8 @@ impl Derivation {
             tangential_impulse: impulses.get(1).copied(),
             rates_after,
             delassus,
+            impulse_symbols,
+            rates_in_impulses,
         })
     }
 }

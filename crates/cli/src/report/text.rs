@@ -221,11 +221,40 @@ impl Text<'_> {
                         "    impact (rates before it on the right; landing at γ⁻ = {} < 0):",
                         self.print(law.normal_rate)
                     ));
-                    self.out.push(format!("      Λ = {}", self.print(law.impulse)));
-                    if let Some(t) = law.tangential_impulse {
-                        self.out.push(format!("      Λ_T = {}", self.print(t)));
+                    let impulses: Vec<ExprId> =
+                        std::iter::once(law.impulse).chain(law.tangential_impulse).collect();
+                    if impulses.iter().any(|e| self.print(*e).chars().count() > 120) {
+                        // Too long put in: the impulses as the problem that gives them.
+                        let d: Vec<Vec<String>> = law
+                            .delassus
+                            .iter()
+                            .map(|r| r.iter().map(|e| self.print(*e)).collect())
+                            .collect();
+                        let rows: Vec<String> =
+                            d.iter().map(|r| format!("[{}]", r.join(", "))).collect();
+                        self.out.push(format!("      D = W·M⁻¹·Wᵀ = [{}]", rows.join("; ")));
+                        let normal = match self.pool.is_zero(c.restitution) {
+                            true => "γ⁻".to_string(),
+                            false => format!("(1 + {})·γ⁻", self.print(c.restitution)),
+                        };
+                        match c.grip {
+                            Some(v) => self.out.push(format!(
+                                "      D·(Λ, Λ_T) = −({normal}, v⁻),  v⁻ = {}",
+                                self.print(v)
+                            )),
+                            None => self.out.push(format!("      D·Λ = −{normal}")),
+                        }
+                    } else {
+                        self.out.push(format!("      Λ = {}", self.print(law.impulse)));
+                        if let Some(t) = law.tangential_impulse {
+                            self.out.push(format!("      Λ_T = {}", self.print(t)));
+                        }
                     }
-                    for (r, after) in rates.iter().zip(&law.rates_after) {
+                    // Long once the impulses are put in (a block's corner), the rates after read
+                    // better as q̇ + U·Λ, as a hand derivation leaves them.
+                    let long = law.rates_after.iter().any(|e| self.print(*e).chars().count() > 80);
+                    let after = if long { &law.rates_in_impulses } else { &law.rates_after };
+                    for (r, after) in rates.iter().zip(after) {
                         self.out.push(format!("      {r}⁺ = {}", self.print(*after)));
                     }
                 }
