@@ -14,12 +14,14 @@ end time. Both models are derived by hand here, not lowered from lagrange:
   coordinate, the tilt theta, pivoting about the corner on the side s = sign(theta):
   theta'' = -p^2 sin(s*alpha - theta), p^2 = 3g/(4R), R = sqrt(b^2 + h^2), alpha = atan(b/h);
   the event theta = 0, and at it the pivot switches (s <- -s) and theta' <- r*theta' with
-  Housner's r = 1 - 3/2 sin^2(alpha).
+  Housner's r = 1 - 3/2 sin^2(alpha). Its impacts accumulate too, where it is released low
+  enough: the loop stops once the next flight (r times the last, as a small swing's) would be
+  shorter than the `floor`.
 
 It reads requests from standard input, one JSON object per line:
 
     {"scene": "ball" | "block", "params": {...}, "until": T, "starts": [h0 or theta0, ...],
-     "references": [[t_1, t_2, ...] per start], "floors": [flight per start] (ball),
+     "references": [[t_1, t_2, ...] per start], "floors": [flight per start, or 0],
      "target": E, "repeats": R}
 
 and for each it looks for the rtol (= atol) whose worst relative impact-time error over the
@@ -113,6 +115,10 @@ def block(params, theta0, until, rtol, floor):
         impacts.append(t)
         y = np.array([0.0, ratio * float(sol.y_events[0][0][1])])
         side = -side
+        if len(impacts) >= 2 and ratio * (impacts[-1] - impacts[-2]) < floor:
+            # The next flight (that of a small swing shrinks as the rate) is shorter than the
+            # floor: the block rests from here.
+            break
     return impacts, steps, evaluations
 
 

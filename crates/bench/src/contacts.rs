@@ -32,7 +32,7 @@ use bench::reference::{
     bouncing_ball_accumulation, bouncing_ball_impacts, housner_ratio, rocking_block_impacts,
 };
 use engine::input::Assignment;
-use sim::ModeChange;
+use sim::{ModeChange, ModeEvent};
 use simulation::{Compiled, Options, Outcome, Settings};
 
 use crate::{median, seconds};
@@ -58,6 +58,8 @@ struct Scene {
     until: f64,
     /// The exact ratio of `rate` after an impact to before.
     ratio: f64,
+    /// How much shorter each flight is than the one before as the impacts accumulate.
+    shrink: f64,
 }
 
 impl Scene {
@@ -68,6 +70,16 @@ impl Scene {
             "ball" => bouncing_ball_impacts(G, E, start, count),
             _ => rocking_block_impacts(G, B, H, start, self.until),
         }
+    }
+
+    /// The exact impact times at `start` against a run that made `count` impacts: where it
+    /// `settled` the contact, the series cut at the impact it settled at.
+    fn exact(&self, start: f64, count: usize, settled: bool) -> Vec<f64> {
+        let mut exact = self.references(start, count);
+        if settled {
+            exact.truncate(count);
+        }
+        exact
     }
 
     /// The peer's parameters.
@@ -89,6 +101,7 @@ fn scenes() -> [Scene; 2] {
             starts: [0.9, 0.95, 1.0, 1.05, 1.1],
             until: 5.0,
             ratio: -E,
+            shrink: E,
         },
         Scene {
             name: "block",
@@ -98,6 +111,8 @@ fn scenes() -> [Scene; 2] {
             starts: [0.08, 0.09, 0.1, 0.11, 0.12],
             until: 2.0,
             ratio: housner_ratio(B, H),
+            // The flights of small swings are in proportion to the landing rate.
+            shrink: housner_ratio(B, H),
         },
     ]
 }
@@ -119,8 +134,8 @@ struct Measured {
 /// One tolerance of one scene: accuracy over the starts, cost over the repeats.
 struct Row {
     tolerance: f64,
-    /// The middle start's run.
-    middle: Measured,
+    /// Each start's run (the first repeat's).
+    measured: Vec<Measured>,
     error: f64,
     ratio_error: f64,
     /// The worst relative error of the settling time against the accumulation point.
@@ -130,10 +145,9 @@ struct Row {
     /// The share of a run spent integrating (the rest: resolving the start, making the
     /// problem, the summary's totals).
     integrating: f64,
-    /// The impacts made from each start.
-    counts: Vec<usize>,
-    /// From each start, the flight below which the peer stops the ball: between the flights
-    /// after the impact at which ours settled it and after the one before.
+    /// From each start, the flight below which the peer stops: between the flights after the
+    /// impact at which ours settled the contact and after the one before (0 where ours did
+    /// not settle it).
     floors: Vec<f64>,
 }
 
@@ -185,27 +199,39 @@ fn once(
 /// The impacts, errors and counts of one run from `start`.
 fn measure(scene: &Scene, outcome: &Outcome, start: f64) -> Measured {
     let run = &outcome.run;
-    let impacts: Vec<f64> = run
+    let (times, rows) = (&run.trajectory.times, &run.trajectory.rows);
+    // The rate just before and just after a jump: the first and the last row at its time.
+    let across = |time: f64| {
+        let first = times.iter().position(|&t| t == time)?;
+        let last = times.iter().rposition(|&t| t == time)?;
+        Some((rows[first][0], rows[last][0]))
+    };
+    let impacts: Vec<&ModeEvent> = run
         .modes
         .iter()
         .filter(|m| matches!(m.kind, ModeChange::Impact | ModeChange::Settled))
-        .map(|m| m.time)
         .collect();
-    let exact = scene.references(start, impacts.len());
-    // The rate just before and just after each impact (not a settling, which stops it): the
-    // two rows a jump records at its time.
-    let bounced: Vec<f64> =
-        run.modes.iter().filter(|m| m.kind == ModeChange::Impact).map(|m| m.time).collect();
-    let (times, rows) = (&run.trajectory.times, &run.trajectory.rows);
-    let ratio_error = (1..times.len())
-        .filter(|&i| times[i] == times[i - 1] && bounced.contains(&times[i]))
-        .map(|i| ((rows[i][0] / rows[i - 1][0] - scene.ratio) / scene.ratio).abs())
+    // Settled: a contact whose impacts accumulate, made plastic, or an impact that leaves the
+    // body at rest (the block's last, where the corner it leaves separates too slowly to count
+    // as leaving and stays closed): from there the series of impacts is cut.
+    let at_rest = |m: &ModeEvent| {
+        m.kind == ModeChange::Settled
+            || across(m.time).is_some_and(|(before, after)| after.abs() <= 1e-9 * before.abs())
+    };
+    let settled = impacts.iter().find(|m| at_rest(m)).map(|m| m.time);
+    let ratio_error = impacts
+        .iter()
+        .filter(|m| !at_rest(m))
+        .filter_map(|m| across(m.time))
+        .map(|(before, after)| ((after / before - scene.ratio) / scene.ratio).abs())
         .fold(0.0, f64::max);
+    let impacts: Vec<f64> = impacts.iter().map(|m| m.time).collect();
+    let exact = scene.exact(start, impacts.len(), settled.is_some());
     Measured {
         error: worst_error(&impacts, &exact),
         impacts,
         ratio_error,
-        settled: run.modes.iter().find(|m| m.kind == ModeChange::Settled).map(|m| m.time),
+        settled,
         steps: run.steps,
         evaluations: run.evaluations,
     }
@@ -246,33 +272,40 @@ fn row(
             })
             .fold(0.0, f64::max)
     });
-    // The flight the ball would have had after its settling (the Kth) impact, t_(K+1) − t_K,
-    // and the one before it, 1/e times as long: the peer stops between the two.
+    // The flight the contact would have had after its settling (the Kth) impact,
+    // t_(K+1) − t_K, and the one before it, longer by 1/shrink: the peer stops between the two.
     let floors = scene
         .starts
         .iter()
         .zip(&measured)
         .map(|(&start, m)| {
-            let exact = scene.references(start, m.impacts.len() + 1);
-            match exact.len() {
-                n if n >= 2 => (exact[n - 1] - exact[n - 2]) / E.sqrt(),
+            let k = m.impacts.len();
+            let exact = scene.references(start, k + 1);
+            match m.settled {
+                Some(_) if k >= 1 && exact.len() > k => {
+                    (exact[k] - exact[k - 1]) / scene.shrink.sqrt()
+                }
                 _ => 0.0,
             }
         })
         .collect();
-    let counts = measured.iter().map(|m| m.impacts.len()).collect();
-    let middle = measured.swap_remove(scene.starts.len() / 2);
     Row {
         tolerance,
-        middle,
+        measured,
         error,
         ratio_error,
         settled_error,
         per_run: median(&mut runs),
         per_impact: median(&mut per_impact),
         integrating: median(&mut integrating),
-        counts,
         floors,
+    }
+}
+
+impl Row {
+    /// The run from the middle start, the scene's own.
+    fn middle(&self) -> &Measured {
+        &self.measured[self.measured.len() / 2]
     }
 }
 
@@ -362,11 +395,11 @@ fn table(scene: &Scene, rows: &[Row], load: f64) {
         outln!(
             "| {:.0e} | {} | {:.1e} |{settled} {:.1e} | {} | {} | {} | {} | {:.0}% |",
             row.tolerance,
-            row.middle.impacts.len(),
+            row.middle().impacts.len(),
             row.error,
             row.ratio_error,
-            row.middle.steps,
-            row.middle.evaluations,
+            row.middle().steps,
+            row.middle().evaluations,
             seconds(row.per_run),
             seconds(row.per_impact),
             100.0 * row.integrating
@@ -379,10 +412,13 @@ fn table(scene: &Scene, rows: &[Row], load: f64) {
 fn scipy(root: &Path, scene: &Scene, rows: &[Row], repeats: usize) -> Result<Vec<Peer>, String> {
     let mut input = String::new();
     for row in rows {
-        // The ball's references as far as ours went: the impacts it made from each start.
-        let references: Vec<Vec<f64>> =
-            scene.starts.iter().zip(&row.counts).map(|(&s, &n)| scene.references(s, n)).collect();
-        let floors = if scene.name == "ball" { row.floors.clone() } else { Vec::new() };
+        // The references as far as ours went: the impacts it made from each start.
+        let references: Vec<Vec<f64>> = scene
+            .starts
+            .iter()
+            .zip(&row.measured)
+            .map(|(&s, m)| scene.exact(s, m.impacts.len(), m.settled.is_some()))
+            .collect();
         let request = serde_json::json!({
             "label": row.tolerance,
             "scene": scene.name,
@@ -390,7 +426,7 @@ fn scipy(root: &Path, scene: &Scene, rows: &[Row], repeats: usize) -> Result<Vec
             "until": scene.until,
             "starts": scene.starts,
             "references": references,
-            "floors": floors,
+            "floors": row.floors,
             "target": row.error,
             "repeats": repeats.max(1),
         });
@@ -414,9 +450,11 @@ fn scipy(root: &Path, scene: &Scene, rows: &[Row], repeats: usize) -> Result<Vec
         return Err(String::from_utf8_lossy(&output.stderr).trim().to_string());
     }
     let text = String::from_utf8_lossy(&output.stdout);
+    // One line per request, in their order.
     text.lines()
         .filter(|l| l.starts_with('{'))
-        .map(|line| {
+        .zip(rows)
+        .map(|(line, row)| {
             let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
             let number = |key: &str| v[key].as_f64().unwrap_or(f64::NAN);
             let count = |key: &str| v[key].as_u64().unwrap_or(0) as usize;
@@ -427,7 +465,10 @@ fn scipy(root: &Path, scene: &Scene, rows: &[Row], repeats: usize) -> Result<Vec
                 .starts
                 .iter()
                 .zip(&times)
-                .map(|(&s, t)| worst_error(t, &scene.references(s, t.len())))
+                .zip(&row.measured)
+                .map(|((&s, t), m)| {
+                    worst_error(t, &scene.exact(s, m.impacts.len(), m.settled.is_some()))
+                })
                 .fold(0.0, f64::max);
             Ok(Peer {
                 rtol: number("rtol"),

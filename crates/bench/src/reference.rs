@@ -87,7 +87,7 @@ pub fn rocking_block_impacts(g: f64, b: f64, h: f64, theta0: f64, until: f64) ->
     let amplitude = |w2: f64| {
         let mut a = w2 / (c * libm::sin(alpha));
         for _ in 0..50 {
-            let slope = libm::cos(alpha - a);
+            let slope = libm::sin(alpha - a);
             let next = a - (rise(a) - w2 / c) / slope;
             if (next - a).abs() <= 1e-16 * a {
                 return next;
