@@ -136,7 +136,7 @@ mod tests {
         assert!((housner_ratio(0.1, 0.3) - 0.85).abs() < 1e-15);
         // Released barely tilted, the block sees a torque that hardly changes over its
         // swing: θ̈ = −(c/2)·sin α, so it lands after √(2·θ₀/((c/2)·sin α)).
-        let (g, b, h, theta0) = (9.81, 0.1, 0.3, 1e-7);
+        let (g, b, h, theta0) = (9.81f64, 0.1f64, 0.3f64, 1e-7);
         let half = 0.75 * g / (b * b + h * h).sqrt() * libm::sin(libm::atan(b / h));
         let first = rocking_block_impacts(g, b, h, theta0, 1.0)[0];
         let expected = (2.0 * theta0 / half).sqrt();
