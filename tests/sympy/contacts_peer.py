@@ -30,7 +30,7 @@ ladder of four tolerances a decade from 1e-3 down, then bisection of log(rtol) b
 loosest rung that meets the target (with every tighter rung scanned meeting it too) and the
 next looser one. At that rtol it times every start `repeats` times and writes one JSON line:
 the rtol, its error, the impact times at each start, impacts, steps and right-hand sides (of
-the middle start), and the median wall time of a run. It measures and asserts nothing else.
+the middle start), and the median wall time and thread CPU time of a run. It measures and asserts nothing else.
 It makes and uses a virtual environment of its own (tests/sympy/.venv-contacts, pinned NumPy
 and SciPy) on first run.
 """
@@ -183,12 +183,13 @@ def main():
         err, runs = worst(request, rtol)
         scene = SCENES[request["scene"]]
         floors = request.get("floors") or [0.0] * len(request["starts"])
-        seconds, per_impact = [], []
+        seconds, per_impact, cpu = [], [], []
         for _ in range(max(1, request.get("repeats", 3))):
             for start, floor in zip(request["starts"], floors):
-                began = time.perf_counter()
+                began, began_cpu = time.perf_counter(), time.thread_time()
                 impacts, _, _ = scene(request["params"], start, request["until"], rtol, floor)
                 took = time.perf_counter() - began
+                cpu.append(time.thread_time() - began_cpu)
                 seconds.append(took)
                 per_impact.append(took / max(1, len(impacts)))
         middle = runs[len(runs) // 2]
@@ -197,6 +198,7 @@ def main():
             "times": [run[0] for run in runs], "impacts": len(middle[0]), "steps": middle[1],
             "evaluations": middle[2], "seconds": statistics.median(seconds),
             "seconds_per_impact": statistics.median(per_impact),
+            "cpu_seconds": statistics.median(cpu),
         }), flush=True)
 
 
