@@ -12,16 +12,17 @@
 //!
 //! Cost: the wall time of one run on the loaded scene and per impact, the medians over the
 //! repeats of every start of the grid (the start changes from run to run, so no run finds the
-//! previous one's numbers waiting), and the one-time load (parsing, deriving, lowering)
-//! apart.
+//! previous one's numbers waiting), the thread's CPU time of a run beside it, and the one-time
+//! load (parsing, deriving, lowering) apart.
 //!
 //! With `--peer`, SciPy in the same run (`tests/sympy/contacts_peer.py`): `solve_ivp`'s DOP853
 //! with a terminal event at the gap and the impulse applied by hand, restarting after each
 //! impact, on models derived by hand (the block reduced to its tilt), at the rtol = atol whose
 //! worst impact-time error over the same starts is at most ours and as close to it as the
-//! peer's search gets ("at equal error"). The ball's impacts accumulate, which an event loop
-//! cannot pass: the peer stops once the next flight would be shorter than the one at which
-//! ours settles the ball, so both make the same impacts.
+//! peer's search gets ("at equal error"). The ball's impacts accumulate (and the block's, from
+//! the lower starts), which an event loop cannot pass: the peer stops once the next flight
+//! would be shorter than the one at which ours settled the contact, so both make the same
+//! impacts.
 
 use std::io::Write;
 use std::path::Path;
@@ -165,7 +166,7 @@ fn worst_error(times: &[f64], exact: &[f64]) -> f64 {
 
 /// The scene loaded once for runs of `scene` recording its rate at every step, and the load's
 /// wall time.
-fn load(root: &Path, scene: &Scene) -> (String, Settings, Compiled, f64) {
+fn load(root: &Path, scene: &Scene) -> (Settings, Compiled, f64) {
     let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
     let options = Options {
         method: Some("dop853".into()),
@@ -176,7 +177,7 @@ fn load(root: &Path, scene: &Scene) -> (String, Settings, Compiled, f64) {
     let started = Instant::now();
     let compiled = Compiled::new(&source, &settings).expect("the scene loads");
     let took = started.elapsed().as_secs_f64();
-    (source, settings, compiled, took)
+    (settings, compiled, took)
 }
 
 /// One run of the loaded scene from `start` at `tolerance`, its wall time and its thread's
@@ -350,7 +351,7 @@ pub fn run(peer: bool, repeats: usize) {
         repeats.max(1)
     );
     for scene in scenes() {
-        let (_source, settings, mut compiled, load) = load(&root, &scene);
+        let (settings, mut compiled, load) = load(&root, &scene);
         let rows: Vec<Row> = TOLERANCES
             .iter()
             .map(|&tol| row(&scene, &mut compiled, &settings, tol, repeats))
