@@ -16,6 +16,10 @@
 //!   their spread at each tolerance (one tolerance should mean one accuracy);
 //! - `ensemble [--peer]`: the double pendulum's 60×60 flip-time map on one thread and on two,
 //!   with `--peer` SciPy's DOP853 on a lambdified SymPy right-hand side on a sample of it;
+//! - `contacts [--peer] [--repeats N]`: the bouncing ball and the rocking block: the worst
+//!   error of their impact times (and rate ratios) against closed forms at tolerances 1e-6,
+//!   1e-9 and 1e-12, and the wall time per run and per impact on the scene loaded once, with
+//!   `--peer` a SciPy event loop (DOP853, the impulses applied by hand) at equal error;
 //! - `memory [--largest N]`: the peak memory of `lagrange simulate` and `lagrange ensemble`
 //!   processes at 1e5, 1e6 … N samples and runs (1e7 by default), their tables streamed to a
 //!   file (Linux: read from /proc);
@@ -43,6 +47,7 @@ macro_rules! outln {
 }
 
 mod bicycle;
+mod contacts;
 mod ensemble;
 mod eval;
 mod hand;
@@ -114,6 +119,17 @@ enum Benchmark {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
     },
+    /// The bouncing ball and the rocking block: impacts against closed forms, and the cost of
+    /// a run and of an impact.
+    Contacts {
+        /// Also run a SciPy event loop (tests/sympy/contacts_peer.py, which makes its own
+        /// Python environment) at equal error, in the same run.
+        #[arg(long)]
+        peer: bool,
+        /// How often each start of the grid is run and timed.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+    },
     /// The peak memory of `lagrange simulate` and `lagrange ensemble` as their tables grow
     /// (Linux).
     Memory {
@@ -171,6 +187,7 @@ fn main() {
             precision::run();
         }
         Benchmark::Model => model::run(),
+        Benchmark::Contacts { peer, repeats } => contacts::run(peer, repeats),
         Benchmark::Memory { largest } => memory::run(largest),
         Benchmark::Derive { family, n } => scaling::json(family, n),
     }
