@@ -299,7 +299,14 @@ impl Mechanical {
         y: &[f64],
         out: &mut [f64],
     ) -> Result<(), FaultKind> {
-        self.accelerations(t, y)?;
+        // An open contact's guard is its gap, which the dynamics program gives: the solve
+        // for the reactions is needed only where a closed contact's reaction is watched (a
+        // ball in flight locates its landing without one).
+        if self.modes.closed.iter().any(|&c| c) {
+            self.accelerations(t, y)?;
+        } else if !self.solved_at(t, y) {
+            self.dynamics_at(t, y)?;
+        }
         let n = self.layout.coordinates;
         for k in 0..self.contacts.len() {
             out[k] = if self.modes.closed[k] {
