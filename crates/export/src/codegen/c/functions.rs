@@ -338,8 +338,8 @@ fn impact(e: &Equations, name: &str) -> String {
     let _ = writeln!(
         s,
         "    double input[{}];\n    double system[{}];\n    double a[{}];\n    double b[{size}];\n    \
-         double rows[{}];\n    double e[{count}];\n    int slot[{rows_max}];\n    int normal_of[{rows_max}];\n    \
-         double c[{rows_max}];\n    double x[{rows_max}];\n    double response[{}];\n    double delassus[{}];\n    \
+         double rows[{}];\n    double e[{count}];\n    int slot[{rows_max}] = {{0}};\n    int normal_of[{rows_max}] = {{0}};\n    \
+         double c[{rows_max}] = {{0.0}};\n    double x[{rows_max}] = {{0.0}};\n    double response[{}] = {{0.0}};\n    double delassus[{}] = {{0.0}};\n    \
          int r = 0, i, j, l, status;",
         e.sizes.dynamics_inputs(),
         size * size,

@@ -1,0 +1,295 @@
+//! The generated impact map, in Rust (built by plain `rustc`) and in C (under `-std=c99 -Wall
+//! -Wextra -Werror -pedantic`, with every compiler found): for the bouncing ball, Newton's
+//! cradle and the rocking block, at states where the hand result is known (the ball's
+//! q̇⁺ = (x', −e·y'), the cradle's (−1/3, 2/3, 2/3)·v0, Housner's ratio with the landing corner
+//! at rest after) to 1e-12, and at the state before the first impact of the library's run,
+//! against the rates the run jumps to. Also the gaps and the flight between impacts.
+
+use std::fmt::Write;
+use std::path::Path;
+use std::process::Command;
+
+use sim::ModeChange;
+use simulation::{simulate, Options};
+
+/// One call of `impact`: the state before, the contacts flagged touching, and what the rates
+/// after must be, each to an absolute tolerance.
+struct Case {
+    what: String,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    touching: Vec<bool>,
+    /// (index into q̇⁺ or a function of it, expected value, tolerance) checked by `check`.
+    expected: Vec<f64>,
+    tolerance: f64,
+}
+
+/// A scene of `examples/contacts/` with its cases.
+struct Scene {
+    file: &'static str,
+    /// The module's name in the Rust driver and the stem of the C files.
+    name: &'static str,
+    coordinates: usize,
+    cases: Vec<Case>,
+}
+
+fn source(file: &str) -> String {
+    let path = lagrange_tests::examples_dir().join("contacts").join(file);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The state just before the first impact of the scene's run, and the rates just after: the
+/// run's rows at the jump, with the columns `q` then `qd` as named.
+fn first_impact(file: &str, q: &[&str], qd: &[&str]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let names: Vec<&str> = q.iter().chain(qd).copied().collect();
+    let options = Options { output: vec![names.join(", ")], ..Options::default() };
+    let outcome = simulate(&source(file), &options).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let impact = outcome.run.modes.iter().find(|m| m.kind == ModeChange::Impact).expect("impact");
+    let trajectory = &outcome.run.trajectory;
+    let at: Vec<usize> =
+        (0..trajectory.times.len()).filter(|&i| trajectory.times[i] == impact.time).collect();
+    assert_eq!(at.len(), 2, "{file}: the rows at the jump");
+    let column = |name: &str| outcome.columns.iter().position(|c| c == name).expect(name);
+    let pick = |row: &[f64], of: &[&str]| of.iter().map(|n| row[column(n)]).collect::<Vec<f64>>();
+    let (before, after) = (&trajectory.rows[at[0]], &trajectory.rows[at[1]]);
+    (pick(before, q), pick(before, qd), pick(after, qd))
+}
+
+fn scenes() -> Vec<Scene> {
+    // The ball: m = 1/2, e = 4/5 (the scene's values).
+    let e = 0.8;
+    let (q, qd, after) = first_impact("bouncing_ball.lag", &["x", "y"], &["x'", "y'"]);
+    let ball = Scene {
+        file: "bouncing_ball.lag",
+        name: "bouncing_ball",
+        coordinates: 2,
+        cases: vec![
+            Case {
+                what: "landing at (0.7, -4.2)".into(),
+                q: vec![0.3, 0.0],
+                qd: vec![0.7, -4.2],
+                touching: vec![true],
+                expected: vec![0.7, e * 4.2],
+                tolerance: 1e-12 * 4.2,
+            },
+            Case {
+                what: "the run's first impact".into(),
+                q,
+                qd,
+                touching: vec![true],
+                expected: after,
+                tolerance: 1e-12 * 4.5,
+            },
+        ],
+    };
+    // The cradle: a = 1/50, v0 = 1.
+    let (a, v0) = (0.02, 1.0);
+    let (q, qd, after) =
+        first_impact("newtons_cradle.lag", &["x1", "x2", "x3"], &["x1'", "x2'", "x3'"]);
+    let cradle = Scene {
+        file: "newtons_cradle.lag",
+        name: "newtons_cradle",
+        coordinates: 3,
+        cases: vec![
+            Case {
+                what: "both contacts, the first ball at v0".into(),
+                q: vec![-2.0 * a, 0.0, 2.0 * a],
+                qd: vec![v0, 0.0, 0.0],
+                touching: vec![true, true],
+                expected: vec![-v0 / 3.0, 2.0 * v0 / 3.0, 2.0 * v0 / 3.0],
+                tolerance: 1e-12 * v0,
+            },
+            Case {
+                what: "the first contact alone: the rates swap".into(),
+                q: vec![-2.0 * a, 0.0, 2.0 * a],
+                qd: vec![v0, 0.0, 0.0],
+                touching: vec![true, false],
+                expected: vec![0.0, v0, 0.0],
+                tolerance: 1e-12 * v0,
+            },
+            Case {
+                what: "the run's first impact".into(),
+                q,
+                qd,
+                touching: vec![true, true],
+                expected: after,
+                tolerance: 1e-12 * v0,
+            },
+        ],
+    };
+    // The block: b = 1/10, h = 3/10, pivoting about its left corner at θ' = w, landing flat.
+    let (b, h, w) = (0.1f64, 0.3f64, -1.3f64);
+    #[allow(clippy::disallowed_methods)]
+    let ratio = 1.0 - 1.5 * (b / h).atan().sin().powi(2);
+    let (q, qd, after) =
+        first_impact("rocking_block.lag", &["x", "y", "theta"], &["x'", "y'", "theta'"]);
+    let block = Scene {
+        file: "rocking_block.lag",
+        name: "rocking_block",
+        coordinates: 3,
+        cases: vec![
+            Case {
+                what: "landing flat on the right corner, pivoting on the left".into(),
+                q: vec![b, h, 0.0],
+                qd: vec![-h * w, b * w, w],
+                touching: vec![true, true],
+                // Housner's ratio on θ', and the right corner (b, −h) from the centre at rest:
+                // x' = −h·θ', y' = −b·θ'.
+                expected: vec![-h * ratio * w, -b * ratio * w, ratio * w],
+                tolerance: 1e-12 * w.abs(),
+            },
+            Case {
+                what: "the run's first impact".into(),
+                q,
+                qd,
+                touching: vec![true, true],
+                expected: after,
+                tolerance: 1e-12 * 2.0,
+            },
+        ],
+    };
+    vec![ball, cradle, block]
+}
+
+fn list(v: &[f64]) -> String {
+    v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ")
+}
+
+/// Reads the driver's output, a line `status q̇⁺…` per case, and checks every case.
+fn check(language: &str, scenes: &[Scene], output: &str) -> usize {
+    let mut lines = output.lines();
+    let mut checked = 0;
+    for scene in scenes {
+        for case in &scene.cases {
+            let line = lines.next().unwrap_or_else(|| panic!("{language}: output ends early"));
+            let values: Vec<f64> = line.split_whitespace().map(|v| v.parse().unwrap()).collect();
+            assert_eq!(values[0], 0.0, "{language}, {}: {}: status {}", scene.file, case.what, values[0]);
+            let plus = &values[1..1 + scene.coordinates];
+            let worst = plus
+                .iter()
+                .zip(&case.expected)
+                .map(|(got, want)| (got - want).abs())
+                .fold(0.0f64, f64::max);
+            eprintln!("{language}, {}: {}: q̇⁺ off by {worst:e}", scene.file, case.what);
+            assert!(
+                worst <= case.tolerance,
+                "{language}, {}: {}: {plus:?} vs {:?}",
+                scene.file,
+                case.what,
+                case.expected
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
+
+/// The Rust driver: each scene's module, and a line per case.
+fn rust_driver(dir: &Path, scenes: &[Scene]) -> String {
+    let mut main = String::new();
+    for scene in scenes {
+        let module = export::codegen::codegen(scene.file, &source(scene.file)).unwrap();
+        std::fs::write(dir.join(format!("{}.rs", scene.name)), &module.source).unwrap();
+        let _ = writeln!(main, "#[allow(dead_code)]\n#[path = \"{}.rs\"]\nmod {};", scene.name, scene.name);
+    }
+    main.push_str("fn main() {\n");
+    for scene in scenes {
+        let name = scene.name;
+        for case in &scene.cases {
+            let touching = case.touching.iter().map(|t| t.to_string()).collect::<Vec<_>>();
+            let _ = writeln!(
+                main,
+                "    {{ let mut plus = [0.0; {n}]; let mut impulses = [0.0; {name}::CONSTRAINTS]; \
+                 let status = {name}::impact(0.0, &[{}], &[{}], &{name}::PARAMETERS, &[], &[{}], &mut plus, &mut impulses); \
+                 print!(\"{{}}\", status as i32); for v in plus {{ print!(\" {{v:?}}\"); }} println!(); }}",
+                list(&case.q),
+                list(&case.qd),
+                touching.join(", "),
+                n = scene.coordinates
+            );
+        }
+    }
+    main.push_str("}\n");
+    main
+}
+
+/// The C driver: a line per case.
+fn c_driver(scenes: &[Scene]) -> String {
+    let mut main = String::from("#include <stdio.h>\n\n");
+    for scene in scenes {
+        let _ = writeln!(main, "#include \"{}.h\"", scene.name);
+    }
+    main.push_str("\nint main(void)\n{\n    int i;\n");
+    for scene in scenes {
+        let name = scene.name;
+        for case in &scene.cases {
+            let touching = case.touching.iter().map(|t| i32::from(*t).to_string()).collect::<Vec<_>>();
+            let _ = writeln!(
+                main,
+                "    {{\n        const double q[] = {{ {} }};\n        const double qd[] = {{ {} }};\n        \
+                 const int touching[] = {{ {} }};\n        double plus[{n}];\n        double impulses[{name}_CONSTRAINTS];\n        \
+                 int status = {name}_impact(0.0, q, qd, &{name}_default_parameters, NULL, touching, plus, impulses);\n        \
+                 printf(\"%d\", status);\n        for (i = 0; i < {n}; i++) {{\n            printf(\" %.17g\", plus[i]);\n        }}\n        \
+                 printf(\"\\n\");\n    }}",
+                list(&case.q),
+                list(&case.qd),
+                touching.join(", "),
+                n = scene.coordinates
+            );
+        }
+    }
+    main.push_str("    return 0;\n}\n");
+    main
+}
+
+#[test]
+fn the_generated_impact_map_is_the_runs() {
+    let scenes = scenes();
+    let dir = std::env::temp_dir().join(format!("lagrange-codegen-contacts-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Rust.
+    std::fs::write(dir.join("main.rs"), rust_driver(&dir, &scenes)).unwrap();
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let binary = dir.join("impacts");
+    let status = Command::new(rustc)
+        .args(["--edition", "2021", "-O", "-o"])
+        .arg(&binary)
+        .arg(dir.join("main.rs"))
+        .status()
+        .expect("rustc runs");
+    assert!(status.success(), "the generated Rust does not compile (see {})", dir.display());
+    let output = Command::new(&binary).output().expect("the driver runs");
+    let mut checked = check("rust", &scenes, &String::from_utf8_lossy(&output.stdout));
+    // C, with each compiler found.
+    let mut units = vec![dir.join("main.c")];
+    for scene in &scenes {
+        let module = export::codegen::c(scene.file, &source(scene.file), Default::default()).unwrap();
+        assert_eq!(module.name, scene.name);
+        std::fs::write(dir.join(format!("{}.h", scene.name)), &module.header).unwrap();
+        std::fs::write(dir.join(format!("{}.c", scene.name)), &module.source).unwrap();
+        units.push(dir.join(format!("{}.c", scene.name)));
+    }
+    std::fs::write(dir.join("main.c"), c_driver(&scenes)).unwrap();
+    let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    let mut compilers = vec![compiler];
+    if Command::new("clang").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        compilers.push("clang".into());
+    }
+    for compiler in compilers {
+        let binary = dir.join(format!("impacts-{compiler}"));
+        let built = Command::new(&compiler)
+            .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-I"])
+            .arg(&dir)
+            .args(&units)
+            .arg("-lm")
+            .arg("-o")
+            .arg(&binary)
+            .output()
+            .expect("the C compiler runs");
+        assert!(built.status.success(), "{compiler}: {}", String::from_utf8_lossy(&built.stderr));
+        let output = Command::new(&binary).output().expect("the driver runs");
+        checked += check(&compiler, &scenes, &String::from_utf8_lossy(&output.stdout));
+    }
+    assert!(checked >= 14, "{checked} cases checked");
+    std::fs::remove_dir_all(&dir).ok();
+}
