@@ -22,6 +22,8 @@ struct Case {
     /// (index into q̇⁺ or a function of it, expected value, tolerance) checked by `check`.
     expected: Vec<f64>,
     tolerance: f64,
+    /// (multiplier slot, impulse) pairs the impulses must hold, to 1e-12 relative.
+    impulses: Vec<(usize, f64)>,
 }
 
 /// A scene of `examples/contacts/` with its cases.
@@ -71,6 +73,7 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true],
                 expected: vec![0.7, e * 4.2],
                 tolerance: 1e-12 * 4.2,
+                impulses: vec![(0, 0.5 * (1.0 + e) * 4.2)],
             },
             Case {
                 what: "the run's first impact".into(),
@@ -79,6 +82,7 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true],
                 expected: after,
                 tolerance: 1e-12 * 4.5,
+                impulses: vec![],
             },
         ],
     };
@@ -98,6 +102,8 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true, true],
                 expected: vec![-v0 / 3.0, 2.0 * v0 / 3.0, 2.0 * v0 / 3.0],
                 tolerance: 1e-12 * v0,
+                // Ball 1 loses 4/3·m·v0, ball 3 gains 2/3·m·v0 (m = 1).
+                impulses: vec![(0, 4.0 / 3.0 * v0), (1, 2.0 / 3.0 * v0)],
             },
             Case {
                 what: "the first contact alone: the rates swap".into(),
@@ -106,6 +112,7 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true, false],
                 expected: vec![0.0, v0, 0.0],
                 tolerance: 1e-12 * v0,
+                impulses: vec![(0, v0), (1, 0.0)],
             },
             Case {
                 what: "the run's first impact".into(),
@@ -114,6 +121,7 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true, true],
                 expected: after,
                 tolerance: 1e-12 * v0,
+                impulses: vec![],
             },
         ],
     };
@@ -137,6 +145,8 @@ fn scenes() -> Vec<Scene> {
                 // x' = −h·θ', y' = −b·θ'.
                 expected: vec![-h * ratio * w, -b * ratio * w, ratio * w],
                 tolerance: 1e-12 * w.abs(),
+                // The left corner lifts off: no impulse at its normal (slot 0) or grip (1).
+                impulses: vec![(0, 0.0), (1, 0.0)],
             },
             Case {
                 what: "the run's first impact".into(),
@@ -145,6 +155,7 @@ fn scenes() -> Vec<Scene> {
                 touching: vec![true, true],
                 expected: after,
                 tolerance: 1e-12 * 2.0,
+                impulses: vec![],
             },
         ],
     };
@@ -178,9 +189,28 @@ fn check(language: &str, scenes: &[Scene], output: &str) -> usize {
                 case.what,
                 case.expected
             );
+            let impulses = &values[1 + scene.coordinates..];
+            for &(slot, want) in &case.impulses {
+                let got = impulses[slot];
+                assert!(
+                    (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                    "{language}, {}: {}: impulse {slot} {got} vs {want}",
+                    scene.file,
+                    case.what
+                );
+            }
             checked += 1;
         }
     }
+    // The ball in flight at (0.3, 1.5) with rates (0.7, −4.2): its gap and normal rate, and
+    // the right-hand side with the floor open (free fall, g = 9.81).
+    let line = lines.next().unwrap_or_else(|| panic!("{language}: no flight line"));
+    let values: Vec<f64> = line.split_whitespace().map(|v| v.parse().unwrap()).collect();
+    let want = [1.5, -4.2, 0.7, -4.2, 0.0, -9.81];
+    for (got, want) in values.iter().zip(want) {
+        assert!((got - want).abs() <= 1e-12 * 10.0, "{language}: flight {values:?} vs {want:?}");
+    }
+    assert_eq!(values.len(), want.len(), "{language}: {values:?}");
     checked
 }
 
@@ -201,7 +231,7 @@ fn rust_driver(dir: &Path, scenes: &[Scene]) -> String {
                 main,
                 "    {{ let mut plus = [0.0; {n}]; let mut impulses = [0.0; {name}::CONSTRAINTS]; \
                  let status = {name}::impact(0.0, &[{}], &[{}], &{name}::PARAMETERS, &[], &[{}], &mut plus, &mut impulses); \
-                 print!(\"{{}}\", status as i32); for v in plus {{ print!(\" {{v:?}}\"); }} println!(); }}",
+                 print!(\"{{}}\", status as i32); for v in plus.iter().chain(&impulses) {{ print!(\" {{v:?}}\"); }} println!(); }}",
                 list(&case.q),
                 list(&case.qd),
                 touching.join(", "),
@@ -209,6 +239,12 @@ fn rust_driver(dir: &Path, scenes: &[Scene]) -> String {
             );
         }
     }
+    main.push_str(
+        "    { let mut g = [0.0; 2]; let mut dy = [0.0; 4]; \
+         bouncing_ball::gaps(0.0, &[0.3, 1.5], &[0.7, -4.2], &bouncing_ball::PARAMETERS, &[], &mut g); \
+         assert!(bouncing_ball::rhs(0.0, &[0.3, 1.5, 0.7, -4.2], &bouncing_ball::PARAMETERS, &[], &mut dy)); \
+         for v in g.iter().chain(&dy) { print!(\"{v:?} \"); } println!(); }\n",
+    );
     main.push_str("}\n");
     main
 }
@@ -230,6 +266,7 @@ fn c_driver(scenes: &[Scene]) -> String {
                  const int touching[] = {{ {} }};\n        double plus[{n}];\n        double impulses[{name}_CONSTRAINTS];\n        \
                  int status = {name}_impact(0.0, q, qd, &{name}_default_parameters, NULL, touching, plus, impulses);\n        \
                  printf(\"%d\", status);\n        for (i = 0; i < {n}; i++) {{\n            printf(\" %.17g\", plus[i]);\n        }}\n        \
+                 for (i = 0; i < {name}_CONSTRAINTS; i++) {{\n            printf(\" %.17g\", impulses[i]);\n        }}\n        \
                  printf(\"\\n\");\n    }}",
                 list(&case.q),
                 list(&case.qd),
@@ -238,6 +275,12 @@ fn c_driver(scenes: &[Scene]) -> String {
             );
         }
     }
+    main.push_str(
+        "    {\n        const double y[] = { 0.3, 1.5, 0.7, -4.2 };\n        double out[6];\n        \
+         bouncing_ball_gaps(0.0, y, y + 2, &bouncing_ball_default_parameters, NULL, out);\n        \
+         if (bouncing_ball_rhs(0.0, y, &bouncing_ball_default_parameters, NULL, out + 2)) {\n            return 1;\n        }\n        \
+         for (i = 0; i < 6; i++) {\n            printf(\"%.17g \", out[i]);\n        }\n        printf(\"\\n\");\n    }\n",
+    );
     main.push_str("    return 0;\n}\n");
     main
 }
@@ -292,4 +335,25 @@ fn the_generated_impact_map_is_the_runs() {
     }
     assert!(checked >= 14, "{checked} cases checked");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The FMU's wrapper integrates with every contact open and knows no impact: `export --fmu`
+/// refuses a scene with contacts, naming them, while `codegen` takes it.
+#[test]
+fn the_fmu_refuses_contacts_naming_them() {
+    for (file, names) in
+        [("bouncing_ball.lag", "`floor`"), ("rocking_block.lag", "`left`, `right`")]
+    {
+        let Err(error) =
+            export::fmu::export(file, &source(file), &export::fmu::ExportOptions::default())
+        else {
+            panic!("export --fmu took {file}");
+        };
+        let message = error.to_string();
+        assert!(
+            message.contains("export --fmu does not take contacts") && message.contains(names),
+            "{message}"
+        );
+        assert!(export::codegen::c(file, &source(file), Default::default()).is_ok());
+    }
 }
