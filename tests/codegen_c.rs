@@ -415,7 +415,7 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
 }
 
 /// The fenced blocks of a page tagged `tag`, in order.
-fn blocks(page: &str, tag: &str) -> Vec<String> {
+pub(crate) fn blocks(page: &str, tag: &str) -> Vec<String> {
     let mut found = Vec::new();
     // The open block's tag and text.
     let mut open: Option<(String, String)> = None;
@@ -439,7 +439,7 @@ fn blocks(page: &str, tag: &str) -> Vec<String> {
 }
 
 /// Compiles `program` with the module's C in `dir` and runs it; what it prints.
-fn build_and_run(compiler: &str, dir: &Path, module: &CModule, program: &str) -> String {
+pub(crate) fn build_and_run(compiler: &str, dir: &Path, module: &CModule, program: &str) -> String {
     std::fs::write(dir.join("driver.c"), program).unwrap();
     let binary = dir.join("driver");
     let built = Command::new(compiler)
@@ -468,8 +468,12 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
     };
     let page = std::fs::read_to_string(lagrange_tests::examples_dir().join("../docs/c.md"))
         .expect("docs/c.md");
-    let [program] = &blocks(&page, "c")[..] else { panic!("one C program on the page") };
-    let shown = blocks(&page, "text").pop().expect("the line it prints");
+    // The page's first program and the first line shown are the cart-pole's; the contacts'
+    // section has its own (tests/codegen_contacts.rs).
+    let programs = blocks(&page, "c");
+    let program = programs.first().expect("the cart-pole's program");
+    assert!(program.contains("inverted_pendulum_on_cart.h"), "{program}");
+    let shown = blocks(&page, "text").into_iter().find(|t| t.starts_with("x = ")).expect("its line");
     let rel = "examples/classics/inverted_pendulum_on_cart.lag";
     let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
     let module = export::codegen::c(rel, &source, Default::default()).expect("generates");

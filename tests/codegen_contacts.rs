@@ -357,3 +357,24 @@ fn the_fmu_refuses_contacts_naming_them() {
         assert!(export::codegen::c(file, &source(file), Default::default()).is_ok());
     }
 }
+
+/// docs/c.md's program for Newton's cradle prints the lines the page shows.
+#[test]
+fn the_pages_cradle_program_prints_what_the_page_shows() {
+    let page = std::fs::read_to_string(lagrange_tests::examples_dir().join("../docs/c.md"))
+        .expect("docs/c.md");
+    let programs = crate::codegen_c::blocks(&page, "c");
+    let program = programs.iter().find(|p| p.contains("newtons_cradle.h")).expect("the program");
+    let texts = crate::codegen_c::blocks(&page, "text");
+    let shown = texts.iter().find(|t| t.starts_with("gaps ")).expect("what it prints");
+    let file = "newtons_cradle.lag";
+    let module = export::codegen::c(file, &source(file), Default::default()).unwrap();
+    let dir = std::env::temp_dir().join(format!("lagrange-c-cradle-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{}.h", module.name)), &module.header).unwrap();
+    std::fs::write(dir.join(format!("{}.c", module.name)), &module.source).unwrap();
+    let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    let printed = crate::codegen_c::build_and_run(&compiler, &dir, &module, program);
+    assert_eq!(&printed, shown, "docs/c.md shows other lines than its program prints");
+    std::fs::remove_dir_all(&dir).ok();
+}
