@@ -473,7 +473,8 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
     let programs = blocks(&page, "c");
     let program = programs.first().expect("the cart-pole's program");
     assert!(program.contains("inverted_pendulum_on_cart.h"), "{program}");
-    let shown = blocks(&page, "text").into_iter().find(|t| t.starts_with("x = ")).expect("its line");
+    let shown =
+        blocks(&page, "text").into_iter().find(|t| t.starts_with("x = ")).expect("its line");
     let rel = "examples/classics/inverted_pendulum_on_cart.lag";
     let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
     let module = export::codegen::c(rel, &source, Default::default()).expect("generates");

@@ -174,7 +174,11 @@ fn check(language: &str, scenes: &[Scene], output: &str) -> usize {
         for case in &scene.cases {
             let line = lines.next().unwrap_or_else(|| panic!("{language}: output ends early"));
             let values: Vec<f64> = line.split_whitespace().map(|v| v.parse().unwrap()).collect();
-            assert_eq!(values[0], 0.0, "{language}, {}: {}: status {}", scene.file, case.what, values[0]);
+            assert_eq!(
+                values[0], 0.0,
+                "{language}, {}: {}: status {}",
+                scene.file, case.what, values[0]
+            );
             let plus = &values[1..1 + scene.coordinates];
             let worst = plus
                 .iter()
@@ -220,7 +224,11 @@ fn rust_driver(dir: &Path, scenes: &[Scene]) -> String {
     for scene in scenes {
         let module = export::codegen::codegen(scene.file, &source(scene.file)).unwrap();
         std::fs::write(dir.join(format!("{}.rs", scene.name)), &module.source).unwrap();
-        let _ = writeln!(main, "#[allow(dead_code)]\n#[path = \"{}.rs\"]\nmod {};", scene.name, scene.name);
+        let _ = writeln!(
+            main,
+            "#[allow(dead_code)]\n#[path = \"{}.rs\"]\nmod {};",
+            scene.name, scene.name
+        );
     }
     main.push_str("fn main() {\n");
     for scene in scenes {
@@ -259,7 +267,8 @@ fn c_driver(scenes: &[Scene]) -> String {
     for scene in scenes {
         let name = scene.name;
         for case in &scene.cases {
-            let touching = case.touching.iter().map(|t| i32::from(*t).to_string()).collect::<Vec<_>>();
+            let touching =
+                case.touching.iter().map(|t| i32::from(*t).to_string()).collect::<Vec<_>>();
             let _ = writeln!(
                 main,
                 "    {{\n        const double q[] = {{ {} }};\n        const double qd[] = {{ {} }};\n        \
@@ -288,7 +297,8 @@ fn c_driver(scenes: &[Scene]) -> String {
 #[test]
 fn the_generated_impact_map_is_the_runs() {
     let scenes = scenes();
-    let dir = std::env::temp_dir().join(format!("lagrange-codegen-contacts-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("lagrange-codegen-contacts-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // Rust.
     std::fs::write(dir.join("main.rs"), rust_driver(&dir, &scenes)).unwrap();
@@ -306,7 +316,8 @@ fn the_generated_impact_map_is_the_runs() {
     // C, with each compiler found.
     let mut units = vec![dir.join("main.c")];
     for scene in &scenes {
-        let module = export::codegen::c(scene.file, &source(scene.file), Default::default()).unwrap();
+        let module =
+            export::codegen::c(scene.file, &source(scene.file), Default::default()).unwrap();
         assert_eq!(module.name, scene.name);
         std::fs::write(dir.join(format!("{}.h", scene.name)), &module.header).unwrap();
         std::fs::write(dir.join(format!("{}.c", scene.name)), &module.source).unwrap();

@@ -160,7 +160,11 @@ impl Equations {
     /// The multipliers' slots of the contacts' rows (each normal, then its grip), which the
     /// functions of the state hold open: λ = 0 there, as a run holds an open contact.
     pub fn contact_slots(&self) -> Vec<usize> {
-        self.prepared.contacts.iter().flat_map(|c| std::iter::once(c.normal).chain(c.grip)).collect()
+        self.prepared
+            .contacts
+            .iter()
+            .flat_map(|c| std::iter::once(c.normal).chain(c.grip))
+            .collect()
     }
 
     /// The contacts' names, in the order written.

@@ -173,7 +173,12 @@ fn augmented_function(e: &Equations) -> String {
         // The contacts' rows held open, as a run holds an open contact: λ = 0.
         for slot in e.contact_slots() {
             let _ = writeln!(s, "    for j in 0..{n} {{\n        a[{} + j] = 0.0;\n        a[j * {size} + {}] = 0.0;\n    }}", (n + slot) * size, n + slot);
-            let _ = writeln!(s, "    a[{}] = 1.0;\n    b[{}] = 0.0;", (n + slot) * size + n + slot, n + slot);
+            let _ = writeln!(
+                s,
+                "    a[{}] = 1.0;\n    b[{}] = 0.0;",
+                (n + slot) * size + n + slot,
+                n + slot
+            );
         }
     }
     s.push_str("}\n");
@@ -370,7 +375,13 @@ fn contact_functions(e: &Equations) -> String {
     let _ = writeln!(s, "/// The contacts' names, in the order written.\npub const CONTACT_NAMES: [&str; {count}] = [{}];", quoted.join(", "));
     let slots: Vec<String> = contacts
         .iter()
-        .map(|c| format!("({}, {})", c.normal, c.grip.map_or("None".to_string(), |g| format!("Some({g})"))))
+        .map(|c| {
+            format!(
+                "({}, {})",
+                c.normal,
+                c.grip.map_or("None".to_string(), |g| format!("Some({g})"))
+            )
+        })
         .collect();
     let _ = writeln!(
         s,
@@ -394,7 +405,11 @@ fn contact_functions(e: &Equations) -> String {
         2 * count
     );
     s.push_str(&dynamics_input(sizes, "q"));
-    let _ = writeln!(s, "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);", m * width);
+    let _ = writeln!(
+        s,
+        "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);",
+        m * width
+    );
     for (k, c) in contacts.iter().enumerate() {
         let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k, c.normal * width + n + 1);
         let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k + 1, e.row_rate(c.normal));
@@ -426,12 +441,19 @@ fn contact_functions(e: &Equations) -> String {
     );
     s.push_str("    let qd = qd_minus;\n");
     s.push_str(&dynamics_input(sizes, "q"));
-    let _ = writeln!(s, "    let mut system = [0.0; {}];\n    let mut b = [0.0; {size}];", size * size);
+    let _ =
+        writeln!(s, "    let mut system = [0.0; {}];\n    let mut b = [0.0; {size}];", size * size);
     s.push_str("    augmented(&input, &mut system, &mut b);\n");
-    let _ = writeln!(s, "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);", m * width);
+    let _ = writeln!(
+        s,
+        "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);",
+        m * width
+    );
     let _ = writeln!(s, "    let mut e = [0.0; {count}];");
     let _ = writeln!(s, "    restitutions(input[{}..].try_into().unwrap(), &mut e);", 1 + 2 * n);
-    s.push_str("    // The touching contacts' rows, each normal then its grip: slot, normal row, c.\n");
+    s.push_str(
+        "    // The touching contacts' rows, each normal then its grip: slot, normal row, c.\n",
+    );
     let _ = writeln!(
         s,
         "    let mut slot = [0usize; {rows_max}];\n    let mut normal_of = [0usize; {rows_max}];\n    \

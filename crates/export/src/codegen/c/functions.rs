@@ -313,7 +313,12 @@ fn gaps(e: &Equations, name: &str) -> String {
         "void {name}_gaps(double t, const double *q, const double *qd, \
          const {name}_parameters *p, const double *u, double *out)\n{{\n"
     );
-    let _ = writeln!(s, "    double input[{}];\n    double rows[{}];", e.sizes.dynamics_inputs(), m * width);
+    let _ = writeln!(
+        s,
+        "    double input[{}];\n    double rows[{}];",
+        e.sizes.dynamics_inputs(),
+        m * width
+    );
     s.push_str("    gather(t, q, qd, p, u, input);\n    eval_constraints(input, rows);\n");
     for (k, c) in e.prepared.contacts.iter().enumerate() {
         let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k, c.normal * width + n + 1);
@@ -349,8 +354,14 @@ fn impact(e: &Equations, name: &str) -> String {
         rows_max * rows_max
     );
     s.push_str("    gather(t, q, qd_minus, p, u, input);\n    augmented(input, system, b);\n");
-    let _ = writeln!(s, "    eval_constraints(input, rows);\n    eval_restitutions(input + {}, e);", 1 + 2 * n);
-    s.push_str("    /* The touching contacts' rows, each normal then its grip: slot, normal row, c. */\n");
+    let _ = writeln!(
+        s,
+        "    eval_constraints(input, rows);\n    eval_restitutions(input + {}, e);",
+        1 + 2 * n
+    );
+    s.push_str(
+        "    /* The touching contacts' rows, each normal then its grip: slot, normal row, c. */\n",
+    );
     for (k, contact) in e.prepared.contacts.iter().enumerate() {
         let _ = writeln!(s, "    if (touching[{k}]) {{");
         let _ = writeln!(
