@@ -435,3 +435,53 @@ fn the_pages_cradle_program_prints_what_the_page_shows() {
     assert_eq!(&printed, shown, "docs/c.md shows other lines than its program prints");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Two walls that cross, a particle between them: `pushed` moves right at 2 m/s, `pulled`
+/// left at 1 m/s, both touching the particle at rest at t = 0. No impulses satisfy both
+/// (w₁ + w₂ = −3 whatever they are), and `impact` says so, in Rust and in C, leaving its
+/// outputs as they were; with one wall alone it pushes the particle to the wall's speed.
+const CROSSING_WALLS: &str = "scene \"A particle between two walls that cross\"\n\
+    param m = 1 kg\ncoord x = 0\nparticle p { mass m; position (x, 0) }\n\
+    contact pushed: x - 2*t >= 0 { restitution 0 }\n\
+    contact pulled: -t - x >= 0 { restitution 0 }\n";
+
+#[test]
+fn an_impact_without_solution_is_a_status() {
+    let dir = std::env::temp_dir().join(format!("lagrange-crossing-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let module = export::codegen::codegen("crossing_walls.lag", CROSSING_WALLS).unwrap();
+    std::fs::write(dir.join("crossing_walls.rs"), &module.source).unwrap();
+    let main = "#[allow(dead_code)]\n#[path = \"crossing_walls.rs\"]\nmod walls;\nfn main() {\n    \
+        for touching in [[true, true], [true, false]] {\n        let mut plus = [7.0];\n        \
+        let mut impulses = [7.0; 2];\n        \
+        let status = walls::impact(0.0, &[0.0], &[0.0], &walls::PARAMETERS, &[], &touching, &mut plus, &mut impulses);\n        \
+        println!(\"{} {:?} {:?}\", status as i32, plus[0], impulses);\n    }\n}\n";
+    std::fs::write(dir.join("main.rs"), main).unwrap();
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let binary = dir.join("walls");
+    let built = Command::new(rustc)
+        .args(["--edition", "2021", "-o"])
+        .arg(&binary)
+        .arg(dir.join("main.rs"))
+        .output()
+        .expect("rustc runs");
+    assert!(built.status.success(), "{}", String::from_utf8_lossy(&built.stderr));
+    let output = Command::new(&binary).output().expect("runs");
+    assert_eq!(String::from_utf8_lossy(&output.stdout), "2 7.0 [7.0, 7.0]\n0 2.0 [2.0, 0.0]\n");
+
+    let module =
+        export::codegen::c("crossing_walls.lag", CROSSING_WALLS, Default::default()).unwrap();
+    std::fs::write(dir.join("crossing_walls.h"), &module.header).unwrap();
+    std::fs::write(dir.join("crossing_walls.c"), &module.source).unwrap();
+    let program = "#include <stdio.h>\n\n#include \"crossing_walls.h\"\n\nint main(void)\n{\n    \
+        const double q[] = { 0.0 }, qd[] = { 0.0 };\n    const int both[] = { 1, 1 }, one[] = { 1, 0 };\n    \
+        double plus[] = { 7.0 }, impulses[] = { 7.0, 7.0 };\n    \
+        int status = crossing_walls_impact(0.0, q, qd, &crossing_walls_default_parameters, NULL, both, plus, impulses);\n    \
+        printf(\"%d %g %g %g\\n\", status, plus[0], impulses[0], impulses[1]);\n    \
+        status = crossing_walls_impact(0.0, q, qd, &crossing_walls_default_parameters, NULL, one, plus, impulses);\n    \
+        printf(\"%d %g %g %g\\n\", status, plus[0], impulses[0], impulses[1]);\n    return 0;\n}\n";
+    let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    let printed = crate::codegen_c::build_and_run(&compiler, &dir, &module, program);
+    assert_eq!(printed, "2 7 7 7\n0 2 2 0\n");
+    std::fs::remove_dir_all(&dir).ok();
+}
