@@ -204,12 +204,18 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
              \n\
              y = (q, qdot) with q = ({}); M(q, t) qddot = f(q, qdot, u, t){}.\n\
              The functions returning int return 0, or 1 when a system they solve is singular.\n\
-             u may be NULL when {name}_INPUTS is 0.",
+             u may be NULL when {name}_INPUTS is 0.{}",
             ascii(&e.title),
             ascii(path),
             ascii(&names.states[..n].join(", ")),
             if m > 0 {
                 " + J^T lambda, J qddot = gamma,\nwith gamma Baumgarte-stabilised (rate 10/s) as lagrange simulate holds kept constraints"
+            } else {
+                ""
+            },
+            if sizes.contacts > 0 {
+                "\nThe contacts' rows are among the constraints'; rhs and the functions like it hold\n\
+                 every contact open (lambda = 0 there). impact gives the rates after an impact."
             } else {
                 ""
             },

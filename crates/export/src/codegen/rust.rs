@@ -81,6 +81,13 @@ fn module(e: &Equations, path: &str) -> String {
         "//! `input` of the partials and the reactions: [t, q, q̇, q̈, λ, parameters{}].",
         if inputs.is_empty() { "" } else { ", inputs" }
     );
+    if sizes.contacts > 0 {
+        let _ = writeln!(
+            s,
+            "//! The contacts' rows are among the constraints'; `rhs` and the functions like it hold\n\
+             //! every contact open (λ = 0 there), and `impact` gives the rates after an impact."
+        );
+    }
     let _ = writeln!(s, "//! Operation counts per call:");
     for (name, p) in &e.programs {
         let _ = writeln!(s, "//!   {name}: {}", p.op_counts());
