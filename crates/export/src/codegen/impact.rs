@@ -34,7 +34,8 @@ pub const MOST_NORMALS: usize = 20;
 
 /// The contract of `impact`, for the generated comments (ASCII, one sentence a line).
 pub fn contract(status: &[(&str, i32)]) -> String {
-    let codes: Vec<String> = status.iter().map(|(what, code)| format!("{code} {what}")).collect();
+    let codes: Vec<String> =
+        status.iter().map(|(what, code)| format!("\n  {code} {what}")).collect();
     format!(
         "The impact map: the rates after an impact at the contacts flagged touching, as\n\
          lagrange simulate's run solves it. W are the touching contacts' rows (each normal,\n\
@@ -53,9 +54,8 @@ pub fn contract(status: &[(&str, i32)]) -> String {
          impulse unless another's impact pushes it; pass touching only where the gap is about 0.\n\
          Where the run holds a contact that was resting it takes e = 0; a resting contact has\n\
          gamma_minus about 0, so (1 + e) gamma_minus is about 0 either way.\n\
-         Returns {}; on failure qd_plus and\n\
-         impulses are left as they were.",
-        codes.join(", ")
+         On failure qd_plus and impulses are left as they were. Returns:{}",
+        codes.concat()
     )
 }
 
