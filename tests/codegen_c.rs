@@ -4,7 +4,9 @@
 //! values and input values, the same numbers as the tape to 1e-13 relative to each vector's
 //! largest entry: the start, M, f, the constraint rows, the right-hand side, its Jacobian,
 //! the energies, the outputs, the reactions and the inverse dynamics. The solves are checked
-//! against nalgebra's LU on the tape's M, f and constraint rows.
+//! against nalgebra's LU on the tape's M, f and constraint rows. The scenes with contacts are
+//! among them, with every contact held open (λ = 0 at its rows) as the generated functions
+//! hold them.
 
 use std::collections::BTreeMap;
 use std::fmt::Write;
@@ -132,6 +134,16 @@ fn expected_at(e: &Equations, point: &Point, at: usize, expected: &mut Expected)
             sim::Stabilisation::Velocity => gamma - alpha * phi,
         };
     }
+    // The contacts' rows held open, as the generated functions hold them: λ = 0.
+    let open = e.contact_slots();
+    for &c in &open {
+        for j in 0..n {
+            a[(n + c, j)] = 0.0;
+            a[(j, n + c)] = 0.0;
+        }
+        a[(n + c, n + c)] = 1.0;
+        b[n + c] = 0.0;
+    }
     let lu = a.clone().lu();
     let Some(solved) = lu.solve(&b) else { return };
     let mut dy = point.y[n..].to_vec();
@@ -154,6 +166,9 @@ fn expected_at(e: &Equations, point: &Point, at: usize, expected: &mut Expected)
                 return d[i * width + col];
             }
             let c = i - n;
+            if open.contains(&c) {
+                return 0.0;
+            }
             match kinds[c] {
                 sim::Stabilisation::Position => {
                     row(0, c) + 2.0 * alpha * row(2, c) + alpha * alpha * row(1, c)
@@ -384,7 +399,9 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
         return;
     }
     let root = std::env::temp_dir().join(format!("lagrange-codegen-c-{}", std::process::id()));
-    let mut scenes = lagrange_tests::examples_without_contacts();
+    // The contact scenes too, their contacts held open (tests/codegen_contacts.rs tests the
+    // impact map).
+    let mut scenes = lagrange_tests::examples();
     scenes.push((
         "examples/bicycle/whipple.lag".into(),
         lagrange_tests::example("bicycle/whipple.lag"),
@@ -415,7 +432,7 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
 }
 
 /// The fenced blocks of a page tagged `tag`, in order.
-fn blocks(page: &str, tag: &str) -> Vec<String> {
+pub(crate) fn blocks(page: &str, tag: &str) -> Vec<String> {
     let mut found = Vec::new();
     // The open block's tag and text.
     let mut open: Option<(String, String)> = None;
@@ -439,7 +456,7 @@ fn blocks(page: &str, tag: &str) -> Vec<String> {
 }
 
 /// Compiles `program` with the module's C in `dir` and runs it; what it prints.
-fn build_and_run(compiler: &str, dir: &Path, module: &CModule, program: &str) -> String {
+pub(crate) fn build_and_run(compiler: &str, dir: &Path, module: &CModule, program: &str) -> String {
     std::fs::write(dir.join("driver.c"), program).unwrap();
     let binary = dir.join("driver");
     let built = Command::new(compiler)
@@ -468,8 +485,13 @@ fn the_pages_driver_balances_the_cart_pole_as_simulate_does() {
     };
     let page = std::fs::read_to_string(lagrange_tests::examples_dir().join("../docs/c.md"))
         .expect("docs/c.md");
-    let [program] = &blocks(&page, "c")[..] else { panic!("one C program on the page") };
-    let shown = blocks(&page, "text").pop().expect("the line it prints");
+    // The page's first program and the first line shown are the cart-pole's; the contacts'
+    // section has its own (tests/codegen_contacts.rs).
+    let programs = blocks(&page, "c");
+    let program = programs.first().expect("the cart-pole's program");
+    assert!(program.contains("inverted_pendulum_on_cart.h"), "{program}");
+    let shown =
+        blocks(&page, "text").into_iter().find(|t| t.starts_with("x = ")).expect("its line");
     let rel = "examples/classics/inverted_pendulum_on_cart.lag";
     let source = lagrange_tests::example("classics/inverted_pendulum_on_cart.lag");
     let module = export::codegen::c(rel, &source, Default::default()).expect("generates");

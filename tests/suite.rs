@@ -14,6 +14,7 @@ mod car_axis;
 mod check;
 mod codegen;
 mod codegen_c;
+mod codegen_contacts;
 mod codegen_hostile;
 mod constraints;
 mod contacts;

@@ -21,7 +21,7 @@ pub fn examples() -> Vec<(String, String)> {
 }
 
 /// [`examples`] without the scenes with contacts: those the stages that refuse contacts
-/// (code generation) and the every-example checks of two-sided constraints' numbers (random
+/// and the every-example checks of two-sided constraints' numbers (random
 /// states on every kept row, the batch evaluator) leave to tests/contacts.rs.
 pub fn examples_without_contacts() -> Vec<(String, String)> {
     let mut all = examples();

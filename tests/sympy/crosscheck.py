@@ -349,7 +349,8 @@ def crosscheck(report, n_states, seed):
 
     # SymPy in the remaining coordinates, with lagrange's kept constraints as multipliers.
     phis = [scope.parse(c["phi"]).xreplace(substitute) for c in kept]
-    velocity = {i for i, c in enumerate(kept) if c.get("kind") == "velocity"}
+    # A grip is a velocity row too, held while its contact is closed (closed at the start here).
+    velocity = {i for i, c in enumerate(kept) if c.get("kind") in ("velocity", "grip")}
     MM, FF, order = sympy_system(model, scope, remaining, substitute, phis, velocity)
     sym_MM, sym_FF = reduced.function(list(MM)), reduced.function(list(FF))
     size = MM.shape[0]
@@ -360,7 +361,8 @@ def crosscheck(report, n_states, seed):
     wanted_full = [r for r in reaction_names if by_reaction[r].get("treatment") == "eliminated"]
     if wanted_full:
         all_phis = [scope.parse(c["phi"]) for c in model["constraints"]]
-        all_velocity = {i for i, c in enumerate(model["constraints"]) if c.get("kind") == "velocity"}
+        all_velocity = {i for i, c in enumerate(model["constraints"])
+                        if c.get("kind") in ("velocity", "grip")}
         fMM, fFF, forder = sympy_system(model, scope, declared, {}, all_phis, all_velocity)
         full = Evaluator(scope, declared)
         full_MM, full_FF = full.function(list(fMM)), full.function(list(fFF))

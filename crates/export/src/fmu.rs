@@ -63,6 +63,9 @@ pub(crate) struct Interface {
 /// the generated C).
 pub fn export(path: &str, source: &str, options: &ExportOptions) -> Result<Fmu, Error> {
     let module = crate::codegen::c(path, source, Options { units: !options.no_units })?;
+    // The wrapper integrates with every contact open and knows no impact: it would let the
+    // bodies pass through each other.
+    module.equations.prepared.refuse_contacts("export --fmu")?;
     let mut interface = interface(&module, options)?;
     interface.guid = guid(&[source, &module.header, &module.source]);
     let fields = crate::codegen::parameter_fields(&module.equations);

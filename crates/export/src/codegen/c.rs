@@ -204,12 +204,18 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
              \n\
              y = (q, qdot) with q = ({}); M(q, t) qddot = f(q, qdot, u, t){}.\n\
              The functions returning int return 0, or 1 when a system they solve is singular.\n\
-             u may be NULL when {name}_INPUTS is 0.",
+             u may be NULL when {name}_INPUTS is 0.{}",
             ascii(&e.title),
             ascii(path),
             ascii(&names.states[..n].join(", ")),
             if m > 0 {
                 " + J^T lambda, J qddot = gamma,\nwith gamma Baumgarte-stabilised (rate 10/s) as lagrange simulate holds kept constraints"
+            } else {
+                ""
+            },
+            if sizes.contacts > 0 {
+                "\nThe contacts' rows are among the constraints'; rhs and the functions like it hold\n\
+                 every contact open (lambda = 0 there). impact gives the rates after an impact."
             } else {
                 ""
             },
@@ -226,6 +232,7 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
         ("INPUTS", sizes.inputs, "u"),
         ("OUTPUTS", e.outputs.len(), "the scene's `output` lines"),
         ("REACTIONS", e.reactions.len(), "the reactions the scene names"),
+        ("CONTACTS", sizes.contacts, "one-sided contacts, their rows among the constraints"),
     ];
     for (what, count, doc) in counts {
         let _ = writeln!(s, "#define {name}_{what} {count} /* {doc} */");
@@ -269,6 +276,11 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
         ("const char *const {name}_input_units[]", ""),
         ("const char *const {name}_output_names[]", "The outputs, then NULL."),
         ("const char *const {name}_reaction_names[]", "The reactions, then NULL."),
+        ("const char *const {name}_contact_names[]", "The contacts, in the order written, then NULL."),
+        (
+            "const int {name}_contact_rows[]",
+            "Per contact, its normal row's slot among the constraints, then its grip row's\n(-1 when it does not grip): 2 {name}_CONTACTS values (one unused -1 when there\nare none).",
+        ),
         (
             "const double {name}_default_inputs[]",
             "The inputs' declared values ({name}_INPUTS of them; one unused 0 when there\nare none, as C has no empty array).",
@@ -349,6 +361,41 @@ fn function_declarations(e: &Equations, name: &str) -> String {
         "int {name}_inverse_dynamics(double t, const double *q, const double *qd, \
          const double *qdd, const {name}_parameters *p, const double *u, double *tau);\n"
     );
+    if e.sizes.contacts > 0 {
+        s.push_str(&comment(
+            &format!(
+                "Per contact, its gap g (open where g > 0), then its normal rate gamma = dg/dq qd +\n\
+                 dg/dt: 2 {name}_CONTACTS values. rhs, jacobian, reactions and inverse_dynamics\n\
+                 hold every contact open (lambda = 0 at its rows, as a run holds an open contact):\n\
+                 integrate a flight with them, watch the gaps, and call impact where some reach 0\n\
+                 closing."
+            ),
+            "",
+        ));
+        let _ = writeln!(
+            s,
+            "void {name}_gaps(double t, const double *q, const double *qd, \
+             const {name}_parameters *p, const double *u, double *out);\n"
+        );
+        s.push_str(&comment(
+            &format!(
+                "{}\ntouching has {name}_CONTACTS flags (nonzero: touching), qd_plus {n} values, impulses\n{name}_CONSTRAINTS.",
+                super::impact::contract(&[
+                    ("(solved)", 0),
+                    ("(the two-sided constraints' system is singular)", 1),
+                    ("(no active set holds: no solution)", 2),
+                    ("(more than 20 contacts touch)", 3),
+                ])
+            ),
+            "",
+        ));
+        let _ = writeln!(
+            s,
+            "int {name}_impact(double t, const double *q, const double *qd_minus, \
+             const {name}_parameters *p, const double *u, const int *touching, double *qd_plus, \
+             double *impulses);\n"
+        );
+    }
     s
 }
 
@@ -390,6 +437,10 @@ fn implementation(e: &Equations, name: &str, path: &str, names: &Names) -> Strin
         .chain(e.derived.iter().map(|(_, p)| p))
         .collect();
     s.push_str(&helpers(&programs));
+    if e.sizes.contacts > 0 {
+        s.push('\n');
+        s.push_str(&super::impact::c_solver(e.contact_slots().len()));
+    }
     for (program, p) in &e.programs {
         s.push('\n');
         s.push_str(&function(p, &format!("eval_{program}"), &program_doc(program)));
@@ -423,6 +474,7 @@ fn program_doc(program: &str) -> String {
              from [t, q, qdot, qddot, lambda, parameters, inputs]."
         }
         "energies" => "KE and PE, from [t, q, qdot, parameters, inputs].",
+        "restitutions" => "Each contact's coefficient of restitution, from [parameters, inputs].",
         "reactions" => "The reactions, from [t, q, qdot, qddot, lambda, parameters, inputs].",
         _ => "The outputs, from [t, q, qdot, parameters, inputs].",
     }
@@ -451,12 +503,22 @@ fn data(e: &Equations, name: &str, names: &Names) -> String {
         ("input_units", &names.input_units),
         ("output_names", &e.outputs),
         ("reaction_names", &e.reactions),
+        ("contact_names", &e.contact_names()),
     ];
     for (list, items) in lists {
         let mut entries: Vec<String> = items.iter().map(|t| string(t)).collect();
         entries.push("NULL".to_string());
         let _ = writeln!(s, "const char *const {name}_{list}[] = {{ {} }};", entries.join(", "));
     }
+    let mut slots: Vec<String> = Vec::new();
+    for c in &e.prepared.contacts {
+        slots.push(c.normal.to_string());
+        slots.push(c.grip.map_or(-1, |g| g as i64).to_string());
+    }
+    if slots.is_empty() {
+        slots.push("-1".to_string());
+    }
+    let _ = writeln!(s, "const int {name}_contact_rows[] = {{ {} }};", slots.join(", "));
     let inputs: Vec<String> = e.values[k..].iter().map(|v| literal(*v)).collect();
     let inputs =
         if inputs.is_empty() { "0.0 /* no inputs */".to_string() } else { inputs.join(", ") };

@@ -11,6 +11,7 @@ use engine::numbers::{prepare, Prepared};
 use engine::{Error, Options};
 
 mod c;
+pub mod impact;
 mod rust;
 
 pub use c::{c, identifier, parameter_fields, CModule};
@@ -28,6 +29,8 @@ pub struct Sizes {
     /// The free parameters, the ones a caller gives; the derived ones follow them.
     pub free_parameters: usize,
     pub inputs: usize,
+    /// The scene's contacts: their rows are among the m multipliers, as a run lays them out.
+    pub contacts: usize,
 }
 
 impl Sizes {
@@ -70,8 +73,6 @@ impl Equations {
         // Reactions the scene derives are part of the module; asking for KE and PE changes
         // nothing.
         let mut prepared = prepare(source, &["KE".into(), "PE".into()], options)?;
-        // The generated code would hold every contact closed, as a two-sided constraint.
-        prepared.refuse_contacts("code generation")?;
         let values = prepared.parameter_values(&[])?;
         let d = &mut prepared.derivation;
         let mut reactions = Vec::new();
@@ -89,6 +90,7 @@ impl Equations {
             parameters: d.model.params.len(),
             free_parameters: prepared.parameter_plan.free().len(),
             inputs: d.model.inputs.len(),
+            contacts: prepared.contacts.len(),
         };
         let (n, m) = (sizes.coordinates, sizes.constraints);
         let dynamics = prepared.dynamics_exprs();
@@ -119,6 +121,15 @@ impl Equations {
         if !output_exprs.is_empty() {
             programs.push(("outputs".to_string(), prepared.lower(&dyn_inputs, &output_exprs)?));
         }
+        if !prepared.contacts.is_empty() {
+            // Each contact's coefficient of restitution, a constant of the parameters.
+            let d = &prepared.derivation;
+            let restitutions: Vec<ExprId> = d.contacts.iter().map(|c| c.restitution).collect();
+            programs.push((
+                "restitutions".to_string(),
+                prepared.lower(&prepared.parameters, &restitutions)?,
+            ));
+        }
         let start = start_program(&prepared)?;
         let title = prepared.derivation.model.title.clone().unwrap_or_else(|| path.to_string());
         let free = prepared.parameter_plan.free();
@@ -144,6 +155,33 @@ impl Equations {
     /// The program named `name`, if the scene has it.
     pub fn program(&self, name: &str) -> Option<&numeric::Program> {
         self.programs.iter().find(|(n, _)| n == name).map(|(_, p)| p)
+    }
+
+    /// The multipliers' slots of the contacts' rows (each normal, then its grip), which the
+    /// functions of the state hold open: λ = 0 there, as a run holds an open contact.
+    pub fn contact_slots(&self) -> Vec<usize> {
+        self.prepared
+            .contacts
+            .iter()
+            .flat_map(|c| std::iter::once(c.normal).chain(c.grip))
+            .collect()
+    }
+
+    /// The contacts' names, in the order written.
+    pub fn contact_names(&self) -> Vec<String> {
+        self.prepared.contact_names()
+    }
+
+    /// The rate the impact law takes of multiplier `slot`'s row, an index into the
+    /// constraints program's outputs: Φ̇ of a position row (a contact's normal rate γ), Φ of
+    /// a velocity row (a grip's tangential rate), as a run reads them.
+    pub fn row_rate(&self, slot: usize) -> usize {
+        let n = self.sizes.coordinates;
+        let base = slot * (n + 3) + n;
+        match self.prepared.stabilisation()[slot] {
+            sim::Stabilisation::Position => base + 2,
+            sim::Stabilisation::Velocity => base + 1,
+        }
     }
 
     /// Names of `syms`, joined by commas.

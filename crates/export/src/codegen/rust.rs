@@ -81,6 +81,13 @@ fn module(e: &Equations, path: &str) -> String {
         "//! `input` of the partials and the reactions: [t, q, q̇, q̈, λ, parameters{}].",
         if inputs.is_empty() { "" } else { ", inputs" }
     );
+    if sizes.contacts > 0 {
+        let _ = writeln!(
+            s,
+            "//! The contacts' rows are among the constraints'; `rhs` and the functions like it hold\n\
+             //! every contact open (λ = 0 there), and `impact` gives the rates after an impact."
+        );
+    }
     let _ = writeln!(s, "//! Operation counts per call:");
     for (name, p) in &e.programs {
         let _ = writeln!(s, "//!   {name}: {}", p.op_counts());
@@ -111,6 +118,9 @@ fn module(e: &Equations, path: &str) -> String {
                            row ∂/∂q (N values)\nthen ∂/∂q̇ (N)."
                 .to_string(),
             "energies" => "Kinetic and potential energy.".to_string(),
+            "restitutions" => {
+                "Each contact's coefficient of restitution, from [parameters, inputs].".to_string()
+            }
             "outputs" => format!("The scene's outputs ({}).", doc(&e.outputs.join(", "))),
             _ => format!(
                 "The reactions, in the order the scene names them. ({})",
@@ -127,6 +137,10 @@ fn module(e: &Equations, path: &str) -> String {
         inverse_dynamics_function(sizes),
     ] {
         s.push_str(&wrapper);
+        s.push('\n');
+    }
+    if sizes.contacts > 0 {
+        s.push_str(&contact_functions(e));
         s.push('\n');
     }
     s.push_str(HELPERS);
@@ -162,6 +176,16 @@ fn augmented_function(e: &Equations) -> String {
         let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            let jac = rows[c * {} + j];\n            a[({n} + c) * {size} + j] = jac;\n            a[j * {size} + {n} + c] = -jac;\n        }}\n        b[{n} + c] = rows[c * {} + {n}];\n    }}", n + 3, n + 3);
         for (c, gamma) in stabilised_gamma(e, &literal).iter().enumerate() {
             let _ = writeln!(s, "    b[{}] = {gamma};", n + c);
+        }
+        // The contacts' rows held open, as a run holds an open contact: λ = 0.
+        for slot in e.contact_slots() {
+            let _ = writeln!(s, "    for j in 0..{n} {{\n        a[{} + j] = 0.0;\n        a[j * {size} + {}] = 0.0;\n    }}", (n + slot) * size, n + slot);
+            let _ = writeln!(
+                s,
+                "    a[{}] = 1.0;\n    b[{}] = 0.0;",
+                (n + slot) * size + n + slot,
+                n + slot
+            );
         }
     }
     s.push_str("}\n");
@@ -241,6 +265,10 @@ fn jacobian_function(e: &Equations) -> String {
         let _ = writeln!(s, "    for col in 0..{width} {{");
         for line in stabilised_partials(e, &literal) {
             let _ = writeln!(s, "        {line}");
+        }
+        // An open contact's row, λ = 0, has no partials.
+        for slot in e.contact_slots() {
+            let _ = writeln!(s, "        d[{} + col] = 0.0;", (n + slot) * width);
         }
         let _ = writeln!(s, "    }}");
     }
@@ -335,5 +363,159 @@ fn inverse_dynamics_function(sizes: Sizes) -> String {
     );
     let _ = writeln!(s, "    for c in 0..{m} {{\n        for j in 0..{n} {{\n            tau[j] += matrix[({n} + c) * {size} + j] * b[{n} + c];\n        }}\n    }}");
     let _ = writeln!(s, "    true\n}}");
+    s
+}
+
+/// The functions of a scene with contacts: their names and rows, `gaps`, and `impact` with
+/// its solver (see [`super::impact`]).
+fn contact_functions(e: &Equations) -> String {
+    let sizes = e.sizes;
+    let (n, m, count) = (sizes.coordinates, sizes.constraints, sizes.contacts);
+    let size = n + m;
+    let width = n + 3;
+    let rows_max = e.contact_slots().len();
+    let contacts = &e.prepared.contacts;
+    let names = e.contact_names();
+    let mut s = String::new();
+    let _ = writeln!(s, "/// Contacts: one-sided, each a normal row and, if it grips, a grip row among the multipliers.\npub const CONTACTS: usize = {count};");
+    let quoted: Vec<String> = names.iter().map(|n| format!("{n:?}")).collect();
+    let _ = writeln!(s, "/// The contacts' names, in the order written.\npub const CONTACT_NAMES: [&str; {count}] = [{}];", quoted.join(", "));
+    let slots: Vec<String> = contacts
+        .iter()
+        .map(|c| {
+            format!(
+                "({}, {})",
+                c.normal,
+                c.grip.map_or("None".to_string(), |g| format!("Some({g})"))
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "/// Each contact's multiplier slots (its normal row, its grip row): where its rows sit among\n\
+         /// the constraints' rows and `impact`'s impulses.\npub const CONTACT_ROWS: [(usize, Option<usize>); {count}] = [{}];",
+        slots.join(", ")
+    );
+    let _ = writeln!(s, "/// The most touching contacts `impact` enumerates the active sets of.\nconst MOST_NORMALS: usize = {};\n", super::impact::MOST_NORMALS);
+    // gaps
+    let _ = writeln!(
+        s,
+        "/// Per contact, its gap g (open > 0) then its normal rate γ = ∂g/∂q·q̇ + ∂g/∂t: `out` holds\n\
+         /// 2·CONTACTS values. `rhs`, `jacobian`, `reactions` and `inverse_dynamics` hold every\n\
+         /// contact open (λ = 0 at its rows, as a run holds an open contact): integrate a flight with\n\
+         /// them, watch the gaps, and apply `impact` where some reach zero closing."
+    );
+    let _ = writeln!(
+        s,
+        "pub fn gaps(t: f64, q: &[f64; {n}], qd: &[f64; {n}], {}, out: &mut [f64; {}]) {{",
+        arguments(sizes),
+        2 * count
+    );
+    s.push_str(&dynamics_input(sizes, "q"));
+    let _ = writeln!(
+        s,
+        "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);",
+        m * width
+    );
+    for (k, c) in contacts.iter().enumerate() {
+        let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k, c.normal * width + n + 1);
+        let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k + 1, e.row_rate(c.normal));
+    }
+    s.push_str("}\n\n");
+    // status
+    s.push_str(
+        "/// What `impact` found.\n#[derive(Clone, Copy, Debug, PartialEq, Eq)]\npub enum ImpactStatus {\n    \
+         /// Solved: `qd_plus` and `impulses` are written.\n    Solved = 0,\n    \
+         /// The augmented system of the two-sided constraints is singular.\n    Singular = 1,\n    \
+         /// No active set satisfies the conditions: no solution (to the solver's tolerance).\n    NoSolution = 2,\n    \
+         /// More than 20 contacts touch.\n    TooMany = 3,\n}\n\n",
+    );
+    for line in super::impact::contract(&[
+        ("(ImpactStatus::Solved)", 0),
+        ("(Singular)", 1),
+        ("(NoSolution)", 2),
+        ("(TooMany)", 3),
+    ])
+    .lines()
+    {
+        let _ = writeln!(s, "/// {line}");
+    }
+    let _ = writeln!(
+        s,
+        "pub fn impact(t: f64, q: &[f64; {n}], qd_minus: &[f64; {n}], {}, touching: &[bool; {count}], \
+         qd_plus: &mut [f64; {n}], impulses: &mut [f64; {m}]) -> ImpactStatus {{",
+        arguments(sizes)
+    );
+    s.push_str("    let qd = qd_minus;\n");
+    s.push_str(&dynamics_input(sizes, "q"));
+    let _ =
+        writeln!(s, "    let mut system = [0.0; {}];\n    let mut b = [0.0; {size}];", size * size);
+    s.push_str("    augmented(&input, &mut system, &mut b);\n");
+    let _ = writeln!(
+        s,
+        "    let mut rows = [0.0; {}];\n    constraints(&input, &mut rows);",
+        m * width
+    );
+    let _ = writeln!(s, "    let mut e = [0.0; {count}];");
+    let _ = writeln!(s, "    restitutions(input[{}..].try_into().unwrap(), &mut e);", 1 + 2 * n);
+    s.push_str(
+        "    // The touching contacts' rows, each normal then its grip: slot, normal row, c.\n",
+    );
+    let _ = writeln!(
+        s,
+        "    let mut slot = [0usize; {rows_max}];\n    let mut normal_of = [0usize; {rows_max}];\n    \
+         let mut c = [0.0; {rows_max}];\n    let mut r = 0;"
+    );
+    for (k, contact) in contacts.iter().enumerate() {
+        let _ = writeln!(s, "    if touching[{k}] {{");
+        let _ = writeln!(
+            s,
+            "        slot[r] = {};\n        normal_of[r] = r;\n        c[r] = (1.0 + e[{k}]) * rows[{}];\n        r += 1;",
+            contact.normal,
+            e.row_rate(contact.normal)
+        );
+        if let Some(grip) = contact.grip {
+            let _ = writeln!(
+                s,
+                "        slot[r] = {grip};\n        normal_of[r] = r - 1;\n        c[r] = rows[{}];\n        r += 1;",
+                e.row_rate(grip)
+            );
+        }
+        s.push_str("    }\n");
+    }
+    let _ = writeln!(
+        s,
+        "    // S·Wᵀ, a column per row: the augmented system of the two-sided rows solved for it.\n    \
+         let mut response = [0.0; {}];\n    for l in 0..r {{\n        let mut a = system;\n        \
+         let mut x = [0.0; {size}];\n        x[..{n}].copy_from_slice(&rows[slot[l] * {width}..slot[l] * {width} + {n}]);\n        \
+         if !solve_in_place({size}, &mut a, &mut x) {{\n            return ImpactStatus::Singular;\n        }}\n        \
+         for i in 0..{n} {{\n            response[i * {rows_max} + l] = x[i];\n        }}\n    }}",
+        n * rows_max
+    );
+    let _ = writeln!(
+        s,
+        "    // The Delassus operator A = W·S·Wᵀ, symmetrised.\n    let mut delassus = [0.0; {}];\n    \
+         for i in 0..r {{\n        for j in 0..r {{\n            let mut v = 0.0;\n            for l in 0..{n} {{\n                \
+         v += rows[slot[i] * {width} + l] * response[l * {rows_max} + j];\n            }}\n            delassus[i * r + j] = v;\n        }}\n    }}\n    \
+         for i in 0..r {{\n        for j in i + 1..r {{\n            let v = (delassus[i * r + j] + delassus[j * r + i]) * 0.5;\n            \
+         delassus[i * r + j] = v;\n            delassus[j * r + i] = v;\n        }}\n    }}",
+        rows_max * rows_max
+    );
+    let _ = writeln!(
+        s,
+        "    let mut x = [0.0; {rows_max}];\n    match complementarity(r, &delassus, &c, &normal_of, &mut x) {{\n        \
+         0 => {{}}\n        2 => return ImpactStatus::NoSolution,\n        _ => return ImpactStatus::TooMany,\n    }}"
+    );
+    let _ = writeln!(
+        s,
+        "    // The two-sided rows' impulses: the augmented system solved for WᵀΛ.\n    let mut a = system;\n    \
+         let mut change = [0.0; {size}];\n    for l in 0..r {{\n        for j in 0..{n} {{\n            \
+         change[j] += rows[slot[l] * {width} + j] * x[l];\n        }}\n    }}\n    \
+         if !solve_in_place({size}, &mut a, &mut change) {{\n        return ImpactStatus::Singular;\n    }}\n    \
+         for i in 0..{n} {{\n        let mut v = 0.0;\n        for l in 0..r {{\n            v += response[i * {rows_max} + l] * x[l];\n        }}\n        \
+         qd_plus[i] = qd_minus[i] + v;\n    }}\n    impulses.copy_from_slice(&change[{n}..]);\n    \
+         for l in 0..r {{\n        impulses[slot[l]] = x[l];\n    }}\n    ImpactStatus::Solved\n}}\n"
+    );
+    s.push_str(super::impact::RUST_SOLVER);
     s
 }

@@ -27,6 +27,10 @@ pub(super) fn all(e: &Equations, name: &str) -> String {
     s.push_str(&jacobian(e, name));
     s.push_str(&reactions(e, name));
     s.push_str(&inverse_dynamics(e, name));
+    if e.sizes.contacts > 0 {
+        s.push_str(&gaps(e, name));
+        s.push_str(&impact(e, name));
+    }
     s
 }
 
@@ -64,6 +68,17 @@ fn augmented(e: &Equations) -> String {
         );
         for (c, gamma) in stabilised_gamma(e, &literal).iter().enumerate() {
             let _ = writeln!(s, "    b[{}] = {gamma};", n + c);
+        }
+        // The contacts' rows held open, as a run holds an open contact: lambda = 0.
+        for slot in e.contact_slots() {
+            let _ = writeln!(
+                s,
+                "    for (j = 0; j < {n}; j++) {{\n        a[{} + j] = 0.0;\n        a[j * {size} + {}] = 0.0;\n    }}\n    a[{}] = 1.0;\n    b[{}] = 0.0;",
+                (n + slot) * size,
+                n + slot,
+                (n + slot) * size + n + slot,
+                n + slot
+            );
         }
     }
     s.push_str("}\n\n");
@@ -200,6 +215,10 @@ fn jacobian(e: &Equations, name: &str) -> String {
         for line in stabilised_partials(e, &literal) {
             let _ = writeln!(s, "        {line}");
         }
+        // An open contact's row, lambda = 0, has no partials.
+        for slot in e.contact_slots() {
+            let _ = writeln!(s, "        d[{} + col] = 0.0;", (n + slot) * width);
+        }
         s.push_str("    }\n");
     }
     let _ = writeln!(
@@ -283,5 +302,113 @@ fn inverse_dynamics(e: &Equations, name: &str) -> String {
         );
     }
     s.push_str("    return 0;\n}\n");
+    s
+}
+
+/// `NAME_gaps`: per contact, its gap and normal rate, read from the constraints' rows.
+fn gaps(e: &Equations, name: &str) -> String {
+    let (n, m) = (e.sizes.coordinates, e.sizes.constraints);
+    let width = n + 3;
+    let mut s = format!(
+        "void {name}_gaps(double t, const double *q, const double *qd, \
+         const {name}_parameters *p, const double *u, double *out)\n{{\n"
+    );
+    let _ = writeln!(
+        s,
+        "    double input[{}];\n    double rows[{}];",
+        e.sizes.dynamics_inputs(),
+        m * width
+    );
+    s.push_str("    gather(t, q, qd, p, u, input);\n    eval_constraints(input, rows);\n");
+    for (k, c) in e.prepared.contacts.iter().enumerate() {
+        let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k, c.normal * width + n + 1);
+        let _ = writeln!(s, "    out[{}] = rows[{}];", 2 * k + 1, e.row_rate(c.normal));
+    }
+    s.push_str("}\n\n");
+    s
+}
+
+/// `NAME_impact`: the touching contacts' complementarity problem (see
+/// [`crate::codegen::impact`]), built as a run builds it and solved by the source's
+/// `complementarity`.
+fn impact(e: &Equations, name: &str) -> String {
+    let (n, m, count) = (e.sizes.coordinates, e.sizes.constraints, e.sizes.contacts);
+    let (size, width) = (n + m, n + 3);
+    let rows_max = e.contact_slots().len();
+    let mut s = format!(
+        "int {name}_impact(double t, const double *q, const double *qd_minus, \
+         const {name}_parameters *p, const double *u, const int *touching, double *qd_plus, \
+         double *impulses)\n{{\n"
+    );
+    let _ = writeln!(
+        s,
+        "    double input[{}];\n    double system[{}];\n    double a[{}];\n    double b[{size}];\n    \
+         double rows[{}];\n    double e[{count}];\n    int slot[{rows_max}] = {{0}};\n    int normal_of[{rows_max}] = {{0}};\n    \
+         double c[{rows_max}] = {{0.0}};\n    double x[{rows_max}] = {{0.0}};\n    double response[{}] = {{0.0}};\n    double delassus[{}] = {{0.0}};\n    \
+         int r = 0, i, j, l, status;",
+        e.sizes.dynamics_inputs(),
+        size * size,
+        size * size,
+        m * width,
+        n * rows_max,
+        rows_max * rows_max
+    );
+    s.push_str("    gather(t, q, qd_minus, p, u, input);\n    augmented(input, system, b);\n");
+    let _ = writeln!(
+        s,
+        "    eval_constraints(input, rows);\n    eval_restitutions(input + {}, e);",
+        1 + 2 * n
+    );
+    s.push_str(
+        "    /* The touching contacts' rows, each normal then its grip: slot, normal row, c. */\n",
+    );
+    for (k, contact) in e.prepared.contacts.iter().enumerate() {
+        let _ = writeln!(s, "    if (touching[{k}]) {{");
+        let _ = writeln!(
+            s,
+            "        slot[r] = {};\n        normal_of[r] = r;\n        c[r] = (1.0 + e[{k}]) * rows[{}];\n        r++;",
+            contact.normal,
+            e.row_rate(contact.normal)
+        );
+        if let Some(grip) = contact.grip {
+            let _ = writeln!(
+                s,
+                "        slot[r] = {grip};\n        normal_of[r] = r - 1;\n        c[r] = rows[{}];\n        r++;",
+                e.row_rate(grip)
+            );
+        }
+        s.push_str("    }\n");
+    }
+    let _ = writeln!(
+        s,
+        "    /* S W^T, a column per row: the augmented system of the two-sided rows solved for it. */\n    \
+         for (l = 0; l < r; l++) {{\n        for (i = 0; i < {}; i++) {{\n            a[i] = system[i];\n        }}\n        \
+         for (i = 0; i < {size}; i++) {{\n            b[i] = i < {n} ? rows[slot[l] * {width} + i] : 0.0;\n        }}\n        \
+         if (solve_in_place({size}, a, b)) {{\n            return 1;\n        }}\n        \
+         for (i = 0; i < {n}; i++) {{\n            response[i * {rows_max} + l] = b[i];\n        }}\n    }}",
+        size * size
+    );
+    let _ = writeln!(
+        s,
+        "    /* The Delassus operator A = W S W^T, symmetrised. */\n    for (i = 0; i < r; i++) {{\n        \
+         for (j = 0; j < r; j++) {{\n            double v = 0.0;\n            for (l = 0; l < {n}; l++) {{\n                \
+         v += rows[slot[i] * {width} + l] * response[l * {rows_max} + j];\n            }}\n            delassus[i * r + j] = v;\n        }}\n    }}\n    \
+         for (i = 0; i < r; i++) {{\n        for (j = i + 1; j < r; j++) {{\n            \
+         double v = (delassus[i * r + j] + delassus[j * r + i]) * 0.5;\n            delassus[i * r + j] = v;\n            delassus[j * r + i] = v;\n        }}\n    }}"
+    );
+    s.push_str("    status = complementarity(r, delassus, c, normal_of, x);\n    if (status) {\n        return status;\n    }\n");
+    let _ = writeln!(
+        s,
+        "    /* The two-sided rows' impulses: the augmented system solved for W^T L. */\n    \
+         for (i = 0; i < {}; i++) {{\n        a[i] = system[i];\n    }}\n    \
+         for (i = 0; i < {size}; i++) {{\n        b[i] = 0.0;\n    }}\n    \
+         for (l = 0; l < r; l++) {{\n        for (j = 0; j < {n}; j++) {{\n            b[j] += rows[slot[l] * {width} + j] * x[l];\n        }}\n    }}\n    \
+         if (solve_in_place({size}, a, b)) {{\n        return 1;\n    }}\n    \
+         for (i = 0; i < {n}; i++) {{\n        double v = 0.0;\n        for (l = 0; l < r; l++) {{\n            v += response[i * {rows_max} + l] * x[l];\n        }}\n        \
+         qd_plus[i] = qd_minus[i] + v;\n    }}\n    \
+         for (i = 0; i < {m}; i++) {{\n        impulses[i] = b[{n} + i];\n    }}\n    \
+         for (l = 0; l < r; l++) {{\n        impulses[slot[l]] = x[l];\n    }}\n    return 0;\n}}\n",
+        size * size
+    );
     s
 }
