@@ -45,6 +45,8 @@ pub struct DerivedContact {
     /// g(q, t) ≥ 0.
     pub gap: ExprId,
     pub restitution: ExprId,
+    /// Coulomb's coefficient along its tangential rate, where it slips rather than grips.
+    pub friction: Option<ExprId>,
     /// The tangential rate its grip holds at zero while it is closed.
     pub grip: Option<ExprId>,
     /// Its reaction's symbol, and its grip's.
@@ -95,6 +97,7 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
             name: contact.name,
             gap,
             restitution: contact.restitution,
+            friction: contact.friction,
             grip,
             force: rows.normal.lambda,
             grip_force: rows.grip.as_ref().map(|g| g.lambda),

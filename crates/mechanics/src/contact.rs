@@ -108,13 +108,20 @@ impl Derivation {
                 closed_at_start,
             });
         }
-        let open: Vec<usize> = contacts
+        let mut open: Vec<usize> = contacts
             .iter()
             .filter(|c| !c.closed_at_start)
             .flat_map(|c| {
                 std::iter::once(c.normal.constraint).chain(c.grip.iter().map(|g| g.constraint))
             })
             .collect();
+        // A contact with Coulomb friction holds its tangential rate only while it sticks: its
+        // row is no constraint of the start's mode (the slipping mode's force law is to come).
+        for c in &contacts {
+            if self.model.contacts[c.contact].friction.is_some() {
+                open.extend(c.grip.iter().map(|g| g.constraint));
+            }
+        }
         self.multipliers.retain(|m| !open.contains(&m.constraint));
         self.contacts = contacts;
         if errors.is_empty() {

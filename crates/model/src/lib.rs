@@ -216,6 +216,9 @@ pub struct Contact {
     /// Newton's coefficient of restitution e on the normal rate, in [0, 1] at the parameters'
     /// values (0 when not written: a plastic landing).
     pub restitution: ExprId,
+    /// Coulomb's coefficient μ along the tangential row (`friction MU; slip V`); `None` for a
+    /// frictionless contact, or one that grips (its tangential row held without a bound).
+    pub friction: Option<ExprId>,
     pub span: Span,
 }
 

@@ -146,6 +146,14 @@ pub(crate) fn with_contacts(
     if prepared.contacts.is_empty() {
         return Ok(mechanical);
     }
+    let d = &prepared.derivation;
+    if let Some(c) = d.contacts.iter().find(|c| d.model.contacts[c.contact].friction.is_some()) {
+        return Err(Error::Input(format!(
+            "runs do not take Coulomb friction yet: the contact `{}` has a friction coefficient \
+             (make it `grip V` to hold it without slipping, or leave friction out)",
+            d.model.contacts[c.contact].name
+        )));
+    }
     if !method.handles_contacts() {
         let d = &prepared.derivation;
         let names: Vec<String> =

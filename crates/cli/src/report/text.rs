@@ -196,8 +196,23 @@ impl Text<'_> {
                 self.print(c.gap),
                 self.print(c.restitution)
             ));
-            if let Some(grip) = c.grip {
-                self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)));
+            match (c.grip, c.friction, c.grip_force) {
+                (Some(slip), Some(mu), Some(tangent)) => {
+                    let (tangent, mu) = (self.sym(tangent), self.print(mu));
+                    self.out.push(format!(
+                        "    Coulomb friction μ = {mu} along {} (runs do not take friction yet)",
+                        self.print(slip)
+                    ));
+                    self.out.push(format!(
+                        "    sticks while |{tangent}| ≤ {mu}·{force}, holding {} = 0; slips with {tangent} = −{mu}·{force}·sign({})",
+                        self.print(slip),
+                        self.print(slip)
+                    ));
+                }
+                (Some(grip), _, _) => {
+                    self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)))
+                }
+                _ => {}
             }
             let start = if c.closed_at_start { "closed" } else { "open" };
             self.out.push(format!("    {start} at the start"));

@@ -11,8 +11,9 @@ use super::{normalize, space, Binding, Resolver};
 use crate::{Constraint, ConstraintKind, Contact, Placeholder, Value};
 
 /// The laws a `contact` block may give, as a hint names them.
-const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1) \
-                            and `grip V` (a tangential rate held at zero while it is closed)";
+const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1), \
+                            `grip V` (a tangential rate held at zero while it is closed), and \
+                            `friction MU` with `slip V` (Coulomb's law along the tangential rate V)";
 
 impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
@@ -152,6 +153,8 @@ impl Resolver<'_> {
         }
         let mut restitution: Option<ExprId> = None;
         let mut grip: Option<(ExprId, Span)> = None;
+        let mut slip: Option<(ExprId, Span)> = None;
+        let mut friction: Option<(ExprId, Span)> = None;
         let mut seen: Vec<&Ident> = Vec::new();
         for law in laws {
             if let Some(first) = seen.iter().find(|k| k.name == law.key.name) {
@@ -166,6 +169,8 @@ impl Resolver<'_> {
             match law.key.name.as_str() {
                 "restitution" => restitution = self.restitution(&law.value),
                 "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                "slip" => slip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                "friction" => friction = self.friction(&law.value).map(|mu| (mu, law.value.span)),
                 other => self.error(
                     Diagnostic::error(law.key.span, format!("a contact has no law `{other}`"))
                         .with_label("unknown law")
@@ -173,6 +178,49 @@ impl Resolver<'_> {
                 ),
             }
         }
+        // Coulomb's law needs its direction, and a grip is friction without a bound: a contact
+        // has one tangential law.
+        match (grip, slip, friction) {
+            (Some((_, g)), Some((_, s)), _) => {
+                self.error(
+                    Diagnostic::error(s, "a contact grips or slips, not both")
+                        .with_label("a slip direction here")
+                        .with_related(g, "a grip here")
+                        .with_hint("`grip V` holds V at zero; `friction MU; slip V` bounds the force along V by MU times the normal force"),
+                );
+                return;
+            }
+            (Some((_, g)), None, Some((_, f))) => {
+                self.error(
+                    Diagnostic::error(f, "a gripping contact has no friction coefficient")
+                        .with_label("friction here")
+                        .with_related(g, "a grip here, which never slips")
+                        .with_hint(
+                            "for Coulomb's law, write `friction MU; slip V` instead of `grip V`",
+                        ),
+                );
+                return;
+            }
+            (None, None, Some((_, f))) => {
+                self.error(
+                    Diagnostic::error(f, "friction needs the tangential rate it acts along")
+                        .with_label("no `slip` for it")
+                        .with_hint("add `slip V`, the contact point's tangential rate (`x'`, `x' + r*theta'`)"),
+                );
+                return;
+            }
+            (None, Some((_, s)), None) => {
+                self.error(
+                    Diagnostic::error(s, "a slip direction without a friction coefficient")
+                        .with_label("slip here")
+                        .with_hint("add `friction MU`; a frictionless contact needs no `slip`"),
+                );
+                return;
+            }
+            _ => {}
+        }
+        let grip = grip.or(slip);
+        let friction = friction.map(|(mu, _)| mu);
         let cname = normalize(&name.name);
         let zero = self.model.pool.zero();
         let normal =
@@ -182,7 +230,14 @@ impl Resolver<'_> {
             self.push_constraint(name, ConstraintKind::Grip, (g, zero), g, gspan)
         });
         let restitution = restitution.unwrap_or(zero);
-        self.model.contacts.push(Contact { name: cname, normal, grip, restitution, span });
+        self.model.contacts.push(Contact {
+            name: cname,
+            normal,
+            grip,
+            restitution,
+            friction,
+            span,
+        });
         self.bind(name, Binding::Constraint(vec![Some(normal)]));
     }
 
@@ -224,6 +279,42 @@ impl Resolver<'_> {
                     "0 is a plastic landing (the contact closes), 1 an elastic one (the \
                          normal rate reverses in full)",
                 ),
+            );
+            return None;
+        }
+        Some(e)
+    }
+
+    /// A contact's `friction`: Coulomb's coefficient, a dimensionless constant, at least 0 at
+    /// the parameters' values.
+    fn friction(&mut self, written: &Expr) -> Option<ExprId> {
+        let (e, dims) = self.scalar(written)?;
+        for f in self.operand(dims).forms() {
+            self.scope.units.dimensionless(&f, written.span, "a coefficient of friction");
+        }
+        let free = self.model.pool.free_symbols(e);
+        if let Some(s) =
+            free.iter().find(|s| !matches!(self.model.pool.symbol(**s).kind, SymbolKind::Param))
+        {
+            let name = self.model.pool.symbol(*s).name.clone();
+            self.error(
+                Diagnostic::error(written.span, "a coefficient of friction is a constant")
+                    .with_label(format!("depends on `{name}`"))
+                    .with_hint("write a number or an expression of parameters, `3/10` or `mu`"),
+            );
+            return None;
+        }
+        let known = self.known(e)?;
+        let negative = match self.model.pool.as_num(known) {
+            Some(q) => q.is_negative(),
+            None => numeric::eval(&self.model.pool, known, &[]) < -1e-12,
+        };
+        if negative {
+            let value = numeric::eval(&self.model.pool, known, &[]);
+            self.error(
+                Diagnostic::error(written.span, "a coefficient of friction is not negative")
+                    .with_label(format!("is {value} here"))
+                    .with_hint("0 is a smooth contact; Coulomb's μ is typically 0.1 to 1"),
             );
             return None;
         }
