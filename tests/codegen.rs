@@ -6,7 +6,6 @@
 //! contacts, as a run starts them).
 
 use std::fmt::Write;
-use std::process::Command;
 
 use numeric::Tape;
 use sim::Problem;
@@ -136,18 +135,7 @@ fn generated_code_compiles_and_matches_the_tape() {
     }
     main.push_str("}\n");
     std::fs::write(dir.join("main.rs"), format!("{modules}\n{main}")).unwrap();
-    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
-    let binary = dir.join("generated");
-    let status = Command::new(rustc)
-        .args(["--edition", "2021", "-O", "-o"])
-        .arg(&binary)
-        .arg(dir.join("main.rs"))
-        .status()
-        .expect("rustc runs");
-    assert!(status.success(), "the generated code does not compile (see {})", dir.display());
-    let output = Command::new(&binary).output().expect("the generated program runs");
-    assert!(output.status.success(), "the generated program failed");
-    let text = String::from_utf8(output.stdout).unwrap();
+    let text = lagrange_tests::compile_and_run_rust(&dir.join("main.rs"), &dir.join("generated"));
     let got: Vec<f64> = text.lines().map(|l| l.parse().unwrap()).collect();
     assert_eq!(got.len(), expected.len());
     for (i, (g, (e, tolerance))) in got.iter().zip(&expected).enumerate() {

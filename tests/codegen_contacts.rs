@@ -348,17 +348,8 @@ fn the_generated_impact_map_is_the_runs() {
     std::fs::create_dir_all(&dir).unwrap();
     // Rust.
     std::fs::write(dir.join("main.rs"), rust_driver(&dir, &scenes)).unwrap();
-    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
-    let binary = dir.join("impacts");
-    let status = Command::new(rustc)
-        .args(["--edition", "2021", "-O", "-o"])
-        .arg(&binary)
-        .arg(dir.join("main.rs"))
-        .status()
-        .expect("rustc runs");
-    assert!(status.success(), "the generated Rust does not compile (see {})", dir.display());
-    let output = Command::new(&binary).output().expect("the driver runs");
-    let mut checked = check("rust", &scenes, &String::from_utf8_lossy(&output.stdout));
+    let printed = lagrange_tests::compile_and_run_rust(&dir.join("main.rs"), &dir.join("impacts"));
+    let mut checked = check("rust", &scenes, &printed);
     // C, with each compiler found.
     let mut units = vec![dir.join("main.c")];
     for scene in &scenes {

@@ -29,6 +29,23 @@ pub fn examples_without_contacts() -> Vec<(String, String)> {
     all
 }
 
+/// Compiles the Rust program `main` (a file in its folder with the generated modules it
+/// includes) with `rustc -O` into `binary`, runs it and gives its standard output; fails the
+/// test where it does not compile or run.
+pub fn compile_and_run_rust(main: &Path, binary: &Path) -> String {
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let status = std::process::Command::new(rustc)
+        .args(["--edition", "2021", "-O", "-o"])
+        .arg(binary)
+        .arg(main)
+        .status()
+        .expect("rustc runs");
+    assert!(status.success(), "the generated Rust does not compile (see {})", main.display());
+    let output = std::process::Command::new(binary).output().expect("the program runs");
+    assert!(output.status.success(), "the generated program failed");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// The example at `path` (relative to `examples/`), whichever tests hold it.
 pub fn example(path: &str) -> String {
     let (_, source) = all_examples()

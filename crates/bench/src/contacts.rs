@@ -24,9 +24,8 @@
 //! would be shorter than the one at which ours settled the contact, so both make the same
 //! impacts.
 
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
+
 use std::time::Instant;
 
 use bench::reference::{
@@ -447,24 +446,7 @@ fn scipy(root: &Path, scene: &Scene, rows: &[Row], repeats: usize) -> Result<Vec
         });
         input += &(request.to_string() + "\n");
     }
-    let mut child = Command::new("python3")
-        .arg(root.join(PEER))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("python3: {e}"))?;
-    child
-        .stdin
-        .take()
-        .ok_or("no standard input")?
-        .write_all(input.as_bytes())
-        .map_err(|e| e.to_string())?;
-    let output = child.wait_with_output().map_err(|e| e.to_string())?;
-    if !output.status.success() {
-        return Err(String::from_utf8_lossy(&output.stderr).trim().to_string());
-    }
-    let text = String::from_utf8_lossy(&output.stdout);
+    let text = crate::peer_lines(&root.join(PEER), &input)?;
     // One line per request, in their order.
     text.lines()
         .filter(|l| l.starts_with('{'))

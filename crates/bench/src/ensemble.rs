@@ -7,9 +7,7 @@
 //! same starts here as an ensemble of their own on one thread (side by side in lockstep, and
 //! one at a time).
 
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use ::ensemble::{Ensemble, Options, Table};
@@ -190,24 +188,7 @@ fn spread(runs: usize, sample: usize) -> Vec<usize> {
 
 /// The peer's first flip and timing for each start of `input`, or why it did not run.
 fn peer(root: &Path, input: &str) -> Result<Vec<(f64, Timing)>, String> {
-    let mut child = Command::new("python3")
-        .arg(root.join(PEER))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("python3: {e}"))?;
-    child
-        .stdin
-        .take()
-        .ok_or("no standard input")?
-        .write_all(input.as_bytes())
-        .map_err(|e| e.to_string())?;
-    let output = child.wait_with_output().map_err(|e| e.to_string())?;
-    if !output.status.success() {
-        return Err(String::from_utf8_lossy(&output.stderr).trim().to_string());
-    }
-    String::from_utf8_lossy(&output.stdout)
+    crate::peer_lines(&root.join(PEER), input)?
         .lines()
         .filter(|l| l.starts_with('{'))
         .map(|line| {

@@ -226,6 +226,31 @@ pub fn per_call(mut f: impl FnMut()) -> f64 {
     median(&mut times)
 }
 
+/// What a Python peer `script` prints given `input` on its standard input (one request a
+/// line), or why it did not run: no python3, or the script failed (its standard error).
+pub fn peer_lines(script: &std::path::Path, input: &str) -> Result<String, String> {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new("python3")
+        .arg(script)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("python3: {e}"))?;
+    child
+        .stdin
+        .take()
+        .ok_or("no standard input")?
+        .write_all(input.as_bytes())
+        .map_err(|e| e.to_string())?;
+    let output = child.wait_with_output().map_err(|e| e.to_string())?;
+    if !output.status.success() {
+        return Err(String::from_utf8_lossy(&output.stderr).trim().to_string());
+    }
+    Ok(String::from_utf8_lossy(&output.stdout).into_owned())
+}
+
 /// A duration with a unit that keeps three significant digits readable.
 pub use simulation::bench::seconds;
 

@@ -52,15 +52,14 @@ pub struct ImpactLaw {
     pub rates_after: Vec<ExprId>,
     /// D = W·U: the inverse inertia the contact's rows meet (1/m for a ball on a floor).
     pub delassus: Vec<Vec<ExprId>>,
-    /// The symbols Λ (and Λ_T) standing for the impulses, and q̇⁺ = q̇⁻ + U·Λ in them: how a
-    /// hand derivation writes the rates after when the impulses put in make them long.
-    pub impulse_symbols: Vec<cas::SymId>,
+    /// q̇⁺ = q̇⁻ + U·Λ with the impulses as the symbols Λ (and Λ_T): how a hand derivation
+    /// writes the rates after when the impulses put in make them long.
     pub rates_in_impulses: Vec<ExprId>,
 }
 
 /// Past this many unknowns (coordinates and two-sided multipliers) the impact law is left to
 /// numbers: a symbolic inverse of the augmented system grows too large to print.
-pub const IMPACT_LAW_LIMIT: usize = 6;
+const IMPACT_LAW_LIMIT: usize = 6;
 
 impl Derivation {
     /// Takes the contacts' rows out of the multipliers into [`Derivation::contacts`], keeping
@@ -131,11 +130,6 @@ impl Derivation {
         }
     }
 
-    /// Whether the scene has contacts.
-    pub fn has_contacts(&self) -> bool {
-        !self.contacts.is_empty()
-    }
-
     /// Makes the multipliers those a run integrates: the two-sided constraints, then each
     /// contact's normal row and its grip's, open or closed. Returns where each contact is.
     pub fn with_every_contact(&mut self) -> Vec<ContactSlots> {
@@ -156,7 +150,7 @@ impl Derivation {
     }
 
     /// The impact law of contact `k` landing alone, exactly; `None` when the system is too
-    /// large to solve symbolically ([`IMPACT_LAW_LIMIT`]) or singular.
+    /// large to solve symbolically (past six unknowns) or singular.
     pub fn impact_law(&mut self, k: usize) -> Option<ImpactLaw> {
         let contact = self.contacts.get(k)?.clone();
         let n = self.coords.len();
@@ -246,7 +240,6 @@ impl Derivation {
             tangential_impulse: impulses.get(1).copied(),
             rates_after,
             delassus,
-            impulse_symbols,
             rates_in_impulses,
         })
     }

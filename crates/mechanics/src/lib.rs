@@ -26,7 +26,7 @@ pub use independent::{IndependentForm, DEPENDENT_LIMIT};
 pub use present::collect_by_motion;
 
 pub use check::Decision;
-pub use contact::{ContactRows, ContactSlots, ImpactLaw, IMPACT_LAW_LIMIT};
+pub use contact::{ContactRows, ContactSlots, ImpactLaw};
 pub use derive::{
     derive, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
 };

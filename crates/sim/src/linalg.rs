@@ -46,6 +46,13 @@ impl Small {
     pub fn zeros(order: usize) -> Option<Small> {
         (order <= SMALL).then_some(Small { order, entries: [0.0; SMALL * SMALL] })
     }
+
+    /// Takes the leading `order` rows and columns as the matrix from now on (at most the
+    /// order it was made with, which its storage holds).
+    pub fn set_order(&mut self, order: usize) {
+        debug_assert!(order <= SMALL);
+        self.order = order.min(SMALL);
+    }
 }
 
 impl Index<(usize, usize)> for Small {

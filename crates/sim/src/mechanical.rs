@@ -299,9 +299,10 @@ impl Mechanical {
             };
         }
         let (solution, pivots, kept) = (&mut self.solution, &mut self.pivots, &self.kept);
-        let solved = match self.small.as_mut() {
-            Some(small) => solve_system(out, self.layout, kept, small, solution, pivots),
-            None => solve_system(out, self.layout, kept, &mut self.system, solution, pivots),
+        let solved = match (self.small.as_mut(), kept.iter().all(|&k| k)) {
+            (Some(small), true) => solve_system(out, self.layout, kept, small, solution, pivots),
+            (Some(small), false) => solve_kept(out, self.layout, kept, small, solution, pivots),
+            (None, _) => solve_system(out, self.layout, kept, &mut self.system, solution, pivots),
         };
         match solved {
             Ok(()) => {
@@ -381,9 +382,14 @@ impl Mechanical {
             }
         }
         let (pivots, kept) = (&mut self.pivots, &self.kept);
-        match self.small.as_mut() {
-            Some(small) => solve_system(out, self.layout, kept, small, &mut change, pivots)?,
-            None => solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?,
+        match (self.small.as_mut(), kept.iter().all(|&k| k)) {
+            (Some(small), true) => {
+                solve_system(out, self.layout, kept, small, &mut change, pivots)?
+            }
+            (Some(small), false) => solve_kept(out, self.layout, kept, small, &mut change, pivots)?,
+            (None, _) => {
+                solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?
+            }
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
             *v += d;
@@ -708,6 +714,65 @@ fn load_system(out: &[f64], layout: Layout, kept: &[bool], a: &mut impl Square) 
             a[(n + c, n + d)] = if !kept[c] && c == d { 1.0 } else { 0.0 };
         }
     }
+}
+
+/// [`solve_system`] with only the kept rows factored: an open contact's multiplier is 0
+/// without its identity row in the factorization, so a ball in flight solves M alone by LDLᵀ
+/// and a rocking block on one corner five rows rather than seven. `a` is resized to the kept
+/// order and left so (the full solve sets its order again).
+fn solve_kept(
+    out: &[f64],
+    layout: Layout,
+    kept: &[bool],
+    a: &mut Small,
+    b: &mut [f64],
+    pivots: &mut [usize],
+) -> Result<(), FaultKind> {
+    let Layout { coordinates: n, multipliers: m, .. } = layout;
+    let mut rows = [0usize; linalg::SMALL];
+    let mut k = 0;
+    for c in (0..m).filter(|&c| kept[c]) {
+        rows[k] = c;
+        k += 1;
+    }
+    let rows = &rows[..k];
+    let load = |a: &mut Small| {
+        a.set_order(n + k);
+        for j in 0..n {
+            for i in 0..n {
+                a[(i, j)] = out[j * n + i];
+            }
+        }
+        for (r, &c) in rows.iter().enumerate() {
+            let base = n * n + n + c * (n + 3);
+            for j in 0..n {
+                a[(n + r, j)] = out[base + j];
+                a[(j, n + r)] = -out[base + j];
+            }
+            for s in 0..k {
+                a[(n + r, n + s)] = 0.0;
+            }
+        }
+    };
+    load(a);
+    let mut x = [0.0; linalg::SMALL];
+    x[..n].copy_from_slice(&b[..n]);
+    for (r, &c) in rows.iter().enumerate() {
+        x[n + r] = b[n + c];
+    }
+    let solved = if k == 0 {
+        linalg::solve_symmetric(a, &mut x[..n], pivots, load)
+    } else {
+        linalg::solve_general(a, &mut x[..n + k], pivots)
+    };
+    a.set_order(n + m);
+    solved?;
+    b[..n].copy_from_slice(&x[..n]);
+    b[n..n + m].fill(0.0);
+    for (r, &c) in rows.iter().enumerate() {
+        b[n + c] = x[n + r];
+    }
+    Ok(())
 }
 
 /// Solves the augmented system of `out` for the right side `b`, in place: by LDLᵀ when
