@@ -173,6 +173,29 @@ impl Prepared {
         d.contacts.iter().map(|c| numeric::eval(&d.model.pool, c.restitution, &values)).collect()
     }
 
+    /// Coulomb's coefficient of each rough contact at the parameters' values `parameters`
+    /// (in slot order), `None` for the others, in the order written.
+    pub fn frictions(&self, parameters: &[f64]) -> Vec<Option<f64>> {
+        let d = &self.derivation;
+        let mut values = vec![0.0; d.model.pool.symbol_count()];
+        for (s, v) in self.parameters.iter().zip(parameters) {
+            values[s.index()] = *v;
+        }
+        d.contacts
+            .iter()
+            .map(|c| {
+                let mu = d.model.contacts[c.contact].friction?;
+                Some(numeric::eval(&d.model.pool, mu, &values))
+            })
+            .collect()
+    }
+
+    /// Whether any contact has Coulomb friction.
+    pub fn has_friction(&self) -> bool {
+        let d = &self.derivation;
+        d.contacts.iter().any(|c| d.model.contacts[c.contact].friction.is_some())
+    }
+
     /// The constraints kept with multipliers, by name, in the order of their slots.
     /// The contacts' names, in the order written (a run's mode events index them).
     pub fn contact_names(&self) -> Vec<String> {

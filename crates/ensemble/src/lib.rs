@@ -127,6 +127,8 @@ struct Start {
     parameters: Vec<f64>,
     state: Vec<f64>,
     restitutions: Vec<f64>,
+    /// And their coefficients of friction (`None` for a smooth contact).
+    frictions: Vec<Option<f64>>,
 }
 
 /// A run's start, or why it could not be made.
@@ -150,7 +152,9 @@ impl Maker {
         // Each run's own: a varied parameter may be a restitution, or one it names.
         let restitutions = simulation::restitutions(&self.prepared, &parameters)
             .map_err(|e| e.worded(run_words))?;
-        Ok(Start { parameters, state, restitutions })
+        let frictions = simulation::frictions(&self.prepared, &parameters)
+            .map_err(|e| e.worded(run_words))?;
+        Ok(Start { parameters, state, restitutions, frictions })
     }
 }
 
@@ -446,6 +450,7 @@ impl Ensemble {
         };
         integrand.mechanical().set_parameters(&start.parameters);
         integrand.mechanical().set_restitutions(&start.restitutions);
+        integrand.mechanical().set_frictions(&start.frictions);
         let mut go_on = |_| unless_stopped(stop);
         let run = integrand.integrate(&start.state, &self.run_settings, &self.watched, &mut go_on);
         self.outcome(&run)

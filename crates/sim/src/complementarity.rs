@@ -680,7 +680,7 @@ fn pseudo_solve(m: DMatrix<f64>, rhs: &DMatrix<f64>) -> DMatrix<f64> {
 /// The least-norm least-squares solution of the symmetric system m·y = rhs, and an orthonormal
 /// basis of m's null space (as columns), with eigenvalues below [`RELATIVE_RANK`] of the
 /// largest (in size) taken as zero.
-fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
+pub(crate) fn least_norm(m: DMatrix<f64>, rhs: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
     let (values, vectors) = symmetric_eigen(m);
     let kept = range_of(&values);
     let mut y = DVector::zeros(vectors.nrows());

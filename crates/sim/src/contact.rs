@@ -13,6 +13,9 @@ pub struct Contact {
     pub grip: Option<usize>,
     /// Newton's coefficient e ∈ [0, 1], on the normal rate.
     pub restitution: f64,
+    /// Coulomb's coefficient μ ≥ 0 on its tangential row (`grip`'s multiplier), which it then
+    /// holds only while it sticks (|λ_T| < μ·λ); `None` for a frictionless contact or a grip.
+    pub friction: Option<f64>,
 }
 
 /// What happened to a contact at a jump of a run.
@@ -31,6 +34,11 @@ pub enum ModeChange {
     LiftOff,
     /// Another contact's impact gave it an impulse while it stayed closed.
     Struck,
+    /// A rough contact, closed, began to stick: its slip stopped and its cone holds it.
+    Sticks,
+    /// A rough contact, closed, began to slip (its tangential force reached μ·λ) or slips
+    /// the other way; the tangential field of the event is the sign of the slip.
+    Slips,
 }
 
 /// A change of mode, as a run records it.

@@ -28,6 +28,7 @@ mod auto;
 pub mod complementarity;
 mod constrained;
 mod contact;
+pub mod coulomb;
 mod erk;
 mod gauss;
 mod hold;
@@ -97,6 +98,25 @@ pub enum FaultKind {
     /// The complementarity problem of these contacts' impact (`impact`) or reactions could not
     /// be solved, though it may have a solution: `why` says what stopped the solver.
     ContactsUnsolved { contacts: Vec<usize>, impact: bool, why: &'static str },
+    /// Painlevé's paradox: with friction, the forces (or, at an `impact`, the impulses) of
+    /// these contacts have no solution or several, or their normal forces grow without bound
+    /// while they slip. A run never goes on from here with a motion of its choosing.
+    Painleve { contacts: Vec<usize>, case: PainleveCase, impact: bool },
+}
+
+/// Which of Painlevé's cases a run met ([`FaultKind::Painleve`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PainleveCase {
+    /// No modes of the contacts give forces that obey their laws (the rod pressed into a
+    /// rough floor with μ past 4/3 at some angles, and no force that pushes).
+    Inconsistent,
+    /// Modes that obey the laws give different motions (the same rod lifting: it may fly, or
+    /// slip pressed to the floor).
+    Indeterminate,
+    /// While slipping, the normal forces' coefficient (Painlevé's a) reached zero: they grow
+    /// without bound (the dynamic jam, or an impact without collision, which no law here
+    /// decides).
+    Jam,
 }
 
 /// Which value came out NaN or infinite: each names the array it indexes, so that a front end

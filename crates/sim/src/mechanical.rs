@@ -125,6 +125,18 @@ pub struct Mechanical {
     kept: Vec<bool>,
     /// The contacts' modes and the scales their tolerances are measured against.
     modes: modes::Modes,
+    /// The normal columns a slipping contact's friction bends: its force acts along the
+    /// normal's gradient plus `factor` (−μ·s) times its tangential row's.
+    bends: Vec<Bend>,
+}
+
+/// A slipping contact's friction in the augmented system: the column of multiplier `normal`
+/// is −(J_normal + factor·J_tangent)ᵀ, and the tangential force `factor`·λ_normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bend {
+    pub normal: usize,
+    pub tangent: usize,
+    pub factor: f64,
 }
 
 impl Mechanical {
@@ -162,6 +174,7 @@ impl Mechanical {
             contacts: Vec::new(),
             kept: vec![true; layout.multipliers],
             modes: modes::Modes::default(),
+            bends: Vec::new(),
         }
     }
 
@@ -299,13 +312,25 @@ impl Mechanical {
             };
         }
         let (solution, pivots, kept) = (&mut self.solution, &mut self.pivots, &self.kept);
+        let bends = &self.bends;
         let solved = match (self.small.as_mut(), kept.iter().all(|&k| k)) {
-            (Some(small), true) => solve_system(out, self.layout, kept, small, solution, pivots),
-            (Some(small), false) => solve_kept(out, self.layout, kept, small, solution, pivots),
-            (None, _) => solve_system(out, self.layout, kept, &mut self.system, solution, pivots),
+            (Some(small), true) => {
+                solve_system(out, self.layout, kept, bends, small, solution, pivots)
+            }
+            (Some(small), false) => {
+                solve_kept(out, self.layout, kept, bends, small, solution, pivots)
+            }
+            (None, _) => {
+                solve_system(out, self.layout, kept, bends, &mut self.system, solution, pivots)
+            }
         };
         match solved {
             Ok(()) => {
+                // A slipping contact's tangential force is μ·λ against the slip, not a
+                // multiplier of its own: it is reported in its slot.
+                for bend in &self.bends {
+                    self.solution[n + bend.tangent] = bend.factor * self.solution[n + bend.normal];
+                }
                 self.solved = Some(self.baumgarte.to_bits());
                 Ok(())
             }
@@ -384,11 +409,13 @@ impl Mechanical {
         let (pivots, kept) = (&mut self.pivots, &self.kept);
         match (self.small.as_mut(), kept.iter().all(|&k| k)) {
             (Some(small), true) => {
-                solve_system(out, self.layout, kept, small, &mut change, pivots)?
+                solve_system(out, self.layout, kept, &[], small, &mut change, pivots)?
             }
-            (Some(small), false) => solve_kept(out, self.layout, kept, small, &mut change, pivots)?,
+            (Some(small), false) => {
+                solve_kept(out, self.layout, kept, &[], small, &mut change, pivots)?
+            }
             (None, _) => {
-                solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?
+                solve_system(out, self.layout, kept, &[], &mut self.system, &mut change, pivots)?
             }
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
@@ -488,7 +515,7 @@ impl Problem for Mechanical {
 
     /// One per contact: its reaction λ while closed, its gap g while open.
     fn guards(&self) -> usize {
-        self.contacts.len()
+        self.contact_guard_count()
     }
 
     fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
@@ -696,7 +723,7 @@ impl Canonical {
 
 /// Writes the augmented matrix [M −Jᵀ; J 0] of the dynamics outputs `out` into `a`, with the
 /// identity's row and column for each multiplier not `kept`.
-fn load_system(out: &[f64], layout: Layout, kept: &[bool], a: &mut impl Square) {
+fn load_system(out: &[f64], layout: Layout, kept: &[bool], bends: &[Bend], a: &mut impl Square) {
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     for j in 0..n {
         for i in 0..n {
@@ -709,6 +736,14 @@ fn load_system(out: &[f64], layout: Layout, kept: &[bool], a: &mut impl Square) 
             let jac = if kept[c] { out[base + j] } else { 0.0 };
             a[(n + c, j)] = jac;
             a[(j, n + c)] = -jac;
+        }
+        if kept[c] {
+            for bend in bends.iter().filter(|b| b.normal == c) {
+                let tangent = n * n + n + bend.tangent * (n + 3);
+                for j in 0..n {
+                    a[(j, n + c)] -= bend.factor * out[tangent + j];
+                }
+            }
         }
         for d in 0..m {
             a[(n + c, n + d)] = if !kept[c] && c == d { 1.0 } else { 0.0 };
@@ -724,6 +759,7 @@ fn solve_kept(
     out: &[f64],
     layout: Layout,
     kept: &[bool],
+    bends: &[Bend],
     a: &mut Small,
     b: &mut [f64],
     pivots: &mut [usize],
@@ -748,6 +784,12 @@ fn solve_kept(
             for j in 0..n {
                 a[(n + r, j)] = out[base + j];
                 a[(j, n + r)] = -out[base + j];
+            }
+            for bend in bends.iter().filter(|b| b.normal == c) {
+                let tangent = n * n + n + bend.tangent * (n + 3);
+                for j in 0..n {
+                    a[(j, n + r)] -= bend.factor * out[tangent + j];
+                }
             }
             for s in 0..k {
                 a[(n + r, n + s)] = 0.0;
@@ -781,13 +823,14 @@ fn solve_system<M: Square>(
     out: &[f64],
     layout: Layout,
     kept: &[bool],
+    bends: &[Bend],
     a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
 ) -> Result<(), FaultKind> {
-    load_system(out, layout, kept, a);
+    load_system(out, layout, kept, bends, a);
     if layout.multipliers == 0 {
-        linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, kept, a))
+        linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, kept, bends, a))
     } else {
         linalg::solve_general(a, b, pivots)
     }

@@ -146,14 +146,6 @@ pub(crate) fn with_contacts(
     if prepared.contacts.is_empty() {
         return Ok(mechanical);
     }
-    let d = &prepared.derivation;
-    if let Some(c) = d.contacts.iter().find(|c| d.model.contacts[c.contact].friction.is_some()) {
-        return Err(Error::Input(format!(
-            "runs do not take Coulomb friction yet: the contact `{}` has a friction coefficient \
-             (make it `grip V` to hold it without slipping, or leave friction out)",
-            d.model.contacts[c.contact].name
-        )));
-    }
     if !method.handles_contacts() {
         let d = &prepared.derivation;
         let names: Vec<String> =
@@ -165,17 +157,39 @@ pub(crate) fn with_contacts(
         )));
     }
     let restitutions = restitutions(prepared, mechanical.parameters())?;
+    let frictions = frictions(prepared, mechanical.parameters())?;
     let contacts = prepared
         .contacts
         .iter()
         .zip(restitutions)
-        .map(|(slots, restitution)| sim::Contact {
+        .zip(frictions)
+        .map(|((slots, restitution), friction)| sim::Contact {
             normal: slots.normal,
             grip: slots.grip,
             restitution,
+            friction,
         })
         .collect();
     Ok(mechanical.with_contacts(contacts))
+}
+
+/// Each rough contact's coefficient of friction at the parameter values `parameters` (in slot
+/// order), checked not to be negative (a run's `--set` or an ensemble's draw may make it so);
+/// `None` for the others.
+pub fn frictions(prepared: &Prepared, parameters: &[f64]) -> Result<Vec<Option<f64>>, Error> {
+    if !prepared.has_friction() {
+        return Ok(vec![None; prepared.contacts.len()]);
+    }
+    let values = prepared.frictions(parameters);
+    for (name, mu) in prepared.contact_names().iter().zip(&values) {
+        if let Some(mu) = mu.filter(|mu| !(*mu >= 0.0)) {
+            return Err(Error::Input(format!(
+                "the coefficient of friction of contact `{name}` is {mu} at this run's values: \
+                 Coulomb's coefficient is not negative"
+            )));
+        }
+    }
+    Ok(values)
 }
 
 /// Each contact's restitution at the parameter values `parameters` (in slot order), checked

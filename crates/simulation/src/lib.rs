@@ -25,7 +25,7 @@ mod rows;
 pub use compiled::Compiled;
 pub use drive::{hold as drive_hold, signals as drive_signals};
 pub use fault::FastestMode;
-pub use integrand::{restitutions, run_settings, watched, Integrand};
+pub use integrand::{frictions, restitutions, run_settings, watched, Integrand};
 pub use rows::{Sink, Totals};
 
 use crate::animate::Animation;
@@ -164,6 +164,8 @@ pub fn mode_word(kind: sim::ModeChange) -> &'static str {
         sim::ModeChange::Closed => "closed",
         sim::ModeChange::LiftOff => "lift-off",
         sim::ModeChange::Struck => "struck",
+        sim::ModeChange::Sticks => "sticks",
+        sim::ModeChange::Slips => "slips",
     }
 }
 
@@ -756,6 +758,10 @@ fn conserves_energy(d: &mut mechanics::Derivation, dynamics: &[cas::ExprId]) -> 
     if !(model.forces.is_empty() && model.torques.is_empty() && model.dissipation.is_empty()) {
         return false;
     }
+    // Coulomb friction takes energy out while a contact slips.
+    if model.contacts.iter().any(|c| c.friction.is_some()) {
+        return false;
+    }
     let mut timed: Vec<cas::ExprId> = dynamics.to_vec();
     for body in &model.bodies {
         timed.extend(&body.position);
@@ -1043,6 +1049,33 @@ impl FaultNames<'_> {
                 ),
                 "a smaller tolerance, or fewer contacts touching at once".into(),
             ),
+            FaultKind::Painleve { contacts, case, impact } => {
+                let at = if *impact { "impact" } else { "forces" };
+                let what = match case {
+                    sim::PainleveCase::Inconsistent => format!(
+                        "Painlevé's inconsistent case: no {at} of {} obey Coulomb's law and \
+                         the contacts' (friction presses them in harder than any force can \
+                         hold them out)",
+                        self.contacts(contacts)
+                    ),
+                    sim::PainleveCase::Indeterminate => format!(
+                        "Painlevé's indeterminate case: the {at} of {} have several solutions \
+                         that move differently (it may lift off or slip pressed on)",
+                        self.contacts(contacts)
+                    ),
+                    sim::PainleveCase::Jam => format!(
+                        "Painlevé's jam: the normal force of {} grows without bound while it \
+                         slips (its coefficient w·M⁻¹·(w − μ·s·t) reached zero)",
+                        self.contacts(contacts)
+                    ),
+                };
+                (
+                    what,
+                    "rigid bodies with Coulomb friction have no motion here: a smaller \
+                     coefficient of friction, or a compliant contact, decides it"
+                        .into(),
+                )
+            }
             FaultKind::ContactsInconsistent { contacts, impact } => (
                 format!(
                     "the {} of {} has no solution",

@@ -312,8 +312,13 @@ impl Resolver<'_> {
             });
         }
         // A vector constraint's reaction is the vector of its components' reactions.
+        // (A contact's grip row is named after its contact, `NAME.grip`, and is one scalar.)
         let vector = components.len() > 1
-            || components.iter().flatten().any(|i| self.model.constraints[*i].name.contains('.'));
+            || (field.name == "force"
+                && components
+                    .iter()
+                    .flatten()
+                    .any(|i| self.model.constraints[*i].name.contains('.')));
         match vector {
             false => Some(Value::Scalar(forces[0])),
             true => Some(Value::Vector(forces)),

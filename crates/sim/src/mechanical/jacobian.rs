@@ -61,7 +61,7 @@ impl Mechanical {
             return Err(fault);
         }
         // The accelerations may have been solved by LDLᵀ; one LU serves every column.
-        super::load_system(&self.dyn_out, self.layout, &self.kept, &mut self.system);
+        super::load_system(&self.dyn_out, self.layout, &self.kept, &self.bends, &mut self.system);
         if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
             self.solution = column;
             return Err(fault);

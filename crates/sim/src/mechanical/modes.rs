@@ -85,6 +85,16 @@ pub(super) struct Modes {
     /// the depth it left (not deeper: a rocking block's corners would sink further at every
     /// landing).
     offset: Vec<f64>,
+    /// Each rough contact's slip while closed: ±1 the sign of its tangential rate, 0 while it
+    /// sticks (and for every other contact).
+    slip: Vec<f64>,
+    /// Each contact's tangential rate scale V_T (rough contacts).
+    tangent_speed: Vec<f64>,
+    /// A slipping contact's guard is s·γ_T + this: a little more than −s·γ_T where it began
+    /// to slip, so that the guard starts positive.
+    slip_offset: Vec<f64>,
+    /// The rough contacts, in order: their guards follow the contacts'.
+    rough: Vec<usize>,
 }
 
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
@@ -103,6 +113,7 @@ impl Mechanical {
         for c in &contacts {
             assert!(c.normal < m && c.grip.is_none_or(|g| g < m), "a contact's multiplier");
             assert!((0.0..=1.0).contains(&c.restitution), "restitution in [0, 1]");
+            assert!(c.friction.is_none_or(|mu| mu >= 0.0 && c.grip.is_some()), "μ ≥ 0 on a row");
         }
         let count = contacts.len();
         self.modes = Modes {
@@ -112,6 +123,10 @@ impl Mechanical {
             impacts: vec![0.0; count],
             speed: vec![0.0; count],
             offset: vec![0.0; count],
+            slip: vec![0.0; count],
+            tangent_speed: vec![0.0; count],
+            slip_offset: vec![0.0; count],
+            rough: (0..count).filter(|&k| contacts[k].friction.is_some()).collect(),
         };
         self.contacts = contacts;
         self.update_kept();
@@ -138,13 +153,41 @@ impl Mechanical {
         &self.modes.closed
     }
 
-    /// The multipliers of the two-sided constraints and of the closed contacts are kept.
+    /// Sets each contact's coefficient of friction (rough contacts only; others keep `None`),
+    /// as [`Mechanical::set_restitutions`] its restitution.
+    pub fn set_frictions(&mut self, frictions: &[Option<f64>]) {
+        assert_eq!(frictions.len(), self.contacts.len(), "a coefficient per contact");
+        for (c, &mu) in self.contacts.iter_mut().zip(frictions) {
+            assert_eq!(c.friction.is_some(), mu.is_some(), "rough contacts stay rough");
+            assert!(mu.is_none_or(|mu| mu >= 0.0), "μ ≥ 0");
+            c.friction = mu;
+        }
+    }
+
+    /// Each contact's slip: ±1 while a rough contact slips that way, 0 otherwise.
+    pub fn slips(&self) -> &[f64] {
+        &self.modes.slip
+    }
+
+    /// The multipliers of the two-sided constraints and of the closed contacts are kept, but
+    /// a slipping contact's tangential row is not: its force is μ·λ against the slip, a bend
+    /// of its normal column.
     fn update_kept(&mut self) {
         self.kept.fill(true);
-        for (contact, &closed) in self.contacts.iter().zip(&self.modes.closed) {
+        self.bends.clear();
+        for (k, contact) in self.contacts.iter().enumerate() {
+            let (closed, slip) = (self.modes.closed[k], self.modes.slip.get(k).copied());
+            let slip = slip.unwrap_or(0.0);
             self.kept[contact.normal] = closed;
             if let Some(grip) = contact.grip {
-                self.kept[grip] = closed;
+                self.kept[grip] = closed && slip == 0.0;
+                if let (true, Some(mu)) = (closed && slip != 0.0, contact.friction) {
+                    self.bends.push(super::Bend {
+                        normal: contact.normal,
+                        tangent: grip,
+                        factor: -mu * slip,
+                    });
+                }
             }
         }
         self.solved = None;
@@ -255,7 +298,7 @@ impl Mechanical {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         let two_sided = self.two_sided();
         let mut system = DMatrix::zeros(n + m, n + m);
-        super::load_system(&self.dyn_out, self.layout, &two_sided, &mut system);
+        super::load_system(&self.dyn_out, self.layout, &two_sided, &[], &mut system);
         let mut pivots = vec![0; n + m];
         linalg::lu_in_place(&mut system, &mut pivots)?;
         let r = multipliers.len();
@@ -292,7 +335,16 @@ impl Mechanical {
         kept
     }
 
-    /// The guards: a closed contact's reaction λ, an open one's gap g.
+    /// How many guards the contacts have: one each, one more for each rough contact (its
+    /// stick or its slip), and one for the solvability of the slipping contacts' forces.
+    pub(super) fn contact_guard_count(&self) -> usize {
+        let rough = self.modes.rough.len();
+        self.contacts.len() + rough + usize::from(rough > 0)
+    }
+
+    /// The guards: a closed contact's reaction λ, an open one's gap g; then each rough
+    /// contact's stick (μ·λ − |λ_T| while it sticks) or slip (s·γ_T while it slips, offset
+    /// to start positive); then the slipping contacts' solvability (1 when none slips).
     pub(super) fn contact_guards(
         &mut self,
         t: f64,
@@ -308,14 +360,58 @@ impl Mechanical {
             self.dynamics_at(t, y)?;
         }
         let n = self.layout.coordinates;
-        for k in 0..self.contacts.len() {
+        let count = self.contacts.len();
+        for k in 0..count {
             out[k] = if self.modes.closed[k] {
                 self.solution[n + self.contacts[k].normal]
             } else {
                 self.gap(k) + self.modes.offset[k]
             };
         }
+        if self.modes.rough.is_empty() {
+            return Ok(());
+        }
+        for (j, &k) in self.modes.rough.iter().enumerate() {
+            let contact = self.contacts[k];
+            let (Some(tangent), Some(mu)) = (contact.grip, contact.friction) else {
+                unreachable!("a rough contact has a tangential row")
+            };
+            let slip = self.modes.slip[k];
+            out[count + j] = if !self.modes.closed[k] {
+                1.0
+            } else if slip == 0.0 {
+                mu * self.solution[n + contact.normal] - self.solution[n + tangent].abs()
+            } else {
+                slip * self.row_rate(tangent) + self.modes.slip_offset[k]
+            };
+        }
+        out[count + self.modes.rough.len()] =
+            if self.bends.is_empty() { 1.0 } else { self.solvability()? };
         Ok(())
+    }
+
+    /// det(A_bent)/det(A) over the kept contact rows, A their Delassus operator and A_bent
+    /// the same with the slipping contacts' columns bent by their friction: 1 without
+    /// friction, and zero where the slipping contacts' normal forces cease to be determined
+    /// (Painlevé's coefficient a = w_N·M⁻¹·(w_N − μ·s·w_T)ᵀ of a single one).
+    fn solvability(&mut self) -> Result<f64, FaultKind> {
+        let two_sided = self.two_sided();
+        let rows: Vec<usize> =
+            (0..self.layout.multipliers).filter(|&c| self.kept[c] && !two_sided[c]).collect();
+        let mut all = rows.clone();
+        all.extend(self.bends.iter().map(|b| b.tangent));
+        let (_, a) = self.condensed(&all)?;
+        let r = rows.len();
+        let plain = DMatrix::from_fn(r, r, |i, j| a[(i, j)]);
+        let mut bent = plain.clone();
+        for (b, bend) in self.bends.iter().enumerate() {
+            let Some(j) = rows.iter().position(|&c| c == bend.normal) else { continue };
+            for i in 0..r {
+                bent[(i, j)] += bend.factor * a[(i, r + b)];
+            }
+        }
+        let ratio = bent.determinant() / plain.determinant();
+        Ok(if ratio.is_finite() { ratio } else { 0.0 })
     }
 
     /// Decides the modes at the start of a run of tolerance `tolerance`.
@@ -357,6 +453,16 @@ impl Mechanical {
         let n = self.layout.coordinates;
         let count = self.contacts.len();
         let tol = self.modes.tolerance;
+        let rough = self.modes.rough.clone();
+        if fired.contains(&(count + rough.len())) {
+            // The slipping contacts' normal forces grew without bound: Painlevé's jam.
+            let slipping = (0..count).filter(|&k| self.modes.slip[k] != 0.0).collect();
+            return Err(FaultKind::Painleve {
+                contacts: slipping,
+                case: crate::PainleveCase::Jam,
+                impact: false,
+            });
+        }
         self.dynamics_at(t, y)?;
         let speed = y[n..].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
         for k in 0..count {
@@ -364,8 +470,28 @@ impl Mechanical {
                 self.jacobian_row(self.contacts[k].normal).iter().map(|v| v.abs()).sum();
             let scale = self.modes.speed[k].max(gradient * speed).max(self.modes.impacts[k]);
             self.modes.speed[k] = scale;
+            if let (Some(tangent), Some(_)) = (self.contacts[k].grip, self.contacts[k].friction) {
+                let gradient: f64 = self.jacobian_row(tangent).iter().map(|v| v.abs()).sum();
+                let rate = self.row_rate(tangent).abs();
+                let scale = self.modes.tangent_speed[k].max(gradient * speed).max(rate);
+                self.modes.tangent_speed[k] = scale;
+            }
         }
         let before = self.modes.closed.clone();
+        let slipped = self.modes.slip.clone();
+        // A rough contact whose stick guard fired sticks no more here; one whose slip guard
+        // fired is at tangential rest.
+        let mut no_stick = vec![false; count];
+        let mut stopped = vec![false; count];
+        for (j, &k) in rough.iter().enumerate() {
+            if fired.contains(&(count + j)) && before[k] {
+                if slipped[k] == 0.0 {
+                    no_stick[k] = true;
+                } else {
+                    stopped[k] = true;
+                }
+            }
+        }
         let touching: Vec<usize> = (0..count)
             .filter(|&k| before[k] || self.gap(k) <= tol * self.modes.length[k])
             .collect();
@@ -410,8 +536,18 @@ impl Mechanical {
                 };
             }
             let scale = c.iter().fold(0.0, |s: f64, v| s.max(v.abs()));
-            let solution = complementarity::solve(&a, &c, &rows.kinds, tol * scale)
-                .map_err(|e| unsolved(e, &rows.owners, true))?;
+            let solution = if rows.owners.iter().any(|&k| self.contacts[k].friction.is_some()) {
+                // Coulomb's law on the tangential impulses: every contact at tangential rest
+                // after the impact, or slipping whichever way its rate goes.
+                let laws = self.coulomb_rows(&rows, |_| None, &vec![false; count]);
+                let answer = crate::coulomb::solve(&a, &c, &x, &laws, tol * scale)
+                    .map_err(|e| painleve(e, &rows.owners, true))?;
+                answer.x
+            } else {
+                complementarity::solve(&a, &c, &rows.kinds, tol * scale)
+                    .map_err(|e| unsolved(e, &rows.owners, true))?
+                    .x
+            };
             let before_rates = y[n..].to_vec();
             let mut kinetic = 0.0;
             {
@@ -424,21 +560,21 @@ impl Mechanical {
                 }
             }
             for i in 0..n {
-                y[n + i] += (0..rows.kinds.len()).map(|r| x[(i, r)] * solution.x[r]).sum::<f64>();
+                y[n + i] += (0..rows.kinds.len()).map(|r| x[(i, r)] * solution[r]).sum::<f64>();
             }
             let mut total = 0.0;
             for (r, &mult) in rows.multipliers.iter().enumerate() {
                 let k = rows.owners[r];
                 let row = self.jacobian_row(mult);
                 let mean: f64 = (0..n).map(|i| row[i] * (before_rates[i] + y[n + i])).sum();
-                let work = 0.5 * solution.x[r] * mean;
+                let work = 0.5 * solution[r] * mean;
                 energy[k] += work;
                 total += work;
                 match rows.kinds[r] {
-                    Row::Normal => impulses[k] = solution.x[r],
-                    Row::Tangent { .. } => tangential[k] = Some(solution.x[r]),
+                    Row::Normal => impulses[k] = solution[r],
+                    Row::Tangent { .. } => tangential[k] = Some(solution[r]),
                 }
-                if solution.x[r] != 0.0 {
+                if solution[r] != 0.0 {
                     struck[k] = true;
                 }
             }
@@ -480,9 +616,10 @@ impl Mechanical {
             })
             .collect();
         let mut closed = vec![false; count];
+        let mut slip = vec![0.0; count];
         if !resting.is_empty() {
             let rows = self.rows_of(&resting);
-            let (_, a) = self.condensed(&rows.multipliers)?;
+            let (moved, a) = self.condensed(&rows.multipliers)?;
             // g̈ = J·q̈ − (γ, stabilised) with every contact open; the scale of its tolerance
             // is that of its terms, since g̈ itself passes through zero where a reaction
             // vanishes (at a lift-off). Where the terms meet inside f (a particle on a sphere
@@ -510,15 +647,39 @@ impl Mechanical {
                     b[r] += 2.0 * tol * scale;
                 }
             }
-            let solution = complementarity::solve(&a, &b, &rows.kinds, tol * scale)
-                .map_err(|e| unsolved(e, &rows.owners, false))?;
-            for (r, kind) in rows.kinds.iter().enumerate() {
-                if *kind == Row::Normal && solution.active[r] {
-                    closed[rows.owners[r]] = true;
+            if rows.owners.iter().any(|&k| self.contacts[k].friction.is_some()) {
+                let modes = &self.modes;
+                let sliding = |k: usize| {
+                    let tangent = self.contacts[k].grip?;
+                    let rate = self.row_rate(tangent);
+                    let held = before[k] && slipped[k] == 0.0 && !landed[k];
+                    let band = tol
+                        * modes.tangent_speed[k]
+                        * if held { CLOSED_BAND } else { OPEN_BAND };
+                    (!stopped[k] && rate.abs() > band).then_some(rate.signum())
+                };
+                let laws = self.coulomb_rows(&rows, sliding, &no_stick);
+                let answer = crate::coulomb::solve(&a, &b, &moved, &laws, tol * scale)
+                    .map_err(|e| painleve(e, &rows.owners, false))?;
+                for (law, mode) in laws.iter().zip(&answer.modes) {
+                    let k = rows.owners[law.normal];
+                    closed[k] = mode.is_closed();
+                    if let crate::coulomb::Mode::Slip(s) = *mode {
+                        slip[k] = s;
+                    }
+                }
+            } else {
+                let solution = complementarity::solve(&a, &b, &rows.kinds, tol * scale)
+                    .map_err(|e| unsolved(e, &rows.owners, false))?;
+                for (r, kind) in rows.kinds.iter().enumerate() {
+                    if *kind == Row::Normal && solution.active[r] {
+                        closed[rows.owners[r]] = true;
+                    }
                 }
             }
         }
         self.modes.closed = closed.clone();
+        self.modes.slip = slip.clone();
         self.update_kept();
         self.drop_redundant_grips();
         // The state onto the new mode's constraints: the closed contacts' gaps and rates (and
@@ -538,36 +699,115 @@ impl Mechanical {
                 -gap * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
             };
         }
+        // A slipping contact's guard must start positive too, from a slip that may have begun
+        // at a tangential rate of rounding's size, or of the other sign.
+        for k in 0..count {
+            self.modes.slip_offset[k] = match (slip[k], self.contacts[k].grip) {
+                (s, Some(tangent)) if s != 0.0 => {
+                    let along = s * self.row_rate(tangent);
+                    if along > 0.0 {
+                        0.0
+                    } else {
+                        -along * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
+                    }
+                }
+                _ => 0.0,
+            };
+        }
         let mut events = Vec::new();
         for k in 0..count {
             let kind = if landed[k] && !before[k] {
-                if settled[k] {
-                    ModeChange::Settled
-                } else {
-                    ModeChange::Impact
-                }
+                Some(if settled[k] { ModeChange::Settled } else { ModeChange::Impact })
             } else if before[k] && !closed[k] {
-                ModeChange::LiftOff
+                Some(ModeChange::LiftOff)
             } else if !before[k] && closed[k] {
-                ModeChange::Closed
+                Some(ModeChange::Closed)
             } else if struck[k] {
-                ModeChange::Struck
+                Some(ModeChange::Struck)
             } else {
-                continue;
+                None
             };
-            events.push(ModeEvent {
-                time: t,
-                contact: k,
-                kind,
-                closed: closed[k],
-                impulse: impulses[k],
-                tangential: tangential[k],
-                energy_change: energy[k],
-                energy_rise: rise && (struck[k] || landed[k]),
-            });
+            if let Some(kind) = kind {
+                events.push(ModeEvent {
+                    time: t,
+                    contact: k,
+                    kind,
+                    closed: closed[k],
+                    impulse: impulses[k],
+                    tangential: tangential[k],
+                    energy_change: energy[k],
+                    energy_rise: rise && (struck[k] || landed[k]),
+                });
+            }
+            // A rough contact's stick or slip, where it changed: from slipping (or open) to
+            // sticking, or to a slip (from sticking, open, or the other way).
+            let was = if before[k] { Some(slipped[k]) } else { None };
+            if self.contacts[k].friction.is_some() && closed[k] && was != Some(slip[k]) {
+                events.push(ModeEvent {
+                    time: t,
+                    contact: k,
+                    kind: if slip[k] == 0.0 { ModeChange::Sticks } else { ModeChange::Slips },
+                    closed: true,
+                    impulse: 0.0,
+                    tangential: (slip[k] != 0.0).then_some(slip[k]),
+                    energy_change: 0.0,
+                    energy_rise: false,
+                });
+            }
         }
         Ok(events)
     }
+}
+
+impl Mechanical {
+    /// The laws of the contacts of `rows` for [`crate::coulomb::solve`]: a rough contact's
+    /// slip sign from `sliding` (`None` at tangential rest), and `no_stick` for those whose
+    /// stick ended here.
+    fn coulomb_rows(
+        &self,
+        rows: &Rows,
+        sliding: impl Fn(usize) -> Option<f64>,
+        no_stick: &[bool],
+    ) -> Vec<crate::coulomb::ContactRows> {
+        use crate::coulomb::{ContactRows, Law};
+        let mut laws = Vec::new();
+        for (r, kind) in rows.kinds.iter().enumerate() {
+            if *kind != Row::Normal {
+                continue;
+            }
+            let k = rows.owners[r];
+            let contact = self.contacts[k];
+            let tangent = contact.grip.map(|_| r + 1);
+            let law = match (contact.grip, contact.friction) {
+                (Some(_), Some(mu)) => Law::Coulomb { mu, sliding: sliding(k) },
+                (Some(_), None) => Law::Grip,
+                (None, _) => Law::Frictionless,
+            };
+            laws.push(ContactRows { normal: r, tangent, law, no_stick: no_stick[k] });
+        }
+        laws
+    }
+}
+
+/// The fault of a contact problem with friction that has no one answer: Painlevé's cases
+/// (none, or several motions), its rows named by the contacts that own them (`owners`).
+fn painleve(trouble: crate::coulomb::Trouble, owners: &[usize], impact: bool) -> FaultKind {
+    use crate::coulomb::Trouble;
+    let mut contacts = owners.to_vec();
+    contacts.sort_unstable();
+    contacts.dedup();
+    let case = match trouble {
+        Trouble::None => crate::PainleveCase::Inconsistent,
+        Trouble::Several(_) => crate::PainleveCase::Indeterminate,
+        Trouble::TooMany => {
+            return FaultKind::ContactsUnsolved {
+                contacts,
+                impact,
+                why: "more than six rough contacts at tangential rest touch at once",
+            }
+        }
+    };
+    FaultKind::Painleve { contacts, case, impact }
 }
 
 /// The fault of a complementarity problem left unsolved, its rows named by the contacts that
