@@ -334,6 +334,13 @@ impl Mechanical {
                 self.solved = Some(self.baumgarte.to_bits());
                 Ok(())
             }
+            // A slipping contact's bent column makes the system singular where Painlevé's
+            // coefficient vanishes, at the jam its guard watches for: the solve may meet it
+            // first, as the normal force grows without bound on the way.
+            Err(FaultKind::SingularMass { .. }) if !self.bends.is_empty() => {
+                let contacts = self.slipping_contacts();
+                Err(FaultKind::Painleve { contacts, case: crate::PainleveCase::Jam, impact: false })
+            }
             Err(FaultKind::SingularMass { .. }) if m > 0 => Err(self.which_lost_rank()),
             Err(fault) => Err(fault),
         }

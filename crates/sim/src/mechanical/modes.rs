@@ -164,6 +164,11 @@ impl Mechanical {
         }
     }
 
+    /// The contacts slipping now.
+    pub(super) fn slipping_contacts(&self) -> Vec<usize> {
+        (0..self.contacts.len()).filter(|&k| self.modes.slip[k] != 0.0).collect()
+    }
+
     /// Each contact's slip: ±1 while a rough contact slips that way, 0 otherwise.
     pub fn slips(&self) -> &[f64] {
         &self.modes.slip
@@ -456,9 +461,8 @@ impl Mechanical {
         let rough = self.modes.rough.clone();
         if fired.contains(&(count + rough.len())) {
             // The slipping contacts' normal forces grew without bound: Painlevé's jam.
-            let slipping = (0..count).filter(|&k| self.modes.slip[k] != 0.0).collect();
             return Err(FaultKind::Painleve {
-                contacts: slipping,
+                contacts: self.slipping_contacts(),
                 case: crate::PainleveCase::Jam,
                 impact: false,
             });
@@ -510,6 +514,14 @@ impl Mechanical {
             !before[k] && this.normal_rate(k) < -band(&this.modes, k, false)
         };
         if touching.iter().any(|&k| lands(self, k)) {
+            // A landing slower than the rate gained falling through the rounding of the
+            // positions is rounding too (a disk whose centre is at 0.2 m bounces in flights
+            // shorter than an ulp of it): it settles.
+            let free = self.open_accelerations()?;
+            let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
+            let rounding: Vec<f64> =
+                (0..count).map(|k| self.rounding_rate(k, &free, size)).collect();
+            self.dynamics_at(t, y)?;
             let rows = self.rows_of(&touching);
             let (x, a) = self.condensed(&rows.multipliers)?;
             let mut c = vec![0.0; rows.kinds.len()];
@@ -523,7 +535,7 @@ impl Mechanical {
                         if lands(self, k) {
                             landed[k] = true;
                             // Accumulating impacts: far slower than the contact's own earlier ones.
-                            if -rate < tol * self.modes.impacts[k] {
+                            if -rate < tol * self.modes.impacts[k] || -rate < rounding[k] {
                                 settled[k] = true;
                                 e = 0.0;
                             }
@@ -582,17 +594,7 @@ impl Mechanical {
             self.dynamics_at(t, y)?;
         }
         // The accelerations with every contact open.
-        let free = if touching.is_empty() {
-            Vec::new()
-        } else {
-            let two_sided = self.two_sided();
-            let kept = std::mem::replace(&mut self.kept, two_sided);
-            let solved = self.solve_dynamics();
-            self.kept = kept;
-            solved?;
-            self.solved = None;
-            self.solution[..n].to_vec()
-        };
+        let free = if touching.is_empty() { Vec::new() } else { self.open_accelerations()? };
         let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
         // The touching contacts at rest: closed where their reactions push. A closed one that
         // an impact separates slower than the floating point of the positions can resolve
@@ -606,13 +608,7 @@ impl Mechanical {
                 if !before[k] || landed[k] {
                     return rate <= band(&self.modes, k, false);
                 }
-                let c = self.contacts[k].normal;
-                let row = self.jacobian_row(c);
-                let falling =
-                    (0..n).map(|i| row[i] * free[i]).sum::<f64>().abs() + self.stabilised(c).abs();
-                let gradient: f64 = row.iter().map(|v| v.abs()).sum();
-                let depth = ROUNDING * f64::EPSILON * gradient * size;
-                rate <= band(&self.modes, k, true).max((2.0 * falling * depth).sqrt())
+                rate <= band(&self.modes, k, true).max(self.rounding_rate(k, &free, size))
             })
             .collect();
         let mut closed = vec![false; count];
@@ -760,6 +756,30 @@ impl Mechanical {
 }
 
 impl Mechanical {
+    /// q̈ with every contact open, at the last evaluation.
+    fn open_accelerations(&mut self) -> Result<Vec<f64>, FaultKind> {
+        let two_sided = self.two_sided();
+        let kept = std::mem::replace(&mut self.kept, two_sided);
+        let solved = self.solve_dynamics();
+        self.kept = kept;
+        solved?;
+        self.solved = None;
+        Ok(self.solution[..self.layout.coordinates].to_vec())
+    }
+
+    /// The rate contact `k` gains falling through the depth rounding moves it by (δ, 64 ulps
+    /// of the positions of size `size` times its gradient) at its acceleration with every
+    /// contact open (`free`): √(2·a·δ). Below it, its flights and landings are rounding.
+    fn rounding_rate(&self, k: usize, free: &[f64], size: f64) -> f64 {
+        let c = self.contacts[k].normal;
+        let row = self.jacobian_row(c);
+        let falling = row.iter().zip(free).map(|(j, a)| j * a).sum::<f64>().abs()
+            + self.stabilised(c).abs();
+        let gradient: f64 = row.iter().map(|v| v.abs()).sum();
+        let depth = ROUNDING * f64::EPSILON * gradient * size;
+        (2.0 * falling * depth).sqrt()
+    }
+
     /// The laws of the contacts of `rows` for [`crate::coulomb::solve`]: a rough contact's
     /// slip sign from `sliding` (`None` at tangential rest), and `no_stick` for those whose
     /// stick ended here.
