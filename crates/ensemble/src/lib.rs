@@ -152,8 +152,8 @@ impl Maker {
         // Each run's own: a varied parameter may be a restitution, or one it names.
         let restitutions = simulation::restitutions(&self.prepared, &parameters)
             .map_err(|e| e.worded(run_words))?;
-        let frictions = simulation::frictions(&self.prepared, &parameters)
-            .map_err(|e| e.worded(run_words))?;
+        let frictions =
+            simulation::frictions(&self.prepared, &parameters).map_err(|e| e.worded(run_words))?;
         Ok(Start { parameters, state, restitutions, frictions })
     }
 }

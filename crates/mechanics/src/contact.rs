@@ -114,20 +114,81 @@ impl Derivation {
                 std::iter::once(c.normal.constraint).chain(c.grip.iter().map(|g| g.constraint))
             })
             .collect();
-        // A contact with Coulomb friction holds its tangential rate only while it sticks: its
-        // row is no constraint of the start's mode (the slipping mode's force law is to come).
+        // A rough contact closed at the start sticks there if its tangential rate is zero (its
+        // row held, as a grip's) and otherwise slips: its row is then no constraint, and
+        // Coulomb's force −μ·s·λ·J_T rides on the normal one, s the sign of the rate.
+        let mut bent = Vec::new();
         for c in &contacts {
-            if self.model.contacts[c.contact].friction.is_some() {
-                open.extend(c.grip.iter().map(|g| g.constraint));
+            let (Some(mu), Some(grip)) = (self.model.contacts[c.contact].friction, &c.grip) else {
+                continue;
+            };
+            if !c.closed_at_start {
+                continue;
             }
+            let rate = self.model.pool.subst(grip.rows.velocity, &state);
+            if self.zero_at_parameter_values(rate) {
+                continue;
+            }
+            let values = self.parameter_values();
+            let at_values = self.model.pool.subst(rate, &values);
+            let Some(sign) = self.sign_of_constant(at_values) else {
+                errors.push(
+                    Diagnostic::error(
+                        self.model.contacts[c.contact].span,
+                        format!(
+                            "the sign of `{}`'s slip at the start is not decided",
+                            self.model.contacts[c.contact].name
+                        ),
+                    )
+                    .with_label("its tangential rate at the start is no number")
+                    .with_hint("give the start's rates as numbers, or expressions of parameters"),
+                );
+                continue;
+            };
+            open.push(grip.constraint);
+            let pool = &mut self.model.pool;
+            let sign = pool.num(cas::number::int(-sign));
+            let factor = pool.mul2(mu, sign);
+            let direction: Vec<ExprId> = c
+                .normal
+                .rows
+                .jacobian
+                .iter()
+                .zip(&grip.rows.jacobian)
+                .map(|(n, t)| {
+                    let along = pool.mul2(factor, *t);
+                    let sum = pool.add(&[*n, along]);
+                    pool.simplify(sum)
+                })
+                .collect();
+            bent.push((c.normal.constraint, direction));
         }
         self.multipliers.retain(|m| !open.contains(&m.constraint));
+        for m in &mut self.multipliers {
+            if let Some((_, direction)) = bent.iter().find(|(c, _)| *c == m.constraint) {
+                m.force = Some(direction.clone());
+            }
+        }
         self.contacts = contacts;
         if errors.is_empty() {
             Ok(())
         } else {
             Err(errors)
         }
+    }
+
+    /// The sign of an expression without free symbols, known not to be zero: exact for a
+    /// rational, else from its value in floating point (None if it has symbols).
+    fn sign_of_constant(&mut self, e: ExprId) -> Option<i64> {
+        let pool = &mut self.model.pool;
+        if let Some(q) = pool.as_num(e) {
+            return Some(if q.is_negative() { -1 } else { 1 });
+        }
+        if !pool.free_symbols(e).is_empty() {
+            return None;
+        }
+        let value = numeric::eval(pool, e, &[]);
+        value.is_finite().then_some(if value < 0.0 { -1 } else { 1 })
     }
 
     /// Makes the multipliers those a run integrates: the two-sided constraints, then each

@@ -47,6 +47,16 @@ pub struct Multiplier {
     pub lambda: SymId,
     /// Φ, the velocity row, J and γ, as the constraint's kind builds them.
     pub rows: ConstraintRows,
+    /// The direction of its generalized force where that is not its row J: a slipping rough
+    /// contact's, J_N − μ·s·J_T (Coulomb's force rides on the normal one).
+    pub force: Option<Vec<ExprId>>,
+}
+
+impl Multiplier {
+    /// The direction of its generalized force λ·(this): its row, unless friction bends it.
+    pub fn force_direction(&self) -> &[ExprId] {
+        self.force.as_deref().unwrap_or(&self.rows.jacobian)
+    }
 }
 
 /// The reaction of an eliminated constraint, from the Euler–Lagrange equation of the
@@ -122,7 +132,7 @@ impl Derivation {
         for i in 0..n {
             let mut row = self.mass_matrix[i].clone();
             for m in &self.multipliers {
-                let j = m.rows.jacobian[i];
+                let j = m.force_direction()[i];
                 row.push(self.model.pool.neg(j));
             }
             rows.push(row);

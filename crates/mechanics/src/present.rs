@@ -100,7 +100,7 @@ impl Derivation {
         let mut parts = vec![self.forcing[i]];
         for m in &self.multipliers {
             let lambda = pool.sym(m.lambda);
-            parts.push(pool.mul2(m.rows.jacobian[i], lambda));
+            parts.push(pool.mul2(m.force_direction()[i], lambda));
         }
         pool.add(&parts)
     }

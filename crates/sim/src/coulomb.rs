@@ -104,8 +104,7 @@ pub fn solve(
         return Err(Trouble::TooMany);
     }
     let diagonal = (0..b.len()).fold(0.0f64, |m, i| m.max(a[(i, i)].abs()));
-    let force_tolerance =
-        if diagonal > 0.0 { tolerance / diagonal } else { tolerance };
+    let force_tolerance = if diagonal > 0.0 { tolerance / diagonal } else { tolerance };
     let mut found: Vec<(Answer, DVector<f64>)> = Vec::new();
     let mut pick = vec![0usize; contacts.len()];
     loop {

@@ -97,6 +97,7 @@ impl Renderer for JsonReport<'_> {
                             "gap": pool.print(c.gap, A),
                             "restitution": pool.print(c.restitution, A),
                             "grip": c.grip.map(|g| pool.print(g, A)),
+                            "friction": c.friction.map(|mu| pool.print(mu, A)),
                             "closed_at_start": c.closed_at_start,
                             "direction": prints(&c.direction),
                             "bias": pool.print(c.bias, A),
@@ -234,6 +235,7 @@ fn json_constraints(d: &Derivation, constraints: &[model::Constraint]) -> Json {
                         "multiplier": name(c.force_symbol),
                         "jacobian": m.map(|m| m.rows.jacobian.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
                         "bias": m.map(|m| pool.print(m.rows.bias, A)),
+                        "force_direction": m.and_then(|m| m.force.as_ref()).map(|f| f.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
                     })
                 }
             })

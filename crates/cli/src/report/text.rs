@@ -196,24 +196,22 @@ impl Text<'_> {
                 self.print(c.gap),
                 self.print(c.restitution)
             ));
-            match (c.grip, c.friction, c.grip_force) {
+            let rough = match (c.grip, c.friction, c.grip_force) {
                 (Some(slip), Some(mu), Some(tangent)) => {
-                    let (tangent, mu) = (self.sym(tangent), self.print(mu));
+                    let (tangent, mu, slip) = (self.sym(tangent), self.print(mu), self.print(slip));
+                    self.out.push(format!("    Coulomb friction μ = {mu} along v = {slip}"));
                     self.out.push(format!(
-                        "    Coulomb friction μ = {mu} along {} (runs do not take friction yet)",
-                        self.print(slip)
+                        "    sticks while |{tangent}| < {mu}·{force}, holding v = 0; slips with \
+                         {tangent} = −{mu}·{force}·s, s = sign(v)"
                     ));
-                    self.out.push(format!(
-                        "    sticks while |{tangent}| ≤ {mu}·{force}, holding {} = 0; slips with {tangent} = −{mu}·{force}·sign({})",
-                        self.print(slip),
-                        self.print(slip)
-                    ));
+                    Some((tangent, mu))
                 }
                 (Some(grip), _, _) => {
-                    self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)))
+                    self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)));
+                    None
                 }
-                _ => {}
-            }
+                _ => None,
+            };
             let start = if c.closed_at_start { "closed" } else { "open" };
             self.out.push(format!("    {start} at the start"));
             let direction: Vec<String> = c.direction.iter().map(|e| self.print(*e)).collect();
@@ -227,7 +225,21 @@ impl Text<'_> {
             if let (Some(gf), Some(gd)) = (c.grip_force, &c.grip_direction) {
                 let gf = self.sym(gf);
                 let gd: Vec<String> = gd.iter().map(|e| self.print(*e)).collect();
-                self.out.push(format!("            and {gf}·({}), any sign", gd.join(", ")));
+                match &rough {
+                    Some((_, mu)) => {
+                        self.out.push(format!(
+                            "            sticking: and {gf}·({}), with v̇ = 0",
+                            gd.join(", ")
+                        ));
+                        self.out.push(format!(
+                            "            slipping: and −{mu}·s·{force}·({}), v free",
+                            gd.join(", ")
+                        ));
+                    }
+                    None => {
+                        self.out.push(format!("            and {gf}·({}), any sign", gd.join(", ")))
+                    }
+                }
             }
             self.out.push(format!("    open: {force} = 0, the equations without it"));
             match &c.impact {
@@ -236,6 +248,12 @@ impl Text<'_> {
                         "    impact (rates before it on the right; landing at γ⁻ = {} < 0):",
                         self.print(law.normal_rate)
                     ));
+                    if let Some((_, mu)) = &rough {
+                        self.out.push(format!(
+                            "      while it sticks, |Λ_T| ≤ {mu}·Λ (else it slips through it, \
+                             Λ_T = −{mu}·Λ·sign(v⁺), which a run solves in numbers):"
+                        ));
+                    }
                     let impulses: Vec<ExprId> =
                         std::iter::once(law.impulse).chain(law.tangential_impulse).collect();
                     if impulses.iter().any(|e| self.print(*e).chars().count() > 120) {
@@ -306,6 +324,11 @@ impl Text<'_> {
             let row = cells(pool, std::slice::from_ref(&m.rows.jacobian), full);
             self.out.extend(bracketed(&row, &format!("  J({name}) = ")));
             self.out.push(format!("  γ({name}) = {}", self.print(m.rows.bias)));
+            if let Some(force) = &m.force {
+                // A slipping contact's: Coulomb's force rides on its normal one.
+                let row = cells(pool, std::slice::from_ref(force), full);
+                self.out.extend(bracketed(&row, &format!("  slipping, {name} acts along ")));
+            }
         }
     }
 

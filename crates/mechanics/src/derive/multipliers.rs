@@ -61,7 +61,7 @@ pub(super) fn kept_constraints(
         }
         let Coordinates { coords, rates, accels, .. } = coordinates;
         let rows = ConstraintRows::of(pool, c.kind, phi, (coords, rates, accels));
-        multipliers.push(Multiplier { constraint: ci, lambda: c.force_symbol, rows });
+        multipliers.push(Multiplier { constraint: ci, lambda: c.force_symbol, rows, force: None });
     }
     (multipliers, warnings)
 }

@@ -649,9 +649,8 @@ impl Mechanical {
                     let tangent = self.contacts[k].grip?;
                     let rate = self.row_rate(tangent);
                     let held = before[k] && slipped[k] == 0.0 && !landed[k];
-                    let band = tol
-                        * modes.tangent_speed[k]
-                        * if held { CLOSED_BAND } else { OPEN_BAND };
+                    let band =
+                        tol * modes.tangent_speed[k] * if held { CLOSED_BAND } else { OPEN_BAND };
                     (!stopped[k] && rate.abs() > band).then_some(rate.signum())
                 };
                 let laws = self.coulomb_rows(&rows, sliding, &no_stick);
@@ -773,8 +772,8 @@ impl Mechanical {
     fn rounding_rate(&self, k: usize, free: &[f64], size: f64) -> f64 {
         let c = self.contacts[k].normal;
         let row = self.jacobian_row(c);
-        let falling = row.iter().zip(free).map(|(j, a)| j * a).sum::<f64>().abs()
-            + self.stabilised(c).abs();
+        let falling =
+            row.iter().zip(free).map(|(j, a)| j * a).sum::<f64>().abs() + self.stabilised(c).abs();
         let gradient: f64 = row.iter().map(|v| v.abs()).sum();
         let depth = ROUNDING * f64::EPSILON * gradient * size;
         (2.0 * falling * depth).sqrt()
