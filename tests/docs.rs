@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 16] = [
+const PAGES: [&str; 17] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -25,6 +25,7 @@ const PAGES: [&str; 16] = [
     "docs/ensembles.md",
     "docs/c.md",
     "docs/contacts.md",
+    "docs/friction.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -567,6 +568,11 @@ fn ensembles() {
 #[test]
 fn contacts() {
     assert_honest("docs/contacts.md");
+}
+
+#[test]
+fn friction() {
+    assert_honest("docs/friction.md");
 }
 
 #[test]

@@ -26,6 +26,7 @@ mod ensemble;
 mod errors;
 mod extremes;
 mod fmu;
+mod friction;
 mod gallery;
 mod hold;
 mod inverse_dynamics;

@@ -29,6 +29,13 @@ pub fn examples_without_contacts() -> Vec<(String, String)> {
     all
 }
 
+/// Whether a scene has a contact with Coulomb friction (`friction MU` in a contact's block):
+/// the stages that do not take friction yet (code generation) leave those to
+/// tests/friction.rs.
+pub fn has_friction(source: &str) -> bool {
+    source.lines().any(|l| l.trim_start().starts_with("contact ") && l.contains("friction "))
+}
+
 /// Compiles the Rust program `main` (a file in its folder with the generated modules it
 /// includes) with `rustc -O` into `binary`, runs it and gives its standard output; fails the
 /// test where it does not compile or run.

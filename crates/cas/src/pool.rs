@@ -41,6 +41,12 @@ pub trait ZeroTest: Send + Sync {
         target: &[ExprId],
         rows: &[Vec<ExprId>],
     ) -> Option<Vec<usize>>;
+
+    /// The sign (−1 or 1) of `e`, an expression without free symbols, where its value is
+    /// clearly away from zero relative to its terms; `None` otherwise.
+    fn sign_of_constant(&self, _pool: &Pool, _e: ExprId) -> Option<i8> {
+        None
+    }
 }
 
 /// The arena that owns every expression and symbol of one derivation.
@@ -97,6 +103,20 @@ impl Pool {
     /// algebra.
     pub fn set_zero_test(&mut self, test: Box<dyn ZeroTest>) {
         self.zero_test = Some(test);
+    }
+
+    /// The sign (−1 or 1) of `e`: exact for a rational, else from the zero test's numbers
+    /// ([`ZeroTest::sign_of_constant`]) for an expression without free symbols that is
+    /// clearly not zero; `None` where neither decides (a symbol left, or no zero test).
+    pub fn sign_of_constant(&mut self, e: ExprId) -> Option<i8> {
+        if let Some(q) = self.as_num(e) {
+            use num_traits::Signed;
+            return (!q.is_zero()).then_some(if q.is_negative() { -1 } else { 1 });
+        }
+        if !self.free_symbols(e).is_empty() {
+            return None;
+        }
+        self.zero_test()?.sign_of_constant(self, e)
     }
 
     /// The numbers of the zero test, if handed in ([`Pool::set_zero_test`]).

@@ -254,6 +254,7 @@ fn summary_json(outcome: &Outcome) -> serde_json::Value {
             "impulse": json_number(m.impulse),
             "tangential_impulse": m.tangential.map(json_number),
             "energy_change": json_number(m.energy_change),
+            "slip": json_number(m.slip),
         })).collect::<Vec<_>>(),
     })
 }
@@ -269,17 +270,19 @@ fn contact_name(outcome: &Outcome, k: usize) -> String {
 /// A run's contact events as CSV, one row each: when, which contact, what happened, whether it
 /// is closed after, its normal and tangential impulses and the kinetic energy they changed.
 pub fn contact_events_csv(outcome: &Outcome) -> String {
-    let mut s = String::from("t,contact,kind,closed,impulse,tangential_impulse,energy_change\n");
+    let mut s =
+        String::from("t,contact,kind,closed,impulse,tangential_impulse,energy_change,slip\n");
     for m in &outcome.run.modes {
         let tangential = m.tangential.map_or(String::new(), |t| t.to_string());
         s.push_str(&format!(
-            "{},{},{},{},{},{tangential},{}\n",
+            "{},{},{},{},{},{tangential},{},{}\n",
             m.time,
             contact_name(outcome, m.contact),
             mode_word(m.kind),
             m.closed,
             m.impulse,
-            m.energy_change
+            m.energy_change,
+            m.slip
         ));
     }
     s
@@ -330,6 +333,10 @@ fn contacts_summary(outcome: &Outcome) -> String {
                 line.push_str(&format!(" (tangential {})", figure(t)));
             }
             line.push_str(&format!(", ΔE = {}", figure(m.energy_change)));
+        }
+        if m.kind == sim::ModeChange::Slips {
+            // Which way along its slip rate v.
+            line.push_str(if m.slip > 0.0 { " (v > 0)" } else { " (v < 0)" });
         }
         if m.energy_rise {
             line.push_str(

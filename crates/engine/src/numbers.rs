@@ -162,6 +162,27 @@ impl Prepared {
         )))
     }
 
+    /// An error naming the scene's rough contacts, for a stage that does not take Coulomb
+    /// friction yet (`what` says which); `Ok` for a scene without any.
+    pub fn refuse_friction(&self, what: &str) -> Result<(), Error> {
+        let d = &self.derivation;
+        let names: Vec<String> = d
+            .contacts
+            .iter()
+            .map(|c| &d.model.contacts[c.contact])
+            .filter(|c| c.friction.is_some())
+            .map(|c| format!("`{}`", c.name))
+            .collect();
+        if names.is_empty() {
+            return Ok(());
+        }
+        Err(Error::Input(format!(
+            "{what} does not take Coulomb friction yet, and this scene's {} has it: runs take \
+             it (`lagrange simulate`), or make the contact grip (`grip V`) or smooth",
+            names.join(", ")
+        )))
+    }
+
     /// Newton's coefficient of each contact at the parameters' values `parameters` (in slot
     /// order), in the order written.
     pub fn restitutions(&self, parameters: &[f64]) -> Vec<f64> {

@@ -131,7 +131,7 @@ impl Derivation {
             }
             let values = self.parameter_values();
             let at_values = self.model.pool.subst(rate, &values);
-            let Some(sign) = self.sign_of_constant(at_values) else {
+            let Some(sign) = self.model.pool.sign_of_constant(at_values).map(i64::from) else {
                 errors.push(
                     Diagnostic::error(
                         self.model.contacts[c.contact].span,
@@ -175,20 +175,6 @@ impl Derivation {
         } else {
             Err(errors)
         }
-    }
-
-    /// The sign of an expression without free symbols, known not to be zero: exact for a
-    /// rational, else from its value in floating point (None if it has symbols).
-    fn sign_of_constant(&mut self, e: ExprId) -> Option<i64> {
-        let pool = &mut self.model.pool;
-        if let Some(q) = pool.as_num(e) {
-            return Some(if q.is_negative() { -1 } else { 1 });
-        }
-        if !pool.free_symbols(e).is_empty() {
-            return None;
-        }
-        let value = numeric::eval(pool, e, &[]);
-        value.is_finite().then_some(if value < 0.0 { -1 } else { 1 })
     }
 
     /// Makes the multipliers those a run integrates: the two-sided constraints, then each

@@ -38,6 +38,13 @@ impl ZeroTest for GenericPoints {
         value.is_finite() && scale.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE)
     }
 
+    /// Its value against the size of its terms, as the generic-point test weighs a value.
+    fn sign_of_constant(&self, pool: &Pool, e: ExprId) -> Option<i8> {
+        let (value, scale) = value_and_scale(pool, e, &vec![0.0; pool.symbol_count()]);
+        let clear = value.is_finite() && value.abs() > 1e-6 * scale.max(f64::MIN_POSITIVE);
+        clear.then_some(if value < 0.0 { -1 } else { 1 })
+    }
+
     /// At each generic point, `target` and the rows by value and magnitude
     /// ([`GenericPoints::at_generic_point`]): Gram–Schmidt against the rows, one after another,
     /// and what is left of the target must be zero relative to its magnitude.

@@ -403,7 +403,8 @@ fn outcome_dict<'py>(
 /// A run's contact events as columns, an entry an event in the order they happened (as
 /// `lagrange simulate --events` writes them): `t`, `contact` (its name), `kind`
 /// (`simulation::mode_word`), `closed` (after it), `impulse`, `tangential_impulse` (NaN for a
-/// contact without grip) and `energy_change`.
+/// contact without grip), `energy_change` and `slip` (a rough contact's: ±1 the way it slips
+/// after the event, 0 sticking).
 fn contact_events<'py>(
     py: Python<'py>,
     outcome: &simulation::Outcome,
@@ -421,6 +422,7 @@ fn contact_events<'py>(
     out.set_item("tangential_impulse", PyArray1::from_iter(py, tangential))?;
     let energy = modes.iter().map(|m| m.energy_change);
     out.set_item("energy_change", PyArray1::from_iter(py, energy))?;
+    out.set_item("slip", PyArray1::from_iter(py, modes.iter().map(|m| m.slip)))?;
     Ok(out)
 }
 

@@ -37,7 +37,7 @@ pub enum ModeChange {
     /// A rough contact, closed, began to stick: its slip stopped and its cone holds it.
     Sticks,
     /// A rough contact, closed, began to slip (its tangential force reached μ·λ) or slips
-    /// the other way; the tangential field of the event is the sign of the slip.
+    /// the other way: the event's `slip` says which.
     Slips,
 }
 
@@ -59,6 +59,9 @@ pub struct ModeEvent {
     /// The kinetic energy ½q̇ᵀMq̇ its impulses changed: the work Λ·(γ⁻ + γ⁺)/2 of its rows
     /// (normal and grip). The changes of an impact's contacts add up to the impact's.
     pub energy_change: f64,
+    /// A rough contact's slip after the event: ±1 the sign of its tangential rate while it
+    /// slips, 0 while it sticks (and for a contact without friction, or open).
+    pub slip: f64,
     /// Whether the impact this event was part of raised the kinetic energy beyond rounding,
     /// as Newton's law can with unequal restitutions across simultaneous contacts (Glocker):
     /// reported, not hidden.

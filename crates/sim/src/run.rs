@@ -713,9 +713,12 @@ fn bracket(
             continue;
         };
         if gm == 0.0 {
+            // Exactly zero here: the crossing is at m, but the time returned is one where the
+            // guard still holds, so the search goes on between a and m (a guard linear in t,
+            // a block's slip rate, lands on zero exactly and would leave a at the step's start).
             b = m;
-            gb = gm;
-            break;
+            gb = -ga.signum() * f64::MIN_POSITIVE;
+            continue;
         }
         if (gm > 0.0) == (ga > 0.0) {
             a = m;

@@ -257,6 +257,7 @@ mod contact_tests {
             impulse: 0.0,
             tangential: None,
             energy_change: 0.0,
+            slip: 0.0,
             energy_rise: false,
         }
     }

@@ -92,17 +92,21 @@ impl Renderer for JsonReport<'_> {
                                 "rates_after": after,
                             })
                         });
-                        json!({
+                        let mut contact = json!({
                             "name": c.name,
                             "gap": pool.print(c.gap, A),
                             "restitution": pool.print(c.restitution, A),
                             "grip": c.grip.map(|g| pool.print(g, A)),
-                            "friction": c.friction.map(|mu| pool.print(mu, A)),
                             "closed_at_start": c.closed_at_start,
                             "direction": prints(&c.direction),
                             "bias": pool.print(c.bias, A),
                             "impact": impact,
-                        })
+                        });
+                        // A rough contact's coefficient, its tangential rate being `grip`'s.
+                        if let Some(mu) = c.friction {
+                            contact["friction"] = json!(pool.print(mu, A));
+                        }
+                        contact
                     })
                     .collect();
                 set("contacts", Json::Array(list));
@@ -228,15 +232,20 @@ fn json_constraints(d: &Derivation, constraints: &[model::Constraint]) -> Json {
                     })
                 } else {
                     let m = d.multipliers.iter().find(|m| m.constraint == i);
-                    json!({
+                    let mut entry = json!({
                         "name": c.name,
                         "equation": equation,
                         "treatment": "multiplier",
                         "multiplier": name(c.force_symbol),
                         "jacobian": m.map(|m| m.rows.jacobian.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
                         "bias": m.map(|m| pool.print(m.rows.bias, A)),
-                        "force_direction": m.and_then(|m| m.force.as_ref()).map(|f| f.iter().map(|e| pool.print(*e, A)).collect::<Vec<_>>()),
-                    })
+                    });
+                    // A slipping contact's force, bent off its row by friction.
+                    if let Some(force) = m.and_then(|m| m.force.as_ref()) {
+                        let force: Vec<String> = force.iter().map(|e| pool.print(*e, A)).collect();
+                        entry["force_direction"] = json!(force);
+                    }
+                    entry
                 }
             })
             .collect();

@@ -73,6 +73,9 @@ impl Equations {
         // Reactions the scene derives are part of the module; asking for KE and PE changes
         // nothing.
         let mut prepared = prepare(source, &["KE".into(), "PE".into()], options)?;
+        // The generated code holds a contact's tangential row as a grip: Coulomb's modes are
+        // the run's alone for now.
+        prepared.refuse_friction("codegen")?;
         let values = prepared.parameter_values(&[])?;
         let d = &mut prepared.derivation;
         let mut reactions = Vec::new();

@@ -155,6 +155,8 @@ impl Resolver<'_> {
         let mut grip: Option<(ExprId, Span)> = None;
         let mut slip: Option<(ExprId, Span)> = None;
         let mut friction: Option<(ExprId, Span)> = None;
+        // A coefficient written but refused (reported already) still pairs with its slip.
+        let mut friction_written = false;
         let mut seen: Vec<&Ident> = Vec::new();
         for law in laws {
             if let Some(first) = seen.iter().find(|k| k.name == law.key.name) {
@@ -170,7 +172,10 @@ impl Resolver<'_> {
                 "restitution" => restitution = self.restitution(&law.value),
                 "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
                 "slip" => slip = self.grip(&law.value).map(|g| (g, law.value.span)),
-                "friction" => friction = self.friction(&law.value).map(|mu| (mu, law.value.span)),
+                "friction" => {
+                    friction_written = true;
+                    friction = self.friction(&law.value).map(|mu| (mu, law.value.span));
+                }
                 other => self.error(
                     Diagnostic::error(law.key.span, format!("a contact has no law `{other}`"))
                         .with_label("unknown law")
@@ -209,6 +214,7 @@ impl Resolver<'_> {
                 );
                 return;
             }
+            (None, Some(_), None) if friction_written => return,
             (None, Some((_, s)), None) => {
                 self.error(
                     Diagnostic::error(s, "a slip direction without a friction coefficient")

@@ -731,6 +731,7 @@ impl Mechanical {
                     impulse: impulses[k],
                     tangential: tangential[k],
                     energy_change: energy[k],
+                    slip: slip[k],
                     energy_rise: rise && (struck[k] || landed[k]),
                 });
             }
@@ -744,8 +745,9 @@ impl Mechanical {
                     kind: if slip[k] == 0.0 { ModeChange::Sticks } else { ModeChange::Slips },
                     closed: true,
                     impulse: 0.0,
-                    tangential: (slip[k] != 0.0).then_some(slip[k]),
+                    tangential: None,
                     energy_change: 0.0,
+                    slip: slip[k],
                     energy_rise: false,
                 });
             }
