@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use sim::{integrate, FaultKind, Mechanical, Method, NonFiniteAt, Run};
 
+pub mod along;
 pub mod animate;
 pub mod bench;
 mod compiled;
