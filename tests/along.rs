@@ -83,7 +83,7 @@ fn the_state_transition_matrix_of_a_large_swing_is_the_difference_of_whole_runs(
     assert!(error < 1e-6, "Φ = {}, runs {reference:?}: {error:e}", l.transition);
     // A swing this large stretches small changes: Φ is far from the identity.
     assert!(l.transition.amax() > 5.0, "{}", l.transition);
-    // Liouville: the flow of a conservative system keeps areas.
+    // Liouville: with M constant, the flow in (θ, θ') keeps areas as in (θ, p).
     assert!((l.transition.determinant() - 1.0).abs() < 1e-8);
     // Riding the scene's equations between samples, Φ does not need them close together.
     let sparse = simulation::along::linearize_run(PENDULUM, &run_options(20)).expect("sparse");

@@ -48,6 +48,35 @@ pub fn read_motion(path: &str, text: &str, along: &Along) -> Result<Motion, Stri
     Ok(motion)
 }
 
+/// The linearization `--along` asks for: along a run of the scene when `along` is `run` (with
+/// the settings of `run`), else along the motion in the CSV file `along` (`run`'s `--set`
+/// values and `no_units` alone apply). `path` names the scene. The error is ready to print,
+/// with the command's exit code.
+pub fn linearize(
+    path: &str,
+    source: &str,
+    along: &str,
+    run: &simulation::Options,
+) -> Result<Linearized, (String, u8)> {
+    let failed = |e: engine::Error| (crate::diagnostics::error(path, &e), e.exit_code());
+    if along == "run" {
+        return simulation::along::linearize_run(source, run).map_err(failed);
+    }
+    let options = engine::along::Options {
+        set: run.set.clone(),
+        no_units: run.no_units,
+        starts_allowed: false,
+    };
+    let mut model = engine::along::along(source, &options).map_err(failed)?;
+    let bytes =
+        std::fs::read(along).map_err(|e| (format!("error: cannot read {along}: {e}"), 2))?;
+    let text =
+        String::from_utf8(bytes).map_err(|_| (format!("error: {along} is not UTF-8 text"), 2))?;
+    let motion = read_motion(along, &text, &model).map_err(|message| (message, 2))?;
+    let between = engine::along::Between::Interpolated;
+    engine::along::linearize_along(&mut model, &motion, between).map_err(failed)
+}
+
 fn number(v: f64) -> String {
     if v == 0.0 {
         return "0".into();

@@ -5,7 +5,8 @@
 //! diagnostics with source context, formats the `derive`, `check` and `linearize` reports,
 //! writes the results of `simulate`, `bench` and `linearize` (CSV, JSON, summaries, tables,
 //! SVG, the HTML page that plays a motion), reads the trajectory `inverse-dynamics` and
-//! `linearize --along` take (`trajectory`), writes the forces and the matrices along a motion, compiles and writes an FMU (`export`), and draws progress.
+//! `linearize --along` take (`trajectory`), writes the forces and the matrices along a
+//! motion (`along`), compiles and writes an FMU (`export`), and draws progress.
 
 pub mod along;
 pub mod animate;

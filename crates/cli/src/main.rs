@@ -1136,26 +1136,7 @@ fn linearize_along(
 ) -> ExitCode {
     let path = file.display().to_string();
     let AlongAsked { along, run, set, no_units } = asked;
-    let linearized = if along == "run" {
-        let (Some(until), Some(tolerance), Some(step)) = (
-            time_option(engine::Setting::Until, run.until.as_deref()),
-            ratio_option(engine::Setting::Tolerance, run.tolerance.as_deref()),
-            time_option(engine::Setting::Step, run.step.as_deref()),
-        ) else {
-            return ExitCode::from(2);
-        };
-        let options = simulation::Options {
-            until,
-            method: run.method.map(|m| m.name().to_string()),
-            tolerance,
-            step,
-            set,
-            no_units,
-            samples: run.samples.unwrap_or(200),
-            ..Default::default()
-        };
-        simulation::along::linearize_run(source, &options)
-    } else {
+    if along != "run" {
         if let Some(flag) = run.given().first() {
             eprintln!(
                 "error: {flag} sets the run of --along run, and --along {along} reads the \
@@ -1163,31 +1144,30 @@ fn linearize_along(
             );
             return ExitCode::from(2);
         }
-        let options = engine::along::Options { set, no_units, starts_allowed: false };
-        let mut model = match engine::along::along(source, &options) {
-            Ok(model) => model,
-            Err(e) => return fail(&path, &e),
-        };
-        let motion = std::fs::read(&along)
-            .map_err(|e| format!("error: cannot read {along}: {e}"))
-            .and_then(|bytes| {
-                let text = String::from_utf8(bytes)
-                    .map_err(|_| format!("error: {along} is not UTF-8 text"))?;
-                cli::along::read_motion(&along, &text, &model)
-            });
-        let motion = match motion {
-            Ok(motion) => motion,
-            Err(message) => {
-                eprintln!("{message}");
-                return ExitCode::from(2);
-            }
-        };
-        let between = engine::along::Between::Interpolated;
-        engine::along::linearize_along(&mut model, &motion, between)
+    }
+    let (Some(until), Some(tolerance), Some(step)) = (
+        time_option(engine::Setting::Until, run.until.as_deref()),
+        ratio_option(engine::Setting::Tolerance, run.tolerance.as_deref()),
+        time_option(engine::Setting::Step, run.step.as_deref()),
+    ) else {
+        return ExitCode::from(2);
     };
-    let linearized = match linearized {
+    let options = simulation::Options {
+        until,
+        method: run.method.map(|m| m.name().to_string()),
+        tolerance,
+        step,
+        set,
+        no_units,
+        samples: run.samples.unwrap_or(200),
+        ..Default::default()
+    };
+    let linearized = match cli::along::linearize(&path, source, &along, &options) {
         Ok(l) => l,
-        Err(e) => return fail(&path, &e),
+        Err((message, code)) => {
+            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
+            return ExitCode::from(code);
+        }
     };
     let what = if along == "run" { format!("a run of {path}") } else { along.clone() };
     let report = match format {
