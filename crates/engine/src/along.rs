@@ -23,6 +23,7 @@ use nalgebra::DVector;
 use numeric::Tape;
 
 use crate::input::Assignment;
+use crate::numbers::Prepared;
 use crate::{Error, Setting};
 
 pub use transition::{state_transition, Between};
@@ -83,10 +84,24 @@ pub fn along(source: &str, options: &Options) -> Result<Along, Error> {
     let (model, warnings) =
         crate::resolve_with(source, crate::Options { units: !options.no_units })?;
     let mut prepared = crate::numbers::prepare_resolved_for(source, model, warnings, &values)?;
-    prepared.refuse_contacts("linearization along a motion")?;
-    refuse_kept(&prepared)?;
+    refuse(&prepared)?;
     let overrides = overrides(&prepared, options)?;
     let slots = prepared.parameter_values(&overrides)?;
+    from_prepared(&mut prepared, slots)
+}
+
+/// What a linearization along a motion does not take: contacts and constraints kept with
+/// multipliers (see the module's doc), each named.
+pub fn refuse(prepared: &Prepared) -> Result<(), Error> {
+    prepared.refuse_contacts("linearization along a motion")?;
+    refuse_kept(prepared)
+}
+
+/// [`along`] of a scene already loaded (a run's, whose programs are lowered first so that the
+/// run is the one `simulate` makes), at the parameter slots' values `slots` (every parameter,
+/// then the inputs).
+pub fn from_prepared(prepared: &mut Prepared, slots: Vec<f64>) -> Result<Along, Error> {
+    refuse(prepared)?;
     let d = &mut prepared.derivation;
     let n = d.coords.len();
     if n == 0 {
@@ -142,7 +157,7 @@ pub fn along(source: &str, options: &Options) -> Result<Along, Error> {
 }
 
 /// The refusal of constraints kept with multipliers, naming them (see the module's doc).
-fn refuse_kept(prepared: &crate::numbers::Prepared) -> Result<(), Error> {
+fn refuse_kept(prepared: &Prepared) -> Result<(), Error> {
     let kept = prepared.kept_constraint_names();
     if kept.is_empty() {
         return Ok(());
@@ -160,10 +175,7 @@ fn refuse_kept(prepared: &crate::numbers::Prepared) -> Result<(), Error> {
 
 /// The `--set` values by parameter index; a coordinate or rate is a run's start, skipped
 /// where the options allow it.
-fn overrides(
-    prepared: &crate::numbers::Prepared,
-    options: &Options,
-) -> Result<Vec<(usize, cas::ExprId)>, Error> {
+fn overrides(prepared: &Prepared, options: &Options) -> Result<Vec<(usize, cas::ExprId)>, Error> {
     let model = &prepared.derivation.model;
     let mut overrides = Vec::new();
     for (Assignment { name, .. }, expr) in options.set.iter().zip(&prepared.extra) {

@@ -1,46 +1,53 @@
 //! A run of a scene as the motion `linearize --along run` linearizes along: the scene run with
 //! its `simulate` settings (and a front end's), its state recorded at the samples, and the
 //! linearization at each with Φ integrated by the scene's own equations between them
-//! ([`engine::along::Between::Model`]).
+//! ([`engine::along::Between::Model`]). The scene is resolved and derived once, for the run and
+//! the linearization alike.
 
-use engine::along::{Along, Between, Linearized, Motion};
+use engine::along::{Between, Linearized, Motion};
 use engine::Error;
 
-use crate::Options;
+use crate::{overrides, set_expressions, Compiled, Options, Resolved};
 
 /// The linearization along a run of `source` with `options` (its `--set` values the run's
-/// parameters and start alike).
+/// parameters and start alike). A run whose inputs are driven (by the options or the scene's
+/// `simulate` block) is refused: what drives them would be part of the linearization too.
 pub fn linearize_run(source: &str, options: &Options) -> Result<Linearized, Error> {
-    let along_options = engine::along::Options {
-        set: options.set.clone(),
-        no_units: options.no_units,
-        starts_allowed: true,
-    };
-    let mut along = engine::along::along(source, &along_options)?;
-    let motion = run_motion(source, options, &along)?;
-    engine::along::linearize_along(&mut along, &motion, Between::Model)
-}
-
-/// The run's samples as a motion: its state at each recorded time, the inputs at their
-/// declared values. A run whose inputs are driven is refused: what drives them would have to
-/// be part of the linearization too.
-pub fn run_motion(source: &str, options: &Options, along: &Along) -> Result<Motion, Error> {
-    if !options.input.is_empty() || !options.input_series.is_empty() || options.hold.is_some() {
+    let resolved = Resolved::new(source, options);
+    // Every declared coordinate and rate is recorded, the remaining ones picked after the
+    // derivation has said which they are.
+    let declared = resolved.declared_states();
+    let options = Options { output: declared.clone(), animate: false, ..options.clone() };
+    let settings = resolved.settings(&options)?;
+    if !settings.drives.is_empty() || !settings.series.is_empty() || settings.hold.is_some() {
         return Err(Error::Input(
-            "a run to linearize along keeps its inputs at their declared values: to linearize \
-             along a driven motion, record it with the inputs among the outputs (`lagrange \
-             simulate SCENE --input … --output …` to a CSV file) and give that file to --along"
+            "a run to linearize along keeps its inputs at their declared values, and this one \
+             drives some: to linearize along a driven motion, record it with the inputs among \
+             the outputs (`lagrange simulate SCENE --input … --output …` to a CSV file) and \
+             give that file to --along"
                 .into(),
         ));
     }
-    let options = Options { output: along.state_names(), animate: false, ..options.clone() };
-    let outcome = crate::simulate(source, &options)?;
+    let mut compiled = Compiled::from_resolved(resolved, &settings)?;
+    engine::along::refuse(compiled.prepared_mut())?;
+    let outcome = compiled.run(&settings, &mut ())?;
     if let Some(fault) = &outcome.run.fault {
         return Err(Error::Numeric(outcome.describe_fault(fault)));
     }
-    let size = 2 * along.coordinates().len();
-    let trajectory = &outcome.run.trajectory;
+    let prepared = compiled.prepared_mut();
+    let sets = set_expressions(prepared, &settings.sets)?;
+    let values = overrides(prepared, &settings.sets, &sets)?;
+    let slots = prepared.parameter_values(&values.params)?;
+    let mut along = engine::along::from_prepared(prepared, slots)?;
+    let mut columns = Vec::new();
+    for name in along.state_names() {
+        let Some(k) = declared.iter().position(|d| *d == name) else {
+            return Err(Error::Input(format!("the run recorded no column of `{name}`")));
+        };
+        columns.push(k);
+    }
     let resting = along.resting_inputs();
+    let trajectory = &outcome.run.trajectory;
     let mut motion = Motion::default();
     for (t, row) in trajectory.times.iter().zip(&trajectory.rows) {
         // A stop or the end may be recorded at a sample's time too: one row a time.
@@ -48,8 +55,8 @@ pub fn run_motion(source: &str, options: &Options, along: &Along) -> Result<Moti
             continue;
         }
         motion.times.push(*t);
-        motion.states.push(row[..size].to_vec());
+        motion.states.push(columns.iter().map(|&k| row[k]).collect());
         motion.inputs.push(resting.clone());
     }
-    Ok(motion)
+    engine::along::linearize_along(&mut along, &motion, Between::Model)
 }

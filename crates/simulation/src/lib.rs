@@ -268,6 +268,14 @@ impl<'a> Resolved<'a> {
         settings_from_block(self.source, simulation, options)
     }
 
+    /// Every coordinate the scene declares and its rate (`theta`, `theta'`), in declaration
+    /// order; none for a scene that does not resolve.
+    pub fn declared_states(&self) -> Vec<String> {
+        let Ok((model, _)) = &self.model else { return Vec::new() };
+        let names = model.coords.iter().map(|c| c.name.clone());
+        names.clone().chain(names.map(|n| format!("{n}'"))).collect()
+    }
+
     /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).
     pub fn load(self, settings: &Settings) -> Result<Loaded, Error> {
         let (model, warnings) = self.model?;
