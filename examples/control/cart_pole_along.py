@@ -79,9 +79,10 @@ def main():
     opened = np.linalg.norm(along.transition, 2)
     held = np.linalg.norm(closed, 2)
     print(f"{len(along)} samples of the fall from t = {along.t[0]} to {along.t[-1]}")
-    print("A at the start:\n", np.round(along.A[0], 4))
-    print("A at the end:\n", np.round(along.A[-1], 4))
-    print("K at the start:", np.round(k_gains[0], 3))
+    # Adding 0 shows −0 (of −M⁻¹·C with no damping) as 0.
+    print("A at the start:\n", np.round(along.A[0], 4) + 0.0)
+    print("A at the end:\n", np.round(along.A[-1], 4) + 0.0)
+    print("K at the start:", np.round(k_gains[0][0], 3))
     print(f"largest growth of a small error of the start: {opened:.3f} open, {held:.3f} held")
     try:
         import control

@@ -108,5 +108,5 @@ def test_the_examples_time_varying_lqr_holds_the_fall():
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     opened, held = module.main()
-    # Open, the fall stretches a tilt of the start several times over; held, it shrinks.
-    assert opened > 3 and held < 1
+    # Open, the fall stretches an error of the start many times over; held, far less.
+    assert opened > 10 and held < opened / 5
