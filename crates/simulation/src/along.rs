@@ -19,14 +19,17 @@ pub fn linearize_run(source: &str, options: &Options) -> Result<Linearized, Erro
     let declared = resolved.declared_states();
     let options = Options { output: declared.clone(), animate: false, ..options.clone() };
     let settings = resolved.settings(&options)?;
-    if !settings.drives.is_empty() || !settings.series.is_empty() || settings.hold.is_some() {
-        return Err(Error::Input(
+    let mut driven: Vec<String> = settings.drives.iter().map(|d| format!("`{}`", d.name)).collect();
+    driven.extend(settings.series.iter().map(|(name, _)| format!("`{name}`")));
+    if !driven.is_empty() {
+        return Err(Error::Input(format!(
             "a run to linearize along keeps its inputs at their declared values, and this one \
-             drives some: to linearize along a driven motion, record it with the inputs among \
-             the outputs (`lagrange simulate SCENE --input … --output …` to a CSV file) and \
-             give that file to --along"
-                .into(),
-        ));
+             drives {} (by the scene's `simulate` block or the options): to linearize along a \
+             driven motion, record it with the inputs among the outputs (`lagrange simulate \
+             SCENE --output` the coordinates, their rates and the inputs, `--out FILE.csv`) \
+             and give that file to --along",
+            driven.join(", ")
+        )));
     }
     let mut compiled = Compiled::from_resolved(resolved, &settings)?;
     engine::along::refuse(compiled.prepared_mut())?;
