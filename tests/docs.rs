@@ -341,8 +341,16 @@ fn ensemble(rest: &[String]) -> Result<String, String> {
 /// `lagrange linearize`: the report (unless `--out`); a sweep's plot made in memory.
 fn linearize(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units", "drop-cyclic"]);
-    args.only(&["about", "set", "sweep", "plot", "format", "out", "no-units", "drop-cyclic"])?;
+    let along = ["along", "until", "method", "tolerance", "step", "samples"];
+    let known = ["about", "set", "sweep", "plot", "format", "out", "no-units", "drop-cyclic"];
+    args.only(&[&known[..], &along[..]].concat())?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
+    if let Some(motion) = args.last("along") {
+        return linearize_along(file, &motion, &args);
+    }
+    if let Some(flag) = along.iter().find(|flag| args.has(flag)) {
+        return Err(format!("--{flag} without --along: the command refuses it"));
+    }
     if let Some(plot) = args.last("plot") {
         if extension(&plot) != "svg" || !args.has("sweep") {
             return Err(format!("--plot {plot}: the command refuses it"));
@@ -366,6 +374,33 @@ fn linearize(rest: &[String]) -> Result<String, String> {
     if let (Some(_), Some(sweep)) = (args.last("plot"), &linearized.sweep) {
         assert!(cli::plot::sweep(file, sweep).starts_with("<svg"));
     }
+    Ok(if args.has("out") { String::new() } else { report })
+}
+
+/// `lagrange linearize --along`: the report along a run or a trajectory's file, as the command
+/// refuses the flags of a linearization about an equilibrium beside it.
+fn linearize_along(file: &str, motion: &str, args: &Args) -> Result<String, String> {
+    if let Some(flag) = ["about", "sweep", "plot", "drop-cyclic"].iter().find(|f| args.has(f)) {
+        return Err(format!("--{flag} with --along: the command refuses it"));
+    }
+    let options = simulation::Options {
+        until: args.number("until")?,
+        method: args.last("method"),
+        tolerance: args.number("tolerance")?,
+        step: args.number("step")?,
+        samples: args.number("samples")?.unwrap_or(200),
+        set: args.parsed("set")?,
+        no_units: args.has("no-units"),
+        ..Default::default()
+    };
+    let l = cli::along::linearize(file, &read(file)?, motion, &options).map_err(|(e, _)| e)?;
+    let what = if motion == "run" { format!("a run of {file}") } else { motion.to_string() };
+    let report = match args.last("format").as_deref() {
+        None | Some("text") => cli::along::text(&what, &l),
+        Some("json") => cli::along::json(&l),
+        Some("csv") => cli::along::csv(&l),
+        Some(other) => return Err(format!("no format {other}")),
+    };
     Ok(if args.has("out") { String::new() } else { report })
 }
 

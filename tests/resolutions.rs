@@ -1,5 +1,5 @@
 //! Every command resolves its scene once: the entry each front end calls (`derive`, `check`,
-//! `simulate`, `ensemble`, `linearize`, `inverse-dynamics`, `codegen`, `export --fmu`) counted
+//! `simulate`, `ensemble`, `linearize` (`--along` too), `inverse-dynamics`, `codegen`, `export --fmu`) counted
 //! with `model::resolutions_on_this_thread`. A second resolution costs a short run's set-up
 //! again and may read the scene differently from the first (a `simulate` block read from one,
 //! the equations derived from another).
@@ -69,6 +69,16 @@ fn linearize_and_inverse_dynamics_resolve_once() {
     let inverse =
         resolutions(|| engine::inverse::inverse_dynamics(&pendulum, &options).expect("loads"));
     assert_eq!(inverse, 1, "inverse-dynamics");
+
+    // Along a run: the run and the linearization share one resolution.
+    let options = simulation::Options { until: Some(0.2), samples: 5, ..Default::default() };
+    let along = resolutions(|| {
+        simulation::along::linearize_run(&pendulum, &options).expect("linearizes along")
+    });
+    assert_eq!(along, 1, "linearize --along run");
+    let along =
+        resolutions(|| engine::along::along(&pendulum, &Default::default()).expect("loads"));
+    assert_eq!(along, 1, "linearize --along FILE.csv");
 }
 
 #[test]

@@ -7,6 +7,7 @@
 //! counting global allocator, which would count every other test's allocations too.
 
 mod algebra;
+mod along;
 mod andrews;
 mod animate;
 mod bicycle;

@@ -21,34 +21,23 @@ pub fn read_trajectory(
     text: &str,
     coordinates: &[String],
 ) -> Result<Trajectory, String> {
-    let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(text.as_bytes());
-    let header: Vec<String> = reader
-        .headers()
-        .map_err(|e| format!("error: cannot read {path}: {e}"))?
-        .iter()
-        .map(String::from)
-        .collect();
     let mut wanted = vec!["t".to_string()];
     for suffix in ["", "'", "''"] {
         wanted.extend(coordinates.iter().map(|c| format!("{c}{suffix}")));
     }
-    let mut columns = Vec::new();
-    for name in &wanted {
-        let found: Vec<usize> = (0..header.len()).filter(|k| header[*k] == *name).collect();
-        match found[..] {
-            [k] => columns.push(k),
-            [] => {
-                return Err(format!(
-                    "error: {path} has no column `{name}`: a trajectory needs `t` and, for each \
-                     coordinate, its position, rate and acceleration ({})\n  = hint: `lagrange \
-                     simulate SCENE --output {} --out FILE.csv` writes one",
-                    wanted[1..].join(", "),
-                    wanted[1..].join(",")
-                ))
-            }
-            _ => return Err(format!("error: {path} has the column `{name}` more than once")),
-        }
-    }
+    let needs = format!(
+        "`t` and, for each coordinate, its position, rate and acceleration ({})",
+        wanted[1..].join(", ")
+    );
+    let hint = format!(
+        "`lagrange simulate SCENE --output {} --out FILE.csv` writes one",
+        wanted[1..].join(",")
+    );
+    let table = crate::trajectory::read_columns(
+        path,
+        text,
+        &crate::trajectory::Wanted { columns: &wanted, needs: &needs, hint: &hint },
+    )?;
     let n = coordinates.len();
     let mut trajectory = Trajectory {
         times: Vec::new(),
@@ -56,28 +45,11 @@ pub fn read_trajectory(
         rates: Vec::new(),
         accelerations: Vec::new(),
     };
-    for record in reader.records() {
-        let record = record.map_err(|e| format!("error: cannot read {path}: {e}"))?;
-        let line = record.position().map_or(0, csv::Position::line);
-        let mut values = Vec::with_capacity(columns.len());
-        for (name, k) in wanted.iter().zip(&columns) {
-            let cell = record.get(*k).unwrap_or("");
-            let value = cell.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                format!(
-                    "error: {path}:{line}:{}: `{cell}` in the column `{name}` is not a finite \
-                     number",
-                    k + 1
-                )
-            })?;
-            values.push(value);
-        }
+    for values in table.rows {
         trajectory.times.push(values[0]);
         trajectory.positions.push(values[1..1 + n].to_vec());
         trajectory.rates.push(values[1 + n..1 + 2 * n].to_vec());
         trajectory.accelerations.push(values[1 + 2 * n..].to_vec());
-    }
-    if trajectory.times.is_empty() {
-        return Err(format!("error: {path} has a header but no rows"));
     }
     Ok(trajectory)
 }

@@ -4,9 +4,11 @@
 //! `engine` loads scenes, lowers and runs them; this crate reads the files, renders
 //! diagnostics with source context, formats the `derive`, `check` and `linearize` reports,
 //! writes the results of `simulate`, `bench` and `linearize` (CSV, JSON, summaries, tables,
-//! SVG, the HTML page that plays a motion), reads the trajectory `inverse-dynamics` takes and
-//! writes its forces, compiles and writes an FMU (`export`), and draws progress.
+//! SVG, the HTML page that plays a motion), reads the trajectory `inverse-dynamics` and
+//! `linearize --along` take (`trajectory`), writes the forces and the matrices along a
+//! motion (`along`), compiles and writes an FMU (`export`), and draws progress.
 
+pub mod along;
 pub mod animate;
 pub mod check;
 pub mod diagnostics;
@@ -19,6 +21,7 @@ pub mod progress;
 pub mod report;
 pub mod series;
 pub mod simulate;
+pub mod trajectory;
 
 use engine::Options;
 use lang::Diagnostic;

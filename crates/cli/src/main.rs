@@ -145,6 +145,15 @@ enum Command {
         /// is the position and rate of every coordinate).
         #[arg(long)]
         drop_cyclic: bool,
+        /// Linearize along a motion rather than about an equilibrium: `run` (the scene run
+        /// with its `simulate` settings, --until, --method, --tolerance, --step, --samples and
+        /// --set), or a CSV file with a column `t` and, for each coordinate x, the columns x
+        /// and x' (and one per input). Gives A(t), B(t), C(t), D(t) at every sample and the
+        /// state-transition matrix over the motion.
+        #[arg(long, value_name = "run|FILE.csv")]
+        along: Option<String>,
+        #[command(flatten)]
+        run: AlongRun,
         /// Draw the sweep's eigenvalues (real and imaginary parts against p) as SVG.
         #[arg(long)]
         plot: Option<PathBuf>,
@@ -244,6 +253,40 @@ enum Command {
     },
 }
 
+/// The settings of the run `linearize --along run` linearizes along, as `simulate` takes them.
+#[derive(Args)]
+struct AlongRun {
+    /// With --along run: the end time, as for simulate.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    until: Option<String>,
+    /// With --along run: the integrator, as for simulate.
+    #[arg(long, value_parser = method_parser())]
+    method: Option<sim::Method>,
+    /// With --along run: the tolerance of the adaptive methods, as for simulate.
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    tolerance: Option<String>,
+    /// With --along run: the step of the fixed-step methods, as for simulate.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    step: Option<String>,
+    /// With --along run: the number of evenly spaced samples (default 200; 0: every step).
+    #[arg(long)]
+    samples: Option<usize>,
+}
+
+impl AlongRun {
+    /// The flags given, by name: each means something only with `--along run`.
+    fn given(&self) -> Vec<&'static str> {
+        let flags = [
+            ("--until", self.until.is_some()),
+            ("--method", self.method.is_some()),
+            ("--tolerance", self.tolerance.is_some()),
+            ("--step", self.step.is_some()),
+            ("--samples", self.samples.is_some()),
+        ];
+        flags.into_iter().filter(|(_, given)| *given).map(|(flag, _)| flag).collect()
+    }
+}
+
 /// The settings of a run, shared by `simulate` and `ensemble`.
 #[derive(Args)]
 struct RunArgs {
@@ -332,6 +375,8 @@ enum LangArg {
 enum LinearizeFormat {
     Text,
     Json,
+    /// With --along: a row per sample, every entry of A, B, C and D.
+    Csv,
 }
 
 /// `--method`: the integrators of `sim`'s method table, each with its line of help, checked by
@@ -458,16 +503,49 @@ fn main() -> ExitCode {
             set,
             sweep,
             drop_cyclic,
+            along,
+            run,
             plot,
             format,
             out,
             no_units,
         } => {
             let outputs = [("--out", out.as_deref()), ("--plot", plot.as_deref())];
-            if writes_over_input(&[("", &file)], &outputs) {
+            let mut inputs = vec![("", file.as_path())];
+            let trajectory = along.as_deref().filter(|a| *a != "run").map(std::path::Path::new);
+            inputs.extend(trajectory.map(|t| ("--along", t)));
+            if writes_over_input(&inputs, &outputs) {
                 return ExitCode::from(2);
             }
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            if let Some(along) = along {
+                let others = [
+                    ("--about", about.is_some()),
+                    ("--sweep", sweep.is_some()),
+                    ("--drop-cyclic", drop_cyclic),
+                    ("--plot", plot.is_some()),
+                ];
+                if let Some((flag, _)) = others.iter().find(|(_, given)| *given) {
+                    eprintln!(
+                        "error: {flag} is about an equilibrium: it does not go with --along, \
+                         which linearizes along a motion"
+                    );
+                    return ExitCode::from(2);
+                }
+                let options = AlongAsked { along, run, set, no_units };
+                return linearize_along(&file, &source, options, format, out);
+            }
+            if let Some(flag) = run.given().first() {
+                eprintln!("error: {flag} sets the run of --along run: give --along run too");
+                return ExitCode::from(2);
+            }
+            if matches!(format, LinearizeFormat::Csv) {
+                eprintln!(
+                    "error: --format csv writes the matrices at every sample of a motion: give \
+                     --along too"
+                );
+                return ExitCode::from(2);
+            }
             // Typed here, read as text there; the same parser reads it back.
             let set = set.iter().map(Assignment::to_string).collect();
             let sweep = sweep.as_ref().map(SweepRange::to_string);
@@ -1025,6 +1103,7 @@ fn linearize(
     let report = match format {
         LinearizeFormat::Text => cli::linearize::text(&linearized),
         LinearizeFormat::Json => cli::linearize::json(&linearized),
+        LinearizeFormat::Csv => unreachable!("refused without --along"),
     };
     if let (Some(p), Some(sweep)) = (plot, &linearized.sweep) {
         let title = format!("Eigenvalues against {}: {path}", sweep.parameter);
@@ -1036,6 +1115,66 @@ fn linearize(
     // The process ends here: freeing a large model's expressions one by one (a tenth of the
     // bicycle's run) would be work for nothing.
     std::mem::forget(linearized);
+    write_or_print(out.as_ref(), &report)
+}
+
+/// What `linearize --along` is asked for.
+struct AlongAsked {
+    /// `run`, or the trajectory's path.
+    along: String,
+    run: AlongRun,
+    set: Vec<Assignment>,
+    no_units: bool,
+}
+
+fn linearize_along(
+    file: &std::path::Path,
+    source: &str,
+    asked: AlongAsked,
+    format: LinearizeFormat,
+    out: Option<PathBuf>,
+) -> ExitCode {
+    let path = file.display().to_string();
+    let AlongAsked { along, run, set, no_units } = asked;
+    if along != "run" {
+        if let Some(flag) = run.given().first() {
+            eprintln!(
+                "error: {flag} sets the run of --along run, and --along {along} reads the \
+                 motion from a file"
+            );
+            return ExitCode::from(2);
+        }
+    }
+    let (Some(until), Some(tolerance), Some(step)) = (
+        time_option(engine::Setting::Until, run.until.as_deref()),
+        ratio_option(engine::Setting::Tolerance, run.tolerance.as_deref()),
+        time_option(engine::Setting::Step, run.step.as_deref()),
+    ) else {
+        return ExitCode::from(2);
+    };
+    let options = simulation::Options {
+        until,
+        method: run.method.map(|m| m.name().to_string()),
+        tolerance,
+        step,
+        set,
+        no_units,
+        samples: run.samples.unwrap_or(200),
+        ..Default::default()
+    };
+    let linearized = match cli::along::linearize(&path, source, &along, &options) {
+        Ok(l) => l,
+        Err((message, code)) => {
+            eprint!("{}", if message.ends_with('\n') { message } else { format!("{message}\n") });
+            return ExitCode::from(code);
+        }
+    };
+    let what = if along == "run" { format!("a run of {path}") } else { along.clone() };
+    let report = match format {
+        LinearizeFormat::Text => cli::along::text(&what, &linearized),
+        LinearizeFormat::Json => cli::along::json(&linearized),
+        LinearizeFormat::Csv => cli::along::csv(&linearized),
+    };
     write_or_print(out.as_ref(), &report)
 }
 

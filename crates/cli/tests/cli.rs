@@ -439,3 +439,76 @@ fn ensemble_pictures_are_written_as_svg_and_png() {
         }
     }
 }
+
+#[test]
+fn linearize_along_reads_a_simulate_table_and_refuses_what_it_cannot_take() {
+    let scratch = Scratch::new("along");
+    let run = scratch.file("run.csv");
+    let pendulum = example("classics/simple_pendulum.lag");
+    let out = lagrange(&[
+        "simulate",
+        &pendulum,
+        "--until",
+        "1",
+        "--samples",
+        "11",
+        "--output",
+        "KE, theta, theta'",
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let along = ["linearize", &pendulum, "--along", run.to_str().unwrap()];
+    let out = lagrange(&[&along[..], &["--format", "csv"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = stdout(&out);
+    let lines: Vec<&str> = table.lines().collect();
+    assert_eq!(
+        lines[0],
+        "t,\"A[theta,theta]\",\"A[theta,theta']\",\"A[theta',theta]\",\"A[theta',theta']\""
+    );
+    assert_eq!(lines.len(), 12);
+    // θ'' = −g/L·sin θ: the entry below the diagonal is −g/L·cos θ, at the start θ = 1/2.
+    let first: Vec<f64> = lines[1].split(',').map(|c| c.parse().unwrap()).collect();
+    assert_eq!(first[..3], [0.0, 0.0, 1.0]);
+    let expected = -9.81 * 0.8775825618903728;
+    assert!((first[3] - expected).abs() < 1e-14, "{}", lines[1]);
+    let out = lagrange(&along);
+    assert!(stdout(&out).contains("11 samples from t = 0 to t = 1"), "{}", stdout(&out));
+
+    // A missing column, times out of order, flags of the other kind of linearization.
+    std::fs::write(&run, "t,theta,omega\n0,0.5,0\n0.1,0.45,-0.9\n").unwrap();
+    let out = lagrange(&along);
+    assert_eq!(out.status.code(), Some(2));
+    let message = stderr(&out);
+    assert!(message.contains("run.csv has no column `theta'`"), "{message}");
+    assert!(message.contains("the columns nothing reads: omega"), "{message}");
+    std::fs::write(&run, "t,theta,theta'\n0,0.5,0\n0.2,0.45,-0.9\n0.1,0.4,-1\n").unwrap();
+    let out = lagrange(&along);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("run.csv:4: `t` = 0.1 does not come after 0.2"),
+        "{}",
+        stderr(&out)
+    );
+    let out = lagrange(&[&along[..], &["--about", "theta=0"]].concat());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).starts_with("error: --about is about an equilibrium"), "{}", stderr(&out));
+    let out = lagrange(&["linearize", &pendulum, "--until", "3"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("--until sets the run of --along run"), "{}", stderr(&out));
+    let out = lagrange(&[&along[..], &["--until", "3"]].concat());
+    assert_eq!(out.status.code(), Some(2));
+    let out = lagrange(&["linearize", &pendulum, "--format", "csv"]);
+    assert_eq!(out.status.code(), Some(2));
+
+    // Contacts and kept constraints are refused by name, with why.
+    let ball = example("contacts/bouncing_ball.lag");
+    let out = lagrange(&["linearize", &ball, "--along", "run"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("does not take contacts yet"), "{}", stderr(&out));
+    let cartesian = example("classics/pendulum_cartesian.lag");
+    let out = lagrange(&["linearize", &cartesian, "--along", "run"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("constraints kept with multipliers"), "{}", stderr(&out));
+}

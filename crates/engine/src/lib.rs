@@ -13,6 +13,7 @@
 //! as `lang::Diagnostic`s with the text they refer to, and a front end (the `lagrange`
 //! command, the benchmarks) shows them.
 
+pub mod along;
 pub mod block;
 pub mod derived;
 mod error;

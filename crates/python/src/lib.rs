@@ -243,6 +243,42 @@ impl NativeScene {
         data::to_python(py, &l)
     }
 
+    /// Linearization along a motion, as `lagrange linearize --along` finds it: the scene run
+    /// with `options` (as for `simulate`) when `times` is `None`, else the motion given by its
+    /// `times`, `states` (q then q̇ per sample) and `inputs` (each input's value per sample).
+    /// Returns `results::along`'s dict: the names, `t`, A, B, C and D stacked over the
+    /// samples, and the state-transition matrix over the motion.
+    #[pyo3(signature = (options, times = None, states = None, inputs = None))]
+    fn linearize_along<'py>(
+        &self,
+        py: Python<'py>,
+        options: RunOptions,
+        times: Option<Vec<f64>>,
+        states: Option<Vec<Vec<f64>>>,
+        inputs: Option<Vec<Vec<f64>>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let options = options.engine(self)?;
+        let linearized = py.detach(|| match times {
+            None => simulation::along::linearize_run(&self.source, &options),
+            Some(times) => {
+                let along_options = engine::along::Options {
+                    set: options.set.clone(),
+                    no_units: options.no_units,
+                    starts_allowed: false,
+                };
+                let mut along = engine::along::along(&self.source, &along_options)?;
+                let count = times.len();
+                let inputs = inputs.unwrap_or_else(|| vec![along.resting_inputs(); count]);
+                let motion =
+                    engine::along::Motion { times, states: states.unwrap_or_default(), inputs };
+                let between = engine::along::Between::Interpolated;
+                engine::along::linearize_along(&mut along, &motion, between)
+            }
+        });
+        let linearized = linearized.map_err(|e| engine_error(&e, &self.path))?;
+        data::to_python(py, &results::along::report(&linearized))
+    }
+
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

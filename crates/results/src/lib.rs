@@ -1,12 +1,13 @@
 //! The results front ends show, as plain data: each result is built here once, from the
 //! engine's types, into a [`Data`] tree of plain values, and a front end only renders the
 //! tree (the `lagrange` command as JSON, the Python package as Python objects). Owns the
-//! shapes of `linearize`'s report ([`linearize`]) and of `check`'s verdicts ([`check`]), and
+//! shapes of `linearize`'s report ([`linearize`]), of `linearize --along`'s ([`along`]) and of `check`'s verdicts ([`check`]), and
 //! exact expressions without their pool ([`Exact`]).
 //!
 //! Nothing here prints for people: the text reports stay with the command, which reads the
 //! same data.
 
+pub mod along;
 pub mod check;
 mod exact;
 pub mod linearize;

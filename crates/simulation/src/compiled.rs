@@ -79,6 +79,12 @@ impl Compiled {
         })
     }
 
+    /// The loaded scene, for what a front end lowers of it besides the run's programs
+    /// (after them, so that the run's are the ones `simulate` lowers).
+    pub(crate) fn prepared_mut(&mut self) -> &mut Prepared {
+        &mut self.prepared
+    }
+
     /// Whether a run with these settings can reuse the programs: they differ at most in what
     /// a run reads alone (the end time, tolerance, step, samples, `--set` values and input
     /// series).

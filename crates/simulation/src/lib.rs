@@ -13,6 +13,7 @@ use std::time::Instant;
 
 use sim::{integrate, FaultKind, Mechanical, Method, NonFiniteAt, Run};
 
+pub mod along;
 pub mod animate;
 pub mod bench;
 mod compiled;
@@ -267,6 +268,14 @@ impl<'a> Resolved<'a> {
             Err(_) => model::Simulation::default(),
         };
         settings_from_block(self.source, simulation, options)
+    }
+
+    /// Every coordinate the scene declares and its rate (`theta`, `theta'`), in declaration
+    /// order; none for a scene that does not resolve.
+    pub fn declared_states(&self) -> Vec<String> {
+        let Ok((model, _)) = &self.model else { return Vec::new() };
+        let names = model.coords.iter().map(|c| c.name.clone());
+        names.clone().chain(names.map(|n| format!("{n}'"))).collect()
     }
 
     /// The scene loaded with the settings' expressions and laws (see [`Loaded`]).

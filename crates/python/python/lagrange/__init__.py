@@ -45,6 +45,7 @@ __all__ = [
     "Constraint",
     "Expectation",
     "Linearization",
+    "LinearizationAlong",
     "Results",
     "ContactEvents",
     "Batch",
@@ -543,6 +544,60 @@ class Scene:
         )
         return Linearization(raw, inputs, outputs)
 
+    def linearize_along(
+        self,
+        t=None,
+        states=None,
+        inputs=None,
+        *,
+        set=None,
+        until=None,
+        method=None,
+        tolerance=None,
+        step=None,
+        samples=200,
+    ):
+        """Small motions about a motion rather than an equilibrium, as ``lagrange linearize
+        --along``: A(t), B(t), C(t), D(t) at each sample and the state-transition matrix over
+        the motion.
+
+        - Without ``t``: the scene is run with its ``simulate`` settings, ``until``,
+          ``method``, ``tolerance``, ``step`` and ``samples`` as for :meth:`simulate`, its
+          inputs at their declared values, and linearized at every recorded sample; Φ is
+          integrated with the scene's equations between the samples.
+        - With ``t`` (increasing times), ``states`` (one row per time: q, then q') and, for a
+          scene with inputs, ``inputs`` (one row per time; their declared values if omitted):
+          the motion given, which need not be one of the scene's (a planner's reference, a
+          measured motion); Φ is integrated with A(t) linear between the samples.
+        - ``set``: parameter values (and, for a run, starting values) as for :meth:`simulate`.
+
+        Returns a :class:`LinearizationAlong`. Scenes with contacts or with constraints kept
+        with multipliers raise :class:`SceneError`.
+        """
+        import numpy as np
+
+        options = _run_options(
+            until=until, method=method, tolerance=tolerance, step=step, set=set, samples=samples
+        )
+        if t is None:
+            if states is not None or inputs is not None:
+                raise ValueError("`states` and `inputs` give a motion with its times `t`")
+            raw = self._native.linearize_along(options)
+        else:
+            t = np.asarray(t, dtype=float)
+            states = np.asarray(states, dtype=float)
+            if t.ndim != 1 or states.ndim != 2 or states.shape[0] != t.shape[0]:
+                raise ValueError(
+                    f"`t` must be one time per sample and `states` one row per time, not shapes "
+                    f"{t.shape} and {states.shape}"
+                )
+            if inputs is not None:
+                inputs = np.asarray(inputs, dtype=float).reshape(t.shape[0], -1).tolist()
+            raw = self._native.linearize_along(
+                options, times=t.tolist(), states=states.tolist(), inputs=inputs
+            )
+        return LinearizationAlong(raw)
+
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
         return [Expectation(**item) for item in self._native.check()]
@@ -631,6 +686,55 @@ class Linearization(dict):
         return (
             f"<lagrange.Linearization {self['stability']}: {len(self.state)} states, "
             f"{len(self.inputs)} inputs, {len(self.outputs)} outputs>"
+        )
+
+
+class LinearizationAlong:
+    """The small motions about a motion, ẋ = A(t)·x + B(t)·u, y = C(t)·x + D(t)·u, at its
+    samples (see :meth:`Scene.linearize_along`).
+
+    - ``t``: the samples' times; ``state``, ``inputs``, ``outputs``: the names of x, u, y.
+    - ``A``, ``B``, ``C``, ``D``: NumPy arrays stacked over the samples, ``A[k]`` at ``t[k]``
+      (shapes samples × n × n, samples × n × inputs, samples × outputs × n, samples ×
+      outputs × inputs).
+    - ``transition``: Φ(t[-1], t[0]), δx(t[-1]) = Φ·δx(t[0]) with the inputs held on the
+      motion; ``transition_method``: ``"model"`` (the scene's equations between samples) or
+      ``"interpolated"`` (A linear between them).
+    - ``to_control(k)``: the state space at sample ``k`` as ``control.StateSpace``.
+    """
+
+    def __init__(self, raw):
+        self.state = raw["state"]
+        self.inputs = raw["inputs"]
+        self.outputs = raw["outputs"]
+        self.t = raw["t"]
+        self.A, self.B, self.C, self.D = raw["A"], raw["B"], raw["C"], raw["D"]
+        self.transition = raw["transition"]["matrix"]
+        self.transition_method = raw["transition"]["method"]
+
+    def __len__(self):
+        return len(self.t)
+
+    def to_control(self, k):
+        """The state space at sample ``k`` as ``control.StateSpace`` (python-control must be
+        installed). Without outputs, C is the identity (y = x), as for :class:`Linearization`."""
+        try:
+            import control
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("to_control() needs python-control: pip install control") from e
+        import numpy as np
+
+        a, b = self.A[k], self.B[k]
+        if self.outputs:
+            c, d = self.C[k], self.D[k]
+        else:
+            c, d = np.eye(a.shape[0]), np.zeros((a.shape[0], b.shape[1]))
+        return control.ss(a, b, c, d)
+
+    def __repr__(self):
+        return (
+            f"<lagrange.LinearizationAlong of {len(self)} samples from t = {self.t[0]} to "
+            f"{self.t[-1]}, x = ({', '.join(self.state)})>"
         )
 
 

@@ -58,6 +58,13 @@ class NativeScene:
         sweep: Optional[str] = None,
         keep_cyclic: bool = True,
     ) -> dict[str, Any]: ...
+    def linearize_along(
+        self,
+        options: RunOptions,
+        times: Optional[Sequence[float]] = None,
+        states: Optional[Sequence[Sequence[float]]] = None,
+        inputs: Optional[Sequence[Sequence[float]]] = None,
+    ) -> dict[str, Any]: ...
     def check(self) -> list[dict[str, Any]]: ...
 
 class Rhs:
