@@ -538,3 +538,31 @@ fn other_methods_take_the_ball_and_the_ladder_or_refuse_naming_the_contacts() {
         }
     }
 }
+
+/// A contact armed by a condition: the ledge's, while x > a. The ball passes its edge below
+/// it (armed inside its gap: no landing, no fault), rises through its level unseen and lands
+/// where the throw says, then bounces with its restitution.
+#[test]
+fn an_armed_ledge_lets_the_ball_rise_through_and_catches_it() {
+    let (g, v0, h, e) = (9.81f64, 6.0f64, 1.0f64, 0.5f64);
+    let outcome =
+        run("ledge.lag", Options { output: vec!["x, y, y'".into()], ..Options::default() });
+    let impacts = events(&outcome, ModeChange::Impact);
+    assert!(impacts.len() >= 3, "{}", summary(&outcome));
+    let rise = (v0 * v0 - 2.0 * g * h).sqrt();
+    let t0 = (v0 - rise) / g;
+    let mut landing = t0 + 2.0 * rise / g;
+    let mut speed = rise;
+    for impact in impacts.iter().take(3) {
+        let error = relative(impact.time, landing);
+        eprintln!("ledge: lands at {} vs {landing}: {error:e}", impact.time);
+        assert!(error < 1e-8);
+        speed *= e;
+        landing += 2.0 * speed / g;
+    }
+    // Below the ledge's level it was never touched.
+    let y = column(&outcome, "y");
+    let trajectory = &outcome.run.trajectory;
+    let crossing = trajectory.times.iter().position(|&t| t > t0).expect("rows after t0");
+    assert!(trajectory.rows[..crossing].iter().all(|r| r[y] < 1e-9));
+}

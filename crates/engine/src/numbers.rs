@@ -34,6 +34,8 @@ pub struct Prepared {
     pub partials_program: Option<Program>,
     /// Where each contact's rows are among the multipliers, in the order written.
     pub contacts: Vec<mechanics::ContactSlots>,
+    /// Each contact's arming condition in the state (`armed A`), in the order written.
+    pub arming: Vec<Option<ExprId>>,
     /// The one way to the parameters' values: free ones set, derived ones following.
     pub parameter_plan: model::ParameterValues,
 }
@@ -104,6 +106,15 @@ impl Prepared {
         let exprs = extra;
         // A run integrates every contact, open or closed, among its multipliers.
         let contacts = derivation.with_every_contact();
+        let arming = derivation
+            .contacts
+            .clone()
+            .iter()
+            .map(|c| {
+                let armed = derivation.model.contacts[c.contact].armed?;
+                Some(derivation.expand_quantities(armed, false))
+            })
+            .collect();
         // The inputs' slots follow the parameters', filled with their values when nothing
         // drives them.
         let parameters: Vec<SymId> = derivation.model.constants().iter().map(|(s, _)| *s).collect();
@@ -122,6 +133,7 @@ impl Prepared {
             driven: Default::default(),
             partials_program: None,
             contacts,
+            arming,
         }
     }
 }

@@ -84,7 +84,8 @@ impl Derivation {
             let at_values = self.model.pool.subst(gap, &values);
             // Decided here where the gap is a rational at the start; a run decides the rest.
             if let Some(g) = self.model.pool.as_num(at_values).cloned() {
-                if g.is_negative() {
+                // An armed contact may start inside its gap: disarmed, or armed below it.
+                if g.is_negative() && contact.armed.is_none() {
                     errors.push(
                         Diagnostic::error(
                             contact.span,

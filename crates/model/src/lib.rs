@@ -219,6 +219,9 @@ pub struct Contact {
     /// Coulomb's coefficient μ along the tangential row (`friction MU; slip V`); `None` for a
     /// frictionless contact, or one that grips (its tangential row held without a bound).
     pub friction: Option<ExprId>,
+    /// The contact is watched only while this expression of the state is positive (`armed
+    /// A`): a walker's swing foot passes below the ground at mid-stance unseen.
+    pub armed: Option<ExprId>,
     pub span: Span,
 }
 

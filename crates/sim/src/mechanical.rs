@@ -128,6 +128,9 @@ pub struct Mechanical {
     /// The normal columns a slipping contact's friction bends: its force acts along the
     /// normal's gradient plus `factor` (−μ·s) times its tangential row's.
     bends: Vec<Bend>,
+    /// The contacts' arming conditions (one output each, 1 for a contact without one) and
+    /// their values at the last evaluation, when a contact has one.
+    arming: Option<(Tape, Vec<f64>)>,
 }
 
 /// A slipping contact's friction in the augmented system: the column of multiplier `normal`
@@ -175,6 +178,7 @@ impl Mechanical {
             kept: vec![true; layout.multipliers],
             modes: modes::Modes::default(),
             bends: Vec::new(),
+            arming: None,
         }
     }
 

@@ -179,7 +179,16 @@ pub(crate) fn with_contacts(
             friction,
         })
         .collect();
-    Ok(mechanical.with_contacts(contacts))
+    let mechanical = mechanical.with_contacts(contacts);
+    if prepared.arming.iter().all(Option::is_none) {
+        return Ok(mechanical);
+    }
+    // A contact without a condition is always armed: its condition is 1.
+    let one = prepared.derivation.model.pool.one();
+    let conditions: Vec<cas::ExprId> = prepared.arming.iter().map(|a| a.unwrap_or(one)).collect();
+    let program = prepared.lower(&prepared.dynamics_inputs(), &conditions)?;
+    let conditioned = prepared.arming.iter().map(Option::is_some).collect();
+    Ok(mechanical.with_arming(Tape::new(program), conditioned))
 }
 
 /// Each rough contact's coefficient of friction at the parameter values `parameters` (in slot

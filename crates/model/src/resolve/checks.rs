@@ -189,6 +189,19 @@ pub(super) const GAP: Role = Role {
                        an input: write the moving surface as an expression of `t`",
 };
 
+/// A contact's arming condition: an expression of the state, the contact watched while it is
+/// positive.
+pub(super) const ARMING: Role = Role {
+    what: "a contact's arming condition",
+    max_order: 1,
+    hint: "a contact is armed while an expression of the coordinates, their rates and `t` is \
+           positive, `{ armed -theta }`",
+    differentiated: false,
+    inputs: false,
+    instead_of_input: "a contact's arming is watched by a run between evaluations of the \
+                       dynamics: write it with the coordinates and their rates",
+};
+
 /// A gripping contact's tangential rate: linear in the rates, held at zero while closed.
 pub(super) const GRIP: Role = Role {
     what: "a grip",

@@ -6,14 +6,15 @@ use cas::number::{One, Signed};
 use cas::{ExprId, Rational, SymId, SymbolKind};
 use lang::{Diagnostic, Expr, Ident, Property, Span};
 
-use super::checks::{self, GAP, GRIP};
+use super::checks::{self, ARMING, GAP, GRIP};
 use super::{normalize, space, Binding, Resolver};
 use crate::{Constraint, ConstraintKind, Contact, Placeholder, Value};
 
 /// The laws a `contact` block may give, as a hint names them.
 const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1), \
-                            `grip V` (a tangential rate held at zero while it is closed), and \
-                            `friction MU` with `slip V` (Coulomb's law along the tangential rate V)";
+                            `grip V` (a tangential rate held at zero while it is closed), \
+                            `friction MU` with `slip V` (Coulomb's law along the tangential rate \
+                            V), and `armed A` (watched only while A > 0)";
 
 impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
@@ -155,6 +156,7 @@ impl Resolver<'_> {
         let mut grip: Option<(ExprId, Span)> = None;
         let mut slip: Option<(ExprId, Span)> = None;
         let mut friction: Option<(ExprId, Span)> = None;
+        let mut armed: Option<ExprId> = None;
         // A coefficient written but refused (reported already) still pairs with its slip.
         let mut friction_written = false;
         let mut seen: Vec<&Ident> = Vec::new();
@@ -172,6 +174,7 @@ impl Resolver<'_> {
                 "restitution" => restitution = self.restitution(&law.value),
                 "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
                 "slip" => slip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                "armed" => armed = self.scalar_in_role(&law.value, &ARMING).map(|(a, _)| a),
                 "friction" => {
                     friction_written = true;
                     friction = self.friction(&law.value).map(|mu| (mu, law.value.span));
@@ -242,6 +245,7 @@ impl Resolver<'_> {
             grip,
             restitution,
             friction,
+            armed,
             span,
         });
         self.bind(name, Binding::Constraint(vec![Some(normal)]));

@@ -52,6 +52,7 @@
 //!   of t∞; the ball gets there in ln(tol)/ln(e) impacts (93 at e = 0.8, tol = 1e-9).
 
 use nalgebra::DMatrix;
+use numeric::Tape;
 
 use super::{Layout, Mechanical, Stabilisation};
 use crate::complementarity::{self, Row};
@@ -95,6 +96,13 @@ pub(super) struct Modes {
     slip_offset: Vec<f64>,
     /// The rough contacts, in order: their guards follow the contacts'.
     rough: Vec<usize>,
+    /// Whether each contact is armed (its condition positive; always, without one).
+    armed: Vec<bool>,
+    /// Whether each contact has an arming condition of its own.
+    conditioned: Vec<bool>,
+    /// An armed contact that was armed inside its gap (g < 0: a swing foot below the ground
+    /// at mid-stance): it neither lands nor faults until its gap rises through 0.
+    below: Vec<bool>,
 }
 
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
@@ -127,6 +135,9 @@ impl Mechanical {
             tangent_speed: vec![0.0; count],
             slip_offset: vec![0.0; count],
             rough: (0..count).filter(|&k| contacts[k].friction.is_some()).collect(),
+            armed: vec![true; count],
+            conditioned: vec![false; count],
+            below: vec![false; count],
         };
         self.contacts = contacts;
         self.update_kept();
@@ -162,6 +173,36 @@ impl Mechanical {
             assert!(mu.is_none_or(|mu| mu >= 0.0), "μ ≥ 0");
             c.friction = mu;
         }
+    }
+
+    /// Watches the contacts' arming conditions, the outputs of `conditions` (one per contact,
+    /// from the dynamics program's inputs): a contact is watched only while its condition is
+    /// positive. Each condition is a guard of its own, after the others.
+    /// `conditioned` says which contacts have a condition of their own (the others' output is
+    /// 1): only those may be armed inside their gap.
+    pub fn with_arming(mut self, conditions: Tape, conditioned: Vec<bool>) -> Self {
+        assert_eq!(conditions.outputs(), self.contacts.len(), "a condition per contact");
+        assert_eq!(conditioned.len(), self.contacts.len(), "a flag per contact");
+        self.modes.conditioned = conditioned;
+        assert_eq!(conditions.inputs(), self.layout.dynamics_inputs(), "the dynamics' inputs");
+        let values = vec![1.0; self.contacts.len()];
+        self.arming = Some((conditions, values));
+        self
+    }
+
+    /// Each contact's arming condition at (t, y), into the stored values.
+    fn evaluate_arming(&mut self, t: f64, y: &[f64]) {
+        let Some((tape, values)) = self.arming.as_mut() else { return };
+        let mut input = Vec::with_capacity(tape.inputs());
+        input.push(t);
+        input.extend_from_slice(y);
+        input.extend_from_slice(&self.parameters);
+        tape.eval(&input, values);
+    }
+
+    /// Whether each contact is armed now.
+    pub fn armed(&self) -> &[bool] {
+        &self.modes.armed
     }
 
     /// The contacts slipping now.
@@ -344,7 +385,8 @@ impl Mechanical {
     /// stick or its slip), and one for the solvability of the slipping contacts' forces.
     pub(super) fn contact_guard_count(&self) -> usize {
         let rough = self.modes.rough.len();
-        self.contacts.len() + rough + usize::from(rough > 0)
+        let arming = if self.arming.is_some() { self.contacts.len() } else { 0 };
+        self.contacts.len() + rough + usize::from(rough > 0) + arming
     }
 
     /// The guards: a closed contact's reaction λ, an open one's gap g; then each rough
@@ -367,11 +409,26 @@ impl Mechanical {
         let n = self.layout.coordinates;
         let count = self.contacts.len();
         for k in 0..count {
-            out[k] = if self.modes.closed[k] {
+            out[k] = if !self.modes.armed[k] {
+                1.0
+            } else if self.modes.below[k] {
+                // Armed inside its gap: watched for rising through it.
+                -self.gap(k) + self.modes.offset[k]
+            } else if self.modes.closed[k] {
                 self.solution[n + self.contacts[k].normal]
             } else {
                 self.gap(k) + self.modes.offset[k]
             };
+        }
+        let rough = self.modes.rough.len();
+        if self.arming.is_some() {
+            self.evaluate_arming(t, y);
+            let at = count + rough + usize::from(rough > 0);
+            let values = &self.arming.as_ref().expect("arming").1;
+            for k in 0..count {
+                // While armed, the condition falling to 0 disarms; while not, its rising does.
+                out[at + k] = if self.modes.armed[k] { values[k] } else { -values[k] };
+            }
         }
         if self.modes.rough.is_empty() {
             return Ok(());
@@ -434,13 +491,18 @@ impl Mechanical {
         self.modes.speed = vec![0.0; count];
         self.update_kept();
         self.dynamics_at(t, y)?;
+        self.evaluate_arming(t, y);
         let size = y[..n].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
         for k in 0..count {
             let gradient: f64 =
                 self.jacobian_row(self.contacts[k].normal).iter().map(|v| v.abs()).sum();
             let length = self.gap(k).abs().max(gradient * size);
             self.modes.length[k] = length;
-            if self.gap(k) < -tolerance * length {
+            let armed = self.arming.as_ref().is_none_or(|(_, values)| values[k] > 0.0);
+            self.modes.armed[k] = armed;
+            // A conditioned contact may start inside its gap: disarmed, or armed below it.
+            self.modes.below[k] = armed && self.modes.conditioned[k] && self.gap(k) < 0.0;
+            if !self.modes.conditioned[k] && self.gap(k) < -tolerance * length {
                 return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
             }
         }
@@ -459,7 +521,7 @@ impl Mechanical {
         let count = self.contacts.len();
         let tol = self.modes.tolerance;
         let rough = self.modes.rough.clone();
-        if fired.contains(&(count + rough.len())) {
+        if !rough.is_empty() && fired.contains(&(count + rough.len())) {
             // The slipping contacts' normal forces grew without bound: Painlevé's jam.
             return Err(FaultKind::Painleve {
                 contacts: self.slipping_contacts(),
@@ -481,6 +543,25 @@ impl Mechanical {
                 self.modes.tangent_speed[k] = scale;
             }
         }
+        // Arming: a contact whose condition fell to 0 is disarmed (and opens, if closed); one
+        // whose condition rose is armed, below its surface if its gap is negative there; one
+        // armed below whose gap rose through 0 is an ordinary open contact from here.
+        if self.arming.is_some() {
+            self.evaluate_arming(t, y);
+            let at = count + rough.len() + usize::from(!rough.is_empty());
+            for k in 0..count {
+                if fired.contains(&(at + k)) {
+                    let armed = !self.modes.armed[k];
+                    self.modes.armed[k] = armed;
+                    self.modes.below[k] = armed && self.gap(k) < 0.0;
+                    if !armed {
+                        self.modes.below[k] = false;
+                    }
+                } else if self.modes.below[k] && fired.contains(&k) {
+                    self.modes.below[k] = false;
+                }
+            }
+        }
         let before = self.modes.closed.clone();
         let slipped = self.modes.slip.clone();
         // A rough contact whose stick guard fired sticks no more here; one whose slip guard
@@ -496,7 +577,9 @@ impl Mechanical {
                 }
             }
         }
+        let watched = |modes: &Modes, k: usize| modes.armed[k] && !modes.below[k];
         let touching: Vec<usize> = (0..count)
+            .filter(|&k| watched(&self.modes, k))
             .filter(|&k| before[k] || self.gap(k) <= tol * self.modes.length[k])
             .collect();
         let band = |modes: &Modes, k: usize, held: bool| {
@@ -688,7 +771,7 @@ impl Mechanical {
         // g ≤ 0 (a closed contact's drift) could otherwise fall back within a step unseen.
         for k in 0..count {
             let gap = self.gap(k);
-            self.modes.offset[k] = if gap > 0.0 || closed[k] {
+            self.modes.offset[k] = if gap > 0.0 || closed[k] || self.modes.below[k] {
                 0.0
             } else {
                 -gap * (1.0 + 4.0 * f64::EPSILON) + f64::MIN_POSITIVE
