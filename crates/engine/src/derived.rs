@@ -49,6 +49,8 @@ pub struct DerivedContact {
     pub friction: Option<ExprId>,
     /// The tangential rate its grip holds at zero while it is closed.
     pub grip: Option<ExprId>,
+    /// The condition it is watched under (`armed A`: while A > 0).
+    pub armed: Option<ExprId>,
     /// Its reaction's symbol, and its grip's.
     pub force: SymId,
     pub grip_force: Option<SymId>,
@@ -99,6 +101,7 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
             restitution: contact.restitution,
             friction: contact.friction,
             grip,
+            armed: contact.armed,
             force: rows.normal.lambda,
             grip_force: rows.grip.as_ref().map(|g| g.lambda),
             direction: rows.normal.rows.jacobian.clone(),

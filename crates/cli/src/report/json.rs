@@ -106,6 +106,9 @@ impl Renderer for JsonReport<'_> {
                         if let Some(mu) = c.friction {
                             contact["friction"] = json!(pool.print(mu, A));
                         }
+                        if let Some(armed) = c.armed {
+                            contact["armed"] = json!(pool.print(armed, A));
+                        }
                         contact
                     })
                     .collect();

@@ -212,6 +212,13 @@ impl Text<'_> {
                 }
                 _ => None,
             };
+            if let Some(armed) = c.armed {
+                self.out.push(format!(
+                    "    armed while {} > 0 (open and unwatched otherwise; armed inside its gap, \
+                     it waits for the gap to rise through 0)",
+                    self.print(armed)
+                ));
+            }
             let start = if c.closed_at_start { "closed" } else { "open" };
             self.out.push(format!("    {start} at the start"));
             let direction: Vec<String> = c.direction.iter().map(|e| self.print(*e)).collect();
