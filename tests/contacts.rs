@@ -566,3 +566,53 @@ fn an_armed_ledge_lets_the_ball_rise_through_and_catches_it() {
     let crossing = trajectory.times.iter().position(|&t| t > t0).expect("rows after t0");
     assert!(trajectory.rows[..crossing].iter().all(|r| r[y] < 1e-9));
 }
+
+/// The stance leg's angle and rate just after the last heel strike of a walk of
+/// `examples/contacts/simplest_walker.lag` with feet of mass `beta`·M: where the gait has
+/// settled (its multipliers are about 0.58 in size, so thirty steps leave 1e-7 of any start).
+fn walker_after_strike(beta: f64) -> (f64, f64, usize) {
+    let outcome = run(
+        "simplest_walker.lag",
+        Options {
+            set: vec![engine::input::Assignment { name: "beta".into(), value: beta.to_string() }],
+            output: vec!["th1, th1', th2, th2'".into()],
+            ..Options::default()
+        },
+    );
+    let strikes = events(&outcome, ModeChange::Impact);
+    let last = strikes.last().expect("it walks");
+    let (_, after) = jump(&outcome, last.time);
+    // The foot that struck is the new stance foot.
+    let (angle, rate) = if outcome.contact_names[last.contact] == "ground1" {
+        (column(&outcome, "th1"), column(&outcome, "th1'"))
+    } else {
+        (column(&outcome, "th2"), column(&outcome, "th2'"))
+    };
+    (after[angle], after[rate], strikes.len())
+}
+
+/// Garcia et al.'s simplest walker: the paper's gait is the limit of feet of vanishing mass.
+/// Two small ratios, each off the paper by O(beta), extrapolate to it within 1e-6.
+#[test]
+fn the_simplest_walker_settles_onto_garcias_gait_as_its_feet_lighten() {
+    let paper = (0.20031090049483f64, -0.19983247291764f64);
+    let (b1, b2) = (2e-4f64, 1e-4f64);
+    let (theta1, rate1, steps) = walker_after_strike(b1);
+    let (theta2, rate2, _) = walker_after_strike(b2);
+    assert!(steps >= 30, "{steps} steps");
+    // Linear in beta: the value at 0 from the two.
+    let limit = |a: f64, b: f64| b - (a - b) * b2 / (b1 - b2);
+    let (theta, rate) = (limit(theta1, theta2), limit(rate1, rate2));
+    let offsets = [(theta1 - paper.0).abs(), (theta2 - paper.0).abs(), (theta - paper.0).abs()];
+    eprintln!(
+        "walker: θ⁺ off the paper by {:e} (β = {b1}), {:e} (β = {b2}), {:e} extrapolated; \
+         θ'⁺ by {:e} extrapolated",
+        offsets[0],
+        offsets[1],
+        offsets[2],
+        (rate - paper.1).abs()
+    );
+    // The approach: halving beta halves the offset.
+    assert!(offsets[1] < 0.6 * offsets[0] && offsets[1] > 0.4 * offsets[0], "{offsets:?}");
+    assert!(offsets[2] < 1e-6 && (rate - paper.1).abs() < 1e-6, "{theta}, {rate}");
+}

@@ -427,7 +427,12 @@ impl Mechanical {
             let values = &self.arming.as_ref().expect("arming").1;
             for k in 0..count {
                 // While armed, the condition falling to 0 disarms; while not, its rising does.
-                out[at + k] = if self.modes.armed[k] { values[k] } else { -values[k] };
+                // A closed contact is held whatever its condition (a walker's stance foot).
+                out[at + k] = match (self.modes.closed[k], self.modes.armed[k]) {
+                    (true, _) => 1.0,
+                    (false, true) => values[k],
+                    (false, false) => -values[k],
+                };
             }
         }
         if self.modes.rough.is_empty() {
@@ -753,6 +758,16 @@ impl Mechanical {
                     if *kind == Row::Normal && solution.active[r] {
                         closed[rows.owners[r]] = true;
                     }
+                }
+            }
+        }
+        // A contact that opened here is armed by its condition's sign now (it was held whatever
+        // its condition while closed).
+        if let Some((_, values)) = &self.arming {
+            for k in 0..count {
+                if before[k] && !closed[k] && self.modes.conditioned[k] {
+                    self.modes.armed[k] = values[k] > 0.0;
+                    self.modes.below[k] = false;
                 }
             }
         }
