@@ -593,6 +593,10 @@ impl Mechanical {
         let mut struck = vec![false; count];
         let mut settled = vec![false; count];
         let mut landed = vec![false; count];
+        // Landed with e = 0: γ⁺ = 0 is the impact law itself where it took an impulse, whatever
+        // rounding leaves of it (a walker's light feet make the Delassus operator ill-conditioned,
+        // and γ⁺ misses a tight band by a rounding of 1/β times the rates').
+        let mut plastic = vec![false; count];
         let mut impulses = vec![0.0; count];
         let mut tangential: Vec<Option<f64>> =
             self.contacts.iter().map(|c| c.grip.map(|_| 0.0)).collect();
@@ -629,6 +633,7 @@ impl Mechanical {
                             }
                             self.modes.impacts[k] = self.modes.impacts[k].max(-rate);
                             self.modes.speed[k] = self.modes.speed[k].max(-rate);
+                            plastic[k] = e == 0.0;
                         }
                         (1.0 + e) * rate
                     }
@@ -693,6 +698,9 @@ impl Mechanical {
             .copied()
             .filter(|&k| {
                 let rate = self.normal_rate(k).abs();
+                if landed[k] && plastic[k] && impulses[k] > 0.0 {
+                    return true;
+                }
                 if !before[k] || landed[k] {
                     return rate <= band(&self.modes, k, false);
                 }
