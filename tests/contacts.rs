@@ -424,17 +424,7 @@ fn particle_leaves_the_hemisphere_at_two_thirds_of_its_starting_height() {
 /// `check` holds every `expect` line of every contact scene, counted.
 #[test]
 fn check_holds_every_expectation_of_the_contact_scenes() {
-    let mut held = 0;
-    for (path, source) in lagrange_tests::examples() {
-        if !path.starts_with("examples/contacts/") {
-            continue;
-        }
-        let expected = source.lines().filter(|l| l.trim_start().starts_with("expect ")).count();
-        let result = cli::check::check_file(&path, &source);
-        assert_eq!(result.exit_code, 0, "{path} fails:\n{}", result.report);
-        assert_eq!((result.held, result.failed), (expected, 0), "{path}:\n{}", result.report);
-        held += result.held;
-    }
+    let held = lagrange_tests::check_every_expectation_in("contacts");
     assert!(held >= 15, "only {held} expectations held");
 }
 

@@ -29,6 +29,23 @@ pub fn examples_without_contacts() -> Vec<(String, String)> {
     all
 }
 
+/// Runs `check` on every example under `examples/<folder>/`, each of which must hold every
+/// `expect` line it has; how many held in all.
+pub fn check_every_expectation_in(folder: &str) -> usize {
+    let mut held = 0;
+    for (path, source) in examples() {
+        if !path.starts_with(&format!("examples/{folder}/")) {
+            continue;
+        }
+        let expected = source.lines().filter(|l| l.trim_start().starts_with("expect ")).count();
+        let result = cli::check::check_file(&path, &source);
+        assert_eq!(result.exit_code, 0, "{path} fails:\n{}", result.report);
+        assert_eq!((result.held, result.failed), (expected, 0), "{path}:\n{}", result.report);
+        held += result.held;
+    }
+    held
+}
+
 /// Whether a scene has a contact with Coulomb friction (`friction MU` in a contact's block):
 /// the stages that do not take friction yet (code generation) leave those to
 /// tests/friction.rs.

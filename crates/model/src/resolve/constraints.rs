@@ -251,11 +251,18 @@ impl Resolver<'_> {
         self.bind(name, Binding::Constraint(vec![Some(normal)]));
     }
 
-    /// A contact's `restitution`: a dimensionless constant, in [0, 1] at the parameters' values.
-    fn restitution(&mut self, written: &Expr) -> Option<ExprId> {
+    /// A contact's coefficient (`what`, "restitution" or "friction"): a dimensionless
+    /// constant of the parameters, with `example` its hint's; the expression, and its value
+    /// at the parameters' (exact where it is a rational).
+    fn coefficient(
+        &mut self,
+        written: &Expr,
+        what: &str,
+        example: &str,
+    ) -> Option<(ExprId, Option<Rational>, f64)> {
         let (e, dims) = self.scalar(written)?;
         for f in self.operand(dims).forms() {
-            self.scope.units.dimensionless(&f, written.span, "a coefficient of restitution");
+            self.scope.units.dimensionless(&f, written.span, &format!("a coefficient of {what}"));
         }
         let free = self.model.pool.free_symbols(e);
         if let Some(s) =
@@ -263,22 +270,25 @@ impl Resolver<'_> {
         {
             let name = self.model.pool.symbol(*s).name.clone();
             self.error(
-                Diagnostic::error(written.span, "a coefficient of restitution is a constant")
+                Diagnostic::error(written.span, format!("a coefficient of {what} is a constant"))
                     .with_label(format!("depends on `{name}`"))
-                    .with_hint("write a number or an expression of parameters, `4/5` or `e`"),
+                    .with_hint(format!("write a number or an expression of parameters, {example}")),
             );
             return None;
         }
         let known = self.known(e)?;
-        let outside = match self.model.pool.as_num(known) {
-            Some(q) => q.is_negative() || *q > Rational::one(),
-            None => {
-                let x = numeric::eval(&self.model.pool, known, &[]);
-                !(-1e-12..=1.0 + 1e-12).contains(&x)
-            }
+        let exact = self.model.pool.as_num(known).cloned();
+        Some((e, exact, numeric::eval(&self.model.pool, known, &[])))
+    }
+
+    /// A contact's `restitution`: a dimensionless constant, in [0, 1] at the parameters' values.
+    fn restitution(&mut self, written: &Expr) -> Option<ExprId> {
+        let (e, exact, value) = self.coefficient(written, "restitution", "`4/5` or `e`")?;
+        let outside = match exact {
+            Some(q) => q.is_negative() || q > Rational::one(),
+            None => !(-1e-12..=1.0 + 1e-12).contains(&value),
         };
         if outside {
-            let value = numeric::eval(&self.model.pool, known, &[]);
             self.error(
                 Diagnostic::error(
                     written.span,
@@ -298,29 +308,12 @@ impl Resolver<'_> {
     /// A contact's `friction`: Coulomb's coefficient, a dimensionless constant, at least 0 at
     /// the parameters' values.
     fn friction(&mut self, written: &Expr) -> Option<ExprId> {
-        let (e, dims) = self.scalar(written)?;
-        for f in self.operand(dims).forms() {
-            self.scope.units.dimensionless(&f, written.span, "a coefficient of friction");
-        }
-        let free = self.model.pool.free_symbols(e);
-        if let Some(s) =
-            free.iter().find(|s| !matches!(self.model.pool.symbol(**s).kind, SymbolKind::Param))
-        {
-            let name = self.model.pool.symbol(*s).name.clone();
-            self.error(
-                Diagnostic::error(written.span, "a coefficient of friction is a constant")
-                    .with_label(format!("depends on `{name}`"))
-                    .with_hint("write a number or an expression of parameters, `3/10` or `mu`"),
-            );
-            return None;
-        }
-        let known = self.known(e)?;
-        let negative = match self.model.pool.as_num(known) {
+        let (e, exact, value) = self.coefficient(written, "friction", "`3/10` or `mu`")?;
+        let negative = match exact {
             Some(q) => q.is_negative(),
-            None => numeric::eval(&self.model.pool, known, &[]) < -1e-12,
+            None => value < -1e-12,
         };
         if negative {
-            let value = numeric::eval(&self.model.pool, known, &[]);
             self.error(
                 Diagnostic::error(written.span, "a coefficient of friction is not negative")
                     .with_label(format!("is {value} here"))
