@@ -11,6 +11,7 @@
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_6, FRAC_PI_8};
 
 use cli::simulate::summary;
+use lagrange_tests::column;
 use sim::{ModeChange, ModeEvent};
 use simulation::{simulate, Options, Outcome};
 
@@ -25,15 +26,6 @@ fn run(name: &str, options: Options) -> Outcome {
     let outcome = simulate(&source(name), &options).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(outcome.run.fault.is_none(), "{name}: {}", summary(&outcome));
     outcome
-}
-
-/// The recorded column named `name`.
-fn column(outcome: &Outcome, name: &str) -> usize {
-    outcome
-        .columns
-        .iter()
-        .position(|c| c == name)
-        .unwrap_or_else(|| panic!("no column `{name}` in {:?}", outcome.columns))
 }
 
 /// The index of the contact named `name`, as the mode events give it.

@@ -10,6 +10,7 @@
 
 use cli::simulate::summary;
 use engine::input::Assignment;
+use lagrange_tests::column;
 use sim::{FaultKind, ModeChange, ModeEvent, PainleveCase};
 use simulation::{simulate, Options, Outcome};
 
@@ -38,14 +39,6 @@ fn options(values: &[(&str, f64)], output: &str) -> Options {
         output: vec![output.into()],
         ..Options::default()
     }
-}
-
-fn column(outcome: &Outcome, name: &str) -> usize {
-    outcome
-        .columns
-        .iter()
-        .position(|c| c == name)
-        .unwrap_or_else(|| panic!("no column `{name}` in {:?}", outcome.columns))
 }
 
 fn events(outcome: &Outcome, kind: ModeChange) -> Vec<ModeEvent> {

@@ -29,6 +29,15 @@ pub fn examples_without_contacts() -> Vec<(String, String)> {
     all
 }
 
+/// The recorded column of a run named `name`.
+pub fn column(outcome: &simulation::Outcome, name: &str) -> usize {
+    outcome
+        .columns
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column `{name}` in {:?}", outcome.columns))
+}
+
 /// Runs `check` on every example under `examples/<folder>/`, each of which must hold every
 /// `expect` line it has; how many held in all.
 pub fn check_every_expectation_in(folder: &str) -> usize {
