@@ -23,6 +23,7 @@ def test_the_ball_lands_at_the_closed_form_times_and_settles_where_they_accumula
     events = run.contact_events
     assert list(events) == [
         "t", "contact", "kind", "closed", "impulse", "tangential_impulse", "energy_change",
+        "slip",
     ]
     impacts = events.of("impact", "floor")
     assert len(impacts) > 20, events
@@ -103,3 +104,18 @@ def test_an_ensemble_records_each_runs_settling_and_impacts():
     assert past.failures[0] is None and "restitution of contact `floor`" in past.failures[1]
     with pytest.raises(ValueError, match="no contact `wall`"):
         lagrange.load(BALL).ensemble({"e": (0.5, 0.9, 2)}, record="settled(wall)")
+
+
+def test_a_block_on_a_rough_incline_stops_and_slides_back_as_its_events_say():
+    # examples/friction/block_on_incline.lag: m = 2 kg, γ = π/6, μ = 0.4, v0 = 3 m/s.
+    block = lagrange.load(ROOT / "examples" / "friction" / "block_on_incline.lag")
+    run = block.simulate(tolerance=1e-10)
+    events = run.contact_events
+    slips = events["kind"] == "slips"
+    # It slips up from the start, then back down where it stops.
+    assert list(events["slip"][slips]) == [1.0, -1.0]
+    g, gamma, mu, v0 = 9.81, math.pi / 6, 0.4, 3.0
+    stop = v0 / (g * (math.sin(gamma) + mu * math.cos(gamma)))
+    assert events["t"][slips][1] == pytest.approx(stop, rel=1e-8)
+    # Sliding down, friction is μ·N up the slope.
+    assert run["plane.grip"][-1] == pytest.approx(mu * 2.0 * g * math.cos(gamma), rel=1e-9)

@@ -940,11 +940,15 @@ class ContactEvents(_Columns):
     - ``kind``: ``"impact"`` (it landed and took an impulse by Newton's law),
       ``"settled"`` (its impacts accumulate: the last one made plastic, the contact closed),
       ``"closed"`` (it closed touching at rest), ``"lift-off"`` (its reaction fell to zero),
-      ``"struck"`` (another contact's impact gave it an impulse while it stayed closed);
+      ``"struck"`` (another contact's impact gave it an impulse while it stayed closed),
+      ``"sticks"`` and ``"slips"`` (a rough contact's friction began to hold it, or it began
+      to slip);
     - ``closed``: whether the contact is closed after it (bools);
     - ``impulse``: the normal impulse it took (0 without an impact);
     - ``tangential_impulse``: its grip's impulse (NaN for a contact without grip);
-    - ``energy_change``: the kinetic energy its impulses changed.
+    - ``energy_change``: the kinetic energy its impulses changed;
+    - ``slip``: a rough contact's slip after it, ±1 the way it slips, 0 sticking (0 for a
+      contact without friction).
 
     ``len(events)`` is the number of columns, as for any mapping; ``events.count`` the number
     of events. ``events.of(kind)`` is the times of one kind, ``events.settled(name)`` the
@@ -960,6 +964,7 @@ class ContactEvents(_Columns):
             "impulse": raw["impulse"],
             "tangential_impulse": raw["tangential_impulse"],
             "energy_change": raw["energy_change"],
+            "slip": raw["slip"],
         }
 
     @property
