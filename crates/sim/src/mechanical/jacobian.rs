@@ -40,6 +40,33 @@ impl Mechanical {
         Ok(Some(&self.partials_out))
     }
 
+    /// The gradients in (q, q̇) of what the rows kept now hold at zero: Φ and Φ̇ of a position
+    /// row, A·q̇ + b of a velocity row. They are the normals of the manifold a run moves on,
+    /// along which Baumgarte's terms, not the motion, decide the Jacobian; a map of the state
+    /// is charted on their null space. `None` without a partials program.
+    pub fn manifold_normals(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<Vec<Vec<f64>>>, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        // Φ and Φ̇ do not depend on q̈ and λ, which the program takes all the same.
+        let held = vec![0.0; n + m];
+        let kept = self.kept.clone();
+        let kinds = self.stabilisation.clone();
+        let Some(out) = self.partials_at(t, y, &held)? else { return Ok(None) };
+        let width = 2 * n;
+        let row = |block: usize, c: usize| out[(n + block * m + c) * width..][..width].to_vec();
+        let mut normals = Vec::new();
+        for c in (0..m).filter(|&c| kept[c]) {
+            normals.push(row(1, c));
+            if kinds[c] == Stabilisation::Position {
+                normals.push(row(2, c));
+            }
+        }
+        Ok(Some(normals))
+    }
+
     /// ∂(q̇, q̈)/∂(q, q̇), row-major, into `jac`; false without a partials program.
     pub(super) fn exact_jacobian(
         &mut self,

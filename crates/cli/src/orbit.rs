@@ -1,0 +1,89 @@
+//! `orbit`'s report: the fixed point, the period, the Floquet multipliers and the verdict, as
+//! text for people or JSON for programs.
+
+use std::fmt::Write;
+
+use orbit::Orbit;
+use serde_json::{json, Value};
+
+/// The report as text.
+pub fn text(path: &str, orbit: &Orbit, section: &str) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "periodic orbit of {path} ({section})");
+    let width = orbit.state_names.iter().map(|n| n.chars().count()).max().unwrap_or(0);
+    let _ = writeln!(out, "fixed point:");
+    for (name, value) in orbit.state_names.iter().zip(&orbit.fixed_point) {
+        let pad = width - name.chars().count();
+        let _ = writeln!(out, "  {name}{} = {}", " ".repeat(pad), number(*value));
+    }
+    let _ = writeln!(out, "period: {} s", number(orbit.period));
+    if orbit.jumps > 0 {
+        let _ = writeln!(out, "jumps on the way: {}", orbit.jumps);
+    }
+    let _ = writeln!(
+        out,
+        "Floquet multipliers ({} on the section, {} trivial left out):",
+        orbit.multipliers.len(),
+        orbit.trivial
+    );
+    for m in &orbit.multipliers {
+        let _ = writeln!(out, "  {:<40} |μ| = {}", complex(m.re, m.im), number(m.norm()));
+    }
+    let verdict = if orbit.stable { "stable" } else { "unstable" };
+    let _ = writeln!(out, "verdict: {verdict} (largest |μ| = {})", number(orbit.spectral_radius()));
+    let residuals: Vec<String> =
+        orbit.iterations.iter().map(|i| format!("{:.1e}", i.residual)).collect();
+    let _ = writeln!(
+        out,
+        "Newton: {} runs, residuals on the section {}",
+        orbit.iterations.len(),
+        residuals.join(", ")
+    );
+    out
+}
+
+/// The report as JSON.
+pub fn json(path: &str, orbit: &Orbit, section: &str) -> String {
+    let size = orbit.fixed_point.len();
+    let fixed: serde_json::Map<String, Value> = orbit
+        .state_names
+        .iter()
+        .zip(&orbit.fixed_point)
+        .map(|(n, v)| (n.clone(), json!(v)))
+        .collect();
+    let monodromy: Vec<Vec<f64>> =
+        (0..size).map(|i| orbit.monodromy[i * size..(i + 1) * size].to_vec()).collect();
+    let value = json!({
+        "scene": path,
+        "section": section,
+        "fixed_point": fixed,
+        "period": orbit.period,
+        "jumps": orbit.jumps,
+        "multipliers": orbit.multipliers.iter().map(|m| json!({
+            "re": m.re, "im": m.im, "abs": m.norm()
+        })).collect::<Vec<_>>(),
+        "trivial": orbit.trivial,
+        "stable": orbit.stable,
+        "spectral_radius": orbit.spectral_radius(),
+        "monodromy": monodromy,
+        "newton": orbit.iterations.iter().map(|i| json!({
+            "residual": i.residual, "steps": i.steps
+        })).collect::<Vec<_>>(),
+    });
+    let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
+    text.push('\n');
+    text
+}
+
+/// Twelve decimals, the trailing zeros dropped.
+fn number(v: f64) -> String {
+    format!("{v:.12}").trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+fn complex(re: f64, im: f64) -> String {
+    if im == 0.0 {
+        return number(re);
+    }
+    let sign = if im < 0.0 { "-" } else { "+" };
+    format!("{} {sign} {}i", number(re), number(im.abs()))
+}

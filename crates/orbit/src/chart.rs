@@ -1,0 +1,98 @@
+//! The linear algebra of a return map: the chart of the section within the manifold the
+//! motion keeps to, the map's Jacobian in it, the Newton step and the multipliers.
+
+use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
+
+/// A rank below this fraction of the largest (squared singular value, rows normalised) is a
+/// direction the normals do not restrain.
+const RANK: f64 = 1e-10;
+
+/// An orthonormal basis (columns, `size` rows) of the directions that every row of `normals`
+/// and `flow` (if given) is orthogonal to: the section's tangent within the manifold the
+/// constraints kept hold the state on. Baumgarte's terms act across it, the motion along it.
+pub fn tangent(normals: &[Vec<f64>], flow: Option<&[f64]>, size: usize) -> DMatrix<f64> {
+    let mut rows: Vec<&[f64]> = normals.iter().map(|r| r.as_slice()).collect();
+    rows.extend(flow);
+    let mut gram = DMatrix::<f64>::zeros(size, size);
+    for row in rows {
+        let length = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if length == 0.0 {
+            continue;
+        }
+        for i in 0..size {
+            for j in 0..size {
+                gram[(i, j)] += row[i] * row[j] / (length * length);
+            }
+        }
+    }
+    let eigen = SymmetricEigen::new(gram);
+    let largest = eigen.eigenvalues.iter().fold(1.0_f64, |m: f64, v: &f64| m.max(v.abs()));
+    let mut free: Vec<usize> =
+        (0..size).filter(|&k| eigen.eigenvalues[k].abs() <= RANK * largest).collect();
+    // The basis in a fixed order, each vector's sign fixed: the same chart on every run.
+    free.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
+    let mut basis = DMatrix::zeros(size, free.len());
+    for (c, &k) in free.iter().enumerate() {
+        let mut v = eigen.eigenvectors.column(k).into_owned();
+        let lead = v.iter().copied().fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        if lead < 0.0 {
+            v = -v;
+        }
+        basis.set_column(c, &v);
+    }
+    basis
+}
+
+/// The full map's Jacobian (row-major, `size` × `size`) in the chart: Tᵀ·M·T.
+pub fn reduced(matrix: &[f64], chart: &DMatrix<f64>) -> DMatrix<f64> {
+    let size = chart.nrows();
+    let m = DMatrix::from_row_slice(size, size, matrix);
+    chart.transpose() * m * chart
+}
+
+/// The Newton step dz of (C − I)·dz = −ρ; `None` where C has a multiplier at 1 (the fixed
+/// point is not isolated there: a fold, or a family of orbits).
+pub fn newton_step(reduced: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
+    let d = reduced.nrows();
+    let system = reduced - DMatrix::identity(d, d);
+    system.lu().solve(&(-residual))
+}
+
+/// The eigenvalues of C, largest modulus first (then by angle, counter-clockwise from the
+/// positive reals): the Floquet multipliers on the section.
+pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    if reduced.nrows() == 0 {
+        return Vec::new();
+    }
+    let mut values: Vec<Complex<f64>> =
+        reduced.clone().complex_eigenvalues().iter().copied().collect();
+    values.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(a.arg().total_cmp(&b.arg())));
+    values
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tangent_is_orthogonal_to_the_normals_and_flow() {
+        let normals = vec![vec![1.0, 1.0, 0.0, 0.0]];
+        let flow = [0.0, 0.0, 2.0, 0.0];
+        let t = tangent(&normals, Some(&flow), 4);
+        assert_eq!(t.ncols(), 2);
+        for c in 0..2 {
+            let v = t.column(c);
+            assert!((v[0] + v[1]).abs() < 1e-14 && v[2].abs() < 1e-14);
+            assert!((v.norm() - 1.0).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn multipliers_of_a_rotation_are_its_conjugate_pair() {
+        let (c, s) = (0.6, 0.8);
+        let m = DMatrix::from_row_slice(2, 2, &[0.5 * c, -0.5 * s, 0.5 * s, 0.5 * c]);
+        let mu = multipliers(&m);
+        assert!((mu[0].norm() - 0.5).abs() < 1e-15 && (mu[1].norm() - 0.5).abs() < 1e-15);
+        assert!((mu[0].im + mu[1].im).abs() < 1e-15 && (mu[0].re - 0.3).abs() < 1e-15);
+    }
+}

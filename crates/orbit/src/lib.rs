@@ -1,0 +1,335 @@
+//! Periodic orbits of a scene: what `lagrange orbit` finds and judges. This crate owns the
+//! return map (over a fixed period, to a section where an expression crosses zero, or to a
+//! contact's landing), the symmetry a return is mapped by before it is compared with its start
+//! ([`Symmetry`]), Newton's method on the map in the chart of its section, and the Floquet
+//! multipliers and the verdict at the fixed point, as an [`Orbit`] a front end renders.
+//!
+//! The map's Jacobian is the variational run's (`sim::variational`): the state transition
+//! matrix integrated on the run's own steps from the exact Jacobian, carried across the jumps
+//! by their saltation matrices, and ended with the section's event time varied with the start.
+//! Newton and the multipliers work in the chart of the section within the manifold the kept
+//! constraints hold the state on ([`chart::tangent`]): the directions across it (the flow's
+//! own, and those Baumgarte's terms decide) are the trivial multipliers, left out.
+//! It loads the scene as `simulation` does for a run, and prints nothing.
+
+pub mod chart;
+mod map;
+
+use nalgebra::{Complex, DVector};
+use numeric::Tape;
+use sim::variational::{self, End, Guard, Refusal};
+use sim::Mechanical;
+
+use engine::input::Assignment;
+use engine::Error;
+pub use map::Symmetry;
+
+/// Where the return map ends.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Section {
+    /// A fixed period, an expression of the parameters in seconds (a driven scene's).
+    Period(String),
+    /// Where an expression of the state crosses zero (`lhs = rhs`: their difference) in the
+    /// direction given.
+    Crossing { expression: String, rising: bool },
+    /// Just after a contact lands (any contact's landing with `None`).
+    Landing { contact: Option<String> },
+}
+
+impl Section {
+    /// `impact`, `impact:NAME`, or an expression (`lhs = rhs` allowed) crossing zero.
+    pub fn parse(text: &str, rising: bool) -> Section {
+        let text = text.trim();
+        if text == "impact" {
+            return Section::Landing { contact: None };
+        }
+        if let Some(name) = text.strip_prefix("impact:") {
+            return Section::Landing { contact: Some(name.trim().to_string()) };
+        }
+        let expression = match text.split_once('=') {
+            Some((l, r)) => format!("({}) - ({})", l.trim(), r.trim()),
+            None => text.to_string(),
+        };
+        Section::Crossing { expression, rising }
+    }
+}
+
+/// What `orbit` is asked.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The run's settings as `simulate` takes them: `until` is the longest a return may take.
+    pub run: simulation::Options,
+    pub section: Section,
+    pub swaps: Vec<Assignment>,
+    pub shifts: Vec<Assignment>,
+    /// The most Newton iterations.
+    pub iterations: usize,
+}
+
+/// One Newton iteration: the residual in the chart before its step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iteration {
+    pub residual: f64,
+    pub steps: usize,
+}
+
+/// A periodic orbit found, judged by its multipliers.
+#[derive(Clone, Debug)]
+pub struct Orbit {
+    pub state_names: Vec<String>,
+    /// The fixed point of the map (q, q̇), on the section.
+    pub fixed_point: Vec<f64>,
+    /// The time the map takes there.
+    pub period: f64,
+    /// The eigenvalues of the map's Jacobian in the chart, largest modulus first.
+    pub multipliers: Vec<Complex<f64>>,
+    /// The map's Jacobian on the whole state (row-major), the symmetry applied.
+    pub monodromy: Vec<f64>,
+    /// How many directions the chart leaves out (the flow's and the constraints' normals),
+    /// whose multipliers are trivial.
+    pub trivial: usize,
+    pub jumps: usize,
+    pub iterations: Vec<Iteration>,
+    /// Whether every multiplier lies inside the unit circle.
+    pub stable: bool,
+}
+
+impl Orbit {
+    /// The largest |μ|.
+    pub fn spectral_radius(&self) -> f64 {
+        self.multipliers.first().map_or(0.0, |m| m.norm())
+    }
+
+    /// det of the map's Jacobian on the whole state: for a fixed period, exp of the integral
+    /// of the divergence (Liouville).
+    pub fn determinant(&self) -> f64 {
+        let size = self.fixed_point.len();
+        nalgebra::DMatrix::from_row_slice(size, size, &self.monodromy).determinant()
+    }
+}
+
+/// The residual, relative to the state's size, below which Newton has converged: the map is
+/// computed to rounding of its steps and event times, not to the integration's tolerance.
+const CONVERGED: f64 = 1e-11;
+
+/// The scene loaded and lowered for variational runs, its start and its map.
+struct Loaded {
+    mechanical: Mechanical,
+    start: Vec<f64>,
+    end: End,
+    until: f64,
+    symmetry: Symmetry,
+    run: sim::Settings,
+    state_names: Vec<String>,
+    contact_names: Vec<String>,
+}
+
+fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
+    let mut run_options = options.run.clone();
+    if let Section::Crossing { expression, .. } = &options.section {
+        run_options.events.push(expression.clone());
+    }
+    let resolved = simulation::Resolved::new(source, &run_options);
+    let mut settings = resolved.settings(&run_options)?;
+    if settings.hold.is_some() {
+        return Err(Error::Input(
+            "orbit takes inputs driven continuously, not held between samples (`hold`)".into(),
+        ));
+    }
+    let method = settings.method;
+    if !method.is_explicit() || method.is_symplectic() {
+        return Err(Error::Input(format!(
+            "orbit integrates the sensitivities on an explicit method's steps; {} is not one \
+             (use dop853, the default, or another of the explicit methods)",
+            method.name()
+        )));
+    }
+    // The section's expression is the one event watched.
+    settings.events = run_options.events.clone();
+    let simulation::Loaded { mut prepared, outputs, .. } = resolved.load(&settings)?;
+    let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
+    let values = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
+    let (parameters, start) = simulation::start(&mut prepared, &values, &[])?;
+    let columns = outputs.len() + settings.stops.len() + settings.events.len() + 2;
+    let dynamics_exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+    let observation = prepared.lower(&prepared.observation_inputs(), &prepared.extra[..columns])?;
+    let partials_exprs = prepared.partials_exprs();
+    let partials = prepared.lower(&prepared.observation_inputs(), &partials_exprs)?;
+    let signals = simulation::drive_signals(&prepared, &settings)?;
+    let mechanical = Mechanical::new(
+        prepared.layout,
+        Tape::new(dynamics),
+        Tape::new(observation),
+        parameters.clone(),
+    )
+    .with_kinds(prepared.stabilisation())
+    .with_signals(signals);
+    let integrand = simulation::Integrand::new(&mut prepared, mechanical, method)?;
+    let simulation::Integrand::Mechanical(mut mechanical) = integrand else {
+        unreachable!("an explicit method integrates (q, q̇)")
+    };
+    mechanical.set_partials(Tape::new(partials));
+    let end = match &options.section {
+        Section::Period(_) => End::Time,
+        Section::Crossing { rising, .. } => {
+            End::Crossing { column: outputs.len() + settings.stops.len(), rising: *rising }
+        }
+        Section::Landing { contact: None } => {
+            refuse_no_contacts(&prepared)?;
+            End::Landing { contact: None }
+        }
+        Section::Landing { contact: Some(name) } => {
+            let names = prepared.contact_names();
+            let Some(k) = names.iter().position(|c| c == name) else {
+                refuse_no_contacts(&prepared)?;
+                return Err(Error::Input(format!(
+                    "--section impact:{name}: the scene has no contact `{name}`; one of {}",
+                    names.join(", ")
+                )));
+            };
+            End::Landing { contact: Some(k) }
+        }
+    };
+    let until = match &options.section {
+        Section::Period(text) => period(&mut prepared, &parameters, text)?,
+        _ => settings.until,
+    };
+    let symmetry = Symmetry::new(&mut prepared, &parameters, &options.swaps, &options.shifts)?;
+    let mut run = simulation::run_settings(&settings, 0);
+    run.until = until;
+    Ok(Loaded {
+        mechanical,
+        start,
+        end,
+        until,
+        symmetry,
+        run,
+        state_names: prepared.state_names(),
+        contact_names: prepared.contact_names(),
+    })
+}
+
+fn refuse_no_contacts(prepared: &engine::numbers::Prepared) -> Result<(), Error> {
+    if prepared.contact_names().is_empty() {
+        return Err(Error::Input(
+            "--section impact: the scene has no contact to land on; give an expression that \
+             crosses zero, or --period for a driven scene"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The fixed period's value in seconds, from an expression of the parameters with an
+/// optional unit.
+fn period(
+    prepared: &mut engine::numbers::Prepared,
+    parameters: &[f64],
+    text: &str,
+) -> Result<f64, Error> {
+    let model = &mut prepared.derivation.model;
+    let value = model
+        .resolve_value_for("t", text)
+        .map_err(|diagnostics| Error::Expression { diagnostics, text: text.to_string() })?;
+    let model::Value::Scalar(e) = value else {
+        return Err(Error::Input(format!(
+            "--period `{text}` is {}, not a time",
+            value.kind_name()
+        )));
+    };
+    let value = prepared.constant(e, parameters);
+    if !(value.is_finite() && value > 0.0) {
+        return Err(Error::Input(format!(
+            "--period `{text}` is {value} at the parameters' values: a period is a positive \
+             time, a constant of the parameters"
+        )));
+    }
+    Ok(value)
+}
+
+/// A variational run's refusal in words.
+fn refused(refusal: Refusal, contacts: &[String], until: f64) -> Error {
+    let guard = |g: Guard| match g {
+        Guard::Contact(k) => format!("contact `{}`", contacts.get(k).cloned().unwrap_or_default()),
+        Guard::Section => "the section".to_string(),
+    };
+    match refusal {
+        Refusal::NoJacobian => Error::Numeric("the scene's partials were not lowered".into()),
+        Refusal::Method(m) => Error::Input(format!("{m} cannot carry the sensitivities")),
+        Refusal::Fault(f) => {
+            Error::Numeric(format!("the run faulted at t = {}: {:?}", f.time, f.kind))
+        }
+        Refusal::Grazing { time, guard: g, relative } => Error::Numeric(format!(
+            "grazing: {} is reached at t = {time} with a rate {relative:.1e} of its scale, too \
+             slow to say when it is reached (the return map is not differentiable there)",
+            guard(g)
+        )),
+        Refusal::Simultaneous { time, guards } => Error::Numeric(format!(
+            "simultaneous events at t = {time}: {} at once, and which comes first changes with \
+             the start",
+            guards.into_iter().map(guard).collect::<Vec<_>>().join(" and ")
+        )),
+        Refusal::NotReached { .. } => Error::Numeric(format!(
+            "no return within {until} s: the section is not reached again (raise --until, or \
+             check the section and its direction)"
+        )),
+    }
+}
+
+/// Finds the periodic orbit of `source` from its start.
+pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
+    let Loaded { mut mechanical, start, end, until, symmetry, run, state_names, contact_names } =
+        load(source, options)?;
+    let fail = |r: Refusal| refused(r, &contact_names, until);
+    let size = start.len();
+    // Onto the section first: the scene's start is anywhere on the orbit's way.
+    let mut x = match end {
+        End::Time => start,
+        _ => variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?.state,
+    };
+    let mut iterations = Vec::new();
+    for _ in 0..options.iterations.max(1) {
+        let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
+        let flow = (end != End::Time).then_some(tr.start_rate.as_slice());
+        let tangent = chart::tangent(&tr.normals, flow, size);
+        let returned = symmetry.apply(&tr.state);
+        let monodromy = symmetry.carry(&tr.matrix);
+        let gap: Vec<f64> = returned.iter().zip(&tr.start).map(|(a, b)| a - b).collect();
+        let residual = tangent.transpose() * DVector::from_vec(gap);
+        let reduced = chart::reduced(&monodromy, &tangent);
+        let size_of = tr.start.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let worst = residual.amax();
+        iterations.push(Iteration { residual: worst, steps: tr.steps });
+        if worst <= CONVERGED * size_of {
+            let multipliers = chart::multipliers(&reduced);
+            let stable = multipliers.iter().all(|m| m.norm() < 1.0);
+            return Ok(Orbit {
+                state_names,
+                fixed_point: tr.start.clone(),
+                period: tr.time - run.start,
+                multipliers,
+                monodromy,
+                trivial: size - tangent.ncols(),
+                jumps: tr.jumps,
+                iterations,
+                stable,
+            });
+        }
+        let Some(step) = chart::newton_step(&reduced, &residual) else {
+            return Err(Error::Numeric(
+                "Newton's matrix is singular: a multiplier is 1 in the chart (a family of \
+                 orbits, or a fold), and the fixed point is not isolated"
+                    .into(),
+            ));
+        };
+        let moved = &tangent * step;
+        x = tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect();
+    }
+    let last = iterations.last().map_or(f64::NAN, |i| i.residual);
+    Err(Error::Numeric(format!(
+        "Newton's method did not converge in {} iterations (residual {last:.3e} on the \
+         section): start nearer the orbit (--set), or check the section and the symmetry",
+        iterations.len()
+    )))
+}
