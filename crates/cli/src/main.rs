@@ -242,6 +242,10 @@ enum Command {
         /// `--swap a=b`.
         #[arg(long = "swap", value_name = "A=B")]
         swap: Vec<Assignment>,
+        /// Leave a coordinate out of the comparison: a cyclic one a return need not repeat
+        /// (the distance a wheel has rolled), `--ignore x`.
+        #[arg(long = "ignore", value_name = "NAME")]
+        ignore: Vec<String>,
         /// The longest a return may take, as the scene writes a time; default: the scene's
         /// `simulate { until … }`, else 10.
         #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
@@ -575,6 +579,7 @@ fn main() -> ExitCode {
             period,
             shift,
             swap,
+            ignore,
             until,
             method,
             tolerance,
@@ -622,6 +627,7 @@ fn main() -> ExitCode {
                 section,
                 swaps: swap,
                 shifts: shift,
+                ignore,
                 iterations,
             };
             let path = file.display().to_string();

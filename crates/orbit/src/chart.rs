@@ -43,6 +43,50 @@ pub fn tangent(normals: &[Vec<f64>], flow: Option<&[f64]>, size: usize) -> DMatr
     basis
 }
 
+/// A row whose component in the range is below this fraction of its length holds there
+/// already (to the differences' accuracy): it restrains nothing more.
+const HELD: f64 = 1e-6;
+
+/// An orthonormal basis of the section's tangent at a start: the range of `surface` (the
+/// derivative along the surface the state arrived on, row-major, the symmetry applied),
+/// within it the directions every row of `rows` (the manifold's normals at the start, the
+/// components left out) is orthogonal to.
+pub fn section(surface: &[f64], rows: &[Vec<f64>], size: usize) -> DMatrix<f64> {
+    let matrix = DMatrix::from_row_slice(size, size, surface);
+    let svd = matrix.svd(true, false);
+    let Some(u) = svd.u else { return DMatrix::zeros(size, 0) };
+    let largest = svd.singular_values.iter().fold(0.0_f64, |m: f64, v: &f64| m.max(*v));
+    let kept: Vec<usize> =
+        (0..size).filter(|&k| svd.singular_values[k] > RANK.sqrt() * largest).collect();
+    let mut range = DMatrix::zeros(size, kept.len());
+    for (c, &k) in kept.iter().enumerate() {
+        range.set_column(c, &u.column(k));
+    }
+    let mut restraints = Vec::new();
+    for row in rows {
+        let length = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if length == 0.0 {
+            continue;
+        }
+        let r = DVector::from_column_slice(row).transpose() * &range / length;
+        if r.norm() > HELD {
+            restraints.push(r.iter().copied().collect::<Vec<f64>>());
+        }
+    }
+    let within = tangent(&restraints, None, kept.len());
+    let basis = range * within;
+    // Signs fixed as `tangent` fixes them: the same chart on every run.
+    let mut out = basis.clone();
+    for c in 0..out.ncols() {
+        let lead = out.column(c).iter().copied().fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        if lead < 0.0 {
+            let negated = -out.column(c).into_owned();
+            out.set_column(c, &negated);
+        }
+    }
+    out
+}
+
 /// The full map's Jacobian (row-major, `size` × `size`) in the chart: Tᵀ·M·T.
 pub fn reduced(matrix: &[f64], chart: &DMatrix<f64>) -> DMatrix<f64> {
     let size = chart.nrows();

@@ -62,6 +62,9 @@ pub struct Options {
     pub section: Section,
     pub swaps: Vec<Assignment>,
     pub shifts: Vec<Assignment>,
+    /// Coordinates left out of the comparison (cyclic ones, whose value a return need not
+    /// repeat: with them in, the orbit would be one of a family, with a multiplier at 1).
+    pub ignore: Vec<String>,
     /// The most Newton iterations.
     pub iterations: usize,
 }
@@ -195,7 +198,7 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
         Section::Period(text) => period(&mut prepared, &parameters, text)?,
         _ => settings.until,
     };
-    let symmetry = Symmetry::new(&mut prepared, &parameters, &options.swaps, &options.shifts)?;
+    let symmetry = Symmetry::new(&mut prepared, &parameters, &options.swaps, &options.shifts, &options.ignore)?;
     let mut run = simulation::run_settings(&settings, 0);
     run.until = until;
     Ok(Loaded {
@@ -277,6 +280,14 @@ fn refused(refusal: Refusal, contacts: &[String], until: f64) -> Error {
     }
 }
 
+fn identity(size: usize) -> Vec<f64> {
+    let mut m = vec![0.0; size * size];
+    for i in 0..size {
+        m[i * size + i] = 1.0;
+    }
+    m
+}
+
 /// Finds the periodic orbit of `source` from its start.
 pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
     let Loaded { mut mechanical, start, end, until, symmetry, run, state_names, contact_names } =
@@ -284,15 +295,19 @@ pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
     let fail = |r: Refusal| refused(r, &contact_names, until);
     let size = start.len();
     // Onto the section first: the scene's start is anywhere on the orbit's way.
-    let mut x = match end {
-        End::Time => start,
-        _ => variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?.state,
+    let (mut x, mut surface) = match end {
+        End::Time => (start, identity(size)),
+        _ => {
+            let tr = variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?;
+            (tr.state, tr.surface)
+        }
     };
     let mut iterations = Vec::new();
     for _ in 0..options.iterations.max(1) {
         let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
-        let flow = (end != End::Time).then_some(tr.start_rate.as_slice());
-        let tangent = chart::tangent(&tr.normals, flow, size);
+        let mut rows = tr.normals.clone();
+        rows.extend(symmetry.ignored_rows());
+        let tangent = chart::section(&symmetry.carry(&surface), &rows, size);
         let returned = symmetry.apply(&tr.state);
         let monodromy = symmetry.carry(&tr.matrix);
         let gap: Vec<f64> = returned.iter().zip(&tr.start).map(|(a, b)| a - b).collect();
@@ -325,6 +340,7 @@ pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
         };
         let moved = &tangent * step;
         x = tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect();
+        surface = tr.surface;
     }
     let last = iterations.last().map_or(f64::NAN, |i| i.residual);
     Err(Error::Numeric(format!(

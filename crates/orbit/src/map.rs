@@ -13,22 +13,27 @@ pub struct Symmetry {
     /// `order[i]` is the component of x that S puts at i.
     order: Vec<usize>,
     offset: Vec<f64>,
+    /// Components the comparison leaves out: positions a motion does not come back to and
+    /// need not (a cyclic coordinate, the distance a wheel has rolled).
+    ignored: Vec<usize>,
 }
 
 impl Symmetry {
     /// The identity on a state of `size` components.
     pub fn identity(size: usize) -> Self {
-        Symmetry { order: (0..size).collect(), offset: vec![0.0; size] }
+        Symmetry { order: (0..size).collect(), offset: vec![0.0; size], ignored: Vec::new() }
     }
 
     /// The map of `swaps` (`a=b`: coordinates a and b exchanged, with their rates) and
     /// `shifts` (`name=value`, `name'=value`: the value, an expression of the parameters with
-    /// an optional unit, added to the coordinate or its rate), at the `parameters`' values.
+    /// an optional unit, added to the coordinate or its rate), at the `parameters`' values,
+    /// leaving the coordinates `ignored` out of the comparison.
     pub fn new(
         prepared: &mut Prepared,
         parameters: &[f64],
         swaps: &[Assignment],
         shifts: &[Assignment],
+        ignored: &[String],
     ) -> Result<Self, Error> {
         let names = prepared.coordinate_names();
         let n = names.len();
@@ -41,6 +46,9 @@ impl Symmetry {
                 ))
             })
         };
+        for name in ignored {
+            map.ignored.push(slot(name.trim(), "--ignore")?);
+        }
         for swap in swaps {
             let (a, b) = (swap.name.trim(), swap.value.trim());
             let (i, j) = (slot(a, "--swap")?, slot(b, "--swap")?);
@@ -82,6 +90,15 @@ impl Symmetry {
             map.offset[i] += amount;
         }
         Ok(map)
+    }
+
+    /// A unit row per component left out: normals the chart is kept orthogonal to.
+    pub fn ignored_rows(&self) -> Vec<Vec<f64>> {
+        let size = self.order.len();
+        self.ignored
+            .iter()
+            .map(|&i| (0..size).map(|k| f64::from(u8::from(k == i))).collect())
+            .collect()
     }
 
     pub fn apply(&self, x: &[f64]) -> Vec<f64> {

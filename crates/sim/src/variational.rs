@@ -80,6 +80,11 @@ pub struct Transition {
     pub state: Vec<f64>,
     /// ∂state/∂start, row-major, 2n × 2n.
     pub matrix: Vec<f64>,
+    /// The derivative of the state at the end along the surface it ended on, within the
+    /// manifold the state moved on before it, row-major: P·Q at a crossing, G_x·P·Q at a
+    /// landing, Q at a time, with Q the orthogonal projection onto that manifold's tangent.
+    /// Its range is the tangent of the section there, the directions a state on it can move in.
+    pub surface: Vec<f64>,
     /// The jumps crossed on the way (the landing that ends a run included).
     pub jumps: usize,
     pub steps: usize,
@@ -142,11 +147,14 @@ pub fn transition(
         fault.state.truncate(size);
         return Err(Refusal::Fault(fault));
     }
-    let (time, state, matrix) = match (captured, end) {
+    let (time, state, matrix, surface) = match (captured, end) {
         (Some(c), _) => c,
         (None, End::Time) if run.final_time == settings.until => {
-            let y = &run.final_state;
-            (run.final_time, y[..size].to_vec(), y[size..].to_vec())
+            let (t, y) = (run.final_time, &run.final_state);
+            let within = manifold_projection(problem, t, &y[..size]).map_err(|kind| {
+                Refusal::Fault(Fault { kind, time: t, state: y[..size].to_vec() })
+            })?;
+            (t, y[..size].to_vec(), y[size..].to_vec(), within)
         }
         (None, _) => return Err(Refusal::NotReached { until: settings.until }),
     };
@@ -168,6 +176,7 @@ pub fn transition(
         time,
         state,
         matrix,
+        surface,
         jumps,
         steps: run.steps,
         evaluations: run.evaluations,
@@ -181,6 +190,10 @@ impl Rows for Discard {
     fn row(&mut self, _: f64, _: &[f64]) {}
 }
 
+/// The end of a run at its event: the time, the state, ∂state/∂start and ∂state along the
+/// event's surface.
+type Captured = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// The state and Φ (row-major) as one problem.
 struct Variational<'a> {
     inner: &'a mut Mechanical,
@@ -192,7 +205,7 @@ struct Variational<'a> {
     armed: bool,
     /// The section's length scale: ‖h_x‖₁ times the size of the state at the start.
     length: f64,
-    captured: Option<(f64, Vec<f64>, Vec<f64>)>,
+    captured: Option<Captured>,
     refusal: Option<Refusal>,
     jumps: usize,
     stop: &'a Cell<bool>,
@@ -212,8 +225,8 @@ impl Variational<'_> {
         Ok(Vec::new())
     }
 
-    fn capture(&mut self, t: f64, x: Vec<f64>, matrix: Vec<f64>) {
-        self.captured = Some((t, x, matrix));
+    fn capture(&mut self, t: f64, x: Vec<f64>, matrix: Vec<f64>, surface: Vec<f64>) {
+        self.captured = Some((t, x, matrix, surface));
         self.stop.set(true);
     }
 }
@@ -256,6 +269,56 @@ fn gradient(
     let step = DIFFERENCE * (1.0 + t.abs());
     let ht = (h(t + step, x)? - h(t - step, x)?) / (2.0 * step);
     Ok((hx, ht))
+}
+
+fn identity(size: usize) -> Vec<f64> {
+    let mut m = vec![0.0; size * size];
+    for i in 0..size {
+        m[i * size + i] = 1.0;
+    }
+    m
+}
+
+/// A·B of row-major squares.
+fn product(a: &[f64], b: &[f64], size: usize) -> Vec<f64> {
+    let mut out = vec![0.0; size * size];
+    for i in 0..size {
+        for k in 0..size {
+            let aik = a[i * size + k];
+            for j in 0..size {
+                out[i * size + j] += aik * b[k * size + j];
+            }
+        }
+    }
+    out
+}
+
+/// The orthogonal projection (row-major) onto the tangent of the manifold the problem's mode
+/// holds the state on at (t, x): I less the projection onto its normals' span.
+fn manifold_projection(problem: &mut Mechanical, t: f64, x: &[f64]) -> Result<Vec<f64>, FaultKind> {
+    let size = x.len();
+    let normals = problem.manifold_normals(t, x)?.unwrap_or_default();
+    let mut out = identity(size);
+    if normals.is_empty() {
+        return Ok(out);
+    }
+    let rows = nalgebra::DMatrix::from_fn(normals.len(), size, |r, c| normals[r][c]);
+    let svd = rows.svd(false, true);
+    let Some(v_t) = svd.v_t else { return Ok(out) };
+    let largest = svd.singular_values.iter().fold(0.0_f64, |m: f64, v: &f64| m.max(*v));
+    for (k, sigma) in svd.singular_values.iter().enumerate() {
+        // A row dependent on the others (a grip implied by a gap) adds no direction.
+        if *sigma <= 1e-10 * largest {
+            continue;
+        }
+        let v = v_t.row(k);
+        for i in 0..size {
+            for j in 0..size {
+                out[i * size + j] -= v[i] * v[j];
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -400,7 +463,9 @@ impl Problem for Variational<'_> {
                 return self.refuse(Refusal::Grazing { time: t, guard: Guard::Section, relative });
             }
             let matrix = along_surface(&phi, &before, &hx, rate, s);
-            self.capture(t, x, matrix);
+            let within = manifold_projection(self.inner, t, &x)?;
+            let surface = product(&along_surface(&identity(s), &before, &hx, rate, s), &within, s);
+            self.capture(t, x, matrix, surface);
             return Ok(Vec::new());
         };
         // The jump's derivative along the guard's surface, on copies in the mode before it.
@@ -444,6 +509,7 @@ impl Problem for Variational<'_> {
                 along[r * s + i] = (sides[0][r] - sides[1][r]) / (2.0 * step);
             }
         }
+        let within = manifold_projection(self.inner, t, &x)?;
         let events = self.inner.jump(t, &mut y[..s], &[k])?;
         let after = rate_of(self.inner, t, &y[..s])?;
         self.jumps += 1;
@@ -458,7 +524,7 @@ impl Problem for Variational<'_> {
                 && matches!(self.end, End::Landing { contact } if contact.is_none_or(|c| c == e.contact))
         };
         if events.iter().any(landed) {
-            self.capture(t, y[..s].to_vec(), carried);
+            self.capture(t, y[..s].to_vec(), carried, product(&along, &within, s));
             return Ok(events);
         }
         // Ξ·Φ = G_x·P·Φ + f⁺·(h_xᵀ·Φ)/ḣ.
