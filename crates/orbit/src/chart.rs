@@ -78,7 +78,11 @@ pub fn section(surface: &[f64], rows: &[Vec<f64>], size: usize) -> DMatrix<f64> 
     // Signs fixed as `tangent` fixes them: the same chart on every run.
     let mut out = basis.clone();
     for c in 0..out.ncols() {
-        let lead = out.column(c).iter().copied().fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        let lead =
+            out.column(c)
+                .iter()
+                .copied()
+                .fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
         if lead < 0.0 {
             let negated = -out.column(c).into_owned();
             out.set_column(c, &negated);

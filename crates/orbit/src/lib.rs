@@ -198,7 +198,13 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
         Section::Period(text) => period(&mut prepared, &parameters, text)?,
         _ => settings.until,
     };
-    let symmetry = Symmetry::new(&mut prepared, &parameters, &options.swaps, &options.shifts, &options.ignore)?;
+    let symmetry = Symmetry::new(
+        &mut prepared,
+        &parameters,
+        &options.swaps,
+        &options.shifts,
+        &options.ignore,
+    )?;
     let mut run = simulation::run_settings(&settings, 0);
     run.until = until;
     Ok(Loaded {
