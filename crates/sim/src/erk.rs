@@ -167,13 +167,11 @@ impl Adaptive {
         f0: &[f64],
         t_end: f64,
     ) -> Result<f64, FaultKind> {
-        let weighed = p.weighed().min(y.len());
-        let scale: Vec<f64> =
-            y[..weighed].iter().map(|v| self.atol + v.abs() * self.rtol).collect();
+        let scale: Vec<f64> = y.iter().map(|v| self.atol + v.abs() * self.rtol).collect();
         let norm = |v: &[f64]| rms(v.iter().zip(&scale).map(|(a, s)| a / s));
         let (d0, d1) = (norm(y), norm(f0));
         if !d1.is_finite() {
-            return Err(rates_overflow(&f0[..weighed], &scale));
+            return Err(rates_overflow(f0, &scale));
         }
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min((t_end - t).abs());
@@ -223,7 +221,6 @@ impl Adaptive {
         self.evals += 1;
         let k = &self.k;
         let scale = |i: usize| self.atol + y[i].abs().max(self.y_new[i].abs()) * self.rtol;
-        let d = p.weighed().min(d);
         Ok(match self.pair.error_weights() {
             Some(weights) => {
                 let e = (0..d).map(|i| {

@@ -141,13 +141,6 @@ pub struct Fault {
 pub trait Problem {
     /// The length of the state y.
     fn dim(&self) -> usize;
-    /// How many leading components of y the adaptive methods' step control weighs: all by
-    /// default. A variational problem weighs its state alone, so that its sensitivities ride
-    /// on the steps the state would take and are the derivatives of those steps
-    /// ([`variational`]).
-    fn weighed(&self) -> usize {
-        self.dim()
-    }
     /// Writes F(t, y) to `dy`.
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind>;
     /// The number of quantities [`Problem::observe`] writes.

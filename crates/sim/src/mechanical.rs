@@ -415,6 +415,21 @@ impl Mechanical {
         FaultKind::SingularConstraints { constraints: dependent.iter().map(|&r| rows[r]).collect() }
     }
 
+    /// [`Problem::begin_modes`] for a start a run reached on its contacts (a periodic orbit's
+    /// section): each touching contact is judged as a closed one, by the closed band of its
+    /// rate, so that a closed contact's drift does not read as flight.
+    pub fn begin_modes_held(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<crate::ModeEvent>, FaultKind> {
+        if self.contacts.is_empty() {
+            return Ok(Vec::new());
+        }
+        self.begin_contacts(t, y, tolerance, true)
+    }
+
     /// Φ of each kept constraint at the last evaluation (0 for an open contact's rows, which
     /// are no constraints while open).
     pub fn constraint_values(&self) -> impl Iterator<Item = f64> + '_ {
@@ -504,7 +519,7 @@ impl Problem for Mechanical {
         if self.contacts.is_empty() {
             return Ok(Vec::new());
         }
-        self.begin_contacts(t, y, tolerance)
+        self.begin_contacts(t, y, tolerance, false)
     }
 
     fn jump(

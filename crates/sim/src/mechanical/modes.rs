@@ -318,12 +318,17 @@ impl Mechanical {
         Ok(())
     }
 
-    /// Decides the modes at the start of a run of tolerance `tolerance`.
+    /// Decides the modes at the start of a run of tolerance `tolerance`. With `held`, every
+    /// touching contact is taken as closed before the decision, so that its rate is judged
+    /// against the closed band (the drift a closed contact has) rather than the open one: a
+    /// start that a run reached on a contact (a periodic orbit's section in mid-stance) stays
+    /// on it, where the open band would read its drift as flight.
     pub(super) fn begin_contacts(
         &mut self,
         t: f64,
         y: &mut [f64],
         tolerance: f64,
+        held: bool,
     ) -> Result<Vec<ModeEvent>, FaultKind> {
         let n = self.layout.coordinates;
         let count = self.contacts.len();
@@ -342,6 +347,13 @@ impl Mechanical {
             if self.gap(k) < -tolerance * length {
                 return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
             }
+        }
+        if held {
+            let length = &self.modes.length;
+            let touching: Vec<bool> =
+                (0..count).map(|k| self.gap(k) <= tolerance * length[k]).collect();
+            self.modes.closed = touching;
+            self.update_kept();
         }
         self.contact_jump(t, y, &[])
     }
