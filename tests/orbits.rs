@@ -31,11 +31,22 @@ fn settings(until: f64, tolerance: f64) -> sim::Settings {
 }
 
 /// The largest entry of Φ from a variational run of `source` from `y0` over `until`, less
-/// the central differences of whole runs, relative to Φ's largest entry.
-fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> f64 {
+/// the central differences of whole runs, relative to Φ's largest entry; and the jumps the
+/// variational run crossed.
+fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> (f64, usize) {
     let mut prepared = prepare(source, &[], engine::Options::default()).expect("derives");
     let parameters = prepared.parameter_values(&[]).expect("values");
     let mut problem = lagrange_tests::mechanical(&mut prepared, &parameters);
+    if !prepared.contacts.is_empty() {
+        let restitutions = simulation::restitutions(&prepared, &parameters).expect("in [0, 1]");
+        let contacts = prepared
+            .contacts
+            .iter()
+            .zip(restitutions)
+            .map(|(c, restitution)| sim::Contact { normal: c.normal, grip: c.grip, restitution })
+            .collect();
+        problem = problem.with_contacts(contacts);
+    }
     let run = settings(until, 1e-13);
     let exact = transition(&mut problem, y0, &run, End::Time).expect("a variational run");
     assert_eq!(exact.time, until);
@@ -65,19 +76,26 @@ fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> f64 {
             worst = worst.max((exact.matrix[i * d + j] - differenced).abs() / largest);
         }
     }
-    worst
+    (worst, exact.jumps)
 }
 
 #[test]
 fn the_transition_matrix_is_what_differences_of_whole_runs_give() {
     let pendulum = lagrange_tests::example("orbits/driven_pendulum.lag");
     // Far from the bottom, where the motion is nonlinear, and driven.
-    let worst = transition_against_differences(&pendulum, &[1.2, -0.7], 2.5);
+    let (worst, _) = transition_against_differences(&pendulum, &[1.2, -0.7], 2.5);
     assert!(worst < 1e-7, "the pendulum's Φ is off by {worst:.1e}");
     // The rod kept with its multiplier: Φ of the stabilised equations on the whole state.
     let cartesian = lagrange_tests::example("classics/pendulum_cartesian.lag");
-    let worst = transition_against_differences(&cartesian, &[0.6, -0.8, 1.6, 1.2], 1.5);
+    let (worst, _) = transition_against_differences(&cartesian, &[0.6, -0.8, 1.6, 1.2], 1.5);
     assert!(worst < 1e-7, "the Cartesian pendulum's Φ is off by {worst:.1e}");
+    // Across two bounces: Φ carried by the saltation matrix, whose event time moves with the
+    // start (the flights' lengths, and where the ball is when the run ends, depend on it).
+    let ball = lagrange_tests::example("contacts/bouncing_ball.lag");
+    let (worst, jumps) = transition_against_differences(&ball, &[0.1, 1.0, 0.3, 0.5], 1.5);
+    assert_eq!(jumps, 2);
+    assert!(worst < 1e-7, "the ball's Φ is off by {worst:.1e}");
+    eprintln!("Φ of the ball across {jumps} bounces against differences: {worst:.1e}");
 }
 
 fn options(section: Section, set: &[(&str, &str)]) -> Options {
