@@ -598,22 +598,12 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             };
             let rising = matches!(direction, DirectionArg::Rising);
-            let (section, words) = match (section, period) {
-                (_, Some(period)) => {
-                    let words = format!("period {period}");
-                    (orbit::Section::Period(period), words)
-                }
-                (Some(text), None) => {
-                    let words = match orbit::Section::parse(&text, rising) {
-                        orbit::Section::Crossing { .. } => {
-                            format!("section {text}, {}", if rising { "rising" } else { "falling" })
-                        }
-                        _ => format!("section {text}"),
-                    };
-                    (orbit::Section::parse(&text, rising), words)
-                }
+            let section = match (section, period) {
+                (_, Some(period)) => orbit::Section::Period(period),
+                (Some(text), None) => orbit::Section::parse(&text, rising),
                 (None, None) => unreachable!("clap requires one"),
             };
+            let words = section.words();
             let options = orbit::Options {
                 run: simulation::Options {
                     until,

@@ -77,7 +77,13 @@ pub fn json(path: &str, orbit: &Orbit, section: &str) -> String {
 
 /// Twelve decimals, the trailing zeros dropped.
 fn number(v: f64) -> String {
-    format!("{v:.12}").trim_end_matches('0').trim_end_matches('.').to_string()
+    let text = format!("{v:.12}").trim_end_matches('0').trim_end_matches('.').to_string();
+    // A value that rounds to zero from below prints as zero, not "-0".
+    if text == "-0" {
+        "0".into()
+    } else {
+        text
+    }
 }
 
 fn complex(re: f64, im: f64) -> String {

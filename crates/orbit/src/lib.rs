@@ -37,6 +37,18 @@ pub enum Section {
 }
 
 impl Section {
+    /// The section in words, as a report heads itself with.
+    pub fn words(&self) -> String {
+        match self {
+            Section::Period(text) => format!("period {text}"),
+            Section::Crossing { expression, rising } => {
+                format!("section {expression}, {}", if *rising { "rising" } else { "falling" })
+            }
+            Section::Landing { contact: None } => "section impact".into(),
+            Section::Landing { contact: Some(name) } => format!("section impact:{name}"),
+        }
+    }
+
     /// `impact`, `impact:NAME`, or an expression (`lhs = rhs` allowed) crossing zero.
     pub fn parse(text: &str, rising: bool) -> Section {
         let text = text.trim();
@@ -112,8 +124,11 @@ impl Orbit {
 }
 
 /// The residual, relative to the state's size, below which Newton has converged: the map is
-/// computed to rounding of its steps and event times, not to the integration's tolerance.
-const CONVERGED: f64 = 1e-11;
+/// computed to the rounding of its steps and event times, not to the integration's tolerance.
+const CONVERGED: f64 = 1e-14;
+/// Below this residual (relative), a step that no longer divides it by ten has met the map's
+/// rounding: the iteration ends there too.
+const STAGNANT: f64 = 1e-9;
 
 /// The scene loaded and lowered for variational runs, its start and its map.
 struct Loaded {
@@ -321,8 +336,10 @@ pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
         let reduced = chart::reduced(&monodromy, &tangent);
         let size_of = tr.start.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         let worst = residual.amax();
+        let previous = iterations.last().map_or(f64::INFINITY, |i: &Iteration| i.residual);
+        let stagnant = worst <= STAGNANT * size_of && worst > previous / 10.0;
         iterations.push(Iteration { residual: worst, steps: tr.steps });
-        if worst <= CONVERGED * size_of {
+        if worst <= CONVERGED * size_of || stagnant {
             let multipliers = chart::multipliers(&reduced);
             let stable = multipliers.iter().all(|m| m.norm() < 1.0);
             return Ok(Orbit {

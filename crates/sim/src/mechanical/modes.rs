@@ -319,7 +319,8 @@ impl Mechanical {
     }
 
     /// Decides the modes at the start of a run of tolerance `tolerance`. With `held`, every
-    /// touching contact is taken as closed before the decision, so that its rate is judged
+    /// contact touching within the closed band (its gap below 100·tol·L) is taken as closed
+    /// before the decision, so that its rate is judged
     /// against the closed band (the drift a closed contact has) rather than the open one: a
     /// start that a run reached on a contact (a periodic orbit's section in mid-stance) stays
     /// on it, where the open band would read its drift as flight.
@@ -349,9 +350,10 @@ impl Mechanical {
             }
         }
         if held {
+            // Touching within the closed band: a closed contact's gap drifts as its rate does.
             let length = &self.modes.length;
             let touching: Vec<bool> =
-                (0..count).map(|k| self.gap(k) <= tolerance * length[k]).collect();
+                (0..count).map(|k| self.gap(k) <= CLOSED_BAND * tolerance * length[k]).collect();
             self.modes.closed = touching;
             self.update_kept();
         }
