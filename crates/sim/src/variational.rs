@@ -196,6 +196,12 @@ impl Rows for Discard {
 /// event's surface.
 type Captured = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
 
+/// The start after its mode was decided, F there and the manifold's normals.
+type Begun = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
+/// A function of (t, x) that may fault: a guard, a section's expression.
+type Scalar<'f> = dyn FnMut(f64, &[f64]) -> Result<f64, FaultKind> + 'f;
+
 /// The state and Φ (row-major) as one problem.
 struct Variational<'a> {
     inner: &'a mut Mechanical,
@@ -212,7 +218,7 @@ struct Variational<'a> {
     jumps: usize,
     stop: &'a Cell<bool>,
     /// The start after its mode was decided, F there and the manifold's normals.
-    begun: Option<(Vec<f64>, Vec<f64>, Vec<Vec<f64>>)>,
+    begun: Option<Begun>,
 }
 
 impl Variational<'_> {
@@ -252,11 +258,7 @@ fn rate_of(problem: &mut Mechanical, t: f64, x: &[f64]) -> Result<Vec<f64>, Faul
 }
 
 /// Central differences of `h` in each component of x and in t: (h_x, h_t).
-fn gradient(
-    t: f64,
-    x: &[f64],
-    h: &mut dyn FnMut(f64, &[f64]) -> Result<f64, FaultKind>,
-) -> Result<(Vec<f64>, f64), FaultKind> {
+fn gradient(t: f64, x: &[f64], h: &mut Scalar<'_>) -> Result<(Vec<f64>, f64), FaultKind> {
     let mut probe = x.to_vec();
     let mut hx = vec![0.0; x.len()];
     for i in 0..x.len() {
