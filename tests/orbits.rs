@@ -98,6 +98,62 @@ fn the_transition_matrix_is_what_differences_of_whole_runs_give() {
     eprintln!("Φ of the ball across {jumps} bounces against differences: {worst:.1e}");
 }
 
+/// The ladder leaving its wall: Φ carried across the lift-off (the wall's reaction, a guard
+/// that is a function of the state through the solve for the accelerations), along the
+/// manifold both contacts hold the start on, against differences of whole runs from starts
+/// on it, (θ, θ̇) ↦ (x, y, θ, x', y', θ') with the centre at L/2·(sin θ, cos θ).
+#[test]
+fn the_transition_matrix_crosses_a_lift_off() {
+    let source = lagrange_tests::example("contacts/ladder.lag");
+    let mut prepared = prepare(&source, &[], engine::Options::default()).expect("derives");
+    let parameters = prepared.parameter_values(&[]).expect("values");
+    let restitutions = simulation::restitutions(&prepared, &parameters).expect("in [0, 1]");
+    let contacts = prepared
+        .contacts
+        .iter()
+        .zip(restitutions)
+        .map(|(c, restitution)| sim::Contact { normal: c.normal, grip: c.grip, restitution })
+        .collect();
+    let mut problem =
+        lagrange_tests::mechanical(&mut prepared, &parameters).with_contacts(contacts);
+    let half = 2.0;
+    let start = |theta: f64, rate: f64| {
+        let (s, c) = theta.sin_cos();
+        vec![half * s, half * c, theta, half * c * rate, -half * s * rate, rate]
+    };
+    let (theta, rate) = (0.6, 0.5);
+    let run = settings(1.0, 1e-13);
+    let exact = transition(&mut problem, &start(theta, rate), &run, End::Time).expect("runs");
+    assert_eq!(exact.jumps, 1, "the wall's lift-off");
+    let end_of = |problem: &mut dyn Problem, y: &[f64]| {
+        let r = sim::integrate(problem, y, &run, &[], &mut |_| ControlFlow::Continue(()));
+        assert!(r.fault.is_none() && r.final_time == 1.0);
+        assert_eq!(r.modes.len(), 3, "closed, closed, lift-off: {:?}", r.modes);
+        r.final_state
+    };
+    let step = 1e-5;
+    let largest = exact.matrix.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst = 0.0f64;
+    for (k, (dtheta, drate)) in [(step, 0.0), (0.0, step)].into_iter().enumerate() {
+        let up = end_of(&mut problem, &start(theta + dtheta, rate + drate));
+        let down = end_of(&mut problem, &start(theta - dtheta, rate - drate));
+        // ∂y0/∂θ or ∂y0/∂θ̇, by hand.
+        let (s, c) = theta.sin_cos();
+        let tangent = if k == 0 {
+            [half * c, -half * s, 1.0, -half * s * rate, -half * c * rate, 0.0]
+        } else {
+            [0.0, 0.0, 0.0, half * c, -half * s, 1.0]
+        };
+        for i in 0..6 {
+            let carried: f64 = (0..6).map(|j| exact.matrix[i * 6 + j] * tangent[j]).sum();
+            let differenced = (up[i] - down[i]) / (2.0 * step);
+            worst = worst.max((carried - differenced).abs() / largest);
+        }
+    }
+    eprintln!("Φ of the ladder across its lift-off against differences: {worst:.1e}");
+    assert!(worst < 1e-7, "the ladder's Φ is off by {worst:.1e}");
+}
+
 fn options(section: Section, set: &[(&str, &str)]) -> Options {
     Options {
         run: simulation::Options {

@@ -14,8 +14,9 @@
 //! matrix Ξ = G_x·P + f⁺·h_xᵀ/ḣ, with h the guard that fired, ḣ = h_x·f⁻ + h_t its rate,
 //! P = I − f⁻·h_xᵀ/ḣ the projection onto the guard's surface along the flow, and G the jump.
 //! G_x·P is the jump's derivative along the surface: central differences of the jump alone
-//! (never of a run), each perturbed state moved back onto the surface along f⁻ first, so that
-//! the jump sees the same touching contacts. h_x and h_t are central differences of the guard.
+//! (never of a run), each perturbed state moved back onto the manifold the mode before the jump
+//! holds it on and onto the surface along f⁻ first, so that the jump sees the same touching
+//! contacts (across the manifold, G is taken of the state projected onto it). h_x and h_t are central differences of the guard.
 //! A crossing with ḣ too small to locate the event by (grazing, where the map has a
 //! square-root singularity) and two guards at once are refused, named.
 //!
@@ -496,11 +497,19 @@ impl Problem for Variational<'_> {
                 let mut probe: Vec<f64> =
                     x.iter().zip(&d).map(|(a, b)| a + sign * step * b).collect();
                 let mut copy = self.inner.clone();
-                // Back onto the surface along f⁻, where the jump sees the contacts the
-                // located one did.
-                let off = (guard(&mut copy, t, &probe)? - h0) / rate;
-                for (p, f) in probe.iter_mut().zip(&before) {
-                    *p -= f * off;
+                // Back onto the manifold the mode before the jump holds the state on, and onto
+                // the guard's surface along f⁻: there the jump sees the contacts the located
+                // one did (a closed contact's rate a difference's step off its manifold would
+                // be far outside its band, and open it). Across that manifold, G_x is taken as
+                // the jump of the state projected onto it, which is what the stabilisation
+                // keeps a run's state within rounding of.
+                for _ in 0..2 {
+                    copy.project_positions(t, &mut probe)?;
+                    copy.project_velocities(t, &mut probe)?;
+                    let off = (guard(&mut copy, t, &probe)? - h0) / rate;
+                    for (p, f) in probe.iter_mut().zip(&before) {
+                        *p -= f * off;
+                    }
                 }
                 copy.jump(t, &mut probe, &[k])?;
                 *side = probe;
