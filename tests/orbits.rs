@@ -287,6 +287,22 @@ fn the_rimless_wheel_rolls_at_mcgeers_rate_with_the_multiplier_c_squared() {
     assert!((mid.fixed_point[5].abs() - top).abs() < 1e-8 * top, "{}", mid.fixed_point[5]);
 }
 
+/// A conservative pendulum's orbits are a family, one per energy: the multiplier on the
+/// section is 1, and the verdict neutral rather than stable.
+#[test]
+fn a_conservative_pendulum_is_neutral() {
+    let source = lagrange_tests::example("classics/simple_pendulum.lag");
+    let section = Section::Crossing { expression: "theta'".into(), rising: false };
+    let found = orbit::orbit(&source, &options(section, &[])).expect("an orbit");
+    assert_eq!(found.multipliers.len(), 1);
+    assert!((found.multipliers[0].re - 1.0).abs() < 1e-8, "{}", found.multipliers[0]);
+    assert_eq!(found.verdict, orbit::Verdict::Neutral);
+    assert!(!found.stable);
+    // The period of a swing from 1/2 rad: 4·sqrt(L/g)·K(sin(1/4)).
+    let period = 4.0 * (1.0f64 / 9.81).sqrt() * bench::reference::elliptic_k(0.25f64.sin());
+    assert!((found.period - period).abs() < 1e-8 * period, "{} against {period}", found.period);
+}
+
 fn refused(scene: &str, section: Section, edit: impl FnOnce(&mut Options)) -> String {
     let mut options = options(section, &[]);
     edit(&mut options);

@@ -29,8 +29,18 @@ pub fn text(path: &str, orbit: &Orbit, section: &str) -> String {
     for m in &orbit.multipliers {
         let _ = writeln!(out, "  {:<40} |μ| = {}", complex(m.re, m.im), number(m.norm()));
     }
-    let verdict = if orbit.stable { "stable" } else { "unstable" };
-    let _ = writeln!(out, "verdict: {verdict} (largest |μ| = {})", number(orbit.spectral_radius()));
+    let why = match orbit.verdict {
+        orbit::Verdict::Neutral => {
+            ": a multiplier on the unit circle, a family of orbits or the edge of stability"
+        }
+        _ => "",
+    };
+    let _ = writeln!(
+        out,
+        "verdict: {} (largest |μ| = {}){why}",
+        orbit.verdict.word(),
+        number(orbit.spectral_radius())
+    );
     let residuals: Vec<String> =
         orbit.iterations.iter().map(|i| format!("{:.1e}", i.residual)).collect();
     let _ = writeln!(
@@ -64,6 +74,7 @@ pub fn json(path: &str, orbit: &Orbit, section: &str) -> String {
         })).collect::<Vec<_>>(),
         "trivial": orbit.trivial,
         "stable": orbit.stable,
+        "verdict": orbit.verdict.word(),
         "spectral_radius": orbit.spectral_radius(),
         "monodromy": monodromy,
         "newton": orbit.iterations.iter().map(|i| json!({

@@ -98,12 +98,21 @@ pub fn reduced(matrix: &[f64], chart: &DMatrix<f64>) -> DMatrix<f64> {
     chart.transpose() * m * chart
 }
 
-/// The Newton step dz of (C − I)·dz = −ρ; `None` where C has a multiplier at 1 (the fixed
-/// point is not isolated there: a fold, or a family of orbits).
+/// A singular value of C − I below this (relative to the largest, and to 1) is a multiplier
+/// at 1 to rounding: a direction along a family of orbits, which the step leaves alone.
+const FAMILY: f64 = 1e-9;
+
+/// The Newton step dz of (C − I)·dz = −ρ, least-squares where C has a multiplier at 1 (a
+/// family of orbits, one per energy of a conservative scene): the step moves along no such
+/// direction, so that Newton stays on the member it started nearest rather than leaping
+/// along the family by the rounding in ρ. `None` if the step is not finite.
 pub fn newton_step(reduced: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
     let d = reduced.nrows();
     let system = reduced - DMatrix::identity(d, d);
-    system.lu().solve(&(-residual))
+    let svd = system.svd(true, true);
+    let largest = svd.singular_values.iter().fold(1.0_f64, |m: f64, v: &f64| m.max(*v));
+    let step = svd.solve(&(-residual), FAMILY * largest).ok()?;
+    step.iter().all(|v| v.is_finite()).then_some(step)
 }
 
 /// The eigenvalues of C, largest modulus first (then by angle, counter-clockwise from the

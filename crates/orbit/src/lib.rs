@@ -105,9 +105,37 @@ pub struct Orbit {
     pub trivial: usize,
     pub jumps: usize,
     pub iterations: Vec<Iteration>,
-    /// Whether every multiplier lies inside the unit circle.
+    /// Whether every multiplier lies inside the unit circle (the verdict is `Stable`).
     pub stable: bool,
+    pub verdict: Verdict,
 }
+
+/// What the multipliers say of an orbit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Every multiplier inside the unit circle: nearby motions come back to the orbit.
+    Stable,
+    /// None outside, but one on the unit circle to the accuracy the multipliers have: a
+    /// family of orbits (a conservative scene's, one per energy), or the edge of stability,
+    /// which the map's linear part cannot decide.
+    Neutral,
+    /// A multiplier outside the unit circle.
+    Unstable,
+}
+
+impl Verdict {
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Stable => "stable",
+            Verdict::Neutral => "neutral",
+            Verdict::Unstable => "unstable",
+        }
+    }
+}
+
+/// How far from the unit circle a multiplier counts as on it: far above the multipliers'
+/// error (the jump maps' differences, about 1e-9), far below any stability worth the name.
+const NEUTRAL: f64 = 1e-6;
 
 impl Orbit {
     /// The largest |μ|.
@@ -365,7 +393,15 @@ fn find(loaded: &mut Loaded, iterations_allowed: usize) -> Result<Orbit, Error> 
         iterations.push(Iteration { residual: worst, steps: tr.steps });
         if worst <= CONVERGED * size_of || stagnant {
             let multipliers = chart::multipliers(&reduced);
-            let stable = multipliers.iter().all(|m| m.norm() < 1.0);
+            let largest = multipliers.first().map_or(0.0, |m| m.norm());
+            let verdict = if largest > 1.0 + NEUTRAL {
+                Verdict::Unstable
+            } else if largest >= 1.0 - NEUTRAL {
+                Verdict::Neutral
+            } else {
+                Verdict::Stable
+            };
+            let stable = verdict == Verdict::Stable;
             return Ok(Orbit {
                 state_names: state_names.clone(),
                 fixed_point: tr.start.clone(),
@@ -376,13 +412,13 @@ fn find(loaded: &mut Loaded, iterations_allowed: usize) -> Result<Orbit, Error> 
                 jumps: tr.jumps,
                 iterations,
                 stable,
+                verdict,
             });
         }
         let Some(step) = chart::newton_step(&reduced, &residual) else {
             return Err(Error::Numeric(
-                "Newton's matrix is singular: a multiplier is 1 in the chart (a family of \
-                 orbits, or a fold), and the fixed point is not isolated"
-                    .into(),
+                "Newton's step is not finite: the map's Jacobian on the section is".to_string()
+                    + " not a number there",
             ));
         };
         let moved = &tangent * step;
@@ -392,7 +428,8 @@ fn find(loaded: &mut Loaded, iterations_allowed: usize) -> Result<Orbit, Error> 
     let last = iterations.last().map_or(f64::NAN, |i| i.residual);
     Err(Error::Numeric(format!(
         "Newton's method did not converge in {} iterations (residual {last:.3e} on the \
-         section): start nearer the orbit (--set), or check the section and the symmetry",
+         section): start nearer the orbit (--set), or check the section and the symmetry (a \
+         cyclic coordinate left in the comparison makes a family of orbits: --ignore it)",
         iterations.len()
     )))
 }

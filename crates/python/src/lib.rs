@@ -442,6 +442,7 @@ fn orbit_dict<'py>(py: Python<'py>, found: &orbit::Orbit) -> PyResult<Bound<'py,
     out.set_item("trivial", found.trivial)?;
     out.set_item("jumps", found.jumps)?;
     out.set_item("stable", found.stable)?;
+    out.set_item("verdict", found.verdict.word())?;
     let residuals: Vec<f64> = found.iterations.iter().map(|i| i.residual).collect();
     out.set_item("residuals", residuals)?;
     Ok(out)

@@ -625,8 +625,10 @@ class Orbit(dict):
       ``trivial``: how many directions (the flow's, the kept constraints' normals, the
       ignored coordinates) were left out.
     - ``monodromy``: the map's Jacobian on the whole state, a NumPy array.
-    - ``stable``: every multiplier inside the unit circle; ``jumps``: the contacts' jumps on
-      the way; ``residuals``: Newton's, on the section, before each step.
+    - ``stable``: every multiplier inside the unit circle; ``verdict``: ``"stable"``,
+      ``"neutral"`` (one on the unit circle, within 1e-6: a family of orbits, or the edge of
+      stability) or ``"unstable"``; ``jumps``: the contacts' jumps on the way; ``residuals``:
+      Newton's, on the section, before each step.
     """
 
     def __init__(self, raw):
@@ -640,7 +642,7 @@ class Orbit(dict):
             setattr(self, key, value)
 
     def __repr__(self):
-        verdict = "stable" if self["stable"] else "unstable"
+        verdict = self["verdict"]
         largest = max((abs(m) for m in self["multipliers"]), default=0.0)
         return f"<lagrange.Orbit period {self['period']:.6g} s, {verdict}, max |μ| {largest:.6g}>"
 
