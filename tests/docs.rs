@@ -373,7 +373,17 @@ fn linearize(rest: &[String]) -> Result<String, String> {
 /// `lagrange orbit`: the report, text or JSON.
 fn orbit(rest: &[String]) -> Result<String, String> {
     let args = Args::parse(rest, &["no-units", "json"]);
-    let own = ["section", "direction", "period", "shift", "swap", "ignore", "iterations", "json"];
+    let own = [
+        "section",
+        "direction",
+        "period",
+        "shift",
+        "swap",
+        "ignore",
+        "iterations",
+        "json",
+        "sweep",
+    ];
     args.only(&[&["until", "method", "tolerance", "step", "set", "no-units"][..], &own].concat())?;
     let [file] = &args.positional[..] else { return Err("one file".into()) };
     let rising = match args.last("direction").as_deref() {
@@ -403,6 +413,15 @@ fn orbit(rest: &[String]) -> Result<String, String> {
         ignore: args.all("ignore"),
         iterations: args.number("iterations")?.unwrap_or(30),
     };
+    if let Some(range) = args.parsed::<SweepRange>("sweep")?.pop() {
+        let swept = orbit::sweep::sweep(&read(file)?, &options, &range)
+            .map_err(|e| cli::diagnostics::error(file, &e))?;
+        return Ok(if args.has("json") {
+            cli::orbit::sweep_json(file, &swept, &words)
+        } else {
+            cli::orbit::sweep_text(file, &swept, &words)
+        });
+    }
     let found =
         orbit::orbit(&read(file)?, &options).map_err(|e| cli::diagnostics::error(file, &e))?;
     Ok(if args.has("json") {

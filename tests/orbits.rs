@@ -303,6 +303,29 @@ fn a_conservative_pendulum_is_neutral() {
     assert!((found.period - period).abs() < 1e-8 * period, "{} against {period}", found.period);
 }
 
+/// The driven pendulum continued in its drive's amplitude: a multiplier crosses +1 between
+/// A = 17 and 17.5 (the response losing its symmetry), located where the other multiplier is
+/// Liouville's factor over it, exp(−c·T/(m·l²)) at μ = 1.
+#[test]
+fn a_sweep_locates_where_a_multiplier_crosses_one() {
+    let source = lagrange_tests::example("orbits/driven_pendulum.lag");
+    let options = options(Section::Period("2*pi/w".into()), &[]);
+    let range: engine::input::SweepRange = "A=15:20:11".parse().expect("a range");
+    let swept = orbit::sweep::sweep(&source, &options, &range).expect("a sweep");
+    assert_eq!(swept.points.len(), 11);
+    assert!(swept.lost.is_none());
+    let stable: Vec<bool> = swept.points.iter().map(|(_, o)| o.stable).collect();
+    assert_eq!(stable, [true, true, true, true, true, false, false, false, false, false, false]);
+    let [crossing] = &swept.crossings[..] else { panic!("{:?}", swept.crossings) };
+    assert_eq!(crossing.kind, orbit::sweep::Crossing::Fold);
+    assert!(crossing.at > 17.0 && crossing.at < 17.5, "{}", crossing.at);
+    let expected = (-C * 2.0 * PI / W / (M * L * L)).exp();
+    let mu = &crossing.orbit.multipliers;
+    assert!(mu.iter().all(|m| m.im == 0.0), "{mu:?}");
+    assert!((mu[0].re - 1.0).abs() < 1e-5, "{mu:?}");
+    assert!((mu[0].re * mu[1].re - expected).abs() < 1e-8 * expected, "{mu:?}");
+}
+
 fn refused(scene: &str, section: Section, edit: impl FnOnce(&mut Options)) -> String {
     let mut options = options(section, &[]);
     edit(&mut options);

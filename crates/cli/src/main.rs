@@ -262,6 +262,10 @@ enum Command {
         /// Override a parameter or the start Newton begins from: `--set w0=2`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
+        /// Continue the orbit over N values of a parameter from A to B, each found from the
+        /// one before, and locate where a multiplier crosses the unit circle: `--sweep A=4:6:11`.
+        #[arg(long, value_name = "P=A:B:N")]
+        sweep: Option<SweepRange>,
         /// The most Newton iterations.
         #[arg(long, default_value_t = 30)]
         iterations: usize,
@@ -585,6 +589,7 @@ fn main() -> ExitCode {
             tolerance,
             step,
             set,
+            sweep,
             iterations,
             json,
             no_units,
@@ -621,6 +626,20 @@ fn main() -> ExitCode {
                 iterations,
             };
             let path = file.display().to_string();
+            if let Some(range) = sweep {
+                return match orbit::sweep::sweep(&source, &options, &range) {
+                    Ok(swept) => {
+                        let report = if json {
+                            cli::orbit::sweep_json(&path, &swept, &words)
+                        } else {
+                            cli::orbit::sweep_text(&path, &swept, &words)
+                        };
+                        print!("{report}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(&path, &e),
+                };
+            }
             match orbit::orbit(&source, &options) {
                 Ok(found) => {
                     let report = if json {

@@ -3,6 +3,7 @@
 
 use std::fmt::Write;
 
+use orbit::sweep::Sweep;
 use orbit::Orbit;
 use serde_json::{json, Value};
 
@@ -103,4 +104,74 @@ fn complex(re: f64, im: f64) -> String {
     }
     let sign = if im < 0.0 { "-" } else { "+" };
     format!("{} {sign} {}i", number(re), number(im.abs()))
+}
+
+/// A sweep's report as text: a row per value, then the crossings located.
+pub fn sweep_text(path: &str, sweep: &Sweep, section: &str) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "orbit of {path} ({section}) swept in {}", sweep.parameter);
+    let p = &sweep.parameter;
+    let _ = writeln!(out, "  {p:>16}  {:>16}  {:>16}  verdict", "period", "largest |μ|");
+    for (value, orbit) in &sweep.points {
+        let _ = writeln!(
+            out,
+            "  {:>16}  {:>16}  {:>16}  {}",
+            number(*value),
+            number(orbit.period),
+            number(orbit.spectral_radius()),
+            orbit.verdict.word()
+        );
+    }
+    for located in &sweep.crossings {
+        let multipliers: Vec<String> =
+            located.orbit.multipliers.iter().map(|m| complex(m.re, m.im)).collect();
+        let _ = writeln!(
+            out,
+            "{} at {p} = {} (multipliers {})",
+            located.kind.words(),
+            number(located.at),
+            multipliers.join(", ")
+        );
+    }
+    if sweep.crossings.is_empty() {
+        let _ = writeln!(out, "no multiplier crosses the unit circle between the values");
+    }
+    if let Some((value, why)) = &sweep.lost {
+        let _ = writeln!(
+            out,
+            "lost the orbit at {p} = {}: no orbit near the last one (past a fold the branch \
+             turns back, which this sweep does not follow; or the step is too long: more \
+             values): {why}",
+            number(*value)
+        );
+    }
+    out
+}
+
+/// A sweep's report as JSON.
+pub fn sweep_json(path: &str, sweep: &Sweep, section: &str) -> String {
+    let multipliers = |orbit: &Orbit| -> Vec<Value> {
+        orbit.multipliers.iter().map(|m| json!({"re": m.re, "im": m.im})).collect()
+    };
+    let value = json!({
+        "scene": path,
+        "section": section,
+        "parameter": sweep.parameter,
+        "points": sweep.points.iter().map(|(p, orbit)| json!({
+            "value": p,
+            "fixed_point": orbit.fixed_point,
+            "period": orbit.period,
+            "multipliers": multipliers(orbit),
+            "verdict": orbit.verdict.word(),
+        })).collect::<Vec<_>>(),
+        "crossings": sweep.crossings.iter().map(|c| json!({
+            "kind": c.kind.words(),
+            "at": c.at,
+            "multipliers": multipliers(&c.orbit),
+        })).collect::<Vec<_>>(),
+        "lost": sweep.lost.as_ref().map(|(p, why)| json!({"at": p, "why": why})),
+    });
+    let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
+    text.push('\n');
+    text
 }

@@ -14,6 +14,7 @@
 
 pub mod chart;
 mod map;
+pub mod sweep;
 
 use nalgebra::{Complex, DVector};
 use numeric::Tape;
@@ -356,17 +357,27 @@ impl Search {
 
     /// The orbit from the scene's start, in at most `iterations` Newton steps.
     pub fn find(&mut self, iterations: usize) -> Result<Orbit, Error> {
-        find(&mut self.loaded, iterations)
+        find(&mut self.loaded, None, iterations)
+    }
+
+    /// The orbit from the state `from` (q, q̇) rather than the scene's start: a nearby orbit's
+    /// fixed point, as a sweep continues one.
+    pub fn find_from(&mut self, from: &[f64], iterations: usize) -> Result<Orbit, Error> {
+        find(&mut self.loaded, Some(from), iterations)
     }
 }
 
-fn find(loaded: &mut Loaded, iterations_allowed: usize) -> Result<Orbit, Error> {
+fn find(
+    loaded: &mut Loaded,
+    from: Option<&[f64]>,
+    iterations_allowed: usize,
+) -> Result<Orbit, Error> {
     let Loaded { mechanical, start, end, until, symmetry, run, state_names, contact_names } =
         loaded;
     let (end, until) = (*end, *until);
     let fail = |r: Refusal| refused(r, contact_names, until);
     let size = start.len();
-    let start = start.clone();
+    let start = from.map_or_else(|| start.clone(), |x| x.to_vec());
     // Onto the section first: the scene's start is anywhere on the orbit's way.
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
