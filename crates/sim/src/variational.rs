@@ -476,14 +476,15 @@ impl Problem for Variational<'_> {
             Ok(out[k])
         };
         let (hx, ht) = {
-            let mut copy = self.inner.clone();
-            gradient(t, &x, &mut |t, x| guard(&mut copy, t, x))?
+            let inner = &mut *self.inner;
+            gradient(t, &x, &mut |t, x| guard(inner, t, x))?
         };
         let (rate, relative) = crossing_rate(&hx, ht, &before);
         if relative < GRAZING {
             return self.refuse(Refusal::Grazing { time: t, guard: Guard::Contact(k), relative });
         }
-        let h0 = guard(&mut self.inner.clone(), t, &x)?;
+        let h0 = guard(self.inner, t, &x)?;
+        let saved = self.inner.modes_state();
         let scale = 1.0 + x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let mut along = vec![0.0; s * s];
         for i in 0..s {
@@ -496,7 +497,7 @@ impl Problem for Variational<'_> {
             for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
                 let mut probe: Vec<f64> =
                     x.iter().zip(&d).map(|(a, b)| a + sign * step * b).collect();
-                let mut copy = self.inner.clone();
+                let copy = &mut *self.inner;
                 // Back onto the manifold the mode before the jump holds the state on, and onto
                 // the guard's surface along f⁻: there the jump sees the contacts the located
                 // one did (a closed contact's rate a difference's step off its manifold would
@@ -506,12 +507,14 @@ impl Problem for Variational<'_> {
                 for _ in 0..2 {
                     copy.project_positions(t, &mut probe)?;
                     copy.project_velocities(t, &mut probe)?;
-                    let off = (guard(&mut copy, t, &probe)? - h0) / rate;
+                    let off = (guard(copy, t, &probe)? - h0) / rate;
                     for (p, f) in probe.iter_mut().zip(&before) {
                         *p -= f * off;
                     }
                 }
-                copy.jump(t, &mut probe, &[k])?;
+                let jumped = copy.jump(t, &mut probe, &[k]);
+                copy.restore_modes(&saved);
+                jumped?;
                 *side = probe;
             }
             for r in 0..s {

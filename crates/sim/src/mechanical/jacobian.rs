@@ -87,9 +87,28 @@ impl Mechanical {
             self.solution = column;
             return Err(fault);
         }
-        // The accelerations may have been solved by LDLᵀ; one LU serves every column.
-        super::load_system(&self.dyn_out, self.layout, &self.kept, &mut self.system);
-        if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
+        // The accelerations may have been solved by LDLᵀ; one LU serves every column. Only
+        // the kept rows are factored: an open contact's multiplier is 0, and its identity row
+        // would only make the factorization larger (a rimless wheel on one spoke: five rows
+        // rather than nineteen).
+        let rows: Vec<usize> = (0..m).filter(|&c| self.kept[c]).collect();
+        let order = n + rows.len();
+        let mut system = nalgebra::DMatrix::zeros(order, order);
+        let out = &self.dyn_out;
+        for j in 0..n {
+            for i in 0..n {
+                system[(i, j)] = out[j * n + i];
+            }
+        }
+        for (r, &c) in rows.iter().enumerate() {
+            let base = n * n + n + c * (n + 3);
+            for j in 0..n {
+                system[(n + r, j)] = out[base + j];
+                system[(j, n + r)] = -out[base + j];
+            }
+        }
+        let mut pivots = vec![0; order];
+        if let Err(fault) = linalg::lu_in_place(&mut system, &mut pivots) {
             self.solution = column;
             return Err(fault);
         }
@@ -100,23 +119,24 @@ impl Mechanical {
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
+        let mut reduced = vec![0.0; order];
         for k in 0..width {
             for i in 0..n {
-                column[i] = -out[i * width + k];
+                reduced[i] = -out[i * width + k];
             }
-            for c in 0..m {
+            for (r, &c) in rows.iter().enumerate() {
                 let row = |block: usize| out[(n + block * m + c) * width + k];
                 // The partials of the row the accelerations satisfy, stabilisation included.
                 let stabilised = match self.stabilisation[c] {
-                    _ if !self.kept[c] => 0.0,
                     Stabilisation::Position => {
                         row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
                     }
                     Stabilisation::Velocity => row(0) + alpha * row(1),
                 };
-                column[n + c] = -stabilised;
+                reduced[n + r] = -stabilised;
             }
-            linalg::lu_solve(&self.system, &self.pivots, &mut column);
+            linalg::lu_solve(&system, &pivots, &mut reduced);
+            column[..n].copy_from_slice(&reduced[..n]);
             for i in 0..n {
                 jac[(n + i) * width + k] = column[i];
             }

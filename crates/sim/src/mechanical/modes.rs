@@ -87,6 +87,16 @@ pub(super) struct Modes {
     offset: Vec<f64>,
 }
 
+/// What a jump changes of a problem besides the state (the modes and their scales, the rows
+/// kept), saved to be put back after a trial jump: a saltation matrix differences the jump
+/// map at states around the real one, on the problem itself rather than on copies of its
+/// programs.
+#[derive(Clone, Debug)]
+pub(crate) struct ModesState {
+    modes: Modes,
+    kept: Vec<bool>,
+}
+
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
 struct Rows {
     multipliers: Vec<usize>,
@@ -136,6 +146,18 @@ impl Mechanical {
     /// Whether each contact is closed now.
     pub fn closed(&self) -> &[bool] {
         &self.modes.closed
+    }
+
+    /// The modes as they are now, for [`Mechanical::restore_modes`].
+    pub(crate) fn modes_state(&self) -> ModesState {
+        ModesState { modes: self.modes.clone(), kept: self.kept.clone() }
+    }
+
+    /// Puts back the modes saved by [`Mechanical::modes_state`].
+    pub(crate) fn restore_modes(&mut self, state: &ModesState) {
+        self.modes.clone_from(&state.modes);
+        self.kept.clone_from(&state.kept);
+        self.solved = None;
     }
 
     /// The multipliers of the two-sided constraints and of the closed contacts are kept.
