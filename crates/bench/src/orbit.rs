@@ -187,7 +187,7 @@ pub fn run(peer: bool, repeats: usize) {
             outln!("|---|---:|---:|---:|---:|---:|");
             for ((scene, t), ours) in scenes.iter().zip(&theirs).zip(&walls) {
                 outln!(
-                    "| {} | {} | {} | {:.1e} | {} | {:.0}× |",
+                    "| {} | {} | {} | {:.1e} | {} | {:.1}× |",
                     scene.name,
                     t.runs,
                     t.evaluations,
