@@ -8,8 +8,10 @@
 //! matrix integrated on the run's own steps from the exact Jacobian, carried across the jumps
 //! by their saltation matrices, and ended with the section's event time varied with the start.
 //! Newton and the multipliers work in the chart of the section within the manifold the kept
-//! constraints hold the state on ([`chart::tangent`]): the directions across it (the flow's
-//! own, and those Baumgarte's terms decide) are the trivial multipliers, left out.
+//! constraints hold the state on ([`chart::section`]): the directions across it (the flow's
+//! own, and those Baumgarte's terms decide) are the trivial multipliers, left out. A scene is
+//! loaded once for many searches ([`Search`]), and [`sweep`] continues an orbit in a
+//! parameter and locates where a multiplier crosses the unit circle.
 //! It loads the scene as `simulation` does for a run, and prints nothing.
 
 pub mod chart;
@@ -169,6 +171,10 @@ struct Loaded {
     run: sim::Settings,
     state_names: Vec<String>,
     contact_names: Vec<String>,
+    /// What a fault's words name besides the state and the contacts.
+    constraint_names: Vec<String>,
+    parameter_names: Vec<String>,
+    angle_oriented_bodies: Vec<String>,
 }
 
 fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
@@ -260,6 +266,9 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
         run,
         state_names: prepared.state_names(),
         contact_names: prepared.contact_names(),
+        constraint_names: prepared.kept_constraint_names(),
+        parameter_names: prepared.parameter_slot_names(),
+        angle_oriented_bodies: simulation::angle_oriented_bodies(&prepared.derivation.model),
     })
 }
 
@@ -302,16 +311,37 @@ fn period(
 }
 
 /// A variational run's refusal in words.
-fn refused(refusal: Refusal, contacts: &[String], until: f64) -> Error {
+fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
+    let contacts = &loaded.contact_names;
     let guard = |g: Guard| match g {
         Guard::Contact(k) => format!("contact `{}`", contacts.get(k).cloned().unwrap_or_default()),
         Guard::Section => "the section".to_string(),
     };
+    let until = loaded.until;
     match refusal {
         Refusal::NoJacobian => Error::Numeric("the scene's partials were not lowered".into()),
         Refusal::Method(m) => Error::Input(format!("{m} cannot carry the sensitivities")),
         Refusal::Fault(f) => {
-            Error::Numeric(format!("the run faulted at t = {}: {:?}", f.time, f.kind))
+            let names = simulation::FaultNames {
+                method: loaded.run.method,
+                state: &loaded.state_names,
+                constraints: &loaded.constraint_names,
+                parameters: &loaded.parameter_names,
+                angle_oriented_bodies: &loaded.angle_oriented_bodies,
+                contacts,
+            };
+            let (what, cause) = names.words(&f.kind);
+            let state: Vec<String> = loaded
+                .state_names
+                .iter()
+                .zip(&f.state)
+                .map(|(n, v)| format!("{n} = {v}"))
+                .collect();
+            Error::Numeric(format!(
+                "numeric fault at t = {} of a return: {what}\n  state: {}\n  likely cause: {cause}",
+                f.time,
+                state.join(", ")
+            ))
         }
         Refusal::Grazing { time, guard: g, relative } => Error::Numeric(format!(
             "grazing: {} is reached at t = {time} with a rate {relative:.1e} of its scale, too \
@@ -357,38 +387,34 @@ impl Search {
 
     /// The orbit from the scene's start, in at most `iterations` Newton steps.
     pub fn find(&mut self, iterations: usize) -> Result<Orbit, Error> {
-        find(&mut self.loaded, None, iterations)
+        find(&self.loaded, None, iterations)
     }
 
     /// The orbit from the state `from` (q, q̇) rather than the scene's start: a nearby orbit's
     /// fixed point, as a sweep continues one.
     pub fn find_from(&mut self, from: &[f64], iterations: usize) -> Result<Orbit, Error> {
-        find(&mut self.loaded, Some(from), iterations)
+        find(&self.loaded, Some(from), iterations)
     }
 }
 
-fn find(
-    loaded: &mut Loaded,
-    from: Option<&[f64]>,
-    iterations_allowed: usize,
-) -> Result<Orbit, Error> {
-    let Loaded { mechanical, start, end, until, symmetry, run, state_names, contact_names } =
-        loaded;
-    let (end, until) = (*end, *until);
-    let fail = |r: Refusal| refused(r, contact_names, until);
-    let size = start.len();
-    let start = from.map_or_else(|| start.clone(), |x| x.to_vec());
+fn find(loaded: &Loaded, from: Option<&[f64]>, iterations_allowed: usize) -> Result<Orbit, Error> {
+    let mut mechanical = loaded.mechanical.clone();
+    let (end, run) = (loaded.end, loaded.run.clone());
+    let fail = |r: Refusal| refused(r, loaded);
+    let symmetry = &loaded.symmetry;
+    let size = loaded.start.len();
+    let start = from.map_or_else(|| loaded.start.clone(), |x| x.to_vec());
     // Onto the section first: the scene's start is anywhere on the orbit's way.
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
         _ => {
-            let tr = variational::transition(mechanical, &start, run, end).map_err(fail)?;
+            let tr = variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?;
             (tr.state, tr.surface)
         }
     };
     let mut iterations = Vec::new();
     for _ in 0..iterations_allowed.max(1) {
-        let tr = variational::transition(mechanical, &x, run, end).map_err(fail)?;
+        let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
         let mut rows = tr.normals.clone();
         rows.extend(symmetry.ignored_rows());
         let tangent = chart::section(&symmetry.carry(&surface), &rows, size);
@@ -414,7 +440,7 @@ fn find(
             };
             let stable = verdict == Verdict::Stable;
             return Ok(Orbit {
-                state_names: state_names.clone(),
+                state_names: loaded.state_names.clone(),
                 fixed_point: tr.start.clone(),
                 period: tr.time - run.start,
                 multipliers,
