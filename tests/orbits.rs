@@ -363,6 +363,20 @@ fn mistakes_are_refused_by_name() {
         },
     );
     assert!(e.contains("no return within 5 s"), "{e}");
+    // A level rod dropped flat lands on both ends at once: which lands first changes with the
+    // start, and the map has no derivative there.
+    let rod = "scene \"A level rod dropped flat\"\n\
+        param m = 1 kg, L = 1 m, g = 9.81 m/s^2\n\
+        coord x = 0\ncoord y = 1\ncoord theta = 0\n\
+        body rod { mass m; inertia m*L^2/12; position (x, y); angle theta }\n\
+        gravity g\n\
+        contact left: y - L/2*sin(theta) >= 0 { restitution 1/2 }\n\
+        contact right: y + L/2*sin(theta) >= 0 { restitution 1/2 }\n";
+    let e = match orbit::orbit(rod, &options(Section::Period("1".into()), &[])) {
+        Ok(o) => panic!("found {:?}", o.fixed_point),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("simultaneous events") && e.contains("`left` and contact `right`"), "{e}");
     // An implicit method cannot carry Φ on its steps.
     let e = refused(pendulum, Section::Period("2*pi/w".into()), |o| {
         o.run.method = Some("radau".into())

@@ -549,3 +549,34 @@ impl Problem for Variational<'_> {
         Ok(events)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_crossing_along_its_surface_is_grazing_and_across_it_is_not() {
+        // h = x₀: the flow nearly along the surface, then across it.
+        let (_, along) = crossing_rate(&[1.0, 0.0], 0.0, &[1e-9, 1.0]);
+        assert!(along < GRAZING, "{along}");
+        let (rate, across) = crossing_rate(&[1.0, 0.0], 0.0, &[-0.5, 0.5]);
+        assert!(across > 0.5 && rate == -0.5, "{rate} {across}");
+        // A moving surface: h = x₀ − t met at rest is no grazing.
+        let (rate, moving) = crossing_rate(&[1.0, 0.0], -1.0, &[0.0, 0.0]);
+        assert!(rate == -1.0 && moving == 1.0);
+    }
+
+    #[test]
+    fn the_projection_along_the_flow_keeps_the_surface() {
+        // P·Φ with Φ = I: h_x·P = 0, and P·f = 0.
+        let (f, hx) = ([2.0, 1.0], [1.0, 3.0]);
+        let rate = dot(&hx, &f);
+        let p = along_surface(&identity(2), &f, &hx, rate, 2);
+        for j in 0..2 {
+            assert!((hx[0] * p[j] + hx[1] * p[2 + j]).abs() < 1e-15);
+        }
+        for i in 0..2 {
+            assert!((p[i * 2] * f[0] + p[i * 2 + 1] * f[1]).abs() < 1e-15);
+        }
+    }
+}
