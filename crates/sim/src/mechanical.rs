@@ -302,7 +302,10 @@ impl Mechanical {
         let solved = match (self.small.as_mut(), kept.iter().all(|&k| k)) {
             (Some(small), true) => solve_system(out, self.layout, kept, small, solution, pivots),
             (Some(small), false) => solve_kept(out, self.layout, kept, small, solution, pivots),
-            (None, _) => solve_system(out, self.layout, kept, &mut self.system, solution, pivots),
+            (None, true) => {
+                solve_system(out, self.layout, kept, &mut self.system, solution, pivots)
+            }
+            (None, false) => solve_kept_heap(out, self.layout, kept, solution),
         };
         match solved {
             Ok(()) => {
@@ -387,9 +390,10 @@ impl Mechanical {
                 solve_system(out, self.layout, kept, small, &mut change, pivots)?
             }
             (Some(small), false) => solve_kept(out, self.layout, kept, small, &mut change, pivots)?,
-            (None, _) => {
+            (None, true) => {
                 solve_system(out, self.layout, kept, &mut self.system, &mut change, pivots)?
             }
+            (None, false) => solve_kept_heap(out, self.layout, kept, &mut change)?,
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
             *v += d;
@@ -782,6 +786,53 @@ fn solve_kept(
     };
     a.set_order(n + m);
     solved?;
+    b[..n].copy_from_slice(&x[..n]);
+    b[n..n + m].fill(0.0);
+    for (r, &c) in rows.iter().enumerate() {
+        b[n + c] = x[n + r];
+    }
+    Ok(())
+}
+
+/// [`solve_kept`] past the stack's order: the kept rows factored on the heap, an open
+/// contact's multiplier 0 without its identity row (a rimless wheel on one spoke solves five
+/// rows, not nineteen).
+fn solve_kept_heap(
+    out: &[f64],
+    layout: Layout,
+    kept: &[bool],
+    b: &mut [f64],
+) -> Result<(), FaultKind> {
+    let Layout { coordinates: n, multipliers: m, .. } = layout;
+    let rows: Vec<usize> = (0..m).filter(|&c| kept[c]).collect();
+    let order = n + rows.len();
+    let load = |a: &mut DMatrix<f64>| {
+        for j in 0..n {
+            for i in 0..n {
+                a[(i, j)] = out[j * n + i];
+            }
+        }
+        for (r, &c) in rows.iter().enumerate() {
+            let base = n * n + n + c * (n + 3);
+            for j in 0..n {
+                a[(n + r, j)] = out[base + j];
+                a[(j, n + r)] = -out[base + j];
+            }
+        }
+    };
+    let mut a = DMatrix::zeros(order, order);
+    load(&mut a);
+    let mut x = vec![0.0; order];
+    x[..n].copy_from_slice(&b[..n]);
+    for (r, &c) in rows.iter().enumerate() {
+        x[n + r] = b[n + c];
+    }
+    let mut pivots = vec![0; order];
+    if rows.is_empty() {
+        linalg::solve_symmetric(&mut a, &mut x, &mut pivots, load)?;
+    } else {
+        linalg::solve_general(&mut a, &mut x, &mut pivots)?;
+    }
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);
     for (r, &c) in rows.iter().enumerate() {
