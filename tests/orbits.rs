@@ -326,6 +326,30 @@ fn a_sweep_locates_where_a_multiplier_crosses_one() {
     assert!((mu[0].re * mu[1].re - expected).abs() < 1e-8 * expected, "{mu:?}");
 }
 
+/// The driven pendulum's resonance bends over: from A = 5 the branch folds back near A = 5.28,
+/// which pseudo-arclength follows round; at the fold a multiplier is 1 and the other is
+/// Liouville's factor itself.
+#[test]
+fn a_sweep_follows_the_branch_round_a_fold() {
+    let source = lagrange_tests::example("orbits/driven_pendulum.lag");
+    let options = options(Section::Period("2*pi/w".into()), &[]);
+    let range: engine::input::SweepRange = "A=5:5.5:11".parse().expect("a range");
+    let swept = orbit::sweep::sweep(&source, &options, &range).expect("a sweep");
+    assert!(swept.lost.is_none() && swept.around > 2, "{:?}", swept.lost);
+    // Up to the fold, then back down past the range's start.
+    let values: Vec<f64> = swept.points.iter().map(|(p, _)| *p).collect();
+    let top = values.iter().copied().fold(f64::MIN, f64::max);
+    assert!(top > 5.25 && top < 5.3 && values.last().is_some_and(|&v| v < 5.0), "{values:?}");
+    let folds: Vec<_> =
+        swept.crossings.iter().filter(|c| c.kind == orbit::sweep::Crossing::Fold).collect();
+    let [fold] = &folds[..] else { panic!("{:?}", swept.crossings) };
+    assert!(fold.at >= top - 1e-9 && fold.at < 5.3, "{} against {top}", fold.at);
+    let expected = (-C * 2.0 * PI / W / (M * L * L)).exp();
+    let mu = &fold.orbit.multipliers;
+    assert!((mu[0].re - 1.0).abs() < 1e-8 && mu[0].im == 0.0, "{mu:?}");
+    assert!((mu[1].re - expected).abs() < 1e-8 * expected, "{mu:?}");
+}
+
 fn refused(scene: &str, section: Section, edit: impl FnOnce(&mut Options)) -> String {
     let mut options = options(section, &[]);
     edit(&mut options);

@@ -112,7 +112,11 @@ pub fn sweep_text(path: &str, sweep: &Sweep, section: &str) -> String {
     let _ = writeln!(out, "orbit of {path} ({section}) swept in {}", sweep.parameter);
     let p = &sweep.parameter;
     let _ = writeln!(out, "  {p:>16}  {:>16}  {:>16}  verdict", "period", "largest |μ|");
-    for (value, orbit) in &sweep.points {
+    let natural = sweep.points.len() - sweep.around;
+    for (k, (value, orbit)) in sweep.points.iter().enumerate() {
+        if k == natural {
+            let _ = writeln!(out, "  then along the branch by pseudo-arclength, past its fold:");
+        }
         let _ = writeln!(
             out,
             "  {:>16}  {:>16}  {:>16}  {}",
@@ -157,6 +161,7 @@ pub fn sweep_json(path: &str, sweep: &Sweep, section: &str) -> String {
         "scene": path,
         "section": section,
         "parameter": sweep.parameter,
+        "around_the_fold": sweep.around,
         "points": sweep.points.iter().map(|(p, orbit)| json!({
             "value": p,
             "fixed_point": orbit.fixed_point,

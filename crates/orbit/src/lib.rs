@@ -18,7 +18,7 @@ pub mod chart;
 mod map;
 pub mod sweep;
 
-use nalgebra::{Complex, DVector};
+use nalgebra::{Complex, DMatrix, DVector};
 use numeric::Tape;
 use sim::variational::{self, End, Guard, Refusal};
 use sim::Mechanical;
@@ -394,6 +394,28 @@ impl Search {
     /// fixed point, as a sweep continues one.
     pub fn find_from(&mut self, from: &[f64], iterations: usize) -> Result<Orbit, Error> {
         find(&self.loaded, Some(from), iterations)
+    }
+
+    /// Whether the map is over a fixed period (whose start is any state, not one on a section).
+    pub(crate) fn is_periodic_in_time(&self) -> bool {
+        self.loaded.end == End::Time
+    }
+
+    /// A fixed period's map at `x`, for continuation: the return less its start, S(P(x)) − x,
+    /// its Jacobian Π·Φ (row-major) and the chart at `x`.
+    pub(crate) fn evaluate(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>, DMatrix<f64>), Error> {
+        let loaded = &self.loaded;
+        let mut mechanical = loaded.mechanical.clone();
+        let fail = |r: Refusal| refused(r, loaded);
+        let tr =
+            variational::transition(&mut mechanical, x, &loaded.run, loaded.end).map_err(fail)?;
+        let mut rows = tr.normals.clone();
+        rows.extend(loaded.symmetry.ignored_rows());
+        let size = x.len();
+        let tangent = chart::section(&identity(size), &rows, size);
+        let returned = loaded.symmetry.apply(&tr.state);
+        let gap = returned.iter().zip(x).map(|(a, b)| a - b).collect();
+        Ok((gap, loaded.symmetry.carry(&tr.matrix), tangent))
     }
 }
 
