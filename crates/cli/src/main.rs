@@ -263,7 +263,8 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
         /// Continue the orbit over N values of a parameter from A to B, each found from the
-        /// one before, and locate where a multiplier crosses the unit circle: `--sweep A=4:6:11`.
+        /// one before (a fixed period's map round a fold by pseudo-arclength), and locate where
+        /// a multiplier crosses the unit circle: `--sweep A=4:6:11`.
         #[arg(long, value_name = "P=A:B:N")]
         sweep: Option<SweepRange>,
         /// The most Newton iterations.

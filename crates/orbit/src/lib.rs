@@ -368,6 +368,10 @@ fn identity(size: usize) -> Vec<f64> {
     m
 }
 
+/// A fixed period's map at a state: the return less its start, the Jacobian (row-major) and
+/// the chart there.
+pub(crate) type Evaluated = (Vec<f64>, Vec<f64>, DMatrix<f64>);
+
 /// Finds the periodic orbit of `source` from its start.
 pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
     Search::new(source, options)?.find(options.iterations)
@@ -403,7 +407,7 @@ impl Search {
 
     /// A fixed period's map at `x`, for continuation: the return less its start, S(P(x)) − x,
     /// its Jacobian Π·Φ (row-major) and the chart at `x`.
-    pub(crate) fn evaluate(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>, DMatrix<f64>), Error> {
+    pub(crate) fn evaluate(&self, x: &[f64]) -> Result<Evaluated, Error> {
         let loaded = &self.loaded;
         let mut mechanical = loaded.mechanical.clone();
         let fail = |r: Refusal| refused(r, loaded);

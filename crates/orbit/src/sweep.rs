@@ -169,6 +169,9 @@ fn distance(a: &Point, b: &Point) -> f64 {
     (dx + (a.1 - b.1) * (a.1 - b.1)).sqrt()
 }
 
+/// The residual F, C − I, ∂F/∂p and the chart at a point.
+type Linearized = (DVector<f64>, DMatrix<f64>, DVector<f64>, DMatrix<f64>);
+
 /// Pseudo-arclength continuation of a fixed period's map in one parameter.
 struct Branch<'a> {
     source: &'a str,
@@ -183,11 +186,7 @@ impl Branch<'_> {
     /// The map's residual in the chart at (x, p), its Jacobian C − I there, ∂/∂p of the
     /// residual (central differences of the map in p alone: the variational runs carry no
     /// parameter columns yet) and the chart.
-    fn residual(
-        &self,
-        x: &[f64],
-        p: f64,
-    ) -> Result<(DVector<f64>, DMatrix<f64>, DVector<f64>, DMatrix<f64>), Error> {
+    fn residual(&self, x: &[f64], p: f64) -> Result<Linearized, Error> {
         let (gap, monodromy, tangent) =
             at(self.source, self.options, self.parameter, p)?.evaluate(x)?;
         let f = tangent.transpose() * DVector::from_vec(gap);
