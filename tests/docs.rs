@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 17] = [
+const PAGES: [&str; 18] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -26,6 +26,7 @@ const PAGES: [&str; 17] = [
     "docs/c.md",
     "docs/contacts.md",
     "docs/friction.md",
+    "docs/orbits.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -180,6 +181,7 @@ fn run(words: &[String]) -> Result<String, String> {
         "simulate" => simulate(rest),
         "linearize" => linearize(rest),
         "ensemble" => ensemble(rest),
+        "orbit" => orbit(rest),
         other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
     }
 }
@@ -404,6 +406,67 @@ fn linearize_along(file: &str, motion: &str, args: &Args) -> Result<String, Stri
     Ok(if args.has("out") { String::new() } else { report })
 }
 
+/// `lagrange orbit`: the report, text or JSON.
+fn orbit(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units", "json"]);
+    let own = [
+        "section",
+        "direction",
+        "period",
+        "shift",
+        "swap",
+        "ignore",
+        "iterations",
+        "json",
+        "sweep",
+    ];
+    args.only(&[&["until", "method", "tolerance", "step", "set", "no-units"][..], &own].concat())?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    let rising = match args.last("direction").as_deref() {
+        None | Some("rising") => true,
+        Some("falling") => false,
+        Some(other) => return Err(format!("no direction {other}")),
+    };
+    let section = match (args.last("section"), args.last("period")) {
+        (None, Some(period)) => orbit::Section::Period(period),
+        (Some(text), None) => orbit::Section::parse(&text, rising),
+        _ => return Err("one of --section and --period".into()),
+    };
+    let words = section.words();
+    let options = orbit::Options {
+        run: simulation::Options {
+            until: args.number("until")?,
+            method: args.last("method"),
+            tolerance: args.number("tolerance")?,
+            step: args.number("step")?,
+            set: args.parsed("set")?,
+            no_units: args.has("no-units"),
+            ..Default::default()
+        },
+        section,
+        swaps: args.parsed("swap")?,
+        shifts: args.parsed("shift")?,
+        ignore: args.all("ignore"),
+        iterations: args.number("iterations")?.unwrap_or(30),
+    };
+    if let Some(range) = args.parsed::<SweepRange>("sweep")?.pop() {
+        let swept = orbit::sweep::sweep(&read(file)?, &options, &range)
+            .map_err(|e| cli::diagnostics::error(file, &e))?;
+        return Ok(if args.has("json") {
+            cli::orbit::sweep_json(file, &swept, &words)
+        } else {
+            cli::orbit::sweep_text(file, &swept, &words)
+        });
+    }
+    let found =
+        orbit::orbit(&read(file)?, &options).map_err(|e| cli::diagnostics::error(file, &e))?;
+    Ok(if args.has("json") {
+        cli::orbit::json(file, &found, &words)
+    } else {
+        cli::orbit::text(file, &found, &words)
+    })
+}
+
 /// The `lagrange` command of a shell line, if it is one that is run: `lagrange derive …` or
 /// `cargo run -- derive …` (with `--release` or not).
 fn command(line: &str) -> Option<Vec<String>> {
@@ -416,7 +479,7 @@ fn command(line: &str) -> Option<Vec<String>> {
         }
         _ => return None,
     };
-    let run = ["derive", "check", "simulate", "linearize", "ensemble"];
+    let run = ["derive", "check", "simulate", "linearize", "ensemble", "orbit"];
     run.contains(&rest.first()?.as_str()).then(|| rest.to_vec())
 }
 
@@ -653,6 +716,11 @@ fn control() {
 #[test]
 fn fmu() {
     assert_honest("docs/fmu.md");
+}
+
+#[test]
+fn orbits() {
+    assert_honest("docs/orbits.md");
 }
 
 #[test]

@@ -57,6 +57,21 @@ fn a_run_resolves_once() {
 }
 
 #[test]
+fn an_orbit_resolves_once() {
+    let pendulum = example("orbits/driven_pendulum.lag");
+    let options = orbit::Options {
+        run: simulation::Options::default(),
+        section: orbit::Section::Period("2*pi/w".into()),
+        swaps: Vec::new(),
+        shifts: Vec::new(),
+        ignore: Vec::new(),
+        iterations: 30,
+    };
+    let found = resolutions(|| orbit::orbit(&pendulum, &options).expect("an orbit"));
+    assert_eq!(found, 1, "orbit");
+}
+
+#[test]
 fn linearize_and_inverse_dynamics_resolve_once() {
     let cart = example("classics/inverted_pendulum_on_cart.lag");
     let options = engine::linearize::Options::default();

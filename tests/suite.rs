@@ -36,6 +36,7 @@ mod linearize;
 mod lockstep;
 mod lockstep_edges;
 mod many;
+mod orbits;
 mod radau;
 mod random_scenes;
 mod rates;

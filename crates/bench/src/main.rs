@@ -20,6 +20,9 @@
 //!   error of their impact times (and rate ratios) against closed forms at tolerances 1e-6,
 //!   1e-9 and 1e-12, and the wall time per run and per impact on the scene loaded once, with
 //!   `--peer` a SciPy event loop (DOP853, the impulses applied by hand) at equal error;
+//! - `orbit [--peer] [--repeats N]`: the rimless wheel's and the driven pendulum's periodic
+//!   orbits found by `orbit`, their multipliers against closed forms and the wall time of a
+//!   search, with `--peer` SciPy's shooting loop (finite-difference Jacobians of whole runs);
 //! - `memory [--largest N]`: the peak memory of `lagrange simulate` and `lagrange ensemble`
 //!   processes at 1e5, 1e6 … N samples and runs (1e7 by default), their tables streamed to a
 //!   file (Linux: read from /proc);
@@ -53,6 +56,7 @@ mod eval;
 mod hand;
 mod memory;
 mod model;
+mod orbit;
 mod precision;
 mod progress;
 mod scaling;
@@ -130,6 +134,17 @@ enum Benchmark {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// The rimless wheel's and the driven pendulum's periodic orbits: multipliers against
+    /// closed forms, and the cost of a search.
+    Orbit {
+        /// Also run SciPy's shooting loop with finite-difference Jacobians
+        /// (tests/sympy/orbit_peer.py, which makes its own Python environment), in the same run.
+        #[arg(long)]
+        peer: bool,
+        /// How often each search is timed.
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+    },
     /// The peak memory of `lagrange simulate` and `lagrange ensemble` as their tables grow
     /// (Linux).
     Memory {
@@ -188,6 +203,7 @@ fn main() {
         }
         Benchmark::Model => model::run(),
         Benchmark::Contacts { peer, repeats } => contacts::run(peer, repeats),
+        Benchmark::Orbit { peer, repeats } => orbit::run(peer, repeats),
         Benchmark::Memory { largest } => memory::run(largest),
         Benchmark::Derive { family, n } => scaling::json(family, n),
     }

@@ -16,6 +16,7 @@ pub mod ensemble;
 pub mod export;
 pub mod inverse;
 pub mod linearize;
+pub mod orbit;
 pub mod plot;
 pub mod progress;
 pub mod report;

@@ -221,6 +221,71 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// Find a periodic orbit: Newton's method on a return map (to a section, a contact's
+    /// landing, or over a fixed period), with the map's Jacobian from the exact variational
+    /// equations; print the fixed point, the period, the Floquet multipliers and the verdict.
+    /// Exit 2 on bad input, 1 when no orbit is found.
+    Orbit {
+        file: PathBuf,
+        /// Where the map returns: an expression crossing zero (`theta`, `x = 2`), `impact`
+        /// (any contact's landing) or `impact:NAME` (that contact's).
+        #[arg(
+            long,
+            value_name = "EXPR",
+            conflicts_with = "period",
+            required_unless_present = "period"
+        )]
+        section: Option<String>,
+        /// The direction an expression section is crossed in.
+        #[arg(long, value_enum, default_value_t = DirectionArg::Rising)]
+        direction: DirectionArg,
+        /// A fixed period instead, for a driven scene: an expression of the parameters
+        /// (`2*pi/w`), in seconds without a unit.
+        #[arg(long, value_name = "TIME")]
+        period: Option<String>,
+        /// Before comparing a return with its start, add a value to a coordinate or a rate:
+        /// `--shift theta=pi/4`, `--shift x=-2*l*sin(pi/8)` (a constant of the parameters).
+        #[arg(long = "shift", value_name = "NAME=VALUE")]
+        shift: Vec<Assignment>,
+        /// Before comparing, exchange two coordinates and their rates (a walker's legs):
+        /// `--swap a=b`.
+        #[arg(long = "swap", value_name = "A=B")]
+        swap: Vec<Assignment>,
+        /// Leave a coordinate out of the comparison: a cyclic one a return need not repeat
+        /// (the distance a wheel has rolled), `--ignore x`.
+        #[arg(long = "ignore", value_name = "NAME")]
+        ignore: Vec<String>,
+        /// The longest a return may take, as the scene writes a time; default: the scene's
+        /// `simulate { until … }`, else 10.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        until: Option<String>,
+        #[arg(long, value_parser = method_parser(),
+              help = "An explicit integrator (default dop853)")]
+        method: Option<sim::Method>,
+        /// Tolerance of the adaptive methods (default: the scene's, else 1e-10).
+        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+        tolerance: Option<String>,
+        /// Step of the fixed-step methods.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        step: Option<String>,
+        /// Override a parameter or the start Newton begins from: `--set w0=2`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<Assignment>,
+        /// Continue the orbit over N values of a parameter from A to B, each found from the
+        /// one before (a fixed period's map round a fold by pseudo-arclength), and locate where
+        /// a multiplier crosses the unit circle: `--sweep A=4:6:11`.
+        #[arg(long, value_name = "P=A:B:N")]
+        sweep: Option<SweepRange>,
+        /// The most Newton iterations.
+        #[arg(long, default_value_t = 30)]
+        iterations: usize,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Measure every integrator over a ladder of tolerances or steps against a tight DOP853
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
@@ -363,6 +428,12 @@ impl RunArgs {
             ..Default::default()
         })
     }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum DirectionArg {
+    Rising,
+    Falling,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -582,6 +653,83 @@ fn main() -> ExitCode {
                     Err(e) => fail(&path, &e),
                 },
                 LangArg::C => codegen_c(&path, &source, options, out.as_deref()),
+            }
+        }
+        Command::Orbit {
+            file,
+            section,
+            direction,
+            period,
+            shift,
+            swap,
+            ignore,
+            until,
+            method,
+            tolerance,
+            step,
+            set,
+            sweep,
+            iterations,
+            json,
+            no_units,
+        } => {
+            let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
+            let (Some(until), Some(tolerance), Some(step)) = (
+                time_option(engine::Setting::Until, until.as_deref()),
+                ratio_option(engine::Setting::Tolerance, tolerance.as_deref()),
+                time_option(engine::Setting::Step, step.as_deref()),
+            ) else {
+                return ExitCode::from(2);
+            };
+            let rising = matches!(direction, DirectionArg::Rising);
+            let section = match (section, period) {
+                (_, Some(period)) => orbit::Section::Period(period),
+                (Some(text), None) => orbit::Section::parse(&text, rising),
+                (None, None) => unreachable!("clap requires one"),
+            };
+            let words = section.words();
+            let options = orbit::Options {
+                run: simulation::Options {
+                    until,
+                    method: method.map(|m| m.name().to_string()),
+                    tolerance,
+                    step,
+                    set,
+                    no_units,
+                    ..Default::default()
+                },
+                section,
+                swaps: swap,
+                shifts: shift,
+                ignore,
+                iterations,
+            };
+            let path = file.display().to_string();
+            if let Some(range) = sweep {
+                return match orbit::sweep::sweep(&source, &options, &range) {
+                    Ok(swept) => {
+                        let report = if json {
+                            cli::orbit::sweep_json(&path, &swept, &words)
+                        } else {
+                            cli::orbit::sweep_text(&path, &swept, &words)
+                        };
+                        print!("{report}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(&path, &e),
+                };
+            }
+            match orbit::orbit(&source, &options) {
+                Ok(found) => {
+                    let report = if json {
+                        cli::orbit::json(&path, &found, &words)
+                    } else {
+                        cli::orbit::text(&path, &found, &words)
+                    };
+                    print!("{report}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&path, &e),
             }
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {

@@ -279,6 +279,76 @@ impl NativeScene {
         data::to_python(py, &results::along::report(&linearized))
     }
 
+    /// A periodic orbit as `lagrange orbit` finds it: over a fixed `period` (an expression of
+    /// the parameters) or to a `section` (an expression crossing zero in `direction`,
+    /// `impact` or `impact:NAME`), each return mapped by `swap` (`a=b`) and `shift`
+    /// (`name=value`) and compared without the coordinates `ignore` names. Returns a dict: the
+    /// state's names, the fixed point, the period, the multipliers (complex), the map's
+    /// Jacobian on the whole state (`monodromy`), how many trivial multipliers were left out,
+    /// the jumps on the way, the verdict and the Newton residuals.
+    #[pyo3(signature = (
+        period = None, section = None, direction = "rising".to_string(), shift = Vec::new(),
+        swap = Vec::new(), ignore = Vec::new(), set = Vec::new(), until = None, method = None,
+        tolerance = None, iterations = 30
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn orbit<'py>(
+        &self,
+        py: Python<'py>,
+        period: Option<String>,
+        section: Option<String>,
+        direction: String,
+        shift: Vec<String>,
+        swap: Vec<String>,
+        ignore: Vec<String>,
+        set: Vec<String>,
+        until: Option<f64>,
+        method: Option<String>,
+        tolerance: Option<f64>,
+        iterations: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let rising = match direction.as_str() {
+            "rising" => true,
+            "falling" => false,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "direction is \"rising\" or \"falling\", not {other:?}"
+                )))
+            }
+        };
+        let section = match (period, section) {
+            (Some(period), None) => orbit::Section::Period(period),
+            (None, Some(text)) => orbit::Section::parse(&text, rising),
+            _ => {
+                return Err(PyValueError::new_err(
+                    "give one of period (a driven scene's) and section",
+                ))
+            }
+        };
+        let read = |texts: &[String]| {
+            engine::input::assignments(texts).map_err(|e| engine_error(&e, &self.path))
+        };
+        let options = orbit::Options {
+            run: simulation::Options {
+                until,
+                method,
+                tolerance,
+                set: read(&set)?,
+                no_units: !self.units,
+                ..Default::default()
+            },
+            section,
+            swaps: read(&swap)?,
+            shifts: read(&shift)?,
+            ignore,
+            iterations,
+        };
+        let found = py
+            .detach(|| orbit::orbit(&self.source, &options))
+            .map_err(|e| engine_error(&e, &self.path))?;
+        orbit_dict(py, &found)
+    }
+
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -393,6 +463,27 @@ impl simulation::Sink for Arrays {
 }
 
 /// A run's outcome as the dict the Python `Results` wraps, with its arrays.
+/// An orbit as the dict `Scene.orbit` reads.
+fn orbit_dict<'py>(py: Python<'py>, found: &orbit::Orbit) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    let size = found.fixed_point.len();
+    out.set_item("state", PyList::new(py, &found.state_names)?)?;
+    out.set_item("fixed_point", PyArray1::from_vec(py, found.fixed_point.clone()))?;
+    out.set_item("period", found.period)?;
+    let multipliers: Vec<(f64, f64)> = found.multipliers.iter().map(|m| (m.re, m.im)).collect();
+    out.set_item("multipliers", multipliers)?;
+    let rows: Vec<Vec<f64>> =
+        (0..size).map(|i| found.monodromy[i * size..(i + 1) * size].to_vec()).collect();
+    out.set_item("monodromy", rows)?;
+    out.set_item("trivial", found.trivial)?;
+    out.set_item("jumps", found.jumps)?;
+    out.set_item("stable", found.stable)?;
+    out.set_item("verdict", found.verdict.word())?;
+    let residuals: Vec<f64> = found.iterations.iter().map(|i| i.residual).collect();
+    out.set_item("residuals", residuals)?;
+    Ok(out)
+}
+
 fn outcome_dict<'py>(
     py: Python<'py>,
     outcome: &simulation::Outcome,

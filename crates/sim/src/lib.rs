@@ -16,7 +16,11 @@
 //! whose samples a run stops and restarts its method), one-sided contacts (their modes, guards
 //! located on the dense output, impacts and lift-offs as jumps after which a run restarts its
 //! method) with the complementarity problems they pose (`complementarity`: the impulses of an
-//! impact, the forces of touching contacts), and the measurements of a run (steps,
+//! impact, the forces of touching contacts), the sensitivities of a run (`variational`: the
+//! state transition matrix integrated on the run's own steps from the exact Jacobian, carried
+//! across jumps by saltation matrices, ended at a time, a section or a landing with the
+//! event's time varied with the start: what a return map's Newton iteration and its Floquet
+//! multipliers are made of), and the measurements of a run (steps,
 //! evaluations, Jacobians, factorizations, energy and constraint drift). It works on numbered
 //! slots and [`numeric::Tape`]s: it knows no symbols, names or files, and nothing of how the
 //! equations were derived.
@@ -41,6 +45,7 @@ mod run;
 mod series;
 mod spectrum;
 mod stepper;
+pub mod variational;
 
 pub use constrained::Constrained;
 pub use contact::{Contact, ModeChange, ModeEvent};

@@ -324,9 +324,10 @@ impl Mechanical {
             (Some(small), false) => {
                 solve_kept(out, self.layout, kept, bends, small, solution, pivots)
             }
-            (None, _) => {
+            (None, true) => {
                 solve_system(out, self.layout, kept, bends, &mut self.system, solution, pivots)
             }
+            (None, false) => solve_kept_heap(out, self.layout, kept, bends, solution),
         };
         match solved {
             Ok(()) => {
@@ -425,9 +426,10 @@ impl Mechanical {
             (Some(small), false) => {
                 solve_kept(out, self.layout, kept, &[], small, &mut change, pivots)?
             }
-            (None, _) => {
+            (None, true) => {
                 solve_system(out, self.layout, kept, &[], &mut self.system, &mut change, pivots)?
             }
+            (None, false) => solve_kept_heap(out, self.layout, kept, &[], &mut change)?,
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
             *v += d;
@@ -451,6 +453,21 @@ impl Mechanical {
             DMatrix::from_fn(rows.len(), n, |r, j| out[n * n + n + rows[r] * (n + 3) + j]);
         let dependent = linalg::dependent_rows(&jacobian);
         FaultKind::SingularConstraints { constraints: dependent.iter().map(|&r| rows[r]).collect() }
+    }
+
+    /// [`Problem::begin_modes`] for a start a run reached on its contacts (a periodic orbit's
+    /// section): each touching contact is judged as a closed one, by the closed band of its
+    /// rate, so that a closed contact's drift does not read as flight.
+    pub fn begin_modes_held(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        tolerance: f64,
+    ) -> Result<Vec<crate::ModeEvent>, FaultKind> {
+        if self.contacts.is_empty() {
+            return Ok(Vec::new());
+        }
+        self.begin_contacts(t, y, tolerance, true)
     }
 
     /// Φ of each kept constraint at the last evaluation (0 for an open contact's rows, which
@@ -542,7 +559,7 @@ impl Problem for Mechanical {
         if self.contacts.is_empty() {
             return Ok(Vec::new());
         }
-        self.begin_contacts(t, y, tolerance)
+        self.begin_contacts(t, y, tolerance, false)
     }
 
     fn jump(
@@ -820,6 +837,60 @@ fn solve_kept(
     };
     a.set_order(n + m);
     solved?;
+    b[..n].copy_from_slice(&x[..n]);
+    b[n..n + m].fill(0.0);
+    for (r, &c) in rows.iter().enumerate() {
+        b[n + c] = x[n + r];
+    }
+    Ok(())
+}
+
+/// [`solve_kept`] past the stack's order: the kept rows factored on the heap, an open
+/// contact's multiplier 0 without its identity row (a rimless wheel on one spoke solves five
+/// rows, not nineteen).
+fn solve_kept_heap(
+    out: &[f64],
+    layout: Layout,
+    kept: &[bool],
+    bends: &[Bend],
+    b: &mut [f64],
+) -> Result<(), FaultKind> {
+    let Layout { coordinates: n, multipliers: m, .. } = layout;
+    let rows: Vec<usize> = (0..m).filter(|&c| kept[c]).collect();
+    let order = n + rows.len();
+    let load = |a: &mut DMatrix<f64>| {
+        for j in 0..n {
+            for i in 0..n {
+                a[(i, j)] = out[j * n + i];
+            }
+        }
+        for (r, &c) in rows.iter().enumerate() {
+            let base = n * n + n + c * (n + 3);
+            for j in 0..n {
+                a[(n + r, j)] = out[base + j];
+                a[(j, n + r)] = -out[base + j];
+            }
+            for bend in bends.iter().filter(|b| b.normal == c) {
+                let tangent = n * n + n + bend.tangent * (n + 3);
+                for j in 0..n {
+                    a[(j, n + r)] -= bend.factor * out[tangent + j];
+                }
+            }
+        }
+    };
+    let mut a = DMatrix::zeros(order, order);
+    load(&mut a);
+    let mut x = vec![0.0; order];
+    x[..n].copy_from_slice(&b[..n]);
+    for (r, &c) in rows.iter().enumerate() {
+        x[n + r] = b[n + c];
+    }
+    let mut pivots = vec![0; order];
+    if rows.is_empty() {
+        linalg::solve_symmetric(&mut a, &mut x, &mut pivots, load)?;
+    } else {
+        linalg::solve_general(&mut a, &mut x, &mut pivots)?;
+    }
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);
     for (r, &c) in rows.iter().enumerate() {

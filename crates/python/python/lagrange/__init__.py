@@ -46,6 +46,7 @@ __all__ = [
     "Expectation",
     "Linearization",
     "LinearizationAlong",
+    "Orbit",
     "Results",
     "ContactEvents",
     "Batch",
@@ -598,6 +599,56 @@ class Scene:
             )
         return LinearizationAlong(raw)
 
+    def orbit(
+        self,
+        period=None,
+        section=None,
+        direction="rising",
+        shift=None,
+        swap=None,
+        ignore=None,
+        set=None,
+        *,
+        until=None,
+        method=None,
+        tolerance=None,
+        iterations=30,
+    ):
+        """A periodic orbit, as ``lagrange orbit`` finds it: Newton's method on a return map,
+        its Jacobian from the exact variational equations, and the Floquet multipliers.
+
+        - ``period``: a fixed period for a driven scene, a number or an expression of the
+          parameters (``"2*pi/w"``); or ``section``: an expression crossing zero (``"theta"``,
+          ``"x = 2"``) in ``direction`` (``"rising"`` or ``"falling"``), ``"impact"`` (any
+          contact's landing) or ``"impact:NAME"``.
+        - ``shift``: values added to coordinates or rates before a return is compared with its
+          start, a dict (``{"theta": "pi/4"}``) or ``"name=value"`` texts; ``swap``: pairs of
+          coordinates exchanged with their rates (``{"a": "b"}`` or ``"a=b"``); ``ignore``:
+          coordinates left out of the comparison (a cyclic one, the distance rolled).
+        - ``set``, ``until``, ``method``, ``tolerance`` as for :meth:`simulate` (``until``: the
+          longest a return may take); ``iterations``: the most Newton steps.
+
+        Returns an :class:`Orbit`. No orbit found (no return, no convergence, grazing)
+        raises :class:`NumericError`; bad input ``ValueError`` (an expression's mistake
+        :class:`SceneError`).
+        """
+        if isinstance(ignore, str):
+            ignore = [ignore]
+        raw = self._native.orbit(
+            period=None if period is None else _value_text(period),
+            section=section,
+            direction=direction,
+            shift=_assignments(shift),
+            swap=_assignments(swap),
+            ignore=list(ignore or []),
+            set=_assignments(set),
+            until=until,
+            method=method,
+            tolerance=tolerance,
+            iterations=iterations,
+        )
+        return Orbit(raw)
+
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
         return [Expectation(**item) for item in self._native.check()]
@@ -618,6 +669,37 @@ def _chosen(names, chosen, what):
         known = ", ".join(names) or "none"
         raise ValueError(f"no {what} {unknown[0]!r} in the scene (its {what}s: {known})")
     return [names.index(c) for c in chosen]
+
+
+class Orbit(dict):
+    """A periodic orbit: the dict ``Scene.orbit`` gives, with its parts as attributes.
+
+    - ``state``: the names of (q, q'); ``fixed_point``: the map's fixed point on the section,
+      a NumPy array; ``period``: the time the map takes there.
+    - ``multipliers``: the Floquet multipliers on the section, complex, largest modulus first;
+      ``trivial``: how many directions (the flow's, the kept constraints' normals, the
+      ignored coordinates) were left out.
+    - ``monodromy``: the map's Jacobian on the whole state, a NumPy array.
+    - ``stable``: every multiplier inside the unit circle; ``verdict``: ``"stable"``,
+      ``"neutral"`` (one on the unit circle, within 1e-6: a family of orbits, or the edge of
+      stability) or ``"unstable"``; ``jumps``: the contacts' jumps on the way; ``residuals``:
+      Newton's, on the section, before each step.
+    """
+
+    def __init__(self, raw):
+        import numpy as np
+
+        raw = dict(raw)
+        raw["multipliers"] = [complex(re, im) for re, im in raw["multipliers"]]
+        raw["monodromy"] = np.array(raw["monodromy"], dtype=float)
+        super().__init__(raw)
+        for key, value in raw.items():
+            setattr(self, key, value)
+
+    def __repr__(self):
+        verdict = self["verdict"]
+        largest = max((abs(m) for m in self["multipliers"]), default=0.0)
+        return f"<lagrange.Orbit period {self['period']:.6g} s, {verdict}, max |μ| {largest:.6g}>"
 
 
 class Linearization(dict):

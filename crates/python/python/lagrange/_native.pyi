@@ -65,6 +65,20 @@ class NativeScene:
         states: Optional[Sequence[Sequence[float]]] = None,
         inputs: Optional[Sequence[Sequence[float]]] = None,
     ) -> dict[str, Any]: ...
+    def orbit(
+        self,
+        period: Optional[str] = None,
+        section: Optional[str] = None,
+        direction: str = "rising",
+        shift: Sequence[str] = ...,
+        swap: Sequence[str] = ...,
+        ignore: Sequence[str] = ...,
+        set: Sequence[str] = ...,
+        until: Optional[float] = None,
+        method: Optional[str] = None,
+        tolerance: Optional[float] = None,
+        iterations: int = 30,
+    ) -> dict[str, Any]: ...
     def check(self) -> list[dict[str, Any]]: ...
 
 class Rhs:

@@ -40,6 +40,33 @@ impl Mechanical {
         Ok(Some(&self.partials_out))
     }
 
+    /// The gradients in (q, q̇) of what the rows kept now hold at zero: Φ and Φ̇ of a position
+    /// row, A·q̇ + b of a velocity row. They are the normals of the manifold a run moves on,
+    /// along which Baumgarte's terms, not the motion, decide the Jacobian; a map of the state
+    /// is charted on their null space. `None` without a partials program.
+    pub fn manifold_normals(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Option<Vec<Vec<f64>>>, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        // Φ and Φ̇ do not depend on q̈ and λ, which the program takes all the same.
+        let held = vec![0.0; n + m];
+        let kept = self.kept.clone();
+        let kinds = self.stabilisation.clone();
+        let Some(out) = self.partials_at(t, y, &held)? else { return Ok(None) };
+        let width = 2 * n;
+        let row = |block: usize, c: usize| out[(n + block * m + c) * width..][..width].to_vec();
+        let mut normals = Vec::new();
+        for c in (0..m).filter(|&c| kept[c]) {
+            normals.push(row(1, c));
+            if kinds[c] == Stabilisation::Position {
+                normals.push(row(2, c));
+            }
+        }
+        Ok(Some(normals))
+    }
+
     /// ∂(q̇, q̈)/∂(q, q̇), row-major, into `jac`; false without a partials program.
     pub(super) fn exact_jacobian(
         &mut self,
@@ -60,9 +87,35 @@ impl Mechanical {
             self.solution = column;
             return Err(fault);
         }
-        // The accelerations may have been solved by LDLᵀ; one LU serves every column.
-        super::load_system(&self.dyn_out, self.layout, &self.kept, &self.bends, &mut self.system);
-        if let Err(fault) = linalg::lu_in_place(&mut self.system, &mut self.pivots) {
+        // The accelerations may have been solved by LDLᵀ; one LU serves every column. Only
+        // the kept rows are factored: an open contact's multiplier is 0, and its identity row
+        // would only make the factorization larger (a rimless wheel on one spoke: five rows
+        // rather than nineteen).
+        let rows: Vec<usize> = (0..m).filter(|&c| self.kept[c]).collect();
+        let order = n + rows.len();
+        let mut system = nalgebra::DMatrix::zeros(order, order);
+        let out = &self.dyn_out;
+        for j in 0..n {
+            for i in 0..n {
+                system[(i, j)] = out[j * n + i];
+            }
+        }
+        for (r, &c) in rows.iter().enumerate() {
+            let base = n * n + n + c * (n + 3);
+            for j in 0..n {
+                system[(n + r, j)] = out[base + j];
+                system[(j, n + r)] = -out[base + j];
+            }
+            // A slipping contact's column, bent by its friction as the solve's is.
+            for bend in self.bends.iter().filter(|b| b.normal == c) {
+                let tangent = n * n + n + bend.tangent * (n + 3);
+                for j in 0..n {
+                    system[(j, n + r)] -= bend.factor * out[tangent + j];
+                }
+            }
+        }
+        let mut pivots = vec![0; order];
+        if let Err(fault) = linalg::lu_in_place(&mut system, &mut pivots) {
             self.solution = column;
             return Err(fault);
         }
@@ -73,23 +126,24 @@ impl Mechanical {
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
+        let mut reduced = vec![0.0; order];
         for k in 0..width {
             for i in 0..n {
-                column[i] = -out[i * width + k];
+                reduced[i] = -out[i * width + k];
             }
-            for c in 0..m {
+            for (r, &c) in rows.iter().enumerate() {
                 let row = |block: usize| out[(n + block * m + c) * width + k];
                 // The partials of the row the accelerations satisfy, stabilisation included.
                 let stabilised = match self.stabilisation[c] {
-                    _ if !self.kept[c] => 0.0,
                     Stabilisation::Position => {
                         row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
                     }
                     Stabilisation::Velocity => row(0) + alpha * row(1),
                 };
-                column[n + c] = -stabilised;
+                reduced[n + r] = -stabilised;
             }
-            linalg::lu_solve(&self.system, &self.pivots, &mut column);
+            linalg::lu_solve(&system, &pivots, &mut reduced);
+            column[..n].copy_from_slice(&reduced[..n]);
             for i in 0..n {
                 jac[(n + i) * width + k] = column[i];
             }

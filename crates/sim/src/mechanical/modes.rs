@@ -105,6 +105,17 @@ pub(super) struct Modes {
     below: Vec<bool>,
 }
 
+/// What a jump changes of a problem besides the state (the modes and their scales, the rows
+/// kept), saved to be put back after a trial jump: a saltation matrix differences the jump
+/// map at states around the real one, on the problem itself rather than on copies of its
+/// programs.
+#[derive(Clone, Debug)]
+pub(crate) struct ModesState {
+    modes: Modes,
+    kept: Vec<bool>,
+    bends: Vec<super::Bend>,
+}
+
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
 struct Rows {
     multipliers: Vec<usize>,
@@ -162,6 +173,19 @@ impl Mechanical {
     /// Whether each contact is closed now.
     pub fn closed(&self) -> &[bool] {
         &self.modes.closed
+    }
+
+    /// The modes as they are now, for [`Mechanical::restore_modes`].
+    pub(crate) fn modes_state(&self) -> ModesState {
+        ModesState { modes: self.modes.clone(), kept: self.kept.clone(), bends: self.bends.clone() }
+    }
+
+    /// Puts back the modes saved by [`Mechanical::modes_state`].
+    pub(crate) fn restore_modes(&mut self, state: &ModesState) {
+        self.modes.clone_from(&state.modes);
+        self.kept.clone_from(&state.kept);
+        self.bends.clone_from(&state.bends);
+        self.solved = None;
     }
 
     /// Sets each contact's coefficient of friction (rough contacts only; others keep `None`),
@@ -481,12 +505,18 @@ impl Mechanical {
         Ok(if ratio.is_finite() { ratio } else { 0.0 })
     }
 
-    /// Decides the modes at the start of a run of tolerance `tolerance`.
+    /// Decides the modes at the start of a run of tolerance `tolerance`. With `held`, every
+    /// contact touching within the closed band (its gap below 100·tol·L) is taken as closed
+    /// before the decision, so that its rate is judged
+    /// against the closed band (the drift a closed contact has) rather than the open one: a
+    /// start that a run reached on a contact (a periodic orbit's section in mid-stance) stays
+    /// on it, where the open band would read its drift as flight.
     pub(super) fn begin_contacts(
         &mut self,
         t: f64,
         y: &mut [f64],
         tolerance: f64,
+        held: bool,
     ) -> Result<Vec<ModeEvent>, FaultKind> {
         let n = self.layout.coordinates;
         let count = self.contacts.len();
@@ -494,6 +524,9 @@ impl Mechanical {
         self.modes.closed = vec![false; count];
         self.modes.impacts = vec![0.0; count];
         self.modes.speed = vec![0.0; count];
+        // A run starts afresh: no slip, and the tangential scales its own.
+        self.modes.slip = vec![0.0; count];
+        self.modes.tangent_speed = vec![0.0; count];
         self.update_kept();
         self.dynamics_at(t, y)?;
         self.evaluate_arming(t, y);
@@ -510,6 +543,14 @@ impl Mechanical {
             if !self.modes.conditioned[k] && self.gap(k) < -tolerance * length {
                 return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
             }
+        }
+        if held {
+            // Touching within the closed band: a closed contact's gap drifts as its rate does.
+            let length = &self.modes.length;
+            let touching: Vec<bool> =
+                (0..count).map(|k| self.gap(k) <= CLOSED_BAND * tolerance * length[k]).collect();
+            self.modes.closed = touching;
+            self.update_kept();
         }
         self.contact_jump(t, y, &[])
     }

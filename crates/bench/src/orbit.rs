@@ -1,0 +1,207 @@
+//! Periodic orbits: McGeer's rimless wheel (`examples/contacts/rimless_wheel.lag`, the map
+//! from one landing to the next, the angle shifted back by a spoke and the distance rolled left
+//! out) and the driven, damped pendulum (`examples/orbits/driven_pendulum.lag` at A = 1 N·m,
+//! where its response is far from linear, the map over one period), found by `orbit` from each
+//! scene's start at tolerance 1e-10 on a scene loaded once ([`orbit::Search`]).
+//!
+//! Accuracy against closed forms: the wheel's one multiplier against c² =
+//! ((I + m·l²·cos 2α)/(I + m·l²))², the pendulum's product of multipliers against Liouville's
+//! exp(−c·T/(m·l²)). Cost: the median wall time of a search (every Newton run, from the
+//! scene's start), the one-time load apart.
+//!
+//! With `--peer`, SciPy in the same run (`tests/sympy/orbit_peer.py`): the shooting loop a
+//! SciPy user writes, Newton's method with the map's Jacobian by forward differences of whole
+//! `solve_ivp` runs (DOP853 at the same rtol = atol, a relative step of 1e-7, the root of the
+//! tolerance's digits), on models derived by hand (the wheel reduced to its stance angle).
+
+// Closed forms the multipliers are held to, far above a last bit: the platform's functions
+// serve.
+#![allow(clippy::disallowed_methods)]
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::time::Instant;
+
+use engine::input::Assignment;
+use orbit::{Options, Orbit, Search, Section};
+
+use crate::{median, seconds};
+
+const PEER: &str = "tests/sympy/orbit_peer.py";
+const TOLERANCE: f64 = 1e-10;
+/// The peer's relative difference step.
+const STEP: f64 = 1e-7;
+
+/// A scene, how `orbit` is asked about it, and its exact figure.
+struct Scene {
+    name: &'static str,
+    file: &'static str,
+    options: Options,
+    /// What the peer is sent about it: its parameters and its start.
+    params: serde_json::Value,
+    start: Vec<f64>,
+    /// The exact figure: c², or exp(−c·T/(m·l²)).
+    exact: f64,
+    figure: &'static str,
+}
+
+fn options(section: Section, set: &[(&str, &str)]) -> Options {
+    let assign = |(n, v): &(&str, &str)| Assignment { name: n.to_string(), value: v.to_string() };
+    Options {
+        run: simulation::Options {
+            tolerance: Some(TOLERANCE),
+            set: set.iter().map(assign).collect(),
+            ..Default::default()
+        },
+        section,
+        swaps: Vec::new(),
+        shifts: Vec::new(),
+        ignore: Vec::new(),
+        iterations: 30,
+    }
+}
+
+fn scenes() -> [Scene; 2] {
+    let mut wheel = options(Section::Landing { contact: None }, &[]);
+    wheel.shifts = vec![Assignment { name: "theta".into(), value: "pi/4".into() }];
+    wheel.ignore = vec!["x".into()];
+    let (m, inertia, l, alpha) = (1.0, 0.1, 1.0, PI / 8.0);
+    let c = (inertia + m * l * l * (2.0 * alpha).cos()) / (inertia + m * l * l);
+    let (cd, w) = (0.5, 2.0);
+    [
+        Scene {
+            name: "rimless wheel",
+            file: "examples/contacts/rimless_wheel.lag",
+            options: wheel,
+            params: serde_json::json!({"m": m, "I": inertia, "l": l, "g": 9.81, "gamma": 0.1}),
+            // The scene's start in the stance angle: φ = −θ.
+            start: vec![-(PI / 8.0 - 0.01), 1.5],
+            exact: c * c,
+            figure: "μ against c²",
+        },
+        Scene {
+            name: "driven pendulum, A = 1",
+            file: "examples/orbits/driven_pendulum.lag",
+            options: options(Section::Period("2*pi/w".into()), &[("A", "1")]),
+            params: serde_json::json!({"m": 1.0, "l": 1.0, "g": 9.81, "c": cd, "A": 1.0, "w": w}),
+            start: vec![0.0, 0.0],
+            exact: (-cd * 2.0 * PI / w).exp(),
+            figure: "Πμ against exp(−cT/ml²)",
+        },
+    ]
+}
+
+/// The relative error of an orbit's figure: the wheel's one multiplier, the pendulum's
+/// product of multipliers.
+fn error(multipliers: &[(f64, f64)], exact: f64) -> f64 {
+    let (re, im) =
+        multipliers.iter().fold((1.0, 0.0), |(a, b), &(c, d)| (a * c - b * d, a * d + b * c));
+    (re - exact).hypot(im) / exact
+}
+
+fn ours(orbit: &Orbit) -> Vec<(f64, f64)> {
+    orbit.multipliers.iter().map(|m| (m.re, m.im)).collect()
+}
+
+/// What the peer reported for a scene.
+struct Theirs {
+    error: f64,
+    wall: f64,
+    runs: usize,
+    evaluations: usize,
+}
+
+fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, String> {
+    let mut input = String::new();
+    for scene in scenes {
+        let kind = if scene.name.starts_with("rimless") { "wheel" } else { "pendulum" };
+        let request = serde_json::json!({
+            "scene": kind, "params": scene.params, "start": scene.start,
+            "rtol": TOLERANCE, "step": STEP, "repeats": repeats,
+        });
+        input += &(request.to_string() + "\n");
+    }
+    let text = crate::peer_lines(&root.join(PEER), &input)?;
+    text.lines()
+        .filter(|l| l.starts_with('{'))
+        .zip(scenes)
+        .map(|(line, scene)| {
+            let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
+            let multipliers: Vec<(f64, f64)> = serde_json::from_value(v["multipliers"].clone())
+                .map_err(|e| format!("the peer's multipliers: {e}"))?;
+            Ok(Theirs {
+                error: error(&multipliers, scene.exact),
+                wall: v["wall"].as_f64().unwrap_or(f64::NAN),
+                runs: v["runs"].as_u64().unwrap_or(0) as usize,
+                evaluations: v["evaluations"].as_u64().unwrap_or(0) as usize,
+            })
+        })
+        .collect()
+}
+
+/// `peer`: also run SciPy's shooting loop; `repeats`: how often each search is timed.
+pub fn run(peer: bool, repeats: usize) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let scenes = scenes();
+    outln!("## Periodic orbits: Newton on the return map, and the multipliers\n");
+    outln!(
+        "dop853 at tolerance {TOLERANCE:e}, from each scene's start; the median of {repeats} \
+         searches, the load (parse, derive, lower) apart.\n"
+    );
+    outln!("| scene | figure | Newton runs | error | load | search |");
+    outln!("|---|---|---:|---:|---:|---:|");
+    let mut walls = Vec::new();
+    for scene in &scenes {
+        let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
+        let began = Instant::now();
+        let mut search = Search::new(&source, &scene.options).expect("the scene loads");
+        let load = began.elapsed().as_secs_f64();
+        let mut times = Vec::new();
+        let mut found = None;
+        for _ in 0..repeats.max(1) {
+            let began = Instant::now();
+            let orbit = search.find(scene.options.iterations).expect("an orbit");
+            times.push(began.elapsed().as_secs_f64());
+            found = Some(orbit);
+        }
+        let orbit = found.expect("a search");
+        let wall = median(&mut times);
+        walls.push(wall);
+        outln!(
+            "| {} | {} | {} | {:.1e} | {} | {} |",
+            scene.name,
+            scene.figure,
+            orbit.iterations.len(),
+            error(&ours(&orbit), scene.exact),
+            seconds(load),
+            seconds(wall)
+        );
+    }
+    outln!();
+    if !peer {
+        return;
+    }
+    match scipy(&root, &scenes, repeats) {
+        Ok(theirs) => {
+            outln!(
+                "SciPy's shooting loop (solve_ivp DOP853 at rtol = atol = {TOLERANCE:e}, the \
+                 Jacobian by forward differences, relative step {STEP:e}):\n"
+            );
+            outln!("| scene | runs | right-hand sides | error | search | ours faster |");
+            outln!("|---|---:|---:|---:|---:|---:|");
+            for ((scene, t), ours) in scenes.iter().zip(&theirs).zip(&walls) {
+                outln!(
+                    "| {} | {} | {} | {:.1e} | {} | {:.1}× |",
+                    scene.name,
+                    t.runs,
+                    t.evaluations,
+                    t.error,
+                    seconds(t.wall),
+                    t.wall / ours
+                );
+            }
+            outln!();
+        }
+        Err(why) => outln!("SciPy not run: {why}\n"),
+    }
+}

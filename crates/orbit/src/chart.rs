@@ -1,0 +1,155 @@
+//! The linear algebra of a return map: the chart of the section within the manifold the
+//! motion keeps to, the map's Jacobian in it, the Newton step and the multipliers.
+
+use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
+
+/// A rank below this fraction of the largest (squared singular value, rows normalised) is a
+/// direction the normals do not restrain.
+const RANK: f64 = 1e-10;
+
+/// An orthonormal basis (columns, `size` rows) of the directions that every row of `normals`
+/// and `flow` (if given) is orthogonal to: the section's tangent within the manifold the
+/// constraints kept hold the state on. Baumgarte's terms act across it, the motion along it.
+pub fn tangent(normals: &[Vec<f64>], flow: Option<&[f64]>, size: usize) -> DMatrix<f64> {
+    let mut rows: Vec<&[f64]> = normals.iter().map(|r| r.as_slice()).collect();
+    rows.extend(flow);
+    let mut gram = DMatrix::<f64>::zeros(size, size);
+    for row in rows {
+        let length = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if length == 0.0 {
+            continue;
+        }
+        for i in 0..size {
+            for j in 0..size {
+                gram[(i, j)] += row[i] * row[j] / (length * length);
+            }
+        }
+    }
+    let eigen = SymmetricEigen::new(gram);
+    let largest = eigen.eigenvalues.iter().fold(1.0_f64, |m: f64, v: &f64| m.max(v.abs()));
+    let mut free: Vec<usize> =
+        (0..size).filter(|&k| eigen.eigenvalues[k].abs() <= RANK * largest).collect();
+    // The basis in a fixed order, each vector's sign fixed: the same chart on every run.
+    free.sort_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]));
+    let mut basis = DMatrix::zeros(size, free.len());
+    for (c, &k) in free.iter().enumerate() {
+        let mut v = eigen.eigenvectors.column(k).into_owned();
+        let lead = v.iter().copied().fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        if lead < 0.0 {
+            v = -v;
+        }
+        basis.set_column(c, &v);
+    }
+    basis
+}
+
+/// A row whose component in the range is below this fraction of its length holds there
+/// already (to the differences' accuracy): it restrains nothing more.
+const HELD: f64 = 1e-6;
+
+/// An orthonormal basis of the section's tangent at a start: the range of `surface` (the
+/// derivative along the surface the state arrived on, row-major, the symmetry applied),
+/// within it the directions every row of `rows` (the manifold's normals at the start, the
+/// components left out) is orthogonal to.
+pub fn section(surface: &[f64], rows: &[Vec<f64>], size: usize) -> DMatrix<f64> {
+    let matrix = DMatrix::from_row_slice(size, size, surface);
+    let svd = matrix.svd(true, false);
+    let Some(u) = svd.u else { return DMatrix::zeros(size, 0) };
+    let largest = svd.singular_values.iter().fold(0.0_f64, |m: f64, v: &f64| m.max(*v));
+    let kept: Vec<usize> =
+        (0..size).filter(|&k| svd.singular_values[k] > RANK.sqrt() * largest).collect();
+    let mut range = DMatrix::zeros(size, kept.len());
+    for (c, &k) in kept.iter().enumerate() {
+        range.set_column(c, &u.column(k));
+    }
+    let mut restraints = Vec::new();
+    for row in rows {
+        let length = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if length == 0.0 {
+            continue;
+        }
+        let r = DVector::from_column_slice(row).transpose() * &range / length;
+        if r.norm() > HELD {
+            restraints.push(r.iter().copied().collect::<Vec<f64>>());
+        }
+    }
+    let within = tangent(&restraints, None, kept.len());
+    let basis = range * within;
+    // Signs fixed as `tangent` fixes them: the same chart on every run.
+    let mut out = basis.clone();
+    for c in 0..out.ncols() {
+        let lead =
+            out.column(c)
+                .iter()
+                .copied()
+                .fold(0.0_f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        if lead < 0.0 {
+            let negated = -out.column(c).into_owned();
+            out.set_column(c, &negated);
+        }
+    }
+    out
+}
+
+/// The full map's Jacobian (row-major, `size` × `size`) in the chart: Tᵀ·M·T.
+pub fn reduced(matrix: &[f64], chart: &DMatrix<f64>) -> DMatrix<f64> {
+    let size = chart.nrows();
+    let m = DMatrix::from_row_slice(size, size, matrix);
+    chart.transpose() * m * chart
+}
+
+/// A singular value of C − I below this (relative to the largest, and to 1) is a multiplier
+/// at 1 to rounding: a direction along a family of orbits, which the step leaves alone.
+const FAMILY: f64 = 1e-9;
+
+/// The Newton step dz of (C − I)·dz = −ρ, least-squares where C has a multiplier at 1 (a
+/// family of orbits, one per energy of a conservative scene): the step moves along no such
+/// direction, so that Newton stays on the member it started nearest rather than leaping
+/// along the family by the rounding in ρ. `None` if the step is not finite.
+pub fn newton_step(reduced: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
+    let d = reduced.nrows();
+    let system = reduced - DMatrix::identity(d, d);
+    let svd = system.svd(true, true);
+    let largest = svd.singular_values.iter().fold(1.0_f64, |m: f64, v: &f64| m.max(*v));
+    let step = svd.solve(&(-residual), FAMILY * largest).ok()?;
+    step.iter().all(|v| v.is_finite()).then_some(step)
+}
+
+/// The eigenvalues of C, largest modulus first (then by angle, counter-clockwise from the
+/// positive reals): the Floquet multipliers on the section.
+pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    if reduced.nrows() == 0 {
+        return Vec::new();
+    }
+    let mut values: Vec<Complex<f64>> =
+        reduced.clone().complex_eigenvalues().iter().copied().collect();
+    values.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(a.arg().total_cmp(&b.arg())));
+    values
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_tangent_is_orthogonal_to_the_normals_and_flow() {
+        let normals = vec![vec![1.0, 1.0, 0.0, 0.0]];
+        let flow = [0.0, 0.0, 2.0, 0.0];
+        let t = tangent(&normals, Some(&flow), 4);
+        assert_eq!(t.ncols(), 2);
+        for c in 0..2 {
+            let v = t.column(c);
+            assert!((v[0] + v[1]).abs() < 1e-14 && v[2].abs() < 1e-14);
+            assert!((v.norm() - 1.0).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn multipliers_of_a_rotation_are_its_conjugate_pair() {
+        let (c, s) = (0.6, 0.8);
+        let m = DMatrix::from_row_slice(2, 2, &[0.5 * c, -0.5 * s, 0.5 * s, 0.5 * c]);
+        let mu = multipliers(&m);
+        assert!((mu[0].norm() - 0.5).abs() < 1e-15 && (mu[1].norm() - 0.5).abs() < 1e-15);
+        assert!((mu[0].im + mu[1].im).abs() < 1e-15 && (mu[0].re - 0.3).abs() < 1e-15);
+    }
+}

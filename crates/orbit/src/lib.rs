@@ -1,0 +1,498 @@
+//! Periodic orbits of a scene: what `lagrange orbit` finds and judges. This crate owns the
+//! return map (over a fixed period, to a section where an expression crosses zero, or to a
+//! contact's landing), the symmetry a return is mapped by before it is compared with its start
+//! ([`Symmetry`]), Newton's method on the map in the chart of its section, and the Floquet
+//! multipliers and the verdict at the fixed point, as an [`Orbit`] a front end renders.
+//!
+//! The map's Jacobian is the variational run's (`sim::variational`): the state transition
+//! matrix integrated on the run's own steps from the exact Jacobian, carried across the jumps
+//! by their saltation matrices, and ended with the section's event time varied with the start.
+//! Newton and the multipliers work in the chart of the section within the manifold the kept
+//! constraints hold the state on ([`chart::section`]): the directions across it (the flow's
+//! own, and those Baumgarte's terms decide) are the trivial multipliers, left out. A scene is
+//! loaded once for many searches ([`Search`]), and [`sweep`] continues an orbit in a
+//! parameter and locates where a multiplier crosses the unit circle.
+//! It loads the scene as `simulation` does for a run, and prints nothing.
+
+pub mod chart;
+mod map;
+pub mod sweep;
+
+use nalgebra::{Complex, DMatrix, DVector};
+use numeric::Tape;
+use sim::variational::{self, End, Guard, Refusal};
+use sim::Mechanical;
+
+use engine::input::Assignment;
+use engine::Error;
+pub use map::Symmetry;
+
+/// Where the return map ends.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Section {
+    /// A fixed period, an expression of the parameters in seconds (a driven scene's).
+    Period(String),
+    /// Where an expression of the state crosses zero (`lhs = rhs`: their difference) in the
+    /// direction given.
+    Crossing { expression: String, rising: bool },
+    /// Just after a contact lands (any contact's landing with `None`).
+    Landing { contact: Option<String> },
+}
+
+impl Section {
+    /// The section in words, as a report heads itself with.
+    pub fn words(&self) -> String {
+        match self {
+            Section::Period(text) => format!("period {text}"),
+            Section::Crossing { expression, rising } => {
+                format!("section {expression}, {}", if *rising { "rising" } else { "falling" })
+            }
+            Section::Landing { contact: None } => "section impact".into(),
+            Section::Landing { contact: Some(name) } => format!("section impact:{name}"),
+        }
+    }
+
+    /// `impact`, `impact:NAME`, or an expression (`lhs = rhs` allowed) crossing zero.
+    pub fn parse(text: &str, rising: bool) -> Section {
+        let text = text.trim();
+        if text == "impact" {
+            return Section::Landing { contact: None };
+        }
+        if let Some(name) = text.strip_prefix("impact:") {
+            return Section::Landing { contact: Some(name.trim().to_string()) };
+        }
+        let expression = match text.split_once('=') {
+            Some((l, r)) => format!("({}) - ({})", l.trim(), r.trim()),
+            None => text.to_string(),
+        };
+        Section::Crossing { expression, rising }
+    }
+}
+
+/// What `orbit` is asked.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The run's settings as `simulate` takes them: `until` is the longest a return may take.
+    pub run: simulation::Options,
+    pub section: Section,
+    pub swaps: Vec<Assignment>,
+    pub shifts: Vec<Assignment>,
+    /// Coordinates left out of the comparison (cyclic ones, whose value a return need not
+    /// repeat: with them in, the orbit would be one of a family, with a multiplier at 1).
+    pub ignore: Vec<String>,
+    /// The most Newton iterations.
+    pub iterations: usize,
+}
+
+/// One Newton iteration: the residual in the chart before its step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Iteration {
+    pub residual: f64,
+    pub steps: usize,
+}
+
+/// A periodic orbit found, judged by its multipliers.
+#[derive(Clone, Debug)]
+pub struct Orbit {
+    pub state_names: Vec<String>,
+    /// The fixed point of the map (q, q̇), on the section.
+    pub fixed_point: Vec<f64>,
+    /// The time the map takes there.
+    pub period: f64,
+    /// The eigenvalues of the map's Jacobian in the chart, largest modulus first.
+    pub multipliers: Vec<Complex<f64>>,
+    /// The map's Jacobian on the whole state (row-major), the symmetry applied.
+    pub monodromy: Vec<f64>,
+    /// How many directions the chart leaves out (the flow's and the constraints' normals),
+    /// whose multipliers are trivial.
+    pub trivial: usize,
+    pub jumps: usize,
+    pub iterations: Vec<Iteration>,
+    /// Whether every multiplier lies inside the unit circle (the verdict is `Stable`).
+    pub stable: bool,
+    pub verdict: Verdict,
+}
+
+/// What the multipliers say of an orbit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Every multiplier inside the unit circle: nearby motions come back to the orbit.
+    Stable,
+    /// None outside, but one on the unit circle to the accuracy the multipliers have: a
+    /// family of orbits (a conservative scene's, one per energy), or the edge of stability,
+    /// which the map's linear part cannot decide.
+    Neutral,
+    /// A multiplier outside the unit circle.
+    Unstable,
+}
+
+impl Verdict {
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Stable => "stable",
+            Verdict::Neutral => "neutral",
+            Verdict::Unstable => "unstable",
+        }
+    }
+}
+
+/// How far from the unit circle a multiplier counts as on it: far above the multipliers'
+/// error (the jump maps' differences, about 1e-9), far below any stability worth the name.
+const NEUTRAL: f64 = 1e-6;
+
+impl Orbit {
+    /// The largest |μ|.
+    pub fn spectral_radius(&self) -> f64 {
+        self.multipliers.first().map_or(0.0, |m| m.norm())
+    }
+
+    /// det of the map's Jacobian on the whole state: for a fixed period, exp of the integral
+    /// of the divergence (Liouville).
+    pub fn determinant(&self) -> f64 {
+        let size = self.fixed_point.len();
+        nalgebra::DMatrix::from_row_slice(size, size, &self.monodromy).determinant()
+    }
+}
+
+/// The residual, relative to the state's size, below which Newton has converged: the map is
+/// computed to the rounding of its steps and event times, not to the integration's tolerance.
+const CONVERGED: f64 = 1e-14;
+/// Below this residual (relative), a step that no longer divides it by ten has met the map's
+/// rounding: the iteration ends there too.
+const STAGNANT: f64 = 1e-9;
+
+/// The scene loaded and lowered for variational runs, its start and its map.
+struct Loaded {
+    mechanical: Mechanical,
+    start: Vec<f64>,
+    end: End,
+    until: f64,
+    symmetry: Symmetry,
+    run: sim::Settings,
+    state_names: Vec<String>,
+    contact_names: Vec<String>,
+    /// What a fault's words name besides the state and the contacts.
+    constraint_names: Vec<String>,
+    parameter_names: Vec<String>,
+    angle_oriented_bodies: Vec<String>,
+}
+
+fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
+    let mut run_options = options.run.clone();
+    if let Section::Crossing { expression, .. } = &options.section {
+        run_options.events.push(expression.clone());
+    }
+    let resolved = simulation::Resolved::new(source, &run_options);
+    let mut settings = resolved.settings(&run_options)?;
+    if settings.hold.is_some() {
+        return Err(Error::Input(
+            "orbit takes inputs driven continuously, not held between samples (`hold`)".into(),
+        ));
+    }
+    let method = settings.method;
+    if !method.is_explicit() || method.is_symplectic() {
+        return Err(Error::Input(format!(
+            "orbit integrates the sensitivities on an explicit method's steps; {} is not one \
+             (use dop853, the default, or another of the explicit methods)",
+            method.name()
+        )));
+    }
+    // The section's expression is the one event watched.
+    settings.events = run_options.events.clone();
+    let simulation::Loaded { mut prepared, outputs, .. } = resolved.load(&settings)?;
+    let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
+    let values = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
+    let (parameters, start) = simulation::start(&mut prepared, &values, &[])?;
+    let columns = outputs.len() + settings.stops.len() + settings.events.len() + 2;
+    let dynamics_exprs = prepared.dynamics_exprs();
+    let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+    let observation = prepared.lower(&prepared.observation_inputs(), &prepared.extra[..columns])?;
+    let partials_exprs = prepared.partials_exprs();
+    let partials = prepared.lower(&prepared.observation_inputs(), &partials_exprs)?;
+    let signals = simulation::drive_signals(&prepared, &settings)?;
+    let mechanical = Mechanical::new(
+        prepared.layout,
+        Tape::new(dynamics),
+        Tape::new(observation),
+        parameters.clone(),
+    )
+    .with_kinds(prepared.stabilisation())
+    .with_signals(signals);
+    let integrand = simulation::Integrand::new(&mut prepared, mechanical, method)?;
+    let simulation::Integrand::Mechanical(mut mechanical) = integrand else {
+        unreachable!("an explicit method integrates (q, q̇)")
+    };
+    mechanical.set_partials(Tape::new(partials));
+    let end = match &options.section {
+        Section::Period(_) => End::Time,
+        Section::Crossing { rising, .. } => {
+            End::Crossing { column: outputs.len() + settings.stops.len(), rising: *rising }
+        }
+        Section::Landing { contact: None } => {
+            refuse_no_contacts(&prepared)?;
+            End::Landing { contact: None }
+        }
+        Section::Landing { contact: Some(name) } => {
+            let names = prepared.contact_names();
+            let Some(k) = names.iter().position(|c| c == name) else {
+                refuse_no_contacts(&prepared)?;
+                return Err(Error::Input(format!(
+                    "--section impact:{name}: the scene has no contact `{name}`; one of {}",
+                    names.join(", ")
+                )));
+            };
+            End::Landing { contact: Some(k) }
+        }
+    };
+    let until = match &options.section {
+        Section::Period(text) => period(&mut prepared, &parameters, text)?,
+        _ => settings.until,
+    };
+    let symmetry = Symmetry::new(
+        &mut prepared,
+        &parameters,
+        &options.swaps,
+        &options.shifts,
+        &options.ignore,
+    )?;
+    let mut run = simulation::run_settings(&settings, 0);
+    run.until = until;
+    Ok(Loaded {
+        mechanical,
+        start,
+        end,
+        until,
+        symmetry,
+        run,
+        state_names: prepared.state_names(),
+        contact_names: prepared.contact_names(),
+        constraint_names: prepared.kept_constraint_names(),
+        parameter_names: prepared.parameter_slot_names(),
+        angle_oriented_bodies: simulation::angle_oriented_bodies(&prepared.derivation.model),
+    })
+}
+
+fn refuse_no_contacts(prepared: &engine::numbers::Prepared) -> Result<(), Error> {
+    if prepared.contact_names().is_empty() {
+        return Err(Error::Input(
+            "--section impact: the scene has no contact to land on; give an expression that \
+             crosses zero, or --period for a driven scene"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The fixed period's value in seconds, from an expression of the parameters with an
+/// optional unit.
+fn period(
+    prepared: &mut engine::numbers::Prepared,
+    parameters: &[f64],
+    text: &str,
+) -> Result<f64, Error> {
+    let model = &mut prepared.derivation.model;
+    let value = model
+        .resolve_value_for("t", text)
+        .map_err(|diagnostics| Error::Expression { diagnostics, text: text.to_string() })?;
+    let model::Value::Scalar(e) = value else {
+        return Err(Error::Input(format!(
+            "--period `{text}` is {}, not a time",
+            value.kind_name()
+        )));
+    };
+    let value = prepared.constant(e, parameters);
+    if !(value.is_finite() && value > 0.0) {
+        return Err(Error::Input(format!(
+            "--period `{text}` is {value} at the parameters' values: a period is a positive \
+             time, a constant of the parameters"
+        )));
+    }
+    Ok(value)
+}
+
+/// A variational run's refusal in words.
+fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
+    let contacts = &loaded.contact_names;
+    let guard = |g: Guard| match g {
+        Guard::Contact(k) => format!("contact `{}`", contacts.get(k).cloned().unwrap_or_default()),
+        Guard::Section => "the section".to_string(),
+    };
+    let until = loaded.until;
+    match refusal {
+        Refusal::NoJacobian => Error::Numeric("the scene's partials were not lowered".into()),
+        Refusal::Method(m) => Error::Input(format!("{m} cannot carry the sensitivities")),
+        Refusal::Fault(f) => {
+            let names = simulation::FaultNames {
+                method: loaded.run.method,
+                state: &loaded.state_names,
+                constraints: &loaded.constraint_names,
+                parameters: &loaded.parameter_names,
+                angle_oriented_bodies: &loaded.angle_oriented_bodies,
+                contacts,
+            };
+            let (what, cause) = names.words(&f.kind);
+            let state: Vec<String> = loaded
+                .state_names
+                .iter()
+                .zip(&f.state)
+                .map(|(n, v)| format!("{n} = {v}"))
+                .collect();
+            Error::Numeric(format!(
+                "numeric fault at t = {} of a return: {what}\n  state: {}\n  likely cause: {cause}",
+                f.time,
+                state.join(", ")
+            ))
+        }
+        Refusal::Grazing { time, guard: g, relative } => Error::Numeric(format!(
+            "grazing: {} is reached at t = {time} with a rate {relative:.1e} of its scale, too \
+             slow to say when it is reached (the return map is not differentiable there)",
+            guard(g)
+        )),
+        Refusal::Simultaneous { time, guards } => Error::Numeric(format!(
+            "simultaneous events at t = {time}: {} at once, and which comes first changes with \
+             the start",
+            guards.into_iter().map(guard).collect::<Vec<_>>().join(" and ")
+        )),
+        Refusal::NotReached { .. } => Error::Numeric(format!(
+            "no return within {until} s: the section is not reached again (raise --until, or \
+             check the section and its direction)"
+        )),
+    }
+}
+
+fn identity(size: usize) -> Vec<f64> {
+    let mut m = vec![0.0; size * size];
+    for i in 0..size {
+        m[i * size + i] = 1.0;
+    }
+    m
+}
+
+/// A fixed period's map at a state: the return less its start, the Jacobian (row-major) and
+/// the chart there.
+pub(crate) type Evaluated = (Vec<f64>, Vec<f64>, DMatrix<f64>);
+
+/// Finds the periodic orbit of `source` from its start.
+pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
+    Search::new(source, options)?.find(options.iterations)
+}
+
+/// A scene loaded and lowered for orbit searches: what a search costs before its first run
+/// (parsing, deriving, lowering) is paid once by [`Search::new`], and [`Search::find`] runs
+/// Newton's method from the scene's start (the benchmarks time the two apart).
+pub struct Search {
+    loaded: Loaded,
+}
+
+impl Search {
+    pub fn new(source: &str, options: &Options) -> Result<Search, Error> {
+        Ok(Search { loaded: load(source, options)? })
+    }
+
+    /// The orbit from the scene's start, in at most `iterations` Newton steps.
+    pub fn find(&mut self, iterations: usize) -> Result<Orbit, Error> {
+        find(&self.loaded, None, iterations)
+    }
+
+    /// The orbit from the state `from` (q, q̇) rather than the scene's start: a nearby orbit's
+    /// fixed point, as a sweep continues one.
+    pub fn find_from(&mut self, from: &[f64], iterations: usize) -> Result<Orbit, Error> {
+        find(&self.loaded, Some(from), iterations)
+    }
+
+    /// Whether the map is over a fixed period (whose start is any state, not one on a section).
+    pub(crate) fn is_periodic_in_time(&self) -> bool {
+        self.loaded.end == End::Time
+    }
+
+    /// A fixed period's map at `x`, for continuation: the return less its start, S(P(x)) − x,
+    /// its Jacobian Π·Φ (row-major) and the chart at `x`.
+    pub(crate) fn evaluate(&self, x: &[f64]) -> Result<Evaluated, Error> {
+        let loaded = &self.loaded;
+        let mut mechanical = loaded.mechanical.clone();
+        let fail = |r: Refusal| refused(r, loaded);
+        let tr =
+            variational::transition(&mut mechanical, x, &loaded.run, loaded.end).map_err(fail)?;
+        let mut rows = tr.normals.clone();
+        rows.extend(loaded.symmetry.ignored_rows());
+        let size = x.len();
+        let tangent = chart::section(&identity(size), &rows, size);
+        let returned = loaded.symmetry.apply(&tr.state);
+        let gap = returned.iter().zip(x).map(|(a, b)| a - b).collect();
+        Ok((gap, loaded.symmetry.carry(&tr.matrix), tangent))
+    }
+}
+
+fn find(loaded: &Loaded, from: Option<&[f64]>, iterations_allowed: usize) -> Result<Orbit, Error> {
+    let mut mechanical = loaded.mechanical.clone();
+    let (end, run) = (loaded.end, loaded.run.clone());
+    let fail = |r: Refusal| refused(r, loaded);
+    let symmetry = &loaded.symmetry;
+    let size = loaded.start.len();
+    let start = from.map_or_else(|| loaded.start.clone(), |x| x.to_vec());
+    // Onto the section first: the scene's start is anywhere on the orbit's way.
+    let (mut x, mut surface) = match end {
+        End::Time => (start, identity(size)),
+        _ => {
+            let tr = variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?;
+            (tr.state, tr.surface)
+        }
+    };
+    let mut iterations = Vec::new();
+    for _ in 0..iterations_allowed.max(1) {
+        let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
+        let mut rows = tr.normals.clone();
+        rows.extend(symmetry.ignored_rows());
+        let tangent = chart::section(&symmetry.carry(&surface), &rows, size);
+        let returned = symmetry.apply(&tr.state);
+        let monodromy = symmetry.carry(&tr.matrix);
+        let gap: Vec<f64> = returned.iter().zip(&tr.start).map(|(a, b)| a - b).collect();
+        let residual = tangent.transpose() * DVector::from_vec(gap);
+        let reduced = chart::reduced(&monodromy, &tangent);
+        let size_of = tr.start.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let worst = residual.amax();
+        let previous = iterations.last().map_or(f64::INFINITY, |i: &Iteration| i.residual);
+        let stagnant = worst <= STAGNANT * size_of && worst > previous / 10.0;
+        iterations.push(Iteration { residual: worst, steps: tr.steps });
+        if worst <= CONVERGED * size_of || stagnant {
+            let multipliers = chart::multipliers(&reduced);
+            let largest = multipliers.first().map_or(0.0, |m| m.norm());
+            let verdict = if largest > 1.0 + NEUTRAL {
+                Verdict::Unstable
+            } else if largest >= 1.0 - NEUTRAL {
+                Verdict::Neutral
+            } else {
+                Verdict::Stable
+            };
+            let stable = verdict == Verdict::Stable;
+            return Ok(Orbit {
+                state_names: loaded.state_names.clone(),
+                fixed_point: tr.start.clone(),
+                period: tr.time - run.start,
+                multipliers,
+                monodromy,
+                trivial: size - tangent.ncols(),
+                jumps: tr.jumps,
+                iterations,
+                stable,
+                verdict,
+            });
+        }
+        let Some(step) = chart::newton_step(&reduced, &residual) else {
+            return Err(Error::Numeric(
+                "Newton's step is not finite: the map's Jacobian on the section is".to_string()
+                    + " not a number there",
+            ));
+        };
+        let moved = &tangent * step;
+        x = tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect();
+        surface = tr.surface;
+    }
+    let last = iterations.last().map_or(f64::NAN, |i| i.residual);
+    Err(Error::Numeric(format!(
+        "Newton's method did not converge in {} iterations (residual {last:.3e} on the \
+         section): start nearer the orbit (--set), or check the section and the symmetry (a \
+         cyclic coordinate left in the comparison makes a family of orbits: --ignore it)",
+        iterations.len()
+    )))
+}
