@@ -43,7 +43,12 @@ fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> (f64,
             .contacts
             .iter()
             .zip(restitutions)
-            .map(|(c, restitution)| sim::Contact { normal: c.normal, grip: c.grip, restitution })
+            .map(|(c, restitution)| sim::Contact {
+                normal: c.normal,
+                grip: c.grip,
+                restitution,
+                friction: None,
+            })
             .collect();
         problem = problem.with_contacts(contacts);
     }
@@ -112,7 +117,12 @@ fn the_transition_matrix_crosses_a_lift_off() {
         .contacts
         .iter()
         .zip(restitutions)
-        .map(|(c, restitution)| sim::Contact { normal: c.normal, grip: c.grip, restitution })
+        .map(|(c, restitution)| sim::Contact {
+            normal: c.normal,
+            grip: c.grip,
+            restitution,
+            friction: None,
+        })
         .collect();
     let mut problem =
         lagrange_tests::mechanical(&mut prepared, &parameters).with_contacts(contacts);
