@@ -4,7 +4,7 @@
 
 use cas::number::{One, Signed};
 use cas::{ExprId, Rational, SymId, SymbolKind};
-use lang::{Diagnostic, Expr, Ident, Property, Span};
+use lang::{Diagnostic, Expr, ExprKind, Ident, Property, Span};
 
 use super::checks::{self, ARMING, GAP, GRIP};
 use super::{normalize, space, Binding, Resolver};
@@ -155,6 +155,8 @@ impl Resolver<'_> {
         let mut restitution: Option<ExprId> = None;
         let mut grip: Option<(ExprId, Span)> = None;
         let mut slip: Option<(ExprId, Span)> = None;
+        // In space, the second tangential rate a rough contact slips along.
+        let mut cross: Option<ExprId> = None;
         let mut friction: Option<(ExprId, Span)> = None;
         let mut armed: Option<ExprId> = None;
         // A coefficient written but refused (reported already) still pairs with its slip.
@@ -173,7 +175,11 @@ impl Resolver<'_> {
             match law.key.name.as_str() {
                 "restitution" => restitution = self.restitution(&law.value),
                 "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
-                "slip" => slip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                "slip" => {
+                    let (first, second) = self.slip(&law.value);
+                    slip = first.map(|g| (g, law.value.span));
+                    cross = second;
+                }
                 "armed" => armed = self.scalar_in_role(&law.value, &ARMING).map(|(a, _)| a),
                 "friction" => {
                     friction_written = true;
@@ -230,6 +236,7 @@ impl Resolver<'_> {
         }
         let grip = grip.or(slip);
         let friction = friction.map(|(mu, _)| mu);
+        let cross_span = slip.map(|(_, s)| s);
         let cname = normalize(&name.name);
         let zero = self.model.pool.zero();
         let normal =
@@ -238,11 +245,16 @@ impl Resolver<'_> {
             let name = format!("{cname}.grip");
             self.push_constraint(name, ConstraintKind::Grip, (g, zero), g, gspan)
         });
+        let cross = cross.zip(cross_span).map(|(c, cspan)| {
+            let name = format!("{cname}.cross");
+            self.push_constraint(name, ConstraintKind::Grip, (c, zero), c, cspan)
+        });
         let restitution = restitution.unwrap_or(zero);
         self.model.contacts.push(Contact {
             name: cname,
             normal,
             grip,
+            cross,
             restitution,
             friction,
             armed,
@@ -329,6 +341,29 @@ impl Resolver<'_> {
             return None;
         }
         Some(e)
+    }
+
+    /// A contact's `slip`: one tangential rate in the plane, or two, `(V1, V2)`, in space (the
+    /// contact point's velocity along two directions of the tangent plane, along which the
+    /// exact cone acts). The second is `None` in the plane; both `None` when refused.
+    fn slip(&mut self, written: &Expr) -> (Option<ExprId>, Option<ExprId>) {
+        let ExprKind::Tuple(items) = &written.kind else { return (self.grip(written), None) };
+        if items.len() != 2 {
+            self.error(
+                Diagnostic::error(written.span, "a slip in space has two tangential rates")
+                    .with_label(format!("{} rates here", items.len()))
+                    .with_hint(
+                        "write `slip V` in the plane, or `slip (V1, V2)` with the contact point's \
+                         velocity along two directions of the tangent plane",
+                    ),
+            );
+            return (None, None);
+        }
+        let (first, second) = (self.grip(&items[0]), self.grip(&items[1]));
+        match (first, second) {
+            (Some(a), Some(b)) => (Some(a), Some(b)),
+            _ => (None, None),
+        }
     }
 
     /// A contact's `grip`: a tangential velocity, linear in the rates.
