@@ -52,6 +52,8 @@ pub struct ImpactLaw {
     pub impulse: ExprId,
     /// The tangential impulse of a grip.
     pub tangential_impulse: Option<ExprId>,
+    /// In space, the tangential impulse along the second rate.
+    pub cross_impulse: Option<ExprId>,
     /// q̇⁺ of each remaining coordinate, in the derivation's order.
     pub rates_after: Vec<ExprId>,
     /// D = W·U: the inverse inertia the contact's rows meet (1/m for a ball on a floor).
@@ -333,6 +335,7 @@ impl Derivation {
             normal_rate,
             impulse: impulses[0],
             tangential_impulse: impulses.get(1).copied(),
+            cross_impulse: impulses.get(2).copied(),
             rates_after,
             delassus,
             rates_in_impulses,
