@@ -524,4 +524,102 @@ mod tests {
             other => panic!("{other:?}"),
         }
     }
+
+    /// Contacts in space, each three rows (normal, then its two tangential ones) from `first`.
+    fn cones(count: usize, mu: f64, sliding: Option<[f64; 2]>) -> Vec<ContactRows> {
+        (0..count)
+            .map(|k| ContactRows {
+                normal: 3 * k,
+                tangent: Some(3 * k + 1),
+                cross: Some(3 * k + 2),
+                law: Law::Cone { mu, sliding },
+                no_stick: false,
+            })
+            .collect()
+    }
+
+    fn in_space(a: &DMatrix<f64>, b: &[f64], rows: &[ContactRows]) -> Result<Answer, Trouble> {
+        solve(a, b, &DMatrix::identity(b.len(), b.len()), rows, 1e-12)
+    }
+
+    /// Coulomb's law in space holds for contact `k` of an answer that slides from rest: the
+    /// normal row closed, the force on the cone against d, and the tangential acceleration
+    /// along d, not against it.
+    fn holds_slipping(answer: &Answer, k: usize, mu: f64) -> [f64; 2] {
+        let Mode::Slide(d) = answer.modes[k] else { panic!("{answer:?}") };
+        let (n, t, c) = (3 * k, 3 * k + 1, 3 * k + 2);
+        assert!(answer.w[n].abs() < 1e-12 && answer.x[n] > 0.0, "{answer:?}");
+        assert!((d[0].hypot(d[1]) - 1.0).abs() < 1e-15);
+        assert!((answer.x[t] + mu * answer.x[n] * d[0]).abs() < 1e-14, "{answer:?}");
+        assert!((answer.x[c] + mu * answer.x[n] * d[1]).abs() < 1e-14, "{answer:?}");
+        let (along, across) =
+            (d[0] * answer.w[t] + d[1] * answer.w[c], d[0] * answer.w[c] - d[1] * answer.w[t]);
+        assert!(along > 0.0 && across.abs() < 1e-12 * along.max(1.0), "{answer:?}");
+        d
+    }
+
+    #[test]
+    fn a_block_in_space_sticks_inside_the_cone_and_slips_along_the_push_beyond_it() {
+        let a = DMatrix::identity(3, 3);
+        // Gravity −1 on the normal row, a push (0.3, 0.4) along the floor, of size 0.5.
+        let b = [-1.0, 0.3, 0.4];
+        let held = in_space(&a, &b, &cones(1, 0.6, None)).expect("one answer");
+        assert_eq!(held.modes, vec![Mode::Stick]);
+        assert_eq!((held.x[1], held.x[2]), (-0.3, -0.4));
+        let slips = in_space(&a, &b, &cones(1, 0.4, None)).expect("one answer");
+        let d = holds_slipping(&slips, 0, 0.4);
+        assert!((d[0] - 0.6).abs() < 1e-15 && (d[1] - 0.8).abs() < 1e-15, "{d:?}");
+        // What is left of the push accelerates it: 0.5 − 0.4.
+        assert!((slips.w[1].hypot(slips.w[2]) - 0.1).abs() < 1e-15);
+        // At the edge of the cone the slip is taken, as in the plane.
+        let edge = in_space(&a, &b, &cones(1, 0.5, None)).expect("one motion");
+        assert!(matches!(edge.modes[0], Mode::Slide(_)), "{edge:?}");
+    }
+
+    #[test]
+    fn a_contact_sliding_in_space_is_decelerated_against_its_slip() {
+        let a = DMatrix::identity(3, 3);
+        let d = [0.28, -0.96];
+        let sliding = in_space(&a, &[-2.0, 0.0, 0.0], &cones(1, 0.25, Some(d))).expect("one");
+        assert_eq!(sliding.modes, vec![Mode::Slide(d)]);
+        assert!(
+            (sliding.w[1] + 0.5 * d[0]).abs() < 1e-15 && (sliding.w[2] + 0.5 * d[1]).abs() < 1e-15
+        );
+    }
+
+    /// Rows coupled through the inertia (a body whose contact point's tangential and normal
+    /// accelerations share terms): the slip's direction differs from the push's, and the
+    /// circle finds the one Coulomb's law allows.
+    #[test]
+    fn a_coupled_contact_slips_from_rest_the_one_way_the_law_allows() {
+        let l = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.0, 0.4, 0.9, 0.0, -0.3, 0.5, 0.7]);
+        let a = &l * l.transpose();
+        let b = [-1.0, 0.8, 0.3];
+        for mu in [0.2, 0.35] {
+            let answer = in_space(&a, &b, &cones(1, mu, None)).expect("one answer");
+            let d = holds_slipping(&answer, 0, mu);
+            let push = [b[1] / b[1].hypot(b[2]), b[2] / b[1].hypot(b[2])];
+            assert!((d[0] * push[1] - d[1] * push[0]).abs() > 1e-3, "along the push: {d:?}");
+        }
+        // With μ large enough it sticks, its force inside the cone.
+        let held = in_space(&a, &b, &cones(1, 3.0, None)).expect("one answer");
+        assert_eq!(held.modes, vec![Mode::Stick]);
+        assert!(held.x[1].hypot(held.x[2]) < 3.0 * held.x[0]);
+    }
+
+    /// Two contacts at rest slipping together, coupled: their directions by the fixed point,
+    /// each held to Coulomb's law.
+    #[test]
+    fn two_contacts_in_space_slip_from_rest_together() {
+        let mut a = DMatrix::identity(6, 6);
+        for (i, j, v) in [(0, 3, 0.2), (1, 4, 0.1), (2, 5, -0.15), (1, 5, 0.05)] {
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+        let b = [-1.0, 0.9, 0.2, -0.8, -0.1, 0.7];
+        let answer = in_space(&a, &b, &cones(2, 0.3, None)).expect("one answer");
+        for k in 0..2 {
+            holds_slipping(&answer, k, 0.3);
+        }
+    }
 }
