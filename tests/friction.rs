@@ -448,3 +448,62 @@ fn a_landing_sphere_grips_or_slips_through_the_impact_in_space() {
         assert_within_the_cone(&outcome, "floor", mu);
     }
 }
+
+/// While a contact slips in space its friction's direction γ_T/‖γ_T‖ moves with the state: the
+/// exact Jacobian carries that turn (∂(direction)/∂(q, q̇)), and agrees with central
+/// differences of the right-hand side, which re-aim the friction at each state.
+#[test]
+fn the_exact_jacobian_turns_with_a_slip_in_space() {
+    use sim::Problem;
+    let mut prepared =
+        engine::numbers::prepare(&source("sliding_sphere.lag"), &[], engine::Options::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+    let values = prepared.parameter_values(&[]).expect("parameters");
+    let slots = prepared.contacts.clone();
+    let mu = 0.2;
+    let contacts = slots
+        .iter()
+        .map(|s| sim::Contact {
+            normal: s.normal,
+            grip: s.grip,
+            cross: s.cross,
+            restitution: 0.0,
+            friction: Some(mu),
+        })
+        .collect();
+    let mut problem = lagrange_tests::mechanical(&mut prepared, &values).with_contacts(contacts);
+    let r = 0.0286;
+    // Sliding with spin: (x, y, z, a, b) and rates, the contact point slipping both ways.
+    let mut y = vec![0.1, -0.2, r, 0.3, -0.4, 1.3, -0.7, 0.0, 11.0, 9.0];
+    let events = problem.begin_modes(0.0, &mut y, 1e-10).expect("begins");
+    assert!(events.iter().any(|e| e.kind == ModeChange::Slips), "{events:?}");
+    let d = y.len();
+    let mut exact = vec![0.0; d * d];
+    assert!(problem.jacobian(0.0, &y, &mut exact).expect("a Jacobian"));
+    let mut worst = 0.0f64;
+    let mut turning = 0.0f64;
+    for k in 0..d {
+        let h = 1e-5 * y[k].abs().max(1.0);
+        let mut at = |shift: f64| {
+            let mut state = y.clone();
+            state[k] += shift;
+            let mut rates = vec![0.0; d];
+            problem.rhs(0.0, &state, &mut rates).expect("rhs");
+            rates
+        };
+        let (plus, minus, plus2, minus2) = (at(h), at(-h), at(h / 2.0), at(-h / 2.0));
+        for i in 0..d {
+            let wide = (plus[i] - minus[i]) / (2.0 * h);
+            let narrow = (plus2[i] - minus2[i]) / h;
+            let differenced = (4.0 * narrow - wide) / 3.0;
+            worst = worst.max((exact[i * d + k] - differenced).abs());
+            // The horizontal accelerations' dependence on the rates: the turn itself.
+            if k >= d / 2 && (i == d / 2 || i == d / 2 + 1) && k != d / 2 + 2 {
+                turning = turning.max(differenced.abs());
+            }
+        }
+    }
+    eprintln!("sphere slipping: exact Jacobian off differences by {worst:e}, turn {turning:e}");
+    assert!(turning > 1e-2, "the slip's direction does not turn with the rates here");
+    assert!(worst < 1e-7, "{worst:e}");
+}
