@@ -304,7 +304,7 @@ fn assert_within_the_cone(outcome: &Outcome, contact: &str, mu: f64) {
 }
 
 /// The row recorded last at time `t` (after a jump there).
-fn row_after<'a>(outcome: &'a Outcome, t: f64) -> &'a [f64] {
+fn row_after(outcome: &Outcome, t: f64) -> &[f64] {
     let trajectory = &outcome.run.trajectory;
     let i = trajectory.times.iter().rposition(|&s| s == t).expect("a row at the event");
     &trajectory.rows[i]

@@ -242,7 +242,10 @@ impl Problem<'_> {
     /// of d(θ) × w_T(θ) on the circle, each checked as an answer.
     fn on_the_circle(&self, modes: &[Mode], k: usize) -> Vec<Answer> {
         let mut modes = modes.to_vec();
-        let at = |theta: f64| [theta.cos(), theta.sin()];
+        let at = |theta: f64| {
+            let (s, c) = numeric::elementary::sin_cos(theta);
+            [c, s]
+        };
         let step = std::f64::consts::TAU / ANGLES as f64;
         let mut roots: Vec<f64> = Vec::new();
         let mut last: Option<(f64, f64)> = None;
@@ -302,7 +305,7 @@ impl Problem<'_> {
                 Some(h) => [-h.x[t], -h.x[c]],
                 None => [self.b[t], self.b[c]],
             };
-            let size = guess[0].hypot(guess[1]);
+            let size = crate::linalg::size2(guess[0], guess[1]);
             modes[k] = Mode::Slide(if size > 0.0 {
                 [guess[0] / size, guess[1] / size]
             } else {
@@ -327,10 +330,10 @@ impl Problem<'_> {
             let mut next = modes.clone();
             for &k in free {
                 let (d, w) = slip(k);
-                let size = w[0].hypot(w[1]);
+                let size = crate::linalg::size2(w[0], w[1]);
                 if size > 0.0 {
                     let along = [w[0] / size, w[1] / size];
-                    change = change.max((along[0] - d[0]).hypot(along[1] - d[1]));
+                    change = change.max(crate::linalg::size2(along[0] - d[0], along[1] - d[1]));
                     next[k] = Mode::Slide(along);
                 }
             }
@@ -418,7 +421,7 @@ impl Problem<'_> {
                                 x[t].abs() < mu * x[n] - force_tolerance
                             }
                             (Law::Cone { mu, .. }, Some(t), Some(c)) => {
-                                x[t].hypot(x[c]) < mu * x[n] - force_tolerance
+                                crate::linalg::size2(x[t], x[c]) < mu * x[n] - force_tolerance
                             }
                             _ => true,
                         }
@@ -455,6 +458,7 @@ impl Problem<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::size2;
 
     /// A block of unit mass on a floor, its coordinates (x, y): normal row y, tangential x.
     fn block(b: [f64; 2], mu: f64, sliding: Option<f64>) -> Result<Answer, Trouble> {
@@ -549,7 +553,7 @@ mod tests {
         let Mode::Slide(d) = answer.modes[k] else { panic!("{answer:?}") };
         let (n, t, c) = (3 * k, 3 * k + 1, 3 * k + 2);
         assert!(answer.w[n].abs() < 1e-12 && answer.x[n] > 0.0, "{answer:?}");
-        assert!((d[0].hypot(d[1]) - 1.0).abs() < 1e-15);
+        assert!((size2(d[0], d[1]) - 1.0).abs() < 1e-15);
         assert!((answer.x[t] + mu * answer.x[n] * d[0]).abs() < 1e-14, "{answer:?}");
         assert!((answer.x[c] + mu * answer.x[n] * d[1]).abs() < 1e-14, "{answer:?}");
         let (along, across) =
@@ -570,7 +574,7 @@ mod tests {
         let d = holds_slipping(&slips, 0, 0.4);
         assert!((d[0] - 0.6).abs() < 1e-15 && (d[1] - 0.8).abs() < 1e-15, "{d:?}");
         // What is left of the push accelerates it: 0.5 − 0.4.
-        assert!((slips.w[1].hypot(slips.w[2]) - 0.1).abs() < 1e-15);
+        assert!((size2(slips.w[1], slips.w[2]) - 0.1).abs() < 1e-15);
         // At the edge of the cone the slip is taken, as in the plane.
         let edge = in_space(&a, &b, &cones(1, 0.5, None)).expect("one motion");
         assert!(matches!(edge.modes[0], Mode::Slide(_)), "{edge:?}");
@@ -598,13 +602,14 @@ mod tests {
         for mu in [0.2, 0.35] {
             let answer = in_space(&a, &b, &cones(1, mu, None)).expect("one answer");
             let d = holds_slipping(&answer, 0, mu);
-            let push = [b[1] / b[1].hypot(b[2]), b[2] / b[1].hypot(b[2])];
+            let push =
+                [b[1] / crate::linalg::size2(b[1], b[2]), b[2] / crate::linalg::size2(b[1], b[2])];
             assert!((d[0] * push[1] - d[1] * push[0]).abs() > 1e-3, "along the push: {d:?}");
         }
         // With μ large enough it sticks, its force inside the cone.
         let held = in_space(&a, &b, &cones(1, 3.0, None)).expect("one answer");
         assert_eq!(held.modes, vec![Mode::Stick]);
-        assert!(held.x[1].hypot(held.x[2]) < 3.0 * held.x[0]);
+        assert!(size2(held.x[1], held.x[2]) < 3.0 * held.x[0]);
     }
 
     /// Two contacts at rest slipping together, coupled: their directions by the fixed point,

@@ -163,7 +163,7 @@ impl Cone {
     fn aim(&self, out: &[f64], layout: Layout) -> ([f64; 2], [f64; 2]) {
         let n = layout.coordinates;
         let rate = self.rates.map(|c| out[n * n + n + c * (n + 3) + n + 1]);
-        let size = rate[0].hypot(rate[1]);
+        let size = crate::linalg::size2(rate[0], rate[1]);
         let direction =
             if size > self.band { [rate[0] / size, rate[1] / size] } else { self.fallback };
         (rate, direction)

@@ -76,7 +76,7 @@ impl Mechanical {
         for bend in &self.bends {
             let Some(cone) = bend.cone else { continue };
             let (rate, d) = cone.aim(&self.dyn_out, self.layout);
-            let size = rate[0].hypot(rate[1]);
+            let size = crate::linalg::size2(rate[0], rate[1]);
             if size <= cone.band {
                 continue;
             }

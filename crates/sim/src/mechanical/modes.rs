@@ -493,7 +493,7 @@ impl Mechanical {
                 let (l, c) = (n + tangent, n + cross);
                 out[count + j] = if slip == 0.0 {
                     mu * self.solution[n + contact.normal]
-                        - self.solution[l].hypot(self.solution[c])
+                        - crate::linalg::size2(self.solution[l], self.solution[c])
                 } else {
                     let band = self.modes.tolerance * self.modes.tangent_speed[k] * OPEN_BAND;
                     let d = self.modes.direction[k];
@@ -741,7 +741,8 @@ impl Mechanical {
                     Row::Normal => impulses[k] = solution[r],
                     // In space, the size of the two tangential impulses.
                     Row::Tangent { .. } if self.contacts[k].cross == Some(mult) => {
-                        tangential[k] = Some(tangential[k].unwrap_or(0.0).hypot(solution[r]));
+                        tangential[k] =
+                            Some(crate::linalg::size2(tangential[k].unwrap_or(0.0), solution[r]));
                     }
                     Row::Tangent { .. } => tangential[k] = Some(solution[r]),
                 }
