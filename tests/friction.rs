@@ -519,3 +519,30 @@ fn the_exact_jacobian_turns_with_a_slip_in_space() {
     assert!(turning > 1e-2, "the slip's direction does not turn with the rates here");
     assert!(worst < 1e-7, "{worst:e}");
 }
+
+/// Launched across an incline with tan α = μ, the block's velocity turns downhill with v + s'
+/// held at v0 in every row, and it ends sliding straight down at v0/2: the slip's direction
+/// turns by a right angle, and the run re-aims its guard on the way without an event.
+#[test]
+fn a_block_across_an_incline_at_the_angle_of_friction_ends_at_half_its_speed() {
+    let (v0, alpha) = (2.0f64, std::f64::consts::PI / 9.0);
+    let outcome = run("incline_in_space.lag", &[], "w', s', plane.force, norm(plane.grip)");
+    assert_eq!(events(&outcome, ModeChange::Slips).len(), 1, "{}", summary(&outcome));
+    assert!(events(&outcome, ModeChange::Sticks).is_empty(), "{}", summary(&outcome));
+    let c = ["w'", "s'", "plane.force", "norm(plane.grip)"].map(|n| column(&outcome, n));
+    let mut worst = 0.0f64;
+    for (row, &t) in outcome.run.trajectory.rows.iter().zip(&outcome.run.trajectory.times) {
+        let speed = (row[c[0]] * row[c[0]] + row[c[1]] * row[c[1]]).sqrt();
+        worst = worst.max((speed + row[c[1]] - v0).abs() / v0);
+        assert!((speed + row[c[1]] - v0).abs() <= 1e-8 * v0, "v + s' at {t}: {row:?}");
+        // Slipping throughout: the force on the cone's edge.
+        assert!(relative(row[c[3]], alpha.tan() * row[c[2]]) < 1e-9, "at {t}: {row:?}");
+    }
+    let last = outcome.run.trajectory.rows.last().expect("rows");
+    eprintln!("incline: v + s' off v0 by {worst:e}; ends at s' = {}", last[c[1]]);
+    assert!(relative(last[c[1]], v0 / 2.0) < 1e-8 && last[c[0]].abs() < 1e-8 * v0);
+    // The jump where its guard was re-aimed, recorded without a mode change.
+    let times = &outcome.run.trajectory.times;
+    assert!(times.windows(2).any(|w| w[0] == w[1]), "no jump re-aimed the slip's guard");
+    assert_within_the_cone(&outcome, "plane", alpha.tan());
+}
