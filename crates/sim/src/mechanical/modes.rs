@@ -433,7 +433,9 @@ impl Mechanical {
 
     /// The guards: a closed contact's reaction λ, an open one's gap g; then each rough
     /// contact's stick (μ·λ − |λ_T| while it sticks) or slip (s·γ_T while it slips, offset
-    /// to start positive); then the slipping contacts' solvability (1 when none slips).
+    /// to start positive); in space μ·λ − ‖λ_T‖, or d·γ_T less its band with d the slip's
+    /// direction at the last jump; then the slipping contacts' solvability (1 when none
+    /// slips).
     pub(super) fn contact_guards(
         &mut self,
         t: f64,
