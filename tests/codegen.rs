@@ -37,6 +37,7 @@ fn mechanical_rhs_and_jacobian(
         .map(|((c, restitution), friction)| sim::Contact {
             normal: c.normal,
             grip: c.grip,
+            cross: c.cross,
             restitution,
             friction,
         })

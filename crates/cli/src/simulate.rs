@@ -334,7 +334,8 @@ fn contacts_summary(outcome: &Outcome) -> String {
             }
             line.push_str(&format!(", ΔE = {}", figure(m.energy_change)));
         }
-        if m.kind == sim::ModeChange::Slips {
+        let in_space = outcome.contacts_in_space.get(m.contact) == Some(&true);
+        if m.kind == sim::ModeChange::Slips && !in_space {
             // Which way along its slip rate v.
             line.push_str(if m.slip > 0.0 { " (v > 0)" } else { " (v < 0)" });
         }

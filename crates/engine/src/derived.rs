@@ -51,6 +51,8 @@ pub struct DerivedContact {
     pub grip: Option<ExprId>,
     /// The condition it is watched under (`armed A`: while A > 0).
     pub armed: Option<ExprId>,
+    /// In space, its second tangential rate, its reaction's symbol and its direction.
+    pub cross: Option<(ExprId, SymId, Vec<ExprId>)>,
     /// Its reaction's symbol, and its grip's.
     pub force: SymId,
     pub grip_force: Option<SymId>,
@@ -78,10 +80,15 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
         let impact = impact.map(|mut law| {
             law.impulse = compact(pool, law.impulse);
             law.tangential_impulse = law.tangential_impulse.map(|t| compact(pool, t));
+            law.cross_impulse = law.cross_impulse.map(|t| compact(pool, t));
             law
         });
         let gap = pool.simplify(rows.normal.rows.phi());
         let grip = rows.grip.as_ref().map(|g| pool.simplify(g.rows.velocity));
+        let cross = rows
+            .cross
+            .as_ref()
+            .map(|g| (pool.simplify(g.rows.velocity), g.lambda, g.rows.jacobian.clone()));
         let bias = pool.simplify(rows.normal.rows.bias);
         let terms: Vec<ExprId> = rows
             .normal
@@ -102,6 +109,7 @@ fn contacts(d: &mut Derivation) -> Vec<DerivedContact> {
             friction: contact.friction,
             grip,
             armed: contact.armed,
+            cross,
             force: rows.normal.lambda,
             grip_force: rows.grip.as_ref().map(|g| g.lambda),
             direction: rows.normal.rows.jacobian.clone(),

@@ -22,6 +22,8 @@ pub struct ContactRows {
     pub normal: Multiplier,
     /// The row of its grip (a tangential rate held at zero while closed), if it grips.
     pub grip: Option<Multiplier>,
+    /// A rough contact in space: the row of its second tangential rate.
+    pub cross: Option<Multiplier>,
     /// Newton's coefficient e.
     pub restitution: ExprId,
     /// Whether its gap and the gap's rate are zero at the start: the derivation's equations
@@ -34,6 +36,8 @@ pub struct ContactRows {
 pub struct ContactSlots {
     pub normal: usize,
     pub grip: Option<usize>,
+    /// A rough contact in space: its second tangential row, after its grip's.
+    pub cross: Option<usize>,
 }
 
 /// The impact law of one contact landing alone, with the two-sided constraints kept:
@@ -48,6 +52,8 @@ pub struct ImpactLaw {
     pub impulse: ExprId,
     /// The tangential impulse of a grip.
     pub tangential_impulse: Option<ExprId>,
+    /// In space, the tangential impulse along the second rate.
+    pub cross_impulse: Option<ExprId>,
     /// q̇⁺ of each remaining coordinate, in the derivation's order.
     pub rates_after: Vec<ExprId>,
     /// D = W·U: the inverse inertia the contact's rows meet (1/m for a ball on a floor).
@@ -78,6 +84,7 @@ impl Derivation {
             };
             let Some(normal) = find(self, contact.normal) else { continue };
             let grip = contact.grip.and_then(|g| find(self, g));
+            let cross = contact.cross.and_then(|g| find(self, g));
             let gap = self.model.pool.subst(normal.rows.phi(), &state);
             let rate = self.model.pool.subst(normal.rows.velocity, &state);
             let values = self.parameter_values();
@@ -104,6 +111,7 @@ impl Derivation {
                 contact: k,
                 normal,
                 grip,
+                cross,
                 restitution: contact.restitution,
                 closed_at_start,
             });
@@ -112,7 +120,8 @@ impl Derivation {
             .iter()
             .filter(|c| !c.closed_at_start)
             .flat_map(|c| {
-                std::iter::once(c.normal.constraint).chain(c.grip.iter().map(|g| g.constraint))
+                std::iter::once(c.normal.constraint)
+                    .chain(c.grip.iter().chain(&c.cross).map(|g| g.constraint))
             })
             .collect();
         // A rough contact closed at the start sticks there if its tangential rate is zero (its
@@ -124,6 +133,40 @@ impl Derivation {
                 continue;
             };
             if !c.closed_at_start {
+                continue;
+            }
+            if let Some(cross) = &c.cross {
+                // In space the slip's direction is the tangential velocity's, γ_T/‖γ_T‖, and
+                // the force −μ·λ·(γ₁·J₁ + γ₂·J₂)/‖γ_T‖ rides on the normal one.
+                let rates = [grip, cross].map(|g| self.model.pool.subst(g.rows.velocity, &state));
+                if rates.iter().all(|r| self.zero_at_parameter_values(*r)) {
+                    continue;
+                }
+                open.push(grip.constraint);
+                open.push(cross.constraint);
+                let pool = &mut self.model.pool;
+                let squares: Vec<ExprId> = rates.iter().map(|r| pool.mul2(*r, *r)).collect();
+                let sum = pool.add(&squares);
+                let size = pool.sqrt(sum);
+                let minus_mu = pool.neg(mu);
+                let factors = rates.map(|r| {
+                    let over = pool.div(r, size);
+                    pool.mul2(minus_mu, over)
+                });
+                let direction: Vec<ExprId> = (0..c.normal.rows.jacobian.len())
+                    .map(|i| {
+                        let along = [grip, cross]
+                            .iter()
+                            .zip(&factors)
+                            .map(|(g, f)| pool.mul2(*f, g.rows.jacobian[i]))
+                            .collect::<Vec<_>>();
+                        let mut terms = vec![c.normal.rows.jacobian[i]];
+                        terms.extend(along);
+                        let sum = pool.add(&terms);
+                        pool.simplify(sum)
+                    })
+                    .collect();
+                bent.push((c.normal.constraint, direction));
                 continue;
             }
             let rate = self.model.pool.subst(grip.rows.velocity, &state);
@@ -191,7 +234,11 @@ impl Derivation {
                 self.multipliers.push(g.clone());
                 normal + 1
             });
-            slots.push(ContactSlots { normal, grip });
+            let cross = c.cross.as_ref().map(|g| {
+                self.multipliers.push(g.clone());
+                normal + 2
+            });
+            slots.push(ContactSlots { normal, grip, cross });
         }
         self.solved = None;
         slots
@@ -228,8 +275,10 @@ impl Derivation {
             row.extend(std::iter::repeat_n(pool.zero(), kept.len()));
             system.push(row);
         }
-        let rows: Vec<&Multiplier> =
-            std::iter::once(&contact.normal).chain(contact.grip.as_ref()).collect();
+        let rows: Vec<&Multiplier> = std::iter::once(&contact.normal)
+            .chain(contact.grip.as_ref())
+            .chain(&contact.cross)
+            .collect();
         // U: the rates' response to a unit impulse along each of the contact's rows.
         let mut response: Vec<Vec<ExprId>> = Vec::new();
         for r in &rows {
@@ -257,14 +306,14 @@ impl Derivation {
         let e1 = pool.add2(one, contact.restitution);
         let normal_rate = pool.simplify(contact.normal.rows.velocity);
         let mut target = vec![pool.mul2(e1, normal_rate)];
-        if let Some(g) = &contact.grip {
+        for g in contact.grip.iter().chain(&contact.cross) {
             target.push(g.rows.velocity);
         }
         let negated: Vec<ExprId> = target.iter().map(|t| pool.neg(*t)).collect();
         let impulses = linear_system::solve(pool, &delassus, &negated)?;
         let impulses: Vec<ExprId> = impulses.into_iter().map(|x| tidy(pool, x)).collect();
         let impulse_symbols: Vec<cas::SymId> =
-            ["Λ", "Λ_T"].iter().take(impulses.len()).map(|name| pool.param(name)).collect();
+            ["Λ", "Λ_T", "Λ_T2"].iter().take(impulses.len()).map(|name| pool.param(name)).collect();
         let symbols: Vec<ExprId> = impulse_symbols.iter().map(|s| pool.sym(*s)).collect();
         let mut rates_after = Vec::with_capacity(n);
         let mut rates_in_impulses = Vec::with_capacity(n);
@@ -286,6 +335,7 @@ impl Derivation {
             normal_rate,
             impulse: impulses[0],
             tangential_impulse: impulses.get(1).copied(),
+            cross_impulse: impulses.get(2).copied(),
             rates_after,
             delassus,
             rates_in_impulses,

@@ -211,8 +211,12 @@ pub struct Contact {
     pub name: String,
     /// The index of its normal row in [`Model::constraints`]: Φ is the gap.
     pub normal: usize,
-    /// The index of its grip's row, if it grips.
+    /// The index of its grip's row, if it grips (or, with friction, its first slip rate's).
     pub grip: Option<usize>,
+    /// A rough contact in space (`slip (V1, V2)`): the index of its second tangential rate's
+    /// row (`NAME.cross`), of kind [`ConstraintKind::Grip`] as the first's. Its friction
+    /// force is the exact cone's, against the slip velocity (V1, V2).
+    pub cross: Option<usize>,
     /// Newton's coefficient of restitution e on the normal rate, in [0, 1] at the parameters'
     /// values (0 when not written: a plastic landing).
     pub restitution: ExprId,

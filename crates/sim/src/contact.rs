@@ -11,6 +11,10 @@ pub struct Contact {
     /// ([`crate::Stabilisation::Velocity`], its Φ slot the tangential rate), held at zero with
     /// a free multiplier while the contact is closed, and given a tangential impulse at landing.
     pub grip: Option<usize>,
+    /// A rough contact in space: the multiplier of its second tangential row (a velocity row
+    /// as its grip's). Its friction is then the exact cone's: −μ·λ·γ_T/‖γ_T‖ while it slips,
+    /// ‖λ_T‖ < μ·λ while it sticks, over the two rows.
+    pub cross: Option<usize>,
     /// Newton's coefficient e ∈ [0, 1], on the normal rate.
     pub restitution: f64,
     /// Coulomb's coefficient μ ≥ 0 on its tangential row (`grip`'s multiplier), which it then
@@ -54,13 +58,14 @@ pub struct ModeEvent {
     pub closed: bool,
     /// The normal impulse Λ ≥ 0 it took (0 without an impact).
     pub impulse: f64,
-    /// The tangential impulse of its grip, if it grips.
+    /// The tangential impulse of its grip, if it grips (in space, the size of its two).
     pub tangential: Option<f64>,
     /// The kinetic energy ½q̇ᵀMq̇ its impulses changed: the work Λ·(γ⁻ + γ⁺)/2 of its rows
     /// (normal and grip). The changes of an impact's contacts add up to the impact's.
     pub energy_change: f64,
     /// A rough contact's slip after the event: ±1 the sign of its tangential rate while it
-    /// slips, 0 while it sticks (and for a contact without friction, or open).
+    /// slips (1 in space, whichever way it slips), 0 while it sticks (and for a contact
+    /// without friction, or open).
     pub slip: f64,
     /// Whether the impact this event was part of raised the kinetic energy beyond rounding,
     /// as Newton's law can with unequal restitutions across simultaneous contacts (Glocker):

@@ -403,6 +403,13 @@ pub fn lu_factor_solve<T: ComplexField<RealField = f64> + Copy, M: Square<T>>(
     }
 }
 
+/// ‖(a, b)‖: the size of a slip velocity or of a tangential force in space. The square root
+/// is correctly rounded, so its bits are every platform's (`hypot`'s are not); the squares
+/// overflow only past 1e154, far beyond any rate or force a scene has.
+pub fn size2(a: f64, b: f64) -> f64 {
+    (a * a + b * b).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

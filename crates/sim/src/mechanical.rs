@@ -140,6 +140,34 @@ pub(crate) struct Bend {
     pub normal: usize,
     pub tangent: usize,
     pub factor: f64,
+    /// In space, where the factor comes from: the exact cone's −μ·γ_i/‖γ_T‖, which follows
+    /// the state and is aimed again before each solve ([`Mechanical::aim_bends`]).
+    pub cone: Option<Cone>,
+}
+
+/// A slipping contact in space: its two tangential rows (`rates`, the multipliers whose Φ
+/// slots are γ₁ and γ₂), which of them a bend is along, μ, the direction its slip was decided
+/// with (opposed while ‖γ_T‖ is within `band`, where γ_T's own direction is rounding's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Cone {
+    pub rates: [usize; 2],
+    pub which: usize,
+    pub mu: f64,
+    pub fallback: [f64; 2],
+    pub band: f64,
+}
+
+impl Cone {
+    /// The slip velocity γ_T from the dynamics outputs, and the unit direction friction
+    /// opposes: γ_T/‖γ_T‖ beyond the band, the decided one within it.
+    fn aim(&self, out: &[f64], layout: Layout) -> ([f64; 2], [f64; 2]) {
+        let n = layout.coordinates;
+        let rate = self.rates.map(|c| out[n * n + n + c * (n + 3) + n + 1]);
+        let size = crate::linalg::size2(rate[0], rate[1]);
+        let direction =
+            if size > self.band { [rate[0] / size, rate[1] / size] } else { self.fallback };
+        (rate, direction)
+    }
 }
 
 impl Mechanical {
@@ -302,6 +330,7 @@ impl Mechanical {
     /// Solves for q̈ and λ from the dynamics outputs in `self.dyn_out`; they are left in
     /// `self.solution`.
     fn solve_dynamics(&mut self) -> Result<(), FaultKind> {
+        self.aim_bends();
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         let out = &self.dyn_out;
         self.solution[..n].copy_from_slice(&out[n * n..n * n + n]);
@@ -348,6 +377,17 @@ impl Mechanical {
             }
             Err(FaultKind::SingularMass { .. }) if m > 0 => Err(self.which_lost_rank()),
             Err(fault) => Err(fault),
+        }
+    }
+
+    /// Aims the bends of the contacts slipping in space along their slip velocities at the
+    /// last evaluation: the friction force is −μ·λ·γ_T/‖γ_T‖, its factors the state's.
+    fn aim_bends(&mut self) {
+        let (out, layout) = (&self.dyn_out, self.layout);
+        for bend in &mut self.bends {
+            if let Some(cone) = bend.cone {
+                bend.factor = -cone.mu * cone.aim(out, layout).1[cone.which];
+            }
         }
     }
 

@@ -206,6 +206,7 @@ impl Compiled {
             state_names: prepared.state_names(),
             constraint_names: prepared.kept_constraint_names(),
             contact_names: prepared.contact_names(),
+            contacts_in_space: prepared.contacts.iter().map(|c| c.cross.is_some()).collect(),
             parameter_names: prepared.parameter_slot_names(),
             angle_oriented_bodies: angle_oriented_bodies(model),
             conservative,

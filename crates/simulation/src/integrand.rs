@@ -175,6 +175,7 @@ pub(crate) fn with_contacts(
         .map(|((slots, restitution), friction)| sim::Contact {
             normal: slots.normal,
             grip: slots.grip,
+            cross: slots.cross,
             restitution,
             friction,
         })

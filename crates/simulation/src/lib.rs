@@ -139,6 +139,9 @@ pub struct Outcome {
     /// The contacts, in the order written: the run's mode events ([`sim::Run::modes`]) index
     /// them.
     pub contact_names: Vec<String>,
+    /// Which contacts are rough contacts in space (`slip (V1, V2)`): their slips have a
+    /// direction, not a sign.
+    pub contacts_in_space: Vec<bool>,
     /// The parameter slots' names (the inputs' after the parameters'), for a fault in a held
     /// law.
     pub parameter_names: Vec<String>,

@@ -109,6 +109,14 @@ impl Renderer for JsonReport<'_> {
                         if let Some(armed) = c.armed {
                             contact["armed"] = json!(pool.print(armed, A));
                         }
+                        // In space, its second tangential rate: the cone acts on (grip, cross).
+                        if let Some((v, _, _)) = &c.cross {
+                            contact["cross"] = json!(pool.print(*v, A));
+                            if let Some(law) = &c.impact {
+                                contact["impact"]["cross_impulse"] =
+                                    json!(law.cross_impulse.map(|t| pool.print(t, A)));
+                            }
+                        }
                         contact
                     })
                     .collect();

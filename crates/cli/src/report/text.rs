@@ -196,7 +196,20 @@ impl Text<'_> {
                 self.print(c.gap),
                 self.print(c.restitution)
             ));
+            let cone = c.cross.as_ref().map(|(v, f, _)| (self.print(*v), self.sym(*f)));
             let rough = match (c.grip, c.friction, c.grip_force) {
+                (Some(slip), Some(mu), Some(tangent)) if cone.is_some() => {
+                    let (tangent, mu, slip) = (self.sym(tangent), self.print(mu), self.print(slip));
+                    let (cross, cross_force) = cone.clone().unwrap_or_default();
+                    self.out.push(format!(
+                        "    Coulomb friction μ = {mu}, the exact cone, along v = ({slip}, {cross})"
+                    ));
+                    self.out.push(format!(
+                        "    sticks while ‖({tangent}, {cross_force})‖ < {mu}·{force}, holding \
+                         v = 0; slips with ({tangent}, {cross_force}) = −{mu}·{force}·v/‖v‖"
+                    ));
+                    Some((tangent, mu))
+                }
                 (Some(slip), Some(mu), Some(tangent)) => {
                     let (tangent, mu, slip) = (self.sym(tangent), self.print(mu), self.print(slip));
                     self.out.push(format!("    Coulomb friction μ = {mu} along v = {slip}"));
@@ -232,8 +245,23 @@ impl Text<'_> {
             if let (Some(gf), Some(gd)) = (c.grip_force, &c.grip_direction) {
                 let gf = self.sym(gf);
                 let gd: Vec<String> = gd.iter().map(|e| self.print(*e)).collect();
-                match &rough {
-                    Some((_, mu)) => {
+                let second = c.cross.as_ref().map(|(_, f, d)| {
+                    let d: Vec<String> = d.iter().map(|e| self.print(*e)).collect();
+                    (self.sym(*f), d.join(", "))
+                });
+                match (&rough, second) {
+                    (Some((_, mu)), Some((cf, cd))) => {
+                        self.out.push(format!(
+                            "            sticking: and {gf}·({}) + {cf}·({cd}), with v̇ = 0",
+                            gd.join(", ")
+                        ));
+                        self.out.push(format!(
+                            "            slipping: and −{mu}·{force}·(v₁·({}) + v₂·({cd}))/‖v‖, \
+                             v free",
+                            gd.join(", ")
+                        ));
+                    }
+                    (Some((_, mu)), None) => {
                         self.out.push(format!(
                             "            sticking: and {gf}·({}), with v̇ = 0",
                             gd.join(", ")
@@ -243,7 +271,7 @@ impl Text<'_> {
                             gd.join(", ")
                         ));
                     }
-                    None => {
+                    (None, _) => {
                         self.out.push(format!("            and {gf}·({}), any sign", gd.join(", ")))
                     }
                 }
@@ -255,14 +283,21 @@ impl Text<'_> {
                         "    impact (rates before it on the right; landing at γ⁻ = {} < 0):",
                         self.print(law.normal_rate)
                     ));
-                    if let Some((_, mu)) = &rough {
+                    if let (Some((_, mu)), true) = (&rough, cone.is_some()) {
+                        self.out.push(format!(
+                            "      while it sticks, ‖Λ_T‖ ≤ {mu}·Λ (else it slips through it, \
+                             Λ_T = −{mu}·Λ·v⁺/‖v⁺‖, which a run solves in numbers):"
+                        ));
+                    } else if let Some((_, mu)) = &rough {
                         self.out.push(format!(
                             "      while it sticks, |Λ_T| ≤ {mu}·Λ (else it slips through it, \
                              Λ_T = −{mu}·Λ·sign(v⁺), which a run solves in numbers):"
                         ));
                     }
-                    let impulses: Vec<ExprId> =
-                        std::iter::once(law.impulse).chain(law.tangential_impulse).collect();
+                    let impulses: Vec<ExprId> = std::iter::once(law.impulse)
+                        .chain(law.tangential_impulse)
+                        .chain(law.cross_impulse)
+                        .collect();
                     if impulses.iter().any(|e| self.print(*e).chars().count() > 120) {
                         // Too long put in: the impulses as the problem that gives them.
                         let d: Vec<Vec<String>> = law
@@ -277,17 +312,24 @@ impl Text<'_> {
                             true => "γ⁻".to_string(),
                             false => format!("(1 + {})·γ⁻", self.print(c.restitution)),
                         };
-                        match c.grip {
-                            Some(v) => self.out.push(format!(
+                        match (c.grip, &cone) {
+                            (Some(v), Some((cross, _))) => self.out.push(format!(
+                                "      D·(Λ, Λ_T, Λ_T2) = −({normal}, v⁻),  v⁻ = ({}, {cross})",
+                                self.print(v)
+                            )),
+                            (Some(v), None) => self.out.push(format!(
                                 "      D·(Λ, Λ_T) = −({normal}, v⁻),  v⁻ = {}",
                                 self.print(v)
                             )),
-                            None => self.out.push(format!("      D·Λ = −{normal}")),
+                            (None, _) => self.out.push(format!("      D·Λ = −{normal}")),
                         }
                     } else {
                         self.out.push(format!("      Λ = {}", self.print(law.impulse)));
                         if let Some(t) = law.tangential_impulse {
                             self.out.push(format!("      Λ_T = {}", self.print(t)));
+                        }
+                        if let Some(t) = law.cross_impulse {
+                            self.out.push(format!("      Λ_T2 = {}", self.print(t)));
                         }
                     }
                     // Long once the impulses are put in (a block's corner), the rates after read

@@ -4,7 +4,7 @@
 
 use cas::number::{One, Signed};
 use cas::{ExprId, Rational, SymId, SymbolKind};
-use lang::{Diagnostic, Expr, Ident, Property, Span};
+use lang::{Diagnostic, Expr, ExprKind, Ident, Property, Span};
 
 use super::checks::{self, ARMING, GAP, GRIP};
 use super::{normalize, space, Binding, Resolver};
@@ -14,7 +14,8 @@ use crate::{Constraint, ConstraintKind, Contact, Placeholder, Value};
 const CONTACT_LAWS: &str = "a contact's laws are `restitution E` (Newton's coefficient, 0 to 1), \
                             `grip V` (a tangential rate held at zero while it is closed), \
                             `friction MU` with `slip V` (Coulomb's law along the tangential rate \
-                            V), and `armed A` (watched only while A > 0)";
+                            V; `slip (V1, V2)` in space, the exact cone), and `armed A` (watched \
+                            only while A > 0)";
 
 impl Resolver<'_> {
     pub(super) fn constraint(&mut self, name: Option<&Ident>, lhs: &Expr, rhs: &Expr, span: Span) {
@@ -155,10 +156,14 @@ impl Resolver<'_> {
         let mut restitution: Option<ExprId> = None;
         let mut grip: Option<(ExprId, Span)> = None;
         let mut slip: Option<(ExprId, Span)> = None;
+        // In space, the second tangential rate a rough contact slips along.
+        let mut cross: Option<ExprId> = None;
         let mut friction: Option<(ExprId, Span)> = None;
         let mut armed: Option<ExprId> = None;
         // A coefficient written but refused (reported already) still pairs with its slip.
         let mut friction_written = false;
+        // And a slip written but refused with its coefficient.
+        let mut slip_written = false;
         let mut seen: Vec<&Ident> = Vec::new();
         for law in laws {
             if let Some(first) = seen.iter().find(|k| k.name == law.key.name) {
@@ -172,8 +177,13 @@ impl Resolver<'_> {
             seen.push(&law.key);
             match law.key.name.as_str() {
                 "restitution" => restitution = self.restitution(&law.value),
-                "grip" => grip = self.grip(&law.value).map(|g| (g, law.value.span)),
-                "slip" => slip = self.grip(&law.value).map(|g| (g, law.value.span)),
+                "grip" => grip = self.grip(&law.value, "a grip").map(|g| (g, law.value.span)),
+                "slip" => {
+                    slip_written = true;
+                    let (first, second) = self.slip(&law.value);
+                    slip = first.map(|g| (g, law.value.span));
+                    cross = second;
+                }
                 "armed" => armed = self.scalar_in_role(&law.value, &ARMING).map(|(a, _)| a),
                 "friction" => {
                     friction_written = true;
@@ -209,6 +219,7 @@ impl Resolver<'_> {
                 );
                 return;
             }
+            (None, None, Some(_)) if slip_written => return,
             (None, None, Some((_, f))) => {
                 self.error(
                     Diagnostic::error(f, "friction needs the tangential rate it acts along")
@@ -230,6 +241,7 @@ impl Resolver<'_> {
         }
         let grip = grip.or(slip);
         let friction = friction.map(|(mu, _)| mu);
+        let cross_span = slip.map(|(_, s)| s);
         let cname = normalize(&name.name);
         let zero = self.model.pool.zero();
         let normal =
@@ -238,11 +250,16 @@ impl Resolver<'_> {
             let name = format!("{cname}.grip");
             self.push_constraint(name, ConstraintKind::Grip, (g, zero), g, gspan)
         });
+        let cross = cross.zip(cross_span).map(|(c, cspan)| {
+            let name = format!("{cname}.cross");
+            self.push_constraint(name, ConstraintKind::Grip, (c, zero), c, cspan)
+        });
         let restitution = restitution.unwrap_or(zero);
         self.model.contacts.push(Contact {
             name: cname,
             normal,
             grip,
+            cross,
             restitution,
             friction,
             armed,
@@ -324,19 +341,49 @@ impl Resolver<'_> {
         Some(e)
     }
 
+    /// A contact's `slip`: one tangential rate in the plane, or two, `(V1, V2)`, in space (the
+    /// contact point's velocity along two directions of the tangent plane, along which the
+    /// exact cone acts). The second is `None` in the plane; both `None` when refused.
+    fn slip(&mut self, written: &Expr) -> (Option<ExprId>, Option<ExprId>) {
+        let ExprKind::Tuple(items) = &written.kind else {
+            return (self.grip(written, "a slip"), None);
+        };
+        if items.len() != 2 {
+            self.error(
+                Diagnostic::error(written.span, "a slip in space has two tangential rates")
+                    .with_label(format!("{} rates here", items.len()))
+                    .with_hint(
+                        "write `slip V` in the plane, or `slip (V1, V2)` with the contact point's \
+                         velocity along two directions of the tangent plane",
+                    ),
+            );
+            return (None, None);
+        }
+        let (first, second) = (self.grip(&items[0], "a slip"), self.grip(&items[1], "a slip"));
+        match (first, second) {
+            (Some(a), Some(b)) => (Some(a), Some(b)),
+            _ => (None, None),
+        }
+    }
+
     /// A contact's `grip`: a tangential velocity, linear in the rates.
-    fn grip(&mut self, written: &Expr) -> Option<ExprId> {
+    /// `what` names the law in its errors: `a grip`, or `a slip` (each of a slip's rates).
+    fn grip(&mut self, written: &Expr, what: &str) -> Option<ExprId> {
         let (g, _) = self.scalar_in_role(written, &GRIP)?;
         match self.constraint_kind(g, written.span)? {
             ConstraintKind::Velocity => Some(g),
             _ => {
+                let hint = if what == "a grip" {
+                    "a grip holds a tangential rate at zero while the contact is closed: \
+                     write the rate, `x'` or `x' + r*theta'`"
+                } else {
+                    "friction acts against the contact point's tangential rates: write each \
+                     rate, `x'` or `x' - r*a'`"
+                };
                 self.error(
-                    Diagnostic::error(written.span, "a grip is a velocity")
+                    Diagnostic::error(written.span, format!("{what} is a velocity"))
                         .with_label("no rate here")
-                        .with_hint(
-                            "a grip holds a tangential rate at zero while the contact is closed: \
-                             write the rate, `x'` or `x' + r*theta'`",
-                        ),
+                        .with_hint(hint),
                 );
                 None
             }

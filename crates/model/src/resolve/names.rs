@@ -265,11 +265,14 @@ impl Resolver<'_> {
         span: Span,
     ) -> Option<Value> {
         // A gripping contact's tangential reaction is `NAME.grip`, beside its normal `NAME.force`.
-        let grip = components.first().copied().flatten().and_then(|normal| {
-            self.model.contacts.iter().find(|c| c.normal == normal).and_then(|c| c.grip)
+        // In space it is the vector of its two tangential rows' reactions.
+        let contact = components.first().copied().flatten().and_then(|normal| {
+            self.model.contacts.iter().find(|c| c.normal == normal).map(|c| (c.grip, c.cross))
         });
-        let components: Vec<Option<usize>> = match (field.name.as_str(), grip) {
-            ("grip", Some(g)) => vec![Some(g)],
+        let grip = contact.and_then(|c| c.0);
+        let components: Vec<Option<usize>> = match (field.name.as_str(), contact) {
+            ("grip", Some((Some(g), None))) => vec![Some(g)],
+            ("grip", Some((Some(g), Some(c)))) => vec![Some(g), Some(c)],
             _ => components.to_vec(),
         };
         let components = &components[..];

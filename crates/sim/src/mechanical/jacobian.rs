@@ -121,6 +121,22 @@ impl Mechanical {
         }
         let width = 2 * n;
         let alpha = self.baumgarte;
+        // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
+        // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
+        // −μ·(δ_ij − d_i·d_j)/‖γ_T‖ and ∂γ_j/∂x the partials of the rows' rates. Within the band,
+        // where the decided direction is held, the factors are constant.
+        let mut turning: Vec<(usize, f64, [f64; 2], [usize; 2])> = Vec::new();
+        for bend in &self.bends {
+            let Some(cone) = bend.cone else { continue };
+            let (rate, d) = cone.aim(&self.dyn_out, self.layout);
+            let size = crate::linalg::size2(rate[0], rate[1]);
+            if size <= cone.band {
+                continue;
+            }
+            let i = cone.which;
+            let df = [0, 1].map(|j| -cone.mu * (f64::from(u8::from(i == j)) - d[i] * d[j]) / size);
+            turning.push((bend.tangent, column[n + bend.normal], df, cone.rates));
+        }
         let out = &self.partials_out;
         jac.fill(0.0);
         for i in 0..n {
@@ -141,6 +157,14 @@ impl Mechanical {
                     Stabilisation::Velocity => row(0) + alpha * row(1),
                 };
                 reduced[n + r] = -stabilised;
+            }
+            for &(tangent, lambda, df, rates) in &turning {
+                let rate = |r: usize| out[(n + m + rates[r]) * width + k];
+                let change = df[0] * rate(0) + df[1] * rate(1);
+                let base = n * n + n + tangent * (n + 3);
+                for i in 0..n {
+                    reduced[i] += self.dyn_out[base + i] * lambda * change;
+                }
             }
             linalg::lu_solve(&system, &pivots, &mut reduced);
             column[..n].copy_from_slice(&reduced[..n]);

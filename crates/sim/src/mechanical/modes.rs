@@ -89,8 +89,12 @@ pub(super) struct Modes {
     /// Each rough contact's slip while closed: ±1 the sign of its tangential rate, 0 while it
     /// sticks (and for every other contact).
     slip: Vec<f64>,
-    /// Each contact's tangential rate scale V_T (rough contacts).
+    /// Each rough contact's tangential rate scale V_T (rough contacts).
     tangent_speed: Vec<f64>,
+    /// Each rough contact in space: the direction of its slip decided at the last jump, the
+    /// one its friction opposes while its slip velocity is within its band (a slip from rest
+    /// starts at γ_T = 0, whose own direction is rounding's).
+    direction: Vec<[f64; 2]>,
     /// A slipping contact's guard is s·γ_T + this: a little more than −s·γ_T where it began
     /// to slip, so that the guard starts positive.
     slip_offset: Vec<f64>,
@@ -133,6 +137,10 @@ impl Mechanical {
             assert!(c.normal < m && c.grip.is_none_or(|g| g < m), "a contact's multiplier");
             assert!((0.0..=1.0).contains(&c.restitution), "restitution in [0, 1]");
             assert!(c.friction.is_none_or(|mu| mu >= 0.0 && c.grip.is_some()), "μ ≥ 0 on a row");
+            assert!(
+                c.cross.is_none_or(|x| x < m && c.grip.is_some() && c.friction.is_some()),
+                "a second tangential row belongs to a rough contact in space"
+            );
         }
         let count = contacts.len();
         self.modes = Modes {
@@ -143,6 +151,7 @@ impl Mechanical {
             speed: vec![0.0; count],
             offset: vec![0.0; count],
             slip: vec![0.0; count],
+            direction: vec![[1.0, 0.0]; count],
             tangent_speed: vec![0.0; count],
             slip_offset: vec![0.0; count],
             rough: (0..count).filter(|&k| contacts[k].friction.is_some()).collect(),
@@ -249,13 +258,38 @@ impl Mechanical {
             let (closed, slip) = (self.modes.closed[k], self.modes.slip.get(k).copied());
             let slip = slip.unwrap_or(0.0);
             self.kept[contact.normal] = closed;
-            if let Some(grip) = contact.grip {
+            if let (Some(grip), Some(cross), Some(mu)) =
+                (contact.grip, contact.cross, contact.friction)
+            {
+                self.kept[grip] = closed && slip == 0.0;
+                self.kept[cross] = closed && slip == 0.0;
+                if closed && slip != 0.0 {
+                    // The factors −μ·γ_i/‖γ_T‖ follow the state: aimed at each solve.
+                    let band = self.modes.tolerance * self.modes.tangent_speed[k] * OPEN_BAND;
+                    let fallback = self.modes.direction[k];
+                    for (which, tangent) in [grip, cross].into_iter().enumerate() {
+                        self.bends.push(super::Bend {
+                            normal: contact.normal,
+                            tangent,
+                            factor: -mu * fallback[which],
+                            cone: Some(super::Cone {
+                                rates: [grip, cross],
+                                which,
+                                mu,
+                                fallback,
+                                band,
+                            }),
+                        });
+                    }
+                }
+            } else if let Some(grip) = contact.grip {
                 self.kept[grip] = closed && slip == 0.0;
                 if let (true, Some(mu)) = (closed && slip != 0.0, contact.friction) {
                     self.bends.push(super::Bend {
                         normal: contact.normal,
                         tangent: grip,
                         factor: -mu * slip,
+                        cone: None,
                     });
                 }
             }
@@ -275,8 +309,10 @@ impl Mechanical {
         for contact in &self.contacts {
             order.push(contact.normal);
             order.extend(contact.grip);
+            order.extend(contact.cross);
         }
-        let grips: Vec<usize> = self.contacts.iter().filter_map(|c| c.grip).collect();
+        let grips: Vec<usize> =
+            self.contacts.iter().flat_map(|c| c.grip.into_iter().chain(c.cross)).collect();
         let mut basis: Vec<Vec<f64>> = Vec::new();
         for c in order {
             if !self.kept[c] {
@@ -337,6 +373,12 @@ impl Mechanical {
         }
     }
 
+    /// A rough contact's tangential rates: one in the plane, two in space.
+    fn tangential_rate(&self, k: usize) -> Vec<f64> {
+        let contact = self.contacts[k];
+        contact.grip.into_iter().chain(contact.cross).map(|t| self.row_rate(t)).collect()
+    }
+
     fn normal_rate(&self, k: usize) -> f64 {
         self.row_rate(self.contacts[k].normal)
     }
@@ -349,7 +391,7 @@ impl Mechanical {
             rows.multipliers.push(self.contacts[k].normal);
             rows.kinds.push(Row::Normal);
             rows.owners.push(k);
-            if let Some(grip) = self.contacts[k].grip {
+            for grip in self.contacts[k].grip.into_iter().chain(self.contacts[k].cross) {
                 rows.multipliers.push(grip);
                 rows.kinds.push(Row::Tangent { normal });
                 rows.owners.push(k);
@@ -398,7 +440,7 @@ impl Mechanical {
         let mut kept = vec![true; self.layout.multipliers];
         for contact in &self.contacts {
             kept[contact.normal] = false;
-            if let Some(grip) = contact.grip {
+            for grip in contact.grip.into_iter().chain(contact.cross) {
                 kept[grip] = false;
             }
         }
@@ -415,7 +457,9 @@ impl Mechanical {
 
     /// The guards: a closed contact's reaction λ, an open one's gap g; then each rough
     /// contact's stick (μ·λ − |λ_T| while it sticks) or slip (s·γ_T while it slips, offset
-    /// to start positive); then the slipping contacts' solvability (1 when none slips).
+    /// to start positive); in space μ·λ − ‖λ_T‖, or d·γ_T less its band with d the slip's
+    /// direction at the last jump; then the slipping contacts' solvability (1 when none
+    /// slips).
     pub(super) fn contact_guards(
         &mut self,
         t: f64,
@@ -468,6 +512,26 @@ impl Mechanical {
                 unreachable!("a rough contact has a tangential row")
             };
             let slip = self.modes.slip[k];
+            if let (Some(cross), true) = (contact.cross, self.modes.closed[k]) {
+                // In space: the cone's room while it sticks. While it slips, the slip
+                // velocity along the direction decided at the last jump, above its band: a
+                // signed rate, which passes through the band at a stop. Neither ‖γ_T‖² (a
+                // double root) nor ‖γ_T‖ (a minimum, not a crossing: a step overshoots the
+                // stop to a reversed slip and both ends of it are positive) change sign
+                // there. A slip whose direction turns far enough reaches the band without
+                // stopping; the jump then aims it again. A slip from rest starts below the
+                // band, its guard negative: only a fall through zero fires.
+                let (l, c) = (n + tangent, n + cross);
+                out[count + j] = if slip == 0.0 {
+                    mu * self.solution[n + contact.normal]
+                        - crate::linalg::size2(self.solution[l], self.solution[c])
+                } else {
+                    let band = self.modes.tolerance * self.modes.tangent_speed[k] * OPEN_BAND;
+                    let d = self.modes.direction[k];
+                    d[0] * self.row_rate(tangent) + d[1] * self.row_rate(cross) - band
+                };
+                continue;
+            }
             out[count + j] = if !self.modes.closed[k] {
                 1.0
             } else if slip == 0.0 {
@@ -583,8 +647,11 @@ impl Mechanical {
             let scale = self.modes.speed[k].max(gradient * speed).max(self.modes.impacts[k]);
             self.modes.speed[k] = scale;
             if let (Some(tangent), Some(_)) = (self.contacts[k].grip, self.contacts[k].friction) {
-                let gradient: f64 = self.jacobian_row(tangent).iter().map(|v| v.abs()).sum();
-                let rate = self.row_rate(tangent).abs();
+                let rows = std::iter::once(tangent).chain(self.contacts[k].cross);
+                let gradient: f64 = rows
+                    .map(|t| self.jacobian_row(t).iter().map(|v| v.abs()).sum::<f64>())
+                    .fold(0.0, f64::max);
+                let rate = self.tangential_rate(k).iter().map(|r| r * r).sum::<f64>().sqrt();
                 let scale = self.modes.tangent_speed[k].max(gradient * speed).max(rate);
                 self.modes.tangent_speed[k] = scale;
             }
@@ -618,8 +685,15 @@ impl Mechanical {
             if fired.contains(&(count + j)) && before[k] {
                 if slipped[k] == 0.0 {
                     no_stick[k] = true;
-                } else {
+                } else if self.contacts[k].cross.is_none() {
                     stopped[k] = true;
+                } else {
+                    // In space the guard is the slip along its last direction: it stopped if
+                    // its speed is that band's too (twice it: turned by less than 60°);
+                    // otherwise its direction turned, and it slips on, aimed anew.
+                    let band = tol * self.modes.tangent_speed[k] * OPEN_BAND;
+                    let speed = self.tangential_rate(k).iter().map(|r| r * r).sum::<f64>().sqrt();
+                    stopped[k] = speed <= 2.0 * band;
                 }
             }
         }
@@ -718,6 +792,11 @@ impl Mechanical {
                 total += work;
                 match rows.kinds[r] {
                     Row::Normal => impulses[k] = solution[r],
+                    // In space, the size of the two tangential impulses.
+                    Row::Tangent { .. } if self.contacts[k].cross == Some(mult) => {
+                        tangential[k] =
+                            Some(crate::linalg::size2(tangential[k].unwrap_or(0.0), solution[r]));
+                    }
                     Row::Tangent { .. } => tangential[k] = Some(solution[r]),
                 }
                 if solution[r] != 0.0 {
@@ -783,12 +862,17 @@ impl Mechanical {
             if rows.owners.iter().any(|&k| self.contacts[k].friction.is_some()) {
                 let modes = &self.modes;
                 let sliding = |k: usize| {
-                    let tangent = self.contacts[k].grip?;
-                    let rate = self.row_rate(tangent);
+                    let rate = self.tangential_rate(k);
+                    let size = rate.iter().map(|r| r * r).sum::<f64>().sqrt();
                     let held = before[k] && slipped[k] == 0.0 && !landed[k];
                     let band =
                         tol * modes.tangent_speed[k] * if held { CLOSED_BAND } else { OPEN_BAND };
-                    (!stopped[k] && rate.abs() > band).then_some(rate.signum())
+                    let direction = match rate[..] {
+                        [v] => [v.signum(), 0.0],
+                        [v, w] => [v / size, w / size],
+                        _ => return None,
+                    };
+                    (!stopped[k] && size > band).then_some(direction)
                 };
                 let laws = self.coulomb_rows(&rows, sliding, &no_stick);
                 let answer = crate::coulomb::solve(&a, &b, &moved, &laws, tol * scale)
@@ -796,8 +880,13 @@ impl Mechanical {
                 for (law, mode) in laws.iter().zip(&answer.modes) {
                     let k = rows.owners[law.normal];
                     closed[k] = mode.is_closed();
-                    if let crate::coulomb::Mode::Slip(s) = *mode {
-                        slip[k] = s;
+                    match *mode {
+                        crate::coulomb::Mode::Slip(s) => slip[k] = s,
+                        crate::coulomb::Mode::Slide(d) => {
+                            slip[k] = 1.0;
+                            self.modes.direction[k] = d;
+                        }
+                        _ => {}
                     }
                 }
             } else {
@@ -845,6 +934,7 @@ impl Mechanical {
         // at a tangential rate of rounding's size, or of the other sign.
         for k in 0..count {
             self.modes.slip_offset[k] = match (slip[k], self.contacts[k].grip) {
+                _ if self.contacts[k].cross.is_some() => 0.0,
                 (s, Some(tangent)) if s != 0.0 => {
                     let along = s * self.row_rate(tangent);
                     if along > 0.0 {
@@ -884,8 +974,10 @@ impl Mechanical {
             }
             // A rough contact's stick or slip, where it changed: from slipping (or open) to
             // sticking, or to a slip (from sticking, open, or the other way).
+            // In space a slip that stopped and slips again (its direction new) is a change too.
             let was = if before[k] { Some(slipped[k]) } else { None };
-            if self.contacts[k].friction.is_some() && closed[k] && was != Some(slip[k]) {
+            let again = stopped[k] && slip[k] != 0.0 && self.contacts[k].cross.is_some();
+            if self.contacts[k].friction.is_some() && closed[k] && (was != Some(slip[k]) || again) {
                 events.push(ModeEvent {
                     time: t,
                     contact: k,
@@ -934,7 +1026,7 @@ impl Mechanical {
     fn coulomb_rows(
         &self,
         rows: &Rows,
-        sliding: impl Fn(usize) -> Option<f64>,
+        sliding: impl Fn(usize) -> Option<[f64; 2]>,
         no_stick: &[bool],
     ) -> Vec<crate::coulomb::ContactRows> {
         use crate::coulomb::{ContactRows, Law};
@@ -946,12 +1038,14 @@ impl Mechanical {
             let k = rows.owners[r];
             let contact = self.contacts[k];
             let tangent = contact.grip.map(|_| r + 1);
+            let cross = contact.cross.map(|_| r + 2);
             let law = match (contact.grip, contact.friction) {
-                (Some(_), Some(mu)) => Law::Coulomb { mu, sliding: sliding(k) },
+                (Some(_), Some(mu)) if cross.is_some() => Law::Cone { mu, sliding: sliding(k) },
+                (Some(_), Some(mu)) => Law::Coulomb { mu, sliding: sliding(k).map(|d| d[0]) },
                 (Some(_), None) => Law::Grip,
                 (None, _) => Law::Frictionless,
             };
-            laws.push(ContactRows { normal: r, tangent, law, no_stick: no_stick[k] });
+            laws.push(ContactRows { normal: r, tangent, cross, law, no_stick: no_stick[k] });
         }
         laws
     }
@@ -972,6 +1066,14 @@ fn painleve(trouble: crate::coulomb::Trouble, owners: &[usize], impact: bool) ->
                 contacts,
                 impact,
                 why: "more than six rough contacts at tangential rest touch at once",
+            }
+        }
+        Trouble::Unsettled => {
+            return FaultKind::ContactsUnsolved {
+                contacts,
+                impact,
+                why: "the directions of several contacts slipping in space from rest did not \
+                      settle: no direction of each was found that its slip and its friction share",
             }
         }
     };

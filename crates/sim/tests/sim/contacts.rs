@@ -142,6 +142,7 @@ fn ball(mass: f64, restitution: f64) -> Mechanical {
     scene.mechanical(&[m], &[weight], &[Kept::Position(y)]).with_contacts(vec![Contact {
         normal: 0,
         grip: None,
+        cross: None,
         restitution,
         friction: None,
     }])
@@ -301,8 +302,8 @@ fn ladder(method: Method) {
             &[Kept::Position(top_x), Kept::Position(foot_y)],
         )
         .with_contacts(vec![
-            Contact { normal: 0, grip: None, restitution: 0.0, friction: None },
-            Contact { normal: 1, grip: None, restitution: 0.0, friction: None },
+            Contact { normal: 0, grip: None, cross: None, restitution: 0.0, friction: None },
+            Contact { normal: 1, grip: None, cross: None, restitution: 0.0, friction: None },
         ]);
     let y0 = [0.5 * length * sin0, 0.5 * length * cos0, theta0, 0.0, 0.0, 0.0];
     let run = run(&mut problem, &y0, &settings(method, 0.75, 1e-10));
@@ -360,7 +361,7 @@ fn column(count: usize, mass: f64, radius: f64, restitution: f64) -> Mechanical 
         kept.push(Kept::Position(scene.pool.sub(centres, sum)));
     }
     let contacts = (0..count)
-        .map(|k| Contact { normal: k, grip: None, restitution, friction: None })
+        .map(|k| Contact { normal: k, grip: None, cross: None, restitution, friction: None })
         .collect();
     scene.mechanical(&mass_matrix, &vec![weight; count], &kept).with_contacts(contacts)
 }
@@ -423,8 +424,8 @@ fn rocking(method: Method) {
     let weight = scene.num(-mass * GRAVITY);
     let mass_matrix = [m, zero, zero, zero, m, zero, zero, zero, inertia];
     let contacts = vec![
-        Contact { normal: 0, grip: Some(1), restitution: 0.0, friction: None },
-        Contact { normal: 2, grip: Some(3), restitution: 0.0, friction: None },
+        Contact { normal: 0, grip: Some(1), cross: None, restitution: 0.0, friction: None },
+        Contact { normal: 2, grip: Some(3), cross: None, restitution: 0.0, friction: None },
     ];
     let mut problem =
         scene.mechanical(&mass_matrix, &[zero, weight, zero], &kept).with_contacts(contacts);
@@ -522,8 +523,8 @@ fn a_rod_landing_flat_lands_on_both_ends_at_once() {
             &[Kept::Position(left), Kept::Position(right)],
         )
         .with_contacts(vec![
-            Contact { normal: 0, grip: None, restitution: e, friction: None },
-            Contact { normal: 1, grip: None, restitution: e, friction: None },
+            Contact { normal: 0, grip: None, cross: None, restitution: e, friction: None },
+            Contact { normal: 1, grip: None, cross: None, restitution: e, friction: None },
         ]);
     let t1 = (2.0 * h / GRAVITY).sqrt();
     let run = run(
@@ -566,6 +567,7 @@ fn a_particle_leaves_a_smooth_hemisphere_where_the_closed_form_says() {
             .with_contacts(vec![Contact {
                 normal: 0,
                 grip: None,
+                cross: None,
                 restitution: 0.0,
                 friction: None,
             }]);
@@ -664,7 +666,13 @@ fn a_rimless_wheel_walks_down_a_slope_at_mcgeers_steady_rate() {
     let down = scene.num(mass * GRAVITY * s);
     let into = scene.num(-mass * GRAVITY * c);
     let contacts = (0..spokes)
-        .map(|k| Contact { normal: 2 * k, grip: Some(2 * k + 1), restitution: 0.0, friction: None })
+        .map(|k| Contact {
+            normal: 2 * k,
+            grip: Some(2 * k + 1),
+            cross: None,
+            restitution: 0.0,
+            friction: None,
+        })
         .collect();
     let mut problem = scene
         .mechanical(&[m, zero, zero, zero, m, zero, zero, zero, i], &[down, into, zero], &kept)
