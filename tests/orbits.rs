@@ -46,6 +46,7 @@ fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> (f64,
             .map(|(c, restitution)| sim::Contact {
                 normal: c.normal,
                 grip: c.grip,
+                cross: c.cross,
                 restitution,
                 friction: None,
             })
@@ -120,6 +121,7 @@ fn the_transition_matrix_crosses_a_lift_off() {
         .map(|(c, restitution)| sim::Contact {
             normal: c.normal,
             grip: c.grip,
+            cross: c.cross,
             restitution,
             friction: None,
         })
