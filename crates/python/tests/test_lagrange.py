@@ -284,10 +284,17 @@ def test_every_example_derives_evaluates_and_checks(path):
         # takes them.
         with pytest.raises(ValueError, match=r"does not take contacts yet.*`"):
             scene.rhs()
-        run = scene.simulate(until=1e-3, samples=2, output=names)
-        assert run.contacts and len(run.t) >= 2
-        q0 = [run[name][0] for name in names]
-        assert np.all(np.isfinite(scene.mass_matrix_function()(0.0, q0)))
+        try:
+            run = scene.simulate(until=1e-3, samples=2, output=names)
+        except lagrange.NumericError as fault:
+            # Painlevé's rod starts where rigid bodies with Coulomb friction have no motion:
+            # the run ends at once, naming the case.
+            assert "Painlevé" in str(fault) and path.stem == "painleve_rod", fault
+            assert fault.results.contacts == ["floor"]
+        else:
+            assert run.contacts and len(run.t) >= 2
+            q0 = [run[name][0] for name in names]
+            assert np.all(np.isfinite(scene.mass_matrix_function()(0.0, q0)))
     else:
         f = scene.rhs()
         assert f.names[:n] == names
