@@ -419,3 +419,43 @@ fn mistakes_are_refused_by_name() {
     });
     assert!(e.contains("radau is not one"), "{e}");
 }
+
+/// The simplest walker's two-step map (a section at mid-stance, `th1 = 1/10` falling, where
+/// leg 1 stands again every other step) at feet of mass `beta`·M: its two multipliers.
+fn walker(beta: &str) -> Vec<nalgebra::Complex<f64>> {
+    let source = lagrange_tests::example("contacts/simplest_walker.lag");
+    let section = Section::Crossing { expression: "th1 - 1/10".into(), rising: false };
+    let mut options = options(section, &[("beta", beta)]);
+    options.ignore = vec!["x".into()];
+    let found = orbit::orbit(&source, &options).unwrap_or_else(|e| panic!("β = {beta}: {e}"));
+    assert!(found.stable, "β = {beta}: {:?}", found.multipliers);
+    let mut nontrivial: Vec<_> =
+        found.multipliers.iter().copied().filter(|m| m.norm() > 1e-6).collect();
+    nontrivial.sort_by(|a, b| a.im.total_cmp(&b.im));
+    nontrivial
+}
+
+/// Garcia et al.'s stride map has multipliers λ = −0.19009985 ± 0.55759878i at γ = 0.009
+/// (its Jacobian by central differences of the reduced equations with SciPy at 1e-13; the
+/// paper prints −0.19120869 ± 0.55633364i, which its own fixed point does not reproduce). A
+/// walker whose feet weigh β·M has the two-step map's λ² off by O(β): two ratios extrapolate
+/// to the paper's model.
+#[test]
+fn the_simplest_walkers_multipliers_approach_garcias_as_its_feet_lighten() {
+    let lambda = nalgebra::Complex::new(-0.19009985, 0.55759878);
+    // In the order of their imaginary parts, as `walker` gives them.
+    let squared = [lambda * lambda, lambda.conj() * lambda.conj()];
+    assert!(squared[0].im < squared[1].im);
+    let (b1, b2) = (2e-4, 1e-4);
+    let (m1, m2) = (walker("2e-4"), walker("1e-4"));
+    assert_eq!((m1.len(), m2.len()), (2, 2), "{m1:?}, {m2:?}");
+    for k in 0..2 {
+        let limit = m2[k] - (m1[k] - m2[k]) * (b2 / (b1 - b2));
+        let (near, off) = ((m2[k] - squared[k]).norm(), (limit - squared[k]).norm());
+        eprintln!(
+            "walker: λ² {} at β = 1e-4 ({near:.1e} off), {limit} extrapolated ({off:.1e})",
+            m2[k]
+        );
+        assert!(off < 1e-5 && off < 0.1 * near, "{limit} against {}", squared[k]);
+    }
+}

@@ -603,7 +603,10 @@ impl Mechanical {
             let armed = self.arming.as_ref().is_none_or(|(_, values)| values[k] > 0.0);
             self.modes.armed[k] = armed;
             // A conditioned contact may start inside its gap: disarmed, or armed below it.
-            self.modes.below[k] = armed && self.modes.conditioned[k] && self.gap(k) < 0.0;
+            // Below means inside beyond the touching tolerance: a contact touching within it
+            // (a stance foot at a section in mid-stance, its gap rounding's) is touching.
+            let inside = self.gap(k) < -tolerance * length;
+            self.modes.below[k] = armed && self.modes.conditioned[k] && inside;
             if !self.modes.conditioned[k] && self.gap(k) < -tolerance * length {
                 return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
             }
@@ -666,7 +669,7 @@ impl Mechanical {
                 if fired.contains(&(at + k)) {
                     let armed = !self.modes.armed[k];
                     self.modes.armed[k] = armed;
-                    self.modes.below[k] = armed && self.gap(k) < 0.0;
+                    self.modes.below[k] = armed && self.gap(k) < -tol * self.modes.length[k];
                     if !armed {
                         self.modes.below[k] = false;
                     }
