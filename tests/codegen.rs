@@ -26,22 +26,7 @@ fn mechanical_rhs_and_jacobian(
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let mut mechanical = lagrange_tests::mechanical(&mut module.prepared, &module.parameters);
     // The contacts open, as a run starts them and as the module holds them.
-    let restitutions = module.prepared.restitutions(&module.parameters);
-    let frictions = module.prepared.frictions(&module.parameters);
-    let contacts: Vec<sim::Contact> = module
-        .prepared
-        .contacts
-        .iter()
-        .zip(restitutions)
-        .zip(frictions)
-        .map(|((c, restitution), friction)| sim::Contact {
-            normal: c.normal,
-            grip: c.grip,
-            cross: c.cross,
-            restitution,
-            friction,
-        })
-        .collect();
+    let contacts = lagrange_tests::contacts(&module.prepared, &module.parameters);
     if !contacts.is_empty() {
         mechanical = mechanical.with_contacts(contacts);
     }

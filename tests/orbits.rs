@@ -38,20 +38,7 @@ fn transition_against_differences(source: &str, y0: &[f64], until: f64) -> (f64,
     let parameters = prepared.parameter_values(&[]).expect("values");
     let mut problem = lagrange_tests::mechanical(&mut prepared, &parameters);
     if !prepared.contacts.is_empty() {
-        let restitutions = simulation::restitutions(&prepared, &parameters).expect("in [0, 1]");
-        let contacts = prepared
-            .contacts
-            .iter()
-            .zip(restitutions)
-            .map(|(c, restitution)| sim::Contact {
-                normal: c.normal,
-                grip: c.grip,
-                cross: c.cross,
-                restitution,
-                friction: None,
-            })
-            .collect();
-        problem = problem.with_contacts(contacts);
+        problem = problem.with_contacts(lagrange_tests::contacts(&prepared, &parameters));
     }
     let run = settings(until, 1e-13);
     let exact = transition(&mut problem, y0, &run, End::Time).expect("a variational run");
@@ -113,19 +100,7 @@ fn the_transition_matrix_crosses_a_lift_off() {
     let source = lagrange_tests::example("contacts/ladder.lag");
     let mut prepared = prepare(&source, &[], engine::Options::default()).expect("derives");
     let parameters = prepared.parameter_values(&[]).expect("values");
-    let restitutions = simulation::restitutions(&prepared, &parameters).expect("in [0, 1]");
-    let contacts = prepared
-        .contacts
-        .iter()
-        .zip(restitutions)
-        .map(|(c, restitution)| sim::Contact {
-            normal: c.normal,
-            grip: c.grip,
-            cross: c.cross,
-            restitution,
-            friction: None,
-        })
-        .collect();
+    let contacts = lagrange_tests::contacts(&prepared, &parameters);
     let mut problem =
         lagrange_tests::mechanical(&mut prepared, &parameters).with_contacts(contacts);
     let half = 2.0;

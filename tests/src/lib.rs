@@ -114,6 +114,26 @@ fn all_examples() -> Vec<(String, String)> {
 
 /// The first-order problem of a scene loaded for numbers, at `parameters`, with its exact
 /// Jacobian: the programs `simulate` lowers for a method that uses one.
+/// The scene's contacts as a problem takes them, with their restitutions and coefficients of
+/// friction at `parameters` (empty for a scene without contacts).
+pub fn contacts(prepared: &engine::numbers::Prepared, parameters: &[f64]) -> Vec<sim::Contact> {
+    let restitutions = prepared.restitutions(parameters);
+    let frictions = prepared.frictions(parameters);
+    prepared
+        .contacts
+        .iter()
+        .zip(restitutions)
+        .zip(frictions)
+        .map(|((c, restitution), friction)| sim::Contact {
+            normal: c.normal,
+            grip: c.grip,
+            cross: c.cross,
+            restitution,
+            friction,
+        })
+        .collect()
+}
+
 pub fn mechanical(prepared: &mut engine::numbers::Prepared, parameters: &[f64]) -> sim::Mechanical {
     let lower = |prepared: &engine::numbers::Prepared, inputs: &[cas::SymId], exprs| {
         numeric::Tape::new(prepared.lower(inputs, exprs).expect("lowers"))

@@ -842,27 +842,7 @@ fn solve_kept(
     let rows = &rows[..k];
     let load = |a: &mut Small| {
         a.set_order(n + k);
-        for j in 0..n {
-            for i in 0..n {
-                a[(i, j)] = out[j * n + i];
-            }
-        }
-        for (r, &c) in rows.iter().enumerate() {
-            let base = n * n + n + c * (n + 3);
-            for j in 0..n {
-                a[(n + r, j)] = out[base + j];
-                a[(j, n + r)] = -out[base + j];
-            }
-            for bend in bends.iter().filter(|b| b.normal == c) {
-                let tangent = n * n + n + bend.tangent * (n + 3);
-                for j in 0..n {
-                    a[(j, n + r)] -= bend.factor * out[tangent + j];
-                }
-            }
-            for s in 0..k {
-                a[(n + r, n + s)] = 0.0;
-            }
-        }
+        load_kept(out, n, rows, bends, a);
     };
     load(a);
     let mut x = [0.0; linalg::SMALL];
@@ -885,6 +865,32 @@ fn solve_kept(
     Ok(())
 }
 
+/// The augmented system of the kept `rows` alone into `a` (of order n + rows): M, each row's
+/// J and −Jᵀ (a slipping contact's column bent by its friction), zeros in the corner.
+fn load_kept(out: &[f64], n: usize, rows: &[usize], bends: &[Bend], a: &mut impl Square) {
+    for j in 0..n {
+        for i in 0..n {
+            a[(i, j)] = out[j * n + i];
+        }
+    }
+    for (r, &c) in rows.iter().enumerate() {
+        let base = n * n + n + c * (n + 3);
+        for j in 0..n {
+            a[(n + r, j)] = out[base + j];
+            a[(j, n + r)] = -out[base + j];
+        }
+        for bend in bends.iter().filter(|b| b.normal == c) {
+            let tangent = n * n + n + bend.tangent * (n + 3);
+            for j in 0..n {
+                a[(j, n + r)] -= bend.factor * out[tangent + j];
+            }
+        }
+        for s in 0..rows.len() {
+            a[(n + r, n + s)] = 0.0;
+        }
+    }
+}
+
 /// [`solve_kept`] past the stack's order: the kept rows factored on the heap, an open
 /// contact's multiplier 0 without its identity row (a rimless wheel on one spoke solves five
 /// rows, not nineteen).
@@ -898,26 +904,7 @@ fn solve_kept_heap(
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     let rows: Vec<usize> = (0..m).filter(|&c| kept[c]).collect();
     let order = n + rows.len();
-    let load = |a: &mut DMatrix<f64>| {
-        for j in 0..n {
-            for i in 0..n {
-                a[(i, j)] = out[j * n + i];
-            }
-        }
-        for (r, &c) in rows.iter().enumerate() {
-            let base = n * n + n + c * (n + 3);
-            for j in 0..n {
-                a[(n + r, j)] = out[base + j];
-                a[(j, n + r)] = -out[base + j];
-            }
-            for bend in bends.iter().filter(|b| b.normal == c) {
-                let tangent = n * n + n + bend.tangent * (n + 3);
-                for j in 0..n {
-                    a[(j, n + r)] -= bend.factor * out[tangent + j];
-                }
-            }
-        }
-    };
+    let load = |a: &mut DMatrix<f64>| load_kept(out, n, &rows, bends, a);
     let mut a = DMatrix::zeros(order, order);
     load(&mut a);
     let mut x = vec![0.0; order];

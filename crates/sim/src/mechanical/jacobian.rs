@@ -94,26 +94,8 @@ impl Mechanical {
         let rows: Vec<usize> = (0..m).filter(|&c| self.kept[c]).collect();
         let order = n + rows.len();
         let mut system = nalgebra::DMatrix::zeros(order, order);
-        let out = &self.dyn_out;
-        for j in 0..n {
-            for i in 0..n {
-                system[(i, j)] = out[j * n + i];
-            }
-        }
-        for (r, &c) in rows.iter().enumerate() {
-            let base = n * n + n + c * (n + 3);
-            for j in 0..n {
-                system[(n + r, j)] = out[base + j];
-                system[(j, n + r)] = -out[base + j];
-            }
-            // A slipping contact's column, bent by its friction as the solve's is.
-            for bend in self.bends.iter().filter(|b| b.normal == c) {
-                let tangent = n * n + n + bend.tangent * (n + 3);
-                for j in 0..n {
-                    system[(j, n + r)] -= bend.factor * out[tangent + j];
-                }
-            }
-        }
+        // A slipping contact's column bent by its friction, as the solve's is.
+        super::load_kept(&self.dyn_out, n, &rows, &self.bends, &mut system);
         let mut pivots = vec![0; order];
         if let Err(fault) = linalg::lu_in_place(&mut system, &mut pivots) {
             self.solution = column;
