@@ -195,25 +195,27 @@ impl Prepared {
         )))
     }
 
-    /// Newton's coefficient of each contact at the parameters' values `parameters` (in slot
-    /// order), in the order written.
-    pub fn restitutions(&self, parameters: &[f64]) -> Vec<f64> {
-        let d = &self.derivation;
-        let mut values = vec![0.0; d.model.pool.symbol_count()];
+    /// The parameters' values `parameters` (in slot order) indexed by symbol, as
+    /// `numeric::eval` takes them.
+    fn by_symbol(&self, parameters: &[f64]) -> Vec<f64> {
+        let mut values = vec![0.0; self.derivation.model.pool.symbol_count()];
         for (s, v) in self.parameters.iter().zip(parameters) {
             values[s.index()] = *v;
         }
+        values
+    }
+
+    /// Newton's coefficient of each contact at the parameters' values `parameters` (in slot
+    /// order), in the order written.
+    pub fn restitutions(&self, parameters: &[f64]) -> Vec<f64> {
+        let (d, values) = (&self.derivation, self.by_symbol(parameters));
         d.contacts.iter().map(|c| numeric::eval(&d.model.pool, c.restitution, &values)).collect()
     }
 
     /// Coulomb's coefficient of each rough contact at the parameters' values `parameters`
     /// (in slot order), `None` for the others, in the order written.
     pub fn frictions(&self, parameters: &[f64]) -> Vec<Option<f64>> {
-        let d = &self.derivation;
-        let mut values = vec![0.0; d.model.pool.symbol_count()];
-        for (s, v) in self.parameters.iter().zip(parameters) {
-            values[s.index()] = *v;
-        }
+        let (d, values) = (&self.derivation, self.by_symbol(parameters));
         d.contacts
             .iter()
             .map(|c| {

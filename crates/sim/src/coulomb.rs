@@ -166,7 +166,7 @@ pub fn solve(
                 return match found.len() {
                     0 if unsettled => Err(Trouble::Unsettled),
                     0 => Err(Trouble::None),
-                    1 => Ok(found.pop().map(|(a, _)| a).unwrap_or_else(|| unreachable!())),
+                    1 => Ok(found.remove(0).0),
                     _ => Err(Trouble::Several(found.into_iter().map(|(a, _)| a.modes).collect())),
                 };
             }

@@ -208,7 +208,7 @@ impl Text<'_> {
                         "    sticks while ‖({tangent}, {cross_force})‖ < {mu}·{force}, holding \
                          v = 0; slips with ({tangent}, {cross_force}) = −{mu}·{force}·v/‖v‖"
                     ));
-                    Some((tangent, mu))
+                    Some(mu)
                 }
                 (Some(slip), Some(mu), Some(tangent)) => {
                     let (tangent, mu, slip) = (self.sym(tangent), self.print(mu), self.print(slip));
@@ -217,7 +217,7 @@ impl Text<'_> {
                         "    sticks while |{tangent}| < {mu}·{force}, holding v = 0; slips with \
                          {tangent} = −{mu}·{force}·s, s = sign(v)"
                     ));
-                    Some((tangent, mu))
+                    Some(mu)
                 }
                 (Some(grip), _, _) => {
                     self.out.push(format!("    grips: {} = 0 while closed", self.print(grip)));
@@ -250,7 +250,7 @@ impl Text<'_> {
                     (self.sym(*f), d.join(", "))
                 });
                 match (&rough, second) {
-                    (Some((_, mu)), Some((cf, cd))) => {
+                    (Some(mu), Some((cf, cd))) => {
                         self.out.push(format!(
                             "            sticking: and {gf}·({}) + {cf}·({cd}), with v̇ = 0",
                             gd.join(", ")
@@ -261,7 +261,7 @@ impl Text<'_> {
                             gd.join(", ")
                         ));
                     }
-                    (Some((_, mu)), None) => {
+                    (Some(mu), None) => {
                         self.out.push(format!(
                             "            sticking: and {gf}·({}), with v̇ = 0",
                             gd.join(", ")
@@ -283,12 +283,12 @@ impl Text<'_> {
                         "    impact (rates before it on the right; landing at γ⁻ = {} < 0):",
                         self.print(law.normal_rate)
                     ));
-                    if let (Some((_, mu)), true) = (&rough, cone.is_some()) {
+                    if let (Some(mu), true) = (&rough, cone.is_some()) {
                         self.out.push(format!(
                             "      while it sticks, ‖Λ_T‖ ≤ {mu}·Λ (else it slips through it, \
                              Λ_T = −{mu}·Λ·v⁺/‖v⁺‖, which a run solves in numbers):"
                         ));
-                    } else if let Some((_, mu)) = &rough {
+                    } else if let Some(mu) = &rough {
                         self.out.push(format!(
                             "      while it sticks, |Λ_T| ≤ {mu}·Λ (else it slips through it, \
                              Λ_T = −{mu}·Λ·sign(v⁺), which a run solves in numbers):"

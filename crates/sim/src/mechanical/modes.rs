@@ -226,26 +226,17 @@ impl Mechanical {
     /// Each contact's arming condition at (t, y), into the stored values.
     fn evaluate_arming(&mut self, t: f64, y: &[f64]) {
         let Some((tape, values)) = self.arming.as_mut() else { return };
-        let mut input = Vec::with_capacity(tape.inputs());
-        input.push(t);
-        input.extend_from_slice(y);
-        input.extend_from_slice(&self.parameters);
-        tape.eval(&input, values);
-    }
-
-    /// Whether each contact is armed now.
-    pub fn armed(&self) -> &[bool] {
-        &self.modes.armed
+        // Filled in place: the guards ask at every step.
+        let input = tape.inputs_mut();
+        input[0] = t;
+        input[1..1 + y.len()].copy_from_slice(y);
+        input[1 + y.len()..].copy_from_slice(&self.parameters);
+        tape.run(values);
     }
 
     /// The contacts slipping now.
     pub(super) fn slipping_contacts(&self) -> Vec<usize> {
         (0..self.contacts.len()).filter(|&k| self.modes.slip[k] != 0.0).collect()
-    }
-
-    /// Each contact's slip: ±1 while a rough contact slips that way, 0 otherwise.
-    pub fn slips(&self) -> &[f64] {
-        &self.modes.slip
     }
 
     /// The multipliers of the two-sided constraints and of the closed contacts are kept, but
@@ -255,8 +246,7 @@ impl Mechanical {
         self.kept.fill(true);
         self.bends.clear();
         for (k, contact) in self.contacts.iter().enumerate() {
-            let (closed, slip) = (self.modes.closed[k], self.modes.slip.get(k).copied());
-            let slip = slip.unwrap_or(0.0);
+            let (closed, slip) = (self.modes.closed[k], self.modes.slip[k]);
             self.kept[contact.normal] = closed;
             if let (Some(grip), Some(cross), Some(mu)) =
                 (contact.grip, contact.cross, contact.friction)
