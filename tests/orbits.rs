@@ -434,3 +434,48 @@ fn the_simplest_walkers_multipliers_approach_garcias_as_its_feet_lighten() {
         assert!(off < 1e-5 && off < 0.1 * near, "{limit} against {}", squared[k]);
     }
 }
+
+/// The jump maps' derivatives exact: at a frictionless landing the partials program's rows
+/// through the impact law and the projections give G_x, and it is what central differences
+/// of the jump alone give, to their truncation: a ball bouncing with e = 0.8 (twice), McGeer's
+/// rimless wheel landing on its next spoke (spoke and grip held, the last spoke lifting) and
+/// the simplest walker's heel strike (its trailing foot leaving, its feet armed).
+#[test]
+fn the_exact_saltation_is_what_differences_of_the_jump_give() {
+    use sim::variational::{transition_by, Saltation};
+    let cases = [
+        ("contacts/bouncing_ball.lag", End::Time, 1.5, 2),
+        ("contacts/rimless_wheel.lag", End::Landing { contact: None }, 2.0, 1),
+        ("contacts/simplest_walker.lag", End::Landing { contact: None }, 8.0, 2),
+    ];
+    for (file, end, until, jumps) in cases {
+        let source = lagrange_tests::example(file);
+        let mut prepared = prepare(&source, &[], engine::Options::default()).expect("derives");
+        let parameters = prepared.parameter_values(&[]).expect("values");
+        let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
+        let mechanical = lagrange_tests::mechanical(&mut prepared, &parameters);
+        let integrand = simulation::Integrand::new(&mut prepared, mechanical, Method::Dop853)
+            .expect("contacts and arming");
+        let simulation::Integrand::Mechanical(mut problem) = integrand else {
+            unreachable!("dop853 integrates (q, q̇)")
+        };
+        let run = settings(until, 1e-12);
+        let mut by = |saltation| {
+            transition_by(&mut problem.clone(), &y0, &run, end, saltation).expect("a run")
+        };
+        let (exact, differenced) = (by(Saltation::Exact), by(Saltation::Differences));
+        // The walker's first jump arms its swing foot: a guard of the arming condition, which
+        // is differenced.
+        let gaps = if file.contains("walker") { jumps - 1 } else { jumps };
+        assert_eq!((exact.jumps, exact.exact_jumps, differenced.exact_jumps), (jumps, gaps, 0));
+        let largest = differenced.matrix.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = exact
+            .matrix
+            .iter()
+            .zip(&differenced.matrix)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / largest));
+        eprintln!("{file}: exact saltation against differenced, {worst:.1e} of Φ's largest");
+        assert!(worst < 1e-7, "{file}: {worst:.1e}");
+        assert_eq!(exact.state, differenced.state, "{file}: the same steps and jumps");
+    }
+}

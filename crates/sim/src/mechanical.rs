@@ -10,6 +10,7 @@ use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, 
 
 mod jacobian;
 mod many;
+mod saltation;
 mod modes;
 
 pub(crate) use many::{finite_lanes, solve_lanes};

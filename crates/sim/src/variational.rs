@@ -43,6 +43,16 @@ pub enum End {
     Landing { contact: Option<usize> },
 }
 
+/// How the jump maps' derivatives G_x are taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Saltation {
+    /// Exact where the guard is a contact's gap and the impulse frictionless (the partials
+    /// program's rows through the impact law and the projections); differenced otherwise.
+    Exact,
+    /// Central differences of the jump map, at every jump.
+    Differences,
+}
+
 /// A guard of a variational run: a contact's, or the section's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Guard {
@@ -90,6 +100,8 @@ pub struct Transition {
     pub surface: Vec<f64>,
     /// The jumps crossed on the way (the landing that ends a run included).
     pub jumps: usize,
+    /// How many of them had their G_x exact ([`Saltation::Exact`]), not differenced.
+    pub exact_jumps: usize,
     pub steps: usize,
     pub evaluations: usize,
 }
@@ -108,6 +120,17 @@ pub fn transition(
     y0: &[f64],
     settings: &Settings,
     end: End,
+) -> Result<Transition, Refusal> {
+    transition_by(problem, y0, settings, end, Saltation::Exact)
+}
+
+/// [`transition`] with the jumps' derivatives taken as `saltation` says.
+pub fn transition_by(
+    problem: &mut Mechanical,
+    y0: &[f64],
+    settings: &Settings,
+    end: End,
+    saltation: Saltation,
 ) -> Result<Transition, Refusal> {
     if !problem.has_partials() {
         return Err(Refusal::NoJacobian);
@@ -135,8 +158,10 @@ pub fn transition(
         captured: None,
         refusal: None,
         jumps: 0,
+        exact_jumps: 0,
         stop: &stop,
         begun: None,
+        saltation,
     };
     let mut halt =
         |_: f64| if stop.get() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -144,8 +169,8 @@ pub fn transition(
     if let Some(refusal) = variational.refusal.take() {
         return Err(refusal);
     }
-    let (jumps, begun, captured) =
-        (variational.jumps, variational.begun.take(), variational.captured.take());
+    let (jumps, exact_jumps) = (variational.jumps, variational.exact_jumps);
+    let (begun, captured) = (variational.begun.take(), variational.captured.take());
     if let (None, Some(mut fault)) = (&captured, run.fault) {
         fault.state.truncate(size);
         return Err(Refusal::Fault(fault));
@@ -181,6 +206,7 @@ pub fn transition(
         matrix,
         surface,
         jumps,
+        exact_jumps,
         steps: run.steps,
         evaluations: run.evaluations,
     })
@@ -217,9 +243,11 @@ struct Variational<'a> {
     captured: Option<Captured>,
     refusal: Option<Refusal>,
     jumps: usize,
+    exact_jumps: usize,
     stop: &'a Cell<bool>,
     /// The start after its mode was decided, F there and the manifold's normals.
     begun: Option<Begun>,
+    saltation: Saltation,
 }
 
 impl Variational<'_> {
@@ -353,6 +381,95 @@ fn along_surface(phi: &[f64], f: &[f64], hx: &[f64], rate: f64, size: usize) -> 
     out
 }
 
+/// Guard `k` of the problem at (t, x).
+fn guard_value(problem: &mut Mechanical, k: usize, t: f64, x: &[f64]) -> Result<f64, FaultKind> {
+    let mut out = vec![0.0; problem.guards()];
+    problem.guard_values(t, x, &mut out)?;
+    Ok(out[k])
+}
+
+impl Variational<'_> {
+    /// The jump at contact `k`'s gap taken on `y`, and G_x·P of it, exact: the projection onto
+    /// the manifold the mode before it holds the state on and onto the guard's surface along
+    /// f⁻ (twice, as [`Variational::differenced_jump`] moves its probes), the impulse, and the
+    /// projection onto the new mode's manifold, each by its own derivative. `None` (the jump
+    /// taken all the same) where one of them has none: Coulomb's law in the impulse, or rows
+    /// that depend on each other.
+    fn exact_jump(
+        &mut self,
+        t: f64,
+        y: &mut [f64],
+        k: usize,
+        before: &[f64],
+        hx: &[f64],
+        rate: f64,
+    ) -> Result<Option<(Vec<f64>, Vec<ModeEvent>)>, FaultKind> {
+        let s = self.size;
+        let x = y[..s].to_vec();
+        let Some(old) = self.inner.projection_derivative(t, &x)? else { return Ok(None) };
+        let events = self.inner.jump(t, &mut y[..s], &[k])?;
+        let Some(impulse) = self.inner.impact_derivative(t, &x)? else { return Ok(None) };
+        let Some(new) = self.inner.projection_derivative(t, &y[..s])? else { return Ok(None) };
+        let flow = along_surface(&identity(s), before, hx, rate, s);
+        let settle = product(&flow, &old, s);
+        let onto = product(&product(&settle, &settle, s), &flow, s);
+        Ok(Some((product(&new, &product(&impulse, &onto, s), s), events)))
+    }
+
+    /// G_x·P of the jump at guard `k` from `x`, by central differences of the jump alone on
+    /// the problem itself, its modes put back after each.
+    fn differenced_jump(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        k: usize,
+        before: &[f64],
+        hx: &[f64],
+        rate: f64,
+    ) -> Result<Vec<f64>, FaultKind> {
+        let s = self.size;
+        let h0 = guard_value(self.inner, k, t, x)?;
+        let saved = self.inner.modes_state();
+        let scale = 1.0 + x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let mut along = vec![0.0; s * s];
+        for i in 0..s {
+            // P·eᵢ, scaled to the difference's step.
+            let mut d: Vec<f64> = before.iter().map(|f| -f * hx[i] / rate).collect();
+            d[i] += 1.0;
+            let size = d.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let step = DIFFERENCE * scale / size;
+            let mut sides = [Vec::new(), Vec::new()];
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                let mut probe: Vec<f64> =
+                    x.iter().zip(&d).map(|(a, b)| a + sign * step * b).collect();
+                let copy = &mut *self.inner;
+                // Back onto the manifold the mode before the jump holds the state on, and onto
+                // the guard's surface along f⁻: there the jump sees the contacts the located
+                // one did (a closed contact's rate a difference's step off its manifold would
+                // be far outside its band, and open it). Across that manifold, G_x is taken as
+                // the jump of the state projected onto it, which is what the stabilisation
+                // keeps a run's state within rounding of.
+                for _ in 0..2 {
+                    copy.project_positions(t, &mut probe)?;
+                    copy.project_velocities(t, &mut probe)?;
+                    let off = (guard_value(copy, k, t, &probe)? - h0) / rate;
+                    for (p, f) in probe.iter_mut().zip(before) {
+                        *p -= f * off;
+                    }
+                }
+                let jumped = copy.jump(t, &mut probe, &[k]);
+                copy.restore_modes(&saved);
+                jumped?;
+                *side = probe;
+            }
+            for r in 0..s {
+                along[r * s + i] = (sides[0][r] - sides[1][r]) / (2.0 * step);
+            }
+        }
+        Ok(along)
+    }
+}
+
 impl Problem for Variational<'_> {
     fn dim(&self) -> usize {
         self.size + self.size * self.size
@@ -469,60 +586,42 @@ impl Problem for Variational<'_> {
             self.capture(t, x, matrix, surface);
             return Ok(Vec::new());
         };
-        // The jump's derivative along the guard's surface, on copies in the mode before it.
-        let guard = |p: &mut Mechanical, t: f64, x: &[f64]| -> Result<f64, FaultKind> {
-            let mut out = vec![0.0; p.guards()];
-            p.guard_values(t, x, &mut out)?;
-            Ok(out[k])
+        // The gradient of a gap is its normal row's, exact; any other guard (a reaction, a
+        // stick or a slip, an arming condition) is differenced.
+        let exact_gradient = match self.saltation {
+            Saltation::Exact => self.inner.gap_gradient(t, &x, k)?,
+            Saltation::Differences => None,
         };
-        let (hx, ht) = {
-            let inner = &mut *self.inner;
-            gradient(t, &x, &mut |t, x| guard(inner, t, x))?
+        let (hx, ht) = match exact_gradient.clone() {
+            Some(gradient) => gradient,
+            None => {
+                let inner = &mut *self.inner;
+                gradient(t, &x, &mut |t, x| guard_value(inner, k, t, x))?
+            }
         };
         let (rate, relative) = crossing_rate(&hx, ht, &before);
         if relative < GRAZING {
             return self.refuse(Refusal::Grazing { time: t, guard: Guard::Contact(k), relative });
         }
-        let h0 = guard(self.inner, t, &x)?;
-        let saved = self.inner.modes_state();
-        let scale = 1.0 + x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-        let mut along = vec![0.0; s * s];
-        for i in 0..s {
-            // P·eᵢ, scaled to the difference's step.
-            let mut d: Vec<f64> = before.iter().map(|f| -f * hx[i] / rate).collect();
-            d[i] += 1.0;
-            let size = d.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-            let step = DIFFERENCE * scale / size;
-            let mut sides = [Vec::new(), Vec::new()];
-            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
-                let mut probe: Vec<f64> =
-                    x.iter().zip(&d).map(|(a, b)| a + sign * step * b).collect();
-                let copy = &mut *self.inner;
-                // Back onto the manifold the mode before the jump holds the state on, and onto
-                // the guard's surface along f⁻: there the jump sees the contacts the located
-                // one did (a closed contact's rate a difference's step off its manifold would
-                // be far outside its band, and open it). Across that manifold, G_x is taken as
-                // the jump of the state projected onto it, which is what the stabilisation
-                // keeps a run's state within rounding of.
-                for _ in 0..2 {
-                    copy.project_positions(t, &mut probe)?;
-                    copy.project_velocities(t, &mut probe)?;
-                    let off = (guard(copy, t, &probe)? - h0) / rate;
-                    for (p, f) in probe.iter_mut().zip(&before) {
-                        *p -= f * off;
-                    }
-                }
-                let jumped = copy.jump(t, &mut probe, &[k]);
-                copy.restore_modes(&saved);
-                jumped?;
-                *side = probe;
-            }
-            for r in 0..s {
-                along[r * s + i] = (sides[0][r] - sides[1][r]) / (2.0 * step);
-            }
-        }
         let within = manifold_projection(self.inner, t, &x)?;
-        let events = self.inner.jump(t, &mut y[..s], &[k])?;
+        let saved = self.inner.modes_state();
+        let exact = match exact_gradient {
+            Some(_) => self.exact_jump(t, y, k, &before, &hx, rate)?,
+            None => None,
+        };
+        let (along, events) = match exact {
+            Some(done) => {
+                self.exact_jumps += 1;
+                done
+            }
+            None => {
+                // Back to the state and the modes before the jump, to difference it there.
+                y[..s].copy_from_slice(&x);
+                self.inner.restore_modes(&saved);
+                let along = self.differenced_jump(t, &x, k, &before, &hx, rate)?;
+                (along, self.inner.jump(t, &mut y[..s], &[k])?)
+            }
+        };
         let after = rate_of(self.inner, t, &y[..s])?;
         self.jumps += 1;
         let mut carried = vec![0.0; s * s];

@@ -107,6 +107,23 @@ pub(super) struct Modes {
     /// An armed contact that was armed inside its gap (g < 0: a swing foot below the ground
     /// at mid-stance): it neither lands nor faults until its gap rises through 0.
     below: Vec<bool>,
+    /// The law the last jump's impulse took, for its exact derivative.
+    pub(super) struck: Struck,
+}
+
+/// The impulse of the last jump, as its derivative needs it ([`Mechanical::impact_derivative`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) enum Struck {
+    /// None: the rates are those before the jump.
+    #[default]
+    None,
+    /// Newton's law without friction on the rows that took the impulse (each multiplier, with
+    /// its factor: 1 + e of a normal row, 1 of a grip), their rates after it −e times those
+    /// before.
+    Frictionless { rows: Vec<usize>, factors: Vec<f64> },
+    /// Coulomb's law within the impact, whose modes switch with the state: no derivative is
+    /// lowered for it.
+    Coulomb,
 }
 
 /// What a jump changes of a problem besides the state (the modes and their scales, the rows
@@ -158,6 +175,7 @@ impl Mechanical {
             armed: vec![true; count],
             conditioned: vec![false; count],
             below: vec![false; count],
+            struck: Struck::None,
         };
         self.contacts = contacts;
         self.update_kept();
@@ -343,7 +361,7 @@ impl Mechanical {
     }
 
     /// The rate of multiplier `c`'s row: ġ of a position row, the residual of a velocity row.
-    fn row_rate(&self, c: usize) -> f64 {
+    pub(super) fn row_rate(&self, c: usize) -> f64 {
         let (b, n) = (self.base(c), self.layout.coordinates);
         match self.stabilisation[c] {
             Stabilisation::Position => self.dyn_out[b + n + 2],
@@ -426,7 +444,7 @@ impl Mechanical {
     }
 
     /// The mask that keeps the two-sided rows alone.
-    fn two_sided(&self) -> Vec<bool> {
+    pub(super) fn two_sided(&self) -> Vec<bool> {
         let mut kept = vec![true; self.layout.multipliers];
         for contact in &self.contacts {
             kept[contact.normal] = false;
@@ -435,6 +453,32 @@ impl Mechanical {
             }
         }
         kept
+    }
+
+    /// The gradient of guard `k` in (q, q̇) and its partial in t, exact, where it is a
+    /// contact's gap (an open, armed contact's; `None` for any other guard): (∂Φ/∂q, 0) and
+    /// Φ̇ − ∂Φ/∂q·q̇ of its normal row.
+    pub(crate) fn gap_gradient(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        k: usize,
+    ) -> Result<Option<(Vec<f64>, f64)>, FaultKind> {
+        let count = self.contacts.len();
+        if k >= count || self.modes.closed[k] || !self.modes.armed[k] || self.modes.below[k] {
+            return Ok(None);
+        }
+        let c = self.contacts[k].normal;
+        if self.stabilisation[c] != Stabilisation::Position {
+            return Ok(None);
+        }
+        let n = self.layout.coordinates;
+        self.dynamics_at(t, y)?;
+        let row = self.jacobian_row(c);
+        let along: f64 = row.iter().zip(&y[n..]).map(|(j, v)| j * v).sum();
+        let mut gradient = row.to_vec();
+        gradient.resize(2 * n, 0.0);
+        Ok(Some((gradient, self.dyn_out[self.base(c) + n + 2] - along)))
     }
 
     /// How many guards the contacts have: one each, one more for each rough contact (its
@@ -632,6 +676,7 @@ impl Mechanical {
                 impact: false,
             });
         }
+        self.modes.struck = Struck::None;
         self.dynamics_at(t, y)?;
         let speed = y[n..].iter().fold(0.0, |s: f64, v| s.max(v.abs()));
         for k in 0..count {
@@ -724,11 +769,11 @@ impl Mechanical {
             self.dynamics_at(t, y)?;
             let rows = self.rows_of(&touching);
             let (x, a) = self.condensed(&rows.multipliers)?;
-            let mut c = vec![0.0; rows.kinds.len()];
+            let mut factors = vec![0.0; rows.kinds.len()];
             for (r, &mult) in rows.multipliers.iter().enumerate() {
                 let k = rows.owners[r];
                 let rate = self.row_rate(mult);
-                c[r] = match rows.kinds[r] {
+                factors[r] = match rows.kinds[r] {
                     Row::Normal => {
                         // A closed contact's γ is drift: absorbed plastically.
                         let mut e = if before[k] { 0.0 } else { self.contacts[k].restitution };
@@ -743,11 +788,17 @@ impl Mechanical {
                             self.modes.speed[k] = self.modes.speed[k].max(-rate);
                             plastic[k] = e == 0.0;
                         }
-                        (1.0 + e) * rate
+                        1.0 + e
                     }
-                    Row::Tangent { .. } => rate,
+                    Row::Tangent { .. } => 1.0,
                 };
             }
+            let c: Vec<f64> = rows
+                .multipliers
+                .iter()
+                .zip(&factors)
+                .map(|(&mult, factor)| factor * self.row_rate(mult))
+                .collect();
             let scale = c.iter().fold(0.0, |s: f64, v| s.max(v.abs()));
             let solution = if rows.owners.iter().any(|&k| self.contacts[k].friction.is_some()) {
                 // Coulomb's law on the tangential impulses: every contact at tangential rest
@@ -755,11 +806,17 @@ impl Mechanical {
                 let laws = self.coulomb_rows(&rows, |_| None, &vec![false; count]);
                 let answer = crate::coulomb::solve(&a, &c, &x, &laws, tol * scale)
                     .map_err(|e| painleve(e, &rows.owners, true))?;
+                self.modes.struck = Struck::Coulomb;
                 answer.x
             } else {
-                complementarity::solve(&a, &c, &rows.kinds, tol * scale)
-                    .map_err(|e| unsolved(e, &rows.owners, true))?
-                    .x
+                let solution = complementarity::solve(&a, &c, &rows.kinds, tol * scale)
+                    .map_err(|e| unsolved(e, &rows.owners, true))?;
+                let took: Vec<usize> = (0..c.len()).filter(|&r| solution.active[r]).collect();
+                self.modes.struck = Struck::Frictionless {
+                    rows: took.iter().map(|&r| rows.multipliers[r]).collect(),
+                    factors: took.iter().map(|&r| factors[r]).collect(),
+                };
+                solution.x
             };
             let before_rates = y[n..].to_vec();
             let mut kinetic = 0.0;
