@@ -21,7 +21,7 @@ pub mod sweep;
 use nalgebra::{Complex, DMatrix, DVector};
 use numeric::Tape;
 use sim::variational::{self, End, Guard, Refusal};
-use sim::Mechanical;
+use sim::{Mechanical, Watched};
 
 use engine::input::Assignment;
 use engine::Error;
@@ -313,8 +313,18 @@ fn period(
 /// A variational run's refusal in words.
 fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
     let contacts = &loaded.contact_names;
+    let name = |k: usize| contacts.get(k).cloned().unwrap_or_default();
     let guard = |g: Guard| match g {
-        Guard::Contact(k) => format!("contact `{}`", contacts.get(k).cloned().unwrap_or_default()),
+        Guard::Contacts(Watched::Contact(k)) => format!("contact `{}`", name(k)),
+        Guard::Contacts(Watched::Friction(k)) => {
+            format!("the stick or slip of contact `{}`", name(k))
+        }
+        Guard::Contacts(Watched::Solvability) => {
+            "the solvability of the slipping contacts' forces".to_string()
+        }
+        Guard::Contacts(Watched::Arming(k)) => {
+            format!("the arming condition of contact `{}`", name(k))
+        }
         Guard::Section => "the section".to_string(),
     };
     let until = loaded.until;

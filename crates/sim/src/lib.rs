@@ -52,7 +52,7 @@ pub use contact::{Contact, ModeChange, ModeEvent};
 pub use erk::{dop853_tableau, Dop853Tableau};
 pub use hold::Hold;
 pub use lockstep::{Job, Lockstep};
-pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, BAUMGARTE_RATE};
+pub use mechanical::{Canonical, Layout, Mechanical, Stabilisation, Watched, BAUMGARTE_RATE};
 pub use methods::{Form, Jacobian, Method};
 pub use run::{
     integrate, integrate_into, Event, EventHit, Rows, Run, Segment, Settings, Trajectory,

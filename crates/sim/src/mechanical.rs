@@ -10,8 +10,10 @@ use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, 
 
 mod jacobian;
 mod many;
-mod saltation;
 mod modes;
+mod saltation;
+
+pub use modes::Watched;
 
 pub(crate) use many::{finite_lanes, solve_lanes};
 

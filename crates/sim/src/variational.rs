@@ -53,10 +53,10 @@ pub enum Saltation {
     Differences,
 }
 
-/// A guard of a variational run: a contact's, or the section's.
+/// A guard of a variational run: one of the contacts' ([`crate::Watched`]), or the section's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Guard {
-    Contact(usize),
+    Contacts(crate::Watched),
     Section,
 }
 
@@ -563,7 +563,13 @@ impl Problem for Variational<'_> {
         let contacts = self.inner.guards();
         let guards: Vec<Guard> = fired
             .iter()
-            .map(|&k| if k < contacts { Guard::Contact(k) } else { Guard::Section })
+            .map(|&k| {
+                if k < contacts {
+                    Guard::Contacts(self.inner.watched_by(k))
+                } else {
+                    Guard::Section
+                }
+            })
             .collect();
         if guards.len() > 1 {
             return self.refuse(Refusal::Simultaneous { time: t, guards });
@@ -571,7 +577,7 @@ impl Problem for Variational<'_> {
         let x = y[..s].to_vec();
         let phi = y[s..].to_vec();
         let before = rate_of(self.inner, t, &x)?;
-        let Guard::Contact(k) = guards[0] else {
+        let Guard::Contacts(_) = guards[0] else {
             let End::Crossing { column, .. } = self.end else { unreachable!("a section fired") };
             let (inner, observed) = (&mut *self.inner, &mut self.observed);
             let (hx, ht) =
@@ -586,6 +592,7 @@ impl Problem for Variational<'_> {
             self.capture(t, x, matrix, surface);
             return Ok(Vec::new());
         };
+        let k = fired[0];
         // The gradient of a gap is its normal row's, exact; any other guard (a reaction, a
         // stick or a slip, an arming condition) is differenced.
         let exact_gradient = match self.saltation {
@@ -601,7 +608,8 @@ impl Problem for Variational<'_> {
         };
         let (rate, relative) = crossing_rate(&hx, ht, &before);
         if relative < GRAZING {
-            return self.refuse(Refusal::Grazing { time: t, guard: Guard::Contact(k), relative });
+            let guard = guards[0];
+            return self.refuse(Refusal::Grazing { time: t, guard, relative });
         }
         let within = manifold_projection(self.inner, t, &x)?;
         let saved = self.inner.modes_state();

@@ -137,6 +137,19 @@ pub(crate) struct ModesState {
     bends: Vec<super::Bend>,
 }
 
+/// What a guard of the contacts watches ([`Mechanical::watched_by`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Watched {
+    /// A contact's gap while it is open, its reaction while it is closed.
+    Contact(usize),
+    /// A rough contact's stick (its force reaching the cone) or slip (its rate stopping).
+    Friction(usize),
+    /// Whether the slipping contacts' forces are still determined (Painlevé's jam).
+    Solvability,
+    /// A contact's arming condition.
+    Arming(usize),
+}
+
 /// The rows of a complementarity problem: each row's multiplier, kind and contact.
 struct Rows {
     multipliers: Vec<usize>,
@@ -479,6 +492,23 @@ impl Mechanical {
         let mut gradient = row.to_vec();
         gradient.resize(2 * n, 0.0);
         Ok(Some((gradient, self.dyn_out[self.base(c) + n + 2] - along)))
+    }
+
+    /// What guard `k` of the contacts watches, in the order [`Mechanical::contact_guards`]
+    /// gives them: each contact's gap or reaction, each rough contact's stick or slip, the
+    /// slipping contacts' solvability, each contact's arming condition.
+    pub(crate) fn watched_by(&self, k: usize) -> Watched {
+        let (count, rough) = (self.contacts.len(), self.modes.rough.len());
+        let solvability = count + rough;
+        if k < count {
+            Watched::Contact(k)
+        } else if k < solvability {
+            Watched::Friction(self.modes.rough[k - count])
+        } else if k == solvability && rough > 0 {
+            Watched::Solvability
+        } else {
+            Watched::Arming(k - solvability - usize::from(rough > 0))
+        }
     }
 
     /// How many guards the contacts have: one each, one more for each rough contact (its
