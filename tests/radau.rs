@@ -162,7 +162,9 @@ fn a_velocity_constraint_is_held_as_the_index_two_system() {
     let stabilised = run(&source, options);
     let drift = kept.constraint_drift_at_steps().expect("the blade");
     assert!(drift < 1e-11, "{}", summary(&kept));
-    let baumgarte = stabilised.constraint_drift().expect("the blade");
+    // At the steps of each: dop853's are where Baumgarte's terms have had least time to pull
+    // the blade back.
+    let baumgarte = stabilised.constraint_drift_at_steps().expect("the blade");
     assert!(drift * 100.0 < baumgarte, "{drift:e} against {baumgarte:e}");
     let (a, b) = (last_row(&kept), last_row(&stabilised));
     for k in 0..3 {

@@ -209,9 +209,13 @@ fn header(e: &Equations, name: &str, path: &str, names: &Names) -> String {
             ascii(path),
             ascii(&names.states[..n].join(", ")),
             if m > 0 {
-                " + J^T lambda, J qddot = gamma,\nwith gamma Baumgarte-stabilised (rate 10/s) as lagrange simulate holds kept constraints"
+                format!(
+                    " + J^T lambda, J qddot = gamma,\nwith gamma Baumgarte-stabilised (rate {}/s) as \
+                     lagrange simulate holds kept constraints",
+                    sim::BAUMGARTE_RATE
+                )
             } else {
-                ""
+                String::new()
             },
             if sizes.contacts > 0 {
                 "\nThe contacts' rows are among the constraints'; rhs and the functions like it hold\n\
