@@ -37,7 +37,7 @@ impl Between {
     /// How Φ was integrated, in a few words for a report.
     pub fn words(self) -> &'static str {
         match self {
-            Between::Model => "the variational equations integrated beside the run",
+            Between::Model => "the variational equations integrated beside the run on its steps",
             Between::Interpolated => "RK4 of Φ with A(t) linear between the samples",
         }
     }
