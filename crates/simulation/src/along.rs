@@ -54,7 +54,7 @@ pub fn linearize_run(source: &str, options: &Options) -> Result<Linearized, Erro
     let sets = set_expressions(prepared, &settings.sets)?;
     let values = overrides(prepared, &settings.sets, &sets)?;
     let (slots, y0) = start(prepared, &values, &[])?;
-    let mut along = engine::along::from_prepared(prepared, slots)?;
+    let mut along = engine::along::from_prepared(prepared, slots.clone())?;
     let mut columns = Vec::new();
     for name in along.state_names() {
         let Some(k) = declared.iter().position(|d| *d == name) else {
@@ -83,6 +83,8 @@ pub fn linearize_run(source: &str, options: &Options) -> Result<Linearized, Erro
     let mut run = run_settings(&settings, 0);
     run.until = outcome.run.final_time;
     let mut mechanical = along.mechanical().clone();
+    // The inputs at their declared values, as the recorded run held them.
+    mechanical.set_parameters(&slots);
     let transition = variational::transition(&mut mechanical, &y0, &run, End::Time)
         .map_err(|refusal| refused(refusal, &outcome))?;
     let size = y0.len();
