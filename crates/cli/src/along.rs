@@ -73,8 +73,7 @@ pub fn linearize(
     let text =
         String::from_utf8(bytes).map_err(|_| (format!("error: {along} is not UTF-8 text"), 2))?;
     let motion = read_motion(along, &text, &model).map_err(|message| (message, 2))?;
-    let between = engine::along::Between::Interpolated;
-    engine::along::linearize_along(&mut model, &motion, between).map_err(failed)
+    engine::along::linearize_along(&mut model, &motion).map_err(failed)
 }
 
 fn number(v: f64) -> String {
@@ -228,12 +227,7 @@ mod tests {
         let text = "t,x,x',F\n0,0,0,0\n0.5,0,0,0\n1,0,0,0\n";
         let mut along = along();
         let motion = read_motion("run.csv", text, &along).expect("reads");
-        let l = engine::along::linearize_along(
-            &mut along,
-            &motion,
-            engine::along::Between::Interpolated,
-        )
-        .expect("linearizes");
+        let l = engine::along::linearize_along(&mut along, &motion).expect("linearizes");
         let table = csv(&l);
         let lines: Vec<&str> = table.lines().collect();
         assert_eq!(

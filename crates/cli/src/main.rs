@@ -324,7 +324,8 @@ struct AlongRun {
     /// With --along run: the end time, as for simulate.
     #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
     until: Option<String>,
-    /// With --along run: the integrator, as for simulate.
+    /// With --along run: the integrator, as for simulate; an explicit one, on whose steps Φ
+    /// is integrated beside the run.
     #[arg(long, value_parser = method_parser())]
     method: Option<sim::Method>,
     /// With --along run: the tolerance of the adaptive methods, as for simulate.

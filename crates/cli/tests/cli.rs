@@ -502,13 +502,17 @@ fn linearize_along_reads_a_simulate_table_and_refuses_what_it_cannot_take() {
     let out = lagrange(&["linearize", &pendulum, "--format", "csv"]);
     assert_eq!(out.status.code(), Some(2));
 
-    // Contacts and kept constraints are refused by name, with why.
+    // Contacts are refused by name, with why, and so is a method Φ cannot ride on; kept
+    // constraints are taken.
     let ball = example("contacts/bouncing_ball.lag");
     let out = lagrange(&["linearize", &ball, "--along", "run"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("does not take contacts yet"), "{}", stderr(&out));
     let cartesian = example("classics/pendulum_cartesian.lag");
-    let out = lagrange(&["linearize", &cartesian, "--along", "run"]);
+    let out = lagrange(&["linearize", &cartesian, "--along", "run", "--method", "radau"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(stderr(&out).contains("constraints kept with multipliers"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("radau is not one"), "{}", stderr(&out));
+    let out = lagrange(&["linearize", &cartesian, "--along", "run", "--until", "1"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("x = (x, y, x', y')"), "{}", stdout(&out));
 }

@@ -1,26 +1,31 @@
 //! Linearization along a motion: A(t), B(t), C(t), D(t) of the small motions about a given
 //! motion (a run of the scene, or a trajectory from a file), at each of its samples, and the
-//! state-transition matrix Φ(t_end, t_0) over it ([`transition`]).
+//! state-transition matrix Φ(t_end, t_0) over it.
 //!
 //! A motion is not an equilibrium, so the analysis about a reference (`linear`'s cases, which
-//! substitute the reference into the equations exactly) does not apply; what does is the
-//! residual form the exact Jacobians are made of: with r = M·q̈ − f and q̈ held at the
-//! sample's accelerations, K = ∂r/∂q and C = ∂r/∂q̇ are lowered once (with each input's
-//! column −∂r/∂u and each output's gradient), and [`linear::holonomic::first_order_near`]
-//! forms A and B by the very formula of the analysis about an equilibrium: at a sample that is
-//! an equilibrium the two agree.
+//! substitute the reference into the equations exactly) does not apply. What does is the
+//! first-order problem a run integrates, `sim::Mechanical`: A is its exact Jacobian
+//! ∂(q̇, q̈)/∂(q, q̇), made of the residual's partials with q̈ and λ held at the sample's
+//! (through the augmented system [M −Jᵀ; J 0] where constraints are kept, their Baumgarte
+//! terms included, since those are part of the right-hand side the motion follows). It is the
+//! very matrix `sim::variational` integrates Φ with beside a run, so that A at the samples and
+//! Φ over a run come from one lowering. B takes each input's generalized force −∂r/∂u through
+//! the same augmented system, and C and D read each output's gradient, its accelerations
+//! through A's and B's lower rows.
 //!
-//! Scenes with contacts are refused (a motion through an impact has no linearization at the
-//! jump), and so are constraints kept with multipliers: about an equilibrium `linear` moves the
-//! state into the constraints' null space at the reference, but along a motion that null space
-//! turns from sample to sample, and A(t) in a basis that turns is not the derivative of one
-//! state. Such a scene written in independent coordinates linearizes.
+//! Along a run, Φ is the variational run's (`simulation::along`); along a motion known only at
+//! its samples, [`transition`] integrates Φ̇ = A(t)·Φ with A linear between them.
+//!
+//! Scenes with contacts are refused: a motion through an impact has no linearization at the
+//! jump. With kept constraints the state is every remaining coordinate and rate, as a run's
+//! is: A holds the directions across the constraints too, where Baumgarte's terms pull the
+//! state back.
 
 pub mod transition;
 
 pub use nalgebra::DMatrix;
-use nalgebra::DVector;
 use numeric::Tape;
+use sim::{FaultKind, Mechanical, Problem};
 
 use crate::input::Assignment;
 use crate::numbers::Prepared;
@@ -67,14 +72,13 @@ pub struct Along {
     slots: Vec<f64>,
     /// Where the inputs' slots begin.
     first_input: usize,
-    /// `[t, q, q̇, slots]` → M (column-major), f.
-    dynamics: Tape,
-    /// `[t, q, q̇, q̈, slots]` → ∂r/∂q, ∂r/∂q̇ (row-major), −∂r/∂u (row-major), then per
-    /// output ∂y/∂q, ∂y/∂q̇, ∂y/∂q̈ and ∂y/∂u.
-    partials: Tape,
-    input: Vec<f64>,
-    dynamics_out: Vec<f64>,
-    partials_out: Vec<f64>,
+    /// The equations as a run integrates them, with their exact Jacobian; its observations,
+    /// taken at the q̈ and λ it solves, are M (row-major), J of each kept constraint (a row
+    /// each), −∂r/∂u (row-major), then per output ∂y/∂q, ∂y/∂q̇, ∂y/∂q̈ and ∂y/∂u.
+    mechanical: Mechanical,
+    multipliers: usize,
+    observed: Vec<f64>,
+    jacobian: Vec<f64>,
 }
 
 /// Loads `source` and lowers what a linearization along a motion needs.
@@ -90,11 +94,9 @@ pub fn along(source: &str, options: &Options) -> Result<Along, Error> {
     from_prepared(&mut prepared, slots)
 }
 
-/// What a linearization along a motion does not take: contacts and constraints kept with
-/// multipliers (see the module's doc), each named.
+/// What a linearization along a motion does not take: contacts, named (see the module's doc).
 pub fn refuse(prepared: &Prepared) -> Result<(), Error> {
-    prepared.refuse_contacts("linearization along a motion")?;
-    refuse_kept(prepared)
+    prepared.refuse_contacts("linearization along a motion")
 }
 
 /// [`along`] of a scene already loaded (a run's, whose programs are lowered first so that the
@@ -110,12 +112,13 @@ pub fn from_prepared(prepared: &mut Prepared, slots: Vec<f64>) -> Result<Along, 
         ));
     }
     let inputs: Vec<cas::SymId> = d.model.inputs.iter().map(|u| u.sym).collect();
-    let partials = d.partials();
-    let mut outputs: Vec<cas::ExprId> = Vec::new();
-    for rows in [&partials.residual.positions, &partials.residual.rates] {
-        outputs.extend(rows.iter().flatten());
+    let mut observed: Vec<cas::ExprId> = d.mass_matrix.iter().flatten().copied().collect();
+    for m in &d.multipliers {
+        observed.extend(&m.rows.jacobian);
     }
-    // −∂r/∂u = ∂f/∂u − (∂M/∂u)·q̈: the generalized force of each input.
+    // −∂r/∂u = ∂f/∂u − (∂M/∂u)·q̈: the generalized force of each input. J does not depend on
+    // an input (one in a constraint is refused, or a run puts its value in place before
+    // deriving), so neither Jᵀλ nor the constraints' rows add to it.
     let accels: Vec<cas::ExprId> = d.accels.iter().map(|a| d.model.pool.sym(*a)).collect();
     for i in 0..n {
         for u in &inputs {
@@ -126,21 +129,25 @@ pub fn from_prepared(prepared: &mut Prepared, slots: Vec<f64>) -> Result<Along, 
                 let inertial = pool.mul2(dm, *accel);
                 terms.push(pool.neg(inertial));
             }
-            outputs.push(pool.add(&terms));
+            observed.push(pool.add(&terms));
         }
     }
+    // An output names no reaction (the model refuses one), so no multiplier stands in its
+    // gradient: ∂λ/∂x, which the Jacobian of (q̇, q̈) does not give, is never needed.
     for output in d.model.outputs.clone() {
         let y = d.expand_quantities(output.value, false);
         let pool = &mut d.model.pool;
         for of in [&d.coords, &d.rates, &d.accels, &inputs] {
-            outputs.extend(of.iter().map(|s| pool.diff(y, *s)).collect::<Vec<_>>());
+            observed.extend(of.iter().map(|s| pool.diff(y, *s)).collect::<Vec<_>>());
         }
     }
-    let mut observed = prepared.dynamics_inputs();
-    observed.splice(1 + 2 * n..1 + 2 * n, prepared.derivation.accels.iter().copied());
-    let partials = Tape::new(prepared.lower(&observed, &outputs)?);
     let dynamics_exprs = prepared.dynamics_exprs();
     let dynamics = Tape::new(prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?);
+    let observation = Tape::new(prepared.lower(&prepared.observation_inputs(), &observed)?);
+    let partials = Tape::new(prepared.partials_program()?);
+    let mechanical = Mechanical::new(prepared.layout, dynamics, observation, slots.clone())
+        .with_kinds(prepared.stabilisation())
+        .with_partials(partials);
     let d = &prepared.derivation;
     Ok(Along {
         coordinates: prepared.coordinate_names(),
@@ -148,29 +155,11 @@ pub fn from_prepared(prepared: &mut Prepared, slots: Vec<f64>) -> Result<Along, 
         outputs: d.model.outputs.iter().map(|o| o.name.clone()).collect(),
         first_input: prepared.parameter_plan.len(),
         slots,
-        dynamics,
-        partials,
-        input: vec![0.0; observed.len()],
-        dynamics_out: vec![0.0; dynamics_exprs.len()],
-        partials_out: vec![0.0; outputs.len()],
+        observed: vec![0.0; mechanical.observations()],
+        jacobian: vec![0.0; 4 * n * n],
+        multipliers: prepared.layout.multipliers,
+        mechanical,
     })
-}
-
-/// The refusal of constraints kept with multipliers, naming them (see the module's doc).
-fn refuse_kept(prepared: &Prepared) -> Result<(), Error> {
-    let kept = prepared.kept_constraint_names();
-    if kept.is_empty() {
-        return Ok(());
-    }
-    let names: Vec<String> = kept.iter().map(|c| format!("`{c}`")).collect();
-    Err(Error::Input(format!(
-        "linearization along a motion does not take constraints kept with multipliers, and \
-         this scene keeps {}: along a motion the directions the constraints allow turn from \
-         sample to sample, so there is no one state to linearize in. Write the scene in \
-         coordinates the constraints leave free (the constraint then eliminated), or \
-         linearize about an equilibrium with `lagrange linearize` without --along",
-        names.join(", ")
-    )))
 }
 
 /// The `--set` values by parameter index; a coordinate or rate is a run's start, skipped
@@ -230,6 +219,12 @@ impl Along {
         self.slots[self.first_input..].to_vec()
     }
 
+    /// The first-order problem A is the Jacobian of, at the parameters' values and the
+    /// inputs of the last sample asked for: what a variational run integrates Φ on.
+    pub fn mechanical(&self) -> &Mechanical {
+        &self.mechanical
+    }
+
     fn check(&self, t: f64, state: &[f64], inputs: &[f64]) -> Result<(), Error> {
         let n = self.coordinates.len();
         if state.len() != 2 * n {
@@ -254,77 +249,64 @@ impl Along {
         Ok(())
     }
 
-    /// Evaluates M and f at the sample, and solves the accelerations; M is returned with them.
-    fn accelerations(
-        &mut self,
-        t: f64,
-        state: &[f64],
-        inputs: &[f64],
-    ) -> Result<(DMatrix<f64>, DVector<f64>), Error> {
+    /// The inputs' values put in their slots, checked with the sample first.
+    fn set_inputs(&mut self, t: f64, state: &[f64], inputs: &[f64]) -> Result<(), Error> {
         self.check(t, state, inputs)?;
-        let n = self.coordinates.len();
         let first = self.first_input;
         self.slots[first..].copy_from_slice(inputs);
-        self.input.truncate(0);
-        self.input.push(t);
-        self.input.extend_from_slice(state);
-        self.input.extend_from_slice(&self.slots);
-        self.dynamics.eval(&self.input, &mut self.dynamics_out);
-        let mass = DMatrix::from_column_slice(n, n, &self.dynamics_out[..n * n]);
-        let forcing = DVector::from_column_slice(&self.dynamics_out[n * n..n * n + n]);
-        let accelerations =
-            mass.clone().lu().solve(&forcing).filter(|a| a.iter().all(|v| v.is_finite()));
-        let Some(accelerations) = accelerations else {
-            return Err(Error::Numeric(format!(
-                "at t = {t}, the accelerations are not finite (the mass matrix is singular \
-                 there, or M or f is not finite)"
-            )));
-        };
-        Ok((mass, accelerations))
+        self.mechanical.set_parameters(&self.slots);
+        Ok(())
     }
 
-    /// (q̇, q̈) at the sample: the right-hand side the motion of the scene follows.
+    /// (q̇, q̈) at the sample: the right-hand side the motion of the scene follows (with kept
+    /// constraints, as a run integrates it, Baumgarte's terms included).
     pub fn rate(&mut self, t: f64, state: &[f64], inputs: &[f64]) -> Result<Vec<f64>, Error> {
-        let n = self.coordinates.len();
-        let (_, accelerations) = self.accelerations(t, state, inputs)?;
-        Ok(state[n..].iter().copied().chain(accelerations.iter().copied()).collect())
+        self.set_inputs(t, state, inputs)?;
+        let mut rate = vec![0.0; state.len()];
+        self.mechanical.rhs(t, state, &mut rate).map_err(|kind| fault(t, &kind))?;
+        Ok(rate)
     }
 
     /// A, B, C and D of the small motions about the sample (time `t`, state (q, q̇), inputs'
     /// values), moving or at rest.
     pub fn at(&mut self, t: f64, state: &[f64], inputs: &[f64]) -> Result<Linear, Error> {
-        self.at_with_rate(t, state, inputs).map(|(linear, _)| linear)
-    }
-
-    /// [`Self::at`] with the right-hand side (q̇, q̈) there, from the same solve.
-    pub fn at_with_rate(
-        &mut self,
-        t: f64,
-        state: &[f64],
-        inputs: &[f64],
-    ) -> Result<(Linear, Vec<f64>), Error> {
-        let n = self.coordinates.len();
+        let (n, m) = (self.coordinates.len(), self.multipliers);
         let (ni, no) = (self.inputs.len(), self.outputs.len());
-        let (mass, accelerations) = self.accelerations(t, state, inputs)?;
-        self.input.truncate(1 + 2 * n);
-        self.input.extend(accelerations.iter());
-        self.input.extend_from_slice(&self.slots);
-        self.partials.eval(&self.input, &mut self.partials_out);
-        let out = &self.partials_out;
+        self.set_inputs(t, state, inputs)?;
+        let fail = |kind: FaultKind| fault(t, &kind);
+        self.mechanical.jacobian(t, state, &mut self.jacobian).map_err(fail)?;
+        self.mechanical.observe(t, state, &mut self.observed).map_err(fail)?;
+        let a = DMatrix::from_row_slice(2 * n, 2 * n, &self.jacobian);
+        let out = &self.observed[..self.observed.len() - m];
         if let Some(k) = out.iter().position(|v| !v.is_finite()) {
             return Err(Error::Numeric(format!(
                 "at t = {t}, a partial derivative of the equations is not finite ({})",
                 out[k]
             )));
         }
-        let stiffness = DMatrix::from_row_slice(n, n, &out[..n * n]);
-        let damping = DMatrix::from_row_slice(n, n, &out[n * n..2 * n * n]);
-        let forces = DMatrix::from_row_slice(n, ni, &out[2 * n * n..2 * n * n + n * ni]);
-        let (a, b) = linear::holonomic::first_order_near(&mass, &damping, &stiffness, &forces)
-            .map_err(|fault| {
-                Error::Numeric(format!("at t = {t}, no first-order form: {}", fault_words(&fault)))
-            })?;
-        let gradients = &out[2 * n * n + n * ni..];
+        let (mass, rest) = out.split_at(n * n);
+        let (rows, rest) = rest.split_at(m * n);
+        let (forces, gradients) = rest.split_at(n * ni);
+        let mut b = DMatrix::zeros(2 * n, ni);
+        if ni > 0 {
+            // [M −Jᵀ; J 0]·(∂q̈, ∂λ)/∂u = (−∂r/∂u, 0): the system the accelerations solve.
+            let rows = DMatrix::from_row_slice(m, n, rows);
+            let mut system = DMatrix::zeros(n + m, n + m);
+            system.view_mut((0, 0), (n, n)).copy_from(&DMatrix::from_row_slice(n, n, mass));
+            system.view_mut((0, n), (n, m)).copy_from(&-rows.transpose());
+            system.view_mut((n, 0), (m, n)).copy_from(&rows);
+            let mut by_inputs = DMatrix::zeros(n + m, ni);
+            by_inputs.view_mut((0, 0), (n, ni)).copy_from(&DMatrix::from_row_slice(n, ni, forces));
+            let solved = system.lu().solve(&by_inputs).filter(|s| s.iter().all(|v| v.is_finite()));
+            let Some(solved) = solved else {
+                return Err(Error::Numeric(format!(
+                    "at t = {t}, the inputs' effect on the accelerations is not finite (the \
+                     mass matrix{} is singular there)",
+                    if m > 0 { " with the kept constraints' rows" } else { "" }
+                )));
+            };
+            b.view_mut((n, 0), (n, ni)).copy_from(&solved.rows(0, n));
+        }
         let width = 3 * n + ni;
         let mut c = DMatrix::zeros(no, 2 * n);
         let mut d = DMatrix::zeros(no, ni);
@@ -343,20 +325,27 @@ impl Along {
                 d[(row, k)] = by_inputs[k] + through;
             }
         }
-        let rate = state[n..].iter().copied().chain(accelerations.iter().copied()).collect();
-        Ok((Linear { a, b, c, d }, rate))
+        Ok(Linear { a, b, c, d })
     }
 }
 
-/// Why the first-order form failed at a sample, in words.
-fn fault_words(fault: &linear::Fault) -> String {
-    match fault {
-        linear::Fault::SingularMass { condition } => {
+/// A fault of the equations at a sample, in words.
+fn fault(t: f64, kind: &FaultKind) -> Error {
+    let words = match kind {
+        FaultKind::SingularMass { condition, .. } => {
             format!("the mass matrix is singular there (condition {condition:.1e})")
         }
-        linear::Fault::NotFinite(what) => format!("{what} is not finite there"),
+        FaultKind::SingularConstraints { .. } => {
+            "the kept constraints' gradients are dependent there (a dead point, or constraints \
+             that coincide)"
+                .to_string()
+        }
+        FaultKind::NonFinite { .. } => {
+            "a value of the equations or of their partials is not finite there".to_string()
+        }
         other => format!("{other:?}"),
-    }
+    };
+    Error::Numeric(format!("at t = {t}, no first-order form: {words}"))
 }
 
 /// The motion checked against the scene: one state and one set of inputs per time, the
@@ -402,24 +391,55 @@ pub struct Linearized {
     pub samples: Vec<Linear>,
     /// Φ(t_end, t_0): δx(t_end) = Φ·δx(t_0) with the inputs held on the motion.
     pub transition: DMatrix<f64>,
-    /// How Φ was integrated between the samples.
+    /// How Φ was integrated.
     pub between: Between,
 }
 
-/// A, B, C, D at every sample of `motion`, and Φ over it, A(t) known between the samples as
-/// `between` says.
-pub fn linearize_along(
-    along: &mut Along,
-    motion: &Motion,
-    between: Between,
-) -> Result<Linearized, Error> {
+/// A, B, C, D at every sample of `motion`, checked first.
+pub fn samples(along: &mut Along, motion: &Motion) -> Result<Vec<Linear>, Error> {
     check_motion(along, motion)?;
     let mut samples = Vec::with_capacity(motion.times.len());
     for (k, t) in motion.times.iter().enumerate() {
         samples.push(along.at(*t, &motion.states[k], &motion.inputs[k])?);
     }
-    let transition = state_transition(along, motion, &samples, between)?;
-    Ok(Linearized {
+    Ok(samples)
+}
+
+/// The linearization along a motion known only at its samples (a file's): A, B, C, D at
+/// each, and Φ over it with A(t) linear between them ([`Between::Interpolated`]).
+pub fn linearize_along(along: &mut Along, motion: &Motion) -> Result<Linearized, Error> {
+    let samples = samples(along, motion)?;
+    let transition = state_transition(&motion.times, &samples)?;
+    Ok(gathered(along, motion, samples, transition, Between::Interpolated))
+}
+
+/// The linearization along a run of the scene whose Φ was integrated beside it
+/// ([`Between::Model`]): A, B, C, D at each of the run's samples `motion`, and `transition`.
+pub fn linearize_run(
+    along: &mut Along,
+    motion: &Motion,
+    transition: DMatrix<f64>,
+) -> Result<Linearized, Error> {
+    let size = 2 * along.coordinates.len();
+    if transition.shape() != (size, size) {
+        return Err(Error::Numeric(format!(
+            "the state-transition matrix is {}×{}, not {size}×{size}",
+            transition.nrows(),
+            transition.ncols()
+        )));
+    }
+    let samples = samples(along, motion)?;
+    Ok(gathered(along, motion, samples, transition, Between::Model))
+}
+
+fn gathered(
+    along: &Along,
+    motion: &Motion,
+    samples: Vec<Linear>,
+    transition: DMatrix<f64>,
+    between: Between,
+) -> Linearized {
+    Linearized {
         state: along.state_names(),
         inputs: along.inputs.clone(),
         outputs: along.outputs.clone(),
@@ -427,7 +447,7 @@ pub fn linearize_along(
         samples,
         transition,
         between,
-    })
+    }
 }
 
 #[cfg(test)]
@@ -463,7 +483,8 @@ linearize about theta = 0
         let space = &about.at.first_order;
         let mut along = loaded(CART_POLE);
         let at = along.at(0.0, &[0.0; 4], &[0.0]).expect("at rest");
-        // The same numbers, not merely close: the same formula on the same partials.
+        // The same numbers, not merely close: the run's Jacobian and `linear`'s formula solve
+        // the same partials with the same M.
         assert_eq!(rows(&at.a), space.a);
         assert_eq!(rows(&at.b), space.b);
         assert_eq!(rows(&at.c), space.c);
@@ -503,31 +524,19 @@ linearize about theta = 0
     }
 
     #[test]
-    fn kept_constraints_and_bad_motions_are_refused() {
-        let kept = "
-param m = 1, L = 1, g = 9.81
-coord x, y = -1
-particle bob { mass m; position (x, y) }
-constraint rod: x^2 + y^2 = L^2
-gravity g
-";
-        let e = along(kept, &Options::default()).err().expect("refused").to_string();
-        assert!(e.contains("keeps `rod`"), "{e}");
+    fn bad_motions_are_refused() {
         let mut along = loaded(CART_POLE);
         let motion = |times: Vec<f64>| Motion {
             states: vec![vec![0.0; 4]; times.len()],
             inputs: vec![vec![0.0]; times.len()],
             times,
         };
-        let e = linearize_along(&mut along, &motion(vec![0.0, 0.2, 0.1]), Between::Interpolated)
+        let e = linearize_along(&mut along, &motion(vec![0.0, 0.2, 0.1]))
             .err()
             .expect("refused")
             .to_string();
         assert!(e.contains("sample 3 (t = 0.1) does not come after sample 2 (t = 0.2)"), "{e}");
-        let e = linearize_along(&mut along, &motion(vec![0.0]), Between::Model)
-            .err()
-            .expect("refused")
-            .to_string();
+        let e = linearize_along(&mut along, &motion(vec![0.0])).err().expect("refused").to_string();
         assert!(e.contains("at least two samples"), "{e}");
         let set =
             Options { set: vec!["theta=1".parse().expect("an assignment")], ..Default::default() };

@@ -181,26 +181,6 @@ pub(crate) fn at(
     Ok(Numbers::new(parameters, matrices, solved, space, spectrum, case))
 }
 
-/// A and B of the motions near any state of a scene without kept constraints, at rest or
-/// moving: the state is (q, q̇) of every coordinate, and A = [0, I; −M⁻¹K, −M⁻¹C],
-/// B = [0; M⁻¹·Q_u], K and C the partials of M·q̈ − f in q and q̇ with q̈ held at the state's
-/// accelerations, and Q_u = −∂(M·q̈ − f)/∂u. It is the formula of the analysis about an
-/// equilibrium, taken through the same reduction with N = I, so that at an equilibrium the
-/// two give the same numbers (what `linearize --along` is checked against).
-pub fn first_order_near(
-    mass: &DMatrix<f64>,
-    damping: &DMatrix<f64>,
-    stiffness: &DMatrix<f64>,
-    forces: &DMatrix<f64>,
-) -> Result<(DMatrix<f64>, DMatrix<f64>), Fault> {
-    let n = mass.nrows();
-    let identity = DMatrix::identity(n, n);
-    let cyclic = vec![false; n];
-    let along = Along { basis: &identity, cyclic: &cyclic, k: 0, keep_cyclic: true };
-    let first = first_order(&along, [mass, damping, stiffness], forces)?;
-    Ok((first.a, first.b))
-}
-
 /// The reduced coordinates: δq = N·z, N's columns those of the null space of the kept
 /// constraints (or the coordinates themselves without), then one per cyclic coordinate.
 struct Along<'a> {

@@ -207,8 +207,7 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
     let dynamics_exprs = prepared.dynamics_exprs();
     let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
     let observation = prepared.lower(&prepared.observation_inputs(), &prepared.extra[..columns])?;
-    let partials_exprs = prepared.partials_exprs();
-    let partials = prepared.lower(&prepared.observation_inputs(), &partials_exprs)?;
+    let partials = prepared.partials_program()?;
     let signals = simulation::drive_signals(&prepared, &settings)?;
     let mechanical = Mechanical::new(
         prepared.layout,
@@ -380,7 +379,7 @@ fn identity(size: usize) -> Vec<f64> {
 
 /// A fixed period's map at a state: the return less its start, the Jacobian (row-major) and
 /// the chart there.
-pub(crate) type Evaluated = (Vec<f64>, Vec<f64>, DMatrix<f64>);
+pub type Evaluated = (Vec<f64>, Vec<f64>, DMatrix<f64>);
 
 /// Finds the periodic orbit of `source` from its start.
 pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
@@ -416,8 +415,9 @@ impl Search {
     }
 
     /// A fixed period's map at `x`, for continuation: the return less its start, S(P(x)) − x,
-    /// its Jacobian Π·Φ (row-major) and the chart at `x`.
-    pub(crate) fn evaluate(&self, x: &[f64]) -> Result<Evaluated, Error> {
+    /// its Jacobian Π·Φ (row-major) and the chart at `x`. With no symmetry Π·Φ is the
+    /// variational run's Φ over the period, which a linearization along a run gives too.
+    pub fn evaluate(&self, x: &[f64]) -> Result<Evaluated, Error> {
         let loaded = &self.loaded;
         let mut mechanical = loaded.mechanical.clone();
         let fail = |r: Refusal| refused(r, loaded);

@@ -271,8 +271,7 @@ impl NativeScene {
                 let inputs = inputs.unwrap_or_else(|| vec![along.resting_inputs(); count]);
                 let motion =
                     engine::along::Motion { times, states: states.unwrap_or_default(), inputs };
-                let between = engine::along::Between::Interpolated;
-                engine::along::linearize_along(&mut along, &motion, between)
+                engine::along::linearize_along(&mut along, &motion)
             }
         });
         let linearized = linearized.map_err(|e| engine_error(&e, &self.path))?;

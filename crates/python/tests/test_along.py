@@ -84,9 +84,14 @@ def test_a_motion_given_as_arrays_and_its_mistakes():
         scene.linearize_along(run.t, states[:-1])
 
 
-def test_kept_constraints_and_contacts_are_refused():
-    with pytest.raises(ValueError, match="constraints kept with multipliers"):
-        lagrange.load(EXAMPLES / "classics" / "pendulum_cartesian.lag").linearize_along()
+def test_kept_constraints_are_taken_and_contacts_and_implicit_methods_refused():
+    scene = lagrange.load(EXAMPLES / "classics" / "pendulum_cartesian.lag")
+    along = scene.linearize_along(until=1.0, samples=11)
+    # Every remaining coordinate, the rod kept: A at the bottom pulls a state back to it.
+    assert along.state == ["x", "y", "x'", "y'"] and along.transition_method == "model"
+    assert along.A.shape == (11, 4, 4)
+    with pytest.raises(ValueError, match="radau is not one"):
+        scene.linearize_along(until=1.0, method="radau")
     with pytest.raises(ValueError, match="does not take contacts"):
         lagrange.load(EXAMPLES / "contacts" / "bouncing_ball.lag").linearize_along()
 

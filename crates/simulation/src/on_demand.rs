@@ -26,13 +26,7 @@ impl<'a> OnDemand<'a> {
 /// The partials program of a problem on (q, q̇), lowered from the derivation's partials the
 /// first time and kept in `prepared` for the runs after.
 pub(crate) fn lower_partials(prepared: &mut Prepared) -> Result<Tape, Error> {
-    if let Some(program) = &prepared.partials_program {
-        return Ok(Tape::new(program.clone()));
-    }
-    let exprs = prepared.partials_exprs();
-    let program = prepared.lower(&prepared.observation_inputs(), &exprs)?;
-    prepared.partials_program = Some(program.clone());
-    Ok(Tape::new(program))
+    prepared.partials_program().map(Tape::new)
 }
 
 impl Problem for OnDemand<'_> {

@@ -1,25 +1,19 @@
-//! The state-transition matrix over a motion: Φ(t_end, t_0) with Φ̇ = A(t)·Φ, Φ(t_0) = I, so
-//! that a small change δx(t_0) of the start becomes Φ·δx(t_0) at the end, the inputs held on
-//! the motion.
+//! The state-transition matrix over a motion known only at its samples: Φ(t_end, t_0) with
+//! Φ̇ = A(t)·Φ, Φ(t_0) = I, so that a small change δx(t_0) of the start becomes Φ·δx(t_0) at
+//! the end, the inputs held on the motion.
 //!
-//! Everything that integrates Φ is [`state_transition`], so that the sensitivity integrator
-//! of `lagrange orbit` (the variational equations lowered beside the run's own) can take its
-//! place without its callers changing. Until then it is classical RK4 on Φ̇ = A(t)·Φ, each
-//! interval between samples cut into substeps short enough that h·‖A‖∞ ≤ [`REACH`], in one of
-//! two ways ([`Between`]):
-//!
-//! - [`Between::Model`], for a run of the scene: from each recorded sample the scene's own
-//!   equations are integrated to the next together with Φ (the state and Φ in one RK4 step,
-//!   A at each stage's state), the inputs linear between the samples. Φ is then the run's to
-//!   RK4's order, however far apart the samples are.
-//! - [`Between::Interpolated`], for a trajectory read from a file, which need not be a motion
-//!   of the scene at all (a planner's reference, a measured motion): only A at the samples is
-//!   known, and A(t) is taken linear between them, so Φ is second order in the samples'
-//!   spacing.
+//! Along a run of the scene Φ is not integrated here: `sim::variational` carries it beside
+//! the run on the run's own steps, from the same exact Jacobian A is ([`Between::Model`]).
+//! A trajectory read from a file need not be a motion of the scene at all (a planner's
+//! reference, a measured motion), so no integrator can follow it with the scene's equations:
+//! only A at the samples is known, and here A(t) is taken linear between them and Φ̇ = A(t)·Φ
+//! integrated by classical RK4, each interval cut into substeps short enough that
+//! h·‖A‖∞ ≤ [`REACH`] ([`Between::Interpolated`]). Φ is then second order in the samples'
+//! spacing.
 
 use nalgebra::DMatrix;
 
-use super::{Along, Linear, Motion};
+use super::Linear;
 use crate::Error;
 
 /// The most of h·‖A‖∞ in one RK4 substep: its local error is about REACH⁵/120 relative
@@ -33,7 +27,7 @@ const MAX_SUBSTEPS: usize = 1_000_000;
 /// How A(t) is known between the samples of a motion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Between {
-    /// The motion is the scene's: its equations are integrated from each sample to the next.
+    /// The motion is a run of the scene: Φ is the variational run's, on the run's steps.
     Model,
     /// Only the samples are known: A(t) linear between them.
     Interpolated,
@@ -43,9 +37,7 @@ impl Between {
     /// How Φ was integrated, in a few words for a report.
     pub fn words(self) -> &'static str {
         match self {
-            Between::Model => {
-                "RK4 of the scene's equations and Φ together from each sample to the next"
-            }
+            Between::Model => "the variational equations integrated beside the run on its steps",
             Between::Interpolated => "RK4 of Φ with A(t) linear between the samples",
         }
     }
@@ -59,17 +51,13 @@ impl Between {
     }
 }
 
-/// Φ(t_end, t_0) over `motion`, whose first-order forms at the samples are `samples`.
-pub fn state_transition(
-    along: &mut Along,
-    motion: &Motion,
-    samples: &[Linear],
-    between: Between,
-) -> Result<DMatrix<f64>, Error> {
-    let size = 2 * along.coordinates().len();
+/// Φ(t_end, t_0) over the samples at `times`, whose first-order forms are `samples`, A(t)
+/// linear between them.
+pub fn state_transition(times: &[f64], samples: &[Linear]) -> Result<DMatrix<f64>, Error> {
+    let size = samples.first().map_or(0, |s| s.a.nrows());
     let mut phi = DMatrix::identity(size, size);
-    for k in 0..motion.times.len().saturating_sub(1) {
-        let (t0, t1) = (motion.times[k], motion.times[k + 1]);
+    for (k, pair) in times.windows(2).enumerate().take(samples.len().saturating_sub(1)) {
+        let (t0, t1) = (pair[0], pair[1]);
         let (a0, a1) = (&samples[k].a, &samples[k + 1].a);
         let reach = (t1 - t0) * norm(a0).max(norm(a1));
         let substeps = (reach / REACH).ceil().max(1.0);
@@ -79,11 +67,7 @@ pub fn state_transition(
                  samples (h·‖A‖ = {reach:.3e}): record the motion more densely"
             )));
         }
-        let interval = match between {
-            Between::Interpolated => interpolated(t0, t1, a0, a1, substeps as usize),
-            Between::Model => riding(along, motion, k, substeps as usize)?,
-        };
-        phi = interval * phi;
+        phi = interpolated(t0, t1, a0, a1, substeps as usize) * phi;
     }
     Ok(phi)
 }
@@ -114,50 +98,6 @@ fn interpolated(
         phi += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
     }
     phi
-}
-
-/// Φ over the interval after sample `k`: the scene's equations and Φ integrated together from
-/// the sample, in `substeps` RK4 steps, the inputs linear between the samples.
-fn riding(
-    along: &mut Along,
-    motion: &Motion,
-    k: usize,
-    substeps: usize,
-) -> Result<DMatrix<f64>, Error> {
-    let (t0, t1) = (motion.times[k], motion.times[k + 1]);
-    let (u0, u1) = (&motion.inputs[k], &motion.inputs[k + 1]);
-    let inputs_at = |t: f64| -> Vec<f64> {
-        let s = (t - t0) / (t1 - t0);
-        u0.iter().zip(u1).map(|(a, b)| a + (b - a) * s).collect()
-    };
-    let h = (t1 - t0) / substeps as f64;
-    let mut x = motion.states[k].clone();
-    let size = x.len();
-    let mut phi = DMatrix::identity(size, size);
-    let mut stage = |t: f64, x: &[f64]| -> Result<(Vec<f64>, DMatrix<f64>), Error> {
-        let u = inputs_at(t);
-        let (linear, rate) = along.at_with_rate(t, x, &u)?;
-        Ok((rate, linear.a))
-    };
-    let shifted = |x: &[f64], by: &[f64], h: f64| -> Vec<f64> {
-        x.iter().zip(by).map(|(a, b)| a + b * h).collect()
-    };
-    for j in 0..substeps {
-        let t = t0 + h * j as f64;
-        let (f1, a1) = stage(t, &x)?;
-        let k1 = &a1 * &phi;
-        let (f2, a2) = stage(t + h / 2.0, &shifted(&x, &f1, h / 2.0))?;
-        let k2 = &a2 * (&phi + &k1 * (h / 2.0));
-        let (f3, a3) = stage(t + h / 2.0, &shifted(&x, &f2, h / 2.0))?;
-        let k3 = &a3 * (&phi + &k2 * (h / 2.0));
-        let (f4, a4) = stage(t + h, &shifted(&x, &f3, h))?;
-        let k4 = &a4 * (&phi + &k3 * h);
-        for (i, xi) in x.iter_mut().enumerate() {
-            *xi += h / 6.0 * (f1[i] + 2.0 * f2[i] + 2.0 * f3[i] + f4[i]);
-        }
-        phi += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
-    }
-    Ok(phi)
 }
 
 #[cfg(test)]

@@ -3,10 +3,25 @@
 //! gathered and lowered only for those.
 
 use cas::ExprId;
+use numeric::Program;
 
 use super::Prepared;
+use crate::Error;
 
 impl Prepared {
+    /// The partials program of [`sim::Mechanical`]'s exact Jacobian ([`Prepared::partials_exprs`]
+    /// lowered for the observation inputs), lowered once and kept: the runs of a compiled scene,
+    /// `orbit`'s variational runs and a linearization along a motion share it.
+    pub fn partials_program(&mut self) -> Result<Program, Error> {
+        if let Some(program) = &self.partials_program {
+            return Ok(program.clone());
+        }
+        let exprs = self.partials_exprs();
+        let program = self.lower(&self.observation_inputs(), &exprs)?;
+        self.partials_program = Some(program.clone());
+        Ok(program)
+    }
+
     /// ∂(r, c, Φ, Φ̇)/∂(q, q̇) with q̈ and λ held fixed, row-major, for the observation inputs
     /// `[t, q, q̇, q̈, λ, parameters]`: the partials program of [`sim::Layout`], from
     /// [`mechanics::Derivation::partials`].

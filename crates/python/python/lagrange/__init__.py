@@ -565,15 +565,16 @@ class Scene:
         - Without ``t``: the scene is run with its ``simulate`` settings, ``until``,
           ``method``, ``tolerance``, ``step`` and ``samples`` as for :meth:`simulate`, its
           inputs at their declared values, and linearized at every recorded sample; Φ is
-          integrated with the scene's equations between the samples.
+          integrated beside the run on its own steps (the variational equations ``orbit``
+          uses, so ``method`` must be an explicit one).
         - With ``t`` (increasing times), ``states`` (one row per time: q, then q') and, for a
           scene with inputs, ``inputs`` (one row per time; their declared values if omitted):
           the motion given, which need not be one of the scene's (a planner's reference, a
           measured motion); Φ is integrated with A(t) linear between the samples.
         - ``set``: parameter values (and, for a run, starting values) as for :meth:`simulate`.
 
-        Returns a :class:`LinearizationAlong`. Scenes with contacts or with constraints kept
-        with multipliers raise :class:`SceneError`.
+        Returns a :class:`LinearizationAlong`. Scenes with contacts raise :class:`SceneError`;
+        constraints kept with multipliers are taken as a run takes them.
         """
         import numpy as np
 
@@ -780,7 +781,7 @@ class LinearizationAlong:
       (shapes samples × n × n, samples × n × inputs, samples × outputs × n, samples ×
       outputs × inputs).
     - ``transition``: Φ(t[-1], t[0]), δx(t[-1]) = Φ·δx(t[0]) with the inputs held on the
-      motion; ``transition_method``: ``"model"`` (the scene's equations between samples) or
+      motion; ``transition_method``: ``"model"`` (the variational equations beside the run) or
       ``"interpolated"`` (A linear between them).
     - ``to_control(k)``: the state space at sample ``k`` as ``control.StateSpace``.
     """
