@@ -456,11 +456,11 @@ fn the_exact_saltation_is_what_differences_of_the_jump_give() {
         let mechanical = lagrange_tests::mechanical(&mut prepared, &parameters);
         let integrand = simulation::Integrand::new(&mut prepared, mechanical, Method::Dop853)
             .expect("contacts and arming");
-        let simulation::Integrand::Mechanical(mut problem) = integrand else {
+        let simulation::Integrand::Mechanical(problem) = integrand else {
             unreachable!("dop853 integrates (q, q̇)")
         };
         let run = settings(until, 1e-12);
-        let mut by = |saltation| {
+        let by = |saltation| {
             transition_by(&mut problem.clone(), &y0, &run, end, saltation).expect("a run")
         };
         let (exact, differenced) = (by(Saltation::Exact), by(Saltation::Differences));

@@ -223,6 +223,9 @@ impl Rows for Discard {
 /// event's surface.
 type Captured = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
 
+/// A jump's G_x·P (row-major) and its mode events.
+type Jumped = (Vec<f64>, Vec<ModeEvent>);
+
 /// The start after its mode was decided, F there and the manifold's normals.
 type Begun = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
 
@@ -403,7 +406,7 @@ impl Variational<'_> {
         before: &[f64],
         hx: &[f64],
         rate: f64,
-    ) -> Result<Option<(Vec<f64>, Vec<ModeEvent>)>, FaultKind> {
+    ) -> Result<Option<Jumped>, FaultKind> {
         let s = self.size;
         let x = y[..s].to_vec();
         let Some(old) = self.inner.projection_derivative(t, &x)? else { return Ok(None) };
