@@ -113,6 +113,8 @@ pub struct Mechanical {
     backup: DMatrix<f64>,
     /// The same on the stack when it is small enough, as it is for most scenes.
     small: Option<Small>,
+    /// The kept rows' system on the heap past the stack's order, and its factors.
+    kept_factors: KeptFactors,
     solution: Vec<f64>,
     /// The Baumgarte rate (as bits) `solution` was solved with at the state and parameters in
     /// the dynamics program's inputs; `None` once `input`, `dyn_out` or `solution` moved on. A step's observations
@@ -205,6 +207,7 @@ impl Mechanical {
             system: DMatrix::zeros(size, size),
             backup: DMatrix::zeros(size, size),
             small: Small::zeros(size),
+            kept_factors: KeptFactors::default(),
             solution: vec![0.0; size],
             solved: None,
             pivots: vec![0; size],
@@ -342,6 +345,7 @@ impl Mechanical {
     /// `self.solution`.
     fn solve_dynamics(&mut self) -> Result<(), FaultKind> {
         self.aim_bends();
+        self.kept_factors.valid = false;
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         let out = &self.dyn_out;
         self.solution[..n].copy_from_slice(&out[n * n..n * n + n]);
@@ -367,7 +371,9 @@ impl Mechanical {
             (None, true) => {
                 solve_system(out, self.layout, kept, bends, &mut self.system, solution, pivots)
             }
-            (None, false) => solve_kept_heap(out, self.layout, kept, bends, solution),
+            (None, false) => {
+                solve_kept_heap(out, self.layout, kept, bends, solution, &mut self.kept_factors)
+            }
         };
         match solved {
             Ok(()) => {
@@ -480,7 +486,10 @@ impl Mechanical {
             (None, true) => {
                 solve_system(out, self.layout, kept, &[], &mut self.system, &mut change, pivots)?
             }
-            (None, false) => solve_kept_heap(out, self.layout, kept, &[], &mut change)?,
+            (None, false) => {
+                let mut work = KeptFactors::default();
+                solve_kept_heap(out, self.layout, kept, &[], &mut change, &mut work)?
+            }
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
             *v += d;
@@ -904,37 +913,69 @@ fn load_kept(out: &[f64], n: usize, rows: &[usize], bends: &[Bend], a: &mut impl
 
 /// [`solve_kept`] past the stack's order: the kept rows factored on the heap, an open
 /// contact's multiplier 0 without its identity row (a rimless wheel on one spoke solves five
-/// rows, not nineteen).
+/// rows, not nineteen), in the buffers of `work`, which keep the LU factors for the exact
+/// Jacobian at the same state ([`KeptFactors`]).
 fn solve_kept_heap(
     out: &[f64],
     layout: Layout,
     kept: &[bool],
     bends: &[Bend],
     b: &mut [f64],
+    work: &mut KeptFactors,
 ) -> Result<(), FaultKind> {
     let Layout { coordinates: n, multipliers: m, .. } = layout;
-    let rows: Vec<usize> = (0..m).filter(|&c| kept[c]).collect();
+    work.valid = false;
+    work.load(out, n, kept, bends);
+    let KeptFactors { lu, pivots, rows, x, .. } = work;
     let order = n + rows.len();
-    let load = |a: &mut DMatrix<f64>| load_kept(out, n, &rows, bends, a);
-    let mut a = DMatrix::zeros(order, order);
-    load(&mut a);
-    let mut x = vec![0.0; order];
-    x[..n].copy_from_slice(&b[..n]);
-    for (r, &c) in rows.iter().enumerate() {
-        x[n + r] = b[n + c];
-    }
-    let mut pivots = vec![0; order];
+    x.clear();
+    x.extend_from_slice(&b[..n]);
+    x.extend(rows.iter().map(|&c| b[n + c]));
     if rows.is_empty() {
-        linalg::solve_symmetric(&mut a, &mut x, &mut pivots, load)?;
+        let load = |a: &mut DMatrix<f64>| load_kept(out, n, rows, bends, a);
+        linalg::solve_symmetric(lu, x, &mut pivots[..order], load)?;
     } else {
-        linalg::solve_general(&mut a, &mut x, &mut pivots)?;
+        linalg::solve_general(lu, x, &mut pivots[..order])?;
+        work.valid = true;
     }
+    let KeptFactors { rows, x, .. } = work;
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);
     for (r, &c) in rows.iter().enumerate() {
         b[n + c] = x[n + r];
     }
     Ok(())
+}
+
+/// The kept rows' augmented system on the heap, its buffers kept from solve to solve: after
+/// the accelerations' solve (`valid`), its LU factors, which the exact Jacobian at the same
+/// state solves with again rather than factoring the same matrix a second time.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct KeptFactors {
+    lu: DMatrix<f64>,
+    pivots: Vec<usize>,
+    /// The multipliers kept, in the order of the system's rows past M's.
+    rows: Vec<usize>,
+    x: Vec<f64>,
+    /// Whether `lu` holds the LU factors of the system the last solve of the accelerations
+    /// used (M alone is solved by LDLᵀ, which the Jacobian's columns cannot reuse).
+    valid: bool,
+}
+
+impl KeptFactors {
+    /// The system of the rows `kept` (bent by `bends`) at the outputs `out`, unfactored.
+    fn load(&mut self, out: &[f64], n: usize, kept: &[bool], bends: &[Bend]) {
+        self.rows.clear();
+        self.rows.extend((0..kept.len()).filter(|&c| kept[c]));
+        let order = n + self.rows.len();
+        if self.lu.nrows() != order {
+            self.lu = DMatrix::zeros(order, order);
+        }
+        if self.pivots.len() < order {
+            self.pivots.resize(order, 0);
+        }
+        load_kept(out, n, &self.rows, bends, &mut self.lu);
+    }
 }
 
 /// Solves the augmented system of `out` for the right side `b`, in place: by LDLᵀ when

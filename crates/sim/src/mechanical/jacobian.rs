@@ -87,20 +87,25 @@ impl Mechanical {
             self.solution = column;
             return Err(fault);
         }
-        // The accelerations may have been solved by LDLᵀ; one LU serves every column. Only
-        // the kept rows are factored: an open contact's multiplier is 0, and its identity row
-        // would only make the factorization larger (a rimless wheel on one spoke: five rows
-        // rather than nineteen).
-        let rows: Vec<usize> = (0..m).filter(|&c| self.kept[c]).collect();
-        let order = n + rows.len();
-        let mut system = nalgebra::DMatrix::zeros(order, order);
-        // A slipping contact's column bent by its friction, as the solve's is.
-        super::load_kept(&self.dyn_out, n, &rows, &self.bends, &mut system);
-        let mut pivots = vec![0; order];
-        if let Err(fault) = linalg::lu_in_place(&mut system, &mut pivots) {
-            self.solution = column;
-            return Err(fault);
+        // One LU serves every column: the accelerations' own where they were solved by LU on
+        // the heap at this state, else one made here (they may have been solved by LDLᵀ, or
+        // on the stack). Only the kept rows are factored: an open contact's multiplier is 0,
+        // and its identity row would only make the factorization larger (a rimless wheel on
+        // one spoke: five rows rather than nineteen).
+        let mut factors = std::mem::take(&mut self.kept_factors);
+        if !factors.valid {
+            // A slipping contact's column bent by its friction, as the solve's is.
+            factors.load(&self.dyn_out, n, &self.kept, &self.bends);
+            let order = n + factors.rows.len();
+            if let Err(fault) = linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order]) {
+                self.kept_factors = factors;
+                self.solution = column;
+                return Err(fault);
+            }
+            factors.valid = true;
         }
+        let order = n + factors.rows.len();
+        let (system, pivots, rows) = (&factors.lu, &factors.pivots[..order], &factors.rows);
         let width = 2 * n;
         let alpha = self.baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
@@ -148,12 +153,13 @@ impl Mechanical {
                     reduced[i] += self.dyn_out[base + i] * lambda * change;
                 }
             }
-            linalg::lu_solve(&system, &pivots, &mut reduced);
+            linalg::lu_solve(system, pivots, &mut reduced);
             column[..n].copy_from_slice(&reduced[..n]);
             for i in 0..n {
                 jac[(n + i) * width + k] = column[i];
             }
         }
+        self.kept_factors = factors;
         self.solution = column;
         check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
