@@ -47,23 +47,49 @@ pub fn tangent(normals: &[Vec<f64>], flow: Option<&[f64]>, size: usize) -> DMatr
 /// already (to the differences' accuracy): it restrains nothing more.
 const HELD: f64 = 1e-6;
 
+/// A direction of the surface's range keeps at least this fraction of its length on the
+/// manifold's tangent at the start, or it is one across the manifold.
+const ON_MANIFOLD: f64 = 0.5;
+
 /// An orthonormal basis of the section's tangent at a start: the range of `surface` (the
-/// derivative along the surface the state arrived on, row-major, the symmetry applied),
-/// within it the directions every row of `rows` (the manifold's normals at the start, the
-/// components left out) is orthogonal to.
-pub fn section(surface: &[f64], rows: &[Vec<f64>], size: usize) -> DMatrix<f64> {
+/// derivative along the surface the state arrived on, row-major, the symmetry applied) moved
+/// onto the tangent of the manifold at the start (the directions every row of `normals` is
+/// orthogonal to), within it the directions every row of `ignored` (the components left out)
+/// is orthogonal to.
+///
+/// The range is the section's tangent where the previous return arrived, and a Newton step
+/// starts a little away from there: the manifold's normals have turned by as much as the step
+/// is long (a walker's stance foot, its coordinates swapped, is normal to a range taken
+/// 3·10⁻⁴ away by 4·10⁻⁶). Projected, the range keeps its dimension; restrained by those
+/// normals, each such turn would take a direction away.
+pub fn section(
+    surface: &[f64],
+    normals: &[Vec<f64>],
+    ignored: &[Vec<f64>],
+    size: usize,
+) -> DMatrix<f64> {
     let matrix = DMatrix::from_row_slice(size, size, surface);
     let svd = matrix.svd(true, false);
     let Some(u) = svd.u else { return DMatrix::zeros(size, 0) };
     let largest = svd.singular_values.iter().fold(0.0_f64, |m: f64, v: &f64| m.max(*v));
     let kept: Vec<usize> =
         (0..size).filter(|&k| svd.singular_values[k] > RANK.sqrt() * largest).collect();
+    let mut arrived = DMatrix::zeros(size, kept.len());
+    for (c, &k) in kept.iter().enumerate() {
+        arrived.set_column(c, &u.column(k));
+    }
+    let on = tangent(normals, None, size);
+    let projected = &on * (on.transpose() * &arrived);
+    let svd = projected.svd(true, false);
+    let Some(u) = svd.u else { return DMatrix::zeros(size, 0) };
+    let kept: Vec<usize> =
+        (0..svd.singular_values.len()).filter(|&k| svd.singular_values[k] > ON_MANIFOLD).collect();
     let mut range = DMatrix::zeros(size, kept.len());
     for (c, &k) in kept.iter().enumerate() {
         range.set_column(c, &u.column(k));
     }
     let mut restraints = Vec::new();
-    for row in rows {
+    for row in ignored {
         let length = row.iter().map(|v| v * v).sum::<f64>().sqrt();
         if length == 0.0 {
             continue;

@@ -423,10 +423,9 @@ impl Search {
         let fail = |r: Refusal| refused(r, loaded);
         let tr =
             variational::transition(&mut mechanical, x, &loaded.run, loaded.end).map_err(fail)?;
-        let mut rows = tr.normals.clone();
-        rows.extend(loaded.symmetry.ignored_rows());
         let size = x.len();
-        let tangent = chart::section(&identity(size), &rows, size);
+        let ignored = loaded.symmetry.ignored_rows();
+        let tangent = chart::section(&identity(size), &tr.normals, &ignored, size);
         let returned = loaded.symmetry.apply(&tr.state);
         let gap = returned.iter().zip(x).map(|(a, b)| a - b).collect();
         Ok((gap, loaded.symmetry.carry(&tr.matrix), tangent))
@@ -440,20 +439,22 @@ fn find(loaded: &Loaded, from: Option<&[f64]>, iterations_allowed: usize) -> Res
     let symmetry = &loaded.symmetry;
     let size = loaded.start.len();
     let start = from.map_or_else(|| loaded.start.clone(), |x| x.to_vec());
-    // Onto the section first: the scene's start is anywhere on the orbit's way.
+    // Onto the section first: the scene's start is anywhere on the orbit's way. The return is
+    // mapped by the symmetry before it starts again, as every return is compared: a walker's
+    // legs swap at the strike, and the state after it, its legs swapped, is where the next
+    // step starts with its modes (the stance foot the one the coordinates now say).
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
         _ => {
             let tr = variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?;
-            (tr.state, tr.surface)
+            (symmetry.apply(&tr.state), tr.surface)
         }
     };
     let mut iterations = Vec::new();
     for _ in 0..iterations_allowed.max(1) {
         let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
-        let mut rows = tr.normals.clone();
-        rows.extend(symmetry.ignored_rows());
-        let tangent = chart::section(&symmetry.carry(&surface), &rows, size);
+        let ignored = symmetry.ignored_rows();
+        let tangent = chart::section(&symmetry.carry(&surface), &tr.normals, &ignored, size);
         let returned = symmetry.apply(&tr.state);
         let monodromy = symmetry.carry(&tr.matrix);
         let gap: Vec<f64> = returned.iter().zip(&tr.start).map(|(a, b)| a - b).collect();
