@@ -493,7 +493,7 @@ fn the_simplest_walkers_stride_map_swaps_its_legs() {
 /// through the impact law and the projections give G_x, and it is what central differences
 /// of the jump alone give, to their truncation: a ball bouncing with e = 0.8 (twice), McGeer's
 /// rimless wheel landing on its next spoke (spoke and grip held, the last spoke lifting) and
-/// the simplest walker's heel strike (its trailing foot leaving, its feet armed).
+/// the simplest walker's swing foot armed and its heel strike (its trailing foot leaving).
 #[test]
 fn the_exact_saltation_is_what_differences_of_the_jump_give() {
     use sim::variational::{transition_by, Saltation};
@@ -518,10 +518,8 @@ fn the_exact_saltation_is_what_differences_of_the_jump_give() {
             transition_by(&mut problem.clone(), &y0, &run, end, saltation).expect("a run")
         };
         let (exact, differenced) = (by(Saltation::Exact), by(Saltation::Differences));
-        // The walker's first jump arms its swing foot: a guard of the arming condition, which
-        // is differenced.
-        let gaps = if file.contains("walker") { jumps - 1 } else { jumps };
-        assert_eq!((exact.jumps, exact.exact_jumps, differenced.exact_jumps), (jumps, gaps, 0));
+        // The walker's first jump arms its swing foot: no impulse, a guard differenced.
+        assert_eq!((exact.jumps, exact.exact_jumps, differenced.exact_jumps), (jumps, jumps, 0));
         let largest = differenced.matrix.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let worst = exact
             .matrix
@@ -530,6 +528,9 @@ fn the_exact_saltation_is_what_differences_of_the_jump_give() {
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs() / largest));
         eprintln!("{file}: exact saltation against differenced, {worst:.1e} of Φ's largest");
         assert!(worst < 1e-7, "{file}: {worst:.1e}");
-        assert_eq!(exact.state, differenced.state, "{file}: the same steps and jumps");
+        // The step control weighs Φ, so after a jump the two take steps a rounding apart.
+        for (a, b) in exact.state.iter().zip(&differenced.state) {
+            assert!((a - b).abs() <= 1e-12 * (1.0 + a.abs()), "{file}: {a} against {b}");
+        }
     }
 }

@@ -10,12 +10,18 @@ derived by hand here, not lowered from lagrange:
   spoke's angle phi from the slope's normal, (I + m l^2) phi'' = m g l sin(phi + gamma); the
   event phi = alpha (the next spoke lands), and at it phi <- -alpha, phi' <- c phi'. The map
   goes from just after a landing to just after the next, on phi' alone (phi is -alpha there).
+- walker (examples/contacts/simplest_walker.lag): Garcia et al.'s simplest walker in the
+  paper's limit of massless feet, theta'' = sin(theta - gamma), phi'' = sin(theta - gamma)
+  + (theta'^2 - cos(theta - gamma)) sin(phi), the strike at phi = 2 theta past mid-stance,
+  and at it theta <- -theta, theta' <- cos(2 theta) theta', phi <- -2 theta,
+  phi' <- cos(2 theta) (1 - cos(2 theta)) theta'. The map goes from just after a strike to
+  just after the next, on (theta, theta') (phi and phi' follow from them there).
 - pendulum (examples/orbits/driven_pendulum.lag): m l^2 theta'' + c theta' + m g l sin(theta)
   = A cos(w t) over one period 2 pi / w, on (theta, theta').
 
 It reads requests from standard input, one JSON object per line:
 
-    {"scene": "wheel" | "pendulum", "params": {...}, "start": [...], "rtol": R,
+    {"scene": "wheel" | "walker" | "pendulum", "params": {...}, "start": [...], "rtol": R,
      "step": H, "repeats": N}
 
 and for each finds the fixed point from `start` (the wheel: first run to its first landing)
@@ -77,6 +83,37 @@ def wheel_map(p, rtol, counter):
     return step, after_landing
 
 
+def walker_map(p, rtol, counter):
+    gamma = p["gamma"]
+
+    def rhs(t, y):
+        theta, rate, phi, phi_rate = y
+        down = math.sin(theta - gamma)
+        return np.array([rate, down, phi_rate,
+                         down + (rate * rate - math.cos(theta - gamma)) * math.sin(phi)])
+
+    # The swing foot passes the ground at mid-stance (phi = 2 theta near theta = 0), a scuff
+    # the paper ignores: the strike is looked for once the stance leg is well past the normal.
+    def strike(t, y):
+        return y[2] - 2 * y[0] if y[0] < -0.1 else 1.0
+
+    strike.terminal = True
+    strike.direction = 1
+
+    def step(state):
+        theta, rate = state
+        c = math.cos(2 * theta)
+        start = np.array([theta, rate, 2 * theta, (1 - c) * rate])
+        sol = solve_ivp(rhs, (0.0, 100.0), start, method="DOP853", rtol=rtol, atol=rtol,
+                        events=strike)
+        counter.runs += 1
+        counter.evaluations += sol.nfev
+        theta, rate = float(sol.y_events[0][0][0]), float(sol.y_events[0][0][1])
+        return np.array([-theta, math.cos(2 * theta) * rate])
+
+    return step
+
+
 def pendulum_map(p, rtol, counter):
     m, l, g, cd, a, w = p["m"], p["l"], p["g"], p["c"], p["A"], p["w"]
     period = 2 * math.pi / w
@@ -120,6 +157,8 @@ def search(request):
         first, after = wheel_map(p, rtol, counter)
         _, rate = first(np.array(request["start"], dtype=float))
         fixed, jac, iterations = newton(lambda x: np.array([after(x[0])[1]]), [rate], step)
+    elif request["scene"] == "walker":
+        fixed, jac, iterations = newton(walker_map(p, rtol, counter), request["start"], step)
     else:
         flow, _ = pendulum_map(p, rtol, counter)
         fixed, jac, iterations = newton(flow, request["start"], step)

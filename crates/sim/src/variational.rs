@@ -46,8 +46,9 @@ pub enum End {
 /// How the jump maps' derivatives G_x are taken.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Saltation {
-    /// Exact where the guard is a contact's gap and the impulse frictionless (the partials
-    /// program's rows through the impact law and the projections); differenced otherwise.
+    /// G_x exact wherever the impulse is frictionless or none (the partials program's rows
+    /// through the impact law and the projections), differenced where Coulomb's law acts in
+    /// an impact; the guard's gradient exact where it is a gap, differenced otherwise.
     Exact,
     /// Central differences of the jump map, at every jump.
     Differences,
@@ -100,7 +101,8 @@ pub struct Transition {
     pub surface: Vec<f64>,
     /// The jumps crossed on the way (the landing that ends a run included).
     pub jumps: usize,
-    /// How many of them had their G_x exact ([`Saltation::Exact`]), not differenced.
+    /// How many of them had their G_x exact ([`Saltation::Exact`]), not differenced (their
+    /// guard's gradient may still be differences: see [`Saltation::Exact`]).
     pub exact_jumps: usize,
     pub steps: usize,
     pub evaluations: usize,
@@ -596,8 +598,8 @@ impl Problem for Variational<'_> {
             return Ok(Vec::new());
         };
         let k = fired[0];
-        // The gradient of a gap is its normal row's, exact; any other guard (a reaction, a
-        // stick or a slip, an arming condition) is differenced.
+        // The gradient of a gap is its normal row's, exact; any other guard's (a reaction, a
+        // stick or a slip, an arming condition) is central differences of it.
         let exact_gradient = match self.saltation {
             Saltation::Exact => self.inner.gap_gradient(t, &x, k)?,
             Saltation::Differences => None,
@@ -616,9 +618,11 @@ impl Problem for Variational<'_> {
         }
         let within = manifold_projection(self.inner, t, &x)?;
         let saved = self.inner.modes_state();
-        let exact = match exact_gradient {
-            Some(_) => self.exact_jump(t, y, k, &before, &hx, rate)?,
-            None => None,
+        // The jump itself is exact whatever its guard (a lift-off, a stick or a slip, an arming
+        // moves no state: its impulse is none); the guard's gradient may be differences.
+        let exact = match self.saltation {
+            Saltation::Exact => self.exact_jump(t, y, k, &before, &hx, rate)?,
+            Saltation::Differences => None,
         };
         let (along, events) = match exact {
             Some(done) => {
