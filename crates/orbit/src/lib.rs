@@ -137,7 +137,8 @@ impl Verdict {
 }
 
 /// How far from the unit circle a multiplier counts as on it: far above the multipliers'
-/// error (the jump maps' differences, about 1e-9), far below any stability worth the name.
+/// error (the integration's, and the differences of a guard that is not a gap: about 1e-9),
+/// far below any stability worth the name.
 const NEUTRAL: f64 = 1e-6;
 
 impl Orbit {

@@ -13,10 +13,14 @@
 //! Where a run jumps (a contact lands or lifts off) Φ is carried across by the saltation
 //! matrix Ξ = G_x·P + f⁺·h_xᵀ/ḣ, with h the guard that fired, ḣ = h_x·f⁻ + h_t its rate,
 //! P = I − f⁻·h_xᵀ/ḣ the projection onto the guard's surface along the flow, and G the jump.
-//! G_x·P is the jump's derivative along the surface: central differences of the jump alone
-//! (never of a run), each perturbed state moved back onto the manifold the mode before the jump
-//! holds it on and onto the surface along f⁻ first, so that the jump sees the same touching
-//! contacts (across the manifold, G is taken of the state projected onto it). h_x and h_t are central differences of the guard.
+//! G_x·P is the jump's derivative along the surface, the state first moved back onto the
+//! manifold the mode before the jump holds it on and onto the surface along f⁻ (across the
+//! manifold, G is taken of the state projected onto it). It is exact wherever the jump's
+//! impulse is frictionless or none (`Mechanical::impact_derivative` and
+//! `Mechanical::projection_derivative`: the partials program's rows through the impact law and
+//! the projections); where Coulomb's law acts in an impact it is central differences of the
+//! jump alone (never of a run), so that the jump sees the same touching contacts. h_x and h_t
+//! are exact for a gap (its row of J) and central differences of any other guard.
 //! A crossing with ḣ too small to locate the event by (grazing, where the map has a
 //! square-root singularity) and two guards at once are refused, named.
 //!
