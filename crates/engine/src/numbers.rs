@@ -11,6 +11,7 @@ use sim::Layout;
 use crate::{Error, Options, Piece, Setting};
 
 mod partials;
+mod sensitivity;
 
 /// The error for a value `setting` gives the derived parameter `i`.
 pub fn derived_error(plan: &model::ParameterValues, setting: Setting, i: usize) -> Error {

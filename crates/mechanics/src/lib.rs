@@ -30,6 +30,6 @@ pub use contact::{ContactRows, ContactSlots, ImpactLaw};
 pub use derive::{
     derive, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
 };
-pub use partials::{Partials, StatePartials};
+pub use partials::{ParameterPartials, Partials, StatePartials};
 pub use present::{Equation, NumericStart, StartShows};
 pub use start_solution::StartSolution;

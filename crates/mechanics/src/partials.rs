@@ -117,6 +117,80 @@ impl Derivation {
     }
 }
 
+/// The partials of the equations of motion in residual form by constants of the scene (the
+/// parameter slots a run fills), q, q̇, q̈ and λ held: `rows[i][j]` is ∂(row i)/∂p_j. They
+/// are what the state's sensitivities to the parameters are integrated from, as
+/// [`Partials`] is what its sensitivities to the start are.
+#[derive(Clone, Debug, Default)]
+pub struct ParameterPartials {
+    /// Of r = M·q̈ − Jᵀ·λ − f: n rows.
+    pub residual: Vec<Vec<ExprId>>,
+    /// Of c = J·q̈ − γ, one row per kept constraint.
+    pub constraint: Vec<Vec<ExprId>>,
+    /// Of Φ of each kept constraint (a velocity constraint's residual A·q̇ + b).
+    pub phi: Vec<Vec<ExprId>>,
+    /// Of each kept constraint's [`crate::ConstraintRows::drift_rate`].
+    pub drift_rate: Vec<Vec<ExprId>>,
+}
+
+impl Derivation {
+    /// The partials of the equations in residual form by each of `constants` (see
+    /// [`ParameterPartials`]). A derived parameter is a symbol of its own here, as it is a
+    /// slot of its own in numbers: the chain rule through it to the parameters it follows is
+    /// the caller's, who knows which of them are set.
+    pub fn parameter_partials(&mut self, constants: &[SymId]) -> ParameterPartials {
+        let n = self.coords.len();
+        let accels: Vec<ExprId> = self.accels.iter().map(|a| self.model.pool.sym(*a)).collect();
+        let multipliers = self.multipliers.clone();
+        let mut residual = Vec::with_capacity(n);
+        for i in 0..n {
+            let mut row = Vec::with_capacity(constants.len());
+            for &p in constants {
+                let at_rest = self.force_partial(i, p);
+                let pool = &mut self.model.pool;
+                let mut terms: Vec<ExprId> = self.mass_matrix[i]
+                    .iter()
+                    .zip(&accels)
+                    .map(|(entry, accel)| {
+                        let dm = pool.diff(*entry, p);
+                        pool.mul2(dm, *accel)
+                    })
+                    .collect();
+                terms.push(at_rest);
+                row.push(pool.add(&terms));
+            }
+            residual.push(row);
+        }
+        let pool = &mut self.model.pool;
+        let mut out = ParameterPartials { residual, ..Default::default() };
+        for m in &multipliers {
+            let drift = m.rows.drift_rate(pool);
+            let row: Vec<ExprId> = constants
+                .iter()
+                .map(|&p| {
+                    let mut terms: Vec<ExprId> = m
+                        .rows
+                        .jacobian
+                        .iter()
+                        .zip(&accels)
+                        .map(|(entry, accel)| {
+                            let dj = pool.diff(*entry, p);
+                            pool.mul2(dj, *accel)
+                        })
+                        .collect();
+                    let dgamma = pool.diff(m.rows.bias, p);
+                    terms.push(pool.neg(dgamma));
+                    pool.add(&terms)
+                })
+                .collect();
+            out.constraint.push(row);
+            out.phi.push(constants.iter().map(|&p| pool.diff(m.rows.phi(), p)).collect());
+            out.drift_rate.push(constants.iter().map(|&p| pool.diff(drift, p)).collect());
+        }
+        out
+    }
+}
+
 /// Rows over (q, q̇) split into their q and q̇ halves.
 fn split(rows: Vec<Vec<ExprId>>, n: usize) -> StatePartials {
     let mut out = StatePartials::default();
@@ -170,5 +244,29 @@ gravity g",
         assert_eq!(text(&p.constraint.rates), [["4*x'", "4*y'"]]);
         assert_eq!(text(&p.phi.positions), [["2*x", "2*y"]]);
         assert_eq!(text(&p.drift_rate.rates), [["2*x", "2*y"]]);
+    }
+
+    #[test]
+    fn a_rods_length_and_a_dampers_rate_enter_their_rows() {
+        let mut d = derived(
+            "param m, L, g, c
+coord x, y
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+dissipation c/2*x'^2",
+        );
+        let constants: Vec<cas::SymId> = d.model.params.iter().map(|p| p.sym).collect();
+        let p = d.parameter_partials(&constants);
+        let pool = d.pool();
+        let text = |rows: &[Vec<cas::ExprId>]| -> Vec<Vec<String>> {
+            rows.iter().map(|r| r.iter().map(|e| ascii(pool, *e)).collect()).collect()
+        };
+        // r = m·(ẍ, ÿ) − λ·(2x, 2y) − (−c·ẋ, −m·g), by m, L, g and c.
+        assert_eq!(text(&p.residual), [["x''", "0", "0", "x'"], ["y'' + g", "0", "m", "0"]]);
+        // The rod's length is in Φ alone: J, γ and Φ̇ do not hold it.
+        assert_eq!(text(&p.constraint), [["0", "0", "0", "0"]]);
+        assert_eq!(text(&p.phi), [["0", "-2*L", "0", "0"]]);
+        assert_eq!(text(&p.drift_rate), [["0", "0", "0", "0"]]);
     }
 }
