@@ -42,6 +42,7 @@ mod random_scenes;
 mod rates;
 mod resolutions;
 mod run_faults;
+mod sensitivities;
 mod simulate;
 mod space;
 mod starts;

@@ -367,6 +367,19 @@ fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
             "no return within {until} s: the section is not reached again (raise --until, or \
              check the section and its direction)"
         )),
+        Refusal::NoSensitivities | Refusal::SensitivityStart { .. } => {
+            Error::Numeric("the parameter sensitivities were not lowered for this run".into())
+        }
+        Refusal::SensitivitiesAtEvent => Error::Input(
+            "the sensitivities to the parameters are carried to a fixed time only, not to a \
+             section or a landing"
+                .into(),
+        ),
+        Refusal::SensitivitiesAcrossJump { time, guard: g } => Error::Input(format!(
+            "the sensitivities to the parameters are not carried across a jump, and {} fires \
+             at t = {time}",
+            guard(g)
+        )),
     }
 }
 

@@ -62,6 +62,11 @@ impl Layout {
     pub fn partials_outputs(&self) -> usize {
         (self.coordinates + 3 * self.multipliers) * 2 * self.coordinates
     }
+
+    /// A sensitivity program's outputs for `columns` parameters: (n + 3m) rows of `columns`.
+    pub fn sensitivity_outputs(&self, columns: usize) -> usize {
+        (self.coordinates + 3 * self.multipliers) * columns
+    }
 }
 
 /// How the integrator keeps one kept constraint from drifting: the slot after γ holds Φ and
@@ -124,6 +129,10 @@ pub struct Mechanical {
     /// The partials program and its outputs, when an exact Jacobian was asked for.
     partials: Option<Tape>,
     partials_out: Vec<f64>,
+    /// The partials by the parameters a caller varies, and how many they are
+    /// ([`Mechanical::set_sensitivities`]), and their outputs.
+    sensitivities: Option<(Tape, usize)>,
+    sensitivities_out: Vec<f64>,
     /// Parameter slots that follow a time series: set from t before each evaluation.
     signals: Vec<(usize, Series)>,
     /// Parameter slots that hold laws of the state sampled every period.
@@ -213,6 +222,8 @@ impl Mechanical {
             pivots: vec![0; size],
             partials: None,
             partials_out: Vec::new(),
+            sensitivities: None,
+            sensitivities_out: Vec::new(),
             signals: Vec::new(),
             hold: None,
             many: None,

@@ -28,6 +28,17 @@
 //! section), or just after a contact lands: at the two events the matrix given is the
 //! derivative of the state there with the event's time varied with the start (P·Φ, G_x·P·Φ),
 //! the Jacobian of a return map.
+//!
+//! Beside Φ a run may carry S = ∂x(t)/∂p, the state's derivative by parameters
+//! ([`transition_with`], [`Options::sensitivities`]): Ṡ = A·S + ∂F/∂p, with ∂F/∂p = (0, ∂q̈/∂p)
+//! from the problem's sensitivity program through the same augmented system
+//! ([`Mechanical::parameter_derivative`]), from S(0) = ∂x(0)/∂p, which the caller gives (the
+//! start may depend on the parameters: `engine`'s `Prepared::start_sensitivity` gives it for a
+//! start as a scene writes it). On the run's own steps too, S is the derivative of the steps
+//! taken. Across a jump S would need the jump's and the guard's own derivatives by the
+//! parameters (∂G/∂p, ∂h/∂p), and at a section's crossing the section's (∂h/∂p), which are not
+//! taken: a run carrying S is refused at its first jump, and one ending at an event before it
+//! starts ([`Refusal::SensitivitiesAcrossJump`], [`Refusal::SensitivitiesAtEvent`]).
 
 use std::cell::Cell;
 use std::ops::ControlFlow;
@@ -48,11 +59,12 @@ pub enum End {
 }
 
 /// How the jump maps' derivatives G_x are taken.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Saltation {
     /// G_x exact wherever the impulse is frictionless or none (the partials program's rows
     /// through the impact law and the projections), differenced where Coulomb's law acts in
     /// an impact; the guard's gradient exact where it is a gap, differenced otherwise.
+    #[default]
     Exact,
     /// Central differences of the jump map, at every jump.
     Differences,
@@ -81,6 +93,30 @@ pub enum Refusal {
     Simultaneous { time: f64, guards: Vec<Guard> },
     /// The run reached its end time before its section or landing.
     NotReached { until: f64 },
+    /// S was asked for of a problem without a sensitivity program
+    /// ([`Mechanical::set_sensitivities`]).
+    NoSensitivities,
+    /// S(0) has `given` entries where the problem's state and sensitivity program make
+    /// `expected` (2n × k).
+    SensitivityStart { expected: usize, given: usize },
+    /// S was asked for of a run that ends at a section or a landing: the event's time moves
+    /// with the parameters through the guard's own derivative by them, which is not taken.
+    SensitivitiesAtEvent,
+    /// A run carrying S met a jump at `time`, fired by `guard`: S across it would need the
+    /// jump's and the guard's derivatives by the parameters, which are not taken.
+    SensitivitiesAcrossJump { time: f64, guard: Guard },
+}
+
+/// What a variational run carries besides Φ, and how.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Options {
+    /// How the jumps' derivatives are taken.
+    pub saltation: Saltation,
+    /// S(0) = ∂x(0)/∂p, row-major 2n × k for the k parameters of the problem's sensitivity
+    /// program: with it the run carries S = ∂x(t)/∂p beside Φ ([`Transition::sensitivities`]).
+    /// The start's own dependence on the parameters is the caller's to give (zeros for a start
+    /// held fixed as they move).
+    pub sensitivities: Option<Vec<f64>>,
 }
 
 /// A run's end and the derivative of its state there with respect to its start.
@@ -98,6 +134,8 @@ pub struct Transition {
     pub state: Vec<f64>,
     /// ∂state/∂start, row-major, 2n × 2n.
     pub matrix: Vec<f64>,
+    /// S = ∂state/∂p at the end, row-major 2n × k, when [`Options::sensitivities`] asked for it.
+    pub sensitivities: Option<Vec<f64>>,
     /// The derivative of the state at the end along the surface it ended on, within the
     /// manifold the state moved on before it, row-major: P·Q at a crossing, G_x·P·Q at a
     /// landing, Q at a time, with Q the orthogonal projection onto that manifold's tangent.
@@ -138,6 +176,18 @@ pub fn transition_by(
     end: End,
     saltation: Saltation,
 ) -> Result<Transition, Refusal> {
+    let options = Options { saltation, sensitivities: None };
+    transition_with(problem, y0, settings, end, &options)
+}
+
+/// [`transition`] with what `options` asks besides Φ: S = ∂x/∂p too, where S(0) is given.
+pub fn transition_with(
+    problem: &mut Mechanical,
+    y0: &[f64],
+    settings: &Settings,
+    end: End,
+    options: &Options,
+) -> Result<Transition, Refusal> {
     if !problem.has_partials() {
         return Err(Refusal::NoJacobian);
     }
@@ -147,11 +197,31 @@ pub fn transition_by(
     }
     let size = problem.dim();
     assert_eq!(y0.len(), size, "state length");
+    let columns = match &options.sensitivities {
+        None => 0,
+        Some(given) => {
+            let Some(columns) = problem.sensitivity_columns() else {
+                return Err(Refusal::NoSensitivities);
+            };
+            if given.len() != size * columns {
+                let expected = size * columns;
+                return Err(Refusal::SensitivityStart { expected, given: given.len() });
+            }
+            if end != End::Time {
+                return Err(Refusal::SensitivitiesAtEvent);
+            }
+            columns
+        }
+    };
     let mut start = y0.to_vec();
     start.resize(size + size * size, 0.0);
     for i in 0..size {
         start[size + i * size + i] = 1.0;
     }
+    if let Some(given) = &options.sensitivities {
+        start.extend(given);
+    }
+    let saltation = options.saltation;
     let stop = Cell::new(false);
     let mut variational = Variational {
         inner: problem,
@@ -168,6 +238,8 @@ pub fn transition_by(
         stop: &stop,
         begun: None,
         saltation,
+        columns,
+        change: vec![0.0; size / 2 * columns],
     };
     let mut halt =
         |_: f64| if stop.get() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -181,6 +253,7 @@ pub fn transition_by(
         fault.state.truncate(size);
         return Err(Refusal::Fault(fault));
     }
+    let mut sensitivities = None;
     let (time, state, matrix, surface) = match (captured, end) {
         (Some(c), _) => c,
         (None, End::Time) if run.final_time == settings.until => {
@@ -188,7 +261,11 @@ pub fn transition_by(
             let within = manifold_projection(problem, t, &y[..size]).map_err(|kind| {
                 Refusal::Fault(Fault { kind, time: t, state: y[..size].to_vec() })
             })?;
-            (t, y[..size].to_vec(), y[size..].to_vec(), within)
+            let carried = size + size * size;
+            if columns > 0 {
+                sensitivities = Some(y[carried..].to_vec());
+            }
+            (t, y[..size].to_vec(), y[size..carried].to_vec(), within)
         }
         (None, _) => return Err(Refusal::NotReached { until: settings.until }),
     };
@@ -210,6 +287,7 @@ pub fn transition_by(
         time,
         state,
         matrix,
+        sensitivities,
         surface,
         jumps,
         exact_jumps,
@@ -257,6 +335,9 @@ struct Variational<'a> {
     /// The start after its mode was decided, F there and the manifold's normals.
     begun: Option<Begun>,
     saltation: Saltation,
+    /// How many parameters S carries (0: Φ alone), and ∂q̈/∂p's buffer.
+    columns: usize,
+    change: Vec<f64>,
 }
 
 impl Variational<'_> {
@@ -481,13 +562,14 @@ impl Variational<'_> {
 
 impl Problem for Variational<'_> {
     fn dim(&self) -> usize {
-        self.size + self.size * self.size
+        self.size + self.size * self.size + self.size * self.columns
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
         let s = self.size;
         let n = s / 2;
         let (x, phi) = y.split_at(s);
+        let (phi, sensitivities) = phi.split_at(s * s);
         self.inner.rhs(t, x, &mut dy[..s])?;
         if !self.inner.jacobian(t, x, &mut self.jac)? {
             return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::Partials });
@@ -503,6 +585,26 @@ impl Problem for Variational<'_> {
                     acc += a[k] * phi[k * s + j];
                 }
                 d[i * s + j] = acc;
+            }
+        }
+        let columns = self.columns;
+        if columns == 0 {
+            return Ok(());
+        }
+        if !self.inner.parameter_derivative(t, x, &mut self.change)? {
+            return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::Partials });
+        }
+        // Ṡ = A·S + (0, ∂q̈/∂p): the upper rows are S's lower rows, as for Φ.
+        let d = &mut dy[s + s * s..];
+        d[..n * columns].copy_from_slice(&sensitivities[n * columns..]);
+        for i in n..s {
+            let a = &self.jac[i * s..(i + 1) * s];
+            for j in 0..columns {
+                let mut acc = self.change[(i - n) * columns + j];
+                for k in 0..s {
+                    acc += a[k] * sensitivities[k * columns + j];
+                }
+                d[i * columns + j] = acc;
             }
         }
         Ok(())
@@ -583,8 +685,12 @@ impl Problem for Variational<'_> {
         if guards.len() > 1 {
             return self.refuse(Refusal::Simultaneous { time: t, guards });
         }
+        if self.columns > 0 {
+            let guard = guards[0];
+            return self.refuse(Refusal::SensitivitiesAcrossJump { time: t, guard });
+        }
         let x = y[..s].to_vec();
-        let phi = y[s..].to_vec();
+        let phi = y[s..s + s * s].to_vec();
         let before = rate_of(self.inner, t, &x)?;
         let Guard::Contacts(_) = guards[0] else {
             let End::Crossing { column, .. } = self.end else { unreachable!("a section fired") };

@@ -5,6 +5,8 @@
 //! ∂q̈/∂(q, q̇) with no step size to choose.
 
 use super::{Canonical, Layout, Mechanical, Stabilisation};
+use numeric::Tape;
+
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
 impl Mechanical {
@@ -77,16 +79,103 @@ impl Mechanical {
         if self.partials.is_none() {
             return Ok(false);
         }
-        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        let n = self.layout.coordinates;
         self.accelerations(t, y)?;
-        let mut column = std::mem::take(&mut self.solution);
-        // `column` is a work space below: the accelerations are gone from it.
-        self.solved = None;
-        let evaluated = self.partials_at(t, y, &column).map(|_| ());
+        let solution = std::mem::take(&mut self.solution);
+        let evaluated = self.partials_at(t, y, &solution).map(|_| ());
         if let Err(fault) = evaluated {
-            self.solution = column;
+            self.solution = solution;
             return Err(fault);
         }
+        let out = std::mem::take(&mut self.partials_out);
+        let width = 2 * n;
+        jac.fill(0.0);
+        for i in 0..n {
+            jac[i * width + n + i] = 1.0;
+        }
+        let solved = self.solve_partials(&out, width, &solution, |k, column| {
+            for i in 0..n {
+                jac[(n + i) * width + k] = column[i];
+            }
+        });
+        self.partials_out = out;
+        self.solution = solution;
+        solved?;
+        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+        Ok(true)
+    }
+
+    /// Gives the problem the partials of its equations by `columns` parameters: `program`
+    /// takes the observation inputs and gives ∂(r, c, Φ, Φ̇)/∂p with the state, q̈ and λ held,
+    /// row-major with the rows of the partials program ([`Layout`]) and a column per
+    /// parameter. Each column is a parameter a caller varies (one set by a user, with the
+    /// slots that follow it moved along: the program carries the chain rule), so `columns`
+    /// need not be the number of slots.
+    pub fn set_sensitivities(&mut self, program: Tape, columns: usize) {
+        assert_eq!(program.inputs(), self.layout.observation_inputs());
+        assert_eq!(program.outputs(), self.layout.sensitivity_outputs(columns));
+        self.sensitivities_out = vec![0.0; program.outputs()];
+        self.sensitivities = Some((program, columns));
+    }
+
+    /// How many parameters the sensitivity program differentiates by; `None` without one.
+    pub fn sensitivity_columns(&self) -> Option<usize> {
+        self.sensitivities.as_ref().map(|(_, columns)| *columns)
+    }
+
+    /// ∂q̈/∂p at (t, y), row-major n × k, into `out`: the accelerations' derivative by each of
+    /// the sensitivity program's parameters with the state held, from the same augmented
+    /// system (its factors where the accelerations left them) and the same stabilisation as
+    /// the exact Jacobian, [M −Jᵀ; J 0]·∂(q̈, λ)/∂p = −∂(r, c̃)/∂p. False without a sensitivity
+    /// program.
+    pub fn parameter_derivative(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, FaultKind> {
+        let Some(columns) = self.sensitivity_columns() else { return Ok(false) };
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        assert_eq!(y.len(), 2 * n, "state length");
+        assert_eq!(out.len(), n * columns, "∂q̈/∂p's length");
+        self.accelerations(t, y)?;
+        let solution = std::mem::take(&mut self.solution);
+        let input = &mut self.obs_input;
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&solution);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        if let Some((tape, _)) = self.sensitivities.as_mut() {
+            tape.eval(input, &mut self.sensitivities_out);
+        }
+        let partials = std::mem::take(&mut self.sensitivities_out);
+        let solved = check_finite(&partials, |_| NonFiniteAt::Partials).and_then(|()| {
+            self.solve_partials(&partials, columns, &solution, |j, column| {
+                for i in 0..n {
+                    out[i * columns + j] = column[i];
+                }
+            })
+        });
+        self.sensitivities_out = partials;
+        self.solution = solution;
+        solved?;
+        check_finite(out, |_| NonFiniteAt::Jacobian)?;
+        Ok(true)
+    }
+
+    /// Solves [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c̃) for each column of `partials` (the rows of
+    /// the partials program's layout, `width` columns each, row-major), c̃ the kept rows as
+    /// the accelerations were solved with them, Baumgarte's terms included, and hands each
+    /// column's ∂q̈ to `put`. `solution` holds q̈ and λ at the state the dynamics program was
+    /// last evaluated at.
+    fn solve_partials(
+        &mut self,
+        partials: &[f64],
+        width: usize,
+        solution: &[f64],
+        mut put: impl FnMut(usize, &[f64]),
+    ) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         // One LU serves every column: the accelerations' own where they were solved by LU on
         // the heap at this state, else one made here (they may have been solved by LDLᵀ, or
         // on the stack). Only the kept rows are factored: an open contact's multiplier is 0,
@@ -99,14 +188,12 @@ impl Mechanical {
             let order = n + factors.rows.len();
             if let Err(fault) = linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order]) {
                 self.kept_factors = factors;
-                self.solution = column;
                 return Err(fault);
             }
             factors.valid = true;
         }
         let order = n + factors.rows.len();
         let (system, pivots, rows) = (&factors.lu, &factors.pivots[..order], &factors.rows);
-        let width = 2 * n;
         let alpha = self.baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
@@ -122,20 +209,15 @@ impl Mechanical {
             }
             let i = cone.which;
             let df = [0, 1].map(|j| -cone.mu * (f64::from(u8::from(i == j)) - d[i] * d[j]) / size);
-            turning.push((bend.tangent, column[n + bend.normal], df, cone.rates));
-        }
-        let out = &self.partials_out;
-        jac.fill(0.0);
-        for i in 0..n {
-            jac[i * width + n + i] = 1.0;
+            turning.push((bend.tangent, solution[n + bend.normal], df, cone.rates));
         }
         let mut reduced = vec![0.0; order];
         for k in 0..width {
             for i in 0..n {
-                reduced[i] = -out[i * width + k];
+                reduced[i] = -partials[i * width + k];
             }
             for (r, &c) in rows.iter().enumerate() {
-                let row = |block: usize| out[(n + block * m + c) * width + k];
+                let row = |block: usize| partials[(n + block * m + c) * width + k];
                 // The partials of the row the accelerations satisfy, stabilisation included.
                 let stabilised = match self.stabilisation[c] {
                     Stabilisation::Position => {
@@ -146,7 +228,7 @@ impl Mechanical {
                 reduced[n + r] = -stabilised;
             }
             for &(tangent, lambda, df, rates) in &turning {
-                let rate = |r: usize| out[(n + m + rates[r]) * width + k];
+                let rate = |r: usize| partials[(n + m + rates[r]) * width + k];
                 let change = df[0] * rate(0) + df[1] * rate(1);
                 let base = n * n + n + tangent * (n + 3);
                 for i in 0..n {
@@ -154,15 +236,10 @@ impl Mechanical {
                 }
             }
             linalg::lu_solve(system, pivots, &mut reduced);
-            column[..n].copy_from_slice(&reduced[..n]);
-            for i in 0..n {
-                jac[(n + i) * width + k] = column[i];
-            }
+            put(k, &reduced[..n]);
         }
         self.kept_factors = factors;
-        self.solution = column;
-        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
-        Ok(true)
+        Ok(())
     }
 }
 
