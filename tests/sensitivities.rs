@@ -115,6 +115,17 @@ gravity g
     let (worst, largest) = sensitivities_against_differences(cartesian, &["L", "m", "g", "w"], 1.5);
     eprintln!("the Cartesian pendulum's S (largest {largest:.2}) against differences: {worst:.1e}");
     assert!(worst < 1e-7, "the Cartesian pendulum's S is off by {worst:.1e}");
+    // A start that stays where it is as L moves leaves the rod at other lengths: there the
+    // stabilisation's pull back onto it, by Φ's and Φ̇'s partials in L, is what S follows.
+    let fixed = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2
+coord x = 3/5 m, y = -4/5 m
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+";
+    let (worst, largest) = sensitivities_against_differences(fixed, &["L"], 1.5);
+    eprintln!("the rod off its length's S (largest {largest:.2}) against differences: {worst:.1e}");
+    assert!(worst < 1e-7, "the rod off its length's S is off by {worst:.1e}");
     // The example itself, from rest at the bottom: S follows y = −L there and nothing moves.
     let example = lagrange_tests::example("classics/pendulum_cartesian.lag");
     let (worst, largest) = sensitivities_against_differences(&example, &["L"], 1.0);
