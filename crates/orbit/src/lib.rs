@@ -170,6 +170,9 @@ struct Loaded {
     until: f64,
     symmetry: Symmetry,
     run: sim::Settings,
+    /// For a sweep's map, where the parameter swept is carried exactly: the period's
+    /// derivative by it (the mechanical problem has its sensitivity program).
+    swept: Option<f64>,
     state_names: Vec<String>,
     contact_names: Vec<String>,
     /// What a fault's words name besides the state and the contacts.
@@ -179,6 +182,13 @@ struct Loaded {
 }
 
 fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
+    load_for(source, options, None)
+}
+
+/// [`load`], with the sensitivities by the parameter `swept` lowered too where the map is one
+/// whose derivative by it S gives: a fixed period's, without contacts (S is not carried
+/// across a jump), series-driven inputs or shifts (whose share in the parameter S leaves out).
+fn load_for(source: &str, options: &Options, swept: Option<&str>) -> Result<Loaded, Error> {
     let mut run_options = options.run.clone();
     if let Section::Crossing { expression, .. } = &options.section {
         run_options.events.push(expression.clone());
@@ -244,10 +254,23 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
             End::Landing { contact: Some(k) }
         }
     };
-    let until = match &options.section {
-        Section::Period(text) => period(&mut prepared, &parameters, text)?,
-        _ => settings.until,
+    let plan = &prepared.parameter_plan;
+    let free = swept
+        .and_then(|name| plan.names().position(|n| n == name))
+        .filter(|i| !plan.is_derived(*i))
+        .filter(|_| {
+            prepared.contacts.is_empty()
+                && options.shifts.is_empty()
+                && settings.series.is_empty()
+        });
+    let (until, swept) = match &options.section {
+        Section::Period(text) => period(&mut prepared, &parameters, text, free)?,
+        _ => (settings.until, None),
     };
+    if let (Some(i), Some(_)) = (free, swept) {
+        let program = prepared.sensitivity_program(&[i])?;
+        mechanical.set_sensitivities(Tape::new(program), 1);
+    }
     let symmetry = Symmetry::new(
         &mut prepared,
         &parameters,
@@ -264,6 +287,7 @@ fn load(source: &str, options: &Options) -> Result<Loaded, Error> {
         until,
         symmetry,
         run,
+        swept,
         state_names: prepared.state_names(),
         contact_names: prepared.contact_names(),
         constraint_names: prepared.kept_constraint_names(),
@@ -284,12 +308,13 @@ fn refuse_no_contacts(prepared: &engine::numbers::Prepared) -> Result<(), Error>
 }
 
 /// The fixed period's value in seconds, from an expression of the parameters with an
-/// optional unit.
+/// optional unit, and its derivative by the free parameter `free` where one is given.
 fn period(
     prepared: &mut engine::numbers::Prepared,
     parameters: &[f64],
     text: &str,
-) -> Result<f64, Error> {
+    free: Option<usize>,
+) -> Result<(f64, Option<f64>), Error> {
     let model = &mut prepared.derivation.model;
     let value = model
         .resolve_value_for("t", text)
@@ -307,7 +332,11 @@ fn period(
              time, a constant of the parameters"
         )));
     }
-    Ok(value)
+    let rate = match free {
+        Some(i) => Some(prepared.constant_sensitivity(e, parameters, &[i])?[0]),
+        None => None,
+    };
+    Ok((value, rate))
 }
 
 /// A variational run's refusal in words.
@@ -412,6 +441,17 @@ impl Search {
         Ok(Search { loaded: load(source, options)? })
     }
 
+    /// [`Search::new`] for a sweep in `parameter`: where the map is a fixed period's, with no
+    /// contacts, series-driven inputs or shifts, its variational runs carry S by the parameter
+    /// too, and [`Search::evaluate_swept`] gives the map's derivative in it.
+    pub(crate) fn for_sweep(
+        source: &str,
+        options: &Options,
+        parameter: &str,
+    ) -> Result<Search, Error> {
+        Ok(Search { loaded: load_for(source, options, Some(parameter))? })
+    }
+
     /// The orbit from the scene's start, in at most `iterations` Newton steps.
     pub fn find(&mut self, iterations: usize) -> Result<Orbit, Error> {
         find(&self.loaded, None, iterations)
@@ -443,6 +483,36 @@ impl Search {
         let returned = loaded.symmetry.apply(&tr.state);
         let gap = returned.iter().zip(x).map(|(a, b)| a - b).collect();
         Ok((gap, loaded.symmetry.carry(&tr.matrix), tangent))
+    }
+
+    /// [`Search::evaluate`], with the map's derivative in the swept parameter p where
+    /// [`Search::for_sweep`] could carry it: Π·(S(T) + F(x(T))·dT/dp), the start held
+    /// (S(0) = 0) and the period moving with p; `None` where it could not.
+    pub(crate) fn evaluate_swept(
+        &self,
+        x: &[f64],
+    ) -> Result<(Evaluated, Option<Vec<f64>>), Error> {
+        let loaded = &self.loaded;
+        let Some(period_rate) = loaded.swept else { return Ok((self.evaluate(x)?, None)) };
+        let mut mechanical = loaded.mechanical.clone();
+        let fail = |r: Refusal| refused(r, loaded);
+        let size = x.len();
+        let options =
+            variational::Options { sensitivities: Some(vec![0.0; size]), ..Default::default() };
+        let tr = variational::transition_with(&mut mechanical, x, &loaded.run, loaded.end, &options)
+            .map_err(fail)?;
+        let mut rate = vec![0.0; size];
+        sim::Problem::rhs(&mut mechanical, tr.time, &tr.state, &mut rate).map_err(|kind| {
+            fail(Refusal::Fault(sim::Fault { kind, time: tr.time, state: tr.state.clone() }))
+        })?;
+        let s = tr.sensitivities.clone().unwrap_or_default();
+        let moved: Vec<f64> = s.iter().zip(&rate).map(|(s, f)| s + f * period_rate).collect();
+        let ignored = loaded.symmetry.ignored_rows();
+        let tangent = chart::section(&identity(size), &tr.normals, &ignored, size);
+        let returned = loaded.symmetry.apply(&tr.state);
+        let gap = returned.iter().zip(x).map(|(a, b)| a - b).collect();
+        let evaluated = (gap, loaded.symmetry.carry(&tr.matrix), tangent);
+        Ok((evaluated, Some(loaded.symmetry.permute(&moved))))
     }
 }
 

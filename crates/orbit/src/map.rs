@@ -105,6 +105,11 @@ impl Symmetry {
         self.order.iter().zip(&self.offset).map(|(&k, c)| x[k] + c).collect()
     }
 
+    /// Π·v: the derivative of the map applied to a change of the state.
+    pub fn permute(&self, v: &[f64]) -> Vec<f64> {
+        self.order.iter().map(|&k| v[k]).collect()
+    }
+
     /// Π·M for a row-major square M.
     pub fn carry(&self, matrix: &[f64]) -> Vec<f64> {
         let size = self.order.len();

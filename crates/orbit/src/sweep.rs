@@ -5,8 +5,9 @@
 //! (Neimark–Sacker). Past a fold the branch turns back and the next value has no orbit near:
 //! a fixed period's map then goes on by pseudo-arclength continuation (Keller's: a secant
 //! predictor, a corrector on the hyperplane normal to it, the bordered Newton system with the
-//! map's Jacobian from the variational run and its derivative in the parameter by central
-//! differences of the map in the parameter alone), round the fold and back, until the
+//! map's Jacobian from the variational run and its derivative in the parameter from the same
+//! run's S = ∂x/∂p, or central differences of the map in the parameter alone where S cannot
+//! be carried), round the fold and back, until the
 //! parameter leaves the range; crossings there are located by bisection along the branch. A
 //! section's map stops at the fold and says so.
 
@@ -184,14 +185,21 @@ const ON_BRANCH: f64 = 1e-10;
 
 impl Branch<'_> {
     /// The map's residual in the chart at (x, p), its Jacobian C − I there, ∂/∂p of the
-    /// residual (central differences of the map in p alone: the variational runs carry no
-    /// parameter columns yet) and the chart.
+    /// residual (from S = ∂x/∂p carried by the same variational run where the map allows,
+    /// else central differences of the map in p alone) and the chart.
     fn residual(&self, x: &[f64], p: f64) -> Result<Linearized, Error> {
-        let (gap, monodromy, tangent) =
-            at(self.source, self.options, self.parameter, p)?.evaluate(x)?;
+        let mut options = self.options.clone();
+        let value = format!("{p}");
+        options.run.set.push(Assignment { name: self.parameter.to_string(), value });
+        let search = Search::for_sweep(self.source, &options, self.parameter)?;
+        let ((gap, monodromy, tangent), exact) = search.evaluate_swept(x)?;
         let f = tangent.transpose() * DVector::from_vec(gap);
         let d = tangent.ncols();
         let c = chart::reduced(&monodromy, &tangent) - DMatrix::identity(d, d);
+        if let Some(change) = exact {
+            let fp = tangent.transpose() * DVector::from_vec(change);
+            return Ok((f, c, fp, tangent));
+        }
         let delta = 1e-6 * p.abs().max(1.0);
         let side = |q: f64| -> Result<DVector<f64>, Error> {
             let (gap, _, _) = at(self.source, self.options, self.parameter, q)?.evaluate(x)?;
@@ -320,4 +328,50 @@ fn locate(
         last = orbit;
     }
     Ok(Located { kind, at: 0.5 * (lo + hi), orbit: last })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Section;
+
+    const PENDULUM: &str = include_str!("../../../examples/orbits/driven_pendulum.lag");
+
+    fn options(amplitude: &str) -> Options {
+        let set = vec![Assignment { name: "A".into(), value: amplitude.into() }];
+        Options {
+            run: simulation::Options { set, ..Default::default() },
+            section: Section::Period("2*pi/w".into()),
+            swaps: Vec::new(),
+            shifts: Vec::new(),
+            ignore: Vec::new(),
+            iterations: 30,
+        }
+    }
+
+    /// The map's derivative in the amplitude and in the frequency, which moves the period
+    /// too (dT/dw = −2π/w²), from S against central differences of the map, at a state off
+    /// the orbit.
+    #[test]
+    fn the_maps_derivative_in_its_parameter_is_what_differences_give() {
+        let options = options("5");
+        let x = [0.9, -1.3];
+        for (parameter, p) in [("A", 5.0), ("w", 2.0)] {
+            let branch = Branch { source: PENDULUM, options: &options, parameter };
+            let (_, _, exact, tangent) = branch.residual(&x, p).expect("the map");
+            let search = |q: f64| at(PENDULUM, &options, parameter, q).expect("loads");
+            let swept = Search::for_sweep(PENDULUM, &options, parameter).expect("loads");
+            assert!(swept.loaded.swept.is_some(), "{parameter} is carried by S");
+            // The differences' truncation goes as the step's square: w's off by 1.0e-7 at a
+            // step of 1e-4, 9.5e-10 at 1e-5, where the runs' rounding is still below.
+            let step = 1e-5 * p;
+            let gap = |q: f64| search(q).evaluate(&x).expect("the map").0;
+            let (up, down) = (gap(p + step), gap(p - step));
+            let differenced: Vec<f64> =
+                up.iter().zip(&down).map(|(u, d)| (u - d) / (2.0 * step)).collect();
+            let differenced = tangent.transpose() * DVector::from_vec(differenced);
+            let worst = (&exact - &differenced).amax() / exact.amax();
+            assert!(worst < 1e-7, "∂F/∂{parameter}: {exact} against {differenced}: {worst:.1e}");
+        }
+    }
 }

@@ -154,6 +154,24 @@ impl Prepared {
         Ok(out)
     }
 
+    /// d e/dp of a constant expression `e` of the parameters (a period, a shift), for the
+    /// free parameters `free`, at the parameters' values `parameters` (in slot order), the
+    /// chain rule through derived parameters included.
+    pub fn constant_sensitivity(
+        &mut self,
+        e: ExprId,
+        parameters: &[f64],
+        free: &[usize],
+    ) -> Result<Vec<f64>, Error> {
+        self.check_free(free)?;
+        let slots = self.slot_derivatives(free);
+        let constants = self.parameters.clone();
+        let partials: Vec<ExprId> =
+            constants.iter().map(|s| self.derivation.model.pool.diff(e, *s)).collect();
+        let exprs = self.through_slots(&[partials], &slots);
+        Ok(exprs.iter().map(|e| self.constant(*e, parameters)).collect())
+    }
+
     /// The remaining coordinates whose start position or rate the kept constraints solve for
     /// at the start, by name.
     fn start_left_to_constraints(&mut self) -> Vec<String> {
