@@ -259,9 +259,7 @@ fn load_for(source: &str, options: &Options, swept: Option<&str>) -> Result<Load
         .and_then(|name| plan.names().position(|n| n == name))
         .filter(|i| !plan.is_derived(*i))
         .filter(|_| {
-            prepared.contacts.is_empty()
-                && options.shifts.is_empty()
-                && settings.series.is_empty()
+            prepared.contacts.is_empty() && options.shifts.is_empty() && settings.series.is_empty()
         });
     let (until, swept) = match &options.section {
         Section::Period(text) => period(&mut prepared, &parameters, text, free)?,
@@ -488,10 +486,7 @@ impl Search {
     /// [`Search::evaluate`], with the map's derivative in the swept parameter p where
     /// [`Search::for_sweep`] could carry it: Π·(S(T) + F(x(T))·dT/dp), the start held
     /// (S(0) = 0) and the period moving with p; `None` where it could not.
-    pub(crate) fn evaluate_swept(
-        &self,
-        x: &[f64],
-    ) -> Result<(Evaluated, Option<Vec<f64>>), Error> {
+    pub(crate) fn evaluate_swept(&self, x: &[f64]) -> Result<(Evaluated, Option<Vec<f64>>), Error> {
         let loaded = &self.loaded;
         let Some(period_rate) = loaded.swept else { return Ok((self.evaluate(x)?, None)) };
         let mut mechanical = loaded.mechanical.clone();
@@ -499,8 +494,9 @@ impl Search {
         let size = x.len();
         let options =
             variational::Options { sensitivities: Some(vec![0.0; size]), ..Default::default() };
-        let tr = variational::transition_with(&mut mechanical, x, &loaded.run, loaded.end, &options)
-            .map_err(fail)?;
+        let tr =
+            variational::transition_with(&mut mechanical, x, &loaded.run, loaded.end, &options)
+                .map_err(fail)?;
         let mut rate = vec![0.0; size];
         sim::Problem::rhs(&mut mechanical, tr.time, &tr.state, &mut rate).map_err(|kind| {
             fail(Refusal::Fault(sim::Fault { kind, time: tr.time, state: tr.state.clone() }))
