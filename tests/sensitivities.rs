@@ -3,7 +3,7 @@
 //! pendulum (its damping and length), the driven one of the orbits' examples (its drive's
 //! amplitude and frequency), a pendulum kept on its rod by a multiplier (the rod's length in
 //! Φ and in the start), and a physical pendulum whose inertia is derived from its mass and
-//! length; and the runs S is refused for, by name.
+//! length; and the runs S is refused for, by name (across a jump, at an event, with friction).
 
 use std::ops::ControlFlow;
 
@@ -33,7 +33,11 @@ fn indices(prepared: &Prepared, names: &[&str]) -> Vec<usize> {
 }
 
 /// The scene's mechanical problem with its sensitivity program by the parameters `free`.
-fn problem(prepared: &mut Prepared, parameters: &[f64], free: &[usize]) -> sim::Mechanical {
+fn with_sensitivities(
+    prepared: &mut Prepared,
+    parameters: &[f64],
+    free: &[usize],
+) -> sim::Mechanical {
     let mut problem = lagrange_tests::mechanical(prepared, parameters);
     let program = prepared.sensitivity_program(free).expect("lowers");
     problem.set_sensitivities(numeric::Tape::new(program), free.len());
@@ -48,7 +52,7 @@ fn sensitivities_against_differences(source: &str, names: &[&str], until: f64) -
     let mut prepared = prepare(source, &[], engine::Options::default()).expect("derives");
     let free = indices(&prepared, names);
     let parameters = prepared.parameter_values(&[]).expect("values");
-    let mut problem = problem(&mut prepared, &parameters, &free);
+    let mut problem = with_sensitivities(&mut prepared, &parameters, &free);
     let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
     let s0 = prepared.start_sensitivity(&parameters, &free).expect("the start's derivative");
     let run = settings(until);
@@ -149,7 +153,7 @@ dissipation c/2*theta'^2
     let mut prepared = prepare(rod, &[], engine::Options::default()).expect("derives");
     let free = indices(&prepared, &["m"]);
     let parameters = prepared.parameter_values(&[]).expect("values");
-    let mut problem = problem(&mut prepared, &parameters, &free);
+    let mut problem = with_sensitivities(&mut prepared, &parameters, &free);
     let mut change = vec![f64::NAN; 1];
     let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
     assert!(problem.parameter_derivative(0.0, &y0, &mut change).expect("evaluates"));
@@ -175,7 +179,7 @@ fn sensitivities_are_refused_across_a_jump_and_at_an_event() {
     let free = indices(&prepared, &["g", "h0"]);
     let parameters = prepared.parameter_values(&[]).expect("values");
     let contacts = lagrange_tests::contacts(&prepared, &parameters);
-    let mut problem = problem(&mut prepared, &parameters, &free).with_contacts(contacts);
+    let mut problem = with_sensitivities(&mut prepared, &parameters, &free).with_contacts(contacts);
     let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
     let s0 = prepared.start_sensitivity(&parameters, &free).expect("the start's derivative");
     // ∂y(0)/∂h0 = 1, the ball dropped from h0.
@@ -194,4 +198,16 @@ fn sensitivities_are_refused_across_a_jump_and_at_an_event() {
     let short = Options { sensitivities: Some(s0[..4].to_vec()), ..Default::default() };
     let refused = transition_with(&mut problem, &y0, &run, End::Time, &short).unwrap_err();
     assert_eq!(refused, Refusal::SensitivityStart { expected: 8, given: 4 });
+    // A block sliding up a rough incline has no jump for a while, but its friction force
+    // holds μ outside the sensitivity program.
+    let block = lagrange_tests::example("friction/block_on_incline.lag");
+    let mut prepared = prepare(&block, &[], engine::Options::default()).expect("derives");
+    let free = indices(&prepared, &["mu"]);
+    let parameters = prepared.parameter_values(&[]).expect("values");
+    let contacts = lagrange_tests::contacts(&prepared, &parameters);
+    let mut sliding = with_sensitivities(&mut prepared, &parameters, &free).with_contacts(contacts);
+    let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
+    let options = Options { sensitivities: Some(vec![0.0; y0.len()]), ..Default::default() };
+    let refused = transition_with(&mut sliding, &y0, &settings(0.1), End::Time, &options);
+    assert_eq!(refused.unwrap_err(), Refusal::SensitivitiesWithFriction);
 }

@@ -38,7 +38,9 @@
 //! taken. Across a jump S would need the jump's and the guard's own derivatives by the
 //! parameters (∂G/∂p, ∂h/∂p), and at a section's crossing the section's (∂h/∂p), which are not
 //! taken: a run carrying S is refused at its first jump, and one ending at an event before it
-//! starts ([`Refusal::SensitivitiesAcrossJump`], [`Refusal::SensitivitiesAtEvent`]).
+//! starts ([`Refusal::SensitivitiesAcrossJump`], [`Refusal::SensitivitiesAtEvent`]); so is one
+//! with Coulomb friction, whose μ acts in the problem's numbers, not in the sensitivity
+//! program ([`Refusal::SensitivitiesWithFriction`]).
 
 use std::cell::Cell;
 use std::ops::ControlFlow;
@@ -105,6 +107,10 @@ pub enum Refusal {
     /// A run carrying S met a jump at `time`, fired by `guard`: S across it would need the
     /// jump's and the guard's derivatives by the parameters, which are not taken.
     SensitivitiesAcrossJump { time: f64, guard: Guard },
+    /// S was asked for of a problem with Coulomb friction: a slipping contact's force
+    /// −μ·λ·J_Tᵀ holds μ as a number of the problem's, not a slot of the sensitivity program,
+    /// so S by μ (and by what μ's value follows) would leave its share out.
+    SensitivitiesWithFriction,
 }
 
 /// What a variational run carries besides Φ, and how.
@@ -115,7 +121,8 @@ pub struct Options {
     /// S(0) = ∂x(0)/∂p, row-major 2n × k for the k parameters of the problem's sensitivity
     /// program: with it the run carries S = ∂x(t)/∂p beside Φ ([`Transition::sensitivities`]).
     /// The start's own dependence on the parameters is the caller's to give (zeros for a start
-    /// held fixed as they move).
+    /// held fixed as they move); it is taken as the start's after its contacts' modes are
+    /// decided, which may project a start on a closed contact.
     pub sensitivities: Option<Vec<f64>>,
 }
 
@@ -209,6 +216,9 @@ pub fn transition_with(
             }
             if end != End::Time {
                 return Err(Refusal::SensitivitiesAtEvent);
+            }
+            if problem.has_friction() {
+                return Err(Refusal::SensitivitiesWithFriction);
             }
             columns
         }

@@ -118,6 +118,11 @@ impl Mechanical {
         self.sensitivities = Some((program, columns));
     }
 
+    /// Whether a contact has Coulomb friction, whose μ the problem holds as a number.
+    pub(crate) fn has_friction(&self) -> bool {
+        self.contacts.iter().any(|c| c.friction.is_some())
+    }
+
     /// How many parameters the sensitivity program differentiates by; `None` without one.
     pub fn sensitivity_columns(&self) -> Option<usize> {
         self.sensitivities.as_ref().map(|(_, columns)| *columns)
