@@ -3,7 +3,8 @@
 //! pendulum (its damping and length), the driven one of the orbits' examples (its drive's
 //! amplitude and frequency), a pendulum kept on its rod by a multiplier (the rod's length in
 //! Φ and in the start), and a physical pendulum whose inertia is derived from its mass and
-//! length; and the runs S is refused for, by name (across a jump, at an event, with friction).
+//! length; and the runs S is refused for, by name (across a jump, at an event,
+//! with friction, with held inputs).
 
 use std::ops::ControlFlow;
 
@@ -210,4 +211,17 @@ fn sensitivities_are_refused_across_a_jump_and_at_an_event() {
     let options = Options { sensitivities: Some(vec![0.0; y0.len()]), ..Default::default() };
     let refused = transition_with(&mut sliding, &y0, &settings(0.1), End::Time, &options);
     assert_eq!(refused.unwrap_err(), Refusal::SensitivitiesWithFriction);
+    // A drive's amplitude held between samples moves with the parameters at each sample.
+    let driven = lagrange_tests::example("orbits/driven_pendulum.lag");
+    let mut prepared = prepare(&driven, &[], engine::Options::default()).expect("derives");
+    let free = indices(&prepared, &["A"]);
+    let parameters = prepared.parameter_values(&[]).expect("values");
+    let law = prepared.derivation.model.pool.sym(prepared.parameters[free[0]]);
+    let laws = prepared.lower(&prepared.dynamics_inputs(), &[law]).expect("lowers");
+    let hold = sim::Hold::new(0.1, free.clone(), numeric::Tape::new(laws));
+    let mut held = with_sensitivities(&mut prepared, &parameters, &free).with_hold(hold);
+    let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
+    let options = Options { sensitivities: Some(vec![0.0; y0.len()]), ..Default::default() };
+    let refused = transition_with(&mut held, &y0, &settings(0.5), End::Time, &options);
+    assert_eq!(refused.unwrap_err(), Refusal::SensitivitiesWithHold);
 }

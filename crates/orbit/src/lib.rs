@@ -397,6 +397,9 @@ fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
         Refusal::NoSensitivities | Refusal::SensitivityStart { .. } => {
             Error::Numeric("the parameter sensitivities were not lowered for this run".into())
         }
+        Refusal::SensitivitiesWithHold => Error::Input(
+            "the sensitivities to the parameters are not carried with held inputs".into(),
+        ),
         Refusal::SensitivitiesWithFriction => Error::Input(
             "the sensitivities to the parameters are not carried with Coulomb friction".into(),
         ),

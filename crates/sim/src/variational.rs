@@ -111,6 +111,10 @@ pub enum Refusal {
     /// −μ·λ·J_Tᵀ holds μ as a number of the problem's, not a slot of the sensitivity program,
     /// so S by μ (and by what μ's value follows) would leave its share out.
     SensitivitiesWithFriction,
+    /// S was asked for of a problem holding laws sampled into parameter slots
+    /// ([`Mechanical::with_hold`]): the held values move with the parameters at each sample,
+    /// a jump of the right-hand side S would need their derivatives at.
+    SensitivitiesWithHold,
 }
 
 /// What a variational run carries besides Φ, and how.
@@ -219,6 +223,9 @@ pub fn transition_with(
             }
             if problem.has_friction() {
                 return Err(Refusal::SensitivitiesWithFriction);
+            }
+            if problem.has_hold() {
+                return Err(Refusal::SensitivitiesWithHold);
             }
             columns
         }

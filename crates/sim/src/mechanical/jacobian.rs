@@ -123,6 +123,11 @@ impl Mechanical {
         self.contacts.iter().any(|c| c.friction.is_some())
     }
 
+    /// Whether laws are held in parameter slots between samples.
+    pub(crate) fn has_hold(&self) -> bool {
+        self.hold.is_some()
+    }
+
     /// How many parameters the sensitivity program differentiates by; `None` without one.
     pub fn sensitivity_columns(&self) -> Option<usize> {
         self.sensitivities.as_ref().map(|(_, columns)| *columns)
