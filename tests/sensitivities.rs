@@ -55,7 +55,7 @@ fn sensitivities_against_differences(source: &str, names: &[&str], until: f64) -
     let parameters = prepared.parameter_values(&[]).expect("values");
     let mut problem = with_sensitivities(&mut prepared, &parameters, &free);
     let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
-    let s0 = prepared.start_sensitivity(&parameters, &free).expect("the start's derivative");
+    let s0 = prepared.start_sensitivity(&parameters, &[], &free).expect("the start's derivative");
     let run = settings(until);
     let options = Options { sensitivities: Some(s0), ..Default::default() };
     let exact = transition_with(&mut problem, &y0, &run, End::Time, &options).expect("runs");
@@ -163,6 +163,19 @@ dissipation c/2*theta'^2
     let (l, m, c) = (1.0, 2.0, 0.1);
     let expected = c * y0[1] / (m * m * l * l / 3.0);
     assert!((change[0] - expected).abs() < 1e-14, "∂θ̈/∂m = {} against {expected}", change[0]);
+    // A start the kept constraints solve for moves with the parameters through the solve.
+    let solved = "param m = 1 kg, L = 1 m, g = 9.81 m/s^2
+coord x = 3/5 m
+coord y ~ -1 m
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+";
+    let mut solved = prepare(solved, &[], engine::Options::default()).expect("derives");
+    let values = solved.parameter_values(&[]).expect("values");
+    let free = indices(&solved, &["L"]);
+    let refused = solved.start_sensitivity(&values, &[], &free).unwrap_err().to_string();
+    assert!(refused.contains("the start of `y` is left to the kept constraints"), "{refused}");
     // A derived parameter is not one to vary.
     let derived = indices(&prepared, &["I"]);
     let refused = prepared.sensitivity_program(&derived).map(|_| ()).unwrap_err();
@@ -182,7 +195,7 @@ fn sensitivities_are_refused_across_a_jump_and_at_an_event() {
     let contacts = lagrange_tests::contacts(&prepared, &parameters);
     let mut problem = with_sensitivities(&mut prepared, &parameters, &free).with_contacts(contacts);
     let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
-    let s0 = prepared.start_sensitivity(&parameters, &free).expect("the start's derivative");
+    let s0 = prepared.start_sensitivity(&parameters, &[], &free).expect("the start's derivative");
     // ∂y(0)/∂h0 = 1, the ball dropped from h0.
     assert_eq!(s0, [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0]);
     let options = Options { sensitivities: Some(s0.clone()), ..Default::default() };

@@ -111,17 +111,19 @@ impl Prepared {
 
     /// ∂x(0)/∂p, row-major 2n × k for the free parameters `free`, at the parameters' values
     /// `parameters` (in slot order): the derivative of the start as the scene writes it (each
-    /// coordinate's value and rate, expressions of the parameters), the chain rule through
+    /// coordinate's value and rate, expressions of the parameters), with `overrides` in place
+    /// of the scene's values as [`Prepared::initial_state`] takes them, the chain rule through
     /// derived parameters included. A start the scene leaves to its kept constraints (a
     /// position or rate solved at the start, which moves with the parameters through the
     /// solve) is refused by name: the caller gives S(0) itself there.
     pub fn start_sensitivity(
         &mut self,
         parameters: &[f64],
+        overrides: &[(usize, bool, ExprId)],
         free: &[usize],
     ) -> Result<Vec<f64>, Error> {
         self.check_free(free)?;
-        let solved = self.start_left_to_constraints();
+        let solved = self.start_left_to_constraints(overrides);
         if let Some(name) = solved.first() {
             return Err(Error::Input(format!(
                 "the start of `{name}` is left to the kept constraints, solved at the start, \
@@ -134,9 +136,12 @@ impl Prepared {
         let model = &self.derivation.model;
         let mut starts = vec![model.pool.zero(); 2 * n];
         for (k, q) in self.derivation.coords.iter().enumerate() {
-            let Some(c) = model.coords.iter().find(|c| c.sym == *q) else { continue };
-            starts[k] = c.initial;
-            starts[n + k] = c.initial_rate;
+            let Some(i) = model.coords.iter().position(|c| c.sym == *q) else { continue };
+            let find = |rate: bool| {
+                overrides.iter().rev().find(|(j, r, _)| *j == i && *r == rate).map(|x| x.2)
+            };
+            starts[k] = find(false).unwrap_or(model.coords[i].initial);
+            starts[n + k] = find(true).unwrap_or(model.coords[i].initial_rate);
         }
         let constants = self.parameters.clone();
         let partials: Vec<Vec<ExprId>> = starts
@@ -173,9 +178,14 @@ impl Prepared {
     }
 
     /// The remaining coordinates whose start position or rate the kept constraints solve for
-    /// at the start, by name.
-    fn start_left_to_constraints(&mut self) -> Vec<String> {
-        let positions: Vec<SymId> = self.derivation.free_start_positions();
+    /// at the start, by name: those the scene leaves to them and `overrides` do not give.
+    fn start_left_to_constraints(&mut self, overrides: &[(usize, bool, ExprId)]) -> Vec<String> {
+        let coords = &self.derivation.model.coords;
+        let overridden: Vec<(SymId, bool)> =
+            overrides.iter().filter_map(|(j, r, _)| coords.get(*j).map(|c| (c.sym, *r))).collect();
+        let given = |sym: SymId, rate: bool| overridden.contains(&(sym, rate));
+        let mut positions: Vec<SymId> = self.derivation.free_start_positions();
+        positions.retain(|q| !given(*q, false));
         let d = &mut self.derivation;
         let velocity_rows: Vec<ExprId> = d
             .multipliers
@@ -185,8 +195,8 @@ impl Prepared {
             .collect();
         let mut unset = Vec::new();
         for k in 0..d.coords.len() {
-            let given = d.model.coords.iter().find(|c| c.sym == d.coords[k]);
-            if given.is_none_or(|c| c.initial_rate_given) {
+            let written = d.model.coords.iter().find(|c| c.sym == d.coords[k]);
+            if written.is_none_or(|c| c.initial_rate_given) || given(d.coords[k], true) {
                 continue;
             }
             let rate = d.rates[k];
