@@ -2,7 +2,8 @@
 //! scene `lang::generate` writes) at n = 2 … 64.
 //!
 //! In this process: the load (parse, derive, lower), the dynamics program's size, and where
-//! one right-hand side's time goes: the tape's M and f, M copied into the solver's matrix,
+//! one right-hand side's time goes: the tape's M and f (and M alone and f alone, each lowered
+//! by itself), M copied into the solver's matrix,
 //! its LDLᵀ factorization, and the whole `Mechanical::rhs` (the rest is the two triangular
 //! solves and the checks). Every figure cycles through distinct states: `Mechanical` returns
 //! the accelerations it solved when a call is at the bits of the last, which would hide the
@@ -60,6 +61,10 @@ struct Row {
     load: f64,
     ops: usize,
     tape: f64,
+    /// M alone and f alone, each lowered by itself: what either costs without the other
+    /// (their common terms counted in both).
+    mass: (usize, f64),
+    forcing: (usize, f64),
     form: f64,
     factor: f64,
     rhs: f64,
@@ -75,6 +80,9 @@ fn measure(n: usize) -> Row {
     let observation = prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers");
     let load = began.elapsed().as_secs_f64();
     let ops = dynamics.op_counts().total();
+    let inputs = prepared.dynamics_inputs();
+    let part = |exprs: &[cas::ExprId]| prepared.lower(&inputs, exprs).expect("lowers");
+    let (mass, forcing) = (part(&exprs[..n * n]), part(&exprs[n * n..]));
     let parameters = prepared.parameter_values(&[]).expect("the parameters' values");
     let layout = prepared.layout;
     let ys = states(n, STATES);
@@ -98,6 +106,21 @@ fn measure(n: usize) -> Row {
         tape.inputs_mut()[1..1 + 2 * n].copy_from_slice(black_box(&ys[k]));
         tape.run(black_box(&mut out));
     });
+
+    let alone = |program: numeric::Program| {
+        let ops = program.op_counts().total();
+        let mut tape = Tape::new(program).with_fixed_inputs(1 + 2 * n..layout.dynamics_inputs());
+        tape.inputs_mut()[1 + 2 * n..].copy_from_slice(&parameters);
+        let mut out = vec![0.0; tape.outputs()];
+        let mut k = 0;
+        let time = crate::per_call(|| {
+            k = (k + 1) % STATES;
+            tape.inputs_mut()[1..1 + 2 * n].copy_from_slice(black_box(&ys[k]));
+            tape.run(black_box(&mut out));
+        });
+        (ops, time)
+    };
+    let (mass, forcing) = (alone(mass), alone(forcing));
 
     // M copied into the solver's matrix as `Mechanical` loads it (M is column-major in the
     // outputs), then factored in place.
@@ -128,18 +151,37 @@ fn measure(n: usize) -> Row {
         k = (k + 1) % STATES;
         mechanical.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
     });
-    Row { n, load, ops, tape, form, factor, rhs }
+    Row { n, load, ops, tape, mass, forcing, form, factor, rhs }
 }
 
-/// What the peer measured at one n, in seconds per call (`batch` per state).
+/// Seconds per call as wall time and as the calling thread's CPU time.
+#[derive(Clone, Copy)]
+struct Time {
+    wall: f64,
+    cpu: f64,
+}
+
+impl Time {
+    fn ratio(self, other: Time) -> String {
+        format!("{:.2} ({:.2})", self.wall / other.wall, self.cpu / other.cpu)
+    }
+}
+
+impl std::fmt::Display for Time {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "{} ({})", seconds(self.wall), seconds(self.cpu))
+    }
+}
+
+/// What the peer measured at one n (`batch` per state).
 struct Theirs {
     n: usize,
     agreement: f64,
-    rhs: f64,
-    rhs_same: f64,
-    batch: f64,
-    aba: f64,
-    jac: Option<f64>,
+    rhs: Time,
+    rhs_same: Time,
+    batch: Time,
+    aba: Time,
+    jac: Option<Time>,
     loads: Option<f64>,
     rhs_load: Option<f64>,
     pinocchio: String,
@@ -160,15 +202,17 @@ fn peer(root: &Path) -> Result<Vec<Theirs>, String> {
         .map(|line| {
             let v: serde_json::Value = serde_json::from_str(line).map_err(|e| e.to_string())?;
             let number = |key: &str| v[key].as_f64();
-            let seconds = |key: &str| number(key).ok_or(format!("the peer gave no `{key}`"));
+            let time =
+                |key: &str| Some(Time { wall: number(key)?, cpu: number(&format!("{key}_cpu"))? });
+            let missing = |key: &str| format!("the peer gave no `{key}`");
             Ok(Theirs {
-                n: v["n"].as_u64().ok_or("the peer gave no `n`")? as usize,
-                agreement: seconds("agreement")?,
-                rhs: seconds("rhs")?,
-                rhs_same: seconds("rhs_same")?,
-                batch: seconds("batch")?,
-                aba: seconds("aba")?,
-                jac: number("jac"),
+                n: v["n"].as_u64().ok_or(missing("n"))? as usize,
+                agreement: number("agreement").ok_or(missing("agreement"))?,
+                rhs: time("rhs").ok_or(missing("rhs"))?,
+                rhs_same: time("rhs_same").ok_or(missing("rhs_same"))?,
+                batch: time("batch").ok_or(missing("batch"))?,
+                aba: time("aba").ok_or(missing("aba"))?,
+                jac: time("jac"),
                 loads: number("loads"),
                 rhs_load: number("rhs_load"),
                 pinocchio: v["pinocchio"].as_str().unwrap_or("?").to_string(),
@@ -193,16 +237,23 @@ pub fn run(peer_too: bool) {
          least 20 ms (load average {} at the start).\n",
         load_average()
     );
-    outln!("| n | load | ops | tape M, f | M copied | LDLᵀ | `rhs` | rest |");
-    outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    outln!(
+        "| n | load | ops | tape M, f | M alone (ops) | f alone (ops) | M copied | LDLᵀ | `rhs` | \
+         rest |"
+    );
+    outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     for n in SIZES {
         let r = measure(n);
         outln!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} |",
             r.n,
             seconds(r.load),
             r.ops,
             seconds(r.tape),
+            seconds(r.mass.1),
+            r.mass.0,
+            seconds(r.forcing.1),
+            r.forcing.0,
             seconds(r.form),
             seconds(r.factor),
             seconds(r.rhs),
@@ -239,21 +290,21 @@ pub fn run(peer_too: bool) {
             disagree.push(t.n);
         }
         outln!(
-            "| {} | {:.0e} | {} | {} | {} | {:.2} | {} | {:.2} |",
+            "| {} | {:.0e} | {} | {} | {} | {} | {} | {} |",
             t.n,
             t.agreement,
-            seconds(t.rhs),
-            seconds(t.rhs_same),
-            seconds(t.aba),
-            t.rhs / t.aba,
-            seconds(t.batch),
-            t.batch / t.aba
+            t.rhs,
+            t.rhs_same,
+            t.aba,
+            t.rhs.ratio(t.aba),
+            t.batch,
+            t.batch.ratio(t.aba)
         );
     }
-    outln!();
+    outln!("\nEach figure is wall time (the thread's CPU time).\n");
     for t in &theirs {
         if let Some(jac) = t.jac {
-            outln!("`jac` at n = {}: {} a call, {:.1}× the `rhs`.", t.n, seconds(jac), jac / t.rhs);
+            outln!("`jac` at n = {}: {jac} a call, {} the `rhs`.", t.n, jac.ratio(t.rhs));
         }
         if let (Some(loads), Some(rhs)) = (t.loads, t.rhs_load) {
             outln!(
