@@ -3,9 +3,8 @@
 //!
 //! In this process: the load (parse, derive, lower), the dynamics program's size, and where
 //! one right-hand side's time goes: the tape's M and f (and M alone and f alone, each lowered
-//! by itself), M copied into the solver's matrix,
-//! its LDLᵀ factorization, and the whole `Mechanical::rhs` (the rest is the two triangular
-//! solves and the checks). Every figure cycles through distinct states: `Mechanical` returns
+//! by itself), M copied into the solver's matrix, its LDLᵀ factorization, and the whole
+//! `Mechanical::rhs` (the rest is the two triangular solves and the checks). Every figure cycles through distinct states: `Mechanical` returns
 //! the accelerations it solved when a call is at the bits of the last, which would hide the
 //! cost.
 //!
@@ -27,9 +26,9 @@ use sim::{Mechanical, Problem};
 use crate::seconds;
 
 const PEER: &str = "tests/sympy/links_peer.py";
-pub const SIZES: [usize; 6] = [2, 4, 8, 16, 32, 64];
-/// How many distinct states a timing cycles through: enough that no call is at the state of
-/// the last, few enough that their outputs stay in cache as one state's would.
+const SIZES: [usize; 6] = [2, 4, 8, 16, 32, 64];
+/// How many distinct states a timing cycles through: no call is at the state of the last, and
+/// the states themselves are few enough to stay in cache.
 const STATES: usize = 64;
 /// The rows of the peer's `batch`.
 const ROWS: usize = 1024;
