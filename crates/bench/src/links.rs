@@ -67,6 +67,9 @@ struct Row {
     form: f64,
     factor: f64,
     rhs: f64,
+    /// At [`JACOBIAN_AT`]: the partials program's size, its tape's time, and the whole exact
+    /// Jacobian (the partials, one LU of M and a solve per state component).
+    jacobian: Option<(usize, f64, f64)>,
 }
 
 fn measure(n: usize) -> Row {
@@ -150,7 +153,38 @@ fn measure(n: usize) -> Row {
         k = (k + 1) % STATES;
         mechanical.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
     });
-    Row { n, load, ops, tape, mass, forcing, form, factor, rhs }
+    let jacobian = (n == JACOBIAN_AT).then(|| {
+        let exprs = prepared.partials_exprs();
+        let program = prepared.lower(&prepared.observation_inputs(), &exprs).expect("lowers");
+        let ops = program.op_counts().total();
+        // The partials at the accelerations each state has, as the Jacobian evaluates them.
+        let inputs: Vec<Vec<f64>> = ys
+            .iter()
+            .map(|y| {
+                mechanical.rhs(0.0, y, &mut dy).expect("regular");
+                let mut input = vec![0.0];
+                input.extend(y);
+                input.extend(&dy[n..]);
+                input.extend(mechanical.parameters());
+                input
+            })
+            .collect();
+        let mut tape = Tape::new(program.clone());
+        let mut out = vec![0.0; tape.outputs()];
+        let partials = crate::per_call(|| {
+            k = (k + 1) % STATES;
+            tape.eval(black_box(&inputs[k]), black_box(&mut out));
+        });
+        mechanical.set_partials(Tape::new(program));
+        let mut jac = vec![0.0; 4 * n * n];
+        let whole = crate::per_call(|| {
+            k = (k + 1) % STATES;
+            let done = mechanical.jacobian(0.0, black_box(&ys[k]), black_box(&mut jac));
+            assert!(done.expect("regular"), "the partials were given");
+        });
+        (ops, partials, whole)
+    });
+    Row { n, load, ops, tape, mass, forcing, form, factor, rhs, jacobian }
 }
 
 /// Seconds per call as wall time and as the calling thread's CPU time.
@@ -241,8 +275,12 @@ pub fn run(peer_too: bool) {
          rest |"
     );
     outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let mut jacobian = None;
     for n in SIZES {
         let r = measure(n);
+        if let Some(j) = r.jacobian {
+            jacobian = Some((r.n, r.rhs, j));
+        }
         outln!(
             "| {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} |",
             r.n,
@@ -260,6 +298,16 @@ pub fn run(peer_too: bool) {
         );
     }
     outln!();
+    if let Some((n, rhs, (ops, partials, whole))) = jacobian {
+        outln!(
+            "The exact Jacobian at n = {n}: {} a call, {:.1}× the `rhs`; its partials program \
+             is {ops} operations, {} on the tape; the rest is one LU of M and {} solves.\n",
+            seconds(whole),
+            whole / rhs,
+            seconds(partials),
+            2 * n
+        );
+    }
     if !peer_too {
         return;
     }
