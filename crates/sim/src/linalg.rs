@@ -356,6 +356,37 @@ pub fn lu_solve<M: Square>(lu: &M, pivots: &[usize], b: &mut [f64]) {
     lu_factor_solve(lu, pivots, b);
 }
 
+/// [`lu_solve`] for several right-hand sides at once, `b[i]` holding entry i of each. Each
+/// substitution is a chain of dependent subtractions; the columns' chains side by side overlap
+/// them. Every column gets [`lu_solve`]'s operations in its order, so its bits.
+pub fn lu_solve_columns<M: Square, const C: usize>(lu: &M, pivots: &[usize], b: &mut [[f64; C]]) {
+    let n = lu.order();
+    for k in 0..n {
+        b.swap(k, pivots[k]);
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            let l = lu[(i, k)];
+            for (s, b) in s.iter_mut().zip(&b[k]) {
+                *s -= l * b;
+            }
+        }
+        b[i] = s;
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            let u = lu[(i, k)];
+            for (s, b) in s.iter_mut().zip(&b[k]) {
+                *s -= u * b;
+            }
+        }
+        let d = lu[(i, i)];
+        b[i] = s.map(|s| s / d);
+    }
+}
+
 /// LU with partial pivoting of a real or complex matrix, for the iteration matrices of an
 /// implicit method. Unlike [`lu_in_place`] it sets no condition limit: those matrices mix
 /// 1/h with the Jacobian's entries and are badly scaled without being singular, and Newton's
@@ -546,6 +577,35 @@ mod tests {
             for j in 0..n {
                 for i in j..n {
                     assert_eq!(four[(i, j)].to_bits(), one[(i, j)].to_bits(), "n = {n}");
+                }
+            }
+        }
+    }
+
+    /// Right-hand sides solved side by side give the bits of each solved alone.
+    #[test]
+    fn lu_columns_side_by_side_are_the_bits_of_one_at_a_time() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in 1..=20 {
+            let mut a = DMatrix::from_fn(n, n, |_, _| uniform());
+            let mut pivots = vec![0; n];
+            lu_in_place(&mut a, &mut pivots).expect("regular");
+            let columns: Vec<Vec<f64>> =
+                (0..4).map(|_| (0..n).map(|_| uniform()).collect()).collect();
+            let mut block: Vec<[f64; 4]> =
+                (0..n).map(|i| std::array::from_fn(|c| columns[c][i])).collect();
+            lu_solve_columns(&a, &pivots, &mut block);
+            for (c, column) in columns.iter().enumerate() {
+                let mut alone = column.clone();
+                lu_solve(&a, &pivots, &mut alone);
+                for i in 0..n {
+                    assert_eq!(block[i][c].to_bits(), alone[i].to_bits(), "n = {n}");
                 }
             }
         }
