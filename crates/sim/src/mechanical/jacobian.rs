@@ -7,6 +7,9 @@
 use super::{Canonical, Layout, Mechanical, Stabilisation};
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
+/// How many of the Jacobian's columns are solved side by side.
+const COLUMNS: usize = 4;
+
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
     pub fn has_partials(&self) -> bool {
@@ -79,8 +82,9 @@ impl Mechanical {
         }
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         self.accelerations(t, y)?;
-        let mut column = std::mem::take(&mut self.solution);
-        // `column` is a work space below: the accelerations are gone from it.
+        // The accelerations, lent to the partials while `self` is borrowed and put back at the
+        // end; the solve they came from is not claimed for a later call.
+        let column = std::mem::take(&mut self.solution);
         self.solved = None;
         let evaluated = self.partials_at(t, y, &column).map(|_| ());
         if let Err(fault) = evaluated {
@@ -130,33 +134,46 @@ impl Mechanical {
             jac[i * width + n + i] = 1.0;
         }
         let mut reduced = vec![0.0; order];
-        for k in 0..width {
-            for i in 0..n {
-                reduced[i] = -out[i * width + k];
-            }
-            for (r, &c) in rows.iter().enumerate() {
-                let row = |block: usize| out[(n + block * m + c) * width + k];
-                // The partials of the row the accelerations satisfy, stabilisation included.
-                let stabilised = match self.stabilisation[c] {
-                    Stabilisation::Position => {
-                        row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
-                    }
-                    Stabilisation::Velocity => row(0) + alpha * row(1),
-                };
-                reduced[n + r] = -stabilised;
-            }
-            for &(tangent, lambda, df, rates) in &turning {
-                let rate = |r: usize| out[(n + m + rates[r]) * width + k];
-                let change = df[0] * rate(0) + df[1] * rate(1);
-                let base = n * n + n + tangent * (n + 3);
+        // The columns are solved four at a time, side by side: the same bits as one by one (a
+        // last block's unused columns are zeros, solved and dropped).
+        let mut block = vec![[0.0; COLUMNS]; order];
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            for (c, k) in (first..first + columns).enumerate() {
                 for i in 0..n {
-                    reduced[i] += self.dyn_out[base + i] * lambda * change;
+                    reduced[i] = -out[i * width + k];
+                }
+                for (r, &c) in rows.iter().enumerate() {
+                    let row = |block: usize| out[(n + block * m + c) * width + k];
+                    // The partials of the row the accelerations satisfy, stabilisation included.
+                    let stabilised = match self.stabilisation[c] {
+                        Stabilisation::Position => {
+                            row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
+                        }
+                        Stabilisation::Velocity => row(0) + alpha * row(1),
+                    };
+                    reduced[n + r] = -stabilised;
+                }
+                for &(tangent, lambda, df, rates) in &turning {
+                    let rate = |r: usize| out[(n + m + rates[r]) * width + k];
+                    let change = df[0] * rate(0) + df[1] * rate(1);
+                    let base = n * n + n + tangent * (n + 3);
+                    for i in 0..n {
+                        reduced[i] += self.dyn_out[base + i] * lambda * change;
+                    }
+                }
+                for (row, v) in block.iter_mut().zip(&reduced) {
+                    row[c] = *v;
                 }
             }
-            linalg::lu_solve(system, pivots, &mut reduced);
-            column[..n].copy_from_slice(&reduced[..n]);
-            for i in 0..n {
-                jac[(n + i) * width + k] = column[i];
+            for row in &mut block {
+                row[columns..].fill(0.0);
+            }
+            linalg::lu_solve_columns(system, pivots, &mut block);
+            for (c, k) in (first..first + columns).enumerate() {
+                for i in 0..n {
+                    jac[(n + i) * width + k] = block[i][c];
+                }
             }
         }
         self.kept_factors = factors;
