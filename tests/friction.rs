@@ -198,8 +198,13 @@ fn a_landing_disk_grips_or_slips_through_the_impact() {
 
 /// The fault a run of Painlevé's rod ends in, with `values` set.
 fn painleve(values: &[(&str, f64)]) -> (PainleveCase, f64, Vec<f64>) {
-    let outcome = simulate(&source("painleve_rod.lag"), &options(values, "theta"))
-        .unwrap_or_else(|e| panic!("{e}"));
+    painleve_in("painleve_rod.lag", values)
+}
+
+/// The fault a run of `scene` (a Painlevé rod) ends in, with `values` set.
+fn painleve_in(scene: &str, values: &[(&str, f64)]) -> (PainleveCase, f64, Vec<f64>) {
+    let outcome =
+        simulate(&source(scene), &options(values, "theta")).unwrap_or_else(|e| panic!("{e}"));
     let fault = outcome.run.fault.as_ref().unwrap_or_else(|| panic!("{}", summary(&outcome)));
     match &fault.kind {
         FaultKind::Painleve { contacts, case, impact } => {
@@ -235,6 +240,31 @@ fn painleves_rod_ends_in_the_case_it_meets() {
     assert!(time > 0.0 && error < 1e-8, "θ = {}", state[2]);
     // Below μ = 4/3 nothing of the kind: the same start slips, sticks or lifts off.
     let outcome = run("painleve_rod.lag", &[("mu", 1.3)], "theta, floor.force");
+    assert!(outcome.run.final_time == 0.5);
+}
+
+/// The same rod as a body in space, its end slipping with the exact cone: started in its
+/// vertical plane it meets the planar rod's three cases, the jam where the plane's does.
+#[test]
+fn painleves_rod_in_space_ends_in_the_same_cases() {
+    let scene = "painleve_rod_in_space.lag";
+    let (case, time, _) = painleve_in(scene, &[]);
+    assert_eq!((case, time), (PainleveCase::Inconsistent, 0.0));
+    let (case, time, _) = painleve_in(scene, &[("theta'", 6.0), ("z'", 1.5), ("v0", -3.0)]);
+    assert_eq!((case, time), (PainleveCase::Indeterminate, 0.0));
+    let theta0 = 0.6f64;
+    let (case, time, state) = painleve_in(
+        scene,
+        &[("theta0", theta0), ("theta'", 4.0), ("z'", 0.5 * theta0.cos() * 4.0), ("v0", -5.0)],
+    );
+    assert_eq!(case, PainleveCase::Jam);
+    // The state is (x, y, z, theta, psi, ...).
+    let edge = (3.0 - 5.0f64.sqrt()).atan();
+    let error = (state[3] - edge).abs();
+    eprintln!("Painlevé's rod in space jams at t = {time}, θ − atan(3 − √5) = {error:e}");
+    assert!(time > 0.0 && error < 1e-8, "θ = {}", state[3]);
+    assert!(state[1].abs() < 1e-12 && state[4].abs() < 1e-12, "left its plane: {state:?}");
+    let outcome = run(scene, &[("mu", 1.3)], "theta, floor.force");
     assert!(outcome.run.final_time == 0.5);
 }
 

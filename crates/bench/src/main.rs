@@ -23,6 +23,10 @@
 //! - `orbit [--peer] [--repeats N]`: the rimless wheel's and the driven pendulum's periodic
 //!   orbits found by `orbit`, their multipliers against closed forms and the wall time of a
 //!   search, with `--peer` SciPy's shooting loop (finite-difference Jacobians of whole runs);
+//! - `links [--peer]`: the n-link pendulum at n = 2 … 64, where a right-hand side's time goes
+//!   (the tape, M copied, its factorization), and with `--peer` lagrange from Python (`rhs`,
+//!   `batch`, `jac`, the load) against Pinocchio's articulated-body algorithm in one Python run,
+//!   the state varied per call;
 //! - `memory [--largest N]`: the peak memory of `lagrange simulate` and `lagrange ensemble`
 //!   processes at 1e5, 1e6 … N samples and runs (1e7 by default), their tables streamed to a
 //!   file (Linux: read from /proc);
@@ -54,6 +58,7 @@ mod contacts;
 mod ensemble;
 mod eval;
 mod hand;
+mod links;
 mod memory;
 mod model;
 mod orbit;
@@ -145,6 +150,14 @@ enum Benchmark {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// The n-link pendulum at n = 2 … 64: the load, and where a right-hand side's time goes.
+    Links {
+        /// Also time lagrange from Python against Pinocchio's articulated-body algorithm
+        /// (tests/sympy/links_peer.py, which makes its own Python environment and installs
+        /// this checkout's package into it), in one Python run.
+        #[arg(long)]
+        peer: bool,
+    },
     /// The peak memory of `lagrange simulate` and `lagrange ensemble` as their tables grow
     /// (Linux).
     Memory {
@@ -204,6 +217,7 @@ fn main() {
         Benchmark::Model => model::run(),
         Benchmark::Contacts { peer, repeats } => contacts::run(peer, repeats),
         Benchmark::Orbit { peer, repeats } => orbit::run(peer, repeats),
+        Benchmark::Links { peer } => links::run(peer),
         Benchmark::Memory { largest } => memory::run(largest),
         Benchmark::Derive { family, n } => scaling::json(family, n),
     }

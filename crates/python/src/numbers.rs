@@ -200,7 +200,12 @@ fn one_state(y: &PyArrayLikeDyn<'_, f64, AllowTypeChange>, names: &[String]) -> 
             y.shape()
         )));
     }
-    Ok(y.iter().copied().collect())
+    // A contiguous array is copied as one slice: the iterator of an array of any dimension
+    // steps a multi-index per element, which cost more than the copy itself at 64 entries.
+    Ok(match y.as_slice() {
+        Some(values) => values.to_vec(),
+        None => y.iter().copied().collect(),
+    })
 }
 
 /// The programs of an [`Rhs`], their buffers and what a call reads: what one call at a

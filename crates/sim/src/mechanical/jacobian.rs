@@ -9,6 +9,9 @@ use numeric::Tape;
 
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
+/// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
+const COLUMNS: usize = 4;
+
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
     pub fn has_partials(&self) -> bool {
@@ -222,31 +225,49 @@ impl Mechanical {
             turning.push((bend.tangent, solution[n + bend.normal], df, cone.rates));
         }
         let mut reduced = vec![0.0; order];
-        for k in 0..width {
-            for i in 0..n {
-                reduced[i] = -partials[i * width + k];
-            }
-            for (r, &c) in rows.iter().enumerate() {
-                let row = |block: usize| partials[(n + block * m + c) * width + k];
-                // The partials of the row the accelerations satisfy, stabilisation included.
-                let stabilised = match self.stabilisation[c] {
-                    Stabilisation::Position => {
-                        row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
-                    }
-                    Stabilisation::Velocity => row(0) + alpha * row(1),
-                };
-                reduced[n + r] = -stabilised;
-            }
-            for &(tangent, lambda, df, rates) in &turning {
-                let rate = |r: usize| partials[(n + m + rates[r]) * width + k];
-                let change = df[0] * rate(0) + df[1] * rate(1);
-                let base = n * n + n + tangent * (n + 3);
+        // The columns are solved four at a time, side by side: the same bits as one by one (a
+        // last block's unused columns are zeros, solved and dropped).
+        let mut block = vec![[0.0; COLUMNS]; order];
+        let mut column = vec![0.0; n];
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            for (c, k) in (first..first + columns).enumerate() {
                 for i in 0..n {
-                    reduced[i] += self.dyn_out[base + i] * lambda * change;
+                    reduced[i] = -partials[i * width + k];
+                }
+                for (r, &c) in rows.iter().enumerate() {
+                    let row = |block: usize| partials[(n + block * m + c) * width + k];
+                    // The partials of the row the accelerations satisfy, stabilisation included.
+                    let stabilised = match self.stabilisation[c] {
+                        Stabilisation::Position => {
+                            row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
+                        }
+                        Stabilisation::Velocity => row(0) + alpha * row(1),
+                    };
+                    reduced[n + r] = -stabilised;
+                }
+                for &(tangent, lambda, df, rates) in &turning {
+                    let rate = |r: usize| partials[(n + m + rates[r]) * width + k];
+                    let change = df[0] * rate(0) + df[1] * rate(1);
+                    let base = n * n + n + tangent * (n + 3);
+                    for i in 0..n {
+                        reduced[i] += self.dyn_out[base + i] * lambda * change;
+                    }
+                }
+                for (row, v) in block.iter_mut().zip(&reduced) {
+                    row[c] = *v;
                 }
             }
-            linalg::lu_solve(system, pivots, &mut reduced);
-            put(k, &reduced[..n]);
+            for row in &mut block {
+                row[columns..].fill(0.0);
+            }
+            linalg::lu_solve_columns(system, pivots, &mut block);
+            for (c, k) in (first..first + columns).enumerate() {
+                for (i, v) in column.iter_mut().enumerate() {
+                    *v = block[i][c];
+                }
+                put(k, &column);
+            }
         }
         self.kept_factors = factors;
         Ok(())
