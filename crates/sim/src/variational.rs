@@ -279,7 +279,7 @@ pub fn transition_with(
                 Refusal::Fault(Fault { kind, time: t, state: y[..size].to_vec() })
             })?;
             let carried = size + size * size;
-            if columns > 0 {
+            if options.sensitivities.is_some() {
                 sensitivities = Some(y[carried..].to_vec());
             }
             (t, y[..size].to_vec(), y[size..carried].to_vec(), within)
