@@ -3,9 +3,8 @@
 //! pendulum (its damping and length), the driven one of the orbits' examples (its drive's
 //! amplitude and frequency), a pendulum kept on its rod by a multiplier (the rod's length in
 //! Φ and in the start), Chaplygin's sleigh (a kept velocity constraint), and a physical
-//! pendulum whose inertia is derived from its mass and
-//! length; and the runs S is refused for, by name (across a jump, at an event,
-//! with friction, with held inputs).
+//! pendulum whose inertia is derived from its mass and length; and the runs S is refused for,
+//! by name (across a jump, at an event, with friction, with held inputs).
 
 use std::ops::ControlFlow;
 
