@@ -117,6 +117,60 @@ dissipation c/2*theta'^2
     assert!(worst < 1e-7, "the driven pendulum's S is off by {worst:.1e}");
 }
 
+/// S recorded at a fit's data times on the way, each against differences of whole runs to
+/// that time; the last, at the end, is the end's.
+#[test]
+fn sensitivities_are_recorded_at_given_times() {
+    let source = "param m = 1 kg, l = 1 m, g = 9.81 m/s^2, c = 1/2 N*m*s
+coord theta = 6/5, theta' = -7/10
+body bob { mass m; inertia 0; position (l*sin(theta), -l*cos(theta)); angle theta }
+gravity g
+dissipation c/2*theta'^2
+";
+    let mut prepared = prepare(source, &[], engine::Options::default()).expect("derives");
+    let free = indices(&prepared, &["l", "c"]);
+    let parameters = prepared.parameter_values(&[]).expect("values");
+    let mut problem = with_sensitivities(&mut prepared, &parameters, &free);
+    let y0 = prepared.initial_state(&parameters, &[]).expect("a start");
+    let s0 = prepared.start_sensitivity(&parameters, &[], &free).expect("the start's derivative");
+    let times = vec![0.0, 0.35, 1.0, 1.7, 2.0];
+    let options = Options { sensitivities: Some(s0), times: times.clone(), ..Default::default() };
+    let exact =
+        transition_with(&mut problem, &y0, &settings(2.0), End::Time, &options).expect("runs");
+    let recorded: Vec<f64> = exact.samples.iter().map(|s| s.time).collect();
+    assert_eq!(recorded, times);
+    let last = exact.samples.last().expect("the end's");
+    assert_eq!(last.sensitivities, exact.sensitivities);
+    assert_eq!((&last.state, &last.matrix), (&exact.state, &exact.matrix));
+    assert_eq!(exact.samples[0].sensitivities, Some(vec![0.0; 4]), "S(0): the start holds none");
+    let mut worst = 0.0f64;
+    for sample in &exact.samples[1..] {
+        let s = sample.sensitivities.as_ref().expect("S was asked for");
+        let largest = s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let run = settings(sample.time);
+        for (j, &i) in free.iter().enumerate() {
+            let step = 1e-5 * (1.0 + parameters[i].abs());
+            let mut end_of = |by: f64| {
+                let values = prepared.parameter_values_given(&[], &[(i, parameters[i] + by)]);
+                problem.set_parameters(&values.expect("values"));
+                let mut go = |_: f64| ControlFlow::Continue(());
+                sim::integrate(&mut problem, &y0, &run, &[], &mut go).final_state
+            };
+            let (up, down) = (end_of(step), end_of(-step));
+            for r in 0..2 {
+                let differenced = (up[r] - down[r]) / (2.0 * step);
+                worst = worst.max((s[r * 2 + j] - differenced).abs() / largest);
+            }
+        }
+        problem.set_parameters(&parameters);
+    }
+    eprintln!("S at the recorded times against differences: {worst:.1e}");
+    assert!(worst < 1e-7, "S at a recorded time is off by {worst:.1e}");
+    let backwards = Options { times: vec![1.0, 0.5], ..Default::default() };
+    let refused = transition_with(&mut problem, &y0, &settings(2.0), End::Time, &backwards);
+    assert_eq!(refused.unwrap_err(), Refusal::SampleTime { time: 0.5 });
+}
+
 #[test]
 fn a_kept_rods_length_moves_its_constraint_and_its_start() {
     // The rod's length is in Φ (and so in the stabilisation) and in the start, on the rod.

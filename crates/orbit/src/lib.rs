@@ -394,6 +394,9 @@ fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
             "no return within {until} s: the section is not reached again (raise --until, or \
              check the section and its direction)"
         )),
+        Refusal::SampleTime { time } => {
+            Error::Numeric(format!("{time} is no time to record at within a return's run"))
+        }
         Refusal::NoSensitivities | Refusal::SensitivityStart { .. } => {
             Error::Numeric("the parameter sensitivities were not lowered for this run".into())
         }

@@ -101,6 +101,8 @@ pub enum Refusal {
     /// S(0) has `given` entries where the problem's state and sensitivity program make
     /// `expected` (2n × k).
     SensitivityStart { expected: usize, given: usize },
+    /// A time of [`Options::times`] outside the run's span, or not after the one before it.
+    SampleTime { time: f64 },
     /// S was asked for of a run that ends at a section or a landing: the event's time moves
     /// with the parameters through the guard's own derivative by them, which is not taken.
     SensitivitiesAtEvent,
@@ -128,6 +130,23 @@ pub struct Options {
     /// held fixed as they move); it is taken as the start's after its contacts' modes are
     /// decided, which may project a start on a closed contact.
     pub sensitivities: Option<Vec<f64>>,
+    /// Times, increasing, within the run's span, at which the state, Φ and S (where carried)
+    /// are recorded besides the end ([`Transition::samples`]): a fit's data times. The run's
+    /// steps end at each, as at a held input's sample, so that what is recorded is a step's
+    /// end, derivative of the steps taken, not an interpolation.
+    pub times: Vec<f64>,
+}
+
+/// What a variational run recorded at one of [`Options::times`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    pub time: f64,
+    /// (q, q̇).
+    pub state: Vec<f64>,
+    /// Φ, row-major 2n × 2n.
+    pub matrix: Vec<f64>,
+    /// S, row-major 2n × k, where [`Options::sensitivities`] asked for it.
+    pub sensitivities: Option<Vec<f64>>,
 }
 
 /// A run's end and the derivative of its state there with respect to its start.
@@ -147,6 +166,8 @@ pub struct Transition {
     pub matrix: Vec<f64>,
     /// S = ∂state/∂p at the end, row-major 2n × k, when [`Options::sensitivities`] asked for it.
     pub sensitivities: Option<Vec<f64>>,
+    /// The state, Φ and S at each of [`Options::times`] the run reached.
+    pub samples: Vec<Sample>,
     /// The derivative of the state at the end along the surface it ended on, within the
     /// manifold the state moved on before it, row-major: P·Q at a crossing, G_x·P·Q at a
     /// landing, Q at a time, with Q the orthogonal projection onto that manifold's tangent.
@@ -187,7 +208,7 @@ pub fn transition_by(
     end: End,
     saltation: Saltation,
 ) -> Result<Transition, Refusal> {
-    let options = Options { saltation, sensitivities: None };
+    let options = Options { saltation, ..Default::default() };
     transition_with(problem, y0, settings, end, &options)
 }
 
@@ -230,6 +251,14 @@ pub fn transition_with(
             columns
         }
     };
+    let mut previous = settings.start;
+    for (k, &time) in options.times.iter().enumerate() {
+        let ordered = if k == 0 { time >= previous } else { time > previous };
+        if !(ordered && time <= settings.until && time.is_finite()) {
+            return Err(Refusal::SampleTime { time });
+        }
+        previous = time;
+    }
     let mut start = y0.to_vec();
     start.resize(size + size * size, 0.0);
     for i in 0..size {
@@ -255,8 +284,11 @@ pub fn transition_with(
         stop: &stop,
         begun: None,
         saltation,
+        carries: options.sensitivities.is_some(),
         columns,
         change: vec![0.0; size / 2 * columns],
+        times: &options.times,
+        samples: Vec::new(),
     };
     let mut halt =
         |_: f64| if stop.get() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -265,6 +297,7 @@ pub fn transition_with(
         return Err(refusal);
     }
     let (jumps, exact_jumps) = (variational.jumps, variational.exact_jumps);
+    let samples = std::mem::take(&mut variational.samples);
     let (begun, captured) = (variational.begun.take(), variational.captured.take());
     if let (None, Some(mut fault)) = (&captured, run.fault) {
         fault.state.truncate(size);
@@ -305,6 +338,7 @@ pub fn transition_with(
         state,
         matrix,
         sensitivities,
+        samples,
         surface,
         jumps,
         exact_jumps,
@@ -352,9 +386,13 @@ struct Variational<'a> {
     /// The start after its mode was decided, F there and the manifold's normals.
     begun: Option<Begun>,
     saltation: Saltation,
-    /// How many parameters S carries (0: Φ alone), and ∂q̈/∂p's buffer.
+    /// Whether S is carried, for how many parameters, and ∂q̈/∂p's buffer.
+    carries: bool,
     columns: usize,
     change: Vec<f64>,
+    /// The times to record at, and what was recorded.
+    times: &'a [f64],
+    samples: Vec<Sample>,
 }
 
 impl Variational<'_> {
@@ -632,6 +670,26 @@ impl Problem for Variational<'_> {
     }
 
     fn observe(&mut self, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), FaultKind> {
+        Ok(())
+    }
+
+    /// The next time to record at: a step ends there, as at a held input's sample.
+    fn next_sample(&self, t: f64) -> Option<f64> {
+        self.times.iter().copied().find(|&s| s > t)
+    }
+
+    fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
+        let recorded = self.samples.last().map(|s| s.time);
+        if !self.times.contains(&t) || recorded == Some(t) {
+            return Ok(());
+        }
+        let (s, carried) = (self.size, self.size + self.size * self.size);
+        self.samples.push(Sample {
+            time: t,
+            state: y[..s].to_vec(),
+            matrix: y[s..carried].to_vec(),
+            sensitivities: self.carries.then(|| y[carried..].to_vec()),
+        });
         Ok(())
     }
 
