@@ -62,57 +62,12 @@ impl Derivation {
     pub fn partials(&mut self) -> Partials {
         let n = self.coords.len();
         let state: Vec<SymId> = self.coords.iter().chain(&self.rates).copied().collect();
-        let accels: Vec<ExprId> = self.accels.iter().map(|a| self.model.pool.sym(*a)).collect();
-        let multipliers = self.multipliers.clone();
-
-        let mut residual = Vec::with_capacity(n);
-        for i in 0..n {
-            let mut row = Vec::with_capacity(state.len());
-            for &s in &state {
-                let at_rest = self.force_partial(i, s);
-                let pool = &mut self.model.pool;
-                let mut terms = Vec::with_capacity(n + 1);
-                for (entry, accel) in self.mass_matrix[i].iter().zip(&accels) {
-                    let dm = pool.diff(*entry, s);
-                    terms.push(pool.mul2(dm, *accel));
-                }
-                terms.push(at_rest);
-                row.push(pool.add(&terms));
-            }
-            residual.push(row);
-        }
-        let pool = &mut self.model.pool;
-
-        let (mut constraint, mut phi, mut drift_rate) = (Vec::new(), Vec::new(), Vec::new());
-        for m in &multipliers {
-            let drift = m.rows.drift_rate(pool);
-            let row: Vec<ExprId> = state
-                .iter()
-                .map(|&s| {
-                    let mut terms: Vec<ExprId> = m
-                        .rows
-                        .jacobian
-                        .iter()
-                        .zip(&accels)
-                        .map(|(entry, accel)| {
-                            let dj = pool.diff(*entry, s);
-                            pool.mul2(dj, *accel)
-                        })
-                        .collect();
-                    let dgamma = pool.diff(m.rows.bias, s);
-                    terms.push(pool.neg(dgamma));
-                    pool.add(&terms)
-                })
-                .collect();
-            constraint.push(row);
-            phi.push(state.iter().map(|&s| pool.diff(m.rows.phi(), s)).collect());
-            drift_rate.push(state.iter().map(|&s| pool.diff(drift, s)).collect());
-        }
+        let rows = self.partials_by(&state);
         Partials {
-            residual: split(residual, n),
-            constraint: split(constraint, n),
-            phi: split(phi, n),
-            drift_rate: split(drift_rate, n),
+            residual: split(rows.residual, n),
+            constraint: split(rows.constraint, n),
+            phi: split(rows.phi, n),
+            drift_rate: split(rows.drift_rate, n),
         }
     }
 }
@@ -139,6 +94,14 @@ impl Derivation {
     /// slot of its own in numbers: the chain rule through it to the parameters it follows is
     /// the caller's, who knows which of them are set.
     pub fn parameter_partials(&mut self, constants: &[SymId]) -> ParameterPartials {
+        self.partials_by(constants)
+    }
+
+    /// The partials of the equations in residual form by each symbol of `constants` (the
+    /// state's, or the parameter slots), q̈ and λ held: the rows of [`Partials`] and
+    /// [`ParameterPartials`] alike, built in one order so that both share what they have in
+    /// common.
+    fn partials_by(&mut self, constants: &[SymId]) -> ParameterPartials {
         let n = self.coords.len();
         let accels: Vec<ExprId> = self.accels.iter().map(|a| self.model.pool.sym(*a)).collect();
         let multipliers = self.multipliers.clone();
