@@ -39,13 +39,16 @@ impl Dialect for Rust {
         literal(v)
     }
 
-    fn open(&self, name: &str, doc: &str, inputs: usize, _: usize, outputs: usize) -> String {
+    fn open(&self, name: &str, doc: &str, inputs: usize, reads: usize, outputs: usize) -> String {
         let mut s = String::new();
         for line in doc.lines() {
             let _ = writeln!(s, "/// {line}");
         }
+        // A program whose outputs are constants (a scene's partials in a coordinate nothing
+        // depends on) reads no input: its parameter is named unused, as rustc asks.
+        let input = if reads == 0 { "_input" } else { "input" };
         let _ =
-            writeln!(s, "pub fn {name}(input: &[f64; {inputs}], out: &mut [f64; {outputs}]) {{");
+            writeln!(s, "pub fn {name}({input}: &[f64; {inputs}], out: &mut [f64; {outputs}]) {{");
         s
     }
 
