@@ -388,6 +388,19 @@ fn mistakes_are_refused_by_name() {
         Err(e) => e.to_string(),
     };
     assert!(e.contains("simultaneous events") && e.contains("`left` and contact `right`"), "{e}");
+    // The walker's stance leg through the slope's normal (th1 = 0) is where its swing foot is
+    // armed (−sin(th1) > 0): a guard of the contacts that is not one's gap, named for what it
+    // watches (it was named as a contact, with an empty name).
+    let e = refused(
+        "contacts/simplest_walker.lag",
+        Section::Crossing { expression: "th1".into(), rising: false },
+        |o| o.ignore = vec!["x".into()],
+    );
+    assert!(
+        e.contains("simultaneous events")
+            && e.contains("the arming condition of contact `ground2` and the section"),
+        "{e}"
+    );
     // An implicit method cannot carry Φ on its steps.
     let e = refused(pendulum, Section::Period("2*pi/w".into()), |o| {
         o.run.method = Some("radau".into())
