@@ -351,6 +351,16 @@ pub fn dependent_rows(a: &DMatrix<f64>) -> Vec<usize> {
     dependent
 }
 
+/// The identity on `size` components, row-major (a transition matrix's start, a jump's
+/// derivative where nothing moves).
+pub(crate) fn identity(size: usize) -> Vec<f64> {
+    let mut m = vec![0.0; size * size];
+    for i in 0..size {
+        m[i * size + i] = 1.0;
+    }
+    m
+}
+
 /// Solves with the factors of [`lu_in_place`].
 pub fn lu_solve<M: Square>(lu: &M, pivots: &[usize], b: &mut [f64]) {
     lu_factor_solve(lu, pivots, b);

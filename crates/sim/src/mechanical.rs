@@ -527,8 +527,9 @@ impl Mechanical {
     }
 
     /// [`Problem::begin_modes`] for a start a run reached on its contacts (a periodic orbit's
-    /// section): each touching contact is judged as a closed one, by the closed band of its
-    /// rate, so that a closed contact's drift does not read as flight.
+    /// section, or one a Newton step moved): a contact touching and at rest to half the
+    /// tolerance's digits is held closed and the start projected onto it, so that neither a
+    /// closed contact's drift nor a Newton step's second-order offset reads as flight.
     pub fn begin_modes_held(
         &mut self,
         t: f64,

@@ -45,6 +45,7 @@
 use std::cell::Cell;
 use std::ops::ControlFlow;
 
+use crate::linalg::identity;
 use crate::{integrate_into, Fault, FaultKind, Form, Mechanical, ModeChange, ModeEvent, Problem};
 use crate::{Rows, Settings};
 
@@ -447,14 +448,6 @@ fn gradient(t: f64, x: &[f64], h: &mut Scalar<'_>) -> Result<(Vec<f64>, f64), Fa
     let step = DIFFERENCE * (1.0 + t.abs());
     let ht = (h(t + step, x)? - h(t - step, x)?) / (2.0 * step);
     Ok((hx, ht))
-}
-
-fn identity(size: usize) -> Vec<f64> {
-    let mut m = vec![0.0; size * size];
-    for i in 0..size {
-        m[i * size + i] = 1.0;
-    }
-    m
 }
 
 /// A·B of row-major squares.

@@ -14,16 +14,8 @@ use nalgebra::DMatrix;
 
 use super::modes::Struck;
 use super::{Layout, Mechanical, Stabilisation};
-use crate::{linalg, FaultKind};
-
-/// The identity on `size` components, row-major.
-fn identity(size: usize) -> Vec<f64> {
-    let mut m = vec![0.0; size * size];
-    for i in 0..size {
-        m[i * size + i] = 1.0;
-    }
-    m
-}
+use crate::linalg::{self, identity};
+use crate::FaultKind;
 
 /// The partials program's outputs at (t, x) with (a, λ) = `unknowns`, and the rows of them a
 /// derivative reads: row i of r, and each multiplier's c, Φ and Φ̇ rows.
