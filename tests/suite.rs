@@ -26,6 +26,7 @@ mod drive;
 mod ensemble;
 mod errors;
 mod extremes;
+mod fitting;
 mod fmu;
 mod friction;
 mod gallery;

@@ -167,3 +167,52 @@ pub fn andrews_with_guesses(source: &str) -> String {
     }
     guessed
 }
+
+/// A recording made from a scene for a fit to recover: the scene run with `set` (the true
+/// values) to `until`, `columns` recorded at `samples` evenly spaced times, each with
+/// Gaussian noise of its level in `noise` (seeded: the same text on every machine), as CSV
+/// with a column `t`. `series` drive the scene's inputs.
+pub fn recording(
+    source: &str,
+    set: &[(&str, &str)],
+    series: &[(&str, sim::Series)],
+    columns: &[(&str, f64)],
+    (until, samples): (f64, usize),
+    seed: u64,
+) -> String {
+    use rand::{Rng, SeedableRng};
+    let options = simulation::Options {
+        until: Some(until),
+        tolerance: Some(1e-12),
+        samples,
+        output: vec![columns.iter().map(|c| c.0).collect::<Vec<_>>().join(",")],
+        set: set.iter().map(|(n, v)| format!("{n}={v}").parse().expect("an assignment")).collect(),
+        input_series: series.iter().map(|(n, s)| (n.to_string(), s.clone())).collect(),
+        ..Default::default()
+    };
+    let outcome = simulation::simulate(source, &options).expect("the recording runs");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    // Box–Muller: two uniforms give a standard normal.
+    let mut normal = move || {
+        let u: f64 = 1.0 - rng.gen::<f64>();
+        let v: f64 = rng.gen::<f64>();
+        use numeric::elementary::apply;
+        // The elementary functions of the tape, so that the noise has its bits everywhere.
+        (-2.0 * apply(cas::Func::Ln, u)).sqrt()
+            * apply(cas::Func::Cos, 2.0 * std::f64::consts::PI * v)
+    };
+    let mut text = String::from("t");
+    for (name, _) in columns {
+        text.push_str(&format!(",{name}"));
+    }
+    text.push('\n');
+    let trajectory = &outcome.run.trajectory;
+    for (t, row) in trajectory.times.iter().zip(&trajectory.rows) {
+        text.push_str(&format!("{t}"));
+        for (k, (_, sigma)) in columns.iter().enumerate() {
+            text.push_str(&format!(",{:.6}", row[k] + sigma * normal()));
+        }
+        text.push('\n');
+    }
+    text
+}

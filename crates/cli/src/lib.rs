@@ -14,6 +14,7 @@ pub mod check;
 pub mod diagnostics;
 pub mod ensemble;
 pub mod export;
+pub mod fit;
 pub mod inverse;
 pub mod linearize;
 pub mod orbit;

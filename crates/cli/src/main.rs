@@ -286,6 +286,68 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+    /// Fit parameters and start values to measurements: Levenberg–Marquardt on the exact
+    /// sensitivities of the runs, with standard errors and correlations. Exit 2 on bad input,
+    /// 1 when a run faults or the fit does not converge.
+    Fit {
+        file: PathBuf,
+        /// The measurements, CSV: a column `t` (seconds, increasing) and columns named by
+        /// scene expressions (`theta`, `x'`, `KE`, an output); an empty cell is a value not
+        /// measured.
+        #[arg(long, value_name = "FILE.csv")]
+        data: PathBuf,
+        /// The unknowns, comma-separated: parameters (`c`) and start values (`theta(0)`,
+        /// `theta'(0)`), each with an optional value to start from (`L=1.2`, in SI); default:
+        /// the scene's value.
+        #[arg(long, value_name = "NAMES", required = true)]
+        free: Vec<String>,
+        /// Keep an unknown within bounds: `--bound c=0:` (either side may be left open).
+        /// Masses and inertias stay positive without one: a step that makes one negative is
+        /// refused.
+        #[arg(long = "bound", value_name = "NAME=LO:HI")]
+        bound: Vec<String>,
+        /// A column's noise level, in its unit: its residuals are divided by it
+        /// (`--noise theta=0.01`). Default: 1 for every column, each residual in its unit.
+        #[arg(long = "noise", value_name = "COLUMN=SIGMA")]
+        noise: Vec<Assignment>,
+        /// Multiple shooting: cut the record into this many shots of equal time, each from a
+        /// start of its own, joined exactly at the optimum. For long or chaotic records.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1000))]
+        shots: u16,
+        /// The most Levenberg–Marquardt iterations.
+        #[arg(long, default_value_t = 100)]
+        iterations: usize,
+        #[arg(long, value_parser = method_parser(),
+              help = "An explicit integrator (default dop853)")]
+        method: Option<sim::Method>,
+        /// Tolerance of the adaptive methods (default: the scene's, else 1e-10).
+        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+        tolerance: Option<String>,
+        /// Step of the fixed-step methods.
+        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+        step: Option<String>,
+        /// Override a parameter or a start value that is not free: `--set g=9.81`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<Assignment>,
+        /// Drive an input by a measured time series (`--input F=push.csv`) or a law.
+        #[arg(long = "input", value_name = "NAME=EXPR")]
+        input: Vec<Assignment>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Write the report to this file (whole or not at all) instead of standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// Write the scene with the fitted values in place of its own (.lag).
+        #[arg(long, value_name = "OUT.lag")]
+        fitted: Option<PathBuf>,
+        /// Draw the data against the fitted motion, and the residuals, as SVG.
+        #[arg(long, value_name = "OUT.svg")]
+        plot: Option<PathBuf>,
+        /// Do not check that terms added or equated have one dimension.
+        #[arg(long)]
+        no_units: bool,
+    },
     /// Measure every integrator over a ladder of tolerances or steps against a tight DOP853
     /// reference: error, wall time and right-hand-side evaluations.
     Bench {
@@ -732,6 +794,57 @@ fn main() -> ExitCode {
                 }
                 Err(e) => fail(&path, &e),
             }
+        }
+        Command::Fit {
+            file,
+            data,
+            free,
+            bound,
+            noise,
+            shots,
+            iterations,
+            method,
+            tolerance,
+            step,
+            set,
+            input,
+            json,
+            out,
+            fitted,
+            plot,
+            no_units,
+        } => {
+            let mut inputs = vec![("", file.as_path()), ("--data", data.as_path())];
+            inputs.extend(input.iter().filter(|i| cli::series::is_series(i)).map(series_file));
+            let outputs = [
+                ("--out", out.as_deref()),
+                ("--fitted", fitted.as_deref()),
+                ("--plot", plot.as_deref()),
+            ];
+            if writes_over_input(&inputs, &outputs) {
+                return ExitCode::from(2);
+            }
+            let (Some(tolerance), Some(step), Some((laws, series))) = (
+                ratio_option(engine::Setting::Tolerance, tolerance.as_deref()),
+                time_option(engine::Setting::Step, step.as_deref()),
+                drives(input),
+            ) else {
+                return ExitCode::from(2);
+            };
+            let run = simulation::Options {
+                method: method.map(|m| m.name().to_string()),
+                tolerance,
+                step,
+                set,
+                input: laws,
+                input_series: series,
+                no_units,
+                ..Default::default()
+            };
+            let request =
+                cli::fit::Request { free, bound, noise, shots: shots as usize, iterations, json };
+            let written = cli::fit::Written { out, fitted, plot };
+            cli::fit::run(&file, &data, run, request, written)
         }
         Command::InverseDynamics { file, trajectory, set, out, no_units } => {
             let inputs = [("", file.as_path()), ("--trajectory", trajectory.as_path())];

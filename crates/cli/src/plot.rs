@@ -1,17 +1,19 @@
 //! Every figure `lagrange` draws, as SVG written by hand: the recorded quantities of a run
 //! against time ([`time_series`]), the eigenvalues of a sweep against its parameter
-//! ([`sweep`]) and the work–precision diagram of a benchmark ([`work_precision`]). They share
+//! ([`sweep`]) and the work–precision diagram of a benchmark ([`work_precision`]), and a fit's data, fitted motion and residuals ([`fit()`]). They share
 //! this module's page, panel, axis, number labels and escaping. Deterministic text, no fonts
 //! or libraries needed. The one exception is an ensemble's picture ([`mod@ensemble`]), a heat
 //! map with a colour bar, a line or a histogram as SVG or PNG, which plotters draws.
 
 pub mod ensemble;
+mod fit;
 mod series;
 mod sweep;
 mod work_precision;
 
 use std::fmt::Write;
 
+pub use self::fit::{fit, Measured};
 pub use self::series::time_series;
 pub use self::sweep::sweep;
 pub use self::work_precision::work_precision;

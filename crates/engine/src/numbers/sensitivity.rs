@@ -228,3 +228,43 @@ fn products(pool: &mut cas::Pool, pairs: impl Iterator<Item = (ExprId, ExprId)>)
     }
     pool.add(&terms)
 }
+
+impl Prepared {
+    /// For each of `exprs` (expressions of the observation inputs), its value, its partials
+    /// in q and then in q̇ (2n), and its total derivative by each free parameter of `free`
+    /// through the derived slots (k): row after row of 1 + 2n + k, lowered for the observation
+    /// inputs. What a fit needs of a measured column to chain the run's Φ and S into the
+    /// column's own derivative, dy/dθ = ∂y/∂x·dx/dθ + ∂y/∂p·dp/dθ. An expression that names
+    /// an acceleration or a multiplier is refused by [`Prepared::names_unknowns`]'s caller:
+    /// its derivative would need d(q̈, λ)/dθ, which this program does not take.
+    pub fn observation_partials(
+        &mut self,
+        exprs: &[ExprId],
+        free: &[usize],
+    ) -> Result<Program, Error> {
+        self.check_free(free)?;
+        let slots = self.slot_derivatives(free);
+        let constants = self.parameters.clone();
+        let d = &self.derivation;
+        let state: Vec<SymId> = d.coords.iter().chain(&d.rates).copied().collect();
+        let mut out = Vec::with_capacity(exprs.len() * (1 + state.len() + free.len()));
+        for &e in exprs {
+            out.push(e);
+            let pool = &mut self.derivation.model.pool;
+            out.extend(state.iter().map(|s| pool.diff(e, *s)));
+            let by_slot: Vec<ExprId> = constants.iter().map(|s| pool.diff(e, *s)).collect();
+            out.extend(self.through_slots(&[by_slot], &slots));
+        }
+        self.lower(&self.observation_inputs(), &out)
+    }
+
+    /// Whether `e` names an acceleration or a constraint's multiplier (a reaction), which a
+    /// run's state alone does not give.
+    pub fn names_unknowns(&mut self, e: ExprId) -> bool {
+        let d = &self.derivation;
+        let unknowns: Vec<SymId> =
+            d.accels.iter().copied().chain(d.multipliers.iter().map(|m| m.lambda)).collect();
+        let pool = &mut self.derivation.model.pool;
+        unknowns.iter().any(|s| pool.depends_on(e, *s))
+    }
+}

@@ -1,0 +1,342 @@
+//! `fit`'s report: the estimates with their standard errors, the correlations, the residuals
+//! per column, the iterations, and a warning where the data cannot tell unknowns apart; as
+//! text for people or JSON for programs. And a fit's errors, each against the text it points
+//! into: the scene, the data file, or a flag's value.
+
+use std::fmt::Write;
+
+use fit::Fit;
+use serde_json::{json, Value};
+
+/// A number as the report prints it: nine significant digits, enough to compare fits and
+/// stable from run to run.
+fn number(v: f64) -> String {
+    if !v.is_finite() {
+        return if v.is_nan() { "undefined".into() } else { "unbounded".into() };
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let text = format!("{v:.8e}");
+    let (mantissa, exponent) = text.split_once('e').expect("exponent form");
+    let exponent: i32 = exponent.parse().expect("an integer exponent");
+    let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+    if (-4..6).contains(&exponent) {
+        let digits = (8 - exponent).max(0) as usize;
+        let plain = format!("{v:.digits$}");
+        if plain.contains('.') {
+            plain.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            plain
+        }
+    } else {
+        format!("{mantissa}e{exponent}")
+    }
+}
+
+/// Two significant digits, for the standard errors' share and the correlations.
+fn short(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        number(v)
+    }
+}
+
+/// The report as text.
+pub fn text_report(path: &str, data: &str, fit: &Fit) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "fit of {path} to {data}: {} measurements, {} unknowns{}",
+        fit.measurements,
+        fit.unknowns.len(),
+        if fit.shots > 1 { format!(", {} shots", fit.shots) } else { String::new() }
+    );
+    let width = fit.unknowns.iter().map(|u| u.name.chars().count()).max().unwrap_or(0);
+    let _ = writeln!(out, "estimates (± one standard error):");
+    for (j, u) in fit.unknowns.iter().enumerate() {
+        let pad = " ".repeat(width - u.name.chars().count());
+        let (value, error) = (fit.estimates[j], fit.standard_errors[j]);
+        let relative = if value != 0.0 {
+            format!("  ({}%)", short(100.0 * error / value.abs()))
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            out,
+            "  {}{pad} = {} ± {}{relative}    from {}",
+            u.name,
+            number(value),
+            number(error),
+            number(fit.initial[j])
+        );
+    }
+    if fit.unknowns.len() > 1 {
+        let _ = writeln!(out, "correlations:");
+        for (i, u) in fit.unknowns.iter().enumerate() {
+            let pad = " ".repeat(width - u.name.chars().count());
+            let row: Vec<String> =
+                fit.correlation[i][..=i].iter().map(|c| format!("{:>6}", short(*c))).collect();
+            let _ = writeln!(out, "  {}{pad} {}", u.name, row.join(" "));
+        }
+    }
+    if let Some(c) = &fit.unidentifiable {
+        let terms: Vec<String> =
+            c.terms.iter().map(|(name, v)| format!("{} δ{name}/{name}", short(*v))).collect();
+        let _ = writeln!(
+            out,
+            "warning: the data cannot tell the unknowns apart along {} (singular values {:.1e} \
+             apart): its standard errors mean little; fix one of them, or measure what moves \
+             them differently",
+            terms.join(" + ").replace("+ -", "- "),
+            c.ratio
+        );
+    }
+    let _ = writeln!(out, "residuals (model − data):");
+    let width = fit.columns.iter().map(|c| c.name.chars().count()).max().unwrap_or(0);
+    for c in &fit.columns {
+        let pad = " ".repeat(width - c.name.chars().count());
+        let noise = c.noise.map(|s| format!(", noise {}", number(s))).unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "  {}{pad}  RMS {}  over {} values{noise}",
+            c.name,
+            number(c.rms),
+            c.count
+        );
+    }
+    let _ = writeln!(
+        out,
+        "cost Σr²: {} from {}; variance Σr²/(N − k) = {} ({} degrees of freedom)",
+        number(fit.cost),
+        number(fit.initial_cost),
+        number(fit.variance),
+        fit.degrees_of_freedom
+    );
+    let _ = writeln!(
+        out,
+        "Levenberg–Marquardt: {} iterations, {} runs, {} integrator steps; {}",
+        fit.iterations,
+        fit.evaluations,
+        fit.steps,
+        fit.ending.words()
+    );
+    out
+}
+
+/// The report as JSON.
+pub fn json(path: &str, data: &str, fit: &Fit) -> String {
+    let unknowns: Vec<Value> = fit
+        .unknowns
+        .iter()
+        .enumerate()
+        .map(|(j, u)| {
+            json!({
+                "name": u.name,
+                "kind": match u.kind { fit::Kind::Parameter(_) => "parameter", fit::Kind::Start { .. } => "start" },
+                "estimate": fit.estimates[j],
+                "standard_error": finite(fit.standard_errors[j]),
+                "initial": fit.initial[j],
+            })
+        })
+        .collect();
+    let grid = |m: &Vec<Vec<f64>>| -> Value {
+        m.iter().map(|row| row.iter().map(|v| finite(*v)).collect::<Value>()).collect()
+    };
+    let columns: Vec<Value> = fit
+        .columns
+        .iter()
+        .map(|c| json!({ "name": c.name, "rms": c.rms, "count": c.count, "noise": c.noise }))
+        .collect();
+    let unidentifiable = fit.unidentifiable.as_ref().map(|c| {
+        json!({
+            "ratio": c.ratio,
+            "terms": c.terms.iter().map(|(n, v)| json!({ "name": n, "coefficient": v })).collect::<Vec<_>>(),
+        })
+    });
+    let report = json!({
+        "scene": path,
+        "data": data,
+        "unknowns": unknowns,
+        "covariance": grid(&fit.covariance),
+        "correlation": grid(&fit.correlation),
+        "columns": columns,
+        "unidentifiable": unidentifiable,
+        "cost": fit.cost,
+        "initial_cost": fit.initial_cost,
+        "variance": finite(fit.variance),
+        "measurements": fit.measurements,
+        "degrees_of_freedom": fit.degrees_of_freedom,
+        "iterations": fit.iterations,
+        "evaluations": fit.evaluations,
+        "steps": fit.steps,
+        "shots": fit.shots,
+        "converged": fit.ending.converged(),
+        "ending": fit.ending.words(),
+    });
+    let mut text = serde_json::to_string_pretty(&report).expect("JSON of plain values");
+    text.push('\n');
+    text
+}
+
+/// A number JSON can hold: null for one that is not finite.
+fn finite(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+/// The picture of `--plot`: data and fit, and the residuals, per column.
+pub fn plot(path: &str, fit: &Fit) -> String {
+    let columns: Vec<crate::plot::Measured> = fit
+        .columns
+        .iter()
+        .enumerate()
+        .map(|(c, column)| crate::plot::Measured {
+            name: column.name.clone(),
+            model: fit.model[c].clone(),
+            data: fit.data[c].clone(),
+        })
+        .collect();
+    crate::plot::fit(&format!("fit of {path}"), &fit.times, &columns)
+}
+
+/// A fit's error as text, each diagnostic against the text it points into.
+pub fn error(path: &str, data: (&str, &str), error: &fit::Error) -> String {
+    match error {
+        fit::Error::Engine(e) => crate::diagnostics::error(path, e),
+        fit::Error::Data(diagnostics) => crate::diagnostics::render(data.0, data.1, diagnostics),
+        fit::Error::Argument { flag, text, diagnostics } => {
+            crate::diagnostics::render(flag, text, diagnostics)
+        }
+    }
+}
+
+/// What `fit` was asked, as the command line gives it.
+pub struct Request {
+    pub free: Vec<String>,
+    pub bound: Vec<String>,
+    pub noise: Vec<engine::input::Assignment>,
+    pub shots: usize,
+    pub iterations: usize,
+    pub json: bool,
+}
+
+/// Where `fit` writes besides standard output.
+pub struct Written {
+    pub out: Option<std::path::PathBuf>,
+    pub fitted: Option<std::path::PathBuf>,
+    pub plot: Option<std::path::PathBuf>,
+}
+
+/// `lagrange fit`: reads the scene and the data, fits, and writes the report and the files
+/// asked for; the exit code (2 bad input, 1 a fault or no convergence).
+pub fn run(
+    scene: &std::path::Path,
+    data: &std::path::Path,
+    run: simulation::Options,
+    request: Request,
+    written: Written,
+) -> std::process::ExitCode {
+    use std::process::ExitCode;
+    let path = scene.display().to_string();
+    let data_path = data.display().to_string();
+    let source = match crate::read_scene(scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprint!("{e}");
+            return ExitCode::from(2);
+        }
+    };
+    let text = match std::fs::read(data)
+        .map_err(|e| e.to_string())
+        .and_then(|bytes| crate::decode(&data_path, bytes))
+    {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: cannot read {data_path}: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let fail = |e: &fit::Error| {
+        eprint!("{}", error(&path, (&data_path, &text), e));
+        ExitCode::from(e.exit_code())
+    };
+    let mut options = fit::Options {
+        run,
+        shots: request.shots,
+        iterations: request.iterations,
+        ..Default::default()
+    };
+    for given in &request.free {
+        match fit::parse_free(given) {
+            Ok(free) => options.free.extend(free),
+            Err(e) => return fail(&e),
+        }
+    }
+    for given in &request.bound {
+        match fit::parse_bound(given) {
+            Ok(b) => options.bounds.push(b),
+            Err(e) => return fail(&e),
+        }
+    }
+    for n in &request.noise {
+        match n.value.trim().parse::<f64>() {
+            Ok(sigma) => options.noise.push((n.name.clone(), sigma)),
+            Err(_) => {
+                eprintln!(
+                    "error: --noise {}={}: a noise level is a number, in the column's unit",
+                    n.name, n.value
+                );
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let table = match fit::data::read(&text) {
+        Ok(t) => t,
+        Err(d) => return fail(&fit::Error::Data(d)),
+    };
+    let result = match fit::fit(&source, &options, table) {
+        Ok(r) => r,
+        Err(e) => return fail(&e),
+    };
+    let report = if request.json {
+        json(&path, &data_path, &result)
+    } else {
+        text_report(&path, &data_path, &result)
+    };
+    if let Some(p) = &written.plot {
+        if let Err(e) = crate::write_atomically(p, &plot(&path, &result)) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return ExitCode::from(2);
+        }
+    }
+    if let Some(p) = &written.fitted {
+        let scene_text = match fit::scene::written(&source, &result) {
+            Ok(t) => t,
+            Err(e) => return fail(&fit::Error::Engine(e)),
+        };
+        if let Err(e) = crate::write_atomically(p, &scene_text) {
+            eprintln!("error: cannot write {}: {e}", p.display());
+            return ExitCode::from(2);
+        }
+    }
+    match &written.out {
+        Some(p) => {
+            if let Err(e) = crate::write_atomically(p, &report) {
+                eprintln!("error: cannot write {}: {e}", p.display());
+                return ExitCode::from(2);
+            }
+        }
+        None => print!("{report}"),
+    }
+    if result.ending.converged() {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("error: the fit did not converge: {}", result.ending.words());
+        ExitCode::from(1)
+    }
+}
