@@ -186,3 +186,143 @@ fn the_jacobian_is_what_differences_of_whole_runs_give() {
     );
     assert!(cart < 1e-7, "cart: {cart:.1e}");
 }
+
+/// The error of fitting the gallery's scene to `data` (its text, shown as `data_path`)
+/// freeing `free`, as `lagrange fit` prints it.
+fn refused(data_path: &str, data: &str, free: &str) -> String {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bad/fit");
+    let scene = std::fs::read_to_string(dir.join("scene.lag")).expect("the gallery's scene");
+    let error = match fit::parse_free(free) {
+        Err(e) => e,
+        Ok(free) => {
+            let options = fit::Options { free, ..Default::default() };
+            match data::read(data) {
+                Err(d) => fit::Error::Data(d),
+                Ok(table) => fit::fit(&scene, &options, table).expect_err("refused"),
+            }
+        }
+    };
+    assert_eq!(error.exit_code(), 2, "{error:?}");
+    cli::fit::error("scene.lag", (data_path, data), &error)
+}
+
+#[test]
+fn bad_data_and_free_names_are_refused_at_their_place() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bad/fit");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("tests/bad/fit exists")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 8, "only {} bad data files", files.len());
+    for path in files {
+        let name = path.file_stem().expect("name").to_string_lossy().into_owned();
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let shown = format!("{name}.csv");
+        let report = refused(&shown, &text, "L, c");
+        assert!(report.contains(&format!("{shown}:")), "{name}: no location in\n{report}");
+        assert!(report.contains('^'), "{name}: no caret in\n{report}");
+        insta::assert_snapshot!(format!("bad_data@{name}"), report);
+    }
+    let good =
+        std::fs::read_to_string(lagrange_tests::examples_dir().join("fitting/damped_pendulum.csv"))
+            .expect("the recording");
+    let names = [
+        ("not_a_parameter", "L, Lc"),
+        ("a_coordinate_without_its_zero", "theta"),
+        ("a_start_value_not_a_number", "L=abc"),
+        ("freed_twice", "m, L, m"),
+        ("no_such_coordinate", "x(0)"),
+    ];
+    for (name, free) in names {
+        let report = refused("recording.csv", &good, free);
+        assert!(report.contains("--free:1:"), "{name}: no location in\n{report}");
+        assert!(report.contains('^'), "{name}: no caret in\n{report}");
+        insta::assert_snapshot!(format!("bad_free@{name}"), report);
+    }
+}
+
+/// A pendulum kept on its rod by a multiplier, its bob's start height solved from the rod.
+const KEPT: &str = "scene \"A pendulum kept on its rod\"
+param m = 1 kg, L = 1 m, g = 9.81 m/s^2
+coord x = L*sin(1/2)
+coord y ~ -L
+particle bob { mass m; position (x, y) }
+constraint rod: x^2 + y^2 = L^2
+gravity g
+";
+
+#[test]
+fn a_kept_rods_length_and_gravity_are_recovered_with_the_start_solved_on_the_rod() {
+    let text = lagrange_tests::recording(
+        KEPT,
+        &[("L", "1.2"), ("g", "9.7")],
+        &[],
+        &[("x", 0.002), ("y", 0.002)],
+        (4.0, 161),
+        17,
+    );
+    let recording = data::read(&text).expect("reads");
+    let mut tight = options("L, g", 1);
+    tight.run.tolerance = Some(1e-12);
+    let mut problem = fit::problem::Problem::load(KEPT, &tight, recording.clone()).expect("loads");
+    let theta = [1.1, 9.75];
+    let exact = problem.evaluate(&theta).expect("runs");
+    let largest = exact.jacobian.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for j in 0..2 {
+        let h = 1e-5 * theta[j];
+        let (mut up, mut down) = (theta, theta);
+        up[j] += h;
+        down[j] -= h;
+        let up = problem.evaluate(&up).expect("runs").residuals;
+        let down = problem.evaluate(&down).expect("runs").residuals;
+        for i in 0..up.len() {
+            let difference = (up[i] - down[i]) / (2.0 * h);
+            let error = (exact.jacobian[i * 2 + j] - difference).abs() / largest;
+            assert!(error < 1e-6, "row {i}, column {j}: {error:.1e}");
+        }
+    }
+    let result = fit::fit(KEPT, &tight, recording).expect("fits");
+    for (j, truth) in [1.2, 9.7].iter().enumerate() {
+        let (estimate, error) = (result.estimates[j], result.standard_errors[j]);
+        assert!((estimate - truth).abs() <= 2.0 * error, "{estimate} ± {error}, truly {truth}");
+    }
+}
+
+#[test]
+fn the_fitted_scene_holds_the_estimates_in_its_units() {
+    let source = "scene \"s\"\nparam m = 1 kg, L = 80 cm, g = 9.81 m/s^2, c = 0.1 N*m*s\ncoord theta = 1, theta' = 0\nparticle bob { mass m; position (L*sin(theta), -L*cos(theta)) }\ngravity g\ndissipation c/2*theta'^2\n";
+    let options = options("L, c, theta'(0)", 1);
+    let result = fit::fit(source, &options, table("damped_pendulum.csv")).expect("fits");
+    let written = fit::scene::written(source, &result).expect("writes");
+    let length = result.estimates[0] * 100.0;
+    assert!(written.contains(&format!("L = {length} cm")), "{written}");
+    assert!(written.contains(&format!("c = {} N*m*s", result.estimates[1])), "{written}");
+    assert!(written.contains(&format!("theta' = {}", result.estimates[2])), "{written}");
+    // The fitted scene fits at once: its values are the optimum.
+    let again = fit::fit(&written, &options, table("damped_pendulum.csv")).expect("fits");
+    for (a, b) in again.estimates.iter().zip(&result.estimates) {
+        assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-3), "{a} against {b}");
+    }
+    assert!(again.iterations <= 3, "{} iterations from the optimum", again.iterations);
+}
+
+#[test]
+fn a_mass_and_a_damping_seen_only_as_their_ratio_are_named_unidentifiable() {
+    // θ'' = −(g/L)·sin θ − c/(m·L²)·θ': the data fix c/m, not c and m apart.
+    let result = fit::fit(
+        &example("damped_pendulum.lag"),
+        &options("m, c, L", 1),
+        table("damped_pendulum.csv"),
+    )
+    .expect("fits");
+    let combination = result.unidentifiable.expect("named");
+    let coefficient =
+        |name: &str| combination.terms.iter().find(|t| t.0 == name).map_or(0.0, |t| t.1);
+    // δm/m = δc/c leaves c/m alone: the combination is (δm/m + δc/c)/√2 up to sign.
+    assert!((coefficient("m") - coefficient("c")).abs() < 1e-6, "{combination:?}");
+    assert!((coefficient("m").abs() - 0.5f64.sqrt()).abs() < 1e-6, "{combination:?}");
+    assert!(coefficient("L").abs() < 1e-3, "{combination:?}");
+}

@@ -37,9 +37,10 @@ fn number(v: f64) -> String {
 /// Two significant digits, for the standard errors' share and the correlations.
 fn short(v: f64) -> String {
     if v.is_finite() {
-        format!("{v:.2}")
+        // Rounded to nothing, a negative shows no sign.
+        format!("{:.2}", if v.abs() < 0.005 { 0.0 } else { v })
     } else {
-        number(v)
+        "–".into()
     }
 }
 
@@ -58,7 +59,7 @@ pub fn text_report(path: &str, data: &str, fit: &Fit) -> String {
     for (j, u) in fit.unknowns.iter().enumerate() {
         let pad = " ".repeat(width - u.name.chars().count());
         let (value, error) = (fit.estimates[j], fit.standard_errors[j]);
-        let relative = if value != 0.0 {
+        let relative = if value != 0.0 && error.is_finite() {
             format!("  ({}%)", short(100.0 * error / value.abs()))
         } else {
             String::new()
@@ -82,14 +83,15 @@ pub fn text_report(path: &str, data: &str, fit: &Fit) -> String {
         }
     }
     if let Some(c) = &fit.unidentifiable {
-        let terms: Vec<String> =
-            c.terms.iter().map(|(name, v)| format!("{} δ{name}/{name}", short(*v))).collect();
+        let (names, coefficients): (Vec<String>, Vec<String>) =
+            c.terms.iter().map(|(name, v)| (format!("δ{name}/{name}"), short(*v))).unzip();
         let _ = writeln!(
             out,
-            "warning: the data cannot tell the unknowns apart along {} (singular values {:.1e} \
-             apart): its standard errors mean little; fix one of them, or measure what moves \
-             them differently",
-            terms.join(" + ").replace("+ -", "- "),
+            "warning: the data cannot tell the unknowns apart: moving ({}) along ({}) leaves \
+             the residuals unchanged (the smallest singular value is {:.1e} of the largest); \
+             fix one of them, or measure what moves them differently",
+            names.join(", "),
+            coefficients.join(", "),
             c.ratio
         );
     }

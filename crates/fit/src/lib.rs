@@ -177,6 +177,7 @@ pub struct Fit {
     pub unknowns: Vec<Unknown>,
     pub initial: Vec<f64>,
     pub estimates: Vec<f64>,
+    /// Infinite for an unknown in a combination the data cannot fix.
     pub standard_errors: Vec<f64>,
     /// k × k.
     pub covariance: Vec<Vec<f64>>,
@@ -250,7 +251,17 @@ pub fn fit(source: &str, options: &Options, table: data::Table) -> Result<Fit, E
     let standard_errors: Vec<f64> = (0..k).map(|j| covariance[j][j].sqrt()).collect();
     let correlation = (0..k)
         .map(|i| {
-            (0..k).map(|j| covariance[i][j] / (standard_errors[i] * standard_errors[j])).collect()
+            (0..k)
+                .map(|j| {
+                    let product = standard_errors[i] * standard_errors[j];
+                    // No correlation is told of an unknown the data leave unbounded.
+                    if product.is_finite() {
+                        covariance[i][j] / product
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect()
         })
         .collect();
     let table = &problem.table;
@@ -342,14 +353,22 @@ fn covariance(
         .copied()
         .enumerate()
         .fold((0, f64::INFINITY), |best, (i, s)| if s < best.1 { (i, s) } else { best });
+    // The pseudo-inverse over the directions the data fix: an unknown along none of the
+    // others keeps its standard error; one in a combination they cannot fix has none.
+    let fixed = |s: f64| s > UNIDENTIFIABLE * largest;
     let mut cov = vec![vec![0.0; k]; k];
     for (i, row) in cov.iter_mut().enumerate() {
         for (l, entry) in row.iter_mut().enumerate() {
             let mut sum = 0.0;
-            for (m, s) in sigma.iter().enumerate() {
+            for (m, s) in sigma.iter().enumerate().filter(|(_, s)| fixed(**s)) {
                 sum += v_t[(m, i)] * v_t[(m, l)] / (s * s);
             }
             *entry = variance * sum * scale[i] * scale[l];
+        }
+    }
+    for (m, _) in sigma.iter().enumerate().filter(|(_, s)| !fixed(**s)) {
+        for i in (0..k).filter(|i| v_t[(m, *i)].abs() > 1e-3) {
+            cov[i][i] = f64::INFINITY;
         }
     }
     let ratio = if largest > 0.0 { smallest / largest } else { 0.0 };
