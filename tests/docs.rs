@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use engine::input::{Assignment, SweepRange};
 
 /// The pages, relative to the repository; `every_page_is_tested` keeps the list whole.
-const PAGES: [&str; 18] = [
+const PAGES: [&str; 19] = [
     "README.md",
     "docs/README.md",
     "docs/language.md",
@@ -27,6 +27,7 @@ const PAGES: [&str; 18] = [
     "docs/contacts.md",
     "docs/friction.md",
     "docs/orbits.md",
+    "docs/fitting.md",
 ];
 
 /// The name a refused scene's diagnostic gives its file.
@@ -182,6 +183,7 @@ fn run(words: &[String]) -> Result<String, String> {
         "linearize" => linearize(rest),
         "ensemble" => ensemble(rest),
         "orbit" => orbit(rest),
+        "fit" => fit(rest),
         other => Err(format!("`lagrange {other}` is not run by tests/docs.rs")),
     }
 }
@@ -467,6 +469,44 @@ fn orbit(rest: &[String]) -> Result<String, String> {
     })
 }
 
+/// `lagrange fit`: the report, text or JSON; the files it would write are not written.
+fn fit(rest: &[String]) -> Result<String, String> {
+    let args = Args::parse(rest, &["no-units", "json"]);
+    let own = ["data", "free", "bound", "noise", "shots", "iterations", "json", "plot", "fitted"];
+    args.only(&[&["method", "tolerance", "step", "set", "input", "no-units"][..], &own].concat())?;
+    let [file] = &args.positional[..] else { return Err("one file".into()) };
+    let data = args.last("data").ok_or("--data")?;
+    let mut series = Vec::new();
+    for input in args.parsed::<Assignment>("input")? {
+        let read = cli::series::read(&root().join(&input.value))?;
+        series.push((input.name, read));
+    }
+    let run = simulation::Options {
+        method: args.last("method"),
+        tolerance: args.number("tolerance")?,
+        step: args.number("step")?,
+        set: args.parsed("set")?,
+        input_series: series,
+        no_units: args.has("no-units"),
+        ..Default::default()
+    };
+    let request = cli::fit::Request {
+        free: args.all("free"),
+        bound: args.all("bound"),
+        noise: args.parsed("noise")?,
+        shots: args.number("shots")?.unwrap_or(1),
+        iterations: args.number("iterations")?.unwrap_or(100),
+        json: args.has("json"),
+    };
+    let (_, found) = cli::fit::from_files(&root().join(file), &root().join(&data), run, &request)
+        .map_err(|(message, _)| message)?;
+    Ok(if request.json {
+        cli::fit::json(file, &data, &found)
+    } else {
+        cli::fit::text_report(file, &data, &found)
+    })
+}
+
 /// The `lagrange` command of a shell line, if it is one that is run: `lagrange derive …` or
 /// `cargo run -- derive …` (with `--release` or not).
 fn command(line: &str) -> Option<Vec<String>> {
@@ -479,7 +519,7 @@ fn command(line: &str) -> Option<Vec<String>> {
         }
         _ => return None,
     };
-    let run = ["derive", "check", "simulate", "linearize", "ensemble", "orbit"];
+    let run = ["derive", "check", "simulate", "linearize", "ensemble", "orbit", "fit"];
     run.contains(&rest.first()?.as_str()).then(|| rest.to_vec())
 }
 
@@ -721,6 +761,11 @@ fn fmu() {
 #[test]
 fn orbits() {
     assert_honest("docs/orbits.md");
+}
+
+#[test]
+fn fitting() {
+    assert_honest("docs/fitting.md");
 }
 
 #[test]

@@ -234,6 +234,49 @@ pub struct Written {
     pub plot: Option<std::path::PathBuf>,
 }
 
+/// A fit made from files: the scene's text and the fit, or the error as text with the exit
+/// code (2 bad input, 1 a fault).
+pub fn from_files(
+    scene: &std::path::Path,
+    data: &std::path::Path,
+    run: simulation::Options,
+    request: &Request,
+) -> Result<(String, Fit), (String, u8)> {
+    let path = scene.display().to_string();
+    let data_path = data.display().to_string();
+    let source = crate::read_scene(scene).map_err(|e| (e, 2))?;
+    let text = std::fs::read(data)
+        .map_err(|e| e.to_string())
+        .and_then(|bytes| crate::decode(&data_path, bytes))
+        .map_err(|e| (format!("error: cannot read {data_path}: {e}\n"), 2))?;
+    let fail = |e: fit::Error| (error(&path, (&data_path, &text), &e), e.exit_code());
+    let mut options = fit::Options {
+        run,
+        shots: request.shots,
+        iterations: request.iterations,
+        ..Default::default()
+    };
+    for given in &request.free {
+        options.free.extend(fit::parse_free(given).map_err(fail)?);
+    }
+    for given in &request.bound {
+        options.bounds.push(fit::parse_bound(given).map_err(fail)?);
+    }
+    for n in &request.noise {
+        let sigma = n.value.trim().parse::<f64>().map_err(|_| {
+            let message = format!(
+                "error: --noise {}={}: a noise level is a number, in the column's unit\n",
+                n.name, n.value
+            );
+            (message, 2)
+        })?;
+        options.noise.push((n.name.clone(), sigma));
+    }
+    let table = fit::data::read(&text).map_err(|d| fail(fit::Error::Data(d)))?;
+    let result = fit::fit(&source, &options, table).map_err(fail)?;
+    Ok((source, result))
+}
+
 /// `lagrange fit`: reads the scene and the data, fits, and writes the report and the files
 /// asked for; the exit code (2 bad input, 1 a fault or no convergence).
 pub fn run(
@@ -246,94 +289,42 @@ pub fn run(
     use std::process::ExitCode;
     let path = scene.display().to_string();
     let data_path = data.display().to_string();
-    let source = match crate::read_scene(scene) {
-        Ok(s) => s,
-        Err(e) => {
-            eprint!("{e}");
-            return ExitCode::from(2);
+    let (source, result) = match from_files(scene, data, run, &request) {
+        Ok(found) => found,
+        Err((message, code)) => {
+            eprint!("{message}");
+            return ExitCode::from(code);
         }
-    };
-    let text = match std::fs::read(data)
-        .map_err(|e| e.to_string())
-        .and_then(|bytes| crate::decode(&data_path, bytes))
-    {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: cannot read {data_path}: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let fail = |e: &fit::Error| {
-        eprint!("{}", error(&path, (&data_path, &text), e));
-        ExitCode::from(e.exit_code())
-    };
-    let mut options = fit::Options {
-        run,
-        shots: request.shots,
-        iterations: request.iterations,
-        ..Default::default()
-    };
-    for given in &request.free {
-        match fit::parse_free(given) {
-            Ok(free) => options.free.extend(free),
-            Err(e) => return fail(&e),
-        }
-    }
-    for given in &request.bound {
-        match fit::parse_bound(given) {
-            Ok(b) => options.bounds.push(b),
-            Err(e) => return fail(&e),
-        }
-    }
-    for n in &request.noise {
-        match n.value.trim().parse::<f64>() {
-            Ok(sigma) => options.noise.push((n.name.clone(), sigma)),
-            Err(_) => {
-                eprintln!(
-                    "error: --noise {}={}: a noise level is a number, in the column's unit",
-                    n.name, n.value
-                );
-                return ExitCode::from(2);
-            }
-        }
-    }
-    let table = match fit::data::read(&text) {
-        Ok(t) => t,
-        Err(d) => return fail(&fit::Error::Data(d)),
-    };
-    let result = match fit::fit(&source, &options, table) {
-        Ok(r) => r,
-        Err(e) => return fail(&e),
     };
     let report = if request.json {
         json(&path, &data_path, &result)
     } else {
         text_report(&path, &data_path, &result)
     };
+    let mut files = Vec::new();
     if let Some(p) = &written.plot {
-        if let Err(e) = crate::write_atomically(p, &plot(&path, &result)) {
-            eprintln!("error: cannot write {}: {e}", p.display());
-            return ExitCode::from(2);
-        }
+        files.push((p, plot(&path, &result)));
     }
     if let Some(p) = &written.fitted {
-        let scene_text = match fit::scene::written(&source, &result) {
-            Ok(t) => t,
-            Err(e) => return fail(&fit::Error::Engine(e)),
-        };
-        if let Err(e) = crate::write_atomically(p, &scene_text) {
+        match fit::scene::written(&source, &result) {
+            Ok(text) => files.push((p, text)),
+            Err(e) => {
+                eprint!("{}", crate::diagnostics::error(&path, &e));
+                return ExitCode::from(e.exit_code());
+            }
+        }
+    }
+    if let Some(p) = &written.out {
+        files.push((p, report.clone()));
+    }
+    for (p, text) in &files {
+        if let Err(e) = crate::write_atomically(p, text) {
             eprintln!("error: cannot write {}: {e}", p.display());
             return ExitCode::from(2);
         }
     }
-    match &written.out {
-        Some(p) => {
-            if let Err(e) = crate::write_atomically(p, &report) {
-                eprintln!("error: cannot write {}: {e}", p.display());
-                return ExitCode::from(2);
-            }
-        }
-        None => print!("{report}"),
+    if written.out.is_none() {
+        print!("{report}");
     }
     if result.ending.converged() {
         ExitCode::SUCCESS

@@ -348,6 +348,91 @@ impl NativeScene {
         orbit_dict(py, &found)
     }
 
+    /// A fit as `lagrange fit` makes it: the scene's `free` unknowns (`"c, L=1.2, theta(0)"`)
+    /// estimated from `data` (CSV text with a column `t`), its runs as `options` set them,
+    /// each column's residuals divided by its `noise`, within `bounds` (`"c=0:"`), over
+    /// `shots` shots. Returns a dict: the unknowns' names and kinds, the estimates, their
+    /// standard errors, the covariance and correlation, the columns' RMS, the cost, the
+    /// residuals' variance, the iterations, whether it converged, the combination the data
+    /// cannot tell apart, the data's times and the model's values there, and the scene with
+    /// the fitted values written in.
+    #[pyo3(signature = (data, free, options, noise = Vec::new(), bounds = Vec::new(), shots = 1, iterations = 100))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit<'py>(
+        &self,
+        py: Python<'py>,
+        data: String,
+        free: String,
+        options: RunOptions,
+        noise: Vec<(String, f64)>,
+        bounds: Vec<String>,
+        shots: usize,
+        iterations: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let run = options.engine(self)?;
+        let shown = |e: &fit::Error| -> PyErr {
+            match e {
+                fit::Error::Engine(e) => engine_error(e, &self.path),
+                fit::Error::Data(diagnostics) => {
+                    PyValueError::new_err(lang::render::render("data", &data, diagnostics))
+                }
+                fit::Error::Argument { text, diagnostics, .. } => {
+                    PyValueError::new_err(lang::render::render("free", text, diagnostics))
+                }
+            }
+        };
+        let mut fit_options = fit::Options { run, noise, shots, iterations, ..Default::default() };
+        fit_options.free = fit::parse_free(&free).map_err(|e| shown(&e))?;
+        for b in &bounds {
+            fit_options.bounds.push(fit::parse_bound(b).map_err(|e| shown(&e))?);
+        }
+        let table = fit::data::read(&data).map_err(|d| shown(&fit::Error::Data(d)))?;
+        let found =
+            py.detach(|| fit::fit(&self.source, &fit_options, table)).map_err(|e| shown(&e))?;
+        let scene =
+            fit::scene::written(&self.source, &found).map_err(|e| engine_error(&e, &self.path))?;
+        let out = PyDict::new(py);
+        let names: Vec<&str> = found.unknowns.iter().map(|u| u.name.as_str()).collect();
+        let kinds: Vec<&str> = found
+            .unknowns
+            .iter()
+            .map(|u| match u.kind {
+                fit::Kind::Parameter(_) => "parameter",
+                fit::Kind::Start { .. } => "start",
+            })
+            .collect();
+        out.set_item("names", names)?;
+        out.set_item("kinds", kinds)?;
+        out.set_item("estimates", PyArray1::from_vec(py, found.estimates.clone()))?;
+        out.set_item("standard_errors", PyArray1::from_vec(py, found.standard_errors.clone()))?;
+        out.set_item("initial", PyArray1::from_vec(py, found.initial.clone()))?;
+        out.set_item("covariance", found.covariance.clone())?;
+        out.set_item("correlation", found.correlation.clone())?;
+        let columns = PyDict::new(py);
+        let model = PyDict::new(py);
+        for (c, column) in found.columns.iter().enumerate() {
+            columns.set_item(&column.name, (column.rms, column.count))?;
+            model.set_item(&column.name, PyArray1::from_vec(py, found.model[c].clone()))?;
+        }
+        out.set_item("rms", columns)?;
+        out.set_item("t", PyArray1::from_vec(py, found.times.clone()))?;
+        out.set_item("model", model)?;
+        out.set_item("cost", found.cost)?;
+        out.set_item("initial_cost", found.initial_cost)?;
+        out.set_item("variance", found.variance)?;
+        out.set_item("measurements", found.measurements)?;
+        out.set_item("degrees_of_freedom", found.degrees_of_freedom)?;
+        out.set_item("iterations", found.iterations)?;
+        out.set_item("evaluations", found.evaluations)?;
+        out.set_item("shots", found.shots)?;
+        out.set_item("converged", found.ending.converged())?;
+        out.set_item("ending", found.ending.words())?;
+        let unidentifiable = found.unidentifiable.as_ref().map(|c| c.terms.clone());
+        out.set_item("unidentifiable", unidentifiable)?;
+        out.set_item("scene", scene)?;
+        Ok(out)
+    }
+
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

@@ -47,6 +47,7 @@ __all__ = [
     "Linearization",
     "LinearizationAlong",
     "Orbit",
+    "Fit",
     "Results",
     "ContactEvents",
     "Batch",
@@ -650,6 +651,65 @@ class Scene:
         )
         return Orbit(raw)
 
+    def fit(
+        self,
+        data,
+        free,
+        *,
+        noise=None,
+        bounds=None,
+        shots=1,
+        set=None,
+        input=None,
+        method=None,
+        tolerance=None,
+        iterations=100,
+    ):
+        """Parameters and start values estimated from measurements, as ``lagrange fit``
+        makes the fit: Levenberg–Marquardt on the exact sensitivities of the runs.
+
+        - ``data``: a pandas DataFrame, or a dict of equal-length arrays, with a column ``t``
+          (seconds, increasing) and columns named by scene expressions (``"theta"``,
+          ``"x'"``, ``"KE"``); NaN is a value not measured.
+        - ``free``: the unknowns, a list of names or one comma-separated text: parameters
+          (``"c"``) and start values (``"theta(0)"``, ``"theta'(0)"``); or a dict of name to
+          the value to start from (in SI). Without a value, the scene's.
+        - ``noise``: a dict of column to its noise level; each residual is divided by its
+          column's (1 where none is given). ``bounds``: a dict of unknown to ``(low, high)``
+          (``None`` for an open side).
+        - ``shots``: multiple shooting over this many shots, for long or chaotic records.
+        - ``set``, ``input`` (measured inputs as ``(t, values)`` series, or laws), ``method``,
+          ``tolerance`` as for :meth:`simulate`; ``iterations``: the most
+          Levenberg–Marquardt iterations.
+
+        Returns a :class:`Fit`. Bad data or names raise ``ValueError`` with the place marked;
+        a run that faults :class:`NumericError`.
+        """
+        options = _run_options(method=method, tolerance=tolerance, set=set, input=input)
+        if isinstance(free, str):
+            free_text = free
+        elif isinstance(free, dict):
+            free_text = ", ".join(
+                name if start is None else f"{name}={float(start)!r}" for name, start in free.items()
+            )
+        else:
+            free_text = ", ".join(free)
+        bound_texts = []
+        for name, (low, high) in (bounds or {}).items():
+            low = "" if low is None else repr(float(low))
+            high = "" if high is None else repr(float(high))
+            bound_texts.append(f"{name}={low}:{high}")
+        raw = self._native.fit(
+            _data_text(data),
+            free_text,
+            options,
+            noise=[(name, float(sigma)) for name, sigma in (noise or {}).items()],
+            bounds=bound_texts,
+            shots=int(shots),
+            iterations=int(iterations),
+        )
+        return Fit(raw)
+
     def check(self):
         """Checks every ``expect`` line of the scene: a list of :class:`Expectation`."""
         return [Expectation(**item) for item in self._native.check()]
@@ -701,6 +761,62 @@ class Orbit(dict):
         verdict = self["verdict"]
         largest = max((abs(m) for m in self["multipliers"]), default=0.0)
         return f"<lagrange.Orbit period {self['period']:.6g} s, {verdict}, max |μ| {largest:.6g}>"
+
+
+def _data_text(data):
+    """Measurements as the CSV text a fit reads: the columns of a DataFrame or a dict of
+    arrays, every number in full (``repr`` gives a float's shortest exact digits), NaN as an
+    empty cell."""
+    import math
+
+    import numpy as np
+
+    names = [str(name) for name in data.keys()] if hasattr(data, "keys") else None
+    if names is None:
+        raise TypeError(f"`data` must be a DataFrame or a dict of arrays, not {type(data).__name__}")
+    columns = [np.asarray(data[name], dtype=float).ravel() for name in data.keys()]
+    lengths = {len(c) for c in columns}
+    if len(lengths) > 1:
+        raise ValueError(f"the columns of `data` differ in length: {sorted(lengths)}")
+    lines = [",".join(names)]
+    for row in zip(*columns):
+        lines.append(",".join("" if math.isnan(v) else repr(float(v)) for v in row))
+    return "\n".join(lines) + "\n"
+
+
+class Fit(dict):
+    """A fit: the dict ``Scene.fit`` gives, with its parts as attributes.
+
+    - ``names``: the unknowns; ``kinds``: ``"parameter"`` or ``"start"`` each;
+      ``estimates``, ``standard_errors``, ``initial``: NumPy arrays in that order (a
+      standard error is infinite for an unknown the data cannot fix); ``covariance`` and
+      ``correlation``: NumPy arrays; ``values``: a dict of name to estimate.
+    - ``rms``: per column, its residuals' RMS and how many values; ``t`` and ``model``: the
+      data's times and the fitted model's value of each column there.
+    - ``cost``: Σ r² at the optimum, ``variance``: Σ r²/(N − k), by which the covariance is
+      scaled; ``iterations``, ``evaluations``, ``shots``, ``converged``, ``ending``.
+    - ``unidentifiable``: ``None``, or the combination (name, coefficient of δθ/θ) along
+      which the residuals do not change.
+    - ``scene``: the scene's text with the fitted values written in.
+    """
+
+    def __init__(self, raw):
+        import numpy as np
+
+        raw = dict(raw)
+        raw["covariance"] = np.array(raw["covariance"], dtype=float)
+        raw["correlation"] = np.array(raw["correlation"], dtype=float)
+        raw["values"] = dict(zip(raw["names"], (float(v) for v in raw["estimates"])))
+        super().__init__(raw)
+        for key, value in raw.items():
+            setattr(self, key, value)
+
+    def __repr__(self):
+        parts = ", ".join(
+            f"{n} = {v:.6g} ± {e:.2g}"
+            for n, v, e in zip(self["names"], self["estimates"], self["standard_errors"])
+        )
+        return f"<lagrange.Fit {parts}{'' if self['converged'] else ' (not converged)'}>"
 
 
 class Linearization(dict):

@@ -79,6 +79,16 @@ class NativeScene:
         tolerance: Optional[float] = None,
         iterations: int = 30,
     ) -> dict[str, Any]: ...
+    def fit(
+        self,
+        data: str,
+        free: str,
+        options: dict[str, Any],
+        noise: Sequence[tuple[str, float]] = ...,
+        bounds: Sequence[str] = ...,
+        shots: int = 1,
+        iterations: int = 100,
+    ) -> dict[str, Any]: ...
     def check(self) -> list[dict[str, Any]]: ...
 
 class Rhs:
