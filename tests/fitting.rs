@@ -185,6 +185,17 @@ fn the_jacobian_is_what_differences_of_whole_runs_give() {
         &[0.7, 0.01, 0.05],
     );
     assert!(cart < 1e-7, "cart: {cart:.1e}");
+    // A value set in terms of a free parameter follows it: c's share in ∂/∂L is taken.
+    let mut following = options("L", 1);
+    following.run.tolerance = Some(1e-13);
+    following.run.set = vec!["c=3*L/11".parse().expect("an assignment")];
+    let set = jacobian_against_differences(
+        "damped_pendulum.lag",
+        "damped_pendulum.csv",
+        following,
+        &[1.05],
+    );
+    assert!(set < 1e-7, "c = 3L/11: {set:.1e}");
 }
 
 /// The error of fitting the gallery's scene to `data` (its text, shown as `data_path`)

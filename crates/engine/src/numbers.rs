@@ -39,6 +39,10 @@ pub struct Prepared {
     pub arming: Vec<Option<ExprId>>,
     /// The one way to the parameters' values: free ones set, derived ones following.
     pub parameter_plan: model::ParameterValues,
+    /// Parameters a run gives other values than the scene's (`--set b=2*a`), each an
+    /// expression of the parameters: their sensitivities follow those expressions, as a derived
+    /// parameter's follow its own ([`Prepared::set_parameter_overrides`]).
+    pub parameter_overrides: Vec<(usize, ExprId)>,
 }
 
 /// Loads `source` with `extra` expressions resolved against it as the scene's `show` items
@@ -135,6 +139,7 @@ impl Prepared {
             partials_program: None,
             contacts,
             arming,
+            parameter_overrides: Vec::new(),
         }
     }
 }

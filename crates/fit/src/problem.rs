@@ -132,6 +132,7 @@ impl Problem {
         let columns = column_expressions(&mut prepared, &table)?;
         let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
         let overrides = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
+        prepared.set_parameter_overrides(&overrides.params);
         let unknowns = unknowns(&prepared, &options.free)?;
         let free_slots: Vec<usize> = unknowns
             .iter()

@@ -213,6 +213,7 @@ fn load_for(source: &str, options: &Options, swept: Option<&str>) -> Result<Load
     let simulation::Loaded { mut prepared, outputs, .. } = resolved.load(&settings)?;
     let set_exprs = simulation::set_expressions(&mut prepared, &settings.sets)?;
     let values = simulation::overrides(&prepared, &settings.sets, &set_exprs)?;
+    prepared.set_parameter_overrides(&values.params);
     let (parameters, start) = simulation::start(&mut prepared, &values, &[])?;
     let columns = outputs.len() + settings.stops.len() + settings.events.len() + 2;
     let dynamics_exprs = prepared.dynamics_exprs();

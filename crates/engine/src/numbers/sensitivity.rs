@@ -40,17 +40,26 @@ impl Prepared {
 
     /// d slot/d p for each parameter slot ([`Prepared::parameters`], the inputs' after the
     /// parameters') and each free parameter of `free`, as expressions of the parameters: 1 or 0
-    /// for a free parameter, the chain rule through the scene's expression for a derived one
-    /// or an input's declared value, 0 for an input a law drives (its symbol is gone from the
-    /// equations).
+    /// for a free parameter, the chain rule through the scene's expression for a derived one,
+    /// an input's declared value or a value a run sets in the scene's place
+    /// ([`Prepared::set_parameter_overrides`]), 0 for an input a law drives (its symbol is gone
+    /// from the equations).
     fn slot_derivatives(&mut self, free: &[usize]) -> Vec<Vec<ExprId>> {
         let model = &mut self.derivation.model;
-        let values: Vec<Option<ExprId>> = model.constants().iter().map(|(_, v)| *v).collect();
+        let mut values: Vec<Option<ExprId>> = model.constants().iter().map(|(_, v)| *v).collect();
+        // A value a run gives in the scene's place follows its expression, unless the slot is
+        // free: then the value is only where it starts.
+        let mut overridden = vec![false; values.len()];
+        for (slot, e) in self.parameter_overrides.iter().filter(|(slot, _)| !free.contains(slot)) {
+            values[*slot] = Some(*e);
+            overridden[*slot] = true;
+        }
         let params = model.params.len();
         let mut out: Vec<Vec<ExprId>> = Vec::with_capacity(self.parameters.len());
         for (slot, &s) in self.parameters.iter().enumerate() {
             let pool = &mut model.pool;
-            let row: Vec<ExprId> = if slot < params && !self.parameter_plan.is_derived(slot) {
+            let set = slot < params && !self.parameter_plan.is_derived(slot) && !overridden[slot];
+            let row: Vec<ExprId> = if set {
                 free.iter().map(|&i| if i == slot { pool.one() } else { pool.zero() }).collect()
             } else if self.driven.contains_key(&s) {
                 vec![pool.zero(); free.len()]
@@ -266,5 +275,15 @@ impl Prepared {
             d.accels.iter().copied().chain(d.multipliers.iter().map(|m| m.lambda)).collect();
         let pool = &mut self.derivation.model.pool;
         unknowns.iter().any(|s| pool.depends_on(e, *s))
+    }
+}
+
+impl Prepared {
+    /// The values a run gives parameters in the scene's place (`--set b=2*a`, by slot): the
+    /// sensitivities by a free parameter follow them through the chain rule, as they follow a
+    /// derived parameter's expression. Without this, `b` would count as a parameter of its
+    /// own, and its share in a sensitivity by `a` would be left out.
+    pub fn set_parameter_overrides(&mut self, overrides: &[(usize, ExprId)]) {
+        self.parameter_overrides = overrides.to_vec();
     }
 }
