@@ -337,3 +337,58 @@ fn a_mass_and_a_damping_seen_only_as_their_ratio_are_named_unidentifiable() {
     assert!((coefficient("m").abs() - 0.5f64.sqrt()).abs() < 1e-6, "{combination:?}");
     assert!(coefficient("L").abs() < 1e-3, "{combination:?}");
 }
+
+#[test]
+fn accelerations_and_reactions_are_measured_columns_with_exact_derivatives() {
+    // An accelerometer on the pendulum, and the kept rod's tension with the bob's x.
+    let text = "t,theta''\n0.5,-5\n1,-2\n1.5,3\n2,6\n2.5,1\n";
+    let recording = data::read(text).expect("reads");
+    let mut pendulum = options("L, c, theta(0)", 1);
+    pendulum.run.tolerance = Some(1e-13);
+    let mut problem =
+        fit::problem::Problem::load(&example("damped_pendulum.lag"), &pendulum, recording)
+            .expect("loads");
+    let error = against_differences(&mut problem, &[1.05, 0.25, 0.98]);
+    assert!(error < 1e-7, "theta'': {error:.1e}");
+    let text = lagrange_tests::recording(
+        KEPT,
+        &[("L", "1.2"), ("g", "9.7")],
+        &[],
+        &[("x", 0.002), ("rod.force", 0.05)],
+        (4.0, 81),
+        19,
+    );
+    let recording = data::read(&text).expect("reads");
+    let mut kept = options("L, g", 1);
+    kept.run.tolerance = Some(1e-12);
+    let mut problem = fit::problem::Problem::load(KEPT, &kept, recording.clone()).expect("loads");
+    let error = against_differences(&mut problem, &[1.1, 9.75]);
+    assert!(error < 1e-6, "rod.force: {error:.1e}");
+    let result = fit::fit(KEPT, &kept, recording).expect("fits");
+    for (j, truth) in [1.2, 9.7].iter().enumerate() {
+        let (estimate, error) = (result.estimates[j], result.standard_errors[j]);
+        assert!((estimate - truth).abs() <= 2.0 * error, "{estimate} ± {error}, truly {truth}");
+    }
+}
+
+/// The largest entry of the problem's Jacobian at `theta` less central differences of its
+/// residuals, relative to the Jacobian's largest entry.
+fn against_differences(problem: &mut fit::problem::Problem, theta: &[f64]) -> f64 {
+    let exact = problem.evaluate(theta).expect("runs");
+    let width = theta.len();
+    let largest = exact.jacobian.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst = 0.0f64;
+    for j in 0..width {
+        let h = 1e-5 * theta[j].abs().max(1e-2);
+        let (mut up, mut down) = (theta.to_vec(), theta.to_vec());
+        up[j] += h;
+        down[j] -= h;
+        let up = problem.evaluate(&up).expect("runs").residuals;
+        let down = problem.evaluate(&down).expect("runs").residuals;
+        for i in 0..up.len() {
+            let difference = (up[i] - down[i]) / (2.0 * h);
+            worst = worst.max((exact.jacobian[i * width + j] - difference).abs());
+        }
+    }
+    worst / largest
+}

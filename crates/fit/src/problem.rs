@@ -54,6 +54,9 @@ pub struct Problem {
     /// The free parameters' slots, in the order of the sensitivity program's columns.
     free_slots: Vec<usize>,
     observation: Tape,
+    /// Whether each column names an acceleration or a reaction, whose derivative comes from
+    /// the accelerations' system at each row.
+    unknown_columns: Vec<bool>,
     /// The series-driven inputs' slots and series, filled in at each data time.
     signals: Vec<(usize, sim::Series)>,
     pub table: Table,
@@ -162,6 +165,7 @@ impl Problem {
             mechanical.set_sensitivities(Tape::new(program), free_slots.len());
         }
         let observation = Tape::new(prepared.observation_partials(&columns, &free_slots)?);
+        let unknown_columns = columns.iter().map(|e| prepared.names_unknowns(*e)).collect();
         let weights = weights(&table, &options.noise)?;
         let kept = prepared.layout.multipliers > 0;
         let shots = options.shots.max(1);
@@ -193,6 +197,7 @@ impl Problem {
             unknowns,
             free_slots,
             observation,
+            unknown_columns,
             signals,
             table,
             weights,
@@ -395,16 +400,49 @@ impl Problem {
         debug_assert_eq!(states.len(), rows);
         let n = self.prepared.layout.coordinates;
         let m = self.prepared.layout.multipliers;
-        let outputs_per = 1 + size + kp;
+        let unknowns_size = n + m;
+        let outputs_per = 1 + size + unknowns_size + kp;
         let mut inputs = vec![0.0; 1 + 3 * n + m + parameters.len()];
         let mut out = vec![0.0; columns * outputs_per];
         let mut residuals = Vec::with_capacity(self.table.measured());
         let mut jacobian = Vec::with_capacity(self.table.measured() * width);
         let mut per_column: Vec<Vec<(f64, Vec<f64>)>> = vec![Vec::new(); columns];
+        let wanted = self.unknown_columns.iter().any(|u| *u);
+        // Which column of the sensitivity program each unknown's own parameter share is.
+        let mut p = 0;
+        let by_parameter: Vec<Option<usize>> = (0..width)
+            .map(|j| match self.unknowns.get(j).map(|u| &u.kind) {
+                Some(Kind::Parameter(_)) => {
+                    p += 1;
+                    Some(p - 1)
+                }
+                _ => None,
+            })
+            .collect();
+        let mut solution = vec![0.0; unknowns_size];
+        let mut solution_rate = vec![0.0; unknowns_size * width];
         for (r, (state, d)) in states.iter().enumerate() {
             let t = self.table.times[r];
             inputs[0] = t;
             inputs[1..1 + size].copy_from_slice(state);
+            if wanted {
+                let found = self
+                    .mechanical
+                    .solution_derivative(
+                        t,
+                        state,
+                        d,
+                        &by_parameter,
+                        &mut solution,
+                        &mut solution_rate,
+                    )
+                    .map_err(|kind| {
+                        let fault = sim::Fault { time: t, state: state.clone(), kind };
+                        self.refused(Refusal::Fault(fault))
+                    })?;
+                debug_assert!(found, "the problem has its partials and sensitivities");
+                inputs[1 + size..1 + size + unknowns_size].copy_from_slice(&solution);
+            }
             let slots = &mut inputs[1 + 3 * n + m..];
             slots.copy_from_slice(&parameters);
             for (slot, series) in &self.signals {
@@ -424,11 +462,18 @@ impl Problem {
                         }
                     }
                 }
-                let mut p = 0;
-                for (j, u) in self.unknowns.iter().enumerate() {
-                    if let Kind::Parameter(_) = u.kind {
-                        grad[j] += row[1 + size + p];
-                        p += 1;
+                if self.unknown_columns[c] {
+                    let by_unknowns = &row[1 + size..1 + size + unknowns_size];
+                    for (i, dh) in by_unknowns.iter().enumerate().filter(|(_, dh)| **dh != 0.0) {
+                        let rates = &solution_rate[i * width..(i + 1) * width];
+                        for (g, ds) in grad.iter_mut().zip(rates) {
+                            *g += dh * ds;
+                        }
+                    }
+                }
+                for (j, p) in by_parameter.iter().enumerate() {
+                    if let Some(p) = p {
+                        grad[j] += row[1 + size + unknowns_size + p];
                     }
                 }
                 grad.iter_mut().for_each(|g| *g *= w);
@@ -550,23 +595,6 @@ fn column_expressions(
             Ok(model::Value::Scalar(e)) => {
                 let e = prepared.derivation.expand_quantities(e, false);
                 let e = prepared.with_laws(e);
-                if prepared.names_unknowns(e) {
-                    diagnostics.push(
-                        Diagnostic::error(
-                            column.span,
-                            format!(
-                                "the column `{}` depends on an acceleration or a reaction, which \
-                                 fit does not take yet",
-                                column.name
-                            ),
-                        )
-                        .with_label("not a function of the state")
-                        .with_hint(
-                            "measure coordinates, rates and expressions of them (energies, \
-                             positions, outputs)",
-                        ),
-                    );
-                }
                 exprs.push(e);
             }
             Ok(value) => diagnostics.push(

@@ -240,12 +240,11 @@ fn products(pool: &mut cas::Pool, pairs: impl Iterator<Item = (ExprId, ExprId)>)
 
 impl Prepared {
     /// For each of `exprs` (expressions of the observation inputs), its value, its partials
-    /// in q and then in q̇ (2n), and its total derivative by each free parameter of `free`
-    /// through the derived slots (k): row after row of 1 + 2n + k, lowered for the observation
-    /// inputs. What a fit needs of a measured column to chain the run's Φ and S into the
-    /// column's own derivative, dy/dθ = ∂y/∂x·dx/dθ + ∂y/∂p·dp/dθ. An expression that names
-    /// an acceleration or a multiplier is refused by [`Prepared::names_unknowns`]'s caller:
-    /// its derivative would need d(q̈, λ)/dθ, which this program does not take.
+    /// in q, q̇, q̈ and λ (2n, then n, then m), and its total derivative by each
+    /// free parameter of `free` through the derived slots (k): row after row of
+    /// 1 + 3n + m + k, lowered for the observation inputs. What a fit needs of a measured
+    /// column to chain the run's Φ and S into the column's own derivative,
+    /// dy/dθ = ∂y/∂x·dx/dθ + ∂y/∂(q̈, λ)·d(q̈, λ)/dθ + ∂y/∂p·dp/dθ.
     pub fn observation_partials(
         &mut self,
         exprs: &[ExprId],
@@ -255,7 +254,9 @@ impl Prepared {
         let slots = self.slot_derivatives(free);
         let constants = self.parameters.clone();
         let d = &self.derivation;
-        let state: Vec<SymId> = d.coords.iter().chain(&d.rates).copied().collect();
+        let multipliers = d.multipliers.iter().map(|m| m.lambda);
+        let state: Vec<SymId> =
+            d.coords.iter().chain(&d.rates).chain(&d.accels).copied().chain(multipliers).collect();
         let mut out = Vec::with_capacity(exprs.len() * (1 + state.len() + free.len()));
         for &e in exprs {
             out.push(e);

@@ -176,11 +176,85 @@ impl Mechanical {
         Ok(true)
     }
 
+    /// q̈ and λ at (t, y) into `solution` (n + m), and their derivatives along `directions`
+    /// (row-major 2n × k: columns of dx/dθ) into `out` (row-major (n + m) × k), with
+    /// column j's own parameter share where `parameters[j]` names a column of the sensitivity
+    /// program: [M −Jᵀ; J 0]·d(q̈, λ) = −(∂(r, c̃)/∂x·D + ∂(r, c̃)/∂p). What a measured
+    /// acceleration's or reaction's derivative by a fit's unknowns needs. False without a
+    /// partials program, or where `parameters` names a column without a sensitivity program.
+    pub fn solution_derivative(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        directions: &[f64],
+        parameters: &[Option<usize>],
+        solution: &mut [f64],
+        out: &mut [f64],
+    ) -> Result<bool, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: slots } = self.layout;
+        let k = parameters.len();
+        assert_eq!(directions.len(), 2 * n * k, "directions' length");
+        assert_eq!(out.len(), (n + m) * k, "the derivatives' length");
+        let wants_parameters = parameters.iter().any(Option::is_some);
+        if self.partials.is_none() || (wants_parameters && self.sensitivities.is_none()) {
+            return Ok(false);
+        }
+        self.accelerations(t, y)?;
+        let held = std::mem::take(&mut self.solution);
+        solution.copy_from_slice(&held);
+        let evaluated = self.partials_at(t, y, &held).map(|_| ());
+        if let Err(fault) = evaluated {
+            self.solution = held;
+            return Err(fault);
+        }
+        let rows = n + 3 * m;
+        let width = 2 * n;
+        let mut combined = vec![0.0; rows * k];
+        for i in 0..rows {
+            let row = &self.partials_out[i * width..(i + 1) * width];
+            for (l, p) in row.iter().enumerate().filter(|(_, p)| **p != 0.0) {
+                for j in 0..k {
+                    combined[i * k + j] += p * directions[l * k + j];
+                }
+            }
+        }
+        if wants_parameters {
+            let input = &mut self.obs_input;
+            input[0] = t;
+            input[1..1 + 2 * n].copy_from_slice(y);
+            input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&held);
+            input[1 + 3 * n + m..1 + 3 * n + m + slots].copy_from_slice(&self.parameters);
+            let Some((tape, columns)) = self.sensitivities.as_mut() else {
+                unreachable!("checked above")
+            };
+            let columns = *columns;
+            tape.eval(input, &mut self.sensitivities_out);
+            for i in 0..rows {
+                for (j, p) in parameters.iter().enumerate() {
+                    if let Some(p) = p {
+                        combined[i * k + j] += self.sensitivities_out[i * columns + p];
+                    }
+                }
+            }
+        }
+        let solved = check_finite(&combined, |_| NonFiniteAt::Partials).and_then(|()| {
+            self.solve_partials(&combined, k, &held, |j, column| {
+                for (i, v) in column.iter().enumerate() {
+                    out[i * k + j] = *v;
+                }
+            })
+        });
+        self.solution = held;
+        solved?;
+        check_finite(out, |_| NonFiniteAt::Jacobian)?;
+        Ok(true)
+    }
+
     /// Solves [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c̃) for each column of `partials` (the rows of
     /// the partials program's layout, `width` columns each, row-major), c̃ the kept rows as
     /// the accelerations were solved with them, Baumgarte's terms included, and hands each
-    /// column's ∂q̈ to `put`. `solution` holds q̈ and λ at the state the dynamics program was
-    /// last evaluated at.
+    /// column's ∂(q̈, λ) to `put` (n + m: a multiplier not kept has none, 0). `solution` holds
+    /// q̈ and λ at the state the dynamics program was last evaluated at.
     fn solve_partials(
         &mut self,
         partials: &[f64],
@@ -228,7 +302,7 @@ impl Mechanical {
         // The columns are solved four at a time, side by side: the same bits as one by one (a
         // last block's unused columns are zeros, solved and dropped).
         let mut block = vec![[0.0; COLUMNS]; order];
-        let mut column = vec![0.0; n];
+        let mut column = vec![0.0; n + m];
         for first in (0..width).step_by(COLUMNS) {
             let columns = (width - first).min(COLUMNS);
             for (c, k) in (first..first + columns).enumerate() {
@@ -263,8 +337,12 @@ impl Mechanical {
             }
             linalg::lu_solve_columns(system, pivots, &mut block);
             for (c, k) in (first..first + columns).enumerate() {
-                for (i, v) in column.iter_mut().enumerate() {
+                for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
+                }
+                column[n..].fill(0.0);
+                for (r, &kept) in rows.iter().enumerate() {
+                    column[n + kept] = block[n + r][c];
                 }
                 put(k, &column);
             }
