@@ -392,3 +392,30 @@ fn against_differences(problem: &mut fit::problem::Problem, theta: &[f64]) -> f6
     }
     worst / largest
 }
+
+#[test]
+fn shots_on_a_kept_rod_join_into_the_single_shots_fit() {
+    // Each shot's start is free of the rod; the joins bring every start back onto it.
+    let text = lagrange_tests::recording(
+        KEPT,
+        &[("L", "1.2"), ("g", "9.7")],
+        &[],
+        &[("x", 0.002), ("y", 0.002), ("x'", 0.01), ("y'", 0.01)],
+        (4.0, 161),
+        17,
+    );
+    let recording = data::read(&text).expect("reads");
+    let fitted = |shots: usize| {
+        let mut o = options("L, g", shots);
+        o.run.tolerance = Some(1e-12);
+        fit::fit(KEPT, &o, recording.clone()).expect("fits")
+    };
+    let (four, one) = (fitted(4), fitted(1));
+    assert!(four.ending.converged(), "{:?}", four.ending);
+    for j in 0..2 {
+        let (a, b) = (four.estimates[j], one.estimates[j]);
+        assert!((a - b).abs() <= 1e-9 * b.abs(), "{a} against {b}");
+        let (a, b) = (four.standard_errors[j], one.standard_errors[j]);
+        assert!((a - b).abs() <= 1e-6 * b.abs(), "± {a} against ± {b}");
+    }
+}

@@ -169,14 +169,6 @@ impl Problem {
         let weights = weights(&table, &options.noise)?;
         let kept = prepared.layout.multipliers > 0;
         let shots = options.shots.max(1);
-        if shots > 1 && kept {
-            return Err(engine::Error::Input(
-                "multiple shooting does not take kept constraints yet: each shot's start would \
-                 have to stay on them; fit with one shot (leave out --shots)"
-                    .into(),
-            )
-            .into());
-        }
         let shot_starts = shot_starts(&table, shots)?;
         let start_solved = kept;
         let mut run = simulation::run_settings(&settings, 0);
