@@ -259,15 +259,8 @@ enum Command {
         /// `simulate { until … }`, else 10.
         #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
         until: Option<String>,
-        #[arg(long, value_parser = method_parser(),
-              help = "An explicit integrator (default dop853)")]
-        method: Option<sim::Method>,
-        /// Tolerance of the adaptive methods (default: the scene's, else 1e-10).
-        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
-        tolerance: Option<String>,
-        /// Step of the fixed-step methods.
-        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
-        step: Option<String>,
+        #[command(flatten)]
+        integrator: ExplicitRun,
         /// Override a parameter or the start Newton begins from: `--set w0=2`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
@@ -317,15 +310,8 @@ enum Command {
         /// The most Levenberg–Marquardt iterations.
         #[arg(long, default_value_t = 100)]
         iterations: usize,
-        #[arg(long, value_parser = method_parser(),
-              help = "An explicit integrator (default dop853)")]
-        method: Option<sim::Method>,
-        /// Tolerance of the adaptive methods (default: the scene's, else 1e-10).
-        #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
-        tolerance: Option<String>,
-        /// Step of the fixed-step methods.
-        #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
-        step: Option<String>,
+        #[command(flatten)]
+        integrator: ExplicitRun,
         /// Override a parameter or a start value that is not free: `--set g=9.81`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<Assignment>,
@@ -378,6 +364,31 @@ enum Command {
         #[arg(long)]
         no_units: bool,
     },
+}
+
+/// The integrator of the commands whose runs carry the variational equations (`orbit`, `fit`):
+/// an explicit method, on whose steps Φ and S are integrated.
+#[derive(Args)]
+struct ExplicitRun {
+    #[arg(long, value_parser = method_parser(),
+          help = "An explicit integrator (default dop853)")]
+    method: Option<sim::Method>,
+    /// Tolerance of the adaptive methods (default: the scene's, else 1e-10).
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    tolerance: Option<String>,
+    /// Step of the fixed-step methods.
+    #[arg(long, value_name = "TIME", allow_hyphen_values = true)]
+    step: Option<String>,
+}
+
+impl ExplicitRun {
+    /// The method's name, the tolerance and the step read; `None` after rendering on stderr
+    /// what could not be read.
+    fn read(self) -> Option<(Option<String>, Option<f64>, Option<f64>)> {
+        let tolerance = ratio_option(engine::Setting::Tolerance, self.tolerance.as_deref())?;
+        let step = time_option(engine::Setting::Step, self.step.as_deref())?;
+        Some((self.method.map(|m| m.name().to_string()), tolerance, step))
+    }
 }
 
 /// The settings of the run `linearize --along run` linearizes along, as `simulate` takes them.
@@ -727,9 +738,7 @@ fn main() -> ExitCode {
             swap,
             ignore,
             until,
-            method,
-            tolerance,
-            step,
+            integrator,
             set,
             sweep,
             iterations,
@@ -737,11 +746,9 @@ fn main() -> ExitCode {
             no_units,
         } => {
             let Some(source) = read_or_report(&file) else { return ExitCode::from(2) };
-            let (Some(until), Some(tolerance), Some(step)) = (
-                time_option(engine::Setting::Until, until.as_deref()),
-                ratio_option(engine::Setting::Tolerance, tolerance.as_deref()),
-                time_option(engine::Setting::Step, step.as_deref()),
-            ) else {
+            let (Some(until), Some((method, tolerance, step))) =
+                (time_option(engine::Setting::Until, until.as_deref()), integrator.read())
+            else {
                 return ExitCode::from(2);
             };
             let rising = matches!(direction, DirectionArg::Rising);
@@ -754,7 +761,7 @@ fn main() -> ExitCode {
             let options = orbit::Options {
                 run: simulation::Options {
                     until,
-                    method: method.map(|m| m.name().to_string()),
+                    method,
                     tolerance,
                     step,
                     set,
@@ -803,9 +810,7 @@ fn main() -> ExitCode {
             noise,
             shots,
             iterations,
-            method,
-            tolerance,
-            step,
+            integrator,
             set,
             input,
             json,
@@ -824,15 +829,13 @@ fn main() -> ExitCode {
             if writes_over_input(&inputs, &outputs) {
                 return ExitCode::from(2);
             }
-            let (Some(tolerance), Some(step), Some((laws, series))) = (
-                ratio_option(engine::Setting::Tolerance, tolerance.as_deref()),
-                time_option(engine::Setting::Step, step.as_deref()),
-                drives(input),
-            ) else {
+            let (Some((method, tolerance, step)), Some((laws, series))) =
+                (integrator.read(), drives(input))
+            else {
                 return ExitCode::from(2);
             };
             let run = simulation::Options {
-                method: method.map(|m| m.name().to_string()),
+                method,
                 tolerance,
                 step,
                 set,

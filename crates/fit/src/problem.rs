@@ -552,15 +552,7 @@ impl Problem {
                     angle_oriented_bodies: &names.angle_oriented_bodies,
                     contacts: &names.contacts,
                 };
-                let (what, cause) = words.words(&f.kind);
-                let state: Vec<String> =
-                    names.state.iter().zip(&f.state).map(|(n, v)| format!("{n} = {v}")).collect();
-                engine::Error::Numeric(format!(
-                    "numeric fault at t = {} of a fit's run: {what}\n  state: {}\n  likely \
-                     cause: {cause}",
-                    f.time,
-                    state.join(", ")
-                ))
+                engine::Error::Numeric(words.report(&f, "a fit's run"))
             }
             Refusal::SensitivitiesWithFriction => engine::Error::Input(
                 "fit does not take Coulomb friction yet: the sensitivities to μ are not carried"

@@ -368,18 +368,7 @@ fn refused(refusal: Refusal, loaded: &Loaded) -> Error {
                 angle_oriented_bodies: &loaded.angle_oriented_bodies,
                 contacts,
             };
-            let (what, cause) = names.words(&f.kind);
-            let state: Vec<String> = loaded
-                .state_names
-                .iter()
-                .zip(&f.state)
-                .map(|(n, v)| format!("{n} = {v}"))
-                .collect();
-            Error::Numeric(format!(
-                "numeric fault at t = {} of a return: {what}\n  state: {}\n  likely cause: {cause}",
-                f.time,
-                state.join(", ")
-            ))
+            Error::Numeric(names.report(&f, "a return"))
         }
         Refusal::Grazing { time, guard: g, relative } => Error::Numeric(format!(
             "grazing: {} is reached at t = {time} with a rate {relative:.1e} of its scale, too \

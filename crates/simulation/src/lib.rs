@@ -872,6 +872,19 @@ pub struct FaultNames<'a> {
 }
 
 impl FaultNames<'_> {
+    /// A fault of a run as a command that runs the scene many times reports it: when, in
+    /// which run (`during`, "a return"), what went wrong, the state and the likely cause.
+    pub fn report(&self, fault: &sim::Fault, during: &str) -> String {
+        let (what, cause) = self.words(&fault.kind);
+        let state: Vec<String> =
+            self.state.iter().zip(&fault.state).map(|(n, v)| format!("{n} = {v}")).collect();
+        format!(
+            "numeric fault at t = {} of {during}: {what}\n  state: {}\n  likely cause: {cause}",
+            fault.time,
+            state.join(", ")
+        )
+    }
+
     /// Contacts by index, in words: "`floor`, `wall`".
     fn contacts(&self, indices: &[usize]) -> String {
         let named: Vec<String> = indices
