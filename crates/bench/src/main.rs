@@ -23,6 +23,9 @@
 //! - `orbit [--peer] [--repeats N]`: the rimless wheel's and the driven pendulum's periodic
 //!   orbits found by `orbit`, their multipliers against closed forms and the wall time of a
 //!   search, with `--peer` SciPy's shooting loop (finite-difference Jacobians of whole runs);
+//! - `fit [--peer] [--repeats N]`: `fit::fit` on the damped pendulum's and the pushed cart's
+//!   recordings at tolerance 1e-12, with `--peer` SciPy's `least_squares` (2-point
+//!   differences of whole `solve_ivp` runs) from the same start, in the same run;
 //! - `links [--peer]`: the n-link pendulum at n = 2 … 64, where a right-hand side's time goes
 //!   (the tape, M copied, its factorization), and with `--peer` lagrange from Python (`rhs`,
 //!   `batch`, `jac`, the load) against Pinocchio's articulated-body algorithm in one Python run,
@@ -57,6 +60,7 @@ mod bicycle;
 mod contacts;
 mod ensemble;
 mod eval;
+mod fit;
 mod hand;
 mod links;
 mod memory;
@@ -150,6 +154,18 @@ enum Benchmark {
         #[arg(long, default_value_t = 5)]
         repeats: usize,
     },
+    /// Parameters fitted to the recordings of examples/fitting: the time of a fit, its
+    /// iterations and runs.
+    Fit {
+        /// Also run SciPy's least_squares on solve_ivp runs of a lambdified SymPy right-hand
+        /// side (tests/sympy/fit_peer.py, which makes its own Python environment), in the same
+        /// run.
+        #[arg(long)]
+        peer: bool,
+        /// How often each fit is timed (SciPy's too).
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+    },
     /// The n-link pendulum at n = 2 … 64: the load, and where a right-hand side's time goes.
     Links {
         /// Also time lagrange from Python against Pinocchio's articulated-body algorithm
@@ -217,6 +233,7 @@ fn main() {
         Benchmark::Model => model::run(),
         Benchmark::Contacts { peer, repeats } => contacts::run(peer, repeats),
         Benchmark::Orbit { peer, repeats } => orbit::run(peer, repeats),
+        Benchmark::Fit { peer, repeats } => fit::run(peer, repeats),
         Benchmark::Links { peer } => links::run(peer),
         Benchmark::Memory { largest } => memory::run(largest),
         Benchmark::Derive { family, n } => scaling::json(family, n),

@@ -178,7 +178,11 @@ fn levenberg(
         if gaps_closed && gradient.amax() <= 1e-15 * (1.0 + cost(&e)) {
             break Ending::Gradient;
         }
-        let mu = *damping.get_or_insert(1e-3 * scale.iter().copied().fold(0.0, f64::max));
+        // The damping multiplies `scale`, JᵀJ's diagonal, already: μ is relative to it, and
+        // starts at 10⁻³ whatever the units. Scaled once more by the diagonal's largest (as
+        // Nielsen starts an unscaled μ) it began at 5 (the pendulum) and 190 (the cart) and,
+        // cut by at most 3 per accepted step, took some eight short steps to come down.
+        let mu = *damping.get_or_insert(1e-3);
         let Some((delta, multipliers)) = damped_step(&normal, &gradient, &e, width, &scale, mu)
         else {
             damping = Some(mu * growth);

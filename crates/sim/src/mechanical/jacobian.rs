@@ -10,7 +10,7 @@ use numeric::Tape;
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
 /// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
-const COLUMNS: usize = 4;
+pub(super) const COLUMNS: usize = 4;
 
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
@@ -298,11 +298,16 @@ impl Mechanical {
             let df = [0, 1].map(|j| -cone.mu * (f64::from(u8::from(i == j)) - d[i] * d[j]) / size);
             turning.push((bend.tangent, solution[n + bend.normal], df, cone.rates));
         }
-        let mut reduced = vec![0.0; order];
+        let (reduced, block, column) =
+            (&mut factors.reduced, &mut factors.block, &mut factors.column);
+        reduced.clear();
+        reduced.resize(order, 0.0);
         // The columns are solved four at a time, side by side: the same bits as one by one (a
         // last block's unused columns are zeros, solved and dropped).
-        let mut block = vec![[0.0; COLUMNS]; order];
-        let mut column = vec![0.0; n + m];
+        block.clear();
+        block.resize(order, [0.0; COLUMNS]);
+        column.clear();
+        column.resize(n + m, 0.0);
         for first in (0..width).step_by(COLUMNS) {
             let columns = (width - first).min(COLUMNS);
             for (c, k) in (first..first + columns).enumerate() {
@@ -328,14 +333,14 @@ impl Mechanical {
                         reduced[i] += self.dyn_out[base + i] * lambda * change;
                     }
                 }
-                for (row, v) in block.iter_mut().zip(&reduced) {
+                for (row, v) in block.iter_mut().zip(reduced.iter()) {
                     row[c] = *v;
                 }
             }
-            for row in &mut block {
+            for row in block.iter_mut() {
                 row[columns..].fill(0.0);
             }
-            linalg::lu_solve_columns(system, pivots, &mut block);
+            linalg::lu_solve_columns(system, pivots, block);
             for (c, k) in (first..first + columns).enumerate() {
                 for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
@@ -344,7 +349,7 @@ impl Mechanical {
                 for (r, &kept) in rows.iter().enumerate() {
                     column[n + kept] = block[n + r][c];
                 }
-                put(k, &column);
+                put(k, column);
             }
         }
         self.kept_factors = factors;
