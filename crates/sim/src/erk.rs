@@ -220,6 +220,8 @@ impl Adaptive {
         p.rhs(t + h, &self.y_new, &mut self.k[stages])?;
         self.evals += 1;
         let k = &self.k;
+        // The components the step control weighs (all, but for a problem that carries some).
+        let d = p.controlled().min(d);
         let scale = |i: usize| self.atol + y[i].abs().max(self.y_new[i].abs()) * self.rtol;
         Ok(match self.pair.error_weights() {
             Some(weights) => {

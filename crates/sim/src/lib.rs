@@ -178,6 +178,13 @@ pub trait Problem {
         let _ = (t, y, jac);
         Ok(false)
     }
+    /// How many of y's components, from the first, the explicit methods' step control weighs:
+    /// all of them, unless the rest are carried along the state rather than wanted to the
+    /// tolerance themselves (a fit's sensitivities, integrated on the state's steps, which
+    /// makes them the exact derivatives of the state those steps computed).
+    fn controlled(&self) -> usize {
+        self.dim()
+    }
     /// How the components of y enter the problem: all differential, index 1, unless the
     /// problem is differential–algebraic (only a method of [`Form::Algebraic`] integrates those).
     fn components(&self) -> Components {

@@ -120,11 +120,24 @@ pub enum Refusal {
     SensitivitiesWithHold,
 }
 
+/// What a variational run's step control weighs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StepControl {
+    /// The state, Φ and S alike: each to the tolerance, as an orbit's multipliers want Φ.
+    #[default]
+    Everything,
+    /// The state alone, Φ and S carried on its steps: the exact derivatives of the state those
+    /// steps computed, which is what a fit's residuals need, at the state's cost in steps.
+    State,
+}
+
 /// What a variational run carries besides Φ, and how.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Options {
     /// How the jumps' derivatives are taken.
     pub saltation: Saltation,
+    /// What the step control weighs.
+    pub step_control: StepControl,
     /// S(0) = ∂x(0)/∂p, row-major 2n × k for the k parameters of the problem's sensitivity
     /// program: with it the run carries S = ∂x(t)/∂p beside Φ ([`Transition::sensitivities`]).
     /// The start's own dependence on the parameters is the caller's to give (zeros for a start
@@ -290,6 +303,7 @@ pub fn transition_with(
         change: vec![0.0; size / 2 * columns],
         times: &options.times,
         samples: Vec::new(),
+        step_control: options.step_control,
     };
     let mut halt =
         |_: f64| if stop.get() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -394,6 +408,7 @@ struct Variational<'a> {
     /// The times to record at, and what was recorded.
     times: &'a [f64],
     samples: Vec<Sample>,
+    step_control: StepControl,
 }
 
 impl Variational<'_> {
@@ -611,6 +626,13 @@ impl Variational<'_> {
 impl Problem for Variational<'_> {
     fn dim(&self) -> usize {
         self.size + self.size * self.size + self.size * self.columns
+    }
+
+    fn controlled(&self) -> usize {
+        match self.step_control {
+            StepControl::Everything => self.dim(),
+            StepControl::State => self.size,
+        }
     }
 
     fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), FaultKind> {
