@@ -391,3 +391,40 @@ fn shots_on_a_kept_rod_join_into_the_single_shots_fit() {
         assert!((a - b).abs() <= 1e-6 * b.abs(), "± {a} against ± {b}");
     }
 }
+
+#[test]
+fn a_fits_runs_end_their_steps_at_an_inputs_knots_as_a_simulation_does() {
+    // Data every 0.03 s, the push's knots every 0.05 s: the runs must stop at both.
+    let scene = example("cart_pendulum.lag");
+    let run = simulation::Options {
+        until: Some(6.0),
+        tolerance: Some(1e-12),
+        samples: 201,
+        output: vec!["x, theta".into()],
+        set: vec!["b=0.8".parse().expect("set"), "I=0.009".parse().expect("set")],
+        input_series: vec![("F".into(), push())],
+        ..Default::default()
+    };
+    let outcome = simulation::simulate(&scene, &run).expect("runs");
+    let trajectory = &outcome.run.trajectory;
+    let mut text = String::from("t,x,theta\n");
+    for (t, row) in trajectory.times.iter().zip(&trajectory.rows) {
+        text.push_str(&format!("{t},{},{}\n", row[0], row[1]));
+    }
+    let mut o = options("b, I", 1);
+    o.run.tolerance = Some(1e-12);
+    o.run.input_series = vec![("F".into(), push())];
+    let table = data::read(&text).expect("reads");
+    let mut problem = fit::problem::Problem::load(&scene, &o, table).expect("loads");
+    let at_truth = problem.evaluate(&[0.8, 0.009]).expect("runs");
+    let worst = at_truth.residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    assert!(worst < 1e-9, "the fit's run is {worst:.1e} from the simulation's");
+    // 200 data times after the start and 120 knots, 40 of them at data times (0.15 s and
+    // 0.15000000000000002 s taken as one): a step ends at each of the 280, however loose the
+    // tolerance.
+    o.run.tolerance = Some(1e-4);
+    let table = data::read(&text).expect("reads");
+    let mut problem = fit::problem::Problem::load(&scene, &o, table).expect("loads");
+    let steps = problem.evaluate(&[0.8, 0.009]).expect("runs").steps;
+    assert!(steps >= 280, "{steps} steps");
+}
