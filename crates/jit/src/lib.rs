@@ -118,8 +118,14 @@ pub fn available() -> bool {
 
 /// Operations a generated function holds at most: a program longer than this is compiled as
 /// several functions run one after the other, which bounds the register allocator's work (it
-/// grows faster than the code does) and keeps each function's values near their uses.
-const CHUNK: usize = 2048;
+/// grows faster than the code does: 2,048 operations a function compiled a third slower than
+/// 512, with no faster code).
+const CHUNK: usize = 512;
+
+/// How many operations back a value is reused from where it was loaded or computed; an older
+/// one is loaded from the registers again, as a spilled value would be. Longer reuse kept
+/// more values alive, which cost the register allocator time and spills and gained nothing.
+const REUSE: usize = 16;
 
 /// Compiles `code` to run on an array of `registers` values: operation k writes register
 /// `code[k].0` (and, for a [`Op::Pair`], its second register too) from the registers it reads,
@@ -136,7 +142,12 @@ pub fn compile(registers: usize, code: &[(Reg, Op)]) -> Result<Kernel, Error> {
     let set = |flags: &mut settings::Builder, name, value| {
         flags.set(name, value).map_err(|e| Error::Codegen(Box::new(e)))
     };
-    set(&mut flags, "opt_level", "speed")?;
+    // The program comes optimized (shared terms computed once): Cranelift's optimizer found
+    // nothing to gain in it and took a third of the compile time.
+    set(&mut flags, "opt_level", "none")?;
+    // The verifier checks Cranelift's input, which `emit` makes the same way for every
+    // program: debug builds (the tests) run it, release builds do not pay its time.
+    set(&mut flags, "enable_verifier", if cfg!(debug_assertions) { "true" } else { "false" })?;
     // As cranelift-jit requires: calls reach anywhere, code at any address.
     set(&mut flags, "use_colocated_libcalls", "false")?;
     set(&mut flags, "is_pic", "false")?;
@@ -172,7 +183,7 @@ fn chunk_name(n: usize) -> String {
 }
 
 /// One function's body: each operation's operands loaded (or reused, where this function has
-/// them in hand), the operation, its result stored.
+/// them in hand from a few operations back), the operation, its result stored.
 fn emit(
     ctx: &mut Context,
     builder_ctx: &mut FunctionBuilderContext,
@@ -199,40 +210,51 @@ fn emit(
     let out = b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, 16, 3));
     // The registers are the caller's alone for the call, aligned, and never trap.
     let flags = MemFlagsData::trusted();
-    let mut known: HashMap<Reg, Value> = HashMap::new();
-    let value = |b: &mut FunctionBuilder, known: &mut HashMap<Reg, Value>, r: Reg| -> Value {
-        *known.entry(r).or_insert_with(|| b.ins().load(types::F64, flags, base, offset(r)))
-    };
+    // Each register's value in hand, with the operation it was loaded or computed at.
+    let mut known: HashMap<Reg, (Value, usize)> = HashMap::new();
+    let mut at = 0;
+    let value =
+        |b: &mut FunctionBuilder, known: &mut HashMap<Reg, (Value, usize)>, r, at| match known
+            .get(&r)
+        {
+            Some(&(v, when)) if at - when <= REUSE => v,
+            _ => {
+                let v = b.ins().load(types::F64, flags, base, offset(r));
+                known.insert(r, (v, at));
+                v
+            }
+        };
     let mut results: Vec<(Reg, Value)> = Vec::with_capacity(2);
     for &(dst, op) in code {
+        at += 1;
         results.clear();
         let v = match op {
             Op::Add(a, c) => {
-                let (x, y) = (value(&mut b, &mut known, a), value(&mut b, &mut known, c));
+                let (x, y) = (value(&mut b, &mut known, a, at), value(&mut b, &mut known, c, at));
                 b.ins().fadd(x, y)
             }
             Op::Sub(a, c) => {
-                let (x, y) = (value(&mut b, &mut known, a), value(&mut b, &mut known, c));
+                let (x, y) = (value(&mut b, &mut known, a, at), value(&mut b, &mut known, c, at));
                 b.ins().fsub(x, y)
             }
             Op::Mul(a, c) => {
-                let (x, y) = (value(&mut b, &mut known, a), value(&mut b, &mut known, c));
+                let (x, y) = (value(&mut b, &mut known, a, at), value(&mut b, &mut known, c, at));
                 b.ins().fmul(x, y)
             }
             Op::Div(a, c) => {
-                let (x, y) = (value(&mut b, &mut known, a), value(&mut b, &mut known, c));
+                let (x, y) = (value(&mut b, &mut known, a, at), value(&mut b, &mut known, c, at));
                 b.ins().fdiv(x, y)
             }
             Op::Neg(a) => {
-                let x = value(&mut b, &mut known, a);
+                let x = value(&mut b, &mut known, a, at);
                 b.ins().fneg(x)
             }
             Op::Sqrt(a) => {
-                let x = value(&mut b, &mut known, a);
+                let x = value(&mut b, &mut known, a, at);
                 b.ins().sqrt(x)
             }
             Op::PowInt(a, n) => {
-                let mut base = value(&mut b, &mut known, a);
+                let mut base = value(&mut b, &mut known, a, at);
                 let mut acc = b.ins().f64const(1.0);
                 let mut k = n.unsigned_abs();
                 while k > 0 {
@@ -253,19 +275,19 @@ fn emit(
                 }
             }
             Op::Unary(f, a) => {
-                let x = value(&mut b, &mut known, a);
+                let x = value(&mut b, &mut known, a, at);
                 let callee = b.ins().iconst(pointer, f as usize as i64);
                 let call = b.ins().call_indirect(unary, callee, &[x]);
                 b.inst_results(call)[0]
             }
             Op::Binary(f, a, c) => {
-                let (x, y) = (value(&mut b, &mut known, a), value(&mut b, &mut known, c));
+                let (x, y) = (value(&mut b, &mut known, a, at), value(&mut b, &mut known, c, at));
                 let callee = b.ins().iconst(pointer, f as usize as i64);
                 let call = b.ins().call_indirect(binary, callee, &[x, y]);
                 b.inst_results(call)[0]
             }
             Op::Pair(f, a, second) => {
-                let x = value(&mut b, &mut known, a);
+                let x = value(&mut b, &mut known, a, at);
                 let callee = b.ins().iconst(pointer, f as usize as i64);
                 let address = b.ins().stack_addr(pointer, out, 0);
                 b.ins().call_indirect(pair, callee, &[x, address]);
@@ -277,7 +299,7 @@ fn emit(
         results.push((dst, v));
         for &(r, v) in &results {
             b.ins().store(flags, v, base, offset(r));
-            known.insert(r, v);
+            known.insert(r, (v, at));
         }
     }
     b.ins().return_(&[]);
