@@ -10,9 +10,9 @@ use super::Op;
 use crate::elementary::{apply, atan2, pow, sin_cos};
 use crate::lower::{Instr, Reg};
 
-/// Runs of one op list after which it is compiled. Compiling costs 4–8 µs an operation, and
+/// Runs of one op list after which it is compiled. Compiling costs 3–8 µs an operation, and
 /// a run as code saves about 3 ns an operation (the n-link pendulum's at n = 32: 3.8 ns
-/// interpreted, 0.9 ns compiled), so compiling pays after some 1,300–2,700 runs: compiled on
+/// interpreted, 0.9 ns compiled), so compiling pays after some 1,000–2,700 runs: compiled on
 /// the 1,000th, a tape run fewer times than that (a one-off value, a start's Newton
 /// iteration, a short run) never pays for it, and one that runs on gains it soon after.
 const COMPILE_AFTER: u32 = 1000;
