@@ -1,6 +1,9 @@
-//! An ensemble's runs allocate nothing per step: with the explicit methods, a run ten times as
-//! long (ten times the steps) makes as many allocations as a short one, alone or side by side
-//! in lockstep. Counted by a global
+//! An ensemble's runs allocate nothing per step: with the explicit methods, a run twice as
+//! long (twice the steps, thousands of them) makes as many allocations as a shorter one,
+//! alone or side by side in lockstep, to the few the code generator's own vary by. Both are
+//! long enough for every tape to have compiled itself (on its 1,000th run, once), so that what
+//! would differ is per step.
+//! Counted by a global
 //! allocator that counts per thread, on the thread that runs the ensemble (`--threads 1`),
 //! in a test binary of its own so that no other test pays for the counting.
 
@@ -39,10 +42,13 @@ fn allocations(method: &str, until: f64, runs: usize) -> u64 {
 #[test]
 fn explicit_runs_allocate_nothing_per_step() {
     for (method, runs) in [("dop853", 1), ("dop853", 9), ("dopri5", 1), ("dopri5", 9), ("rk4", 1)] {
-        let (short, long) = (allocations(method, 1.0, runs), allocations(method, 10.0, runs));
-        assert_eq!(
-            short, long,
-            "{method} ({runs} runs): {short} allocations to t = 1, {long} to t = 10"
+        let (short, long) = (allocations(method, 200.0, runs), allocations(method, 400.0, runs));
+        // The code generator's own allocations differ by one or two from one compile of the
+        // same program to the next (its hash maps are seeded at random); an allocation per
+        // step would add thousands.
+        assert!(
+            short.abs_diff(long) <= 4,
+            "{method} ({runs} runs): {short} allocations to t = 200, {long} to t = 400"
         );
         assert!(short > 0, "{method}: the counter counted nothing");
     }

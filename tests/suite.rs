@@ -33,6 +33,7 @@ mod gallery;
 mod hold;
 mod inverse_dynamics;
 mod jacobian;
+mod jit;
 mod linearize;
 mod lockstep;
 mod lockstep_edges;

@@ -35,6 +35,8 @@ const ROWS: usize = 1024;
 /// Where the Jacobian is timed, and where the load.
 const JACOBIAN_AT: usize = 32;
 const LOAD_AT: usize = 64;
+/// Calls before a timing of `Mechanical`, past the run on which its tapes compile themselves.
+const WARM: usize = 1100;
 /// The largest relative difference of the two q̈ that still counts as the same model.
 const AGREEMENT: f64 = 1e-9;
 
@@ -59,6 +61,9 @@ struct Row {
     n: usize,
     load: f64,
     ops: usize,
+    /// The dynamics program compiled to machine code (all of it, and the ops on the state
+    /// alone), as `Tape::compile` does it; 0 where tapes are interpreted (`LAGRANGE_JIT=off`).
+    compile: f64,
     tape: f64,
     /// M alone and f alone, each lowered by itself: what either costs without the other
     /// (their common terms counted in both).
@@ -67,9 +72,10 @@ struct Row {
     form: f64,
     factor: f64,
     rhs: f64,
-    /// At [`JACOBIAN_AT`]: the partials program's size, its tape's time, and the whole exact
-    /// Jacobian (the partials, one LU of M and a solve per state component).
-    jacobian: Option<(usize, f64, f64)>,
+    /// At [`JACOBIAN_AT`]: the partials program's size, its compile time, its tape's time,
+    /// and the whole exact Jacobian (the partials, one LU of M and a solve per state
+    /// component).
+    jacobian: Option<(usize, f64, f64, f64)>,
 }
 
 fn measure(n: usize) -> Row {
@@ -93,6 +99,8 @@ fn measure(n: usize) -> Row {
     let fixed = 1 + 2 * n..layout.dynamics_inputs();
     let mut tape = Tape::new(dynamics.clone()).with_fixed_inputs(fixed.clone());
     tape.inputs_mut()[fixed].copy_from_slice(&parameters);
+    let began = Instant::now();
+    let compile = if tape.compile() { began.elapsed().as_secs_f64() } else { 0.0 };
     let mut out = vec![0.0; layout.dynamics_outputs()];
     let outputs: Vec<Vec<f64>> = ys
         .iter()
@@ -149,6 +157,11 @@ fn measure(n: usize) -> Row {
     let mut mechanical =
         Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), parameters);
     let mut dy = vec![0.0; 2 * n];
+    // A tape compiles itself to machine code on its 1,000th run: the calls are timed after
+    // that, as those of a run past its start are.
+    for y in ys.iter().cycle().take(WARM) {
+        mechanical.rhs(0.0, y, &mut dy).expect("regular");
+    }
     let rhs = crate::per_call(|| {
         k = (k + 1) % STATES;
         mechanical.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
@@ -170,6 +183,8 @@ fn measure(n: usize) -> Row {
             })
             .collect();
         let mut tape = Tape::new(program.clone());
+        let began = Instant::now();
+        let compile = if tape.compile() { began.elapsed().as_secs_f64() } else { 0.0 };
         let mut out = vec![0.0; tape.outputs()];
         let partials = crate::per_call(|| {
             k = (k + 1) % STATES;
@@ -177,14 +192,17 @@ fn measure(n: usize) -> Row {
         });
         mechanical.set_partials(Tape::new(program));
         let mut jac = vec![0.0; 4 * n * n];
+        for y in ys.iter().cycle().take(WARM) {
+            mechanical.jacobian(0.0, y, &mut jac).expect("regular");
+        }
         let whole = crate::per_call(|| {
             k = (k + 1) % STATES;
             let done = mechanical.jacobian(0.0, black_box(&ys[k]), black_box(&mut jac));
             assert!(done.expect("regular"), "the partials were given");
         });
-        (ops, partials, whole)
+        (ops, compile, partials, whole)
     });
-    Row { n, load, ops, tape, mass, forcing, form, factor, rhs, jacobian }
+    Row { n, load, ops, compile, tape, mass, forcing, form, factor, rhs, jacobian }
 }
 
 /// Seconds per call as wall time and as the calling thread's CPU time.
@@ -271,10 +289,10 @@ pub fn run(peer_too: bool) {
         load_average()
     );
     outln!(
-        "| n | load | ops | tape M, f | M alone (ops) | f alone (ops) | M copied | LDLᵀ | `rhs` | \
-         rest |"
+        "| n | load | ops | compile | tape M, f | M alone (ops) | f alone (ops) | M copied | LDLᵀ \
+         | `rhs` | rest |"
     );
-    outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     let mut jacobian = None;
     for n in SIZES {
         let r = measure(n);
@@ -282,10 +300,11 @@ pub fn run(peer_too: bool) {
             jacobian = Some((r.n, r.rhs, j));
         }
         outln!(
-            "| {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} |",
             r.n,
             seconds(r.load),
             r.ops,
+            seconds(r.compile),
             seconds(r.tape),
             seconds(r.mass.1),
             r.mass.0,
@@ -298,12 +317,14 @@ pub fn run(peer_too: bool) {
         );
     }
     outln!();
-    if let Some((n, rhs, (ops, partials, whole))) = jacobian {
+    if let Some((n, rhs, (ops, compile, partials, whole))) = jacobian {
         outln!(
             "The exact Jacobian at n = {n}: {} a call, {:.1}× the `rhs`; its partials program \
-             is {ops} operations, {} on the tape; the rest is one LU of M and {} solves.\n",
+             is {ops} operations (compiled in {}), {} on the tape; the rest is one LU of M and \
+             {} solves.\n",
             seconds(whole),
             whole / rhs,
+            seconds(compile),
             seconds(partials),
             2 * n
         );

@@ -1,6 +1,11 @@
-//! The tape evaluator: runs a [`Program`] over a register file allocated once.
+//! The tape evaluator: runs a [`Program`] over a register file allocated once, interpreted,
+//! or as machine code once it has run often (`native`).
 
 use cas::Func;
+
+mod native;
+
+use native::Native;
 
 use crate::elementary::{apply, atan2, pow, pow_int, sin_cos};
 use crate::lower::{Instr, Program, Reg};
@@ -15,6 +20,8 @@ pub struct Tape {
     ops: Vec<(Reg, Op)>,
     registers: Vec<f64>,
     fixed: Option<Fixed>,
+    /// `ops` as machine code.
+    native: Native,
 }
 
 /// Inputs that change seldom, such as parameters ([`Tape::with_fixed_inputs`]), and the ops
@@ -26,6 +33,8 @@ struct Fixed {
     /// Their values at the last run that ran every op; `None` before the first.
     last: Option<Vec<f64>>,
     varying: Vec<(Reg, Op)>,
+    /// `varying` as machine code.
+    native: Native,
 }
 
 /// An instruction of [`Program::code`] as the tape (and the batch tape) runs it: the k-th
@@ -77,7 +86,7 @@ impl Tape {
             .enumerate()
             .map(|(k, op)| (Reg::try_from(base + k).expect("registers fit a Reg"), op))
             .collect();
-        Tape { program, ops, registers, fixed: None }
+        Tape { program, ops, registers, fixed: None, native: Native::default() }
     }
 
     /// Declares the inputs in `inputs` fixed from run to run but for now and then (the
@@ -98,8 +107,27 @@ impl Tape {
             varies[self.ops[k].0 as usize] = any;
         }
         let varying = self.ops.iter().filter(|(dst, _)| varies[*dst as usize]).copied().collect();
-        self.fixed = Some(Fixed { inputs, last: None, varying });
+        self.fixed = Some(Fixed { inputs, last: None, varying, native: Native::default() });
         self
+    }
+
+    /// Compiles the program to machine code now, rather than once it has run often (the ops
+    /// on the varying inputs alone too, with [`Tape::with_fixed_inputs`]): for a caller that
+    /// knows it will run it often, or a test. Whether it is compiled: not where the machine
+    /// has no code generator, or with `LAGRANGE_JIT=off`, where it stays interpreted.
+    pub fn compile(&mut self) -> bool {
+        let registers = self.registers.len();
+        let full = self.native.compile(&self.ops, registers).is_some();
+        match &self.fixed {
+            Some(fixed) => full && fixed.native.compile(&fixed.varying, registers).is_some(),
+            None => full,
+        }
+    }
+
+    /// Whether the program runs as machine code: [`Tape::compile`] said so, or it has run
+    /// often enough.
+    pub fn is_compiled(&self) -> bool {
+        self.native.is_compiled()
     }
 
     pub fn program(&self) -> &Program {
@@ -139,49 +167,57 @@ impl Tape {
         let p = &self.program;
         assert_eq!(out.len(), p.outputs.len(), "tape outputs");
         let r = &mut self.registers;
-        let ops = match &mut self.fixed {
-            None => &self.ops,
-            Some(Fixed { inputs, last, varying }) => {
+        let (ops, native) = match &mut self.fixed {
+            None => (&self.ops, &mut self.native),
+            Some(Fixed { inputs, last, varying, native }) => {
                 let now = &r[inputs.clone()];
                 let same = last.as_ref().is_some_and(|last| {
                     last.iter().zip(now).all(|(a, b)| a.to_bits() == b.to_bits())
                 });
                 if same {
-                    &*varying
+                    (&*varying, native)
                 } else {
                     *last = Some(now.to_vec());
-                    &self.ops
+                    (&self.ops, &mut self.native)
                 }
             }
         };
-        for &(dst, op) in ops {
-            let instr = match op {
-                Op::Plain(instr) => instr,
-                Op::SinCos { arg, sine_here, other } => {
-                    let (sine, cosine) = sin_cos(r[arg as usize]);
-                    let (here, there) = if sine_here { (sine, cosine) } else { (cosine, sine) };
-                    r[other as usize] = there;
-                    r[dst as usize] = here;
-                    continue;
-                }
-                Op::Written => continue,
-            };
-            r[dst as usize] = match instr {
-                Instr::Add(a, b) => r[a as usize] + r[b as usize],
-                Instr::Sub(a, b) => r[a as usize] - r[b as usize],
-                Instr::Mul(a, b) => r[a as usize] * r[b as usize],
-                Instr::Div(a, b) => r[a as usize] / r[b as usize],
-                Instr::Neg(a) => -r[a as usize],
-                Instr::PowInt(a, n) => pow_int(r[a as usize], n),
-                Instr::Sqrt(a) => r[a as usize].sqrt(),
-                Instr::PowF(a, b) => pow(r[a as usize], r[b as usize]),
-                Instr::Func(f, a) => apply(f, r[a as usize]),
-                Instr::Atan2(y, x) => atan2(r[y as usize], r[x as usize]),
-            };
+        match native.code(ops, r.len()) {
+            Some(code) => code.run(r),
+            None => interpret(ops, r),
         }
         for (o, reg) in out.iter_mut().zip(&p.outputs) {
             *o = r[*reg as usize];
         }
+    }
+}
+
+/// Runs `ops` on the registers `r`, one after the other.
+fn interpret(ops: &[(Reg, Op)], r: &mut [f64]) {
+    for &(dst, op) in ops {
+        let instr = match op {
+            Op::Plain(instr) => instr,
+            Op::SinCos { arg, sine_here, other } => {
+                let (sine, cosine) = sin_cos(r[arg as usize]);
+                let (here, there) = if sine_here { (sine, cosine) } else { (cosine, sine) };
+                r[other as usize] = there;
+                r[dst as usize] = here;
+                continue;
+            }
+            Op::Written => continue,
+        };
+        r[dst as usize] = match instr {
+            Instr::Add(a, b) => r[a as usize] + r[b as usize],
+            Instr::Sub(a, b) => r[a as usize] - r[b as usize],
+            Instr::Mul(a, b) => r[a as usize] * r[b as usize],
+            Instr::Div(a, b) => r[a as usize] / r[b as usize],
+            Instr::Neg(a) => -r[a as usize],
+            Instr::PowInt(a, n) => pow_int(r[a as usize], n),
+            Instr::Sqrt(a) => r[a as usize].sqrt(),
+            Instr::PowF(a, b) => pow(r[a as usize], r[b as usize]),
+            Instr::Func(f, a) => apply(f, r[a as usize]),
+            Instr::Atan2(y, x) => atan2(r[y as usize], r[x as usize]),
+        };
     }
 }
 

@@ -4,6 +4,7 @@
 mod abs_and_sign;
 mod common;
 mod eval;
+mod native;
 mod pow_lanes;
 mod sin_cos_lanes;
 mod tape;
