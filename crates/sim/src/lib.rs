@@ -185,6 +185,17 @@ pub trait Problem {
     fn controlled(&self) -> usize {
         self.dim()
     }
+    /// Times, increasing, at which the problem records its whole state itself
+    /// ([`Problem::record`]), from the method's dense output between steps (the start's and
+    /// the end's exactly): a fit's data times, where a variational run wants x, Φ and S
+    /// without ending a step at each.
+    fn recorded_times(&self) -> &[f64] {
+        &[]
+    }
+    /// Records y at one of [`Problem::recorded_times`].
+    fn record(&mut self, t: f64, y: &[f64]) {
+        let _ = (t, y);
+    }
     /// How the components of y enter the problem: all differential, index 1, unless the
     /// problem is differential–algebraic (only a method of [`Form::Algebraic`] integrates those).
     fn components(&self) -> Components {

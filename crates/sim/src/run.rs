@@ -285,6 +285,7 @@ impl<'r> Course<'r> {
         }
         run.trajectory.times.push(t);
         run.trajectory.rows.push(row.clone());
+        let sampler = Sampler::new(settings, problem, t, &y);
         Ok(Course {
             run,
             sink: None,
@@ -293,7 +294,7 @@ impl<'r> Course<'r> {
             previous_row: row.clone(),
             row,
             next_sample,
-            sampler: Sampler::new(settings),
+            sampler,
             until: settings.until,
             samples: settings.samples,
             guards,
@@ -404,6 +405,9 @@ impl<'r> Course<'r> {
         }
         if self.samples == 0 || t >= self.until {
             rows_of(&mut self.sink, &mut self.run.trajectory).row(t, &self.row);
+        }
+        if t >= self.until {
+            self.sampler.record_at_end(problem, t, &self.y);
         }
         std::mem::swap(&mut self.previous_row, &mut self.row);
         if progress(t).is_break() {
@@ -598,13 +602,45 @@ struct Sampler {
     intervals: usize,
     /// The next sample to record; past `intervals` when done or not sampling.
     next: usize,
+    /// The problem's own times ([`Problem::recorded_times`]), and the next of them to record.
+    own: Vec<f64>,
+    next_own: usize,
+    /// The dense output's state at one of them.
+    scratch: Vec<f64>,
 }
 
 impl Sampler {
-    fn new(settings: &Settings) -> Self {
+    /// The sampler of a run from (t, y), which records the problem's own times at t there.
+    fn new(settings: &Settings, problem: &mut dyn Problem, t: f64, y: &[f64]) -> Self {
         let intervals = settings.samples.saturating_sub(1).max(1);
         let next = if settings.samples > 0 { 1 } else { usize::MAX };
-        Sampler { start: settings.start, until: settings.until, intervals, next }
+        let own = problem.recorded_times().to_vec();
+        let mut next_own = 0;
+        while own.get(next_own).is_some_and(|s| *s <= t) {
+            if own[next_own] == t {
+                problem.record(t, y);
+            }
+            next_own += 1;
+        }
+        let scratch = if own.is_empty() { Vec::new() } else { vec![0.0; y.len()] };
+        Sampler {
+            start: settings.start,
+            until: settings.until,
+            intervals,
+            next,
+            own,
+            next_own,
+            scratch,
+        }
+    }
+
+    /// Records the problem's own times up to `t` inclusive at the exact state `y` there: the
+    /// run's end.
+    fn record_at_end(&mut self, problem: &mut dyn Problem, t: f64, y: &[f64]) {
+        while self.own.get(self.next_own).is_some_and(|s| *s <= t) {
+            problem.record(self.own[self.next_own], y);
+            self.next_own += 1;
+        }
     }
 
     fn time(&self, k: usize) -> f64 {
@@ -619,6 +655,12 @@ impl Sampler {
         end: f64,
         rows: &mut dyn Rows,
     ) {
+        while self.own.get(self.next_own).is_some_and(|s| *s < end) {
+            let s = self.own[self.next_own];
+            stepper.interpolate(problem, s, &mut self.scratch);
+            problem.record(s, &self.scratch);
+            self.next_own += 1;
+        }
         // Most steps cover no sample: they allocate nothing.
         if self.next > self.intervals || self.time(self.next) >= end {
             return;

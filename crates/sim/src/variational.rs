@@ -145,9 +145,10 @@ pub struct Options {
     /// decided, which may project a start on a closed contact.
     pub sensitivities: Option<Vec<f64>>,
     /// Times, increasing, within the run's span, at which the state, Φ and S (where carried)
-    /// are recorded besides the end ([`Transition::samples`]): a fit's data times. The run's
-    /// steps end at each, as at a held input's sample, so that what is recorded is a step's
-    /// end, derivative of the steps taken, not an interpolation.
+    /// are recorded besides the end ([`Transition::samples`]): a fit's data times. They are
+    /// read from the method's dense output, as a simulation's samples are, and end no step:
+    /// the interpolant is linear in the stages, whose Φ and S are their states' derivatives,
+    /// so what is recorded is still the exact derivative of what the run computed.
     pub times: Vec<f64>,
 }
 
@@ -688,34 +689,27 @@ impl Problem for Variational<'_> {
         Ok(())
     }
 
-    /// The next time to record at, or the problem's own next sample (a series' knot, where
-    /// its slope changes): a step ends at either, as at a held input's sample.
-    /// A knot within rounding of a time to record at (`0.15` in a data file and
-    /// `0.15000000000000002` in an input's) is one step end with it, at the time recorded:
-    /// two would leave a step of an ulp between them.
+    /// The problem's own next sample (a series' knot, where its slope changes, or a held
+    /// law's): a step ends there. The times to record at are the dense output's
+    /// ([`Problem::recorded_times`]), and end no step.
     fn next_sample(&self, t: f64) -> Option<f64> {
-        let close =
-            |a: f64, b: f64| (a - b).abs() <= 8.0 * f64::EPSILON * a.abs().max(b.abs()).max(1.0);
-        let recorded = self.times.iter().copied().find(|&s| s > t && !close(s, t));
-        let mut own = self.inner.next_sample(t);
-        while let Some(b) = own.filter(|b| close(*b, t)) {
-            own = self.inner.next_sample(b);
-        }
-        match (recorded, own) {
-            (Some(a), Some(b)) if close(a, b) => Some(a),
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        self.inner.next_sample(t)
     }
 
+    /// The problem's own sample (a held law's) changes its right-hand side, not the state: Φ
+    /// and S go on through it.
     fn sample(&mut self, t: f64, y: &mut [f64]) -> Result<(), FaultKind> {
-        // The problem's own sample (a held law's) changes its right-hand side, not the state:
-        // Φ and S go on through it.
-        self.inner.sample(t, &mut y[..self.size])?;
-        let recorded = self.samples.last().map(|s| s.time);
-        if !self.times.contains(&t) || recorded == Some(t) {
-            return Ok(());
-        }
+        self.inner.sample(t, &mut y[..self.size])
+    }
+
+    fn recorded_times(&self) -> &[f64] {
+        self.times
+    }
+
+    /// x, Φ and S at a time to record at: from the dense output between steps, whose Φ and S
+    /// are the derivatives of its x (the interpolant is linear in the stages, and the stages'
+    /// Φ and S are their x's derivatives), or the exact state at the start and the end.
+    fn record(&mut self, t: f64, y: &[f64]) {
         let (s, carried) = (self.size, self.size + self.size * self.size);
         self.samples.push(Sample {
             time: t,
@@ -723,7 +717,6 @@ impl Problem for Variational<'_> {
             matrix: y[s..carried].to_vec(),
             sensitivities: self.carries.then(|| y[carried..].to_vec()),
         });
-        Ok(())
     }
 
     fn physical(&mut self, _: f64, y: &[f64]) -> Vec<f64> {
