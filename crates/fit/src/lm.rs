@@ -210,6 +210,11 @@ fn levenberg(
             .iter()
             .zip(&x)
             .all(|(d, v)| d.abs() <= STEP_TOLERANCE * (v.abs() + STEP_TOLERANCE));
+        // A step this small cannot move the estimates past the tolerance: its run would
+        // only confirm it (a full run with its sensitivities, a tenth of a small fit's time).
+        if step_small && gap_norm(&e) <= GAP_TOLERANCE * state_scale {
+            break Ending::Step;
+        }
         let outcome = problem.evaluate(&trial).map(|e| penalized(e, gap_weight));
         evaluations += 1;
         let accepted = match outcome {
@@ -239,10 +244,6 @@ fn levenberg(
             }
             Ok(next) => {
                 steps += next.steps;
-                // Nothing left to gain along the step: the cost is at its rounding.
-                if step_small && gap_norm(&e) <= GAP_TOLERANCE * state_scale {
-                    break Ending::Step;
-                }
                 false
             }
             // A step into values the scene refuses (a mass below zero) or a run that faults
@@ -250,9 +251,6 @@ fn levenberg(
             Err(_) => false,
         };
         if !accepted {
-            if step_small && gap_norm(&e) <= GAP_TOLERANCE * state_scale {
-                break Ending::Step;
-            }
             damping = Some(mu * growth);
             growth *= 2.0;
             if mu > 1e20 {

@@ -100,8 +100,10 @@ pub(crate) struct Adaptive {
     /// F(t, y) at the current point (first-same-as-last).
     f: Option<Vec<f64>>,
     evals: usize,
-    /// Dense-output coefficients of the last step, computed on first use.
-    dense: Option<Vec<Vec<f64>>>,
+    /// Dense-output coefficients of the last step, computed on first use (`dense_ready`),
+    /// in buffers kept from step to step.
+    dense: Vec<Vec<f64>>,
+    dense_ready: bool,
     pub rejected: usize,
     /// Accepted steps at the edge of the method's stability region. Hairer's test: with the
     /// last stage and the end point both at t + h, ρ = h·‖F(y₁) − F(ŷ)‖ / ‖y₁ − ŷ‖ estimates
@@ -135,7 +137,8 @@ impl Adaptive {
             h_last: 0.0,
             f: None,
             evals: 0,
-            dense: None,
+            dense: Vec::new(),
+            dense_ready: false,
             rejected: 0,
             stiff: 0,
         }
@@ -145,7 +148,7 @@ impl Adaptive {
     /// derivative there and the dense output are computed anew.
     pub fn restart(&mut self, h: f64) {
         self.f = None;
-        self.dense = None;
+        self.dense_ready = false;
         self.h = h;
     }
 
@@ -197,26 +200,12 @@ impl Adaptive {
         let d = y.len();
         let stages = self.pair.stage_count();
         for s in 1..stages {
-            let a = self.pair.a(s);
-            for i in 0..d {
-                let mut acc = 0.0;
-                for (j, aj) in a.iter().enumerate() {
-                    acc += aj * self.k[j][i];
-                }
-                self.tmp[i] = y[i] + h * acc;
-            }
+            combine(&mut self.tmp, y, h, self.pair.a(s), &self.k);
             let c = self.pair.c(s);
             p.rhs(t + c * h, &self.tmp, &mut self.k[s])?;
             self.evals += 1;
         }
-        let b = self.pair.b();
-        for i in 0..d {
-            let mut acc = 0.0;
-            for (j, bj) in b.iter().enumerate() {
-                acc += bj * self.k[j][i];
-            }
-            self.y_new[i] = y[i] + h * acc;
-        }
+        combine(&mut self.y_new, y, h, self.pair.b(), &self.k);
         p.rhs(t + h, &self.y_new, &mut self.k[stages])?;
         self.evals += 1;
         let k = &self.k;
@@ -390,58 +379,80 @@ impl Adaptive {
         self.h_last = h;
         let last = self.pair.stage_count();
         self.f.as_mut().expect("prepared").copy_from_slice(&self.k[last]);
-        self.dense = None;
+        self.dense_ready = false;
     }
 
-    fn dense_coefficients(&mut self, p: &mut dyn Problem) -> Vec<Vec<f64>> {
+    /// Fills `dense` with the last step's dense-output coefficients.
+    fn dense_coefficients(&mut self, p: &mut dyn Problem) {
         let d = self.y_old.len();
         let h = self.h_last;
+        let mut f = std::mem::take(&mut self.dense);
         match self.pair.dense_weights() {
-            Some(weights) => (0..weights[0].len())
-                .map(|power| {
-                    (0..d)
-                        .map(|i| {
-                            let mut acc = 0.0;
-                            for (j, row) in weights.iter().enumerate() {
-                                acc += row[power] * self.k[j][i];
-                            }
-                            h * acc
-                        })
-                        .collect()
-                })
-                .collect(),
+            Some(weights) => {
+                f.resize_with(weights[0].len(), Vec::new);
+                for (power, row) in f.iter_mut().enumerate() {
+                    row.clear();
+                    row.resize(d, 0.0);
+                    for (j, w) in weights.iter().enumerate() {
+                        for (v, k) in row.iter_mut().zip(&self.k[j]) {
+                            *v += w[power] * k;
+                        }
+                    }
+                    for v in row.iter_mut() {
+                        *v *= h;
+                    }
+                }
+            }
             None => {
                 for s in 13..16 {
-                    let a = DOP853_A[s];
-                    for i in 0..d {
-                        let mut acc = 0.0;
-                        for (j, aj) in a.iter().enumerate() {
-                            acc += aj * self.k[j][i];
-                        }
-                        self.tmp[i] = self.y_old[i] + h * acc;
-                    }
+                    combine(&mut self.tmp, &self.y_old, h, DOP853_A[s], &self.k);
                     // A fault here already showed up when the step was taken.
                     let _ = p.rhs(self.t_old + DOP853_C[s] * h, &self.tmp, &mut self.k[s]);
                     self.evals += 1;
                 }
+                f.resize_with(7, Vec::new);
+                for row in f.iter_mut() {
+                    row.clear();
+                    row.resize(d, 0.0);
+                }
                 let y1 = &self.y_new;
-                let mut f = vec![vec![0.0; d]; 7];
                 for i in 0..d {
                     let dy = y1[i] - self.y_old[i];
                     f[0][i] = dy;
                     f[1][i] = h * self.k[0][i] - dy;
                     f[2][i] = 2.0 * dy - h * (self.k[12][i] + self.k[0][i]);
-                    for r in 0..4 {
-                        let mut acc = 0.0;
-                        for (j, dj) in DOP853_D[r].iter().enumerate() {
-                            acc += dj * self.k[j][i];
+                }
+                for r in 0..4 {
+                    let row = &mut f[3 + r];
+                    for (j, dj) in DOP853_D[r].iter().enumerate() {
+                        for (v, k) in row.iter_mut().zip(&self.k[j]) {
+                            *v += dj * k;
                         }
-                        f[3 + r][i] = h * acc;
+                    }
+                    for v in row.iter_mut() {
+                        *v *= h;
                     }
                 }
-                f
             }
         }
+        self.dense = f;
+        self.dense_ready = true;
+    }
+}
+
+/// `out` = y + h·Σⱼ aⱼ·kⱼ, the sum taken over j in order for each component, as a stage's
+/// argument is: the stages' index runs outside, the components' inside, which the compiler
+/// makes into vector instructions (with j inside, each component waited on a chain of
+/// dependent additions), and each component's sum is the same bits.
+fn combine(out: &mut [f64], y: &[f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
+    out.fill(0.0);
+    for (aj, kj) in a.iter().zip(k) {
+        for (v, k) in out.iter_mut().zip(kj) {
+            *v += aj * k;
+        }
+    }
+    for (v, y) in out.iter_mut().zip(y) {
+        *v = y + h * *v;
     }
 }
 
@@ -464,34 +475,35 @@ fn min_step(t: f64) -> f64 {
 
 impl Dense for Adaptive {
     fn interpolate(&mut self, p: &mut dyn Problem, t: f64, out: &mut [f64]) {
-        if self.dense.is_none() {
-            self.dense = Some(self.dense_coefficients(p));
+        if !self.dense_ready {
+            self.dense_coefficients(p);
         }
-        let coef = self.dense.as_ref().expect("set");
+        let coef = &self.dense;
         let x = (t - self.t_old) / self.h_last;
-        let d = out.len();
+        // Each component's sum in the same order as one component at a time, the rows outside
+        // so that the components go side by side.
+        out.fill(0.0);
         match self.pair.dense_weights() {
             Some(_) => {
-                for i in 0..d {
-                    let mut acc = 0.0;
-                    let mut xp = 1.0;
-                    for row in coef {
-                        xp *= x;
-                        acc += row[i] * xp;
+                let mut xp = 1.0;
+                for row in coef {
+                    xp *= x;
+                    for (v, c) in out.iter_mut().zip(row) {
+                        *v += c * xp;
                     }
-                    out[i] = self.y_old[i] + acc;
                 }
             }
             None => {
-                for i in 0..d {
-                    let mut acc = 0.0;
-                    for (r, row) in coef.iter().rev().enumerate() {
-                        acc += row[i];
-                        acc *= if r % 2 == 0 { x } else { 1.0 - x };
+                for (r, row) in coef.iter().rev().enumerate() {
+                    let factor = if r % 2 == 0 { x } else { 1.0 - x };
+                    for (v, c) in out.iter_mut().zip(row) {
+                        *v = (*v + c) * factor;
                     }
-                    out[i] = self.y_old[i] + acc;
                 }
             }
+        }
+        for (v, y) in out.iter_mut().zip(&self.y_old) {
+            *v += y;
         }
     }
 

@@ -641,11 +641,12 @@ impl Problem for Variational<'_> {
         let n = s / 2;
         let (x, phi) = y.split_at(s);
         let (phi, sensitivities) = phi.split_at(s * s);
-        self.inner.rhs(t, x, &mut dy[..s])?;
-        if !self.inner.jacobian(t, x, &mut self.jac)? {
+        let columns = self.columns;
+        let (rates, d) = dy.split_at_mut(s);
+        let change = (columns > 0).then_some(&mut self.change[..]);
+        if !self.inner.variational_parts(t, x, rates, &mut self.jac, change)? {
             return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::Partials });
         }
-        let d = &mut dy[s..];
         // A = [0 I; ∂q̈/∂q ∂q̈/∂q̇]: the upper rows of AΦ are the lower rows of Φ.
         d[..n * s].copy_from_slice(&phi[n * s..]);
         for i in n..s {
@@ -658,12 +659,8 @@ impl Problem for Variational<'_> {
                 d[i * s + j] = acc;
             }
         }
-        let columns = self.columns;
         if columns == 0 {
             return Ok(());
-        }
-        if !self.inner.parameter_derivative(t, x, &mut self.change)? {
-            return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::Partials });
         }
         // Ṡ = A·S + (0, ∂q̈/∂p): the upper rows are S's lower rows, as for Φ.
         let d = &mut dy[s + s * s..];

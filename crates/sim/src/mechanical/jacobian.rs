@@ -176,6 +176,94 @@ impl Mechanical {
         Ok(true)
     }
 
+    /// What a variational run needs at one state, from one solve of the accelerations and
+    /// one factorization of their matrix: the rates F = (q̇, q̈) into `rates`, ∂F/∂(q, q̇)
+    /// into `jac` (row-major 2n × 2n) and, with `change`, ∂q̈/∂p (row-major n × k) into it.
+    /// The same bits as [`Problem::rhs`], [`Problem::jacobian`] and
+    /// [`Mechanical::parameter_derivative`] one after another, at a fraction of their cost on
+    /// small scenes, where the three calls' handling (the accelerations' cache checked twice,
+    /// the observation inputs copied twice, the columns' set-up done twice) outweighed the
+    /// arithmetic. False without a partials program, or with `change` and no sensitivity
+    /// program.
+    pub(crate) fn variational_parts(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        rates: &mut [f64],
+        jac: &mut [f64],
+        change: Option<&mut [f64]>,
+    ) -> Result<bool, FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        let columns = match (&change, &self.sensitivities) {
+            (None, _) => 0,
+            (Some(_), Some((_, columns))) => *columns,
+            (Some(_), None) => return Ok(false),
+        };
+        if self.partials.is_none() {
+            return Ok(false);
+        }
+        self.accelerations(t, y)?;
+        rates[..n].copy_from_slice(&y[n..2 * n]);
+        rates[n..].copy_from_slice(&self.solution[..n]);
+        check_finite(rates, crate::rate)?;
+        let input = &mut self.obs_input;
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&self.solution);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        if let Some(tape) = self.partials.as_mut() {
+            tape.eval(input, &mut self.partials_out);
+        }
+        check_finite(&self.partials_out, |_| NonFiniteAt::Partials)?;
+        if columns > 0 {
+            if let Some((tape, _)) = self.sensitivities.as_mut() {
+                tape.eval(input, &mut self.sensitivities_out);
+            }
+            check_finite(&self.sensitivities_out, |_| NonFiniteAt::Partials)?;
+        }
+        let width = 2 * n;
+        jac.fill(0.0);
+        for i in 0..n {
+            jac[i * width + n + i] = 1.0;
+        }
+        let solution = std::mem::take(&mut self.solution);
+        let partials = std::mem::take(&mut self.partials_out);
+        let sensitivities = std::mem::take(&mut self.sensitivities_out);
+        let mut change = change;
+        // The Jacobian's 2n columns, then the parameters' k, solved as one block of columns.
+        let solved = self.solve_partials_of(
+            width + columns,
+            |row, c| {
+                if c < width {
+                    partials[row * width + c]
+                } else {
+                    sensitivities[row * columns + c - width]
+                }
+            },
+            &solution,
+            |c, column| {
+                if c < width {
+                    for i in 0..n {
+                        jac[(n + i) * width + c] = column[i];
+                    }
+                } else if let Some(out) = change.as_deref_mut() {
+                    for i in 0..n {
+                        out[i * columns + c - width] = column[i];
+                    }
+                }
+            },
+        );
+        self.solution = solution;
+        self.partials_out = partials;
+        self.sensitivities_out = sensitivities;
+        solved?;
+        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+        if let Some(out) = change {
+            check_finite(out, |_| NonFiniteAt::Jacobian)?;
+        }
+        Ok(true)
+    }
+
     /// q̈ and λ at (t, y) into `solution` (n + m), and their derivatives along `directions`
     /// (row-major 2n × k: columns of dx/dθ) into `out` (row-major (n + m) × k), with
     /// column j's own parameter share where `parameters[j]` names a column of the sensitivity
@@ -260,6 +348,18 @@ impl Mechanical {
         partials: &[f64],
         width: usize,
         solution: &[f64],
+        put: impl FnMut(usize, &[f64]),
+    ) -> Result<(), FaultKind> {
+        self.solve_partials_of(width, |row, k| partials[row * width + k], solution, put)
+    }
+
+    /// [`Mechanical::solve_partials`] with column `k`'s entry in row `row` given by `entry`:
+    /// columns from two programs solved in one pass.
+    fn solve_partials_of(
+        &mut self,
+        width: usize,
+        entry: impl Fn(usize, usize) -> f64,
+        solution: &[f64],
         mut put: impl FnMut(usize, &[f64]),
     ) -> Result<(), FaultKind> {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
@@ -312,10 +412,10 @@ impl Mechanical {
             let columns = (width - first).min(COLUMNS);
             for (c, k) in (first..first + columns).enumerate() {
                 for i in 0..n {
-                    reduced[i] = -partials[i * width + k];
+                    reduced[i] = -entry(i, k);
                 }
                 for (r, &c) in rows.iter().enumerate() {
-                    let row = |block: usize| partials[(n + block * m + c) * width + k];
+                    let row = |block: usize| entry(n + block * m + c, k);
                     // The partials of the row the accelerations satisfy, stabilisation included.
                     let stabilised = match self.stabilisation[c] {
                         Stabilisation::Position => {
@@ -326,7 +426,7 @@ impl Mechanical {
                     reduced[n + r] = -stabilised;
                 }
                 for &(tangent, lambda, df, rates) in &turning {
-                    let rate = |r: usize| partials[(n + m + rates[r]) * width + k];
+                    let rate = |r: usize| entry(n + m + rates[r], k);
                     let change = df[0] * rate(0) + df[1] * rate(1);
                     let base = n * n + n + tangent * (n + 3);
                     for i in 0..n {
