@@ -362,34 +362,42 @@ impl Mechanical {
         solution: &[f64],
         mut put: impl FnMut(usize, &[f64]),
     ) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        // The fields apart, borrowed side by side: taking the factors out and putting them
+        // back moved their 192 bytes twice per stage.
+        let Mechanical {
+            kept_factors: factors,
+            dyn_out,
+            kept,
+            bends,
+            baumgarte,
+            stabilisation,
+            layout,
+            ..
+        } = self;
+        let Layout { coordinates: n, multipliers: m, .. } = *layout;
         // One LU serves every column: the accelerations' own where they were solved by LU on
         // the heap at this state, else one made here (they may have been solved by LDLᵀ, or
         // on the stack). Only the kept rows are factored: an open contact's multiplier is 0,
         // and its identity row would only make the factorization larger (a rimless wheel on
         // one spoke: five rows rather than nineteen).
-        let mut factors = std::mem::take(&mut self.kept_factors);
         if !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
-            factors.load(&self.dyn_out, n, &self.kept, &self.bends);
+            factors.load(dyn_out, n, kept, bends);
             let order = n + factors.rows.len();
-            if let Err(fault) = linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order]) {
-                self.kept_factors = factors;
-                return Err(fault);
-            }
+            linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order])?;
             factors.valid = true;
         }
         let order = n + factors.rows.len();
         let (system, pivots, rows) = (&factors.lu, &factors.pivots[..order], &factors.rows);
-        let alpha = self.baumgarte;
+        let alpha = *baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
         // −μ·(δ_ij − d_i·d_j)/‖γ_T‖ and ∂γ_j/∂x the partials of the rows' rates. Within the band,
         // where the decided direction is held, the factors are constant.
         let mut turning: Vec<(usize, f64, [f64; 2], [usize; 2])> = Vec::new();
-        for bend in &self.bends {
+        for bend in bends.iter() {
             let Some(cone) = bend.cone else { continue };
-            let (rate, d) = cone.aim(&self.dyn_out, self.layout);
+            let (rate, d) = cone.aim(dyn_out, *layout);
             let size = crate::linalg::size2(rate[0], rate[1]);
             if size <= cone.band {
                 continue;
@@ -400,13 +408,12 @@ impl Mechanical {
         }
         let (reduced, block, column) =
             (&mut factors.reduced, &mut factors.block, &mut factors.column);
-        reduced.clear();
+        // Every entry of these is written before it is read, column by column: they are
+        // resized, not cleared.
         reduced.resize(order, 0.0);
         // The columns are solved four at a time, side by side: the same bits as one by one (a
         // last block's unused columns are zeros, solved and dropped).
-        block.clear();
         block.resize(order, [0.0; COLUMNS]);
-        column.clear();
         column.resize(n + m, 0.0);
         for first in (0..width).step_by(COLUMNS) {
             let columns = (width - first).min(COLUMNS);
@@ -417,7 +424,7 @@ impl Mechanical {
                 for (r, &c) in rows.iter().enumerate() {
                     let row = |block: usize| entry(n + block * m + c, k);
                     // The partials of the row the accelerations satisfy, stabilisation included.
-                    let stabilised = match self.stabilisation[c] {
+                    let stabilised = match stabilisation[c] {
                         Stabilisation::Position => {
                             row(0) + 2.0 * alpha * row(2) + alpha * alpha * row(1)
                         }
@@ -430,7 +437,7 @@ impl Mechanical {
                     let change = df[0] * rate(0) + df[1] * rate(1);
                     let base = n * n + n + tangent * (n + 3);
                     for i in 0..n {
-                        reduced[i] += self.dyn_out[base + i] * lambda * change;
+                        reduced[i] += dyn_out[base + i] * lambda * change;
                     }
                 }
                 for (row, v) in block.iter_mut().zip(reduced.iter()) {
@@ -452,7 +459,6 @@ impl Mechanical {
                 put(k, column);
             }
         }
-        self.kept_factors = factors;
         Ok(())
     }
 }
