@@ -272,15 +272,13 @@ impl Mechanical {
         if !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
             factors.load(&self.dyn_out, n, &self.kept, &self.bends);
-            let order = n + factors.rows.len();
-            if let Err(fault) = linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order]) {
+            if let Err(fault) = factors.factor(n) {
                 self.kept_factors = factors;
                 return Err(fault);
             }
             factors.valid = true;
         }
-        let order = n + factors.rows.len();
-        let (system, pivots, rows) = (&factors.lu, &factors.pivots[..order], &factors.rows);
+        let order = factors.order(n);
         let alpha = self.baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
@@ -298,8 +296,12 @@ impl Mechanical {
             let df = [0, 1].map(|j| -cone.mu * (f64::from(u8::from(i == j)) - d[i] * d[j]) / size);
             turning.push((bend.tangent, solution[n + bend.normal], df, cone.rates));
         }
-        let (reduced, block, column) =
-            (&mut factors.reduced, &mut factors.block, &mut factors.column);
+        let (mut reduced, mut block, mut column) = (
+            std::mem::take(&mut factors.reduced),
+            std::mem::take(&mut factors.block),
+            std::mem::take(&mut factors.column),
+        );
+        let rows = factors.rows();
         reduced.clear();
         reduced.resize(order, 0.0);
         // The columns are solved four at a time, side by side: the same bits as one by one (a
@@ -340,7 +342,7 @@ impl Mechanical {
             for row in block.iter_mut() {
                 row[columns..].fill(0.0);
             }
-            linalg::lu_solve_columns(system, pivots, block);
+            factors.solve_columns(n, &mut block);
             for (c, k) in (first..first + columns).enumerate() {
                 for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
@@ -349,9 +351,10 @@ impl Mechanical {
                 for (r, &kept) in rows.iter().enumerate() {
                     column[n + kept] = block[n + r][c];
                 }
-                put(k, column);
+                put(k, &column);
             }
         }
+        (factors.reduced, factors.block, factors.column) = (reduced, block, column);
         self.kept_factors = factors;
         Ok(())
     }
