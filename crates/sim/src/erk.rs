@@ -93,6 +93,9 @@ pub(crate) struct Adaptive {
     /// for DOP853.
     k: Vec<Vec<f64>>,
     tmp: Vec<f64>,
+    /// The stages' sums of a trial, and DOP853's second error estimate's.
+    sum: Vec<f64>,
+    sum3: Vec<f64>,
     y_new: Vec<f64>,
     y_old: Vec<f64>,
     t_old: f64,
@@ -129,6 +132,8 @@ impl Adaptive {
             h: 0.0,
             k: vec![vec![0.0; dim]; stages],
             tmp: vec![0.0; dim],
+            sum: vec![0.0; dim],
+            sum3: vec![0.0; dim],
             y_new: vec![0.0; dim],
             y_old: vec![0.0; dim],
             t_old: 0.0,
@@ -197,25 +202,17 @@ impl Adaptive {
         let d = y.len();
         let stages = self.pair.stage_count();
         for s in 1..stages {
-            let a = self.pair.a(s);
-            for i in 0..d {
-                let mut acc = 0.0;
-                for (j, aj) in a.iter().enumerate() {
-                    acc += aj * self.k[j][i];
-                }
-                self.tmp[i] = y[i] + h * acc;
+            stage_sum(self.pair.a(s), &self.k, &mut self.sum);
+            for ((out, y), acc) in self.tmp.iter_mut().zip(y).zip(&self.sum) {
+                *out = y + h * acc;
             }
             let c = self.pair.c(s);
             p.rhs(t + c * h, &self.tmp, &mut self.k[s])?;
             self.evals += 1;
         }
-        let b = self.pair.b();
-        for i in 0..d {
-            let mut acc = 0.0;
-            for (j, bj) in b.iter().enumerate() {
-                acc += bj * self.k[j][i];
-            }
-            self.y_new[i] = y[i] + h * acc;
+        stage_sum(self.pair.b(), &self.k, &mut self.sum);
+        for ((out, y), acc) in self.y_new.iter_mut().zip(y).zip(&self.sum) {
+            *out = y + h * acc;
         }
         p.rhs(t + h, &self.y_new, &mut self.k[stages])?;
         self.evals += 1;
@@ -236,12 +233,10 @@ impl Adaptive {
             }
             None => {
                 let (mut e5, mut e3) = (0.0, 0.0);
+                stage_sum(&DOP853_E5, &k[..12], &mut self.sum);
+                stage_sum(&DOP853_E3, &k[..12], &mut self.sum3);
                 for i in 0..d {
-                    let (mut a5, mut a3) = (0.0, 0.0);
-                    for j in 0..12 {
-                        a5 += DOP853_E5[j] * k[j][i];
-                        a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * k[j][i];
-                    }
+                    let (a5, a3) = (self.sum[i], self.sum3[i]);
                     // Squares as products: the bits `powi(2)` gave, without its unspecified
                     // precision.
                     let (r5, r3) = (a5 / scale(i), a3 / scale(i));
@@ -412,13 +407,9 @@ impl Adaptive {
                 .collect(),
             None => {
                 for s in 13..16 {
-                    let a = DOP853_A[s];
-                    for i in 0..d {
-                        let mut acc = 0.0;
-                        for (j, aj) in a.iter().enumerate() {
-                            acc += aj * self.k[j][i];
-                        }
-                        self.tmp[i] = self.y_old[i] + h * acc;
+                    stage_sum(DOP853_A[s], &self.k, &mut self.sum);
+                    for ((out, y), acc) in self.tmp.iter_mut().zip(&self.y_old).zip(&self.sum) {
+                        *out = y + h * acc;
                     }
                     // A fault here already showed up when the step was taken.
                     let _ = p.rhs(self.t_old + DOP853_C[s] * h, &self.tmp, &mut self.k[s]);
@@ -431,16 +422,42 @@ impl Adaptive {
                     f[0][i] = dy;
                     f[1][i] = h * self.k[0][i] - dy;
                     f[2][i] = 2.0 * dy - h * (self.k[12][i] + self.k[0][i]);
-                    for r in 0..4 {
-                        let mut acc = 0.0;
-                        for (j, dj) in DOP853_D[r].iter().enumerate() {
-                            acc += dj * self.k[j][i];
-                        }
-                        f[3 + r][i] = h * acc;
+                }
+                for r in 0..4 {
+                    stage_sum(&DOP853_D[r], &self.k, &mut self.sum);
+                    for (out, acc) in f[3 + r].iter_mut().zip(&self.sum) {
+                        *out = h * acc;
                     }
                 }
                 f
             }
+        }
+    }
+}
+
+/// DOP853's weights of its third-order error estimate, b − b̂, as the sums had them.
+const DOP853_E3: [f64; 12] = {
+    let mut weights = [0.0; 12];
+    let mut j = 0;
+    while j < 12 {
+        weights[j] = DOP853_A[12][j] - DOP853_BHH[j];
+        j += 1;
+    }
+    weights
+};
+
+/// Σⱼ cⱼ·kⱼ into `sum`, each entry summed over the stages in their order, stage by stage so
+/// that the entries' sums run side by side. A zero coefficient's term is left out: ±0 added
+/// to a sum that starts at +0 and is never −0 (x + (−x) is +0) changes no bit, for the finite
+/// stages an accepted step has (a stage that is not finite fails its evaluation).
+fn stage_sum(coefficients: &[f64], k: &[Vec<f64>], sum: &mut [f64]) {
+    sum.fill(0.0);
+    for (c, kj) in coefficients.iter().zip(k) {
+        if *c == 0.0 {
+            continue;
+        }
+        for (acc, v) in sum.iter_mut().zip(kj) {
+            *acc += c * v;
         }
     }
 }
