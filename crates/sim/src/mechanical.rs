@@ -3,7 +3,7 @@
 //! Jacobian when the partials of its equations were lowered too.
 
 use nalgebra::DMatrix;
-use numeric::Tape;
+use numeric::{Slice, Tape};
 
 use crate::linalg::{self, Small, Square};
 use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, Series};
@@ -129,6 +129,9 @@ pub struct Mechanical {
     /// The partials program and its outputs, when an exact Jacobian was asked for.
     partials: Option<Tape>,
     partials_out: Vec<f64>,
+    /// Slices of the partials program for the exact Jacobian, one for each set of kept rows
+    /// met so far ([`Mechanical::kept_partials_at`]).
+    partial_slices: Vec<(Vec<bool>, Slice)>,
     /// The partials by the parameters a caller varies, and how many they are
     /// ([`Mechanical::set_sensitivities`]), and their outputs.
     sensitivities: Option<(Tape, usize)>,
@@ -222,6 +225,7 @@ impl Mechanical {
             pivots: vec![0; size],
             partials: None,
             partials_out: Vec::new(),
+            partial_slices: Vec::new(),
             sensitivities: None,
             sensitivities_out: Vec::new(),
             signals: Vec::new(),
@@ -263,6 +267,7 @@ impl Mechanical {
         assert_eq!(partials.inputs(), self.layout.observation_inputs());
         assert_eq!(partials.outputs(), self.layout.partials_outputs());
         self.partials_out = vec![0.0; partials.outputs()];
+        self.partial_slices.clear();
         self.partials = Some(partials);
     }
 

@@ -12,6 +12,9 @@ use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 /// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
 pub(super) const COLUMNS: usize = 4;
 
+/// How many slices of the partials program a problem keeps ([`Mechanical::kept_partials_at`]).
+const SLICES: usize = 64;
+
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
     pub fn has_partials(&self) -> bool {
@@ -72,6 +75,51 @@ impl Mechanical {
         Ok(Some(normals))
     }
 
+    /// [`Mechanical::partials_at`] into `partials_out` for what the exact Jacobian reads: the
+    /// rows of r and the kept rows' (an open contact's rows are not read), from a slice of the
+    /// partials program for the rows kept now; the other rows keep older values. A rimless
+    /// wheel on one of its eight spokes had evaluated its sixteen contact rows' partials at
+    /// every stage, most of the program. A contact slipping in space reads the rates of rows
+    /// it does not keep: there, the whole program runs.
+    fn kept_partials_at(&mut self, t: f64, y: &[f64], unknowns: &[f64]) -> Result<(), FaultKind> {
+        if self.bends.iter().any(|b| b.cone.is_some()) {
+            return self.partials_at(t, y, unknowns).map(|_| ());
+        }
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.follow_signals(t);
+        let Some(tape) = self.partials.as_mut() else { return Ok(()) };
+        let kept = &self.kept;
+        let index = match self.partial_slices.iter().position(|(rows, _)| rows == kept) {
+            Some(index) => index,
+            None => {
+                let width = 2 * n;
+                let rows = (0..n).chain(
+                    (0..m).filter(|&c| kept[c]).flat_map(|c| (0..3).map(move |b| n + b * m + c)),
+                );
+                let slice = tape.slice(rows.flat_map(|r| r * width..(r + 1) * width));
+                // The modes a run meets are few; a problem that meets ever more starts over.
+                if self.partial_slices.len() >= SLICES {
+                    self.partial_slices.clear();
+                }
+                self.partial_slices.push((kept.clone(), slice));
+                self.partial_slices.len() - 1
+            }
+        };
+        let input = tape.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(unknowns);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        let slice = &mut self.partial_slices[index].1;
+        tape.run_slice(slice, &mut self.partials_out);
+        for &o in slice.outputs() {
+            if !self.partials_out[o].is_finite() {
+                return Err(FaultKind::NonFinite { at: NonFiniteAt::Partials });
+            }
+        }
+        Ok(())
+    }
+
     /// ∂(q̇, q̈)/∂(q, q̇), row-major, into `jac`; false without a partials program.
     pub(super) fn exact_jacobian(
         &mut self,
@@ -85,7 +133,7 @@ impl Mechanical {
         let n = self.layout.coordinates;
         self.accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
-        let evaluated = self.partials_at(t, y, &solution).map(|_| ());
+        let evaluated = self.kept_partials_at(t, y, &solution);
         if let Err(fault) = evaluated {
             self.solution = solution;
             return Err(fault);
