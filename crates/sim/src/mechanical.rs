@@ -902,7 +902,13 @@ fn solve_kept(
 
 /// The augmented system of the kept `rows` alone into `a` (of order n + rows): M, each row's
 /// J and −Jᵀ (a slipping contact's column bent by its friction), zeros in the corner.
-fn load_kept(out: &[f64], n: usize, rows: &[usize], bends: &[Bend], a: &mut impl Square) {
+pub(super) fn load_kept(
+    out: &[f64],
+    n: usize,
+    rows: &[usize],
+    bends: &[Bend],
+    a: &mut impl Square,
+) {
     for j in 0..n {
         for i in 0..n {
             a[(i, j)] = out[j * n + i];
