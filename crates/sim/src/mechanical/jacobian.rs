@@ -316,14 +316,11 @@ impl Mechanical {
         // on the stack). Only the kept rows are factored: an open contact's multiplier is 0,
         // and its identity row would only make the factorization larger (a rimless wheel on
         // one spoke: five rows rather than nineteen).
-        let mut factors = std::mem::take(&mut self.kept_factors);
+        let factors = &mut self.kept_factors;
         if !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
             factors.load(&self.dyn_out, n, &self.kept, &self.bends);
-            if let Err(fault) = factors.factor(n) {
-                self.kept_factors = factors;
-                return Err(fault);
-            }
+            factors.factor(n)?;
             factors.valid = true;
         }
         let order = factors.order(n);
@@ -403,7 +400,6 @@ impl Mechanical {
             }
         }
         (factors.reduced, factors.block, factors.column) = (reduced, block, column);
-        self.kept_factors = factors;
         Ok(())
     }
 }
