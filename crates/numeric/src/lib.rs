@@ -28,5 +28,5 @@ pub use batch::BatchTape;
 pub use elementary::{pow_int, to_f64, LANES};
 pub use eval::{eval, value_and_magnitude, value_and_scale, Evaluator, ScaledEvaluator};
 pub use lower::{lower, Instr, LowerError, OpCounts, Program, Reg};
-pub use tape::Tape;
+pub use tape::{Slice, Tape};
 pub use zero_test::{GenericPoints, GENERIC_POINTS};

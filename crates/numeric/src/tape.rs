@@ -192,6 +192,72 @@ impl Tape {
     }
 }
 
+/// The ops a subset of a tape's outputs depends on ([`Tape::slice`]), run on the tape's own
+/// registers by [`Tape::run_slice`]: the same operations in the same order, those no wanted
+/// output needs left out, so the wanted outputs get the bits a full run gives them.
+#[derive(Clone, Debug)]
+pub struct Slice {
+    ops: Vec<(Reg, Op)>,
+    /// The wanted outputs' indices.
+    outputs: Vec<usize>,
+    native: Native,
+}
+
+impl Slice {
+    /// The indices of the outputs it computes, increasing.
+    pub fn outputs(&self) -> &[usize] {
+        &self.outputs
+    }
+}
+
+impl Tape {
+    /// The ops the outputs `wanted` (indices) depend on: for a caller that needs some outputs
+    /// often and the rest seldom (the kept rows of a problem whose contacts are mostly open).
+    pub fn slice(&self, wanted: impl IntoIterator<Item = usize>) -> Slice {
+        let mut outputs: Vec<usize> = wanted.into_iter().collect();
+        outputs.sort_unstable();
+        outputs.dedup();
+        let mut needed = vec![false; self.registers.len()];
+        for &o in &outputs {
+            needed[self.program.outputs[o] as usize] = true;
+        }
+        let mut kept = vec![false; self.ops.len()];
+        for (k, &(dst, op)) in self.ops.iter().enumerate().rev() {
+            match op {
+                Op::Plain(instr) if needed[dst as usize] => {
+                    kept[k] = true;
+                    instr.map_registers(|r| {
+                        needed[r as usize] = true;
+                        r
+                    });
+                }
+                Op::SinCos { arg, other, .. } if needed[dst as usize] || needed[other as usize] => {
+                    kept[k] = true;
+                    needed[arg as usize] = true;
+                }
+                _ => {}
+            }
+        }
+        let ops = self.ops.iter().zip(&kept).filter(|(_, k)| **k).map(|(op, _)| *op).collect();
+        Slice { ops, outputs, native: Native::default() }
+    }
+
+    /// Evaluates the outputs of `slice` (made by [`Tape::slice`] of this tape) at the inputs
+    /// in [`Tape::inputs_mut`], writing output `i` to `out[i]` for each of them; the other
+    /// entries of `out` are left as they were.
+    pub fn run_slice(&mut self, slice: &mut Slice, out: &mut [f64]) {
+        assert_eq!(out.len(), self.program.outputs.len(), "tape outputs");
+        let r = &mut self.registers;
+        match slice.native.code(&slice.ops, r.len()) {
+            Some(code) => code.run(r),
+            None => interpret(&slice.ops, r),
+        }
+        for &o in &slice.outputs {
+            out[o] = r[self.program.outputs[o] as usize];
+        }
+    }
+}
+
 /// Runs `ops` on the registers `r`, one after the other.
 fn interpret(ops: &[(Reg, Op)], r: &mut [f64]) {
     for &(dst, op) in ops {
@@ -264,6 +330,38 @@ mod tests {
         for (got, want) in out.iter().zip(want) {
             assert_eq!(got.to_bits(), want.to_bits(), "{out:?}");
         }
+    }
+
+    #[test]
+    fn a_slice_runs_what_its_outputs_need_and_gives_their_bits() {
+        // cos x, x·x, sin x (fused with cos x), sin y, y·2 (a constant), x·x + y·2.
+        let program = Program {
+            inputs: 2,
+            constants: vec![2.0],
+            code: vec![
+                Instr::Func(Func::Cos, 0),
+                Instr::Mul(0, 0),
+                Instr::Func(Func::Sin, 0),
+                Instr::Func(Func::Sin, 1),
+                Instr::Mul(1, 2),
+                Instr::Add(4, 7),
+            ],
+            outputs: vec![3, 5, 6, 8],
+        };
+        let mut tape = Tape::new(program);
+        // sin x needs the fused pair written at cos x's place; the sum, x·x and y·2.
+        let mut slice = tape.slice([3, 1]);
+        assert_eq!(slice.outputs(), &[1, 3]);
+        assert_eq!(slice.ops.len(), 4);
+        let (x, y) = (0.7, -4.1);
+        let mut full = [0.0; 4];
+        tape.eval(&[x, y], &mut full);
+        let mut part = [f64::NAN; 4];
+        tape.inputs_mut().copy_from_slice(&[x, y]);
+        tape.run_slice(&mut slice, &mut part);
+        assert_eq!(part[1].to_bits(), full[1].to_bits());
+        assert_eq!(part[3].to_bits(), full[3].to_bits());
+        assert!(part[0].is_nan() && part[2].is_nan(), "the rest left as they were: {part:?}");
     }
 
     #[test]

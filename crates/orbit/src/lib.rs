@@ -431,11 +431,20 @@ pub fn orbit(source: &str, options: &Options) -> Result<Orbit, Error> {
 /// Newton's method from the scene's start (the benchmarks time the two apart).
 pub struct Search {
     loaded: Loaded,
+    /// The problem the searches run on, kept from one to the next: what it makes for itself
+    /// as it runs (the partials program's slices for the modes it meets, and their machine
+    /// code once they have run often) serves every later search rather than one.
+    working: Mechanical,
 }
 
 impl Search {
     pub fn new(source: &str, options: &Options) -> Result<Search, Error> {
-        Ok(Search { loaded: load(source, options)? })
+        Ok(Search::of(load(source, options)?))
+    }
+
+    fn of(loaded: Loaded) -> Search {
+        let working = loaded.mechanical.clone();
+        Search { loaded, working }
     }
 
     /// [`Search::new`] for a sweep in `parameter`: where the map is a fixed period's, with no
@@ -446,18 +455,18 @@ impl Search {
         options: &Options,
         parameter: &str,
     ) -> Result<Search, Error> {
-        Ok(Search { loaded: load_for(source, options, Some(parameter))? })
+        Ok(Search::of(load_for(source, options, Some(parameter))?))
     }
 
     /// The orbit from the scene's start, in at most `iterations` Newton steps.
     pub fn find(&mut self, iterations: usize) -> Result<Orbit, Error> {
-        find(&self.loaded, None, iterations)
+        find(&self.loaded, &mut self.working, None, iterations)
     }
 
     /// The orbit from the state `from` (q, q̇) rather than the scene's start: a nearby orbit's
     /// fixed point, as a sweep continues one.
     pub fn find_from(&mut self, from: &[f64], iterations: usize) -> Result<Orbit, Error> {
-        find(&self.loaded, Some(from), iterations)
+        find(&self.loaded, &mut self.working, Some(from), iterations)
     }
 
     /// Whether the map is over a fixed period (whose start is any state, not one on a section).
@@ -511,8 +520,12 @@ impl Search {
     }
 }
 
-fn find(loaded: &Loaded, from: Option<&[f64]>, iterations_allowed: usize) -> Result<Orbit, Error> {
-    let mut mechanical = loaded.mechanical.clone();
+fn find(
+    loaded: &Loaded,
+    mechanical: &mut Mechanical,
+    from: Option<&[f64]>,
+    iterations_allowed: usize,
+) -> Result<Orbit, Error> {
     let (end, run) = (loaded.end, loaded.run.clone());
     let fail = |r: Refusal| refused(r, loaded);
     let symmetry = &loaded.symmetry;
@@ -525,13 +538,13 @@ fn find(loaded: &Loaded, from: Option<&[f64]>, iterations_allowed: usize) -> Res
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
         _ => {
-            let tr = variational::transition(&mut mechanical, &start, &run, end).map_err(fail)?;
+            let tr = variational::transition(mechanical, &start, &run, end).map_err(fail)?;
             (symmetry.apply(&tr.state), tr.surface)
         }
     };
     let mut iterations = Vec::new();
     for _ in 0..iterations_allowed.max(1) {
-        let tr = variational::transition(&mut mechanical, &x, &run, end).map_err(fail)?;
+        let tr = variational::transition(mechanical, &x, &run, end).map_err(fail)?;
         let ignored = symmetry.ignored_rows();
         let tangent = chart::section(&symmetry.carry(&surface), &tr.normals, &ignored, size);
         let returned = symmetry.apply(&tr.state);

@@ -93,6 +93,9 @@ pub(crate) struct Adaptive {
     /// for DOP853.
     k: Vec<Vec<f64>>,
     tmp: Vec<f64>,
+    /// The stages' sums of a trial, and DOP853's second error estimate's.
+    sum: Vec<f64>,
+    sum3: Vec<f64>,
     y_new: Vec<f64>,
     y_old: Vec<f64>,
     t_old: f64,
@@ -131,6 +134,8 @@ impl Adaptive {
             h: 0.0,
             k: vec![vec![0.0; dim]; stages],
             tmp: vec![0.0; dim],
+            sum: vec![0.0; dim],
+            sum3: vec![0.0; dim],
             y_new: vec![0.0; dim],
             y_old: vec![0.0; dim],
             t_old: 0.0,
@@ -200,12 +205,18 @@ impl Adaptive {
         let d = y.len();
         let stages = self.pair.stage_count();
         for s in 1..stages {
-            combine(&mut self.tmp, y, h, self.pair.a(s), &self.k);
+            stage_sum(self.pair.a(s), &self.k, &mut self.sum);
+            for ((out, y), acc) in self.tmp.iter_mut().zip(y).zip(&self.sum) {
+                *out = y + h * acc;
+            }
             let c = self.pair.c(s);
             p.rhs(t + c * h, &self.tmp, &mut self.k[s])?;
             self.evals += 1;
         }
-        combine(&mut self.y_new, y, h, self.pair.b(), &self.k);
+        stage_sum(self.pair.b(), &self.k, &mut self.sum);
+        for ((out, y), acc) in self.y_new.iter_mut().zip(y).zip(&self.sum) {
+            *out = y + h * acc;
+        }
         p.rhs(t + h, &self.y_new, &mut self.k[stages])?;
         self.evals += 1;
         let k = &self.k;
@@ -225,12 +236,10 @@ impl Adaptive {
             }
             None => {
                 let (mut e5, mut e3) = (0.0, 0.0);
+                stage_sum(&DOP853_E5, &k[..12], &mut self.sum);
+                stage_sum(&DOP853_E3, &k[..12], &mut self.sum3);
                 for i in 0..d {
-                    let (mut a5, mut a3) = (0.0, 0.0);
-                    for j in 0..12 {
-                        a5 += DOP853_E5[j] * k[j][i];
-                        a3 += (DOP853_A[12][j] - DOP853_BHH[j]) * k[j][i];
-                    }
+                    let (a5, a3) = (self.sum[i], self.sum3[i]);
                     // Squares as products: the bits `powi(2)` gave, without its unspecified
                     // precision.
                     let (r5, r3) = (a5 / scale(i), a3 / scale(i));
@@ -405,7 +414,10 @@ impl Adaptive {
             }
             None => {
                 for s in 13..16 {
-                    combine(&mut self.tmp, &self.y_old, h, DOP853_A[s], &self.k);
+                    stage_sum(DOP853_A[s], &self.k, &mut self.sum);
+                    for ((out, y), acc) in self.tmp.iter_mut().zip(&self.y_old).zip(&self.sum) {
+                        *out = y + h * acc;
+                    }
                     // A fault here already showed up when the step was taken.
                     let _ = p.rhs(self.t_old + DOP853_C[s] * h, &self.tmp, &mut self.k[s]);
                     self.evals += 1;
@@ -423,14 +435,9 @@ impl Adaptive {
                     f[2][i] = 2.0 * dy - h * (self.k[12][i] + self.k[0][i]);
                 }
                 for r in 0..4 {
-                    let row = &mut f[3 + r];
-                    for (j, dj) in DOP853_D[r].iter().enumerate() {
-                        for (v, k) in row.iter_mut().zip(&self.k[j]) {
-                            *v += dj * k;
-                        }
-                    }
-                    for v in row.iter_mut() {
-                        *v *= h;
+                    stage_sum(&DOP853_D[r], &self.k, &mut self.sum);
+                    for (out, acc) in f[3 + r].iter_mut().zip(&self.sum) {
+                        *out = h * acc;
                     }
                 }
             }
@@ -440,19 +447,30 @@ impl Adaptive {
     }
 }
 
-/// `out` = y + h·Σⱼ aⱼ·kⱼ, the sum taken over j in order for each component, as a stage's
-/// argument is: the stages' index runs outside, the components' inside, which the compiler
-/// makes into vector instructions (with j inside, each component waited on a chain of
-/// dependent additions), and each component's sum is the same bits.
-fn combine(out: &mut [f64], y: &[f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
-    out.fill(0.0);
-    for (aj, kj) in a.iter().zip(k) {
-        for (v, k) in out.iter_mut().zip(kj) {
-            *v += aj * k;
-        }
+/// DOP853's weights of its third-order error estimate, b − b̂, as the sums had them.
+const DOP853_E3: [f64; 12] = {
+    let mut weights = [0.0; 12];
+    let mut j = 0;
+    while j < 12 {
+        weights[j] = DOP853_A[12][j] - DOP853_BHH[j];
+        j += 1;
     }
-    for (v, y) in out.iter_mut().zip(y) {
-        *v = y + h * *v;
+    weights
+};
+
+/// Σⱼ cⱼ·kⱼ into `sum`, each entry summed over the stages in their order, stage by stage so
+/// that the entries' sums run side by side. A zero coefficient's term is left out: ±0 added
+/// to a sum that starts at +0 and is never −0 (x + (−x) is +0) changes no bit, for the finite
+/// stages an accepted step has (a stage that is not finite fails its evaluation).
+fn stage_sum(coefficients: &[f64], k: &[Vec<f64>], sum: &mut [f64]) {
+    sum.fill(0.0);
+    for (c, kj) in coefficients.iter().zip(k) {
+        if *c == 0.0 {
+            continue;
+        }
+        for (acc, v) in sum.iter_mut().zip(kj) {
+            *acc += c * v;
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 //! Jacobian when the partials of its equations were lowered too.
 
 use nalgebra::DMatrix;
-use numeric::Tape;
+use numeric::{Slice, Tape};
 
 use crate::linalg::{self, Small, Square};
 use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, Series};
@@ -129,6 +129,9 @@ pub struct Mechanical {
     /// The partials program and its outputs, when an exact Jacobian was asked for.
     partials: Option<Tape>,
     partials_out: Vec<f64>,
+    /// Slices of the partials program for the exact Jacobian, one for each set of kept rows
+    /// met so far ([`Mechanical::kept_partials_at`]).
+    partial_slices: Vec<(Vec<bool>, Slice)>,
     /// The partials by the parameters a caller varies, and how many they are
     /// ([`Mechanical::set_sensitivities`]), and their outputs.
     sensitivities: Option<(Tape, usize)>,
@@ -222,6 +225,7 @@ impl Mechanical {
             pivots: vec![0; size],
             partials: None,
             partials_out: Vec::new(),
+            partial_slices: Vec::new(),
             sensitivities: None,
             sensitivities_out: Vec::new(),
             signals: Vec::new(),
@@ -263,6 +267,7 @@ impl Mechanical {
         assert_eq!(partials.inputs(), self.layout.observation_inputs());
         assert_eq!(partials.outputs(), self.layout.partials_outputs());
         self.partials_out = vec![0.0; partials.outputs()];
+        self.partial_slices.clear();
         self.partials = Some(partials);
     }
 
@@ -376,14 +381,12 @@ impl Mechanical {
             (Some(small), true) => {
                 solve_system(out, self.layout, kept, bends, small, solution, pivots)
             }
-            (Some(small), false) => {
-                solve_kept(out, self.layout, kept, bends, small, solution, pivots)
-            }
             (None, true) => {
                 solve_system(out, self.layout, kept, bends, &mut self.system, solution, pivots)
             }
-            (None, false) => {
-                solve_kept_heap(out, self.layout, kept, bends, solution, &mut self.kept_factors)
+            // In the factors the exact Jacobian solves with again at the same state.
+            (_, false) => {
+                solve_kept_factored(out, self.layout, kept, bends, solution, &mut self.kept_factors)
             }
         };
         match solved {
@@ -499,7 +502,7 @@ impl Mechanical {
             }
             (None, false) => {
                 let mut work = KeptFactors::default();
-                solve_kept_heap(out, self.layout, kept, &[], &mut change, &mut work)?
+                solve_kept_factored(out, self.layout, kept, &[], &mut change, &mut work)?
             }
         }
         for (v, d) in y[at..at + n].iter_mut().zip(&change[..n]) {
@@ -899,7 +902,13 @@ fn solve_kept(
 
 /// The augmented system of the kept `rows` alone into `a` (of order n + rows): M, each row's
 /// J and −Jᵀ (a slipping contact's column bent by its friction), zeros in the corner.
-fn load_kept(out: &[f64], n: usize, rows: &[usize], bends: &[Bend], a: &mut impl Square) {
+pub(super) fn load_kept(
+    out: &[f64],
+    n: usize,
+    rows: &[usize],
+    bends: &[Bend],
+    a: &mut impl Square,
+) {
     for j in 0..n {
         for i in 0..n {
             a[(i, j)] = out[j * n + i];
@@ -923,11 +932,11 @@ fn load_kept(out: &[f64], n: usize, rows: &[usize], bends: &[Bend], a: &mut impl
     }
 }
 
-/// [`solve_kept`] past the stack's order: the kept rows factored on the heap, an open
-/// contact's multiplier 0 without its identity row (a rimless wheel on one spoke solves five
-/// rows, not nineteen), in the buffers of `work`, which keep the LU factors for the exact
-/// Jacobian at the same state ([`KeptFactors`]).
-fn solve_kept_heap(
+/// [`solve_kept`] in the buffers of `work`, which keep the LU factors for the exact Jacobian at
+/// the same state ([`KeptFactors`]): an open contact's multiplier 0 without its identity row
+/// (a rimless wheel on one spoke solves five rows, not nineteen), on the stack where the kept
+/// rows fit it. The Jacobian had factored the stack's system again at every stage.
+fn solve_kept_factored(
     out: &[f64],
     layout: Layout,
     kept: &[bool],
@@ -938,18 +947,18 @@ fn solve_kept_heap(
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     work.valid = false;
     work.load(out, n, kept, bends);
-    let KeptFactors { lu, pivots, rows, x, .. } = work;
+    let KeptFactors { lu, small, pivots, rows, x, .. } = work;
     let order = n + rows.len();
     x.clear();
     x.extend_from_slice(&b[..n]);
     x.extend(rows.iter().map(|&c| b[n + c]));
-    if rows.is_empty() {
-        let load = |a: &mut DMatrix<f64>| load_kept(out, n, rows, bends, a);
-        linalg::solve_symmetric(lu, x, &mut pivots[..order], load)?;
+    let solved = if order <= linalg::SMALL {
+        solve_loaded(small, out, n, rows, bends, x, &mut pivots[..order])
     } else {
-        linalg::solve_general(lu, x, &mut pivots[..order])?;
-        work.valid = true;
-    }
+        solve_loaded(lu, out, n, rows, bends, x, &mut pivots[..order])
+    };
+    let valid = solved? && !rows.is_empty();
+    work.valid = valid;
     let KeptFactors { rows, x, .. } = work;
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);
@@ -959,18 +968,43 @@ fn solve_kept_heap(
     Ok(())
 }
 
-/// The kept rows' augmented system on the heap, its buffers kept from solve to solve: after
-/// the accelerations' solve (`valid`), its LU factors, which the exact Jacobian at the same
-/// state solves with again rather than factoring the same matrix a second time.
-#[derive(Clone, Debug, Default)]
+/// Solves the kept rows' system loaded into `a` for `x`, in place: by LDLᵀ with no kept rows
+/// (M alone, symmetric), else by LU, whose factors are left in `a` (true).
+fn solve_loaded<M: Square>(
+    a: &mut M,
+    out: &[f64],
+    n: usize,
+    rows: &[usize],
+    bends: &[Bend],
+    x: &mut [f64],
+    pivots: &mut [usize],
+) -> Result<bool, FaultKind> {
+    if rows.is_empty() {
+        let load = |a: &mut M| load_kept(out, n, rows, bends, a);
+        linalg::solve_symmetric(a, x, pivots, load)?;
+        Ok(false)
+    } else {
+        linalg::solve_general(a, x, pivots)?;
+        Ok(true)
+    }
+}
+
+/// The kept rows' augmented system, its buffers kept from solve to solve: on the stack where
+/// its order fits [`Small`] (a walker on one foot: six rows of eight), on the heap past it (a
+/// rimless wheel's nineteen rows with one spoke's two kept: five), and after the
+/// accelerations' solve (`valid`) its LU factors, which the exact Jacobian at the same state
+/// solves with again rather than factoring the same matrix a second time.
+#[derive(Clone, Debug)]
 pub(crate) struct KeptFactors {
     lu: DMatrix<f64>,
+    small: Small,
     pivots: Vec<usize>,
     /// The multipliers kept, in the order of the system's rows past M's.
     rows: Vec<usize>,
     x: Vec<f64>,
-    /// Whether `lu` holds the LU factors of the system the last solve of the accelerations
-    /// used (M alone is solved by LDLᵀ, which the Jacobian's columns cannot reuse).
+    /// Whether `lu` (or `small`, by the order) holds the LU factors of the system the last
+    /// solve of the accelerations used (M alone is solved by LDLᵀ, which the Jacobian's
+    /// columns cannot reuse).
     valid: bool,
     /// The exact Jacobian's and the sensitivities' right-hand sides and solutions, kept: a
     /// variational run solves with them twice per stage, and allocating them each time was a
@@ -980,19 +1014,72 @@ pub(crate) struct KeptFactors {
     pub(crate) column: Vec<f64>,
 }
 
+impl Default for KeptFactors {
+    fn default() -> Self {
+        KeptFactors {
+            lu: DMatrix::zeros(0, 0),
+            small: Small::zeros(linalg::SMALL).expect("the stack's order"),
+            pivots: Vec::new(),
+            rows: Vec::new(),
+            x: Vec::new(),
+            valid: false,
+            reduced: Vec::new(),
+            block: Vec::new(),
+            column: Vec::new(),
+        }
+    }
+}
+
 impl KeptFactors {
     /// The system of the rows `kept` (bent by `bends`) at the outputs `out`, unfactored.
     fn load(&mut self, out: &[f64], n: usize, kept: &[bool], bends: &[Bend]) {
         self.rows.clear();
         self.rows.extend((0..kept.len()).filter(|&c| kept[c]));
         let order = n + self.rows.len();
-        if self.lu.nrows() != order {
-            self.lu = DMatrix::zeros(order, order);
-        }
         if self.pivots.len() < order {
             self.pivots.resize(order, 0);
         }
+        if order <= linalg::SMALL {
+            self.small.set_order(order);
+            load_kept(out, n, &self.rows, bends, &mut self.small);
+            return;
+        }
+        if self.lu.nrows() != order {
+            self.lu = DMatrix::zeros(order, order);
+        }
         load_kept(out, n, &self.rows, bends, &mut self.lu);
+    }
+
+    /// The order of the system last loaded.
+    pub(crate) fn order(&self, n: usize) -> usize {
+        n + self.rows.len()
+    }
+
+    /// LU-factors the system last loaded in place.
+    pub(crate) fn factor(&mut self, n: usize) -> Result<(), FaultKind> {
+        let order = self.order(n);
+        let pivots = &mut self.pivots[..order];
+        if order <= linalg::SMALL {
+            linalg::lu_in_place(&mut self.small, pivots)
+        } else {
+            linalg::lu_in_place(&mut self.lu, pivots)
+        }
+    }
+
+    /// Solves with the factors for the columns of `block` side by side.
+    pub(crate) fn solve_columns(&self, n: usize, block: &mut [[f64; jacobian::COLUMNS]]) {
+        let order = self.order(n);
+        let pivots = &self.pivots[..order];
+        if order <= linalg::SMALL {
+            linalg::lu_solve_columns(&self.small, pivots, block);
+        } else {
+            linalg::lu_solve_columns(&self.lu, pivots, block);
+        }
+    }
+
+    /// The kept multipliers, in the order of the system's rows past M's.
+    pub(crate) fn rows(&self) -> &[usize] {
+        &self.rows
     }
 }
 

@@ -649,14 +649,20 @@ impl Problem for Variational<'_> {
         }
         // A = [0 I; ∂q̈/∂q ∂q̈/∂q̇]: the upper rows of AΦ are the lower rows of Φ.
         d[..n * s].copy_from_slice(&phi[n * s..]);
+        // Row by row of Φ, each entry's sum over k in its order from +0 as before (the same
+        // bits), a zero of A's left out: ±0 added to a sum that is never −0 changes nothing,
+        // for the finite Φ a run carries.
         for i in n..s {
             let a = &self.jac[i * s..(i + 1) * s];
-            for j in 0..s {
-                let mut acc = 0.0;
-                for k in 0..s {
-                    acc += a[k] * phi[k * s + j];
+            let row = &mut d[i * s..(i + 1) * s];
+            row.fill(0.0);
+            for (k, &a) in a.iter().enumerate() {
+                if a == 0.0 {
+                    continue;
                 }
-                d[i * s + j] = acc;
+                for (out, p) in row.iter_mut().zip(&phi[k * s..(k + 1) * s]) {
+                    *out += a * p;
+                }
             }
         }
         if columns == 0 {

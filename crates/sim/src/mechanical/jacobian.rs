@@ -12,6 +12,9 @@ use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 /// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
 pub(super) const COLUMNS: usize = 4;
 
+/// How many slices of the partials program a problem keeps ([`Mechanical::kept_partials_at`]).
+const SLICES: usize = 64;
+
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
     pub fn has_partials(&self) -> bool {
@@ -72,6 +75,51 @@ impl Mechanical {
         Ok(Some(normals))
     }
 
+    /// [`Mechanical::partials_at`] into `partials_out` for what the exact Jacobian reads: the
+    /// rows of r and the kept rows' (an open contact's rows are not read), from a slice of the
+    /// partials program for the rows kept now; the other rows keep older values. A rimless
+    /// wheel on one of its eight spokes had evaluated its sixteen contact rows' partials at
+    /// every stage, most of the program. A contact slipping in space reads the rates of rows
+    /// it does not keep: there, the whole program runs.
+    fn kept_partials_at(&mut self, t: f64, y: &[f64], unknowns: &[f64]) -> Result<(), FaultKind> {
+        if self.bends.iter().any(|b| b.cone.is_some()) {
+            return self.partials_at(t, y, unknowns).map(|_| ());
+        }
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        self.follow_signals(t);
+        let Some(tape) = self.partials.as_mut() else { return Ok(()) };
+        let kept = &self.kept;
+        let index = match self.partial_slices.iter().position(|(rows, _)| rows == kept) {
+            Some(index) => index,
+            None => {
+                let width = 2 * n;
+                let rows = (0..n).chain(
+                    (0..m).filter(|&c| kept[c]).flat_map(|c| (0..3).map(move |b| n + b * m + c)),
+                );
+                let slice = tape.slice(rows.flat_map(|r| r * width..(r + 1) * width));
+                // The modes a run meets are few; a problem that meets ever more starts over.
+                if self.partial_slices.len() >= SLICES {
+                    self.partial_slices.clear();
+                }
+                self.partial_slices.push((kept.clone(), slice));
+                self.partial_slices.len() - 1
+            }
+        };
+        let input = tape.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(unknowns);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        let slice = &mut self.partial_slices[index].1;
+        tape.run_slice(slice, &mut self.partials_out);
+        for &o in slice.outputs() {
+            if !self.partials_out[o].is_finite() {
+                return Err(FaultKind::NonFinite { at: NonFiniteAt::Partials });
+            }
+        }
+        Ok(())
+    }
+
     /// ∂(q̇, q̈)/∂(q, q̇), row-major, into `jac`; false without a partials program.
     pub(super) fn exact_jacobian(
         &mut self,
@@ -85,7 +133,7 @@ impl Mechanical {
         let n = self.layout.coordinates;
         self.accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
-        let evaluated = self.partials_at(t, y, &solution).map(|_| ());
+        let evaluated = self.kept_partials_at(t, y, &solution);
         if let Err(fault) = evaluated {
             self.solution = solution;
             return Err(fault);
@@ -206,27 +254,30 @@ impl Mechanical {
         rates[..n].copy_from_slice(&y[n..2 * n]);
         rates[n..].copy_from_slice(&self.solution[..n]);
         check_finite(rates, crate::rate)?;
-        let input = &mut self.obs_input;
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&self.solution);
-        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
-        if let Some(tape) = self.partials.as_mut() {
-            tape.eval(input, &mut self.partials_out);
-        }
-        check_finite(&self.partials_out, |_| NonFiniteAt::Partials)?;
-        if columns > 0 {
+        let solution = std::mem::take(&mut self.solution);
+        let evaluated = self.kept_partials_at(t, y, &solution).and_then(|()| {
+            if columns == 0 {
+                return Ok(());
+            }
+            let input = &mut self.obs_input;
+            input[0] = t;
+            input[1..1 + 2 * n].copy_from_slice(y);
+            input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&solution);
+            input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
             if let Some((tape, _)) = self.sensitivities.as_mut() {
                 tape.eval(input, &mut self.sensitivities_out);
             }
-            check_finite(&self.sensitivities_out, |_| NonFiniteAt::Partials)?;
+            check_finite(&self.sensitivities_out, |_| NonFiniteAt::Partials)
+        });
+        if let Err(fault) = evaluated {
+            self.solution = solution;
+            return Err(fault);
         }
         let width = 2 * n;
         jac.fill(0.0);
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
-        let solution = std::mem::take(&mut self.solution);
         let partials = std::mem::take(&mut self.partials_out);
         let sensitivities = std::mem::take(&mut self.sensitivities_out);
         let mut change = change;
@@ -383,12 +434,10 @@ impl Mechanical {
         if !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
             factors.load(dyn_out, n, kept, bends);
-            let order = n + factors.rows.len();
-            linalg::lu_in_place(&mut factors.lu, &mut factors.pivots[..order])?;
+            factors.factor(n)?;
             factors.valid = true;
         }
-        let order = n + factors.rows.len();
-        let (system, pivots, rows) = (&factors.lu, &factors.pivots[..order], &factors.rows);
+        let order = factors.order(n);
         let alpha = *baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
@@ -406,8 +455,12 @@ impl Mechanical {
             let df = [0, 1].map(|j| -cone.mu * (f64::from(u8::from(i == j)) - d[i] * d[j]) / size);
             turning.push((bend.tangent, solution[n + bend.normal], df, cone.rates));
         }
-        let (reduced, block, column) =
-            (&mut factors.reduced, &mut factors.block, &mut factors.column);
+        let (mut reduced, mut block, mut column) = (
+            std::mem::take(&mut factors.reduced),
+            std::mem::take(&mut factors.block),
+            std::mem::take(&mut factors.column),
+        );
+        let rows = factors.rows();
         // Every entry of these is written before it is read, column by column: they are
         // resized, not cleared.
         reduced.resize(order, 0.0);
@@ -447,7 +500,7 @@ impl Mechanical {
             for row in block.iter_mut() {
                 row[columns..].fill(0.0);
             }
-            linalg::lu_solve_columns(system, pivots, block);
+            factors.solve_columns(n, &mut block);
             for (c, k) in (first..first + columns).enumerate() {
                 for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
@@ -456,9 +509,10 @@ impl Mechanical {
                 for (r, &kept) in rows.iter().enumerate() {
                     column[n + kept] = block[n + r][c];
                 }
-                put(k, column);
+                put(k, &column);
             }
         }
+        (factors.reduced, factors.block, factors.column) = (reduced, block, column);
         Ok(())
     }
 }

@@ -430,13 +430,17 @@ impl Mechanical {
     ) -> Result<(DMatrix<f64>, DMatrix<f64>), FaultKind> {
         let Layout { coordinates: n, multipliers: m, .. } = self.layout;
         let two_sided = self.two_sided();
-        let mut system = DMatrix::zeros(n + m, n + m);
-        super::load_system(&self.dyn_out, self.layout, &two_sided, &[], &mut system);
-        let mut pivots = vec![0; n + m];
+        // The two-sided rows alone: the contacts' rows would be the identity's, which only
+        // made the factorization larger (a rimless wheel's sixteen rows beside its M).
+        let rows: Vec<usize> = (0..m).filter(|&c| two_sided[c]).collect();
+        let order = n + rows.len();
+        let mut system = DMatrix::zeros(order, order);
+        super::load_kept(&self.dyn_out, n, &rows, &[], &mut system);
+        let mut pivots = vec![0; order];
         linalg::lu_in_place(&mut system, &mut pivots)?;
         let r = multipliers.len();
         let mut x = DMatrix::zeros(n, r);
-        let mut column = vec![0.0; n + m];
+        let mut column = vec![0.0; order];
         for (j, &c) in multipliers.iter().enumerate() {
             column.fill(0.0);
             column[..n].copy_from_slice(self.jacobian_row(c));
