@@ -2,7 +2,9 @@
 //! and c, the column theta) and the pushed cart with its pole (free b and I, the columns x and
 //! theta, driven by the recorded push) — at tolerance 1e-12, from the scenes' own values, unit
 //! weights. The time is a whole fit in-process (load, every run, the statistics), the median
-//! of the repeats; nothing is kept from one repeat to the next.
+//! of the repeats, at least `--repeats` of them and for at least three seconds (SciPy's
+//! repeats take that long, and the machine's speed swings over seconds); nothing is kept from
+//! one repeat to the next.
 //!
 //! With `--peer`, SciPy in the same run (`tests/sympy/fit_peer.py`): `least_squares` with its
 //! defaults (trf, the Jacobian by 2-point differences of whole runs) on the residuals of
@@ -93,6 +95,9 @@ struct Ours {
     load: f64,
 }
 
+/// The least time our repeats of a fit span, in seconds.
+const SPAN: f64 = 3.0;
+
 fn ours(root: &Path, problem: &Problem, repeats: usize) -> Ours {
     let source = std::fs::read_to_string(root.join(problem.file)).expect("the scene");
     let text = std::fs::read_to_string(root.join(problem.data)).expect("the data");
@@ -109,7 +114,12 @@ fn ours(root: &Path, problem: &Problem, repeats: usize) -> Ours {
     let mut times = Vec::new();
     let mut loads = Vec::new();
     let mut last = None;
-    for _ in 0..repeats.max(1) {
+    // The machine's speed swings by up to 2× over seconds (a fit of ours took 16 to 30 ms
+    // in one steady loop); SciPy's repeats span seconds and meet the swings in their
+    // proportions. Ours are repeated until they span as long, so that the two medians sample
+    // the same machine.
+    let span = Instant::now();
+    while times.len() < repeats.max(1) || span.elapsed().as_secs_f64() < SPAN {
         // The table is the fit's to own; copying it is not part of the time.
         let table = table.clone();
         let began = Instant::now();
@@ -207,8 +217,8 @@ pub fn run(peer: bool, repeats: usize) {
     outln!("## Fitting: Levenberg–Marquardt on exact sensitivities\n");
     outln!(
         "`fit::fit` at tolerance {TOLERANCE:e} from the scenes' values, unit weights; the \
-         median of {repeats} whole fits (load, runs, statistics), and of as many loads alone \
-         (parse, derive, lower).\n"
+         median of whole fits (load, runs, statistics) repeated at least {repeats} times and \
+         for at least {SPAN} s, and of as many loads alone (parse, derive, lower).\n"
     );
     outln!("| problem | estimates | Σr² | iterations | runs | steps per run | fit | load |");
     outln!("|---|---|---:|---:|---:|---:|---:|---:|");
