@@ -188,6 +188,21 @@ impl Mechanical {
         self.sensitivities.as_ref().map(|(_, columns)| *columns)
     }
 
+    /// The sensitivity program's outputs at (t, y) with q̈ and λ held at `solution`, into
+    /// `sensitivities_out`; a fault where one is not finite.
+    fn sensitivities_at(&mut self, t: f64, y: &[f64], solution: &[f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        let input = &mut self.obs_input;
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(solution);
+        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
+        if let Some((tape, _)) = self.sensitivities.as_mut() {
+            tape.eval(input, &mut self.sensitivities_out);
+        }
+        check_finite(&self.sensitivities_out, |_| NonFiniteAt::Partials)
+    }
+
     /// ∂q̈/∂p at (t, y), row-major n × k, into `out`: the accelerations' derivative by each of
     /// the sensitivity program's parameters with the state held, from the same augmented
     /// system (its factors where the accelerations left them) and the same stabilisation as
@@ -200,26 +215,20 @@ impl Mechanical {
         out: &mut [f64],
     ) -> Result<bool, FaultKind> {
         let Some(columns) = self.sensitivity_columns() else { return Ok(false) };
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        let n = self.layout.coordinates;
         assert_eq!(y.len(), 2 * n, "state length");
         assert_eq!(out.len(), n * columns, "∂q̈/∂p's length");
         self.accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
-        let input = &mut self.obs_input;
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&solution);
-        input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
-        if let Some((tape, _)) = self.sensitivities.as_mut() {
-            tape.eval(input, &mut self.sensitivities_out);
+        if let Err(fault) = self.sensitivities_at(t, y, &solution) {
+            self.solution = solution;
+            return Err(fault);
         }
         let partials = std::mem::take(&mut self.sensitivities_out);
-        let solved = check_finite(&partials, |_| NonFiniteAt::Partials).and_then(|()| {
-            self.solve_partials(&partials, columns, &solution, |j, column| {
-                for i in 0..n {
-                    out[i * columns + j] = column[i];
-                }
-            })
+        let solved = self.solve_partials(&partials, columns, &solution, |j, column| {
+            for i in 0..n {
+                out[i * columns + j] = column[i];
+            }
         });
         self.sensitivities_out = partials;
         self.solution = solution;
@@ -245,7 +254,7 @@ impl Mechanical {
         jac: &mut [f64],
         change: Option<&mut [f64]>,
     ) -> Result<bool, FaultKind> {
-        let Layout { coordinates: n, multipliers: m, parameters: k } = self.layout;
+        let n = self.layout.coordinates;
         let columns = match (&change, &self.sensitivities) {
             (None, _) => 0,
             (Some(_), Some((_, columns))) => *columns,
@@ -263,15 +272,7 @@ impl Mechanical {
             if columns == 0 {
                 return Ok(());
             }
-            let input = &mut self.obs_input;
-            input[0] = t;
-            input[1..1 + 2 * n].copy_from_slice(y);
-            input[1 + 2 * n..1 + 3 * n + m].copy_from_slice(&solution);
-            input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
-            if let Some((tape, _)) = self.sensitivities.as_mut() {
-                tape.eval(input, &mut self.sensitivities_out);
-            }
-            check_finite(&self.sensitivities_out, |_| NonFiniteAt::Partials)
+            self.sensitivities_at(t, y, &solution)
         });
         if let Err(fault) = evaluated {
             self.solution = solution;
