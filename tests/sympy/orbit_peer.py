@@ -22,10 +22,11 @@ derived by hand here, not lowered from lagrange:
 It reads requests from standard input, one JSON object per line:
 
     {"scene": "wheel" | "walker" | "pendulum", "params": {...}, "start": [...], "rtol": R,
-     "step": H, "repeats": N}
+     "step": H, "repeats": N, "span": S}
 
 and for each finds the fixed point from `start` (the wheel: first run to its first landing)
-with rtol = atol = R and difference step H (relative), `repeats` times, and writes one JSON
+with rtol = atol = R and difference step H (relative), at least `repeats` times and for at
+least S seconds, and writes one JSON
 line: the fixed point, the multipliers (re, im), the Newton iterations, the runs, the
 right-hand sides, and the median wall time of a search. It measures and asserts nothing else.
 It makes and uses a virtual environment of its own (tests/sympy/.venv-orbit, pinned NumPy and
@@ -172,7 +173,11 @@ def main():
             continue
         request = json.loads(line)
         walls = []
-        for _ in range(request["repeats"]):
+        # At least `repeats` searches, spanning at least `span` seconds: the machine's speed
+        # moves in phases of seconds, and a few milliseconds' searches would see one phase.
+        started = time.perf_counter()
+        span = request.get("span", 0.0)
+        while len(walls) < request["repeats"] or time.perf_counter() - started < span:
             began = time.perf_counter()
             fixed, multipliers, iterations, counter = search(request)
             walls.append(time.perf_counter() - began)

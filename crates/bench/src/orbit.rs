@@ -12,7 +12,8 @@
 //! exp(−c·T/(m·l²)). The walker has none: its feet weigh β·M, the paper's nothing, so ours is
 //! held to its own search at tolerance 1e-12 and the peer's (the paper's model) to the product
 //! of the paper's map's multipliers by central differences of its equations at 1e-13. Cost: the median wall time of a search (every Newton run, from the
-//! scene's start), the one-time load apart.
+//! scene's start), the one-time load apart, over at least `--repeats` searches spanning at
+//! least three seconds on each side.
 //!
 //! With `--peer`, SciPy in the same run (`tests/sympy/orbit_peer.py`): the shooting loop a
 //! SciPy user writes, Newton's method with the map's Jacobian by forward differences of whole
@@ -150,7 +151,7 @@ fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, S
         };
         let request = serde_json::json!({
             "scene": kind, "params": scene.params, "start": scene.start,
-            "rtol": TOLERANCE, "step": STEP, "repeats": repeats,
+            "rtol": TOLERANCE, "step": STEP, "repeats": repeats, "span": SPAN,
         });
         input += &(request.to_string() + "\n");
     }
@@ -173,13 +174,17 @@ fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, S
 }
 
 /// `peer`: also run SciPy's shooting loop; `repeats`: how often each search is timed.
+/// The least time each side's repeats of a search span, in seconds.
+const SPAN: f64 = 3.0;
+
 pub fn run(peer: bool, repeats: usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let scenes = scenes();
     outln!("## Periodic orbits: Newton on the return map, and the multipliers\n");
     outln!(
-        "dop853 at tolerance {TOLERANCE:e}, from each scene's start; the median of {repeats} \
-         searches, the load (parse, derive, lower) apart.\n"
+        "dop853 at tolerance {TOLERANCE:e}, from each scene's start; the median of searches \
+         repeated at least {repeats} times and for at least {SPAN} s (SciPy's too), the load \
+         (parse, derive, lower) apart.\n"
     );
     outln!("| scene | figure | Newton runs | error | load | search |");
     outln!("|---|---|---:|---:|---:|---:|");
@@ -191,7 +196,11 @@ pub fn run(peer: bool, repeats: usize) {
         let load = began.elapsed().as_secs_f64();
         let mut times = Vec::new();
         let mut found = None;
-        for _ in 0..repeats.max(1) {
+        // Both sides' searches take milliseconds, and the machine's speed swings by up to 2×
+        // in phases of seconds: each side repeats its searches until they span SPAN, so that
+        // the two medians sample the same machine (the peer is asked for the same).
+        let span = Instant::now();
+        while times.len() < repeats.max(1) || span.elapsed().as_secs_f64() < SPAN {
             let began = Instant::now();
             let orbit = search.find(scene.options.iterations).expect("an orbit");
             times.push(began.elapsed().as_secs_f64());
