@@ -8,7 +8,9 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use rustc_hash::FxHashMap;
+use hashbrown::HashTable;
+use rustc_hash::{FxBuildHasher, FxHashMap};
+use std::hash::BuildHasher;
 
 use num_traits::{One, Zero};
 
@@ -52,8 +54,11 @@ pub trait ZeroTest: Send + Sync {
 /// The arena that owns every expression and symbol of one derivation.
 pub struct Pool {
     nodes: Vec<Node>,
-    // Fx rather than SipHash: the keys are our own ids, and interning is the hot path.
-    interned: FxHashMap<Node, ExprId>,
+    /// Each node's id under its hash (Fx rather than SipHash: the keys are our own ids, and
+    /// interning is the hot path). The node itself is only in `nodes`: a map keyed by the
+    /// node held a second copy of each and hashed every node again each time it grew, a
+    /// tenth of a 64-link chain's load, and its copies were another part of the drop.
+    interned: HashTable<(u64, ExprId)>,
     symbols: Vec<Symbol>,
     symbol_ids: HashMap<String, SymId>,
     pub(crate) diff_memo: FxHashMap<(ExprId, SymId), ExprId>,
@@ -78,7 +83,7 @@ impl Pool {
     pub fn new() -> Self {
         let mut pool = Pool {
             nodes: Vec::new(),
-            interned: FxHashMap::default(),
+            interned: HashTable::new(),
             symbols: Vec::new(),
             symbol_ids: HashMap::new(),
             diff_memo: FxHashMap::default(),
@@ -126,13 +131,16 @@ impl Pool {
 
     fn intern(&mut self, node: Node) -> ExprId {
         // One lookup, hashing the node once, whether it is new or not.
-        match self.interned.entry(node) {
-            std::collections::hash_map::Entry::Occupied(known) => *known.get(),
-            std::collections::hash_map::Entry::Vacant(slot) => {
+        let hash = FxBuildHasher.hash_one(&node);
+        let nodes = &self.nodes;
+        let same = |&(h, id): &(u64, ExprId)| h == hash && nodes[id.index()] == node;
+        match self.interned.entry(hash, same, |&(h, _)| h) {
+            hashbrown::hash_table::Entry::Occupied(known) => known.get().1,
+            hashbrown::hash_table::Entry::Vacant(slot) => {
                 let id =
                     ExprId(u32::try_from(self.nodes.len()).expect("more than 2^32 expressions"));
-                self.nodes.push(slot.key().clone());
-                slot.insert(id);
+                slot.insert((hash, id));
+                self.nodes.push(node);
                 id
             }
         }
