@@ -16,7 +16,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use crate::{median, seconds};
+use crate::{median, repeating, seconds, SPAN};
 
 const PEER: &str = "tests/sympy/fit_peer.py";
 const TOLERANCE: f64 = 1e-12;
@@ -95,9 +95,6 @@ struct Ours {
     load: f64,
 }
 
-/// The least time our repeats of a fit span, in seconds.
-const SPAN: f64 = 3.0;
-
 fn ours(root: &Path, problem: &Problem, repeats: usize) -> Ours {
     let source = std::fs::read_to_string(root.join(problem.file)).expect("the scene");
     let text = std::fs::read_to_string(root.join(problem.data)).expect("the data");
@@ -114,12 +111,9 @@ fn ours(root: &Path, problem: &Problem, repeats: usize) -> Ours {
     let mut times = Vec::new();
     let mut loads = Vec::new();
     let mut last = None;
-    // The machine's speed swings by up to 2× over seconds (a fit of ours took 16 to 30 ms
-    // in one steady loop); SciPy's repeats span seconds and meet the swings in their
-    // proportions. Ours are repeated until they span as long, so that the two medians sample
-    // the same machine.
-    let span = Instant::now();
-    while times.len() < repeats.max(1) || span.elapsed().as_secs_f64() < SPAN {
+    // SciPy's repeats span seconds on their own; ours are made to (`SPAN`).
+    let since = Instant::now();
+    while repeating(times.len(), repeats, since) {
         // The table is the fit's to own; copying it is not part of the time.
         let table = table.clone();
         let began = Instant::now();

@@ -240,6 +240,19 @@ fn main() {
     }
 }
 
+/// The least time, in seconds, that each side's repeats of a short measurement span. This
+/// machine's speed swings by up to 2× in phases of seconds (a fit of ours took 16 to 30 ms in
+/// one steady loop): repeats of a few milliseconds would meet one phase, a peer's of a second
+/// each meet them all in their proportions. Spanning as long, the two medians sample the same
+/// machine.
+pub const SPAN: f64 = 3.0;
+
+/// Whether a measurement repeated `done` times since `since` goes on: until it has at least
+/// `repeats` and spans [`SPAN`].
+pub fn repeating(done: usize, repeats: usize, since: std::time::Instant) -> bool {
+    done < repeats.max(1) || since.elapsed().as_secs_f64() < SPAN
+}
+
 /// The median of `v`.
 pub fn median(v: &mut [f64]) -> f64 {
     simulation::bench::median(v)

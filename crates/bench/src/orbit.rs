@@ -31,7 +31,7 @@ use std::time::Instant;
 use engine::input::Assignment;
 use orbit::{Options, Orbit, Search, Section};
 
-use crate::{median, seconds};
+use crate::{median, repeating, seconds, SPAN};
 
 const PEER: &str = "tests/sympy/orbit_peer.py";
 const TOLERANCE: f64 = 1e-10;
@@ -173,10 +173,7 @@ fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, S
         .collect()
 }
 
-/// `peer`: also run SciPy's shooting loop; `repeats`: how often each search is timed.
-/// The least time each side's repeats of a search span, in seconds.
-const SPAN: f64 = 3.0;
-
+/// `peer`: also run SciPy's shooting loop; `repeats`: how often each search is timed at least.
 pub fn run(peer: bool, repeats: usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let scenes = scenes();
@@ -196,11 +193,10 @@ pub fn run(peer: bool, repeats: usize) {
         let load = began.elapsed().as_secs_f64();
         let mut times = Vec::new();
         let mut found = None;
-        // Both sides' searches take milliseconds, and the machine's speed swings by up to 2×
-        // in phases of seconds: each side repeats its searches until they span SPAN, so that
-        // the two medians sample the same machine (the peer is asked for the same).
-        let span = Instant::now();
-        while times.len() < repeats.max(1) || span.elapsed().as_secs_f64() < SPAN {
+        // Both sides' searches take milliseconds: each repeats them until they span `SPAN`
+        // (the peer is asked for the same).
+        let since = Instant::now();
+        while repeating(times.len(), repeats, since) {
             let began = Instant::now();
             let orbit = search.find(scene.options.iterations).expect("an orbit");
             times.push(began.elapsed().as_secs_f64());
