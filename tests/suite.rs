@@ -42,6 +42,7 @@ mod orbits;
 mod radau;
 mod random_scenes;
 mod rates;
+mod recursive;
 mod resolutions;
 mod run_faults;
 mod sensitivities;

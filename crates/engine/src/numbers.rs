@@ -19,6 +19,10 @@ pub fn derived_error(plan: &model::ParameterValues, setting: Setting, i: usize) 
     Error::given(setting, name, format!(": {}", plan.derived_error(i)))
 }
 
+/// The fewest coordinates at which a scene with a recursive form is solved by it
+/// ([`Prepared::recursive`]): about where its sweep overtakes factoring M.
+pub const RECURSIVE_FROM: usize = 8;
+
 /// A scene loaded for numbers, with extra expressions (outputs, events, `--set` values)
 /// resolved against it.
 pub struct Prepared {
@@ -285,6 +289,31 @@ impl Prepared {
             v.push(m.rows.drift_rate(&d.model.pool));
         }
         v
+    }
+
+    /// The recursive form's sweep and its program (inputs those of the dynamics program),
+    /// where the scene has the form and at least [`RECURSIVE_FROM`] coordinates: below that
+    /// the dense route is as fast, and keeps the bits small scenes have always had.
+    pub fn recursive(&mut self) -> Result<Option<(sim::Chain, Program)>, Error> {
+        self.recursive_from(RECURSIVE_FROM)
+    }
+
+    /// [`Prepared::recursive`] from `fewest` coordinates on (tests hold small scenes to it).
+    pub fn recursive_from(
+        &mut self,
+        fewest: usize,
+    ) -> Result<Option<(sim::Chain, Program)>, Error> {
+        // A law driving an input may move a position in time, which the form was judged
+        // without.
+        if self.derivation.coords.len() < fewest || !self.driven.is_empty() {
+            return Ok(None);
+        }
+        let Some(form) = self.derivation.chain_form() else { return Ok(None) };
+        let nodes: Vec<(Option<usize>, Vec<usize>)> =
+            form.nodes.iter().map(|node| (node.parent, node.coordinates.clone())).collect();
+        let chain = sim::Chain::new(form.dimension, &nodes);
+        let program = self.lower(&self.dynamics_inputs(), &form.outputs())?;
+        Ok(Some((chain, program)))
     }
 
     /// How the integrator stabilises each kept constraint, in slot order.

@@ -1,6 +1,7 @@
 //! From a model to equations of motion: constraints eliminated or kept as multipliers, the
 //! energies, the Euler–Lagrange equations in mass-matrix form, and reactions where asked for.
 
+mod chain;
 mod eliminate;
 mod energies;
 mod equations;
@@ -25,6 +26,7 @@ use equations::{coordinates_without_inertia, euler_lagrange_rows};
 use multipliers::kept_constraints;
 use reactions::eliminated_reactions;
 
+pub use chain::{ChainForm, ChainNode};
 pub use rows::{ConstraintRows, Stabilisation};
 
 /// A constraint solved for one coordinate, which then leaves the equations.
@@ -109,6 +111,8 @@ pub struct Derivation {
     /// there in numbers: what is decided at the start is decided at those values, not at
     /// random ones.
     pub start_at_values_only: bool,
+    /// What the recursive form is built from, kept from the rows ([`Derivation::chain_form`]).
+    structure: Option<equations::Structure>,
 }
 
 impl Derivation {
@@ -322,6 +326,7 @@ pub fn derive(mut model: Model) -> Result<Derivation, Vec<Diagnostic>> {
         potential: reduced.potential,
         lagrangian: reduced.lagrangian,
         generalized_forces: rows.generalized_forces,
+        structure: Some(rows.structure),
         mass_matrix: rows.mass_matrix,
         forcing: rows.forcing,
         reactions,

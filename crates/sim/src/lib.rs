@@ -29,6 +29,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod auto;
+mod chain;
 pub mod complementarity;
 mod constrained;
 mod contact;
@@ -47,6 +48,7 @@ mod spectrum;
 mod stepper;
 pub mod variational;
 
+pub use chain::Chain;
 pub use constrained::Constrained;
 pub use contact::{Contact, ModeChange, ModeEvent};
 pub use erk::{dop853_tableau, Dop853Tableau};

@@ -156,6 +156,12 @@ pub struct Mechanical {
     /// The contacts' arming conditions (one output each, 1 for a contact without one) and
     /// their values at the last evaluation, when a contact has one.
     arming: Option<(Tape, Vec<f64>)>,
+    /// The recursive form's program, its sweep and its outputs, where the scene has one and
+    /// no multiplier ([`Mechanical::with_chain`]).
+    chain: Option<(Tape, crate::Chain, Vec<f64>)>,
+    /// Whether `dyn_out` holds the dense program's outputs at the inputs `solved_at` compares
+    /// (the recursive form leaves it behind).
+    dense: bool,
 }
 
 /// A slipping contact's friction in the augmented system: the column of multiplier `normal`
@@ -236,7 +242,33 @@ impl Mechanical {
             modes: modes::Modes::default(),
             bends: Vec::new(),
             arming: None,
+            chain: None,
+            dense: false,
         }
+    }
+
+    /// Solves for q̈ by the recursive form (`program` gives the outputs `chain` sweeps) rather
+    /// than by factoring M: O(n) rather than O(n³) on a long chain. The dense program still
+    /// serves what needs M (the exact Jacobian, the sensitivities). Ignored where the problem
+    /// has multipliers.
+    pub fn with_chain(mut self, program: Tape, chain: crate::Chain) -> Self {
+        assert_eq!(program.inputs(), self.layout.dynamics_inputs());
+        assert_eq!(program.outputs(), chain.outputs());
+        if self.layout.multipliers > 0 {
+            return self;
+        }
+        let state = 1 + 2 * self.layout.coordinates;
+        let mut program = program.with_fixed_inputs(state..self.layout.dynamics_inputs());
+        program.inputs_mut()[state..].copy_from_slice(&self.parameters);
+        let out = vec![0.0; chain.outputs()];
+        self.chain = Some((program, chain, out));
+        self.solved = None;
+        self
+    }
+
+    /// Whether q̈ is solved by the recursive form.
+    pub fn recursive(&self) -> bool {
+        self.chain.is_some()
     }
 
     /// The parameter values the programs are evaluated at, in declaration order.
@@ -252,6 +284,9 @@ impl Mechanical {
         // inputs alone (`rhs_from_outputs`).
         let state = 1 + 2 * self.layout.coordinates;
         self.dynamics.inputs_mut()[state..state + values.len()].copy_from_slice(values);
+        if let Some((program, _, _)) = &mut self.chain {
+            program.inputs_mut()[state..state + values.len()].copy_from_slice(values);
+        }
         self.solved = None;
     }
 
@@ -311,6 +346,7 @@ impl Mechanical {
         input[1..1 + 2 * n].copy_from_slice(y);
         input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
         self.dynamics.run(&mut self.dyn_out);
+        self.dense = true;
         let layout = self.layout;
         check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         Ok(&self.dyn_out)
@@ -353,8 +389,44 @@ impl Mechanical {
         if self.solved_at(t, y) {
             return Ok(());
         }
+        if self.chain.is_some() {
+            return self.recursive_accelerations(t, y);
+        }
         self.dynamics_at(t, y)?;
         self.solve_dynamics()
+    }
+
+    /// [`Mechanical::accelerations`] with the dense program's outputs at (t, y) in `dyn_out`,
+    /// for what needs M: the accelerations solved from them, not by the recursive form.
+    pub(crate) fn dense_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        if self.dense && self.solved_at(t, y) {
+            return Ok(());
+        }
+        self.dynamics_at(t, y)?;
+        self.solve_dynamics()
+    }
+
+    /// q̈ at (t, y) by the recursive form's sweep, into `self.solution`.
+    fn recursive_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        let Layout { coordinates: n, parameters: k, .. } = self.layout;
+        self.solved = None;
+        self.follow_signals(t);
+        // The dense program's inputs say where `solution` was solved (`solved_at`).
+        let input = self.dynamics.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        self.dense = false;
+        let (program, chain, out) = self.chain.as_mut().expect("a recursive form");
+        let input = program.inputs_mut();
+        input[0] = t;
+        input[1..1 + 2 * n].copy_from_slice(y);
+        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        program.run(out);
+        check_finite(out, |_| NonFiniteAt::System)?;
+        chain.solve(out, &mut self.solution[..n])?;
+        self.solved = Some(self.baumgarte.to_bits());
+        Ok(())
     }
 
     /// Solves for q̈ and λ from the dynamics outputs in `self.dyn_out`; they are left in

@@ -26,6 +26,8 @@ pub struct Compiled {
     outputs: Vec<String>,
     columns: Columns,
     dynamics: Program,
+    /// The recursive form's sweep and program, where q̈ is solved by it.
+    recursive: Option<(sim::Chain, Program)>,
     /// The observations, lowered once; `None` with an animation, whose figures' expressions
     /// take the run's parameter values and are lowered with each run.
     observation: Option<Program>,
@@ -59,6 +61,7 @@ impl Compiled {
         };
         let dynamics_exprs = prepared.dynamics_exprs();
         let dynamics = prepared.lower(&prepared.dynamics_inputs(), &dynamics_exprs)?;
+        let recursive = prepared.recursive()?;
         let observation = if settings.animate {
             None
         } else {
@@ -72,6 +75,7 @@ impl Compiled {
             outputs,
             columns,
             dynamics,
+            recursive,
             observation,
             conservative,
             held,
@@ -152,6 +156,9 @@ impl Compiled {
         )
         .with_kinds(prepared.stabilisation())
         .with_signals(signals);
+        if let Some((chain, program)) = &self.recursive {
+            mechanical = mechanical.with_chain(Tape::new(program.clone()), chain.clone());
+        }
         if let Some(hold) = hold {
             mechanical = mechanical.with_hold(hold);
         }

@@ -9,7 +9,7 @@ use model::{Model, Rotation, Value};
 
 use super::eliminate::Coordinates;
 use super::energies::Energies;
-use super::structural::{inertial_terms, kinetic_expansion, structural_rows};
+use super::structural::{inertial_terms, kinetic_expansion, structural_rows, InertialTerm};
 
 /// The equations of motion in the remaining coordinates, one row per coordinate.
 #[derive(Debug)]
@@ -18,6 +18,29 @@ pub(super) struct Rows {
     pub forcing: Vec<ExprId>,
     /// Q of the applied forces, torques and dissipation, already part of `forcing`.
     pub generalized_forces: Vec<ExprId>,
+    /// What the recursive form is built from ([`super::chain`]).
+    pub structure: Structure,
+}
+
+/// The rows taken apart as the recursive form needs them: the kinetic-energy terms on the
+/// structural route, and per row the parts of f they did not give. Only ids already built are
+/// kept, so that holding them adds no expression to the pool (whose numbering some printing
+/// ties go by).
+pub(super) struct Structure {
+    pub terms: Vec<InertialTerm>,
+    pub rest_forcing: Vec<Vec<ExprId>>,
+    /// Whether the rest of L has a term with the accelerations (a body off the structural route).
+    pub rest_has_mass: bool,
+}
+
+impl std::fmt::Debug for Structure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Structure")
+            .field("terms", &self.terms.len())
+            .field("rest_forcing", &self.rest_forcing)
+            .field("rest_has_mass", &self.rest_has_mass)
+            .finish()
+    }
 }
 
 /// The generalized force along `q` in any set of coordinates, by virtual work: Σ F·∂r/∂q over
@@ -97,12 +120,15 @@ pub(super) fn euler_lagrange_rows(
     let mut mass_matrix = vec![vec![pool.zero(); n]; n];
     let mut forcing = Vec::with_capacity(n);
     let mut generalized_forces = Vec::with_capacity(n);
+    let mut rest_forcing = Vec::with_capacity(n);
+    let mut rest_has_mass = false;
     for i in 0..n {
         // p_i = ∂L/∂q̇_i; d/dt p_i = Σ_j M_ij q̈_j + Σ_j ∂p_i/∂q_j q̇_j + ∂p_i/∂t.
         let p = pool.diff(lagrangian, rates[i]);
         for j in 0..n {
             let m = pool.diff(p, rates[j]);
             // The structural part is symmetric and kept in its upper triangle.
+            rest_has_mass |= !pool.is_zero(m);
             let structural = structural_mass[i.min(j)][i.max(j)];
             mass_matrix[i][j] = pool.add2(structural, m);
         }
@@ -122,6 +148,8 @@ pub(super) fn euler_lagrange_rows(
         let dpt = pool.diff(p, model.time);
         parts.push(pool.neg(dpt));
         forcing.push(pool.add(&parts));
+        parts.remove(1);
+        rest_forcing.push(parts);
     }
     // Folding sin² + cos² and angle sums (cos θ₁ cos θ₂ + sin θ₁ sin θ₂ = cos(θ₁ − θ₂)) leaves
     // fewer operations for the numbers to do, and is what every report prints anyway.
@@ -146,7 +174,8 @@ pub(super) fn euler_lagrange_rows(
     ) {
         pool.remember_expansion(reduced.kinetic, expanded);
     }
-    Rows { mass_matrix, forcing, generalized_forces }
+    let structure = Structure { terms: inertial, rest_forcing, rest_has_mass };
+    Rows { mass_matrix, forcing, generalized_forces, structure }
 }
 
 /// A row entry simplified; but one too large to print either way (a bicycle's) is kept in

@@ -32,18 +32,18 @@ use model::{Model, Rotation};
 
 /// One term ½·mass·|d position/dt|² of T, with the mass constant.
 pub(super) struct Inertial {
-    mass: ExprId,
+    pub mass: ExprId,
     /// The position in the remaining coordinates (for a planar body's rotation, its angle).
-    position: Vec<ExprId>,
+    pub position: Vec<ExprId>,
 }
 
 /// One term ½·ωᵀ·I·ω of T, a body turning in space, with I constant.
 pub(super) struct Turning {
-    inertia: [[ExprId; 3]; 3],
+    pub inertia: [[ExprId; 3]; 3],
     /// ω in body axes, in the remaining coordinates and their rates.
-    omega: [ExprId; 3],
+    pub omega: [ExprId; 3],
     /// Whether ω has a part no rate multiplies (a turning the scene prescribes in time).
-    driven: bool,
+    pub driven: bool,
 }
 
 /// The kinetic energy terms that take the structural route, in the remaining coordinates,
@@ -344,7 +344,7 @@ fn turning_rows(
 }
 
 /// d/dt of a velocity with every acceleration q̈ taken as zero: Σ ∂v/∂q·q̇ + ∂v/∂t.
-fn acceleration_without_q2(pool: &mut Pool, velocity: ExprId) -> ExprId {
+pub(super) fn acceleration_without_q2(pool: &mut Pool, velocity: ExprId) -> ExprId {
     let mut parts = Vec::new();
     for &s in pool.free_symbols(velocity).iter() {
         let rate = match pool.symbol(s).kind {

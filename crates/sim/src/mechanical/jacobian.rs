@@ -135,7 +135,7 @@ impl Mechanical {
             return Ok(false);
         }
         let n = self.layout.coordinates;
-        self.accelerations(t, y)?;
+        self.dense_accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
         let evaluated = self.kept_partials_at(t, y, &solution);
         if let Err(fault) = evaluated {
@@ -218,7 +218,7 @@ impl Mechanical {
         let n = self.layout.coordinates;
         assert_eq!(y.len(), 2 * n, "state length");
         assert_eq!(out.len(), n * columns, "∂q̈/∂p's length");
-        self.accelerations(t, y)?;
+        self.dense_accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
         if let Err(fault) = self.sensitivities_at(t, y, &solution) {
             self.solution = solution;
@@ -263,7 +263,7 @@ impl Mechanical {
         if self.partials.is_none() {
             return Ok(false);
         }
-        self.accelerations(t, y)?;
+        self.dense_accelerations(t, y)?;
         rates[..n].copy_from_slice(&y[n..2 * n]);
         rates[n..].copy_from_slice(&self.solution[..n]);
         check_finite(rates, crate::rate)?;
@@ -343,7 +343,7 @@ impl Mechanical {
         if self.partials.is_none() || (wants_parameters && self.sensitivities.is_none()) {
             return Ok(false);
         }
-        self.accelerations(t, y)?;
+        self.dense_accelerations(t, y)?;
         let held = std::mem::take(&mut self.solution);
         solution.copy_from_slice(&held);
         let evaluated = self.partials_at(t, y, &held).map(|_| ());

@@ -1,0 +1,124 @@
+//! The recursive form (`mechanics::ChainForm` swept by `sim::Chain`) against the dense route
+//! it replaces on long chains: the same q̈ at random states and parameters, on every example
+//! that has the form, on generated chains, and in a run; and the scenes that must keep the
+//! dense route do.
+
+use engine::numbers::{prepare, Prepared};
+use lang::generate::{n_link, Family};
+use numeric::Tape;
+use sim::{Mechanical, Problem};
+
+/// How far the two routes' q̈ may be apart, relative to the largest |q̈|.
+const AGREEMENT: f64 = 1e-10;
+
+/// The dense problem and the same with the recursive form (any size), at `values` (a random
+/// admissible state's), with (t, y); `None` where the scene has no recursive form.
+fn both(prepared: &mut Prepared, values: &[f64]) -> Option<(Mechanical, Mechanical, f64, Vec<f64>)> {
+    let (chain, program) = prepared.recursive_from(1).expect("lowers")?;
+    let d = &prepared.derivation;
+    let parameters: Vec<f64> = prepared.parameters.iter().map(|s| values[s.index()]).collect();
+    let y: Vec<f64> = d.coords.iter().chain(&d.rates).map(|s| values[s.index()]).collect();
+    let t = values[d.model.time.index()];
+    let dense = lagrange_tests::mechanical(prepared, &parameters);
+    let recursive =
+        lagrange_tests::mechanical(prepared, &parameters).with_chain(Tape::new(program), chain);
+    assert!(recursive.recursive());
+    Some((dense, recursive, t, y))
+}
+
+/// The largest difference of the two routes' q̈ at (t, y), relative to the largest |q̈|.
+fn difference(dense: &mut Mechanical, recursive: &mut Mechanical, t: f64, y: &[f64]) -> f64 {
+    let n = y.len() / 2;
+    let (mut a, mut b) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+    dense.rhs(t, y, &mut a).expect("the dense route solves");
+    recursive.rhs(t, y, &mut b).expect("the recursive route solves");
+    let scale = a[n..].iter().fold(1e-300_f64, |m, x| m.max(x.abs()));
+    a[n..].iter().zip(&b[n..]).map(|(u, v)| (u - v).abs() / scale).fold(0.0, f64::max)
+}
+
+#[test]
+fn every_example_with_the_form_gives_the_dense_accelerations() {
+    let mut with_form = Vec::new();
+    for (rel, source) in lagrange_tests::examples_without_contacts() {
+        let mut prepared = prepare(&source, &[], engine::Options::default())
+            .unwrap_or_else(|e| panic!("{rel}: {e}"));
+        let states = verify::admissible_states(&mut prepared.derivation, 4, 0x5eed_c4a1);
+        let mut compared = 0;
+        for values in states {
+            let Some((mut dense, mut recursive, t, y)) = both(&mut prepared, &values) else {
+                break;
+            };
+            let off = difference(&mut dense, &mut recursive, t, &y);
+            assert!(off < AGREEMENT, "{rel}: q̈ off by {off:.1e}");
+            compared += 1;
+        }
+        if compared > 0 {
+            with_form.push(rel);
+        }
+    }
+    eprintln!("with the recursive form: {with_form:?}");
+    for expected in [
+        "classics/double_pendulum.lag",
+        "classics/pendulum_on_cart.lag",
+        "space/double_pendulum_3d.lag",
+    ] {
+        assert!(with_form.iter().any(|rel| rel.ends_with(expected)), "{expected}: {with_form:?}");
+    }
+}
+
+#[test]
+fn generated_chains_take_the_recursive_route_and_agree() {
+    for (family, n) in [(Family::Pendulum, 8), (Family::Pendulum, 33), (Family::PendulumOnCart, 12)]
+    {
+        let source = n_link(family, n);
+        let mut prepared = prepare(&source, &[], engine::Options::default()).expect("prepares");
+        assert!(prepared.recursive().expect("lowers").is_some(), "{n} links");
+        for values in verify::admissible_states(&mut prepared.derivation, 3, 0xc4a1_0001) {
+            let (mut dense, mut recursive, t, y) = both(&mut prepared, &values).expect("a form");
+            let off = difference(&mut dense, &mut recursive, t, &y);
+            assert!(off < AGREEMENT, "{n} links: q̈ off by {off:.1e}");
+        }
+    }
+}
+
+/// A chain in relative angles, a chain with a kept constraint and a small one keep the dense
+/// route.
+#[test]
+fn scenes_without_the_form_keep_the_dense_route() {
+    let mut relative = String::from("param m = 1, l = 1, g = 9.81\n");
+    let mut angle = String::from("0");
+    let (mut x, mut y) = (String::from("0"), String::from("0"));
+    for i in 1..=8 {
+        relative.push_str(&format!("coord q{i} = 0.1\n"));
+        angle = format!("{angle} + q{i}");
+        x = format!("{x} + l*sin({angle})");
+        y = format!("{y} - l*cos({angle})");
+        relative.push_str(&format!("particle p{i} {{ mass m; position ({x}, {y}) }}\n"));
+    }
+    relative.push_str("gravity g\n");
+    let kept = "param m = 1, l = 1, g = 9.81\ncoord x = 1, y = 0\nparticle p { mass m; position (x, y) }\nconstraint rod: x^2 + y^2 = l^2\ngravity g\n";
+    for source in [relative.as_str(), kept] {
+        let mut prepared = prepare(source, &[], engine::Options::default()).expect("prepares");
+        assert!(prepared.recursive_from(1).expect("lowers").is_none(), "{source}");
+    }
+    let small = n_link(Family::Pendulum, engine::numbers::RECURSIVE_FROM - 1);
+    let mut prepared = prepare(&small, &[], engine::Options::default()).expect("prepares");
+    assert!(prepared.recursive().expect("lowers").is_none());
+    assert!(prepared.recursive_from(1).expect("lowers").is_some());
+}
+
+/// A 16-link chain run by `simulate`, which takes the recursive route at that size, keeps
+/// its energy to the tolerance's order over two seconds of tumbling.
+#[test]
+fn a_run_on_the_recursive_route_keeps_its_energy() {
+    let scene = n_link(Family::Pendulum, 16).replace("coord theta1 = 1/10", "coord theta1 = 1")
+        + "simulate { until 2 s; method dop853; tolerance 1e-10; output KE + PE }\n";
+    let outcome = simulation::simulate(&scene, &simulation::Options::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let energy = lagrange_tests::column(&outcome, "KE + PE");
+    let rows = &outcome.run.trajectory.rows;
+    assert!(rows.len() > 10);
+    let start = rows[0][energy];
+    let drift = rows.iter().map(|r| (r[energy] - start).abs()).fold(0.0, f64::max);
+    assert!(drift < 1e-6 * start.abs().max(1.0), "energy drifted by {drift:.1e} from {start}");
+}
