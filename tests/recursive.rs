@@ -13,7 +13,10 @@ const AGREEMENT: f64 = 1e-10;
 
 /// The dense problem and the same with the recursive form (any size), at `values` (a random
 /// admissible state's), with (t, y); `None` where the scene has no recursive form.
-fn both(prepared: &mut Prepared, values: &[f64]) -> Option<(Mechanical, Mechanical, f64, Vec<f64>)> {
+fn both(
+    prepared: &mut Prepared,
+    values: &[f64],
+) -> Option<(Mechanical, Mechanical, f64, Vec<f64>)> {
     let (chain, program) = prepared.recursive_from(1).expect("lowers")?;
     let d = &prepared.derivation;
     let parameters: Vec<f64> = prepared.parameters.iter().map(|s| values[s.index()]).collect();

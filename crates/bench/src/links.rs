@@ -76,6 +76,9 @@ struct Row {
     /// and the whole exact Jacobian (the partials, one LU of M and a solve per state
     /// component).
     jacobian: Option<(usize, f64, f64, f64)>,
+    /// The recursive form: its program's size, the time to find and lower it, and the
+    /// `rhs` that sweeps it.
+    recursive: (usize, f64, f64),
 }
 
 fn measure(n: usize) -> Row {
@@ -166,6 +169,24 @@ fn measure(n: usize) -> Row {
         k = (k + 1) % STATES;
         mechanical.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
     });
+    let began = Instant::now();
+    let (chain, program) = prepared.recursive_from(1).expect("lowers").expect("a chain");
+    let found = began.elapsed().as_secs_f64();
+    let recursive_ops = program.op_counts().total();
+    let mut swept = Mechanical::new(
+        layout,
+        Tape::new(prepared.lower(&inputs, &exprs).expect("lowers")),
+        Tape::new(prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers")),
+        mechanical.parameters().to_vec(),
+    )
+    .with_chain(Tape::new(program), chain);
+    for y in ys.iter().cycle().take(WARM) {
+        swept.rhs(0.0, y, &mut dy).expect("regular");
+    }
+    let swept_rhs = crate::per_call(|| {
+        k = (k + 1) % STATES;
+        swept.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
+    });
     let jacobian = (n == JACOBIAN_AT).then(|| {
         let exprs = prepared.partials_exprs();
         let program = prepared.lower(&prepared.observation_inputs(), &exprs).expect("lowers");
@@ -202,7 +223,8 @@ fn measure(n: usize) -> Row {
         });
         (ops, compile, partials, whole)
     });
-    Row { n, load, ops, compile, tape, mass, forcing, form, factor, rhs, jacobian }
+    let recursive = (recursive_ops, found, swept_rhs);
+    Row { n, load, ops, compile, tape, mass, forcing, form, factor, rhs, jacobian, recursive }
 }
 
 /// Seconds per call as wall time and as the calling thread's CPU time.
@@ -290,9 +312,12 @@ pub fn run(peer_too: bool) {
     );
     outln!(
         "| n | load | ops | compile | tape M, f | M alone (ops) | f alone (ops) | M copied | LDLᵀ \
-         | `rhs` | rest |"
+         | `rhs` | rest | recursive: found (ops) | `rhs` |"
     );
-    outln!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    outln!(
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: \
+         | ---: |"
+    );
     let mut jacobian = None;
     for n in SIZES {
         let r = measure(n);
@@ -300,7 +325,7 @@ pub fn run(peer_too: bool) {
             jacobian = Some((r.n, r.rhs, j));
         }
         outln!(
-            "| {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} | {} ({}) | {} |",
             r.n,
             seconds(r.load),
             r.ops,
@@ -313,7 +338,10 @@ pub fn run(peer_too: bool) {
             seconds(r.form),
             seconds(r.factor),
             seconds(r.rhs),
-            seconds(r.rhs - r.tape - r.form - r.factor)
+            seconds(r.rhs - r.tape - r.form - r.factor),
+            seconds(r.recursive.1),
+            r.recursive.0,
+            seconds(r.recursive.2)
         );
     }
     outln!();

@@ -28,7 +28,8 @@ pub use present::collect_by_motion;
 pub use check::Decision;
 pub use contact::{ContactRows, ContactSlots, ImpactLaw};
 pub use derive::{
-    derive, ChainForm, ChainNode, ConstraintRows, Derivation, Elimination, Multiplier, Reaction, Stabilisation,
+    derive, ChainForm, ChainNode, ConstraintRows, Derivation, Elimination, Multiplier, Reaction,
+    Stabilisation,
 };
 pub use partials::{ParameterPartials, Partials, StatePartials};
 pub use present::{Equation, NumericStart, StartShows};

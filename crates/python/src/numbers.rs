@@ -248,13 +248,18 @@ impl RhsInner {
         let tunable = Tunable::new(prepared.parameter_plan.clone());
         let input_names: Vec<String> = model.inputs.iter().map(|u| u.name.clone()).collect();
         let declared_inputs = parameters[tunable.slots()..].to_vec();
-        let mechanical = Mechanical::new(
+        let mut mechanical = Mechanical::new(
             prepared.layout,
             Tape::new(dynamics),
             Tape::new(observation),
             parameters,
         )
         .with_kinds(prepared.stabilisation());
+        if let Some((chain, program)) =
+            prepared.recursive().map_err(|e| engine_error(&e, path))?
+        {
+            mechanical = mechanical.with_chain(Tape::new(program), chain);
+        }
         let dim = mechanical.dim();
         Ok(RhsInner {
             mechanical,

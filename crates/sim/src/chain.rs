@@ -46,6 +46,23 @@ pub struct Chain {
     acceleration: Vec<f64>,
     /// u per node (k), then D⁻¹·u.
     force: Vec<f64>,
+    /// Whether every node has one own coordinate, the common case, swept by
+    /// [`Chain::solve_single`] in fixed-size arrays.
+    single: bool,
+    /// That sweep's scratch: per node Ĩ then Iᴬ, U then D⁻¹·U, Σm·c then p, and the base
+    /// acceleration (each padded to 3), D and u then D⁻¹·u.
+    unit: Vec<Unit>,
+}
+
+/// One node of [`Chain::solve_single`]'s sweep.
+#[derive(Clone, Copy, Debug, Default)]
+struct Unit {
+    inertia: [[f64; 3]; 3],
+    coupling: [f64; 3],
+    bias: [f64; 3],
+    acceleration: [f64; 3],
+    joint: f64,
+    force: f64,
 }
 
 impl Chain {
@@ -89,6 +106,8 @@ impl Chain {
             bias: vec![0.0; vector],
             acceleration: vec![0.0; vector],
             force: vec![0.0; own],
+            single: nodes.iter().all(|(_, c)| c.len() == 1) && (2..=3).contains(&dimension),
+            unit: vec![Unit::default(); nodes.len()],
         }
     }
 
@@ -99,8 +118,13 @@ impl Chain {
 
     /// q̈ into `accelerations` (indexed by coordinate) from the program's outputs `out`.
     pub fn solve(&mut self, out: &[f64], accelerations: &mut [f64]) -> Result<(), FaultKind> {
-        let d = self.dimension;
         debug_assert_eq!(out.len(), self.outputs);
+        match (self.single, self.dimension) {
+            (true, 2) => return self.solve_single::<2>(out, accelerations),
+            (true, 3) => return self.solve_single::<3>(out, accelerations),
+            _ => {}
+        }
+        let d = self.dimension;
         for node in &self.nodes {
             let k = node.coordinates.len();
             let mut at = node.out;
@@ -148,6 +172,102 @@ impl Chain {
                 }
                 accelerations[q] = v;
             }
+        }
+        Ok(())
+    }
+
+    /// [`Chain::solve`] where every node has one own coordinate, in a scene of dimension `D`:
+    /// D is a number, and each node's parts fit in fixed arrays the compiler unrolls.
+    fn solve_single<const D: usize>(
+        &mut self,
+        out: &[f64],
+        accelerations: &mut [f64],
+    ) -> Result<(), FaultKind> {
+        // Per node: Σm, D, U (D), Σm·c (D), u, then B (D) and c (D) unless a root.
+        for (node, unit) in self.nodes.iter().zip(self.unit.iter_mut()) {
+            let o = &out[node.out..node.out + 3 + 2 * D];
+            unit.inertia = [[0.0; 3]; 3];
+            for i in 0..D {
+                unit.inertia[i][i] = o[0];
+                unit.coupling[i] = o[2 + i];
+                unit.bias[i] = o[2 + D + i];
+            }
+            unit.joint = o[1];
+            unit.force = o[2 + 2 * D];
+        }
+        for x in (0..self.nodes.len()).rev() {
+            let node = &self.nodes[x];
+            let here = self.unit[x];
+            // What rounding alone could leave of a vanishing D is a few ulps of its parts.
+            let scale = out[node.out + 1].abs() + (here.joint - out[node.out + 1]).abs();
+            if here.joint.is_nan() || here.joint <= 1e-13 * scale {
+                return Err(FaultKind::SingularMass {
+                    coordinates: vec![node.coordinates[0]],
+                    condition: f64::INFINITY,
+                });
+            }
+            let inverse = 1.0 / here.joint;
+            let mut solved = [0.0; 3];
+            for i in 0..D {
+                solved[i] = here.coupling[i] * inverse;
+            }
+            let free = here.force * inverse;
+            let mut articulated = here.inertia;
+            let mut bias = here.bias;
+            for i in 0..D {
+                for l in 0..D {
+                    articulated[i][l] -= here.coupling[i] * solved[l];
+                }
+                bias[i] += here.coupling[i] * free;
+            }
+            let unit = &mut self.unit[x];
+            unit.coupling = solved;
+            unit.force = free;
+            let Some(p) = node.parent else { continue };
+            let b = &out[node.out + 3 + 2 * D..node.out + 3 + 4 * D];
+            let (columns, base_bias) = b.split_at(D);
+            let parent = &mut self.unit[p];
+            let mut pushed = [0.0; 3];
+            let mut through = [0.0; 3];
+            for i in 0..D {
+                let (mut z, mut ib) = (bias[i], 0.0);
+                for l in 0..D {
+                    z += articulated[i][l] * base_bias[l];
+                    ib += articulated[i][l] * columns[l];
+                    parent.inertia[i][l] += articulated[i][l];
+                }
+                pushed[i] = z;
+                through[i] = ib;
+            }
+            let (mut joint, mut force) = (0.0, 0.0);
+            for i in 0..D {
+                parent.bias[i] += pushed[i];
+                parent.coupling[i] += through[i];
+                joint += columns[i] * through[i];
+                force += columns[i] * pushed[i];
+            }
+            parent.joint += joint;
+            parent.force -= force;
+        }
+        for x in 0..self.nodes.len() {
+            let node = &self.nodes[x];
+            let mut a = [0.0; 3];
+            if let Some(p) = node.parent {
+                let b = &out[node.out + 3 + 2 * D..node.out + 3 + 4 * D];
+                let (columns, base_bias) = b.split_at(D);
+                let q = accelerations[self.nodes[p].coordinates[0]];
+                let above = self.unit[p].acceleration;
+                for i in 0..D {
+                    a[i] = above[i] + columns[i] * q + base_bias[i];
+                }
+            }
+            let unit = &mut self.unit[x];
+            unit.acceleration = a;
+            let mut v = unit.force;
+            for i in 0..D {
+                v -= unit.coupling[i] * a[i];
+            }
+            accelerations[node.coordinates[0]] = v;
         }
         Ok(())
     }
@@ -205,7 +325,8 @@ impl Chain {
         let parent = &self.nodes[p];
         let kp = parent.coordinates.len();
         let base = node.out + 1 + k * k + d * k + d + k;
-        let (columns, base_bias) = (&out[base..base + d * kp], &out[base + d * kp..base + d * kp + d]);
+        let (columns, base_bias) =
+            (&out[base..base + d * kp], &out[base + d * kp..base + d * kp + d]);
         let mut articulated = [0.0; 9];
         articulated[..d * d].copy_from_slice(&self.inertia[node.square..node.square + d * d]);
         let mut pushed = [0.0; 3];
@@ -262,7 +383,7 @@ fn cholesky(a: &mut [f64], k: usize) -> Result<(), usize> {
         }
         // What rounding alone could leave of a pivot that vanishes is a few ulps of the
         // diagonal it started from.
-        if !(pivot > 1e-13 * diagonal.abs()) {
+        if pivot.is_nan() || pivot <= 1e-13 * diagonal.abs() {
             return Err(j);
         }
         let root = pivot.sqrt();

@@ -247,11 +247,7 @@ fn build(
 
 /// The nonzero columns ∂x/∂s of a vector x, by coordinate index, for the symbols s that
 /// `by` maps to one (the coordinates themselves, or their rates).
-fn columns(
-    pool: &mut Pool,
-    x: &[ExprId],
-    by: &HashMap<SymId, usize>,
-) -> Vec<(usize, Vec<ExprId>)> {
+fn columns(pool: &mut Pool, x: &[ExprId], by: &HashMap<SymId, usize>) -> Vec<(usize, Vec<ExprId>)> {
     let mut moving: Vec<(usize, SymId)> = Vec::new();
     for &e in x {
         for s in pool.free_symbols(e).iter() {
@@ -303,17 +299,14 @@ fn node_expressions(
         let e: Vec<Vec<ExprId>> = (0..d)
             .map(|a| {
                 own.iter()
-                    .map(|i| {
-                        point.columns.iter().find(|(j, _)| j == i).map_or(zero, |(_, c)| c[a])
-                    })
+                    .map(|i| point.columns.iter().find(|(j, _)| j == i).map_or(zero, |(_, c)| c[a]))
                     .collect()
             })
             .collect();
         let c: Vec<ExprId> = (0..d)
             .map(|a| {
-                let parts: Vec<ExprId> = (0..k)
-                    .map(|j| rate_times_derivative(pool, e[a][j], coords[own[j]]))
-                    .collect();
+                let parts: Vec<ExprId> =
+                    (0..k).map(|j| rate_times_derivative(pool, e[a][j], coords[own[j]])).collect();
                 pool.add(&parts)
             })
             .collect();
@@ -463,7 +456,8 @@ impl Tree {
         if !covered.iter().all(|&c| c) {
             return None;
         }
-        let node_of = deps.iter().map(|d| sets.iter().position(|s| s == d).expect("a set")).collect();
+        let node_of =
+            deps.iter().map(|d| sets.iter().position(|s| s == d).expect("a set")).collect();
         Some(Tree { sets, parent, own, node_of })
     }
 }
