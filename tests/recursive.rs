@@ -17,14 +17,14 @@ fn both(
     prepared: &mut Prepared,
     values: &[f64],
 ) -> Option<(Mechanical, Mechanical, f64, Vec<f64>)> {
-    let (chain, program) = prepared.recursive_from(1).expect("lowers")?;
+    let program = prepared.recursive_from(1).expect("lowers")?;
     let d = &prepared.derivation;
     let parameters: Vec<f64> = prepared.parameters.iter().map(|s| values[s.index()]).collect();
     let y: Vec<f64> = d.coords.iter().chain(&d.rates).map(|s| values[s.index()]).collect();
     let t = values[d.model.time.index()];
     let dense = lagrange_tests::mechanical(prepared, &parameters);
     let recursive =
-        lagrange_tests::mechanical(prepared, &parameters).with_chain(Tape::new(program), chain);
+        lagrange_tests::mechanical(prepared, &parameters).with_chain(Tape::new(program));
     assert!(recursive.recursive());
     Some((dense, recursive, t, y))
 }
@@ -124,4 +124,30 @@ fn a_run_on_the_recursive_route_keeps_its_energy() {
     let start = rows[0][energy];
     let drift = rows.iter().map(|r| (r[energy] - start).abs()).fold(0.0, f64::max);
     assert!(drift < 1e-6 * start.abs().max(1.0), "energy drifted by {drift:.1e} from {start}");
+}
+
+/// Many states at once on the recursive route (the batch tape, eight a pass) give each
+/// state's right-hand side bit for bit.
+#[test]
+fn many_states_at_once_give_each_state_s_bits() {
+    let mut prepared =
+        prepare(&n_link(Family::PendulumOnCart, 11), &[], engine::Options::default())
+            .expect("prepares");
+    let states = verify::admissible_states(&mut prepared.derivation, 13, 0xc4a1_0002);
+    let (_, mut recursive, _, _) = both(&mut prepared, &states[0]).expect("a form");
+    let d = &prepared.derivation;
+    let ys: Vec<f64> = states
+        .iter()
+        .flat_map(|v| d.coords.iter().chain(&d.rates).map(|s| v[s.index()]).collect::<Vec<_>>())
+        .collect();
+    let width = 2 * d.coords.len();
+    let times: Vec<f64> = (0..states.len()).map(|k| k as f64 * 0.1).collect();
+    let mut many = vec![0.0; ys.len()];
+    recursive.rhs_many(&times, &ys, &mut many).expect("regular");
+    for (k, y) in ys.chunks_exact(width).enumerate() {
+        let mut one = vec![0.0; width];
+        recursive.rhs(times[k], y, &mut one).expect("regular");
+        let same = one.iter().zip(&many[k * width..]).all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "state {k}: {one:?} against {:?}", &many[k * width..(k + 1) * width]);
+    }
 }

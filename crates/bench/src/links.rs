@@ -170,7 +170,7 @@ fn measure(n: usize) -> Row {
         mechanical.rhs(0.0, black_box(&ys[k]), black_box(&mut dy)).expect("regular");
     });
     let began = Instant::now();
-    let (chain, program) = prepared.recursive_from(1).expect("lowers").expect("a chain");
+    let program = prepared.recursive_from(1).expect("lowers").expect("a chain");
     let found = began.elapsed().as_secs_f64();
     let recursive_ops = program.op_counts().total();
     let mut swept = Mechanical::new(
@@ -179,7 +179,7 @@ fn measure(n: usize) -> Row {
         Tape::new(prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers")),
         mechanical.parameters().to_vec(),
     )
-    .with_chain(Tape::new(program), chain);
+    .with_chain(Tape::new(program));
     for y in ys.iter().cycle().take(WARM) {
         swept.rhs(0.0, y, &mut dy).expect("regular");
     }

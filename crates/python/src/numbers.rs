@@ -255,10 +255,8 @@ impl RhsInner {
             parameters,
         )
         .with_kinds(prepared.stabilisation());
-        if let Some((chain, program)) =
-            prepared.recursive().map_err(|e| engine_error(&e, path))?
-        {
-            mechanical = mechanical.with_chain(Tape::new(program), chain);
+        if let Some(program) = prepared.recursive().map_err(|e| engine_error(&e, path))? {
+            mechanical = mechanical.with_chain(Tape::new(program));
         }
         let dim = mechanical.dim();
         Ok(RhsInner {

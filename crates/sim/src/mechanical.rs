@@ -156,9 +156,11 @@ pub struct Mechanical {
     /// The contacts' arming conditions (one output each, 1 for a contact without one) and
     /// their values at the last evaluation, when a contact has one.
     arming: Option<(Tape, Vec<f64>)>,
-    /// The recursive form's program, its sweep and its outputs, where the scene has one and
-    /// no multiplier ([`Mechanical::with_chain`]).
-    chain: Option<(Tape, crate::Chain, Vec<f64>)>,
+    /// The program of q̈ by the recursive form, where the scene has one and no multiplier
+    /// ([`Mechanical::with_chain`]).
+    chain: Option<Tape>,
+    /// That program over many states at once, made on the first [`Mechanical::rhs_many`].
+    chain_many: Option<numeric::BatchTape>,
     /// Whether `dyn_out` holds the dense program's outputs at the inputs `solved_at` compares
     /// (the recursive form leaves it behind).
     dense: bool,
@@ -243,25 +245,26 @@ impl Mechanical {
             bends: Vec::new(),
             arming: None,
             chain: None,
+            chain_many: None,
             dense: false,
         }
     }
 
-    /// Solves for q̈ by the recursive form (`program` gives the outputs `chain` sweeps) rather
-    /// than by factoring M: O(n) rather than O(n³) on a long chain. The dense program still
-    /// serves what needs M (the exact Jacobian, the sensitivities). Ignored where the problem
-    /// has multipliers.
-    pub fn with_chain(mut self, program: Tape, chain: crate::Chain) -> Self {
-        assert_eq!(program.inputs(), self.layout.dynamics_inputs());
-        assert_eq!(program.outputs(), chain.outputs());
+    /// Solves for q̈ by the recursive form (`accelerations`, [`crate::Chain::accelerations`]'s
+    /// program, which takes the dynamics program's inputs) rather than by factoring M: O(n)
+    /// rather than O(n³) on a long chain. The dense program still serves what needs M (the
+    /// exact Jacobian, the sensitivities) and says why where the sweep gives no number.
+    /// Ignored where the problem has multipliers.
+    pub fn with_chain(mut self, accelerations: Tape) -> Self {
+        assert_eq!(accelerations.inputs(), self.layout.dynamics_inputs());
+        assert_eq!(accelerations.outputs(), self.layout.coordinates);
         if self.layout.multipliers > 0 {
             return self;
         }
         let state = 1 + 2 * self.layout.coordinates;
-        let mut program = program.with_fixed_inputs(state..self.layout.dynamics_inputs());
+        let mut program = accelerations.with_fixed_inputs(state..self.layout.dynamics_inputs());
         program.inputs_mut()[state..].copy_from_slice(&self.parameters);
-        let out = vec![0.0; chain.outputs()];
-        self.chain = Some((program, chain, out));
+        self.chain = Some(program);
         self.solved = None;
         self
     }
@@ -284,7 +287,7 @@ impl Mechanical {
         // inputs alone (`rhs_from_outputs`).
         let state = 1 + 2 * self.layout.coordinates;
         self.dynamics.inputs_mut()[state..state + values.len()].copy_from_slice(values);
-        if let Some((program, _, _)) = &mut self.chain {
+        if let Some(program) = &mut self.chain {
             program.inputs_mut()[state..state + values.len()].copy_from_slice(values);
         }
         self.solved = None;
@@ -417,16 +420,20 @@ impl Mechanical {
         input[1..1 + 2 * n].copy_from_slice(y);
         input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
         self.dense = false;
-        let (program, chain, out) = self.chain.as_mut().expect("a recursive form");
+        let program = self.chain.as_mut().expect("a recursive form");
         let input = program.inputs_mut();
         input[0] = t;
         input[1..1 + 2 * n].copy_from_slice(y);
         input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
-        program.run(out);
-        check_finite(out, |_| NonFiniteAt::System)?;
-        chain.solve(out, &mut self.solution[..n])?;
-        self.solved = Some(self.baumgarte.to_bits());
-        Ok(())
+        program.run(&mut self.solution[..n]);
+        if self.solution[..n].iter().all(|a| a.is_finite()) {
+            self.solved = Some(self.baumgarte.to_bits());
+            return Ok(());
+        }
+        // No number: a term of the form, or a node's inertia that vanished. The dense route
+        // tells which, or solves where only the sweep overflowed.
+        self.dynamics_at(t, y)?;
+        self.solve_dynamics()
     }
 
     /// Solves for q̈ and λ from the dynamics outputs in `self.dyn_out`; they are left in

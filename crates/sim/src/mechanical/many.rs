@@ -39,12 +39,7 @@ impl Mechanical {
         assert_eq!(states.len(), times.len() * width, "rhs_many: a state a time");
         assert_eq!(dys.len(), states.len(), "rhs_many: a derivative a state");
         if self.recursive() {
-            // The sweep is O(n) a state where eight dense solves side by side are O(n³) each.
-            let rows = states.chunks_exact(width).zip(dys.chunks_exact_mut(width));
-            for (row, ((state, dy), &t)) in rows.zip(times).enumerate() {
-                self.rhs(t, state, dy).map_err(|kind| (row, kind))?;
-            }
-            return Ok(());
+            return self.rhs_many_recursive(times, states, dys);
         }
         let n = self.layout.coordinates;
         let mut many = self.many.take().unwrap_or_else(|| Many {
@@ -59,6 +54,46 @@ impl Mechanical {
         // `dyn_out` no longer holds the outputs at the dynamics program's inputs.
         self.solved = None;
         solved
+    }
+
+    /// [`Mechanical::rhs_many`] by the recursive form's program on the batch tape, q̈ of
+    /// [`LANES`] states a pass: the same operations as one state's, so the same bits. A state
+    /// whose q̈ is not finite is solved alone, which says why.
+    fn rhs_many_recursive(
+        &mut self,
+        times: &[f64],
+        states: &[f64],
+        dys: &mut [f64],
+    ) -> Result<(), (usize, FaultKind)> {
+        let n = self.layout.coordinates;
+        let width = 2 * n;
+        if !self.signals.is_empty() {
+            // Parameters that follow a series take its value at each state's time.
+            let rows = states.chunks_exact(width).zip(dys.chunks_exact_mut(width));
+            for (row, ((state, dy), &t)) in rows.zip(times).enumerate() {
+                self.rhs(t, state, dy).map_err(|kind| (row, kind))?;
+            }
+            return Ok(());
+        }
+        let program = self.chain.as_ref().expect("a recursive form").program().clone();
+        let tape = self.chain_many.get_or_insert_with(|| BatchTape::new(program));
+        let mut inputs = Vec::with_capacity(times.len() * tape.program().inputs);
+        for (state, &t) in states.chunks_exact(width).zip(times) {
+            inputs.push(t);
+            inputs.extend_from_slice(state);
+            inputs.extend_from_slice(&self.parameters);
+        }
+        let mut accelerations = vec![0.0; times.len() * n];
+        tape.eval_many(&inputs, &mut accelerations);
+        let rows = states.chunks_exact(width).zip(dys.chunks_exact_mut(width));
+        for (row, ((state, dy), a)) in rows.zip(accelerations.chunks_exact(n)).enumerate() {
+            dy[..n].copy_from_slice(&state[n..]);
+            dy[n..].copy_from_slice(a);
+            if !dy.iter().all(|x| x.is_finite()) {
+                self.rhs(times[row], state, dy).map_err(|kind| (row, kind))?;
+            }
+        }
+        Ok(())
     }
 
     /// [`Mechanical::rhs_many`] a pass of [`LANES`] states at a time: the dynamics program on
