@@ -79,11 +79,18 @@ fn generated_code_compiles_and_matches_the_tape() {
     // The contact scenes too, their contacts open (tests/codegen_contacts.rs tests the impact
     // map); `engine::inverse` refuses them, so their inverse dynamics is left out here. Code
     // generation refuses Coulomb friction (tested below), so the rough scenes are left out.
-    let scenes =
-        lagrange_tests::examples().into_iter().filter(|(_, s)| !lagrange_tests::has_friction(s));
+    // And a chain long enough that `rhs` takes the recursive form's `accelerations`.
+    let chain = lang::generate::n_link(lang::generate::Family::PendulumOnCart, 9);
+    let scenes = lagrange_tests::examples()
+        .into_iter()
+        .filter(|(_, s)| !lagrange_tests::has_friction(s))
+        .chain([("generated/pendulum_on_cart_9.lag".to_string(), chain)]);
     for (k, (rel, source)) in scenes.enumerate() {
         let mut module =
             export::codegen::codegen(&rel, &source).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        if rel.starts_with("generated/") {
+            assert!(module.programs.iter().any(|(name, _)| name == "accelerations"), "{rel}");
+        }
         std::fs::write(dir.join(format!("m{k}.rs")), &module.source).unwrap();
         let _ = writeln!(modules, "#[path = \"m{k}.rs\"]\nmod m{k};");
         for (name, program) in &module.programs {

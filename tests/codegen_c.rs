@@ -407,6 +407,11 @@ fn generated_c_compiles_warning_free_and_matches_the_tape() {
         "examples/bicycle/whipple.lag".into(),
         lagrange_tests::example("bicycle/whipple.lag"),
     ));
+    // A chain long enough that rhs takes the recursive form's accelerations.
+    scenes.push((
+        "generated/pendulum_on_cart_9.lag".into(),
+        lang::generate::n_link(lang::generate::Family::PendulumOnCart, 9),
+    ));
     let examples = scenes.len();
     scenes.extend(CORNERS.iter().map(|(name, text)| (name.to_string(), text.to_string())));
     let next = AtomicUsize::new(0);

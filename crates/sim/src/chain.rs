@@ -348,9 +348,43 @@ impl Builder {
         b
     }
 
-    /// The program with `outputs` its outputs (a zero one the constant 0).
+    /// The program with `outputs` its outputs (a zero one the constant 0), without the
+    /// instructions no output needs (a root's articulated inertia, a form's term the sweep
+    /// skips): generated code must not compute a value it never reads.
     fn finish(mut self, outputs: &[Value]) -> Program {
-        self.program.outputs = outputs.iter().map(|v| v.unwrap_or(self.zero)).collect();
+        let p = &mut self.program;
+        p.outputs = outputs.iter().map(|v| v.unwrap_or(self.zero)).collect();
+        let base = p.inputs + p.constants.len();
+        let mut live = vec![false; p.code.len()];
+        for r in &p.outputs {
+            if let Some(i) = (*r as usize).checked_sub(base) {
+                live[i] = true;
+            }
+        }
+        for i in (0..p.code.len()).rev() {
+            if live[i] {
+                p.code[i].map_registers(|r| {
+                    if let Some(j) = (r as usize).checked_sub(base) {
+                        live[j] = true;
+                    }
+                    r
+                });
+            }
+        }
+        let mut renamed = vec![0; p.code.len()];
+        let mut code = Vec::with_capacity(p.code.len());
+        let rename = |r: Reg, renamed: &[Reg]| match (r as usize).checked_sub(base) {
+            Some(i) => renamed[i],
+            None => r,
+        };
+        for (i, instr) in p.code.iter().enumerate() {
+            if live[i] {
+                renamed[i] = (base + code.len()) as Reg;
+                code.push(instr.map_registers(|r| rename(r, &renamed)));
+            }
+        }
+        p.code = code;
+        p.outputs = p.outputs.iter().map(|r| rename(*r, &renamed)).collect();
         self.program
     }
 }

@@ -471,6 +471,11 @@ fn program_doc(program: &str) -> String {
     match program {
         "mass_matrix" => "M, column-major, from [t, q, qdot, parameters, inputs].",
         "forcing" => "f, from [t, q, qdot, parameters, inputs].",
+        "accelerations" => {
+            "qddot by the articulated-body sweep of the scene's tree of bodies, O(n), from\n\
+             [t, q, qdot, parameters, inputs]: what rhs gives without forming M where every\n\
+             value is finite."
+        }
         "constraints" => "Per kept constraint: J's row, gamma, Phi, d(Phi)/dt.",
         "partials" => {
             "With qddot and lambda held: d/dq then d/dqdot of r = M qddot - J^T lambda - f\n\

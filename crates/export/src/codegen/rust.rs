@@ -110,6 +110,10 @@ fn module(e: &Equations, path: &str) -> String {
         let doc = match name.as_str() {
             "mass_matrix" => "The mass matrix M, column-major (symmetric).".to_string(),
             "forcing" => "The forcing f.".to_string(),
+            "accelerations" => "q̈, by the articulated-body sweep of the scene's tree of bodies, \
+                                O(N): what `rhs`\ngives without forming M where every value is \
+                                finite."
+                .to_string(),
             "constraints" => {
                 "Per kept constraint: its Jacobian row J (N values), then γ, Φ, Φ̇.".to_string()
             }
@@ -132,7 +136,7 @@ fn module(e: &Equations, path: &str) -> String {
     }
     for wrapper in [
         augmented_function(e),
-        rhs_function(sizes),
+        rhs_function(sizes, e.program("accelerations").is_some()),
         jacobian_function(e),
         inverse_dynamics_function(sizes),
     ] {
@@ -194,7 +198,7 @@ fn augmented_function(e: &Equations) -> String {
 
 /// `rhs(t, y, parameters, inputs, dy)`: y = (q, q̇), dy = (q̇, q̈), solving M q̈ = f (with multipliers,
 /// the augmented system, stabilised as a run stabilises it). False when the system is singular.
-fn rhs_function(sizes: Sizes) -> String {
+fn rhs_function(sizes: Sizes, recursive: bool) -> String {
     let (n, m) = (sizes.coordinates, sizes.constraints);
     let size = n + m;
     let mut s = String::new();
@@ -211,6 +215,17 @@ fn rhs_function(sizes: Sizes) -> String {
         2 * n
     );
     s.push_str(&dynamics_input(sizes, "y"));
+    if recursive {
+        let _ = writeln!(s, "    let mut qdd = [0.0; {n}];");
+        let _ = writeln!(s, "    accelerations(&input, &mut qdd);");
+        let _ = writeln!(
+            s,
+            "    if qdd.iter().all(|x| x.is_finite()) {{\n        dy[..{n}].copy_from_slice(&y[{n}..]);\n        \
+             dy[{n}..].copy_from_slice(&qdd);\n        return true;\n    }}"
+        );
+        let _ =
+            writeln!(s, "    // No number from the sweep: M's solve says whether M is singular.");
+    }
     let _ = writeln!(s, "    let mut a = [0.0; {}];", size * size);
     let _ = writeln!(s, "    let mut b = [0.0; {size}];");
     let _ = writeln!(s, "    augmented(&input, &mut a, &mut b);");

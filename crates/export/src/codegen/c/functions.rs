@@ -179,7 +179,17 @@ fn rhs(e: &Equations, name: &str) -> String {
         e.sizes.dynamics_inputs(),
         size * size
     );
-    let _ = writeln!(s, "    gather(t, y, y + {n}, p, u, input);\n    augmented(input, a, b);");
+    let _ = writeln!(s, "    gather(t, y, y + {n}, p, u, input);");
+    if e.program("accelerations").is_some() {
+        let _ = writeln!(
+            s,
+            "    eval_accelerations(input, b);\n    for (i = 0; i < {n} && isfinite(b[i]); i++) {{\n    }}\n    \
+             if (i == {n}) {{\n        for (i = 0; i < {n}; i++) {{\n            dy[i] = y[{n} + i];\n            \
+             dy[{n} + i] = b[i];\n        }}\n        return 0;\n    }}\n    \
+             /* No number from the sweep: M's solve says whether M is singular. */"
+        );
+    }
+    let _ = writeln!(s, "    augmented(input, a, b);");
     let _ = writeln!(s, "    if (solve_in_place({size}, a, b)) {{\n        return 1;\n    }}");
     let _ = writeln!(
         s,
