@@ -52,12 +52,21 @@ fn jobs(parameters: &[f64], y0: &[f64]) -> Vec<Job> {
 #[test]
 fn every_example_runs_the_same_bits_in_lockstep_as_alone() {
     let mut compared = 0;
-    for (rel, source) in lagrange_tests::examples() {
+    // And a chain long enough that q̈ comes from the recursive form, in lanes as alone.
+    let chain = lang::generate::n_link(lang::generate::Family::PendulumOnCart, 9);
+    let scenes = lagrange_tests::examples()
+        .into_iter()
+        .chain([("generated/pendulum_on_cart_9".into(), chain)]);
+    for (rel, source) in scenes {
         let mut prepared = prepare(&source, &[], engine::Options::default())
             .unwrap_or_else(|e| panic!("{rel}: {e}"));
         let Ok(parameters) = prepared.parameter_values(&[]) else { continue };
         let Ok(y0) = prepared.initial_state(&parameters, &[]) else { continue };
-        let problem = lagrange_tests::mechanical(&mut prepared, &parameters);
+        let mut problem = lagrange_tests::mechanical(&mut prepared, &parameters);
+        if let Some(program) = prepared.recursive().expect("lowers") {
+            problem = problem.with_chain(numeric::Tape::new(program));
+        }
+        assert_eq!(problem.recursive(), rel.starts_with("generated/"), "{rel}");
         // The constraints' drift |Φ| is observed; watch it cross a small level.
         let events: Vec<Event> = (0..sim::Problem::observations(&problem))
             .map(|column| Event { column, stop: false })

@@ -36,6 +36,9 @@ pub struct Lockstep {
     settings: Settings,
     layout: Layout,
     tape: BatchTape,
+    /// Whether `tape` is the recursive form's program of q̈ rather than the dense one of M and
+    /// f, as each lane's problem solves alone.
+    recursive: bool,
     stages: Stages,
     lanes: Vec<Lane>,
     /// Each lane's time at the start of its step, its step, and the end of the step.
@@ -105,7 +108,10 @@ impl Lockstep {
         Some(Lockstep {
             settings: settings.clone(),
             layout: problem.layout,
-            tape: BatchTape::new(problem.dynamics_program().clone()),
+            tape: BatchTape::new(
+                problem.recursive_program().unwrap_or(problem.dynamics_program()).clone(),
+            ),
+            recursive: problem.recursive(),
             stages: Stages::new(pair, d),
             lanes,
             t: [0.0; LANES],
@@ -291,7 +297,12 @@ impl Lockstep {
         self.tape.run_lanes();
         let outputs = self.layout.dynamics_outputs();
         let tape = &self.tape;
-        let solved = if m == 0 {
+        let solved = if self.recursive {
+            for (i, a) in self.accelerations.iter_mut().enumerate() {
+                *a = *tape.output_lanes(i);
+            }
+            [true; LANES]
+        } else if m == 0 {
             solve_lanes(self.layout, tape, &mut self.mass, &mut self.accelerations)
         } else {
             [false; LANES]
@@ -321,14 +332,19 @@ impl Lockstep {
             for (a, arg) in self.argument.iter_mut().zip(args) {
                 *a = arg[lane];
             }
-            let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
             let l = &mut self.lanes[lane];
-            let solved = l.problem.rhs_from_outputs(
-                times[lane],
-                &self.argument,
-                values,
-                &mut self.derivative,
-            );
+            let solved = if self.recursive {
+                // A q̈ the sweep gave no number for: the problem alone says why.
+                l.problem.rhs(times[lane], &self.argument, &mut self.derivative)
+            } else {
+                let values = (0..outputs).map(|o| tape.output_lanes(o)[lane]);
+                l.problem.rhs_from_outputs(
+                    times[lane],
+                    &self.argument,
+                    values,
+                    &mut self.derivative,
+                )
+            };
             match solved {
                 Ok(()) => {
                     self.evaluations[lane] += 1;

@@ -178,6 +178,12 @@ impl Mechanical {
         self.dynamics.program()
     }
 
+    /// The recursive form's program of q̈ (the dynamics program's inputs), where q̈ is solved
+    /// by it ([`Mechanical::with_chain`]).
+    pub(crate) fn recursive_program(&self) -> Option<&Program> {
+        self.chain.as_ref().map(|tape| tape.program())
+    }
+
     /// The observation program, for a caller that evaluates it over many states itself.
     pub(crate) fn observation_program(&self) -> &Program {
         self.observation.program()
