@@ -151,3 +151,54 @@ fn many_states_at_once_give_each_state_s_bits() {
         assert!(same, "state {k}: {one:?} against {:?}", &many[k * width..(k + 1) * width]);
     }
 }
+
+/// The exact Jacobian on the recursive route is the dense route's, bit for bit, whether or not
+/// the sweep solved at the same state just before (the Jacobian solves with M, and must not
+/// take the sweep's q̈ for M's outputs).
+#[test]
+fn the_jacobian_on_the_recursive_route_is_the_dense_one() {
+    let mut prepared =
+        prepare(&n_link(Family::Pendulum, 10), &[], engine::Options::default()).expect("prepares");
+    let states = verify::admissible_states(&mut prepared.derivation, 3, 0xc4a1_0003);
+    let (mut dense, mut recursive, t, _) = both(&mut prepared, &states[0]).expect("a form");
+    let d = &prepared.derivation;
+    let width = 2 * d.coords.len();
+    let ys: Vec<Vec<f64>> = states
+        .iter()
+        .map(|v| d.coords.iter().chain(&d.rates).map(|s| v[s.index()]).collect())
+        .collect();
+    let (mut a, mut b) = (vec![0.0; width * width], vec![0.0; width * width]);
+    let mut dy = vec![0.0; width];
+    for (k, y) in ys.iter().enumerate() {
+        if k % 2 == 0 {
+            recursive.rhs(t, y, &mut dy).expect("regular");
+        }
+        assert!(dense.jacobian(t, y, &mut a).expect("regular"));
+        assert!(recursive.jacobian(t, y, &mut b).expect("regular"));
+        let same = a.iter().zip(&b).all(|(u, v)| u.to_bits() == v.to_bits());
+        assert!(same, "state {k}: the Jacobians differ");
+    }
+}
+
+/// A point that loses its mass leaves its coordinate without inertia: the sweep gives no
+/// number there, and the run says which coordinate, as the dense route says it.
+#[test]
+fn a_coordinate_without_inertia_is_named_on_the_recursive_route() {
+    let source = n_link(Family::Pendulum, 9)
+        .replace("particle p9 { mass m;", "param m9 = 1 kg\nparticle p9 { mass m9;");
+    let mut prepared = prepare(&source, &[], engine::Options::default()).expect("prepares");
+    let mut values = verify::admissible_states(&mut prepared.derivation, 1, 0xc4a1_0004).remove(0);
+    let m9 = prepared
+        .parameters
+        .iter()
+        .find(|s| prepared.derivation.model.pool.symbol(**s).name == "m9")
+        .copied()
+        .expect("m9");
+    values[m9.index()] = 0.0;
+    let (mut dense, mut recursive, t, y) = both(&mut prepared, &values).expect("a form");
+    let mut dy = vec![0.0; y.len()];
+    let alone = dense.rhs(t, &y, &mut dy).expect_err("M is singular");
+    let swept = recursive.rhs(t, &y, &mut dy).expect_err("M is singular");
+    assert_eq!(format!("{swept:?}"), format!("{alone:?}"));
+    assert!(matches!(swept, sim::FaultKind::SingularMass { .. }), "{swept:?}");
+}
