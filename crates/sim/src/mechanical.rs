@@ -341,13 +341,9 @@ impl Mechanical {
 
     /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
     pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
-        let Layout { coordinates: n, parameters: k, .. } = self.layout;
         self.solved = None;
         self.follow_signals(t);
-        let input = self.dynamics.inputs_mut();
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
         self.dynamics.run(&mut self.dyn_out);
         self.dense = true;
         let layout = self.layout;
@@ -411,20 +407,14 @@ impl Mechanical {
 
     /// q̈ at (t, y) by the recursive form's sweep, into `self.solution`.
     fn recursive_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
-        let Layout { coordinates: n, parameters: k, .. } = self.layout;
+        let n = self.layout.coordinates;
         self.solved = None;
         self.follow_signals(t);
         // The dense program's inputs say where `solution` was solved (`solved_at`).
-        let input = self.dynamics.inputs_mut();
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
         self.dense = false;
         let program = self.chain.as_mut().expect("a recursive form");
-        let input = program.inputs_mut();
-        input[0] = t;
-        input[1..1 + 2 * n].copy_from_slice(y);
-        input[1 + 2 * n..1 + 2 * n + k].copy_from_slice(&self.parameters);
+        fill_inputs(program.inputs_mut(), t, y, &self.parameters);
         program.run(&mut self.solution[..n]);
         if self.solution[..n].iter().all(|a| a.is_finite()) {
             self.solved = Some(self.baumgarte.to_bits());
@@ -901,6 +891,13 @@ impl Canonical {
         self.physical[n..].copy_from_slice(&self.rates);
         Ok(self.physical.clone())
     }
+}
+
+/// `[t, y, parameters]` into the first slots of a program's inputs.
+fn fill_inputs(input: &mut [f64], t: f64, y: &[f64], parameters: &[f64]) {
+    input[0] = t;
+    input[1..1 + y.len()].copy_from_slice(y);
+    input[1 + y.len()..1 + y.len() + parameters.len()].copy_from_slice(parameters);
 }
 
 /// Writes the augmented matrix [M −Jᵀ; J 0] of the dynamics outputs `out` into `a`, with the
