@@ -202,3 +202,59 @@ fn a_coordinate_without_inertia_is_named_on_the_recursive_route() {
     assert_eq!(format!("{swept:?}"), format!("{alone:?}"));
     assert!(matches!(swept, sim::FaultKind::SingularMass { .. }), "{swept:?}");
 }
+
+/// Trees, not only chains: each link hangs from a random earlier one (so nodes have several
+/// children), some links are rods with their own inertia, masses and lengths differ, and a
+/// spring pulls one joint sideways. The recursive route gives the dense route's q̈.
+#[test]
+fn branching_trees_give_the_dense_accelerations() {
+    // A small linear congruential generator: the same trees on every run.
+    let mut seed: u64 = 0x7ee5_0001;
+    let mut next = move |below: usize| -> usize {
+        seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % below
+    };
+    let mut branched = 0;
+    for tree in 0..6 {
+        let links = 8 + next(6);
+        let mut scene = String::from("param g = 9.81, k = 3\n");
+        let mut parents = Vec::new();
+        for i in 0..links {
+            let parent = if i == 0 { None } else { Some(next(i)) };
+            parents.push(parent);
+            let (mass, length) = (1 + next(4), 1 + next(3));
+            scene.push_str(&format!("coord q{i} = 0.{}\n", 1 + next(8)));
+            let (bx, by) = match parent {
+                None => ("0".to_string(), "0".to_string()),
+                Some(p) => (format!("x{p}"), format!("y{p}")),
+            };
+            scene.push_str(&format!(
+                "let x{i} = {bx} + {length}/2*sin(q{i})\nlet y{i} = {by} - {length}/2*cos(q{i})\n"
+            ));
+            if next(2) == 0 {
+                scene.push_str(&format!(
+                    "body b{i} {{ mass {mass}; inertia {mass}*{length}^2/12; position (x{i}, y{i}); angle q{i} }}\n"
+                ));
+            } else {
+                scene
+                    .push_str(&format!("particle b{i} {{ mass {mass}; position (x{i}, y{i}) }}\n"));
+            }
+        }
+        scene.push_str(&format!("potential k/2*x{}^2\ngravity g\n", links - 1));
+        let branching = (0..links).any(|p| parents.iter().filter(|q| **q == Some(p)).count() > 1);
+        branched += usize::from(branching);
+        let mut prepared = prepare(&scene, &[], engine::Options::default())
+            .unwrap_or_else(|e| panic!("tree {tree}: {e}\n{scene}"));
+        let states = verify::admissible_states(&mut prepared.derivation, 3, 0xc4a1_0005 + tree);
+        for values in states {
+            let (mut dense, mut recursive, t, y) = both(&mut prepared, &values)
+                .unwrap_or_else(|| panic!("tree {tree}: no form\n{scene}"));
+            let off = difference(&mut dense, &mut recursive, t, &y);
+            assert!(
+                off < AGREEMENT,
+                "tree {tree} (branching {branching}): q̈ off by {off:.1e}\n{scene}"
+            );
+        }
+    }
+    assert!(branched >= 3, "only {branched} of the trees branch");
+}

@@ -420,21 +420,16 @@ impl Tree {
         sets.sort_by(|a, b| a.len().cmp(&b.len()).then_with(|| a.cmp(b)));
         sets.dedup();
         let subset = |a: &[usize], b: &[usize]| a.iter().all(|x| b.binary_search(x).is_ok());
+        // Each set's parent is the largest set inside it (sorted by size, the last found).
         let mut parent = vec![None; sets.len()];
         for s in 0..sets.len() {
             for t in 0..s {
-                let (a, b) = (&sets[t], &sets[s]);
-                let meet = a.iter().any(|x| b.binary_search(x).is_ok());
-                if !meet {
-                    continue;
+                if sets[t].len() < sets[s].len() && subset(&sets[t], &sets[s]) {
+                    parent[s] = Some(t);
                 }
-                // Sorted by size, so only a ⊆ b can hold.
-                if !subset(a, b) {
-                    return None;
-                }
-                parent[s] = Some(t);
             }
-            // Every set inside this one lies inside its parent: the sets below form a chain.
+            // Every set inside this one lies inside its parent: the sets below form a chain,
+            // as the sets on the way from a root to a node do.
             if let Some(p) = parent[s] {
                 for t in 0..s {
                     if subset(&sets[t], &sets[s]) && !subset(&sets[t], &sets[p]) {
@@ -449,11 +444,14 @@ impl Tree {
                 Some(p) => sets[s].iter().copied().filter(|x| !sets[p].contains(x)).collect(),
             })
             .collect();
-        let mut covered = vec![false; n];
+        // Each coordinate owned by one node: then a set meets another only in what the nodes
+        // on both their ways from a root own (siblings meet in their parent's set), and a
+        // point's set is what the nodes on its way own.
+        let mut owners = vec![0; n];
         for i in own.iter().flatten() {
-            covered[*i] = true;
+            owners[*i] += 1;
         }
-        if !covered.iter().all(|&c| c) {
+        if !owners.iter().all(|&c| c == 1) {
             return None;
         }
         let node_of =
