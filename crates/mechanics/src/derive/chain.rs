@@ -5,9 +5,11 @@
 //! what the dense route costs on a long chain.
 //!
 //! The structure is found, not declared. A point of the scene's dimension (a particle, a
-//! body's centre) depends on a set of coordinates; these sets must nest as a tree does (two
-//! that meet, one inside the other), and each set's own coordinates are those its largest
-//! subset lacks. A point's column for a coordinate its node does not own must be the same for
+//! body's centre) depends on a set of coordinates; each set is a node, its parent the largest
+//! set inside it, and its own coordinates those its parent lacks. The sets inside a set must
+//! lie on one way up from it (a chain of parents), and every coordinate must be owned by one
+//! node: then sets meet only in what the nodes above both own, as siblings meet in their
+//! parent's set. A point's column for a coordinate its node does not own must be the same for
 //! every point below that coordinate's child node: that common column is the child's base,
 //! so the base's velocity is its parent's base velocity plus the base columns times the
 //! parent's own rates. Rotation (a planar angle, a body turning in space) and any other
@@ -398,7 +400,7 @@ fn node_expressions(
     }
 }
 
-/// The tree the points' coordinate sets make, or `None` where they do not nest as one.
+/// The tree the points' coordinate sets make, or `None` where they make none.
 struct Tree {
     /// The distinct sets (sorted indices), smallest first: a parent before its children.
     sets: Vec<Vec<usize>>,
