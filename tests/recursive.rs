@@ -258,3 +258,34 @@ fn branching_trees_give_the_dense_accelerations() {
     }
     assert!(branched >= 3, "only {branched} of the trees branch");
 }
+
+/// Trees in space: each rod turns by its own azimuth and tilt (two coordinates a node, so the
+/// sweep factors 2×2 blocks) and hangs from the centre of a random earlier one.
+#[test]
+fn branching_trees_in_space_give_the_dense_accelerations() {
+    let parents = [None, Some(0), Some(0), Some(1), Some(1), Some(2)];
+    let mut scene = String::from("param g = 9.81\n");
+    for (i, parent) in parents.iter().enumerate() {
+        let (mass, length) = (1 + i % 3, 1 + i % 2);
+        scene.push_str(&format!("coord a{i} = 0.{}, b{i} = 0.{}\n", 1 + i, 2 + i % 5));
+        scene.push_str(&format!("let R{i} = rotz(a{i})*rotx(b{i})\n"));
+        let base = match parent {
+            None => "(0, 0, 0)".to_string(),
+            Some(p) => format!("c{p}"),
+        };
+        scene.push_str(&format!("let c{i} = {base} + R{i}*(0, 0, -{length}/2)\n"));
+        scene.push_str(&format!(
+            "body r{i} {{ mass {mass}; inertia ({mass}*{length}^2/12, {mass}*{length}^2/12, 0); orientation R{i}; position c{i} }}\n"
+        ));
+    }
+    scene.push_str("gravity g\n");
+    let mut prepared =
+        prepare(&scene, &[], engine::Options::default()).unwrap_or_else(|e| panic!("{e}\n{scene}"));
+    assert!(prepared.recursive().expect("lowers").is_some(), "12 coordinates: {scene}");
+    for values in verify::admissible_states(&mut prepared.derivation, 3, 0xc4a1_0006) {
+        let (mut dense, mut recursive, t, y) =
+            both(&mut prepared, &values).unwrap_or_else(|| panic!("no form\n{scene}"));
+        let off = difference(&mut dense, &mut recursive, t, &y);
+        assert!(off < AGREEMENT, "q̈ off by {off:.1e}\n{scene}");
+    }
+}
