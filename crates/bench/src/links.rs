@@ -157,8 +157,12 @@ fn measure(n: usize) -> Row {
         black_box(sim::linalg::ldl_in_place(&mut a)).expect("M is positive definite");
     }) - form;
 
-    let mut mechanical =
-        Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), parameters);
+    let mut mechanical = Mechanical::new(
+        layout,
+        Tape::new(dynamics.clone()),
+        Tape::new(observation.clone()),
+        parameters.clone(),
+    );
     let mut dy = vec![0.0; 2 * n];
     // A tape compiles itself to machine code on its 1,000th run: the calls are timed after
     // that, as those of a run past its start are.
@@ -173,13 +177,9 @@ fn measure(n: usize) -> Row {
     let program = prepared.recursive_from(1).expect("lowers").expect("a chain");
     let found = began.elapsed().as_secs_f64();
     let recursive_ops = program.op_counts().total();
-    let mut swept = Mechanical::new(
-        layout,
-        Tape::new(prepared.lower(&inputs, &exprs).expect("lowers")),
-        Tape::new(prepared.lower(&prepared.observation_inputs(), &[]).expect("lowers")),
-        mechanical.parameters().to_vec(),
-    )
-    .with_chain(Tape::new(program));
+    let mut swept =
+        Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), parameters)
+            .with_chain(Tape::new(program));
     for y in ys.iter().cycle().take(WARM) {
         swept.rhs(0.0, y, &mut dy).expect("regular");
     }

@@ -43,15 +43,19 @@ impl Chain {
     /// How many values the recursive form's program gives: per node Σm, D (k×k), U (d×k),
     /// Σm·c (d), u (k), then B (d × the parent's k) and c (d) unless it is a root.
     pub fn outputs(&self) -> usize {
+        (0..self.nodes.len()).map(|x| self.own_terms(x) + self.base_terms(x)).sum()
+    }
+
+    /// How many of node x's terms are its own: Σm, D, U, Σm·c and u.
+    fn own_terms(&self, x: usize) -> usize {
+        let (d, k) = (self.dimension, self.nodes[x].1.len());
+        1 + k * k + d * k + d + k
+    }
+
+    /// How many of node x's terms place its base in its parent: B and c (none at a root).
+    fn base_terms(&self, x: usize) -> usize {
         let d = self.dimension;
-        self.nodes
-            .iter()
-            .map(|(parent, own)| {
-                let k = own.len();
-                let base = parent.map_or(0, |p| d * self.nodes[p].1.len() + d);
-                1 + k * k + d * k + d + k + base
-            })
-            .sum()
+        self.nodes[x].0.map_or(0, |p| d * self.nodes[p].1.len() + d)
     }
 
     /// How many coordinates the nodes own.
@@ -68,10 +72,9 @@ impl Chain {
         // Where each node's terms start in the form's outputs.
         let mut starts = Vec::with_capacity(count);
         let mut at = 0;
-        for (parent, own) in &self.nodes {
+        for x in 0..count {
             starts.push(at);
-            let k = own.len();
-            at += 1 + k * k + d * k + d + k + parent.map_or(0, |p| d * self.nodes[p].1.len() + d);
+            at += self.own_terms(x) + self.base_terms(x);
         }
         let mut parts: Vec<Parts> = Vec::with_capacity(count);
         for (x, (_, own)) in self.nodes.iter().enumerate() {
@@ -96,10 +99,8 @@ impl Chain {
         }
         // The base columns B and bias c of each node, in its parent's own coordinates.
         let base = |b: &Builder, x: usize| -> (Vec<Value>, Vec<Value>) {
-            let (parent, own) = &self.nodes[x];
-            let k = own.len();
-            let kp = self.nodes[parent.expect("a child")].1.len();
-            let at = starts[x] + 1 + k * k + d * k + d + k;
+            let kp = self.nodes[self.nodes[x].0.expect("a child")].1.len();
+            let at = starts[x] + self.own_terms(x);
             let columns = (at..at + d * kp).map(|i| b.term(i)).collect();
             let bias = (at + d * kp..at + d * kp + d).map(|i| b.term(i)).collect();
             (columns, bias)

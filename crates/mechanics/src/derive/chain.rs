@@ -32,7 +32,7 @@ use std::collections::HashMap;
 use cas::{ExprId, Pool, SymId, SymbolKind};
 
 use super::equations::Structure;
-use super::structural::{acceleration_without_q2, InertialTerm};
+use super::structural::{acceleration_without_q2, angular_momentum_rate, InertialTerm};
 use super::Derivation;
 
 /// The recursive form: nodes in an order where a parent comes before its children.
@@ -194,7 +194,7 @@ fn build(
                         base[child].insert(i, column.clone());
                     }
                     Some(shared) => {
-                        for (a, b) in shared.clone().into_iter().zip(column.iter().copied()) {
+                        for (&a, &b) in shared.iter().zip(column) {
                             if a != b {
                                 let difference = pool.sub(a, b);
                                 if !pool.is_identically_zero(difference) {
@@ -343,26 +343,7 @@ fn node_expressions(
                 }
             }
             Own::Turning { inertia: body, omega, .. } => {
-                // I·α₀ + ω × I·ω, as the structural rows form it.
-                let alpha = omega.map(|x| acceleration_without_q2(pool, x));
-                let times = |pool: &mut Pool, v: &[ExprId; 3]| -> [ExprId; 3] {
-                    [0, 1, 2].map(|a| {
-                        let parts: Vec<ExprId> =
-                            (0..3).map(|b| pool.mul2(body[a][b], v[b])).collect();
-                        pool.add(&parts)
-                    })
-                };
-                let momentum = times(pool, omega);
-                let spun = times(pool, &alpha);
-                let rate: Vec<ExprId> = (0..3)
-                    .map(|a| {
-                        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
-                        let ahead = pool.mul2(omega[b], momentum[c]);
-                        let behind = pool.mul2(omega[c], momentum[b]);
-                        let gyroscopic = pool.sub(ahead, behind);
-                        pool.add2(spun[a], gyroscopic)
-                    })
-                    .collect();
+                let rate = angular_momentum_rate(pool, body, omega);
                 for j in 0..k {
                     let Some(wj) = column(own[j]) else { continue };
                     for a in 0..3 {

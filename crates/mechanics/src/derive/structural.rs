@@ -315,23 +315,9 @@ fn turning_rows(
             }
         }
     }
-    // I·α₀ + ω × I·ω, the body-axes rate of the angular momentum with every q̈ set to zero.
-    let alpha = omega.map(|x| acceleration_without_q2(pool, x));
-    let times = |pool: &mut Pool, v: &[ExprId; 3]| -> [ExprId; 3] {
-        [0, 1, 2].map(|a| {
-            let parts: Vec<ExprId> = (0..3).map(|b| pool.mul2(inertia[a][b], v[b])).collect();
-            pool.add(&parts)
-        })
-    };
-    let momentum = times(pool, omega);
-    let spun = times(pool, &alpha);
+    let rates = angular_momentum_rate(pool, inertia, omega);
     let one = pool.one();
-    for a in 0..3 {
-        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
-        let ahead = pool.mul2(omega[b], momentum[c]);
-        let behind = pool.mul2(omega[c], momentum[b]);
-        let gyroscopic = pool.sub(ahead, behind);
-        let rate = pool.add2(spun[a], gyroscopic);
+    for (a, rate) in rates.into_iter().enumerate() {
         if pool.is_zero(rate) {
             continue;
         }
@@ -341,6 +327,31 @@ fn turning_rows(
             }
         }
     }
+}
+
+/// I·α₀ + ω × I·ω, the body-axes rate of a body's angular momentum with every q̈ set to zero
+/// (ω in body axes, I constant): what its rows take from f.
+pub(super) fn angular_momentum_rate(
+    pool: &mut Pool,
+    inertia: &[[ExprId; 3]; 3],
+    omega: &[ExprId; 3],
+) -> [ExprId; 3] {
+    let alpha = omega.map(|x| acceleration_without_q2(pool, x));
+    let times = |pool: &mut Pool, v: &[ExprId; 3]| -> [ExprId; 3] {
+        [0, 1, 2].map(|a| {
+            let parts: Vec<ExprId> = (0..3).map(|b| pool.mul2(inertia[a][b], v[b])).collect();
+            pool.add(&parts)
+        })
+    };
+    let momentum = times(pool, omega);
+    let spun = times(pool, &alpha);
+    [0, 1, 2].map(|a| {
+        let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+        let ahead = pool.mul2(omega[b], momentum[c]);
+        let behind = pool.mul2(omega[c], momentum[b]);
+        let gyroscopic = pool.sub(ahead, behind);
+        pool.add2(spun[a], gyroscopic)
+    })
 }
 
 /// d/dt of a velocity with every acceleration q̈ taken as zero: Σ ∂v/∂q·q̇ + ∂v/∂t.

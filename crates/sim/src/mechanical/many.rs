@@ -214,6 +214,7 @@ impl Mechanical {
         for (slot, value) in self.dyn_out.iter_mut().zip(outputs) {
             *slot = value;
         }
+        self.dense = true;
         let layout = self.layout;
         check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         self.solve_dynamics()?;
