@@ -19,9 +19,11 @@ at least 50 ms, as wall time and (KEY_cpu) as the thread's CPU time: `rhs`, lagr
 at the state of the last returns the solve it cached, which would hide the cost); `rhs_same`,
 the same call at one state again and again, which is what a call costs besides evaluating;
 `batch`, `f.batch(Y)` on R distinct states, per state; `aba`, `pinocchio.aba` cycling through
-the same K states; `jac`, `f.jac(t, y)` cycling (when asked); `loads` and `rhs_load`, the
-median of three `lagrange.loads(text)` (parse, resolve, derive) and `scene.rhs()` (which
-parses and derives again, then lowers: a whole load) (when asked); and `agreement`, the
+the same K states; `jac`, `f.jac(t, y)` cycling, and `aba_derivatives`, Pinocchio's
+`computeABADerivatives` on the same states (when asked); `loads`, `rhs_load` and `whole_load`,
+the medians of three `lagrange.loads(text)` (parse, resolve, derive), `scene.rhs()` after it
+(a copy of the derivation, lowered) and the two together: text to a callable (when asked);
+and `agreement`, the
 largest difference of the two q̈ over the K states relative to the largest |q̈|, so that the
 timings are known to be of the same model. It measures and asserts nothing else.
 
@@ -150,21 +152,28 @@ def measure(request):
     ]
     if request.get("jac"):
         timings.append(("jac", f.jac, ours, {}))
+        # The peer's own derivatives of its forward dynamics, ∂q̈/∂q and ∂q̈/∂v (Carpentier
+        # and Mansard's analytic derivatives of the articulated-body algorithm): what `jac`
+        # gives, but for its rows q̇' = q̇.
+        timings.append(("aba_derivatives", pin.computeABADerivatives, theirs, {}))
     for key, call, args, settings in timings:
         wall, cpu = per_call(call, args, **settings)
         per = len(rows) if key == "batch" else 1
         answer[key], answer[key + "_cpu"] = wall / per, cpu / per
     if request.get("load"):
-        loads, rhs = [], []
+        loads, rhs, whole = [], [], []
         for _ in range(3):
             start = time.perf_counter()
             loaded = lagrange.loads(request["scene"])
-            loads.append(time.perf_counter() - start)
-            start = time.perf_counter()
+            middle = time.perf_counter()
             loaded.rhs()
-            rhs.append(time.perf_counter() - start)
+            end = time.perf_counter()
+            loads.append(middle - start)
+            rhs.append(end - middle)
+            whole.append(end - start)
         answer["loads"] = statistics.median(loads)
         answer["rhs_load"] = statistics.median(rhs)
+        answer["whole_load"] = statistics.median(whole)
     return answer
 
 

@@ -255,8 +255,10 @@ struct Theirs {
     batch: Time,
     aba: Time,
     jac: Option<Time>,
+    aba_derivatives: Option<Time>,
     loads: Option<f64>,
     rhs_load: Option<f64>,
+    whole_load: Option<f64>,
     pinocchio: String,
 }
 
@@ -286,8 +288,10 @@ fn peer(root: &Path) -> Result<Vec<Theirs>, String> {
                 batch: time("batch").ok_or(missing("batch"))?,
                 aba: time("aba").ok_or(missing("aba"))?,
                 jac: time("jac"),
+                aba_derivatives: time("aba_derivatives"),
                 loads: number("loads"),
                 rhs_load: number("rhs_load"),
+                whole_load: number("whole_load"),
                 pinocchio: v["pinocchio"].as_str().unwrap_or("?").to_string(),
             })
         })
@@ -401,12 +405,22 @@ pub fn run(peer_too: bool) {
     for t in &theirs {
         if let Some(jac) = t.jac {
             outln!("`jac` at n = {}: {jac} a call, {} the `rhs`.", t.n, jac.ratio(t.rhs));
+            if let Some(theirs) = t.aba_derivatives {
+                outln!(
+                    "Pinocchio's `computeABADerivatives` (∂q̈/∂q and ∂q̈/∂v) on the same states: \
+                     {theirs} a call, {} its `aba`; `jac` is {} of it.",
+                    theirs.ratio(t.aba),
+                    jac.ratio(theirs)
+                );
+            }
         }
-        if let (Some(loads), Some(rhs)) = (t.loads, t.rhs_load) {
+        if let (Some(loads), Some(rhs), Some(whole)) = (t.loads, t.rhs_load, t.whole_load) {
             outln!(
-                "Loading at n = {} from Python: `lagrange.loads` (parse, resolve, derive) {}, \
-                 `scene.rhs()` (parse, derive and lower) {} (medians of 3).",
+                "Loading at n = {} from Python, text to a callable: {} (`lagrange.loads`: parse, \
+                 resolve, derive {}; then `scene.rhs()`: lay out a copy of the derivation and \
+                 lower it {}; medians of 3).",
                 t.n,
+                seconds(whole),
                 seconds(loads),
                 seconds(rhs)
             );

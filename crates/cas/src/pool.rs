@@ -52,6 +52,7 @@ pub trait ZeroTest: Send + Sync {
 }
 
 /// The arena that owns every expression and symbol of one derivation.
+#[derive(Clone)]
 pub struct Pool {
     nodes: Vec<Node>,
     /// Each node's id under its hash (Fx rather than SipHash: the keys are our own ids, and
@@ -70,7 +71,7 @@ pub struct Pool {
     zero: ExprId,
     one: ExprId,
     /// The numbers of the zero test, if a crate above handed them in.
-    zero_test: Option<Box<dyn ZeroTest>>,
+    zero_test: Option<Arc<dyn ZeroTest>>,
 }
 
 impl Default for Pool {
@@ -107,7 +108,7 @@ impl Pool {
     /// [`Pool::combination_at_generic_points`] decide with it what is too large for the
     /// algebra.
     pub fn set_zero_test(&mut self, test: Box<dyn ZeroTest>) {
-        self.zero_test = Some(test);
+        self.zero_test = Some(Arc::from(test));
     }
 
     /// The sign (−1 or 1) of `e`: exact for a rational, else from the zero test's numbers

@@ -90,12 +90,7 @@ pub fn prepare_resolved_for(
     }
     let extra: Vec<String> = extra.iter().map(|(_, text)| text.clone()).collect();
     let extra = &extra;
-    let mut derivation = crate::derive_resolved(source, model, warnings)?.derivation;
-    // A run gives every contact a multiplier of its own, open or closed, and records it (0
-    // while open): the reaction the derivation solved for in the mode at the start holds only
-    // while that mode does (a bead's push off a sphere would be recorded pulling once it flew).
-    let constraints = &derivation.model.constraints;
-    derivation.reactions.retain(|r| !constraints[r.constraint].kind.is_unilateral());
+    let mut derivation = for_numbers(crate::derive_resolved(source, model, warnings)?.derivation);
     let mut exprs = Vec::new();
     for (value, text) in values.iter().zip(extra) {
         let model::Value::Scalar(e) = value else {
@@ -107,6 +102,22 @@ pub fn prepare_resolved_for(
         exprs.push(derivation.expand_quantities(*e, false));
     }
     Ok(Prepared::from_derivation(derivation, exprs))
+}
+
+/// A scene derived already (by [`crate::load_with`], with the same options) laid out for
+/// numbers, as [`prepare`] would lay it out: a front end that holds a loaded scene takes its
+/// numbers from a copy of the derivation rather than deriving the text again.
+pub fn prepare_derived(derivation: Derivation) -> Prepared {
+    Prepared::from_derivation(for_numbers(derivation), Vec::new())
+}
+
+/// A run gives every contact a multiplier of its own, open or closed, and records it (0 while
+/// open): the reaction the derivation solved for in the mode at the start holds only while
+/// that mode does (a bead's push off a sphere would be recorded pulling once it flew).
+fn for_numbers(mut derivation: Derivation) -> Derivation {
+    let constraints = &derivation.model.constraints;
+    derivation.reactions.retain(|r| !constraints[r.constraint].kind.is_unilateral());
+    derivation
 }
 
 impl Prepared {

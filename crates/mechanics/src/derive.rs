@@ -71,6 +71,7 @@ pub struct Reaction {
 }
 
 /// Everything derived from a model. Owns the model (and with it the expression pool).
+#[derive(Clone)]
 pub struct Derivation {
     pub model: Model,
     /// The coordinates left after elimination, in declaration order.

@@ -462,6 +462,7 @@ pub struct Drive {
 }
 
 /// Everything a scene says, resolved.
+#[derive(Clone)]
 pub struct Model {
     /// What resolving the scene left for resolving more expressions against it.
     pub scope: Scope,

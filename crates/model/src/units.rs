@@ -266,7 +266,7 @@ impl Shape {
 /// What the resolver states about dimensions, to be solved once the scene is resolved.
 // Each is stored once and read once; boxing the forms would cost an allocation apiece.
 #[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 enum Fact {
     /// `a` and `b` have one dimension.
     Same {
@@ -297,6 +297,7 @@ enum Fact {
 }
 
 /// The facts about dimensions gathered while a scene is resolved.
+#[derive(Clone)]
 pub(crate) struct Inference {
     /// The statement being resolved, counted from 1 in file order (0 is before the first).
     stmt: usize,
@@ -314,7 +315,7 @@ pub(crate) struct Inference {
 }
 
 /// A parameter, as the messages about its dimension name it.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 struct Declared {
     name: String,
     span: Span,

@@ -16,6 +16,7 @@ mod numbers;
 mod runs;
 mod sympy;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use numpy::PyArray1;
@@ -42,6 +43,11 @@ struct NativeScene {
     /// derived only in a run, with the input's law in its place, so `derive` and `check`
     /// raise what the engine says while `simulate` runs it.
     scene: Mutex<Result<engine::Scene, engine::Error>>,
+    /// Whether `derive` or `check` has added its forms to the derivation's pool. Numbers laid
+    /// out from a copy of it would then number their expressions after those forms, and a
+    /// sum's order (so its rounding) could follow: they derive the text afresh instead, so that
+    /// `rhs()` gives the same bits whatever was asked of the scene before.
+    forms_added: AtomicBool,
     runs: runs::Store,
 }
 
@@ -76,6 +82,7 @@ fn loads(py: Python<'_>, text: String, path: String, units: bool) -> PyResult<Na
         path,
         units,
         scene: Mutex::new(scene),
+        forms_added: AtomicBool::new(false),
         runs: runs::Store::default(),
     })
 }
@@ -88,9 +95,27 @@ impl NativeScene {
         self.scene.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    /// A copy of the loaded scene's derivation, for numbers to be laid out from without
+    /// deriving the text again; `None` where there is none (the callers then derive the text
+    /// and say why it fails).
+    fn derived(&self) -> Option<mechanics::Derivation> {
+        let scene = self.scene();
+        if self.forms_added.load(Ordering::SeqCst) {
+            return None;
+        }
+        scene.as_ref().ok().map(|scene| scene.derivation.clone())
+    }
+
+    /// The loaded scene, for `derive` and `check` to add their forms to.
+    fn scene_for_forms(&self) -> MutexGuard<'_, Result<engine::Scene, engine::Error>> {
+        let scene = self.scene();
+        self.forms_added.store(true, Ordering::SeqCst);
+        scene
+    }
+
     /// `body` on the derived scene, or the engine's reason there is none, raised.
     fn with_scene<T>(&self, body: impl FnOnce(&mut engine::Scene) -> PyResult<T>) -> PyResult<T> {
-        match &mut *self.scene() {
+        match &mut *self.scene_for_forms() {
             Ok(scene) => body(scene),
             Err(refused) => Err(engine_error(refused, &self.path)),
         }
@@ -112,7 +137,7 @@ impl NativeScene {
 
     /// y' = F(t, y) for `solve_ivp`.
     fn rhs(&self, py: Python<'_>) -> PyResult<numbers::Rhs> {
-        py.detach(|| numbers::Rhs::new(&self.source, &self.path, self.units))
+        py.detach(|| numbers::Rhs::new(&self.source, &self.path, self.units, self.derived()))
     }
 
     /// Pickles as what it is made from, the scene's text and settings: unpickling loads it
@@ -130,7 +155,7 @@ impl NativeScene {
 
     /// M(t, q) at the parameters' values.
     fn mass_matrix_function(&self) -> PyResult<numbers::MassMatrix> {
-        numbers::MassMatrix::new(&self.source, &self.path, self.units)
+        numbers::MassMatrix::new(&self.source, &self.path, self.units, self.derived())
     }
 
     /// Runs the scene as `lagrange simulate` does, with `options` (see [`RunOptions`]). The
@@ -436,7 +461,7 @@ impl NativeScene {
     /// Every `expect` line with its verdict: dicts of line, text, held, how (and for one that
     /// fails, the residual and a state where it is not zero).
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut scene = self.scene();
+        let mut scene = self.scene_for_forms();
         let d = match &mut *scene {
             Ok(scene) => &mut scene.derivation,
             Err(refused) => return Err(engine_error(refused, &self.path)),

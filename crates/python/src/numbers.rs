@@ -8,6 +8,7 @@
 //! `engine::inverse` over many states is [`InverseDynamics`].
 
 use engine::numbers::{prepare, Prepared};
+use mechanics::Derivation;
 use numeric::Tape;
 use numpy::ndarray::ArrayView2;
 use numpy::{
@@ -31,9 +32,13 @@ use crate::inputs::{self, Source};
 fn prepared(
     source: &str,
     units: bool,
+    derived: Option<Derivation>,
     refused: Option<&str>,
 ) -> Result<(Prepared, Vec<f64>, Vec<f64>), engine::Error> {
-    let prepared = prepare(source, &[], engine::Options { units })?;
+    let prepared = match derived {
+        Some(derivation) => engine::numbers::prepare_derived(derivation),
+        None => prepare(source, &[], engine::Options { units })?,
+    };
     if let Some(what) = refused {
         prepared.refuse_contacts(what)?;
     }
@@ -96,8 +101,15 @@ pub struct Rhs {
 }
 
 impl Rhs {
-    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
-        let inner = RhsInner::new(source, path, units)?;
+    /// The right-hand side of the scene `source`, from `derived` (the loaded scene's
+    /// derivation, derived from `source` with these `units`) where there is one.
+    pub fn new(
+        source: &str,
+        path: &str,
+        units: bool,
+        derived: Option<Derivation>,
+    ) -> PyResult<Self> {
+        let inner = RhsInner::new(source, path, units, derived)?;
         Ok(Rhs {
             names: inner.names.clone(),
             parameter_names: inner.tunable.names.clone(),
@@ -119,7 +131,7 @@ impl Rhs {
         units: bool,
         parameters: &[f64],
     ) -> PyResult<Self> {
-        let rhs = Rhs::new(source, path, units)?;
+        let rhs = Rhs::new(source, path, units, None)?;
         let mut inner = rhs.inner.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         let mut all = inner.mechanical.parameters().to_vec();
         if parameters.len() != rhs.parameter_names.len() {
@@ -230,11 +242,16 @@ struct RhsInner {
 }
 
 impl RhsInner {
-    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+    pub fn new(
+        source: &str,
+        path: &str,
+        units: bool,
+        derived: Option<Derivation>,
+    ) -> PyResult<Self> {
         // Its evaluations would hold every contact closed: a two-sided constraint it is not.
         let refused = "`Scene.rhs()` (f, f.batch and f.jac, which would hold every contact closed)";
         let (mut prepared, parameters, y0) =
-            prepared(source, units, Some(refused)).map_err(|e| engine_error(&e, path))?;
+            prepared(source, units, derived, Some(refused)).map_err(|e| engine_error(&e, path))?;
         let dynamics_exprs = prepared.dynamics_exprs();
         let inputs = prepared.dynamics_inputs();
         let dynamics =
@@ -869,10 +886,16 @@ pub struct MassMatrix {
 }
 
 impl MassMatrix {
-    pub fn new(source: &str, path: &str, units: bool) -> PyResult<Self> {
+    /// M of the scene `source`, from `derived` as [`Rhs::new`] takes it.
+    pub fn new(
+        source: &str,
+        path: &str,
+        units: bool,
+        derived: Option<Derivation>,
+    ) -> PyResult<Self> {
         // M(q) is the same whichever contacts are closed.
         let (prepared, parameters, _) =
-            prepared(source, units, None).map_err(|e| engine_error(&e, path))?;
+            prepared(source, units, derived, None).map_err(|e| engine_error(&e, path))?;
         let d = &prepared.derivation;
         let n = d.coords.len();
         let entries: Vec<cas::ExprId> =

@@ -166,6 +166,34 @@ def test_jac_is_the_jacobian_of_the_rhs(example):
         f.jac(0.0, [1.0])
 
 
+@pytest.mark.parametrize(
+    "example",
+    ["classics/double_pendulum.lag", "classics/car_axis.lag", "space/heavy_top.lag"],
+)
+def test_rhs_from_the_loaded_derivation_is_the_rhs_derived_afresh(example):
+    """`rhs()` lays its numbers out from a copy of the loaded scene's derivation; after
+    `derive()` has added its forms, and when unpickled, it derives the text again. All three
+    give the same bits, and so does M."""
+    import pickle
+
+    text = (EXAMPLES / example).read_text()
+    copied = lagrange.loads(text)
+    f, M = copied.rhs(), copied.mass_matrix_function()
+    touched = lagrange.loads(text)
+    touched.derive()
+    afresh, M_afresh = touched.rhs(), touched.mass_matrix_function()
+    unpickled = pickle.loads(pickle.dumps(f))
+    n = len(f.names)
+    rng = np.random.default_rng(3)
+    for y in [f.y0, f.y0 + 0.2 * rng.normal(size=n)]:
+        value = f(0.4, y)
+        assert value.tobytes() == afresh(0.4, y).tobytes()
+        assert value.tobytes() == unpickled(0.4, y).tobytes()
+        assert f.jac(0.4, y).tobytes() == afresh.jac(0.4, y).tobytes()
+        q = y[: len(M.names)]
+        assert M(0.4, q).tobytes() == M_afresh(0.4, q).tobytes()
+
+
 def test_radau_with_the_exact_jacobian_agrees_with_dop853():
     from scipy.integrate import solve_ivp
 

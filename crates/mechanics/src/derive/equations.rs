@@ -26,6 +26,7 @@ pub(super) struct Rows {
 /// structural route, and per row the parts of f they did not give. Only ids already built are
 /// kept, so that holding them adds no expression to the pool (whose numbering some printing
 /// ties go by).
+#[derive(Clone)]
 pub(super) struct Structure {
     pub terms: Vec<InertialTerm>,
     pub rest_forcing: Vec<Vec<ExprId>>,

@@ -31,6 +31,7 @@ use cas::{ExprId, Func, Node, Pool, SymId, SymbolKind};
 use model::{Model, Rotation};
 
 /// One term ½·mass·|d position/dt|² of T, with the mass constant.
+#[derive(Clone)]
 pub(super) struct Inertial {
     pub mass: ExprId,
     /// The position in the remaining coordinates (for a planar body's rotation, its angle).
@@ -38,6 +39,7 @@ pub(super) struct Inertial {
 }
 
 /// One term ½·ωᵀ·I·ω of T, a body turning in space, with I constant.
+#[derive(Clone)]
 pub(super) struct Turning {
     pub inertia: [[ExprId; 3]; 3],
     /// ω in body axes, in the remaining coordinates and their rates.
@@ -116,6 +118,7 @@ pub(super) fn inertial_terms(
 }
 
 /// A kinetic-energy term on the structural route (its parts private to this module).
+#[derive(Clone)]
 pub(super) enum InertialTerm {
     Moving(Inertial),
     Turning(Turning),

@@ -38,6 +38,7 @@ impl From<Shape> for Dims {
 }
 
 /// The dimension of a name, beside its binding.
+#[derive(Clone)]
 pub(super) struct NameDims {
     /// The statement that declares it, by its place in the file.
     pub at: usize,
@@ -47,6 +48,7 @@ pub(super) struct NameDims {
     pub entries: Option<Dims>,
 }
 
+#[derive(Clone)]
 /// The dimensions of a body, beside it in the resolver's table.
 pub(super) struct BodyDims {
     pub at: usize,

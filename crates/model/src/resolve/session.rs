@@ -14,7 +14,7 @@ use crate::{Checks, Model, Value};
 /// What resolving a scene leaves behind for resolving more expressions against it later: its
 /// names and what they are bound to, the dimension facts and the values of its parameters.
 /// A [`Model`] keeps it, for [`Model::resolve_expression`] and [`Model::resolve_about`].
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Scope {
     pub(super) names: HashMap<String, Binding>,
     pub(super) declared: HashMap<String, (Span, &'static str)>,
