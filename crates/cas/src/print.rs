@@ -3,9 +3,9 @@
 //! never by arena ids, so the same scene prints the same text in every run.
 
 use std::cmp::Ordering;
-use std::collections::HashMap;
 
 use num_traits::{One, Signed, ToPrimitive, Zero};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::number::Rational;
 use crate::pool::{ExprId, Node, Pool, SymId, SymbolKind};
@@ -160,35 +160,33 @@ impl Pool {
     /// Whether `e` written out as a tree has more than `limit` nodes (each shared
     /// subexpression counted every time it occurs), without writing it out.
     pub fn tree_exceeds(&self, e: ExprId, limit: usize) -> bool {
-        fn size(pool: &Pool, e: ExprId, cap: usize, memo: &mut HashMap<ExprId, usize>) -> usize {
+        fn size(pool: &Pool, e: ExprId, cap: usize, memo: &mut FxHashMap<ExprId, usize>) -> usize {
             if let Some(&n) = memo.get(&e) {
                 return n;
             }
             let mut n = 1usize;
-            for c in pool.children(e) {
-                n = n.saturating_add(size(pool, c, cap, memo)).min(cap);
-            }
+            pool.for_each_child(e, |c| n = n.saturating_add(size(pool, c, cap, memo)).min(cap));
             memo.insert(e, n);
             n
         }
-        size(self, e, limit.saturating_add(1), &mut HashMap::new()) > limit
+        size(self, e, limit.saturating_add(1), &mut FxHashMap::default()) > limit
     }
 
     /// The distinct operations (sums, products, powers, functions) `e` is built of, each
     /// shared subexpression once.
     pub fn operation_count(&self, e: ExprId) -> usize {
-        let mut seen = std::collections::HashSet::new();
+        let mut seen = FxHashSet::default();
         let mut stack = vec![e];
         let mut count = 0;
         while let Some(x) = stack.pop() {
             if !seen.insert(x) {
                 continue;
             }
-            let children = self.children(x);
-            if !children.is_empty() {
+            let before = stack.len();
+            self.for_each_child(x, |c| stack.push(c));
+            if stack.len() > before {
                 count += 1;
             }
-            stack.extend(children);
         }
         count
     }

@@ -33,6 +33,12 @@ impl Pool {
         sum.finish(self)
     }
 
+    /// `Σ k·t` over `terms`, each a term and its coefficient: the node `add` gives for the
+    /// scaled terms (or for each term written out k times), and no other node made.
+    pub fn add_scaled(&mut self, terms: &[(ExprId, Rational)]) -> ExprId {
+        self.sum_of(Rational::zero(), terms.iter().cloned())
+    }
+
     pub fn add2(&mut self, a: ExprId, b: ExprId) -> ExprId {
         self.add(&[a, b])
     }

@@ -50,6 +50,20 @@ impl Pool {
         }
     }
 
+    /// `body` on each of [`Pool::children`] in its order, without a vector to hold them: for
+    /// walks over large expressions, which visit many nodes once each.
+    pub fn for_each_child(&self, e: ExprId, mut body: impl FnMut(ExprId)) {
+        match self.node(e) {
+            Node::Num(_) | Node::Sym(_) | Node::Pi => {}
+            Node::Add(_, t) | Node::Mul(_, t) => t.iter().for_each(|(x, _)| body(*x)),
+            Node::Pow(a, b) | Node::Atan2(a, b) => {
+                body(*a);
+                body(*b);
+            }
+            Node::Func(_, a) => body(*a),
+        }
+    }
+
     /// Splits `e` into a rational coefficient and the rest: `3xy` → (3, xy), `x` → (1, x).
     pub fn split_coefficient(&mut self, e: ExprId) -> (Rational, ExprId) {
         match self.node(e).clone() {
