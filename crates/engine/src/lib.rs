@@ -24,9 +24,11 @@ pub mod linearize;
 pub mod numbers;
 
 pub use error::{line_col, Error, Piece, Setting};
+/// What a [`Scene`] holds, for front ends that keep a copy of it ([`numbers::prepare_derived`])
+/// without depending on `mechanics` themselves.
+pub use mechanics::Derivation;
 
 use lang::Diagnostic;
-use mechanics::Derivation;
 
 /// What the pipeline checks besides the grammar and the names.
 #[derive(Clone, Copy, Debug)]

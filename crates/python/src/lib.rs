@@ -98,7 +98,7 @@ impl NativeScene {
     /// A copy of the loaded scene's derivation, for numbers to be laid out from without
     /// deriving the text again; `None` where there is none (the callers then derive the text
     /// and say why it fails).
-    fn derived(&self) -> Option<mechanics::Derivation> {
+    fn derived(&self) -> Option<engine::Derivation> {
         let scene = self.scene();
         if self.forms_added.load(Ordering::SeqCst) {
             return None;

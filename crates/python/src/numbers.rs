@@ -8,7 +8,7 @@
 //! `engine::inverse` over many states is [`InverseDynamics`].
 
 use engine::numbers::{prepare, Prepared};
-use mechanics::Derivation;
+use engine::Derivation;
 use numeric::Tape;
 use numpy::ndarray::ArrayView2;
 use numpy::{

@@ -90,13 +90,14 @@ pub const CONDITION_LIMIT: f64 = 1e13;
 
 /// Solves `a·x = b` for symmetric `a`, overwriting `a` with its factors and `b` with `x`.
 /// Tries LDLᵀ; if `a` is not positive definite, `reload` puts the matrix back into `a` and LU
-/// factors it.
+/// factors it. Whether the factors left in `a` are LDLᵀ's ([`ldl_solve_columns`] solves with
+/// them) rather than LU's.
 pub fn solve_symmetric<M: Square>(
     a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
     reload: impl FnOnce(&mut M),
-) -> Result<(), FaultKind> {
+) -> Result<bool, FaultKind> {
     if ldl_in_place(a).is_ok() {
         let n = a.order();
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
@@ -110,10 +111,10 @@ pub fn solve_symmetric<M: Square>(
             return Err(FaultKind::SingularMass { coordinates: worst, condition: hi / lo });
         }
         ldl_solve(a, b);
-        return Ok(());
+        return Ok(true);
     }
     reload(a);
-    solve_general(a, b, pivots)
+    solve_general(a, b, pivots).map(|()| false)
 }
 
 /// Solves `a·x = b` by LU with partial pivoting, overwriting `a` and `b`.
@@ -394,6 +395,37 @@ pub fn lu_solve_columns<M: Square, const C: usize>(lu: &M, pivots: &[usize], b: 
         }
         let d = lu[(i, i)];
         b[i] = s.map(|s| s / d);
+    }
+}
+
+/// Solves with the LDLᵀ factors [`ldl_in_place`] leaves for the columns of `b` side by side
+/// (row i of `b` holds their entries i). Each entry's sum is kept in registers while it
+/// runs, as [`lu_solve_columns`] keeps it.
+pub fn ldl_solve_columns<M: Square, const C: usize>(ldl: &M, b: &mut [[f64; C]]) {
+    let n = ldl.order();
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            let l = ldl[(i, k)];
+            for (s, z) in s.iter_mut().zip(&b[k]) {
+                *s -= l * z;
+            }
+        }
+        b[i] = s;
+    }
+    for (i, row) in b.iter_mut().enumerate().take(n) {
+        let d = ldl[(i, i)];
+        *row = row.map(|s| s / d);
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            let l = ldl[(k, i)];
+            for (s, x) in s.iter_mut().zip(&b[k]) {
+                *s -= l * x;
+            }
+        }
+        b[i] = s;
     }
 }
 

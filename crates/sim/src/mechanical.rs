@@ -164,6 +164,11 @@ pub struct Mechanical {
     /// Whether `dyn_out` holds the dense program's outputs at the inputs `solved_at` compares
     /// (the recursive form leaves it behind).
     dense: bool,
+    /// Whether `small` (at its order) or else `system` holds the LDLᵀ factors of M from the
+    /// solve of the accelerations `solved` names, for the exact Jacobian's columns to solve
+    /// with: true only from that solve (no multipliers, M positive definite) until the next
+    /// evaluation of the dynamics program.
+    mass_factored: bool,
 }
 
 /// A slipping contact's friction in the augmented system: the column of multiplier `normal`
@@ -247,6 +252,7 @@ impl Mechanical {
             chain: None,
             chain_many: None,
             dense: false,
+            mass_factored: false,
         }
     }
 
@@ -342,6 +348,7 @@ impl Mechanical {
     /// The dynamics program's outputs at (t, q, q̇) (see [`Layout`]).
     pub(crate) fn dynamics_at(&mut self, t: f64, y: &[f64]) -> Result<&[f64], FaultKind> {
         self.solved = None;
+        self.mass_factored = false;
         self.follow_signals(t);
         fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
         self.dynamics.run(&mut self.dyn_out);
@@ -409,6 +416,7 @@ impl Mechanical {
     fn recursive_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
         let n = self.layout.coordinates;
         self.solved = None;
+        self.mass_factored = false;
         self.follow_signals(t);
         // The dense program's inputs say where `solution` was solved (`solved_at`).
         fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
@@ -456,10 +464,12 @@ impl Mechanical {
             // In the factors the exact Jacobian solves with again at the same state.
             (_, false) => {
                 solve_kept_factored(out, self.layout, kept, bends, solution, &mut self.kept_factors)
+                    .map(|()| false)
             }
         };
+        self.mass_factored = matches!(solved, Ok(true));
         match solved {
-            Ok(()) => {
+            Ok(_) => {
                 // A slipping contact's tangential force is μ·λ against the slip, not a
                 // multiplier of its own: it is reported in its slot.
                 for bend in &self.bends {
@@ -561,13 +571,13 @@ impl Mechanical {
         let (pivots, kept) = (&mut self.pivots, &self.kept);
         match (self.small.as_mut(), kept.iter().all(|&k| k)) {
             (Some(small), true) => {
-                solve_system(out, self.layout, kept, &[], small, &mut change, pivots)?
+                solve_system(out, self.layout, kept, &[], small, &mut change, pivots)?;
             }
             (Some(small), false) => {
                 solve_kept(out, self.layout, kept, &[], small, &mut change, pivots)?
             }
             (None, true) => {
-                solve_system(out, self.layout, kept, &[], &mut self.system, &mut change, pivots)?
+                solve_system(out, self.layout, kept, &[], &mut self.system, &mut change, pivots)?;
             }
             (None, false) => {
                 let mut work = KeptFactors::default();
@@ -818,6 +828,7 @@ impl Canonical {
         linalg::solve_symmetric(&mut inner.system, &mut self.rates, &mut inner.pivots, |a| {
             a.copy_from(&inner.backup)
         })
+        .map(|_| ())
     }
 
     /// (q, p) from (q, q̇).
@@ -962,7 +973,7 @@ fn solve_kept(
         x[n + r] = b[n + c];
     }
     let solved = if k == 0 {
-        linalg::solve_symmetric(a, &mut x[..n], pivots, load)
+        linalg::solve_symmetric(a, &mut x[..n], pivots, load).map(|_| ())
     } else {
         linalg::solve_general(a, &mut x[..n + k], pivots)
     };
@@ -1160,7 +1171,8 @@ impl KeptFactors {
 }
 
 /// Solves the augmented system of `out` for the right side `b`, in place: by LDLᵀ when
-/// there are no multipliers (M alone, symmetric), by LU otherwise.
+/// there are no multipliers (M alone, symmetric), by LU otherwise. Whether `a` is left
+/// holding M's LDLᵀ factors.
 fn solve_system<M: Square>(
     out: &[f64],
     layout: Layout,
@@ -1169,11 +1181,11 @@ fn solve_system<M: Square>(
     a: &mut M,
     b: &mut [f64],
     pivots: &mut [usize],
-) -> Result<(), FaultKind> {
+) -> Result<bool, FaultKind> {
     load_system(out, layout, kept, bends, a);
     if layout.multipliers == 0 {
         linalg::solve_symmetric(a, b, pivots, |a| load_system(out, layout, kept, bends, a))
     } else {
-        linalg::solve_general(a, b, pivots)
+        linalg::solve_general(a, b, pivots).map(|()| false)
     }
 }

@@ -10,7 +10,7 @@ use numeric::Tape;
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
 /// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
-pub(super) const COLUMNS: usize = 4;
+pub(super) const COLUMNS: usize = 8;
 
 /// How many slices of the partials program a problem keeps ([`Mechanical::kept_partials_at`]).
 const SLICES: usize = 64;
@@ -428,21 +428,29 @@ impl Mechanical {
             baumgarte,
             stabilisation,
             layout,
+            mass_factored,
+            small,
+            system,
             ..
         } = self;
         let Layout { coordinates: n, multipliers: m, .. } = *layout;
-        // One LU serves every column: the accelerations' own where they were solved by LU on
-        // the heap at this state, else one made here (they may have been solved by LDLᵀ, or
-        // on the stack). Only the kept rows are factored: an open contact's multiplier is 0,
-        // and its identity row would only make the factorization larger (a rimless wheel on
-        // one spoke: five rows rather than nineteen).
-        if !factors.valid {
+        // M alone past the stack's order, factored by LDLᵀ as the accelerations were solved at
+        // this state: those factors serve every column (a 32-link chain's LU for them had been a
+        // quarter of its Jacobian). Smaller systems keep the LU below, whose columns are the
+        // bits `linear`'s solves give (a linearization along a run at an equilibrium is the
+        // one about it, exactly).
+        let mass = (*mass_factored && small.is_none()).then_some(&*system);
+        // Else one LU serves every column: the accelerations' own where they were solved by LU
+        // on the heap at this state, else one made here. Only the kept rows are factored: an
+        // open contact's multiplier is 0, and its identity row would only make the
+        // factorization larger (a rimless wheel on one spoke: five rows rather than nineteen).
+        if mass.is_none() && !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
             factors.load(dyn_out, n, kept, bends);
             factors.factor(n)?;
             factors.valid = true;
         }
-        let order = factors.order(n);
+        let order = if mass.is_some() { n } else { factors.order(n) };
         let alpha = *baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
@@ -465,7 +473,7 @@ impl Mechanical {
             std::mem::take(&mut factors.block),
             std::mem::take(&mut factors.column),
         );
-        let rows = factors.rows();
+        let rows: &[usize] = if mass.is_some() { &[] } else { factors.rows() };
         // Every entry of these is written before it is read, column by column: they are
         // resized, not cleared.
         reduced.resize(order, 0.0);
@@ -505,7 +513,10 @@ impl Mechanical {
             for row in block.iter_mut() {
                 row[columns..].fill(0.0);
             }
-            factors.solve_columns(n, &mut block);
+            match mass {
+                Some(ldl) => linalg::ldl_solve_columns(ldl, &mut block),
+                None => factors.solve_columns(n, &mut block),
+            }
             for (c, k) in (first..first + columns).enumerate() {
                 for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
