@@ -73,8 +73,8 @@ struct Row {
     factor: f64,
     rhs: f64,
     /// At [`JACOBIAN_AT`]: the partials program's size, its compile time, its tape's time,
-    /// and the whole exact Jacobian (the partials, one LU of M and a solve per state
-    /// component).
+    /// and the whole exact Jacobian (the dense accelerations and M's LDLᵀ factors, the
+    /// partials, and a solve with those factors per state component).
     jacobian: Option<(usize, f64, f64, f64)>,
     /// The recursive form: its program's size, the time to find and lower it, and the
     /// `rhs` that sweeps it.
@@ -352,8 +352,9 @@ pub fn run(peer_too: bool) {
     if let Some((n, rhs, (ops, compile, partials, whole))) = jacobian {
         outln!(
             "The exact Jacobian at n = {n}: {} a call, {:.1}× the `rhs`; its partials program \
-             is {ops} operations (compiled in {}), {} on the tape; the rest is one LU of M and \
-             {} solves.\n",
+             is {ops} operations (compiled in {}), {} on the tape; the rest is the dense \
+             accelerations (M, f and M's LDLᵀ factors, which the columns reuse) and {} \
+             solves with those factors.\n",
             seconds(whole),
             whole / rhs,
             seconds(compile),

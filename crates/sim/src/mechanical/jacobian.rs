@@ -148,6 +148,34 @@ impl Mechanical {
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
+        if self.mass_factored && self.small.is_none() {
+            // M alone past the stack's order: the columns' solves of `solve_partials`, with
+            // the same bits, read from the partials and written to the Jacobian a row of a
+            // block at a time rather than a column at a time (strided both ways, a fifth of a
+            // 32-link chain's Jacobian).
+            let mut block = std::mem::take(&mut self.kept_factors.block);
+            block.resize(n, [0.0; COLUMNS]);
+            for first in (0..width).step_by(COLUMNS) {
+                let columns = (width - first).min(COLUMNS);
+                for (i, row) in block.iter_mut().enumerate() {
+                    let partials = &out[i * width + first..i * width + first + columns];
+                    for (v, p) in row.iter_mut().zip(partials) {
+                        *v = -p;
+                    }
+                    row[columns..].fill(0.0);
+                }
+                linalg::ldl_solve_columns(&self.system, &mut block);
+                for (i, row) in block.iter().enumerate() {
+                    let at = (n + i) * width + first;
+                    jac[at..at + columns].copy_from_slice(&row[..columns]);
+                }
+            }
+            self.kept_factors.block = block;
+            self.partials_out = out;
+            self.solution = solution;
+            check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+            return Ok(true);
+        }
         let solved = self.solve_partials(&out, width, &solution, |k, column| {
             for i in 0..n {
                 jac[(n + i) * width + k] = column[i];
