@@ -1,7 +1,9 @@
 //! Expansion, zero recognition and the simplifications that make printed equations read like a
 //! careful hand derivation.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
+
+use rustc_hash::FxHashMap;
 
 use num_traits::{One, Signed, ToPrimitive, Zero};
 
@@ -135,12 +137,17 @@ impl Pool {
     /// Whether expanding `e` would give more than `limit` terms, counted before like terms
     /// combine (an upper bound), without expanding: linear in the size of `e` as a graph.
     pub fn expansion_exceeds(&self, e: ExprId, limit: usize) -> bool {
-        let mut memo = HashMap::new();
+        let mut memo = FxHashMap::default();
         self.expanded_terms(e, limit, &mut memo) > limit
     }
 
     /// The number of terms `expand` would multiply out, saturated just past `limit`.
-    fn expanded_terms(&self, e: ExprId, limit: usize, memo: &mut HashMap<ExprId, usize>) -> usize {
+    fn expanded_terms(
+        &self,
+        e: ExprId,
+        limit: usize,
+        memo: &mut FxHashMap<ExprId, usize>,
+    ) -> usize {
         if let Some(&n) = memo.get(&e) {
             return n;
         }
@@ -193,12 +200,12 @@ impl Pool {
     /// sin and cos of the same argument have one form. Used to recognise zero, not to print.
     pub fn trig_normal(&mut self, e: ExprId) -> ExprId {
         let e = self.expand(e);
-        let mut memo = HashMap::new();
+        let mut memo = FxHashMap::default();
         let r = self.rewrite_cos_squares(e, &mut memo);
         self.expand(r)
     }
 
-    fn rewrite_cos_squares(&mut self, e: ExprId, memo: &mut HashMap<ExprId, ExprId>) -> ExprId {
+    fn rewrite_cos_squares(&mut self, e: ExprId, memo: &mut FxHashMap<ExprId, ExprId>) -> ExprId {
         if let Some(&r) = memo.get(&e) {
             return r;
         }
@@ -250,11 +257,11 @@ impl Pool {
 
     /// How deeply trigonometric functions nest inside each other's arguments.
     fn trig_depth(&self, e: ExprId) -> usize {
-        let mut memo: HashMap<ExprId, usize> = HashMap::new();
+        let mut memo: FxHashMap<ExprId, usize> = FxHashMap::default();
         self.trig_depth_memo(e, &mut memo)
     }
 
-    fn trig_depth_memo(&self, e: ExprId, memo: &mut HashMap<ExprId, usize>) -> usize {
+    fn trig_depth_memo(&self, e: ExprId, memo: &mut FxHashMap<ExprId, usize>) -> usize {
         if let Some(&d) = memo.get(&e) {
             return d;
         }

@@ -10,7 +10,9 @@
 //! changes. The terms still to examine are taken in the sum's order, so every fold is the one
 //! the full rescan would have made, and the result is the same.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet};
+
+use rustc_hash::FxHashMap;
 
 use num_traits::{One, ToPrimitive, Zero};
 
@@ -27,12 +29,12 @@ enum Key {
 /// The terms still to examine, and those waiting for a key to change.
 struct Worklist {
     pending: BTreeSet<ExprId>,
-    waiting: HashMap<Key, Vec<ExprId>>,
+    waiting: FxHashMap<Key, Vec<ExprId>>,
 }
 
 impl Worklist {
     fn new(terms: &BTreeMap<ExprId, Rational>) -> Self {
-        Worklist { pending: terms.keys().copied().collect(), waiting: HashMap::new() }
+        Worklist { pending: terms.keys().copied().collect(), waiting: FxHashMap::default() }
     }
 
     /// The first term, in the sum's order, still to examine that is still in the sum.

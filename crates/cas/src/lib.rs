@@ -21,5 +21,5 @@ pub mod print;
 mod subst;
 
 pub use number::Rational;
-pub use pool::{ExprId, Func, Node, Pool, SymId, Symbol, SymbolKind, ZeroTest};
+pub use pool::{Collected, ExprId, Func, Node, Pool, SymId, Symbol, SymbolKind, ZeroTest};
 pub use print::{greek_word, Style};

@@ -22,6 +22,7 @@ mod functions;
 mod node;
 mod query;
 
+pub use collect::Collected;
 pub use node::{ExprId, Func, Node, SymId, Symbol, SymbolKind};
 
 /// The numeric side of the zero test, handed in by a crate above this one ([`Pool::set_zero_test`]):
@@ -300,6 +301,40 @@ mod tests {
         assert!(p.is_zero(d));
         let q = p.div(x2, x);
         assert_eq!(q, x);
+    }
+
+    /// A sum collected from other sums' collections, or in one pass, is the node `add` gives,
+    /// and collecting makes no node; a product with a coefficient other than 1 is not
+    /// collected (`add` would intern its rest).
+    #[test]
+    fn collected_sums_are_the_sums_add_gives() {
+        let mut p = Pool::new();
+        let [x, y, z] = ["x", "y", "z"].map(|n| {
+            let s = p.param(n);
+            p.sym(s)
+        });
+        let sx = p.sin(x);
+        let xy = p.mul2(x, y);
+        let half = p.num(number::ratio(1, 2));
+        let a = p.add(&[x, sx, half]);
+        let neg = p.neg(sx);
+        let b = p.add(&[a, xy, neg]);
+        let c = p.add(&[b, z]);
+        let list = [c, b, a, z, half];
+        let before = p.nodes.len();
+        let suffix = p.collected_all(&list[1..]).expect("collects");
+        let whole = p.collected(list[0]).expect("collects").plus(&suffix);
+        assert_eq!(p.collected_all(&list), Some(whole.clone()));
+        assert_eq!(p.nodes.len(), before, "collecting made a node");
+        let expected = p.add(&list);
+        assert_eq!(p.add_collected(&whole), expected);
+        let minus_x = p.scale(x, &number::int(-1));
+        assert!(p.collected(minus_x).is_none());
+        // Terms that cancel leave the sum: −sin x in b against sin x.
+        let opposite = p.collected_all(&[b, sx]).expect("collects");
+        let with_x = p.collected(x).expect("collects").plus(&opposite);
+        let expected = p.add(&[x, b, sx]);
+        assert_eq!(p.add_collected(&with_x), expected);
     }
 
     #[test]

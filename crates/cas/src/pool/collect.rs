@@ -73,6 +73,73 @@ impl SumBuilder {
     }
 }
 
+/// A sum collected outside the pool: its constant, and its terms sorted by term with their
+/// coefficients, like terms added. Sums of many long sums that share most of their terms (a
+/// chain's accelerations, Σₖ≥ᵢ a₀ₖ for every i) are collected from each other's collections
+/// rather than term by term, and interned only when complete ([`Pool::add_collected`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Collected {
+    constant: Rational,
+    terms: Vec<(ExprId, Rational)>,
+}
+
+impl Collected {
+    /// The collection of both sums.
+    pub fn plus(&self, other: &Collected) -> Collected {
+        let mut terms = Vec::with_capacity(self.terms.len() + other.terms.len());
+        let (mut a, mut b) = (self.terms.iter().peekable(), other.terms.iter().peekable());
+        loop {
+            let next = match (a.peek(), b.peek()) {
+                (Some(x), Some(y)) if x.0 == y.0 => {
+                    let sum = number::plus(&x.1, &y.1);
+                    let key = x.0;
+                    a.next();
+                    b.next();
+                    (key, sum)
+                }
+                (Some(x), Some(y)) if x.0 < y.0 => a.next().cloned().expect("peeked"),
+                (Some(_), Some(_)) | (None, Some(_)) => b.next().cloned().expect("peeked"),
+                (Some(_), None) => a.next().cloned().expect("peeked"),
+                (None, None) => break,
+            };
+            terms.push(next);
+        }
+        Collected { constant: number::plus(&self.constant, &other.constant), terms }
+    }
+}
+
+impl Pool {
+    /// What [`Pool::add`] collects from `e`, where collecting it makes no node: every
+    /// expression but a product with a coefficient other than 1 (whose rest `add` interns).
+    pub fn collected(&self, e: ExprId) -> Option<Collected> {
+        self.collected_all(&[e])
+    }
+
+    /// [`Pool::collected`] of the sum of `exprs`, in one pass as `add` collects it.
+    pub fn collected_all(&self, exprs: &[ExprId]) -> Option<Collected> {
+        let mut sum = SumBuilder::default();
+        for &e in exprs {
+            match self.node(e) {
+                Node::Mul(c, _) if !c.is_one() => return None,
+                Node::Num(q) => number::add_to(&mut sum.constant, q),
+                Node::Add(c, terms) => {
+                    number::add_to(&mut sum.constant, c);
+                    sum.terms.extend(terms.iter().cloned());
+                }
+                _ => sum.terms.push((e, Rational::one())),
+            }
+        }
+        Some(Collected { constant: sum.constant, terms: merged(sum.terms) })
+    }
+
+    /// The sum collected: the node [`Pool::add`] of the expressions it was collected from
+    /// gives.
+    pub fn add_collected(&mut self, sum: &Collected) -> ExprId {
+        let builder = SumBuilder { constant: sum.constant.clone(), terms: sum.terms.clone() };
+        builder.finish(self)
+    }
+}
+
 /// Collects a product: a coefficient and an exponent per distinct base.
 pub(super) struct ProductBuilder {
     pub(super) coef: Rational,
