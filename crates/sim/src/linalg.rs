@@ -375,16 +375,7 @@ pub fn lu_solve_columns<M: Square, const C: usize>(lu: &M, pivots: &[usize], b: 
     for k in 0..n {
         b.swap(k, pivots[k]);
     }
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            let l = lu[(i, k)];
-            for (s, b) in s.iter_mut().zip(&b[k]) {
-                *s -= l * b;
-            }
-        }
-        b[i] = s;
-    }
+    unit_lower_solve_columns(lu, b);
     for i in (0..n).rev() {
         let mut s = b[i];
         for k in i + 1..n {
@@ -398,21 +389,26 @@ pub fn lu_solve_columns<M: Square, const C: usize>(lu: &M, pivots: &[usize], b: 
     }
 }
 
-/// Solves with the LDLᵀ factors [`ldl_in_place`] leaves for the columns of `b` side by side
-/// (row i of `b` holds their entries i). Each entry's sum is kept in registers while it
-/// runs, as [`lu_solve_columns`] keeps it.
-pub fn ldl_solve_columns<M: Square, const C: usize>(ldl: &M, b: &mut [[f64; C]]) {
-    let n = ldl.order();
-    for i in 0..n {
+/// L·x = b for the columns of `b` side by side, L the unit lower triangle of `l` (LU's and
+/// LDLᵀ's first substitution), each entry's sum kept in registers while it runs.
+fn unit_lower_solve_columns<M: Square, const C: usize>(l: &M, b: &mut [[f64; C]]) {
+    for i in 0..l.order() {
         let mut s = b[i];
         for k in 0..i {
-            let l = ldl[(i, k)];
-            for (s, z) in s.iter_mut().zip(&b[k]) {
-                *s -= l * z;
+            let lik = l[(i, k)];
+            for (s, b) in s.iter_mut().zip(&b[k]) {
+                *s -= lik * b;
             }
         }
         b[i] = s;
     }
+}
+
+/// Solves with the LDLᵀ factors [`ldl_in_place`] leaves for the columns of `b` side by side
+/// (row i of `b` holds their entries i).
+pub fn ldl_solve_columns<M: Square, const C: usize>(ldl: &M, b: &mut [[f64; C]]) {
+    let n = ldl.order();
+    unit_lower_solve_columns(ldl, b);
     for (i, row) in b.iter_mut().enumerate().take(n) {
         let d = ldl[(i, i)];
         *row = row.map(|s| s / d);
@@ -646,6 +642,37 @@ mod tests {
             for (c, column) in columns.iter().enumerate() {
                 let mut alone = column.clone();
                 lu_solve(&a, &pivots, &mut alone);
+                for i in 0..n {
+                    assert_eq!(block[i][c].to_bits(), alone[i].to_bits(), "n = {n}");
+                }
+            }
+        }
+    }
+
+    /// The same for LDLᵀ's factors: each column side by side has the bits `ldl_solve` gives
+    /// it alone, so the exact Jacobian's columns are the accelerations' own solve.
+    #[test]
+    fn ldl_columns_side_by_side_are_the_bits_of_one_at_a_time() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in 1..=20 {
+            // BᵀB + n·I: symmetric positive definite.
+            let b = DMatrix::from_fn(n, n, |_, _| uniform());
+            let mut a = b.transpose() * &b + DMatrix::identity(n, n) * n as f64;
+            ldl_in_place(&mut a).expect("positive definite");
+            let columns: Vec<Vec<f64>> =
+                (0..8).map(|_| (0..n).map(|_| uniform()).collect()).collect();
+            let mut block: Vec<[f64; 8]> =
+                (0..n).map(|i| std::array::from_fn(|c| columns[c][i])).collect();
+            ldl_solve_columns(&a, &mut block);
+            for (c, column) in columns.iter().enumerate() {
+                let mut alone = column.clone();
+                ldl_solve(&a, &mut alone);
                 for i in 0..n {
                     assert_eq!(block[i][c].to_bits(), alone[i].to_bits(), "n = {n}");
                 }
