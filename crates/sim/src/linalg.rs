@@ -503,19 +503,23 @@ pub fn size2(a: f64, b: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// Numbers uniform in [−0.5, 0.5) from `seed` (xorshift64): the same on every machine.
+    fn uniform_from(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// Symmetric systems of orders 1 to 6, eight to a call: positive definite and well
     /// conditioned, near the condition limit on either side, indefinite (LU's), singular and
     /// with NaN. Each lane solved side by side must be the bits `solve_symmetric` gives by
     /// LDLᵀ, and each lane it declines must be one `solve_symmetric` factors by LU or rejects.
     #[test]
     fn the_lanes_solve_as_solve_symmetric_does_or_decline() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_from(0x2545_f491_4f6c_dd1du64);
         let (mut side_by_side, mut declined) = (0, 0);
         for n in 1..=6 {
             for round in 0..40 {
@@ -585,13 +589,7 @@ mod tests {
     /// at every order from 1 to 40 (whole blocks of four, and one to three rows left over).
     #[test]
     fn ldl_rows_side_by_side_are_the_bits_of_one_at_a_time() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_from(0x9e37_79b9_7f4a_7c15u64);
         for n in 1..=40 {
             let b = DMatrix::from_fn(n, n, |_, _| uniform());
             let m = b.transpose() * &b + DMatrix::identity(n, n);
@@ -623,13 +621,7 @@ mod tests {
     /// Right-hand sides solved side by side give the bits of each solved alone.
     #[test]
     fn lu_columns_side_by_side_are_the_bits_of_one_at_a_time() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_from(0x2545_f491_4f6c_dd1du64);
         for n in 1..=20 {
             let mut a = DMatrix::from_fn(n, n, |_, _| uniform());
             let mut pivots = vec![0; n];
@@ -653,13 +645,7 @@ mod tests {
     /// it alone, so the exact Jacobian's columns are the accelerations' own solve.
     #[test]
     fn ldl_columns_side_by_side_are_the_bits_of_one_at_a_time() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut uniform = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uniform = uniform_from(0x9e37_79b9_7f4a_7c15u64);
         for n in 1..=20 {
             // BᵀB + n·I: symmetric positive definite.
             let b = DMatrix::from_fn(n, n, |_, _| uniform());

@@ -149,10 +149,13 @@ impl Mechanical {
             jac[i * width + n + i] = 1.0;
         }
         if self.mass_factored && self.small.is_none() {
-            // M alone past the stack's order: the columns' solves of `solve_partials`, with
-            // the same bits, read from the partials and written to the Jacobian a row of a
-            // block at a time rather than a column at a time (strided both ways, a fifth of a
-            // 32-link chain's Jacobian).
+            // M alone past the stack's order, factored by LDLᵀ as the accelerations were solved
+            // at this state: those factors serve every column (a 32-link chain's LU for them
+            // had been a quarter of its Jacobian). The partials are read and the Jacobian
+            // written a row of a block at a time rather than a column at a time (strided both
+            // ways, a fifth of it). Smaller systems keep `solve_partials`' LU, whose columns
+            // are the bits `linear`'s solves give (a linearization along a run at an
+            // equilibrium is the one about it, exactly).
             let mut block = std::mem::take(&mut self.kept_factors.block);
             block.resize(n, [0.0; COLUMNS]);
             for first in (0..width).step_by(COLUMNS) {
@@ -456,29 +459,22 @@ impl Mechanical {
             baumgarte,
             stabilisation,
             layout,
-            mass_factored,
-            small,
-            system,
             ..
         } = self;
         let Layout { coordinates: n, multipliers: m, .. } = *layout;
-        // M alone past the stack's order, factored by LDLᵀ as the accelerations were solved at
-        // this state: those factors serve every column (a 32-link chain's LU for them had been a
-        // quarter of its Jacobian). Smaller systems keep the LU below, whose columns are the
-        // bits `linear`'s solves give (a linearization along a run at an equilibrium is the
-        // one about it, exactly).
-        let mass = (*mass_factored && small.is_none()).then_some(&*system);
-        // Else one LU serves every column: the accelerations' own where they were solved by LU
-        // on the heap at this state, else one made here. Only the kept rows are factored: an
-        // open contact's multiplier is 0, and its identity row would only make the
-        // factorization larger (a rimless wheel on one spoke: five rows rather than nineteen).
-        if mass.is_none() && !factors.valid {
+        // One LU serves every column: the accelerations' own where they were solved by LU on
+        // the heap at this state, else one made here (the exact Jacobian of M alone past the
+        // stack's order solves with the accelerations' LDLᵀ factors instead, in
+        // `exact_jacobian`). Only the kept rows are factored: an open contact's multiplier is
+        // 0, and its identity row would only make the factorization larger (a rimless wheel on
+        // one spoke: five rows rather than nineteen).
+        if !factors.valid {
             // A slipping contact's column bent by its friction, as the solve's is.
             factors.load(dyn_out, n, kept, bends);
             factors.factor(n)?;
             factors.valid = true;
         }
-        let order = if mass.is_some() { n } else { factors.order(n) };
+        let order = factors.order(n);
         let alpha = *baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
         // the force −J_iᵀ·f_i·λ adds −J_iᵀ·λ·∂f_i/∂x to ∂r/∂x, with ∂f_i/∂γ_j =
@@ -501,7 +497,7 @@ impl Mechanical {
             std::mem::take(&mut factors.block),
             std::mem::take(&mut factors.column),
         );
-        let rows: &[usize] = if mass.is_some() { &[] } else { factors.rows() };
+        let rows = factors.rows();
         // Every entry of these is written before it is read, column by column: they are
         // resized, not cleared.
         reduced.resize(order, 0.0);
@@ -541,10 +537,7 @@ impl Mechanical {
             for row in block.iter_mut() {
                 row[columns..].fill(0.0);
             }
-            match mass {
-                Some(ldl) => linalg::ldl_solve_columns(ldl, &mut block),
-                None => factors.solve_columns(n, &mut block),
-            }
+            factors.solve_columns(n, &mut block);
             for (c, k) in (first..first + columns).enumerate() {
                 for (i, v) in column[..n].iter_mut().enumerate() {
                     *v = block[i][c];
