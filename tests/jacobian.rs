@@ -198,11 +198,12 @@ fn every_example_has_the_jacobian_central_differences_give() {
     );
 }
 
-/// Past the stack's order (eight), M alone is solved by LDLᵀ and the Jacobian's columns solve
-/// with those factors rather than an LU of their own: generated chains of 10 and 13
-/// coordinates, with a spring and a damper so that f depends on every kind of entry, against
-/// central differences; and the same bits whatever was solved before (the factors are the
-/// state's own, not another state's left behind).
+/// Past the stack's order (eight), the Jacobian's columns solve with what the accelerations
+/// left: the LDLᵀ factors of M on the dense route, the sweep's factors on the recursive one
+/// (O(n) a column, M never formed). Generated chains of 10 and 13 coordinates, with a spring
+/// and a damper so that f depends on every kind of entry, on both routes, against central
+/// differences; and the same bits whatever was solved before (the factors are the state's
+/// own, not another state's left behind).
 #[test]
 fn past_the_stack_the_jacobian_solves_with_the_accelerations_factors() {
     let spring = "param k = 3 N/m, c = 1/2 N*s/m, l0 = 1/4 m\n\
@@ -213,35 +214,45 @@ fn past_the_stack_the_jacobian_solves_with_the_accelerations_factors() {
         let source = lang::generate::n_link(family, n) + spring;
         let mut prepared = prepare(&source, &[], engine::Options::default()).expect("prepares");
         assert!(prepared.layout.coordinates > 8 && prepared.layout.multipliers == 0);
+        let recursive = prepared.recursive().expect("lowers").expect("a chain");
         let states = verify::admissible_states(&mut prepared.derivation, 4, 0x7ac0_b1a3);
-        let mut tally = Tally::default();
-        let mut firsts = Vec::new();
-        for values in &states {
-            let mut at = problems(&mut prepared, values);
-            let worst = compare(&mut at.mechanical, at.t, &at.y).expect("regular");
-            tally.worst = tally.worst.max(worst);
-            assert!(worst < AGREEMENT, "{n} coordinates: off by {worst:.1e}");
-            let d = at.y.len();
-            let mut first = vec![0.0; d * d];
-            assert!(at.mechanical.jacobian(at.t, &at.y, &mut first).expect("regular"));
-            let parameters = at.mechanical.parameters().to_vec();
-            firsts.push((at.t, at.y, parameters, first));
-        }
-        // One problem through every state (and its parameters) in turn, with other states'
-        // solves between.
-        let mut problem = problems(&mut prepared, &states[0]).mechanical;
-        let d = firsts[0].1.len();
-        let (mut jac, mut dy) = (vec![0.0; d * d], vec![0.0; d]);
-        for (k, (t, y, parameters, first)) in firsts.iter().enumerate() {
-            let (other_t, other_y, _, _) = &firsts[(k + 1) % firsts.len()];
-            problem.set_parameters(parameters);
-            problem.rhs(*other_t, other_y, &mut dy).expect("regular");
-            if k % 2 == 0 {
-                problem.rhs(*t, y, &mut dy).expect("regular");
+        for route in ["dense", "recursive"] {
+            let on_route = |prepared: &mut Prepared, values: &[f64]| {
+                let at = problems(prepared, values);
+                let mechanical = match route {
+                    "dense" => at.mechanical,
+                    _ => at.mechanical.with_chain(recursive.clone()),
+                };
+                (mechanical, at.t, at.y)
+            };
+            let mut firsts = Vec::new();
+            for values in &states {
+                let (mut mechanical, t, y) = on_route(&mut prepared, values);
+                assert_eq!(mechanical.recursive(), route == "recursive");
+                let worst = compare(&mut mechanical, t, &y).expect("regular");
+                assert!(worst < AGREEMENT, "{n} coordinates, {route}: off by {worst:.1e}");
+                let d = y.len();
+                let mut first = vec![0.0; d * d];
+                assert!(mechanical.jacobian(t, &y, &mut first).expect("regular"));
+                let parameters = mechanical.parameters().to_vec();
+                firsts.push((t, y, parameters, first));
             }
-            assert!(problem.jacobian(*t, y, &mut jac).expect("regular"));
-            let same = jac.iter().zip(first).all(|(a, b)| a.to_bits() == b.to_bits());
-            assert!(same, "{n} coordinates, state {k}: the Jacobian moved with what came before");
+            // One problem through every state (and its parameters) in turn, with other states'
+            // solves between.
+            let mut problem = on_route(&mut prepared, &states[0]).0;
+            let d = firsts[0].1.len();
+            let (mut jac, mut dy) = (vec![0.0; d * d], vec![0.0; d]);
+            for (k, (t, y, parameters, first)) in firsts.iter().enumerate() {
+                let (other_t, other_y, _, _) = &firsts[(k + 1) % firsts.len()];
+                problem.set_parameters(parameters);
+                problem.rhs(*other_t, other_y, &mut dy).expect("regular");
+                if k % 2 == 0 {
+                    problem.rhs(*t, y, &mut dy).expect("regular");
+                }
+                assert!(problem.jacobian(*t, y, &mut jac).expect("regular"));
+                let same = jac.iter().zip(first).all(|(a, b)| a.to_bits() == b.to_bits());
+                assert!(same, "{n} coordinates, {route}, state {k}: the Jacobian moved");
+            }
         }
     }
 }

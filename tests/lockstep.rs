@@ -64,7 +64,7 @@ fn every_example_runs_the_same_bits_in_lockstep_as_alone() {
         let Ok(y0) = prepared.initial_state(&parameters, &[]) else { continue };
         let mut problem = lagrange_tests::mechanical(&mut prepared, &parameters);
         if let Some(program) = prepared.recursive().expect("lowers") {
-            problem = problem.with_chain(numeric::Tape::new(program));
+            problem = problem.with_chain(program);
         }
         assert_eq!(problem.recursive(), rel.starts_with("generated/"), "{rel}");
         // The constraints' drift |Φ| is observed; watch it cross a small level.

@@ -23,8 +23,7 @@ fn both(
     let y: Vec<f64> = d.coords.iter().chain(&d.rates).map(|s| values[s.index()]).collect();
     let t = values[d.model.time.index()];
     let dense = lagrange_tests::mechanical(prepared, &parameters);
-    let recursive =
-        lagrange_tests::mechanical(prepared, &parameters).with_chain(Tape::new(program));
+    let recursive = lagrange_tests::mechanical(prepared, &parameters).with_chain(program);
     assert!(recursive.recursive());
     Some((dense, recursive, t, y))
 }
@@ -152,9 +151,30 @@ fn many_states_at_once_give_each_state_s_bits() {
     }
 }
 
-/// The exact Jacobian on the recursive route is the dense route's, bit for bit, whether or not
-/// the sweep solved at the same state just before (the Jacobian solves with M, and must not
-/// take the sweep's q̈ for M's outputs).
+/// How far the two routes' Jacobians may be apart, relative to the largest entry of ∂q̈: the
+/// recursive route solves its columns by the sweep, the dense one by M's factors.
+const JACOBIANS_AGREE: f64 = 1e-9;
+
+/// The largest difference of the two routes' exact Jacobians at (t, y), relative to the
+/// largest entry of ∂q̈/∂(q, q̇).
+fn jacobian_difference(
+    dense: &mut Mechanical,
+    recursive: &mut Mechanical,
+    t: f64,
+    y: &[f64],
+) -> f64 {
+    let width = y.len();
+    let (mut a, mut b) = (vec![0.0; width * width], vec![0.0; width * width]);
+    assert!(dense.jacobian(t, y, &mut a).expect("regular"));
+    assert!(recursive.jacobian(t, y, &mut b).expect("regular"));
+    let lower = width / 2 * width..;
+    let scale = a[lower.clone()].iter().fold(1e-300_f64, |m, x| m.max(x.abs()));
+    a[lower.clone()].iter().zip(&b[lower]).map(|(u, v)| (u - v).abs() / scale).fold(0.0, f64::max)
+}
+
+/// The exact Jacobian on the recursive route (its columns solved by the sweep past the
+/// stack's order) is the dense route's, whether or not the sweep solved at the same state just
+/// before (the Jacobian must not take another state's factors).
 #[test]
 fn the_jacobian_on_the_recursive_route_is_the_dense_one() {
     let mut prepared =
@@ -167,16 +187,24 @@ fn the_jacobian_on_the_recursive_route_is_the_dense_one() {
         .iter()
         .map(|v| d.coords.iter().chain(&d.rates).map(|s| v[s.index()]).collect())
         .collect();
-    let (mut a, mut b) = (vec![0.0; width * width], vec![0.0; width * width]);
     let mut dy = vec![0.0; width];
+    let mut firsts = Vec::new();
     for (k, y) in ys.iter().enumerate() {
         if k % 2 == 0 {
             recursive.rhs(t, y, &mut dy).expect("regular");
         }
-        assert!(dense.jacobian(t, y, &mut a).expect("regular"));
-        assert!(recursive.jacobian(t, y, &mut b).expect("regular"));
-        let same = a.iter().zip(&b).all(|(u, v)| u.to_bits() == v.to_bits());
-        assert!(same, "state {k}: the Jacobians differ");
+        let off = jacobian_difference(&mut dense, &mut recursive, t, y);
+        assert!(off < JACOBIANS_AGREE, "state {k}: the Jacobians differ by {off:.1e}");
+        let mut first = vec![0.0; width * width];
+        assert!(recursive.jacobian(t, y, &mut first).expect("regular"));
+        firsts.push(first);
+    }
+    let mut jac = vec![0.0; width * width];
+    for (k, y) in ys.iter().enumerate().rev() {
+        recursive.rhs(t, &ys[(k + 1) % ys.len()], &mut dy).expect("regular");
+        assert!(recursive.jacobian(t, y, &mut jac).expect("regular"));
+        let same = jac.iter().zip(&firsts[k]).all(|(u, v)| u.to_bits() == v.to_bits());
+        assert!(same, "state {k}: the Jacobian moved with what came before");
     }
 }
 
@@ -254,15 +282,19 @@ fn branching_trees_give_the_dense_accelerations() {
                 off < AGREEMENT,
                 "tree {tree} (branching {branching}): q̈ off by {off:.1e}\n{scene}"
             );
+            let off = jacobian_difference(&mut dense, &mut recursive, t, &y);
+            assert!(
+                off < JACOBIANS_AGREE,
+                "tree {tree} (branching {branching}): the Jacobian off by {off:.1e}\n{scene}"
+            );
         }
     }
     assert!(branched >= 3, "only {branched} of the trees branch");
 }
 
-/// Trees in space: each rod turns by its own azimuth and tilt (two coordinates a node, so the
-/// sweep factors 2×2 blocks) and hangs from the centre of a random earlier one.
-#[test]
-fn branching_trees_in_space_give_the_dense_accelerations() {
+/// Six rods in space, each turning by its own azimuth and tilt and hanging from the centre of
+/// an earlier one: twelve coordinates, nodes of two, several children a node.
+fn tree_in_space() -> String {
     let parents = [None, Some(0), Some(0), Some(1), Some(1), Some(2)];
     let mut scene = String::from("param g = 9.81\n");
     for (i, parent) in parents.iter().enumerate() {
@@ -279,6 +311,14 @@ fn branching_trees_in_space_give_the_dense_accelerations() {
         ));
     }
     scene.push_str("gravity g\n");
+    scene
+}
+
+/// Trees in space: each rod turns by its own azimuth and tilt (two coordinates a node, so the
+/// sweep factors 2×2 blocks) and hangs from the centre of a random earlier one.
+#[test]
+fn branching_trees_in_space_give_the_dense_accelerations() {
+    let scene = tree_in_space();
     let mut prepared =
         prepare(&scene, &[], engine::Options::default()).unwrap_or_else(|e| panic!("{e}\n{scene}"));
     assert!(prepared.recursive().expect("lowers").is_some(), "12 coordinates: {scene}");
@@ -287,5 +327,52 @@ fn branching_trees_in_space_give_the_dense_accelerations() {
             both(&mut prepared, &values).unwrap_or_else(|| panic!("no form\n{scene}"));
         let off = difference(&mut dense, &mut recursive, t, &y);
         assert!(off < AGREEMENT, "q̈ off by {off:.1e}\n{scene}");
+        let off = jacobian_difference(&mut dense, &mut recursive, t, &y);
+        assert!(off < JACOBIANS_AGREE, "the Jacobian off by {off:.1e}\n{scene}");
+    }
+}
+
+/// The sweep's factors solve M·x = b for any b ([`sim::Chain::solve_columns`], what the exact
+/// Jacobian's columns solve with): M's own columns give the identity and f gives q̈, at random
+/// states of a chain and of a tree in space (nodes of two coordinates, 3×3 bases).
+#[test]
+fn the_sweep_s_factors_solve_with_m() {
+    for scene in [n_link(Family::Pendulum, 7), tree_in_space()] {
+        let mut prepared = prepare(&scene, &[], engine::Options::default()).expect("prepares");
+        let recursive = prepared.recursive_from(1).expect("lowers").expect("a form");
+        let exprs = prepared.dynamics_exprs();
+        let dynamics = prepared.lower(&prepared.dynamics_inputs(), &exprs).expect("lowers");
+        let (mut dense, mut factored) = (Tape::new(dynamics), Tape::new(recursive.factored));
+        let n = prepared.layout.coordinates;
+        assert!(n < 16, "M and f fit one block");
+        for values in verify::admissible_states(&mut prepared.derivation, 3, 0xc4a1_0007) {
+            let d = &prepared.derivation;
+            let inputs: Vec<f64> =
+                prepared.dynamics_inputs().iter().map(|s| values[s.index()]).collect();
+            dense.inputs_mut().copy_from_slice(&inputs);
+            factored.inputs_mut().copy_from_slice(&inputs);
+            let (mut m_f, mut out) = (vec![0.0; exprs.len()], vec![0.0; factored.outputs()]);
+            dense.run(&mut m_f);
+            factored.run(&mut out);
+            // b: M's columns (M is stored by columns), then f.
+            let mut block = vec![[0.0; 16]; n];
+            for (i, row) in block.iter_mut().enumerate() {
+                for k in 0..n {
+                    row[k] = m_f[k * n + i];
+                }
+                row[n] = m_f[n * n + i];
+            }
+            let mut work = Vec::new();
+            recursive.chain.solve_columns(&out[n..], &mut block, &mut work);
+            let scale = out[..n].iter().fold(1.0_f64, |m, a| m.max(a.abs()));
+            for (i, row) in block.iter().enumerate() {
+                for (k, x) in row[..n].iter().enumerate() {
+                    let expected = if i == k { 1.0 } else { 0.0 };
+                    assert!((x - expected).abs() < 1e-12, "{:?}: M⁻¹·M [{i}][{k}] = {x}", d.coords);
+                }
+                let off = (row[n] - out[i]).abs() / scale;
+                assert!(off < 1e-12, "M⁻¹·f off q̈ by {off:.1e} at coordinate {i}");
+            }
+        }
     }
 }

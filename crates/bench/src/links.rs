@@ -176,10 +176,10 @@ fn measure(n: usize) -> Row {
     let began = Instant::now();
     let program = prepared.recursive_from(1).expect("lowers").expect("a chain");
     let found = began.elapsed().as_secs_f64();
-    let recursive_ops = program.op_counts().total();
+    let recursive_ops = program.accelerations.op_counts().total();
     let mut swept =
         Mechanical::new(layout, Tape::new(dynamics), Tape::new(observation), parameters)
-            .with_chain(Tape::new(program));
+            .with_chain(program);
     for y in ys.iter().cycle().take(WARM) {
         swept.rhs(0.0, y, &mut dy).expect("regular");
     }

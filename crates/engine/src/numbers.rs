@@ -302,15 +302,15 @@ impl Prepared {
         v
     }
 
-    /// The program of q̈ by the recursive form's sweep (inputs those of the dynamics program),
-    /// where the scene has the form and at least [`RECURSIVE_FROM`] coordinates: below that
-    /// the dense route is as fast, and keeps the bits small scenes have always had.
-    pub fn recursive(&mut self) -> Result<Option<Program>, Error> {
+    /// The programs of q̈ by the recursive form's sweep (inputs those of the dynamics
+    /// program), where the scene has the form and at least [`RECURSIVE_FROM`] coordinates:
+    /// below that the dense route is as fast, and keeps the bits small scenes have always had.
+    pub fn recursive(&mut self) -> Result<Option<sim::Recursive>, Error> {
         self.recursive_from(RECURSIVE_FROM)
     }
 
     /// [`Prepared::recursive`] from `fewest` coordinates on (tests hold small scenes to it).
-    pub fn recursive_from(&mut self, fewest: usize) -> Result<Option<Program>, Error> {
+    pub fn recursive_from(&mut self, fewest: usize) -> Result<Option<sim::Recursive>, Error> {
         // A law driving an input may move a position in time, which the form was judged
         // without.
         if self.derivation.coords.len() < fewest || !self.driven.is_empty() {
@@ -321,7 +321,7 @@ impl Prepared {
             form.nodes.iter().map(|node| (node.parent, node.coordinates.clone())).collect();
         let chain = sim::Chain::new(form.dimension, &nodes);
         let terms = self.lower(&self.dynamics_inputs(), &form.outputs())?;
-        Ok(Some(chain.accelerations(terms)))
+        Ok(Some(chain.lower(terms)))
     }
 
     /// How the integrator stabilises each kept constraint, in slot order.

@@ -221,8 +221,8 @@ impl Ensemble {
         )
         .with_kinds(prepared.stabilisation())
         .with_signals(signals);
-        if let Some(program) = prepared.recursive()? {
-            mechanical = mechanical.with_chain(numeric::Tape::new(program));
+        if let Some(recursive) = prepared.recursive()? {
+            mechanical = mechanical.with_chain(recursive);
         }
         if let Some(hold) = hold {
             mechanical = mechanical.with_hold(hold);

@@ -272,8 +272,8 @@ impl RhsInner {
             parameters,
         )
         .with_kinds(prepared.stabilisation());
-        if let Some(program) = prepared.recursive().map_err(|e| engine_error(&e, path))? {
-            mechanical = mechanical.with_chain(Tape::new(program));
+        if let Some(recursive) = prepared.recursive().map_err(|e| engine_error(&e, path))? {
+            mechanical = mechanical.with_chain(recursive);
         }
         let dim = mechanical.dim();
         Ok(RhsInner {

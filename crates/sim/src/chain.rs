@@ -63,9 +63,44 @@ impl Chain {
         self.nodes.iter().map(|(_, own)| own.len()).sum()
     }
 
+    /// How many values the factored program gives after q̈ ([`Recursive::factored`]).
+    pub fn factor_outputs(&self) -> usize {
+        (0..self.nodes.len()).map(|x| self.factor_terms(x)).sum()
+    }
+
+    /// How many of the sweep's factors node x has: 1/Δ (k), L below its diagonal
+    /// (k·(k − 1)/2, row by row), D⁻¹·Uᵀ (k×d), then B (d × the parent's k) unless it is a
+    /// root.
+    fn factor_terms(&self, x: usize) -> usize {
+        let (d, k) = (self.dimension, self.nodes[x].1.len());
+        let base = self.nodes[x].0.map_or(0, |p| d * self.nodes[p].1.len());
+        k + k * (k - 1) / 2 + k * d + base
+    }
+
+    /// The sweep lowered after `terms`, the recursive form's program: q̈'s program, and the
+    /// same with the sweep's factors after q̈.
+    pub fn lower(self, terms: Program) -> Recursive {
+        let (builder, accelerations, factors) = self.sweep(terms);
+        let mut both = accelerations.clone();
+        both.extend(factors);
+        let copy = Builder { program: builder.program.clone(), ..builder };
+        Recursive {
+            accelerations: copy.finish(&accelerations),
+            factored: builder.finish(&both),
+            chain: self,
+        }
+    }
+
     /// The program of q̈ (one output per coordinate, in the coordinates' order): `terms`, the
     /// recursive form's program, followed by the sweep.
     pub fn accelerations(&self, terms: Program) -> Program {
+        let (builder, accelerations, _) = self.sweep(terms);
+        builder.finish(&accelerations)
+    }
+
+    /// The sweep's instructions after `terms`: the builder, q̈ and the factors in the layout
+    /// of [`Chain::factor_outputs`].
+    fn sweep(&self, terms: Program) -> (Builder, Vec<Value>, Vec<Value>) {
         assert_eq!(terms.outputs.len(), self.outputs(), "the recursive form's program");
         let mut b = Builder::new(terms);
         let (d, count) = (self.dimension, self.nodes.len());
@@ -107,6 +142,7 @@ impl Chain {
         };
         // From the leaves: D⁻¹·Uᵀ (k×d) and D⁻¹·u per node, for the pass back.
         let mut solved: Vec<(Vec<Value>, Vec<Value>)> = vec![(Vec::new(), Vec::new()); count];
+        let mut factor_values: Vec<Vec<Value>> = vec![Vec::new(); count];
         for x in (0..count).rev() {
             let k = self.nodes[x].1.len();
             let Parts { inertia, coupling, joint, bias, force } = parts[x].clone();
@@ -119,6 +155,11 @@ impl Chain {
                 }
             }
             let free = b.ldl_solve(&factors, k, force);
+            let mut own_factors = factors.reciprocals.clone();
+            for i in 0..k {
+                own_factors.extend((0..i).map(|m| factors.lower[i * k + m]));
+            }
+            own_factors.extend(&y);
             let mut articulated = inertia;
             let mut pushed = bias;
             for i in 0..d {
@@ -134,9 +175,14 @@ impl Chain {
                 pushed[i] = b.add(pushed[i], sum);
             }
             solved[x] = (y, free);
-            let Some(p) = self.nodes[x].0 else { continue };
+            let Some(p) = self.nodes[x].0 else {
+                factor_values[x] = own_factors;
+                continue;
+            };
             let kp = self.nodes[p].1.len();
             let (columns, base_bias) = base(&b, x);
+            own_factors.extend(&columns);
+            factor_values[x] = own_factors;
             // z = Iᴬ·c + p: the force the subtree needs beyond Iᴬ times the parent's terms.
             let z: Vec<Value> = (0..d)
                 .map(|i| {
@@ -208,7 +254,135 @@ impl Chain {
             }
             base_accelerations[x] = a;
         }
-        b.finish(&accelerations)
+        (b, accelerations, factor_values.concat())
+    }
+}
+
+/// The recursive form lowered ([`Chain::lower`]).
+#[derive(Clone)]
+pub struct Recursive {
+    /// q̈, one output per coordinate in the coordinates' order.
+    pub accelerations: Program,
+    /// The same q̈, then the sweep's factors ([`Chain::factor_outputs`]), with which
+    /// [`Chain::solve_columns`] solves M·x = b for other right-hand sides.
+    pub factored: Program,
+    pub chain: Chain,
+}
+
+impl Chain {
+    /// Solves M·x = b for `W` right-hand sides side by side (`block`, a row per coordinate, b
+    /// in and x out) with the sweep's factors at a state (`factors`, the factored program's
+    /// outputs after q̈), in O(n) per column where the dense route's solve is O(n²) and needs M
+    /// formed and factored first. The equations are linear in q̈, the bias terms and the
+    /// forces, so the sweep with no bias and b for u solves M·x = b: from the leaves each node
+    /// takes D⁻¹ of its rows (its children's forces already taken out) and passes the force
+    /// its subtree needs, z = U·D⁻¹·u plus its children's, to its parent; from the roots,
+    /// x = D⁻¹·u − D⁻¹·Uᵀ·a with a = a(parent) + B·x(parent). `work` is scratch.
+    pub fn solve_columns<const W: usize>(
+        &self,
+        factors: &[f64],
+        block: &mut [[f64; W]],
+        work: &mut Vec<[f64; W]>,
+    ) {
+        let (d, count) = (self.dimension, self.nodes.len());
+        assert_eq!(factors.len(), self.factor_outputs(), "the sweep's factors");
+        assert_eq!(block.len(), self.coordinates(), "a row per coordinate");
+        work.clear();
+        work.resize(2 * d * count, [0.0; W]);
+        let (pushed, bases) = work.split_at_mut(d * count);
+        let mut starts = Vec::with_capacity(count);
+        let mut at = 0;
+        for x in 0..count {
+            starts.push(at);
+            at += self.factor_terms(x);
+        }
+        let parts = |x: usize| {
+            let k = self.nodes[x].1.len();
+            let f = &factors[starts[x]..starts[x] + self.factor_terms(x)];
+            let (reciprocals, rest) = f.split_at(k);
+            let (lower, rest) = rest.split_at(k * (k - 1) / 2);
+            let (through, columns) = rest.split_at(k * d);
+            (reciprocals, lower, through, columns)
+        };
+        for x in (0..count).rev() {
+            let (parent, own) = &self.nodes[x];
+            let k = own.len();
+            let (reciprocals, lower, through, columns) = parts(x);
+            // z = the children's + U·D⁻¹·u, U·D⁻¹ being (D⁻¹·Uᵀ)ᵀ: from u, before D⁻¹.
+            for i in 0..d {
+                let mut z = pushed[x * d + i];
+                for j in 0..k {
+                    let (t, force) = (through[j * d + i], block[own[j]]);
+                    for (v, f) in z.iter_mut().zip(force) {
+                        *v += t * f;
+                    }
+                }
+                pushed[x * d + i] = z;
+            }
+            // D⁻¹ of the node's rows: L, Δ, then Lᵀ.
+            for i in 0..k {
+                for m in 0..i {
+                    let (l, from) = (lower[i * (i - 1) / 2 + m], block[own[m]]);
+                    for (v, b) in block[own[i]].iter_mut().zip(from) {
+                        *v -= l * b;
+                    }
+                }
+            }
+            for (i, r) in reciprocals.iter().enumerate() {
+                for v in block[own[i]].iter_mut() {
+                    *v *= r;
+                }
+            }
+            for i in (0..k).rev() {
+                for m in i + 1..k {
+                    let (l, from) = (lower[m * (m - 1) / 2 + i], block[own[m]]);
+                    for (v, b) in block[own[i]].iter_mut().zip(from) {
+                        *v -= l * b;
+                    }
+                }
+            }
+            let Some(p) = *parent else { continue };
+            let parent_own = &self.nodes[p].1;
+            let kp = parent_own.len();
+            for i in 0..d {
+                let z = pushed[x * d + i];
+                for (v, f) in pushed[p * d + i].iter_mut().zip(z) {
+                    *v += f;
+                }
+                for (m, q) in parent_own.iter().enumerate() {
+                    let c = columns[i * kp + m];
+                    for (v, f) in block[*q].iter_mut().zip(z) {
+                        *v -= c * f;
+                    }
+                }
+            }
+        }
+        for x in 0..count {
+            let (parent, own) = &self.nodes[x];
+            let (_, _, through, columns) = parts(x);
+            if let Some(p) = *parent {
+                let parent_own = &self.nodes[p].1;
+                let kp = parent_own.len();
+                for i in 0..d {
+                    let mut a = bases[p * d + i];
+                    for (j, q) in parent_own.iter().enumerate() {
+                        let c = columns[i * kp + j];
+                        for (v, f) in a.iter_mut().zip(block[*q]) {
+                            *v += c * f;
+                        }
+                    }
+                    bases[x * d + i] = a;
+                }
+            }
+            for (j, q) in own.iter().enumerate() {
+                for i in 0..d {
+                    let (t, a) = (through[j * d + i], bases[x * d + i]);
+                    for (v, f) in block[*q].iter_mut().zip(a) {
+                        *v -= t * f;
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -48,7 +48,7 @@ mod spectrum;
 mod stepper;
 pub mod variational;
 
-pub use chain::Chain;
+pub use chain::{Chain, Recursive};
 pub use constrained::Constrained;
 pub use contact::{Contact, ModeChange, ModeEvent};
 pub use erk::{dop853_tableau, Dop853Tableau};

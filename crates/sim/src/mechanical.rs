@@ -161,6 +161,8 @@ pub struct Mechanical {
     chain: Option<Tape>,
     /// That program over many states at once, made on the first [`Mechanical::rhs_many`].
     chain_many: Option<numeric::BatchTape>,
+    /// The same sweep with its factors among the outputs, for the exact Jacobian's columns.
+    chain_factored: Option<ChainFactored>,
     /// Whether `dyn_out` holds the dense program's outputs at the inputs `solved_at` compares
     /// (the recursive form leaves it behind).
     dense: bool,
@@ -169,6 +171,17 @@ pub struct Mechanical {
     /// with: true only from that solve (no multipliers, M positive definite) until the next
     /// evaluation of the dynamics program.
     mass_factored: bool,
+}
+
+/// The recursive form's sweep with its factors among its outputs ([`crate::Recursive`]).
+#[derive(Clone)]
+struct ChainFactored {
+    chain: crate::Chain,
+    tape: Tape,
+    /// Its outputs at the last state: q̈, then the factors.
+    out: Vec<f64>,
+    /// Scratch for [`crate::Chain::solve_columns`].
+    work: Vec<[f64; jacobian::COLUMNS]>,
 }
 
 /// A slipping contact's friction in the augmented system: the column of multiplier `normal`
@@ -251,26 +264,36 @@ impl Mechanical {
             arming: None,
             chain: None,
             chain_many: None,
+            chain_factored: None,
             dense: false,
             mass_factored: false,
         }
     }
 
-    /// Solves for q̈ by the recursive form (`accelerations`, [`crate::Chain::accelerations`]'s
-    /// program, which takes the dynamics program's inputs) rather than by factoring M: O(n)
-    /// rather than O(n³) on a long chain. The dense program still serves what needs M (the
-    /// exact Jacobian, the sensitivities) and says why where the sweep gives no number.
-    /// Ignored where the problem has multipliers.
-    pub fn with_chain(mut self, accelerations: Tape) -> Self {
-        assert_eq!(accelerations.inputs(), self.layout.dynamics_inputs());
-        assert_eq!(accelerations.outputs(), self.layout.coordinates);
+    /// Solves for q̈ by the recursive form (`recursive`, [`crate::Chain::lower`]'s programs,
+    /// which take the dynamics program's inputs) rather than by factoring M: O(n) rather than
+    /// O(n³) on a long chain. The exact Jacobian's columns solve with the sweep's factors. The
+    /// dense program still serves what needs M (the sensitivities, a linearization) and says
+    /// why where the sweep gives no number. Ignored where the problem has multipliers.
+    pub fn with_chain(mut self, recursive: crate::Recursive) -> Self {
+        let crate::Recursive { accelerations, factored, chain } = recursive;
+        let inputs = self.layout.dynamics_inputs();
+        assert_eq!(accelerations.inputs, inputs);
+        assert_eq!(accelerations.outputs.len(), self.layout.coordinates);
+        assert_eq!(factored.outputs.len(), self.layout.coordinates + chain.factor_outputs());
         if self.layout.multipliers > 0 {
             return self;
         }
         let state = 1 + 2 * self.layout.coordinates;
-        let mut program = accelerations.with_fixed_inputs(state..self.layout.dynamics_inputs());
-        program.inputs_mut()[state..].copy_from_slice(&self.parameters);
-        self.chain = Some(program);
+        let fixed = |program| {
+            let mut tape = Tape::new(program).with_fixed_inputs(state..inputs);
+            tape.inputs_mut()[state..].copy_from_slice(&self.parameters);
+            tape
+        };
+        let (accelerations, factored) = (fixed(accelerations), fixed(factored));
+        let out = vec![0.0; factored.outputs()];
+        self.chain = Some(accelerations);
+        self.chain_factored = Some(ChainFactored { chain, tape: factored, out, work: Vec::new() });
         self.solved = None;
         self
     }
@@ -295,6 +318,9 @@ impl Mechanical {
         self.dynamics.inputs_mut()[state..state + values.len()].copy_from_slice(values);
         if let Some(program) = &mut self.chain {
             program.inputs_mut()[state..state + values.len()].copy_from_slice(values);
+        }
+        if let Some(factored) = &mut self.chain_factored {
+            factored.tape.inputs_mut()[state..state + values.len()].copy_from_slice(values);
         }
         self.solved = None;
     }

@@ -26,8 +26,8 @@ pub struct Compiled {
     outputs: Vec<String>,
     columns: Columns,
     dynamics: Program,
-    /// The program of q̈ by the recursive form, where q̈ is solved by it.
-    recursive: Option<Program>,
+    /// The programs of q̈ by the recursive form, where q̈ is solved by it.
+    recursive: Option<sim::Recursive>,
     /// The observations, lowered once; `None` with an animation, whose figures' expressions
     /// take the run's parameter values and are lowered with each run.
     observation: Option<Program>,
@@ -156,8 +156,8 @@ impl Compiled {
         )
         .with_kinds(prepared.stabilisation())
         .with_signals(signals);
-        if let Some(program) = &self.recursive {
-            mechanical = mechanical.with_chain(Tape::new(program.clone()));
+        if let Some(recursive) = &self.recursive {
+            mechanical = mechanical.with_chain(recursive.clone());
         }
         if let Some(hold) = hold {
             mechanical = mechanical.with_hold(hold);

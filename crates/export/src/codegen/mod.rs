@@ -103,9 +103,9 @@ impl Equations {
             ("mass_matrix".to_string(), prepared.lower(&dyn_inputs, &dynamics[..n * n])?),
             ("forcing".to_string(), prepared.lower(&dyn_inputs, &dynamics[n * n..n * n + n])?),
         ];
-        if let Some(program) = prepared.recursive()? {
+        if let Some(recursive) = prepared.recursive()? {
             // q̈ by the recursive form's sweep, O(n), which `rhs` takes where it gives numbers.
-            programs.push(("accelerations".to_string(), program));
+            programs.push(("accelerations".to_string(), recursive.accelerations));
         }
         if m > 0 {
             // J (m×n row-major) then γ, Φ, Φ̇ per constraint, as the dynamics layout has them.

@@ -4,7 +4,7 @@
 //! the accelerations were solved with, and a solve per state component, give the exact
 //! ∂q̈/∂(q, q̇) with no step size to choose.
 
-use super::{Canonical, Layout, Mechanical, Stabilisation};
+use super::{Canonical, ChainFactored, Layout, Mechanical, Stabilisation};
 use numeric::Tape;
 
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
@@ -134,6 +134,12 @@ impl Mechanical {
         if self.partials.is_none() {
             return Ok(false);
         }
+        if self.small.is_none()
+            && self.chain_factored.is_some()
+            && self.chain_jacobian(t, y, jac)?
+        {
+            return Ok(true);
+        }
         let n = self.layout.coordinates;
         self.dense_accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
@@ -187,6 +193,66 @@ impl Mechanical {
         self.partials_out = out;
         self.solution = solution;
         solved?;
+        check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+        Ok(true)
+    }
+
+    /// [`Mechanical::exact_jacobian`] on the recursive route, past the stack's order: q̈ and
+    /// the sweep's factors from one run of the factored program, then −M⁻¹ times the partials
+    /// solved by the sweep a block of columns at a time, O(n) a column. The dense route had
+    /// formed M (n² entries), factored it (n³/6) and solved each column in O(n²): at 32 links
+    /// most of the Jacobian. False where the sweep gives no number: the dense route then
+    /// solves, or says why it cannot.
+    fn chain_jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        let n = self.layout.coordinates;
+        self.solved = None;
+        self.mass_factored = false;
+        self.follow_signals(t);
+        // The dense program's inputs say where `solution` was solved (`solved_at`).
+        super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
+        self.dense = false;
+        let mut factored = self.chain_factored.take().expect("a recursive form");
+        super::fill_inputs(factored.tape.inputs_mut(), t, y, &self.parameters);
+        factored.tape.run(&mut factored.out);
+        if !factored.out.iter().all(|v| v.is_finite()) {
+            self.chain_factored = Some(factored);
+            return Ok(false);
+        }
+        self.solution[..n].copy_from_slice(&factored.out[..n]);
+        self.solved = Some(self.baumgarte.to_bits());
+        let solution = std::mem::take(&mut self.solution);
+        let evaluated = self.kept_partials_at(t, y, &solution);
+        self.solution = solution;
+        if let Err(fault) = evaluated {
+            self.chain_factored = Some(factored);
+            return Err(fault);
+        }
+        let out = &self.partials_out;
+        let width = 2 * n;
+        jac.fill(0.0);
+        for i in 0..n {
+            jac[i * width + n + i] = 1.0;
+        }
+        let mut block = std::mem::take(&mut self.kept_factors.block);
+        block.resize(n, [0.0; COLUMNS]);
+        let ChainFactored { chain, out: values, work, .. } = &mut factored;
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            for (i, row) in block.iter_mut().enumerate() {
+                let partials = &out[i * width + first..i * width + first + columns];
+                for (v, p) in row.iter_mut().zip(partials) {
+                    *v = -p;
+                }
+                row[columns..].fill(0.0);
+            }
+            chain.solve_columns(&values[n..], &mut block, work);
+            for (i, row) in block.iter().enumerate() {
+                let at = (n + i) * width + first;
+                jac[at..at + columns].copy_from_slice(&row[..columns]);
+            }
+        }
+        self.kept_factors.block = block;
+        self.chain_factored = Some(factored);
         check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
     }
