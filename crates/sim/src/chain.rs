@@ -29,6 +29,19 @@ type Value = Option<Reg>;
 pub struct Chain {
     dimension: usize,
     nodes: Vec<(Option<usize>, Vec<usize>)>,
+    /// Where each node's factors start among the factored program's outputs after q̈, and
+    /// (last) how many there are.
+    factor_starts: Vec<usize>,
+    /// Where every node owns one coordinate (a chain of hinges, the common case): per node
+    /// its coordinate, and its parent with the parent's coordinate.
+    hinges: Option<Vec<Hinge>>,
+}
+
+/// A node of one coordinate, for the solves' lean loop.
+#[derive(Clone, Copy, Debug)]
+struct Hinge {
+    coordinate: usize,
+    parent: Option<(usize, usize)>,
 }
 
 impl Chain {
@@ -37,7 +50,20 @@ impl Chain {
         for (x, (parent, _)) in nodes.iter().enumerate() {
             assert!(parent.is_none_or(|p| p < x), "a parent comes before its children");
         }
-        Chain { dimension, nodes: nodes.to_vec() }
+        assert!(dimension <= 3, "a scene of two or three dimensions");
+        let hinges = nodes.iter().all(|(_, own)| own.len() == 1).then(|| {
+            let hinge = |(parent, own): &(Option<usize>, Vec<usize>)| Hinge {
+                coordinate: own[0],
+                parent: parent.map(|p| (p, nodes[p].1[0])),
+            };
+            nodes.iter().map(hinge).collect()
+        });
+        let mut chain = Chain { dimension, nodes: nodes.to_vec(), factor_starts: vec![0], hinges };
+        for x in 0..nodes.len() {
+            let next = chain.factor_starts[x] + chain.factor_terms(x);
+            chain.factor_starts.push(next);
+        }
+        chain
     }
 
     /// How many values the recursive form's program gives: per node Σm, D (k×k), U (d×k),
@@ -65,7 +91,7 @@ impl Chain {
 
     /// How many values the factored program gives after q̈ ([`Recursive::factored`]).
     pub fn factor_outputs(&self) -> usize {
-        (0..self.nodes.len()).map(|x| self.factor_terms(x)).sum()
+        self.factor_starts[self.nodes.len()]
     }
 
     /// How many of the sweep's factors node x has: 1/Δ (k), L below its diagonal
@@ -284,101 +310,183 @@ impl Chain {
         block: &mut [[f64; W]],
         work: &mut Vec<[f64; W]>,
     ) {
-        let (d, count) = (self.dimension, self.nodes.len());
         assert_eq!(factors.len(), self.factor_outputs(), "the sweep's factors");
         assert_eq!(block.len(), self.coordinates(), "a row per coordinate");
-        work.clear();
-        work.resize(2 * d * count, [0.0; W]);
-        let (pushed, bases) = work.split_at_mut(d * count);
-        let mut starts = Vec::with_capacity(count);
-        let mut at = 0;
-        for x in 0..count {
-            starts.push(at);
-            at += self.factor_terms(x);
+        // The dimension fixed at compile time keeps a node's d rows of columns in registers.
+        match (self.dimension, &self.hinges) {
+            (2, Some(hinges)) => self.solve_hinges::<W, 2>(hinges, factors, block, work),
+            (_, Some(hinges)) => self.solve_hinges::<W, 3>(hinges, factors, block, work),
+            (2, None) => self.solve_in::<W, 2>(factors, block, work),
+            (_, None) => self.solve_in::<W, 3>(factors, block, work),
         }
-        let parts = |x: usize| {
-            let k = self.nodes[x].1.len();
-            let f = &factors[starts[x]..starts[x] + self.factor_terms(x)];
-            let (reciprocals, rest) = f.split_at(k);
-            let (lower, rest) = rest.split_at(k * (k - 1) / 2);
-            let (through, columns) = rest.split_at(k * d);
-            (reciprocals, lower, through, columns)
-        };
+    }
+
+    /// [`Chain::solve_columns`] where every node has one coordinate: the same operations in
+    /// the same order (the same bits), without the general loops' bookkeeping, which had cost
+    /// more than the arithmetic.
+    fn solve_hinges<const W: usize, const D: usize>(
+        &self,
+        hinges: &[Hinge],
+        factors: &[f64],
+        block: &mut [[f64; W]],
+        work: &mut Vec<[f64; W]>,
+    ) {
+        let count = hinges.len();
+        work.clear();
+        work.resize(2 * D * count, [0.0; W]);
+        let (pushed, bases) = work.split_at_mut(D * count);
+        for (x, hinge) in hinges.iter().enumerate().rev() {
+            let f = &factors[self.factor_starts[x]..self.factor_starts[x + 1]];
+            let (reciprocal, through) = (f[0], &f[1..1 + D]);
+            let u = block[hinge.coordinate];
+            let mut z = [[0.0; W]; D];
+            for i in 0..D {
+                let (t, sum) = (through[i], pushed[x * D + i]);
+                for c in 0..W {
+                    z[i][c] = sum[c] + t * u[c];
+                }
+            }
+            let row = &mut block[hinge.coordinate];
+            for c in 0..W {
+                row[c] *= reciprocal;
+            }
+            let Some((p, above)) = hinge.parent else { continue };
+            let columns = &f[1 + D..1 + 2 * D];
+            let mut row = block[above];
+            for i in 0..D {
+                let (b, sum) = (columns[i], &mut pushed[p * D + i]);
+                for c in 0..W {
+                    sum[c] += z[i][c];
+                    row[c] -= b * z[i][c];
+                }
+            }
+            block[above] = row;
+        }
+        for (x, hinge) in hinges.iter().enumerate() {
+            let Some((p, above)) = hinge.parent else { continue };
+            let f = &factors[self.factor_starts[x]..self.factor_starts[x + 1]];
+            let (through, columns) = (&f[1..1 + D], &f[1 + D..1 + 2 * D]);
+            let v = block[above];
+            let mut row = block[hinge.coordinate];
+            for i in 0..D {
+                let (b, t) = (columns[i], through[i]);
+                let mut a = bases[p * D + i];
+                for c in 0..W {
+                    a[c] += b * v[c];
+                    row[c] -= t * a[c];
+                }
+                bases[x * D + i] = a;
+            }
+            block[hinge.coordinate] = row;
+        }
+    }
+
+    /// Node x's factors: 1/Δ, L below the diagonal, D⁻¹·Uᵀ and B.
+    #[inline(always)]
+    fn factors_of<'a>(&self, factors: &'a [f64], x: usize) -> [&'a [f64]; 4] {
+        let (d, k) = (self.dimension, self.nodes[x].1.len());
+        let f = &factors[self.factor_starts[x]..self.factor_starts[x + 1]];
+        let (reciprocals, rest) = f.split_at(k);
+        let (lower, rest) = rest.split_at(k * (k - 1) / 2);
+        let (through, columns) = rest.split_at(k * d);
+        [reciprocals, lower, through, columns]
+    }
+
+    fn solve_in<const W: usize, const D: usize>(
+        &self,
+        factors: &[f64],
+        block: &mut [[f64; W]],
+        work: &mut Vec<[f64; W]>,
+    ) {
+        let count = self.nodes.len();
+        work.clear();
+        work.resize(2 * D * count, [0.0; W]);
+        let (pushed, bases) = work.split_at_mut(D * count);
         for x in (0..count).rev() {
             let (parent, own) = &self.nodes[x];
             let k = own.len();
-            let (reciprocals, lower, through, columns) = parts(x);
+            let [reciprocals, lower, through, columns] = self.factors_of(factors, x);
             // z = the children's + U·D⁻¹·u, U·D⁻¹ being (D⁻¹·Uᵀ)ᵀ: from u, before D⁻¹.
-            for i in 0..d {
-                let mut z = pushed[x * d + i];
-                for j in 0..k {
-                    let (t, force) = (through[j * d + i], block[own[j]]);
-                    for (v, f) in z.iter_mut().zip(force) {
-                        *v += t * f;
+            let mut z = [[0.0; W]; D];
+            z.copy_from_slice(&pushed[x * D..x * D + D]);
+            for (j, q) in own.iter().enumerate() {
+                let u = block[*q];
+                for (i, zi) in z.iter_mut().enumerate() {
+                    let t = through[j * D + i];
+                    for c in 0..W {
+                        zi[c] += t * u[c];
                     }
                 }
-                pushed[x * d + i] = z;
             }
             // D⁻¹ of the node's rows: L, Δ, then Lᵀ.
             for i in 0..k {
                 for m in 0..i {
                     let (l, from) = (lower[i * (i - 1) / 2 + m], block[own[m]]);
-                    for (v, b) in block[own[i]].iter_mut().zip(from) {
-                        *v -= l * b;
+                    let row = &mut block[own[i]];
+                    for c in 0..W {
+                        row[c] -= l * from[c];
                     }
                 }
             }
-            for (i, r) in reciprocals.iter().enumerate() {
-                for v in block[own[i]].iter_mut() {
+            for (q, r) in own.iter().zip(reciprocals) {
+                let row = &mut block[*q];
+                for v in row.iter_mut() {
                     *v *= r;
                 }
             }
             for i in (0..k).rev() {
                 for m in i + 1..k {
                     let (l, from) = (lower[m * (m - 1) / 2 + i], block[own[m]]);
-                    for (v, b) in block[own[i]].iter_mut().zip(from) {
-                        *v -= l * b;
+                    let row = &mut block[own[i]];
+                    for c in 0..W {
+                        row[c] -= l * from[c];
                     }
                 }
             }
             let Some(p) = *parent else { continue };
             let parent_own = &self.nodes[p].1;
             let kp = parent_own.len();
-            for i in 0..d {
-                let z = pushed[x * d + i];
-                for (v, f) in pushed[p * d + i].iter_mut().zip(z) {
-                    *v += f;
+            for (i, zi) in z.iter().enumerate() {
+                let sum = &mut pushed[p * D + i];
+                for c in 0..W {
+                    sum[c] += zi[c];
                 }
-                for (m, q) in parent_own.iter().enumerate() {
-                    let c = columns[i * kp + m];
-                    for (v, f) in block[*q].iter_mut().zip(z) {
-                        *v -= c * f;
+            }
+            for (m, q) in parent_own.iter().enumerate() {
+                let row = &mut block[*q];
+                for (i, zi) in z.iter().enumerate() {
+                    let b = columns[i * kp + m];
+                    for c in 0..W {
+                        row[c] -= b * zi[c];
                     }
                 }
             }
         }
         for x in 0..count {
             let (parent, own) = &self.nodes[x];
-            let (_, _, through, columns) = parts(x);
-            if let Some(p) = *parent {
-                let parent_own = &self.nodes[p].1;
-                let kp = parent_own.len();
-                for i in 0..d {
-                    let mut a = bases[p * d + i];
-                    for (j, q) in parent_own.iter().enumerate() {
-                        let c = columns[i * kp + j];
-                        for (v, f) in a.iter_mut().zip(block[*q]) {
-                            *v += c * f;
-                        }
+            // A root's base is fixed: its rows are D⁻¹·u already.
+            let Some(p) = *parent else { continue };
+            let [_, _, through, columns] = self.factors_of(factors, x);
+            let parent_own = &self.nodes[p].1;
+            let kp = parent_own.len();
+            let mut a = [[0.0; W]; D];
+            a.copy_from_slice(&bases[p * D..p * D + D]);
+            for (j, q) in parent_own.iter().enumerate() {
+                let v = block[*q];
+                for (i, ai) in a.iter_mut().enumerate() {
+                    let b = columns[i * kp + j];
+                    for c in 0..W {
+                        ai[c] += b * v[c];
                     }
-                    bases[x * d + i] = a;
                 }
             }
+            bases[x * D..x * D + D].copy_from_slice(&a);
             for (j, q) in own.iter().enumerate() {
-                for i in 0..d {
-                    let (t, a) = (through[j * d + i], bases[x * d + i]);
-                    for (v, f) in block[*q].iter_mut().zip(a) {
-                        *v -= t * f;
+                let row = &mut block[*q];
+                for (i, ai) in a.iter().enumerate() {
+                    let t = through[j * D + i];
+                    for c in 0..W {
+                        row[c] -= t * ai[c];
                     }
                 }
             }

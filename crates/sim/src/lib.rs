@@ -305,10 +305,28 @@ pub(crate) fn check_finite(
     v: &[f64],
     at: impl FnOnce(usize) -> NonFiniteAt,
 ) -> Result<(), FaultKind> {
+    if all_finite(v) {
+        return Ok(());
+    }
     match v.iter().position(|x| !x.is_finite()) {
         Some(index) => Err(FaultKind::NonFinite { at: at(index) }),
         None => Ok(()),
     }
+}
+
+/// Whether every entry is finite. x − x is 0 for a finite x and NaN for an infinity or a NaN,
+/// and sums side by side in eight lanes vectorize where a search stopping at the first
+/// non-finite entry does not: a 64×64 Jacobian's check had cost a tenth of it.
+pub(crate) fn all_finite(v: &[f64]) -> bool {
+    let mut lanes = [0.0; 8];
+    let chunks = v.chunks_exact(8);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (lane, x) in lanes.iter_mut().zip(chunk) {
+            *lane += x - x;
+        }
+    }
+    lanes.iter().chain(rest).all(|x| x.is_finite())
 }
 
 /// The index of the state y = (q, q̇) as the rate it is.

@@ -116,10 +116,19 @@ impl Mechanical {
         input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         let slice = &mut self.partial_slices[index].1;
         tape.run_slice(slice, &mut self.partials_out);
-        for &o in slice.outputs() {
-            if !self.partials_out[o].is_finite() {
-                return Err(FaultKind::NonFinite { at: NonFiniteAt::Partials });
+        // x − x is NaN for a non-finite x (see `all_finite`): no branch per output, and four
+        // sums side by side rather than one chain of additions.
+        let out = &self.partials_out;
+        let mut lanes = [0.0; 4];
+        let chunks = slice.outputs().chunks_exact(4);
+        let rest = chunks.remainder().iter().fold(0.0, |sum, &o| sum + (out[o] - out[o]));
+        for chunk in chunks {
+            for (lane, &o) in lanes.iter_mut().zip(chunk) {
+                *lane += out[o] - out[o];
             }
+        }
+        if !lanes.iter().fold(rest, |sum, lane| sum + lane).is_finite() {
+            return Err(FaultKind::NonFinite { at: NonFiniteAt::Partials });
         }
         Ok(())
     }
@@ -229,7 +238,8 @@ impl Mechanical {
         }
         let out = &self.partials_out;
         let width = 2 * n;
-        jac.fill(0.0);
+        // q̇'s rows; q̈'s are every one written below.
+        jac[..n * width].fill(0.0);
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
