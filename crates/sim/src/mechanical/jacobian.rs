@@ -116,15 +116,15 @@ impl Mechanical {
         input[1 + 3 * n + m..1 + 3 * n + m + k].copy_from_slice(&self.parameters);
         let slice = &mut self.partial_slices[index].1;
         tape.run_slice(slice, &mut self.partials_out);
-        // x − x is NaN for a non-finite x (see `all_finite`): no branch per output, and four
+        // 0·x is NaN for a non-finite x (see `all_finite`): no branch per output, and four
         // sums side by side rather than one chain of additions.
         let out = &self.partials_out;
         let mut lanes = [0.0; 4];
         let chunks = slice.outputs().chunks_exact(4);
-        let rest = chunks.remainder().iter().fold(0.0, |sum, &o| sum + (out[o] - out[o]));
+        let rest = chunks.remainder().iter().fold(0.0, |sum, &o| sum + 0.0 * out[o]);
         for chunk in chunks {
             for (lane, &o) in lanes.iter_mut().zip(chunk) {
-                *lane += out[o] - out[o];
+                *lane += 0.0 * out[o];
             }
         }
         if !lanes.iter().fold(rest, |sum, lane| sum + lane).is_finite() {
