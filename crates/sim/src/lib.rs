@@ -333,3 +333,31 @@ pub(crate) fn all_finite(v: &[f64]) -> bool {
 pub(crate) fn rate(component: usize) -> NonFiniteAt {
     NonFiniteAt::Rate { component }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An infinity or a NaN anywhere (in the lanes or the remainder past them) is found, and
+    /// `check_finite` names its index; finite values of every size, zeros of both signs and
+    /// subnormals pass.
+    #[test]
+    fn every_non_finite_entry_is_found_wherever_it_is() {
+        let finite: Vec<f64> = (0..21)
+            .map(|i| [1e308, -0.0, 0.0, 5e-324, -3.5][i % 5] * (i as f64 + 1.0).recip())
+            .collect();
+        assert!(all_finite(&finite) && check_finite(&finite, |_| NonFiniteAt::Jacobian).is_ok());
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for at in 0..finite.len() {
+                let mut v = finite.clone();
+                v[at] = bad;
+                assert!(!all_finite(&v), "{bad} at {at}");
+                let found = check_finite(&v, |i| NonFiniteAt::Rate { component: i });
+                assert_eq!(
+                    found,
+                    Err(FaultKind::NonFinite { at: NonFiniteAt::Rate { component: at } })
+                );
+            }
+        }
+    }
+}
