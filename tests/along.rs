@@ -300,3 +300,22 @@ fn with_a_kept_constraint_the_state_transition_matrix_is_the_difference_of_whole
     }
     assert!(worst < 1e-6, "{worst:e}");
 }
+
+/// A chain of ten links, past the stack's order, where the runs solve q̈ by the recursive
+/// form's sweep and the variational run's columns by its factors: A and B along a run are
+/// central differences of the right-hand side, a push on the third link giving B.
+#[test]
+fn on_a_long_chain_a_and_b_along_a_run_are_differences_of_the_right_hand_side() {
+    let source = lang::generate::n_link(lang::generate::Family::Pendulum, 10)
+        .replace("coord theta1 = 1/10", "coord theta1 = 1")
+        .replace("coord theta4 = 1/10", "coord theta4 = -1")
+        + "input F = 0 N\nforce push on p3: (F, 0)\n";
+    let mut prepared =
+        engine::numbers::prepare(&source, &[], engine::Options::default()).expect("prepares");
+    assert!(prepared.recursive().expect("lowers").is_some(), "the sweep solves q̈");
+    let names: Vec<String> = (1..=10).map(|i| format!("theta{i}")).collect();
+    let rates: Vec<String> = names.iter().map(|q| format!("{q}'")).collect();
+    let state: Vec<&str> = names.iter().chain(&rates).map(String::as_str).collect();
+    let compared = right_hand_side_differences(&source, &state);
+    assert!(compared >= 40 * (400 + 20), "{compared}");
+}

@@ -43,11 +43,16 @@ from pinned import HERE, run_inside  # noqa: E402
 
 run_inside("links", PACKAGES)
 
-# The package's build prints to stdout, which carries this script's answers.
+# The package's build prints to stdout, which carries this script's answers. Without build
+# isolation the build backend runs `maturin` from PATH: the environment's own comes first, as
+# it would in an activated environment (a fresh machine has no other).
+build_env = dict(os.environ)
+build_env["PATH"] = os.path.dirname(sys.executable) + os.pathsep + build_env.get("PATH", "")
 subprocess.check_call(
     [sys.executable, "-m", "pip", "install", "-q", "--disable-pip-version-check", "--no-deps",
      "--no-build-isolation", "--force-reinstall", os.path.join(HERE, "..", "..", "crates", "python")],
     stdout=sys.stderr,
+    env=build_env,
 )
 
 import json  # noqa: E402

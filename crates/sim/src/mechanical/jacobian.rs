@@ -213,22 +213,8 @@ impl Mechanical {
     /// most of the Jacobian. False where the sweep gives no number: the dense route then
     /// solves, or says why it cannot.
     fn chain_jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, FaultKind> {
+        let Some(mut factored) = self.recursive_factors(t, y) else { return Ok(false) };
         let n = self.layout.coordinates;
-        self.solved = None;
-        self.mass_factored = false;
-        self.follow_signals(t);
-        // The dense program's inputs say where `solution` was solved (`solved_at`).
-        super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
-        self.dense = false;
-        let mut factored = self.chain_factored.take().expect("a recursive form");
-        super::fill_inputs(factored.tape.inputs_mut(), t, y, &self.parameters);
-        factored.tape.run(&mut factored.out);
-        if !factored.out.iter().all(|v| v.is_finite()) {
-            self.chain_factored = Some(factored);
-            return Ok(false);
-        }
-        self.solution[..n].copy_from_slice(&factored.out[..n]);
-        self.solved = Some(self.baumgarte.to_bits());
         let solution = std::mem::take(&mut self.solution);
         let evaluated = self.kept_partials_at(t, y, &solution);
         self.solution = solution;
@@ -236,35 +222,48 @@ impl Mechanical {
             self.chain_factored = Some(factored);
             return Err(fault);
         }
-        let out = &self.partials_out;
         let width = 2 * n;
         // q̇'s rows; q̈'s are every one written below.
         jac[..n * width].fill(0.0);
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
-        let mut block = std::mem::take(&mut self.kept_factors.block);
-        block.resize(n, [0.0; COLUMNS]);
-        let ChainFactored { chain, out: values, work, .. } = &mut factored;
-        for first in (0..width).step_by(COLUMNS) {
-            let columns = (width - first).min(COLUMNS);
-            for (i, row) in block.iter_mut().enumerate() {
-                let partials = &out[i * width + first..i * width + first + columns];
-                for (v, p) in row.iter_mut().zip(partials) {
-                    *v = -p;
-                }
-                row[columns..].fill(0.0);
-            }
-            chain.solve_columns(&values[n..], &mut block, work);
-            for (i, row) in block.iter().enumerate() {
-                let at = (n + i) * width + first;
-                jac[at..at + columns].copy_from_slice(&row[..columns]);
-            }
-        }
-        self.kept_factors.block = block;
+        let out = &self.partials_out;
+        let block = &mut self.kept_factors.block;
+        factored.solve_negated(n, width, block, |i, c| out[i * width + c], |i, first, row| {
+            let at = (n + i) * width + first;
+            jac[at..at + row.len()].copy_from_slice(row);
+        });
         self.chain_factored = Some(factored);
         check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
+    }
+
+    /// Where the recursive route solves this problem's columns (past the stack's order, the
+    /// sweep giving numbers at this state): q̈ into `solution` from one run of the factored
+    /// program, and the sweep's factors, taken out of the problem for the caller to solve with
+    /// and put back. `None`: the dense route solves.
+    fn recursive_factors(&mut self, t: f64, y: &[f64]) -> Option<ChainFactored> {
+        if self.small.is_some() {
+            return None;
+        }
+        let mut factored = self.chain_factored.take()?;
+        let n = self.layout.coordinates;
+        self.solved = None;
+        self.mass_factored = false;
+        self.follow_signals(t);
+        // The dense program's inputs say where `solution` was solved (`solved_at`).
+        super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
+        self.dense = false;
+        super::fill_inputs(factored.tape.inputs_mut(), t, y, &self.parameters);
+        factored.tape.run(&mut factored.out);
+        if !crate::all_finite(&factored.out) {
+            self.chain_factored = Some(factored);
+            return None;
+        }
+        self.solution[..n].copy_from_slice(&factored.out[..n]);
+        self.solved = Some(self.baumgarte.to_bits());
+        Some(factored)
     }
 
     /// Gives the problem the partials of its equations by `columns` parameters: `program`
@@ -325,6 +324,22 @@ impl Mechanical {
         let n = self.layout.coordinates;
         assert_eq!(y.len(), 2 * n, "state length");
         assert_eq!(out.len(), n * columns, "∂q̈/∂p's length");
+        if let Some(mut factored) = self.recursive_factors(t, y) {
+            let solution = std::mem::take(&mut self.solution);
+            let evaluated = self.sensitivities_at(t, y, &solution);
+            self.solution = solution;
+            if evaluated.is_ok() {
+                let partials = &self.sensitivities_out;
+                let read = |i: usize, c: usize| partials[i * columns + c];
+                factored.solve_negated(n, columns, &mut self.kept_factors.block, read, |i, c, row| {
+                    out[i * columns + c..i * columns + c + row.len()].copy_from_slice(row);
+                });
+            }
+            self.chain_factored = Some(factored);
+            evaluated?;
+            check_finite(out, |_| NonFiniteAt::Jacobian)?;
+            return Ok(true);
+        }
         self.dense_accelerations(t, y)?;
         let solution = std::mem::take(&mut self.solution);
         if let Err(fault) = self.sensitivities_at(t, y, &solution) {
@@ -370,10 +385,16 @@ impl Mechanical {
         if self.partials.is_none() {
             return Ok(false);
         }
-        self.dense_accelerations(t, y)?;
+        let recursive = self.recursive_factors(t, y);
+        if recursive.is_none() {
+            self.dense_accelerations(t, y)?;
+        }
         rates[..n].copy_from_slice(&y[n..2 * n]);
         rates[n..].copy_from_slice(&self.solution[..n]);
-        check_finite(rates, crate::rate)?;
+        if let Err(fault) = check_finite(rates, crate::rate) {
+            self.chain_factored = self.chain_factored.take().or(recursive);
+            return Err(fault);
+        }
         let solution = std::mem::take(&mut self.solution);
         let evaluated = self.kept_partials_at(t, y, &solution).and_then(|()| {
             if columns == 0 {
@@ -383,6 +404,7 @@ impl Mechanical {
         });
         if let Err(fault) = evaluated {
             self.solution = solution;
+            self.chain_factored = self.chain_factored.take().or(recursive);
             return Err(fault);
         }
         let width = 2 * n;
@@ -390,9 +412,37 @@ impl Mechanical {
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
+        let mut change = change;
+        if let Some(mut factored) = recursive {
+            // The Jacobian's 2n columns, then the parameters' k, as one run of blocks.
+            let (partials, sensitivities) = (&self.partials_out, &self.sensitivities_out);
+            let read = |i: usize, c: usize| {
+                if c < width {
+                    partials[i * width + c]
+                } else {
+                    sensitivities[i * columns + c - width]
+                }
+            };
+            let block = &mut self.kept_factors.block;
+            factored.solve_negated(n, width + columns, block, read, |i, first, row| {
+                for (c, v) in (first..).zip(row) {
+                    if c < width {
+                        jac[(n + i) * width + c] = *v;
+                    } else if let Some(out) = change.as_deref_mut() {
+                        out[i * columns + c - width] = *v;
+                    }
+                }
+            });
+            self.chain_factored = Some(factored);
+            self.solution = solution;
+            check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+            if let Some(out) = change {
+                check_finite(out, |_| NonFiniteAt::Jacobian)?;
+            }
+            return Ok(true);
+        }
         let partials = std::mem::take(&mut self.partials_out);
         let sensitivities = std::mem::take(&mut self.sensitivities_out);
-        let mut change = change;
         // The Jacobian's 2n columns, then the parameters' k, solved as one block of columns.
         let solved = self.solve_partials_of(
             width + columns,
@@ -685,5 +735,34 @@ impl Canonical {
         }
         check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
+    }
+}
+
+impl ChainFactored {
+    /// −M⁻¹ times `count` columns (`read(row, column)`, a row per coordinate) by the sweep at
+    /// the state the factors were run at, [`COLUMNS`] side by side: each block's solved rows
+    /// go to `put(row, first column, values)`.
+    fn solve_negated(
+        &mut self,
+        n: usize,
+        count: usize,
+        block: &mut Vec<[f64; COLUMNS]>,
+        read: impl Fn(usize, usize) -> f64,
+        mut put: impl FnMut(usize, usize, &[f64]),
+    ) {
+        block.resize(n, [0.0; COLUMNS]);
+        for first in (0..count).step_by(COLUMNS) {
+            let columns = (count - first).min(COLUMNS);
+            for (i, row) in block.iter_mut().enumerate() {
+                for (c, v) in row[..columns].iter_mut().enumerate() {
+                    *v = -read(i, first + c);
+                }
+                row[columns..].fill(0.0);
+            }
+            self.chain.solve_columns(&self.out[n..], block, &mut self.work);
+            for (i, row) in block.iter().enumerate() {
+                put(i, first, &row[..columns]);
+            }
+        }
     }
 }
