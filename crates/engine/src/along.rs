@@ -148,6 +148,11 @@ pub fn from_prepared(prepared: &mut Prepared, slots: Vec<f64>) -> Result<Along, 
     let mechanical = Mechanical::new(prepared.layout, dynamics, observation, slots.clone())
         .with_kinds(prepared.stabilisation())
         .with_partials(partials);
+    // A long chain's q̈, A and B by the recursive form's sweep, as its runs solve them.
+    let mechanical = match prepared.recursive()? {
+        Some(recursive) => mechanical.with_chain(recursive),
+        None => mechanical,
+    };
     let d = &prepared.derivation;
     Ok(Along {
         coordinates: prepared.coordinate_names(),

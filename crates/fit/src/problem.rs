@@ -155,6 +155,11 @@ impl Problem {
             Mechanical::new(prepared.layout, Tape::new(dynamics), Tape::new(observed), parameters)
                 .with_kinds(prepared.stabilisation())
                 .with_signals(signals.clone());
+        // A long chain's q̈ and its sensitivities' columns by the recursive form's sweep.
+        let mechanical = match prepared.recursive()? {
+            Some(recursive) => mechanical.with_chain(recursive),
+            None => mechanical,
+        };
         let integrand = simulation::Integrand::new(&mut prepared, mechanical, method)?;
         let simulation::Integrand::Mechanical(mut mechanical) = integrand else {
             unreachable!("an explicit method integrates (q, q̇)")

@@ -229,6 +229,11 @@ fn load_for(source: &str, options: &Options, swept: Option<&str>) -> Result<Load
     )
     .with_kinds(prepared.stabilisation())
     .with_signals(signals);
+    // A long chain's q̈ and its variational columns by the recursive form's sweep.
+    let mechanical = match prepared.recursive()? {
+        Some(recursive) => mechanical.with_chain(recursive),
+        None => mechanical,
+    };
     let integrand = simulation::Integrand::new(&mut prepared, mechanical, method)?;
     let simulation::Integrand::Mechanical(mut mechanical) = integrand else {
         unreachable!("an explicit method integrates (q, q̇)")

@@ -230,10 +230,16 @@ impl Mechanical {
         }
         let out = &self.partials_out;
         let block = &mut self.kept_factors.block;
-        factored.solve_negated(n, width, block, |i, c| out[i * width + c], |i, first, row| {
-            let at = (n + i) * width + first;
-            jac[at..at + row.len()].copy_from_slice(row);
-        });
+        factored.solve_negated(
+            n,
+            width,
+            block,
+            |i, c| out[i * width + c],
+            |i, first, row| {
+                let at = (n + i) * width + first;
+                jac[at..at + row.len()].copy_from_slice(row);
+            },
+        );
         self.chain_factored = Some(factored);
         check_finite(jac, |_| NonFiniteAt::Jacobian)?;
         Ok(true)
@@ -331,9 +337,15 @@ impl Mechanical {
             if evaluated.is_ok() {
                 let partials = &self.sensitivities_out;
                 let read = |i: usize, c: usize| partials[i * columns + c];
-                factored.solve_negated(n, columns, &mut self.kept_factors.block, read, |i, c, row| {
-                    out[i * columns + c..i * columns + c + row.len()].copy_from_slice(row);
-                });
+                factored.solve_negated(
+                    n,
+                    columns,
+                    &mut self.kept_factors.block,
+                    read,
+                    |i, c, row| {
+                        out[i * columns + c..i * columns + c + row.len()].copy_from_slice(row);
+                    },
+                );
             }
             self.chain_factored = Some(factored);
             evaluated?;
