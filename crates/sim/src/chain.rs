@@ -14,6 +14,11 @@
 //! articulated-body algorithm with translations for the joints' motion: the scene's own
 //! kinematics give B, E and the bias terms exactly, the sweep only adds and solves.
 //!
+//! The same sweep with no bias terms and other right-hand sides for u solves M·x = b: a
+//! second program gives the sweep's factors beside q̈ (per node 1/Δ, L, D⁻¹·Uᵀ and B), and
+//! [`Chain::solve_columns`] solves blocks of columns with them in O(n) each, which the exact
+//! Jacobian, the sensitivities and the variational runs take on a long chain.
+//!
 //! A D that vanishes (a coordinate that has lost its inertia) makes q̈ infinite or NaN; the
 //! problem that runs the program then solves by the dense route, which says why.
 
@@ -103,8 +108,9 @@ impl Chain {
         k + k * (k - 1) / 2 + k * d + base
     }
 
-    /// The sweep lowered after `terms`, the recursive form's program: q̈'s program, and the
-    /// same with the sweep's factors after q̈.
+    /// The sweep lowered after `terms`, the recursive form's program: q̈'s program (one output
+    /// per coordinate, in the coordinates' order), and the same with the sweep's factors after
+    /// q̈.
     pub fn lower(self, terms: Program) -> Recursive {
         let (builder, accelerations, factors) = self.sweep(terms);
         let mut both = accelerations.clone();
@@ -115,13 +121,6 @@ impl Chain {
             factored: builder.finish(&both),
             chain: self,
         }
-    }
-
-    /// The program of q̈ (one output per coordinate, in the coordinates' order): `terms`, the
-    /// recursive form's program, followed by the sweep.
-    pub fn accelerations(&self, terms: Program) -> Program {
-        let (builder, accelerations, _) = self.sweep(terms);
-        builder.finish(&accelerations)
     }
 
     /// The sweep's instructions after `terms`: the builder, q̈ and the factors in the layout
