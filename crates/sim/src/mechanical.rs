@@ -161,7 +161,8 @@ pub struct Mechanical {
     chain: Option<Tape>,
     /// That program over many states at once, made on the first [`Mechanical::rhs_many`].
     chain_many: Option<numeric::BatchTape>,
-    /// The same sweep with its factors among the outputs, for the exact Jacobian's columns.
+    /// The same sweep with its factors among the outputs, for the columns of the exact
+    /// Jacobian, the sensitivities and a variational stage.
     chain_factored: Option<ChainFactored>,
     /// Whether `dyn_out` holds the dense program's outputs at the inputs `solved_at` compares
     /// (the recursive form leaves it behind).
@@ -272,9 +273,10 @@ impl Mechanical {
 
     /// Solves for q̈ by the recursive form (`recursive`, [`crate::Chain::lower`]'s programs,
     /// which take the dynamics program's inputs) rather than by factoring M: O(n) rather than
-    /// O(n³) on a long chain. The exact Jacobian's columns solve with the sweep's factors. The
-    /// dense program still serves what needs M (the sensitivities, a linearization) and says
-    /// why where the sweep gives no number. Ignored where the problem has multipliers.
+    /// O(n³) on a long chain. Past the stack's order the exact Jacobian's, the sensitivities'
+    /// and a variational stage's columns solve with the sweep's factors. The dense program
+    /// still says why where the sweep gives no number. Ignored where the problem has
+    /// multipliers.
     pub fn with_chain(mut self, recursive: crate::Recursive) -> Self {
         let crate::Recursive { accelerations, factored, chain } = recursive;
         let inputs = self.layout.dynamics_inputs();
@@ -441,12 +443,7 @@ impl Mechanical {
     /// q̈ at (t, y) by the recursive form's sweep, into `self.solution`.
     fn recursive_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
         let n = self.layout.coordinates;
-        self.solved = None;
-        self.mass_factored = false;
-        self.follow_signals(t);
-        // The dense program's inputs say where `solution` was solved (`solved_at`).
-        fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
-        self.dense = false;
+        self.begin_recursive(t, y);
         let program = self.chain.as_mut().expect("a recursive form");
         fill_inputs(program.inputs_mut(), t, y, &self.parameters);
         program.run(&mut self.solution[..n]);
@@ -458,6 +455,17 @@ impl Mechanical {
         // tells which, or solves where only the sweep overflowed.
         self.dynamics_at(t, y)?;
         self.solve_dynamics()
+    }
+
+    /// What a solve by the recursive form does before its program runs at (t, y): forgets the
+    /// last solve and M's factors, follows the signals, and gives the dense program the inputs
+    /// `solved_at` compares (its outputs stay behind).
+    fn begin_recursive(&mut self, t: f64, y: &[f64]) {
+        self.solved = None;
+        self.mass_factored = false;
+        self.follow_signals(t);
+        fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
+        self.dense = false;
     }
 
     /// Solves for q̈ and λ from the dynamics outputs in `self.dyn_out`; they are left in

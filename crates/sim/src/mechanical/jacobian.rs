@@ -2,7 +2,8 @@
 //! beside them. The accelerations solve r = M q̈ − Jᵀλ − f = 0 together with the (stabilised)
 //! constraint rows, so along the state [M −Jᵀ; J 0]·∂(q̈, λ) = −∂(r, c): one LU of the matrix
 //! the accelerations were solved with, and a solve per state component, give the exact
-//! ∂q̈/∂(q, q̇) with no step size to choose.
+//! ∂q̈/∂(q, q̇) with no step size to choose. On a long chain's recursive route the columns
+//! solve with the sweep's own factors instead, O(n) each, M never formed.
 
 use super::{Canonical, ChainFactored, Layout, Mechanical, Stabilisation};
 use numeric::Tape;
@@ -143,10 +144,7 @@ impl Mechanical {
         if self.partials.is_none() {
             return Ok(false);
         }
-        if self.small.is_none()
-            && self.chain_factored.is_some()
-            && self.chain_jacobian(t, y, jac)?
-        {
+        if self.chain_jacobian(t, y, jac)? {
             return Ok(true);
         }
         let n = self.layout.coordinates;
@@ -166,29 +164,21 @@ impl Mechanical {
         if self.mass_factored && self.small.is_none() {
             // M alone past the stack's order, factored by LDLᵀ as the accelerations were solved
             // at this state: those factors serve every column (a 32-link chain's LU for them
-            // had been a quarter of its Jacobian). The partials are read and the Jacobian
-            // written a row of a block at a time rather than a column at a time (strided both
-            // ways, a fifth of it). Smaller systems keep `solve_partials`' LU, whose columns
-            // are the bits `linear`'s solves give (a linearization along a run at an
-            // equilibrium is the one about it, exactly).
-            let mut block = std::mem::take(&mut self.kept_factors.block);
-            block.resize(n, [0.0; COLUMNS]);
-            for first in (0..width).step_by(COLUMNS) {
-                let columns = (width - first).min(COLUMNS);
-                for (i, row) in block.iter_mut().enumerate() {
-                    let partials = &out[i * width + first..i * width + first + columns];
-                    for (v, p) in row.iter_mut().zip(partials) {
-                        *v = -p;
-                    }
-                    row[columns..].fill(0.0);
-                }
-                linalg::ldl_solve_columns(&self.system, &mut block);
-                for (i, row) in block.iter().enumerate() {
+            // had been a quarter of its Jacobian). Smaller systems keep `solve_partials`' LU,
+            // whose columns are the bits `linear`'s solves give (a linearization along a run
+            // at an equilibrium is the one about it, exactly).
+            let system = &self.system;
+            negated_in_blocks(
+                n,
+                width,
+                &mut self.kept_factors.block,
+                |i, c| out[i * width + c],
+                |block| linalg::ldl_solve_columns(system, block),
+                |i, first, row| {
                     let at = (n + i) * width + first;
-                    jac[at..at + columns].copy_from_slice(&row[..columns]);
-                }
-            }
-            self.kept_factors.block = block;
+                    jac[at..at + row.len()].copy_from_slice(row);
+                },
+            );
             self.partials_out = out;
             self.solution = solution;
             check_finite(jac, |_| NonFiniteAt::Jacobian)?;
@@ -255,12 +245,7 @@ impl Mechanical {
         }
         let mut factored = self.chain_factored.take()?;
         let n = self.layout.coordinates;
-        self.solved = None;
-        self.mass_factored = false;
-        self.follow_signals(t);
-        // The dense program's inputs say where `solution` was solved (`solved_at`).
-        super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
-        self.dense = false;
+        self.begin_recursive(t, y);
         super::fill_inputs(factored.tape.inputs_mut(), t, y, &self.parameters);
         factored.tape.run(&mut factored.out);
         if !crate::all_finite(&factored.out) {
@@ -404,7 +389,9 @@ impl Mechanical {
         rates[..n].copy_from_slice(&y[n..2 * n]);
         rates[n..].copy_from_slice(&self.solution[..n]);
         if let Err(fault) = check_finite(rates, crate::rate) {
-            self.chain_factored = self.chain_factored.take().or(recursive);
+            if recursive.is_some() {
+                self.chain_factored = recursive;
+            }
             return Err(fault);
         }
         let solution = std::mem::take(&mut self.solution);
@@ -416,7 +403,9 @@ impl Mechanical {
         });
         if let Err(fault) = evaluated {
             self.solution = solution;
-            self.chain_factored = self.chain_factored.take().or(recursive);
+            if recursive.is_some() {
+                self.chain_factored = recursive;
+            }
             return Err(fault);
         }
         let width = 2 * n;
@@ -752,29 +741,45 @@ impl Canonical {
 
 impl ChainFactored {
     /// −M⁻¹ times `count` columns (`read(row, column)`, a row per coordinate) by the sweep at
-    /// the state the factors were run at, [`COLUMNS`] side by side: each block's solved rows
-    /// go to `put(row, first column, values)`.
+    /// the state the factors were run at ([`negated_in_blocks`]).
     fn solve_negated(
         &mut self,
         n: usize,
         count: usize,
         block: &mut Vec<[f64; COLUMNS]>,
         read: impl Fn(usize, usize) -> f64,
-        mut put: impl FnMut(usize, usize, &[f64]),
+        put: impl FnMut(usize, usize, &[f64]),
     ) {
-        block.resize(n, [0.0; COLUMNS]);
-        for first in (0..count).step_by(COLUMNS) {
-            let columns = (count - first).min(COLUMNS);
-            for (i, row) in block.iter_mut().enumerate() {
-                for (c, v) in row[..columns].iter_mut().enumerate() {
-                    *v = -read(i, first + c);
-                }
-                row[columns..].fill(0.0);
+        let (chain, factors, work) = (&self.chain, &self.out[n..], &mut self.work);
+        negated_in_blocks(n, count, block, read, |b| chain.solve_columns(factors, b, work), put);
+    }
+}
+
+/// Solves M·x = −b for `count` columns b (`read(row, column)`, a row per coordinate)
+/// [`COLUMNS`] side by side with `solve` (a block in, its solution out), each block's solved
+/// rows going to `put(row, first column, values)`: the partials are read and the results
+/// written a row of a block at a time rather than a column at a time (strided both ways, a
+/// fifth of a 32-link chain's Jacobian).
+fn negated_in_blocks(
+    n: usize,
+    count: usize,
+    block: &mut Vec<[f64; COLUMNS]>,
+    read: impl Fn(usize, usize) -> f64,
+    mut solve: impl FnMut(&mut [[f64; COLUMNS]]),
+    mut put: impl FnMut(usize, usize, &[f64]),
+) {
+    block.resize(n, [0.0; COLUMNS]);
+    for first in (0..count).step_by(COLUMNS) {
+        let columns = (count - first).min(COLUMNS);
+        for (i, row) in block.iter_mut().enumerate() {
+            for (c, v) in row[..columns].iter_mut().enumerate() {
+                *v = -read(i, first + c);
             }
-            self.chain.solve_columns(&self.out[n..], block, &mut self.work);
-            for (i, row) in block.iter().enumerate() {
-                put(i, first, &row[..columns]);
-            }
+            row[columns..].fill(0.0);
+        }
+        solve(block);
+        for (i, row) in block.iter().enumerate() {
+            put(i, first, &row[..columns]);
         }
     }
 }
