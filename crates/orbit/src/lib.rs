@@ -539,11 +539,15 @@ fn find(
     // Onto the section first: the scene's start is anywhere on the orbit's way. The return is
     // mapped by the symmetry before it starts again, as every return is compared: a walker's
     // legs swap at the strike, and the state after it, its legs swapped, is where the next
-    // step starts with its modes (the stance foot the one the coordinates now say).
+    // step starts with its modes (the stance foot the one the coordinates now say). That run
+    // carries no Φ: its surface, all the next run needs of it, is the jump's and the section's.
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
         _ => {
-            let tr = variational::transition(mechanical, &start, &run, end).map_err(fail)?;
+            let options =
+                variational::Options { directions: Some(Vec::new()), ..Default::default() };
+            let tr = variational::transition_with(mechanical, &start, &run, end, &options)
+                .map_err(fail)?;
             (symmetry.apply(&tr.state), tr.surface)
         }
     };

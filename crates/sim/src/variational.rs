@@ -150,6 +150,10 @@ pub struct Options {
     /// the interpolant is linear in the stages, whose Φ and S are their states' derivatives,
     /// so what is recorded is still the exact derivative of what the run computed.
     pub times: Vec<f64>,
+    /// D (row-major 2n × c): the run carries Φ·D, the state's derivative along D's columns,
+    /// rather than Φ itself (D = I). With c = 0 it carries the state alone, its `surface` and
+    /// its end all the same: a return map's first run onto its section needs no more.
+    pub directions: Option<Vec<f64>>,
 }
 
 /// What a variational run recorded at one of [`Options::times`].
@@ -158,7 +162,7 @@ pub struct Sample {
     pub time: f64,
     /// (q, q̇).
     pub state: Vec<f64>,
-    /// Φ, row-major 2n × 2n.
+    /// Φ, row-major 2n × 2n (Φ·D, 2n × c, where [`Options::directions`] gave D).
     pub matrix: Vec<f64>,
     /// S, row-major 2n × k, where [`Options::sensitivities`] asked for it.
     pub sensitivities: Option<Vec<f64>>,
@@ -177,7 +181,8 @@ pub struct Transition {
     pub time: f64,
     /// (q, q̇) at the end, after the jump for a landing.
     pub state: Vec<f64>,
-    /// ∂state/∂start, row-major, 2n × 2n.
+    /// ∂state/∂start, row-major, 2n × 2n; along D's columns (Φ·D, 2n × c) where
+    /// [`Options::directions`] gave D.
     pub matrix: Vec<f64>,
     /// S = ∂state/∂p at the end, row-major 2n × k, when [`Options::sensitivities`] asked for it.
     pub sensitivities: Option<Vec<f64>>,
@@ -275,10 +280,21 @@ pub fn transition_with(
         previous = time;
     }
     let mut start = y0.to_vec();
-    start.resize(size + size * size, 0.0);
-    for i in 0..size {
-        start[size + i * size + i] = 1.0;
-    }
+    let directions = match &options.directions {
+        None => {
+            start.resize(size + size * size, 0.0);
+            for i in 0..size {
+                start[size + i * size + i] = 1.0;
+            }
+            size
+        }
+        // Φ(0) = I: Φ·D starts as D.
+        Some(d) => {
+            assert_eq!(d.len() % size, 0, "D's rows are the state's");
+            start.extend(d);
+            d.len() / size
+        }
+    };
     if let Some(given) = &options.sensitivities {
         start.extend(given);
     }
@@ -305,6 +321,7 @@ pub fn transition_with(
         times: &options.times,
         samples: Vec::new(),
         step_control: options.step_control,
+        directions,
     };
     let mut halt =
         |_: f64| if stop.get() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) };
@@ -327,7 +344,7 @@ pub fn transition_with(
             let within = manifold_projection(problem, t, &y[..size]).map_err(|kind| {
                 Refusal::Fault(Fault { kind, time: t, state: y[..size].to_vec() })
             })?;
-            let carried = size + size * size;
+            let carried = size + size * directions;
             if options.sensitivities.is_some() {
                 sensitivities = Some(y[carried..].to_vec());
             }
@@ -410,6 +427,8 @@ struct Variational<'a> {
     times: &'a [f64],
     samples: Vec<Sample>,
     step_control: StepControl,
+    /// The columns of Φ·D carried (2n for Φ itself).
+    directions: usize,
 }
 
 impl Variational<'_> {
@@ -523,13 +542,15 @@ fn crossing_rate(hx: &[f64], ht: f64, f: &[f64]) -> (f64, f64) {
     (rate, if scale > 0.0 { rate.abs() / scale } else { 0.0 })
 }
 
-/// P·Φ = Φ − f·(h_xᵀ·Φ)/ḣ: Φ with the event's time varied with the start.
+/// P·Φ = Φ − f·(h_xᵀ·Φ)/ḣ: Φ (row-major, `size` rows) with the event's time varied with the
+/// start.
 fn along_surface(phi: &[f64], f: &[f64], hx: &[f64], rate: f64, size: usize) -> Vec<f64> {
+    let columns = phi.len() / size;
     let mut out = phi.to_vec();
-    for j in 0..size {
-        let moved: f64 = (0..size).map(|k| hx[k] * phi[k * size + j]).sum::<f64>() / rate;
+    for j in 0..columns {
+        let moved: f64 = (0..size).map(|k| hx[k] * phi[k * columns + j]).sum::<f64>() / rate;
         for i in 0..size {
-            out[i * size + j] -= f[i] * moved;
+            out[i * columns + j] -= f[i] * moved;
         }
     }
     out
@@ -626,7 +647,7 @@ impl Variational<'_> {
 
 impl Problem for Variational<'_> {
     fn dim(&self) -> usize {
-        self.size + self.size * self.size + self.size * self.columns
+        self.size + self.size * self.directions + self.size * self.columns
     }
 
     fn controlled(&self) -> usize {
@@ -640,27 +661,32 @@ impl Problem for Variational<'_> {
         let s = self.size;
         let n = s / 2;
         let (x, phi) = y.split_at(s);
-        let (phi, sensitivities) = phi.split_at(s * s);
+        let c = self.directions;
+        let (phi, sensitivities) = phi.split_at(s * c);
         let columns = self.columns;
         let (rates, d) = dy.split_at_mut(s);
+        if c == 0 && columns == 0 {
+            // The state alone: no Jacobian to form.
+            return self.inner.rhs(t, x, rates);
+        }
         let change = (columns > 0).then_some(&mut self.change[..]);
         if !self.inner.variational_parts(t, x, rates, &mut self.jac, change)? {
             return Err(FaultKind::NonFinite { at: crate::NonFiniteAt::Partials });
         }
         // A = [0 I; ∂q̈/∂q ∂q̈/∂q̇]: the upper rows of AΦ are the lower rows of Φ.
-        d[..n * s].copy_from_slice(&phi[n * s..]);
+        d[..n * c].copy_from_slice(&phi[n * c..]);
         // Row by row of Φ, each entry's sum over k in its order from +0 as before (the same
         // bits), a zero of A's left out: ±0 added to a sum that is never −0 changes nothing,
         // for the finite Φ a run carries.
         for i in n..s {
             let a = &self.jac[i * s..(i + 1) * s];
-            let row = &mut d[i * s..(i + 1) * s];
+            let row = &mut d[i * c..(i + 1) * c];
             row.fill(0.0);
             for (k, &a) in a.iter().enumerate() {
                 if a == 0.0 {
                     continue;
                 }
-                for (out, p) in row.iter_mut().zip(&phi[k * s..(k + 1) * s]) {
+                for (out, p) in row.iter_mut().zip(&phi[k * c..(k + 1) * c]) {
                     *out += a * p;
                 }
             }
@@ -669,7 +695,7 @@ impl Problem for Variational<'_> {
             return Ok(());
         }
         // Ṡ = A·S + (0, ∂q̈/∂p): the upper rows are S's lower rows, as for Φ.
-        let d = &mut dy[s + s * s..];
+        let d = &mut dy[s + s * c..];
         d[..n * columns].copy_from_slice(&sensitivities[n * columns..]);
         for i in n..s {
             let a = &self.jac[i * s..(i + 1) * s];
@@ -713,7 +739,7 @@ impl Problem for Variational<'_> {
     /// are the derivatives of its x (the interpolant is linear in the stages, and the stages'
     /// Φ and S are their x's derivatives), or the exact state at the start and the end.
     fn record(&mut self, t: f64, y: &[f64]) {
-        let (s, carried) = (self.size, self.size + self.size * self.size);
+        let (s, carried) = (self.size, self.size + self.size * self.directions);
         self.samples.push(Sample {
             time: t,
             state: y[..s].to_vec(),
@@ -794,7 +820,8 @@ impl Problem for Variational<'_> {
             return self.refuse(Refusal::SensitivitiesAcrossJump { time: t, guard });
         }
         let x = y[..s].to_vec();
-        let phi = y[s..s + s * s].to_vec();
+        let c = self.directions;
+        let phi = y[s..s + s * c].to_vec();
         let before = rate_of(self.inner, t, &x)?;
         let Guard::Contacts(_) = guards[0] else {
             let End::Crossing { column, .. } = self.end else { unreachable!("a section fired") };
@@ -853,10 +880,10 @@ impl Problem for Variational<'_> {
         };
         let after = rate_of(self.inner, t, &y[..s])?;
         self.jumps += 1;
-        let mut carried = vec![0.0; s * s];
+        let mut carried = vec![0.0; s * c];
         for i in 0..s {
-            for j in 0..s {
-                carried[i * s + j] = (0..s).map(|r| along[i * s + r] * phi[r * s + j]).sum();
+            for j in 0..c {
+                carried[i * c + j] = (0..s).map(|r| along[i * s + r] * phi[r * c + j]).sum();
             }
         }
         let landed = |e: &ModeEvent| {
@@ -868,10 +895,10 @@ impl Problem for Variational<'_> {
             return Ok(events);
         }
         // Ξ·Φ = G_x·P·Φ + f⁺·(h_xᵀ·Φ)/ḣ.
-        for j in 0..s {
-            let moved: f64 = (0..s).map(|r| hx[r] * phi[r * s + j]).sum::<f64>() / rate;
+        for j in 0..c {
+            let moved: f64 = (0..s).map(|r| hx[r] * phi[r * c + j]).sum::<f64>() / rate;
             for i in 0..s {
-                y[s + i * s + j] = carried[i * s + j] + after[i] * moved;
+                y[s + i * c + j] = carried[i * c + j] + after[i] * moved;
             }
         }
         Ok(events)
