@@ -91,6 +91,71 @@ fn the_transition_matrix_is_what_differences_of_whole_runs_give() {
     eprintln!("Φ of the ball across {jumps} bounces against differences: {worst:.1e}");
 }
 
+/// Φ·D along given directions (`Options::directions`) is Φ times them: D = I gives Φ's own
+/// bits, two columns agree with Φ·D to the tolerance (their own steps weigh them, not Φ), and
+/// none carries the state alone to where the run with Φ ends; across bounces and ending at a
+/// landing alike.
+#[test]
+fn phi_along_given_directions_is_phi_times_them() {
+    use sim::variational::{transition_with, Options};
+    let ball = lagrange_tests::example("contacts/bouncing_ball.lag");
+    let mut prepared = prepare(&ball, &[], engine::Options::default()).expect("derives");
+    let parameters = prepared.parameter_values(&[]).expect("values");
+    let problem = lagrange_tests::mechanical(&mut prepared, &parameters)
+        .with_contacts(lagrange_tests::contacts(&prepared, &parameters));
+    let y0 = [0.1, 1.0, 0.3, 0.5];
+    let size = y0.len();
+    let run = settings(1.5, 1e-13);
+    let along = |directions: Option<Vec<f64>>, end: End| {
+        let options = Options { directions, ..Default::default() };
+        transition_with(&mut problem.clone(), &y0, &run, end, &options).expect("a run")
+    };
+    let identity: Vec<f64> =
+        (0..size * size).map(|k| f64::from(u8::from(k % (size + 1) == 0))).collect();
+    // Two directions, neither a coordinate axis.
+    let d = [0.6, -0.2, 0.0, 0.5, -0.8, 0.3, 0.1, 0.7];
+    for end in [End::Time, End::Landing { contact: None }] {
+        let whole = along(None, end);
+        assert!(whole.jumps >= 1, "the run crosses a bounce");
+        let same = along(Some(identity.clone()), end);
+        assert_eq!(
+            (&same.state, &same.matrix, same.time),
+            (&whole.state, &whole.matrix, whole.time)
+        );
+        let two = along(Some(d.to_vec()), end);
+        assert_eq!((two.matrix.len(), two.jumps), (2 * size, whole.jumps));
+        let largest = whole.matrix.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..size {
+            for j in 0..2 {
+                let expected: f64 =
+                    (0..size).map(|k| whole.matrix[i * size + k] * d[k * 2 + j]).sum();
+                let off = (two.matrix[i * 2 + j] - expected).abs() / largest;
+                assert!(off < 1e-10, "Φ·D[{i}][{j}] is off by {off:.1e} ({end:?})");
+            }
+        }
+        let none = along(Some(Vec::new()), end);
+        assert!(none.matrix.is_empty() && none.jumps == whole.jumps);
+        assert!((none.time - whole.time).abs() < 1e-10, "{} against {}", none.time, whole.time);
+        for (a, b) in none.state.iter().zip(&whole.state) {
+            assert!(
+                (a - b).abs() < 1e-10 * (1.0 + b.abs()),
+                "{:?} against {:?}",
+                none.state,
+                whole.state
+            );
+        }
+        assert_eq!(none.surface.len(), size * size);
+        for (a, b) in none.surface.iter().zip(&whole.surface) {
+            assert!(
+                (a - b).abs() < 1e-8,
+                "the surface: {:?} against {:?}",
+                none.surface,
+                whole.surface
+            );
+        }
+    }
+}
+
 /// The ladder leaving its wall: Φ carried across the lift-off (the wall's reaction, a guard
 /// that is a function of the state through the solve for the accelerations), along the
 /// manifold both contacts hold the start on, against differences of whole runs from starts
