@@ -488,6 +488,30 @@ fn walker(beta: &str) -> Vec<nalgebra::Complex<f64>> {
     nontrivial
 }
 
+/// The multipliers converge with the tolerance, on both of the walker's sections: at 10⁻¹⁰
+/// they are those at 10⁻¹² to 3·10⁻⁹. Taken from the map's Jacobian compressed to a chart built
+/// from the previous return's surface, the mid-stance section's had been 1.2·10⁻⁸ off at
+/// 10⁻¹⁰ and 5·10⁻⁷ at 10⁻¹²: that chart's span moved by up to 10⁻⁶ from run to run.
+#[test]
+fn the_walkers_multipliers_converge_with_the_tolerance() {
+    let source = lagrange_tests::example("contacts/simplest_walker.lag");
+    let mid_stance = Section::Crossing { expression: "th1 - 1/10".into(), rising: false };
+    for (section, swap) in [(mid_stance, false), (Section::Landing { contact: None }, true)] {
+        let at = |tolerance: f64| {
+            let mut options = options(section.clone(), &[]);
+            options.ignore = vec!["x".into()];
+            if swap {
+                options.swaps = vec![Assignment { name: "th1".into(), value: "th2".into() }];
+            }
+            options.run.tolerance = Some(tolerance);
+            let found = orbit::orbit(&source, &options).unwrap_or_else(|e| panic!("{e}"));
+            found.multipliers[0]
+        };
+        let (coarse, fine) = (at(1e-10), at(1e-12));
+        assert!((coarse - fine).norm() < 3e-9, "{section:?}: {coarse} at 1e-10, {fine} at 1e-12");
+    }
+}
+
 /// Garcia et al.'s stride map has multipliers λ = −0.19009985 ± 0.55759878i at γ = 0.009
 /// (its Jacobian by central differences of the reduced equations with SciPy at 1e-13; the
 /// paper prints −0.19120869 ± 0.55633364i, which its own fixed point does not reproduce). A

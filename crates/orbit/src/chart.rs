@@ -153,6 +153,48 @@ pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
     values
 }
 
+/// The multipliers on the section, `reduced`'s eigenvalues, each taken as the eigenvalue of
+/// `whole` (the map's Jacobian on the whole state, row-major) nearest it, then ordered as
+/// [`multipliers`] orders them.
+///
+/// The map keeps the manifold the kept constraints hold the state on, so the eigenvalues of
+/// its Jacobian on the manifold's tangent are among the whole Jacobian's, whatever the chart;
+/// the compression to the chart has them only as far as the chart spans that tangent's
+/// directions on the section. Taken from a previous return's surface, its span moved by up to
+/// 10⁻⁶ from run to run on a walker whose stabilisation decays by e⁻¹⁵ over the return, and
+/// the compression's multipliers with it (by 10⁻⁸ at tolerance 10⁻¹⁰ and 5·10⁻⁷ at 10⁻¹²),
+/// where the whole Jacobian's converged with the tolerance. The chart still says which of the
+/// whole Jacobian's are the section's: the rest are the trivial ones (0 for the flow and the
+/// directions across the manifold, 1 for a coordinate left out of the comparison), far from a
+/// multiplier or equal to it.
+pub fn multipliers_within(reduced: &DMatrix<f64>, whole: &[f64]) -> Vec<Complex<f64>> {
+    let size = (whole.len() as f64).sqrt() as usize;
+    let section = multipliers(reduced);
+    if size == 0 || section.is_empty() {
+        return section;
+    }
+    let mut candidates: Vec<Option<Complex<f64>>> = DMatrix::from_row_slice(size, size, whole)
+        .complex_eigenvalues()
+        .iter()
+        .copied()
+        .map(Some)
+        .collect();
+    let mut values: Vec<Complex<f64>> = section
+        .iter()
+        .map(|m| {
+            let nearest =
+                (0..candidates.len()).filter(|&k| candidates[k].is_some()).min_by(|&a, &b| {
+                    let distance =
+                        |k: usize| candidates[k].map_or(f64::INFINITY, |c| (c - m).norm());
+                    distance(a).total_cmp(&distance(b))
+                });
+            nearest.and_then(|k| candidates[k].take()).unwrap_or(*m)
+        })
+        .collect();
+    values.sort_by(|a, b| b.norm().total_cmp(&a.norm()).then(a.arg().total_cmp(&b.arg())));
+    values
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,6 +210,23 @@ mod tests {
             assert!((v[0] + v[1]).abs() < 1e-14 && v[2].abs() < 1e-14);
             assert!((v.norm() - 1.0).abs() < 1e-14);
         }
+    }
+
+    #[test]
+    fn the_multipliers_within_are_the_whole_jacobians_the_chart_picks() {
+        // A map keeping the plane z = 0 (the manifold), with 0.5 and 0.25 on it and 0.01
+        // across; its chart turned out of the plane by 10⁻³ compresses the map to values
+        // off by about that, and the whole map's own are taken instead.
+        let whole = [0.5, 0.1, 0.3, 0.0, 0.25, 0.2, 0.0, 0.0, 0.01];
+        let tilt = 1e-3_f64;
+        let chart =
+            DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, (1.0 - tilt * tilt).sqrt(), 0.0, tilt]);
+        let reduced = reduced(&whole, &chart);
+        let compressed = multipliers(&reduced);
+        assert!((compressed[1].re - 0.25).abs() > 1e-5, "{compressed:?}");
+        let within = multipliers_within(&reduced, &whole);
+        assert_eq!(within.len(), 2);
+        assert!((within[0].re - 0.5).abs() < 1e-14 && (within[1].re - 0.25).abs() < 1e-14);
     }
 
     #[test]
