@@ -162,7 +162,8 @@ pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
 /// the compression to the chart has them only as far as the chart spans that tangent's
 /// directions on the section. Taken from a previous return's surface, its span moved by up to
 /// 10⁻⁶ from run to run on a walker whose stabilisation decays by e⁻¹⁵ over the return, and
-/// the compression's multipliers with it (by 10⁻⁸ at tolerance 10⁻¹⁰ and 5·10⁻⁷ at 10⁻¹²),
+/// the compression's multipliers with it (by 10⁻⁸ at tolerance 10⁻¹⁰, and by 5·10⁻⁷ at 10⁻¹²
+/// on another Newton path to the same orbit),
 /// where the whole Jacobian's converged with the tolerance. The chart still says which of the
 /// whole Jacobian's are the section's: the rest are the trivial ones (0 for the flow and the
 /// directions across the manifold, 1 for a coordinate left out of the comparison), far from a
