@@ -154,22 +154,20 @@ pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
 }
 
 /// The multipliers on the section, `reduced`'s eigenvalues, each taken as the eigenvalue of
-/// `whole` (the map's Jacobian on the whole state, row-major) nearest it, then ordered as
-/// [`multipliers`] orders them.
+/// `whole` (the map's Jacobian on the whole state, row-major `size` × `size`) nearest it, then
+/// ordered as [`multipliers`] orders them.
 ///
 /// The map keeps the manifold the kept constraints hold the state on, so the eigenvalues of
 /// its Jacobian on the manifold's tangent are among the whole Jacobian's, whatever the chart;
 /// the compression to the chart has them only as far as the chart spans that tangent's
-/// directions on the section. Taken from a previous return's surface, its span moved by up to
-/// 10⁻⁶ from run to run on a walker whose stabilisation decays by e⁻¹⁵ over the return, and
-/// the compression's multipliers with it (by 10⁻⁸ at tolerance 10⁻¹⁰, and by 5·10⁻⁷ at 10⁻¹²
-/// on another Newton path to the same orbit),
+/// directions on the section. Taken from a previous return's surface, the chart's span moved
+/// by up to 10⁻⁶ from run to run on a walker, and the compression's multipliers with it (by
+/// 10⁻⁸ at tolerance 10⁻¹⁰, and by 5·10⁻⁷ at 10⁻¹² on another Newton path to the same orbit),
 /// where the whole Jacobian's converged with the tolerance. The chart still says which of the
 /// whole Jacobian's are the section's: the rest are the trivial ones (0 for the flow and the
 /// directions across the manifold, 1 for a coordinate left out of the comparison), far from a
 /// multiplier or equal to it.
-pub fn multipliers_within(reduced: &DMatrix<f64>, whole: &[f64]) -> Vec<Complex<f64>> {
-    let size = (whole.len() as f64).sqrt() as usize;
+pub fn multipliers_within(reduced: &DMatrix<f64>, whole: &[f64], size: usize) -> Vec<Complex<f64>> {
     let section = multipliers(reduced);
     if size == 0 || section.is_empty() {
         return section;
@@ -225,7 +223,7 @@ mod tests {
         let reduced = reduced(&whole, &chart);
         let compressed = multipliers(&reduced);
         assert!((compressed[1].re - 0.25).abs() > 1e-5, "{compressed:?}");
-        let within = multipliers_within(&reduced, &whole);
+        let within = multipliers_within(&reduced, &whole, 3);
         assert_eq!(within.len(), 2);
         assert!((within[0].re - 0.5).abs() < 1e-14 && (within[1].re - 0.25).abs() < 1e-14);
     }

@@ -567,7 +567,7 @@ fn find(
         let stagnant = worst <= STAGNANT * size_of && worst > previous / 10.0;
         iterations.push(Iteration { residual: worst, steps: tr.steps });
         if worst <= CONVERGED * size_of || stagnant {
-            let multipliers = chart::multipliers_within(&reduced, &monodromy);
+            let multipliers = chart::multipliers_within(&reduced, &monodromy, size);
             let largest = multipliers.first().map_or(0.0, |m| m.norm());
             let verdict = if largest > 1.0 + NEUTRAL {
                 Verdict::Unstable
