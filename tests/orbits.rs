@@ -491,7 +491,7 @@ fn walker(beta: &str) -> Vec<nalgebra::Complex<f64>> {
 /// The multipliers converge with the tolerance, on both of the walker's sections: at 10⁻¹⁰
 /// they are those at 10⁻¹² to 3·10⁻⁹. Taken from the map's Jacobian compressed to a chart built
 /// from the previous return's surface, the mid-stance section's had been 1.2·10⁻⁸ off at
-/// 10⁻¹⁰: that chart's span moved by up to 10⁻⁶ from run to run.
+/// 10⁻¹⁰.
 #[test]
 fn the_walkers_multipliers_converge_with_the_tolerance() {
     let source = lagrange_tests::example("contacts/simplest_walker.lag");

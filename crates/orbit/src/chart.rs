@@ -160,10 +160,10 @@ pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
 /// The map keeps the manifold the kept constraints hold the state on, so the eigenvalues of
 /// its Jacobian on the manifold's tangent are among the whole Jacobian's, whatever the chart;
 /// the compression to the chart has them only as far as the chart spans that tangent's
-/// directions on the section. Taken from a previous return's surface, the chart's span moved
-/// by up to 10⁻⁶ from run to run on a walker, and the compression's multipliers with it (by
-/// 10⁻⁸ at tolerance 10⁻¹⁰, and by 5·10⁻⁷ at 10⁻¹² on another Newton path to the same orbit),
-/// where the whole Jacobian's converged with the tolerance. The chart still says which of the
+/// directions on the section. On a walker's mid-stance section the compression's multipliers
+/// depended on the chart, built from the previous return's surface or from the run's own, by
+/// 1.2·10⁻⁸ at tolerance 10⁻¹⁰ and 5·10⁻⁷ at 10⁻¹², where the whole Jacobian's converged with
+/// the tolerance (why the compression is that sensitive there was not found). The chart still says which of the
 /// whole Jacobian's are the section's: the rest are the trivial ones (0 for the flow and the
 /// directions across the manifold, 1 for a coordinate left out of the comparison), far from a
 /// multiplier or equal to it.
