@@ -163,13 +163,13 @@ pub fn multipliers(reduced: &DMatrix<f64>) -> Vec<Complex<f64>> {
 /// directions on the section. On a walker's mid-stance section the compression's multipliers
 /// depended on the chart, built from the previous return's surface or from the run's own, by
 /// 1.2·10⁻⁸ at tolerance 10⁻¹⁰ and 5·10⁻⁷ at 10⁻¹², where the whole Jacobian's converged with
-/// the tolerance (why the compression is that sensitive there was not found). The chart still says which of the
-/// whole Jacobian's are the section's: the rest are the trivial ones (0 for the flow and the
-/// directions across the manifold, 1 for a coordinate left out of the comparison), far from a
-/// multiplier or equal to it.
+/// the tolerance (why the compression is that sensitive there was not found). The chart still
+/// says which of the whole Jacobian's are the section's: the rest are the trivial ones (0 for
+/// the flow and the directions across the manifold, 1 for a coordinate left out of the
+/// comparison), far from a multiplier or equal to it.
 pub fn multipliers_within(reduced: &DMatrix<f64>, whole: &[f64], size: usize) -> Vec<Complex<f64>> {
     let section = multipliers(reduced);
-    if size == 0 || section.is_empty() {
+    if section.is_empty() {
         return section;
     }
     let mut candidates: Vec<Option<Complex<f64>>> = DMatrix::from_row_slice(size, size, whole)
@@ -181,12 +181,10 @@ pub fn multipliers_within(reduced: &DMatrix<f64>, whole: &[f64], size: usize) ->
     let mut values: Vec<Complex<f64>> = section
         .iter()
         .map(|m| {
+            // A candidate taken is at an infinite distance: each is matched once.
+            let distance = |k: usize| candidates[k].map_or(f64::INFINITY, |c| (c - m).norm());
             let nearest =
-                (0..candidates.len()).filter(|&k| candidates[k].is_some()).min_by(|&a, &b| {
-                    let distance =
-                        |k: usize| candidates[k].map_or(f64::INFINITY, |c| (c - m).norm());
-                    distance(a).total_cmp(&distance(b))
-                });
+                (0..candidates.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b)));
             nearest.and_then(|k| candidates[k].take()).unwrap_or(*m)
         })
         .collect();
