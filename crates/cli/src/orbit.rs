@@ -44,10 +44,17 @@ pub fn text(path: &str, orbit: &Orbit, section: &str) -> String {
     );
     let residuals: Vec<String> =
         orbit.iterations.iter().map(|i| format!("{:.1e}", i.residual)).collect();
+    let tolerances: Vec<String> =
+        orbit.iterations.iter().map(|i| format!("{:.0e}", i.tolerance)).collect();
+    let last = orbit
+        .last_step
+        .map(|e| format!(", then a step expected to leave {e:.0e}"))
+        .unwrap_or_default();
     let _ = writeln!(
         out,
-        "Newton: {} runs, residuals on the section {}",
+        "Newton: {} runs at tolerances {}, residuals on the section {}{last}",
         orbit.iterations.len(),
+        tolerances.join(", "),
         residuals.join(", ")
     );
     out
@@ -79,8 +86,9 @@ pub fn json(path: &str, orbit: &Orbit, section: &str) -> String {
         "spectral_radius": orbit.spectral_radius(),
         "monodromy": monodromy,
         "newton": orbit.iterations.iter().map(|i| json!({
-            "residual": i.residual, "steps": i.steps
+            "residual": i.residual, "steps": i.steps, "tolerance": i.tolerance
         })).collect::<Vec<_>>(),
+        "last_step": orbit.last_step,
     });
     let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
     text.push('\n');

@@ -127,17 +127,26 @@ pub fn reduced(matrix: &[f64], chart: &DMatrix<f64>) -> DMatrix<f64> {
 /// A singular value of C − I below this (relative to the largest, and to 1) is a multiplier
 /// at 1 to rounding: a direction along a family of orbits, which the step leaves alone.
 const FAMILY: f64 = 1e-9;
+/// ... or below this many times the run's tolerance: a loose run's C is that far off, and a
+/// family's multiplier read as 1 − 10⁻⁶ would send the step far along it.
+const FAMILY_PER_TOLERANCE: f64 = 100.0;
 
 /// The Newton step dz of (C − I)·dz = −ρ, least-squares where C has a multiplier at 1 (a
 /// family of orbits, one per energy of a conservative scene): the step moves along no such
 /// direction, so that Newton stays on the member it started nearest rather than leaping
-/// along the family by the rounding in ρ. `None` if the step is not finite.
-pub fn newton_step(reduced: &DMatrix<f64>, residual: &DVector<f64>) -> Option<DVector<f64>> {
+/// along the family by the rounding in ρ. C is the map's at `tolerance`. `None` if the step
+/// is not finite.
+pub fn newton_step(
+    reduced: &DMatrix<f64>,
+    residual: &DVector<f64>,
+    tolerance: f64,
+) -> Option<DVector<f64>> {
     let d = reduced.nrows();
     let system = reduced - DMatrix::identity(d, d);
     let svd = system.svd(true, true);
     let largest = svd.singular_values.iter().fold(1.0_f64, |m: f64, v: &f64| m.max(*v));
-    let step = svd.solve(&(-residual), FAMILY * largest).ok()?;
+    let family = FAMILY.max(FAMILY_PER_TOLERANCE * tolerance);
+    let step = svd.solve(&(-residual), family * largest).ok()?;
     step.iter().all(|v| v.is_finite()).then_some(step)
 }
 

@@ -89,6 +89,8 @@ pub struct Options {
 pub struct Iteration {
     pub residual: f64,
     pub steps: usize,
+    /// The tolerance its run was integrated at ([`Accuracy`]).
+    pub tolerance: f64,
 }
 
 /// A periodic orbit found, judged by its multipliers.
@@ -108,6 +110,12 @@ pub struct Orbit {
     pub trivial: usize,
     pub jumps: usize,
     pub iterations: Vec<Iteration>,
+    /// Where the last iteration's step was taken without a run to check it (its residual
+    /// already small enough that Newton's quadratic rate, measured on the iterations before,
+    /// leaves nothing after it): the residual it is expected to leave. The fixed point is then
+    /// that step's end, and the multipliers, the monodromy and the period are the last run's,
+    /// a step away at most the run's tolerance in relative terms.
+    pub last_step: Option<f64>,
     /// Whether every multiplier lies inside the unit circle (the verdict is `Stable`).
     pub stable: bool,
     pub verdict: Verdict,
@@ -161,6 +169,96 @@ const CONVERGED: f64 = 1e-14;
 /// Below this residual (relative), a step that no longer divides it by ten has met the map's
 /// rounding: the iteration ends there too.
 const STAGNANT: f64 = 1e-9;
+/// The loosest tolerance a Newton run is integrated at, far from the orbit.
+const LOOSEST: f64 = 1e-6;
+/// A run's tolerance against the residual its step is expected to leave: the map's error at
+/// that tolerance (the run's global error, some tens of tolerances) a small part of it.
+const MATCHED: f64 = 1e-3;
+
+/// How accurately each Newton run is integrated: an inexact Newton's method. A step from a
+/// residual r leaves about K·r² (Newton's quadratic rate K) plus the map's own error, so a
+/// run far from the orbit needs the map no more accurately than that: its tolerance is
+/// matched to the residual its step is expected to leave, between the loosest and the one
+/// asked for, and never loosened again. Only a run at the tolerance asked for may end the
+/// search, so the fixed point, the period and the multipliers are those the tolerance gives.
+#[derive(Clone, Copy, Debug)]
+struct Accuracy {
+    /// The tolerance asked for.
+    target: f64,
+    /// The first run's.
+    loosest: f64,
+}
+
+/// A Newton run as [`Accuracy`] reads it: its residual relative to the state's size, and its
+/// tolerance.
+#[derive(Clone, Copy, Debug)]
+struct Run {
+    residual: f64,
+    tolerance: f64,
+}
+
+/// What a run's residual says of the search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Finish {
+    Continue,
+    /// The residual is the map's rounding: the run's start is the fixed point.
+    Converged,
+    /// The step from this run is expected to leave this residual (relative), below
+    /// [`CONVERGED`], and moves the state by less than the tolerance: take it and end.
+    LastStep(f64),
+}
+
+impl Accuracy {
+    fn of(target: f64, far: bool) -> Accuracy {
+        Accuracy { target, loosest: if far { LOOSEST.max(target) } else { target } }
+    }
+
+    /// Newton's quadratic rate K (r₂ ≈ K·r₁²) from two runs in a row; 1 without them.
+    fn rate(before: &Run, after: &Run) -> f64 {
+        if before.residual > 0.0 {
+            after.residual / (before.residual * before.residual)
+        } else {
+            1.0
+        }
+    }
+
+    /// The tolerance of the next run, after `runs`.
+    fn next(&self, runs: &[Run]) -> f64 {
+        let Some(last) = runs.last() else { return self.loosest };
+        let rate = match runs {
+            [.., a, b] => Accuracy::rate(a, b),
+            _ => 1.0,
+        };
+        // What the next run should see, and what its step should leave; never more than the
+        // residual before (a rate measured on a map's error rather than on Newton's steps).
+        let coming = (rate * last.residual * last.residual).min(last.residual);
+        let after = (rate * coming * coming).min(coming);
+        (MATCHED * after).clamp(self.target, last.tolerance)
+    }
+
+    /// Whether the search ends at `this` run, after `runs`.
+    fn finish(&self, runs: &[Run], this: Run) -> Finish {
+        if this.tolerance > self.target {
+            return Finish::Continue;
+        }
+        if this.residual <= CONVERGED {
+            return Finish::Converged;
+        }
+        let Some(previous) = runs.last() else { return Finish::Continue };
+        let at_target = previous.tolerance <= self.target;
+        if at_target && this.residual <= STAGNANT && this.residual > previous.residual / 10.0 {
+            return Finish::Converged;
+        }
+        // The rate from a looser run before is, if anything, too large (its residual the
+        // looser map's): the expectation errs towards another run.
+        let rate = Accuracy::rate(previous, &this);
+        let expected = rate * this.residual * this.residual;
+        if expected <= CONVERGED && rate * this.residual <= self.target {
+            return Finish::LastStep(expected);
+        }
+        Finish::Continue
+    }
+}
 
 /// The scene loaded and lowered for variational runs, its start and its map.
 struct Loaded {
@@ -531,74 +629,131 @@ fn find(
     from: Option<&[f64]>,
     iterations_allowed: usize,
 ) -> Result<Orbit, Error> {
-    let (end, run) = (loaded.end, loaded.run.clone());
+    newton(loaded, mechanical, from, iterations_allowed).map(|(orbit, _)| orbit)
+}
+
+/// One Newton run from `x`, whose chart is built from `surface` (the surface of the return
+/// `x` was reached from): the run, its chart, and the residual in it.
+struct Measured {
+    run: variational::Transition,
+    tangent: DMatrix<f64>,
+    residual: DVector<f64>,
+}
+
+fn measure(
+    loaded: &Loaded,
+    mechanical: &mut Mechanical,
+    x: &[f64],
+    surface: &[f64],
+    tolerance: f64,
+) -> Result<Measured, Error> {
+    let settings = sim::Settings { tolerance, ..loaded.run.clone() };
+    let symmetry = &loaded.symmetry;
+    let size = x.len();
+    let run = variational::transition(mechanical, x, &settings, loaded.end)
+        .map_err(|r| refused(r, loaded))?;
+    let ignored = symmetry.ignored_rows();
+    let tangent = chart::section(&symmetry.carry(surface), &run.normals, &ignored, size);
+    let returned = symmetry.apply(&run.state);
+    let gap: Vec<f64> = returned.iter().zip(&run.start).map(|(a, b)| a - b).collect();
+    let residual = tangent.transpose() * DVector::from_vec(gap);
+    Ok(Measured { run, tangent, residual })
+}
+
+/// [`find`], and the surface of the last run's return (the chart at the fixed point).
+fn newton(
+    loaded: &Loaded,
+    mechanical: &mut Mechanical,
+    from: Option<&[f64]>,
+    iterations_allowed: usize,
+) -> Result<(Orbit, Vec<f64>), Error> {
+    let end = loaded.end;
     let fail = |r: Refusal| refused(r, loaded);
     let symmetry = &loaded.symmetry;
     let size = loaded.start.len();
     let start = from.map_or_else(|| loaded.start.clone(), |x| x.to_vec());
+    // From the scene's start the first step is a long one; from a nearby orbit's fixed point
+    // (a sweep's prediction) it is short, and a loose run's error would be most of it.
+    let accuracy = Accuracy::of(loaded.run.tolerance, from.is_none());
     // Onto the section first: the scene's start is anywhere on the orbit's way. The return is
     // mapped by the symmetry before it starts again, as every return is compared: a walker's
     // legs swap at the strike, and the state after it, its legs swapped, is where the next
     // step starts with its modes (the stance foot the one the coordinates now say). That run
-    // carries no Φ: its surface, all the next run needs of it, is the jump's and the section's.
+    // carries no Φ: its surface, all the next run needs of it, is the jump's and the
+    // section's. It is integrated at the tolerance asked for, though only Newton's start:
+    // Newton's steps stay in the chart, along the manifold the constraints hold, so how far
+    // its end lies off that manifold (the run's error) stays in every later start.
     let (mut x, mut surface) = match end {
         End::Time => (start, identity(size)),
         _ => {
             let options =
                 variational::Options { directions: Some(Vec::new()), ..Default::default() };
-            let tr = variational::transition_with(mechanical, &start, &run, end, &options)
+            let tr = variational::transition_with(mechanical, &start, &loaded.run, end, &options)
                 .map_err(fail)?;
             (symmetry.apply(&tr.state), tr.surface)
         }
     };
-    let mut iterations = Vec::new();
+    let mut iterations: Vec<Iteration> = Vec::new();
+    let mut runs: Vec<Run> = Vec::new();
     for _ in 0..iterations_allowed.max(1) {
-        let tr = variational::transition(mechanical, &x, &run, end).map_err(fail)?;
-        let ignored = symmetry.ignored_rows();
-        let tangent = chart::section(&symmetry.carry(&surface), &tr.normals, &ignored, size);
-        let returned = symmetry.apply(&tr.state);
+        let tolerance = accuracy.next(&runs);
+        let Measured { run: tr, tangent, residual } =
+            measure(loaded, mechanical, &x, &surface, tolerance)?;
         let monodromy = symmetry.carry(&tr.matrix);
-        let gap: Vec<f64> = returned.iter().zip(&tr.start).map(|(a, b)| a - b).collect();
-        let residual = tangent.transpose() * DVector::from_vec(gap);
         let reduced = chart::reduced(&monodromy, &tangent);
         let size_of = tr.start.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         let worst = residual.amax();
-        let previous = iterations.last().map_or(f64::INFINITY, |i: &Iteration| i.residual);
-        let stagnant = worst <= STAGNANT * size_of && worst > previous / 10.0;
-        iterations.push(Iteration { residual: worst, steps: tr.steps });
-        if worst <= CONVERGED * size_of || stagnant {
-            let multipliers = chart::multipliers_within(&reduced, &monodromy, size);
-            let largest = multipliers.first().map_or(0.0, |m| m.norm());
-            let verdict = if largest > 1.0 + NEUTRAL {
-                Verdict::Unstable
-            } else if largest >= 1.0 - NEUTRAL {
-                Verdict::Neutral
-            } else {
-                Verdict::Stable
-            };
-            let stable = verdict == Verdict::Stable;
-            return Ok(Orbit {
-                state_names: loaded.state_names.clone(),
-                fixed_point: tr.start.clone(),
-                period: tr.time - run.start,
-                multipliers,
-                monodromy,
-                trivial: size - tangent.ncols(),
-                jumps: tr.jumps,
-                iterations,
-                stable,
-                verdict,
-            });
-        }
-        let Some(step) = chart::newton_step(&reduced, &residual) else {
-            return Err(Error::Numeric(
-                "Newton's step is not finite: the map's Jacobian on the section is".to_string()
-                    + " not a number there",
-            ));
+        let this = Run { residual: worst / size_of, tolerance };
+        let finish = accuracy.finish(&runs, this);
+        runs.push(this);
+        iterations.push(Iteration { residual: worst, steps: tr.steps, tolerance });
+        let step = match finish {
+            Finish::Converged => None,
+            Finish::Continue | Finish::LastStep(_) => {
+                let Some(step) = chart::newton_step(&reduced, &residual, tolerance) else {
+                    return Err(Error::Numeric(
+                        "Newton's step is not finite: the map's Jacobian on the section is"
+                            .to_string()
+                            + " not a number there",
+                    ));
+                };
+                let moved = &tangent * step;
+                Some(tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect::<Vec<_>>())
+            }
         };
-        let moved = &tangent * step;
-        x = tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect();
-        surface = tr.surface;
+        if let (Finish::Continue, Some(next)) = (finish, &step) {
+            x = next.clone();
+            surface = tr.surface;
+            continue;
+        }
+        let last_step = match finish {
+            Finish::LastStep(expected) => Some(expected * size_of),
+            _ => None,
+        };
+        let multipliers = chart::multipliers_within(&reduced, &monodromy, size);
+        let largest = multipliers.first().map_or(0.0, |m| m.norm());
+        let verdict = if largest > 1.0 + NEUTRAL {
+            Verdict::Unstable
+        } else if largest >= 1.0 - NEUTRAL {
+            Verdict::Neutral
+        } else {
+            Verdict::Stable
+        };
+        let stable = verdict == Verdict::Stable;
+        let orbit = Orbit {
+            state_names: loaded.state_names.clone(),
+            fixed_point: step.unwrap_or_else(|| tr.start.clone()),
+            period: tr.time - loaded.run.start,
+            multipliers,
+            monodromy,
+            trivial: size - tangent.ncols(),
+            jumps: tr.jumps,
+            iterations,
+            last_step,
+            stable,
+            verdict,
+        };
+        return Ok((orbit, tr.surface));
     }
     let last = iterations.last().map_or(f64::NAN, |i| i.residual);
     Err(Error::Numeric(format!(
@@ -607,4 +762,77 @@ fn find(
          cyclic coordinate left in the comparison makes a family of orbits: --ignore it)",
         iterations.len()
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const WHEEL: &str = include_str!("../../../examples/contacts/rimless_wheel.lag");
+
+    fn run(residual: f64, tolerance: f64) -> Run {
+        Run { residual, tolerance }
+    }
+
+    /// Far from the orbit the runs are loose; as the residual falls they tighten, never loosen,
+    /// and reach the tolerance asked for once a step is expected to leave less than it can
+    /// tell; a run looser than that never ends the search.
+    #[test]
+    fn the_runs_tighten_with_the_residual_and_only_a_tight_one_ends_the_search() {
+        let accuracy = Accuracy::of(1e-10, true);
+        assert_eq!(accuracy.next(&[]), LOOSEST);
+        assert_eq!(Accuracy::of(1e-10, false).next(&[]), 1e-10);
+        // From 10⁻¹ (rate 1 assumed): 10⁻² expected, then 10⁻⁴ after its step, matched by 10⁻⁷.
+        let first = [run(1e-1, LOOSEST)];
+        assert!((accuracy.next(&first) - 1e-7).abs() < 1e-20);
+        // The rate measured (10⁻³/10⁻² = 10): 10⁻⁵ expected, 10⁻⁹ after, and 10⁻¹² is below
+        // the tolerance asked for.
+        let two = [run(1e-1, LOOSEST), run(1e-3, 1e-7)];
+        assert_eq!(accuracy.next(&two), 1e-10);
+        // A residual that grew (a rate read on a loose map's error) never loosens the runs.
+        let grown = [run(1e-9, 1e-10), run(1e-6, 1e-10)];
+        assert_eq!(accuracy.next(&grown), 1e-10);
+        // A loose run's tiny residual is its map's error, not the orbit's: it goes on.
+        assert_eq!(accuracy.finish(&[], run(1e-16, 1e-7)), Finish::Continue);
+        assert_eq!(accuracy.finish(&[], run(1e-15, 1e-10)), Finish::Converged);
+        // Quadratic from 10⁻⁶ to 10⁻¹²: the next step would leave about 10⁻²⁴, and moves the
+        // state by less than the tolerance: taken unchecked.
+        let near = [run(1e-6, 1e-10)];
+        match accuracy.finish(&near, run(1e-12, 1e-10)) {
+            Finish::LastStep(expected) => assert!((expected / 1e-24 - 1.0).abs() < 1e-9),
+            other => panic!("{other:?}"),
+        }
+        // From 10⁻⁴ to 10⁻⁸ (rate 1): 10⁻¹⁶ expected, but the step moves the state by 10⁻⁸,
+        // a hundred tolerances: checked by another run.
+        assert_eq!(accuracy.finish(&[run(1e-4, 1e-10)], run(1e-8, 1e-10)), Finish::Continue);
+        // A residual that no longer falls tenfold below 10⁻⁹ has met the map's rounding, but
+        // only against a run at the same tolerance.
+        assert_eq!(accuracy.finish(&[run(2e-10, 1e-10)], run(1e-10, 1e-10)), Finish::Converged);
+        assert_eq!(accuracy.finish(&[run(2e-10, 1e-8)], run(1e-10, 1e-10)), Finish::Continue);
+    }
+
+    /// The wheel's last step is taken unchecked: a run from its end, on the chart the last run
+    /// returned to, finds the residual at the map's rounding (the step had promised 10⁻²⁴),
+    /// far below the 10⁻¹² the step started from.
+    #[test]
+    fn an_unchecked_last_step_leaves_the_residual_it_promised() {
+        let options = Options {
+            run: simulation::Options { tolerance: Some(1e-10), ..Default::default() },
+            section: Section::Landing { contact: None },
+            swaps: Vec::new(),
+            shifts: vec![Assignment { name: "theta".into(), value: "pi/4".into() }],
+            ignore: vec!["x".into()],
+            iterations: 30,
+        };
+        let loaded = load(WHEEL, &options).expect("loads");
+        let mut mechanical = loaded.mechanical.clone();
+        let (orbit, surface) = newton(&loaded, &mut mechanical, None, 30).expect("an orbit");
+        let promised = orbit.last_step.expect("taken unchecked");
+        let before = orbit.iterations.last().expect("a run").residual;
+        let measured =
+            measure(&loaded, &mut mechanical, &orbit.fixed_point, &surface, 1e-10).expect("a run");
+        let left = measured.residual.amax();
+        assert!(promised < 1e-20 && left < 1e-14, "{left:e} left, {promised:e} promised");
+        assert!(before > 1e2 * left, "{before:e} before the step, {left:e} after");
+    }
 }

@@ -686,7 +686,10 @@ impl Mechanical {
             // A conditioned contact may start inside its gap: disarmed, or armed below it.
             // Below means inside beyond the touching tolerance: a contact touching within it
             // (a stance foot at a section in mid-stance, its gap rounding's) is touching.
-            let inside = self.gap(k) < -tolerance * length && !resting[k];
+            // So is one leaving, inside by rounding at half the digits: the contact a held start
+            // has just lifted from (a rimless wheel's trailing spoke at its landing section).
+            let leaving = held && self.gap(k) >= -half * length && self.normal_rate(k) > 0.0;
+            let inside = self.gap(k) < -tolerance * length && !resting[k] && !leaving;
             self.modes.below[k] = armed && self.modes.conditioned[k] && inside;
             if !self.modes.conditioned[k] && inside {
                 return Err(FaultKind::Penetrating { contact: k, gap: self.gap(k) });
