@@ -590,6 +590,9 @@ fn orbit_dict<'py>(py: Python<'py>, found: &orbit::Orbit) -> PyResult<Bound<'py,
     out.set_item("verdict", found.verdict.word())?;
     let residuals: Vec<f64> = found.iterations.iter().map(|i| i.residual).collect();
     out.set_item("residuals", residuals)?;
+    let tolerances: Vec<f64> = found.iterations.iter().map(|i| i.tolerance).collect();
+    out.set_item("tolerances", tolerances)?;
+    out.set_item("last_step", found.last_step)?;
     Ok(out)
 }
 

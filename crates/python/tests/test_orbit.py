@@ -26,6 +26,11 @@ def test_the_rimless_wheel_rolls_at_mcgeers_rate_with_the_multiplier_c_squared()
     assert orbit.multipliers[0] == pytest.approx(c * c, abs=1e-8)
     assert orbit.stable and orbit.jumps == 1
     assert orbit.monodromy.shape == (6, 6)
+    # Newton's first run is loose, its last at the tolerance asked for; the last step is taken
+    # unchecked, expected to leave the map's rounding at most.
+    assert len(orbit.tolerances) == len(orbit.residuals)
+    assert orbit.tolerances[0] == 1e-6 and orbit.tolerances[-1] < 1e-6
+    assert orbit.last_step is not None and orbit.last_step < 1e-14
 
 
 def test_the_driven_pendulum_contracts_areas_by_liouvilles_factor():

@@ -744,7 +744,9 @@ class Orbit(dict):
     - ``stable``: every multiplier inside the unit circle; ``verdict``: ``"stable"``,
       ``"neutral"`` (one on the unit circle, within 1e-6: a family of orbits, or the edge of
       stability) or ``"unstable"``; ``jumps``: the contacts' jumps on the way; ``residuals``:
-      Newton's, on the section, before each step.
+      Newton's, on the section, before each step; ``tolerances``: each run's (loose far from
+      the orbit, the one asked for near it); ``last_step``: where the last step was taken
+      without a run to check it, the residual it is expected to leave, else None.
     """
 
     def __init__(self, raw):
