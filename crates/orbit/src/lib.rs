@@ -3,6 +3,8 @@
 //! contact's landing), the symmetry a return is mapped by before it is compared with its start
 //! ([`Symmetry`]), Newton's method on the map in the chart of its section, and the Floquet
 //! multipliers and the verdict at the fixed point, as an [`Orbit`] a front end renders.
+//! Newton is inexact: each run's tolerance is matched to the residual its step should leave
+//! (`Accuracy`), and only a run at the tolerance asked for ends a search.
 //!
 //! The map's Jacobian is the variational run's (`sim::variational`): the state transition
 //! matrix integrated on the run's own steps from the exact Jacobian, carried across the jumps
@@ -89,7 +91,7 @@ pub struct Options {
 pub struct Iteration {
     pub residual: f64,
     pub steps: usize,
-    /// The tolerance its run was integrated at ([`Accuracy`]).
+    /// The tolerance its run was integrated at (matched to Newton's residual: loose far from the orbit).
     pub tolerance: f64,
 }
 
