@@ -18,6 +18,9 @@ pub trait Square<T = f64>:
     /// The number of rows, which is that of columns.
     fn order(&self) -> usize;
     fn swap_rows(&mut self, a: usize, b: usize);
+    /// The entries, column-major, and the stride between columns: the factorization walks
+    /// them as slices.
+    fn columns_mut(&mut self) -> (&mut [T], usize);
 }
 
 impl<T: Scalar> Square<T> for DMatrix<T> {
@@ -27,6 +30,11 @@ impl<T: Scalar> Square<T> for DMatrix<T> {
 
     fn swap_rows(&mut self, a: usize, b: usize) {
         nalgebra::Matrix::swap_rows(self, a, b);
+    }
+
+    fn columns_mut(&mut self) -> (&mut [T], usize) {
+        let stride = self.nrows();
+        (self.as_mut_slice(), stride)
     }
 }
 
@@ -78,6 +86,10 @@ impl Square for Small {
         for j in 0..self.order {
             self.entries.swap(a + SMALL * j, b + SMALL * j);
         }
+    }
+
+    fn columns_mut(&mut self) -> (&mut [f64], usize) {
+        (&mut self.entries, SMALL)
     }
 }
 
@@ -281,10 +293,39 @@ pub fn solve_symmetric_lanes(n: usize, a: &mut [Lanes], b: &mut [Lanes]) -> [boo
 /// vanishes relative to the largest entry, or an extreme pivot ratio, is a singular matrix.
 pub fn lu_in_place<M: Square>(a: &mut M, pivots: &mut [usize]) -> Result<(), FaultKind> {
     let n = a.order();
+    let (a, stride) = a.columns_mut();
+    // The small orders each their own copy, the order a constant: a constrained system's
+    // five or six rows factored at every stage had spent most of their time on loop bounds.
+    match (n, stride) {
+        (1, SMALL) => lu_columns(a, SMALL, 1, pivots),
+        (2, SMALL) => lu_columns(a, SMALL, 2, pivots),
+        (3, SMALL) => lu_columns(a, SMALL, 3, pivots),
+        (4, SMALL) => lu_columns(a, SMALL, 4, pivots),
+        (5, SMALL) => lu_columns(a, SMALL, 5, pivots),
+        (6, SMALL) => lu_columns(a, SMALL, 6, pivots),
+        (7, SMALL) => lu_columns(a, SMALL, 7, pivots),
+        (8, SMALL) => lu_columns(a, SMALL, 8, pivots),
+        _ => lu_columns(a, stride, n, pivots),
+    }
+}
+
+/// [`lu_in_place`] on column-major entries `stride` apart, of order `n`.
+#[inline(always)]
+fn lu_columns(
+    a: &mut [f64],
+    stride: usize,
+    n: usize,
+    pivots: &mut [usize],
+) -> Result<(), FaultKind> {
+    if n == 0 {
+        return Ok(());
+    }
+    let a = &mut a[..(n - 1) * stride + n];
+    let pivots = &mut pivots[..n];
     let mut scale = 0.0f64;
     for j in 0..n {
-        for i in 0..n {
-            scale = scale.max(a[(i, j)].abs());
+        for v in &a[j * stride..j * stride + n] {
+            scale = scale.max(v.abs());
         }
     }
     if !scale.is_finite() {
@@ -293,35 +334,43 @@ pub fn lu_in_place<M: Square>(a: &mut M, pivots: &mut [usize]) -> Result<(), Fau
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     let mut vanished = Vec::new();
     for k in 0..n {
+        let column = &a[k * stride..k * stride + n];
         let mut p = k;
         for i in k + 1..n {
-            if a[(i, k)].abs() > a[(p, k)].abs() {
+            if column[i].abs() > column[p].abs() {
                 p = i;
             }
         }
         pivots[k] = p;
         if p != k {
-            a.swap_rows(k, p);
+            for j in 0..n {
+                a.swap(j * stride + k, j * stride + p);
+            }
         }
-        let pivot = a[(k, k)];
+        let pivot = a[k * stride + k];
         lo = lo.min(pivot.abs());
         hi = hi.max(pivot.abs());
         if pivot.abs() <= scale * f64::EPSILON * n as f64 {
             vanished.push(k);
             continue;
         }
-        for i in k + 1..n {
-            let factor = a[(i, k)] / pivot;
-            a[(i, k)] = factor;
-            for j in k + 1..n {
-                let u = a[(k, j)];
-                a[(i, j)] -= factor * u;
+        for factor in &mut a[k * stride + k + 1..k * stride + n] {
+            *factor /= pivot;
+        }
+        // Column by column: each entry still takes its updates in the order of k, so the
+        // factors are the bits a row-by-row sweep gives.
+        for j in k + 1..n {
+            let (left, right) = a.split_at_mut(j * stride);
+            let u = right[k];
+            let factors = &left[k * stride + k + 1..k * stride + n];
+            for (entry, factor) in right[k + 1..n].iter_mut().zip(factors) {
+                *entry -= factor * u;
             }
         }
     }
     if !vanished.is_empty() || hi / lo > CONDITION_LIMIT {
         if vanished.is_empty() {
-            vanished = (0..n).filter(|&k| a[(k, k)].abs() * CONDITION_LIMIT < hi).collect();
+            vanished = (0..n).filter(|&k| a[k * stride + k].abs() * CONDITION_LIMIT < hi).collect();
         }
         return Err(FaultKind::SingularMass { coordinates: vanished, condition: hi / lo });
     }
