@@ -13,7 +13,8 @@
 //! held to its own search at tolerance 1e-12 and the peer's (the paper's model) to the product
 //! of the paper's map's multipliers by central differences of its equations at 1e-13. Cost: the median wall time of a search (every Newton run, from the
 //! scene's start), the one-time load apart, over at least `--repeats` searches spanning at
-//! least three seconds on each side.
+//! least three seconds on each side. With the peer the two sides take turns, three of a second
+//! each, and the ratio is taken turn by turn.
 //!
 //! With `--peer`, SciPy in the same run (`tests/sympy/orbit_peer.py`): the shooting loop a
 //! SciPy user writes, Newton's method with the map's Jacobian by forward differences of whole
@@ -31,7 +32,7 @@ use std::time::Instant;
 use engine::input::Assignment;
 use orbit::{Options, Orbit, Search, Section};
 
-use crate::{median, repeating, seconds, SPAN};
+use crate::{median, seconds, SPAN};
 
 const PEER: &str = "tests/sympy/orbit_peer.py";
 const TOLERANCE: f64 = 1e-10;
@@ -141,7 +142,7 @@ struct Theirs {
     evaluations: usize,
 }
 
-fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, String> {
+fn scipy(root: &Path, scenes: &[Scene], repeats: usize, span: f64) -> Result<Vec<Theirs>, String> {
     let mut input = String::new();
     for scene in scenes {
         let kind = match scene.name {
@@ -151,7 +152,7 @@ fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, S
         };
         let request = serde_json::json!({
             "scene": kind, "params": scene.params, "start": scene.start,
-            "rtol": TOLERANCE, "step": STEP, "repeats": repeats, "span": SPAN,
+            "rtol": TOLERANCE, "step": STEP, "repeats": repeats, "span": span,
         });
         input += &(request.to_string() + "\n");
     }
@@ -173,41 +174,76 @@ fn scipy(root: &Path, scenes: &[Scene], repeats: usize) -> Result<Vec<Theirs>, S
         .collect()
 }
 
+/// With the peer, the two sides take turns this many times, each turn a third of [`SPAN`]:
+/// this machine's speed moves in phases of seconds, which one side's whole span and then the
+/// other's had met unequally (SciPy's wheel 8 ms in one run, 25 ms in another).
+const ROUNDS: usize = 3;
+
 /// `peer`: also run SciPy's shooting loop; `repeats`: how often each search is timed at least.
 pub fn run(peer: bool, repeats: usize) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let scenes = scenes();
+    let rounds = if peer { ROUNDS } else { 1 };
+    let span = SPAN / rounds as f64;
+    let turn_repeats = repeats.div_ceil(rounds);
     outln!("## Periodic orbits: Newton on the return map, and the multipliers\n");
     outln!(
         "dop853 at tolerance {TOLERANCE:e}, from each scene's start; the median of searches \
          repeated at least {repeats} times and for at least {SPAN} s (SciPy's too), the load \
          (parse, derive, lower) apart.\n"
     );
-    outln!("| scene | figure | Newton runs | error | load | search |");
-    outln!("|---|---|---:|---:|---:|---:|");
-    let mut walls = Vec::new();
+    let mut searches = Vec::new();
+    let mut loads = Vec::new();
     for scene in &scenes {
         let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
         let began = Instant::now();
-        let mut search = Search::new(&source, &scene.options).expect("the scene loads");
-        let load = began.elapsed().as_secs_f64();
-        let mut times = Vec::new();
-        let mut found = None;
-        // Both sides' searches take milliseconds: each repeats them until they span `SPAN`
-        // (the peer is asked for the same).
-        let since = Instant::now();
-        while repeating(times.len(), repeats, since) {
-            let began = Instant::now();
-            let orbit = search.find(scene.options.iterations).expect("an orbit");
-            times.push(began.elapsed().as_secs_f64());
-            found = Some(orbit);
+        searches.push(Search::new(&source, &scene.options).expect("the scene loads"));
+        loads.push(began.elapsed().as_secs_f64());
+    }
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); scenes.len()];
+    let mut found: Vec<Option<Orbit>> = vec![None; scenes.len()];
+    // Per turn, each side's median: the ratio is taken turn by turn.
+    let mut turns: Vec<Vec<(f64, Theirs)>> = (0..scenes.len()).map(|_| Vec::new()).collect();
+    let mut peer_failed = None;
+    for _ in 0..rounds {
+        let mut ours_this_turn = Vec::new();
+        for (k, scene) in scenes.iter().enumerate() {
+            // Both sides' searches take milliseconds: each repeats them until they span the
+            // turn (the peer is asked for the same).
+            let mut turn = Vec::new();
+            let since = Instant::now();
+            while turn.len() < turn_repeats.max(1) || since.elapsed().as_secs_f64() < span {
+                let began = Instant::now();
+                let orbit = searches[k].find(scene.options.iterations).expect("an orbit");
+                turn.push(began.elapsed().as_secs_f64());
+                found[k] = Some(orbit);
+            }
+            times[k].extend(&turn);
+            ours_this_turn.push(median(&mut turn));
         }
-        let orbit = found.expect("a search");
-        let wall = median(&mut times);
+        if !peer || peer_failed.is_some() {
+            continue;
+        }
+        match scipy(&root, &scenes, turn_repeats, span) {
+            Ok(theirs) => {
+                for (k, t) in theirs.into_iter().enumerate() {
+                    turns[k].push((ours_this_turn[k], t));
+                }
+            }
+            Err(why) => peer_failed = Some(why),
+        }
+    }
+    outln!("| scene | figure | Newton runs | error | load | search |");
+    outln!("|---|---|---:|---:|---:|---:|");
+    let mut walls = Vec::new();
+    for (k, scene) in scenes.iter().enumerate() {
+        let orbit = found[k].take().expect("a search");
+        let wall = median(&mut times[k]);
         walls.push(wall);
         let exact = match scene.own_reference {
             None => scene.exact,
             Some(tolerance) => {
+                let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
                 let mut tight = scene.options.clone();
                 tight.run.tolerance = Some(tolerance);
                 let reference = orbit::orbit(&source, &tight).expect("the reference orbit");
@@ -223,7 +259,7 @@ pub fn run(peer: bool, repeats: usize) {
             scene.figure,
             orbit.iterations.len(),
             error(&ours(&orbit), exact),
-            seconds(load),
+            seconds(loads[k]),
             seconds(wall)
         );
     }
@@ -231,27 +267,35 @@ pub fn run(peer: bool, repeats: usize) {
     if !peer {
         return;
     }
-    match scipy(&root, &scenes, repeats) {
-        Ok(theirs) => {
-            outln!(
-                "SciPy's shooting loop (solve_ivp DOP853 at rtol = atol = {TOLERANCE:e}, the \
-                 Jacobian by forward differences, relative step {STEP:e}):\n"
-            );
-            outln!("| scene | runs | right-hand sides | error | search | ours faster |");
-            outln!("|---|---:|---:|---:|---:|---:|");
-            for ((scene, t), ours) in scenes.iter().zip(&theirs).zip(&walls) {
-                outln!(
-                    "| {} | {} | {} | {:.1e} | {} | {:.1}× |",
-                    scene.name,
-                    t.runs,
-                    t.evaluations,
-                    t.error,
-                    seconds(t.wall),
-                    t.wall / ours
-                );
-            }
-            outln!();
-        }
-        Err(why) => outln!("SciPy not run: {why}\n"),
+    if let Some(why) = peer_failed {
+        outln!("SciPy not run: {why}\n");
+        return;
     }
+    outln!(
+        "SciPy's shooting loop (solve_ivp DOP853 at rtol = atol = {TOLERANCE:e}, the Jacobian \
+         by forward differences, relative step {STEP:e}), the two sides taking {ROUNDS} turns \
+         of {span} s each; its search the median of its turns' medians, and ours faster the \
+         median of the turns' ratios (their range beside it):\n"
+    );
+    outln!("| scene | runs | right-hand sides | error | search | ours faster | turns |");
+    outln!("|---|---:|---:|---:|---:|---:|---|");
+    for (scene, turns) in scenes.iter().zip(&turns) {
+        let Some((_, last)) = turns.last() else { continue };
+        let mut theirs: Vec<f64> = turns.iter().map(|(_, t)| t.wall).collect();
+        let mut ratios: Vec<f64> = turns.iter().map(|(o, t)| t.wall / o).collect();
+        let range =
+            ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
+        outln!(
+            "| {} | {} | {} | {:.1e} | {} | {:.1}× | {:.1}–{:.1}× |",
+            scene.name,
+            last.runs,
+            last.evaluations,
+            last.error,
+            seconds(median(&mut theirs)),
+            median(&mut ratios),
+            range.0,
+            range.1
+        );
+    }
+    outln!();
 }
