@@ -91,7 +91,8 @@ pub struct Options {
 pub struct Iteration {
     pub residual: f64,
     pub steps: usize,
-    /// The tolerance its run was integrated at (matched to Newton's residual: loose far from the orbit).
+    /// The tolerance its run was integrated at: matched to Newton's residual, loose far from
+    /// the orbit.
     pub tolerance: f64,
 }
 
