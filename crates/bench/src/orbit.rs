@@ -11,10 +11,12 @@
 //! ((I + m·l²·cos 2α)/(I + m·l²))², the pendulum's product of multipliers against Liouville's
 //! exp(−c·T/(m·l²)). The walker has none: its feet weigh β·M, the paper's nothing, so ours is
 //! held to its own search at tolerance 1e-12 and the peer's (the paper's model) to the product
-//! of the paper's map's multipliers by central differences of its equations at 1e-13. Cost: the median wall time of a search (every Newton run, from the
-//! scene's start), the one-time load apart, over at least `--repeats` searches spanning at
-//! least three seconds on each side. With the peer the two sides take turns, three of a second
-//! each, and the ratio is taken turn by turn.
+//! of the paper's map's multipliers by central differences of its equations at 1e-13.
+//!
+//! Cost: the median wall time of a search (every Newton run, from the scene's start), the
+//! one-time load apart, over at least `--repeats` searches spanning at least three seconds on
+//! each side. With the peer the two sides take turns, three of a second each, and the ratio is
+//! taken turn by turn.
 //!
 //! With `--peer`, SciPy in the same run (`tests/sympy/orbit_peer.py`): the shooting loop a
 //! SciPy user writes, Newton's method with the map's Jacobian by forward differences of whole
