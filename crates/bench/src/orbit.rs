@@ -194,12 +194,15 @@ pub fn run(peer: bool, repeats: usize) {
          repeated at least {repeats} times and for at least {SPAN} s (SciPy's too), the load \
          (parse, derive, lower) apart.\n"
     );
+    let sources: Vec<String> = scenes
+        .iter()
+        .map(|scene| std::fs::read_to_string(root.join(scene.file)).expect("scene"))
+        .collect();
     let mut searches = Vec::new();
     let mut loads = Vec::new();
-    for scene in &scenes {
-        let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
+    for (scene, source) in scenes.iter().zip(&sources) {
         let began = Instant::now();
-        searches.push(Search::new(&source, &scene.options).expect("the scene loads"));
+        searches.push(Search::new(source, &scene.options).expect("the scene loads"));
         loads.push(began.elapsed().as_secs_f64());
     }
     let mut times: Vec<Vec<f64>> = vec![Vec::new(); scenes.len()];
@@ -245,10 +248,9 @@ pub fn run(peer: bool, repeats: usize) {
         let exact = match scene.own_reference {
             None => scene.exact,
             Some(tolerance) => {
-                let source = std::fs::read_to_string(root.join(scene.file)).expect("scene");
                 let mut tight = scene.options.clone();
                 tight.run.tolerance = Some(tolerance);
-                let reference = orbit::orbit(&source, &tight).expect("the reference orbit");
+                let reference = orbit::orbit(&sources[k], &tight).expect("the reference orbit");
                 let product = ours(&reference)
                     .iter()
                     .fold((1.0, 0.0), |(a, b), &(c, d)| (a * c - b * d, a * d + b * c));

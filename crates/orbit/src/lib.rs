@@ -710,7 +710,7 @@ fn newton(
         let finish = accuracy.finish(&runs, this);
         runs.push(this);
         iterations.push(Iteration { residual: worst, steps: tr.steps, tolerance });
-        let step = match finish {
+        let next = match finish {
             Finish::Converged => None,
             Finish::Continue | Finish::LastStep(_) => {
                 let Some(step) = chart::newton_step(&reduced, &residual, tolerance) else {
@@ -724,10 +724,12 @@ fn newton(
                 Some(tr.start.iter().zip(moved.iter()).map(|(a, d)| a + d).collect::<Vec<_>>())
             }
         };
-        if let (Finish::Continue, Some(next)) = (finish, &step) {
-            x = next.clone();
-            surface = tr.surface;
-            continue;
+        if finish == Finish::Continue {
+            if let Some(next) = next {
+                x = next;
+                surface = tr.surface;
+                continue;
+            }
         }
         let last_step = match finish {
             Finish::LastStep(expected) => Some(expected * size_of),
@@ -745,7 +747,7 @@ fn newton(
         let stable = verdict == Verdict::Stable;
         let orbit = Orbit {
             state_names: loaded.state_names.clone(),
-            fixed_point: step.unwrap_or_else(|| tr.start.clone()),
+            fixed_point: next.unwrap_or_else(|| tr.start.clone()),
             period: tr.time - loaded.run.start,
             multipliers,
             monodromy,
