@@ -27,14 +27,39 @@ pub struct Tape {
 /// Inputs that change seldom, such as parameters ([`Tape::with_fixed_inputs`]), and the ops
 /// that depend on the other inputs: while the fixed inputs keep their bits, only those run,
 /// and the registers of the rest keep the values the same operations gave them before.
+///
+/// Runs of the whole program and of its slices share the registers, so they share the count
+/// of the fixed inputs' changes: between two changes an op on them alone gives the same bits
+/// whoever runs it, and a run (whole or a slice) that ran its own since the last change may
+/// leave them out.
 #[derive(Clone, Debug)]
 struct Fixed {
     inputs: std::ops::Range<usize>,
-    /// Their values at the last run that ran every op; `None` before the first.
-    last: Option<Vec<f64>>,
+    /// Their values at the last run of any kind; `None` before the first.
+    seen: Option<Vec<f64>>,
+    /// How many times a run found them changed.
+    epoch: u64,
+    /// The epoch in which a run of the whole program last ran every op.
+    whole: Option<u64>,
     varying: Vec<(Reg, Op)>,
     /// `varying` as machine code.
     native: Native,
+}
+
+impl Fixed {
+    /// The epoch of the fixed inputs in `registers`, counting a change since the last run.
+    fn epoch(&mut self, registers: &[f64]) -> u64 {
+        let now = &registers[self.inputs.clone()];
+        let same = self
+            .seen
+            .as_ref()
+            .is_some_and(|seen| seen.iter().zip(now).all(|(a, b)| a.to_bits() == b.to_bits()));
+        if !same {
+            self.seen = Some(now.to_vec());
+            self.epoch += 1;
+        }
+        self.epoch
+    }
 }
 
 /// An instruction of [`Program::code`] as the tape (and the batch tape) runs it: the k-th
@@ -107,7 +132,14 @@ impl Tape {
             varies[self.ops[k].0 as usize] = any;
         }
         let varying = self.ops.iter().filter(|(dst, _)| varies[*dst as usize]).copied().collect();
-        self.fixed = Some(Fixed { inputs, last: None, varying, native: Native::default() });
+        self.fixed = Some(Fixed {
+            inputs,
+            seen: None,
+            epoch: 0,
+            whole: None,
+            varying,
+            native: Native::default(),
+        });
         self
     }
 
@@ -128,6 +160,12 @@ impl Tape {
     /// often enough.
     pub fn is_compiled(&self) -> bool {
         self.native.is_compiled()
+    }
+
+    /// How many operations a run takes while the fixed inputs keep their bits (all of them on
+    /// a tape without fixed inputs).
+    pub fn operations(&self) -> usize {
+        self.fixed.as_ref().map_or(self.ops.len(), |fixed| fixed.varying.len())
     }
 
     pub fn program(&self) -> &Program {
@@ -169,15 +207,12 @@ impl Tape {
         let r = &mut self.registers;
         let (ops, native) = match &mut self.fixed {
             None => (&self.ops, &mut self.native),
-            Some(Fixed { inputs, last, varying, native }) => {
-                let now = &r[inputs.clone()];
-                let same = last.as_ref().is_some_and(|last| {
-                    last.iter().zip(now).all(|(a, b)| a.to_bits() == b.to_bits())
-                });
-                if same {
-                    (&*varying, native)
+            Some(fixed) => {
+                let epoch = fixed.epoch(r);
+                if fixed.whole == Some(epoch) {
+                    (&fixed.varying, &mut fixed.native)
                 } else {
-                    *last = Some(now.to_vec());
+                    fixed.whole = Some(epoch);
                     (&self.ops, &mut self.native)
                 }
             }
@@ -201,12 +236,30 @@ pub struct Slice {
     /// The wanted outputs' indices.
     outputs: Vec<usize>,
     native: Native,
+    /// Of a tape with fixed inputs: the ops among `ops` that depend on the other inputs, as
+    /// ops and as machine code, and the epoch of the fixed inputs in which the slice last ran
+    /// every op ([`Fixed`]).
+    varying: Vec<(Reg, Op)>,
+    varying_native: Native,
+    whole: Option<u64>,
+    /// Whether the tape has fixed inputs.
+    of_fixed: bool,
 }
 
 impl Slice {
     /// The indices of the outputs it computes, increasing.
     pub fn outputs(&self) -> &[usize] {
         &self.outputs
+    }
+
+    /// How many operations a run of it takes while the fixed inputs keep their bits (all of
+    /// them on a tape without fixed inputs): what it costs against [`Tape::operations`].
+    pub fn operations(&self) -> usize {
+        if self.of_fixed {
+            self.varying.len()
+        } else {
+            self.ops.len()
+        }
     }
 }
 
@@ -238,8 +291,27 @@ impl Tape {
                 _ => {}
             }
         }
-        let ops = self.ops.iter().zip(&kept).filter(|(_, k)| **k).map(|(op, _)| *op).collect();
-        Slice { ops, outputs, native: Native::default() }
+        let ops: Vec<(Reg, Op)> =
+            self.ops.iter().zip(&kept).filter(|(_, k)| **k).map(|(op, _)| *op).collect();
+        let varying = match &self.fixed {
+            Some(fixed) => {
+                let mut varies = vec![false; self.registers.len()];
+                for &(dst, _) in &fixed.varying {
+                    varies[dst as usize] = true;
+                }
+                ops.iter().filter(|(dst, _)| varies[*dst as usize]).copied().collect()
+            }
+            None => Vec::new(),
+        };
+        Slice {
+            ops,
+            outputs,
+            native: Native::default(),
+            varying,
+            varying_native: Native::default(),
+            whole: None,
+            of_fixed: self.fixed.is_some(),
+        }
     }
 
     /// Evaluates the outputs of `slice` (made by [`Tape::slice`] of this tape) at the inputs
@@ -248,9 +320,21 @@ impl Tape {
     pub fn run_slice(&mut self, slice: &mut Slice, out: &mut [f64]) {
         assert_eq!(out.len(), self.program.outputs.len(), "tape outputs");
         let r = &mut self.registers;
-        match slice.native.code(&slice.ops, r.len()) {
+        let (ops, native) = match &mut self.fixed {
+            None => (&slice.ops, &mut slice.native),
+            Some(fixed) => {
+                let epoch = fixed.epoch(r);
+                if slice.whole == Some(epoch) {
+                    (&slice.varying, &mut slice.varying_native)
+                } else {
+                    slice.whole = Some(epoch);
+                    (&slice.ops, &mut slice.native)
+                }
+            }
+        };
+        match native.code(ops, r.len()) {
             Some(code) => code.run(r),
-            None => interpret(&slice.ops, r),
+            None => interpret(ops, r),
         }
         for &o in &slice.outputs {
             out[o] = r[self.program.outputs[o] as usize];
@@ -386,5 +470,54 @@ mod tests {
             assert_eq!(bits(&got), bits(&want), "at {input:?}");
         }
         assert_eq!(got, [9.0, 9.0, 2.0]);
+    }
+
+    /// A slice leaves out its ops on the fixed inputs alone only while they hold the bits its
+    /// own last full run saw; whole runs and other slices in between, at other values or at
+    /// the same, change nothing of what it gives.
+    #[test]
+    fn slices_share_the_fixed_inputs_epochs_with_whole_runs() {
+        // p·p (fixed alone), x·(p·p), x + 1, p + 1 (fixed alone).
+        let program = Program {
+            inputs: 2,
+            constants: vec![1.0],
+            code: vec![Instr::Mul(1, 1), Instr::Mul(0, 3), Instr::Add(0, 2), Instr::Add(1, 2)],
+            outputs: vec![3, 4, 5, 6],
+        };
+        let mut plain = Tape::new(program.clone());
+        let mut fixed = Tape::new(program).with_fixed_inputs(1..2);
+        let mut product = fixed.slice([1]);
+        let mut other = fixed.slice([3]);
+        assert_eq!((product.operations(), fixed.operations()), (1, 2));
+        let mut want = [0.0; 4];
+        let mut got = [0.0; 4];
+        // Each state: a whole run or one of the two slices, at these inputs.
+        let steps: [(u8, [f64; 2]); 8] = [
+            (1, [2.0, 3.0]),
+            (0, [2.0, 5.0]),
+            (1, [4.0, 5.0]),
+            (2, [4.0, 3.0]),
+            (1, [1.0, 3.0]),
+            (0, [1.0, 7.0]),
+            (2, [1.0, 3.0]),
+            (1, [6.0, 3.0]),
+        ];
+        for (run, input) in steps {
+            plain.eval(&input, &mut want);
+            fixed.inputs_mut().copy_from_slice(&input);
+            match run {
+                0 => fixed.run(&mut got),
+                1 => fixed.run_slice(&mut product, &mut got),
+                _ => fixed.run_slice(&mut other, &mut got),
+            }
+            let wanted = match run {
+                0 => vec![0, 1, 2, 3],
+                1 => vec![1],
+                _ => vec![3],
+            };
+            for o in wanted {
+                assert_eq!(got[o].to_bits(), want[o].to_bits(), "output {o} at {input:?}");
+            }
+        }
     }
 }

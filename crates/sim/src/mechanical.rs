@@ -92,6 +92,10 @@ pub enum Stabilisation {
 /// a quaternion's norm moved a sphere's stop by 2.5e-8 (`tests/friction.rs`).
 pub const BAUMGARTE_RATE: f64 = 2.0;
 
+/// How many slices of the dynamics or the partials program a problem keeps, one per set of
+/// kept rows ([`Mechanical::kept_accelerations`], [`Mechanical::kept_partials_at`]).
+const SLICES: usize = 64;
+
 /// The equations of motion M q̈ − Jᵀλ = f, J q̈ = γ as y' = F(t, y) with y = (q, q̇).
 ///
 /// Constraints kept with multipliers drift at the position and velocity level, because only
@@ -132,6 +136,14 @@ pub struct Mechanical {
     /// Slices of the partials program for the exact Jacobian, one for each set of kept rows
     /// met so far ([`Mechanical::kept_partials_at`]).
     partial_slices: Vec<(Vec<bool>, Slice)>,
+    /// Slices of the dynamics program for a variational stage, one for each set of kept rows
+    /// met so far: M, the forces and the kept rows alone ([`Mechanical::kept_accelerations`]).
+    /// Each with the slice of the other rows, which completes it where they are needed, and
+    /// whether it saves enough to be run rather than the whole program.
+    dynamics_slices: Vec<(Vec<bool>, Slice, Slice, bool)>,
+    /// Where `dyn_out` holds only such a slice's outputs at the inputs `solved_at` compares
+    /// (the rows not kept older), which: what needs them (an open contact's gap) completes it.
+    sliced: Option<usize>,
     /// The partials by the parameters a caller varies, and how many they are
     /// ([`Mechanical::set_sensitivities`]), and their outputs.
     sensitivities: Option<(Tape, usize)>,
@@ -253,6 +265,8 @@ impl Mechanical {
             partials: None,
             partials_out: Vec::new(),
             partial_slices: Vec::new(),
+            dynamics_slices: Vec::new(),
+            sliced: None,
             sensitivities: None,
             sensitivities_out: Vec::new(),
             signals: Vec::new(),
@@ -381,6 +395,7 @@ impl Mechanical {
         fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
         self.dynamics.run(&mut self.dyn_out);
         self.dense = true;
+        self.sliced = None;
         let layout = self.layout;
         check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         Ok(&self.dyn_out)
@@ -423,6 +438,9 @@ impl Mechanical {
         if self.solved_at(t, y) {
             return Ok(());
         }
+        if self.completed_at(t, y)? {
+            return Ok(());
+        }
         if self.chain.is_some() {
             return self.recursive_accelerations(t, y);
         }
@@ -436,7 +454,66 @@ impl Mechanical {
         if self.dense && self.solved_at(t, y) {
             return Ok(());
         }
+        if self.completed_at(t, y)? {
+            return Ok(());
+        }
         self.dynamics_at(t, y)?;
+        self.solve_dynamics()
+    }
+
+    /// [`Mechanical::dense_accelerations`] for a variational stage, which reads M, the forces
+    /// and the kept rows alone: with contacts and no friction, from a slice of the dynamics
+    /// program for the rows kept now. A rimless wheel on one of its eight spokes had evaluated
+    /// its sixteen contact rows (gaps, Jacobian rows, their rates) at every stage, for the two
+    /// it keeps; the open rows' gaps are the guards', read after the step at its end.
+    pub(crate) fn kept_accelerations(&mut self, t: f64, y: &[f64]) -> Result<(), FaultKind> {
+        if self.contacts.is_empty() || !self.bends.is_empty() || self.kept.iter().all(|&k| k) {
+            return self.dense_accelerations(t, y);
+        }
+        if self.dense && self.solved_on(t, y) {
+            return Ok(());
+        }
+        let Layout { coordinates: n, multipliers: m, .. } = self.layout;
+        let kept = &self.kept;
+        let same =
+            |rows: &[bool]| rows.len() == kept.len() && rows.iter().zip(kept).all(|(a, b)| a == b);
+        let index = match self.dynamics_slices.iter().position(|(rows, ..)| same(rows)) {
+            Some(index) => index,
+            None => {
+                let rows = |keep: bool| {
+                    (0..m)
+                        .filter(move |&c| kept[c] == keep)
+                        .flat_map(|c| n * n + n + c * (n + 3)..n * n + n + (c + 1) * (n + 3))
+                };
+                let slice = self.dynamics.slice((0..n * n + n).chain(rows(true)));
+                let rest = self.dynamics.slice(rows(false));
+                // A step's end completes the slice with the rest, which shares the kept rows'
+                // subexpressions: a slice of most of the program saves nothing (a walker
+                // keeping one foot's two rows of four ran 1% more of them).
+                let worth = 2 * slice.operations() <= self.dynamics.operations();
+                // The modes a run meets are few; a problem that meets ever more starts over.
+                if self.dynamics_slices.len() >= SLICES {
+                    self.dynamics_slices.clear();
+                }
+                self.dynamics_slices.push((kept.clone(), slice, rest, worth));
+                self.dynamics_slices.len() - 1
+            }
+        };
+        if !self.dynamics_slices[index].3 {
+            return self.dense_accelerations(t, y);
+        }
+        self.solved = None;
+        self.mass_factored = false;
+        self.follow_signals(t);
+        fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
+        let slice = &mut self.dynamics_slices[index].1;
+        self.dynamics.run_slice(slice, &mut self.dyn_out);
+        self.dense = true;
+        self.sliced = Some(index);
+        let (out, layout) = (&self.dyn_out, self.layout);
+        if let Some(&o) = slice.outputs().iter().find(|&&o| !out[o].is_finite()) {
+            return Err(FaultKind::NonFinite { at: layout.dynamics_entry(o) });
+        }
         self.solve_dynamics()
     }
 
@@ -539,6 +616,30 @@ impl Mechanical {
     /// the last evaluation was at the same bits of t, y and the parameters, with the same
     /// Baumgarte rate.
     fn solved_at(&mut self, t: f64, y: &[f64]) -> bool {
+        self.sliced.is_none() && self.solved_on(t, y)
+    }
+
+    /// Where a slice's run solved the accelerations at (t, y): the whole dynamics program run
+    /// there too (its inputs are in place), the solution kept, which the outputs the slice
+    /// gave decided with the same bits. False elsewhere: nothing was run.
+    pub(crate) fn completed_at(&mut self, t: f64, y: &[f64]) -> Result<bool, FaultKind> {
+        let Some(index) = self.sliced else { return Ok(false) };
+        if !(self.dense && self.solved_on(t, y)) {
+            return Ok(false);
+        }
+        let rest = &mut self.dynamics_slices[index].2;
+        self.dynamics.run_slice(rest, &mut self.dyn_out);
+        self.sliced = None;
+        let (out, layout) = (&self.dyn_out, self.layout);
+        if let Some(&o) = rest.outputs().iter().find(|&&o| !out[o].is_finite()) {
+            return Err(FaultKind::NonFinite { at: layout.dynamics_entry(o) });
+        }
+        Ok(true)
+    }
+
+    /// [`Mechanical::solved_at`], whether `dyn_out` is whole or a slice's (what a variational
+    /// stage reads).
+    fn solved_on(&mut self, t: f64, y: &[f64]) -> bool {
         if self.solved != Some(self.baumgarte.to_bits()) {
             return false;
         }

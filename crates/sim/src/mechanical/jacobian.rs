@@ -5,16 +5,13 @@
 //! ∂q̈/∂(q, q̇) with no step size to choose. On a long chain's recursive route the columns
 //! solve with the sweep's own factors instead, O(n) each, M never formed.
 
-use super::{Canonical, ChainFactored, Layout, Mechanical, Stabilisation};
+use super::{Canonical, ChainFactored, Layout, Mechanical, Stabilisation, SLICES};
 use numeric::Tape;
 
 use crate::{check_finite, linalg, FaultKind, NonFiniteAt};
 
 /// How many of the Jacobian's (and the sensitivities') columns are solved side by side.
 pub(super) const COLUMNS: usize = 8;
-
-/// How many slices of the partials program a problem keeps ([`Mechanical::kept_partials_at`]).
-const SLICES: usize = 64;
 
 impl Mechanical {
     /// Whether the problem has its exact Jacobian ([`Mechanical::with_partials`]).
@@ -384,7 +381,7 @@ impl Mechanical {
         }
         let recursive = self.recursive_factors(t, y);
         if recursive.is_none() {
-            self.dense_accelerations(t, y)?;
+            self.kept_accelerations(t, y)?;
         }
         rates[..n].copy_from_slice(&y[n..2 * n]);
         rates[n..].copy_from_slice(&self.solution[..n]);

@@ -215,6 +215,7 @@ impl Mechanical {
             *slot = value;
         }
         self.dense = true;
+        self.sliced = None;
         let layout = self.layout;
         check_finite(&self.dyn_out, |i| layout.dynamics_entry(i))?;
         self.solve_dynamics()?;

@@ -539,7 +539,7 @@ impl Mechanical {
         // ball in flight locates its landing without one).
         if self.modes.closed.iter().any(|&c| c) {
             self.accelerations(t, y)?;
-        } else if !self.solved_at(t, y) {
+        } else if !self.solved_at(t, y) && !self.completed_at(t, y)? {
             self.dynamics_at(t, y)?;
         }
         let n = self.layout.coordinates;
