@@ -440,6 +440,20 @@ impl Mechanical {
             return Ok(true);
         }
         let partials = std::mem::take(&mut self.partials_out);
+        if columns == 0 {
+            let solved = self.solve_partials_rows(&partials, width, |i, first, row| {
+                jac[(n + i) * width + first..][..row.len()].copy_from_slice(row);
+            });
+            self.partials_out = partials;
+            if solved? {
+                self.solution = solution;
+                check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+                return Ok(true);
+            }
+        } else {
+            self.partials_out = partials;
+        }
+        let partials = std::mem::take(&mut self.partials_out);
         let sensitivities = std::mem::take(&mut self.sensitivities_out);
         // The Jacobian's 2n columns, then the parameters' k, solved as one block of columns.
         let solved = self.solve_partials_of(
@@ -546,6 +560,81 @@ impl Mechanical {
         self.solution = held;
         solved?;
         check_finite(out, |_| NonFiniteAt::Jacobian)?;
+        Ok(true)
+    }
+
+    /// [`Mechanical::solve_partials_of`] for the partials program's own columns (`width` of
+    /// them, row-major in `partials`), each solved block's coordinate rows handed to
+    /// `put(row, first column, values)`: the blocks are filled and emptied a row at a time, as
+    /// slices, rather than an entry at a time through a closure (the walker's bookkeeping had
+    /// been a seventh of its search). The same operations on each entry, so the same bits.
+    /// False, with nothing solved, where a slipping contact in space turns its force with the
+    /// state: [`Mechanical::solve_partials_of`] adds that.
+    fn solve_partials_rows(
+        &mut self,
+        partials: &[f64],
+        width: usize,
+        mut put: impl FnMut(usize, usize, &[f64]),
+    ) -> Result<bool, FaultKind> {
+        let Mechanical {
+            kept_factors: factors,
+            dyn_out,
+            kept,
+            bends,
+            baumgarte,
+            stabilisation,
+            layout,
+            ..
+        } = self;
+        if bends.iter().any(|b| b.cone.is_some()) {
+            return Ok(false);
+        }
+        let Layout { coordinates: n, multipliers: m, .. } = *layout;
+        if !factors.valid {
+            factors.load(dyn_out, n, kept, bends);
+            factors.factor(n)?;
+            factors.valid = true;
+        }
+        let order = factors.order(n);
+        let alpha = *baumgarte;
+        let mut block = std::mem::take(&mut factors.block);
+        block.resize(order, [0.0; COLUMNS]);
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            let row = |r: usize| &partials[r * width + first..r * width + first + columns];
+            for (i, out) in block[..n].iter_mut().enumerate() {
+                for (o, v) in out.iter_mut().zip(row(i)) {
+                    *o = -v;
+                }
+                out[columns..].fill(0.0);
+            }
+            for (out, &c) in block[n..].iter_mut().zip(factors.rows()) {
+                let of = |b: usize| row(n + b * m + c);
+                // The partials of the row the accelerations satisfy, stabilisation included.
+                match stabilisation[c] {
+                    Stabilisation::Position => {
+                        // c̃'s partials, then Φ's and Φ̇'s.
+                        let (value, position, rate) = (of(0), of(1), of(2));
+                        for (k, o) in out[..columns].iter_mut().enumerate() {
+                            *o = -(value[k] + 2.0 * alpha * rate[k] + alpha * alpha * position[k]);
+                        }
+                    }
+                    Stabilisation::Velocity => {
+                        // c̃'s partials, then the velocity row's residual's.
+                        let (value, residual) = (of(0), of(1));
+                        for (k, o) in out[..columns].iter_mut().enumerate() {
+                            *o = -(value[k] + alpha * residual[k]);
+                        }
+                    }
+                }
+                out[columns..].fill(0.0);
+            }
+            factors.solve_columns(n, &mut block);
+            for (i, solved) in block[..n].iter().enumerate() {
+                put(i, first, &solved[..columns]);
+            }
+        }
+        factors.block = block;
         Ok(true)
     }
 
