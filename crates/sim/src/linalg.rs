@@ -324,10 +324,16 @@ fn lu_fixed<const N: usize>(
     pivots: &mut [usize],
 ) -> Result<(), FaultKind> {
     let pivots = &mut pivots[..N];
+    // Comparisons rather than `max` and `min`, which spend instructions on a NaN operand:
+    // neither ever takes a NaN here (a NaN entry compares false and is passed over, as `max`
+    // passes it over), so the same values.
     let mut scale = 0.0f64;
     for j in 0..N {
         for i in 0..N {
-            scale = scale.max(a[i + SMALL * j].abs());
+            let v = a[i + SMALL * j].abs();
+            if v > scale {
+                scale = v;
+            }
         }
     }
     if !scale.is_finite() {
@@ -349,8 +355,13 @@ fn lu_fixed<const N: usize>(
             }
         }
         let pivot = a[k + SMALL * k];
-        lo = lo.min(pivot.abs());
-        hi = hi.max(pivot.abs());
+        let size = pivot.abs();
+        if size < lo {
+            lo = size;
+        }
+        if size > hi {
+            hi = size;
+        }
         if pivot.abs() <= scale * f64::EPSILON * N as f64 {
             vanished.push(k);
             continue;
