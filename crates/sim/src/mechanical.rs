@@ -461,6 +461,25 @@ impl Mechanical {
         self.solve_dynamics()
     }
 
+    /// [`Problem::rhs`] for a variational run that carries the state alone (a return map's
+    /// run onto its section): with contacts, the kept rows alone as
+    /// [`Mechanical::kept_accelerations`] solves them.
+    pub(crate) fn kept_rates(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        dy: &mut [f64],
+    ) -> Result<(), FaultKind> {
+        if self.contacts.is_empty() {
+            return self.rhs(t, y, dy);
+        }
+        let n = self.layout.coordinates;
+        self.kept_accelerations(t, y)?;
+        dy[..n].copy_from_slice(&y[n..2 * n]);
+        dy[n..].copy_from_slice(&self.solution[..n]);
+        check_finite(dy, rate)
+    }
+
     /// [`Mechanical::dense_accelerations`] for a variational stage, which reads M, the forces
     /// and the kept rows alone: with contacts and no friction, from a slice of the dynamics
     /// program for the rows kept now. A rimless wheel on one of its eight spokes had evaluated
@@ -554,11 +573,16 @@ impl Mechanical {
         let out = &self.dyn_out;
         self.solution[..n].copy_from_slice(&out[n * n..n * n + n]);
         let a = self.baumgarte;
-        for c in 0..m {
+        // A row not kept is not read: a wheel's fourteen open rows of sixteen.
+        let rows = self.solution[n..n + m].iter_mut().zip(&self.kept).zip(&self.stabilisation);
+        for (c, ((slot, &kept), kind)) in rows.enumerate() {
+            if !kept {
+                *slot = 0.0;
+                continue;
+            }
             let base = n * n + n + c * (n + 3);
             let (gamma, phi, phi_rate) = (out[base + n], out[base + n + 1], out[base + n + 2]);
-            self.solution[n + c] = match self.stabilisation[c] {
-                _ if !self.kept[c] => 0.0,
+            *slot = match kind {
                 Stabilisation::Position => gamma - 2.0 * a * phi_rate - a * a * phi,
                 Stabilisation::Velocity => gamma - a * phi,
             };

@@ -702,7 +702,7 @@ impl Problem for Variational<'_> {
         let (rates, d) = dy.split_at_mut(s);
         if c == 0 && columns == 0 {
             // The state alone: no Jacobian to form.
-            return self.inner.rhs(t, x, rates);
+            return self.inner.kept_rates(t, x, rates);
         }
         let change = (columns > 0).then_some(&mut self.change[..]);
         if !self.inner.variational_parts(t, x, rates, &mut self.jac, change)? {

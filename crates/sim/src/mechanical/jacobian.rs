@@ -406,7 +406,8 @@ impl Mechanical {
             return Err(fault);
         }
         let width = 2 * n;
-        jac.fill(0.0);
+        // [0 I] above; every entry below is written by the solve.
+        jac[..n * width].fill(0.0);
         for i in 0..n {
             jac[i * width + n + i] = 1.0;
         }
