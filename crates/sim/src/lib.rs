@@ -241,6 +241,19 @@ pub trait Problem {
         let _ = (t, y, out);
         Ok(())
     }
+    /// Guard `k` alone at (t, y), `scratch` a buffer of [`Problem::guards`] values: what
+    /// locating a crossing asks at each probe. By default all of them, one kept; a problem
+    /// whose guard needs less than the others (an open contact's gap, no solve) gives it so.
+    fn guard_value(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        k: usize,
+        scratch: &mut [f64],
+    ) -> Result<f64, FaultKind> {
+        self.guard_values(t, y, scratch)?;
+        Ok(scratch[k])
+    }
     /// Decides the mode at the start of a run of tolerance `tolerance` at (t, y), changing `y`
     /// in place where that takes an impulse (a contact closing at the start), and says what
     /// happened.

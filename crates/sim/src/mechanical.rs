@@ -144,6 +144,9 @@ pub struct Mechanical {
     /// Where `dyn_out` holds only such a slice's outputs at the inputs `solved_at` compares
     /// (the rows not kept older), which: what needs them (an open contact's gap) completes it.
     sliced: Option<usize>,
+    /// Each contact's gap alone, a slice of the dynamics program made on first use: what
+    /// locating its landing asks at each probe ([`Mechanical::open_gap`]).
+    gap_slices: Vec<Option<Slice>>,
     /// The partials by the parameters a caller varies, and how many they are
     /// ([`Mechanical::set_sensitivities`]), and their outputs.
     sensitivities: Option<(Tape, usize)>,
@@ -267,6 +270,7 @@ impl Mechanical {
             partial_slices: Vec::new(),
             dynamics_slices: Vec::new(),
             sliced: None,
+            gap_slices: Vec::new(),
             sensitivities: None,
             sensitivities_out: Vec::new(),
             signals: Vec::new(),
@@ -861,6 +865,22 @@ impl Problem for Mechanical {
 
     fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
         self.contact_guards(t, y, out)
+    }
+
+    fn guard_value(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        k: usize,
+        scratch: &mut [f64],
+    ) -> Result<f64, FaultKind> {
+        match self.open_gap(t, y, k)? {
+            Some(gap) => Ok(gap),
+            None => {
+                self.contact_guards(t, y, scratch)?;
+                Ok(scratch[k])
+            }
+        }
     }
 
     fn begin_modes(

@@ -442,7 +442,7 @@ impl<'r> Course<'r> {
             if self.guards[k] > 0.0 && now[k] <= 0.0 {
                 let mut guard = |p: &mut dyn Problem, d: &mut dyn Dense, s: f64| {
                     d.interpolate(p, s, &mut y);
-                    p.guard_values(s, &y, &mut values).ok().map(|()| values[k])
+                    p.guard_value(s, &y, k, &mut values).ok()
                 };
                 let ((a, _), _) =
                     bracket(problem, dense, &mut guard, (t0, self.guards[k]), (self.t, now[k]));

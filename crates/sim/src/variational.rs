@@ -785,6 +785,23 @@ impl Problem for Variational<'_> {
         self.inner.guards() + usize::from(matches!(self.end, End::Crossing { .. }))
     }
 
+    /// A contact's guard asked of the problem alone (an open contact's gap needs no solve);
+    /// the section's as [`Problem::guard_values`] gives it.
+    fn guard_value(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        k: usize,
+        scratch: &mut [f64],
+    ) -> Result<f64, FaultKind> {
+        let contacts = self.inner.guards();
+        if k < contacts {
+            return self.inner.guard_value(t, &y[..self.size], k, &mut scratch[..contacts]);
+        }
+        self.guard_values(t, y, scratch)?;
+        Ok(scratch[k])
+    }
+
     fn guard_values(&mut self, t: f64, y: &[f64], out: &mut [f64]) -> Result<(), FaultKind> {
         let contacts = self.inner.guards();
         let x = &y[..self.size];

@@ -523,6 +523,50 @@ impl Mechanical {
         self.contacts.len() + rough + usize::from(rough > 0) + arming
     }
 
+    /// Guard `k` where it is an open contact's (its gap, or 1 while it is not armed), from a
+    /// slice of the dynamics program with that gap alone: no solve, as
+    /// [`Mechanical::contact_guards`] needs for the closed contacts' reactions. `None` for
+    /// any other guard. The dynamics program's inputs move to (t, y), so the accelerations
+    /// solved before are forgotten.
+    pub(crate) fn open_gap(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        k: usize,
+    ) -> Result<Option<f64>, FaultKind> {
+        if k >= self.contacts.len() || self.modes.closed[k] {
+            return Ok(None);
+        }
+        if !self.modes.armed[k] {
+            return Ok(Some(1.0));
+        }
+        let n = self.layout.coordinates;
+        let output = self.base(self.contacts[k].normal) + n + 1;
+        if !self.solved_at(t, y) {
+            if self.gap_slices.len() != self.contacts.len() {
+                self.gap_slices = vec![None; self.contacts.len()];
+            }
+            if self.gap_slices[k].is_none() {
+                self.gap_slices[k] = Some(self.dynamics.slice([output]));
+            }
+            self.solved = None;
+            self.sliced = None;
+            self.mass_factored = false;
+            self.kept_factors.valid = false;
+            self.follow_signals(t);
+            super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
+            if let Some(slice) = self.gap_slices[k].as_mut() {
+                self.dynamics.run_slice(slice, &mut self.dyn_out);
+            }
+            if !self.dyn_out[output].is_finite() {
+                let layout = self.layout;
+                return Err(FaultKind::NonFinite { at: layout.dynamics_entry(output) });
+            }
+        }
+        let gap = self.gap(k);
+        Ok(Some(if self.modes.below[k] { -gap } else { gap } + self.modes.offset[k]))
+    }
+
     /// The guards: a closed contact's reaction λ, an open one's gap g; then each rough
     /// contact's stick (μ·λ − |λ_T| while it sticks) or slip (s·γ_T while it slips, offset
     /// to start positive); in space μ·λ − ‖λ_T‖, or d·γ_T less its band with d the slip's
