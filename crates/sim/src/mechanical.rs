@@ -1320,6 +1320,24 @@ impl KeptFactors {
         load_kept(out, n, &self.rows, bends, &mut self.lu);
     }
 
+    /// The factors of the kept rows' system at `out`: the accelerations' own where their
+    /// solve left them, else loaded (a slipping contact's column bent by its friction, as the
+    /// solve's is) and factored here.
+    pub(crate) fn ready(
+        &mut self,
+        out: &[f64],
+        n: usize,
+        kept: &[bool],
+        bends: &[Bend],
+    ) -> Result<(), FaultKind> {
+        if !self.valid {
+            self.load(out, n, kept, bends);
+            self.factor(n)?;
+            self.valid = true;
+        }
+        Ok(())
+    }
+
     /// The order of the system last loaded.
     pub(crate) fn order(&self, n: usize) -> usize {
         n + self.rows.len()

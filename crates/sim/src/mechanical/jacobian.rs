@@ -591,11 +591,7 @@ impl Mechanical {
             return Ok(false);
         }
         let Layout { coordinates: n, multipliers: m, .. } = *layout;
-        if !factors.valid {
-            factors.load(dyn_out, n, kept, bends);
-            factors.factor(n)?;
-            factors.valid = true;
-        }
+        factors.ready(dyn_out, n, kept, bends)?;
         let order = factors.order(n);
         let alpha = *baumgarte;
         let mut block = std::mem::take(&mut factors.block);
@@ -682,12 +678,7 @@ impl Mechanical {
         // `exact_jacobian`). Only the kept rows are factored: an open contact's multiplier is
         // 0, and its identity row would only make the factorization larger (a rimless wheel on
         // one spoke: five rows rather than nineteen).
-        if !factors.valid {
-            // A slipping contact's column bent by its friction, as the solve's is.
-            factors.load(dyn_out, n, kept, bends);
-            factors.factor(n)?;
-            factors.valid = true;
-        }
+        factors.ready(dyn_out, n, kept, bends)?;
         let order = factors.order(n);
         let alpha = *baumgarte;
         // In space a slipping contact's factors f_i = −μ·γ_i/‖γ_T‖ move with the state too:
