@@ -362,7 +362,7 @@ fn lu_fixed<const N: usize>(
         if size > hi {
             hi = size;
         }
-        if pivot.abs() <= scale * f64::EPSILON * N as f64 {
+        if size <= scale * f64::EPSILON * N as f64 {
             vanished.push(k);
             continue;
         }

@@ -92,6 +92,15 @@ pub enum Stabilisation {
 /// a quaternion's norm moved a sphere's stop by 2.5e-8 (`tests/friction.rs`).
 pub const BAUMGARTE_RATE: f64 = 2.0;
 
+/// Whether the outputs a slice of the dynamics program gave in `out` are finite, naming the
+/// first that is not.
+fn slice_finite(out: &[f64], slice: &Slice, layout: Layout) -> Result<(), FaultKind> {
+    match slice.outputs().iter().find(|&&o| !out[o].is_finite()) {
+        Some(&o) => Err(FaultKind::NonFinite { at: layout.dynamics_entry(o) }),
+        None => Ok(()),
+    }
+}
+
 /// How many slices of the dynamics or the partials program a problem keeps, one per set of
 /// kept rows ([`Mechanical::kept_accelerations`], [`Mechanical::kept_partials_at`]).
 const SLICES: usize = 64;
@@ -533,10 +542,7 @@ impl Mechanical {
         self.dynamics.run_slice(slice, &mut self.dyn_out);
         self.dense = true;
         self.sliced = Some(index);
-        let (out, layout) = (&self.dyn_out, self.layout);
-        if let Some(&o) = slice.outputs().iter().find(|&&o| !out[o].is_finite()) {
-            return Err(FaultKind::NonFinite { at: layout.dynamics_entry(o) });
-        }
+        slice_finite(&self.dyn_out, slice, self.layout)?;
         self.solve_dynamics()
     }
 
@@ -658,10 +664,7 @@ impl Mechanical {
         let rest = &mut self.dynamics_slices[index].2;
         self.dynamics.run_slice(rest, &mut self.dyn_out);
         self.sliced = None;
-        let (out, layout) = (&self.dyn_out, self.layout);
-        if let Some(&o) = rest.outputs().iter().find(|&&o| !out[o].is_finite()) {
-            return Err(FaultKind::NonFinite { at: layout.dynamics_entry(o) });
-        }
+        slice_finite(&self.dyn_out, rest, self.layout)?;
         Ok(true)
     }
 

@@ -441,20 +441,20 @@ impl Mechanical {
             return Ok(true);
         }
         let partials = std::mem::take(&mut self.partials_out);
-        if columns == 0 {
-            let solved = self.solve_partials_rows(&partials, width, |i, first, row| {
+        // The Jacobian's columns alone, where nothing turns with the state, a row at a time.
+        let by_rows = match columns {
+            0 => self.solve_partials_rows(&partials, width, |i, first, row| {
                 jac[(n + i) * width + first..][..row.len()].copy_from_slice(row);
-            });
+            }),
+            _ => Ok(false),
+        };
+        if !matches!(by_rows, Ok(false)) {
+            self.solution = solution;
             self.partials_out = partials;
-            if solved? {
-                self.solution = solution;
-                check_finite(jac, |_| NonFiniteAt::Jacobian)?;
-                return Ok(true);
-            }
-        } else {
-            self.partials_out = partials;
+            by_rows?;
+            check_finite(jac, |_| NonFiniteAt::Jacobian)?;
+            return Ok(true);
         }
-        let partials = std::mem::take(&mut self.partials_out);
         let sensitivities = std::mem::take(&mut self.sensitivities_out);
         // The Jacobian's 2n columns, then the parameters' k, solved as one block of columns.
         let solved = self.solve_partials_of(

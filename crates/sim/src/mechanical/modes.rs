@@ -557,10 +557,7 @@ impl Mechanical {
             super::fill_inputs(self.dynamics.inputs_mut(), t, y, &self.parameters);
             if let Some(slice) = self.gap_slices[k].as_mut() {
                 self.dynamics.run_slice(slice, &mut self.dyn_out);
-            }
-            if !self.dyn_out[output].is_finite() {
-                let layout = self.layout;
-                return Err(FaultKind::NonFinite { at: layout.dynamics_entry(output) });
+                super::slice_finite(&self.dyn_out, slice, self.layout)?;
             }
         }
         let gap = self.gap(k);
