@@ -11,6 +11,10 @@ use numeric::LANES;
 
 use crate::FaultKind;
 
+mod saddle;
+
+pub use saddle::Saddle;
+
 /// Square storage the solves work on, indexed (row, column).
 pub trait Square<T = f64>:
     Index<(usize, usize), Output = T> + IndexMut<(usize, usize), Output = T>

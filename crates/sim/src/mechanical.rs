@@ -5,7 +5,7 @@
 use nalgebra::DMatrix;
 use numeric::{Slice, Tape};
 
-use crate::linalg::{self, Small, Square};
+use crate::linalg::{self, Saddle, Small, Square};
 use crate::{check_finite, rate, Contact, FaultKind, Hold, NonFiniteAt, Problem, Series};
 
 mod jacobian;
@@ -1219,19 +1219,27 @@ fn solve_kept_factored(
 ) -> Result<(), FaultKind> {
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     work.valid = false;
-    work.load(out, n, kept, bends);
-    let KeptFactors { lu, small, pivots, rows, x, .. } = work;
-    let order = n + rows.len();
-    x.clear();
-    x.extend_from_slice(&b[..n]);
-    x.extend(rows.iter().map(|&c| b[n + c]));
-    let solved = if order <= linalg::SMALL {
-        solve_loaded(small, out, n, rows, bends, x, &mut pivots[..order])
+    work.keep(kept);
+    {
+        let KeptFactors { rows, x, .. } = &mut *work;
+        x.clear();
+        x.extend_from_slice(&b[..n]);
+        x.extend(rows.iter().map(|&c| b[n + c]));
+    }
+    if work.by_blocks(out, n, bends) {
+        work.saddle.solve(&mut work.x);
+        work.valid = true;
     } else {
-        solve_loaded(lu, out, n, rows, bends, x, &mut pivots[..order])
-    };
-    let valid = solved? && !rows.is_empty();
-    work.valid = valid;
+        work.load(out, n, bends);
+        let KeptFactors { lu, small, pivots, rows, x, .. } = work;
+        let order = n + rows.len();
+        let solved = if order <= linalg::SMALL {
+            solve_loaded(small, out, n, rows, bends, x, &mut pivots[..order])
+        } else {
+            solve_loaded(lu, out, n, rows, bends, x, &mut pivots[..order])
+        };
+        work.valid = solved? && !rows.is_empty();
+    }
     let KeptFactors { rows, x, .. } = work;
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);
@@ -1262,22 +1270,26 @@ fn solve_loaded<M: Square>(
     }
 }
 
-/// The kept rows' augmented system, its buffers kept from solve to solve: on the stack where
-/// its order fits [`Small`] (a walker on one foot: six rows of eight), on the heap past it (a
-/// rimless wheel's nineteen rows with one spoke's two kept: five), and after the
-/// accelerations' solve (`valid`) its LU factors, which the exact Jacobian at the same state
-/// solves with again rather than factoring the same matrix a second time.
+/// The kept rows' augmented system, its buffers kept from solve to solve, and after the
+/// accelerations' solve (`valid`) its factors, which the exact Jacobian at the same state
+/// solves with again rather than factoring the same matrix a second time. Factored by its
+/// blocks ([`Saddle`]) where they serve, else by LU: on the stack where its order fits
+/// [`Small`] (a walker on one foot: six rows of eight), on the heap past it (a rimless wheel's
+/// nineteen rows with one spoke's two kept: five).
 #[derive(Clone, Debug)]
 pub(crate) struct KeptFactors {
     lu: DMatrix<f64>,
     small: Small,
     pivots: Vec<usize>,
+    saddle: Saddle,
+    /// Whether the factors are `saddle`'s rather than LU's.
+    blocks: bool,
     /// The multipliers kept, in the order of the system's rows past M's.
     rows: Vec<usize>,
     x: Vec<f64>,
-    /// Whether `lu` (or `small`, by the order) holds the LU factors of the system the last
-    /// solve of the accelerations used (M alone is solved by LDLᵀ, which the Jacobian's
-    /// columns cannot reuse).
+    /// Whether `saddle`, or else `lu` (or `small`, by the order), holds the factors of the
+    /// system the last solve of the accelerations used (M alone is solved by LDLᵀ, which the
+    /// Jacobian's columns cannot reuse).
     valid: bool,
     /// The exact Jacobian's and the sensitivities' right-hand sides and solutions, kept: a
     /// variational run solves with them twice per stage, and allocating them each time was a
@@ -1293,6 +1305,8 @@ impl Default for KeptFactors {
             lu: DMatrix::zeros(0, 0),
             small: Small::zeros(linalg::SMALL).expect("the stack's order"),
             pivots: Vec::new(),
+            saddle: Saddle::default(),
+            blocks: false,
             rows: Vec::new(),
             x: Vec::new(),
             valid: false,
@@ -1304,10 +1318,22 @@ impl Default for KeptFactors {
 }
 
 impl KeptFactors {
-    /// The system of the rows `kept` (bent by `bends`) at the outputs `out`, unfactored.
-    fn load(&mut self, out: &[f64], n: usize, kept: &[bool], bends: &[Bend]) {
+    /// Takes the rows `kept` as the system's.
+    fn keep(&mut self, kept: &[bool]) {
         self.rows.clear();
         self.rows.extend((0..kept.len()).filter(|&c| kept[c]));
+    }
+
+    /// Factors the kept rows' system at `out` by its blocks, if they serve: kept rows, none
+    /// bent by friction (which leaves the system unsymmetric), and [`Saddle::factor`]'s
+    /// conditions. Whether it did.
+    fn by_blocks(&mut self, out: &[f64], n: usize, bends: &[Bend]) -> bool {
+        self.blocks = bends.is_empty() && self.saddle.factor(out, n, &self.rows);
+        self.blocks
+    }
+
+    /// The system of the rows kept at `out` (bent by `bends`), unfactored, for LU.
+    fn load(&mut self, out: &[f64], n: usize, bends: &[Bend]) {
         let order = n + self.rows.len();
         if self.pivots.len() < order {
             self.pivots.resize(order, 0);
@@ -1324,8 +1350,8 @@ impl KeptFactors {
     }
 
     /// The factors of the kept rows' system at `out`: the accelerations' own where their
-    /// solve left them, else loaded (a slipping contact's column bent by its friction, as the
-    /// solve's is) and factored here.
+    /// solve left them, else made here as that solve makes them (a slipping contact's column
+    /// bent by its friction, as the solve's is).
     pub(crate) fn ready(
         &mut self,
         out: &[f64],
@@ -1334,8 +1360,17 @@ impl KeptFactors {
         bends: &[Bend],
     ) -> Result<(), FaultKind> {
         if !self.valid {
-            self.load(out, n, kept, bends);
-            self.factor(n)?;
+            self.keep(kept);
+            if !self.by_blocks(out, n, bends) {
+                self.load(out, n, bends);
+                let order = self.order(n);
+                let pivots = &mut self.pivots[..order];
+                if order <= linalg::SMALL {
+                    linalg::lu_in_place(&mut self.small, pivots)?;
+                } else {
+                    linalg::lu_in_place(&mut self.lu, pivots)?;
+                }
+            }
             self.valid = true;
         }
         Ok(())
@@ -1346,19 +1381,11 @@ impl KeptFactors {
         n + self.rows.len()
     }
 
-    /// LU-factors the system last loaded in place.
-    pub(crate) fn factor(&mut self, n: usize) -> Result<(), FaultKind> {
-        let order = self.order(n);
-        let pivots = &mut self.pivots[..order];
-        if order <= linalg::SMALL {
-            linalg::lu_in_place(&mut self.small, pivots)
-        } else {
-            linalg::lu_in_place(&mut self.lu, pivots)
-        }
-    }
-
     /// Solves with the factors for the columns of `block` side by side.
     pub(crate) fn solve_columns(&self, n: usize, block: &mut [[f64; jacobian::COLUMNS]]) {
+        if self.blocks {
+            return self.saddle.solve_columns(block);
+        }
         let order = self.order(n);
         let pivots = &self.pivots[..order];
         if order <= linalg::SMALL {
