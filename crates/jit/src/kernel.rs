@@ -4,9 +4,11 @@
 //! - The code reads and writes the registers it was compiled for and nothing else of the
 //!   caller's: [`crate::compile`] refuses an operation naming a register at or past the
 //!   array's length, and its code generation touches no memory but `registers[r]` for the
-//!   registers the operations name and a stack slot of its own. [`Kernel::run`] takes the
-//!   registers as one `&mut [f64]` of exactly that length (anything else panics before the
-//!   code runs), so the code has the array to itself for the call.
+//!   registers the operations name, `outputs[slot]` for the outputs it gathers, and a stack
+//!   slot of its own. [`crate::compile_gathering`] refuses a slot at or past the outputs'
+//!   length. [`Kernel::run_into`] takes the registers and the outputs as two `&mut [f64]`
+//!   (distinct, as two mutable borrows are) of exactly the lengths compiled for (anything
+//!   else panics before the code runs), so the code has both arrays to itself for the call.
 //! - The code calls only the functions its operations carry, as the safe `extern "C"` function
 //!   pointers they are, with the arguments their types say (a [`crate::Pair`]'s output is
 //!   the code's own 16-byte, 8-aligned stack slot); a panic inside one aborts (`extern "C"`),
@@ -24,9 +26,11 @@ use cranelift_jit::JITModule;
 
 /// Native code for a program on an array of `f64` registers; [`Kernel::run`] runs it.
 pub struct Kernel {
-    /// The functions to run one after the other, each taking the registers' address.
-    entries: Vec<unsafe extern "C" fn(*mut f64)>,
+    /// The functions to run one after the other, each taking the registers' address and the
+    /// outputs'.
+    entries: Vec<unsafe extern "C" fn(*mut f64, *mut f64)>,
     registers: usize,
+    outputs: usize,
     /// Owns the code memory. Behind a mutex only to be `Sync` (the module keeps a `RefCell` of
     /// its symbols, which nothing touches once finalized); it is never locked but to be freed.
     module: Mutex<Option<JITModule>>,
@@ -35,17 +39,23 @@ pub struct Kernel {
 impl Kernel {
     /// A kernel for the finalized functions at `entries` of `module`, which `compile`
     /// generated for an array of `registers` values (the module doc's invariants).
-    pub(crate) fn new(module: JITModule, entries: Vec<*const u8>, registers: usize) -> Kernel {
+    pub(crate) fn new(
+        module: JITModule,
+        entries: Vec<*const u8>,
+        registers: usize,
+        outputs: usize,
+    ) -> Kernel {
+        type Entry = unsafe extern "C" fn(*mut f64, *mut f64);
         let entries = entries
             .into_iter()
             .map(|code| {
                 // SAFETY: `code` is the start of a function finalized in `module` with the
-                // signature `fn(*mut f64)` in the host's C calling convention, which is what
-                // `compile` declared for every chunk.
-                unsafe { std::mem::transmute::<*const u8, unsafe extern "C" fn(*mut f64)>(code) }
+                // signature `fn(*mut f64, *mut f64)` in the host's C calling convention, which
+                // is what `compile_gathering` declared for every chunk.
+                unsafe { std::mem::transmute::<*const u8, Entry>(code) }
             })
             .collect();
-        Kernel { entries, registers, module: Mutex::new(Some(module)) }
+        Kernel { entries, registers, outputs, module: Mutex::new(Some(module)) }
     }
 
     /// How many registers the code was compiled for.
@@ -58,12 +68,24 @@ impl Kernel {
     /// # Panics
     /// When `registers` is not of the length the code was compiled for: a caller's bug.
     pub fn run(&self, registers: &mut [f64]) {
+        assert_eq!(self.outputs, 0, "a kernel that gathers outputs runs with them");
+        self.run_into(registers, &mut []);
+    }
+
+    /// Runs the code on `registers`, gathering the outputs it was compiled for into `outputs`.
+    ///
+    /// # Panics
+    /// When `registers` or `outputs` is not of the length the code was compiled for: a
+    /// caller's bug.
+    pub fn run_into(&self, registers: &mut [f64], outputs: &mut [f64]) {
         assert_eq!(registers.len(), self.registers, "a kernel's registers");
-        let at = registers.as_mut_ptr();
+        assert_eq!(outputs.len(), self.outputs, "a kernel's outputs");
+        let (at, out) = (registers.as_mut_ptr(), outputs.as_mut_ptr());
         for entry in &self.entries {
-            // SAFETY: the array is ours for the call and of the length the code was compiled
-            // for, which touches nothing past it; the code is alive while `self` is borrowed.
-            unsafe { entry(at) };
+            // SAFETY: both arrays are ours for the call and of the lengths the code was
+            // compiled for, which touches nothing past them; the code is alive while `self`
+            // is borrowed.
+            unsafe { entry(at, out) };
         }
     }
 }
@@ -83,6 +105,7 @@ impl std::fmt::Debug for Kernel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Kernel")
             .field("registers", &self.registers)
+            .field("outputs", &self.outputs)
             .field("functions", &self.entries.len())
             .finish()
     }

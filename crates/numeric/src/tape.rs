@@ -5,7 +5,7 @@ use cas::Func;
 
 mod native;
 
-use native::Native;
+use native::{Native, Outputs};
 
 use crate::elementary::{apply, atan2, pow, pow_int, sin_cos};
 use crate::lower::{Instr, Program, Reg};
@@ -149,11 +149,20 @@ impl Tape {
     /// has no code generator, or with `LAGRANGE_JIT=off`, where it stays interpreted.
     pub fn compile(&mut self) -> bool {
         let registers = self.registers.len();
-        let full = self.native.compile(&self.ops, registers).is_some();
+        let gather = || self.gather();
+        let outputs = || Outputs { gather: &gather, outputs: self.program.outputs.len() };
+        let full = self.native.compile(&self.ops, registers, outputs()).is_some();
         match &self.fixed {
-            Some(fixed) => full && fixed.native.compile(&fixed.varying, registers).is_some(),
+            Some(fixed) => {
+                full && fixed.native.compile(&fixed.varying, registers, outputs()).is_some()
+            }
             None => full,
         }
+    }
+
+    /// Each output with the register it is read from, for the compiled code to gather.
+    fn gather(&self) -> Vec<(usize, Reg)> {
+        self.program.outputs.iter().copied().enumerate().collect()
     }
 
     /// Whether the program runs as machine code: [`Tape::compile`] said so, or it has run
@@ -217,12 +226,15 @@ impl Tape {
                 }
             }
         };
-        match native.code(ops, r.len()) {
-            Some(code) => code.run(r),
-            None => interpret(ops, r),
-        }
-        for (o, reg) in out.iter_mut().zip(&p.outputs) {
-            *o = r[*reg as usize];
+        let gather = || p.outputs.iter().copied().enumerate().collect();
+        match native.code(ops, r.len(), Outputs { gather: &gather, outputs: out.len() }) {
+            Some(code) => code.run_into(r, out),
+            None => {
+                interpret(ops, r);
+                for (o, reg) in out.iter_mut().zip(&p.outputs) {
+                    *o = r[*reg as usize];
+                }
+            }
         }
     }
 }
@@ -332,12 +344,16 @@ impl Tape {
                 }
             }
         };
-        match native.code(ops, r.len()) {
-            Some(code) => code.run(r),
-            None => interpret(ops, r),
-        }
-        for &o in &slice.outputs {
-            out[o] = r[self.program.outputs[o] as usize];
+        let outputs = &self.program.outputs;
+        let gather = || slice.outputs.iter().map(|&o| (o, outputs[o])).collect();
+        match native.code(ops, r.len(), Outputs { gather: &gather, outputs: out.len() }) {
+            Some(code) => code.run_into(r, out),
+            None => {
+                interpret(ops, r);
+                for &o in &slice.outputs {
+                    out[o] = r[outputs[o] as usize];
+                }
+            }
         }
     }
 }

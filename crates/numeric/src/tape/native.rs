@@ -26,21 +26,38 @@ pub(super) struct Native {
     kernel: Arc<OnceLock<Option<jit::Kernel>>>,
 }
 
+/// Where a run's outputs go: output `gather[i].0` of `outputs` is register `gather[i].1`.
+pub(super) struct Outputs<'a> {
+    pub gather: &'a dyn Fn() -> Vec<(usize, Reg)>,
+    pub outputs: usize,
+}
+
 impl Native {
-    /// The code for `ops` on `registers` registers, if it is compiled or now due.
-    pub(super) fn code(&mut self, ops: &[(Reg, Op)], registers: usize) -> Option<&jit::Kernel> {
+    /// The code for `ops` on `registers` registers, gathering `outputs`, if it is compiled or
+    /// now due.
+    pub(super) fn code(
+        &mut self,
+        ops: &[(Reg, Op)],
+        registers: usize,
+        outputs: Outputs,
+    ) -> Option<&jit::Kernel> {
         if self.kernel.get().is_none() {
             self.runs = self.runs.saturating_add(1);
             if self.runs < COMPILE_AFTER {
                 return None;
             }
         }
-        self.compile(ops, registers)
+        self.compile(ops, registers, outputs)
     }
 
     /// Compiles `ops` now if it is not yet.
-    pub(super) fn compile(&self, ops: &[(Reg, Op)], registers: usize) -> Option<&jit::Kernel> {
-        self.kernel.get_or_init(|| compiled(ops, registers)).as_ref()
+    pub(super) fn compile(
+        &self,
+        ops: &[(Reg, Op)],
+        registers: usize,
+        outputs: Outputs,
+    ) -> Option<&jit::Kernel> {
+        self.kernel.get_or_init(|| compiled(ops, registers, outputs)).as_ref()
     }
 
     pub(super) fn is_compiled(&self) -> bool {
@@ -48,7 +65,7 @@ impl Native {
     }
 }
 
-fn compiled(ops: &[(Reg, Op)], registers: usize) -> Option<jit::Kernel> {
+fn compiled(ops: &[(Reg, Op)], registers: usize, outputs: Outputs) -> Option<jit::Kernel> {
     if !jit::available() {
         return None;
     }
@@ -66,7 +83,7 @@ fn compiled(ops: &[(Reg, Op)], registers: usize) -> Option<jit::Kernel> {
         })
         .collect();
     // A program the code generator refuses still runs, interpreted.
-    jit::compile(registers, &code).ok()
+    jit::compile_gathering(registers, &code, &(outputs.gather)(), outputs.outputs).ok()
 }
 
 fn plain(instr: Instr) -> jit::Op {

@@ -177,3 +177,27 @@ fn a_tape_run_often_compiles_itself_and_keeps_its_bits() {
     }
     assert_eq!(tape.is_compiled(), jit::available());
 }
+
+/// A slice run often compiles itself too, its code gathering only its own outputs: the
+/// others keep what the caller left there.
+#[test]
+fn a_slice_run_often_compiles_itself_and_gathers_its_outputs_alone() {
+    let mut rng = Random(11);
+    let program = program(&mut rng, 3, 300);
+    let mut whole = Tape::new(program.clone());
+    let mut tape = Tape::new(program);
+    let mut slice = tape.slice([1, 4, 6]);
+    let (mut want, mut got) = (vec![0.0; 8], vec![0.0; 8]);
+    for _ in 0..1500 {
+        let x: Vec<f64> = (0..3).map(|_| rng.value()).collect();
+        whole.eval(&x, &mut want);
+        got.fill(f64::INFINITY);
+        tape.inputs_mut().copy_from_slice(&x);
+        tape.run_slice(&mut slice, &mut got);
+        for o in 0..8 {
+            let kept = [1, 4, 6].contains(&o);
+            let expected = if kept { want[o] } else { f64::INFINITY };
+            assert_eq!(bits(&[got[o]]), bits(&[expected]), "output {o} at {x:?}");
+        }
+    }
+}
