@@ -1220,26 +1220,29 @@ fn solve_kept_factored(
     let Layout { coordinates: n, multipliers: m, .. } = layout;
     work.valid = false;
     work.keep(kept);
-    {
-        let KeptFactors { rows, x, .. } = &mut *work;
-        x.clear();
-        x.extend_from_slice(&b[..n]);
-        x.extend(rows.iter().map(|&c| b[n + c]));
-    }
     if work.by_blocks(out, n, bends) {
-        work.saddle.solve(&mut work.x);
+        // In place: an open row's multiplier is 0.
+        work.saddle.solve_scattered(b, &work.rows);
+        for (c, &kept) in kept.iter().enumerate() {
+            if !kept {
+                b[n + c] = 0.0;
+            }
+        }
         work.valid = true;
-    } else {
-        work.load(out, n, bends);
-        let KeptFactors { lu, small, pivots, rows, x, .. } = work;
-        let order = n + rows.len();
-        let solved = if order <= linalg::SMALL {
-            solve_loaded(small, out, n, rows, bends, x, &mut pivots[..order])
-        } else {
-            solve_loaded(lu, out, n, rows, bends, x, &mut pivots[..order])
-        };
-        work.valid = solved? && !rows.is_empty();
+        return Ok(());
     }
+    work.load(out, n, bends);
+    let KeptFactors { lu, small, pivots, rows, x, .. } = &mut *work;
+    x.clear();
+    x.extend_from_slice(&b[..n]);
+    x.extend(rows.iter().map(|&c| b[n + c]));
+    let order = n + rows.len();
+    let solved = if order <= linalg::SMALL {
+        solve_loaded(small, out, n, rows, bends, x, &mut pivots[..order])
+    } else {
+        solve_loaded(lu, out, n, rows, bends, x, &mut pivots[..order])
+    };
+    work.valid = solved? && !work.rows.is_empty();
     let KeptFactors { rows, x, .. } = work;
     b[..n].copy_from_slice(&x[..n]);
     b[n..n + m].fill(0.0);

@@ -211,6 +211,9 @@ pub(crate) struct Course<'r> {
     guards: Vec<f64>,
     /// The time of the last jump, and how many jumps in a row were at that time.
     jumped: (f64, usize),
+    /// The guards at a step's end, a located guard's values and the state at a probe: kept
+    /// from step to step (allocated at every step, they were a fifth of a walker's mallocs).
+    scratch: [Vec<f64>; 3],
 }
 
 /// The most jumps in a row at one time before a run says its modes chatter there.
@@ -297,6 +300,7 @@ impl<'r> Course<'r> {
             sampler,
             until: settings.until,
             samples: settings.samples,
+            scratch: [vec![0.0; guards.len()], vec![0.0; guards.len()], vec![0.0; problem.dim()]],
             guards,
             jumped: (f64::NAN, 0),
         })
@@ -433,16 +437,14 @@ impl<'r> Course<'r> {
         if count == 0 {
             return Ok(None);
         }
-        let mut now = vec![0.0; count];
-        problem.guard_values(self.t, &self.y, &mut now)?;
+        let [now, values, y] = &mut self.scratch;
+        problem.guard_values(self.t, &self.y, now)?;
         let mut found: Vec<(usize, f64)> = Vec::new();
-        let mut values = vec![0.0; count];
-        let mut y = vec![0.0; problem.dim()];
         for k in 0..count {
             if self.guards[k] > 0.0 && now[k] <= 0.0 {
                 let mut guard = |p: &mut dyn Problem, d: &mut dyn Dense, s: f64| {
-                    d.interpolate(p, s, &mut y);
-                    p.guard_value(s, &y, k, &mut values).ok()
+                    d.interpolate(p, s, y);
+                    p.guard_value(s, y, k, values).ok()
                 };
                 let ((a, _), _) =
                     bracket(problem, dense, &mut guard, (t0, self.guards[k]), (self.t, now[k]));
@@ -450,7 +452,7 @@ impl<'r> Course<'r> {
             }
         }
         let Some(first) = found.iter().map(|f| f.1).reduce(f64::min) else {
-            self.guards = now;
+            std::mem::swap(&mut self.guards, now);
             return Ok(None);
         };
         let window = 16.0 * f64::EPSILON * first.abs().max(1.0);

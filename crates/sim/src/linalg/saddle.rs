@@ -145,14 +145,30 @@ impl Saddle {
 
     /// Solves for one right side `x` (f then c), in place.
     pub fn solve(&self, x: &mut [f64]) {
+        let rows: [usize; SMALL] = std::array::from_fn(|r| r);
+        self.solve_scattered(x, &rows[..self.k]);
+    }
+
+    /// Solves for one right side laid out as a dynamics solution is: f in `x[..n]`, the kept
+    /// row r's c in `x[n + rows[r]]` (`rows` the kept multipliers factored), leaving q̈ in
+    /// `x[..n]` and each kept λ where its c was. The other entries are not read or written.
+    /// The same operations as [`Saddle::solve_columns`] on one column, so its bits, without
+    /// gathering the right side into a block and scattering it back.
+    pub fn solve_scattered(&self, x: &mut [f64], rows: &[usize]) {
         let mut b = [[0.0]; SMALL];
-        let order = self.n + self.k;
-        for (b, x) in b.iter_mut().zip(&x[..order]) {
+        let n = self.n;
+        for (b, x) in b.iter_mut().zip(&x[..n]) {
             *b = [*x];
         }
-        self.solve_columns(&mut b[..order]);
-        for (x, b) in x.iter_mut().zip(&b[..order]) {
+        for (b, &c) in b[n..].iter_mut().zip(rows) {
+            *b = [x[n + c]];
+        }
+        self.solve_columns(&mut b[..n + self.k]);
+        for (x, b) in x.iter_mut().zip(&b[..n]) {
             *x = b[0];
+        }
+        for (b, &c) in b[n..].iter().zip(rows) {
+            x[n + c] = b[0];
         }
     }
 
