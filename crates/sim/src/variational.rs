@@ -867,6 +867,24 @@ impl Problem for Variational<'_> {
         }
         let x = y[..s].to_vec();
         let c = self.directions;
+        let landed = |end: End, e: &ModeEvent| {
+            e.kind == ModeChange::Impact
+                && matches!(end, End::Landing { contact } if contact.is_none_or(|c| c == e.contact))
+        };
+        // A run carrying the state alone needs no jump's derivative but that of the landing
+        // that ends it (its surface): any other jump is taken as it is, without the guard's
+        // gradient (differences of a reaction, eighteen solves) or G_x. A jump that turns out
+        // to end the run is taken again from where it started, with its derivative.
+        if c == 0 && matches!(guards[0], Guard::Contacts(_)) {
+            let saved = self.inner.modes_state();
+            let events = self.inner.jump(t, &mut y[..s], fired)?;
+            if !events.iter().any(|e| landed(self.end, e)) {
+                self.jumps += 1;
+                return Ok(events);
+            }
+            y[..s].copy_from_slice(&x);
+            self.inner.restore_modes(&saved);
+        }
         let phi = y[s..s + s * c].to_vec();
         let before = rate_of(self.inner, t, &x)?;
         let Guard::Contacts(_) = guards[0] else {
@@ -932,11 +950,7 @@ impl Problem for Variational<'_> {
                 carried[i * c + j] = (0..s).map(|r| along[i * s + r] * phi[r * c + j]).sum();
             }
         }
-        let landed = |e: &ModeEvent| {
-            e.kind == ModeChange::Impact
-                && matches!(self.end, End::Landing { contact } if contact.is_none_or(|c| c == e.contact))
-        };
-        if events.iter().any(landed) {
+        if events.iter().any(|e| landed(self.end, e)) {
             self.capture(t, y[..s].to_vec(), carried, product(&along, &within, s));
             return Ok(events);
         }
