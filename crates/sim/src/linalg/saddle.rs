@@ -12,6 +12,156 @@
 
 use super::{CONDITION_LIMIT, SMALL};
 
+/// Runs `$body` with `$N` and `$K` the constants n and k, for every order n + k ≤ [`SMALL`]
+/// with k ≥ 1 (`$otherwise` past them): both blocks' loops of known length.
+macro_rules! with_orders {
+    ($n:expr, $k:expr, |$N:ident, $K:ident| $body:expr, $otherwise:expr) => {
+        match ($n, $k) {
+            (1, 1) => {
+                const $N: usize = 1;
+                const $K: usize = 1;
+                $body
+            }
+            (1, 2) => {
+                const $N: usize = 1;
+                const $K: usize = 2;
+                $body
+            }
+            (1, 3) => {
+                const $N: usize = 1;
+                const $K: usize = 3;
+                $body
+            }
+            (1, 4) => {
+                const $N: usize = 1;
+                const $K: usize = 4;
+                $body
+            }
+            (1, 5) => {
+                const $N: usize = 1;
+                const $K: usize = 5;
+                $body
+            }
+            (1, 6) => {
+                const $N: usize = 1;
+                const $K: usize = 6;
+                $body
+            }
+            (1, 7) => {
+                const $N: usize = 1;
+                const $K: usize = 7;
+                $body
+            }
+            (2, 1) => {
+                const $N: usize = 2;
+                const $K: usize = 1;
+                $body
+            }
+            (2, 2) => {
+                const $N: usize = 2;
+                const $K: usize = 2;
+                $body
+            }
+            (2, 3) => {
+                const $N: usize = 2;
+                const $K: usize = 3;
+                $body
+            }
+            (2, 4) => {
+                const $N: usize = 2;
+                const $K: usize = 4;
+                $body
+            }
+            (2, 5) => {
+                const $N: usize = 2;
+                const $K: usize = 5;
+                $body
+            }
+            (2, 6) => {
+                const $N: usize = 2;
+                const $K: usize = 6;
+                $body
+            }
+            (3, 1) => {
+                const $N: usize = 3;
+                const $K: usize = 1;
+                $body
+            }
+            (3, 2) => {
+                const $N: usize = 3;
+                const $K: usize = 2;
+                $body
+            }
+            (3, 3) => {
+                const $N: usize = 3;
+                const $K: usize = 3;
+                $body
+            }
+            (3, 4) => {
+                const $N: usize = 3;
+                const $K: usize = 4;
+                $body
+            }
+            (3, 5) => {
+                const $N: usize = 3;
+                const $K: usize = 5;
+                $body
+            }
+            (4, 1) => {
+                const $N: usize = 4;
+                const $K: usize = 1;
+                $body
+            }
+            (4, 2) => {
+                const $N: usize = 4;
+                const $K: usize = 2;
+                $body
+            }
+            (4, 3) => {
+                const $N: usize = 4;
+                const $K: usize = 3;
+                $body
+            }
+            (4, 4) => {
+                const $N: usize = 4;
+                const $K: usize = 4;
+                $body
+            }
+            (5, 1) => {
+                const $N: usize = 5;
+                const $K: usize = 1;
+                $body
+            }
+            (5, 2) => {
+                const $N: usize = 5;
+                const $K: usize = 2;
+                $body
+            }
+            (5, 3) => {
+                const $N: usize = 5;
+                const $K: usize = 3;
+                $body
+            }
+            (6, 1) => {
+                const $N: usize = 6;
+                const $K: usize = 1;
+                $body
+            }
+            (6, 2) => {
+                const $N: usize = 6;
+                const $K: usize = 2;
+                $body
+            }
+            (7, 1) => {
+                const $N: usize = 7;
+                const $K: usize = 1;
+                $body
+            }
+            _ => $otherwise,
+        }
+    };
+}
+
 /// The blocks' factors, for a system of order n + k ≤ [`SMALL`] with at least one kept row.
 #[derive(Clone, Debug)]
 pub struct Saddle {
@@ -48,20 +198,16 @@ impl Saddle {
         }
         self.n = n;
         self.k = k;
-        match n {
-            1 => self.factor_fixed::<1>(out, rows),
-            2 => self.factor_fixed::<2>(out, rows),
-            3 => self.factor_fixed::<3>(out, rows),
-            4 => self.factor_fixed::<4>(out, rows),
-            5 => self.factor_fixed::<5>(out, rows),
-            6 => self.factor_fixed::<6>(out, rows),
-            7 => self.factor_fixed::<7>(out, rows),
-            _ => false,
-        }
+        with_orders!(n, k, |N, K| self.factor_fixed::<N, K>(out, rows), false)
     }
 
-    fn factor_fixed<const N: usize>(&mut self, out: &[f64], rows: &[usize]) -> bool {
-        let k = rows.len();
+    fn factor_fixed<const N: usize, const K: usize>(
+        &mut self,
+        out: &[f64],
+        rows: &[usize],
+    ) -> bool {
+        let k = K;
+        let rows: &[usize; K] = rows.try_into().expect("K kept rows");
         let mass = &out[..N * N];
         // The largest diagonal entry and the smallest pivot of both factorizations: in a
         // positive definite matrix no pivot exceeds its diagonal entry, so their ratio bounds
@@ -131,16 +277,12 @@ impl Saddle {
     /// Solves for the columns of `b` side by side, in place: rows 0..n hold f's entries and
     /// rows n..n + k the kept rows' c, and they are left holding q̈'s and λ's.
     pub fn solve_columns<const C: usize>(&self, b: &mut [[f64; C]]) {
-        match self.n {
-            1 => self.solve_fixed::<1, C>(b),
-            2 => self.solve_fixed::<2, C>(b),
-            3 => self.solve_fixed::<3, C>(b),
-            4 => self.solve_fixed::<4, C>(b),
-            5 => self.solve_fixed::<5, C>(b),
-            6 => self.solve_fixed::<6, C>(b),
-            7 => self.solve_fixed::<7, C>(b),
-            _ => unreachable!("a saddle factored with n + k ≤ {SMALL} and k ≥ 1"),
-        }
+        with_orders!(
+            self.n,
+            self.k,
+            |N, K| self.solve_fixed::<N, K, C>(b),
+            unreachable!("a saddle factored with n + k ≤ {SMALL} and k ≥ 1")
+        )
     }
 
     /// Solves for one right side `x` (f then c), in place.
@@ -172,11 +314,11 @@ impl Saddle {
         }
     }
 
-    fn solve_fixed<const N: usize, const C: usize>(&self, b: &mut [[f64; C]]) {
-        let k = self.k;
+    fn solve_fixed<const N: usize, const K: usize, const C: usize>(&self, b: &mut [[f64; C]]) {
+        let k = K;
         let (f, c) = b.split_at_mut(N);
         let f: &mut [[f64; C]; N] = f.try_into().expect("the coordinates' rows");
-        let c = &mut c[..k];
+        let c: &mut [[f64; C]; K] = (&mut c[..K]).try_into().expect("the kept rows");
         // u = M⁻¹·f, left in f.
         ldl_solve_columns_fixed::<N, C>(&self.mass, f);
         // c − J·u
