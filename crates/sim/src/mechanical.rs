@@ -1331,7 +1331,8 @@ impl KeptFactors {
     /// bent by friction (which leaves the system unsymmetric), and [`Saddle::factor`]'s
     /// conditions. Whether it did.
     fn by_blocks(&mut self, out: &[f64], n: usize, bends: &[Bend]) -> bool {
-        self.blocks = bends.is_empty() && self.saddle.factor(out, n, &self.rows);
+        self.blocks =
+            !self.rows.is_empty() && bends.is_empty() && self.saddle.factor(out, n, &self.rows);
         self.blocks
     }
 
