@@ -523,11 +523,12 @@ fn lower_rows<const C: usize>(a: &[f64], phi: &[f64], d: &mut [f64], n: usize, s
 /// A·B of row-major squares.
 fn product(a: &[f64], b: &[f64], size: usize) -> Vec<f64> {
     let mut out = vec![0.0; size * size];
-    for i in 0..size {
-        for k in 0..size {
-            let aik = a[i * size + k];
-            for j in 0..size {
-                out[i * size + j] += aik * b[k * size + j];
+    // Row slices rather than indices: each entry's sum in the same order, without a bounds
+    // check per term.
+    for (row, a) in out.chunks_exact_mut(size).zip(a.chunks_exact(size)) {
+        for (aik, b) in a.iter().zip(b.chunks_exact(size)) {
+            for (o, bkj) in row.iter_mut().zip(b) {
+                *o += aik * bkj;
             }
         }
     }

@@ -12,6 +12,7 @@
 
 use nalgebra::DMatrix;
 
+use super::jacobian::COLUMNS;
 use super::modes::Struck;
 use super::{Layout, Mechanical, Stabilisation};
 use crate::linalg::{self, identity};
@@ -119,18 +120,26 @@ impl Mechanical {
         let Some(struck) = self.partials_copy(t, x, &unknowns)? else { return Ok(None) };
         let Some(free) = self.partials_copy(t, x, &vec![0.0; n + m])? else { return Ok(None) };
         let mut out = identity(width);
-        let mut column = vec![0.0; n + rows.len()];
-        for k in 0..width {
-            for (i, slot) in column.iter_mut().enumerate().take(n) {
-                *slot = free.residual(i, k) - struck.residual(i, k);
+        // The columns side by side, eight a block, as in `projection_derivative`.
+        let mut block = vec![[0.0; COLUMNS]; n + rows.len()];
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            block.fill([0.0; COLUMNS]);
+            for k in first..first + columns {
+                for (i, row) in block[..n].iter_mut().enumerate() {
+                    row[k - first] = free.residual(i, k) - struck.residual(i, k);
+                }
+                for (r, &c) in rows.iter().enumerate() {
+                    let moved = struck.constraint(c, k) - free.constraint(c, k);
+                    block[n + r][k - first] =
+                        -moved - factor(r) * free.rate(c, self.stabilisation[c], k);
+                }
             }
-            for (r, &c) in rows.iter().enumerate() {
-                let moved = struck.constraint(c, k) - free.constraint(c, k);
-                column[n + r] = -moved - factor(r) * free.rate(c, self.stabilisation[c], k);
-            }
-            linalg::lu_solve(&system, &pivots, &mut column);
-            for i in 0..n {
-                out[(n + i) * width + k] += column[i];
+            linalg::lu_solve_columns(&system, &pivots, &mut block);
+            for (i, row) in block[..n].iter().enumerate() {
+                for (k, v) in row[..columns].iter().enumerate() {
+                    out[(n + i) * width + first + k] += v;
+                }
             }
         }
         Ok(Some(out))
@@ -158,31 +167,45 @@ impl Mechanical {
         let Some(partials) = self.partials_copy(t, x, &vec![0.0; n + m])? else {
             return Ok(None);
         };
+        // The columns side by side, eight a block, each with the operations one column at a
+        // time had (the same bits): solved one by one, they had been a third of a landing's
+        // derivatives.
         let mut out = vec![0.0; width * width];
-        let mut change = vec![0.0; n + rows.len()];
-        for k in 0..width {
-            let mut d = vec![0.0; width];
-            d[k] = 1.0;
-            change.fill(0.0);
+        let mut block = vec![[0.0; COLUMNS]; n + rows.len()];
+        let mut d = vec![[0.0; COLUMNS]; width];
+        for first in (0..width).step_by(COLUMNS) {
+            let columns = (width - first).min(COLUMNS);
+            for (j, d) in d.iter_mut().enumerate() {
+                *d = std::array::from_fn(|c| if j == first + c { 1.0 } else { 0.0 });
+            }
+            block.fill([0.0; COLUMNS]);
             for (r, &c) in rows.iter().enumerate() {
                 let kind = self.stabilisation[c];
-                change[n + r] = -(0..n).map(|j| partials.position(c, kind, j) * d[j]).sum::<f64>();
+                for (k, entry) in block[n + r][..columns].iter_mut().enumerate() {
+                    *entry = -(0..n).map(|j| partials.position(c, kind, j) * d[j][k]).sum::<f64>();
+                }
             }
-            linalg::lu_solve(&system, &pivots, &mut change);
+            linalg::lu_solve_columns(&system, &pivots, &mut block);
             for i in 0..n {
-                d[i] += change[i];
+                for k in 0..columns {
+                    d[i][k] += block[i][k];
+                }
             }
-            change.fill(0.0);
+            block.fill([0.0; COLUMNS]);
             for (r, &c) in rows.iter().enumerate() {
                 let kind = self.stabilisation[c];
-                change[n + r] = -(0..width).map(|j| partials.rate(c, kind, j) * d[j]).sum::<f64>();
+                for (k, entry) in block[n + r][..columns].iter_mut().enumerate() {
+                    *entry = -(0..width).map(|j| partials.rate(c, kind, j) * d[j][k]).sum::<f64>();
+                }
             }
-            linalg::lu_solve(&system, &pivots, &mut change);
+            linalg::lu_solve_columns(&system, &pivots, &mut block);
             for i in 0..n {
-                d[n + i] += change[i];
+                for k in 0..columns {
+                    d[n + i][k] += block[i][k];
+                }
             }
-            for (i, v) in d.iter().enumerate() {
-                out[i * width + k] = *v;
+            for (i, d) in d.iter().enumerate() {
+                out[i * width + first..i * width + first + columns].copy_from_slice(&d[..columns]);
             }
         }
         Ok(Some(out))
