@@ -206,71 +206,35 @@ impl Saddle {
         out: &[f64],
         rows: &[usize],
     ) -> bool {
-        let k = K;
         let rows: &[usize; K] = rows.try_into().expect("K kept rows");
         let mass = &out[..N * N];
         // The largest diagonal entry and the smallest pivot of both factorizations: in a
         // positive definite matrix no pivot exceeds its diagonal entry, so their ratio bounds
         // the spread LU's pivot test measures, and a vanishing pivot (dependent rows leave
         // rounding in S's) reads as a spread past any limit.
-        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-        let m = &mut self.mass;
-        for j in 0..N {
-            let diagonal = mass[j * N + j];
-            let mut d = diagonal;
-            for p in 0..j {
-                d -= m[j * SMALL + p] * m[j * SMALL + p] * m[p * SMALL + p];
-            }
-            // False for a NaN as for a pivot that is not positive.
-            if !(d > 0.0 && diagonal.is_finite()) {
-                return false;
-            }
-            m[j * SMALL + j] = d;
-            lo = lo.min(d);
-            hi = hi.max(diagonal);
-            for i in j + 1..N {
-                let mut s = mass[j * N + i];
-                for p in 0..j {
-                    s -= m[i * SMALL + p] * m[j * SMALL + p] * m[p * SMALL + p];
-                }
-                m[i * SMALL + j] = s / d;
-            }
+        let mut spread = (f64::INFINITY, 0.0f64);
+        if !ldl_fixed::<N>(|i, j| mass[j * N + i], &mut self.mass, &mut spread) {
+            return false;
         }
         for (r, &c) in rows.iter().enumerate() {
             let base = N * N + N + c * (N + 3);
             let row: &[f64; N] = out[base..base + N].try_into().expect("a Jacobian row");
             self.rows[r * SMALL..r * SMALL + N].copy_from_slice(row);
-            let column: &mut [f64; N] =
-                (&mut self.y[r * SMALL..r * SMALL + N]).try_into().expect("a column of Y");
-            *column = *row;
-            ldl_solve_fixed::<N>(&self.mass, column);
-        }
-        // S = J·Y, its lower triangle, factored as it is formed.
-        let s = &mut self.schur;
-        for j in 0..k {
-            let dot = |a: usize, b: usize| {
-                let (row, column) = (&self.rows[a * SMALL..a * SMALL + N], &self.y[b * SMALL..]);
-                row.iter().zip(column).fold(0.0, |sum, (u, v)| sum + u * v)
-            };
-            let diagonal = dot(j, j);
-            let mut d = diagonal;
-            for p in 0..j {
-                d -= s[j * SMALL + p] * s[j * SMALL + p] * s[p * SMALL + p];
-            }
-            if !(d > 0.0 && diagonal.is_finite()) {
-                return false;
-            }
-            s[j * SMALL + j] = d;
-            lo = lo.min(d);
-            hi = hi.max(diagonal);
-            for i in j + 1..k {
-                let mut e = dot(i, j);
-                for p in 0..j {
-                    e -= s[i * SMALL + p] * s[j * SMALL + p] * s[p * SMALL + p];
-                }
-                s[i * SMALL + j] = e / d;
+            let mut column: [[f64; 1]; N] = std::array::from_fn(|i| [row[i]]);
+            ldl_solve_columns_fixed::<N, 1>(&self.mass, &mut column);
+            for (y, v) in self.y[r * SMALL..r * SMALL + N].iter_mut().zip(&column) {
+                *y = v[0];
             }
         }
+        // S = J·Y, its lower triangle.
+        let dot = |a: usize, b: usize| {
+            let (row, column) = (&self.rows[a * SMALL..a * SMALL + N], &self.y[b * SMALL..]);
+            row.iter().zip(column).fold(0.0, |sum, (u, v)| sum + u * v)
+        };
+        if !ldl_fixed::<K>(dot, &mut self.schur, &mut spread) {
+            return false;
+        }
+        let (lo, hi) = spread;
         hi <= lo * CONDITION_LIMIT
     }
 
@@ -315,7 +279,6 @@ impl Saddle {
     }
 
     fn solve_fixed<const N: usize, const K: usize, const C: usize>(&self, b: &mut [[f64; C]]) {
-        let k = K;
         let (f, c) = b.split_at_mut(N);
         let f: &mut [[f64; C]; N] = f.try_into().expect("the coordinates' rows");
         let c: &mut [[f64; C]; K] = (&mut c[..K]).try_into().expect("the kept rows");
@@ -331,31 +294,7 @@ impl Saddle {
             }
         }
         // λ = S⁻¹·(c − J·u)
-        let s = &self.schur;
-        for i in 0..k {
-            let mut sum = c[i];
-            for p in 0..i {
-                let l = s[i * SMALL + p];
-                for (sum, c) in sum.iter_mut().zip(&c[p]) {
-                    *sum -= l * c;
-                }
-            }
-            c[i] = sum;
-        }
-        for (i, c) in c.iter_mut().enumerate() {
-            let d = s[i * SMALL + i];
-            *c = c.map(|v| v / d);
-        }
-        for i in (0..k).rev() {
-            let mut sum = c[i];
-            for p in i + 1..k {
-                let l = s[p * SMALL + i];
-                for (sum, c) in sum.iter_mut().zip(&c[p]) {
-                    *sum -= l * c;
-                }
-            }
-            c[i] = sum;
-        }
+        ldl_solve_columns_fixed::<K, C>(&self.schur, c);
         // q̈ = u + Y·λ
         for (i, u) in f.iter_mut().enumerate() {
             for (r, lambda) in c.iter().enumerate() {
@@ -368,28 +307,40 @@ impl Saddle {
     }
 }
 
-/// M⁻¹·x in place with the LDLᵀ factors in `mass` ([`Saddle`]'s layout).
-fn ldl_solve_fixed<const N: usize>(mass: &[f64; SMALL * SMALL], x: &mut [f64; N]) {
-    for i in 0..N {
-        let mut s = x[i];
-        for p in 0..i {
-            s -= mass[i * SMALL + p] * x[p];
+/// LDLᵀ of the symmetric matrix whose entry (i, j), j ≤ i, is `entry(i, j)`, into `into`
+/// ([`Saddle`]'s layout), widening `spread` (the smallest pivot, the largest diagonal entry).
+/// False at a pivot that is not positive (or a NaN) or a diagonal entry that is not finite.
+fn ldl_fixed<const N: usize>(
+    entry: impl Fn(usize, usize) -> f64,
+    into: &mut [f64; SMALL * SMALL],
+    spread: &mut (f64, f64),
+) -> bool {
+    let m = into;
+    for j in 0..N {
+        let diagonal = entry(j, j);
+        let mut d = diagonal;
+        for p in 0..j {
+            d -= m[j * SMALL + p] * m[j * SMALL + p] * m[p * SMALL + p];
         }
-        x[i] = s;
-    }
-    for (i, x) in x.iter_mut().enumerate() {
-        *x /= mass[i * SMALL + i];
-    }
-    for i in (0..N).rev() {
-        let mut s = x[i];
-        for p in i + 1..N {
-            s -= mass[p * SMALL + i] * x[p];
+        if !(d > 0.0 && diagonal.is_finite()) {
+            return false;
         }
-        x[i] = s;
+        m[j * SMALL + j] = d;
+        spread.0 = spread.0.min(d);
+        spread.1 = spread.1.max(diagonal);
+        for i in j + 1..N {
+            let mut s = entry(i, j);
+            for p in 0..j {
+                s -= m[i * SMALL + p] * m[j * SMALL + p] * m[p * SMALL + p];
+            }
+            m[i * SMALL + j] = s / d;
+        }
     }
+    true
 }
 
-/// [`ldl_solve_fixed`] for the columns of `b` side by side.
+/// M⁻¹·b (or S⁻¹·b) in place for the columns of `b` side by side, with the LDLᵀ factors in
+/// `mass` ([`Saddle`]'s layout).
 fn ldl_solve_columns_fixed<const N: usize, const C: usize>(
     mass: &[f64; SMALL * SMALL],
     b: &mut [[f64; C]; N],
