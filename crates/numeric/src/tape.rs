@@ -149,7 +149,7 @@ impl Tape {
     /// has no code generator, or with `LAGRANGE_JIT=off`, where it stays interpreted.
     pub fn compile(&mut self) -> bool {
         let registers = self.registers.len();
-        let gather = || self.gather();
+        let gather = || gather_all(&self.program);
         let outputs = || Outputs { gather: &gather, outputs: self.program.outputs.len() };
         let full = self.native.compile(&self.ops, registers, outputs()).is_some();
         match &self.fixed {
@@ -158,11 +158,6 @@ impl Tape {
             }
             None => full,
         }
-    }
-
-    /// Each output with the register it is read from, for the compiled code to gather.
-    fn gather(&self) -> Vec<(usize, Reg)> {
-        self.program.outputs.iter().copied().enumerate().collect()
     }
 
     /// Whether the program runs as machine code: [`Tape::compile`] said so, or it has run
@@ -226,7 +221,7 @@ impl Tape {
                 }
             }
         };
-        let gather = || p.outputs.iter().copied().enumerate().collect();
+        let gather = || gather_all(p);
         match native.code(ops, r.len(), Outputs { gather: &gather, outputs: out.len() }) {
             Some(code) => code.run_into(r, out),
             None => {
@@ -356,6 +351,11 @@ impl Tape {
             }
         }
     }
+}
+
+/// Each output of `program` with the register it is read from, for compiled code to gather.
+fn gather_all(program: &Program) -> Vec<(usize, Reg)> {
+    program.outputs.iter().copied().enumerate().collect()
 }
 
 /// Runs `ops` on the registers `r`, one after the other.

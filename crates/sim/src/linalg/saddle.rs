@@ -16,147 +16,18 @@ use super::{CONDITION_LIMIT, SMALL};
 /// with k ≥ 1 (`$otherwise` past them): both blocks' loops of known length.
 macro_rules! with_orders {
     ($n:expr, $k:expr, |$N:ident, $K:ident| $body:expr, $otherwise:expr) => {
-        match ($n, $k) {
-            (1, 1) => {
-                const $N: usize = 1;
-                const $K: usize = 1;
+        with_orders!(@arms ($n, $k), $N, $K, $body, $otherwise,
+            1: [1 2 3 4 5 6 7], 2: [1 2 3 4 5 6], 3: [1 2 3 4 5], 4: [1 2 3 4], 5: [1 2 3],
+            6: [1 2], 7: [1])
+    };
+    (@arms $pair:expr, $N:ident, $K:ident, $body:expr, $otherwise:expr,
+        $($n:literal: [$($k:literal)*]),*) => {
+        match $pair {
+            $($(($n, $k) => {
+                const $N: usize = $n;
+                const $K: usize = $k;
                 $body
-            }
-            (1, 2) => {
-                const $N: usize = 1;
-                const $K: usize = 2;
-                $body
-            }
-            (1, 3) => {
-                const $N: usize = 1;
-                const $K: usize = 3;
-                $body
-            }
-            (1, 4) => {
-                const $N: usize = 1;
-                const $K: usize = 4;
-                $body
-            }
-            (1, 5) => {
-                const $N: usize = 1;
-                const $K: usize = 5;
-                $body
-            }
-            (1, 6) => {
-                const $N: usize = 1;
-                const $K: usize = 6;
-                $body
-            }
-            (1, 7) => {
-                const $N: usize = 1;
-                const $K: usize = 7;
-                $body
-            }
-            (2, 1) => {
-                const $N: usize = 2;
-                const $K: usize = 1;
-                $body
-            }
-            (2, 2) => {
-                const $N: usize = 2;
-                const $K: usize = 2;
-                $body
-            }
-            (2, 3) => {
-                const $N: usize = 2;
-                const $K: usize = 3;
-                $body
-            }
-            (2, 4) => {
-                const $N: usize = 2;
-                const $K: usize = 4;
-                $body
-            }
-            (2, 5) => {
-                const $N: usize = 2;
-                const $K: usize = 5;
-                $body
-            }
-            (2, 6) => {
-                const $N: usize = 2;
-                const $K: usize = 6;
-                $body
-            }
-            (3, 1) => {
-                const $N: usize = 3;
-                const $K: usize = 1;
-                $body
-            }
-            (3, 2) => {
-                const $N: usize = 3;
-                const $K: usize = 2;
-                $body
-            }
-            (3, 3) => {
-                const $N: usize = 3;
-                const $K: usize = 3;
-                $body
-            }
-            (3, 4) => {
-                const $N: usize = 3;
-                const $K: usize = 4;
-                $body
-            }
-            (3, 5) => {
-                const $N: usize = 3;
-                const $K: usize = 5;
-                $body
-            }
-            (4, 1) => {
-                const $N: usize = 4;
-                const $K: usize = 1;
-                $body
-            }
-            (4, 2) => {
-                const $N: usize = 4;
-                const $K: usize = 2;
-                $body
-            }
-            (4, 3) => {
-                const $N: usize = 4;
-                const $K: usize = 3;
-                $body
-            }
-            (4, 4) => {
-                const $N: usize = 4;
-                const $K: usize = 4;
-                $body
-            }
-            (5, 1) => {
-                const $N: usize = 5;
-                const $K: usize = 1;
-                $body
-            }
-            (5, 2) => {
-                const $N: usize = 5;
-                const $K: usize = 2;
-                $body
-            }
-            (5, 3) => {
-                const $N: usize = 5;
-                const $K: usize = 3;
-                $body
-            }
-            (6, 1) => {
-                const $N: usize = 6;
-                const $K: usize = 1;
-                $body
-            }
-            (6, 2) => {
-                const $N: usize = 6;
-                const $K: usize = 2;
-                $body
-            }
-            (7, 1) => {
-                const $N: usize = 7;
-                const $K: usize = 1;
-                $body
-            }
+            })*)*
             _ => $otherwise,
         }
     };
@@ -247,12 +118,6 @@ impl Saddle {
             |N, K| self.solve_fixed::<N, K, C>(b),
             unreachable!("a saddle factored with n + k ≤ {SMALL} and k ≥ 1")
         )
-    }
-
-    /// Solves for one right side `x` (f then c), in place.
-    pub fn solve(&self, x: &mut [f64]) {
-        let rows: [usize; SMALL] = std::array::from_fn(|r| r);
-        self.solve_scattered(x, &rows[..self.k]);
     }
 
     /// Solves for one right side laid out as a dynamics solution is: f in `x[..n]`, the kept
@@ -406,7 +271,7 @@ mod tests {
         assert!(saddle.factor(&out, 4, &kept));
         let rhs = [0.3, -1.2, 2.5, 0.7, 0.9, -0.4];
         let mut ours = rhs;
-        saddle.solve(&mut ours);
+        saddle.solve_scattered(&mut ours, &kept);
         let mut whole = Small::zeros(6).unwrap();
         for i in 0..4 {
             for j in 0..4 {
